@@ -1,0 +1,3 @@
+from motioncue.cli import main
+
+raise SystemExit(main())

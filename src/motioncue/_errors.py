@@ -1,0 +1,28 @@
+"""The exception tree shared by every part of motioncue."""
+
+from __future__ import annotations
+
+__all__ = ["ConfigError", "LimitError", "MotioncueError", "ProtocolError", "TransportError"]
+
+
+class MotioncueError(Exception):
+    """Base class of every error motioncue raises on purpose."""
+
+
+class ConfigError(MotioncueError, ValueError):
+    """A configuration file, argument or constructor value is invalid.
+
+    The message names the key (or argument), the value given and what is allowed.
+    """
+
+
+class ProtocolError(MotioncueError, ValueError):
+    """Bytes that do not decode as the wire format says (confirm code, length, checksum...)."""
+
+
+class LimitError(MotioncueError):
+    """A request cannot be met within the machine's stroke, speed or acceleration limits."""
+
+
+class TransportError(MotioncueError, OSError):
+    """A link to a controller failed (socket, serial port, file). Raised ``from`` the cause."""

@@ -1,0 +1,53 @@
+"""The ``motioncue`` command line: one verb per job users do.
+
+Each verb lives in its own private module exposing ``register(subparsers)``; the module adds
+its parser and sets ``run=<function(args) -> int>`` as default. Errors motioncue raises on
+purpose (:class:`~motioncue.MotioncueError`) print one clear line and exit with status 2.
+"""
+
+from __future__ import annotations
+
+import argparse
+import importlib
+import sys
+from collections.abc import Sequence
+
+from .._errors import MotioncueError
+
+__all__ = ["build_parser", "main"]
+
+# Verb modules, in the order of the data flow. Each registers one or more verbs.
+_VERB_MODULES: tuple[str, ...] = ()
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(
+        prog="motioncue",
+        description="Vehicle motion to electric-cylinder motion platforms.",
+    )
+    from .. import __version__
+
+    parser.add_argument("--version", action="version", version=f"motioncue {__version__}")
+    sub = parser.add_subparsers(dest="verb", metavar="VERB")
+    for name in _VERB_MODULES:
+        module = importlib.import_module(f"{__name__}.{name}")
+        module.register(sub)
+    return parser
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """Run the command line; returns the exit status."""
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    run = getattr(args, "run", None)
+    if run is None:
+        parser.print_help()
+        return 2
+    try:
+        return int(run(args) or 0)
+    except MotioncueError as exc:
+        print(f"motioncue {args.verb}: error: {exc}", file=sys.stderr)
+        return 2
+    except KeyboardInterrupt:
+        print(f"motioncue {args.verb}: interrupted", file=sys.stderr)
+        return 130

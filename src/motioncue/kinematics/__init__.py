@@ -1,0 +1,3 @@
+"""motioncue.kinematics (see the package docstring of motioncue)."""
+
+__all__: list[str] = []

@@ -1,0 +1,3 @@
+"""motioncue.output (see the package docstring of motioncue)."""
+
+__all__: list[str] = []

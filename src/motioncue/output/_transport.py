@@ -1,0 +1,107 @@
+"""One interface for every link to a controller, addressed by the URLs of conventions.md.
+
+``udp://HOST:PORT``, ``serial:///dev/ttyUSB0?baud=19200``, ``pcap:PATH``, ``file:PATH``.
+Framing (how messages are delimited on a byte stream) and payload (what a message means) are
+not the transport's business; a transport moves whole messages (datagrams) or bytes.
+"""
+
+from __future__ import annotations
+
+import abc
+from dataclasses import dataclass, field
+from types import TracebackType
+from urllib.parse import parse_qs, urlsplit
+
+from .._errors import ConfigError
+
+__all__ = ["Transport", "TransportURL", "parse_target"]
+
+
+@dataclass(frozen=True)
+class TransportURL:
+    """A parsed target URL.
+
+    Attributes
+    ----------
+    scheme : str
+        ``udp``, ``serial``, ``pcap`` or ``file``.
+    host : str
+        UDP host (empty otherwise).
+    port : int
+        UDP port (0 otherwise).
+    path : str
+        Device or file path (empty for UDP).
+    options : dict[str, str]
+        Query options (``baud=19200``).
+    """
+
+    scheme: str
+    host: str = ""
+    port: int = 0
+    path: str = ""
+    options: dict[str, str] = field(default_factory=dict)
+
+
+_SCHEMES = ("udp", "serial", "pcap", "file")
+
+
+def parse_target(url: str) -> TransportURL:
+    """Parse a target URL, rejecting anything not of the four forms with a clear message."""
+    if ":" not in url:
+        raise ConfigError(
+            f"target {url!r} is not a URL; use one of udp://HOST:PORT, "
+            "serial:///dev/ttyUSB0?baud=19200, pcap:PATH, file:PATH"
+        )
+    scheme, rest = url.split(":", 1)
+    scheme = scheme.lower()
+    if scheme not in _SCHEMES:
+        raise ConfigError(
+            f"target {url!r}: scheme {scheme!r} unknown; allowed: {', '.join(_SCHEMES)}"
+        )
+    if scheme in ("pcap", "file"):
+        path = rest[2:] if rest.startswith("//") else rest
+        if not path:
+            raise ConfigError(f"target {url!r}: empty path")
+        return TransportURL(scheme, path=path)
+    parts = urlsplit(url)
+    options = {k: v[-1] for k, v in parse_qs(parts.query).items()}
+    if scheme == "udp":
+        try:
+            port = parts.port
+        except ValueError as exc:
+            raise ConfigError(f"target {url!r}: bad port") from exc
+        if not parts.hostname or port is None:
+            raise ConfigError(f"target {url!r}: expected udp://HOST:PORT")
+        return TransportURL(scheme, host=parts.hostname, port=port, options=options)
+    if not parts.path:
+        raise ConfigError(f"target {url!r}: expected serial:///dev/ttyXXX?baud=19200")
+    return TransportURL(scheme, path=parts.path, options=options)
+
+
+class Transport(abc.ABC):
+    """A link that sends and receives whole messages.
+
+    Implementations wrap OS errors in :class:`~motioncue.TransportError` (``raise ... from``).
+    """
+
+    @abc.abstractmethod
+    def send(self, data: bytes) -> None:
+        """Send one message."""
+
+    def recv(self, timeout_s: float) -> bytes | None:
+        """Receive one message, or ``None`` after ``timeout_s``. Send-only links return None."""
+        return None
+
+    def close(self) -> None:  # noqa: B027 - optional hook
+        """Release the link."""
+
+    def __enter__(self) -> Transport:
+        return self
+
+    def __exit__(
+        self,
+        exc_type: type[BaseException] | None,
+        exc: BaseException | None,
+        tb: TracebackType | None,
+    ) -> None:
+        self.close()
