@@ -1,0 +1,48 @@
+"""``open_transport(url)``: one entry point for every target URL of conventions.md."""
+
+from __future__ import annotations
+
+import importlib
+from typing import Any
+
+from ._transport import Transport, TransportURL, parse_target
+
+__all__ = ["open_transport"]
+
+# scheme -> (module, class); each class has ``from_url(url, **options)``. The serial
+# transport lives with the EasySmc work and is imported only when a serial URL is opened.
+_SCHEMES: dict[str, tuple[str, str]] = {
+    "udp": ("._transports_udp", "UdpTransport"),
+    "pcap": ("._transports_file", "PcapTransport"),
+    "file": ("._transports_file", "FileTransport"),
+    "serial": ("._transports_serial", "SerialTransport"),
+}
+
+
+def open_transport(url: str | TransportURL, **options: Any) -> Transport:
+    """Open the link a target URL names.
+
+    Parameters
+    ----------
+    url : str or TransportURL
+        ``udp://HOST:PORT[?local_port=8410&timeout_ms=250&retries=2]``, ``pcap:PATH``,
+        ``file:PATH``, ``serial:///dev/ttyUSB0?baud=19200``.
+    **options
+        Passed to the transport: for ``pcap`` ``src``/``dst`` (``"ip:port"``) and
+        ``epoch_s``; for ``udp`` ``local_port``, ``timeout_s``, ``retries``.
+
+    Raises
+    ------
+    ConfigError
+        The URL is malformed or an option is invalid.
+    TransportError
+        The link cannot be opened (the OS error is chained).
+    """
+    parsed = parse_target(url) if isinstance(url, str) else url
+    module_name, class_name = _SCHEMES[parsed.scheme]
+    cls = getattr(importlib.import_module(module_name, __package__), class_name)
+    if parsed.scheme in ("pcap", "file"):
+        return cls(parsed.path, **options)  # type: ignore[no-any-return]
+    if parsed.scheme == "udp" and options:
+        return cls(parsed.host, parsed.port, **options)  # type: ignore[no-any-return]
+    return cls.from_url(parsed, **options)  # type: ignore[no-any-return]
