@@ -40,41 +40,72 @@ def _controller(name: str) -> tuple[Any, ModuleType]:
 
 
 def register(sub: Any) -> None:
-    p = sub.add_parser("emulate", help="run a controller emulator (UDP on loopback)",
-                       description="Emulate a controller: decode and check every datagram, "
-                       "reply as the manual says, report the trace and violations.")
+    p = sub.add_parser(
+        "emulate",
+        help="run a controller emulator (UDP on loopback)",
+        description="Emulate a controller: decode and check every datagram, "
+        "reply as the manual says, report the trace and violations.",
+    )
     p.add_argument("--controller", required=True, help="bundled name (mbox6) or TOML path")
-    p.add_argument("--listen", default=None,
-                   help="udp://HOST:PORT to listen on (default: the controller's "
-                   "default target; port 0 = any free port)")
-    p.add_argument("--duration", type=float, default=None, metavar="S",
-                   help="stop after S seconds (default: until Ctrl-C)")
+    p.add_argument(
+        "--listen",
+        default=None,
+        help="udp://HOST:PORT to listen on (default: the controller's "
+        "default target; port 0 = any free port)",
+    )
+    p.add_argument(
+        "--duration",
+        type=float,
+        default=None,
+        metavar="S",
+        help="stop after S seconds (default: until Ctrl-C)",
+    )
     p.add_argument("--homing-time", type=float, default=1.0, metavar="S")
-    p.add_argument("--trace-csv", type=Path, default=None,
-                   help="write the trace (t_s, frame, axis positions) here on exit")
+    p.add_argument(
+        "--trace-csv",
+        type=Path,
+        default=None,
+        help="write the trace (t_s, frame, axis positions) here on exit",
+    )
     p.set_defaults(run=_run_emulate)
 
-    p = sub.add_parser("send", help="send one command to a controller",
-                       description="Send a command: estop on|off, reset, home, park, "
-                       "outputs BITS, read REG [COUNT], write REG VALUE...")
+    p = sub.add_parser(
+        "send",
+        help="send one command to a controller",
+        description="Send a command: estop on|off, reset, home, park, "
+        "outputs BITS, read REG [COUNT], write REG VALUE...",
+    )
     p.add_argument("--controller", required=True)
-    p.add_argument("--target", default=None,
-                   help="udp://HOST:PORT, pcap:PATH, file:PATH or serial://... "
-                   "(default: the controller's default target)")
-    p.add_argument("--node", default="all",
-                   help="Who fields: 'all' (0xFFFF/0xFFFF, default) or XX.YY (hex)")
+    p.add_argument(
+        "--target",
+        default=None,
+        help="udp://HOST:PORT, pcap:PATH, file:PATH or serial://... "
+        "(default: the controller's default target)",
+    )
+    p.add_argument(
+        "--node", default="all", help="Who fields: 'all' (0xFFFF/0xFFFF, default) or XX.YY (hex)"
+    )
     p.add_argument("--no-reply", action="store_true", help="ask for no reply (WhoReply 0)")
-    p.add_argument("--save", action="store_true",
-                   help="write parameters so they survive power-off (MBOX FX, IMAX PA0f=2)")
+    p.add_argument(
+        "--save",
+        action="store_true",
+        help="write parameters so they survive power-off (MBOX FX, IMAX PA0f=2)",
+    )
     p.add_argument("verb", help="estop | reset | home | park | outputs | read | write")
     p.add_argument("args", nargs="*")
     p.set_defaults(run=_run_send)
 
-    p = sub.add_parser("inspect", help="decode a capture, one line per message",
-                       description="Decode a pcap (UDP payloads) or a raw file: capture.")
+    p = sub.add_parser(
+        "inspect",
+        help="decode a capture, one line per message",
+        description="Decode a pcap (UDP payloads) or a raw file: capture.",
+    )
     p.add_argument("file", type=Path)
-    p.add_argument("--controller", default=None,
-                   help="decode as this controller's kind (default: try each kind)")
+    p.add_argument(
+        "--controller",
+        default=None,
+        help="decode as this controller's kind (default: try each kind)",
+    )
     p.add_argument("--raw", action="store_true", help="the file holds raw bytes (file: target)")
     p.set_defaults(run=_run_inspect)
 
@@ -88,8 +119,10 @@ def _run_emulate(args: argparse.Namespace) -> int:
         raise ConfigError(f"--listen {url!r}: the {ctrl.kind} emulator listens on udp://HOST:PORT")
     emu = kind.emulator(ctrl, url.host, url.port, homing_time_s=args.homing_time)
     emu.start()
-    print(f"emulating {ctrl.name} ({ctrl.kind}, {ctrl.n_axes} axes) on udp://{url.host}:"
-          f"{emu.port}", flush=True)
+    print(
+        f"emulating {ctrl.name} ({ctrl.kind}, {ctrl.n_axes} axes) on udp://{url.host}:{emu.port}",
+        flush=True,
+    )
     t_end = None if args.duration is None else time.monotonic() + args.duration
     try:
         while t_end is None or time.monotonic() < t_end:
@@ -100,8 +133,10 @@ def _run_emulate(args: argparse.Namespace) -> int:
         emu.stop()
     trace = emu.trace
     violations = emu.violations
-    print(f"received {emu.received} datagrams, played {len(trace)} trace points, "
-          f"{len(violations)} violation(s)")
+    print(
+        f"received {emu.received} datagrams, played {len(trace)} trace points, "
+        f"{len(violations)} violation(s)"
+    )
     for v in violations[:50]:
         axis = "" if v.axis is None else f" axis {v.axis}"
         print(f"  {v.t_s:9.3f} s {v.kind}{axis}: {v.detail}")
@@ -123,8 +158,17 @@ def _run_send(args: argparse.Namespace) -> int:
     if args.no_reply:
         reply = 0
     with open_transport(args.target or ctrl.default_target) as transport:
-        return int(kind.send_verb(ctrl, transport, args.verb, list(args.args),
-                                  who=(accept, reply), save=args.save, out=sys.stdout))
+        return int(
+            kind.send_verb(
+                ctrl,
+                transport,
+                args.verb,
+                list(args.args),
+                who=(accept, reply),
+                save=args.save,
+                out=sys.stdout,
+            )
+        )
 
 
 def _payloads(path: Path, raw: bool, kind: ModuleType | None) -> list[tuple[str, bytes]]:
@@ -132,10 +176,16 @@ def _payloads(path: Path, raw: bool, kind: ModuleType | None) -> list[tuple[str,
 
     if not raw:
         head = path.read_bytes()[:4] if path.exists() else b""
-        if head in (b"\xd4\xc3\xb2\xa1", b"\xa1\xb2\xc3\xd4", b"\x4d\x3c\xb2\xa1",
-                    b"\xa1\xb2\x3c\x4d"):
-            return [(f"{p.t_s:.6f} {p.src[0]}:{p.src[1]} > {p.dst[0]}:{p.dst[1]}", p.payload)
-                    for p in read_pcap(path)]
+        if head in (
+            b"\xd4\xc3\xb2\xa1",
+            b"\xa1\xb2\xc3\xd4",
+            b"\x4d\x3c\xb2\xa1",
+            b"\xa1\xb2\x3c\x4d",
+        ):
+            return [
+                (f"{p.t_s:.6f} {p.src[0]}:{p.src[1]} > {p.dst[0]}:{p.dst[1]}", p.payload)
+                for p in read_pcap(path)
+            ]
     try:
         blob = path.read_bytes()
     except OSError as exc:

@@ -54,8 +54,9 @@ def _mac_for(ip: bytes) -> bytes:
     return b"\x02\x00" + ip  # locally administered, derived from the address
 
 
-def ethernet_ipv4_udp(src: tuple[str, int], dst: tuple[str, int], payload: bytes,
-                      ident: int = 0, ttl: int = 64) -> bytes:
+def ethernet_ipv4_udp(
+    src: tuple[str, int], dst: tuple[str, int], payload: bytes, ident: int = 0, ttl: int = 64
+) -> bytes:
     """One Ethernet II frame carrying ``payload`` in IPv4/UDP, checksums filled in."""
     sip = ipaddress.IPv4Address(src[0]).packed
     dip = ipaddress.IPv4Address(dst[0]).packed
@@ -121,9 +122,14 @@ class PcapTransport(Transport):
         Time stamp of ``t_s = 0`` (default: the wall clock when the file is opened).
     """
 
-    def __init__(self, path: str | Path, *, src: tuple[str, int] | str = ("192.168.15.101", 8410),
-                 dst: tuple[str, int] | str = ("192.168.15.201", 7408),
-                 epoch_s: float | None = None) -> None:
+    def __init__(
+        self,
+        path: str | Path,
+        *,
+        src: tuple[str, int] | str = ("192.168.15.101", 8410),
+        dst: tuple[str, int] | str = ("192.168.15.201", 7408),
+        epoch_s: float | None = None,
+    ) -> None:
         self.path = Path(path)
         self.src = _address(src, "pcap source")
         self.dst = _address(dst, "pcap destination")
@@ -135,8 +141,14 @@ class PcapTransport(Transport):
         except OSError as exc:
             raise TransportError(f"cannot write {self.path}: {exc}") from exc
 
-    def send(self, data: bytes, *, t_s: float | None = None,
-             src: tuple[str, int] | None = None, dst: tuple[str, int] | None = None) -> None:
+    def send(
+        self,
+        data: bytes,
+        *,
+        t_s: float | None = None,
+        src: tuple[str, int] | None = None,
+        dst: tuple[str, int] | None = None,
+    ) -> None:
         """Append one packet, stamped ``epoch_s + t_s`` (or now)."""
         ts = time.time() if t_s is None else self.epoch_s + t_s
         frame = ethernet_ipv4_udp(src or self.src, dst or self.dst, data, self._ident)
@@ -189,7 +201,7 @@ def read_pcap(path: str | Path) -> Iterator[PcapPacket]:
             raise ProtocolError(f"{path}: truncated record header at byte {off}")
         sec, frac, incl, _orig = rec.unpack_from(blob, off)
         off += rec.size
-        pkt = blob[off:off + incl]
+        pkt = blob[off : off + incl]
         if len(pkt) != incl:
             raise ProtocolError(f"{path}: truncated packet at byte {off}")
         off += incl
@@ -214,5 +226,9 @@ def read_pcap(path: str | Path) -> Iterator[PcapPacket]:
         if len(udp) < 8:
             continue
         sport, dport, ulen, _ = UDP.unpack_from(udp)
-        yield PcapPacket(t, (str(ipaddress.IPv4Address(ip[12:16])), sport),
-                         (str(ipaddress.IPv4Address(ip[16:20])), dport), bytes(udp[8:ulen]))
+        yield PcapPacket(
+            t,
+            (str(ipaddress.IPv4Address(ip[12:16])), sport),
+            (str(ipaddress.IPv4Address(ip[16:20])), dport),
+            bytes(udp[8:ulen]),
+        )

@@ -42,7 +42,7 @@ def open_transport(url: str | TransportURL, **options: Any) -> Transport:
     module_name, class_name = _SCHEMES[parsed.scheme]
     cls = getattr(importlib.import_module(module_name, __package__), class_name)
     if parsed.scheme in ("pcap", "file"):
-        return cls(parsed.path, **options)  # type: ignore[no-any-return]
+        return cls(parsed.path, **options)
     if parsed.scheme == "udp" and options:
-        return cls(parsed.host, parsed.port, **options)  # type: ignore[no-any-return]
-    return cls.from_url(parsed, **options)  # type: ignore[no-any-return]
+        return cls(parsed.host, parsed.port, **options)
+    return cls.from_url(parsed, **options)

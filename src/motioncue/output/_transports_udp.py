@@ -47,8 +47,15 @@ class UdpTransport(Transport):
         Extra attempts of :meth:`request` after a timeout.
     """
 
-    def __init__(self, host: str, port: int, *, local_port: int = 0, timeout_s: float = 0.25,
-                 retries: int = 2) -> None:
+    def __init__(
+        self,
+        host: str,
+        port: int,
+        *,
+        local_port: int = 0,
+        timeout_s: float = 0.25,
+        retries: int = 2,
+    ) -> None:
         self.address = (host, port)
         self.timeout_s = timeout_s
         self.retries = retries
@@ -81,8 +88,7 @@ class UdpTransport(Transport):
         try:
             self._sock.sendto(data, self.address)
         except OSError as exc:
-            raise TransportError(f"UDP send to {self.address[0]}:{self.address[1]}: {exc}") \
-                from exc
+            raise TransportError(f"UDP send to {self.address[0]}:{self.address[1]}: {exc}") from exc
 
     def recv(self, timeout_s: float) -> bytes | None:
         """One datagram from anyone, or ``None`` after ``timeout_s``."""
@@ -102,8 +108,14 @@ class UdpTransport(Transport):
             n += 1
         return n
 
-    def request(self, data: bytes, accept: Callable[[bytes], bool], *,
-                timeout_s: float | None = None, retries: int | None = None) -> bytes:
+    def request(
+        self,
+        data: bytes,
+        accept: Callable[[bytes], bool],
+        *,
+        timeout_s: float | None = None,
+        retries: int | None = None,
+    ) -> bytes:
         """Send ``data`` and return the first reply ``accept`` takes; retry on timeout.
 
         Raises

@@ -13,7 +13,7 @@ from .._errors import ConfigError, ProtocolError
 from ._transport import Transport
 from ._udp_common import format_who
 
-__all__ = ["describe", "exchange", "parse_bits", "parse_value", "park"]
+__all__ = ["describe", "exchange", "park", "parse_bits", "parse_value"]
 
 
 def _fmt(name: str, value: Any) -> str:
@@ -32,8 +32,7 @@ def describe(msg: Any) -> str:
     """One line naming a decoded message and its fields."""
     name = type(msg).__name__
     parts = []
-    if hasattr(msg, "function") and not any(f.name == "function"
-                                            for f in dataclasses.fields(msg)):
+    if hasattr(msg, "function") and not any(f.name == "function" for f in dataclasses.fields(msg)):
         parts.append(f"function=0x{msg.function:04X}")
     for f in dataclasses.fields(msg):
         value = getattr(msg, f.name)
@@ -59,8 +58,14 @@ def parse_bits(text: str, n_bits: int) -> int:
     return value
 
 
-def exchange(transport: Transport, data: bytes, decode: Callable[[bytes], Any],
-             is_reply: Callable[[Any], bool], expect_reply: bool, out: TextIO) -> Any | None:
+def exchange(
+    transport: Transport,
+    data: bytes,
+    decode: Callable[[bytes], Any],
+    is_reply: Callable[[Any], bool],
+    expect_reply: bool,
+    out: TextIO,
+) -> Any | None:
     """Send a command; if the link and the Who fields ask for one, wait for its reply.
 
     Prints what was sent and what came back; returns the decoded reply or ``None``.
@@ -83,8 +88,16 @@ def exchange(transport: Transport, data: bytes, decode: Callable[[bytes], Any],
     return reply
 
 
-def park(controller: Any, transport: Transport, current: Sequence[int], out: TextIO,
-         *, period_s: float = 0.02, speed_fraction: float = 0.25, realtime: bool = True) -> int:
+def park(
+    controller: Any,
+    transport: Transport,
+    current: Sequence[int],
+    out: TextIO,
+    *,
+    period_s: float = 0.02,
+    speed_fraction: float = 0.25,
+    realtime: bool = True,
+) -> int:
     """Bring every axis from ``current`` to 0 (the homed origin) on a raised-cosine ramp
     whose peak speed is ``speed_fraction`` of the axis limit; frames every ``period_s``.
     Returns the number of frames sent."""

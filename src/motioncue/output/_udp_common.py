@@ -21,29 +21,29 @@ The layouts that follow the header are declared in each kind's ``_messages`` mod
 from __future__ import annotations
 
 import math
+import numbers
 import struct
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
-from typing import Any, ClassVar
+from typing import Any
 
 from .._errors import ConfigError, ProtocolError
 
 __all__ = [
     "CONFIRM_MAIN",
-    "REG_HEAD",
-    "check_int32",
-    "param_lookup",
     "CONFIRM_SERVO",
     "HEADER",
     "PASSCODE",
+    "REG_HEAD",
     "WHO_ALL",
     "WHO_NONE",
     "FrameClock",
     "Header",
-    "RegisterBlock",
+    "check_int32",
     "check_length",
     "decode_header",
     "format_who",
+    "param_lookup",
     "parse_node",
     "u16_tuple",
 ]
@@ -76,9 +76,7 @@ def decode_header(data: bytes) -> Header:
         raise ProtocolError(f"datagram of {len(data)} bytes is shorter than the 12-byte header")
     header = Header(*HEADER.unpack_from(data))
     if header.confirm not in (CONFIRM_MAIN, CONFIRM_SERVO):
-        raise ProtocolError(
-            f"confirm code 0x{header.confirm:04X} is neither 0x55AA nor 0x33CC"
-        )
+        raise ProtocolError(f"confirm code 0x{header.confirm:04X} is neither 0x55AA nor 0x33CC")
     if header.passcode != PASSCODE:
         raise ProtocolError(f"pass code 0x{header.passcode:04X}, expected 0x0000")
     return header
@@ -131,95 +129,6 @@ def u16_tuple(values: Sequence[int], what: str) -> tuple[int, ...]:
     return tuple(out)
 
 
-def _u16(value: int, what: str) -> int:
-    if isinstance(value, bool) or not isinstance(value, int) or not 0 <= value <= 0xFFFF:
-        raise ProtocolError(f"{what} = {value!r} is not in [0, 0xFFFF]")
-    return value
-
-
-@dataclass(frozen=True, slots=True)
-class RegisterBlock:
-    """A register message: header, StartAddress u16, Count u16, then ``values`` (u16 each).
-
-    This one layout is what the manuals print for register reads and writes and their
-    replies (IMAX 2.2.2.1-2.2.2.4 and 2.2.2.13-14, SC-MBOX 4.2.3-4.2.5). ``count`` is
-    ``len(values)`` except for read requests, which carry ``count`` and ``pad`` zero words.
-
-    Attributes
-    ----------
-    confirm, function, channel, who_accept, who_reply : int
-        Header fields.
-    start : int
-        First register address.
-    count : int
-        Register count as written in the message.
-    values : tuple[int, ...]
-        Register values (unsigned 16-bit), or the zero padding of a read request.
-    """
-
-    LAYOUT: ClassVar[struct.Struct] = REG_HEAD  # then len(values) x ">H"
-
-    confirm: int
-    function: int
-    channel: int
-    start: int
-    count: int
-    values: tuple[int, ...] = ()
-    who_accept: int = WHO_ALL
-    who_reply: int = WHO_ALL
-
-    def __post_init__(self) -> None:
-        for name in ("confirm", "function", "channel", "start", "count", "who_accept"):
-            _u16(getattr(self, name), name)
-        _u16(self.who_reply, "who_reply")
-        u16_tuple(self.values, "register block")
-
-    @property
-    def size(self) -> int:
-        return HEADER.size + REG_HEAD.size + 2 * len(self.values)
-
-    def encode(self) -> bytes:
-        n = len(self.values)
-        return struct.pack(
-            f">6HHH{n}H",
-            self.confirm,
-            PASSCODE,
-            self.function,
-            self.channel,
-            self.who_accept,
-            self.who_reply,
-            self.start,
-            self.count,
-            *self.values,
-        )
-
-    @classmethod
-    def decode_body(cls, header: Header, data: bytes) -> RegisterBlock:
-        """Decode everything after the header; the words after Count become ``values``."""
-        if len(data) < HEADER.size + REG_HEAD.size:
-            raise ProtocolError(
-                f"register message 0x{header.function:04X}: length {len(data)} bytes, "
-                f"at least {HEADER.size + REG_HEAD.size} needed"
-            )
-        if (len(data) - HEADER.size) % 2:
-            raise ProtocolError(
-                f"register message 0x{header.function:04X}: odd length {len(data)} bytes"
-            )
-        start, count = REG_HEAD.unpack_from(data, HEADER.size)
-        n = (len(data) - HEADER.size - REG_HEAD.size) // 2
-        values = struct.unpack_from(f">{n}H", data, HEADER.size + REG_HEAD.size)
-        return cls(
-            header.confirm,
-            header.function,
-            header.channel,
-            start,
-            count,
-            values,
-            header.who_accept,
-            header.who_reply,
-        )
-
-
 def check_int32(values: Sequence[Any], n_axes: int, what: str = "positions") -> tuple[int, ...]:
     """Validate motor positions: ``n_axes`` finite integers within int32.
 
@@ -230,7 +139,9 @@ def check_int32(values: Sequence[Any], n_axes: int, what: str = "positions") -> 
         raise ProtocolError(f"{what}: {len(values)} values given, the controller has {n_axes} axes")
     out = []
     for i, v in enumerate(values):
-        if isinstance(v, int) and not isinstance(v, bool):
+        if isinstance(v, bool) or not isinstance(v, numbers.Real):
+            raise ProtocolError(f"{what}[{i}] = {v!r} is not a number")
+        if isinstance(v, int):
             iv = v
         else:
             try:

@@ -182,8 +182,12 @@ class Playback:
         self._check(t, duration_s, positions, frame_no)
         if self.last_frame_no is not None and frame_no != (self.last_frame_no + 1) & 0xFFFFFFFF:
             self.violations.append(
-                Violation(t, "sequence", None,
-                          f"frame {frame_no} after frame {self.last_frame_no} (lost or reordered)")
+                Violation(
+                    t,
+                    "sequence",
+                    None,
+                    f"frame {frame_no} after frame {self.last_frame_no} (lost or reordered)",
+                )
             )
         self.last_frame_no = frame_no
         self.rows_t.append(t)
@@ -215,19 +219,31 @@ class Playback:
             lo, hi = self.stroke
             for i, p in enumerate(positions):
                 if not lo <= p <= hi:
-                    self.violations.append(Violation(
-                        t, "stroke", i, f"frame {frame}: axis {i} at {p} pulses, allowed "
-                        f"[{lo}, {hi}]"))
+                    self.violations.append(
+                        Violation(
+                            t,
+                            "stroke",
+                            i,
+                            f"frame {frame}: axis {i} at {p} pulses, allowed [{lo}, {hi}]",
+                        )
+                    )
         if self.max_speed is not None:
-            for i, (p, q, vmax) in enumerate(zip(positions, self.position, self.max_speed,
-                                                 strict=True)):
+            for i, (p, q, vmax) in enumerate(
+                zip(positions, self.position, self.max_speed, strict=True)
+            ):
                 if vmax <= 0 or p == q:
                     continue
                 v = abs(p - q) / duration_s if duration_s > 0 else float("inf")
                 if v > vmax * (1 + 1e-9):
-                    self.violations.append(Violation(
-                        t, "speed", i, f"frame {frame}: axis {i} moves {p - q} pulses in "
-                        f"{duration_s * 1e3:.1f} ms = {v:.0f} pulses/s > {vmax:.0f}"))
+                    self.violations.append(
+                        Violation(
+                            t,
+                            "speed",
+                            i,
+                            f"frame {frame}: axis {i} moves {p - q} pulses in "
+                            f"{duration_s * 1e3:.1f} ms = {v:.0f} pulses/s > {vmax:.0f}",
+                        )
+                    )
 
     def trace(self) -> Trace:
         n = self.n_axes
@@ -275,14 +291,14 @@ class UdpEmulatorBase:
             sock.setsockopt(socket.SOL_SOCKET, socket.SO_RCVBUF, 1 << 21)
             sock.bind((self._host, self._port))
         except OSError as exc:
-            raise TransportError(f"emulator cannot listen on {self._host}:{self._port}: {exc}") \
-                from exc
+            raise TransportError(
+                f"emulator cannot listen on {self._host}:{self._port}: {exc}"
+            ) from exc
         sock.settimeout(0.02)
         self._port = int(sock.getsockname()[1])
         self._sock = sock
         self._stop.clear()
-        self._thread = threading.Thread(target=self._serve, name="motioncue-emulator",
-                                        daemon=True)
+        self._thread = threading.Thread(target=self._serve, name="motioncue-emulator", daemon=True)
         self._thread.start()
         return self
 

@@ -7,7 +7,7 @@ from typing import Any, TextIO
 
 from ..._errors import ConfigError, ProtocolError
 from .._transport import Transport
-from .._udp_cli import describe, exchange, parse_bits, parse_value, park
+from .._udp_cli import describe, exchange, park, parse_bits, parse_value
 from .._udp_common import CONFIRM_SERVO, HEADER, WHO_ALL, decode_header
 from ._controller import ImaxController
 from ._emulator import ImaxEmulator
@@ -39,8 +39,9 @@ _DP = re.compile(r"^dp[ _]?([0-9a-f]{1,2})$", re.IGNORECASE)
 _DPF = re.compile(r"^dpf[ _]?([0-9a-f])$", re.IGNORECASE)
 
 
-def emulator(controller: ImaxController, host: str = "127.0.0.1", port: int = 0,
-             **options: Any) -> ImaxEmulator:
+def emulator(
+    controller: ImaxController, host: str = "127.0.0.1", port: int = 0, **options: Any
+) -> ImaxEmulator:
     """An (unstarted) emulator of ``controller`` listening on ``host:port``."""
     return ImaxEmulator(controller, host, port, **options)
 
@@ -51,8 +52,7 @@ def register(name: str, *, for_write: bool) -> tuple[int, int, str]:
     m = _DPF.match(text)
     if m:
         a = int(m.group(1), 16)
-        return (CHANNEL_DPF, a, f"DPF{a:X}") if for_write else (CHANNEL_DP, 0xF0 + a,
-                                                                f"DPF{a:X}")
+        return (CHANNEL_DPF, a, f"DPF{a:X}") if for_write else (CHANNEL_DP, 0xF0 + a, f"DPF{a:X}")
     m = _DP.match(text)
     if m:
         a = int(m.group(1), 16)
@@ -61,9 +61,16 @@ def register(name: str, *, for_write: bool) -> tuple[int, int, str]:
     return CHANNEL_PA, int(pa[2:], 16), pa
 
 
-def send_verb(controller: ImaxController, transport: Transport, verb: str, args: list[str],
-              *, who: tuple[int, int] = (WHO_ALL, WHO_ALL), save: bool = False,
-              out: TextIO) -> int:
+def send_verb(
+    controller: ImaxController,
+    transport: Transport,
+    verb: str,
+    args: list[str],
+    *,
+    who: tuple[int, int] = (WHO_ALL, WHO_ALL),
+    save: bool = False,
+    out: TextIO,
+) -> int:
     """Run one ``motioncue send`` verb; returns the exit status (0 ok, 1 error reply)."""
     accept, reply_who = who
 
@@ -85,7 +92,8 @@ def send_verb(controller: ImaxController, transport: Transport, verb: str, args:
     if verb == "estop":
         raise ConfigError(
             "the IMAX has no e-stop command over UDP: its e-stop is wired to inputs "
-            "X01..X12 (PA90 bit 0, PA91, PA92; manual 5.6). Stop streaming or send 'park'.")
+            "X01..X12 (PA90 bit 0, PA91, PA92; manual 5.6). Stop streaming or send 'park'."
+        )
     if verb == "reset":
         nargs(0)
         reply = write(CHANNEL_PA, 0x08, (1,))  # PA08 = 1: manual reset (5.2, 5.13)
@@ -98,7 +106,7 @@ def send_verb(controller: ImaxController, transport: Transport, verb: str, args:
     elif verb == "read":
         if len(args) not in (1, 2):
             raise ConfigError("send read REG [COUNT]")
-        channel, start, label = register(args[0], for_write=False)
+        channel, start, _label = register(args[0], for_write=False)
         count = parse_value(args[1], "count") if len(args) == 2 else 1
         reply = read(channel, start, count)
         if isinstance(reply, RegisterReply) and reply.status == ReplyStatus.OK:
@@ -108,7 +116,7 @@ def send_verb(controller: ImaxController, transport: Transport, verb: str, args:
     elif verb == "write":
         if len(args) < 2:
             raise ConfigError("send write REG VALUE...")
-        channel, start, label = register(args[0], for_write=True)
+        channel, start, _label = register(args[0], for_write=True)
         reply = write(channel, start, tuple(parse_value(v) & 0xFFFF for v in args[1:]))
         if save and channel == CHANNEL_PA:
             write(CHANNEL_PA, 0x0F, (2,))  # PA0f = 2: save parameters
@@ -121,7 +129,7 @@ def send_verb(controller: ImaxController, transport: Transport, verb: str, args:
             return 1
         dp = reply.values
         current = []
-        for a in (0x06, 0x08, 0x0A, 0x21, 0x23, 0x25)[:controller.n_axes]:
+        for a in (0x06, 0x08, 0x0A, 0x21, 0x23, 0x25)[: controller.n_axes]:
             v = dp[a] | dp[a + 1] << 16
             current.append(v - (1 << 32) if v & 0x80000000 else v)
         park(controller, transport, current, out)
@@ -144,18 +152,18 @@ def split_stream(blob: bytes) -> list[bytes]:
     out = []
     off = 0
     while off < len(blob):
-        if blob[off:off + 2] == b"\x33\xcc" and blob[off + 4:off + 6] == b"\x31\x01":
-            n = int.from_bytes(blob[off + 8:off + 10], "big")
+        if blob[off : off + 2] == b"\x33\xcc" and blob[off + 4 : off + 6] == b"\x31\x01":
+            n = int.from_bytes(blob[off + 8 : off + 10], "big")
             size = 16 + 8 * n
         else:
-            h = decode_header(blob[off:off + HEADER.size])
+            h = decode_header(blob[off : off + HEADER.size])
             f = h.function
             if f in (F_ABS, F_REL):
                 size = frame_size(axes_of_channel(h.channel))
             elif f in (F_VIB_ABS, F_VIB_REL):
                 size = 22 + 8 * axes_of_channel(h.channel)
             elif (f & 0xFFF0) in (F_READ & 0xFFF0, F_WRITE & 0xFFF0, 0x2100, 0x2200) and f & 0xF:
-                count = int.from_bytes(blob[off + 14:off + 16], "big")
+                count = int.from_bytes(blob[off + 14 : off + 16], "big")
                 size = HEADER.size + 4 + 2 * count
             elif h.confirm == CONFIRM_SERVO and f == F_STATUS:
                 raise ProtocolError(f"byte {off}: malformed status report")
@@ -163,6 +171,6 @@ def split_stream(blob: bytes) -> list[bytes]:
                 raise ProtocolError(f"byte {off}: cannot size IMAX function 0x{f:04X}")
         if off + size > len(blob):
             raise ProtocolError(f"byte {off}: message of {size} bytes truncated")
-        out.append(blob[off:off + size])
+        out.append(blob[off : off + size])
         off += size
     return out

@@ -39,8 +39,10 @@ def validate_parameters(values: Mapping[str, Any], where: str) -> dict[str, int]
             raise ConfigError(f"{where}: {key} is not an IMAX parameter this package knows")
         lo, hi, _, meaning = PA_SPEC[name]
         if isinstance(value, bool) or not isinstance(value, int) or not lo <= value <= hi:
-            raise ConfigError(f"{where}: {name} = {value!r} is invalid ({meaning}); "
-                              f"allowed: an integer in [{lo}, {hi}]")
+            raise ConfigError(
+                f"{where}: {name} = {value!r} is invalid ({meaning}); "
+                f"allowed: an integer in [{lo}, {hi}]"
+            )
         out[name] = value
     return out
 
@@ -80,8 +82,10 @@ class ImaxController:
         parse_target(self.default_target)
         params = validate_parameters(self.parameters, f"IMAX {self.name}")
         if params["PA02"] != self.n_axes:
-            raise ConfigError(f"IMAX {self.name}: PA02 = {params['PA02']} but axes = "
-                              f"{self.n_axes}; they must agree")
+            raise ConfigError(
+                f"IMAX {self.name}: PA02 = {params['PA02']} but axes = "
+                f"{self.n_axes}; they must agree"
+            )
         object.__setattr__(self, "parameters", MappingProxyType(params))
         if not self.stroke_mm >= 0:
             raise ConfigError(f"IMAX {self.name}: stroke_mm = {self.stroke_mm}; allowed >= 0")
@@ -117,8 +121,7 @@ class ImaxController:
 
     @property
     def max_speed_pulses_s(self) -> tuple[float, ...]:
-        return tuple(self.max_speed_rpm(i) / 60.0 * self.pulses_per_rev
-                     for i in range(self.n_axes))
+        return tuple(self.max_speed_rpm(i) / 60.0 * self.pulses_per_rev for i in range(self.n_axes))
 
     @property
     def stroke_pulses(self) -> tuple[int, int] | None:
@@ -126,8 +129,10 @@ class ImaxController:
         if self.stroke_mm == 0:
             return None
         lift = self.parameters["PA40"] / 10.0
-        return (round(-lift * self.pulses_per_mm),
-                round((self.stroke_mm - lift) * self.pulses_per_mm))
+        return (
+            round(-lift * self.pulses_per_mm),
+            round((self.stroke_mm - lift) * self.pulses_per_mm),
+        )
 
     @property
     def controller_address(self) -> tuple[str, int]:
@@ -149,12 +154,19 @@ class ImaxController:
         merged.update({pa_name(k): v for k, v in changes.items()})
         return dataclasses.replace(self, parameters=merged)
 
-    def frame_encoder(self, absolute_time: bool = True, *, t0_s: float | None = None,
-                      who_accept: int = WHO_ALL, who_reply: int = WHO_ALL,
-                      first_frame: int = 0) -> ImaxFrameEncoder:
+    def frame_encoder(
+        self,
+        absolute_time: bool = True,
+        *,
+        t0_s: float | None = None,
+        who_accept: int = WHO_ALL,
+        who_reply: int = WHO_ALL,
+        first_frame: int = 0,
+    ) -> ImaxFrameEncoder:
         """A fresh frame encoder (frame counter and time origin) for one run."""
-        return ImaxFrameEncoder(self, FrameClock(absolute_time, t0_s, first_frame),
-                                who_accept, who_reply)
+        return ImaxFrameEncoder(
+            self, FrameClock(absolute_time, t0_s, first_frame), who_accept, who_reply
+        )
 
 
 class ImaxFrameEncoder:
@@ -164,24 +176,44 @@ class ImaxFrameEncoder:
     ``dout`` = Y01..Y12 (12 bits). The IMAX has no DACs: ``dacs`` must be ``(0, 0)``.
     """
 
-    __slots__ = ("_head", "_pack", "_stroke", "clock", "controller", "n_axes", "who_accept",
-                 "who_reply")
+    __slots__ = (
+        "_head",
+        "_pack",
+        "_stroke",
+        "clock",
+        "controller",
+        "n_axes",
+        "who_accept",
+        "who_reply",
+    )
 
-    def __init__(self, controller: ImaxController, clock: FrameClock, who_accept: int,
-                 who_reply: int) -> None:
+    def __init__(
+        self, controller: ImaxController, clock: FrameClock, who_accept: int, who_reply: int
+    ) -> None:
         self.controller = controller
         self.clock = clock
         self.n_axes = controller.n_axes
         self.who_accept = who_accept
         self.who_reply = who_reply
         self._pack = _frame_struct(self.n_axes, not clock.absolute_time).pack
-        self._head = (CONFIRM_MAIN, PASSCODE, F_ABS if clock.absolute_time else F_REL,
-                      channel_of_axes(self.n_axes), who_accept, who_reply)
+        self._head = (
+            CONFIRM_MAIN,
+            PASSCODE,
+            F_ABS if clock.absolute_time else F_REL,
+            channel_of_axes(self.n_axes),
+            who_accept,
+            who_reply,
+        )
         self._stroke = controller.stroke_pulses
 
-    def encode(self, t_s: float, pulses: Sequence[Any], dout: int = 0,
-               dacs: tuple[int, int] = (0, 0),
-               vibration: Sequence[tuple[int, int]] | None = None) -> list[bytes]:
+    def encode(
+        self,
+        t_s: float,
+        pulses: Sequence[Any],
+        dout: int = 0,
+        dacs: tuple[int, int] = (0, 0),
+        vibration: Sequence[tuple[int, int]] | None = None,
+    ) -> list[bytes]:
         """One frame datagram for ``pulses`` (len ``n_axes``) at ``t_s``.
 
         ``vibration``: per axis ``(period in 0.125 ms, amplitude in pulses)``, both u16.
@@ -206,15 +238,21 @@ class ImaxFrameEncoder:
             flat = [int(v) for pair in vibration for v in pair]
             if len(flat) != 2 * self.n_axes or not all(0 <= v <= 0xFFFF for v in flat):
                 raise ProtocolError(f"vibration {vibration!r}: (period, amplitude) u16 pairs")
-            head = (*self._head[:2], F_VIB_ABS if self.clock.absolute_time else F_VIB_REL,
-                    *self._head[3:])
+            head = (
+                *self._head[:2],
+                F_VIB_ABS if self.clock.absolute_time else F_VIB_REL,
+                *self._head[3:],
+            )
             data = _vib_struct(self.n_axes, not self.clock.absolute_time).pack(
-                *head, frame, field, *pulses, dout, *flat)
+                *head, frame, field, *pulses, dout, *flat
+            )
         if self._stroke is not None:
             lo, hi = self._stroke
             if min(pulses) < lo or max(pulses) > hi:
-                raise LimitError(f"positions {list(pulses)} leave the stroke [{lo}, {hi}] "
-                                 "pulses (stroke_mm, PA40 lift)")
+                raise LimitError(
+                    f"positions {list(pulses)} leave the stroke [{lo}, {hi}] "
+                    "pulses (stroke_mm, PA40 lift)"
+                )
         self.clock.commit(t_s, abs_ms)
         return [data]
 

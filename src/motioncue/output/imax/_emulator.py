@@ -76,8 +76,15 @@ class ImaxEmulator(UdpEmulatorBase):
     start_homed : bool
     """
 
-    def __init__(self, controller: ImaxController, host: str = "127.0.0.1", port: int = 0,
-                 *, homing_time_s: float = 1.0, start_homed: bool = True) -> None:
+    def __init__(
+        self,
+        controller: ImaxController,
+        host: str = "127.0.0.1",
+        port: int = 0,
+        *,
+        homing_time_s: float = 1.0,
+        start_homed: bool = True,
+    ) -> None:
         super().__init__(host, port)
         self.controller = controller
         self.n_axes = controller.n_axes
@@ -100,8 +107,9 @@ class ImaxEmulator(UdpEmulatorBase):
         self._reported_alarm = 0
         self._violations: list[Violation] = []
         stroke = controller.stroke_pulses
-        self.playback = Playback(self.n_axes, controller.buffer_frames, True,
-                                 controller.max_speed_pulses_s, stroke)
+        self.playback = Playback(
+            self.n_axes, controller.buffer_frames, True, controller.max_speed_pulses_s, stroke
+        )
         self.playback.fast_rate = 1.5 if self.params["PA06"] else 1.0
 
     @property
@@ -195,26 +203,54 @@ class ImaxEmulator(UdpEmulatorBase):
         n = self.n_axes
         absolute = function in (F_ABS, F_VIB_ABS)
         if function in (F_VIB_ABS, F_VIB_REL):
-            return VibrationFrameReply(ReplyStatus.COMMAND_ERROR, absolute, 5, 0, 0, (0,) * n,
-                                       self.inputs & 0xFFFF, ((0, 0),) * n).encode()
-        return MotionFrameReply(ReplyStatus.COMMAND_ERROR, absolute, 5, 0, 0, (0,) * n,
-                                self.inputs & 0xFFFF).encode()
+            return VibrationFrameReply(
+                ReplyStatus.COMMAND_ERROR,
+                absolute,
+                5,
+                0,
+                0,
+                (0,) * n,
+                self.inputs & 0xFFFF,
+                ((0, 0),) * n,
+            ).encode()
+        return MotionFrameReply(
+            ReplyStatus.COMMAND_ERROR, absolute, 5, 0, 0, (0,) * n, self.inputs & 0xFFFF
+        ).encode()
 
-    def _reply(self, msg: MotionFrame | VibrationFrame, status: ReplyStatus,
-               code: int) -> MotionFrameReply | VibrationFrameReply:
+    def _reply(
+        self, msg: MotionFrame | VibrationFrame, status: ReplyStatus, code: int
+    ) -> MotionFrameReply | VibrationFrameReply:
         channel = code if status != ReplyStatus.OK else channel_of_axes(len(msg.positions))
         if isinstance(msg, VibrationFrame):
-            return VibrationFrameReply(status, msg.absolute, channel, msg.frame, msg.time_ms,
-                                       msg.positions, self.inputs & 0xFFFF, msg.vibration)
-        return MotionFrameReply(status, msg.absolute, channel, msg.frame, msg.time_ms,
-                                msg.positions, self.inputs & 0xFFFF, msg.extend)
+            return VibrationFrameReply(
+                status,
+                msg.absolute,
+                channel,
+                msg.frame,
+                msg.time_ms,
+                msg.positions,
+                self.inputs & 0xFFFF,
+                msg.vibration,
+            )
+        return MotionFrameReply(
+            status,
+            msg.absolute,
+            channel,
+            msg.frame,
+            msg.time_ms,
+            msg.positions,
+            self.inputs & 0xFFFF,
+            msg.extend,
+        )
 
     def _frame(self, msg: MotionFrame | VibrationFrame) -> MotionFrameReply | VibrationFrameReply:
         p = self.params
         off = p["PA95"]
         if len(msg.positions) < off + self.n_axes:
-            self._malformed(f"frame {msg.frame} carries {len(msg.positions)} axes; this "
-                            f"controller needs axes {off + 1}..{off + self.n_axes} (PA95={off})")
+            self._malformed(
+                f"frame {msg.frame} carries {len(msg.positions)} axes; this "
+                f"controller needs axes {off + 1}..{off + self.n_axes} (PA95={off})"
+            )
             return self._reply(msg, ReplyStatus.COMMAND_ERROR, 5)
         if self.state == STATE_ESTOP:
             self.ignored_frames += 1
@@ -226,9 +262,14 @@ class ImaxEmulator(UdpEmulatorBase):
         if pb.full:
             self.refused_frames += 1
             self._bump_alarm(ERR_BUFFER)
-            self._violations.append(Violation(pb.t_end, "buffer", None,
-                                              f"frame {msg.frame} refused: buffer full "
-                                              f"({pb.depth} frames, Err21)"))
+            self._violations.append(
+                Violation(
+                    pb.t_end,
+                    "buffer",
+                    None,
+                    f"frame {msg.frame} refused: buffer full ({pb.depth} frames, Err21)",
+                )
+            )
             return self._reply(msg, ReplyStatus.ERROR, ERR_BUFFER)
         if msg.absolute:
             step = None if self._last_time_ms is None else msg.time_ms - self._last_time_ms
@@ -237,7 +278,7 @@ class ImaxEmulator(UdpEmulatorBase):
             step = msg.time_ms
         min_period = max(p["PA59"], 1) / 1000.0
         if self._resume_pending:
-            positions = msg.positions[off:off + self.n_axes]
+            positions = msg.positions[off : off + self.n_axes]
             duration = self._safe_time(positions)
             self._resume_pending = False
         elif p["PA0a"]:
@@ -247,14 +288,19 @@ class ImaxEmulator(UdpEmulatorBase):
         else:
             duration = step / 1000.0
             if duration < min_period - 1e-9:
-                self._violations.append(Violation(pb.t_end + duration, "period", None,
-                                                  f"frame {msg.frame} {step} ms after the "
-                                                  f"previous, PA59 = {p['PA59']} ms"))
-        pb.play(msg.frame, duration, msg.positions[off:off + self.n_axes])
+                self._violations.append(
+                    Violation(
+                        pb.t_end + duration,
+                        "period",
+                        None,
+                        f"frame {msg.frame} {step} ms after the previous, PA59 = {p['PA59']} ms",
+                    )
+                )
+        pb.play(msg.frame, duration, msg.positions[off : off + self.n_axes])
         if not p["PA9d"]:
             self.outputs = msg.port_out & 0xFFF
         if isinstance(msg, VibrationFrame):
-            self.vibration = msg.vibration[off:off + self.n_axes]
+            self.vibration = msg.vibration[off : off + self.n_axes]
         return self._reply(msg, ReplyStatus.OK, 0)
 
     def _servo(self, msg: ServoRead | ServoWrite) -> ServoReply:
@@ -263,8 +309,9 @@ class ImaxEmulator(UdpEmulatorBase):
             n = msg.count if isinstance(msg, ServoRead) else len(msg.values)
             return ServoReply(func + 1, ERR_ADDRESS, msg.start, (0,) * n)
         if isinstance(msg, ServoRead):
-            vals = tuple(self.servo_params.get((msg.channel, msg.start + i), 0)
-                         for i in range(msg.count))
+            vals = tuple(
+                self.servo_params.get((msg.channel, msg.start + i), 0) for i in range(msg.count)
+            )
             return ServoReply(func, msg.channel, msg.start, vals)
         for i, v in enumerate(msg.values):
             self.servo_params[(msg.channel, msg.start + i)] = v
@@ -280,15 +327,19 @@ class ImaxEmulator(UdpEmulatorBase):
         if address in self.dp_extra:
             return self.dp_extra[address]
         now = self._position_now()
-        for i, a in enumerate(_DP_POS[:self.n_axes]):
+        for i, a in enumerate(_DP_POS[: self.n_axes]):
             if address == a:
                 return now[i] & 0xFFFF
             if address == a + 1:
                 return (now[i] >> 16) & 0xFFFF
-        table = {0x48: len(self.playback.rows_t) & 0xFFFF,
-                 0x49: (len(self.playback.rows_t) - self.playback.depth) & 0xFFFF,
-                 0x5E: self.inputs & 0xFFFF, 0x66: self.outputs & 0xFFFF,
-                 0xFE: 0, 0xFF: 1}
+        table = {
+            0x48: len(self.playback.rows_t) & 0xFFFF,
+            0x49: (len(self.playback.rows_t) - self.playback.depth) & 0xFFFF,
+            0x5E: self.inputs & 0xFFFF,
+            0x66: self.outputs & 0xFFFF,
+            0xFE: 0,
+            0xFF: 1,
+        }
         return table.get(address, 0) if address <= 0xFF else None
 
     def _read(self, msg: RegisterRead) -> RegisterReply:
@@ -379,14 +430,22 @@ class ImaxEmulator(UdpEmulatorBase):
             return pb.rows_p[k]
         t0, t1 = pb.rows_t[k - 1], pb.rows_t[k]
         w = (t - t0) / (t1 - t0) if t1 > t0 else 1.0
-        return tuple(round(a + (b - a) * w) for a, b in zip(pb.rows_p[k - 1], pb.rows_p[k],
-                                                           strict=True))
+        return tuple(
+            round(a + (b - a) * w) for a, b in zip(pb.rows_p[k - 1], pb.rows_p[k], strict=True)
+        )
 
     def status_report(self) -> StatusReport:
         now = self._position_now()
         n = self.n_axes
-        return StatusReport(self.controller.node, now, (0,) * n, (0,) * n, self.alarm,
-                            self.outputs & 0xFFFF, self.inputs & 0xFFFF)
+        return StatusReport(
+            self.controller.node,
+            now,
+            (0,) * n,
+            (0,) * n,
+            self.alarm,
+            self.outputs & 0xFFFF,
+            self.inputs & 0xFFFF,
+        )
 
     def periodic(self, now_s: float) -> list[bytes]:
         p = self.params

@@ -32,7 +32,7 @@ from __future__ import annotations
 import enum
 import struct
 from dataclasses import dataclass
-from functools import lru_cache
+from functools import cache
 from typing import ClassVar
 
 from ..._errors import ProtocolError
@@ -134,7 +134,8 @@ def _check_u16(value: int, what: str) -> None:
 def _reg_unpack(data: bytes) -> tuple[int, int, tuple[int, ...]]:
     if len(data) < HEADER.size + REG_HEAD.size or len(data) % 2:
         raise ProtocolError(
-            f"register message: length {len(data)} bytes, expected an even length >= 16")
+            f"register message: length {len(data)} bytes, expected an even length >= 16"
+        )
     start, count = REG_HEAD.unpack_from(data, HEADER.size)
     n = (len(data) - HEADER.size - REG_HEAD.size) // 2
     return start, count, struct.unpack_from(f">{n}H", data, HEADER.size + REG_HEAD.size)
@@ -162,13 +163,15 @@ class RegisterRead:
 
     def __post_init__(self) -> None:
         if self.channel not in self.CHANNELS:
-            raise ProtocolError(f"{type(self).__name__}: channel {self.channel}, "
-                                f"allowed {self.CHANNELS}")
+            raise ProtocolError(
+                f"{type(self).__name__}: channel {self.channel}, allowed {self.CHANNELS}"
+            )
         for name in ("start", "who_accept", "who_reply"):
             _check_u16(getattr(self, name), name)
         if not 1 <= self.count <= self.MAX_COUNT:
-            raise ProtocolError(f"{type(self).__name__}: count {self.count}, "
-                                f"allowed 1..{self.MAX_COUNT}")
+            raise ProtocolError(
+                f"{type(self).__name__}: count {self.count}, allowed 1..{self.MAX_COUNT}"
+            )
 
     @property
     def function(self) -> int:
@@ -179,12 +182,21 @@ class RegisterRead:
         return HEADER.size + REG_HEAD.size + 2 * self.count
 
     def encode(self) -> bytes:
-        return struct.pack(f">6H2H{self.count}H", self.CONFIRM, PASSCODE, self.FUNCTION,
-                           self.channel, self.who_accept, self.who_reply, self.start,
-                           self.count, *([0] * self.count))
+        return struct.pack(
+            f">6H2H{self.count}H",
+            self.CONFIRM,
+            PASSCODE,
+            self.FUNCTION,
+            self.channel,
+            self.who_accept,
+            self.who_reply,
+            self.start,
+            self.count,
+            *([0] * self.count),
+        )
 
     @classmethod
-    def decode_parts(cls, h: Header, data: bytes):  # type: ignore[no-untyped-def]
+    def decode_parts(cls, h: Header, data: bytes):
         start, count, pad = _reg_unpack(data)
         if any(pad):
             raise ProtocolError(f"{cls.__name__}: Extra Data after Count must be zero")
@@ -223,14 +235,16 @@ class RegisterWrite:
 
     def __post_init__(self) -> None:
         if self.channel not in self.CHANNELS:
-            raise ProtocolError(f"{type(self).__name__}: channel {self.channel}, "
-                                f"allowed {self.CHANNELS[:3]}")
+            raise ProtocolError(
+                f"{type(self).__name__}: channel {self.channel}, allowed {self.CHANNELS[:3]}"
+            )
         for name in ("start", "who_accept", "who_reply"):
             _check_u16(getattr(self, name), name)
         object.__setattr__(self, "values", u16_tuple(self.values, type(self).__name__))
         if not 1 <= len(self.values) <= self.MAX_COUNT:
-            raise ProtocolError(f"{type(self).__name__}: {len(self.values)} values, "
-                                f"allowed 1..{self.MAX_COUNT}")
+            raise ProtocolError(
+                f"{type(self).__name__}: {len(self.values)} values, allowed 1..{self.MAX_COUNT}"
+            )
 
     @property
     def function(self) -> int:
@@ -242,15 +256,26 @@ class RegisterWrite:
 
     def encode(self) -> bytes:
         n = len(self.values)
-        return struct.pack(f">6H2H{n}H", self.CONFIRM, PASSCODE, self.FUNCTION, self.channel,
-                           self.who_accept, self.who_reply, self.start, n, *self.values)
+        return struct.pack(
+            f">6H2H{n}H",
+            self.CONFIRM,
+            PASSCODE,
+            self.FUNCTION,
+            self.channel,
+            self.who_accept,
+            self.who_reply,
+            self.start,
+            n,
+            *self.values,
+        )
 
     @classmethod
-    def decode_parts(cls, h: Header, data: bytes):  # type: ignore[no-untyped-def]
+    def decode_parts(cls, h: Header, data: bytes):
         start, count, values = _reg_unpack(data)
         if count != len(values):
-            raise ProtocolError(f"{cls.__name__}: Count says {count} registers, the datagram "
-                                f"carries {len(values)}")
+            raise ProtocolError(
+                f"{cls.__name__}: Count says {count} registers, the datagram carries {len(values)}"
+            )
         return cls(h.channel, start, values, h.who_accept, h.who_reply)
 
 
@@ -285,8 +310,12 @@ class RegisterReply:
     who_reply: int = WHO_NONE
 
     def __post_init__(self) -> None:
-        if (self.function & 0xFFF0) | 1 not in self.BASES or self.function & 0xF not in (2, 3,
-                                                                                        4, 5):
+        if (self.function & 0xFFF0) | 1 not in self.BASES or self.function & 0xF not in (
+            2,
+            3,
+            4,
+            5,
+        ):
             raise ProtocolError(f"{type(self).__name__}: function 0x{self.function:04X}")
         for name in ("channel", "start", "who_accept", "who_reply"):
             _check_u16(getattr(self, name), name)
@@ -309,15 +338,26 @@ class RegisterReply:
 
     def encode(self) -> bytes:
         n = len(self.values)
-        return struct.pack(f">6H2H{n}H", self.CONFIRM, PASSCODE, self.function, self.channel,
-                           self.who_accept, self.who_reply, self.start, n, *self.values)
+        return struct.pack(
+            f">6H2H{n}H",
+            self.CONFIRM,
+            PASSCODE,
+            self.function,
+            self.channel,
+            self.who_accept,
+            self.who_reply,
+            self.start,
+            n,
+            *self.values,
+        )
 
     @classmethod
-    def decode_parts(cls, h: Header, data: bytes):  # type: ignore[no-untyped-def]
+    def decode_parts(cls, h: Header, data: bytes):
         start, count, values = _reg_unpack(data)
         if count != len(values):
-            raise ProtocolError(f"{cls.__name__}: Count says {count} registers, the datagram "
-                                f"carries {len(values)}")
+            raise ProtocolError(
+                f"{cls.__name__}: Count says {count} registers, the datagram carries {len(values)}"
+            )
         return cls(h.function, h.channel, start, values, h.who_accept, h.who_reply)
 
 
@@ -330,13 +370,13 @@ class ServoReply(RegisterReply):
 
 
 # -- frames -----------------------------------------------------------------------------------
-@lru_cache(maxsize=None)
+@cache
 def _frame_struct(n_axes: int, relative: bool) -> struct.Struct:
     # header, Frame u32, Time u32 / i32, n x i32 positions, PortOut u16, Extend u32
     return struct.Struct(f">6HI{'i' if relative else 'I'}{n_axes}iHI")
 
 
-@lru_cache(maxsize=None)
+@cache
 def _vib_struct(n_axes: int, relative: bool) -> struct.Struct:
     # header, Frame u32, Time, n x i32, PortOut u16, n x (period u16 0.125 ms, amplitude u16)
     return struct.Struct(f">6HI{'i' if relative else 'I'}{n_axes}iH{2 * n_axes}H")
@@ -386,9 +426,18 @@ class MotionFrame:
         n = len(self.positions)
         try:
             return _frame_struct(n, not self.absolute).pack(
-                CONFIRM_MAIN, PASSCODE, self.function, channel_of_axes(n), self.who_accept,
-                self.who_reply, self.frame, self.time_ms, *self.positions, self.port_out,
-                self.extend)
+                CONFIRM_MAIN,
+                PASSCODE,
+                self.function,
+                channel_of_axes(n),
+                self.who_accept,
+                self.who_reply,
+                self.frame,
+                self.time_ms,
+                *self.positions,
+                self.port_out,
+                self.extend,
+            )
         except struct.error as exc:
             raise ProtocolError(f"IMAX frame field out of range: {exc}") from None
 
@@ -399,8 +448,9 @@ class MotionFrame:
         layout = _frame_struct(n, relative)
         check_length(data, layout.size, f"{n}-axis frame 0x{h.function:04X}")
         f = layout.unpack(data)
-        return cls(not relative, f[6], f[7], f[8:8 + n], f[8 + n], f[9 + n], h.who_accept,
-                   h.who_reply)
+        return cls(
+            not relative, f[6], f[7], f[8 : 8 + n], f[8 + n], f[9 + n], h.who_accept, h.who_reply
+        )
 
 
 @dataclass(frozen=True, slots=True)
@@ -433,8 +483,18 @@ class MotionFrameReply:
         n = len(self.positions)
         try:
             return _frame_struct(n, not self.absolute).pack(
-                CONFIRM_MAIN, PASSCODE, self.function, self.channel, WHO_NONE, WHO_NONE,
-                self.frame, self.time_ms, *self.positions, self.port, self.extend)
+                CONFIRM_MAIN,
+                PASSCODE,
+                self.function,
+                self.channel,
+                WHO_NONE,
+                WHO_NONE,
+                self.frame,
+                self.time_ms,
+                *self.positions,
+                self.port,
+                self.extend,
+            )
         except struct.error as exc:
             raise ProtocolError(f"IMAX frame reply field out of range: {exc}") from None
 
@@ -442,12 +502,22 @@ class MotionFrameReply:
     def decode_parts(cls, h: Header, data: bytes) -> MotionFrameReply:
         n, rest = divmod(len(data) - frame_size(0), 4)
         if rest or not 2 <= n <= MAX_AXES:
-            raise ProtocolError(f"frame reply 0x{h.function:04X}: length {len(data)} bytes is "
-                                "not 26 + 4 n for 2..12 axes")
+            raise ProtocolError(
+                f"frame reply 0x{h.function:04X}: length {len(data)} bytes is "
+                "not 26 + 4 n for 2..12 axes"
+            )
         relative = (h.function & 0xFFF0) == 0x1400
         f = _frame_struct(n, relative).unpack(data)
-        return cls(ReplyStatus(h.function & 0xF), not relative, h.channel, f[6], f[7],
-                   f[8:8 + n], f[8 + n], f[9 + n])
+        return cls(
+            ReplyStatus(h.function & 0xF),
+            not relative,
+            h.channel,
+            f[6],
+            f[7],
+            f[8 : 8 + n],
+            f[8 + n],
+            f[9 + n],
+        )
 
 
 @dataclass(frozen=True, slots=True)
@@ -468,8 +538,9 @@ class VibrationFrame:
     def __post_init__(self) -> None:
         channel_of_axes(len(self.positions))
         if len(self.vibration) != len(self.positions):
-            raise ProtocolError(f"{len(self.vibration)} vibration pairs for "
-                                f"{len(self.positions)} axes")
+            raise ProtocolError(
+                f"{len(self.vibration)} vibration pairs for {len(self.positions)} axes"
+            )
         self.encode()
 
     @property
@@ -484,9 +555,18 @@ class VibrationFrame:
         n = len(self.positions)
         try:
             return _vib_struct(n, not self.absolute).pack(
-                CONFIRM_MAIN, PASSCODE, self.function, channel_of_axes(n), self.who_accept,
-                self.who_reply, self.frame, self.time_ms, *self.positions, self.port_out,
-                *(v for pair in self.vibration for v in pair))
+                CONFIRM_MAIN,
+                PASSCODE,
+                self.function,
+                channel_of_axes(n),
+                self.who_accept,
+                self.who_reply,
+                self.frame,
+                self.time_ms,
+                *self.positions,
+                self.port_out,
+                *(v for pair in self.vibration for v in pair),
+            )
         except (struct.error, TypeError) as exc:
             raise ProtocolError(f"IMAX vibration frame field out of range: {exc}") from None
 
@@ -497,9 +577,17 @@ class VibrationFrame:
         layout = _vib_struct(n, relative)
         check_length(data, layout.size, f"{n}-axis vibration frame 0x{h.function:04X}")
         f = layout.unpack(data)
-        vib = f[9 + n:]
-        return cls(not relative, f[6], f[7], f[8:8 + n], f[8 + n],
-                   tuple(zip(vib[0::2], vib[1::2], strict=True)), h.who_accept, h.who_reply)
+        vib = f[9 + n :]
+        return cls(
+            not relative,
+            f[6],
+            f[7],
+            f[8 : 8 + n],
+            f[8 + n],
+            tuple(zip(vib[0::2], vib[1::2], strict=True)),
+            h.who_accept,
+            h.who_reply,
+        )
 
 
 @dataclass(frozen=True, slots=True)
@@ -533,9 +621,18 @@ class VibrationFrameReply:
         n = len(self.positions)
         try:
             return _vib_struct(n, not self.absolute).pack(
-                CONFIRM_MAIN, PASSCODE, self.function, self.channel, WHO_NONE, WHO_NONE,
-                self.frame, self.time_ms, *self.positions, self.port,
-                *(v for pair in self.vibration for v in pair))
+                CONFIRM_MAIN,
+                PASSCODE,
+                self.function,
+                self.channel,
+                WHO_NONE,
+                WHO_NONE,
+                self.frame,
+                self.time_ms,
+                *self.positions,
+                self.port,
+                *(v for pair in self.vibration for v in pair),
+            )
         except (struct.error, TypeError) as exc:
             raise ProtocolError(f"IMAX vibration reply field out of range: {exc}") from None
 
@@ -543,20 +640,30 @@ class VibrationFrameReply:
     def decode_parts(cls, h: Header, data: bytes) -> VibrationFrameReply:
         n, rest = divmod(len(data) - _vib_struct(0, False).size, 8)
         if rest or not 2 <= n <= MAX_AXES:
-            raise ProtocolError(f"vibration reply 0x{h.function:04X}: length {len(data)} is "
-                                "not 22 + 8 n for 2..12 axes")
+            raise ProtocolError(
+                f"vibration reply 0x{h.function:04X}: length {len(data)} is "
+                "not 22 + 8 n for 2..12 axes"
+            )
         relative = (h.function & 0xFFF0) == 0x1900
         f = _vib_struct(n, relative).unpack(data)
-        vib = f[9 + n:]
-        return cls(ReplyStatus(h.function & 0xF), not relative, h.channel, f[6], f[7],
-                   f[8:8 + n], f[8 + n], tuple(zip(vib[0::2], vib[1::2], strict=True)))
+        vib = f[9 + n :]
+        return cls(
+            ReplyStatus(h.function & 0xF),
+            not relative,
+            h.channel,
+            f[6],
+            f[7],
+            f[8 : 8 + n],
+            f[8 + n],
+            tuple(zip(vib[0::2], vib[1::2], strict=True)),
+        )
 
 
 # -- status report ----------------------------------------------------------------------------
 STATUS_HEAD = struct.Struct(">3HHH")  # confirm, pass, function, control id, servo count
 
 
-@lru_cache(maxsize=None)
+@cache
 def _status_struct(n: int) -> struct.Struct:
     return struct.Struct(f">3HHH{n}i{n}h{n}H3H")
 
@@ -590,8 +697,9 @@ class StatusReport:
     def __post_init__(self) -> None:
         n = len(self.positions)
         if not 0 <= n <= MAX_AXES or len(self.torques) != n or len(self.alarms) != n:
-            raise ProtocolError("status report: one position, torque and alarm per servo "
-                                "(at most 12)")
+            raise ProtocolError(
+                "status report: one position, torque and alarm per servo (at most 12)"
+            )
         self.encode()
 
     @property
@@ -601,9 +709,19 @@ class StatusReport:
     def encode(self) -> bytes:
         n = len(self.positions)
         try:
-            return _status_struct(n).pack(CONFIRM_SERVO, PASSCODE, F_STATUS, self.control_id,
-                                          n, *self.positions, *self.torques, *self.alarms,
-                                          self.control_alarm, self.outputs, self.inputs)
+            return _status_struct(n).pack(
+                CONFIRM_SERVO,
+                PASSCODE,
+                F_STATUS,
+                self.control_id,
+                n,
+                *self.positions,
+                *self.torques,
+                *self.alarms,
+                self.control_alarm,
+                self.outputs,
+                self.inputs,
+            )
         except struct.error as exc:
             raise ProtocolError(f"status report field out of range: {exc}") from None
 
@@ -617,7 +735,9 @@ class StatusReport:
         layout = _status_struct(n)
         check_length(data, layout.size, f"status report of {n} servos")
         f = layout.unpack(data)
-        return cls(f[3], f[5:5 + n], f[5 + n:5 + 2 * n], f[5 + 2 * n:5 + 3 * n], *f[5 + 3 * n:])
+        return cls(
+            f[3], f[5 : 5 + n], f[5 + n : 5 + 2 * n], f[5 + 2 * n : 5 + 3 * n], *f[5 + 3 * n :]
+        )
 
 
 ImaxMessage = (
@@ -666,7 +786,8 @@ def decode(data: bytes) -> ImaxMessage:
         function), pass code not 0, unknown function, wrong channel, length or padding.
     """
     if len(data) >= 6 and data[:2] == b"\x33\xcc" and data[4:6] == b"\x31\x01":
-        h = Header(CONFIRM_SERVO, *struct.unpack_from(">HH", data, 2), 0, 0, 0)
+        passcode, function = struct.unpack_from(">HH", data, 2)
+        h = Header(CONFIRM_SERVO, passcode, function, 0, 0, 0)
         if h.passcode != PASSCODE:
             raise ProtocolError(f"pass code 0x{h.passcode:04X}, expected 0x0000")
     else:
@@ -674,9 +795,10 @@ def decode(data: bytes) -> ImaxMessage:
     decoder = _DECODERS.get((h.confirm, h.function))
     if decoder is None:
         raise ProtocolError(
-            f"unknown IMAX function code 0x{h.function:04X} with confirm code 0x{h.confirm:04X}")
+            f"unknown IMAX function code 0x{h.function:04X} with confirm code 0x{h.confirm:04X}"
+        )
     try:
-        return decoder(h, data)  # type: ignore[operator, no-any-return]
+        return decoder(h, data)  # type: ignore[operator]
     except (struct.error, ValueError) as exc:
         if isinstance(exc, ProtocolError):
             raise

@@ -51,8 +51,10 @@ PA_SPEC: dict[str, tuple[int, int, int, str]] = {
     "PA27": (0, 255, 0, "report IP 2 C"),
     "PA28": (0, 255, 0, "report IP 2 D"),
     "PA29": (0, 65535, 0, "report port 2"),
-    **{f"PA{0x30 + i:02x}": (0, 300, 40, f"axis {i + 1} homing torque (5.4: 35..47)")
-       for i in range(11)},
+    **{
+        f"PA{0x30 + i:02x}": (0, 300, 40, f"axis {i + 1} homing torque (5.4: 35..47)")
+        for i in range(11)
+    },
     "PA3b": (0, 65535, 0, "485 homing sensor"),
     "PA3c": (0, 4095, 0, "per-axis homing: bit = sensor"),
     "PA3d": (0, 65535, 0, "power-up delay, ms"),
@@ -60,8 +62,10 @@ PA_SPEC: dict[str, tuple[int, int, int, str]] = {
     "PA3f": (0, 65535, 0, "485 homing speed"),
     "PA40": (0, 65535, 100, "lift after homing, 0.1 mm (ex 5.5: 100)"),
     "PA41": (1, 65535, 50, "actuator screw lead, 0.1 mm (ex 5.5: 50)"),
-    **{f"PA{0x42 + i:02x}": (0, 65535, 0, f"axis {i + 1} lift when PA40 = 0, 0.1 mm")
-       for i in range(6)},
+    **{
+        f"PA{0x42 + i:02x}": (0, 65535, 0, f"axis {i + 1} lift when PA40 = 0, 0.1 mm")
+        for i in range(6)
+    },
     "PA4c": (0, 65535, 0, "end-of-command delay"),
     "PA4d": (0, 65535, 0, "command smoothing time"),
     "PA54": (0, 1, 0, "encoder: 0 = 5000 lines, 1 = 2500 lines"),
@@ -71,10 +75,14 @@ PA_SPEC: dict[str, tuple[int, int, int, str]] = {
     "PA60": (0, 1, 0, "analogue position mode"),
     "PA61": (1, 65535, 1, "analogue position ratio numerator"),
     "PA62": (1, 65535, 1, "analogue position ratio denominator"),
-    **{f"PA{0x70 + i:02x}": (0, 10000, 100, f"axis {i + 1} safe speed, rpm (chosen 100)")
-       for i in range(6)},
-    **{f"PA{0x80 + i:02x}": (0, 10000, 0, f"axis {i + 1} maximum speed, rpm (0 = none)")
-       for i in range(6)},
+    **{
+        f"PA{0x70 + i:02x}": (0, 10000, 100, f"axis {i + 1} safe speed, rpm (chosen 100)")
+        for i in range(6)
+    },
+    **{
+        f"PA{0x80 + i:02x}": (0, 10000, 0, f"axis {i + 1} maximum speed, rpm (0 = none)")
+        for i in range(6)
+    },
     "PA90": (0, 15, 0, "IO functions: bit0 e-stop, bit1 jog, bit3 emergency reset"),
     "PA91": (0, 2, 0, "e-stop: 0 hold then go on, 1 to zero then go on, 2 hold until reset"),
     "PA92": (0, 4095, 0, "e-stop inputs (all selected must be active)"),
@@ -87,10 +95,14 @@ PA_SPEC: dict[str, tuple[int, int, int, str]] = {
     "PA9d": (0, 1, 0, "1: ignore PortOut of frames (outputs by DPF1 only)"),
     "PA9e": (0, 4095, 0, "manual output bits"),
     "PA9f": (0, 4095, 0, "initial output bits"),
-    **{f"PA{0xA0 + i:02x}": (1, 3000, 2, f"axis {i + 1} acceleration factor (ex 5.10: 2)")
-       for i in range(6)},
-    **{f"PA{0xB0 + i:02x}": (1, 3000, 1500, f"axis {i + 1} acceleration (ex 5.10: 1500)")
-       for i in range(6)},
+    **{
+        f"PA{0xA0 + i:02x}": (1, 3000, 2, f"axis {i + 1} acceleration factor (ex 5.10: 2)")
+        for i in range(6)
+    },
+    **{
+        f"PA{0xB0 + i:02x}": (1, 3000, 1500, f"axis {i + 1} acceleration (ex 5.10: 1500)")
+        for i in range(6)
+    },
     **{f"PA{0xC0 + i:02x}": (0, 12, 0, f"axis {i + 1} homing input") for i in range(6)},
     **{f"PA{0xC6 + i:02x}": (0, 3, 0, f"axis {i + 1} homing method") for i in range(6)},
     "PAcd": (0, 65535, 0, "reverse homing limit"),

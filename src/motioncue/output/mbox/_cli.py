@@ -7,7 +7,7 @@ from typing import Any, TextIO
 
 from ..._errors import ConfigError, ProtocolError
 from .._transport import Transport
-from .._udp_cli import describe, exchange, parse_bits, parse_value, park
+from .._udp_cli import describe, exchange, park, parse_bits, parse_value
 from .._udp_common import HEADER, WHO_ALL, decode_header
 from ._controller import MboxController
 from ._emulator import MboxEmulator
@@ -17,9 +17,9 @@ from ._messages import (
     CHANNEL_FX,
     CHANNEL_FXM,
     F_ABS,
-    F_REL,
     F_READ,
     F_READ_ERR,
+    F_REL,
     F_STATUS,
     F_WRITE,
     F_WRITE_ERR,
@@ -38,8 +38,9 @@ _DX = re.compile(r"^(?:dn|dx)[ _]?([0-9a-f]{1,2})$", re.IGNORECASE)
 _CX = re.compile(r"^(?:cn|cx)[ _]?([0-7])$", re.IGNORECASE)
 
 
-def emulator(controller: MboxController, host: str = "127.0.0.1", port: int = 0,
-             **options: Any) -> MboxEmulator:
+def emulator(
+    controller: MboxController, host: str = "127.0.0.1", port: int = 0, **options: Any
+) -> MboxEmulator:
     """An (unstarted) emulator of ``controller`` listening on ``host:port``."""
     return MboxEmulator(controller, host, port, **options)
 
@@ -64,21 +65,40 @@ def register(name: str, *, for_write: bool, save: bool = False) -> tuple[int, in
     return channel, int(fn[2:], 16), fn
 
 
-def send_verb(controller: MboxController, transport: Transport, verb: str, args: list[str],
-              *, who: tuple[int, int] = (WHO_ALL, WHO_ALL), save: bool = False,
-              out: TextIO) -> int:
+def send_verb(
+    controller: MboxController,
+    transport: Transport,
+    verb: str,
+    args: list[str],
+    *,
+    who: tuple[int, int] = (WHO_ALL, WHO_ALL),
+    save: bool = False,
+    out: TextIO,
+) -> int:
     """Run one ``motioncue send`` verb; returns the exit status (0 ok, 1 error reply)."""
     accept, reply_who = who
 
     def write(channel: int, start: int, values: tuple[int, ...]) -> Any:
         msg = RegisterWrite(channel, start, values, accept, reply_who)
-        return exchange(transport, msg.encode(), decode,
-                        lambda r: r.function in (F_WRITE + 1, F_WRITE_ERR), reply_who != 0, out)
+        return exchange(
+            transport,
+            msg.encode(),
+            decode,
+            lambda r: r.function in (F_WRITE + 1, F_WRITE_ERR),
+            reply_who != 0,
+            out,
+        )
 
     def read(channel: int, start: int, count: int) -> Any:
         msg = RegisterRead(channel, start, count, accept, reply_who)
-        return exchange(transport, msg.encode(), decode,
-                        lambda r: r.function in (F_READ + 1, F_READ_ERR), reply_who != 0, out)
+        return exchange(
+            transport,
+            msg.encode(),
+            decode,
+            lambda r: r.function in (F_READ + 1, F_READ_ERR),
+            reply_who != 0,
+            out,
+        )
 
     def nargs(n: int) -> None:
         if len(args) != n:
@@ -105,7 +125,7 @@ def send_verb(controller: MboxController, transport: Transport, verb: str, args:
     elif verb == "read":
         if len(args) not in (1, 2):
             raise ConfigError("send read REG [COUNT]")
-        channel, start, label = register(args[0], for_write=False)
+        channel, start, _label = register(args[0], for_write=False)
         count = parse_value(args[1], "count") if len(args) == 2 else 1
         reply = read(channel, start, count)
         if isinstance(reply, RegisterReadReply):
@@ -115,7 +135,7 @@ def send_verb(controller: MboxController, transport: Transport, verb: str, args:
     elif verb == "write":
         if len(args) < 2:
             raise ConfigError("send write REG VALUE...")
-        channel, start, label = register(args[0], for_write=True, save=save)
+        channel, start, _label = register(args[0], for_write=True, save=save)
         values = tuple(parse_value(v) & 0xFFFF for v in args[1:])
         reply = write(channel, start, values)
     elif verb == "park":
@@ -126,7 +146,7 @@ def send_verb(controller: MboxController, transport: Transport, verb: str, args:
         if not isinstance(reply, RegisterReadReply):
             return 1
         dx = reply.values
-        addrs = (0x0C, 0x0E, 0x10, 0x28, 0x2A, 0x2C)[:controller.n_axes]
+        addrs = (0x0C, 0x0E, 0x10, 0x28, 0x2A, 0x2C)[: controller.n_axes]
         current = []
         for a in addrs:
             v = dx[a] | dx[a + 1] << 16
@@ -151,7 +171,7 @@ def split_stream(blob: bytes) -> list[bytes]:
     out = []
     off = 0
     while off < len(blob):
-        h = decode_header(blob[off:off + HEADER.size])
+        h = decode_header(blob[off : off + HEADER.size])
         f = h.function
         if f & 0xFFF0 in (F_ABS & 0xFFF0, F_REL & 0xFFF0):
             if h.channel not in (0, 1):
@@ -162,12 +182,12 @@ def split_stream(blob: bytes) -> list[bytes]:
         elif f in (F_STATUS, F_READ, F_READ + 1, F_WRITE, F_WRITE + 1):
             if len(blob) < off + HEADER.size + 4:
                 raise ProtocolError(f"byte {off}: truncated register message")
-            count = int.from_bytes(blob[off + 14:off + 16], "big")
+            count = int.from_bytes(blob[off + 14 : off + 16], "big")
             size = HEADER.size + 4 + 2 * count
         else:
             raise ProtocolError(f"byte {off}: unknown MBOX function 0x{f:04X}")
         if off + size > len(blob):
             raise ProtocolError(f"byte {off}: message of {size} bytes truncated")
-        out.append(blob[off:off + size])
+        out.append(blob[off : off + size])
         off += size
     return out

@@ -38,8 +38,10 @@ def validate_parameters(values: Mapping[str, Any], where: str) -> dict[str, int]
             )
         lo, hi, _, meaning = FN_SPEC[name]
         if isinstance(value, bool) or not isinstance(value, int) or not lo <= value <= hi:
-            raise ConfigError(f"{where}: {name} = {value!r} is invalid ({meaning}); "
-                              f"allowed: an integer in [{lo}, {hi}]")
+            raise ConfigError(
+                f"{where}: {name} = {value!r} is invalid ({meaning}); "
+                f"allowed: an integer in [{lo}, {hi}]"
+            )
         out[name] = value
     return out
 
@@ -78,14 +80,18 @@ class MboxController:
         if self.n_axes not in (3, 6):
             raise ConfigError(f"MBOX {self.name}: axes = {self.n_axes}; allowed: 3, 6")
         parse_target(self.default_target)
-        object.__setattr__(self, "parameters", _freeze(
-            validate_parameters(self.parameters, f"MBOX {self.name}")))
+        object.__setattr__(
+            self, "parameters", _freeze(validate_parameters(self.parameters, f"MBOX {self.name}"))
+        )
         if not self.max_motor_speed_rpm > 0:
-            raise ConfigError(f"MBOX {self.name}: max_motor_speed_rpm = "
-                              f"{self.max_motor_speed_rpm!r}; allowed: > 0")
+            raise ConfigError(
+                f"MBOX {self.name}: max_motor_speed_rpm = "
+                f"{self.max_motor_speed_rpm!r}; allowed: > 0"
+            )
         if not 1 <= self.buffer_frames <= 65535:
-            raise ConfigError(f"MBOX {self.name}: buffer_frames = {self.buffer_frames}; "
-                              "allowed: 1..65535")
+            raise ConfigError(
+                f"MBOX {self.name}: buffer_frames = {self.buffer_frames}; allowed: 1..65535"
+            )
 
     # -- derived ------------------------------------------------------------------------
     @property
@@ -146,8 +152,9 @@ class MboxController:
         first_frame: int = 0,
     ) -> MboxFrameEncoder:
         """A fresh frame encoder (frame counter and time origin) for one run."""
-        return MboxFrameEncoder(self, FrameClock(absolute_time, t0_s, first_frame),
-                                who_accept, who_reply)
+        return MboxFrameEncoder(
+            self, FrameClock(absolute_time, t0_s, first_frame), who_accept, who_reply
+        )
 
 
 class MboxFrameEncoder:
@@ -160,24 +167,41 @@ class MboxFrameEncoder:
     Nothing is counted for a refused frame.
     """
 
-    __slots__ = ("_dac_max", "_head", "_pack", "_stroke", "clock", "controller", "n_axes",
-                 "who_accept", "who_reply")
+    __slots__ = (
+        "_dac_max",
+        "_head",
+        "_pack",
+        "_stroke",
+        "clock",
+        "controller",
+        "n_axes",
+        "who_accept",
+        "who_reply",
+    )
 
-    def __init__(self, controller: MboxController, clock: FrameClock, who_accept: int,
-                 who_reply: int) -> None:
+    def __init__(
+        self, controller: MboxController, clock: FrameClock, who_accept: int, who_reply: int
+    ) -> None:
         self.controller = controller
         self.clock = clock
         self.n_axes = controller.n_axes
         self.who_accept = who_accept
         self.who_reply = who_reply
         self._pack = _frame_struct(controller.n_axes, not clock.absolute_time).pack
-        self._head = (CONFIRM_MAIN, PASSCODE, F_ABS if clock.absolute_time else F_REL,
-                      0 if controller.n_axes == 3 else 1, who_accept, who_reply)
+        self._head = (
+            CONFIRM_MAIN,
+            PASSCODE,
+            F_ABS if clock.absolute_time else F_REL,
+            0 if controller.n_axes == 3 else 1,
+            who_accept,
+            who_reply,
+        )
         self._stroke = controller.stroke_pulses
         self._dac_max = (controller.parameters["Fn078"], controller.parameters["Fn079"])
 
-    def encode(self, t_s: float, pulses: Sequence[Any], dout: int = 0,
-               dacs: tuple[int, int] = (0, 0)) -> list[bytes]:
+    def encode(
+        self, t_s: float, pulses: Sequence[Any], dout: int = 0, dacs: tuple[int, int] = (0, 0)
+    ) -> list[bytes]:
         """One frame datagram for the positions ``pulses`` (len ``n_axes``) at ``t_s``."""
         if len(pulses) != self.n_axes:
             raise ProtocolError(f"{len(pulses)} positions given, the MBOX runs {self.n_axes} axes")
@@ -186,21 +210,27 @@ class MboxFrameEncoder:
         if len(dacs) != 2:
             raise ProtocolError(f"dacs = {dacs!r}: the MBOX has 2 DACs")
         d1, d2 = dacs
-        if not (isinstance(d1, int) and isinstance(d2, int)
-                and 0 <= d1 <= self._dac_max[0] and 0 <= d2 <= self._dac_max[1]):
+        if not (
+            isinstance(d1, int)
+            and isinstance(d2, int)
+            and 0 <= d1 <= self._dac_max[0]
+            and 0 <= d2 <= self._dac_max[1]
+        ):
             raise ProtocolError(f"dacs = {dacs!r}: allowed 0 .. Fn078/Fn079 = {self._dac_max}")
         frame, field, abs_ms = self.clock.stamp(t_s)
         try:
-            data = self._pack(*self._head, frame, field, *pulses, dout & 0xFFF, d1, d2,
-                              dout >> 12)
+            data = self._pack(*self._head, frame, field, *pulses, dout & 0xFFF, d1, d2, dout >> 12)
         except struct.error:
             pulses = check_int32(pulses, self.n_axes)  # raises with a clear message, or
-            data = self._pack(*self._head, frame, field, *pulses, dout & 0xFFF, d1, d2,
-                              dout >> 12)  # integral floats
+            data = self._pack(
+                *self._head, frame, field, *pulses, dout & 0xFFF, d1, d2, dout >> 12
+            )  # integral floats
         if self._stroke is not None:
             if min(pulses) < 0 or max(pulses) > self._stroke:
-                raise LimitError(f"positions {list(pulses)} leave the stroke [0, {self._stroke}] "
-                                 "pulses (Fn0C0 x Fn0C1)")
+                raise LimitError(
+                    f"positions {list(pulses)} leave the stroke [0, {self._stroke}] "
+                    "pulses (Fn0C0 x Fn0C1)"
+                )
         self.clock.commit(t_s, abs_ms)
         return [data]
 

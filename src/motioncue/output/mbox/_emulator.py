@@ -81,8 +81,15 @@ class MboxEmulator(UdpEmulatorBase):
         ``True``: ready at once; ``False``: homing first, as after power-up.
     """
 
-    def __init__(self, controller: MboxController, host: str = "127.0.0.1", port: int = 0,
-                 *, homing_time_s: float = 1.0, start_homed: bool = True) -> None:
+    def __init__(
+        self,
+        controller: MboxController,
+        host: str = "127.0.0.1",
+        port: int = 0,
+        *,
+        homing_time_s: float = 1.0,
+        start_homed: bool = True,
+    ) -> None:
         super().__init__(host, port)
         self.controller = controller
         self.n_axes = controller.n_axes
@@ -104,8 +111,12 @@ class MboxEmulator(UdpEmulatorBase):
         self._violations: list[Violation] = []
         stroke = controller.stroke_pulses
         self.playback = Playback(
-            self.n_axes, controller.buffer_frames, bool(self.params["Fn01C"]),
-            controller.max_speed_pulses_s, None if stroke is None else (0, stroke))
+            self.n_axes,
+            controller.buffer_frames,
+            bool(self.params["Fn01C"]),
+            controller.max_speed_pulses_s,
+            None if stroke is None else (0, stroke),
+        )
         self._set_rate()
 
     # -- what tests look at -------------------------------------------------------------
@@ -178,9 +189,14 @@ class MboxEmulator(UdpEmulatorBase):
             return MotionFrameReply(FrameStatus.OK, msg)
         if pb.fifo and pb.full:
             self.refused_frames += 1
-            self._violations.append(Violation(pb.t_end, "buffer", None,
-                                              f"frame {msg.line} refused: buffer full "
-                                              f"({pb.depth} frames)"))
+            self._violations.append(
+                Violation(
+                    pb.t_end,
+                    "buffer",
+                    None,
+                    f"frame {msg.line} refused: buffer full ({pb.depth} frames)",
+                )
+            )
             return MotionFrameReply(FrameStatus.BUFFER_FULL, msg)
         p = self.params
         if msg.absolute:
@@ -211,8 +227,9 @@ class MboxEmulator(UdpEmulatorBase):
             if msg.start + msg.count > 256:
                 return RegisterError(0x1103, msg.channel, msg.start, msg.count, ERR_ADDRESS)
             dx = self.dx()
-            return RegisterReadReply(msg.channel, msg.start, tuple(dx[msg.start:msg.start +
-                                                                      msg.count]))
+            return RegisterReadReply(
+                msg.channel, msg.start, tuple(dx[msg.start : msg.start + msg.count])
+            )
         if msg.start + msg.count > 0x200:  # Fn000 .. Fn1FF
             return RegisterError(0x1103, msg.channel, msg.start, msg.count, ERR_ADDRESS)
         values = []
@@ -321,8 +338,9 @@ class MboxEmulator(UdpEmulatorBase):
             return pb.rows_p[k]
         t0, t1 = rows_t[k - 1], rows_t[k]
         w = (t - t0) / (t1 - t0) if t1 > t0 else 1.0
-        return tuple(round(a + (b - a) * w) for a, b in zip(pb.rows_p[k - 1], pb.rows_p[k],
-                                                           strict=True))
+        return tuple(
+            round(a + (b - a) * w) for a, b in zip(pb.rows_p[k - 1], pb.rows_p[k], strict=True)
+        )
 
     def dx(self) -> list[int]:
         """The 256 DX status words as the box would report them."""
@@ -370,5 +388,5 @@ class MboxEmulator(UdpEmulatorBase):
         self._tick(now_s)
         start, count = p["Fn042"], max(1, p["Fn043"])
         dx = self.dx()
-        words = tuple(dx[start:start + count]) or (0,)
+        words = tuple(dx[start : start + count]) or (0,)
         return [StatusReport(CHANNEL_DX, start, words, WHO_NONE, WHO_NONE).encode()]

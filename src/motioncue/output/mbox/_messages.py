@@ -20,7 +20,7 @@ from __future__ import annotations
 import enum
 import struct
 from dataclasses import dataclass
-from functools import lru_cache
+from functools import cache
 from typing import ClassVar
 
 from ..._errors import ProtocolError
@@ -96,10 +96,27 @@ def _check_u16(value: int, what: str) -> None:
         raise ProtocolError(f"{what} = {value!r} is not in [0, 0xFFFF]")
 
 
-def _reg_pack(function: int, channel: int, accept: int, reply: int, start: int,
-              count: int, words: tuple[int, ...]) -> bytes:
-    return struct.pack(f">6H2H{len(words)}H", CONFIRM_MAIN, PASSCODE, function, channel,
-                       accept, reply, start, count, *words)
+def _reg_pack(
+    function: int,
+    channel: int,
+    accept: int,
+    reply: int,
+    start: int,
+    count: int,
+    words: tuple[int, ...],
+) -> bytes:
+    return struct.pack(
+        f">6H2H{len(words)}H",
+        CONFIRM_MAIN,
+        PASSCODE,
+        function,
+        channel,
+        accept,
+        reply,
+        start,
+        count,
+        *words,
+    )
 
 
 def _reg_unpack(data: bytes) -> tuple[int, int, tuple[int, ...]]:
@@ -146,8 +163,15 @@ class RegisterRead:
         return HEADER.size + REG_HEAD.size + 2 * self.count
 
     def encode(self) -> bytes:
-        return _reg_pack(F_READ, self.channel, self.who_accept, self.who_reply, self.start,
-                         self.count, (0,) * self.count)
+        return _reg_pack(
+            F_READ,
+            self.channel,
+            self.who_accept,
+            self.who_reply,
+            self.start,
+            self.count,
+            (0,) * self.count,
+        )
 
     @classmethod
     def decode_parts(cls, h: Header, data: bytes) -> RegisterRead:
@@ -193,11 +217,18 @@ class _RegisterValues:
         return HEADER.size + REG_HEAD.size + 2 * len(self.values)
 
     def encode(self) -> bytes:
-        return _reg_pack(self.FUNCTION, self.channel, self.who_accept, self.who_reply,
-                         self.start, len(self.values), self.values)
+        return _reg_pack(
+            self.FUNCTION,
+            self.channel,
+            self.who_accept,
+            self.who_reply,
+            self.start,
+            len(self.values),
+            self.values,
+        )
 
     @classmethod
-    def decode_parts(cls, h: Header, data: bytes):  # type: ignore[no-untyped-def]
+    def decode_parts(cls, h: Header, data: bytes):
         start, count, values = _reg_unpack(data)
         if count != len(values):
             raise ProtocolError(
@@ -268,9 +299,9 @@ class RegisterError:
     size: ClassVar[int] = HEADER.size + 6
 
     def encode(self) -> bytes:
-        return HEADER.pack(CONFIRM_MAIN, PASSCODE, self.function, self.channel,
-                           self.who_accept, self.who_reply) + self.LAYOUT.pack(
-            self.start, self.count, self.error_code)
+        return HEADER.pack(
+            CONFIRM_MAIN, PASSCODE, self.function, self.channel, self.who_accept, self.who_reply
+        ) + self.LAYOUT.pack(self.start, self.count, self.error_code)
 
     @classmethod
     def decode_parts(cls, h: Header, data: bytes) -> RegisterError:
@@ -287,7 +318,7 @@ class FrameStatus(enum.IntEnum):
     SHORT_FRAME = 4
 
 
-@lru_cache(maxsize=None)
+@cache
 def _frame_struct(n_axes: int, relative: bool) -> struct.Struct:
     # header, Line u32, Time u32 (abs) / i32 (delta), n x i32 positions,
     # BaseDout u16, DAC1 u16, DAC2 u16, ExtDout u16
@@ -360,9 +391,20 @@ class MotionFrame:
         n = len(self.positions)
         try:
             return _frame_struct(n, not self.absolute).pack(
-                CONFIRM_MAIN, PASSCODE, F_ABS if self.absolute else F_REL,
-                _CHANNEL_OF_AXES[n], self.who_accept, self.who_reply, self.line, self.time_ms,
-                *self.positions, self.base_dout, self.dac1, self.dac2, self.ext_dout)
+                CONFIRM_MAIN,
+                PASSCODE,
+                F_ABS if self.absolute else F_REL,
+                _CHANNEL_OF_AXES[n],
+                self.who_accept,
+                self.who_reply,
+                self.line,
+                self.time_ms,
+                *self.positions,
+                self.base_dout,
+                self.dac1,
+                self.dac2,
+                self.ext_dout,
+            )
         except (struct.error, KeyError) as exc:
             raise ProtocolError(f"frame field out of range: {exc}") from None
 
@@ -375,8 +417,18 @@ class MotionFrame:
         layout = _frame_struct(n, relative)
         check_length(data, layout.size, f"{n}-axis frame 0x{h.function:04X}")
         f = layout.unpack(data)
-        return cls(not relative, f[6], f[7], f[8:8 + n], f[8 + n], f[9 + n], f[10 + n],
-                   f[11 + n], h.who_accept, h.who_reply)
+        return cls(
+            not relative,
+            f[6],
+            f[7],
+            f[8 : 8 + n],
+            f[8 + n],
+            f[9 + n],
+            f[10 + n],
+            f[11 + n],
+            h.who_accept,
+            h.who_reply,
+        )
 
 
 @dataclass(frozen=True, slots=True)
@@ -452,7 +504,7 @@ def decode(data: bytes) -> MboxMessage:
     if decoder is None:
         raise ProtocolError(f"unknown MBOX function code 0x{h.function:04X}")
     try:
-        return decoder(h, data)  # type: ignore[no-any-return]
+        return decoder(h, data)
     except (struct.error, ValueError) as exc:
         if isinstance(exc, ProtocolError):
             raise
