@@ -163,23 +163,26 @@ class Playback:
     def play(self, frame_no: int, duration_s: float, positions: Sequence[int]) -> None:
         """Append a frame reached ``duration_s`` after the previous one (or at 0 if first)."""
         positions = tuple(int(p) for p in positions)
+        base = None
         if not self.fifo and len(self.pending) > 1 and self.rows_t:
-            # latest-frame mode: the frame not yet started is replaced by this one
+            # latest-frame mode: the frame not yet started is replaced by this one, which
+            # keeps its own place in time (the replaced frame's time + this step)
             self.pending.pop()
-            t_prev_end = self.rows_t.pop()
+            base = self.rows_t.pop()
             self.rows_p.pop()
             self.rows_f.pop()
             self.frames_dropped += 1
             self.t_end = self.rows_t[-1] if self.rows_t else 0.0
-            self.position = self.rows_p[-1] if self.rows_p else self.position
-            del t_prev_end
+            self.position = self.rows_p[-1] if self.rows_p else (0,) * self.n_axes
         if not self.started:
             self.started = True
             t = 0.0
             self.play_t = 0.0
+            move_s = duration_s
         else:
-            t = self.t_end + duration_s
-        self._check(t, duration_s, positions, frame_no)
+            t = (self.t_end if base is None else base) + duration_s
+            move_s = t - self.t_end if self.rows_t else duration_s
+        self._check(t, move_s, positions, frame_no)
         if self.last_frame_no is not None and frame_no != (self.last_frame_no + 1) & 0xFFFFFFFF:
             self.violations.append(
                 Violation(
