@@ -202,7 +202,9 @@ def test_mutations_near_valid_messages_raise_only_protocol_error(msg, data):
         out = mbox.decode(bytes(raw))
     except ProtocolError:
         return
-    assert out.encode() == bytes(raw)  # whatever decodes re-encodes to the same bytes
+    assert mbox.decode(out.encode()) == out
+    if not isinstance(out, mbox.RegisterRead):  # a read request's zero padding may vary
+        assert out.encode() == bytes(raw)  # whatever decodes re-encodes to the same bytes
 
 
 # -- the frame encoder (the pipeline's contract) -----------------------------------------------

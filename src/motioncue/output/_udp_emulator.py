@@ -183,7 +183,9 @@ class Playback:
             t = (self.t_end if base is None else base) + duration_s
             move_s = t - self.t_end if self.rows_t else duration_s
         self._check(t, move_s, positions, frame_no)
-        if self.last_frame_no is not None and frame_no != (self.last_frame_no + 1) & 0xFFFFFFFF:
+        # frame numbers count up by one; 0 starts a new run (a new encoder)
+        expected = None if self.last_frame_no is None else (self.last_frame_no + 1) & 0xFFFFFFFF
+        if expected is not None and frame_no not in (expected, 0):
             self.violations.append(
                 Violation(
                     t,
