@@ -40,8 +40,9 @@ class Listener:
         self.got.append(data)
         if self.answer:
             msg = mbox.decode(data)
-            self.sock.sendto(mbox.RegisterWriteReply(msg.channel, msg.start, msg.values).encode(),
-                             peer)
+            self.sock.sendto(
+                mbox.RegisterWriteReply(msg.channel, msg.start, msg.values).encode(), peer
+            )
 
     def close(self) -> None:
         self.thread.join(3.0)
@@ -50,8 +51,9 @@ class Listener:
 
 def test_send_estop_puts_exactly_the_manual_capture_on_the_wire(capsys):
     peer = Listener()
-    rc = main(["send", "--controller", "mbox6", "--target", f"udp://127.0.0.1:{peer.port}",
-               "estop", "on"])
+    rc = main(
+        ["send", "--controller", "mbox6", "--target", f"udp://127.0.0.1:{peer.port}", "estop", "on"]
+    )
     peer.close()
     assert rc == 0
     assert peer.got == [ESTOP_CAPTURE]
@@ -61,8 +63,20 @@ def test_send_estop_puts_exactly_the_manual_capture_on_the_wire(capsys):
 
 def test_send_node_and_no_reply_set_the_who_fields():
     peer = Listener(answer=False)
-    rc = main(["send", "--controller", "mbox6", "--target", f"udp://127.0.0.1:{peer.port}",
-               "--node", "0F.C9", "--no-reply", "estop", "off"])
+    rc = main(
+        [
+            "send",
+            "--controller",
+            "mbox6",
+            "--target",
+            f"udp://127.0.0.1:{peer.port}",
+            "--node",
+            "0F.C9",
+            "--no-reply",
+            "estop",
+            "off",
+        ]
+    )
     peer.close()
     assert rc == 0
     assert peer.got == [bytes.fromhex("55AA000012010000 0FC9 0000 009000010000".replace(" ", ""))]
@@ -70,8 +84,16 @@ def test_send_node_and_no_reply_set_the_who_fields():
 
 def test_send_reports_a_missing_reply_as_an_error(capsys):
     peer = Listener(answer=False)
-    rc = main(["send", "--controller", "mbox6", "--target",
-               f"udp://127.0.0.1:{peer.port}?timeout_ms=50&retries=0", "home"])
+    rc = main(
+        [
+            "send",
+            "--controller",
+            "mbox6",
+            "--target",
+            f"udp://127.0.0.1:{peer.port}?timeout_ms=50&retries=0",
+            "home",
+        ]
+    )
     peer.close()
     assert rc == 2 and "no reply" in capsys.readouterr().err
 
@@ -98,8 +120,12 @@ def test_park_ramps_the_platform_down_to_the_origin(capsys):
     with mbox.MboxEmulator(ctrl) as emu:
         with emu.lock:
             emu.handle(mbox.MotionFrame(True, 99, 0, (20_000, 30_000, 10_000)).encode(), 0.0)
-        assert main(["send", "--controller", "mbox3", "--target",
-                     f"udp://127.0.0.1:{emu.port}", "park"]) == 0
+        assert (
+            main(
+                ["send", "--controller", "mbox3", "--target", f"udp://127.0.0.1:{emu.port}", "park"]
+            )
+            == 0
+        )
         deadline = time.monotonic() + 3  # the last frames may still be in flight
         while (emu.trace.positions[-1] != 0).any() and time.monotonic() < deadline:
             time.sleep(0.01)
@@ -157,9 +183,25 @@ def test_emulate_verb_serves_and_reports(tmp_path):
     csv = tmp_path / "trace.csv"
     env = dict(os.environ, PYTHONPATH=str(SRC))
     proc = subprocess.Popen(
-        [sys.executable, "-m", "motioncue", "emulate", "--controller", "mbox3", "--listen",
-         "udp://127.0.0.1:0", "--duration", "1.5", "--trace-csv", str(csv)],
-        stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env)
+        [
+            sys.executable,
+            "-m",
+            "motioncue",
+            "emulate",
+            "--controller",
+            "mbox3",
+            "--listen",
+            "udp://127.0.0.1:0",
+            "--duration",
+            "1.5",
+            "--trace-csv",
+            str(csv),
+        ],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+        env=env,
+    )
     assert proc.stdout is not None
     first = proc.stdout.readline()
     port = int(first.rsplit(":", 1)[1])

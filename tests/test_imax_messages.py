@@ -34,7 +34,9 @@ def test_register_write_to_dpf0_homes_2_2_2_3():
 
 def test_register_replies_put_error_code_in_channel_2_2_2_2():
     ok = imax.RegisterReply(0x1102, 1, 0x80, (3000, 0))
-    assert ok.encode() == bytes.fromhex("55AA0000110200010000000000800002 0BB8 0000".replace(" ", ""))
+    assert ok.encode() == bytes.fromhex(
+        "55AA0000110200010000000000800002 0BB8 0000".replace(" ", "")
+    )
     err = imax.RegisterReply(0x1203, 21, 0x80, (1,))
     assert err.status == imax.ReplyStatus.ERROR and err.error_code == 21
     assert err.encode()[6:8] == (21).to_bytes(2, "big")
@@ -46,8 +48,17 @@ def test_absolute_frame_layout_2_2_2_5():
     # Frame L, absolute Time L, 6 x L positions (0xffffffff = -1), PortOut 2 bytes, Extend L
     msg = imax.MotionFrame(True, 9, 100, (1, -1, 2, 3, 4, 100), 0x0FFF, 0)
     expected = bytes.fromhex("55AA000013010001FFFFFFFF") + _be(
-        (9, 4, False), (100, 4, False), (1, 4, True), (-1, 4, True), (2, 4, True), (3, 4, True),
-        (4, 4, True), (100, 4, True), (0x0FFF, 2, False), (0, 4, False))
+        (9, 4, False),
+        (100, 4, False),
+        (1, 4, True),
+        (-1, 4, True),
+        (2, 4, True),
+        (3, 4, True),
+        (4, 4, True),
+        (100, 4, True),
+        (0x0FFF, 2, False),
+        (0, 4, False),
+    )
     assert msg.encode() == expected and msg.size == len(expected) == 50
     assert expected[24:28] == b"\xff\xff\xff\xff"
     assert imax.decode(expected) == msg
@@ -65,9 +76,19 @@ def test_channel_codes_for_n_axes():
 def test_vibration_frame_layout_2_2_2_11():
     msg = imax.VibrationFrame(False, 1, 20, (10, 20, 30), 0x5, ((8, 100), (16, 200), (0, 0)))
     expected = bytes.fromhex("55AA000019010000FFFFFFFF") + _be(
-        (1, 4, False), (20, 4, True), (10, 4, True), (20, 4, True), (30, 4, True),
-        (5, 2, False), (8, 2, False), (100, 2, False), (16, 2, False), (200, 2, False),
-        (0, 2, False), (0, 2, False))
+        (1, 4, False),
+        (20, 4, True),
+        (10, 4, True),
+        (20, 4, True),
+        (30, 4, True),
+        (5, 2, False),
+        (8, 2, False),
+        (100, 2, False),
+        (16, 2, False),
+        (200, 2, False),
+        (0, 2, False),
+        (0, 2, False),
+    )
     assert msg.encode() == expected
     assert imax.decode(expected) == msg
 
@@ -76,8 +97,7 @@ def test_servo_messages_use_33cc_and_at_most_six_registers_2_2_2_13():
     raw = imax.ServoRead(2, 0x01FC, 1).encode()  # PA508 of servo 2
     assert raw == bytes.fromhex("33CC000021010002FFFFFFFF01FC00010000")
     assert imax.decode(raw) == imax.ServoRead(2, 0x01FC, 1)
-    assert imax.decode(imax.ServoWrite(1, 0x01FC, (7,)).encode()) == imax.ServoWrite(1, 0x1FC,
-                                                                                        (7,))
+    assert imax.decode(imax.ServoWrite(1, 0x01FC, (7,)).encode()) == imax.ServoWrite(1, 0x1FC, (7,))
     with pytest.raises(ProtocolError, match="count 7"):
         imax.ServoRead(1, 0, 7)
     with pytest.raises(ProtocolError, match="7 values"):
@@ -90,8 +110,16 @@ def test_servo_messages_use_33cc_and_at_most_six_registers_2_2_2_13():
 def test_status_report_layout_2_2_2_15():
     rep = imax.StatusReport(0x0FC9, (100, -2), (5, -6), (0, 10), 21, 0x3, 0x1)
     expected = bytes.fromhex("33CC00003101 0FC9 0002".replace(" ", "")) + _be(
-        (100, 4, True), (-2, 4, True), (5, 2, True), (-6, 2, True), (0, 2, False),
-        (10, 2, False), (21, 2, False), (3, 2, False), (1, 2, False))
+        (100, 4, True),
+        (-2, 4, True),
+        (5, 2, True),
+        (-6, 2, True),
+        (0, 2, False),
+        (10, 2, False),
+        (21, 2, False),
+        (3, 2, False),
+        (1, 2, False),
+    )
     assert rep.encode() == expected
     assert imax.decode(expected) == rep
 
@@ -138,37 +166,58 @@ def motion(draw, reply=False, vib=False):
     if reply:
         ch = draw(u16)
         if vib:
-            return imax.VibrationFrameReply(draw(status), absolute, ch, draw(u32), t, pos,
-                                            draw(u16), vibration)
-        return imax.MotionFrameReply(draw(status), absolute, ch, draw(u32), t, pos, draw(u16),
-                                     draw(u32))
+            return imax.VibrationFrameReply(
+                draw(status), absolute, ch, draw(u32), t, pos, draw(u16), vibration
+            )
+        return imax.MotionFrameReply(
+            draw(status), absolute, ch, draw(u32), t, pos, draw(u16), draw(u32)
+        )
     if vib:
-        return imax.VibrationFrame(absolute, draw(u32), t, pos, draw(u16), vibration, draw(u16),
-                                   draw(u16))
-    return imax.MotionFrame(absolute, draw(u32), t, pos, draw(u16), draw(u32), draw(u16),
-                            draw(u16))
+        return imax.VibrationFrame(
+            absolute, draw(u32), t, pos, draw(u16), vibration, draw(u16), draw(u16)
+        )
+    return imax.MotionFrame(absolute, draw(u32), t, pos, draw(u16), draw(u32), draw(u16), draw(u16))
 
 
 @st.composite
 def status_reports(draw):
     n = draw(st.integers(0, 12))
-    return imax.StatusReport(draw(u16), tuple(draw(st.lists(i32, min_size=n, max_size=n))),
-                             tuple(draw(st.lists(i16, min_size=n, max_size=n))),
-                             tuple(draw(st.lists(u16, min_size=n, max_size=n))),
-                             draw(u16), draw(u16), draw(u16))
+    return imax.StatusReport(
+        draw(u16),
+        tuple(draw(st.lists(i32, min_size=n, max_size=n))),
+        tuple(draw(st.lists(i16, min_size=n, max_size=n))),
+        tuple(draw(st.lists(u16, min_size=n, max_size=n))),
+        draw(u16),
+        draw(u16),
+        draw(u16),
+    )
 
 
 messages = st.one_of(
     st.builds(imax.RegisterRead, st.sampled_from([0, 1]), u16, st.integers(1, 256), u16, u16),
     st.builds(imax.RegisterWrite, st.sampled_from([0, 1, 2]), u16, words, u16, u16),
-    st.builds(imax.RegisterReply, st.sampled_from([0x1102, 0x1103, 0x1104, 0x1105, 0x1202,
-                                                   0x1203, 0x1204, 0x1205]), u16, u16, words),
+    st.builds(
+        imax.RegisterReply,
+        st.sampled_from([0x1102, 0x1103, 0x1104, 0x1105, 0x1202, 0x1203, 0x1204, 0x1205]),
+        u16,
+        u16,
+        words,
+    ),
     st.builds(imax.ServoRead, u16, u16, st.integers(1, 6), u16, u16),
-    st.builds(imax.ServoWrite, u16, u16, st.lists(u16, min_size=1, max_size=6).map(tuple), u16,
-              u16),
-    st.builds(imax.ServoReply, st.sampled_from([0x2102, 0x2103, 0x2202, 0x2205]), u16, u16,
-              st.lists(u16, max_size=6).map(tuple)),
-    motion(), motion(reply=True), motion(vib=True), motion(reply=True, vib=True),
+    st.builds(
+        imax.ServoWrite, u16, u16, st.lists(u16, min_size=1, max_size=6).map(tuple), u16, u16
+    ),
+    st.builds(
+        imax.ServoReply,
+        st.sampled_from([0x2102, 0x2103, 0x2202, 0x2205]),
+        u16,
+        u16,
+        st.lists(u16, max_size=6).map(tuple),
+    ),
+    motion(),
+    motion(reply=True),
+    motion(vib=True),
+    motion(reply=True, vib=True),
     status_reports(),
 )
 
@@ -181,11 +230,29 @@ def test_round_trip_every_message_type(msg):
 
 
 # -- fuzzing -------------------------------------------------------------------------------------
-_PREFIXES = [bytes.fromhex(h) for h in (
-    "55AA00001101", "55AA00001102", "55AA00001103", "55AA00001201", "55AA00001205",
-    "55AA00001301", "55AA00001302", "55AA00001401", "55AA00001404", "55AA00001801",
-    "55AA00001802", "55AA00001901", "55AA00001903", "33CC00002101", "33CC00002102",
-    "33CC00002201", "33CC00002205", "33CC00003101")]
+_PREFIXES = [
+    bytes.fromhex(h)
+    for h in (
+        "55AA00001101",
+        "55AA00001102",
+        "55AA00001103",
+        "55AA00001201",
+        "55AA00001205",
+        "55AA00001301",
+        "55AA00001302",
+        "55AA00001401",
+        "55AA00001404",
+        "55AA00001801",
+        "55AA00001802",
+        "55AA00001901",
+        "55AA00001903",
+        "33CC00002101",
+        "33CC00002102",
+        "33CC00002201",
+        "33CC00002205",
+        "33CC00003101",
+    )
+]
 
 
 def test_random_bytes_raise_only_protocol_error():
@@ -194,7 +261,7 @@ def test_random_bytes_raise_only_protocol_error():
     lengths = rng.integers(0, 80, size=100_000)
     deep = 0  # rejections that got past the header to a message's own checks
     for i, n in enumerate(lengths):
-        data = blob[i * 80:i * 80 + int(n)]
+        data = blob[i * 80 : i * 80 + int(n)]
         if i % 2:
             data = _PREFIXES[i % len(_PREFIXES)] + data
         try:
@@ -235,8 +302,12 @@ def test_encoder_frames_and_vibration():
 
 @pytest.mark.parametrize(
     ("kwargs", "words"),
-    [({"dout": 0x1000}, "Y01..Y12"), ({"dacs": (1, 0)}, "no analogue"),
-     ({"vibration": [(8, 70000)] * 3}, "u16"), ({"vibration": [(8, 1)] * 2}, "2 vibration")],
+    [
+        ({"dout": 0x1000}, "Y01..Y12"),
+        ({"dacs": (1, 0)}, "no analogue"),
+        ({"vibration": [(8, 70000)] * 3}, "u16"),
+        ({"vibration": [(8, 1)] * 2}, "2 vibration"),
+    ],
 )
 def test_encoder_refuses_what_the_imax_cannot_carry(kwargs, words):
     enc = load_controller("imax3").frame_encoder()
@@ -288,3 +359,10 @@ def test_imax_config_errors(tmp_path):
     path.write_text('kind = "imax"\naxes = 6\n[parameters]\nPAzz = 0\n')
     with pytest.raises(ConfigError, match="PAzz"):
         load_controller(path)
+
+
+def test_signed_positions_of_section_5_7():
+    # 5.7: "100 is 0x00000064, -100 is 0xfffff9c" (printed with a digit missing: -100 is
+    # 0xFFFFFF9C in 32-bit two's complement, as 2.2.2.5's "0xffffffff is -1" implies)
+    raw = imax.MotionFrame(True, 0, 0, (100, -100, -1)).encode()
+    assert raw[20:32] == bytes.fromhex("00000064 FFFFFF9C FFFFFFFF".replace(" ", ""))

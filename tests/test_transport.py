@@ -62,8 +62,12 @@ def test_our_reader_reads_what_dpkt_writes(tmp_path):
     payload = mbox.RegisterWrite(0, 0x90, (1,)).encode()
     udp = dpkt.udp.UDP(sport=8410, dport=7408, data=payload)
     udp.ulen = 8 + len(payload)
-    ip = dpkt.ip.IP(src=socket.inet_aton("10.0.0.1"), dst=socket.inet_aton("10.0.0.2"),
-                    p=dpkt.ip.IP_PROTO_UDP, data=udp)
+    ip = dpkt.ip.IP(
+        src=socket.inet_aton("10.0.0.1"),
+        dst=socket.inet_aton("10.0.0.2"),
+        p=dpkt.ip.IP_PROTO_UDP,
+        data=udp,
+    )
     ip.len = 20 + udp.ulen
     eth = dpkt.ethernet.Ethernet(src=b"\x02" * 6, dst=b"\x04" * 6, type=0x0800, data=ip)
     with open(path, "wb") as fh:
@@ -75,8 +79,9 @@ def test_our_reader_reads_what_dpkt_writes(tmp_path):
 
 def test_pcap_addresses_can_be_set(tmp_path):
     path = tmp_path / "b.pcap"
-    with PcapTransport(path, src="169.254.88.22:8410", dst=("255.255.255.255", 7408),
-                       epoch_s=0.0) as tr:
+    with PcapTransport(
+        path, src="169.254.88.22:8410", dst=("255.255.255.255", 7408), epoch_s=0.0
+    ) as tr:
         tr.send(b"\x55\xaa" + bytes(16), t_s=1.5)
     (pkt,) = list(read_pcap(path))
     assert pkt.dst == ("255.255.255.255", 7408) and pkt.t_s == 1.5

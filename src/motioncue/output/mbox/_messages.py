@@ -88,6 +88,7 @@ FUNCTION_NAMES = {
 }
 
 _AXES_OF_CHANNEL = {0: 3, 1: 6}
+_HEAD4 = struct.Struct(">4H")
 _CHANNEL_OF_AXES = {3: 0, 6: 1}
 
 
@@ -410,25 +411,32 @@ class MotionFrame:
 
     @classmethod
     def decode_parts(cls, h: Header, data: bytes) -> MotionFrame:
-        n = _AXES_OF_CHANNEL.get(h.channel)
+        return cls._from_wire(data, h.function, h.channel)
+
+    @classmethod
+    def _from_wire(cls, data: bytes, function: int, channel: int) -> MotionFrame:
+        n = _AXES_OF_CHANNEL.get(channel)
         if n is None:
-            raise ProtocolError(f"frame channel {h.channel}: allowed 0 (3 axes), 1 (6 axes)")
-        relative = h.function == F_REL
+            raise ProtocolError(f"frame channel {channel}: allowed 0 (3 axes), 1 (6 axes)")
+        relative = function == F_REL
         layout = _frame_struct(n, relative)
-        check_length(data, layout.size, f"{n}-axis frame 0x{h.function:04X}")
+        if len(data) != layout.size:
+            check_length(data, layout.size, f"{n}-axis frame 0x{function:04X}")
         f = layout.unpack(data)
-        return cls(
-            not relative,
-            f[6],
-            f[7],
-            f[8 : 8 + n],
-            f[8 + n],
-            f[9 + n],
-            f[10 + n],
-            f[11 + n],
-            h.who_accept,
-            h.who_reply,
-        )
+        # every field came out of the layout, so it is in range: skip the re-validation
+        obj = object.__new__(cls)
+        setattr_ = object.__setattr__
+        setattr_(obj, "absolute", not relative)
+        setattr_(obj, "line", f[6])
+        setattr_(obj, "time_ms", f[7])
+        setattr_(obj, "positions", f[8 : 8 + n])
+        setattr_(obj, "base_dout", f[8 + n])
+        setattr_(obj, "dac1", f[9 + n])
+        setattr_(obj, "dac2", f[10 + n])
+        setattr_(obj, "ext_dout", f[11 + n])
+        setattr_(obj, "who_accept", f[4])
+        setattr_(obj, "who_reply", f[5])
+        return obj
 
 
 @dataclass(frozen=True, slots=True)
@@ -456,9 +464,11 @@ class MotionFrameReply:
     @classmethod
     def decode_parts(cls, h: Header, data: bytes) -> MotionFrameReply:
         status = FrameStatus(h.function & 0xF)
-        base = (h.function & 0xFFF0) | 1
-        inner = Header(h.confirm, h.passcode, base, h.channel, WHO_NONE, WHO_NONE)
-        return cls(status, MotionFrame.decode_parts(inner, data))
+        frame = MotionFrame._from_wire(data, (h.function & 0xFFF0) | 1, h.channel)
+        # replies address the host (Who = 0); other values are accepted and not kept
+        object.__setattr__(frame, "who_accept", WHO_NONE)
+        object.__setattr__(frame, "who_reply", WHO_NONE)
+        return cls(status, frame)
 
 
 MboxMessage = (
@@ -497,6 +507,10 @@ def decode(data: bytes) -> MboxMessage:
         Short header, confirm code not 0x55AA, pass code not 0, unknown function, wrong
         channel or length, non-zero padding.
     """
+    if len(data) >= HEADER.size:  # fast path for frames, the bulk of the traffic
+        confirm, passcode, function, channel = _HEAD4.unpack_from(data)
+        if (function == F_ABS or function == F_REL) and confirm == CONFIRM_MAIN and not passcode:
+            return MotionFrame._from_wire(data, function, channel)
     h = decode_header(data)
     if h.confirm != CONFIRM_MAIN:
         raise ProtocolError(f"confirm code 0x{h.confirm:04X}: the MBOX uses 0x55AA")
