@@ -111,7 +111,9 @@ def _per_actuator(
     lo: float = -math.inf,
     lo_open: bool = False,
 ) -> np.ndarray:
-    """A number, or a list of ``n`` numbers, one per actuator."""
+    """A number, or a list of ``n`` numbers, one per actuator (``default`` None: required)."""
+    if not r.has(key) and default is None:
+        raise ConfigError(f"{r.where}: missing key {key!r}")
     if r.has(key) and isinstance(r.raw(key), list):
         vals = r.vector(key, n)
     elif integer:
@@ -150,6 +152,9 @@ def _pulses_per_rev(r: ConfigReader, n: int, travel_per_rev_mm: np.ndarray | Non
                 "a value giving a whole number of pulses per revolution with lead_mm",
             )
         return np.round(ppr)
+    if not r.has("pulses_per_rev"):
+        alt = " or 'pulses_per_mm'" if travel_per_rev_mm is not None else ""
+        raise ConfigError(f"{r.where}: missing key 'pulses_per_rev'{alt}")
     return _per_actuator(r, "pulses_per_rev", n, None, integer=True, lo=1)
 
 
@@ -323,10 +328,11 @@ def _rotary(
     d.finish()
     legs = CrankLegs(base, plat, height, axes, zero_dirs, crank, rod)
     if not np.all(legs.reachable0):
-        raise g.error(
-            "neutral_height_mm",
-            g.raw("neutral_height_mm"),
-            "a height at which every rod reaches its crank (check crank_mm, rod_mm)",
+        raise c.error(
+            "rod_mm",
+            c.raw("rod_mm"),
+            f"a rod that reaches its crank at the neutral pose (crank_mm = {c.raw('crank_mm')}, "
+            f"[geometry] neutral_height_mm = {g.raw('neutral_height_mm')})",
         )
     theta0_deg = np.degrees(legs.theta0)
     if np.any((theta0_deg <= lo_deg) | (theta0_deg >= hi_deg)):
