@@ -10,6 +10,7 @@ Actuator positions ``q`` are measured from the neutral pose: metres (linear), ra
 """
 
 from ._drive import Drive
+from ._forces import STANDARD_GRAVITY, ForceResult, Payload, actuator_forces, pose_wrench
 from ._load import load_platform, platform_from_dict
 from ._platform import (
     DOF_NAMES,
@@ -24,14 +25,19 @@ from ._platform import (
 
 __all__ = [
     "DOF_NAMES",
+    "STANDARD_GRAVITY",
     "CheckResult",
     "Drive",
     "FKResult",
+    "ForceResult",
+    "Payload",
     "Platform",
     "Seat2Yaw",
     "Seat3",
     "Stewart6Linear",
     "Stewart6Rotary",
+    "actuator_forces",
     "load_platform",
     "platform_from_dict",
+    "pose_wrench",
 ]
