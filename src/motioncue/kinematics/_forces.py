@@ -103,7 +103,7 @@ class ForceResult:
 def _derivative(t: np.ndarray, y: np.ndarray) -> np.ndarray:
     if len(t) < 3:
         return np.zeros_like(y)
-    return np.gradient(y, t, axis=0, edge_order=2)  # type: ignore[no-any-return]
+    return np.gradient(y, t, axis=0, edge_order=2)
 
 
 def _euler_rate_derivative(angles: np.ndarray, rates: np.ndarray) -> np.ndarray:
