@@ -22,6 +22,7 @@ from ._platform import (
     Stewart6Linear,
     Stewart6Rotary,
 )
+from ._workspace import WorkspaceRanges, dof_ranges, plot_workspace
 
 __all__ = [
     "DOF_NAMES",
@@ -36,8 +37,11 @@ __all__ = [
     "Seat3",
     "Stewart6Linear",
     "Stewart6Rotary",
+    "WorkspaceRanges",
     "actuator_forces",
+    "dof_ranges",
     "load_platform",
     "platform_from_dict",
+    "plot_workspace",
     "pose_wrench",
 ]
