@@ -297,7 +297,8 @@ def test_encoder_refuses_bad_positions_and_counts_nothing(bad):
 
 def test_encoder_accepts_numpy_and_integral_floats():
     enc = load_controller("mbox6").frame_encoder()
-    a = enc.encode(0.0, np.arange(6, dtype=np.int64))[0]
+    a = enc.encode(0.0, np.arange(6, dtype=np.int64), np.int64(3), (np.int32(1), np.uint16(2)))[0]
+    assert mbox.decode(a).base_dout == 3 and mbox.decode(a).dac2 == 2
     b = enc.encode(0.01, np.arange(6, dtype=float))[0]
     assert mbox.decode(a).positions == mbox.decode(b).positions == (0, 1, 2, 3, 4, 5)
 

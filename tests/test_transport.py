@@ -9,7 +9,7 @@ import threading
 import dpkt
 import pytest
 
-from motioncue import ConfigError, TransportError
+from motioncue import ConfigError, MotioncueError, TransportError
 from motioncue.output import (
     FileTransport,
     PcapTransport,
@@ -126,6 +126,9 @@ def test_bad_urls_are_config_errors():
             open_transport(url)
     with pytest.raises(ConfigError, match="retries"):
         open_transport("udp://127.0.0.1:9?retries=x")
+    # serial:// belongs to the EasySmc work: absent -> ConfigError, present -> no such port
+    with pytest.raises(MotioncueError):
+        open_transport("serial:///dev/motioncue-no-such-port?baud=19200")
 
 
 class _Peer:

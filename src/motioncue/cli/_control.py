@@ -4,7 +4,9 @@ The verbs dispatch on the controller's kind: each kind module (``motioncue.outpu
 ``motioncue.output.mbox``, ...) exposes the hooks
 
 * ``emulator(controller, host, port, **options)`` -> an emulator with ``start()``,
-  ``stop()``, ``port``, ``trace``, ``violations``;
+  ``stop()``, ``port``, ``received``, ``trace``, ``violations`` (``options``:
+  ``homing_time_s``); a kind that listens on another link instead provides
+  ``emulator_at(controller, target_url, **options)`` (its emulator may expose ``where``);
 * ``send_verb(controller, transport, verb, args, *, who, save, out)`` -> exit status;
 * ``inspect_decode(datagram) -> str`` and ``split_stream(raw_bytes) -> list[bytes]``.
 
@@ -25,7 +27,8 @@ from .._errors import ConfigError, ProtocolError
 
 __all__ = ["register"]
 
-_INSPECT_KINDS = ("mbox", "imax")  # tried in order when no --controller is given
+# kinds tried in order by ``inspect`` when no --controller is given (add new kinds here)
+_INSPECT_KINDS = ("mbox", "imax")
 
 
 def _kind_module(kind: str) -> ModuleType:
@@ -115,14 +118,19 @@ def _run_emulate(args: argparse.Namespace) -> int:
 
     ctrl, kind = _controller(args.controller)
     url = parse_target(args.listen or ctrl.default_target)
-    if url.scheme != "udp":
-        raise ConfigError(f"--listen {url!r}: the {ctrl.kind} emulator listens on udp://HOST:PORT")
-    emu = kind.emulator(ctrl, url.host, url.port, homing_time_s=args.homing_time)
-    emu.start()
-    print(
-        f"emulating {ctrl.name} ({ctrl.kind}, {ctrl.n_axes} axes) on udp://{url.host}:{emu.port}",
-        flush=True,
-    )
+    if url.scheme == "udp":
+        emu = kind.emulator(ctrl, url.host, url.port, homing_time_s=args.homing_time)
+        emu.start()
+        where = f"udp://{url.host}:{emu.port}"
+    elif hasattr(kind, "emulator_at"):  # kinds on other links (serial, ...) listen by URL
+        emu = kind.emulator_at(ctrl, url, homing_time_s=args.homing_time)
+        emu.start()
+        where = str(getattr(emu, "where", args.listen))
+    else:
+        raise ConfigError(
+            f"--listen {args.listen!r}: the {ctrl.kind} emulator listens on udp://HOST:PORT"
+        )
+    print(f"emulating {ctrl.name} ({ctrl.kind}, {ctrl.n_axes} axes) on {where}", flush=True)
     t_end = None if args.duration is None else time.monotonic() + args.duration
     try:
         while t_end is None or time.monotonic() < t_end:

@@ -5,6 +5,7 @@ from __future__ import annotations
 import importlib
 from typing import Any
 
+from .._errors import ConfigError
 from ._transport import Transport, TransportURL, parse_target
 
 __all__ = ["open_transport"]
@@ -40,7 +41,13 @@ def open_transport(url: str | TransportURL, **options: Any) -> Transport:
     """
     parsed = parse_target(url) if isinstance(url, str) else url
     module_name, class_name = _SCHEMES[parsed.scheme]
-    cls = getattr(importlib.import_module(module_name, __package__), class_name)
+    try:
+        module = importlib.import_module(module_name, __package__)
+    except ModuleNotFoundError as exc:
+        raise ConfigError(
+            f"target {url!r}: the {parsed.scheme} transport is not installed ({exc.name})"
+        ) from exc
+    cls = getattr(module, class_name)
     if parsed.scheme in ("pcap", "file"):
         return cls(parsed.path, **options)
     if parsed.scheme == "udp" and options:

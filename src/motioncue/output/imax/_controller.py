@@ -6,6 +6,7 @@ import dataclasses
 import struct
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
+from numbers import Integral
 from types import MappingProxyType
 from typing import Any, ClassVar
 
@@ -220,10 +221,11 @@ class ImaxFrameEncoder:
         """
         if len(pulses) != self.n_axes:
             raise ProtocolError(f"{len(pulses)} positions given, the IMAX drives {self.n_axes}")
-        if isinstance(dout, bool) or not isinstance(dout, int) or not 0 <= dout <= 0xFFF:
+        if isinstance(dout, bool) or not isinstance(dout, Integral) or not 0 <= dout <= 0xFFF:
             raise ProtocolError(f"dout = {dout!r}: allowed Y01..Y12, 0 .. 0xFFF")
         if tuple(dacs) != (0, 0):
             raise ProtocolError(f"dacs = {dacs!r}: the IMAX has no analogue outputs")
+        dout = int(dout)
         frame, field, abs_ms = self.clock.stamp(t_s)
         if vibration is None:
             try:

@@ -6,6 +6,7 @@ import dataclasses
 import struct
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
+from numbers import Integral
 from types import MappingProxyType
 from typing import Any, ClassVar
 
@@ -205,18 +206,19 @@ class MboxFrameEncoder:
         """One frame datagram for the positions ``pulses`` (len ``n_axes``) at ``t_s``."""
         if len(pulses) != self.n_axes:
             raise ProtocolError(f"{len(pulses)} positions given, the MBOX runs {self.n_axes} axes")
-        if isinstance(dout, bool) or not isinstance(dout, int) or not 0 <= dout < 1 << 24:
+        if isinstance(dout, bool) or not isinstance(dout, Integral) or not 0 <= dout < 1 << 24:
             raise ProtocolError(f"dout = {dout!r}: allowed 24 output bits, 0 .. 0xFFFFFF")
         if len(dacs) != 2:
             raise ProtocolError(f"dacs = {dacs!r}: the MBOX has 2 DACs")
         d1, d2 = dacs
         if not (
-            isinstance(d1, int)
-            and isinstance(d2, int)
+            isinstance(d1, Integral)
+            and isinstance(d2, Integral)
             and 0 <= d1 <= self._dac_max[0]
             and 0 <= d2 <= self._dac_max[1]
         ):
             raise ProtocolError(f"dacs = {dacs!r}: allowed 0 .. Fn078/Fn079 = {self._dac_max}")
+        dout, d1, d2 = int(dout), int(d1), int(d2)
         frame, field, abs_ms = self.clock.stamp(t_s)
         try:
             data = self._pack(*self._head, frame, field, *pulses, dout & 0xFFF, d1, d2, dout >> 12)
