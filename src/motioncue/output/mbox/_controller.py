@@ -158,6 +158,12 @@ class MboxController:
         )
 
 
+def _integer(value: Any, what: str) -> int:
+    if isinstance(value, bool) or not isinstance(value, Integral):
+        raise ProtocolError(f"{what} = {value!r} is not an integer")
+    return int(value)
+
+
 class MboxFrameEncoder:
     """Turns ``(t_s, pulses, dout, dacs)`` into MBOX frame datagrams, numbering frames.
 
@@ -206,19 +212,17 @@ class MboxFrameEncoder:
         """One frame datagram for the positions ``pulses`` (len ``n_axes``) at ``t_s``."""
         if len(pulses) != self.n_axes:
             raise ProtocolError(f"{len(pulses)} positions given, the MBOX runs {self.n_axes} axes")
-        if isinstance(dout, bool) or not isinstance(dout, Integral) or not 0 <= dout < 1 << 24:
+        if type(dout) is not int:  # plain ints skip the slower ABC checks
+            dout = _integer(dout, "dout")
+        if not 0 <= dout < 1 << 24:
             raise ProtocolError(f"dout = {dout!r}: allowed 24 output bits, 0 .. 0xFFFFFF")
         if len(dacs) != 2:
             raise ProtocolError(f"dacs = {dacs!r}: the MBOX has 2 DACs")
         d1, d2 = dacs
-        if not (
-            isinstance(d1, Integral)
-            and isinstance(d2, Integral)
-            and 0 <= d1 <= self._dac_max[0]
-            and 0 <= d2 <= self._dac_max[1]
-        ):
+        if type(d1) is not int or type(d2) is not int:
+            d1, d2 = _integer(d1, "dacs[0]"), _integer(d2, "dacs[1]")
+        if not (0 <= d1 <= self._dac_max[0] and 0 <= d2 <= self._dac_max[1]):
             raise ProtocolError(f"dacs = {dacs!r}: allowed 0 .. Fn078/Fn079 = {self._dac_max}")
-        dout, d1, d2 = int(dout), int(d1), int(d2)
         frame, field, abs_ms = self.clock.stamp(t_s)
         try:
             data = self._pack(*self._head, frame, field, *pulses, dout & 0xFFF, d1, d2, dout >> 12)
