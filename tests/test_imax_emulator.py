@@ -179,3 +179,15 @@ def test_ten_second_trajectory_over_udp(absolute):
     vmax = float(np.max(AMP * 2 * np.pi * FREQ))
     err = np.abs(trace.positions - intended(trace.t_s))
     assert np.all(err <= 1 + vmax * np.abs(trace.t_s - t)[:, None])
+
+
+def test_pa0b_flags_late_frames_and_pa0d_homes_when_frames_stop():
+    emu = imax.ImaxEmulator(_ctrl(PA0b=50, PA0d=200), homing_time_s=0.1)
+    enc = emu.controller.frame_encoder()
+    emu.handle(enc.encode(0.0, [0] * 6)[0], 0.0)
+    emu.handle(enc.encode(0.08, [10] * 6)[0], 0.08)  # 80 ms > PA0b = 50 ms
+    assert [v.kind for v in emu.violations] == ["period"]
+    emu.handle(imax.RegisterRead(0, 0xF0, 1).encode(), 0.25)
+    assert emu.state == 1  # 170 ms without frames: still playing
+    emu.handle(imax.RegisterRead(0, 0xF0, 1).encode(), 0.30)
+    assert emu.state == 0 and (emu.trace.positions[-1] == 0).all()  # > 200 ms: homing

@@ -337,7 +337,7 @@ def test_encoder_refuses_time_going_back():
 
 def test_encoder_refuses_positions_outside_the_stroke():
     ctrl = load_controller("mbox6").with_parameters(Fn0C0=3000)  # 300 mm x 2000 pulses/mm
-    assert ctrl.stroke_pulses == 600_000
+    assert ctrl.stroke_pulses == (0, 600_000)
     enc = ctrl.frame_encoder()
     enc.encode(0.0, [600_000] * 6)
     with pytest.raises(LimitError, match="stroke"):

@@ -14,6 +14,8 @@ Modelled (IMAX manual section in brackets):
   reads 2 when done, PA08 = 1 homes and reads 0 after, DPF1 sets Y outputs, PA9d masks
   PortOut of frames; unknown addresses answer x = 3 with error code 1, values out of range
   error code 2 (the manual's error-code table is missing: decision).
+* PA0b: a frame later than PA0b ms after the previous one is flagged (``period``); PA0d:
+  the platform homes once frames have stopped for PA0d ms.
 * e-stop from inputs (:meth:`ImaxEmulator.set_inputs`): active when PA90 bit 0 is set and
   every input of PA92 is on; PA91 = 0 hold then go on, 1 back to zero then go on, 2 hold
   until a reset (DPF0 = 0 or PA08 = 1) homes the platform (5.6).
@@ -103,6 +105,7 @@ class ImaxEmulator(UdpEmulatorBase):
         self.servo_params: dict[tuple[int, int], int] = {}
         self._last_time_ms: int | None = None
         self._resume_pending = False
+        self._last_frame_wall: float | None = None
         self._next_report: float | None = None
         self._reported_alarm = 0
         self._violations: list[Violation] = []
@@ -287,6 +290,15 @@ class ImaxEmulator(UdpEmulatorBase):
             duration = min_period
         else:
             duration = step / 1000.0
+            if p["PA0b"] and step > p["PA0b"]:
+                self._violations.append(
+                    Violation(
+                        pb.t_end + duration,
+                        "period",
+                        None,
+                        f"frame {msg.frame} {step} ms after the previous, PA0b = {p['PA0b']} ms",
+                    )
+                )
             if duration < min_period - 1e-9:
                 self._violations.append(
                     Violation(
@@ -297,6 +309,7 @@ class ImaxEmulator(UdpEmulatorBase):
                     )
                 )
         pb.play(msg.frame, duration, msg.positions[off : off + self.n_axes])
+        self._last_frame_wall = pb.last_wall
         if not p["PA9d"]:
             self.outputs = msg.port_out & 0xFFF
         if isinstance(msg, VibrationFrame):
@@ -410,6 +423,15 @@ class ImaxEmulator(UdpEmulatorBase):
 
     def _tick(self, now_s: float) -> None:
         self.playback.advance(now_s)
+        idle_ms = self.params["PA0d"]  # home once frames have stopped for PA0d ms
+        if (
+            idle_ms
+            and self.state == STATE_READY
+            and self._last_frame_wall is not None
+            and now_s - self._last_frame_wall > idle_ms / 1000.0
+        ):
+            self._last_frame_wall = None
+            self._start_homing(now_s)
         if self.state == STATE_HOMING:
             if self._homing_until is not None and self._homing_until < 0:
                 self._homing_until = now_s + self.homing_time_s

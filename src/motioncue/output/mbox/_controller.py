@@ -111,10 +111,11 @@ class MboxController:
         return self.parameters["Fn0C2"] / 10.0
 
     @property
-    def stroke_pulses(self) -> int | None:
-        """Largest allowed position (Fn0C0 x Fn0C1), ``None`` when Fn0C0 = 0 (no limit)."""
+    def stroke_pulses(self) -> tuple[int, int] | None:
+        """Allowed position range ``(0, Fn0C0 x Fn0C1)`` in pulses (0 is the homed origin);
+        ``None`` when Fn0C0 = 0 (no stroke limit)."""
         stroke = self.parameters["Fn0C0"]
-        return None if stroke == 0 else round(stroke / 10.0 * self.parameters["Fn0C1"])
+        return None if stroke == 0 else (0, round(stroke / 10.0 * self.parameters["Fn0C1"]))
 
     @property
     def max_speed_pulses_s(self) -> tuple[float, ...]:
@@ -232,10 +233,10 @@ class MboxFrameEncoder:
                 *self._head, frame, field, *pulses, dout & 0xFFF, d1, d2, dout >> 12
             )  # integral floats
         if self._stroke is not None:
-            if min(pulses) < 0 or max(pulses) > self._stroke:
+            lo, hi = self._stroke
+            if min(pulses) < lo or max(pulses) > hi:
                 raise LimitError(
-                    f"positions {list(pulses)} leave the stroke [0, {self._stroke}] "
-                    "pulses (Fn0C0 x Fn0C1)"
+                    f"positions {list(pulses)} leave the stroke [{lo}, {hi}] pulses (Fn0C0 x Fn0C1)"
                 )
         self.clock.commit(t_s, abs_ms)
         return [data]

@@ -115,7 +115,7 @@ class MboxEmulator(UdpEmulatorBase):
             controller.buffer_frames,
             bool(self.params["Fn01C"]),
             controller.max_speed_pulses_s,
-            None if stroke is None else (0, stroke),
+            stroke,
         )
         self._set_rate()
 
