@@ -216,3 +216,37 @@ def test_emulate_verb_serves_and_reports(tmp_path):
     assert "malformed" in out
     rows = csv.read_text().splitlines()
     assert rows[0] == "t_s,frame,axis0,axis1,axis2" and rows[3] == "0.040000,2,2,2,2"
+
+
+def test_transport_options_follow_the_config(tmp_path, capsys):
+    from motioncue.output import imax as imax_kind
+    from motioncue.output import parse_target
+
+    ictrl, mctrl = load_controller("imax6"), load_controller("mbox6")
+    far = parse_target("udp://192.168.15.201:7408")
+    assert imax_kind.transport_options(ictrl, far) == {"local_port": 8410}  # PA24
+    assert imax_kind.transport_options(ictrl, parse_target("udp://127.0.0.1:7408")) == {}
+    assert mbox.transport_options(mctrl, far) == {}
+    path = tmp_path / "cmd.pcap"
+    assert main(["send", "--controller", "mbox6", "--target", f"pcap:{path}", "home"]) == 0
+    from motioncue.output import read_pcap
+
+    (pkt,) = list(read_pcap(path))
+    assert pkt.src == ("192.168.15.101", 8410) and pkt.dst == ("192.168.15.201", 7408)
+    assert pkt.payload == bytes.fromhex("55AA000012010002FFFFFFFF000000010000")
+
+
+def test_park_on_the_imax_reads_dp_positions(capsys):
+    ctrl = load_controller("imax3")
+    with imax.ImaxEmulator(ctrl) as emu:
+        with emu.lock:
+            emu.handle(imax.MotionFrame(True, 7, 0, (-4000, 8000, 2000)).encode(), 0.0)
+            before = emu.violations  # the setup frame itself jumps from rest in 1 ms
+        base = ["send", "--controller", "imax3", "--target", f"udp://127.0.0.1:{emu.port}"]
+        assert main([*base, "park"]) == 0
+        deadline = time.monotonic() + 3
+        while (emu.trace.positions[-1] != 0).any() and time.monotonic() < deadline:
+            time.sleep(0.01)
+        trace = emu.trace
+    assert "from [-4000, 8000, 2000] to 0" in capsys.readouterr().out
+    assert (trace.positions[-1] == 0).all() and emu.violations == before

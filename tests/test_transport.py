@@ -171,3 +171,10 @@ def test_request_gives_up_with_transport_error():
             tr.request(b"ping", lambda r: True)
     peer.thread.join(0.5)
     assert peer.got == [b"ping", b"ping"]
+
+
+def test_url_query_wins_over_keyword_options():
+    with open_transport("udp://127.0.0.1:9?timeout_ms=40", timeout_s=2.0, retries=0) as tr:
+        assert isinstance(tr, UdpTransport) and tr.timeout_s == 0.04 and tr.retries == 0
+    with pytest.raises(ConfigError, match="unknown option"):
+        open_transport("udp://127.0.0.1:9", colour="red")

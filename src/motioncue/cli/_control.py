@@ -8,9 +8,10 @@ The verbs dispatch on the controller's kind: each kind module (``motioncue.outpu
   ``homing_time_s``); a kind that listens on another link instead provides
   ``emulator_at(controller, target_url, **options)`` (its emulator may expose ``where``);
 * ``send_verb(controller, transport, verb, args, *, who, save, out)`` -> exit status;
-* ``inspect_decode(datagram) -> str`` and ``split_stream(raw_bytes) -> list[bytes]``.
+* ``inspect_decode(datagram) -> str`` and ``split_stream(raw_bytes) -> list[bytes]``;
+* optionally ``transport_options(controller, target_url) -> dict`` for ``open_transport``.
 
-A new kind plugs in by providing these four functions; nothing here changes.
+A new kind plugs in by providing these functions; nothing here changes.
 """
 
 from __future__ import annotations
@@ -158,14 +159,16 @@ def _run_emulate(args: argparse.Namespace) -> int:
 
 
 def _run_send(args: argparse.Namespace) -> int:
-    from ..output import open_transport
+    from ..output import open_transport, parse_target
     from ..output._udp_common import parse_node
 
     ctrl, kind = _controller(args.controller)
     accept, reply = parse_node(args.node)
     if args.no_reply:
         reply = 0
-    with open_transport(args.target or ctrl.default_target) as transport:
+    target = parse_target(args.target or ctrl.default_target)
+    options = kind.transport_options(ctrl, target) if hasattr(kind, "transport_options") else {}
+    with open_transport(target, **options) as transport:
         return int(
             kind.send_verb(
                 ctrl,

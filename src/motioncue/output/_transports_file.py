@@ -15,10 +15,10 @@ import time
 from collections.abc import Iterator
 from dataclasses import dataclass
 from pathlib import Path
-from typing import BinaryIO
+from typing import Any, BinaryIO
 
 from .._errors import ConfigError, ProtocolError, TransportError
-from ._transport import Transport
+from ._transport import Transport, TransportURL
 
 __all__ = [
     "FileTransport",
@@ -83,6 +83,10 @@ class FileTransport(Transport):
         except OSError as exc:
             raise TransportError(f"cannot write {self.path}: {exc}") from exc
 
+    @classmethod
+    def from_url(cls, url: TransportURL, **options: Any) -> FileTransport:
+        return cls(url.path, **options)
+
     def send(self, data: bytes, *, t_s: float | None = None) -> None:
         try:
             self._fh.write(data)
@@ -140,6 +144,10 @@ class PcapTransport(Transport):
             self._fh.write(PCAP_GLOBAL.pack(0xA1B2C3D4, 2, 4, 0, 0, 65535, LINKTYPE_ETHERNET))
         except OSError as exc:
             raise TransportError(f"cannot write {self.path}: {exc}") from exc
+
+    @classmethod
+    def from_url(cls, url: TransportURL, **options: Any) -> PcapTransport:
+        return cls(url.path, **options)
 
     def send(
         self,

@@ -30,7 +30,8 @@ def open_transport(url: str | TransportURL, **options: Any) -> Transport:
         ``file:PATH``, ``serial:///dev/ttyUSB0?baud=19200``.
     **options
         Passed to the transport: for ``pcap`` ``src``/``dst`` (``"ip:port"``) and
-        ``epoch_s``; for ``udp`` ``local_port``, ``timeout_s``, ``retries``.
+        ``epoch_s``; for ``udp`` ``local_port``, ``timeout_s``, ``retries`` (the URL's
+        query, when it sets the same option, wins).
 
     Raises
     ------
@@ -48,8 +49,4 @@ def open_transport(url: str | TransportURL, **options: Any) -> Transport:
             f"target {url!r}: the {parsed.scheme} transport is not installed ({exc.name})"
         ) from exc
     cls = getattr(module, class_name)
-    if parsed.scheme in ("pcap", "file"):
-        return cls(parsed.path, **options)
-    if parsed.scheme == "udp" and options:
-        return cls(parsed.host, parsed.port, **options)
     return cls.from_url(parsed, **options)

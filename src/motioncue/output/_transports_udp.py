@@ -12,6 +12,7 @@ import select
 import socket
 import time
 from collections.abc import Callable
+from typing import Any
 
 from .._errors import ConfigError, TransportError
 from ._transport import Transport, TransportURL
@@ -70,14 +71,21 @@ class UdpTransport(Transport):
         self._sock = sock
 
     @classmethod
-    def from_url(cls, url: TransportURL) -> UdpTransport:
-        return cls(
-            url.host,
-            url.port,
-            local_port=_int_option(url, "local_port", 0, 0, 65535),
-            timeout_s=_int_option(url, "timeout_ms", 250, 1, 60000) / 1000.0,
-            retries=_int_option(url, "retries", 2, 0, 100),
-        )
+    def from_url(cls, url: TransportURL, **overrides: Any) -> UdpTransport:
+        """Open from a parsed URL; keyword ``overrides`` (``local_port``, ``timeout_s``,
+        ``retries``) apply where the URL's query does not set the option."""
+        options: dict[str, Any] = {
+            "local_port": _int_option(url, "local_port", 0, 0, 65535),
+            "timeout_s": _int_option(url, "timeout_ms", 250, 1, 60000) / 1000.0,
+            "retries": _int_option(url, "retries", 2, 0, 100),
+        }
+        given = {"local_port": "local_port", "timeout_s": "timeout_ms", "retries": "retries"}
+        for key, value in overrides.items():
+            if key not in given:
+                raise ConfigError(f"udp transport: unknown option {key!r}")
+            if given[key] not in url.options:
+                options[key] = value
+        return cls(url.host, url.port, **options)
 
     @property
     def local_port(self) -> int:

@@ -10,10 +10,25 @@ from collections.abc import Callable, Sequence
 from typing import Any, TextIO
 
 from .._errors import ConfigError, ProtocolError
-from ._transport import Transport
+from ._transport import Transport, TransportURL
 from ._udp_common import format_who
 
-__all__ = ["describe", "exchange", "park", "parse_bits", "parse_value"]
+__all__ = ["describe", "exchange", "park", "parse_bits", "parse_value", "transport_options"]
+
+
+def transport_options(controller: Any, url: TransportURL, *, fixed_source_port: bool) -> dict:
+    """Options for ``open_transport`` taken from the controller's addresses.
+
+    ``pcap:`` packets are written from the host address to the controller address of the
+    config; a ``udp://`` target that is not loopback sends from the host port when the
+    controller only accepts that source port (IMAX PA24).
+    """
+    if url.scheme == "pcap":
+        return {"src": controller.host_address, "dst": controller.controller_address}
+    loopback = url.host in ("localhost", "::1") or url.host.startswith("127.")
+    if url.scheme == "udp" and fixed_source_port and not loopback:
+        return {"local_port": controller.host_address[1]}
+    return {}
 
 
 def _fmt(name: str, value: Any) -> str:

@@ -35,7 +35,7 @@ Contradictions in the manual and the decisions taken (more in ``_messages``):
   motor turn are taken as 4 x encoder lines (PA54: 20000 or 10000).
 """
 
-from ._cli import emulator, inspect_decode, send_verb, split_stream
+from ._cli import emulator, inspect_decode, send_verb, split_stream, transport_options
 from ._controller import ImaxController, ImaxFrameEncoder, controller_from_config
 from ._emulator import ImaxEmulator
 from ._messages import (
@@ -92,4 +92,5 @@ __all__ = [
     "pa_name",
     "send_verb",
     "split_stream",
+    "transport_options",
 ]

@@ -6,8 +6,9 @@ import re
 from typing import Any, TextIO
 
 from ..._errors import ConfigError, ProtocolError
-from .._transport import Transport
+from .._transport import Transport, TransportURL
 from .._udp_cli import describe, exchange, park, parse_bits, parse_value
+from .._udp_cli import transport_options as _transport_options
 from .._udp_common import CONFIRM_SERVO, HEADER, WHO_ALL, decode_header
 from ._controller import ImaxController
 from ._emulator import ImaxEmulator
@@ -32,7 +33,14 @@ from ._messages import (
 )
 from ._params import pa_name
 
-__all__ = ["VERBS", "emulator", "inspect_decode", "send_verb", "split_stream"]
+__all__ = [
+    "VERBS",
+    "emulator",
+    "inspect_decode",
+    "send_verb",
+    "split_stream",
+    "transport_options",
+]
 
 VERBS = ("estop", "reset", "home", "park", "outputs", "read", "write")
 _DP = re.compile(r"^dp[ _]?([0-9a-f]{1,2})$", re.IGNORECASE)
@@ -59,6 +67,13 @@ def register(name: str, *, for_write: bool) -> tuple[int, int, str]:
         return CHANNEL_DP, a, f"DP{a:02x}"
     pa = pa_name(text)
     return CHANNEL_PA, int(pa[2:], 16), pa
+
+
+def transport_options(controller: Any, url: TransportURL) -> dict:
+    """``open_transport`` options for this controller: pcap addresses from the config;
+    the IMAX only accepts commands sent from port PA24 (2.3.1), so a
+    non-loopback ``udp://`` target sends from it."""
+    return _transport_options(controller, url, fixed_source_port=True)
 
 
 def send_verb(

@@ -34,7 +34,7 @@ Contradictions in the manual and the decisions taken:
   FIFO depth: see :mod:`motioncue.output.mbox._emulator` for the decisions.
 """
 
-from ._cli import emulator, inspect_decode, send_verb, split_stream
+from ._cli import emulator, inspect_decode, send_verb, split_stream, transport_options
 from ._controller import MboxController, MboxFrameEncoder, controller_from_config
 from ._emulator import MboxEmulator
 from ._messages import (
@@ -83,4 +83,5 @@ __all__ = [
     "inspect_decode",
     "send_verb",
     "split_stream",
+    "transport_options",
 ]

@@ -6,8 +6,9 @@ import re
 from typing import Any, TextIO
 
 from ..._errors import ConfigError, ProtocolError
-from .._transport import Transport
+from .._transport import Transport, TransportURL
 from .._udp_cli import describe, exchange, park, parse_bits, parse_value
+from .._udp_cli import transport_options as _transport_options
 from .._udp_common import HEADER, WHO_ALL, decode_header
 from ._controller import MboxController
 from ._emulator import MboxEmulator
@@ -31,7 +32,14 @@ from ._messages import (
 )
 from ._params import fn_name
 
-__all__ = ["VERBS", "emulator", "inspect_decode", "send_verb", "split_stream"]
+__all__ = [
+    "VERBS",
+    "emulator",
+    "inspect_decode",
+    "send_verb",
+    "split_stream",
+    "transport_options",
+]
 
 VERBS = ("estop", "reset", "home", "park", "outputs", "read", "write")
 _DX = re.compile(r"^(?:dn|dx)[ _]?([0-9a-f]{1,2})$", re.IGNORECASE)
@@ -63,6 +71,12 @@ def register(name: str, *, for_write: bool, save: bool = False) -> tuple[int, in
     fn = fn_name(name)
     channel = (CHANNEL_FX if save else CHANNEL_FXM) if for_write else CHANNEL_FX
     return channel, int(fn[2:], 16), fn
+
+
+def transport_options(controller: Any, url: TransportURL) -> dict:
+    """``open_transport`` options for this controller: pcap addresses from the config;
+    the MBOX accepts any source port."""
+    return _transport_options(controller, url, fixed_source_port=False)
 
 
 def send_verb(
