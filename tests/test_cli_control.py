@@ -196,6 +196,8 @@ def test_emulate_verb_serves_and_reports(tmp_path):
             "1.5",
             "--trace-csv",
             str(csv),
+            "--plot",
+            str(tmp_path / "trace.png"),
         ],
         stdout=subprocess.PIPE,
         stderr=subprocess.PIPE,
@@ -214,6 +216,7 @@ def test_emulate_verb_serves_and_reports(tmp_path):
     assert proc.returncode == 1, err  # the junk datagram is a violation
     assert "received 4 datagrams, played 3 trace points, 1 violation(s)" in out
     assert "malformed" in out
+    assert (tmp_path / "trace.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     rows = csv.read_text().splitlines()
     assert rows[0] == "t_s,frame,axis0,axis1,axis2" and rows[3] == "0.040000,2,2,2,2"
 

@@ -71,6 +71,12 @@ def register(sub: Any) -> None:
         default=None,
         help="write the trace (t_s, frame, axis positions) here on exit",
     )
+    p.add_argument(
+        "--plot",
+        type=Path,
+        default=None,
+        help="write a PNG of the trace (positions per axis, violations in red)",
+    )
     p.set_defaults(run=_run_emulate)
 
     p = sub.add_parser(
@@ -155,6 +161,16 @@ def _run_emulate(args: argparse.Namespace) -> int:
             fh.write(f"t_s,frame,{cols}\n")
             for t, f, row in zip(trace.t_s, trace.frames, trace.positions, strict=True):
                 fh.write(f"{t:.6f},{f}," + ",".join(str(int(v)) for v in row) + "\n")
+    if args.plot is not None:
+        from ..output._trace_plot import plot_trace
+
+        plot_trace(
+            trace,
+            args.plot,
+            violations=violations,
+            title=f"{ctrl.name}: {len(trace)} frames, {len(violations)} violation(s)",
+        )
+        print(f"wrote {args.plot}")
     return 1 if violations else 0
 
 
