@@ -173,7 +173,7 @@ def test_ten_second_trajectory_over_udp(absolute):
         deadline = time.monotonic() + 5
         while emu.received < len(t) and time.monotonic() < deadline:
             time.sleep(0.01)
-    assert emu.received == len(t) and emu.violations == []
+    assert emu.received == len(t) and emu.violations == [] and emu.internal_errors == []
     trace = emu.trace
     assert len(trace) == len(t) and np.all(np.abs(trace.t_s - t) <= dt)
     vmax = float(np.max(AMP * 2 * np.pi * FREQ))

@@ -211,7 +211,7 @@ def test_ten_second_trajectory_over_udp_matches_within_a_frame_and_a_pulse(absol
         deadline = time.monotonic() + 5
         while emu.received < len(t) and time.monotonic() < deadline:
             time.sleep(0.01)
-    assert emu.received == len(t)
+    assert emu.received == len(t) and emu.internal_errors == []
     assert emu.violations == []
     check_trace(emu.trace, t, dt)
     assert list(emu.trace.frames) == list(range(len(t)))

@@ -275,6 +275,7 @@ class UdpEmulatorBase:
         self.lock = threading.RLock()
         self.last_peer: tuple[str, int] | None = None
         self.received = 0
+        self.internal_errors: list[str] = []  # emulator bugs met while serving (none expected)
 
     # -- subclass hooks -----------------------------------------------------------------
     def handle(self, data: bytes, now_s: float) -> list[bytes]:  # pragma: no cover - abstract
@@ -330,13 +331,17 @@ class UdpEmulatorBase:
                 break
             now = time.monotonic()
             with self.lock:
-                if peer is not None:
-                    self.last_peer = peer
-                    self.received += 1
-                    replies = self.handle(data, now)
-                else:
-                    replies = []
-                reports = self.periodic(now)
+                try:
+                    if peer is not None:
+                        self.last_peer = peer
+                        self.received += 1
+                        replies = self.handle(data, now)
+                    else:
+                        replies = []
+                    reports = self.periodic(now)
+                except Exception as exc:  # keep serving; the error is reported
+                    self.internal_errors.append(f"{type(exc).__name__}: {exc}")
+                    replies, reports = [], []
             target = peer or self.last_peer
             if target is None:
                 continue

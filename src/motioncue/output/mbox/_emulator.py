@@ -16,7 +16,8 @@ Behaviour modelled (manual section in brackets):
 * CX0 (4.2.10): RST (bit 0) leaves the fault state; SON (bit 1) = 0 re-homes.
 * status reports 0x1001 with DX[Fn042 : Fn042 + Fn043] per Fn040 / Fn041 (4.2.3, 5.6).
 
-Decisions where the manual says nothing: error codes 1 = address not implemented,
+Decisions where the manual says nothing: a frame of the other axis mode is answered
+0x1x04 (not the data this box needs) and not played; error codes 1 = address not implemented,
 2 = value out of range; frames received while homing, faulted or in e-stop are answered
 0x1x02 and not played (the manual defines no reply for that case); DX 0x3E (state ID)
 reads 0 homing, 1 ready, 2 e-stop, 3 fault.
@@ -182,7 +183,12 @@ class MboxEmulator(UdpEmulatorBase):
 
     def _frame(self, msg: MotionFrame) -> MotionFrameReply:
         if msg.n_axes != self.n_axes:
-            raise AssertionError("channel checked above")
+            # a frame of the other axis mode: not enough (or not the) data for this box
+            self._malformed(
+                f"frame {msg.line}: {msg.n_axes}-axis frame (channel "
+                f"{0 if msg.n_axes == 3 else 1}) to a box in {self.n_axes}-axis mode"
+            )
+            return MotionFrameReply(FrameStatus.SHORT_FRAME, msg)
         pb = self.playback
         if self.state != STATE_READY:
             self.ignored_frames += 1
