@@ -152,6 +152,9 @@ def _run_emulate(args: argparse.Namespace) -> int:
         f"received {emu.received} datagrams, played {len(trace)} trace points, "
         f"{len(violations)} violation(s)"
     )
+    errors = list(getattr(emu, "internal_errors", []))
+    for e in errors[:10]:
+        print(f"  emulator error: {e}")
     for v in violations[:50]:
         axis = "" if v.axis is None else f" axis {v.axis}"
         print(f"  {v.t_s:9.3f} s {v.kind}{axis}: {v.detail}")
@@ -171,7 +174,7 @@ def _run_emulate(args: argparse.Namespace) -> int:
             title=f"{ctrl.name}: {len(trace)} frames, {len(violations)} violation(s)",
         )
         print(f"wrote {args.plot}")
-    return 1 if violations else 0
+    return 1 if violations or errors else 0
 
 
 def _run_send(args: argparse.Namespace) -> int:
