@@ -191,3 +191,28 @@ def test_pa0b_flags_late_frames_and_pa0d_homes_when_frames_stop():
     assert emu.state == 1  # 170 ms without frames: still playing
     emu.handle(imax.RegisterRead(0, 0xF0, 1).encode(), 0.30)
     assert emu.state == 0 and (emu.trace.positions[-1] == 0).all()  # > 200 ms: homing
+
+
+def test_realtime_stream_at_1khz_in_order_with_replies():
+    ctrl = _ctrl()  # PA59 = 1 ms: 1 kHz is the fastest the controller takes
+    n = 500
+    with imax.ImaxEmulator(ctrl) as emu, open_transport(f"udp://127.0.0.1:{emu.port}") as tr:
+        enc = ctrl.frame_encoder()
+        replies = []
+        start = time.monotonic()
+        for k in range(n):
+            delay = start + k * 0.001 - time.monotonic()
+            if delay > 0:
+                time.sleep(delay)
+            tr.send(enc.encode(k * 0.001, [k] * 6)[0])
+            while (r := tr.recv(0.0)) is not None:  # the host reads replies as they come
+                replies.append(imax.decode(r))
+        deadline = time.monotonic() + 5
+        while len(replies) < n and time.monotonic() < deadline:
+            r = tr.recv(0.2)
+            if r is not None:
+                replies.append(imax.decode(r))
+    assert emu.received == n and list(emu.trace.frames) == list(range(n))
+    assert [r.frame for r in replies] == list(range(n))  # every frame acknowledged, in order
+    assert all(r.status == imax.ReplyStatus.OK for r in replies)
+    assert emu.violations == [] and emu.internal_errors == []
