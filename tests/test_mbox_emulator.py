@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import dataclasses
+import sys
 import time
 
 import numpy as np
@@ -234,3 +235,24 @@ def test_realtime_stream_at_1khz_loses_and_reorders_nothing():
     assert emu.received == n and emu.refused_frames == 0
     assert list(emu.trace.frames) == list(range(n))
     assert not [v for v in emu.violations if v.kind in ("sequence", "buffer", "malformed")]
+
+
+@pytest.mark.skipif(sys.platform != "linux", reason="kernel receive stamps: Linux SO_TIMESTAMPNS")
+def test_a_stalled_emulator_thread_still_sees_real_arrival_times():
+    # 400 frames at 1 kHz while the emulator thread cannot run: they queue in the socket.
+    # Judged by the time they are read, 400 frames would arrive at once and overflow the
+    # 256-frame FIFO; judged by the kernel's arrival stamps they came 1 ms apart.
+    ctrl = _ctrl()
+    with mbox.MboxEmulator(ctrl) as emu, open_transport(f"udp://127.0.0.1:{emu.port}") as tr:
+        enc = ctrl.frame_encoder(who_reply=0)
+        with emu.lock:
+            start = time.monotonic()
+            for k in range(400):
+                delay = start + k * 0.001 - time.monotonic()
+                if delay > 0:
+                    time.sleep(delay)
+                tr.send(enc.encode(k * 0.001, [k] * 6)[0])
+        deadline = time.monotonic() + 5
+        while emu.received < 400 and time.monotonic() < deadline:
+            time.sleep(0.01)
+    assert emu.received == 400 and emu.refused_frames == 0

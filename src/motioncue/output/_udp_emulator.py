@@ -18,16 +18,29 @@ from __future__ import annotations
 
 import collections
 import socket
+import struct
+import sys
 import threading
 import time
 from collections.abc import Sequence
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
 from .._errors import TransportError
 
-__all__ = ["Playback", "Trace", "UdpEmulatorBase", "Violation", "who_matches"]
+__all__ = ["Playback", "Trace", "UdpEmulatorBase", "Violation", "wall_clock", "who_matches"]
+
+# kernel receive time stamps (struct timespec); Python does not name the option, Linux's
+# generic value is 35 (also the control-message type SCM_TIMESTAMPNS)
+_SO_TIMESTAMPNS = getattr(socket, "SO_TIMESTAMPNS", 35 if sys.platform == "linux" else None)
+_TIMESPEC = struct.Struct("@ll")
+
+
+def wall_clock() -> float:
+    """The emulators' clock: seconds of wall time (comparable with kernel receive stamps)."""
+    return time.time()
 
 
 @dataclass(frozen=True)
@@ -275,6 +288,7 @@ class UdpEmulatorBase:
         self.lock = threading.RLock()
         self.last_peer: tuple[str, int] | None = None
         self.received = 0
+        self._stamped = False
         self.internal_errors: list[str] = []  # emulator bugs met while serving (none expected)
 
     # -- subclass hooks -----------------------------------------------------------------
@@ -300,6 +314,13 @@ class UdpEmulatorBase:
             raise TransportError(
                 f"emulator cannot listen on {self._host}:{self._port}: {exc}"
             ) from exc
+        self._stamped = False
+        if _SO_TIMESTAMPNS is not None:
+            try:
+                sock.setsockopt(socket.SOL_SOCKET, _SO_TIMESTAMPNS, 1)
+                self._stamped = True
+            except OSError:
+                pass
         sock.settimeout(0.02)
         self._port = int(sock.getsockname()[1])
         self._sock = sock
@@ -324,12 +345,11 @@ class UdpEmulatorBase:
         assert sock is not None
         while not self._stop.is_set():
             try:
-                data, peer = sock.recvfrom(65536)
+                data, peer, now = self._receive(sock)
             except TimeoutError:
-                data, peer = b"", None
+                data, peer, now = b"", None, wall_clock()
             except OSError:
                 break
-            now = time.monotonic()
             with self.lock:
                 try:
                     if peer is not None:
@@ -350,6 +370,20 @@ class UdpEmulatorBase:
                     sock.sendto(out, target)
                 except OSError:
                     pass
+
+    def _receive(self, sock: socket.socket) -> tuple[bytes, Any, float]:
+        """One datagram, its sender and its arrival time: the kernel's receive stamp when
+        the OS gives one (so a busy emulator thread does not distort the playback model),
+        else the time it is read."""
+        if not self._stamped:
+            data, peer = sock.recvfrom(65536)
+            return data, peer, wall_clock()
+        data, ancillary, _flags, peer = sock.recvmsg(65536, 64)
+        for level, kind, cdata in ancillary:
+            if level == socket.SOL_SOCKET and kind == _SO_TIMESTAMPNS and len(cdata) >= 8:
+                sec, nsec = _TIMESPEC.unpack_from(cdata.ljust(_TIMESPEC.size, b"\0"))
+                return data, peer, sec + nsec * 1e-9
+        return data, peer, wall_clock()
 
     def stop(self) -> None:
         """Stop serving and close the socket (idempotent)."""

@@ -29,7 +29,14 @@ from typing import Any
 
 from ..._errors import ProtocolError
 from .._udp_common import decode_header
-from .._udp_emulator import Playback, Trace, UdpEmulatorBase, Violation, who_matches
+from .._udp_emulator import (
+    Playback,
+    Trace,
+    UdpEmulatorBase,
+    Violation,
+    wall_clock,
+    who_matches,
+)
 from ._controller import ImaxController
 from ._messages import (
     CHANNEL_DP,
@@ -131,9 +138,7 @@ class ImaxEmulator(UdpEmulatorBase):
 
     def set_inputs(self, bits: int, now_s: float | None = None) -> None:
         """Set the X01..X12 inputs (logical values); may trigger or release the e-stop."""
-        import time
-
-        now = time.monotonic() if now_s is None else now_s
+        now = wall_clock() if now_s is None else now_s
         with self.lock:
             self._tick(now)
             self.inputs = bits
