@@ -76,21 +76,28 @@ class LegSet:
         return (drot @ self.rot_part).reshape(drot.shape[0], 3, self.n, 3)
 
     def jacobian_one(
-        self, d: list, q: list[float], drot: tuple[tuple[float, ...], ...]
+        self, d: list, q: list[float], t: tuple[float, float, float], angles: tuple
     ) -> list[list[float]]:
-        """Rows ``dq_i/dpose`` (6 floats each) for one pose, without numpy."""
+        """Rows ``dq_i/dpose`` (6 floats each) for one pose, without numpy.
+
+        With ``g = dq_i/dP_i`` and ``r = R p_i``, the Euler-angle columns are
+        ``g . (e_k x r) = e_k . (r x g)`` where ``e_k`` are the columns of the Euler-rate
+        matrix E (world axes of the roll, pitch and yaw rotations).
+        """
+        _, pitch, yaw = angles
+        cp, sp = math.cos(pitch), math.sin(pitch)
+        cy, sy = math.cos(yaw), math.sin(yaw)
+        e0x, e0y, e0z = cy * cp, sy * cp, -sp
+        x, y, z = t
         rows = []
-        for (px, py, pz, _, _, _), (gx, gy, gz) in zip(
-            self._one, self.gradient_one(d, q), strict=True
+        for (dx, dy, dz), (_, _, _, bx, by, bz), (gx, gy, gz) in zip(
+            d, self._one, self.gradient_one(d, q), strict=True
         ):
-            row = [gx, gy, gz]
-            for r in drot:
-                row.append(
-                    gx * (r[0] * px + r[1] * py + r[2] * pz)
-                    + gy * (r[3] * px + r[4] * py + r[5] * pz)
-                    + gz * (r[6] * px + r[7] * py + r[8] * pz)
-                )
-            rows.append(row)
+            rx, ry, rz = dx - x + bx, dy - y + by, dz - z + bz
+            mx = ry * gz - rz * gy
+            my = rz * gx - rx * gz
+            mz = rx * gy - ry * gx
+            rows.append([gx, gy, gz, mx * e0x + my * e0y + mz * e0z, -mx * sy + my * cy, mz])
         return rows
 
     # Implemented by the subclasses.

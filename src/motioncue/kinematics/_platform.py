@@ -18,7 +18,7 @@ import numpy.typing as npt
 from .._errors import ConfigError
 from ._drive import Drive
 from ._legs import CrankLegs, LegSet, LinearLegs
-from ._rotation import drot_one, rot9, rot9_derivatives, rot_one
+from ._rotation import rot9, rot9_derivatives, rot_one
 
 __all__ = [
     "DOF_NAMES",
@@ -32,7 +32,7 @@ __all__ = [
 ]
 
 DOF_NAMES = ("x", "y", "z", "roll", "pitch", "yaw")
-_CHUNK = 65536  # poses per block in batch inverse kinematics (bounds temporary memory)
+_CHUNK = 2048  # poses per block in batch IK: temporaries stay in cache, BLAS stays single-threaded
 _NO_REACH = np.ones((0, 0), dtype=bool)
 
 
@@ -296,16 +296,22 @@ class Platform:
         return self._inverse_one_checked(pose)[0]
 
     def _inverse_one_checked(self, pose: list[float]) -> tuple[list[float], bool]:
+        _, q, reachable = self._eval_one(pose)
+        return q, reachable
+
+    def _eval_one(self, pose: list[float]) -> tuple[list, list[float], bool]:
+        """Leg vectors, actuator positions and reachability for one pose (plain floats)."""
         for v in pose:
             if not math.isfinite(v):
                 raise _bad_input("poses", np.asarray(pose))
         m = self._leg_mask_list
         x, y, z, roll, pitch, yaw = (v if keep else 0.0 for v, keep in zip(pose, m, strict=True))
         legs = self._legs
-        q, reachable = legs.q_one_checked(legs.vectors_one(rot_one(roll, pitch, yaw), (x, y, z)))
+        d = legs.vectors_one(rot_one(roll, pitch, yaw), (x, y, z))
+        q, reachable = legs.q_one_checked(d)
         if self._yaw_axis:
             q.append(pose[5])
-        return q, reachable
+        return d, q, reachable
 
     def inverse(self, poses: Any) -> np.ndarray:
         """Actuator positions for poses, in closed form.
@@ -391,14 +397,20 @@ class Platform:
             jac[:, -1, 5] = 1.0
         return jac
 
-    def _jacobian_one(self, pose: list[float]) -> np.ndarray:
-        m = self._leg_mask_list
-        x, y, z, roll, pitch, yaw = (v if keep else 0.0 for v, keep in zip(pose, m, strict=True))
+    def _jacobian_one(
+        self, pose: list[float], d: list | None = None, q: list[float] | None = None
+    ) -> np.ndarray:
+        """``(n, 6)`` Jacobian for one pose; ``d`` and ``q`` from :meth:`_eval_one` if known."""
+        if d is None or q is None:
+            d, q, _ = self._eval_one(pose)
+        x, y, z, roll, pitch, yaw = (
+            v if keep else 0.0 for v, keep in zip(pose, self._leg_mask_list, strict=True)
+        )
         legs = self._legs
-        d = legs.vectors_one(rot_one(roll, pitch, yaw), (x, y, z))
-        rows = legs.jacobian_one(d, legs.q_one(d), drot_one(roll, pitch, yaw))
-        jac = np.array(rows)
-        jac *= self._leg_mask
+        rows = legs.jacobian_one(d, q[: legs.n], (x, y, z), (roll, pitch, yaw))
+        jac: np.ndarray = np.array(rows, dtype=float)
+        if not self._all_dof_legs:
+            jac *= self._leg_mask
         if self._yaw_axis:
             jac = np.vstack([jac, [0.0, 0.0, 0.0, 0.0, 0.0, 1.0]])
         return jac
@@ -434,15 +446,17 @@ class Platform:
             raise ConfigError(f"q has shape {qv.shape}; expected ({self.n_actuators},)")
         if not np.isfinite(qv).all():
             raise _bad_input("q", qv)
-        pose = np.zeros(6)
+        pose = [0.0] * 6
+        idx = [int(k) for k in self._dof_idx]
         if guess is not None:
             g = np.asarray(guess, dtype=float)
             if g.shape != (6,) or not np.isfinite(g).all():
                 raise ConfigError(f"guess = {g!r} is invalid; allowed: 6 finite numbers")
-            pose[self._dof_idx] = g[self._dof_idx]
+            for k in idx:
+                pose[k] = float(g[k])
         target = qv.tolist()
-        idx = self._dof_idx
-        cur = self._inverse_one(pose.tolist())
+        all_dof = len(idx) == 6
+        d, cur, _ = self._eval_one(pose)
         r = [c - t for c, t in zip(cur, target, strict=True)]
         sq = sum(v * v for v in r)
         iterations = 0
@@ -451,29 +465,35 @@ class Platform:
         # every crank reaches its rod, the step is halved.
         while max(abs(v) for v in r) > tol and iterations < max_iter:
             iterations += 1
-            jac = self._jacobian_one(pose.tolist())[:, idx]
+            jac = self._jacobian_one(pose, d, cur)
+            if not all_dof:
+                jac = jac[:, idx]
             try:
-                step = np.linalg.solve(jac, r)
+                step = np.linalg.solve(jac, r).tolist()
             except np.linalg.LinAlgError:
                 break
-            if not np.isfinite(step).all():
+            if not all(math.isfinite(v) for v in step):
                 break
             alpha = 1.0
             for _ in range(30):
-                trial = pose.copy()
-                trial[idx] -= alpha * step
-                cur, reachable = self._inverse_one_checked(trial.tolist())
-                r_new = [c - t for c, t in zip(cur, target, strict=True)]
+                trial = pose[:]
+                for j, k in enumerate(idx):
+                    trial[k] -= alpha * step[j]
+                d_new, cur_new, reachable = self._eval_one(trial)
+                r_new = [c - t for c, t in zip(cur_new, target, strict=True)]
                 sq_new = sum(v * v for v in r_new)
                 if sq_new < sq and reachable:
                     break
                 alpha *= 0.5
             else:
                 break
-            pose, r, sq = trial, r_new, sq_new
+            pose, d, cur, r, sq = trial, d_new, cur_new, r_new, sq_new
         residual = max(abs(v) for v in r)
         return FKResult(
-            pose=pose, converged=bool(residual <= tol), iterations=iterations, residual=residual
+            pose=np.array(pose),
+            converged=bool(residual <= tol),
+            iterations=iterations,
+            residual=residual,
         )
 
     # --- checks -------------------------------------------------------------------------
