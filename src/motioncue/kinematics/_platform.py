@@ -191,6 +191,8 @@ class Platform:
         a(self, "_leg_mask", np.asarray(leg_pose_mask, dtype=float))
         a(self, "_leg_mask_list", [bool(v) for v in leg_pose_mask])
         a(self, "_all_dof_legs", all(bool(v) for v in leg_pose_mask))
+        fast = self._all_dof_legs and not yaw_axis and isinstance(legs, LinearLegs)
+        a(self, "_fast_linear", legs if fast else None)
         a(self, "_yaw_axis", bool(yaw_axis))
         a(self, "_dof_idx", np.flatnonzero(np.asarray(dof_mask, dtype=bool)))
         a(self, "q_neutral", _readonly(np.zeros(n)))
@@ -238,6 +240,7 @@ class Platform:
     _leg_mask: np.ndarray
     _leg_mask_list: list[bool]
     _all_dof_legs: bool
+    _fast_linear: LinearLegs | None
     _yaw_axis: bool
     _dof_idx: np.ndarray
 
@@ -293,6 +296,12 @@ class Platform:
         return q_legs, reach
 
     def _inverse_one(self, pose: list[float]) -> list[float]:
+        fast = self._fast_linear
+        if fast is not None:
+            total = sum(pose)  # NaN or inf anywhere makes this NaN or inf
+            if total - total == 0.0:
+                x, y, z, roll, pitch, yaw = pose
+                return fast.q_pose_one(rot_one(roll, pitch, yaw), x, y, z)
         return self._inverse_one_checked(pose)[0]
 
     def _inverse_one_checked(self, pose: list[float]) -> tuple[list[float], bool]:
