@@ -480,6 +480,10 @@ def test_si_constructor_rejects_bad_geometry() -> None:
         Stewart6Linear(good.legs.base, good.legs.plat, math.nan, (0.485, 0.625))
     with pytest.raises(ConfigError, match="stroke"):
         Stewart6Linear(good.legs.base, good.legs.plat, 0.45, (0.625, 0.485))
+    # six vertical legs cannot hold x, y or yaw
+    ring = np.array([[math.cos(a), math.sin(a), 0.0] for a in np.radians(np.arange(0, 360, 60))])
+    with pytest.raises(ConfigError, match="singular at the neutral pose"):
+        Stewart6Linear(ring, ring, 1.0, (0.9, 1.1))
     # neutral outside the stroke
     with pytest.raises(ConfigError, match="neutral"):
         Stewart6Linear(good.legs.base, good.legs.plat, 0.45, (0.6, 0.7))

@@ -215,6 +215,13 @@ class Platform:
         if isinstance(legs, CrankLegs) and not np.all(legs.reachable0):
             bad = [names[i] for i in np.flatnonzero(~legs.reachable0)]
             raise ConfigError(f"crank legs {bad} cannot reach their rod at the neutral pose")
+        jac0 = self._jacobian_one([0.0] * 6)[:, self._dof_idx]
+        if not np.linalg.cond(jac0) < 1e10:
+            raise ConfigError(
+                "the geometry is singular at the neutral pose (the actuators cannot hold "
+                f"{', '.join(DOF_NAMES[i] for i in self._dof_idx)} there)"
+            )
+        a(self, "_jac0_inv", np.linalg.inv(jac0))
         fk = self.forward(home)
         if not fk.converged:
             raise ConfigError(
@@ -241,6 +248,7 @@ class Platform:
     _leg_mask_list: list[bool]
     _all_dof_legs: bool
     _fast_linear: LinearLegs | None
+    _jac0_inv: np.ndarray
     _yaw_axis: bool
     _dof_idx: np.ndarray
 
@@ -356,22 +364,23 @@ class Platform:
     def _inverse_batch(
         self, arr: np.ndarray, want_reach: bool = False
     ) -> tuple[np.ndarray, np.ndarray]:
+        """q ``(..., n)`` and, when ``want_reach``, reachable ``(..., n)`` (else empty)."""
         lead = arr.shape[:-1]
         flat = arr.reshape(-1, 6)
         total = flat.shape[0]
         n = self.n_actuators
         if total <= _CHUNK:
             q, reach = self._ik_block(flat, want_reach)
-            if not want_reach:
-                reach = np.ones(q.shape, dtype=bool)
         else:
             q = np.empty((total, n))
-            reach = np.empty((total, n), dtype=bool) if want_reach else np.ones((total, n), bool)
+            reach = np.empty((total, n), dtype=bool) if want_reach else _NO_REACH
             for start in range(0, total, _CHUNK):
                 stop = min(start + _CHUNK, total)
                 q[start:stop], r = self._ik_block(flat[start:stop], want_reach)
                 if want_reach:
                     reach[start:stop] = r
+        if not want_reach:
+            return q.reshape(*lead, n), _NO_REACH
         return q.reshape(*lead, n), reach.reshape(*lead, n)
 
     # --- Jacobian -----------------------------------------------------------------------
@@ -472,15 +481,18 @@ class Platform:
         # Newton with backtracking: a full step is taken whenever it lowers the residual (the
         # usual case, quadratic convergence); otherwise, or when it leaves the region where
         # every crank reaches its rod, the step is halved.
-        while max(abs(v) for v in r) > tol and iterations < max_iter:
+        while max(map(abs, r)) > tol and iterations < max_iter:
             iterations += 1
-            jac = self._jacobian_one(pose, d, cur)
-            if not all_dof:
-                jac = jac[:, idx]
-            try:
-                step = np.linalg.solve(jac, r).tolist()
-            except np.linalg.LinAlgError:
-                break
+            if iterations == 1 and guess is None:
+                step = (self._jac0_inv @ r).tolist()  # Jacobian at neutral, inverted once
+            else:
+                jac = self._jacobian_one(pose, d, cur)
+                if not all_dof:
+                    jac = jac[:, idx]
+                try:
+                    step = np.linalg.solve(jac, r).tolist()
+                except np.linalg.LinAlgError:
+                    break
             if not all(math.isfinite(v) for v in step):
                 break
             alpha = 1.0
@@ -497,7 +509,7 @@ class Platform:
             else:
                 break
             pose, d, cur, r, sq = trial, d_new, cur_new, r_new, sq_new
-        residual = max(abs(v) for v in r)
+        residual = max(map(abs, r))
         return FKResult(
             pose=np.array(pose),
             converged=bool(residual <= tol),
