@@ -7,6 +7,8 @@ import tomllib
 
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 import motioncue
 from motioncue import ConfigError
@@ -487,3 +489,19 @@ def test_si_constructor_rejects_bad_geometry() -> None:
     # neutral outside the stroke
     with pytest.raises(ConfigError, match="neutral"):
         Stewart6Linear(good.legs.base, good.legs.plat, 0.45, (0.6, 0.7))
+
+
+@settings(max_examples=200)
+@given(
+    name=st.sampled_from(BUNDLED),
+    pose=st.lists(st.floats(-10.0, 10.0, allow_nan=False), min_size=6, max_size=6),
+)
+def test_any_finite_pose_gives_finite_positions(name: str, pose: list[float]) -> None:
+    """Wild but finite requests never produce NaN: positions stay finite, check() says why."""
+    p = load_platform(name)
+    q = p.inverse(np.array(pose))
+    assert np.all(np.isfinite(q))
+    res = p.check(np.array([pose]))
+    assert np.all(np.isfinite(res.q)) and np.all(np.isfinite(res.overshoot))
+    assert np.array_equal(res.q[0], q) or np.allclose(res.q[0], q, atol=1e-12)
+    assert res.ok[0] == bool(np.all(res.in_stroke[0] & res.reachable[0]))
