@@ -286,6 +286,18 @@ def test_jacobian_against_finite_differences(platform: Platform) -> None:
         assert np.allclose(jac[:, :, k], fd, atol=2e-8, rtol=1e-8), k
 
 
+def test_blocked_batches_match_single_block(platform: Platform) -> None:
+    """Batches longer than one internal block give the same numbers as short ones."""
+    poses = np.random.default_rng(15).uniform(-0.02, 0.02, (20000, 6))
+    q = platform.inverse(poses)
+    jac = platform.jacobian(poses)
+    res = platform.check(poses)
+    for lo, hi in ((0, 100), (8100, 8300), (19900, 20000)):
+        assert np.allclose(platform.inverse(poses[lo:hi]), q[lo:hi], rtol=0, atol=1e-15)
+        assert np.allclose(platform.jacobian(poses[lo:hi]), jac[lo:hi], rtol=0, atol=1e-15)
+        assert np.array_equal(platform.check(poses[lo:hi]).ok, res.ok[lo:hi])
+
+
 def test_forward_with_guess_and_reports_iterations(platform: Platform) -> None:
     pose = _random_reachable(platform, 1, seed=7)[0]
     q = platform.inverse(pose)

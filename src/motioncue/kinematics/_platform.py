@@ -33,6 +33,7 @@ __all__ = [
 
 DOF_NAMES = ("x", "y", "z", "roll", "pitch", "yaw")
 _CHUNK = 2048  # poses per block in batch IK: temporaries stay in cache, BLAS stays single-threaded
+_JAC_CHUNK = 8192  # poses per block in batch Jacobians (bounds temporary memory)
 _NO_REACH = np.ones((0, 0), dtype=bool)
 
 
@@ -393,7 +394,13 @@ class Platform:
         arr = _as_poses(poses)
         lead = arr.shape[:-1]
         flat = arr.reshape(-1, 6)
-        return self._jacobian_block(flat).reshape(*lead, self.n_actuators, 6)
+        n = self.n_actuators
+        if flat.shape[0] <= _JAC_CHUNK:
+            return self._jacobian_block(flat).reshape(*lead, n, 6)
+        out = np.empty((flat.shape[0], n, 6))
+        for start in range(0, flat.shape[0], _JAC_CHUNK):
+            out[start : start + _JAC_CHUNK] = self._jacobian_block(flat[start : start + _JAC_CHUNK])
+        return out.reshape(*lead, n, 6)
 
     def _jacobian_block(self, flat: np.ndarray) -> np.ndarray:
         legs = self._legs
