@@ -15,14 +15,32 @@ Example
 """
 
 from ._classical import ClassicalWashout, WashoutResult, WashoutState
+from ._evaluate import (
+    AXIS_NAMES,
+    OTOLITH,
+    SEMICIRCULAR_CANAL,
+    CueingEvaluation,
+    VestibularModel,
+    evaluate_cueing,
+    simulator_motion,
+)
 from ._params import DOF_NAMES, GRAVITY_M_S2, CueingParams, load_cueing
+from ._plot import plot_cueing
 
 __all__ = [
+    "AXIS_NAMES",
     "DOF_NAMES",
     "GRAVITY_M_S2",
+    "OTOLITH",
+    "SEMICIRCULAR_CANAL",
     "ClassicalWashout",
+    "CueingEvaluation",
     "CueingParams",
+    "VestibularModel",
     "WashoutResult",
     "WashoutState",
+    "evaluate_cueing",
     "load_cueing",
+    "plot_cueing",
+    "simulator_motion",
 ]

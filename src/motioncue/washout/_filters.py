@@ -168,19 +168,23 @@ def rate_limit_array(x: NDArray[np.float64], step: float, y0: float) -> NDArray[
             continue
         # ramping from i: continue at i + m while s (x[i+m] - prev) > (m + 1) step
         s = 1.0 if diff > 0.0 else -1.0
+        lo = i
         window = 256
         while True:
-            hi = min(n, i + window)
-            reach = (x[i:hi] - prev) * s - ramp[: hi - i]
+            hi = min(n, lo + window)
+            if s > 0.0:
+                reach = (x[lo:hi] - prev) - ramp[lo - i : hi - i]
+            else:
+                reach = (prev - x[lo:hi]) - ramp[lo - i : hi - i]
             stops = reach <= 0.0
-            stop = int(np.argmax(stops))
-            if not stops[stop]:
-                stop = hi - i
-            if stop < hi - i or hi == n:
+            k = int(np.argmax(stops))
+            if stops[k] or hi == n:
+                stop = (lo - i) + (k if stops[k] else hi - lo)
                 y[i : i + stop] = prev + s * ramp[:stop]
                 prev = prev + s * float(ramp[stop - 1])
                 i += stop
                 break
+            lo = hi
             window *= 4
     return y
 
