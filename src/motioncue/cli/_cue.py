@@ -12,7 +12,7 @@ from .._errors import ConfigError
 __all__ = ["register"]
 
 
-def register(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
+def register(sub: argparse._SubParsersAction) -> None:
     parser = sub.add_parser(
         "cue",
         help="washout cueing of a recording to platform poses",
