@@ -304,7 +304,7 @@ def _write_variant(tmp_path: Path, old: str, new: str) -> Path:
 
 
 def test_config_errors_name_the_key(tmp_path: Path) -> None:
-    with pytest.raises(ConfigError, match="unknown key.*'tilt_rate_deg_s'"):
+    with pytest.raises(ConfigError, match=r"unknown key.*'tilt_rate_deg_s'"):
         load_cueing(
             _write_variant(
                 tmp_path, "rate_limit_deg_s = 8.0", "rate_limit_deg_s = 8.0\ntilt_rate_deg_s = 3"
