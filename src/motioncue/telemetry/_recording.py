@@ -160,7 +160,8 @@ def resample(rec: Recording, fs_hz: float) -> Recording:
     last one in the file wins (a later packet supersedes an earlier one). The grid starts at
     the earliest time, ``t_k = t_0 + k / fs``, and ends at the last grid point not after the
     latest time. Each grid value interpolates linearly between the two samples around it; a
-    grid point exactly on a sample takes that sample's values, and one strictly between two
+    grid point on a sample (within a millionth of the grid period, absorbing rounding of
+    the times) takes that sample's values, and one strictly between two
     samples of which one is NaN is NaN (left for the washout to hold and count). A
     recording of one sample gives one sample; an empty one gives an empty one.
 
@@ -208,9 +209,11 @@ def resample(rec: Recording, fs_hz: float) -> Recording:
         out = d0 + frac * (d1 - d0)
         bad = ~(np.isfinite(d0) & np.isfinite(d1))
         out[bad] = np.nan
-        # on a sample: exactly that sample (even if its neighbour is NaN)
-        on0 = frac[:, 0] == 0.0
-        on1 = frac[:, 0] == 1.0
+        # on a sample (within 1e-6 of a grid period): exactly that sample, even if its
+        # neighbour is NaN
+        tol = 1e-6 / fs_hz
+        on0 = (grid - t0) <= tol
+        on1 = ~on0 & ((t1 - grid) <= tol)
         out[on0] = d0[on0]
         out[on1] = d1[on1]
     return Recording(grid, out[:, :3], out[:, 3:])
