@@ -30,13 +30,6 @@ __all__ = [
 Section = tuple[float, float, float, float, float, float]
 
 
-def _poly_pow(base: NDArray[np.float64], n: int) -> NDArray[np.float64]:
-    out = np.array([1.0])
-    for _ in range(n):
-        out = np.polymul(out, base)
-    return out
-
-
 def tustin_section(
     num: Sequence[float], den: Sequence[float], fs_hz: float, warp_rad_s: float | None
 ) -> Section:
@@ -61,6 +54,8 @@ def tustin_section(
     tuple of 6 floats
         ``(b0, b1, b2, 1.0, a1, a2)``, normalised so that ``a0 = 1``.
     """
+    from scipy.signal import bilinear
+
     den_a = np.trim_zeros(np.asarray(den, dtype=float), "f")
     num_a = np.trim_zeros(np.asarray(num, dtype=float), "f")
     order = len(den_a) - 1
@@ -76,20 +71,8 @@ def tustin_section(
                 f"({nyquist:g} rad/s at fs = {fs_hz:g} Hz); raise the sample rate"
             )
         k = warp_rad_s / math.tan(warp_rad_s / (2.0 * fs_hz))
-    minus = np.array([-1.0, 1.0])  # (1 - q) as a polynomial in q, highest power first
-    plus = np.array([1.0, 1.0])  # (1 + q)
-
-    def substitute(poly: NDArray[np.float64]) -> NDArray[np.float64]:
-        acc = np.zeros(order + 1)
-        deg = len(poly) - 1
-        for i, c in enumerate(poly):
-            p = deg - i  # power of s
-            term = c * k**p * np.polymul(_poly_pow(minus, p), _poly_pow(plus, order - p))
-            acc[order + 1 - len(term) :] += term
-        return acc[::-1]  # ascending powers of q = z^-1
-
-    b = substitute(num_a)
-    a = substitute(den_a)
+    # scipy's bilinear substitutes s = 2 fs' (z - 1)/(z + 1): fs' = K / 2 gives the prewarp
+    b, a = bilinear(num_a, den_a, fs=k / 2.0)
     b = np.concatenate([b, np.zeros(3 - len(b))]) / a[0]
     a = np.concatenate([a, np.zeros(3 - len(a))]) / a[0]
     return (float(b[0]), float(b[1]), float(b[2]), 1.0, float(a[1]), float(a[2]))
