@@ -331,3 +331,29 @@ def test_design_rejects_bad_sample_rates() -> None:
             ClassicalWashout(p, fs_hz=bad)
     with pytest.raises(ConfigError, match="shape"):
         ClassicalWashout(p, fs_hz=FS).run(np.zeros((5, 2)), np.zeros((5, 3)))
+
+
+def test_yaw_rate_in_a_steady_corner_goes_through_euler_rates(racing: ClassicalWashout) -> None:
+    """Rolled by tilt phi, a yaw rate r gives Euler rates pitch' = -sin(phi) r, yaw' = cos(phi) r,
+    each high-passed and integrated by H_R(s)/s (oracle: lsim of the continuous filter)."""
+    from scipy import signal
+
+    p = racing.params
+    n = int(70 * FS)
+    k_turn = int(30 * FS)
+    f = np.tile([0.0, 0.0, G], (n, 1))
+    f[50:, 1] = -2.0  # a right-hand corner, held
+    w = np.zeros((n, 3))
+    w[k_turn:, 2] = -0.3  # turning right: negative yaw rate about z up
+    res = racing.run(f, w)
+    phi = res.poses[k_turn - 1, 3]
+    assert phi == pytest.approx(math.asin(p.f_scale[1] * -2.0 / G), abs=1e-9)  # settled tilt
+    t = np.arange(n - k_turn) / FS
+    r = p.w_scale[2] * -0.3
+    yaw_c = signal.lsim(racing.continuous()["rot"][2], np.full(t.size, math.cos(phi) * r), t)[1]
+    pitch_c = signal.lsim(racing.continuous()["rot"][1], np.full(t.size, -math.sin(phi) * r), t)[1]
+    yaw, pitch = res.poses[k_turn:, 5], res.poses[k_turn:, 4]
+    assert pitch.min() < -1e-3  # left side down and yawing right: the Euler pitch rate is < 0
+    assert np.sqrt(np.mean((yaw - yaw_c) ** 2)) < 0.01 * np.sqrt(np.mean(yaw_c**2))
+    assert np.sqrt(np.mean((pitch - pitch_c) ** 2)) < 0.01 * np.sqrt(np.mean(pitch_c**2))
+    np.testing.assert_allclose(res.poses[k_turn:, 3], phi, atol=1e-12)  # roll' = 0 here
