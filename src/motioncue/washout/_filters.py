@@ -107,6 +107,11 @@ def soft_limit_array(x: NDArray[np.float64], limit: float, knee: float) -> NDArr
     return out
 
 
+_SHORT = 24  # a segment shorter than this switches to the scalar loop
+_SCALAR_RUN = 512  # samples per scalar stretch
+_CALM = 6  # at most this many switches in a scalar stretch switch back to segments
+
+
 def rate_limit_array(x: NDArray[np.float64], step: float, y0: float) -> NDArray[np.float64]:
     """Rate limiter over a signal: the loop of :func:`rate_limit_step`, vectorised.
 
@@ -115,8 +120,10 @@ def rate_limit_array(x: NDArray[np.float64], step: float, y0: float) -> NDArray[
     is the ramp ``y0 + s (m + 1) step`` (``s = +-1``) until the input is within reach again.
     The ramp is computed by multiplication where the loop adds ``step`` repeatedly, so the
     two differ by rounding only (the limiter is 1-Lipschitz in its input, so rounding never
-    grows into a different branch of consequence). Cost: linear in the length plus a small
-    constant per activation.
+    grows into a different branch of consequence). Where the limiter switches on and off
+    every few samples (a noisy target near the rate limit) the per-segment overhead would
+    dominate, so such stretches run the plain loop on floats instead, and the segments
+    resume when the signal calms down. Cost: linear in the length.
 
     Parameters
     ----------
@@ -141,6 +148,7 @@ def rate_limit_array(x: NDArray[np.float64], step: float, y0: float) -> NDArray[
     i = 0
     while i < n:
         diff = x[i] - prev
+        start = i
         if -step <= diff <= step:
             # tracking from i: y = x until the next jump
             k = int(np.searchsorted(jumps, i, side="right"))
@@ -148,27 +156,53 @@ def rate_limit_array(x: NDArray[np.float64], step: float, y0: float) -> NDArray[
             y[i:j] = x[i:j]
             prev = float(x[j - 1])
             i = j
-            continue
-        # ramping from i: continue at i + m while s (x[i+m] - prev) > (m + 1) step
-        s = 1.0 if diff > 0.0 else -1.0
-        lo = i
-        window = 256
-        while True:
-            hi = min(n, lo + window)
-            if s > 0.0:
-                reach = (x[lo:hi] - prev) - ramp[lo - i : hi - i]
-            else:
-                reach = (prev - x[lo:hi]) - ramp[lo - i : hi - i]
-            stops = reach <= 0.0
-            k = int(np.argmax(stops))
-            if stops[k] or hi == n:
-                stop = (lo - i) + (k if stops[k] else hi - lo)
-                y[i : i + stop] = prev + s * ramp[:stop]
-                prev = prev + s * float(ramp[stop - 1])
-                i += stop
+        else:
+            # ramping from i: continue at i + m while s (x[i+m] - prev) > (m + 1) step
+            s = 1.0 if diff > 0.0 else -1.0
+            lo = i
+            window = 256
+            while True:
+                hi = min(n, lo + window)
+                if s > 0.0:
+                    reach = (x[lo:hi] - prev) - ramp[lo - i : hi - i]
+                else:
+                    reach = (prev - x[lo:hi]) - ramp[lo - i : hi - i]
+                stops = reach <= 0.0
+                k = int(np.argmax(stops))
+                if stops[k] or hi == n:
+                    stop = (lo - i) + (k if stops[k] else hi - lo)
+                    y[i : i + stop] = prev + s * ramp[:stop]
+                    prev = prev + s * float(ramp[stop - 1])
+                    i += stop
+                    break
+                lo = hi
+                window *= 4
+        while i - start < _SHORT and i < n:
+            # choppy: the scalar loop until the limiter stops switching so often
+            start = i
+            end = min(n, i + _SCALAR_RUN)
+            out = []
+            switches = 0
+            active = False
+            for v in x[i:end].tolist():
+                d = v - prev
+                if d > step:
+                    prev = prev + step
+                    switches += not active
+                    active = True
+                elif d < -step:
+                    prev = prev - step
+                    switches += not active
+                    active = True
+                else:
+                    prev = v
+                    switches += active
+                    active = False
+                out.append(prev)
+            y[i:end] = out
+            i = end
+            if switches <= _CALM:
                 break
-            lo = hi
-            window *= 4
     return y
 
 
