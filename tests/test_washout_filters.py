@@ -148,3 +148,12 @@ def test_rate_limit_array_equals_loop(x: np.ndarray, step: float, y0: float, wal
 def test_rate_limit_long_ramps() -> None:
     x = np.concatenate([np.zeros(10), np.ones(50000), -np.ones(3), np.zeros(20000)])
     np.testing.assert_allclose(rate_limit_array(x, 1e-4, 0.0), loop(x, 1e-4, 0.0), atol=1e-12)
+
+
+def test_rate_limit_choppy_then_calm() -> None:
+    """Noise near the rate limit (scalar stretches), then smooth ramps (segments) again."""
+    rng = np.random.default_rng(6)
+    t = np.arange(20000)
+    x = np.where(t < 8000, 1e-3 * t + rng.normal(0, 2e-3, t.size), np.sin(t * 1e-3))
+    for step in (1e-3, 5e-4):
+        np.testing.assert_allclose(rate_limit_array(x, step, 0.3), loop(x, step, 0.3), atol=1e-12)
