@@ -24,7 +24,8 @@ Signal flow (per sample; frames, signs and units of conventions.md)
    acceleration -> nose up, negative pitch about the left-pointing y axis) and
    ``roll* = asin(f_y,lp / g)`` (rightward force -> left side down, rider pressed left).
    Each target is smoothly limited to ``tilt_limit`` and then rate limited:
-   ``tilt[n] = tilt[n-1] + clip(target - tilt[n-1], -r/fs, r/fs)``.
+   ``tilt[n] = tilt[n-1] + clip(target - tilt[n-1], -r/fs, r/fs)`` (the limit bounds the
+   tilt; roll and pitch also carry the high-passed rotational cue of step 3).
 3. **Rotational channel.** Body rates are turned into Euler-angle rates
    ``e = T(beta) w_s`` (ZYX: ``roll' = p + tan(pitch)(q sin(roll) + r cos(roll))``,
    ``pitch' = q cos(roll) - r sin(roll)``, ``yaw' = (q sin(roll) + r cos(roll))/cos(pitch)``),
@@ -43,7 +44,7 @@ Signal flow (per sample; frames, signs and units of conventions.md)
    platform attitude and gravity removed, ``a = R(roll, pitch, yaw) f_s - [0, 0, g]``
    (``R = Rz Ry Rx``), then high-passed and integrated twice in one stable filter
    ``P(s) = H_T(s)/s^2`` with
-   ``H_T(s) = s^2/(s^2 + 2 zt wn s + wn^2) * s/(s + wb)``, i.e.
+   ``H_T(s) = s^2/(s^2 + 2 zeta wn s + wn^2) * s/(s + wb)``, i.e.
    ``P(s) = 1/(s^2 + 2 zeta wn s + wn^2) * s/(s + wb)``. With ``wb > 0`` a sustained
    acceleration returns the platform to neutral; with ``wb = 0``
    (``P = 1/(s^2 + 2 zeta wn s + wn^2)``) it leaves an offset ``a / wn^2``.
@@ -53,7 +54,9 @@ Discretisation
 --------------
 Each continuous factor (one second-order or one first-order section) is discretised by
 the bilinear (Tustin) transform prewarped at its own characteristic frequency (``wn`` of
-a second-order factor, ``wb`` of the break) at the run's sample rate, and executed as a
+a second-order factor, ``wb`` of the break) at the run's sample rate: ``s = K (z - 1) /
+(z + 1)`` with ``K = w / tan(w / (2 fs))`` (:func:`scipy.signal.bilinear` with
+``fs = K / 2``), so each factor's response is exact at its own ``w``. It is executed as a
 second-order section in transposed direct form II (the recurrence of
 :func:`scipy.signal.sosfilt`). Streaming runs that recurrence on plain floats; batch calls
 ``sosfilt``. A factor whose frequency is not below Nyquist is rejected at construction.
