@@ -318,6 +318,8 @@ def test_config_errors_name_the_key(tmp_path: Path) -> None:
         load_cueing(_write_variant(tmp_path, '"yaw"]', '"heave"]'))
     with pytest.raises(ConfigError, match="zeta"):
         load_cueing(_write_variant(tmp_path, "zeta = [1.0, 1.0, 1.0]", "zeta = [1.0, 0.0, 1.0]"))
+    with pytest.raises(ConfigError, match="f_scale"):
+        load_cueing(_write_variant(tmp_path, "f_scale = [0.4,", "f_scale = [-0.4,"))
     with pytest.raises(ConfigError, match="unknown cueing config"):
         load_cueing("no-such-preset")
 

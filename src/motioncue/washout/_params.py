@@ -113,8 +113,8 @@ class CueingParams:
     def __post_init__(self) -> None:
         if len(self.dofs) != 6 or not all(isinstance(d, bool) for d in self.dofs):
             raise ConfigError(f"CueingParams.dofs = {self.dofs!r} is invalid; 6 booleans")
-        for name in ("f_scale", "w_scale"):
-            _check(name, getattr(self, name), -100.0, False, 100.0)
+        for name in ("f_scale", "w_scale"):  # a negative gain would cue the wrong way
+            _check(name, getattr(self, name), 0.0, False, 100.0)
         for name in (
             "f_limit_m_s2",
             "w_limit_rad_s",
