@@ -115,7 +115,7 @@ class OutputStage:
         lim = self.limits
         span = float(np.max(lim.q_max - lim.q_min))
         v, a = float(np.min(lim.v_max)), float(np.min(lim.a_max))
-        return int(math.ceil((span / v + 2 * v / a) / self.dt_s)) + 10
+        return math.ceil((span / v + 2 * v / a) / self.dt_s) + 10
 
 
 @dataclass(frozen=True)
