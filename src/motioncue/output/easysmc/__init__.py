@@ -14,6 +14,8 @@ from ._controller import (
     Unit,
     controller_from_config,
 )
+from ._emulator import BUFFER_DEPTH, ControllerModel, EasySmcEmulator, TraceEntry
+from ._link import EasySmcLink, EasySmcStreamer, StreamStats
 from ._profile import feed_for_duration, move_duration_s, move_progress
 from ._protocol import (
     COMMANDS,
@@ -46,23 +48,34 @@ from ._protocol import (
     split_serial_frames,
     word_from_signed,
 )
+from ._tools import SEND_USAGE, emulator, inspect_bytes, run_emulator, run_send, send_commands
+from ._usb import UsbDllLink
 
 __all__ = [
     "BAUD_RATES",
+    "BUFFER_DEPTH",
     "COMMANDS",
-    "MANUAL_DECISIONS",
-    "PARAMETERS",
     "Command",
     "CommandSpec",
+    "ControllerModel",
     "EasySmcController",
+    "EasySmcEmulator",
     "EasySmcFrameEncoder",
+    "EasySmcLink",
+    "EasySmcStreamer",
     "ErrorCode",
     "ErrorReply",
     "ExecStatus",
     "LinkBudget",
+    "MANUAL_DECISIONS",
+    "PARAMETERS",
     "ReadReply",
+    "SEND_USAGE",
     "Start",
+    "StreamStats",
+    "TraceEntry",
     "Unit",
+    "UsbDllLink",
     "UsbReadReply",
     "UsbReadRequest",
     "UsbWriteReply",
@@ -75,14 +88,19 @@ __all__ = [
     "decode_usb_read_reply",
     "decode_usb_write",
     "decode_usb_write_reply",
+    "emulator",
     "encode_command",
     "encode_reply",
     "encode_usb_read_reply",
     "encode_usb_write",
     "encode_usb_write_reply",
     "feed_for_duration",
+    "inspect_bytes",
     "move_duration_s",
     "move_progress",
+    "run_emulator",
+    "run_send",
+    "send_commands",
     "serial_frame_size",
     "signed_from_word",
     "split_serial_frames",
