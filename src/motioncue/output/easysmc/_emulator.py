@@ -211,6 +211,8 @@ class ControllerModel:
             done, _ = move_progress(job.dist, *job.profile, eff - job.start_s)
             frac = done / job.dist
             return tuple(o + int(d * frac) for o, d in zip(job.origin, job.deltas, strict=True))  # type: ignore[return-value]
+        if self.queue:
+            return self.queue[0].origin
         return tuple(self.position)  # type: ignore[return-value]
 
     def _planned_position(self) -> list[int]:

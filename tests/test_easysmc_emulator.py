@@ -1,0 +1,352 @@
+"""EasySmc emulator (manual state machine and replies), send/inspect hooks, USB adapter
+against a fake DLL, and the end-to-end stream over a real pseudo-terminal with pyserial."""
+
+from __future__ import annotations
+
+import ctypes
+import math
+import time
+
+import pytest
+
+from motioncue import ProtocolError, TransportError
+from motioncue.output._controllers import load_controller
+from motioncue.output._transport_serial import SerialTransport, open_serial
+from motioncue.output.easysmc import (
+    BUFFER_DEPTH,
+    Command,
+    ControllerModel,
+    EasySmcEmulator,
+    EasySmcLink,
+    EasySmcStreamer,
+    ErrorCode,
+    ErrorReply,
+    ExecStatus,
+    ReadReply,
+    Start,
+    UsbDllLink,
+    UsbReadReply,
+    UsbReadRequest,
+    UsbWriteReply,
+    WriteReply,
+    decode_reply,
+    decode_usb_write,
+    encode_command,
+    encode_usb_read_reply,
+    encode_usb_write_reply,
+    inspect_bytes,
+    move_duration_s,
+    run_send,
+    send_commands,
+    signed_from_word,
+    word_from_signed,
+)
+
+SEQ = Start.SEQUENCE
+OOB = Start.OUT_OF_BAND
+
+
+def ask(emu: EasySmcEmulator, cmd: Command, t: float):  # type: ignore[no-untyped-def]
+    out = emu.feed(encode_command(cmd), now_s=t)
+    return decode_reply(out)
+
+
+def homed_emulator() -> EasySmcEmulator:
+    emu = EasySmcEmulator((0,), clock=lambda: 0.0)
+    for code in (0x41, 0x42, 0x43, 0x47):
+        assert isinstance(ask(emu, Command(code, (2,), SEQ), 0.0), WriteReply)
+    return emu
+
+
+def position(emu: EasySmcEmulator, t: float) -> list[int]:
+    r = ask(emu, Command(0x31, (4,), Start.IMMEDIATE), t)
+    assert isinstance(r, ReadReply)
+    return [signed_from_word(w) for w in r.words]
+
+
+def status(emu: EasySmcEmulator, t: float) -> ExecStatus:
+    r = ask(emu, Command(0x38, (0,), Start.IMMEDIATE), t)
+    assert isinstance(r, ReadReply)
+    return ExecStatus.from_reply(r)
+
+
+# -- replies as the manual says -------------------------------------------------------------
+
+
+def test_error_replies() -> None:
+    emu = EasySmcEmulator((0,), clock=lambda: 0.0)
+    good = encode_command(Command(0x01, (2000,)))
+    assert decode_reply(emu.feed(good[:-2] + b"00", 0.0)) == ErrorReply(ErrorCode.CHECKSUM)
+    body = b"000A0000000" + b"0\x03"
+    unknown = b"\x02" + body + (b"%02X" % (sum(body) & 0xFF))
+    assert decode_reply(emu.feed(unknown, 0.0)) == ErrorReply(ErrorCode.NO_SUCH_COMMAND)
+    emu.set_manual(True)
+    assert ask(emu, Command(0x01, (2000,)), 0.0) == ErrorReply(ErrorCode.MANUAL_MODE)
+    r = ask(emu, Command(0x37, (0,)), 0.0)  # queries still answered: 0 = manual
+    assert isinstance(r, ReadReply) and r.words == (0,)
+    emu.set_manual(False)
+    assert ask(emu, Command(0x19, (0x5000000,), OOB), 0.0) == WriteReply(0x19, 8, 0)  # loop
+    assert emu.stats["checksum_errors"] == 1 and emu.stats["unknown"] == 1
+    # another address on the bus: silence
+    assert emu.feed(encode_command(Command(0x01, (2000,), addr=2)), 0.0) == b""
+
+
+def test_buffer_full_after_63_commands() -> None:
+    emu = homed_emulator()  # 4 homing commands (instant: at the home switch already)
+    for i in range(BUFFER_DEPTH):
+        r = ask(emu, Command(0x19, (0x1000000 | 1000,), SEQ), 0.001)
+        assert isinstance(r, WriteReply), i
+    assert ask(emu, Command(0x19, (0x1000000 | 1000,), SEQ), 0.001) == ErrorReply(
+        ErrorCode.BUFFER_FULL, 4)
+    st = status(emu, 0.001)
+    assert st.received == 4 + BUFFER_DEPTH and st.executing == 5
+    # after one wait of 1 s has run there is room for one more
+    assert isinstance(ask(emu, Command(0x19, (0x1000000 | 1000,), SEQ), 1.0011), WriteReply)
+    assert emu.models[0].stats["buffer_full"] == 1
+
+
+def test_queries_reply_state_and_parameters() -> None:
+    emu = homed_emulator()
+    ask(emu, Command(0xA3, (1000, 3000, 2000), SEQ), 0.0)
+    r = ask(emu, Command(0x34, (0xA,)), 0.0)
+    assert isinstance(r, ReadReply) and r.words == (1000, 3000, 2000)
+    ask(emu, Command(0x27, (word_from_signed(-500),), SEQ), 0.0)
+    r = ask(emu, Command(0x37, (0xB,)), 0.0)
+    assert isinstance(r, ReadReply) and signed_from_word(r.words[0]) == -500
+    assert ask(emu, Command(0x31, (0x77,)), 0.0) == ErrorReply(ErrorCode.NO_SUCH_COMMAND)
+    ask(emu, Command(0x19, (0x9010064,), SEQ), 0.0)  # counter 1 = 100 (5.8.1.1)
+    ask(emu, Command(0x19, (0xA010001,), SEQ), 0.0)  # counter 1 - 1
+    r = ask(emu, Command(0x38, (0x3010000,)), 0.0)
+    assert isinstance(r, ReadReply) and r.words == (0x3010063,)
+
+
+def test_move_timing_follows_feed_and_accelerations() -> None:
+    emu = homed_emulator()
+    ask(emu, Command(0xA3, (20000, 5000, 20000), SEQ), 0.0)
+    ask(emu, Command.move(0x57, [3000, -1500, 10]), 0.0)
+    duration = move_duration_s(3000, 5000, 2000, 20000, 20000)
+    assert position(emu, duration / 2)[0] not in (0, 3000)
+    st = status(emu, duration / 2)
+    assert st.executing == st.received == 6
+    assert ask(emu, Command(0x31, (3,)), duration / 2) == ReadReply(0x31, (0x0111,))  # X Y Z busy
+    assert position(emu, duration + 1e-6) == [3000, -1500, 10]
+    entry = emu.models[0].trace[-1]
+    assert entry.t_s == pytest.approx(duration) and entry.positions == (3000, -1500, 10, 0)
+    assert emu.violations == []
+
+
+def test_estop_freezes_and_release_resumes() -> None:
+    emu = homed_emulator()
+    ask(emu, Command(0xA3, (20000, 1000, 20000), SEQ), 0.0)
+    ask(emu, Command.move(0x57, [1000, 0, 0]), 0.0)  # 1 s at 1000 Hz
+    ask(emu, Command.move(0x57, [-200, 0, 0]), 0.0)
+    assert ask(emu, Command(0x18, (0,), OOB), 0.3) == WriteReply(0x18, 8, 0)
+    frozen = position(emu, 0.3)
+    assert frozen[0] == pytest.approx(300, abs=1)
+    assert position(emu, 5.0) == frozen  # nothing moves while braked
+    assert status(emu, 5.0).state == 7  # e-stop state digit (8.8.0)
+    ask(emu, Command(0x18, (1,), OOB), 5.0)  # release: the rest of the buffer continues
+    assert position(emu, 5.0 + 0.7 + 0.2 + 1e-3) == [800, 0, 0]
+    assert status(emu, 7.0).state == 0
+
+
+def test_clear_buffer_stops_and_drops_the_queue() -> None:
+    emu = homed_emulator()
+    ask(emu, Command(0xA3, (20000, 1000, 20000), SEQ), 0.0)
+    ask(emu, Command.move(0x57, [1000, 0, 0]), 0.0)
+    ask(emu, Command.move(0x57, [1000, 0, 0]), 0.0)
+    ask(emu, Command(0x19, (0x4000000,), OOB), 0.5)
+    stopped = position(emu, 0.5)
+    assert position(emu, 10.0) == stopped and abs(stopped[0] - 500) <= 1
+    ask(emu, Command.move(0x57, [10, 0, 0]), 10.0)  # new moves start from where it stopped
+    assert position(emu, 11.0) == [stopped[0] + 10, 0, 0]
+
+
+def test_violations_are_flagged() -> None:
+    emu = EasySmcEmulator((0,), clock=lambda: 0.0)
+    ask(emu, Command.move(0x57, [10, 0, 0]), 0.0)  # never homed
+    ask(emu, Command(0x21, (100,), SEQ), 0.0)
+    ask(emu, Command.move(0x44, [500]), 0.0)  # beyond the X positive soft limit
+    ask(emu, Command.move(0x5B, [1, 1]), 0.0)
+    ask(emu, Command.move(0x57, [0, 0, 1]), 0.0)  # 5B without its 5C
+    v = " | ".join(emu.violations)
+    assert "before homing" in v and "soft limits" in v and "5B" in v
+
+
+def test_controller_model_is_usable_alone() -> None:
+    m = ControllerModel(1)
+    r = m.handle(Command(0x38, (0x1000000,), addr=1), 0.0)
+    assert r == ReadReply(0x38, (0,), 0, 1)
+
+
+# -- send / inspect hooks ------------------------------------------------------------------
+
+
+class EmulatorLink:
+    """A byte link straight into an emulator (no pty)."""
+
+    def __init__(self, emu: EasySmcEmulator) -> None:
+        self.emu = emu
+        self.pending = b""
+        self.sent: list[bytes] = []
+
+    def send(self, data: bytes) -> None:
+        self.sent.append(data)
+        self.pending += self.emu.feed(data)
+
+    def recv(self, timeout_s: float) -> bytes | None:
+        data, self.pending = self.pending, b""
+        return data or None
+
+
+def test_send_words() -> None:
+    ctrl = load_controller("easysmc")
+    assert send_commands(ctrl, ["estop", "on"]) == [Command(0x18, (0,), OOB)]
+    assert send_commands(ctrl, ["estop", "off"]) == [Command(0x18, (1,), OOB)]
+    raw = send_commands(ctrl, ["raw", "44", "00003E8", "--start", "4"])
+    assert raw == [Command(0x44, (1000,), SEQ)]
+    outs = send_commands(ctrl, ["outputs", "0x3"])
+    assert [c.words[0] for c in outs[:3]] == [0xD000000, 0xD000001, 0xC000002]
+    reset = send_commands(ctrl, ["reset"])
+    assert [c.words[0] for c in reset] == [0x4000000, 1, 0xC, 0x3000000]
+    with pytest.raises(ProtocolError):
+        send_commands(ctrl, ["raw", "0A", "0000000"])
+
+    clock = [0.0]
+    emu = EasySmcEmulator((0,), clock=lambda: clock[0])
+    link = EmulatorLink(emu)
+    lines = run_send(ctrl, ["home"], link)
+    assert len(lines) == 6 and all(line.endswith("ok") for line in lines)
+    assert run_send(ctrl, ["write", "A3_feed_hz", "4000"], link)[0].endswith("ok")
+    assert run_send(ctrl, ["read", "A3_feed_hz"], link) == ["A3_feed_hz = 4000"]
+    assert run_send(ctrl, ["read", "A3_acc_a_hz_s"], link) == ["A3_acc_a_hz_s = 20000"]
+    run_send(ctrl, ["write", "27_XFMAX", "-1234"], link)
+    assert run_send(ctrl, ["read", "27_XFMAX"], link) == ["27_XFMAX = -1234"]
+    run_send(ctrl, ["raw", "57", "0000064", "1000032", "0000000", "--start", "4"], link)
+    clock[0] = 1.0
+    run_send(ctrl, ["park"], link)
+    clock[0] = 3.0
+    assert position(emu, 3.0) == [0, 0, 0]
+    assert run_send(ctrl, ["estop", "on"], link)[0].endswith("ok")
+    assert status(emu, 3.0).state == 7
+    run_send(ctrl, ["reset"], link)
+    assert status(emu, 3.0).state == 0
+    assert emu.violations == []
+    text = inspect_bytes(b"".join(link.sent) + b"junk")
+    assert any("xyz_linear" in line for line in text)
+    assert text[-1].startswith("4 byte(s) outside frames")
+
+
+# -- USB adapter against a fake DLL ---------------------------------------------------------
+
+
+class FakeDll:
+    """The two DLL functions, backed by a controller model speaking the USB formats."""
+
+    def __init__(self) -> None:
+        self.model = ControllerModel(0)
+        self.t = 0.0
+
+    def senddata(self, buf, addr: int, length: int) -> int:  # type: ignore[no-untyped-def]
+        assert addr == 0 and length == 16
+        cmd = decode_usb_write(bytes(buf[:16]))
+        r = self.model.handle(cmd, self.t)
+        st = self.model.exec_status(self.t)
+        pos = self.model.position_at(self.t)
+        if isinstance(r, ErrorReply):
+            reply = UsbWriteReply(0x99, int(r.error), 0, st.state, st.executing, pos[:3])
+        else:
+            reply = UsbWriteReply(cmd.code, 0, 0, st.state, st.executing, pos[:3])
+        ctypes.memmove(buf, encode_usb_write_reply(reply), 20)
+        return 1
+
+    def recdata(self, buf, addr: int, cmd: int, rdat1: int, rdat2: int) -> int:  # type: ignore[no-untyped-def]
+        req = UsbReadRequest(cmd, rdat1, rdat2)
+        words = self.model.query_words(cmd, req.serial_word(), self.t) or (0,)
+        padded = (tuple(words) + (0, 0, 0))[:3]
+        data = encode_usb_read_reply(UsbReadReply(cmd, padded, 0, len(words)))  # type: ignore[arg-type]
+        ctypes.memmove(buf, data, 16)
+        return 1
+
+
+def test_usb_dll_adapter_against_fake() -> None:
+    fake = FakeDll()
+    usb = UsbDllLink(fake)
+    assert usb.write(Command(0x41, (2,))).code == 0x41
+    r = usb.write(Command.move(0x44, [1000], SEQ))
+    assert r.code == 0x44 and r.executing == 2
+    fake.t = 1.0
+    rr = usb.read(UsbReadRequest(0x31, 0x04))
+    assert signed_from_word(rr.words[0]) == 1000 and rr.n_valid == 3
+    assert usb.read(UsbReadRequest(0x34, 0x01)).words[0] == 2000  # 6.2.1 example 2
+    fake.model.manual_mode = True
+    err = usb.write(Command(0x01, (100,)))
+    assert err.code == 0x99 and err.error == 2
+    with pytest.raises(ProtocolError, match="query"):
+        usb.write(Command(0x31, (1,)))
+    with pytest.raises(TransportError, match="Windows"):
+        UsbDllLink()
+
+
+# -- serial transport --------------------------------------------------------------------------
+
+
+def test_serial_transport_errors_are_wrapped() -> None:
+    with pytest.raises(TransportError) as info:
+        open_serial("serial:///dev/does-not-exist-easysmc?baud=19200")
+    assert info.value.__cause__ is not None
+    with pytest.raises(Exception, match="unknown option"):
+        open_serial("serial:///dev/ttyS0?speed=1")
+
+
+def test_end_to_end_stream_over_a_pty() -> None:
+    """10 s trajectory at 20 Hz, 19200 baud, XYZ: pyserial on the emulator's pty."""
+    ctrl = load_controller("easysmc")
+    rate = 20.0  # the link budget allows 23.2 Hz at 19200 baud
+    emu = EasySmcEmulator((0,)).start()
+    try:
+        port = open_serial(f"serial://{emu.path}?baud={ctrl.baud}")
+        assert isinstance(port, SerialTransport)
+        link = EasySmcLink(port, timeout_s=1.0)
+        streamer = EasySmcStreamer.for_controller(ctrl, link, rate)
+        streamer.send_all(ctrl.setup_commands())
+        streamer.send_all(send_commands(ctrl, ["home"]))
+        enc = ctrl.frame_encoder(rate)
+        frames = []
+        for k in range(int(10 * rate)):
+            t = k / rate
+            frames.append((t, [
+                400 * math.sin(2 * math.pi * 0.4 * t),
+                250 * math.sin(2 * math.pi * 0.25 * t) * (t < 6),  # then holds still
+                150 * (1 - math.cos(2 * math.pi * 0.1 * t)),
+            ]))  # fmt: skip
+        streamer.stream(enc, frames)
+        streamer.drain(timeout_s=5.0)
+        # e-stop, buffer-full and reset over the same link
+        r = link.request(Command(0x18, (0,), OOB))
+        assert r == WriteReply(0x18, 8, 0)
+        assert link.status(0).state == 7
+        for _ in range(BUFFER_DEPTH):
+            link.request(Command(0x19, (0x1000000 | 10,), SEQ))
+        assert link.request(Command(0x19, (0x1000000 | 10,), SEQ)) == ErrorReply(
+            ErrorCode.BUFFER_FULL, 4)
+        for c in send_commands(ctrl, ["reset"]):
+            assert isinstance(link.request(c), WriteReply)
+        st = link.status(0)
+        assert st.state == 0 and st.executing == 1  # cleared, renumbered
+        port.close()
+    finally:
+        emu.stop()
+    assert emu.violations == []
+    assert emu.models[0].stats["underflows"] == 0
+    # the trace: one entry per frame (move or wait), in order
+    n_before = len(ctrl.setup_commands()) + len(send_commands(ctrl, ["home"]))
+    moves = [e for e in emu.trace if e.number > n_before][: len(frames)]
+    assert len(moves) == len(frames)
+    t_first = moves[0].t_s - 1 / rate  # controller time of the frame-0 start
+    for (t, target), entry in zip(frames, moves, strict=True):
+        assert [abs(p - round(v)) <= 1 for p, v in zip(entry.positions, target, strict=False)] \
+            == [True] * 3, (t, entry)
+        assert abs((entry.t_s - t_first) - (t + 1 / rate)) <= 1 / rate, (t, entry)
+    assert moves[-1].positions[:3] == enc.last_pulses
+    assert emu.models[0].stats["buffer_full"] == 1 and link.stats.garbled_replies == 0
