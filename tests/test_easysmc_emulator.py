@@ -5,7 +5,6 @@ from __future__ import annotations
 
 import ctypes
 import math
-import time
 
 import pytest
 
@@ -97,7 +96,8 @@ def test_buffer_full_after_63_commands() -> None:
         r = ask(emu, Command(0x19, (0x1000000 | 1000,), SEQ), 0.001)
         assert isinstance(r, WriteReply), i
     assert ask(emu, Command(0x19, (0x1000000 | 1000,), SEQ), 0.001) == ErrorReply(
-        ErrorCode.BUFFER_FULL, 4)
+        ErrorCode.BUFFER_FULL, 4
+    )
     st = status(emu, 0.001)
     assert st.received == 4 + BUFFER_DEPTH and st.executing == 5
     # after one wait of 1 s has run there is room for one more
@@ -263,7 +263,7 @@ class FakeDll:
     def recdata(self, buf, addr: int, cmd: int, rdat1: int, rdat2: int) -> int:  # type: ignore[no-untyped-def]
         req = UsbReadRequest(cmd, rdat1, rdat2)
         words = self.model.query_words(cmd, req.serial_word(), self.t) or (0,)
-        padded = (tuple(words) + (0, 0, 0))[:3]
+        padded = (*words, 0, 0, 0)[:3]
         data = encode_usb_read_reply(UsbReadReply(cmd, padded, 0, len(words)))  # type: ignore[arg-type]
         ctypes.memmove(buf, data, 16)
         return 1
@@ -315,11 +315,16 @@ def test_end_to_end_stream_over_a_pty() -> None:
         frames = []
         for k in range(int(10 * rate)):
             t = k / rate
-            frames.append((t, [
-                400 * math.sin(2 * math.pi * 0.4 * t),
-                250 * math.sin(2 * math.pi * 0.25 * t) * (t < 6),  # then holds still
-                150 * (1 - math.cos(2 * math.pi * 0.1 * t)),
-            ]))  # fmt: skip
+            frames.append(
+                (
+                    t,
+                    [
+                        400 * math.sin(2 * math.pi * 0.4 * t),
+                        250 * math.sin(2 * math.pi * 0.25 * t) * (t < 6),  # then holds still
+                        150 * (1 - math.cos(2 * math.pi * 0.1 * t)),
+                    ],
+                )
+            )
         streamer.stream(enc, frames)
         streamer.drain(timeout_s=5.0)
         # e-stop, buffer-full and reset over the same link
@@ -329,7 +334,8 @@ def test_end_to_end_stream_over_a_pty() -> None:
         for _ in range(BUFFER_DEPTH):
             link.request(Command(0x19, (0x1000000 | 10,), SEQ))
         assert link.request(Command(0x19, (0x1000000 | 10,), SEQ)) == ErrorReply(
-            ErrorCode.BUFFER_FULL, 4)
+            ErrorCode.BUFFER_FULL, 4
+        )
         for c in send_commands(ctrl, ["reset"]):
             assert isinstance(link.request(c), WriteReply)
         st = link.status(0)
@@ -345,8 +351,9 @@ def test_end_to_end_stream_over_a_pty() -> None:
     assert len(moves) == len(frames)
     t_first = moves[0].t_s - 1 / rate  # controller time of the frame-0 start
     for (t, target), entry in zip(frames, moves, strict=True):
-        assert [abs(p - round(v)) <= 1 for p, v in zip(entry.positions, target, strict=False)] \
-            == [True] * 3, (t, entry)
+        assert [abs(p - round(v)) <= 1 for p, v in zip(entry.positions, target, strict=False)] == [
+            True
+        ] * 3, (t, entry)
         assert abs((entry.t_s - t_first) - (t + 1 / rate)) <= 1 / rate, (t, entry)
     assert moves[-1].positions[:3] == enc.last_pulses
     assert emu.models[0].stats["buffer_full"] == 1 and link.stats.garbled_replies == 0

@@ -27,8 +27,9 @@ from motioncue.output.easysmc import (
 # -- profile against numerical integration ---------------------------------------------------
 
 
-def integrate_move(distance: float, feed: float, f0: float, a: float, b: float,
-                   dt: float = 1e-6) -> float:  # fmt: skip
+def integrate_move(
+    distance: float, feed: float, f0: float, a: float, b: float, dt: float = 1e-6
+) -> float:
     """Oracle: step the pulse rate (start at f0, ramp up at a to feed, ramp down at b so as
     to reach f0 at the end) and count the time to cover the distance."""
     if feed <= f0:
@@ -46,16 +47,21 @@ def integrate_move(distance: float, feed: float, f0: float, a: float, b: float,
     return t
 
 
-@pytest.mark.parametrize(("d", "feed", "f0", "a", "b"), [
-    (50, 1000, 2000, 20000, 20000),     # below the start frequency: constant rate
-    (110, 2300, 2000, 20000, 20000),    # trapezoid
-    (100.5, 2500, 2000, 20000, 10000),  # triangular (feed not reached), unequal ramps
-    (5000, 30000, 1000, 200000, 400000),
-])  # fmt: skip
-def test_move_duration_matches_integration(d: float, feed: float, f0: float, a: float,
-                                           b: float) -> None:  # fmt: skip
+@pytest.mark.parametrize(
+    ("d", "feed", "f0", "a", "b"),
+    [
+        (50, 1000, 2000, 20000, 20000),  # below the start frequency: constant rate
+        (110, 2300, 2000, 20000, 20000),  # trapezoid
+        (100.5, 2500, 2000, 20000, 10000),  # triangular (feed not reached), unequal ramps
+        (5000, 30000, 1000, 200000, 400000),
+    ],
+)
+def test_move_duration_matches_integration(
+    d: float, feed: float, f0: float, a: float, b: float
+) -> None:
     assert move_duration_s(d, feed, f0, a, b) == pytest.approx(
-        integrate_move(d, feed, f0, a, b), abs=2e-5)
+        integrate_move(d, feed, f0, a, b), abs=2e-5
+    )
     # progress: at the end all of it, half-way about half by symmetry of equal ramps
     total = move_duration_s(d, feed, f0, a, b)
     assert move_progress(d, feed, f0, a, b, total)[0] == d
@@ -64,8 +70,13 @@ def test_move_duration_matches_integration(d: float, feed: float, f0: float, a: 
     assert all(np.diff(done) >= -1e-9)
 
 
-@given(st.floats(1, 5000), st.floats(0.01, 0.2), st.integers(100, 5000),
-       st.integers(1000, 500000), st.integers(1000, 500000))  # fmt: skip
+@given(
+    st.floats(1, 5000),
+    st.floats(0.01, 0.2),
+    st.integers(100, 5000),
+    st.integers(1000, 500000),
+    st.integers(1000, 500000),
+)
 def test_feed_for_duration_inverts_duration(d: float, t: float, f0: int, a: int, b: int) -> None:
     try:
         feed = feed_for_duration(d, t, f0, a, b)
@@ -132,8 +143,9 @@ def test_still_frame_becomes_a_wait() -> None:
 
 def test_no_drift_in_pulses_or_time() -> None:
     # a low start frequency, so that most frames ramp (trapezoids, not constant rates)
-    ctrl = EasySmcController("t", (Unit(0, "XYZ"), Unit(1, "XYZ")),
-                             parameters={"02_x_linear_start_hz": 100})  # fmt: skip
+    ctrl = EasySmcController(
+        "t", (Unit(0, "XYZ"), Unit(1, "XYZ")), parameters={"02_x_linear_start_hz": 100}
+    )
     rate = 10.0
     enc = ctrl.frame_encoder(rate)
     rng = random.Random(7)
@@ -187,9 +199,17 @@ def test_bad_input_is_refused_and_state_kept() -> None:
 
 
 def test_feed_cap_and_soft_limits_from_parameters() -> None:
-    ctrl = EasySmcController("t", (Unit(0, "XYZ"),), parameters={
-        "A3_feed_hz": 1500, "A3_acc_a_hz_s": 10**6, "A3_acc_b_hz_s": 10**6,
-        "21_XZMAX": 1000, "27_XFMAX": -50})  # fmt: skip
+    ctrl = EasySmcController(
+        "t",
+        (Unit(0, "XYZ"),),
+        parameters={
+            "A3_feed_hz": 1500,
+            "A3_acc_a_hz_s": 10**6,
+            "A3_acc_b_hz_s": 10**6,
+            "21_XZMAX": 1000,
+            "27_XFMAX": -50,
+        },
+    )
     enc = ctrl.frame_encoder(20)
     enc.encode(0.0, [70, 0, 0])  # 1400 Hz: fine
     with pytest.raises(LimitError, match="feed cap A3_feed_hz = 1500"):
@@ -212,8 +232,10 @@ def test_outputs_are_sequenced_with_the_frame() -> None:
 # -- configs -------------------------------------------------------------------------------
 
 
-@pytest.mark.parametrize(("name", "n_axes", "addrs"), [
-    ("easysmc", 3, [0]), ("easysmc-xyzu", 4, [0]), ("easysmc-dual", 6, [0, 1])])  # fmt: skip
+@pytest.mark.parametrize(
+    ("name", "n_axes", "addrs"),
+    [("easysmc", 3, [0]), ("easysmc-xyzu", 4, [0]), ("easysmc-dual", 6, [0, 1])],
+)
 def test_bundled_configs(name: str, n_axes: int, addrs: list[int]) -> None:
     ctrl = load_controller(name)
     assert ctrl.kind == "easysmc" and ctrl.name == name

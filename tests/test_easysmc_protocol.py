@@ -94,7 +94,10 @@ def test_worked_examples_of_chapter_5() -> None:
     g = manual_frame("00", "19", ["10003E8"], "4")
     assert decode_command(g).describe().endswith("[wait 1000 ms] start 4")
     # 5.8.1.1: counter 1 = 100 -> 9010064
-    assert "set counter 1 = 100" in decode_command(manual_frame("00", "19", ["9010064"], "0")).describe()
+    assert (
+        "set counter 1 = 100"
+        in decode_command(manual_frame("00", "19", ["9010064"], "0")).describe()
+    )
     # 5.1.8.4 clear buffer, 5.1.7 brake all, start condition 8
     assert decode_command(manual_frame("00", "19", ["4000000"], "8")).start == Start.OUT_OF_BAND
     assert decode_command(manual_frame("00", "18", ["0000000"], "8")).words == (0,)
@@ -104,8 +107,12 @@ def test_worked_examples_of_chapter_5() -> None:
 
 
 def test_error_replies_of_chapter_5() -> None:
-    for code, digit in ((ErrorCode.NO_SUCH_COMMAND, "1"), (ErrorCode.MANUAL_MODE, "2"),
-                        (ErrorCode.BUFFER_FULL, "3"), (ErrorCode.CHECKSUM, "4")):  # fmt: skip
+    for code, digit in (
+        (ErrorCode.NO_SUCH_COMMAND, "1"),
+        (ErrorCode.MANUAL_MODE, "2"),
+        (ErrorCode.BUFFER_FULL, "3"),
+        (ErrorCode.CHECKSUM, "4"),
+    ):
         g = manual_frame("00", "99", ["000000" + digit], "0")
         assert decode_reply(g) == ErrorReply(code, 0, 0)
         assert encode_reply(ErrorReply(code, 0, 0)) == g
@@ -216,15 +223,35 @@ def test_split_frames_counts_noise() -> None:
 # -- hypothesis round-trips ---------------------------------------------------------------------
 
 _VALID_CODE_WORDS = {
-    0x19: [0x1000000 | 50, 0x3000000, 0x3000001, 0x3000002, 0x4000000, 0x5000000, 0x6000001,
-           0x6000038, 0x7000018, 0x8000001, 0x9010064, 0xA020001, 0xB000000, 0xC00000F,
-           0xD000000, 0xE010203],
+    0x19: [
+        0x1000000 | 50,
+        0x3000000,
+        0x3000001,
+        0x3000002,
+        0x4000000,
+        0x5000000,
+        0x6000001,
+        0x6000038,
+        0x7000018,
+        0x8000001,
+        0x9010064,
+        0xA020001,
+        0xB000000,
+        0xC00000F,
+        0xD000000,
+        0xE010203,
+    ],
     0x18: [0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 0xA, 0xB, 0xC, 0xD, 0xE, 0xF, 0x12, 0x13, 0x19, 0x1D],
     0x17: [1, 2],
-    0x2A: [0], 0x2B: [0], 0x2C: [0], 0x2D: [0],
-    0x41: list(range(1, 8)), 0x42: list(range(1, 8)), 0x43: list(range(1, 8)),
+    0x2A: [0],
+    0x2B: [0],
+    0x2C: [0],
+    0x2D: [0],
+    0x41: list(range(1, 8)),
+    0x42: list(range(1, 8)),
+    0x43: list(range(1, 8)),
     0x47: list(range(1, 8)),
-}  # fmt: skip
+}
 
 
 @st.composite
@@ -268,22 +295,45 @@ _word = st.integers(0, 0x0FFFFFFF)
 _signed = st.integers(-0xFFFFFF, 0xFFFFFF)
 
 
-@given(st.one_of(
-    st.builds(WriteReply, _codes, st.integers(0, 8), st.integers(0, 255)),
-    st.builds(ReadReply, _codes, st.lists(_word, min_size=1, max_size=3).map(tuple),
-              st.integers(0, 8), st.integers(0, 255)),
-    st.builds(ErrorReply, st.sampled_from(list(ErrorCode)), st.integers(0, 8),
-              st.integers(0, 255)),
-))  # fmt: skip
+@given(
+    st.one_of(
+        st.builds(WriteReply, _codes, st.integers(0, 8), st.integers(0, 255)),
+        st.builds(
+            ReadReply,
+            _codes,
+            st.lists(_word, min_size=1, max_size=3).map(tuple),
+            st.integers(0, 8),
+            st.integers(0, 255),
+        ),
+        st.builds(
+            ErrorReply, st.sampled_from(list(ErrorCode)), st.integers(0, 8), st.integers(0, 255)
+        ),
+    )
+)
 def test_serial_reply_round_trip(reply: object) -> None:
     assert decode_reply(encode_reply(reply)) == reply  # type: ignore[arg-type]
 
 
-@given(st.builds(UsbWriteReply, st.integers(0, 255).filter(lambda c: c != 0x99), st.just(0),
-                 st.integers(0, 15), st.integers(0, 7), st.integers(0, 0xFFFFFF),
-                 st.tuples(_signed, _signed, _signed), st.integers(0, 255)),
-       st.builds(UsbReadReply, _codes, st.tuples(_word, _word, _word), st.integers(0, 8),
-                 st.integers(0, 3), st.integers(0, 255)))  # fmt: skip
+@given(
+    st.builds(
+        UsbWriteReply,
+        st.integers(0, 255).filter(lambda c: c != 0x99),
+        st.just(0),
+        st.integers(0, 15),
+        st.integers(0, 7),
+        st.integers(0, 0xFFFFFF),
+        st.tuples(_signed, _signed, _signed),
+        st.integers(0, 255),
+    ),
+    st.builds(
+        UsbReadReply,
+        _codes,
+        st.tuples(_word, _word, _word),
+        st.integers(0, 8),
+        st.integers(0, 3),
+        st.integers(0, 255),
+    ),
+)
 def test_usb_reply_round_trip(wr: UsbWriteReply, rr: UsbReadReply) -> None:
     assert decode_usb_write_reply(encode_usb_write_reply(wr)) == wr
     assert decode_usb_read_reply(encode_usb_read_reply(rr)) == rr
@@ -298,8 +348,13 @@ def test_sign_magnitude_round_trip(v: int) -> None:
 
 # -- random bytes -----------------------------------------------------------------------------
 
-_DECODERS = [decode_command, decode_reply, decode_usb_write, decode_usb_write_reply,
-             decode_usb_read_reply]  # fmt: skip
+_DECODERS = [
+    decode_command,
+    decode_reply,
+    decode_usb_write,
+    decode_usb_write_reply,
+    decode_usb_read_reply,
+]
 
 
 @pytest.mark.parametrize("decoder", _DECODERS, ids=lambda d: d.__name__)
@@ -317,7 +372,9 @@ def test_random_bytes_raise_only_protocol_error(decoder: object) -> None:
             if i % 8 == 1:
                 data = rng.randbytes(size)
             else:
-                data = bytes([1, 0, rng.randrange(256)] + [rng.randrange(3) for _ in range(size - 3)])
+                data = bytes(
+                    [1, 0, rng.randrange(256)] + [rng.randrange(3) for _ in range(size - 3)]
+                )
         else:  # plausible serial frames with a valid checksum (reaches the payload checks)
             n = rng.choice((0, 7, 14, 21, rng.randrange(0, 25)))
             body = bytes(rng.choice(alphabet) for _ in range(4 + n)) + b"0\x03"

@@ -31,8 +31,9 @@ class SerialTransport(Transport):
         Character format (8N1 by default, as the EasySmc manual says).
     """
 
-    def __init__(self, path: str, baud: int = 19200, bytesize: int = 8, parity: str = "N",
-                 stopbits: int = 1) -> None:  # fmt: skip
+    def __init__(
+        self, path: str, baud: int = 19200, bytesize: int = 8, parity: str = "N", stopbits: int = 1
+    ) -> None:
         import serial  # pyserial: imported here so `import motioncue` stays light
 
         if baud <= 0:
@@ -43,9 +44,16 @@ class SerialTransport(Transport):
         self.bytes_received = 0
         try:
             self._port: Any = serial.Serial(
-                port=path, baudrate=baud, bytesize=bytesize, parity=_PARITY[parity],
-                stopbits=stopbits, timeout=0, write_timeout=2.0, xonxoff=False, rtscts=False,
-            )  # fmt: skip
+                port=path,
+                baudrate=baud,
+                bytesize=bytesize,
+                parity=_PARITY[parity],
+                stopbits=stopbits,
+                timeout=0,
+                write_timeout=2.0,
+                xonxoff=False,
+                rtscts=False,
+            )
         except (serial.SerialException, OSError, ValueError) as exc:
             raise TransportError(f"cannot open serial port {path!r} at {baud} baud: {exc}") from exc
 
@@ -79,7 +87,7 @@ class SerialTransport(Transport):
     def close(self) -> None:
         try:
             self._port.close()
-        except Exception:  # noqa: BLE001 - closing must not mask the original error
+        except Exception:
             pass
 
 
@@ -99,6 +107,8 @@ def open_serial(url: str | TransportURL) -> SerialTransport:
     if parity not in _PARITY:
         raise ConfigError(f"target {url!r}: parity {parity!r}; allowed N | E | O")
     if opts:
-        raise ConfigError(f"target {url!r}: unknown option(s) {', '.join(sorted(opts))}; "
-                          "known: baud, bytesize, parity, stopbits")  # fmt: skip
+        raise ConfigError(
+            f"target {url!r}: unknown option(s) {', '.join(sorted(opts))}; "
+            "known: baud, bytesize, parity, stopbits"
+        )
     return SerialTransport(target.path, baud, bytesize, parity, stopbits)

@@ -59,32 +59,50 @@ _F = (1, 2_000_000)  # pulse rates: manual ch. 2, "up to 2 MHz"
 _ACC = (1, 0x0FFFFFFF)
 _LIM = (-MAX_MAGNITUDE, MAX_MAGNITUDE)
 
-PARAMETERS: Mapping[str, _Param] = MappingProxyType({
-    "02_x_linear_start_hz": _Param("02 DAT2", "X linear-interpolation start frequency", 2000, *_F),
-    "09_y_linear_start_hz": _Param("09 DAT2", "Y linear-interpolation start frequency", 2000, *_F),
-    "14_z_linear_start_hz": _Param("14 DAT2", "Z linear-interpolation start frequency", 2000, *_F),
-    "A3_acc_a_hz_s": _Param("A3 DAT1", "XYZ linear interpolation acceleration A", 20000, *_ACC),
-    "A3_feed_hz": _Param("A3 DAT2", "XYZ linear interpolation feed (the cap for frames)",
-                         20000, *_F),
-    "A3_acc_b_hz_s": _Param("A3 DAT3", "XYZ linear interpolation deceleration B", 20000, *_ACC),
-    "A6_acc_a_hz_s": _Param("A6 DAT1", "XYZU linear interpolation acceleration A", 20000, *_ACC),
-    "A6_feed_hz": _Param("A6 DAT2", "XYZU linear interpolation feed (the cap for frames)",
-                         20000, *_F),
-    "A6_acc_b_hz_s": _Param("A6 DAT3", "XYZU linear interpolation deceleration B", 20000, *_ACC),
-    "21_XZMAX": _Param("21", "X positive soft limit (pulses)", MAX_MAGNITUDE, *_LIM),
-    "27_XFMAX": _Param("27", "X negative soft limit (pulses)", -MAX_MAGNITUDE, *_LIM),
-    "22_YZMAX": _Param("22", "Y positive soft limit (pulses)", MAX_MAGNITUDE, *_LIM),
-    "28_YFMAX": _Param("28", "Y negative soft limit (pulses)", -MAX_MAGNITUDE, *_LIM),
-    "23_ZZMAX": _Param("23", "Z positive soft limit (pulses)", MAX_MAGNITUDE, *_LIM),
-    "29_ZFMAX": _Param("29", "Z negative soft limit (pulses)", -MAX_MAGNITUDE, *_LIM),
-    "AF_UZMAX": _Param("AF DAT1", "U positive soft limit (pulses)", MAX_MAGNITUDE, *_LIM),
-    "AF_UFMAX": _Param("AF DAT2", "U negative soft limit (pulses)", -MAX_MAGNITUDE, *_LIM),
-})  # fmt: skip
+PARAMETERS: Mapping[str, _Param] = MappingProxyType(
+    {
+        "02_x_linear_start_hz": _Param(
+            "02 DAT2", "X linear-interpolation start frequency", 2000, *_F
+        ),
+        "09_y_linear_start_hz": _Param(
+            "09 DAT2", "Y linear-interpolation start frequency", 2000, *_F
+        ),
+        "14_z_linear_start_hz": _Param(
+            "14 DAT2", "Z linear-interpolation start frequency", 2000, *_F
+        ),
+        "A3_acc_a_hz_s": _Param("A3 DAT1", "XYZ linear interpolation acceleration A", 20000, *_ACC),
+        "A3_feed_hz": _Param(
+            "A3 DAT2", "XYZ linear interpolation feed (the cap for frames)", 20000, *_F
+        ),
+        "A3_acc_b_hz_s": _Param("A3 DAT3", "XYZ linear interpolation deceleration B", 20000, *_ACC),
+        "A6_acc_a_hz_s": _Param(
+            "A6 DAT1", "XYZU linear interpolation acceleration A", 20000, *_ACC
+        ),
+        "A6_feed_hz": _Param(
+            "A6 DAT2", "XYZU linear interpolation feed (the cap for frames)", 20000, *_F
+        ),
+        "A6_acc_b_hz_s": _Param(
+            "A6 DAT3", "XYZU linear interpolation deceleration B", 20000, *_ACC
+        ),
+        "21_XZMAX": _Param("21", "X positive soft limit (pulses)", MAX_MAGNITUDE, *_LIM),
+        "27_XFMAX": _Param("27", "X negative soft limit (pulses)", -MAX_MAGNITUDE, *_LIM),
+        "22_YZMAX": _Param("22", "Y positive soft limit (pulses)", MAX_MAGNITUDE, *_LIM),
+        "28_YFMAX": _Param("28", "Y negative soft limit (pulses)", -MAX_MAGNITUDE, *_LIM),
+        "23_ZZMAX": _Param("23", "Z positive soft limit (pulses)", MAX_MAGNITUDE, *_LIM),
+        "29_ZFMAX": _Param("29", "Z negative soft limit (pulses)", -MAX_MAGNITUDE, *_LIM),
+        "AF_UZMAX": _Param("AF DAT1", "U positive soft limit (pulses)", MAX_MAGNITUDE, *_LIM),
+        "AF_UFMAX": _Param("AF DAT2", "U negative soft limit (pulses)", -MAX_MAGNITUDE, *_LIM),
+    }
+)
 """Parameters a config may set, named after the manual's command codes, with the factory
 defaults of the manual's appendix and the allowed range."""
 
-_SOFT = {"X": ("27_XFMAX", "21_XZMAX"), "Y": ("28_YFMAX", "22_YZMAX"),
-         "Z": ("29_ZFMAX", "23_ZZMAX"), "U": ("AF_UFMAX", "AF_UZMAX")}  # fmt: skip
+_SOFT = {
+    "X": ("27_XFMAX", "21_XZMAX"),
+    "Y": ("28_YFMAX", "22_YZMAX"),
+    "Z": ("29_ZFMAX", "23_ZZMAX"),
+    "U": ("AF_UFMAX", "AF_UZMAX"),
+}
 
 
 @dataclass(frozen=True)
@@ -110,8 +128,9 @@ class Unit:
 
     def frame_commands_bytes(self) -> int:
         """Serial bytes of the commands of one frame, with their 9-byte write replies."""
-        cmd = serial_frame_size(3) + sum(serial_frame_size(len(self.axes) // len(
-            self.move_codes)) for _ in self.move_codes)  # fmt: skip
+        cmd = serial_frame_size(3) + sum(
+            serial_frame_size(len(self.axes) // len(self.move_codes)) for _ in self.move_codes
+        )
         return cmd + WRITE_REPLY_BYTES * (1 + len(self.move_codes))
 
 
@@ -138,22 +157,27 @@ class LinkBudget:
 
     def describe(self, frame_rate_hz: float) -> str:
         if self.link == "usb":
-            return (f"{self.commands_per_frame} commands per frame x {frame_rate_hz:g} Hz = "
-                    f"{self.commands_per_frame * frame_rate_hz:g} commands/s; USB carries "
-                    f"{USB_COMMANDS_PER_S:g}/s (max {self.max_frame_rate_hz:.1f} Hz)")  # fmt: skip
+            return (
+                f"{self.commands_per_frame} commands per frame x {frame_rate_hz:g} Hz = "
+                f"{self.commands_per_frame * frame_rate_hz:g} commands/s; USB carries "
+                f"{USB_COMMANDS_PER_S:g}/s (max {self.max_frame_rate_hz:.1f} Hz)"
+            )
         bits = self.bytes_per_frame * BITS_PER_BYTE
-        return (f"{self.bytes_per_frame:g} bytes per frame x {BITS_PER_BYTE} bits / "
-                f"{self.baud} baud = {bits / self.baud * 1e3:.1f} ms per frame; "
-                f"{frame_rate_hz:g} Hz leaves {1e3 / frame_rate_hz:.1f} ms "
-                f"(max {self.max_frame_rate_hz:.1f} Hz)")  # fmt: skip
+        return (
+            f"{self.bytes_per_frame:g} bytes per frame x {BITS_PER_BYTE} bits / "
+            f"{self.baud} baud = {bits / self.baud * 1e3:.1f} ms per frame; "
+            f"{frame_rate_hz:g} Hz leaves {1e3 / frame_rate_hz:.1f} ms "
+            f"(max {self.max_frame_rate_hz:.1f} Hz)"
+        )
 
     def check(self, frame_rate_hz: float) -> None:
         """Refuse a frame rate the link cannot carry (:class:`LimitError` with the figure)."""
         if not (math.isfinite(frame_rate_hz) and frame_rate_hz > 0):
             raise LimitError(f"frame rate {frame_rate_hz!r} Hz must be finite and positive")
         if frame_rate_hz > self.max_frame_rate_hz:
-            raise LimitError(f"EasySmc link cannot carry {frame_rate_hz:g} Hz: "
-                             + self.describe(frame_rate_hz))  # fmt: skip
+            raise LimitError(
+                f"EasySmc link cannot carry {frame_rate_hz:g} Hz: " + self.describe(frame_rate_hz)
+            )
 
 
 @dataclass(frozen=True)
@@ -203,7 +227,9 @@ class EasySmcController:
         params = {k: p.default for k, p in PARAMETERS.items()}
         for k, v in dict(self.parameters).items():
             if k not in PARAMETERS:
-                raise ConfigError(f"unknown EasySmc parameter {k!r}; known: {', '.join(PARAMETERS)}")
+                raise ConfigError(
+                    f"unknown EasySmc parameter {k!r}; known: {', '.join(PARAMETERS)}"
+                )
             p = PARAMETERS[k]
             if isinstance(v, bool) or not isinstance(v, int) or not p.lo <= v <= p.hi:
                 raise ConfigError(f"parameter {k} = {v!r}; allowed: an integer in [{p.lo}, {p.hi}]")
@@ -213,8 +239,10 @@ class EasySmcController:
             raise ConfigError(f"poll_every_frames {self.poll_every_frames}; allowed 1..1000")
         frame_cmds = 1 + max(len(u.move_codes) for u in self.units)
         if not 1 <= self.lead_frames * frame_cmds <= 60:
-            raise ConfigError(f"lead_frames {self.lead_frames} x {frame_cmds} commands must "
-                              "fit the 63-command buffer with 3 to spare (<= 60)")  # fmt: skip
+            raise ConfigError(
+                f"lead_frames {self.lead_frames} x {frame_cmds} commands must "
+                "fit the 63-command buffer with 3 to spare (<= 60)"
+            )
 
     @property
     def n_axes(self) -> int:
@@ -222,8 +250,9 @@ class EasySmcController:
 
     @property
     def axis_names(self) -> tuple[str, ...]:
-        return tuple(f"{a}{u.address}" if len(self.units) > 1 else a
-                     for u in self.units for a in u.axes)  # fmt: skip
+        return tuple(
+            f"{a}{u.address}" if len(self.units) > 1 else a for u in self.units for a in u.axes
+        )
 
     def link_budget(self) -> LinkBudget:
         per_frame = 0.0
@@ -261,19 +290,26 @@ class EasySmcController:
             a = u.address
             out.append(Command.named("control", 0x3000000, addr=a))
             out.append(Command.named("control", 0x3000001, addr=a))
-            for code, key in ((0x02, "02_x_linear_start_hz"), (0x09, "09_y_linear_start_hz"),
-                              (0x14, "14_z_linear_start_hz")):  # fmt: skip
+            for code, key in (
+                (0x02, "02_x_linear_start_hz"),
+                (0x09, "09_y_linear_start_hz"),
+                (0x14, "14_z_linear_start_hz"),
+            ):
                 f0 = p[key]
                 out.append(Command(code, (f0, f0, f0), Start.IMMEDIATE, a))
-            for axis, pos_code, neg_code in (("X", 0x21, 0x27), ("Y", 0x22, 0x28),
-                                             ("Z", 0x23, 0x29)):  # fmt: skip
+            for axis, pos_code, neg_code in (
+                ("X", 0x21, 0x27),
+                ("Y", 0x22, 0x28),
+                ("Z", 0x23, 0x29),
+            ):
                 neg, pos = p[_SOFT[axis][0]], p[_SOFT[axis][1]]
                 out.append(Command(pos_code, (word_from_signed(pos),), Start.IMMEDIATE, a))
                 out.append(Command(neg_code, (word_from_signed(neg),), Start.IMMEDIATE, a))
         return out
 
-    def frame_encoder(self, frame_rate_hz: float,
-                      start_pulses: Sequence[int] | None = None) -> EasySmcFrameEncoder:  # fmt: skip
+    def frame_encoder(
+        self, frame_rate_hz: float, start_pulses: Sequence[int] | None = None
+    ) -> EasySmcFrameEncoder:
         """A new encoder for timed frames at ``frame_rate_hz`` (checked against the link)."""
         return EasySmcFrameEncoder(self, frame_rate_hz, start_pulses)
 
@@ -293,8 +329,9 @@ def controller_from_config(reader: ConfigReader, name: str) -> EasySmcController
     lead = reader.integer("lead_frames", 6, lo=1, hi=60)
     units = []
     for ur in reader.tables("units"):
-        units.append(Unit(ur.integer("address", lo=0, hi=3),
-                          ur.string("axes", choices=("XYZ", "XYZU"))))  # fmt: skip
+        units.append(
+            Unit(ur.integer("address", lo=0, hi=3), ur.string("axes", choices=("XYZ", "XYZU")))
+        )
         ur.finish()
     pr = reader.table("parameters", {})
     params = {}
@@ -303,8 +340,9 @@ def controller_from_config(reader: ConfigReader, name: str) -> EasySmcController
             params[key] = pr.integer(key, lo=p.lo, hi=p.hi)
     pr.finish()
     try:
-        return EasySmcController(name, tuple(units), link, baud, target, params, poll, lead,
-                                 description)  # fmt: skip
+        return EasySmcController(
+            name, tuple(units), link, baud, target, params, poll, lead, description
+        )
     except ConfigError as exc:
         raise ConfigError(f"{reader.where}: {exc}") from exc
 
@@ -330,8 +368,12 @@ class EasySmcFrameEncoder:
     rounding of the feed to whole hertz does not accumulate either.
     """
 
-    def __init__(self, controller: EasySmcController, frame_rate_hz: float,
-                 start_pulses: Sequence[int] | None = None) -> None:  # fmt: skip
+    def __init__(
+        self,
+        controller: EasySmcController,
+        frame_rate_hz: float,
+        start_pulses: Sequence[int] | None = None,
+    ) -> None:
         controller.link_budget().check(frame_rate_hz)
         self.controller = controller
         self.frame_rate_hz = float(frame_rate_hz)
@@ -364,13 +406,15 @@ class EasySmcFrameEncoder:
             self.next_number[u.address] = n + 1  # 19 3000000 is number 1, the rest follow
         return [encode_command(c) for c in cmds]
 
-    def encode(self, t_s: float, pulses: Sequence[float], dout: int = 0,
-               dacs: Sequence[float] = (0, 0)) -> list[bytes]:  # fmt: skip
+    def encode(
+        self, t_s: float, pulses: Sequence[float], dout: int = 0, dacs: Sequence[float] = (0, 0)
+    ) -> list[bytes]:
         """Serial ASCII frames for one motion frame (see :meth:`encode_commands`)."""
         return [encode_command(c) for c in self.encode_commands(t_s, pulses, dout, dacs)]
 
-    def encode_commands(self, t_s: float, pulses: Sequence[float], dout: int = 0,
-                        dacs: Sequence[float] = (0, 0)) -> list[Command]:  # fmt: skip
+    def encode_commands(
+        self, t_s: float, pulses: Sequence[float], dout: int = 0, dacs: Sequence[float] = (0, 0)
+    ) -> list[Command]:
         """Commands for one motion frame.
 
         Parameters
@@ -409,8 +453,7 @@ class EasySmcFrameEncoder:
         if len(pulses) != ctrl.n_axes:
             raise ProtocolError(f"{len(pulses)} pulse values, expected {ctrl.n_axes}")
         target: list[int] = []
-        for axis, value, (lo, hi) in zip(ctrl.axis_names, pulses, ctrl.soft_limits(),
-                                         strict=True):  # fmt: skip
+        for axis, value, (lo, hi) in zip(ctrl.axis_names, pulses, ctrl.soft_limits(), strict=True):
             v = float(value)
             if not math.isfinite(v):
                 raise ProtocolError(f"axis {axis}: pulse target {value!r} is not finite")
@@ -419,8 +462,9 @@ class EasySmcFrameEncoder:
                 raise LimitError(f"axis {axis}: {p} pulses outside soft limits [{lo}, {hi}]")
             target.append(p)
         if any(d != 0 for d in dacs):
-            raise ProtocolError(f"DAC values {tuple(dacs)} requested: the EasySmc 2300 has "
-                                "no analogue outputs")  # fmt: skip
+            raise ProtocolError(
+                f"DAC values {tuple(dacs)} requested: the EasySmc 2300 has no analogue outputs"
+            )
         n_out = 16 * len(ctrl.units)
         if isinstance(dout, bool) or not 0 <= int(dout) < (1 << n_out):
             raise ProtocolError(f"dout {dout!r} outside the {n_out} output bits")
@@ -428,7 +472,7 @@ class EasySmcFrameEncoder:
 
         t0 = t if self.t0_s is None else self.t0_s
         end_s = (t - t0) + self.period_s  # controller time at which this frame must end
-        p = ctrl.parameters
+        params = ctrl.parameters
         f0 = ctrl.start_frequency_hz()
         cmds: list[Command] = []
         new_states: list[_UnitState] = []
@@ -458,8 +502,11 @@ class EasySmcFrameEncoder:
                 new_states.append(_UnitState(goal, st.done_s + ms / 1e3, st.feed_hz))
                 continue
             prefix = "A3" if unit.axes == "XYZ" else "A6"
-            acc_a, cap, acc_b = (p[f"{prefix}_acc_a_hz_s"], p[f"{prefix}_feed_hz"],
-                                 p[f"{prefix}_acc_b_hz_s"])  # fmt: skip
+            acc_a, cap, acc_b = (
+                params[f"{prefix}_acc_a_hz_s"],
+                params[f"{prefix}_feed_hz"],
+                params[f"{prefix}_acc_b_hz_s"],
+            )
             if want_s <= 0:
                 raise LimitError(f"unit {a:02X} is {-want_s * 1e3:.1f} ms behind its schedule")
             feed = feed_for_duration(dist, want_s, f0, acc_a, acc_b)

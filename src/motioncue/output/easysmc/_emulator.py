@@ -51,24 +51,66 @@ _AXES = "XYZU"
 
 # Interpolation speed command and leading axis of each move command.
 _MOVE_SPEED = {
-    0x44: (0x03, "X"), 0x45: (0x10, "Y"), 0x46: (0x15, "Z"), 0x4A: (0xAD, "U"),
-    0x51: (0x04, "XY"), 0x52: (0x05, "XZ"), 0x53: (0x11, "YZ"), 0x54: (0xA1, "XU"),
-    0x55: (0xA7, "YU"), 0x56: (0xAA, "ZU"), 0x57: (0xA3, "XYZ"), 0x58: (0xA4, "XYU"),
-    0x59: (0xA5, "XZU"), 0x5A: (0xA9, "YZU"), 0x5B: (0xA6, "XY"), 0x5C: (0xA6, "ZU"),
-}  # fmt: skip
+    0x44: (0x03, "X"),
+    0x45: (0x10, "Y"),
+    0x46: (0x15, "Z"),
+    0x4A: (0xAD, "U"),
+    0x51: (0x04, "XY"),
+    0x52: (0x05, "XZ"),
+    0x53: (0x11, "YZ"),
+    0x54: (0xA1, "XU"),
+    0x55: (0xA7, "YU"),
+    0x56: (0xAA, "ZU"),
+    0x57: (0xA3, "XYZ"),
+    0x58: (0xA4, "XYU"),
+    0x59: (0xA5, "XZU"),
+    0x5A: (0xA9, "YZU"),
+    0x5B: (0xA6, "XY"),
+    0x5C: (0xA6, "ZU"),
+}
 _ARC = {0x61: (0x06, "XY"), 0x62: (0x07, "XZ"), 0x63: (0x12, "YZ")}
 _START_CODE = {"X": 0x02, "Y": 0x09, "Z": 0x14}
 
 # Parameter reads (5.3.4 .. 5.3.6): (query code, item) -> parameter command code.
 _PARAM_READ = {
-    **{(0x34, i): c for i, c in ((1, 0x01), (2, 0x02), (3, 0x03), (4, 0x04), (5, 0x05),
-                                 (6, 0x06), (7, 0x07), (8, 0xA1), (9, 0xA2), (0xA, 0xA3),
-                                 (0xB, 0xA4), (0xC, 0xA5), (0xD, 0xA6), (0x80, 0xAC),
-                                 (0x81, 0xAD), (0x82, 0xAE), (0xFE, 0xFE), (0xFF, 0xFF))},
-    **{(0x35, i): c for i, c in ((1, 0x08), (2, 0x09), (3, 0x10), (4, 0x11), (5, 0x12),
-                                 (6, 0xA7), (7, 0xA8), (8, 0xA9))},
+    **{
+        (0x34, i): c
+        for i, c in (
+            (1, 0x01),
+            (2, 0x02),
+            (3, 0x03),
+            (4, 0x04),
+            (5, 0x05),
+            (6, 0x06),
+            (7, 0x07),
+            (8, 0xA1),
+            (9, 0xA2),
+            (0xA, 0xA3),
+            (0xB, 0xA4),
+            (0xC, 0xA5),
+            (0xD, 0xA6),
+            (0x80, 0xAC),
+            (0x81, 0xAD),
+            (0x82, 0xAE),
+            (0xFE, 0xFE),
+            (0xFF, 0xFF),
+        )
+    },
+    **{
+        (0x35, i): c
+        for i, c in (
+            (1, 0x08),
+            (2, 0x09),
+            (3, 0x10),
+            (4, 0x11),
+            (5, 0x12),
+            (6, 0xA7),
+            (7, 0xA8),
+            (8, 0xA9),
+        )
+    },
     **{(0x36, i): c for i, c in ((1, 0x13), (2, 0x14), (3, 0x15), (4, 0xAA), (5, 0xAB))},
-}  # fmt: skip
+}
 
 
 def _factory_params() -> dict[int, list[int]]:
@@ -78,8 +120,29 @@ def _factory_params() -> dict[int, list[int]]:
         p[c] = [2000]
     for c in (0x02, 0x09, 0x14, 0xAC):
         p[c] = [2000, 2000, 2000]
-    for c in (0x03, 0x04, 0x05, 0x06, 0x07, 0xA1, 0xA2, 0xA3, 0xA4, 0xA5, 0xA6, 0x10, 0x11,
-              0x12, 0xA7, 0xA8, 0xA9, 0x15, 0xAA, 0xAB, 0xAD):  # fmt: skip
+    for c in (
+        0x03,
+        0x04,
+        0x05,
+        0x06,
+        0x07,
+        0xA1,
+        0xA2,
+        0xA3,
+        0xA4,
+        0xA5,
+        0xA6,
+        0x10,
+        0x11,
+        0x12,
+        0xA7,
+        0xA8,
+        0xA9,
+        0x15,
+        0xAA,
+        0xAB,
+        0xAD,
+    ):
         p[c] = [20000, 20000, 20000]
     p[0xAE] = [1000, 1000, 1000]
     p[0xFC] = [2000, 20000, 1]
@@ -95,7 +158,7 @@ class TraceEntry:
 
     t_s: float
     addr: int
-    positions: tuple[int, int, int, int]
+    positions: tuple[int, ...]
     number: int  # command number that ended here
 
 
@@ -105,11 +168,11 @@ class _Job:
     cmd: Command
     start_s: float
     end_s: float
-    deltas: tuple[int, int, int, int] = (0, 0, 0, 0)
+    deltas: tuple[int, ...] = (0, 0, 0, 0)
     dist: int = 0
     profile: tuple[float, float, float, float] = (1.0, 1.0, 1.0, 1.0)  # feed, f0, a, b
-    origin: tuple[int, int, int, int] = (0, 0, 0, 0)
-    end: tuple[int, int, int, int] = (0, 0, 0, 0)  # logical positions once done
+    origin: tuple[int, ...] = (0, 0, 0, 0)
+    end: tuple[int, ...] = (0, 0, 0, 0)  # logical positions once done
 
 
 @dataclass
@@ -183,9 +246,13 @@ class ControllerModel:
             self._control_done(job.cmd.words[0])
         self.last_done = job.number
         self._last_end_s = t_s
-        if code in _MOVE_SPEED or code in _ARC or code in (0x24, 0x25, 0x26, 0xAF) or (
-                code == 0x19 and job.cmd.words[0] >> 24 == 1):  # fmt: skip
-            self.trace.append(TraceEntry(t_s, self.address, tuple(self.position), job.number))  # type: ignore[arg-type]
+        if (
+            code in _MOVE_SPEED
+            or code in _ARC
+            or code in (0x24, 0x25, 0x26, 0xAF)
+            or (code == 0x19 and job.cmd.words[0] >> 24 == 1)
+        ):
+            self.trace.append(TraceEntry(t_s, self.address, tuple(self.position), job.number))
 
     def _control_done(self, word: int) -> None:
         lead, rest = word >> 24, word & 0xFFFFFF
@@ -202,7 +269,7 @@ class ControllerModel:
             c = rest >> 16
             self.counters[c] = (self.counters[c] + (1 if rest & 0xF == 0 else -1)) & 0xFFFF
 
-    def position_at(self, now_s: float) -> tuple[int, int, int, int]:
+    def position_at(self, now_s: float) -> tuple[int, ...]:
         """Logical positions now, including the part of the executing move done."""
         self.advance(now_s)
         eff = now_s if self.halt is None else min(now_s, self.halt.at_s)
@@ -210,10 +277,10 @@ class ControllerModel:
             job = self.queue[0]
             done, _ = move_progress(job.dist, *job.profile, eff - job.start_s)
             frac = done / job.dist
-            return tuple(o + int(d * frac) for o, d in zip(job.origin, job.deltas, strict=True))  # type: ignore[return-value]
+            return tuple(o + int(d * frac) for o, d in zip(job.origin, job.deltas, strict=True))
         if self.queue:
             return self.queue[0].origin
-        return tuple(self.position)  # type: ignore[return-value]
+        return tuple(self.position)
 
     def _planned_position(self) -> list[int]:
         return list(self.queue[-1].end) if self.queue else list(self.position)
@@ -236,13 +303,17 @@ class ControllerModel:
         oob = cmd.code == 0x18 or (cmd.code == 0x19 and cmd.words[0] >> 24 in (4, 5))
         if oob:
             if cmd.start != Start.OUT_OF_BAND:
-                self._flag(f"command {cmd.code:02X} {cmd.words[0]:07X} needs start condition 8 "
-                           f"(got {int(cmd.start)}); executed out of band anyway")  # fmt: skip
+                self._flag(
+                    f"command {cmd.code:02X} {cmd.words[0]:07X} needs start condition 8 "
+                    f"(got {int(cmd.start)}); executed out of band anyway"
+                )
             self._out_of_band(cmd, now_s)
             return WriteReply(cmd.code, int(cmd.start), self.address)
         if cmd.start == Start.OUT_OF_BAND:
-            self._flag(f"start condition 8 on command {cmd.code:02X}, which the manual allows "
-                       "only for brakes, clear buffer and loop test; queued")  # fmt: skip
+            self._flag(
+                f"start condition 8 on command {cmd.code:02X}, which the manual allows "
+                "only for brakes, clear buffer and loop test; queued"
+            )
         if len(self.queue) + (self.pending_5b is not None) >= BUFFER_DEPTH:
             self.stats["buffer_full"] += 1
             return ErrorReply(ErrorCode.BUFFER_FULL, int(cmd.start), self.address)
@@ -275,8 +346,12 @@ class ControllerModel:
             self._flag(f"5B (command {self.pending_5b[0]}) not followed by 5C; run as an XY move")
             n5b, c5b = self.pending_5b
             self.pending_5b = None
-            self._enqueue_move(n5b, c5b, now_s, [signed_from_word(c5b.words[0]),
-                                                 signed_from_word(c5b.words[1]), 0, 0])  # fmt: skip
+            self._enqueue_move(
+                n5b,
+                c5b,
+                now_s,
+                [signed_from_word(c5b.words[0]), signed_from_word(c5b.words[1]), 0, 0],
+            )
         if code == 0x5B:
             self.pending_5b = (number, cmd)
             return
@@ -331,8 +406,16 @@ class ControllerModel:
             end[code - 0x24] = signed_from_word(cmd.words[0])
         elif code == 0xAF:
             end[3] = signed_from_word(cmd.words[2])
-        self.queue.append(_Job(number, cmd, start, start + duration, origin=origin,  # type: ignore[arg-type]
-                               end=tuple(end)))  # type: ignore[arg-type]
+        self.queue.append(
+            _Job(
+                number,
+                cmd,
+                start,
+                start + duration,
+                origin=origin,
+                end=tuple(end),
+            )
+        )
 
     def _enqueue_move(self, number: int, cmd: Command, now_s: float, deltas: list[int]) -> None:
         self._moves_seen = True
@@ -350,8 +433,9 @@ class ControllerModel:
                 self._flag(f"axis {a} moved before homing", once=f"home{a}")
             pos, neg = self.soft[a]
             if deltas[i] and not neg <= end[i] <= pos:
-                self._flag(f"command {number}: axis {a} to {end[i]} outside soft limits "
-                           f"[{neg}, {pos}]")  # fmt: skip
+                self._flag(
+                    f"command {number}: axis {a} to {end[i]} outside soft limits [{neg}, {pos}]"
+                )
         if self.small_segment:
             acc_a, feed, acc_b = self.params[0xFD]
             f0 = self.params[0xFC][0]
@@ -359,15 +443,28 @@ class ControllerModel:
         if feed > MAX_PULSE_HZ:
             self._flag(f"command {number}: feed {feed} Hz above the 2 MHz the controller makes")
         if dist and (feed <= 0 or (feed > f0 and (acc_a <= 0 or acc_b <= 0))):
-            self._flag(f"command {number}: feed {feed} Hz / accelerations {acc_a}, {acc_b} "
-                       "cannot run a move; skipped")  # fmt: skip
+            self._flag(
+                f"command {number}: feed {feed} Hz / accelerations {acc_a}, {acc_b} "
+                "cannot run a move; skipped"
+            )
             deltas = [0, 0, 0, 0]
             dist = 0
         duration = move_duration_s(dist, feed, f0, acc_a, acc_b)
         start = self._start_time(now_s)
         end = [o + d for o, d in zip(origin, deltas, strict=True)]
-        self.queue.append(_Job(number, cmd, start, start + duration, tuple(deltas), dist,  # type: ignore[arg-type]
-                               (feed, f0, acc_a, acc_b), tuple(origin), tuple(end)))  # type: ignore[arg-type]
+        self.queue.append(
+            _Job(
+                number,
+                cmd,
+                start,
+                start + duration,
+                tuple(deltas),
+                dist,
+                (feed, f0, acc_a, acc_b),
+                tuple(origin),
+                tuple(end),
+            )
+        )
 
     def _enqueue_arc(self, number: int, cmd: Command, now_s: float) -> None:
         import math
@@ -395,9 +492,19 @@ class ControllerModel:
         start = self._start_time(now_s)
         duration = move_duration_s(dist, max(feed, 1), f0, max(acc_a, 1), max(acc_b, 1))
         end = [o + d for o, d in zip(origin, deltas, strict=True)]
-        self.queue.append(_Job(number, cmd, start, start + duration, tuple(deltas), dist,  # type: ignore[arg-type]
-                               (max(feed, 1), f0, max(acc_a, 1), max(acc_b, 1)), tuple(origin),  # type: ignore[arg-type]
-                               tuple(end)))  # type: ignore[arg-type]
+        self.queue.append(
+            _Job(
+                number,
+                cmd,
+                start,
+                start + duration,
+                tuple(deltas),
+                dist,
+                (max(feed, 1), f0, max(acc_a, 1), max(acc_b, 1)),
+                tuple(origin),
+                tuple(end),
+            )
+        )
 
     def _stop_now(self, t_s: float) -> None:
         """Cut the executing move at ``t_s`` (position truncated) and keep the rest queued."""
@@ -407,8 +514,17 @@ class ControllerModel:
             rest = tuple(o + d - p for o, d, p in zip(job.origin, job.deltas, pos, strict=True))
             remaining = max(abs(r) for r in rest)
             feed, f0, a, b = job.profile
-            new = _Job(job.number, job.cmd, t_s, t_s + move_duration_s(remaining, feed, f0, a, b),
-                       rest, remaining, job.profile, pos, job.end)  # type: ignore[arg-type]
+            new = _Job(
+                job.number,
+                job.cmd,
+                t_s,
+                t_s + move_duration_s(remaining, feed, f0, a, b),
+                rest,
+                remaining,
+                job.profile,
+                pos,
+                job.end,
+            )
             self.queue[0] = new
             self.trace.append(TraceEntry(t_s, self.address, pos, job.number))
 
@@ -487,8 +603,12 @@ class ControllerModel:
                 return (sw(pos[i]), 0, 0)
             if item == 3:
                 busy = self.busy_axes(now_s)
-                return ((("U" in busy) << 12) | (("X" in busy) << 8) | (("Y" in busy) << 4)
-                        | ("Z" in busy),)  # fmt: skip
+                return (
+                    (("U" in busy) << 12)
+                    | (("X" in busy) << 8)
+                    | (("Y" in busy) << 4)
+                    | ("Z" in busy),
+                )
             if item == 4 and code == 0x31:
                 return (sw(pos[0]), sw(pos[1]), sw(pos[2]))
             if item == 5 and code == 0x31:
@@ -546,16 +666,22 @@ class EasySmcEmulator:
     ``stop()``; or call :meth:`feed` with bytes directly (no pty).
     """
 
-    def __init__(self, addresses: Sequence[int] = (0,),
-                 clock: Callable[[], float] = time.monotonic) -> None:  # fmt: skip
+    def __init__(
+        self, addresses: Sequence[int] = (0,), clock: Callable[[], float] = time.monotonic
+    ) -> None:
         if not addresses or len(set(addresses)) != len(addresses):
             raise ValueError(f"addresses {addresses!r} must be distinct and non-empty")
         self.models = {a: ControllerModel(a) for a in addresses}
         self._clock = clock
         self._epoch = clock()
         self._buffer = b""
-        self.stats = {"frames": 0, "checksum_errors": 0, "unknown": 0, "foreign_address": 0,
-                      "noise_bytes": 0}  # fmt: skip
+        self.stats = {
+            "frames": 0,
+            "checksum_errors": 0,
+            "unknown": 0,
+            "foreign_address": 0,
+            "noise_bytes": 0,
+        }
         self._lock = threading.Lock()
         self._thread: threading.Thread | None = None
         self._stop = threading.Event()

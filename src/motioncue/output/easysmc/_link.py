@@ -115,7 +115,10 @@ class EasySmcLink:
             except ProtocolError:
                 self.stats.garbled_replies += 1
                 self._rx = b""
-                if expected_number is not None and self.status(cmd.addr).received >= expected_number:
+                if (
+                    expected_number is not None
+                    and self.status(cmd.addr).received >= expected_number
+                ):
                     return WriteReply(cmd.code, int(cmd.start), cmd.addr)
                 continue
             if isinstance(reply, ErrorReply) and reply.error is ErrorCode.CHECKSUM:
@@ -126,8 +129,10 @@ class EasySmcLink:
             else:
                 self.stats.commands += 1
             return reply
-        raise TransportError(f"EasySmc addr {cmd.addr:02X}: command {cmd.code:02X} failed "
-                             f"{self.retries + 1} times (checksum / garbled replies)")  # fmt: skip
+        raise TransportError(
+            f"EasySmc addr {cmd.addr:02X}: command {cmd.code:02X} failed "
+            f"{self.retries + 1} times (checksum / garbled replies)"
+        )
 
     def status(self, addr: int) -> ExecStatus:
         """Query 38 item 0: executing command number, received count, faults."""
@@ -160,9 +165,13 @@ class EasySmcStreamer:
         Sleep between two status queries while the buffer is at its limit.
     """
 
-    def __init__(self, link: EasySmcLink, max_queued: dict[int, int],
-                 poll_interval_s: float = 0.01,
-                 sleep: Callable[[float], None] = time.sleep) -> None:  # fmt: skip
+    def __init__(
+        self,
+        link: EasySmcLink,
+        max_queued: dict[int, int],
+        poll_interval_s: float = 0.01,
+        sleep: Callable[[float], None] = time.sleep,
+    ) -> None:
         if any(not 1 <= m <= 60 for m in max_queued.values()):
             raise ValueError(f"max_queued {max_queued} must be within 1..60 (63-command buffer)")
         self.link = link
@@ -176,8 +185,9 @@ class EasySmcStreamer:
         self.poll_every_frames = 10
 
     @classmethod
-    def for_controller(cls, controller: object, link: EasySmcLink,
-                       frame_rate_hz: float) -> EasySmcStreamer:  # fmt: skip
+    def for_controller(
+        cls, controller: object, link: EasySmcLink, frame_rate_hz: float
+    ) -> EasySmcStreamer:
         """Streamer for an :class:`EasySmcController`.
 
         The hard cap per unit is the 63-command buffer less 3 spare and one frame; the
@@ -219,8 +229,10 @@ class EasySmcStreamer:
                 self.poll(addr)
                 continue
             if isinstance(reply, ErrorReply):
-                raise TransportError(f"EasySmc addr {addr:02X} refused command {cmd.code:02X}: "
-                                     f"{reply.error.name} (error 99/{int(reply.error)})")  # fmt: skip
+                raise TransportError(
+                    f"EasySmc addr {addr:02X} refused command {cmd.code:02X}: "
+                    f"{reply.error.name} (error 99/{int(reply.error)})"
+                )
             break
         self.sent[addr] += 1
         queued = self.sent[addr] - self.executing[addr]
@@ -231,8 +243,12 @@ class EasySmcStreamer:
         for c in cmds:
             self.send(c)
 
-    def stream(self, encoder: object, frames: Iterable[tuple[float, Sequence[float]]],
-               clock: Callable[[], float] = time.monotonic) -> int:  # fmt: skip
+    def stream(
+        self,
+        encoder: object,
+        frames: Iterable[tuple[float, Sequence[float]]],
+        clock: Callable[[], float] = time.monotonic,
+    ) -> int:
         """Encode and send frames ``(t_s, pulses)`` paced in real time; returns frames sent.
 
         Frame ``k`` is sent ``lead_s`` before its time (the first ones at once), so about
@@ -268,7 +284,9 @@ class EasySmcStreamer:
                     if isinstance(busy, ReadReply) and busy.words[0] == 0:
                         break
                 if time.monotonic() > deadline:
-                    raise TransportError(f"EasySmc addr {addr:02X} still executing command "
-                                         f"{st.executing} of {self.sent[addr]} after "
-                                         f"{timeout_s:g} s")  # fmt: skip
+                    raise TransportError(
+                        f"EasySmc addr {addr:02X} still executing command "
+                        f"{st.executing} of {self.sent[addr]} after "
+                        f"{timeout_s:g} s"
+                    )
                 self._sleep(self.poll_interval_s)

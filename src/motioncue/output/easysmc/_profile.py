@@ -29,8 +29,9 @@ def _peak(distance: float, feed: float, f0: float, a: float, b: float) -> float:
     return math.sqrt(f0 * f0 + distance / (0.5 / a + 0.5 / b))
 
 
-def move_duration_s(distance: float, feed_hz: float, f0_hz: float, a_hz_s: float,
-                    b_hz_s: float) -> float:  # fmt: skip
+def move_duration_s(
+    distance: float, feed_hz: float, f0_hz: float, a_hz_s: float, b_hz_s: float
+) -> float:
     """Duration in seconds of a move of ``distance`` pulses (>= 0)."""
     if distance <= 0:
         return 0.0
@@ -44,8 +45,9 @@ def move_duration_s(distance: float, feed_hz: float, f0_hz: float, a_hz_s: float
     return t_ramps + max(distance - d_ramps, 0.0) / peak
 
 
-def move_progress(distance: float, feed_hz: float, f0_hz: float, a_hz_s: float,
-                  b_hz_s: float, t_s: float) -> tuple[float, float]:  # fmt: skip
+def move_progress(
+    distance: float, feed_hz: float, f0_hz: float, a_hz_s: float, b_hz_s: float, t_s: float
+) -> tuple[float, float]:
     """Pulses done and current pulse rate ``t_s`` seconds into the move.
 
     Returns
@@ -73,8 +75,9 @@ def move_progress(distance: float, feed_hz: float, f0_hz: float, a_hz_s: float,
     return da + peak * tc + peak * u - 0.5 * b_hz_s * u * u, peak - b_hz_s * u
 
 
-def feed_for_duration(distance: float, duration_s: float, f0_hz: float, a_hz_s: float,
-                      b_hz_s: float) -> float:  # fmt: skip
+def feed_for_duration(
+    distance: float, duration_s: float, f0_hz: float, a_hz_s: float, b_hz_s: float
+) -> float:
     """Feed (Hz, real) that makes a move of ``distance`` pulses last ``duration_s``.
 
     Raises

@@ -144,8 +144,9 @@ _STARTF = (("single_start_hz", _U), ("linear_start_hz", _U), ("arc_start_hz", _U
 def _table() -> dict[int, CommandSpec]:
     rows: list[CommandSpec] = []
 
-    def add(code: int, name: str, words: Sequence[tuple[str, WordKind]], sec: str,
-            kind: str = "write") -> None:  # fmt: skip
+    def add(
+        code: int, name: str, words: Sequence[tuple[str, WordKind]], sec: str, kind: str = "write"
+    ) -> None:
         rows.append(CommandSpec(code, name, tuple(words), kind, sec))
 
     add(0x01, "x_home_speed", [("home_hz", _U)], "5.1.1.1")
@@ -174,29 +175,45 @@ def _table() -> dict[int, CommandSpec]:
     add(0x15, "z_speed", _SPEED, "5.1.3.3")
     add(0xAA, "zu_linear_speed", _SPEED, "5.1.3.4")
     add(0xAB, "zu_arc_speed", _SPEED, "5.1.3.5")
-    add(0xAC, "u_home_start", [("home_hz", _U), ("single_start_hz", _U), ("equiv", _U)],
-        "5.1.4.1")  # fmt: skip
+    add(0xAC, "u_home_start", [("home_hz", _U), ("single_start_hz", _U), ("equiv", _U)], "5.1.4.1")
     add(0xAD, "u_speed", _SPEED, "5.1.4.2")
     add(0x16, "manual_param", [("selector_value", _C)], "5.1.5")
-    add(0xAE, "u_manual_param",
-        [("level_hz", _U), ("jog_pulses", _U), ("home_backoff_pulses", _U)], "5.1.5.10")  # fmt: skip
+    add(
+        0xAE,
+        "u_manual_param",
+        [("level_hz", _U), ("jog_pulses", _U), ("home_backoff_pulses", _U)],
+        "5.1.5.10",
+    )
     add(0x17, "defaults", [("action", _C)], "5.1.6")
     add(0x18, "brake", [("brake_code", _C)], "5.1.7")
     add(0x19, "control", [("control", _C)], "5.1.8")
-    for code, name in ((0x21, "x_soft_limit_pos"), (0x22, "y_soft_limit_pos"),
-                       (0x23, "z_soft_limit_pos"), (0x24, "x_set_position"),
-                       (0x25, "y_set_position"), (0x26, "z_set_position"),
-                       (0x27, "x_soft_limit_neg"), (0x28, "y_soft_limit_neg"),
-                       (0x29, "z_soft_limit_neg")):  # fmt: skip
+    for code, name in (
+        (0x21, "x_soft_limit_pos"),
+        (0x22, "y_soft_limit_pos"),
+        (0x23, "z_soft_limit_pos"),
+        (0x24, "x_set_position"),
+        (0x25, "y_set_position"),
+        (0x26, "z_set_position"),
+        (0x27, "x_soft_limit_neg"),
+        (0x28, "y_soft_limit_neg"),
+        (0x29, "z_soft_limit_neg"),
+    ):
         add(code, name, [("pulses", _S)], f"5.2.{code - 0x20}")
     for code, axis in ((0x2A, "x"), (0x2B, "y"), (0x2C, "z"), (0x2D, "u")):
         add(code, f"{axis}_clear_encoder", [("zero", _C)], f"5.2.{code - 0x20}")
-    add(0xAF, "u_soft_limits_position",
-        [("soft_limit_pos", _S), ("soft_limit_neg", _S), ("position", _S)], "5.2.14")  # fmt: skip
-    add(0xFC, "small_segment_1",
-        [("start_hz", _U), ("corner_acc_hz_s", _U), ("chord_error", _U)], "5.2.15")  # fmt: skip
-    add(0xFD, "small_segment_2",
-        [("acc_hz_s", _U), ("feed_hz", _U), ("dec_hz_s", _U)], "5.2.16")  # fmt: skip
+    add(
+        0xAF,
+        "u_soft_limits_position",
+        [("soft_limit_pos", _S), ("soft_limit_neg", _S), ("position", _S)],
+        "5.2.14",
+    )
+    add(
+        0xFC,
+        "small_segment_1",
+        [("start_hz", _U), ("corner_acc_hz_s", _U), ("chord_error", _U)],
+        "5.2.15",
+    )
+    add(0xFD, "small_segment_2", [("acc_hz_s", _U), ("feed_hz", _U), ("dec_hz_s", _U)], "5.2.16")
     add(0xFE, "xyz_work_mode", [("x_mode", _U), ("y_mode", _U), ("z_mode", _U)], "5.2.17")
     add(0xFF, "uvw_work_mode", [("u_mode", _U), ("v_mode", _U), ("w_mode", _U)], "5.2.18")
     for code, axis in ((0x31, "x"), (0x32, "y"), (0x33, "z")):
@@ -209,22 +226,41 @@ def _table() -> dict[int, CommandSpec]:
         add(code, f"{axis}_home", [("mode", _C)], "5.4")
     for code, axis in ((0x44, "x"), (0x45, "y"), (0x46, "z"), (0x4A, "u")):
         add(code, f"{axis}_move", [(f"{axis}_pulses", _S)], "5.4")
-    for code, axes in ((0x51, "xy"), (0x52, "xz"), (0x53, "yz"), (0x54, "xu"), (0x55, "yu"),
-                       (0x56, "zu"), (0x57, "xyz"), (0x58, "xyu"), (0x59, "xzu"),
-                       (0x5A, "yzu")):  # fmt: skip
+    for code, axes in (
+        (0x51, "xy"),
+        (0x52, "xz"),
+        (0x53, "yz"),
+        (0x54, "xu"),
+        (0x55, "yu"),
+        (0x56, "zu"),
+        (0x57, "xyz"),
+        (0x58, "xyu"),
+        (0x59, "xzu"),
+        (0x5A, "yzu"),
+    ):
         add(code, f"{axes}_linear", [(f"{a}_pulses", _S) for a in axes], f"5.5.{code - 0x50:X}")
     add(0x5B, "xyzu_linear_1", [("x_pulses", _S), ("y_pulses", _S)], "5.5.B")
     add(0x5C, "xyzu_linear_2", [("z_pulses", _S), ("u_pulses", _S)], "5.5.C")
     for code, axes in ((0x61, "xy"), (0x62, "xz"), (0x63, "yz")):
-        add(code, f"{axes}_arc",
-            [(f"{axes[0]}_center_pulses", _S), (f"{axes[1]}_center_pulses", _S),
-             ("angle_cdeg", _A)], f"5.6.{code - 0x60}")  # fmt: skip
+        add(
+            code,
+            f"{axes}_arc",
+            [
+                (f"{axes[0]}_center_pulses", _S),
+                (f"{axes[1]}_center_pulses", _S),
+                ("angle_cdeg", _A),
+            ],
+            f"5.6.{code - 0x60}",
+        )
     add(0x70, "spline_params", [("start_hz", _U), ("acc_hz_s", _U), ("max_hz", _U)], "5.7")
     for code in (0x75, 0x76):
-        add(code, f"spline_knot_{code - 0x74}",
-            [("knot", _U), ("x_pulses", _S), ("y_pulses", _S)], "5.7")  # fmt: skip
-    add(0x77, "spline_corner", [("corner_acc_hz_s", _U), ("x_pulses", _S), ("y_pulses", _S)],
-        "5.7")  # fmt: skip
+        add(
+            code,
+            f"spline_knot_{code - 0x74}",
+            [("knot", _U), ("x_pulses", _S), ("y_pulses", _S)],
+            "5.7",
+        )
+    add(0x77, "spline_corner", [("corner_acc_hz_s", _U), ("x_pulses", _S), ("y_pulses", _S)], "5.7")
     add(0x78, "spline_chord", [("chord_error", _U), ("x_pulses", _S), ("y_pulses", _S)], "5.7")
     return {r.code: r for r in rows}
 
@@ -237,17 +273,27 @@ _BY_NAME = {spec.name: spec for spec in COMMANDS.values()}
 # Sub-command words -----------------------------------------------------------------------
 
 _BRAKE_CODES = {
-    0x00: "emergency brake all axes", 0x01: "release emergency brake all axes",
-    0x02: "emergency brake X", 0x03: "release emergency brake X",
-    0x04: "emergency brake Y", 0x05: "release emergency brake Y",
-    0x06: "emergency brake Z", 0x07: "release emergency brake Z",
-    0x12: "emergency brake U", 0x13: "release emergency brake U",
-    0x08: "smooth brake all axes", 0x09: "smooth brake X", 0x0A: "smooth brake Y",
-    0x0B: "smooth brake Z", 0x19: "smooth brake U",
-    0x0C: "release smooth brake all axes", 0x0D: "release smooth brake X",
-    0x0E: "release smooth brake Y", 0x0F: "release smooth brake Z",
+    0x00: "emergency brake all axes",
+    0x01: "release emergency brake all axes",
+    0x02: "emergency brake X",
+    0x03: "release emergency brake X",
+    0x04: "emergency brake Y",
+    0x05: "release emergency brake Y",
+    0x06: "emergency brake Z",
+    0x07: "release emergency brake Z",
+    0x12: "emergency brake U",
+    0x13: "release emergency brake U",
+    0x08: "smooth brake all axes",
+    0x09: "smooth brake X",
+    0x0A: "smooth brake Y",
+    0x0B: "smooth brake Z",
+    0x19: "smooth brake U",
+    0x0C: "release smooth brake all axes",
+    0x0D: "release smooth brake X",
+    0x0E: "release smooth brake Y",
+    0x0F: "release smooth brake Z",
     0x1D: "release smooth brake U",
-}  # fmt: skip
+}
 
 
 def describe_control(word: int) -> str:
@@ -380,16 +426,18 @@ class Command:
         return COMMANDS[self.code]
 
     @classmethod
-    def named(cls, name: str, *words: int, start: Start = Start.IMMEDIATE, addr: int = 0
-              ) -> Command:  # fmt: skip
+    def named(
+        cls, name: str, *words: int, start: Start = Start.IMMEDIATE, addr: int = 0
+    ) -> Command:
         """Build by table name: ``Command.named("xyz_linear", w1, w2, w3, start=4)``."""
         if name not in _BY_NAME:
             raise ProtocolError(f"unknown command name {name!r}")
         return cls(_BY_NAME[name].code, tuple(words), start, addr)
 
     @classmethod
-    def move(cls, code: int, pulses: Sequence[int], start: Start = Start.SEQUENCE,
-             addr: int = 0) -> Command:  # fmt: skip
+    def move(
+        cls, code: int, pulses: Sequence[int], start: Start = Start.SEQUENCE, addr: int = 0
+    ) -> Command:
         """A relative move (44..4A, 51..5C) from signed pulse counts."""
         return cls(code, tuple(word_from_signed(int(p)) for p in pulses), start, addr)
 
@@ -415,8 +463,10 @@ class Command:
                 parts.append(_BRAKE_CODES[w])
             else:
                 parts.append(f"{name}={w}" if kind is WordKind.UNSIGNED else f"{name}={w:07X}")
-        return (f"addr {self.addr:02X} cmd {self.code:02X} {spec.name} [{', '.join(parts)}] "
-                f"start {int(self.start)}")  # fmt: skip
+        return (
+            f"addr {self.addr:02X} cmd {self.code:02X} {spec.name} [{', '.join(parts)}] "
+            f"start {int(self.start)}"
+        )
 
 
 @dataclass(frozen=True)
@@ -553,9 +603,7 @@ class _RawFrame:
 def _unframe(frame: bytes) -> _RawFrame:
     n = len(frame)
     if n < 9 or (n - 9) % 7 or n > serial_frame_size(3):
-        raise ProtocolError(
-            f"serial frame of {n} bytes; expected 9, 16, 23 or 30 (9 + 7 x words)"
-        )
+        raise ProtocolError(f"serial frame of {n} bytes; expected 9, 16, 23 or 30 (9 + 7 x words)")
     if frame[0] != STX:
         raise ProtocolError(f"frame starts with {frame[0]:#04x}, expected STX 0x02")
     if frame[-3] != ETX:
@@ -568,8 +616,9 @@ def _unframe(frame: bytes) -> _RawFrame:
         )
     addr = _parse_hex(frame[1:3], "address")
     code = _parse_hex(frame[3:5], "command code")
-    words = tuple(_parse_hex(frame[5 + 7 * i : 12 + 7 * i], f"DAT{i + 1}")
-                  for i in range((n - 9) // 7))  # fmt: skip
+    words = tuple(
+        _parse_hex(frame[5 + 7 * i : 12 + 7 * i], f"DAT{i + 1}") for i in range((n - 9) // 7)
+    )
     start_byte = frame[-4]
     if not 0x30 <= start_byte <= 0x39:
         raise ProtocolError(f"start condition byte {start_byte:#04x} is not an ASCII digit")
@@ -684,8 +733,9 @@ def decode_usb_write(data: bytes) -> Command:
         raise ProtocolError(f"unknown command code {data[2]:02X}")
     if spec.kind == "query":
         raise ProtocolError(f"command {data[2]:02X} is a query; USB reads go through recdata")
-    words = tuple(_word_from_usb(data[3 + 4 * i : 7 + 4 * i], f"DAT{i + 1}")
-                  for i in range(spec.n_words))  # fmt: skip
+    words = tuple(
+        _word_from_usb(data[3 + 4 * i : 7 + 4 * i], f"DAT{i + 1}") for i in range(spec.n_words)
+    )
     if data[15] > 8:
         raise ProtocolError(f"USB start code {data[15]:#04x} not in 0..8")
     return Command(spec.code, words, Start(data[15]), data[1])
@@ -721,8 +771,13 @@ class UsbWriteReply:
 
 
 def encode_usb_write_reply(r: UsbWriteReply) -> bytes:
-    if not (0 <= r.busy <= 0x0F and 0 <= r.state <= 0xFF and 0 <= r.executing <= MAX_MAGNITUDE
-            and 0 <= r.error <= 0xFF and 0 <= r.code <= 0xFF):  # fmt: skip
+    if not (
+        0 <= r.busy <= 0x0F
+        and 0 <= r.state <= 0xFF
+        and 0 <= r.executing <= MAX_MAGNITUDE
+        and 0 <= r.error <= 0xFF
+        and 0 <= r.code <= 0xFF
+    ):
         raise ProtocolError(f"USB write reply field out of range: {r}")
     out = bytes((r.addr, r.code, r.error, r.busy, r.state)) + r.executing.to_bytes(3, "big")
     for p in r.positions:
@@ -744,8 +799,15 @@ def decode_usb_write_reply(data: bytes) -> UsbWriteReply:
     for i, axis in enumerate("XYZ"):
         w = _word_from_usb(data[8 + 4 * i : 12 + 4 * i], f"{axis} position")
         pos.append(signed_from_word(w))
-    return UsbWriteReply(data[1], data[2], data[3], data[4], int.from_bytes(data[5:8], "big"),
-                         (pos[0], pos[1], pos[2]), data[0])  # fmt: skip
+    return UsbWriteReply(
+        data[1],
+        data[2],
+        data[3],
+        data[4],
+        int.from_bytes(data[5:8], "big"),
+        (pos[0], pos[1], pos[2]),
+        data[0],
+    )
 
 
 @dataclass(frozen=True)
@@ -811,60 +873,90 @@ class _Decision:
 
 
 MANUAL_DECISIONS: tuple[_Decision, ...] = (
-    _Decision("read / error reply framing",
-              "ch. 5 summary omits ETX from the read and error reply formats",
-              "ETX present in every reply, as in the worked replies of 5.3.1.1 and 5.3.4.1"),
-    _Decision("USB start code byte",
-              "7.1.7/7.1.8.4 say start condition 38H; the worked USB example sends $00",
-              "USB byte 15 carries the numeric start condition 0..8 (like the DAT digits)"),
-    _Decision("small-segment mode word",
-              "USB 7.1.8.3 gives 03 00 00 01 for both standard and small-segment mode",
-              "serial 5.1.8.3: 3000001 standard, 3000002 small-segment, on both links"),
-    _Decision("brake code 7",
-              "5.1.7 and 7.1.7: code 0000007 'release Y brake' (Y appears twice, Z never)",
-              "0000007 releases the Z emergency brake"),
-    _Decision("query U inputs",
-              "serial 5.3.1.6 sends 0000042, USB 8.1.6 uses rdat1 = $06",
-              "serial uses 0000042 as printed; the USB read request maps rdat1 6 to it"),
-    _Decision("buffer depth",
-              "ch. 5: 63 commands; 5.8.2.2 (download): 62, the 63rd is 'buffer full'",
-              "63 pending commands in normal operation (the download mode is not used)"),
-    _Decision("per-command move range",
-              "ch. 2: single-axis range +-134 217 727; 5.5.1: 6 hex digits, max 16 777 215",
-              "the wire carries at most 16 777 215 pulses per word; larger is refused"),
-    _Decision("negative soft-limit default",
-              "appendix: negative soft limits default 16 777 215 (FFFFFF) without sign",
-              "read as -16 777 215 (no limit); U current-position default FFFFFF read as 0"),
-    _Decision("query 38 item 0 layout",
-              "serial: DAT1 first digit brake state, rest number; USB 8.8.0: byte 02 fault "
-              "0..7 then says both 03-05 and 02-04 hold the number",
-              "DAT1 = state digit (0 normal, 1..6 limit faults, 7 e-stop) + 6-digit number"),
-    _Decision("USB write-reply busy bits",
-              "6.2.4.2 lists lsb1 twice (Z and Y) and X at lsb2",
-              "bit0 U, bit1 Z, bit2 Y, bit3 X (serial 5.3.1.3 order U X Y Z by nibble)"),
-    _Decision("USB write-reply executing number",
-              "6.2.4.2: bytes 04..07 'executing line number' without layout",
-              "byte 04 = state as in 8.8.0, bytes 05..07 = number (24-bit big-endian)"),
-    _Decision("Z start frequencies",
-              "serial 5.1.3.2: command 14 takes DAT1..3; USB 7.1.3.2 lists only DAT1",
-              "three words, as for X (02) and Y (09) and the query reply 5.3.6.2"),
-    _Decision("work-mode soft-limit bit",
-              "5.2.17: 'Bit3=0 soft limit off; Bit4=1 soft limit on'",
-              "bit 3 of the 6th digit enables the soft limits"),
-    _Decision("command numbering reset",
-              "5.1.8.3: the numbering restarts when 19 3000000 *executes*",
-              "the emulator renumbers when it is received (identical when sent first into an "
-              "empty buffer, which is how the streamer uses it)"),
-    _Decision("interpolation feed reference",
-              "5.1.1.10: 'XYZ linear interpolation constant frequency' without saying of "
-              "which axis",
-              "the feed is the pulse rate of the axis with the longest move; the start "
-              "frequency is the linear-interpolation start frequency of the first axis "
-              "(02 DAT2 for X...); a move whose feed is at or below the start frequency runs "
-              "at constant feed. To be confirmed on hardware."),
-    _Decision("emergency-brake release",
-              "5.1.7: after release the controller 'continues the buffered commands'",
-              "the interrupted move completes its remaining distance, then the queue resumes"),
+    _Decision(
+        "read / error reply framing",
+        "ch. 5 summary omits ETX from the read and error reply formats",
+        "ETX present in every reply, as in the worked replies of 5.3.1.1 and 5.3.4.1",
+    ),
+    _Decision(
+        "USB start code byte",
+        "7.1.7/7.1.8.4 say start condition 38H; the worked USB example sends $00",
+        "USB byte 15 carries the numeric start condition 0..8 (like the DAT digits)",
+    ),
+    _Decision(
+        "small-segment mode word",
+        "USB 7.1.8.3 gives 03 00 00 01 for both standard and small-segment mode",
+        "serial 5.1.8.3: 3000001 standard, 3000002 small-segment, on both links",
+    ),
+    _Decision(
+        "brake code 7",
+        "5.1.7 and 7.1.7: code 0000007 'release Y brake' (Y appears twice, Z never)",
+        "0000007 releases the Z emergency brake",
+    ),
+    _Decision(
+        "query U inputs",
+        "serial 5.3.1.6 sends 0000042, USB 8.1.6 uses rdat1 = $06",
+        "serial uses 0000042 as printed; the USB read request maps rdat1 6 to it",
+    ),
+    _Decision(
+        "buffer depth",
+        "ch. 5: 63 commands; 5.8.2.2 (download): 62, the 63rd is 'buffer full'",
+        "63 pending commands in normal operation (the download mode is not used)",
+    ),
+    _Decision(
+        "per-command move range",
+        "ch. 2: single-axis range +-134 217 727; 5.5.1: 6 hex digits, max 16 777 215",
+        "the wire carries at most 16 777 215 pulses per word; larger is refused",
+    ),
+    _Decision(
+        "negative soft-limit default",
+        "appendix: negative soft limits default 16 777 215 (FFFFFF) without sign",
+        "read as -16 777 215 (no limit); U current-position default FFFFFF read as 0",
+    ),
+    _Decision(
+        "query 38 item 0 layout",
+        "serial: DAT1 first digit brake state, rest number; USB 8.8.0: byte 02 fault "
+        "0..7 then says both 03-05 and 02-04 hold the number",
+        "DAT1 = state digit (0 normal, 1..6 limit faults, 7 e-stop) + 6-digit number",
+    ),
+    _Decision(
+        "USB write-reply busy bits",
+        "6.2.4.2 lists lsb1 twice (Z and Y) and X at lsb2",
+        "bit0 U, bit1 Z, bit2 Y, bit3 X (serial 5.3.1.3 order U X Y Z by nibble)",
+    ),
+    _Decision(
+        "USB write-reply executing number",
+        "6.2.4.2: bytes 04..07 'executing line number' without layout",
+        "byte 04 = state as in 8.8.0, bytes 05..07 = number (24-bit big-endian)",
+    ),
+    _Decision(
+        "Z start frequencies",
+        "serial 5.1.3.2: command 14 takes DAT1..3; USB 7.1.3.2 lists only DAT1",
+        "three words, as for X (02) and Y (09) and the query reply 5.3.6.2",
+    ),
+    _Decision(
+        "work-mode soft-limit bit",
+        "5.2.17: 'Bit3=0 soft limit off; Bit4=1 soft limit on'",
+        "bit 3 of the 6th digit enables the soft limits",
+    ),
+    _Decision(
+        "command numbering reset",
+        "5.1.8.3: the numbering restarts when 19 3000000 *executes*",
+        "the emulator renumbers when it is received (identical when sent first into an "
+        "empty buffer, which is how the streamer uses it)",
+    ),
+    _Decision(
+        "interpolation feed reference",
+        "5.1.1.10: 'XYZ linear interpolation constant frequency' without saying of which axis",
+        "the feed is the pulse rate of the axis with the longest move; the start "
+        "frequency is the linear-interpolation start frequency of the first axis "
+        "(02 DAT2 for X...); a move whose feed is at or below the start frequency runs "
+        "at constant feed. To be confirmed on hardware.",
+    ),
+    _Decision(
+        "emergency-brake release",
+        "5.1.7: after release the controller 'continues the buffered commands'",
+        "the interrupted move completes its remaining distance, then the queue resumes",
+    ),
 )
 """Every place the manual contradicts itself or is silent, and the decision taken."""
-

@@ -42,8 +42,10 @@ from ._protocol import (
 
 __all__ = ["SEND_USAGE", "emulator", "inspect_bytes", "run_emulator", "run_send", "send_commands"]
 
-SEND_USAGE = ("estop on|off | reset | home [MODE] | park | outputs BITS | read REG | "
-              "write REG VALUE | raw CMD DATA... [--start C]")  # fmt: skip
+SEND_USAGE = (
+    "estop on|off | reset | home [MODE] | park | outputs BITS | read REG | "
+    "write REG VALUE | raw CMD DATA... [--start C]"
+)
 
 
 @dataclass(frozen=True)
@@ -109,10 +111,12 @@ def send_commands(ctrl: EasySmcController, tokens: Sequence[str]) -> list[Comman
         return [Command(0x18, (code,), oob, u.address) for u in units]
     if word == "reset":
         for u in units:
-            out += [Command(0x19, (0x4000000,), oob, u.address),
-                    Command(0x18, (0x01,), oob, u.address),
-                    Command(0x18, (0x0C,), oob, u.address),
-                    Command(0x19, (0x3000000,), Start.IMMEDIATE, u.address)]  # fmt: skip
+            out += [
+                Command(0x19, (0x4000000,), oob, u.address),
+                Command(0x18, (0x01,), oob, u.address),
+                Command(0x18, (0x0C,), oob, u.address),
+                Command(0x19, (0x3000000,), Start.IMMEDIATE, u.address),
+            ]
         return out
     if word == "home":
         mode = _int(args[0], "homing mode") if args else 2
@@ -121,14 +125,20 @@ def send_commands(ctrl: EasySmcController, tokens: Sequence[str]) -> list[Comman
         p = ctrl.parameters
         for u in units:
             a = u.address
-            for axis, code in zip(u.axes, (0x41, 0x42, 0x43, 0x47), strict=False):
+            for code in (0x41, 0x42, 0x43, 0x47)[: len(u.axes)]:
                 out.append(Command(code, (mode,), Start.SEQUENCE, a))
             for axis, code in zip("XYZ", (0x24, 0x25, 0x26), strict=True):
                 if axis in u.axes:
                     out.append(Command(code, (0,), Start.SEQUENCE, a))
             if "U" in u.axes:
-                out.append(Command(0xAF, (word_from_signed(p["AF_UZMAX"]),
-                                          word_from_signed(p["AF_UFMAX"]), 0), Start.SEQUENCE, a))  # fmt: skip
+                out.append(
+                    Command(
+                        0xAF,
+                        (word_from_signed(p["AF_UZMAX"]), word_from_signed(p["AF_UFMAX"]), 0),
+                        Start.SEQUENCE,
+                        a,
+                    )
+                )
         return out
     if word == "outputs":
         if len(args) != 1:
@@ -175,8 +185,9 @@ def _reply_line(cmd: Command, reply: Any) -> str:
     return f"{cmd.describe()} -> ok"
 
 
-def run_send(ctrl: EasySmcController, tokens: Sequence[str], transport: ByteLink,
-             timeout_s: float = 0.5) -> list[str]:  # fmt: skip
+def run_send(
+    ctrl: EasySmcController, tokens: Sequence[str], transport: ByteLink, timeout_s: float = 0.5
+) -> list[str]:
     """Carry out one ``send`` request over a byte transport; returns lines for people."""
     link = EasySmcLink(transport, timeout_s)
     word = tokens[0] if tokens else ""
@@ -197,34 +208,41 @@ def run_send(ctrl: EasySmcController, tokens: Sequence[str], transport: ByteLink
             code = _hex(q, "query code", 0xFF)
             words = _query(link, code, _hex(item, "query item", MAX_WORD), addr)
             return [f"{code:02X}:{item} -> {' '.join(f'{w:07X}' for w in words)}"]
-        raise ConfigError(f"send read: {reg!r} is neither a parameter ({', '.join(_REGS)}) "
-                          "nor QQ:ITEM")  # fmt: skip
+        raise ConfigError(
+            f"send read: {reg!r} is neither a parameter ({', '.join(_REGS)}) nor QQ:ITEM"
+        )
     if word == "write":
         if len(tokens) != 3 or tokens[1] not in _REGS:
             raise ConfigError(f"send write: expected REG VALUE, REG one of {', '.join(_REGS)}")
         r = _REGS[tokens[1]]
         value = _int(tokens[2], tokens[1])
-        p = PARAMETERS[tokens[1]]
-        if not p.lo <= value <= p.hi:
-            raise ConfigError(f"send write: {tokens[1]} = {value} outside [{p.lo}, {p.hi}]")
+        spec = PARAMETERS[tokens[1]]
+        if not spec.lo <= value <= spec.hi:
+            raise ConfigError(f"send write: {tokens[1]} = {value} outside [{spec.lo}, {spec.hi}]")
         cmds = []
         for u in ctrl.units:
             n = COMMANDS[r.set_code].n_words
-            words = list(_query(link, r.query, r.item, u.address)) if n > 1 else [0]
-            words = words[:n]
-            words[r.index] = word_from_signed(value) if r.signed else value
-            cmds.append(Command(r.set_code, tuple(words), Start.IMMEDIATE, u.address))
+            current = list(_query(link, r.query, r.item, u.address)) if n > 1 else [0]
+            new_words = current[:n]
+            new_words[r.index] = word_from_signed(value) if r.signed else value
+            cmds.append(Command(r.set_code, tuple(new_words), Start.IMMEDIATE, u.address))
     elif word == "park":
         cmds = []
         f0 = ctrl.start_frequency_hz()
-        p = ctrl.parameters
+        params = ctrl.parameters
         for u in ctrl.units:
             a = u.address
             xyz = [signed_from_word(w) for w in _query(link, 0x31, 4, a)]
             pos = xyz + ([signed_from_word(_query(link, 0x31, 5, a)[0])] if "U" in u.axes else [])
             prefix = "A3" if u.axes == "XYZ" else "A6"
-            cmds.append(Command(u.speed_code, (p[f"{prefix}_acc_a_hz_s"], f0,
-                                               p[f"{prefix}_acc_b_hz_s"]), Start.SEQUENCE, a))  # fmt: skip
+            cmds.append(
+                Command(
+                    u.speed_code,
+                    (params[f"{prefix}_acc_a_hz_s"], f0, params[f"{prefix}_acc_b_hz_s"]),
+                    Start.SEQUENCE,
+                    a,
+                )
+            )
             back = [-v for v in pos]
             per = len(u.axes) // len(u.move_codes)
             for j, code in enumerate(u.move_codes):
@@ -264,15 +282,18 @@ def emulator(ctrl: EasySmcController) -> EasySmcEmulator:
     return EasySmcEmulator(tuple(u.address for u in ctrl.units))
 
 
-def run_emulator(ctrl: EasySmcController, duration_s: float | None = None,
-                 out: Callable[[str], None] = print) -> int:  # fmt: skip
+def run_emulator(
+    ctrl: EasySmcController, duration_s: float | None = None, out: Callable[[str], None] = print
+) -> int:
     """Serve a pseudo-terminal until ``duration_s`` passes or Ctrl-C; print a summary.
 
     Returns 0, or 1 when violations were flagged.
     """
     emu = emulator(ctrl).start()
-    out(f"EasySmc emulator ({ctrl.name}, addresses "
-        f"{', '.join(f'{u.address:02X}' for u in ctrl.units)}) on {emu.path}")  # fmt: skip
+    out(
+        f"EasySmc emulator ({ctrl.name}, addresses "
+        f"{', '.join(f'{u.address:02X}' for u in ctrl.units)}) on {emu.path}"
+    )
     out(f"connect with: serial://{emu.path}?baud={ctrl.baud}")
     t_end = None if duration_s is None else time.monotonic() + duration_s
     try:

@@ -46,7 +46,7 @@ def load_dll_functions(path: str = DLL_NAME) -> Any:
             "use serial:// on this system"
         )
     try:
-        dll = ctypes.WinDLL(path)  # type: ignore[attr-defined]
+        dll = ctypes.WinDLL(path)
     except OSError as exc:
         raise TransportError(f"cannot load {path!r}: {exc}") from exc
     u8p = ctypes.POINTER(ctypes.c_ubyte)
