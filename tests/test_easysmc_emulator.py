@@ -23,6 +23,7 @@ from motioncue.output.easysmc import (
     ExecStatus,
     ReadReply,
     Start,
+    UsbCommandLink,
     UsbDllLink,
     UsbReadReply,
     UsbReadRequest,
@@ -211,6 +212,11 @@ def test_send_words() -> None:
     assert [c.words[0] for c in reset] == [0x4000000, 1, 0xC, 0x3000000]
     with pytest.raises(ProtocolError):
         send_commands(ctrl, ["raw", "0A", "0000000"])
+    dual = load_controller("easysmc-dual")
+    (c,) = send_commands(dual, ["raw", "57", "0000001", "0000000", "0000000", "--addr", "1"])
+    assert c.addr == 1
+    with pytest.raises(Exception, match="not on this bus"):
+        send_commands(dual, ["raw", "57", "0", "0", "0", "--addr", "2"])
 
     clock = [0.0]
     emu = EasySmcEmulator((0,), clock=lambda: clock[0])
@@ -288,6 +294,30 @@ def test_usb_dll_adapter_against_fake() -> None:
         UsbDllLink()
 
 
+def test_usb_stream_and_send_through_fake_dll() -> None:
+    ctrl = load_controller("easysmc")
+    fake = FakeDll()
+    link = UsbCommandLink(UsbDllLink(fake))
+    assert all(line.endswith("ok") for line in run_send(ctrl, ["home"], link))
+    assert run_send(ctrl, ["read", "A3_feed_hz"], link) == ["A3_feed_hz = 20000"]
+    streamer = EasySmcStreamer.for_controller(ctrl, link, 20.0)
+    streamer.lead_s = 0.0
+    enc = ctrl.frame_encoder(20.0)
+    fake_clock = [0.0]
+
+    def sleep(dt: float) -> None:
+        fake_clock[0] += dt
+        fake.t = fake_clock[0]
+
+    streamer._sleep = sleep
+    frames = [(k / 20, [3 * k, -2 * k, k]) for k in range(40)]
+    assert streamer.stream(enc, frames, clock=lambda: fake_clock[0]) == 40
+    fake.t = 10.0
+    assert fake.model.position_at(10.0)[:3] == (117, -78, 39)
+    assert link.last_write is not None and link.last_write.code == 0x57
+    assert fake.model.violations == []
+
+
 # -- serial transport --------------------------------------------------------------------------
 
 
@@ -297,6 +327,14 @@ def test_serial_transport_errors_are_wrapped() -> None:
     assert info.value.__cause__ is not None
     with pytest.raises(Exception, match="unknown option"):
         open_serial("serial:///dev/ttyS0?speed=1")
+    emu = EasySmcEmulator((0,)).start()
+    port = open_serial(f"serial://{emu.path}")
+    emu.stop()  # the other end goes away: writing fails with an OS error, wrapped
+    with pytest.raises(TransportError) as info:
+        for _ in range(100):
+            port.send(b"x" * 4096)
+    assert isinstance(info.value.__cause__, OSError)
+    port.close()
 
 
 def test_end_to_end_stream_over_a_pty() -> None:
@@ -327,6 +365,8 @@ def test_end_to_end_stream_over_a_pty() -> None:
             )
         streamer.stream(enc, frames)
         streamer.drain(timeout_s=5.0)
+        stream_depth = emu.models[0].stats["max_depth"]
+        stream_full = link.stats.buffer_full + emu.models[0].stats["buffer_full"]
         # e-stop, buffer-full and reset over the same link
         r = link.request(Command(0x18, (0,), OOB))
         assert r == WriteReply(0x18, 8, 0)
@@ -344,7 +384,12 @@ def test_end_to_end_stream_over_a_pty() -> None:
     finally:
         emu.stop()
     assert emu.violations == []
-    assert emu.models[0].stats["underflows"] == 0
+    model_stats = emu.models[0].stats
+    assert model_stats["underflows"] == 0  # the buffer never ran dry while streaming
+    # never beyond the 63-command buffer while streaming (the 63 waits of the buffer-full
+    # check come after); the paced streamer kept about lead_frames x 2 commands queued
+    assert 2 * ctrl.lead_frames <= stream_depth <= 40
+    assert stream_full == 0
     # the trace: one entry per frame (move or wait), in order
     n_before = len(ctrl.setup_commands()) + len(send_commands(ctrl, ["home"]))
     moves = [e for e in emu.trace if e.number > n_before][: len(frames)]

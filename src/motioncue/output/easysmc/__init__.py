@@ -49,7 +49,7 @@ from ._protocol import (
     word_from_signed,
 )
 from ._tools import SEND_USAGE, emulator, inspect_bytes, run_emulator, run_send, send_commands
-from ._usb import UsbDllLink
+from ._usb import UsbCommandLink, UsbDllLink, usb_read_request
 
 __all__ = [
     "BAUD_RATES",
@@ -75,6 +75,7 @@ __all__ = [
     "StreamStats",
     "TraceEntry",
     "Unit",
+    "UsbCommandLink",
     "UsbDllLink",
     "UsbReadReply",
     "UsbReadRequest",
@@ -104,5 +105,6 @@ __all__ = [
     "serial_frame_size",
     "signed_from_word",
     "split_serial_frames",
+    "usb_read_request",
     "word_from_signed",
 ]

@@ -213,7 +213,7 @@ class ControllerModel:
         self.counters = [0, 0, 0]
         self.trace: list[TraceEntry] = []
         self.violations: list[str] = []
-        self.stats = {"underflows": 0, "buffer_full": 0}
+        self.stats = {"underflows": 0, "buffer_full": 0, "max_depth": 0}
         self._flagged: set[str] = set()
         self._last_end_s = 0.0
         self._moves_seen = False
@@ -323,6 +323,8 @@ class ControllerModel:
         self.next_number += 1
         self.received = number
         self._enqueue(number, cmd, now_s)
+        depth = len(self.queue) + (self.pending_5b is not None)
+        self.stats["max_depth"] = max(self.stats["max_depth"], depth)
         return WriteReply(cmd.code, int(cmd.start), self.address)
 
     def _set_param(self, cmd: Command) -> None:

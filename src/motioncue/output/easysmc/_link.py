@@ -12,7 +12,7 @@ from __future__ import annotations
 import time
 from collections.abc import Callable, Iterable, Sequence
 from dataclasses import dataclass, field
-from typing import Protocol
+from typing import Any, Protocol
 
 from ..._errors import ProtocolError, TransportError
 from ._protocol import (
@@ -158,7 +158,8 @@ class EasySmcStreamer:
 
     Parameters
     ----------
-    link : EasySmcLink
+    link : EasySmcLink or UsbCommandLink
+        Anything with ``request(cmd, expected_number)``, ``status(addr)`` and ``stats``.
     max_queued : dict[int, int]
         Per address, the most commands allowed between sent and executing.
     poll_interval_s : float
@@ -167,7 +168,7 @@ class EasySmcStreamer:
 
     def __init__(
         self,
-        link: EasySmcLink,
+        link: EasySmcLink | Any,
         max_queued: dict[int, int],
         poll_interval_s: float = 0.01,
         sleep: Callable[[float], None] = time.sleep,
@@ -186,7 +187,7 @@ class EasySmcStreamer:
 
     @classmethod
     def for_controller(
-        cls, controller: object, link: EasySmcLink, frame_rate_hz: float
+        cls, controller: object, link: EasySmcLink | Any, frame_rate_hz: float
     ) -> EasySmcStreamer:
         """Streamer for an :class:`EasySmcController`.
 

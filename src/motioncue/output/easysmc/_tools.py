@@ -12,7 +12,8 @@
 - ``outputs BITS``: set X0-1 .. U0-4 (bit 0 .. bit 15) low/high (19 C/D) [5.1.8.10]
 - ``read REG``: a parameter of :data:`PARAMETERS` by name, or a raw query ``QQ:ITEM`` (hex)
 - ``write REG VALUE``: a parameter by name (read-modify-write of its command's words)
-- ``raw CMD DATA... [--start C]``: any command, hex code and 7-digit hex words
+- ``raw CMD DATA... [--start C] [--addr A]``: any command, hex code and 7-digit hex words,
+  to the first controller unless ``--addr`` names another on the bus
 """
 
 from __future__ import annotations
@@ -44,7 +45,7 @@ __all__ = ["SEND_USAGE", "emulator", "inspect_bytes", "run_emulator", "run_send"
 
 SEND_USAGE = (
     "estop on|off | reset | home [MODE] | park | outputs BITS | read REG | "
-    "write REG VALUE | raw CMD DATA... [--start C]"
+    "write REG VALUE | raw CMD DATA... [--start C] [--addr A]"
 )
 
 
@@ -153,24 +154,30 @@ def send_commands(ctrl: EasySmcController, tokens: Sequence[str]) -> list[Comman
         return out
     if word == "raw":
         start = Start.IMMEDIATE
-        if "--start" in args:
-            i = args.index("--start")
-            if i + 1 >= len(args):
-                raise ConfigError("send raw: --start needs a value 0..8")
-            start = Start(_hex(args[i + 1], "start condition", 8))
-            del args[i : i + 2]
+        addr = units[0].address
+        for flag in ("--start", "--addr"):
+            if flag in args:
+                i = args.index(flag)
+                if i + 1 >= len(args):
+                    raise ConfigError(f"send raw: {flag} needs a value")
+                if flag == "--start":
+                    start = Start(_hex(args[i + 1], "start condition", 8))
+                else:
+                    addr = _hex(args[i + 1], "address", 3)
+                    if addr not in {u.address for u in units}:
+                        raise ConfigError(f"send raw: address {addr:02X} is not on this bus")
+                del args[i : i + 2]
         if not args:
             raise ConfigError("send raw: expected CMD DATA... (hex)")
         code = _hex(args[0], "command code", 0xFF)
         words = tuple(_hex(w, "data word", MAX_WORD) for w in args[1:])
-        addr = units[0].address
         if code not in COMMANDS:
             raise ProtocolError(f"send raw: unknown command code {code:02X}")
         return [Command(code, words, start, addr)]
     raise ConfigError(f"send: unknown word {word!r}; use {SEND_USAGE}")
 
 
-def _query(link: EasySmcLink, code: int, item: int, addr: int) -> tuple[int, ...]:
+def _query(link: Any, code: int, item: int, addr: int) -> tuple[int, ...]:
     reply = link.request(Command(code, (item,), Start.IMMEDIATE, addr))
     if not isinstance(reply, ReadReply):
         raise ProtocolError(f"query {code:02X} {item:07X} answered by {reply}")
@@ -186,10 +193,17 @@ def _reply_line(cmd: Command, reply: Any) -> str:
 
 
 def run_send(
-    ctrl: EasySmcController, tokens: Sequence[str], transport: ByteLink, timeout_s: float = 0.5
+    ctrl: EasySmcController,
+    tokens: Sequence[str],
+    transport: ByteLink | Any,
+    timeout_s: float = 0.5,
 ) -> list[str]:
-    """Carry out one ``send`` request over a byte transport; returns lines for people."""
-    link = EasySmcLink(transport, timeout_s)
+    """Carry out one ``send`` request; returns lines for people.
+
+    ``transport`` is a byte transport (serial port) or a command link that already speaks
+    requests (:class:`UsbCommandLink`, :class:`EasySmcLink`).
+    """
+    link = transport if hasattr(transport, "request") else EasySmcLink(transport, timeout_s)
     word = tokens[0] if tokens else ""
     lines: list[str] = []
     if word == "read":

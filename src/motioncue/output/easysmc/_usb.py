@@ -19,20 +19,27 @@ import sys
 from typing import Any
 
 from ..._errors import ProtocolError, TransportError
+from ._link import StreamStats
 from ._protocol import (
     USB_READ_REPLY_SIZE,
     USB_WRITE_REPLY_SIZE,
     USB_WRITE_SIZE,
     Command,
+    ErrorCode,
+    ErrorReply,
+    ExecStatus,
+    ReadReply,
+    Reply,
     UsbReadReply,
     UsbReadRequest,
     UsbWriteReply,
+    WriteReply,
     decode_usb_read_reply,
     decode_usb_write_reply,
     encode_usb_write,
 )
 
-__all__ = ["DLL_NAME", "UsbDllLink", "load_dll_functions"]
+__all__ = ["DLL_NAME", "UsbCommandLink", "UsbDllLink", "load_dll_functions", "usb_read_request"]
 
 DLL_NAME = "EM2300_DLL.dll"
 _BUFFER = 64  # the manual's examples allocate 64 bytes for psend
@@ -98,3 +105,51 @@ class UsbDllLink:
         if ret is not None and int(ret) < 0:
             raise TransportError(f"EM2300 recdata returned {ret}")
         return decode_usb_read_reply(bytes(buf))
+
+
+def usb_read_request(cmd: Command) -> UsbReadRequest:
+    """The ``recdata`` arguments of a serial query command (inverse of ``serial_word``)."""
+    word = cmd.words[0]
+    if cmd.code == 0x38:
+        sub = word >> 24
+        return UsbReadRequest(0x38, sub, (word >> 16) & 0xFF if sub == 3 else 0)
+    if cmd.code == 0x31 and word == 0x42:
+        return UsbReadRequest(0x31, 0x06)
+    if word > 0xFF:
+        raise ProtocolError(f"query {cmd.code:02X} item {word:07X} has no USB form (rdat1 <= 0xFF)")
+    return UsbReadRequest(cmd.code, word)
+
+
+class UsbCommandLink:
+    """The request/status interface of :class:`EasySmcLink` over the USB DLL.
+
+    With it, :class:`EasySmcStreamer` and the ``send`` hooks drive a USB-connected
+    controller exactly as a serial one: writes answer :class:`WriteReply` or
+    :class:`ErrorReply` (manual mode, buffer full), queries :class:`ReadReply`.
+    """
+
+    def __init__(self, usb: UsbDllLink) -> None:
+        self.usb = usb
+        self.stats = StreamStats()
+        self.last_write: UsbWriteReply | None = None
+
+    def request(self, cmd: Command, expected_number: int | None = None) -> Reply:
+        if cmd.spec.kind == "query":
+            r = self.usb.read(usb_read_request(cmd))
+            self.stats.queries += 1
+            if r.code == 0x99:
+                return ErrorReply(ErrorCode.NO_SUCH_COMMAND, r.start, r.addr)
+            n = r.n_valid if 1 <= r.n_valid <= 3 else 3
+            return ReadReply(r.code, r.words[:n], r.start, r.addr)
+        w = self.usb.write(cmd)
+        self.last_write = w
+        self.stats.commands += 1
+        if w.code == 0x99:
+            return ErrorReply(ErrorCode(w.error), int(cmd.start), w.addr)
+        return WriteReply(w.code, int(cmd.start), w.addr)
+
+    def status(self, addr: int) -> ExecStatus:
+        reply = self.request(Command(0x38, (0,), addr=addr))
+        if not isinstance(reply, ReadReply) or len(reply.words) != 3:
+            raise ProtocolError(f"USB status query answered by {reply}")
+        return ExecStatus.from_reply(reply)
