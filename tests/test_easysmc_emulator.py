@@ -402,3 +402,53 @@ def test_end_to_end_stream_over_a_pty() -> None:
         assert abs((entry.t_s - t_first) - (t + 1 / rate)) <= 1 / rate, (t, entry)
     assert moves[-1].positions[:3] == enc.last_pulses
     assert emu.models[0].stats["buffer_full"] == 1 and link.stats.garbled_replies == 0
+
+
+@pytest.mark.parametrize(("name", "rate"), [("easysmc-xyzu", 15.0), ("easysmc-dual", 10.0)])
+def test_frames_play_on_time_in_the_emulator(name: str, rate: float) -> None:
+    """Simulated time (no pty): every frame's target is reached at its time on every unit."""
+    ctrl = load_controller(name)
+    emu = EasySmcEmulator(tuple(u.address for u in ctrl.units), clock=lambda: 0.0)
+    for c in ctrl.setup_commands() + send_commands(ctrl, ["home"]):
+        assert isinstance(decode_reply(emu.feed(encode_command(c), 0.0)), WriteReply)
+    n_before = {u.address: emu.models[u.address].received for u in ctrl.units}
+    enc = ctrl.frame_encoder(rate)
+    frames = []
+    for k in range(int(8 * rate)):
+        t = k / rate
+        frames.append((t, [(150 + 30 * i) * math.sin(1.3 * t) for i in range(ctrl.n_axes)]))
+    for t, target in frames:
+        # the host sends each frame half a period before its time: queue never runs dry
+        for c in enc.encode_commands(t, target):
+            reply = decode_reply(emu.feed(encode_command(c), max(t - 0.5 / rate, 0.0)))
+            assert isinstance(reply, WriteReply), reply
+    emu.feed(b"", 100.0)
+    for m in emu.models.values():
+        m.advance(100.0)
+    assert emu.violations == []
+    i = 0
+    for u in ctrl.units:
+        model = emu.models[u.address]
+        assert model.stats["underflows"] == 0
+        moves = [e for e in model.trace if e.number > n_before[u.address]]
+        assert len(moves) == len(frames)
+        for (t, target), entry in zip(frames, moves, strict=True):
+            want = [round(v) for v in target[i : i + len(u.axes)]]
+            assert list(entry.positions[: len(u.axes)]) == want
+            assert entry.t_s == pytest.approx(t + 1 / rate, abs=2e-3)
+        i += len(u.axes)
+
+
+def test_smooth_brake_decelerates_then_holds() -> None:
+    emu = homed_emulator()
+    ask(emu, Command(0x02, (100, 100, 100), SEQ), 0.0)
+    ask(emu, Command(0xA3, (1000, 1000, 1000), SEQ), 0.0)  # slow ramps: 0.9 s each
+    ask(emu, Command.move(0x57, [5000, 0, 0]), 0.0)
+    ask(emu, Command(0x18, (0x08,), OOB), 1.0)  # smooth brake all axes at full feed
+    p_brake = position(emu, 1.0)[0]
+    held = position(emu, 10.0)[0]
+    # it keeps going while slowing from 1000 Hz to 100 Hz at 1000 Hz/s: ~0.9 s more
+    assert 300 < held - p_brake < 600
+    assert position(emu, 20.0)[0] == held
+    ask(emu, Command(0x18, (0x0C,), OOB), 20.0)  # release the smooth brake
+    assert position(emu, 40.0)[0] == 5000

@@ -246,8 +246,9 @@ class ControllerModel:
             self._control_done(job.cmd.words[0])
         self.last_done = job.number
         self._last_end_s = t_s
+        paired_5b = code == 0x5B and not any(job.deltas)  # its 5C records the pair
         if (
-            code in _MOVE_SPEED
+            (code in _MOVE_SPEED and not paired_5b)
             or code in _ARC
             or code in (0x24, 0x25, 0x26, 0xAF)
             or (code == 0x19 and job.cmd.words[0] >> 24 == 1)
@@ -530,6 +531,47 @@ class ControllerModel:
             self.queue[0] = new
             self.trace.append(TraceEntry(t_s, self.address, pos, job.number))
 
+    def _smooth_split(self, now_s: float) -> float:
+        """Smooth brake: decelerate at B from the current rate to the start frequency.
+
+        The executing move is split into a deceleration segment, which runs, and the
+        remainder, which waits for the release. Returns the time the axes stop.
+        """
+        if not self.queue or self.queue[0].start_s >= now_s or not self.queue[0].dist:
+            return now_s
+        job = self.queue[0]
+        _, rate = move_progress(job.dist, *job.profile, now_s - job.start_s)
+        self._stop_now(now_s)
+        rest = self.queue[0]
+        feed, f0, a, b = job.profile
+        if rate <= f0 or not rest.dist:
+            return now_s
+        d_dec = min(rest.dist, (rate * rate - f0 * f0) / (2.0 * b))
+        frac = d_dec / rest.dist
+        seg = tuple(round(d * frac) for d in rest.deltas)
+        seg_dist = max(abs(d) for d in seg)
+        profile = (rate, f0, 1e12, b)  # already at speed: only the deceleration remains
+        t_end = now_s + move_duration_s(seg_dist, *profile)
+        mid = tuple(o + d for o, d in zip(rest.origin, seg, strict=True))
+        first = _Job(job.number, job.cmd, now_s, t_end, seg, seg_dist, profile, rest.origin, mid)
+        left = tuple(d - s for d, s in zip(rest.deltas, seg, strict=True))
+        left_dist = max(abs(d) for d in left)
+        second = _Job(
+            job.number,
+            job.cmd,
+            t_end,
+            t_end + move_duration_s(left_dist, feed, f0, a, b),
+            left,
+            left_dist,
+            job.profile,
+            mid,
+            rest.end,
+        )
+        self.queue.popleft()
+        self.queue.appendleft(second)
+        self.queue.appendleft(first)
+        return t_end
+
     def _out_of_band(self, cmd: Command, now_s: float) -> None:
         if cmd.code == 0x19:
             if cmd.words[0] >> 24 == 4:  # clear buffer: stop now and drop everything
@@ -551,14 +593,12 @@ class ControllerModel:
         smooth_release = {0x0C: "XYZU", 0x0D: "X", 0x0E: "Y", 0x0F: "Z", 0x1D: "U"}
         if code in brake_axes or code in smooth_axes:
             self.advance(now_s)
-            t_stop = now_s
-            if code in smooth_axes and self.queue and self.queue[0].start_s < now_s:
-                job = self.queue[0]
-                _, rate = move_progress(job.dist, *job.profile, now_s - job.start_s)
-                f0, b = job.profile[1], job.profile[3]
-                t_stop = min(now_s + max(rate - f0, 0.0) / b, job.end_s)
             if self.halt is None:
-                self._stop_now(t_stop)
+                t_stop = now_s
+                if code in smooth_axes:
+                    t_stop = self._smooth_split(now_s)
+                else:
+                    self._stop_now(now_s)
                 self.halt = _Halt(t_stop)
             target = self.halt.axes if code in brake_axes else self.halt.smooth
             target.update((brake_axes | smooth_axes)[code])
@@ -570,6 +610,7 @@ class ControllerModel:
             else:
                 self.halt.smooth -= set(smooth_release[code])
             if not self.halt.axes and not self.halt.smooth:
+                self.advance(self.halt.at_s)
                 shift = max(now_s - self.halt.at_s, 0.0)
                 for job in self.queue:
                     job.start_s += shift

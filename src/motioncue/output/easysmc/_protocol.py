@@ -954,6 +954,33 @@ MANUAL_DECISIONS: tuple[_Decision, ...] = (
         "at constant feed. To be confirmed on hardware.",
     ),
     _Decision(
+        "arc example word width",
+        "5.6.1's worked arc example prints 8 ASCII bytes per DAT (31H 30H 30H 30H 30H 31H 39H 30H)",
+        "7 digits, as the frame format, 5.5.1's identical example and USB 7.5.1 say",
+    ),
+    _Decision(
+        "online-state reply",
+        "5.3.7.0 prints the reply DAT1 with 6 digits (30H x5 + 30H/31H)",
+        "a 7-digit word: 0000000 manual, 0000001 online (USB 8.7.0: 00 00 00 00 / 01)",
+    ),
+    _Decision(
+        "start conditions",
+        "0 and 1 (and 4 and 5) are described identically; 2/3/6/7 wait for an interlock",
+        "frames use 4; the emulator runs 0..7 in sequence and treats the interlock as "
+        "satisfied (it has no interlock inputs); 8 only for brakes, clear buffer, loop test",
+    ),
+    _Decision(
+        "cross-references and titles",
+        "ch. 5 points to '5.1.11' for the checksum example; 7.3.4 is titled Z homing for "
+        "command 47; appendix 1 lists Z start frequency / Z equivalent under 5.1.4.1 (AC)",
+        "read as 5.1.1.1, U homing (47) and U parameters (AC DAT2, DAT3)",
+    ),
+    _Decision(
+        "received-command count",
+        "5.3.8.0 DAT2 / 8.8.1: 'valid commands received' without saying since when",
+        "counted since the last numbering reset (19 3000000), i.e. the last number given",
+    ),
+    _Decision(
         "emergency-brake release",
         "5.1.7: after release the controller 'continues the buffered commands'",
         "the interrupted move completes its remaining distance, then the queue resumes",
