@@ -1,0 +1,5 @@
+"""The jobs users run, built from the pipeline stages: ride files, generate, play, bridge, demo."""
+
+from ._ridefile import RIDE_FORMAT, RIDE_FORMAT_VERSION, Ride, load_ride, save_ride
+
+__all__ = ["RIDE_FORMAT", "RIDE_FORMAT_VERSION", "Ride", "load_ride", "save_ride"]
