@@ -15,13 +15,13 @@ Figures
 from __future__ import annotations
 
 import math
-import statistics
 import sys
-import time
 from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "src"))
+sys.path.insert(0, str(Path(__file__).resolve().parent))
 
+from _timing import median_time_s, report
 from motioncue.output._controllers import load_controller
 from motioncue.output.easysmc import (
     Command,
@@ -34,23 +34,6 @@ from motioncue.output.easysmc import (
 REPEATS = 5
 
 
-def median_time(fn, repeats: int = REPEATS) -> float:  # type: ignore[no-untyped-def]
-    times = []
-    for _ in range(repeats):
-        t0 = time.perf_counter()
-        fn()
-        times.append(time.perf_counter() - t0)
-    return statistics.median(times)
-
-
-def report(name: str, value: float, target: float, unit: str, lower_is_better: bool) -> None:
-    ratio = value / target if lower_is_better else target / value
-    verdict = "ok" if ratio <= 1 else "MISSED"
-    print(
-        f"{name:<44} {value:>12.1f} {unit:<9} target {target:>9.0f}  ratio {ratio:5.2f}  {verdict}"
-    )
-
-
 def bench_encode(name: str, rate: float, n: int = 400) -> float:
     ctrl = load_controller(name)
 
@@ -60,25 +43,27 @@ def bench_encode(name: str, rate: float, n: int = 400) -> float:
             t = k / rate
             enc.encode(t, [(200 + 40 * i) * math.sin(0.9 * t) for i in range(ctrl.n_axes)])
 
-    return median_time(run) / n * 1e6
+    return median_time_s(run, repeats=REPEATS) / n * 1e6
 
 
 def main() -> None:
     print(f"EasySmc benchmark, median of {REPEATS} repeats (machine shared with other sessions)")
-    report("encode XYZ frame (easysmc, 20 Hz)", bench_encode("easysmc", 20), 200, "us/frame", True)
-    report(
+    ok = report(
+        "encode XYZ frame (easysmc, 20 Hz)", bench_encode("easysmc", 20), "us/frame", 200, False
+    )
+    ok &= report(
         "encode XYZU frame (easysmc-xyzu, 15 Hz)",
         bench_encode("easysmc-xyzu", 15),
-        200,
         "us/frame",
-        True,
+        200,
+        False,
     )
-    report(
+    ok &= report(
         "encode 6-axis frame (easysmc-dual, 10 Hz)",
         bench_encode("easysmc-dual", 10),
-        200,
         "us/frame",
-        True,
+        200,
+        False,
     )
 
     frames = [
@@ -89,11 +74,11 @@ def main() -> None:
         for f in frames:
             decode_command(f)
 
-    report("decode serial command", len(frames) / median_time(decode_all), 20000, "frames/s", False)
+    rate = len(frames) / median_time_s(decode_all, repeats=REPEATS)
+    ok &= report("decode serial command", rate, "frames/s", 20000, True)
 
     speed = encode_command(Command(0xA3, (20000, 2000, 20000), Start.SEQUENCE))
     home = b"".join(encode_command(Command(c, (2,), Start.SEQUENCE)) for c in (0x41, 0x42, 0x43))
-
     small = [
         encode_command(Command.move(0x57, [k % 40, -(k % 30), 5], Start.SEQUENCE))
         for k in range(1000)
@@ -108,15 +93,14 @@ def main() -> None:
             emu.feed(f, t)
         assert emu.models[0].stats["buffer_full"] == 0 and not emu.violations
 
-    report(
-        "emulator feed (speed + move pairs)", 2000 / median_time(emulate), 5000, "frames/s", False
-    )
+    rate = 2 * len(small) / median_time_s(emulate, repeats=REPEATS)
+    ok &= report("emulator feed (speed + move commands)", rate, "frames/s", 5000, True)
     for name in ("easysmc", "easysmc-xyzu", "easysmc-dual"):
         ctrl = load_controller(name)
-        print(
-            f"link budget {name:<14} max {ctrl.max_frame_rate_hz:5.1f} Hz at {ctrl.baud} baud: "
-            f"{ctrl.link_budget().describe(min(20.0, math.floor(ctrl.max_frame_rate_hz)))}"
-        )
+        shown = min(20.0, math.floor(ctrl.max_frame_rate_hz))
+        print(f"link budget {name:<14} {ctrl.link_budget().describe(shown)}")
+    if not ok:
+        raise SystemExit(1)
 
 
 if __name__ == "__main__":
