@@ -452,3 +452,19 @@ def test_smooth_brake_decelerates_then_holds() -> None:
     assert position(emu, 20.0)[0] == held
     ask(emu, Command(0x18, (0x0C,), OOB), 20.0)  # release the smooth brake
     assert position(emu, 40.0)[0] == 5000
+
+
+def test_run_emulator_prints_its_path_and_inspect_reads_replies() -> None:
+    from motioncue.output.easysmc import run_emulator
+
+    lines: list[str] = []
+    assert run_emulator(load_controller("easysmc-dual"), duration_s=0.05, out=lines.append) == 0
+    assert lines[0].startswith("EasySmc emulator (easysmc-dual, addresses 00, 01) on /dev/")
+    assert lines[1].startswith("connect with: serial:///dev/") and lines[1].endswith("baud=19200")
+    emu = EasySmcEmulator((0,), clock=lambda: 0.0)
+    replies = emu.feed(encode_command(Command(0x38, (0,))), 0.0)
+    replies += emu.feed(encode_command(Command(0x01, (1,)))[:-1] + b"0", 0.0)  # bad checksum
+    text = inspect_bytes(replies + b"xx")
+    assert text[0].startswith("reply ReadReply(code=56")
+    assert text[1].startswith("reply ErrorReply(error=<ErrorCode.CHECKSUM")
+    assert text[2] == "2 byte(s) outside frames, 0 trailing byte(s)"

@@ -37,6 +37,7 @@ from motioncue.output.easysmc import (
     serial_frame_size,
     signed_from_word,
     split_serial_frames,
+    usb_read_request,
     word_from_signed,
 )
 
@@ -388,3 +389,18 @@ def test_random_bytes_raise_only_protocol_error(decoder: object) -> None:
             pass
     # some random frames must decode, or the fuzzing never reached the payload checks
     assert ok > 0
+
+
+@given(
+    st.sampled_from([0x31, 0x32, 0x33, 0x34, 0x35, 0x36, 0x37, 0x38]),
+    st.integers(0, 255),
+    st.integers(1, 2),
+)
+def test_usb_read_request_round_trip(code: int, rdat1: int, counter: int) -> None:
+    if code == 0x38:
+        rdat1 %= 16
+    if code == 0x31 and rdat1 == 0x42:
+        rdat1 = 0x41  # 0x42 is the serial spelling of USB item 6 (decision)
+    req = UsbReadRequest(code, rdat1, counter if (code, rdat1) == (0x38, 3) else 0)
+    query = Command(code, (req.serial_word(),))
+    assert usb_read_request(query) == req
