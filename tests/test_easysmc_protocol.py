@@ -404,3 +404,24 @@ def test_usb_read_request_round_trip(code: int, rdat1: int, counter: int) -> Non
     req = UsbReadRequest(code, rdat1, counter if (code, rdat1) == (0x38, 3) else 0)
     query = Command(code, (req.serial_word(),))
     assert usb_read_request(query) == req
+
+
+@given(st.lists(st.one_of(commands(), st.binary(max_size=40)), max_size=40), st.randoms())
+def test_emulator_answers_anything_without_crashing(items: list, rnd: random.Random) -> None:
+    """Any mix of valid commands (all codes, all words) and noise: every answer decodes."""
+    from motioncue.output.easysmc import EasySmcEmulator
+
+    emu = EasySmcEmulator((0, 1), clock=lambda: 0.0)
+    t = 0.0
+    for item in items:
+        t += rnd.uniform(0.0, 0.5)
+        data = encode_command(item) if isinstance(item, Command) else item
+        out = emu.feed(data, t)
+        frames, rest, skipped = split_serial_frames(out)
+        assert rest == b"" and skipped == 0
+        for f in frames:
+            decode_reply(f)
+        if isinstance(item, Command) and item.addr in (0, 1) and not emu._buffer:
+            assert len(frames) == 1
+    emu.sync()
+    assert isinstance(emu.trace, list)
