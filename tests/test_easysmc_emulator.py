@@ -170,8 +170,10 @@ def test_violations_are_flagged() -> None:
     ask(emu, Command.move(0x44, [500]), 0.0)  # beyond the X positive soft limit
     ask(emu, Command.move(0x5B, [1, 1]), 0.0)
     ask(emu, Command.move(0x57, [0, 0, 1]), 0.0)  # 5B without its 5C
-    v = " | ".join(emu.violations)
+    v = " | ".join(str(x) for x in emu.violations)
     assert "before homing" in v and "soft limits" in v and "5B" in v
+    kinds = {(x.kind, x.axis) for x in emu.violations}
+    assert {("homing", "X"), ("soft-limit", "X"), ("pairing", None)} <= kinds
 
 
 def test_controller_model_is_usable_alone() -> None:
@@ -328,7 +330,13 @@ def test_serial_transport_errors_are_wrapped() -> None:
     with pytest.raises(Exception, match="unknown option"):
         open_serial("serial:///dev/ttyS0?speed=1")
     emu = EasySmcEmulator((0,)).start()
+    other = SerialTransport.from_url(f"serial://{emu.path}?baud=9600&parity=n", baud=4800)
+    assert other.baud == 4800  # open_transport's options override the URL's
+    other.close()
+    with pytest.raises(Exception, match="not a serial target"):
+        SerialTransport.from_url("udp://127.0.0.1:7408")
     port = open_serial(f"serial://{emu.path}")
+    assert port.baud == 19200
     emu.stop()  # the other end goes away: writing fails with an OS error, wrapped
     with pytest.raises(TransportError) as info:
         for _ in range(100):
@@ -468,3 +476,57 @@ def test_run_emulator_prints_its_path_and_inspect_reads_replies() -> None:
     assert text[0].startswith("reply ReadReply(code=56")
     assert text[1].startswith("reply ErrorReply(error=<ErrorCode.CHECKSUM")
     assert text[2] == "2 byte(s) outside frames, 0 trailing byte(s)"
+
+
+class WriteOnly:
+    def __init__(self) -> None:
+        self.data = b""
+
+    def send(self, data: bytes) -> None:
+        self.data += data
+
+    def recv(self, timeout_s: float) -> None:
+        return None
+
+
+def test_verb_hooks() -> None:
+    import io
+
+    from motioncue import ConfigError
+    from motioncue.output.easysmc import emulator, inspect_decode, send_verb, split_stream
+
+    ctrl = load_controller("easysmc")
+    emu = EasySmcEmulator((0,), clock=lambda: 0.0)
+    link = EasySmcLink(EmulatorLink(emu))
+    out = io.StringIO()
+    assert send_verb(ctrl, link, "home", [], out=out) == 0
+    assert send_verb(ctrl, link, "write", ["A3_feed_hz", "5000"], save=True, out=out) == 0
+    assert "defaults" in out.getvalue().splitlines()[-1]  # 17 0000002: save to EEPROM
+    emu.set_manual(True)  # A/M jumper closed: serial commands are refused (4.3.1)
+    assert send_verb(ctrl, link, "estop", ["on"], out=out) == 1
+    assert "error 99/2 MANUAL_MODE" in out.getvalue().splitlines()[-1]
+    # write-only target (file:): frames written, reading verbs refused
+    sink = WriteOnly()
+    assert send_verb(ctrl, sink, "estop", ["on"], out=io.StringIO()) == 0
+    assert sink.data == encode_command(Command(0x18, (0,), OOB))
+    with pytest.raises(ConfigError, match="serial"):
+        send_verb(ctrl, sink, "read", ["A3_feed_hz"], out=io.StringIO())
+    # inspect: frames and the junk between them, in order
+    capture = b"zz" + sink.data + encode_reply_bytes() + b"\x02\x03"
+    parts = split_stream(capture)
+    assert parts[0] == b"zz" and parts[1] == sink.data
+    assert inspect_decode(parts[1]).startswith("cmd addr 00 cmd 18 brake")
+    assert inspect_decode(parts[2]).startswith("reply WriteReply(code=24")
+    with pytest.raises(ProtocolError):
+        inspect_decode(parts[0])
+    with pytest.raises(ProtocolError, match="no EasySmc frame"):
+        split_stream(b"\x00\x01 not a capture")
+    with pytest.raises(ConfigError, match="pseudo-terminal"):
+        emulator(ctrl, "127.0.0.1", 7408)
+    assert emulator(ctrl).models.keys() == {0}
+
+
+def encode_reply_bytes() -> bytes:
+    from motioncue.output.easysmc import encode_reply
+
+    return encode_reply(WriteReply(0x18, 8, 0))

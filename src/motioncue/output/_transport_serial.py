@@ -57,6 +57,32 @@ class SerialTransport(Transport):
         except (serial.SerialException, OSError, ValueError) as exc:
             raise TransportError(f"cannot open serial port {path!r} at {baud} baud: {exc}") from exc
 
+    @classmethod
+    def from_url(cls, url: str | TransportURL, **options: Any) -> SerialTransport:
+        """Open ``serial://PATH?baud=..`` (the ``open_transport`` entry point).
+
+        ``options`` may override ``baud``, ``bytesize``, ``parity``, ``stopbits``.
+        """
+        target = parse_target(url) if isinstance(url, str) else url
+        if target.scheme != "serial":
+            raise ConfigError(f"not a serial target: {url!r}")
+        opts = {**target.options, **{k: str(v) for k, v in options.items()}}
+        try:
+            baud = int(opts.pop("baud", "19200"))
+            bytesize = int(opts.pop("bytesize", "8"))
+            stopbits = int(opts.pop("stopbits", "1"))
+        except ValueError as exc:
+            raise ConfigError(f"target {url!r}: baud/bytesize/stopbits must be integers") from exc
+        parity = opts.pop("parity", "N").upper()
+        if parity not in _PARITY:
+            raise ConfigError(f"target {url!r}: parity {parity!r}; allowed N | E | O")
+        if opts:
+            raise ConfigError(
+                f"target {url!r}: unknown option(s) {', '.join(sorted(opts))}; "
+                "known: baud, bytesize, parity, stopbits"
+            )
+        return cls(target.path, baud, bytesize, parity, stopbits)
+
     def send(self, data: bytes) -> None:
         import serial
 
@@ -93,22 +119,4 @@ class SerialTransport(Transport):
 
 def open_serial(url: str | TransportURL) -> SerialTransport:
     """Open ``serial:///dev/ttyUSB0?baud=19200`` (options: baud, bytesize, parity, stopbits)."""
-    target = parse_target(url) if isinstance(url, str) else url
-    if target.scheme != "serial":
-        raise ConfigError(f"not a serial target: {url!r}")
-    opts = dict(target.options)
-    try:
-        baud = int(opts.pop("baud", "19200"))
-        bytesize = int(opts.pop("bytesize", "8"))
-        stopbits = int(opts.pop("stopbits", "1"))
-    except ValueError as exc:
-        raise ConfigError(f"target {url!r}: baud/bytesize/stopbits must be integers") from exc
-    parity = opts.pop("parity", "N").upper()
-    if parity not in _PARITY:
-        raise ConfigError(f"target {url!r}: parity {parity!r}; allowed N | E | O")
-    if opts:
-        raise ConfigError(
-            f"target {url!r}: unknown option(s) {', '.join(sorted(opts))}; "
-            "known: baud, bytesize, parity, stopbits"
-        )
-    return SerialTransport(target.path, baud, bytesize, parity, stopbits)
+    return SerialTransport.from_url(url)

@@ -1,8 +1,23 @@
 """EasySmc 2300 step/servo pulse controller (Xiamen Hualing): wire formats, timed frames,
 flow-controlled serial streaming, USB DLL adapter and an emulator.
 
-See ``_protocol.MANUAL_DECISIONS`` for every place the manual contradicts itself and the
-decision taken.
+Typical use::
+
+    from motioncue.output._controllers import load_controller
+    from motioncue.output._transport_serial import open_serial
+    from motioncue.output.easysmc import EasySmcLink, EasySmcStreamer, send_commands
+
+    ctrl = load_controller("easysmc")                   # XYZ, 19200 baud, address 00
+    link = EasySmcLink(open_serial("serial:///dev/ttyUSB0?baud=19200"))
+    streamer = EasySmcStreamer.for_controller(ctrl, link, frame_rate_hz=20)
+    streamer.send_all(ctrl.setup_commands() + send_commands(ctrl, ["home"]))
+    streamer.stream(ctrl.frame_encoder(20), frames)    # frames: (t_s, pulses) pairs
+    streamer.drain(timeout_s=5)
+
+Each frame becomes a speed command and a relative interpolated move (start condition 4)
+lasting one frame period; ``ctrl.max_frame_rate_hz`` is what the serial link carries.
+See ``MANUAL_DECISIONS`` for every place the manual contradicts itself and the decision
+taken.
 """
 
 from ._controller import (
@@ -14,7 +29,7 @@ from ._controller import (
     Unit,
     controller_from_config,
 )
-from ._emulator import BUFFER_DEPTH, ControllerModel, EasySmcEmulator, TraceEntry
+from ._emulator import BUFFER_DEPTH, ControllerModel, EasySmcEmulator, TraceEntry, Violation
 from ._link import EasySmcLink, EasySmcStreamer, StreamStats
 from ._profile import feed_for_duration, move_duration_s, move_progress
 from ._protocol import (
@@ -48,7 +63,17 @@ from ._protocol import (
     split_serial_frames,
     word_from_signed,
 )
-from ._tools import SEND_USAGE, emulator, inspect_bytes, run_emulator, run_send, send_commands
+from ._tools import (
+    SEND_USAGE,
+    emulator,
+    inspect_bytes,
+    inspect_decode,
+    run_emulator,
+    run_send,
+    send_commands,
+    send_verb,
+    split_stream,
+)
 from ._usb import UsbCommandLink, UsbDllLink, usb_read_request
 
 __all__ = [
@@ -80,6 +105,7 @@ __all__ = [
     "UsbReadReply",
     "UsbReadRequest",
     "UsbWriteReply",
+    "Violation",
     "WordKind",
     "WriteReply",
     "checksum",
@@ -97,14 +123,17 @@ __all__ = [
     "encode_usb_write_reply",
     "feed_for_duration",
     "inspect_bytes",
+    "inspect_decode",
     "move_duration_s",
     "move_progress",
     "run_emulator",
     "run_send",
     "send_commands",
+    "send_verb",
     "serial_frame_size",
     "signed_from_word",
     "split_serial_frames",
+    "split_stream",
     "usb_read_request",
     "word_from_signed",
 ]

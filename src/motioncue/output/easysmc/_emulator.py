@@ -43,7 +43,7 @@ from ._protocol import (
     word_from_signed,
 )
 
-__all__ = ["BUFFER_DEPTH", "ControllerModel", "EasySmcEmulator", "TraceEntry"]
+__all__ = ["BUFFER_DEPTH", "ControllerModel", "EasySmcEmulator", "TraceEntry", "Violation"]
 
 BUFFER_DEPTH = 63
 MAX_PULSE_HZ = 2_000_000  # manual ch. 2 item 3
@@ -153,6 +153,34 @@ def _factory_params() -> dict[int, list[int]]:
 
 
 @dataclass(frozen=True)
+class Violation:
+    """Something the host sent that a real controller would not like.
+
+    Attributes
+    ----------
+    t_s : float
+        Emulator time of the command (s).
+    addr : int
+        Controller address.
+    kind : str
+        ``homing``, ``soft-limit``, ``feed``, ``pairing``, ``start-condition``, ``arc``.
+    axis : str or None
+        Axis letter when one axis is concerned.
+    detail : str
+        What happened.
+    """
+
+    t_s: float
+    addr: int
+    kind: str
+    axis: str | None
+    detail: str
+
+    def __str__(self) -> str:
+        return f"{self.t_s:.3f} s addr {self.addr:02X} {self.kind}: {self.detail}"
+
+
+@dataclass(frozen=True)
 class TraceEntry:
     """Logical positions (pulses, X Y Z U) of one controller at a time (s since start)."""
 
@@ -212,19 +240,20 @@ class ControllerModel:
         self.outputs = 0
         self.counters = [0, 0, 0]
         self.trace: list[TraceEntry] = []
-        self.violations: list[str] = []
+        self.violations: list[Violation] = []
+        self._now = 0.0
         self.stats = {"underflows": 0, "buffer_full": 0, "max_depth": 0}
         self._flagged: set[str] = set()
         self._last_end_s = 0.0
         self._moves_seen = False
 
     # -- time ------------------------------------------------------------------------------
-    def _flag(self, msg: str, once: str | None = None) -> None:
+    def _flag(self, kind: str, msg: str, axis: str | None = None, once: str | None = None) -> None:
         if once is not None:
             if once in self._flagged:
                 return
             self._flagged.add(once)
-        self.violations.append(f"addr {self.address:02X}: {msg}")
+        self.violations.append(Violation(self._now, self.address, kind, axis, msg))
 
     def advance(self, now_s: float) -> None:
         """Finish every job whose end time has passed (applies positions, trace)."""
@@ -295,6 +324,7 @@ class ControllerModel:
     # -- commands ----------------------------------------------------------------------------
     def handle(self, cmd: Command, now_s: float) -> WriteReply | ReadReply | ErrorReply:
         """Apply one valid command received at ``now_s``; returns the reply."""
+        self._now = now_s
         self.advance(now_s)
         spec = cmd.spec
         if spec.kind == "query":
@@ -305,15 +335,17 @@ class ControllerModel:
         if oob:
             if cmd.start != Start.OUT_OF_BAND:
                 self._flag(
+                    "start-condition",
                     f"command {cmd.code:02X} {cmd.words[0]:07X} needs start condition 8 "
-                    f"(got {int(cmd.start)}); executed out of band anyway"
+                    f"(got {int(cmd.start)}); executed out of band anyway",
                 )
             self._out_of_band(cmd, now_s)
             return WriteReply(cmd.code, int(cmd.start), self.address)
         if cmd.start == Start.OUT_OF_BAND:
             self._flag(
+                "start-condition",
                 f"start condition 8 on command {cmd.code:02X}, which the manual allows "
-                "only for brakes, clear buffer and loop test; queued"
+                "only for brakes, clear buffer and loop test; queued",
             )
         if len(self.queue) + (self.pending_5b is not None) >= BUFFER_DEPTH:
             self.stats["buffer_full"] += 1
@@ -346,7 +378,9 @@ class ControllerModel:
     def _enqueue(self, number: int, cmd: Command, now_s: float) -> None:
         code = cmd.code
         if self.pending_5b is not None and code != 0x5C:
-            self._flag(f"5B (command {self.pending_5b[0]}) not followed by 5C; run as an XY move")
+            self._flag(
+                "pairing", f"5B (command {self.pending_5b[0]}) not followed by 5C; run as XY"
+            )
             n5b, c5b = self.pending_5b
             self.pending_5b = None
             self._enqueue_move(
@@ -360,7 +394,7 @@ class ControllerModel:
             return
         if code == 0x5C:
             if self.pending_5b is None:
-                self._flag(f"5C (command {number}) without a preceding 5B; run as a ZU move")
+                self._flag("pairing", f"5C (command {number}) without a preceding 5B; run as ZU")
                 xy = [0, 0]
                 first = number
             else:
@@ -433,22 +467,25 @@ class ControllerModel:
         end = [o + d for o, d in zip(origin, deltas, strict=True)]
         for i, a in enumerate(_AXES):
             if deltas[i] and not self.homed[i]:
-                self._flag(f"axis {a} moved before homing", once=f"home{a}")
+                self._flag("homing", f"axis {a} moved before homing", a, once=f"home{a}")
             pos, neg = self.soft[a]
             if deltas[i] and not neg <= end[i] <= pos:
                 self._flag(
-                    f"command {number}: axis {a} to {end[i]} outside soft limits [{neg}, {pos}]"
+                    "soft-limit",
+                    f"command {number}: axis {a} to {end[i]} outside soft limits [{neg}, {pos}]",
+                    a,
                 )
         if self.small_segment:
             acc_a, feed, acc_b = self.params[0xFD]
             f0 = self.params[0xFC][0]
         dist = max(abs(d) for d in deltas)
         if feed > MAX_PULSE_HZ:
-            self._flag(f"command {number}: feed {feed} Hz above the 2 MHz the controller makes")
+            self._flag("feed", f"command {number}: feed {feed} Hz above the controller's 2 MHz")
         if dist and (feed <= 0 or (feed > f0 and (acc_a <= 0 or acc_b <= 0))):
             self._flag(
+                "feed",
                 f"command {number}: feed {feed} Hz / accelerations {acc_a}, {acc_b} "
-                "cannot run a move; skipped"
+                "cannot run a move; skipped",
             )
             deltas = [0, 0, 0, 0]
             dist = 0
@@ -479,7 +516,7 @@ class ControllerModel:
         w = cmd.words[2]
         angle_deg = (w & 0xFFFFFF) / 100.0
         if angle_deg == 0:
-            self._flag(f"command {number}: endless arc (angle 0); emulated as one full turn")
+            self._flag("arc", f"command {number}: endless arc (angle 0); emulated as one turn")
             angle_deg = 360.0
         sign = -1.0 if w >> 24 else 1.0  # 0 = counter-clockwise
         r = math.hypot(cx, cy)
@@ -784,8 +821,13 @@ class EasySmcEmulator:
         return sorted((e for m in self.models.values() for e in m.trace), key=lambda e: e.t_s)
 
     @property
-    def violations(self) -> list[str]:
-        return [v for m in self.models.values() for v in m.violations]
+    def violations(self) -> list[Violation]:
+        return sorted((v for m in self.models.values() for v in m.violations), key=lambda v: v.t_s)
+
+    @property
+    def received(self) -> int:
+        """Valid frames received (any address on the bus)."""
+        return self.stats["frames"]
 
     def set_manual(self, manual: bool) -> None:
         """Close / open the A/M jumper (manual mode answers writes with error 2)."""

@@ -18,10 +18,11 @@
 
 from __future__ import annotations
 
+import sys
 import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, TextIO
 
 from ..._errors import ConfigError, ProtocolError
 from ._controller import PARAMETERS, EasySmcController
@@ -36,12 +37,23 @@ from ._protocol import (
     Start,
     decode_command,
     decode_reply,
+    serial_frame_size,
     signed_from_word,
     split_serial_frames,
     word_from_signed,
 )
 
-__all__ = ["SEND_USAGE", "emulator", "inspect_bytes", "run_emulator", "run_send", "send_commands"]
+__all__ = [
+    "SEND_USAGE",
+    "emulator",
+    "inspect_bytes",
+    "inspect_decode",
+    "run_emulator",
+    "run_send",
+    "send_commands",
+    "send_verb",
+    "split_stream",
+]
 
 SEND_USAGE = (
     "estop on|off | reset | home [MODE] | park | outputs BITS | read REG | "
@@ -268,6 +280,107 @@ def run_send(
     return lines
 
 
+_NEEDS_REPLIES = ("read", "write", "park")
+
+
+def _talks_back(transport: Any) -> bool:
+    from .._transport_serial import SerialTransport
+
+    return hasattr(transport, "request") or isinstance(transport, SerialTransport)
+
+
+def send_verb(
+    controller: EasySmcController,
+    transport: Any,
+    verb: str,
+    args: Sequence[str],
+    *,
+    who: Any = None,
+    save: bool = False,
+    out: TextIO = sys.stdout,
+) -> int:
+    """The ``motioncue send`` hook for kind ``easysmc``; returns the exit status.
+
+    Over a serial port (or a :class:`UsbCommandLink`) each command is sent and its reply
+    printed; over a write-only target (``file:``, ``pcap:``) the frames are written and
+    printed, and the verbs that must read the controller first (``read``, ``write``,
+    ``park``) are refused. ``save`` adds ``17 0000002`` (save parameters to EEPROM,
+    manual 5.1.6.2) after ``write``. ``who`` (UDP node selection) has no meaning on this
+    controller and must be left at its default.
+    """
+    if who not in (None, (0xFFFF, 0xFFFF)):
+        raise ConfigError("send --node: the EasySmc has no node fields; use raw --addr A")
+    tokens = [verb, *args]
+    if _talks_back(transport):
+        lines = run_send(controller, tokens, transport)
+        if save and verb == "write":
+            lines += run_send(controller, ["raw", "17", "0000002"], transport)
+        for line in lines:
+            print(line, file=out)
+        return 1 if any("-> error" in line for line in lines) else 0
+    if verb in _NEEDS_REPLIES:
+        raise ConfigError(f"send {verb}: needs replies from the controller; use a serial:// target")
+    from ._protocol import encode_command
+
+    for cmd in send_commands(controller, tokens):
+        transport.send(encode_command(cmd))
+        print(f"sent {cmd.describe()}", file=out)
+    return 0
+
+
+def split_stream(data: bytes) -> list[bytes]:
+    """The ``inspect`` hook: cut a raw serial capture into messages, in order.
+
+    Complete ``STX .. ETX cc`` frames are returned as they are; bytes between or after
+    frames are returned as separate chunks (so that ``inspect_decode`` reports them).
+
+    Raises
+    ------
+    ProtocolError
+        When the capture holds no EasySmc frame at all.
+    """
+    data = bytes(data)
+    out: list[bytes] = []
+    junk = bytearray()
+    i, n = 0, len(data)
+    longest = serial_frame_size(3)
+    while i < n:
+        if data[i] == 0x02:
+            j = data.find(b"\x03", i + 1, i + longest - 2)
+            if j >= 0 and j + 3 <= n:
+                if junk:
+                    out.append(bytes(junk))
+                    junk.clear()
+                out.append(data[i : j + 3])
+                i = j + 3
+                continue
+        junk.append(data[i])
+        i += 1
+    if junk:
+        out.append(bytes(junk))
+    if not any(len(c) >= 9 and c[0] == 0x02 and c[-3] == 0x03 for c in out):
+        raise ProtocolError("no EasySmc frame (STX .. ETX checksum) in the capture")
+    return out
+
+
+def inspect_decode(message: bytes) -> str:
+    """The ``inspect`` hook: one line for one serial frame (command or reply).
+
+    Raises
+    ------
+    ProtocolError
+        The bytes are neither a valid command nor a valid reply (the reason is given).
+    """
+    try:
+        return "cmd " + decode_command(message).describe()
+    except ProtocolError as exc_cmd:
+        first = exc_cmd
+    try:
+        return f"reply {decode_reply(message)}"
+    except ProtocolError as exc:
+        raise ProtocolError(f"not an EasySmc frame: {first} / as a reply: {exc}") from exc
+
+
 def inspect_bytes(data: bytes) -> list[str]:
     """Describe every serial frame in a byte capture (commands and replies), one per line.
 
@@ -291,8 +404,19 @@ def inspect_bytes(data: bytes) -> list[str]:
     return lines
 
 
-def emulator(ctrl: EasySmcController) -> EasySmcEmulator:
-    """An (unstarted) emulator of the controller's bus (its unit addresses)."""
+def emulator(
+    ctrl: EasySmcController, host: str | None = None, port: int | None = None, **options: Any
+) -> EasySmcEmulator:
+    """The ``emulate`` hook: an (unstarted) emulator of the controller's bus.
+
+    The EasySmc is a serial device, so the emulator serves a pseudo-terminal (``start()``
+    then ``path``), not a UDP port; ``host``/``port`` must be left unset.
+    """
+    if host is not None or port is not None or options:
+        raise ConfigError(
+            "the EasySmc emulator serves a pseudo-terminal (its path is printed); "
+            f"it takes no host/port/options (got {host!r}, {port!r}, {sorted(options)})"
+        )
     return EasySmcEmulator(tuple(u.address for u in ctrl.units))
 
 
