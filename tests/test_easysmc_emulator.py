@@ -346,10 +346,14 @@ def test_serial_transport_errors_are_wrapped() -> None:
 
 
 def test_end_to_end_stream_over_a_pty() -> None:
-    """10 s trajectory at 20 Hz, 19200 baud, XYZ: pyserial on the emulator's pty."""
+    """10 s trajectory at 20 Hz, 19200 baud, XYZ: pyserial on the emulator's pty.
+
+    The emulator holds every byte for its time on a 19200-baud line, so the stream only
+    keeps up if the link budget (82.6 bytes per frame, max 23.2 Hz) is right.
+    """
     ctrl = load_controller("easysmc")
     rate = 20.0  # the link budget allows 23.2 Hz at 19200 baud
-    emu = EasySmcEmulator((0,)).start()
+    emu = EasySmcEmulator((0,), line_baud=ctrl.baud).start()
     try:
         port = open_serial(f"serial://{emu.path}?baud={ctrl.baud}")
         assert isinstance(port, SerialTransport)
@@ -530,3 +534,23 @@ def encode_reply_bytes() -> bytes:
     from motioncue.output.easysmc import encode_reply
 
     return encode_reply(WriteReply(0x18, 8, 0))
+
+
+def test_a_slower_line_than_budgeted_starves_the_controller() -> None:
+    """The other side of the budget: 20 Hz over a 9600-baud line (max 11.6 Hz) falls behind."""
+    ctrl = load_controller("easysmc")
+    assert ctrl.link_budget().bytes_per_frame * 10 / 9600 > 1 / 20
+    emu = EasySmcEmulator((0,), line_baud=9600).start()
+    try:
+        port = open_serial(f"serial://{emu.path}?baud=9600")
+        link = EasySmcLink(port, timeout_s=1.0)
+        streamer = EasySmcStreamer.for_controller(ctrl, link, 20.0)
+        streamer.lead_s = 0.1
+        streamer.send_all(send_commands(ctrl, ["home"]))
+        enc = ctrl.frame_encoder(20.0)  # checked against 19200 baud, the config's rate
+        frames = [(k / 20, [2 * k, k, 0]) for k in range(30)]
+        streamer.stream(enc, frames)
+        port.close()
+    finally:
+        emu.stop()
+    assert emu.models[0].stats["underflows"] > 5

@@ -24,7 +24,7 @@ from collections import deque
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 
-from ..._errors import ProtocolError, TransportError
+from ..._errors import ConfigError, ProtocolError, TransportError
 from ._profile import move_duration_s, move_progress
 from ._protocol import (
     MAX_MAGNITUDE,
@@ -741,16 +741,27 @@ class EasySmcEmulator:
         Controller addresses on the bus (``(0,)``; ``(0, 1)`` for two on RS485).
     clock : callable
         Time source in seconds (``time.monotonic``).
+    line_baud : int, optional
+        Simulate the serial line: every byte received and sent occupies the line for
+        10 bits at this rate (8N1), so a host cannot push more than the real link carries.
+        None (default): bytes pass as fast as the pseudo-terminal moves them.
 
     Use ``start()`` (thread), ``path`` (give it to pyserial), ``trace``, ``violations``,
     ``stop()``; or call :meth:`feed` with bytes directly (no pty).
     """
 
     def __init__(
-        self, addresses: Sequence[int] = (0,), clock: Callable[[], float] = time.monotonic
+        self,
+        addresses: Sequence[int] = (0,),
+        clock: Callable[[], float] = time.monotonic,
+        line_baud: int | None = None,
     ) -> None:
         if not addresses or len(set(addresses)) != len(addresses):
-            raise ValueError(f"addresses {addresses!r} must be distinct and non-empty")
+            raise ConfigError(f"addresses {addresses!r} must be distinct and non-empty")
+        if line_baud is not None and line_baud <= 0:
+            raise ConfigError(f"line_baud {line_baud} must be positive")
+        self.line_baud = line_baud
+        self._line_free = 0.0
         self.models = {a: ControllerModel(a) for a in addresses}
         self._clock = clock
         self._epoch = clock()
@@ -868,10 +879,22 @@ class EasySmcEmulator:
                 continue
             if not data:
                 continue
+            self._occupy_line(len(data))  # the command arrives once it is on the line
             reply = self.feed(data)
             if reply:
+                self._occupy_line(len(reply))
                 with contextlib.suppress(OSError):
                     os.write(fd, reply)
+
+    def _occupy_line(self, n_bytes: int) -> None:
+        """Wait while ``n_bytes`` cross the simulated line (absolute schedule, no drift)."""
+        if self.line_baud is None:
+            return
+        now = time.monotonic()
+        self._line_free = max(self._line_free, now) + n_bytes * 10 / self.line_baud
+        delay = self._line_free - now
+        if delay > 0:
+            time.sleep(delay)
 
     def stop(self) -> None:
         """Stop serving and close the pseudo-terminal."""
