@@ -296,6 +296,27 @@ def test_usb_dll_adapter_against_fake() -> None:
         UsbDllLink()
 
 
+def test_streamer_learns_the_numbering_and_waits_for_room() -> None:
+    clock = [0.0]
+    emu = EasySmcEmulator((0,), clock=lambda: clock[0])
+    link = EasySmcLink(EmulatorLink(emu))
+    for _ in range(5):  # someone else used the controller before
+        link.request(Command(0x19, (0x1000000,), SEQ))
+    slept: list[float] = []
+
+    def sleep(dt: float) -> None:
+        slept.append(dt)
+        clock[0] += dt
+
+    streamer = EasySmcStreamer(link, {0: 10}, poll_interval_s=0.1, sleep=sleep)
+    for _ in range(30):  # 1 s waits: only 10 may be queued at a time
+        streamer.send(Command(0x19, (0x1000000 | 1000,), SEQ))
+    assert streamer.sent[0] == 35
+    assert emu.models[0].stats["buffer_full"] == 0
+    assert emu.models[0].stats["max_depth"] <= 11
+    assert sum(slept) == pytest.approx(20.0, abs=1.0)  # 30 s of waits, 10 still queued
+
+
 def test_usb_stream_and_send_through_fake_dll() -> None:
     ctrl = load_controller("easysmc")
     fake = FakeDll()

@@ -183,6 +183,7 @@ class EasySmcStreamer:
         self.executing = dict.fromkeys(max_queued, 0)
         self.last_status: dict[int, ExecStatus] = {}
         self.lead_s = 0.3
+        self._synced: set[int] = set()
         self.poll_every_frames = 10
 
     @classmethod
@@ -217,6 +218,12 @@ class EasySmcStreamer:
         if cmd.code == 0x19 and cmd.words[0] == 0x3000000:
             self.sent[addr] = 0
             self.executing[addr] = 0
+            self._synced.add(addr)
+        elif addr not in self._synced:
+            # first contact without a numbering reset: learn where the controller counts
+            st = self.poll(addr)
+            self.sent[addr] = st.received
+            self._synced.add(addr)
         while self.sent[addr] - self.executing[addr] >= self.max_queued[addr]:
             self.poll(addr)
             if self.sent[addr] - self.executing[addr] >= self.max_queued[addr]:
