@@ -487,13 +487,26 @@ def test_smooth_brake_decelerates_then_holds() -> None:
     assert position(emu, 40.0)[0] == 5000
 
 
-def test_run_emulator_prints_its_path_and_inspect_reads_replies() -> None:
+def test_run_emulator_prints_its_path_and_inspect_reads_replies(tmp_path) -> None:  # type: ignore[no-untyped-def]
     from motioncue.output.easysmc import run_emulator
 
+    ctrl = load_controller("easysmc-dual")
+
+    def drive(emu: EasySmcEmulator) -> None:  # a client on the printed path
+        port = open_serial(f"serial://{emu.path}?baud=19200")
+        link = EasySmcLink(port)
+        for c in [Command(0x41, (2,), SEQ, 1), Command.move(0x57, [5, 6, 7], SEQ, 1)]:
+            assert isinstance(link.request(c), WriteReply)
+        port.close()
+
     lines: list[str] = []
-    assert run_emulator(load_controller("easysmc-dual"), duration_s=0.05, out=lines.append) == 0
+    csv = tmp_path / "trace.csv"
+    status_ = run_emulator(ctrl, 0.3, lines.append, trace_csv=csv, ready=drive)
+    assert status_ == 1  # Y and Z of controller 01 moved without homing: flagged
     assert lines[0].startswith("EasySmc emulator (easysmc-dual, addresses 00, 01) on /dev/")
     assert lines[1].startswith("connect with: serial:///dev/") and lines[1].endswith("baud=19200")
+    assert lines[2].startswith("received 2 frames, 1 trace points, 2 violation(s)")
+    assert csv.read_text().splitlines()[1].endswith(",1,2,5,6,7,0")
     emu = EasySmcEmulator((0,), clock=lambda: 0.0)
     replies = emu.feed(encode_command(Command(0x38, (0,))), 0.0)
     replies += emu.feed(encode_command(Command(0x01, (1,)))[:-1] + b"0", 0.0)  # bad checksum

@@ -22,6 +22,7 @@ import sys
 import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
+from pathlib import Path
 from typing import Any, TextIO
 
 from ..._errors import ConfigError, ProtocolError
@@ -421,13 +422,30 @@ def emulator(
 
 
 def run_emulator(
-    ctrl: EasySmcController, duration_s: float | None = None, out: Callable[[str], None] = print
+    ctrl: EasySmcController,
+    duration_s: float | None = None,
+    out: Callable[[str], None] = print,
+    *,
+    trace_csv: str | Path | None = None,
+    line_baud: bool = True,
+    ready: Callable[[EasySmcEmulator], None] | None = None,
 ) -> int:
     """Serve a pseudo-terminal until ``duration_s`` passes or Ctrl-C; print a summary.
 
+    Parameters
+    ----------
+    trace_csv : path, optional
+        Write the trace here: ``t_s, addr, command, X, Y, Z, U`` (pulses).
+    line_baud : bool
+        Hold each byte for its time on a line at the controller's baud (default True).
+    ready : callable, optional
+        Called with the running emulator once its path is printed (tests, tools).
+
     Returns 0, or 1 when violations were flagged.
     """
-    emu = emulator(ctrl).start()
+    emu = EasySmcEmulator(
+        tuple(u.address for u in ctrl.units), line_baud=ctrl.baud if line_baud else None
+    ).start()
     out(
         f"EasySmc emulator ({ctrl.name}, addresses "
         f"{', '.join(f'{u.address:02X}' for u in ctrl.units)}) on {emu.path}"
@@ -435,14 +453,28 @@ def run_emulator(
     out(f"connect with: serial://{emu.path}?baud={ctrl.baud}")
     t_end = None if duration_s is None else time.monotonic() + duration_s
     try:
+        if ready is not None:
+            ready(emu)
         while t_end is None or time.monotonic() < t_end:
-            time.sleep(0.1)
+            time.sleep(0.05)
     except KeyboardInterrupt:
         pass
     finally:
         emu.stop()
     trace = emu.trace
-    out(f"{emu.stats['frames']} frames, {len(trace)} trace points, stats {emu.stats}")
-    for v in emu.violations:
-        out(f"VIOLATION {v}")
+    out(
+        f"received {emu.received} frames, {len(trace)} trace points, "
+        f"{len(emu.violations)} violation(s); {emu.stats}"
+    )
+    for v in emu.violations[:50]:
+        out(f"  {v}")
+    if trace_csv is not None:
+        try:
+            with open(trace_csv, "w") as fh:
+                fh.write("t_s,addr,command,X,Y,Z,U\n")
+                for e in trace:
+                    fh.write(f"{e.t_s:.6f},{e.addr},{e.number}," + ",".join(map(str, e.positions)))
+                    fh.write("\n")
+        except OSError as exc:
+            raise ConfigError(f"cannot write the trace to {trace_csv}: {exc}") from exc
     return 1 if emu.violations else 0
