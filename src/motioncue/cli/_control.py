@@ -9,7 +9,9 @@ The verbs dispatch on the controller's kind: each kind module (``motioncue.outpu
   ``emulator_at(controller, target_url, **options)`` (its emulator may expose ``where``);
 * ``send_verb(controller, transport, verb, args, *, who, save, out)`` -> exit status;
 * ``inspect_decode(datagram) -> str`` and ``split_stream(raw_bytes) -> list[bytes]``;
-* optionally ``transport_options(controller, target_url) -> dict`` for ``open_transport``.
+* optionally ``transport_options(controller, target_url) -> dict`` for ``open_transport``,
+  and ``run_emulator(controller, duration_s, *, trace_csv)`` -> exit status for a kind
+  that runs its own emulator session (used when ``--listen`` is not given).
 
 A new kind plugs in by providing these functions; nothing here changes.
 """
@@ -29,7 +31,7 @@ from .._errors import ConfigError, ProtocolError
 __all__ = ["register"]
 
 # kinds tried in order by ``inspect`` when no --controller is given (add new kinds here)
-_INSPECT_KINDS = ("mbox", "imax")
+_INSPECT_KINDS = ("mbox", "imax", "easysmc")
 
 
 def _kind_module(kind: str) -> ModuleType:
@@ -124,6 +126,9 @@ def _run_emulate(args: argparse.Namespace) -> int:
     from ..output import parse_target
 
     ctrl, kind = _controller(args.controller)
+    if hasattr(kind, "run_emulator") and args.listen is None:
+        # kinds that run their own emulator session (the EasySmc serves a pseudo-terminal)
+        return int(kind.run_emulator(ctrl, args.duration, trace_csv=args.trace_csv))
     url = parse_target(args.listen or ctrl.default_target)
     if url.scheme == "udp":
         emu = kind.emulator(ctrl, url.host, url.port, homing_time_s=args.homing_time)

@@ -16,7 +16,7 @@ _SCHEMES: dict[str, tuple[str, str]] = {
     "udp": ("._transports_udp", "UdpTransport"),
     "pcap": ("._transports_file", "PcapTransport"),
     "file": ("._transports_file", "FileTransport"),
-    "serial": ("._transports_serial", "SerialTransport"),
+    "serial": ("._transport_serial", "SerialTransport"),
 }
 
 
