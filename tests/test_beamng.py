@@ -46,19 +46,24 @@ def test_at_rest_level_reads_plus_one_g() -> None:
 
 
 def test_axis_map_by_hand() -> None:
-    """acc = -sensor, sensor frame (x left, y rear, z up): acc = (right, forward, down)."""
+    """acc = -sensor, sensor frame (x left, y rear, z up): acc = (right, forward, down);
+    rates in the aerospace convention (roll right-down, pitch nose-up, yaw nose-right)."""
     s = BeamNGDecoder().feed(
         _motion(acc=(1.0, 2.0, 3.0), roll_rate=0.1, pitch_rate=0.2, yaw_rate=0.3).pack(), 0.0
     )
     assert s is not None
     assert s.f == pytest.approx((2.0, -1.0, -3.0 + G0_M_S2), abs=1e-6)
-    assert s.w == pytest.approx((-0.1, 0.2, 0.3), abs=1e-7)
+    assert s.w == pytest.approx((0.1, -0.2, -0.3), abs=1e-7)
 
 
-def test_pitch_and_roll_add_gravity_like_iso_angles() -> None:
+def test_pitch_and_roll_add_gravity() -> None:
+    """pitchPos = +0.2 is nose up: an accelerometer at rest reads +g sin(0.2) forward;
+    rollPos = +0.3 is left side down: it reads toward the raised right side (f_y < 0)."""
     s = BeamNGDecoder().feed(_motion(pitch_pos=0.2, roll_pos=0.3).pack(), 0.0)
     assert s is not None
-    up = (-math.sin(0.2), math.sin(0.3) * math.cos(0.2), math.cos(0.3) * math.cos(0.2))
+    th, ph = -0.2, -0.3  # ISO pitch and roll
+    up = (-math.sin(th), math.sin(ph) * math.cos(th), math.cos(ph) * math.cos(th))
+    assert s.f[0] > 0 and s.f[1] < 0
     assert s.f == pytest.approx(tuple(G0_M_S2 * u for u in up), abs=1e-5)
 
 

@@ -18,20 +18,32 @@ little-endian::
 Axes and conversion
 -------------------
 The Lua source fills ``acc = -ffiSensors.sensor{X,Y,Z}``, ``rollPos = -roll``, ``pitchPos =
-pitch``, ``yawPos = -yaw`` (from ``obj:getRollPitchYaw()``) and the rates straight from
-``obj:getRollPitchYawAngularVelocity()``. BeamNG vehicles are built facing -Y in a
-right-handed, Z-up frame, so the vehicle frame of the sensors is (x left, y rearward, z up);
-community code confirms ``sensorY`` is positive under braking and ``sensorX`` is the lateral
-acceleration. Hence ``acc = (a_right, a_forward, a_down)`` and, with right-hand rotations
-about the vehicle axes, ``pitchPos`` is nose-down positive and ``rollPos`` right-side-down
-positive, as ISO pitch and roll; the roll rate, not negated, is left-side-down positive::
+pitch``, ``yawPos = -yaw`` (from ``obj:getRollPitchYaw()``) and the three rates straight from
+``obj:getRollPitchYawAngularVelocity()``.
+
+* Rates: the game's roll/pitch/yaw angular velocities follow the aerospace convention
+  (x forward, y right, z down: roll right-side-down +, pitch nose-up +, yaw nose-right +).
+  A public BeamNG research bridge that checked them against a node-based estimate builds
+  ``omega_world = rollAV * forward + pitchAV * right - yawAV * up`` and notes "on FLU,
+  p = +rollAV, q = -pitchAV, r = -yawAV". Hence ``w_iso = (rollRate, -pitchRate,
+  -yawRate)``.
+* Angles: taken in the same aerospace convention as their rates, ``rollPos = -roll`` is
+  left-side-down positive and ``pitchPos`` nose-up positive, so ISO roll = ``-rollPos`` and
+  ISO pitch = ``-pitchPos``.
+* Acceleration: BeamNG vehicles are built facing -Y in a right-handed, Z-up frame, so the
+  sensor frame is (x left, y rearward, z up); community code confirms ``sensorY`` is positive
+  under braking and ``sensorX`` is the lateral acceleration. Hence ``acc = -sensor =
+  (a_right, a_forward, a_down)``, which also matches motion-sim plugins that use ``accX`` as
+  sway (+ in a right turn) and ``accY`` as surge (+ accelerating).
+
+::
 
     a_iso = (accY, -accX, -accZ)
-    f     = a_iso + G0 * up_body(pitch=pitchPos, roll=rollPos)
-    w_iso = (-rollRate, pitchRate, yawRate)
+    f     = a_iso + G0 * up_body(pitch=-pitchPos, roll=-rollPos)
+    w_iso = (rollRate, -pitchRate, -yawRate)
 
-These signs follow from the source and the vehicle frame; no captured BeamNG datagram was
-available to pin them against real motion (the F1 conversion is pinned on real packets).
+These signs rest on the game's source and third-party measurements; no captured BeamNG
+datagram was available to pin them here (the F1 conversion is pinned on real packets).
 
 Pause: the format has no flag. BeamNG sends nothing while the simulation is paused or no
 player is seated (``updateV1`` returns early), which sources see as missing packets.
@@ -139,9 +151,9 @@ class BeamNGDecoder(Decoder):
         roll_rate, pitch_rate, yaw_rate = v[16:19]
         if not (math.isfinite(pitch) and math.isfinite(roll)):
             return DecodeResult("skipped", "skipped: non-finite")
-        ux, uy, uz = up_in_body_from_angles(pitch, roll)
+        ux, uy, uz = up_in_body_from_angles(-pitch, -roll)
         f = (ay + G0_M_S2 * ux, -ax + G0_M_S2 * uy, -az + G0_M_S2 * uz)
-        w = (-roll_rate, pitch_rate, yaw_rate)
+        w = (roll_rate, -pitch_rate, -yaw_rate)
         return self._make(t_s, f, w, False)
 
 
