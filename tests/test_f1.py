@@ -243,3 +243,40 @@ def test_nan_and_inf_are_skipped_and_never_reach_a_sample() -> None:
         struct.pack_into("<f", bad, base + 36, value)
         assert dec.decode(bytes(bad), 0.0).reason == reason
     assert dec.feed(motion, 0.0) is not None  # the good one still decodes
+
+
+def test_vertical_g_force_sign_agrees_with_the_change_of_vertical_velocity() -> None:
+    """F1 24 capture: Motion Ex (frame 39278) and Motion (frame 39280) are 35 ms apart; the
+    car's up-velocity grows from 0.07 to 0.19 m/s, i.e. ~+3.5 m/s^2, and gForceVertical is
+    +0.22 g: positive vertical g-force is upward acceleration (same sign, similar size)."""
+    motion, ex = _packets(2024)
+    h = _hand(2024)
+    t_motion, t_ex = struct.unpack_from("<f", motion, 15)[0], struct.unpack_from("<f", ex, 15)[0]
+    dt = t_motion - t_ex
+    assert 0.02 < dt < 0.05
+    F, R, v = h["fwd"], h["right"], h["world_vel"]
+    U = (R[1] * F[2] - R[2] * F[1], R[2] * F[0] - R[0] * F[2], R[0] * F[1] - R[1] * F[0])
+    v_up_now = sum(u * x for u, x in zip(U, v, strict=True))
+    a_up = (v_up_now - h["local_vel"][1]) / dt
+    g_vert = h["g"][2] * G0_M_S2
+    assert a_up > 0 and g_vert > 0
+    assert 0.3 < a_up / g_vert < 3.0
+
+
+@pytest.mark.parametrize("roll_deg", [-8.0, 8.0])
+def test_roll_sign_right_side_down_reads_leftward_specific_force(roll_deg: float) -> None:
+    """ISO roll + is right side down; at rest the accelerometer then reads +g sin(roll) on
+    y (toward the raised left side). Right side down means worldRightDir points below the
+    horizon (negative Y)."""
+    motion, ex = _packets(2023)
+    base = 29 + 60 * motion[27]
+    ph = math.radians(roll_deg)
+    m = bytearray(motion)
+    right = (round(-32767 * math.cos(ph)), round(-32767 * math.sin(ph)), 0)  # facing +Z
+    struct.pack_into("<3h3h3f", m, base + 24, 0, 0, 32767, *right, 0.0, 0.0, 0.0)
+    dec = F1Decoder()
+    dec.feed(ex, 0.0)
+    s = dec.feed(bytes(m), 0.0)
+    assert s is not None
+    assert s.f[1] == pytest.approx(G0_M_S2 * math.sin(ph), abs=1e-3)
+    assert s.f[2] == pytest.approx(G0_M_S2 * math.cos(ph), abs=1e-3)
