@@ -108,3 +108,16 @@ def test_gravity_only_rotates(
     g = [fi - ai for fi, ai in zip(s.f, a_iso, strict=True)]
     assert math.sqrt(sum(x * x for x in g)) == pytest.approx(G0_M_S2, rel=1e-5)
     assert MAGIC == b"BNG1"
+
+
+@given(
+    vals=st.lists(st.floats(allow_nan=False, allow_infinity=False, width=32), min_size=21,
+                  max_size=21)
+)  # fmt: skip
+def test_pack_unpack_round_trip(vals: list[float]) -> None:
+    m = BeamNGMotion(
+        tuple(vals[0:3]), tuple(vals[3:6]), tuple(vals[6:9]), tuple(vals[9:12]),  # type: ignore[arg-type]
+        *vals[12:21],
+    )  # fmt: skip
+    p = m.pack()
+    assert len(p) == 88 and BeamNGMotion.unpack(p) == m

@@ -7,6 +7,8 @@ import struct
 from pathlib import Path
 
 import pytest
+from hypothesis import given
+from hypothesis import strategies as st
 
 from motioncue.telemetry import G0_M_S2, decoder_for
 from motioncue.telemetry._f1 import HEADER, MOTION_EX_SIZES, MOTION_SIZE, F1Decoder, F1Header
@@ -280,3 +282,17 @@ def test_roll_sign_right_side_down_reads_leftward_specific_force(roll_deg: float
     assert s is not None
     assert s.f[1] == pytest.approx(G0_M_S2 * math.sin(ph), abs=1e-3)
     assert s.f[2] == pytest.approx(G0_M_S2 * math.cos(ph), abs=1e-3)
+
+
+@given(
+    st.tuples(
+        st.integers(0, 65535), *(st.integers(0, 255) for _ in range(5)),
+        st.integers(0, 2**64 - 1), st.floats(width=32, allow_nan=False),
+        st.integers(0, 2**32 - 1), st.integers(0, 2**32 - 1), st.integers(0, 255),
+        st.integers(0, 255),
+    )
+)  # fmt: skip
+def test_header_pack_unpack_round_trip(fields: tuple) -> None:
+    h = F1Header(*fields)
+    raw = h.pack()
+    assert len(raw) == HEADER.size == 29 and F1Header.unpack(raw) == h

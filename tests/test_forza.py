@@ -126,3 +126,17 @@ def test_specific_force_minus_gravity_recovers_the_acceleration(
     g = [fi - ai for fi, ai in zip(s.f, a_iso, strict=True)]
     assert math.sqrt(sum(x * x for x in g)) == pytest.approx(G0_M_S2, rel=1e-5)
     assert math.hypot(*s.w) == pytest.approx(math.hypot(*ang), rel=1e-6, abs=1e-9)
+
+
+f32 = st.floats(allow_nan=False, allow_infinity=False, width=32)
+
+
+@given(
+    ints=st.tuples(st.integers(-(2**31), 2**31 - 1), st.integers(0, 2**32 - 1)),
+    v=st.lists(f32, min_size=15, max_size=15),
+)
+def test_pack_unpack_round_trip(ints: tuple[int, int], v: list[float]) -> None:
+    m = ForzaMotion(ints[0], ints[1], v[0], v[1], v[2], (v[3], v[4], v[5]), (v[6], v[7], v[8]),
+                    (v[9], v[10], v[11]), v[12], v[13], v[14])  # fmt: skip
+    raw = m.pack()
+    assert len(raw) == SLED_HEAD.size == 68 and ForzaMotion.unpack(raw) == m

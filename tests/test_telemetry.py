@@ -413,3 +413,33 @@ def test_sample_is_frozen() -> None:
     s = TelemetrySample(0.0, (0.0, 0.0, 9.8), (0.0, 0.0, 0.0), False, "f1")
     with pytest.raises(AttributeError):
         s.paused = True  # type: ignore[misc]
+
+
+def test_record_verb_captures_datagrams_sent_to_it(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as probe:
+        probe.bind(("127.0.0.1", 0))
+        port = probe.getsockname()[1]
+    stop = threading.Event()
+
+    def sender() -> None:
+        with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as tx:
+            while not stop.is_set():
+                tx.sendto(b"BNG1" + bytes(84), ("127.0.0.1", port))
+                time.sleep(0.01)
+
+    th = threading.Thread(target=sender)
+    th.start()
+    out = tmp_path / "b.mctr"
+    try:
+        code = main(["record", "--source", f"beamng:{port}", "--out", str(out), "--seconds", "0.4"])
+    finally:
+        stop.set()
+        th.join()
+    assert code == 0
+    rec = read_recording_file(out)
+    assert rec.port == port and len(rec) >= 5
+    assert all(d == b"BNG1" + bytes(84) for d in rec.datagrams)
+    text = capsys.readouterr().out
+    assert f"recorded {len(rec)} datagrams" in text and f"sample: {len(rec)}" in text

@@ -217,12 +217,15 @@ class TelemetrySource(_ThreadedSource):
                     continue
                 t = clock()
                 data = bytes(buf[:n])
-                if self._on_datagram is not None:
-                    try:
+                try:
+                    if self._on_datagram is not None:
                         self._on_datagram(t, data)
-                    except Exception:
-                        self._errors += 1
-                self._deliver(data, t)
+                except Exception:
+                    self._errors += 1
+                try:
+                    self._deliver(data, t)
+                except Exception:  # never let the receiver thread die
+                    self._errors += 1
         finally:
             sock.close()
 
