@@ -296,3 +296,19 @@ def test_header_pack_unpack_round_trip(fields: tuple) -> None:
     h = F1Header(*fields)
     raw = h.pack()
     assert len(raw) == HEADER.size == 29 and F1Header.unpack(raw) == h
+
+
+def test_f1_25_motion_ex_layout_is_accepted_by_its_size() -> None:
+    """F1 25 appends chassisPitch, wheelCamber[4], wheelCamberGain[4] (9 floats) to the F1 24
+    Motion Ex: 273 bytes. Built from the real F1 24 packet with the format set to 2025."""
+    motion, ex = _packets(2024)
+    ex25 = bytearray(ex + bytes(36))
+    struct.pack_into("<H", ex25, 0, 2025)
+    m25 = bytearray(motion)
+    struct.pack_into("<H", m25, 0, 2025)
+    dec = F1Decoder()
+    assert dec.decode(bytes(ex25[:237]), 0.0).reason == "skipped: truncated"
+    assert dec.decode(bytes(ex25), 0.0).reason == "partial: motion ex stored"
+    s = dec.feed(bytes(m25), 0.0)
+    assert s is not None
+    assert (s.f, s.w) == _decode_pair(2024)

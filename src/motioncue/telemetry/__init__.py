@@ -34,7 +34,14 @@ from ._container import (
     record,
 )
 from ._registry import GAMES, GameInfo, decoder_for, register_game
-from ._sample import G0_M_S2, Decoder, DecodeResult, TelemetrySample
+from ._sample import (
+    G0_M_S2,
+    Decoder,
+    DecodeResult,
+    SampleArrays,
+    TelemetrySample,
+    samples_to_arrays,
+)
 from ._source import ReplaySource, TelemetrySource, open_source
 
 __all__ = [
@@ -47,6 +54,7 @@ __all__ = [
     "RecordSummary",
     "RecordingWriter",
     "ReplaySource",
+    "SampleArrays",
     "TelemetrySample",
     "TelemetrySource",
     "decode_recording",
@@ -56,6 +64,7 @@ __all__ = [
     "read_recording_file",
     "record",
     "register_game",
+    "samples_to_arrays",
 ]
 
 # One module per game; each registers itself in GAMES on import.

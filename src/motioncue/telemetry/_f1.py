@@ -209,7 +209,7 @@ class F1Decoder(Decoder):
             return self._motion_ex(datagram, n, fmt, uid, stime)
         if pid == _ID_SESSION:
             return self._session(datagram, n, uid)
-        return DecodeResult("partial", "ignored: other packet id")
+        return DecodeResult("ignored", "ignored: other packet id")
 
     def _motion(
         self, data: bytes, n: int, uid: int, stime: float, player: int, t_s: float

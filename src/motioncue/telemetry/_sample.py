@@ -9,8 +9,13 @@ from __future__ import annotations
 
 import math
 from abc import ABC, abstractmethod
+from collections.abc import Sequence
 from dataclasses import dataclass
-from typing import Literal
+from typing import TYPE_CHECKING, Literal
+
+if TYPE_CHECKING:
+    import numpy as np
+    from numpy.typing import NDArray
 
 __all__ = [
     "G0_M_S2",
@@ -18,7 +23,9 @@ __all__ = [
     "MAX_ABS_W_RAD_S",
     "DecodeResult",
     "Decoder",
+    "SampleArrays",
     "TelemetrySample",
+    "samples_to_arrays",
     "up_in_body_from_angles",
 ]
 
@@ -65,7 +72,7 @@ class TelemetrySample:
     game: str
 
 
-DecodeStatus = Literal["sample", "partial", "state", "skipped"]
+DecodeStatus = Literal["sample", "partial", "state", "ignored", "skipped"]
 
 
 @dataclass(frozen=True, slots=True)
@@ -74,10 +81,11 @@ class DecodeResult:
 
     Attributes
     ----------
-    status : {"sample", "partial", "state", "skipped"}
+    status : {"sample", "partial", "state", "ignored", "skipped"}
         ``sample``: a new sample is in ``sample``. ``partial``: the datagram was valid but a
         sample needs another one too (F1 Motion without a Motion Ex yet). ``state``: valid,
-        carried game state only (F1 Session: paused flag). ``skipped``: rejected, see reason.
+        carried game state only (F1 Session: paused flag). ``ignored``: valid, of a kind that
+        carries no motion (F1 lap data...). ``skipped``: rejected, see reason.
     reason : str
         The counter key this outcome was counted under in ``Decoder.stats``.
     sample : TelemetrySample or None
@@ -166,3 +174,32 @@ def up_in_body_from_angles(pitch_rad: float, roll_rad: float) -> Vec3:
     """
     cp = math.cos(pitch_rad)
     return (-math.sin(pitch_rad), math.sin(roll_rad) * cp, math.cos(roll_rad) * cp)
+
+
+def samples_to_arrays(samples: Sequence[TelemetrySample]) -> SampleArrays:
+    """Stack samples into arrays for offline work (ride files, plots, washout in batch).
+
+    Returns
+    -------
+    SampleArrays
+        ``t_s`` (N,) s, ``f`` (N, 3) m/s^2, ``w`` (N, 3) rad/s, ``paused`` (N,) bool; N may
+        be 0 (shapes (0,), (0, 3)).
+    """
+    import numpy as np
+
+    n = len(samples)
+    t_s = np.fromiter((s.t_s for s in samples), dtype=float, count=n)
+    f = np.array([s.f for s in samples], dtype=float).reshape(n, 3)
+    w = np.array([s.w for s in samples], dtype=float).reshape(n, 3)
+    paused = np.fromiter((s.paused for s in samples), dtype=bool, count=n)
+    return SampleArrays(t_s, f, w, paused)
+
+
+@dataclass(frozen=True)
+class SampleArrays:
+    """Samples as arrays: ``t_s`` (N,), ``f`` (N, 3), ``w`` (N, 3), ``paused`` (N,)."""
+
+    t_s: NDArray[np.float64]
+    f: NDArray[np.float64]
+    w: NDArray[np.float64]
+    paused: NDArray[np.bool_]
