@@ -312,3 +312,11 @@ def test_f1_25_motion_ex_layout_is_accepted_by_its_size() -> None:
     s = dec.feed(bytes(m25), 0.0)
     assert s is not None
     assert (s.f, s.w) == _decode_pair(2024)
+
+
+def test_pairing_window_is_validated() -> None:
+    from motioncue import ConfigError
+
+    for bad in (0.0, -1.0, math.nan, math.inf):
+        with pytest.raises(ConfigError, match="max_ex_age_s"):
+            F1Decoder(max_ex_age_s=bad)

@@ -73,6 +73,7 @@ import math
 import struct
 from dataclasses import dataclass
 
+from .._errors import ConfigError
 from ._registry import GameInfo, register_game
 from ._sample import G0_M_S2, Decoder, DecodeResult
 
@@ -180,6 +181,8 @@ class F1Decoder(Decoder):
 
     def __init__(self, max_ex_age_s: float = 0.1) -> None:
         super().__init__()
+        if not (math.isfinite(max_ex_age_s) and max_ex_age_s > 0):
+            raise ConfigError(f"max_ex_age_s = {max_ex_age_s!r} must be a finite number > 0")
         self.max_ex_age_s = float(max_ex_age_s)
         self.reset()
 
