@@ -457,3 +457,29 @@ def test_samples_to_arrays_shapes_and_values() -> None:
     a = samples_to_arrays(ss)
     assert a.t_s.tolist() == [0.1, 0.2] and a.paused.tolist() == [False, True]
     assert a.f.tolist() == [[1, 2, 3], [7, 8, 9]] and a.w[1].tolist() == [0.1, 0.2, 0.3]
+
+
+def test_other_games_packets_are_skipped() -> None:
+    from motioncue.telemetry._beamng import BeamNGMotion
+    from motioncue.telemetry._forza import ForzaMotion
+
+    ex, motion = _f1_pair(2024)
+    z = (0.0, 0.0, 0.0)
+    forza = ForzaMotion(1, 5, 1.0, 1.0, 1.0, z, z, z, 0.0, 0.0, 0.0).pack() + bytes(232 - 68)
+    beamng = BeamNGMotion(z, z, z, (0.0, 0.0, 1.0), 0, 0, 0, 0, 0, 0, 0, 0, 0).pack()
+    packets = {"f1": [ex, motion], "forza": [forza, forza + bytes(99)], "beamng": [beamng]}
+    for game in GAMES:
+        dec = decoder_for(game)
+        for other, datagrams in packets.items():
+            for d in datagrams:
+                r = dec.decode(d, 0.0)
+                if other == game:
+                    assert r.status in ("sample", "partial")
+                else:
+                    assert r.status == "skipped", (game, other, r.reason)
+                    # Forza has no magic: a short foreign datagram reads as truncated
+                    assert r.reason in (
+                        "skipped: foreign",
+                        "skipped: wrong size",
+                        "skipped: truncated",
+                    )
