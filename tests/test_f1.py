@@ -190,16 +190,22 @@ def _session(year: int, uid_from: bytes, paused: int, spectating: int = 0) -> by
 @pytest.mark.parametrize("year", YEARS)
 def test_session_packet_pauses_and_resumes(year: int) -> None:
     motion, ex = _packets(year)
-    dec = F1Decoder()
+    dec = F1Decoder(max_ex_age_s=1.0)
     dec.feed(ex, 0.0)
+
+    def tick(k: int) -> bytes:  # the session clock runs, so only the Session flag pauses
+        m = bytearray(motion)
+        struct.pack_into("<f", m, 15, struct.unpack_from("<f", motion, 15)[0] + k / 60)
+        return bytes(m)
+
     assert dec.decode(_session(year, motion, paused=1), 0.0).reason == "state: session"
-    s = dec.feed(motion, 0.0)
+    s = dec.feed(tick(0), 0.0)
     assert s is not None and s.paused
     dec.feed(_session(year, motion, paused=0, spectating=1), 0.0)
-    s = dec.feed(motion, 0.0)
+    s = dec.feed(tick(1), 0.0)
     assert s is not None and s.paused
     dec.feed(_session(year, motion, paused=0), 0.0)
-    s = dec.feed(motion, 0.0)
+    s = dec.feed(tick(2), 0.0)
     assert s is not None and not s.paused
     assert dec.stats["state: session"] == 3
 
@@ -320,3 +326,22 @@ def test_pairing_window_is_validated() -> None:
     for bad in (0.0, -1.0, math.nan, math.inf):
         with pytest.raises(ConfigError, match="max_ex_age_s"):
             F1Decoder(max_ex_age_s=bad)
+
+
+def test_frozen_session_time_flags_pause_after_repeats() -> None:
+    """A paused game that keeps sending repeats the same sessionTime: the third identical
+    Motion (two repeats) is paused, a single duplicate is not, and time moving resumes."""
+    motion, ex = _packets(2024)
+    dec = F1Decoder()
+    dec.feed(ex, 0.0)
+    flags = []
+    for _ in range(4):
+        s = dec.feed(motion, 0.0)
+        assert s is not None
+        flags.append(s.paused)
+    assert flags == [False, False, True, True]
+    later = bytearray(motion)
+    (stime,) = struct.unpack_from("<f", motion, 15)
+    struct.pack_into("<f", later, 15, stime + 1 / 60)
+    s = dec.feed(bytes(later), 0.0)
+    assert s is not None and not s.paused

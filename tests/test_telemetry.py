@@ -265,8 +265,11 @@ def test_live_receiver_decodes_real_f1_packets_over_loopback() -> None:
             assert s is not None
             assert s.f == expected.f and s.w == expected.w and s.game == "f1"
             assert t_send <= s.t_s <= time.perf_counter()  # stamped on arrival
-            for _ in range(5):
-                tx.sendto(motion, dest)
+            (stime,) = struct.unpack_from("<f", motion, 15)
+            for k in range(5):  # the session clock advances, as in a running game
+                later = bytearray(motion)
+                struct.pack_into("<f", later, 15, stime + (k + 1) / 500)
+                tx.sendto(bytes(later), dest)
             assert _wait(lambda: src.stats["samples"] == 6)
         st_ = src.stats
         assert st_["datagrams"] == 8 and st_["skipped: truncated"] == 1

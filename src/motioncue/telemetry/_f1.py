@@ -62,7 +62,9 @@ Pairing and pause
 A sample is emitted for each Motion packet, combined with the latest Motion Ex of the same
 session within :data:`F1Decoder.max_ex_age_s` of session time (the game sends both every
 frame; the Motion Ex may be a frame older). ``paused`` follows the Session packet's
-``gamePaused`` ("network game only" per EA) or ``isSpectating``. In single-player the game
+``gamePaused`` ("network game only" per EA) or ``isSpectating``, and is also set when Motion
+packets keep coming with a frozen ``sessionTime`` (:data:`FROZEN_REPEATS` repeats in a row,
+so one duplicated datagram does not pause). In single-player the game
 stops sending Motion packets when not in control (pause menu, replays): sources detect that
 as missing packets (``latest(max_age_s=...)``).
 """
@@ -113,6 +115,10 @@ MOTION_EX_SIZES: dict[int, int] = {
 }
 F1_FORMATS = frozenset(MOTION_EX_SIZES)
 """``packetFormat`` values decoded (F1 23, F1 24, F1 25)."""
+
+FROZEN_REPEATS = 2
+"""Motion packets repeating the previous one's session time this many times in a row mean the
+game is paused while still sending (time frozen): the samples are flagged ``paused``."""
 
 _PLAUSIBLE_F1_FORMATS = range(2017, 2036)  # older/newer F1 games: "unsupported format"
 _ID_MOTION, _ID_SESSION, _ID_MOTION_EX = 0, 1, 13
@@ -192,6 +198,8 @@ class F1Decoder(Decoder):
         self._ex_w = (0.0, 0.0, 0.0)
         self._paused_uid: int | None = None
         self._paused = False
+        self._last_motion: tuple[int, float] | None = None
+        self._frozen_repeats = 0
 
     def _decode(self, datagram: bytes, t_s: float) -> DecodeResult:
         n = len(datagram)
@@ -228,13 +236,20 @@ class F1Decoder(Decoder):
         )
         if self._ex_uid != uid or not abs(stime - self._ex_time) <= self.max_ex_age_s:
             return DecodeResult("partial", "partial: no motion ex")
+        if self._last_motion is not None and self._last_motion == (uid, stime):
+            self._frozen_repeats += 1
+        else:
+            self._frozen_repeats = 0
+        self._last_motion = (uid, stime)
         up_y = (rz * fx - rx * fz) * (_INV_NORM * _INV_NORM)  # (R x F)_y
         f = (
             G0_M_S2 * (g_lon + fy * _INV_NORM),
             G0_M_S2 * (g_lat - ry * _INV_NORM),
             G0_M_S2 * (g_vert + up_y),
         )
-        paused = self._paused if self._paused_uid == uid else False
+        paused = (self._paused and self._paused_uid == uid) or (
+            self._frozen_repeats >= FROZEN_REPEATS
+        )
         return self._make(t_s, f, self._ex_w, paused)
 
     def _motion_ex(self, data: bytes, n: int, fmt: int, uid: int, stime: float) -> DecodeResult:
