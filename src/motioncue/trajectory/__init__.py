@@ -1,3 +1,21 @@
-"""motioncue.trajectory (see the package docstring of motioncue)."""
+"""motioncue.trajectory: actuator limits, real-time limiting, offline ride optimisation,
+workspace-aware pose limiting, time-optimal transitions, park/unpark/resume.
 
-__all__: list[str] = []
+Discrete-time definitions shared by every function here (frame period ``dt``):
+speed ``(q[k]-q[k-1])/dt``, acceleration ``(q[k]-2q[k-1]+q[k-2])/dt**2``, jerk
+``(q[k]-3q[k-1]+3q[k-2]-q[k-3])/dt**3``; see :func:`check_trajectory`.
+"""
+
+from ._limits import ActuatorLimits, LimitCheck, check_trajectory, finite_differences
+from ._realtime import LimiterState, RealtimeLimiter, braking_distance, braking_speed_cap
+
+__all__ = [
+    "ActuatorLimits",
+    "LimitCheck",
+    "LimiterState",
+    "RealtimeLimiter",
+    "braking_distance",
+    "braking_speed_cap",
+    "check_trajectory",
+    "finite_differences",
+]
