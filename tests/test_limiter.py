@@ -153,7 +153,7 @@ def test_full_speed_into_the_stroke_end_brakes_in_time(case, seed):
 @given(scenario(), st.floats(0.3, 0.99))
 def test_feasible_streams_pass_through_exactly(case, shrink):
     """A stream made feasible by a tighter limiter goes through the real one bit for bit."""
-    lim, dt, q0, v0, targets = case
+    lim, dt, q0, _v0, targets = case
     mid = 0.5 * (lim.q_min + lim.q_max)
     half = 0.5 * (lim.q_max - lim.q_min) * shrink
     tight = ActuatorLimits(mid - half, mid + half, lim.v_max * shrink, lim.a_max * shrink)

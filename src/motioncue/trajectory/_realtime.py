@@ -287,7 +287,10 @@ class RealtimeLimiter:
                 vn = vd
             else:
                 e = t - qp
-                vn = vt + (_vcap(e * inv_dt, adt, vbig) if e > 0.0 else -_vcap(-e * inv_dt, adt, vbig))
+                if e > 0.0:
+                    vn = vt + _vcap(e * inv_dt, adt, vbig)
+                else:
+                    vn = vt - _vcap(-e * inv_dt, adt, vbig)
                 if vn > hi:
                     vn = hi
                 if vn < lo:
