@@ -7,15 +7,18 @@ speed ``(q[k]-q[k-1])/dt``, acceleration ``(q[k]-2q[k-1]+q[k-2])/dt**2``, jerk
 """
 
 from ._limits import ActuatorLimits, LimitCheck, check_trajectory, finite_differences
+from ._offline import OptimisedRide, limit_ride
 from ._realtime import LimiterState, RealtimeLimiter, braking_distance, braking_speed_cap
 
 __all__ = [
     "ActuatorLimits",
     "LimitCheck",
     "LimiterState",
+    "OptimisedRide",
     "RealtimeLimiter",
     "braking_distance",
     "braking_speed_cap",
     "check_trajectory",
     "finite_differences",
+    "limit_ride",
 ]

@@ -41,7 +41,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
@@ -163,6 +163,9 @@ class RealtimeLimiter:
 
     limits: ActuatorLimits
     dt_s: float
+    _params: tuple[tuple[float, ...], ...] = field(init=False, repr=False)
+    _dt: float = field(init=False, repr=False)
+    _inv_dt: float = field(init=False, repr=False)
 
     def __post_init__(self) -> None:
         if not (isinstance(self.dt_s, int | float) and 0.0 < self.dt_s <= 1.0):
@@ -194,7 +197,7 @@ class RealtimeLimiter:
         return self.limits.n_actuators
 
     # ------------------------------------------------------------------ states
-    def is_admissible(self, q: Sequence[float], v: Sequence[float] | None = None) -> bool:
+    def is_admissible(self, q: Any, v: Any = None) -> bool:
         """Whether ``(q, v)`` is a state from which the limits can always be kept.
 
         Rounding slack: 1e-12 (SI) on positions, one part in 1e9 on speeds.
@@ -254,7 +257,7 @@ class RealtimeLimiter:
         out = [0.0] * len(qs)
         clamped = False
         i = 0
-        for qmin, qmax, vmax, adt, half_inv_a, vbig in self._params:  # type: ignore[attr-defined]
+        for qmin, qmax, vmax, adt, half_inv_a, vbig in self._params:
             t = float(q_target[i])
             tp = lts[i]
             if t - t != 0.0:  # NaN or +-inf
