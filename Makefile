@@ -13,7 +13,7 @@ $(BIN)/.installed: pyproject.toml
 	touch $@
 
 demo: $(BIN)/.installed
-	$(BIN)/motioncue demo
+	$(BIN)/motioncue workspace --platform stewart6-linear
 
 test: $(BIN)/.installed
 	$(BIN)/python -m pytest

@@ -1,0 +1,364 @@
+"""Platform configuration files (TOML, human units in key names) -> frozen platform models.
+
+Layout of a platform file::
+
+    kind = "stewart6-linear"          # | stewart6-rotary | seat3 | seat2-yaw
+    description = "..."
+    actuators = ["1", "2", ...]       # controller order
+
+    [geometry]                        # anchors: a symmetric ring layout or explicit lists
+    [stroke]                          # linear legs: retracted_length_mm, stroke_mm, margin_mm
+    [crank]                           # rotary legs: crank_mm, rod_mm, min_deg, max_deg
+    [drive]                           # leg drives (screw lead or gear ratio, pulses, homing)
+    [yaw]                             # seat2-yaw: min_deg, max_deg, gear_ratio, pulses...
+
+Every value is converted to SI once, here. Unknown keys, missing keys and impossible values
+raise :class:`~motioncue.ConfigError` naming the file, the key and the value.
+"""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import numpy as np
+
+from .._config import ConfigReader, find_config, load_toml
+from .._errors import ConfigError
+from ._drive import Drive
+from ._legs import CrankLegs
+from ._platform import Platform, Seat2Yaw, Seat3, Stewart6Linear, Stewart6Rotary
+
+__all__ = ["KINDS", "load_platform", "platform_from_dict"]
+
+KINDS = ("stewart6-linear", "stewart6-rotary", "seat3", "seat2-yaw")
+_MM = 1e-3
+_N_LEGS = {"stewart6-linear": 6, "stewart6-rotary": 6, "seat3": 3, "seat2-yaw": 2}
+
+
+def load_platform(name_or_path: str | Path) -> Platform:
+    """Load a platform: a bundled name (``"stewart6-linear"``) or a path to a ``.toml`` file.
+
+    Parameters
+    ----------
+    name_or_path
+        Bundled names: ``stewart6-linear``, ``stewart6-rotary``, ``seat3``, ``seat2-yaw``.
+
+    Returns
+    -------
+    Platform
+        Frozen model (:class:`Stewart6Linear`, :class:`Stewart6Rotary`, :class:`Seat3` or
+        :class:`Seat2Yaw`).
+
+    Raises
+    ------
+    ConfigError
+        Unknown name, unreadable file, unknown or missing key, impossible value.
+    """
+    path = find_config("platforms", name_or_path)
+    return platform_from_dict(load_toml(path), where=path.name, name=path.stem)
+
+
+def _ring(g: ConfigReader, which: str) -> np.ndarray:
+    """Anchors of a symmetric ring: pairs centred at 0, 120, 240 deg (pair 1 at the front, +x),
+    each pair at +-``pair_angle`` about its centre, first the clockwise one."""
+    radius = g.number(f"{which}_radius_mm", lo=0.0, lo_open=True) * _MM
+    half = g.number(f"{which}_pair_angle_deg", lo=0.0, hi=60.0, hi_open=True)
+    z = g.number(f"{which}_z_mm", 0.0) * _MM
+    out = []
+    for centre in (0.0, 120.0, 240.0):
+        for side in (-1.0, 1.0):
+            a = math.radians(centre + side * half)
+            out.append([radius * math.cos(a), radius * math.sin(a), z])
+    return np.array(out)
+
+
+def _anchor_list(g: ConfigReader, key: str, n: int) -> np.ndarray:
+    value = g.raw(key)
+    if (
+        not isinstance(value, list)
+        or len(value) != n
+        or not all(
+            isinstance(row, list)
+            and len(row) == 3
+            and all(isinstance(v, int | float) and not isinstance(v, bool) for v in row)
+            and all(math.isfinite(v) for v in row)
+            for row in value
+        )
+    ):
+        raise g.error(key, value, f"a list of {n} [x, y, z] triples of finite numbers (mm)")
+    return np.array(value, dtype=float) * _MM
+
+
+def _anchors(g: ConfigReader, n: int) -> tuple[np.ndarray, np.ndarray]:
+    if g.has("base_anchors_mm") or g.has("platform_anchors_mm"):
+        return _anchor_list(g, "base_anchors_mm", n), _anchor_list(g, "platform_anchors_mm", n)
+    if n != 6:
+        raise ConfigError(
+            f"{g.where}: missing key 'base_anchors_mm' (and 'platform_anchors_mm'): "
+            f"{n} [x, y, z] triples in mm"
+        )
+    return _ring(g, "base"), _ring(g, "platform")
+
+
+def _per_actuator(
+    r: ConfigReader,
+    key: str,
+    n: int,
+    default: object,
+    *,
+    integer: bool = False,
+    lo: float = -math.inf,
+    lo_open: bool = False,
+) -> np.ndarray:
+    """A number, or a list of ``n`` numbers, one per actuator (``default`` None: required)."""
+    if not r.has(key) and default is None:
+        raise ConfigError(f"{r.where}: missing key {key!r}")
+    if r.has(key) and isinstance(r.raw(key), list):
+        vals = r.vector(key, n)
+    elif integer:
+        vals = (float(r.integer(key, default)),) * n
+    else:
+        vals = (r.number(key, default),) * n
+    arr = np.array(vals, dtype=float)
+    below = arr <= lo if lo_open else arr < lo
+    if np.any(below) or (integer and np.any(arr != np.round(arr))):
+        what = "integers" if integer else "numbers"
+        sign = ">" if lo_open else ">="
+        raise r.error(key, r.raw(key), f"{what} {sign} {lo}, one or a list of {n}")
+    return arr
+
+
+def _direction(r: ConfigReader, n: int) -> np.ndarray:
+    arr = _per_actuator(r, "direction", n, 1, integer=True, lo=-1)
+    if not np.all(np.isin(arr, (-1.0, 1.0))):
+        raise r.error("direction", r.raw("direction"), f"+1 or -1, one or a list of {n}")
+    return arr.astype(int)
+
+
+def _pulses_per_rev(r: ConfigReader, n: int, travel_per_rev_mm: np.ndarray | None) -> np.ndarray:
+    """``pulses_per_rev``, or for a screw ``pulses_per_mm`` (MBOX Fn0C1) times the lead."""
+    if r.has("pulses_per_mm") and travel_per_rev_mm is not None:
+        if r.has("pulses_per_rev"):
+            raise ConfigError(
+                f"{r.where}: give either 'pulses_per_rev' or 'pulses_per_mm', not both"
+            )
+        ppmm = _per_actuator(r, "pulses_per_mm", n, None, lo=0.0, lo_open=True)
+        ppr = ppmm * travel_per_rev_mm
+        if np.any(np.abs(ppr - np.round(ppr)) > 1e-9):
+            raise r.error(
+                "pulses_per_mm",
+                r.raw("pulses_per_mm"),
+                "a value giving a whole number of pulses per revolution with lead_mm",
+            )
+        return np.round(ppr)
+    if not r.has("pulses_per_rev"):
+        alt = " or 'pulses_per_mm'" if travel_per_rev_mm is not None else ""
+        raise ConfigError(f"{r.where}: missing key 'pulses_per_rev'{alt}")
+    return _per_actuator(r, "pulses_per_rev", n, None, integer=True, lo=1)
+
+
+def _linear_stroke(cfg: ConfigReader, n: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(retracted, usable_min, usable_max) pin-to-pin lengths (m), per leg."""
+    s = cfg.table("stroke")
+    retracted = _per_actuator(s, "retracted_length_mm", n, None, lo=0.0, lo_open=True) * _MM
+    stroke = _per_actuator(s, "stroke_mm", n, None, lo=0.0, lo_open=True) * _MM
+    margin = _per_actuator(s, "margin_mm", n, 0.0, lo=0.0) * _MM
+    if np.any(2 * margin >= stroke):
+        raise s.error("margin_mm", s.raw("margin_mm"), "less than half of stroke_mm")
+    s.finish()
+    return retracted, retracted + margin, retracted + stroke - margin
+
+
+def _linear_drive(
+    cfg: ConfigReader,
+    n: int,
+    retracted: np.ndarray,
+    neutral_length: np.ndarray,
+    usable: tuple[np.ndarray, np.ndarray],
+) -> Drive:
+    d = cfg.table("drive")
+    lead_mm = _per_actuator(d, "lead_mm", n, None, lo=0.0, lo_open=True)
+    ppr = _pulses_per_rev(d, n, lead_mm)
+    direction = _direction(d, n)
+    lift = _per_actuator(d, "home_lift_mm", n, 0.0, lo=0.0) * _MM
+    home_length = retracted + lift
+    bad = (home_length < usable[0] - 1e-12) | (home_length > usable[1] + 1e-12)
+    if np.any(bad):
+        i = int(np.flatnonzero(bad)[0])
+        raise d.error(
+            "home_lift_mm",
+            d.raw("home_lift_mm"),
+            "a lift keeping the homed length inside the usable stroke "
+            f"[{(usable[0][i] - retracted[i]) / _MM:.6g}, "
+            f"{(usable[1][i] - retracted[i]) / _MM:.6g}] mm above retracted (margin_mm)",
+        )
+    d.finish()
+    return Drive.linear(lead_mm * _MM, ppr.astype(int), home_length - neutral_length, direction)
+
+
+def _check_neutral(g: ConfigReader, lengths: np.ndarray, lo: np.ndarray, hi: np.ndarray) -> None:
+    bad = (lengths <= lo) | (lengths >= hi)
+    if np.any(bad):
+        i = int(np.flatnonzero(bad)[0])
+        raise g.error(
+            "neutral_height_mm",
+            g.raw("neutral_height_mm"),
+            f"a height putting every leg inside its usable stroke at neutral (leg {i + 1} "
+            f"would be {lengths[i] / _MM:.6g} mm, usable {lo[i] / _MM:.6g}..{hi[i] / _MM:.6g} mm)",
+        )
+
+
+def platform_from_dict(data: dict, where: str = "<dict>", name: str = "platform") -> Platform:
+    """Build a platform from a parsed TOML table (see the module docstring for the layout)."""
+    cfg = ConfigReader(data, where)
+    kind = cfg.string("kind", choices=KINDS)
+    description = cfg.string("description", "")
+    n_legs = _N_LEGS[kind]
+    n_act = n_legs + (1 if kind == "seat2-yaw" else 0)
+    names_raw = cfg.raw("actuators")
+    if (
+        not isinstance(names_raw, list)
+        or len(names_raw) != n_act
+        or not all(isinstance(v, str) and v for v in names_raw)
+        or len(set(names_raw)) != n_act
+    ):
+        raise cfg.error(
+            "actuators", names_raw, f"{n_act} distinct non-empty names, controller order"
+        )
+    names = tuple(names_raw)
+    g = cfg.table("geometry")
+    base, plat = _anchors(g, n_legs)
+    height = g.number("neutral_height_mm", lo=0.0, lo_open=True) * _MM
+    platform: Platform
+    if kind == "stewart6-rotary":
+        platform = _rotary(cfg, g, base, plat, height, names, description, name)
+    else:
+        g.finish()
+        retracted, lo, hi = _linear_stroke(cfg, n_legs)
+        neutral = np.linalg.norm(plat + np.array([0.0, 0.0, height]) - base, axis=1)
+        _check_neutral(g, neutral, lo, hi)
+        drive = _linear_drive(cfg, n_legs, retracted, neutral, (lo, hi))
+        stroke = np.stack([lo, hi], axis=1)
+        if kind == "stewart6-linear":
+            platform = Stewart6Linear(
+                base,
+                plat,
+                height,
+                stroke,
+                drives=drive,
+                name=name,
+                actuator_names=names,
+                description=description,
+            )
+        elif kind == "seat3":
+            platform = Seat3(
+                base,
+                plat,
+                height,
+                stroke,
+                drives=drive,
+                name=name,
+                actuator_names=names,
+                description=description,
+            )
+        else:
+            y = cfg.table("yaw")
+            lo_deg = y.number("min_deg", lo=-360.0, hi=0.0, hi_open=True)
+            hi_deg = y.number("max_deg", lo=0.0, hi=360.0, lo_open=True)
+            gear = y.number("gear_ratio", lo=0.0, lo_open=True)
+            ppr = y.integer("pulses_per_rev", lo=1)
+            direction = y.integer("direction", 1)
+            if direction not in (-1, 1):
+                raise y.error("direction", direction, "+1 or -1")
+            home = y.number("home_deg", 0.0)
+            if not lo_deg <= home <= hi_deg:
+                raise y.error("home_deg", home, f"inside [min_deg, max_deg] = [{lo_deg}, {hi_deg}]")
+            y.finish()
+            yaw_drive = Drive.rotary(gear, ppr, [math.radians(home)], direction)
+            platform = Seat2Yaw(
+                base,
+                plat,
+                height,
+                stroke,
+                (math.radians(lo_deg), math.radians(hi_deg)),
+                drives=Drive.concat(drive, yaw_drive),
+                name=name,
+                actuator_names=names,
+                description=description,
+            )
+    cfg.finish()
+    return platform
+
+
+def _rotary(
+    cfg: ConfigReader,
+    g: ConfigReader,
+    base: np.ndarray,
+    plat: np.ndarray,
+    height: float,
+    names: tuple[str, ...],
+    description: str,
+    name: str,
+) -> Platform:
+    """Crank-and-rod hexapod: crank axes radial (horizontal), crank at angle 0 horizontal and
+    tangential, pointing away from its pair's centre; positive angle lifts the crank tip.
+
+    The crank directions follow from the pivots' angles about the base origin with legs in
+    pairs, clockwise one first (as the ring layout orders them, and as explicit anchor lists
+    must). Other crank arrangements: build :class:`Stewart6Rotary` in Python.
+    """
+    g.finish()
+    c = cfg.table("crank")
+    crank = _per_actuator(c, "crank_mm", 6, None, lo=0.0, lo_open=True) * _MM
+    rod = _per_actuator(c, "rod_mm", 6, None, lo=0.0, lo_open=True) * _MM
+    lo_deg = c.number("min_deg", lo=-180.0, hi=180.0)
+    hi_deg = c.number("max_deg", lo=-180.0, hi=180.0)
+    if lo_deg >= hi_deg:
+        raise c.error("max_deg", hi_deg, f"greater than min_deg = {lo_deg}")
+    c.finish()
+    angles = np.arctan2(base[:, 1], base[:, 0])
+    side = np.array([-1.0, 1.0] * 3)
+    zero_dirs = side[:, None] * np.stack([-np.sin(angles), np.cos(angles), np.zeros(6)], axis=1)
+    axes = np.cross(zero_dirs, [0.0, 0.0, 1.0])
+    d = cfg.table("drive")
+    gear = _per_actuator(d, "gear_ratio", 6, None, lo=0.0, lo_open=True)
+    ppr = _pulses_per_rev(d, 6, None)
+    direction = _direction(d, 6)
+    home_deg = _per_actuator(d, "home_deg", 6, None)
+    if np.any((home_deg < lo_deg) | (home_deg > hi_deg)):
+        raise d.error(
+            "home_deg", d.raw("home_deg"), f"inside [min_deg, max_deg] = [{lo_deg}, {hi_deg}]"
+        )
+    d.finish()
+    legs = CrankLegs(base, plat, height, axes, zero_dirs, crank, rod)
+    if not np.all(legs.reachable0):
+        raise c.error(
+            "rod_mm",
+            c.raw("rod_mm"),
+            f"a rod that reaches its crank at the neutral pose (crank_mm = {c.raw('crank_mm')}, "
+            f"[geometry] neutral_height_mm = {g.raw('neutral_height_mm')})",
+        )
+    theta0_deg = np.degrees(legs.theta0)
+    if np.any((theta0_deg <= lo_deg) | (theta0_deg >= hi_deg)):
+        raise g.error(
+            "neutral_height_mm",
+            g.raw("neutral_height_mm"),
+            f"a height putting every crank inside [{lo_deg}, {hi_deg}] deg at neutral "
+            f"(crank angles would be {np.round(theta0_deg, 2).tolist()} deg)",
+        )
+    drive = Drive.rotary(gear, ppr.astype(int), np.radians(home_deg) - legs.theta0, direction)
+    return Stewart6Rotary(
+        base,
+        axes,
+        zero_dirs,
+        crank,
+        rod,
+        plat,
+        height,
+        (math.radians(lo_deg), math.radians(hi_deg)),
+        drives=drive,
+        name=name,
+        actuator_names=names,
+        description=description,
+    )

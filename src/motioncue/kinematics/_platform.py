@@ -1,0 +1,853 @@
+"""Platform models: closed-form inverse kinematics, Newton forward kinematics, Jacobian, checks.
+
+Pose vector: ``[x, y, z, roll, pitch, yaw]`` (m, rad) of the platform frame relative to its
+neutral pose, ``R = Rz(yaw) Ry(pitch) Rx(roll)``, ISO 8855 axes. Actuator positions ``q`` are
+measured from the neutral pose: metres for linear actuators, radians for rotary ones.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+import numpy.typing as npt
+
+from .._errors import ConfigError
+from ._drive import Drive
+from ._legs import CrankLegs, LegSet, LinearLegs
+from ._rotation import rot9, rot9_derivatives, rot_one
+
+__all__ = [
+    "DOF_NAMES",
+    "CheckResult",
+    "FKResult",
+    "Platform",
+    "Seat2Yaw",
+    "Seat3",
+    "Stewart6Linear",
+    "Stewart6Rotary",
+]
+
+DOF_NAMES = ("x", "y", "z", "roll", "pitch", "yaw")
+_CHUNK = 2048  # poses per block in batch IK: temporaries stay in cache, BLAS stays single-threaded
+_JAC_CHUNK = 8192  # poses per block in batch Jacobians (bounds temporary memory)
+_NO_REACH = np.ones((0, 0), dtype=bool)
+
+
+def _readonly(a: Any, dtype: Any = float) -> np.ndarray:
+    arr = np.array(a, dtype=dtype)
+    arr.setflags(write=False)
+    return arr
+
+
+@dataclass(frozen=True)
+class FKResult:
+    """Result of :meth:`Platform.forward`.
+
+    Attributes
+    ----------
+    pose
+        ``(6,)`` pose found (m, rad); the last iterate when not converged.
+    converged
+        True when ``residual`` fell below the tolerance.
+    iterations
+        Newton iterations taken.
+    residual
+        Max abs difference between ``inverse(pose)`` and the requested ``q`` (m or rad).
+    """
+
+    pose: np.ndarray
+    converged: bool
+    iterations: int
+    residual: float
+
+
+@dataclass(frozen=True)
+class CheckResult:
+    """Result of :meth:`Platform.check` for poses ``(..., 6)`` on ``n`` actuators.
+
+    Attributes
+    ----------
+    q
+        ``(..., n)`` actuator positions (m or rad, from neutral).
+    in_stroke
+        ``(..., n)`` bool: ``q_min <= q <= q_max``.
+    overshoot
+        ``(..., n)`` signed amount beyond the stroke (``q - q_max`` above, ``q - q_min``
+        below), 0 inside.
+    reachable
+        ``(..., n)`` bool: False where a crank cannot reach its rod (rotary legs); ``q`` is
+        then the crank angle of closest approach.
+    unsupported
+        ``(..., 6)`` bool: a nonzero request of a pose component the machine cannot produce.
+    ok
+        ``(...)`` bool: every actuator in stroke and reachable.
+    """
+
+    q: np.ndarray
+    in_stroke: np.ndarray
+    overshoot: np.ndarray
+    reachable: np.ndarray
+    unsupported: np.ndarray
+    ok: np.ndarray
+
+
+def _bad_input(name: str, arr: np.ndarray) -> ConfigError:
+    bad = np.argwhere(~np.isfinite(arr))[0]
+    return ConfigError(
+        f"{name}{list(bad.tolist())} = {arr[tuple(bad)]!r} is invalid; allowed: finite numbers"
+    )
+
+
+def _as_poses(poses: Any) -> np.ndarray:
+    arr = np.asarray(poses, dtype=float)
+    if arr.ndim == 0 or arr.shape[-1] != 6:
+        raise ConfigError(f"poses has shape {arr.shape}; expected (..., 6) [x,y,z,roll,pitch,yaw]")
+    if not np.isfinite(arr).all():
+        raise _bad_input("poses", arr)
+    return arr
+
+
+class Platform:
+    """A motion platform: legs (linear or crank) plus, optionally, a direct yaw axis.
+
+    Instances are frozen. Build one with :func:`~motioncue.kinematics.load_platform` or the
+    geometry classes (:class:`Stewart6Linear`, :class:`Stewart6Rotary`, :class:`Seat3`,
+    :class:`Seat2Yaw`).
+
+    Attributes
+    ----------
+    name : str
+    actuator_names : tuple of str
+        In controller order.
+    n_actuators : int
+    actuator_kinds : tuple of str
+        ``"linear"`` (m) or ``"rotary"`` (rad) per actuator.
+    dof_mask : ndarray (6,) bool
+        Pose components the machine can produce.
+    q_neutral, q_min, q_max, q_park : ndarray (n,)
+        Actuator positions at neutral (zeros), usable stroke, and parked (homed).
+    pose_park : ndarray (6,)
+        Pose at ``q_park``.
+    neutral_absolute : ndarray (n,)
+        At the neutral pose, pin-to-pin length (m) of linear actuators, crank angle from its
+        zero direction (rad) of rotary ones: absolute position = ``q + neutral_absolute``.
+    drives : Drive
+    """
+
+    def __init__(
+        self,
+        *,
+        name: str,
+        actuator_names: Sequence[str],
+        legs: LegSet,
+        leg_pose_mask: Sequence[bool],
+        dof_mask: Sequence[bool],
+        q_min: npt.ArrayLike,
+        q_max: npt.ArrayLike,
+        drives: Drive | None,
+        yaw_axis: bool = False,
+        description: str = "",
+    ) -> None:
+        n = legs.n + (1 if yaw_axis else 0)
+        names = tuple(str(a) for a in actuator_names)
+        if len(names) != n or len(set(names)) != n:
+            raise ConfigError(
+                f"actuator_names = {list(names)} is invalid; allowed: {n} distinct names"
+            )
+        q_lo = np.asarray(q_min, dtype=float)
+        q_hi = np.asarray(q_max, dtype=float)
+        if q_lo.shape != (n,) or q_hi.shape != (n,):
+            raise ConfigError(f"q_min/q_max must have shape ({n},)")
+        for i in range(n):
+            if not (q_lo[i] < 0.0 < q_hi[i]):
+                raise ConfigError(
+                    f"actuator {names[i]!r}: usable stroke [{q_lo[i]:.6g}, {q_hi[i]:.6g}] "
+                    "(from neutral) does not contain the neutral pose strictly inside; "
+                    "check the neutral height and the stroke"
+                )
+        kinds = (legs.kind,) * legs.n + (("rotary",) if yaw_axis else ())
+        if drives is None:
+            drives = _default_drives(kinds, q_lo)
+        if drives.kinds != kinds:
+            raise ConfigError(f"drives kinds {drives.kinds} do not match actuators {kinds}")
+        home = drives.q_home
+        for i in range(n):
+            if not (q_lo[i] - 1e-12 <= home[i] <= q_hi[i] + 1e-12):
+                raise ConfigError(
+                    f"actuator {names[i]!r}: homed position {home[i]:.6g} (from neutral) is "
+                    f"outside the usable stroke [{q_lo[i]:.6g}, {q_hi[i]:.6g}]"
+                )
+        a = object.__setattr__
+        a(self, "name", str(name))
+        a(self, "description", str(description))
+        a(self, "actuator_names", names)
+        a(self, "n_actuators", n)
+        a(self, "actuator_kinds", kinds)
+        a(self, "dof_mask", _readonly(dof_mask, bool))
+        a(self, "_legs", legs)
+        a(self, "_leg_mask", np.asarray(leg_pose_mask, dtype=float))
+        a(self, "_leg_mask_list", [bool(v) for v in leg_pose_mask])
+        a(self, "_all_dof_legs", all(bool(v) for v in leg_pose_mask))
+        fast = self._all_dof_legs and not yaw_axis and isinstance(legs, LinearLegs)
+        a(self, "_fast_linear", legs if fast else None)
+        a(self, "_yaw_axis", bool(yaw_axis))
+        a(self, "_dof_idx", np.flatnonzero(np.asarray(dof_mask, dtype=bool)))
+        a(self, "q_neutral", _readonly(np.zeros(n)))
+        a(self, "q_min", _readonly(q_lo))
+        a(self, "q_max", _readonly(q_hi))
+        a(self, "q_park", _readonly(home))
+        a(self, "drives", drives)
+        if isinstance(legs, LinearLegs):
+            absolute = legs.length0
+        elif isinstance(legs, CrankLegs):
+            absolute = legs.theta0
+        else:
+            raise TypeError(f"unknown leg set {type(legs).__name__}")
+        a(self, "neutral_absolute", _readonly(np.concatenate([absolute, [0.0] * yaw_axis])))
+        if len(self._dof_idx) != n:
+            raise ConfigError(
+                f"{n} actuators cannot drive {len(self._dof_idx)} degrees of freedom "
+                f"({', '.join(DOF_NAMES[i] for i in self._dof_idx)})"
+            )
+        if isinstance(legs, CrankLegs) and not np.all(legs.reachable0):
+            bad = [names[i] for i in np.flatnonzero(~legs.reachable0)]
+            raise ConfigError(f"crank legs {bad} cannot reach their rod at the neutral pose")
+        jac0 = self._jacobian_one([0.0] * 6)[:, self._dof_idx]
+        if not np.linalg.cond(jac0) < 1e10:
+            raise ConfigError(
+                "the geometry is singular at the neutral pose (the actuators cannot hold "
+                f"{', '.join(DOF_NAMES[i] for i in self._dof_idx)} there)"
+            )
+        a(self, "_jac0_inv", np.linalg.inv(jac0))
+        fk = self.forward(home)
+        if not fk.converged:
+            raise ConfigError(
+                f"no pose puts the actuators at their homed positions {home.tolist()} "
+                "(from neutral): is the stroke minimum possible for this geometry?"
+            )
+        a(self, "pose_park", _readonly(fk.pose))
+
+    name: str
+    description: str
+    actuator_names: tuple[str, ...]
+    n_actuators: int
+    actuator_kinds: tuple[str, ...]
+    dof_mask: np.ndarray
+    q_neutral: np.ndarray
+    q_min: np.ndarray
+    q_max: np.ndarray
+    q_park: np.ndarray
+    pose_park: np.ndarray
+    neutral_absolute: np.ndarray
+    drives: Drive
+    _legs: LegSet
+    _leg_mask: np.ndarray
+    _leg_mask_list: list[bool]
+    _all_dof_legs: bool
+    _fast_linear: LinearLegs | None
+    _jac0_inv: np.ndarray
+    _yaw_axis: bool
+    _dof_idx: np.ndarray
+
+    def __setattr__(self, key: str, value: Any) -> None:
+        raise AttributeError(f"{type(self).__name__} is frozen; cannot set {key!r}")
+
+    def __repr__(self) -> str:
+        return (
+            f"{type(self).__name__}(name={self.name!r}, actuators={list(self.actuator_names)}, "
+            f"dof={[d for d, m in zip(DOF_NAMES, self.dof_mask, strict=True) if m]})"
+        )
+
+    # --- inverse kinematics -------------------------------------------------------------
+    def _features_t(self, poses: np.ndarray) -> np.ndarray:
+        """Transposed features ``(13, N)``: R entries, translation, 1 (masked pose)."""
+        a = poses.T
+        if not self._all_dof_legs:
+            a = a * self._leg_mask[:, None]
+        f = np.empty((13, poses.shape[0]))
+        cr, sr = np.cos(a[3]), np.sin(a[3])
+        cp, sp = np.cos(a[4]), np.sin(a[4])
+        cy, sy = np.cos(a[5]), np.sin(a[5])
+        spsr = sp * sr
+        spcr = sp * cr
+        np.multiply(cy, cp, out=f[0])
+        f[1] = cy * spsr - sy * cr
+        f[2] = cy * spcr + sy * sr
+        np.multiply(sy, cp, out=f[3])
+        f[4] = sy * spsr + cy * cr
+        f[5] = sy * spcr - cy * sr
+        np.negative(sp, out=f[6])
+        np.multiply(cp, sr, out=f[7])
+        np.multiply(cp, cr, out=f[8])
+        f[9:12] = a[0:3]
+        f[12] = 1.0
+        return f
+
+    def _ik_block(self, poses: np.ndarray, want_reach: bool) -> tuple[np.ndarray, np.ndarray]:
+        """q and reachable for a block ``(N, 6)`` of validated poses."""
+        legs = self._legs
+        n_pose = poses.shape[0]
+        feat_t = self._features_t(poses)
+        if isinstance(legs, LinearLegs):
+            q_legs = legs.q_from_features_t(feat_t).T
+            reach = np.ones((n_pose, legs.n), dtype=bool) if want_reach else _NO_REACH
+        else:
+            q_legs, reach = legs.q(legs.vectors(feat_t.T))
+        if self._yaw_axis:
+            q = np.concatenate([q_legs, poses[:, 5:6]], axis=1)
+            if want_reach:
+                reach = np.concatenate([reach, np.ones((n_pose, 1), dtype=bool)], axis=1)
+            return q, reach
+        return q_legs, reach
+
+    def _inverse_one(self, pose: list[float]) -> list[float]:
+        fast = self._fast_linear
+        if fast is not None:
+            total = sum(pose)  # NaN or inf anywhere makes this NaN or inf
+            if total - total == 0.0:
+                x, y, z, roll, pitch, yaw = pose
+                return fast.q_pose_one(rot_one(roll, pitch, yaw), x, y, z)
+        return self._inverse_one_checked(pose)[0]
+
+    def _inverse_one_checked(self, pose: list[float]) -> tuple[list[float], bool]:
+        _, q, reachable = self._eval_one(pose)
+        return q, reachable
+
+    def _eval_one(self, pose: list[float]) -> tuple[list, list[float], bool]:
+        """Leg vectors, actuator positions and reachability for one pose (plain floats)."""
+        for v in pose:
+            if not math.isfinite(v):
+                raise _bad_input("poses", np.asarray(pose))
+        m = self._leg_mask_list
+        x, y, z, roll, pitch, yaw = (v if keep else 0.0 for v, keep in zip(pose, m, strict=True))
+        legs = self._legs
+        d = legs.vectors_one(rot_one(roll, pitch, yaw), (x, y, z))
+        q, reachable = legs.q_one_checked(d)
+        if self._yaw_axis:
+            q.append(pose[5])
+        return d, q, reachable
+
+    def inverse(self, poses: Any) -> np.ndarray:
+        """Actuator positions for poses, in closed form.
+
+        Parameters
+        ----------
+        poses
+            ``(..., 6)`` [x, y, z, roll, pitch, yaw] (m, rad) from the neutral pose. Pose
+            components the machine cannot produce are held at zero (see :meth:`check`).
+
+        Returns
+        -------
+        ndarray ``(..., n)``
+            m (linear) or rad (rotary), from neutral. Where a crank cannot reach (rotary), the
+            angle of closest approach; :meth:`check` flags it.
+
+        Raises
+        ------
+        ConfigError
+            Wrong shape, NaN or inf in ``poses`` (the message names the element).
+        """
+        if isinstance(poses, np.ndarray):
+            if poses.shape == (6,):
+                return np.array(self._inverse_one(poses.tolist()))
+        elif (
+            isinstance(poses, list | tuple)
+            and len(poses) == 6
+            and not isinstance(poses[0], list | tuple | np.ndarray)
+        ):
+            return np.array(self._inverse_one([float(v) for v in poses]))
+        return self._inverse_batch(_as_poses(poses))[0]
+
+    def _inverse_batch(
+        self, arr: np.ndarray, want_reach: bool = False
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """q ``(..., n)`` and, when ``want_reach``, reachable ``(..., n)`` (else empty)."""
+        lead = arr.shape[:-1]
+        flat = arr.reshape(-1, 6)
+        total = flat.shape[0]
+        n = self.n_actuators
+        if total <= _CHUNK:
+            q, reach = self._ik_block(flat, want_reach)
+        else:
+            q = np.empty((total, n))
+            reach = np.empty((total, n), dtype=bool) if want_reach else _NO_REACH
+            for start in range(0, total, _CHUNK):
+                stop = min(start + _CHUNK, total)
+                q[start:stop], r = self._ik_block(flat[start:stop], want_reach)
+                if want_reach:
+                    reach[start:stop] = r
+        if not want_reach:
+            return q.reshape(*lead, n), _NO_REACH
+        return q.reshape(*lead, n), reach.reshape(*lead, n)
+
+    # --- Jacobian -----------------------------------------------------------------------
+    def jacobian(self, poses: Any) -> np.ndarray:
+        """``d q / d pose`` for poses ``(..., 6)``; returns ``(..., n, 6)``.
+
+        Columns of pose components the machine does not produce are zero (``inverse`` holds
+        them at zero). Angles are the Euler angles of the pose vector, not body rates.
+        """
+        arr = _as_poses(poses)
+        lead = arr.shape[:-1]
+        flat = arr.reshape(-1, 6)
+        n = self.n_actuators
+        if flat.shape[0] <= _JAC_CHUNK:
+            return self._jacobian_block(flat).reshape(*lead, n, 6)
+        out = np.empty((flat.shape[0], n, 6))
+        for start in range(0, flat.shape[0], _JAC_CHUNK):
+            out[start : start + _JAC_CHUNK] = self._jacobian_block(flat[start : start + _JAC_CHUNK])
+        return out.reshape(*lead, n, 6)
+
+    def _jacobian_block(self, flat: np.ndarray) -> np.ndarray:
+        legs = self._legs
+        m = self._leg_mask
+        ang = flat[:, 3:6] * m[3:6]
+        feat = np.empty((flat.shape[0], 13))
+        feat[:, :9] = rot9(ang)
+        feat[:, 9:12] = flat[:, 0:3] * m[0:3]
+        feat[:, 12] = 1.0
+        d = legs.vectors(feat)
+        q, _ = legs.q(d)
+        g = legs.gradient(d, q)  # (N, nl, 3)
+        dp = legs.anchor_derivatives(rot9_derivatives(ang))  # (N, 3, nl, 3)
+        jac = np.zeros((flat.shape[0], self.n_actuators, 6))
+        jac[:, : legs.n, 0:3] = g
+        jac[:, : legs.n, 3:6] = np.einsum("nij,nkij->nik", g, dp)
+        jac[:, : legs.n, :] *= m
+        if self._yaw_axis:
+            jac[:, -1, 5] = 1.0
+        return jac
+
+    def _jacobian_one(
+        self, pose: list[float], d: list | None = None, q: list[float] | None = None
+    ) -> np.ndarray:
+        """``(n, 6)`` Jacobian for one pose; ``d`` and ``q`` from :meth:`_eval_one` if known."""
+        if d is None or q is None:
+            d, q, _ = self._eval_one(pose)
+        x, y, z, roll, pitch, yaw = (
+            v if keep else 0.0 for v, keep in zip(pose, self._leg_mask_list, strict=True)
+        )
+        legs = self._legs
+        rows = legs.jacobian_one(d, q[: legs.n], (x, y, z), (roll, pitch, yaw))
+        jac: np.ndarray = np.array(rows, dtype=float)
+        if not self._all_dof_legs:
+            jac *= self._leg_mask
+        if self._yaw_axis:
+            jac = np.vstack([jac, [0.0, 0.0, 0.0, 0.0, 0.0, 1.0]])
+        return jac
+
+    # --- forward kinematics -------------------------------------------------------------
+    def forward(
+        self,
+        q: Any,
+        guess: Any = None,
+        *,
+        tol: float = 1e-12,
+        max_iter: int = 50,
+    ) -> FKResult:
+        """Pose for actuator positions, by Newton's method on the closed-form inverse.
+
+        Parameters
+        ----------
+        q
+            ``(n,)`` actuator positions (m or rad, from neutral).
+        guess
+            ``(6,)`` starting pose; the neutral pose when None.
+        tol
+            Convergence threshold on the max abs actuator residual (m or rad).
+        max_iter
+            Iteration limit.
+
+        Returns
+        -------
+        FKResult
+        """
+        qv = np.asarray(q, dtype=float)
+        if qv.shape != (self.n_actuators,):
+            raise ConfigError(f"q has shape {qv.shape}; expected ({self.n_actuators},)")
+        if not np.isfinite(qv).all():
+            raise _bad_input("q", qv)
+        pose = [0.0] * 6
+        idx = [int(k) for k in self._dof_idx]
+        if guess is not None:
+            g = np.asarray(guess, dtype=float)
+            if g.shape != (6,) or not np.isfinite(g).all():
+                raise ConfigError(f"guess = {g!r} is invalid; allowed: 6 finite numbers")
+            for k in idx:
+                pose[k] = float(g[k])
+        target = qv.tolist()
+        all_dof = len(idx) == 6
+        d, cur, _ = self._eval_one(pose)
+        r = [c - t for c, t in zip(cur, target, strict=True)]
+        sq = sum(v * v for v in r)
+        iterations = 0
+        # Newton with backtracking: a full step is taken whenever it lowers the residual (the
+        # usual case, quadratic convergence); otherwise, or when it leaves the region where
+        # every crank reaches its rod, the step is halved.
+        while max(map(abs, r)) > tol and iterations < max_iter:
+            iterations += 1
+            if iterations == 1 and guess is None:
+                step = (self._jac0_inv @ r).tolist()  # Jacobian at neutral, inverted once
+            else:
+                jac = self._jacobian_one(pose, d, cur)
+                if not all_dof:
+                    jac = jac[:, idx]
+                try:
+                    step = np.linalg.solve(jac, r).tolist()
+                except np.linalg.LinAlgError:
+                    break
+            if not all(math.isfinite(v) for v in step):
+                break
+            alpha = 1.0
+            for _ in range(30):
+                trial = pose[:]
+                for j, k in enumerate(idx):
+                    trial[k] -= alpha * step[j]
+                d_new, cur_new, reachable = self._eval_one(trial)
+                r_new = [c - t for c, t in zip(cur_new, target, strict=True)]
+                sq_new = sum(v * v for v in r_new)
+                if sq_new < sq and reachable:
+                    break
+                alpha *= 0.5
+            else:
+                break
+            pose, d, cur, r, sq = trial, d_new, cur_new, r_new, sq_new
+        residual = max(map(abs, r))
+        return FKResult(
+            pose=np.array(pose),
+            converged=bool(residual <= tol),
+            iterations=iterations,
+            residual=residual,
+        )
+
+    # --- checks -------------------------------------------------------------------------
+    def check(self, poses: Any) -> CheckResult:
+        """Per actuator: in stroke or not and by how much, reachable or not; as data.
+
+        Parameters
+        ----------
+        poses
+            ``(..., 6)`` poses (m, rad).
+
+        Returns
+        -------
+        CheckResult
+        """
+        arr = _as_poses(poses)
+        q, reach = self._inverse_batch(arr, want_reach=True)
+        above = q > self.q_max
+        below = q < self.q_min
+        overshoot = np.where(above, q - self.q_max, np.where(below, q - self.q_min, 0.0))
+        in_stroke = ~(above | below)
+        unsupported = (arr != 0.0) & ~self.dof_mask
+        ok = np.all(in_stroke & reach, axis=-1)
+        return CheckResult(
+            q=q,
+            in_stroke=in_stroke,
+            overshoot=overshoot,
+            reachable=reach,
+            unsupported=unsupported,
+            ok=ok,
+        )
+
+    def absolute(self, q: Any) -> np.ndarray:
+        """Pin-to-pin length (m) or crank angle from its zero direction (rad), ``(..., n)``."""
+        return np.asarray(q, dtype=float) + self.neutral_absolute
+
+    @property
+    def legs(self) -> LegSet:
+        """The leg set (anchors in SI) for force computations and plots."""
+        return self._legs
+
+    @property
+    def has_yaw_axis(self) -> bool:
+        """True when the last actuator is a direct yaw axis (turntable)."""
+        return self._yaw_axis
+
+
+def _default_drives(kinds: tuple[str, ...], q_min: np.ndarray) -> Drive:
+    """Drives for user geometries that name none: 5 mm lead, 10000 pulses/rev (linear) or
+    gear 50, 10000 pulses/rev (rotary), homed at the bottom of the usable stroke."""
+    parts = []
+    for i, kind in enumerate(kinds):
+        if kind == "linear":
+            parts.append(Drive.linear(0.005, 10000, [q_min[i]]))
+        else:
+            parts.append(Drive.rotary(50.0, 10000, [q_min[i]]))
+    return Drive.concat(*parts)
+
+
+def _anchors(name: str, value: Any, n: int) -> np.ndarray:
+    arr = np.asarray(value, dtype=float)
+    if arr.shape != (n, 3) or not np.isfinite(arr).all():
+        raise ConfigError(f"{name} = {value!r} is invalid; allowed: ({n}, 3) finite numbers (m)")
+    return arr
+
+
+def _names(value: Sequence[str] | None, n: int, prefix: str = "") -> tuple[str, ...]:
+    if value is None:
+        return tuple(f"{prefix}{i + 1}" for i in range(n))
+    return tuple(value)
+
+
+def _positive(name: str, value: Any) -> float:
+    v = float(value)
+    if not math.isfinite(v) or v <= 0:
+        raise ConfigError(f"{name} = {value!r} is invalid; allowed: a finite number > 0")
+    return v
+
+
+def _length_stroke(legs: LinearLegs, stroke: Any) -> tuple[np.ndarray, np.ndarray]:
+    arr = np.asarray(stroke, dtype=float)
+    if arr.shape == (2,):
+        arr = np.broadcast_to(arr, (legs.n, 2))
+    if arr.shape != (legs.n, 2) or not np.isfinite(arr).all() or np.any(arr[:, 0] >= arr[:, 1]):
+        raise ConfigError(
+            f"stroke = {stroke!r} is invalid; allowed: (min_length_m, max_length_m) with "
+            "min < max, or one such pair per leg"
+        )
+    if np.any(arr[:, 0] <= 0):
+        raise ConfigError(f"stroke = {stroke!r} is invalid; allowed: lengths > 0")
+    return arr[:, 0] - legs.length0, arr[:, 1] - legs.length0
+
+
+class Stewart6Linear(Platform):
+    """6-DOF hexapod with six linear actuators (electric cylinders), SI geometry.
+
+    Parameters
+    ----------
+    base_anchors
+        ``(6, 3)`` lower joint centres in the base frame (m).
+    platform_anchors
+        ``(6, 3)`` upper joint centres in the platform frame (m). Leg i joins base anchor i to
+        platform anchor i.
+    neutral_height
+        Height of the platform frame above the base frame at the neutral pose (m).
+    stroke
+        ``(min_length_m, max_length_m)`` usable pin-to-pin length, or ``(6, 2)`` per leg.
+    drives
+        Drives (pulses); default 5 mm lead, 10000 pulses/rev, homed at the usable minimum.
+    """
+
+    def __init__(
+        self,
+        base_anchors: Any,
+        platform_anchors: Any,
+        neutral_height: float,
+        stroke: Any,
+        *,
+        drives: Drive | None = None,
+        name: str = "stewart6-linear",
+        actuator_names: Sequence[str] | None = None,
+        description: str = "",
+    ) -> None:
+        legs = LinearLegs(
+            _anchors("base_anchors", base_anchors, 6),
+            _anchors("platform_anchors", platform_anchors, 6),
+            _finite("neutral_height", neutral_height),
+        )
+        q_min, q_max = _length_stroke(legs, stroke)
+        super().__init__(
+            name=name,
+            actuator_names=_names(actuator_names, 6),
+            legs=legs,
+            leg_pose_mask=[True] * 6,
+            dof_mask=[True] * 6,
+            q_min=q_min,
+            q_max=q_max,
+            drives=drives,
+            description=description,
+        )
+
+
+class Seat3(Platform):
+    """3-actuator heave/pitch/roll seat: three linear legs, x, y and yaw held by a central
+    guide (so the platform frame origin is the centre of rotation).
+
+    Parameters are those of :class:`Stewart6Linear` with ``(3, 3)`` anchors.
+    """
+
+    def __init__(
+        self,
+        base_anchors: Any,
+        platform_anchors: Any,
+        neutral_height: float,
+        stroke: Any,
+        *,
+        drives: Drive | None = None,
+        name: str = "seat3",
+        actuator_names: Sequence[str] | None = None,
+        description: str = "",
+    ) -> None:
+        legs = LinearLegs(
+            _anchors("base_anchors", base_anchors, 3),
+            _anchors("platform_anchors", platform_anchors, 3),
+            _finite("neutral_height", neutral_height),
+        )
+        q_min, q_max = _length_stroke(legs, stroke)
+        mask = [False, False, True, True, True, False]
+        super().__init__(
+            name=name,
+            actuator_names=_names(actuator_names, 3),
+            legs=legs,
+            leg_pose_mask=mask,
+            dof_mask=mask,
+            q_min=q_min,
+            q_max=q_max,
+            drives=drives,
+            description=description,
+        )
+
+
+class Seat2Yaw(Platform):
+    """Two linear legs tilting the seat (pitch, roll) about a central universal joint at the
+    platform frame origin, on a turntable giving yaw (the IMAX "rotating axis", PA03).
+
+    The turntable carries the tilting mechanism, so the legs see roll and pitch only, and the
+    last actuator is the yaw angle itself.
+
+    Parameters
+    ----------
+    base_anchors, platform_anchors
+        ``(2, 3)`` leg joint centres (m), in the turntable frame and the platform frame.
+    neutral_height
+        Height of the universal joint (platform frame origin) above the base frame (m).
+    stroke
+        ``(min_length_m, max_length_m)`` of the legs.
+    yaw_range
+        ``(min_rad, max_rad)`` usable yaw.
+    """
+
+    def __init__(
+        self,
+        base_anchors: Any,
+        platform_anchors: Any,
+        neutral_height: float,
+        stroke: Any,
+        yaw_range: Any,
+        *,
+        drives: Drive | None = None,
+        name: str = "seat2-yaw",
+        actuator_names: Sequence[str] | None = None,
+        description: str = "",
+    ) -> None:
+        legs = LinearLegs(
+            _anchors("base_anchors", base_anchors, 2),
+            _anchors("platform_anchors", platform_anchors, 2),
+            _finite("neutral_height", neutral_height),
+        )
+        q_min, q_max = _length_stroke(legs, stroke)
+        yr = np.asarray(yaw_range, dtype=float)
+        if yr.shape != (2,) or not np.isfinite(yr).all() or not (yr[0] < 0 < yr[1]):
+            raise ConfigError(
+                f"yaw_range = {yaw_range!r} is invalid; allowed: (min_rad < 0 < max_rad)"
+            )
+        super().__init__(
+            name=name,
+            actuator_names=_names(actuator_names, 3),
+            legs=legs,
+            leg_pose_mask=[False, False, False, True, True, False],
+            dof_mask=[False, False, False, True, True, True],
+            q_min=[*q_min, yr[0]],
+            q_max=[*q_max, yr[1]],
+            drives=drives,
+            yaw_axis=True,
+            description=description,
+        )
+
+
+class Stewart6Rotary(Platform):
+    """6-DOF hexapod with crank-and-rod legs (servo arms), SI geometry.
+
+    Parameters
+    ----------
+    base_pivots
+        ``(6, 3)`` crank pivot centres in the base frame (m).
+    crank_axes
+        ``(6, 3)`` crank axis directions (unit vectors, normalised here).
+    crank_zero_dirs
+        ``(6, 3)`` crank direction at angle 0, perpendicular to the axis; the crank angle
+        grows by the right-hand rule about the axis.
+    crank_length, rod_length
+        Scalars or ``(6,)`` (m).
+    platform_anchors
+        ``(6, 3)`` rod ends in the platform frame (m).
+    neutral_height
+        Height of the platform frame above the base frame at the neutral pose (m).
+    crank_range
+        ``(min_rad, max_rad)`` usable crank angle from the zero direction, or ``(6, 2)``.
+    """
+
+    def __init__(
+        self,
+        base_pivots: Any,
+        crank_axes: Any,
+        crank_zero_dirs: Any,
+        crank_length: Any,
+        rod_length: Any,
+        platform_anchors: Any,
+        neutral_height: float,
+        crank_range: Any,
+        *,
+        drives: Drive | None = None,
+        name: str = "stewart6-rotary",
+        actuator_names: Sequence[str] | None = None,
+        description: str = "",
+    ) -> None:
+        axes = _anchors("crank_axes", crank_axes, 6)
+        norms = np.linalg.norm(axes, axis=1)
+        if np.any(norms < 1e-9):
+            raise ConfigError(f"crank_axes = {crank_axes!r} is invalid; allowed: nonzero vectors")
+        axes = axes / norms[:, None]
+        zero = _anchors("crank_zero_dirs", crank_zero_dirs, 6)
+        zero = zero - np.einsum("ij,ij->i", zero, axes)[:, None] * axes
+        zn = np.linalg.norm(zero, axis=1)
+        if np.any(zn < 1e-9):
+            raise ConfigError(
+                f"crank_zero_dirs = {crank_zero_dirs!r} is invalid; allowed: vectors not "
+                "parallel to the crank axes"
+            )
+        zero = zero / zn[:, None]
+        crank = np.broadcast_to(np.asarray(crank_length, dtype=float), (6,))
+        rod = np.broadcast_to(np.asarray(rod_length, dtype=float), (6,))
+        for i in range(6):
+            _positive("crank_length", crank[i])
+            _positive("rod_length", rod[i])
+        legs = CrankLegs(
+            _anchors("base_pivots", base_pivots, 6),
+            _anchors("platform_anchors", platform_anchors, 6),
+            _finite("neutral_height", neutral_height),
+            axes,
+            zero,
+            crank,
+            rod,
+        )
+        cr = np.asarray(crank_range, dtype=float)
+        if cr.shape == (2,):
+            cr = np.broadcast_to(cr, (6, 2))
+        if cr.shape != (6, 2) or not np.isfinite(cr).all() or np.any(cr[:, 0] >= cr[:, 1]):
+            raise ConfigError(
+                f"crank_range = {crank_range!r} is invalid; allowed: (min_rad, max_rad), min < max"
+            )
+        super().__init__(
+            name=name,
+            actuator_names=_names(actuator_names, 6),
+            legs=legs,
+            leg_pose_mask=[True] * 6,
+            dof_mask=[True] * 6,
+            q_min=cr[:, 0] - legs.theta0,
+            q_max=cr[:, 1] - legs.theta0,
+            drives=drives,
+            description=description,
+        )
+
+
+def _finite(name: str, value: Any) -> float:
+    v = float(value)
+    if not math.isfinite(v):
+        raise ConfigError(f"{name} = {value!r} is invalid; allowed: a finite number")
+    return v
