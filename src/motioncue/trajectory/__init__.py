@@ -9,6 +9,16 @@ speed ``(q[k]-q[k-1])/dt``, acceleration ``(q[k]-2q[k-1]+q[k-2])/dt**2``, jerk
 from ._limits import ActuatorLimits, LimitCheck, check_trajectory, finite_differences
 from ._offline import OptimisedRide, limit_ride
 from ._realtime import LimiterState, RealtimeLimiter, braking_distance, braking_speed_cap
+from ._transition import (
+    Transition,
+    brake_to_rest,
+    park_path,
+    resume_path,
+    transition,
+    transition_q,
+    transition_through,
+    unpark_path,
+)
 
 __all__ = [
     "ActuatorLimits",
@@ -16,9 +26,17 @@ __all__ = [
     "LimiterState",
     "OptimisedRide",
     "RealtimeLimiter",
+    "Transition",
+    "brake_to_rest",
     "braking_distance",
     "braking_speed_cap",
     "check_trajectory",
     "finite_differences",
     "limit_ride",
+    "park_path",
+    "resume_path",
+    "transition",
+    "transition_q",
+    "transition_through",
+    "unpark_path",
 ]
