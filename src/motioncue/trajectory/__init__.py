@@ -19,12 +19,14 @@ from ._transition import (
     transition_through,
     unpark_path,
 )
+from ._workspace import PoseLimitResult, limit_pose
 
 __all__ = [
     "ActuatorLimits",
     "LimitCheck",
     "LimiterState",
     "OptimisedRide",
+    "PoseLimitResult",
     "RealtimeLimiter",
     "Transition",
     "brake_to_rest",
@@ -32,6 +34,7 @@ __all__ = [
     "braking_speed_cap",
     "check_trajectory",
     "finite_differences",
+    "limit_pose",
     "limit_ride",
     "park_path",
     "resume_path",
