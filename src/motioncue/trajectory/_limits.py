@@ -201,12 +201,11 @@ class ActuatorLimits:
             )
         rows = []
         for i in range(self.n_actuators):
-            a = float(self.q_min[i]) * ppu[i]
-            b = float(self.q_max[i]) * ppu[i]
-            lo_real, hi_real = min(a, b), max(a, b)
-            offset = _pulse_offset(platform, i)
-            lo = int(np.ceil(lo_real + offset - 1e-6))
-            hi = int(np.floor(hi_real + offset + 1e-6))
+            q_home = _pulse_origin(platform, i)  # q at pulse 0
+            a = (float(self.q_min[i]) - q_home) * ppu[i]
+            b = (float(self.q_max[i]) - q_home) * ppu[i]
+            lo = int(np.ceil(min(a, b) - 1e-6))
+            hi = int(np.floor(max(a, b) + 1e-6))
             lo, hi = _inside(platform, self, i, lo, hi)
             rows.append(
                 {
@@ -224,18 +223,21 @@ class ActuatorLimits:
         return rows
 
     def to_json(self, platform: Any = None) -> str:
-        """JSON of :meth:`to_dict`, plus ``pulses`` (see :meth:`to_pulses_table`) if given."""
+        """JSON of :meth:`to_dict`; with a platform each actuator entry also carries the
+        pulse keys of :meth:`to_pulses_table` (``stroke_pulses``, ``max_speed_pulses_s``,
+        ``max_accel_pulses_s2``, ...)."""
         data = self.to_dict()
         if platform is not None:
-            data["pulses"] = self.to_pulses_table(platform)
+            for row, pulses in zip(data["actuators"], self.to_pulses_table(platform), strict=True):
+                row.update(pulses)
         return json.dumps(data, indent=2)
 
 
-def _pulse_offset(platform: Any, i: int) -> float:
-    """Pulse count of q = 0 for actuator i (drives may map q to pulses with an offset)."""
+def _pulse_origin(platform: Any, i: int) -> float:
+    """Actuator position at pulse 0 (the homed position) of actuator i."""
     n = len(np.asarray(platform.drives.pulses_per_unit).reshape(-1))
-    p0 = np.asarray(platform.drives.to_pulses(np.zeros(n)), dtype=float).reshape(-1)
-    return float(p0[i])
+    zero = np.zeros(n, dtype=np.int64)
+    return float(np.asarray(platform.drives.from_pulses(zero), dtype=float).reshape(-1)[i])
 
 
 def _inside(platform: Any, lim: ActuatorLimits, i: int, lo: int, hi: int) -> tuple[int, int]:

@@ -111,8 +111,8 @@ class _ChunkSolver:
         tail_on = ca.SX.sym("tail_on")
         full = ca.vertcat(hist, x, tail)
         n_in = h + L  # frames up to the window's end
-        d1 = full[h : n_in] - full[h - 1 : n_in - 1]
-        d2 = full[h : n_in] - 2 * full[h - 1 : n_in - 1] + full[h - 2 : n_in - 2]
+        d1 = full[h:n_in] - full[h - 1 : n_in - 1]
+        d2 = full[h:n_in] - 2 * full[h - 1 : n_in - 1] + full[h - 2 : n_in - 2]
         # join differences that reach into the fixed tail (multiplied by tail_on)
         t1 = tail_on * (full[n_in] - full[n_in - 1])
         t2 = tail_on * ca.vertcat(
@@ -123,7 +123,7 @@ class _ChunkSolver:
         self.n_rows = [L, 1, L, 2]
         if jerk:
             d3 = (
-                full[h : n_in]
+                full[h:n_in]
                 - 3 * full[h - 1 : n_in - 1]
                 + 3 * full[h - 2 : n_in - 2]
                 - full[h - 3 : n_in - 3]
@@ -137,7 +137,7 @@ class _ChunkSolver:
             self.n_rows += [L, 3]
         f = 0.5 * ca.sum1(w * (x - xd) ** 2)
         p = ca.vertcat(xd, w, hist, tail, tail_on)
-        opts = {
+        opts: dict[str, Any] = {
             "ipopt": {
                 "print_level": 0,
                 "sb": "yes",
@@ -152,7 +152,9 @@ class _ChunkSolver:
         self.jerk = jerk
         self.h = h
         self.length = L
-        self.solver = ca.nlpsol("ride_chunk", "ipopt", {"x": x, "p": p, "f": f, "g": ca.vertcat(*g)}, opts)
+        self.solver = ca.nlpsol(
+            "ride_chunk", "ipopt", {"x": x, "p": p, "f": f, "g": ca.vertcat(*g)}, opts
+        )
 
     def solve(
         self,
@@ -186,9 +188,7 @@ def _bad_frames(q: np.ndarray, dt: float, lim: ActuatorLimits, hist: np.ndarray)
         bad |= np.abs(v) > lim.v_max
         bad |= np.abs(a) > lim.a_max
         if lim.j_max is not None and h >= 3:
-            j = (
-                full[h:] - 3 * full[h - 1 : -1] + 3 * full[h - 2 : -2] - full[h - 3 : -3]
-            ) / dt**3
+            j = (full[h:] - 3 * full[h - 1 : -1] + 3 * full[h - 2 : -2] - full[h - 3 : -3]) / dt**3
             bad |= np.abs(j) > lim.j_max
         adt = lim.a_max * dt
         n = np.floor(np.abs(v) / adt)
@@ -315,7 +315,7 @@ def limit_ride(
     n_stop = limits.braking_steps(dt_s)
     if jerk:
         n_stop += int(np.max(np.ceil(limits.a_max / (limits.j_max * dt_s)))) + 1  # type: ignore[operator]
-    pad = max(int(round(pad_s / dt_s)), 2 * n_stop)
+    pad = max(round(pad_s / dt_s), 2 * n_stop)
     overlap = max(2 * n_stop, _BLOCK)
     chunk = max(int(chunk), overlap + _BLOCK)
     chunk = _BLOCK * math.ceil(chunk / _BLOCK)

@@ -125,7 +125,7 @@ def _sample_s(grid: np.ndarray, sd: np.ndarray, rate_hz: float) -> tuple[np.ndar
     dt_seg = 2.0 * ds / np.maximum(sd[:-1] + sd[1:], 1e-300)
     t_grid = np.r_[0.0, np.cumsum(dt_seg)]
     duration = float(t_grid[-1])
-    m = int(math.ceil(duration * rate_hz - 1e-9)) + 1
+    m = math.ceil(duration * rate_hz - 1e-9) + 1
     t = np.arange(m) / rate_hz
     seg = np.clip(np.searchsorted(t_grid, t, side="right") - 1, 0, ds.size - 1)
     tau = np.minimum(t - t_grid[seg], dt_seg[seg])
@@ -235,7 +235,7 @@ def transition_q(
         return a + np.asarray(s)[..., None] * (b - a)
 
     def pose_of_s(s: np.ndarray) -> np.ndarray:
-        return np.full(np.shape(s) + (6,), np.nan)
+        return np.full((*np.shape(s), 6), np.nan)
 
     return _run(q_of_s, pose_of_s, limits, rate_hz, n_grid)
 
@@ -262,7 +262,7 @@ def brake_to_rest(limiter: RealtimeLimiter, state: Any, max_frames: int = 100000
         q + math.copysign(braking_distance(v, float(lim.a_max[i]), limiter.dt_s), v)
         for i, (q, v) in enumerate(zip(state.q, state.v, strict=True))
     ]
-    frames = []
+    frames: list[list[float]] = []
     while any(v != 0.0 for v in state.v) and len(frames) < max_frames:
         frames.append(limiter.step(state, target))
     return np.asarray(frames, dtype=float).reshape(-1, lim.n_actuators)

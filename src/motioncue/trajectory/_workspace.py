@@ -77,7 +77,9 @@ def _feasible(platform: Any, poses: np.ndarray, limits: ActuatorLimits | None) -
     return ok
 
 
-def limit_pose(platform: Any, pose: Any, *, limits: ActuatorLimits | None = None) -> PoseLimitResult:
+def limit_pose(
+    platform: Any, pose: Any, *, limits: ActuatorLimits | None = None
+) -> PoseLimitResult:
     """Replace unreachable poses by the farthest reachable pose towards neutral (see module).
 
     Parameters
