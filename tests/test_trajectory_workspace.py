@@ -62,3 +62,20 @@ def test_narrower_limits_are_respected():
     res = limit_pose(p, [0.0, 0.0, 0.06, 0.0, 0.0, 0.0], limits=lim)
     assert res.status == "clamped"
     assert np.all(lim.contains(p.inverse(res.pose)))
+
+
+def test_single_pose_fast_path_agrees_with_the_batch_path():
+    p = motioncue.load_platform("stewart6-linear")
+    rng = np.random.default_rng(5)
+    req = rng.normal(0.0, SIGMA * 0.3, (300, 6))
+    batch = limit_pose(p, req)
+    singles = [limit_pose(p, x) for x in req]
+    assert {r.status for r in singles} == {"ok", "clamped"}
+    for r, s_b, st_b, x in zip(singles, batch.scale, batch.status, req, strict=True):
+        assert r.status == st_b
+        assert p.check(r.pose).ok
+        np.testing.assert_allclose(r.pose, r.scale * x, atol=1e-15)
+        # same boundary to the batch grid's resolution (17**-3 per bracket)
+        assert abs(r.scale - s_b) <= 17.0**-3 + 1e-9
+        if r.status == "ok":
+            assert np.array_equal(r.pose, x)

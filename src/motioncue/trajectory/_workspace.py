@@ -16,6 +16,13 @@ Rule (documented, deterministic):
 5. NaN/inf poses become neutral (status ``"invalid"``); if neutral itself is infeasible
    (limits narrower than the neutral pose) the result is neutral with status
    ``"unreachable"``.
+
+Single poses on platforms whose actuators are all linear (no reachability question, only
+the stroke) take a faster path for the real-time loop: the same ray, with ``s`` found by a
+bracketing root search (Illinois variant of regula falsi) on the largest stroke overshoot,
+to within 1e-7, keeping the bracket ``[feasible, infeasible]``; the returned pose is always
+an evaluated feasible one. Where the feasible part of the ray is an interval (the usual,
+star-shaped workspace) both paths find the same boundary (to the grid's resolution).
 """
 
 from __future__ import annotations
@@ -93,6 +100,8 @@ def limit_pose(
     """
     arr = np.array(pose, dtype=float)
     single = arr.ndim == 1
+    if single and arr.shape == (6,) and all(k == "linear" for k in platform.actuator_kinds):
+        return _limit_one_linear(platform, arr, limits)
     poses = arr.reshape(-1, 6) if arr.size % 6 == 0 and arr.shape[-1:] == (6,) else None
     if poses is None or arr.ndim > 2:
         raise ConfigError(f"pose has shape {arr.shape}; expected (6,) or (N, 6)")
@@ -137,3 +146,61 @@ def limit_pose(
     if single:
         return PoseLimitResult(out[0], str(status[0]), float(scale[0]), amount[0], dropped[0], q[0])
     return PoseLimitResult(out, status.astype(str), scale, amount, dropped, q)
+
+
+def _limit_one_linear(
+    platform: Any, pose: np.ndarray, limits: ActuatorLimits | None
+) -> PoseLimitResult:
+    """Fast single-pose path for all-linear platforms (see module docstring)."""
+    mask = np.asarray(platform.dof_mask, dtype=bool)
+    if not np.all(np.isfinite(pose)):
+        zero = np.zeros(6)
+        q0 = np.asarray(platform.inverse(zero), dtype=float)
+        return PoseLimitResult(zero, "invalid", 0.0, zero.copy(), np.zeros(6, bool), q0)
+    dropped = (pose != 0.0) & ~mask
+    req = np.where(mask, pose, 0.0)
+    lo_b = platform.q_min if limits is None else np.maximum(platform.q_min, limits.q_min)
+    hi_b = platform.q_max if limits is None else np.minimum(platform.q_max, limits.q_max)
+    tol = 1e-12
+    lo_l = [float(x) for x in lo_b]
+    hi_l = [float(x) for x in hi_b]
+    base = req.tolist()
+    inverse = platform.inverse
+
+    def over(sc: float) -> tuple[float, np.ndarray]:
+        q = inverse([sc * b for b in base])
+        worst = -np.inf
+        for qi, a, b in zip(q.tolist(), lo_l, hi_l, strict=True):
+            worst = max(worst, qi - b, a - qi)
+        return worst + tol, q
+
+    # feasible = inside the stroke by 1e-12 (m), room for the last-bit differences between
+    # the platform's single-pose and batch inverse kinematics
+    g1, q1 = over(1.0)
+    if g1 - tol <= 0.0:
+        return PoseLimitResult(req, "ok", 1.0, pose - req, dropped, q1)
+    g0, q0 = over(0.0)
+    if g0 > 0.0:
+        zero = np.zeros(6)
+        return PoseLimitResult(zero, "unreachable", 0.0, pose.copy(), dropped, q0)
+    lo, hi, glo, ghi, qlo = 0.0, 1.0, g0, g1, q0
+    side = 0
+    for _ in range(60):
+        if hi - lo <= 1e-7:
+            break
+        sc = (lo * ghi - hi * glo) / (ghi - glo)
+        if not lo < sc < hi:
+            sc = 0.5 * (lo + hi)
+        g, q = over(sc)
+        if g <= 0.0:
+            lo, glo, qlo = sc, g, q
+            if side == -1:
+                ghi *= 0.5
+            side = -1
+        else:
+            hi, ghi = sc, g
+            if side == 1:
+                glo *= 0.5
+            side = 1
+    out = lo * req
+    return PoseLimitResult(out, "clamped", lo, pose - out, dropped, qlo)
