@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 from scipy.optimize import LinearConstraint, minimize
 
 from motioncue.trajectory import (
@@ -143,3 +145,23 @@ def test_bad_arguments_are_named():
         limit_ride(np.zeros((10, 3)), DT, _lim())
     with pytest.raises(ConfigError, match="weights"):
         limit_ride(np.zeros((10, 2)) + 0.1, DT, _lim(), weights=-np.ones(10))
+
+
+@settings(max_examples=12, deadline=None)
+@given(st.integers(0, 2**32 - 1), st.integers(30, 260), st.sampled_from([0.004, 0.01, 0.02]))
+def test_random_rides_are_feasible_and_no_worse_than_the_limiter(seed, N, dt):
+    rng = np.random.default_rng(seed)
+    n = int(rng.integers(1, 4))
+    lim = ActuatorLimits(
+        rng.uniform(-0.1, 0.0, n), rng.uniform(0.05, 0.2, n), rng.uniform(0.1, 1.0, n),
+        rng.uniform(1.0, 20.0, n),
+    )  # fmt: skip
+    span = lim.q_max - lim.q_min
+    q = lim.q_min + span * np.cumsum(rng.normal(0, 0.1, (N, n)), axis=0)
+    q[rng.integers(0, N)] = rng.choice([np.nan, 1e6, -1e6])
+    res = limit_ride(q, dt, lim)
+    assert res.check.ok, res.check
+    assert np.all(np.isfinite(res.q))
+    assert res.objective <= res.objective_realtime * (1 + 1e-12)
+    if res.status == "unchanged":
+        assert np.array_equal(res.q, q)
