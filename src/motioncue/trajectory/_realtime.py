@@ -200,7 +200,9 @@ class RealtimeLimiter:
     def is_admissible(self, q: Any, v: Any = None) -> bool:
         """Whether ``(q, v)`` is a state from which the limits can always be kept.
 
-        Rounding slack: 1e-12 (SI) on positions, one part in 1e9 on speeds.
+        Rounding slack: 1e-9 (SI) on positions and stopping points (float round-off in
+        the speed, divided by dt, moves the discrete stopping point by ~1e-12 per frame near
+        a stroke end), one part in 1e9 on speeds.
         """
         lim, dt = self.limits, self._dt
         qa = np.asarray(q, dtype=float).reshape(-1)
@@ -211,14 +213,14 @@ class RealtimeLimiter:
             qi, vi = float(qa[i]), float(va[i])
             if not (math.isfinite(qi) and math.isfinite(vi)):
                 return False
-            if not lim.q_min[i] - 1e-12 <= qi <= lim.q_max[i] + 1e-12:
+            if not lim.q_min[i] - 1e-9 <= qi <= lim.q_max[i] + 1e-9:
                 return False
             if abs(vi) > lim.v_max[i] * (1.0 + 1e-9):
                 return False
             d = braking_distance(vi, float(lim.a_max[i]), dt)
-            if vi > 0 and qi + d > lim.q_max[i] + 1e-12:
+            if vi > 0 and qi + d > lim.q_max[i] + 1e-9:
                 return False
-            if vi < 0 and qi - d < lim.q_min[i] - 1e-12:
+            if vi < 0 and qi - d < lim.q_min[i] - 1e-9:
                 return False
         return True
 
