@@ -271,3 +271,12 @@ def test_construction_is_validated():
         RealtimeLimiter(ActuatorLimits([0.0], [0.3], [0.4], [6.0]), 0.0)
     with pytest.raises(ConfigError, match="jerk"):
         RealtimeLimiter(ActuatorLimits([0.0], [0.3], [0.4], [6.0], [100.0]), 0.01)
+
+
+def test_wrong_target_length_is_refused():
+    lim = ActuatorLimits([0.0, 0.0], [0.3, 0.3], [0.4, 0.4], [6.0, 6.0])
+    rt = RealtimeLimiter(lim, 0.01)
+    state = rt.initial_state([0.1, 0.1])
+    with pytest.raises(ConfigError, match="expected 2"):
+        rt.step(state, [0.1])
+    assert state.n_frames == 0

@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 import motioncue
 from motioncue import LimitError
@@ -11,6 +13,7 @@ from motioncue.trajectory import (
     ActuatorLimits,
     RealtimeLimiter,
     check_trajectory,
+    limit_pose,
     park_path,
     resume_path,
     transition,
@@ -127,3 +130,32 @@ def test_path_outside_the_stroke_is_refused(hexapod, hex_limits):
 def test_zero_length_transition_is_one_frame(hexapod, hex_limits):
     tr = transition(hexapod, POSES[0][0], POSES[0][0], hex_limits, 100.0)
     assert tr.n_frames == 1 and tr.duration_s == 0.0
+
+
+@settings(max_examples=25, deadline=None)
+@given(
+    st.sampled_from(["stewart6-linear", "stewart6-rotary", "seat3", "seat2-yaw"]),
+    st.integers(0, 2**32 - 1),
+    st.sampled_from([50.0, 100.0, 200.0]),
+)
+def test_random_transitions_respect_every_limit_when_sampled(name, seed, rate):
+    p = motioncue.load_platform(name)
+    rng = np.random.default_rng(seed)
+    kind_scale = np.where(np.array(p.actuator_kinds) == "rotary", 10.0, 1.0)
+    lim = ActuatorLimits(
+        p.q_min, p.q_max, rng.uniform(0.05, 0.4, p.n_actuators) * kind_scale,
+        rng.uniform(0.5, 8.0, p.n_actuators) * kind_scale,
+    )  # fmt: skip
+    ends = limit_pose(p, rng.normal(0.0, [0.03, 0.03, 0.02, 0.1, 0.1, 0.3], (2, 6))).pose
+    try:
+        tr = transition(p, ends[0], ends[1], lim, rate)
+    except LimitError:
+        # only allowed when the straight line leaves the workspace
+        s = np.linspace(0, 1, 201)[:, None]
+        assert not np.all(p.check(ends[0] + s * (ends[1] - ends[0])).ok)
+        return
+    dt = 1.0 / rate
+    padded = np.concatenate([tr.q, tr.q[-1:], tr.q[-1:]])
+    chk = check_trajectory(padded, dt, lim, history=np.stack([tr.q[0], tr.q[0]]))
+    assert chk.ok, chk
+    np.testing.assert_allclose(tr.poses[-1], ends[1], atol=1e-12)

@@ -27,7 +27,9 @@ Solution strategy (so that 10-minute rides work):
    corrected towards the limits), then checked with :func:`check_trajectory`;
 5. the objective is compared with the real-time limiter's output on the same input; if the
    limiter happened to be closer (possible in principle because windows and chunks are
-   local), the limiter's output is returned (status ``"realtime"``).
+   local), the limiter's output is returned (status ``"realtime"``). With a jerk limit the
+   limiter's output competes only when it happens to meet the jerk limit too. If no
+   candidate meets every limit, :class:`~motioncue.LimitError` is raised (never returned).
 
 The input is returned unchanged (status ``"unchanged"``) when it is already feasible.
 Non-finite desired frames get weight 0 (the optimiser bridges them).
@@ -42,7 +44,7 @@ from typing import Any
 
 import numpy as np
 
-from .._errors import ConfigError
+from .._errors import ConfigError, LimitError
 from ._limits import ActuatorLimits, LimitCheck, check_trajectory
 from ._realtime import RealtimeLimiter
 
@@ -391,8 +393,11 @@ def limit_ride(
     q_fin = rt.run(state2, q_opt)
     n_rep = int(state2.n_clamped)
     out = result(q_fin, "optimised", n_windows, n_rep)
-    if not out.check.ok or out.objective > obj_rt:
-        fallback = result(q_rt, "realtime", n_windows, n_rep)
-        if fallback.check.ok or not out.check.ok:
-            return fallback
+    fallback = result(q_rt, "realtime", n_windows, n_rep)
+    # the real-time limiter's output competes only where it meets every limit (it does not
+    # enforce jerk, so with a jerk limit it may not)
+    if fallback.check.ok and (not out.check.ok or out.objective > obj_rt):
+        return fallback
+    if not out.check.ok:
+        raise LimitError(f"no trajectory meeting every limit was found: {out.check}")
     return out

@@ -251,6 +251,8 @@ class RealtimeLimiter:
         """Next frame (n,) for a target (n,); updates ``state``. Never returns NaN/inf."""
         if isinstance(q_target, np.ndarray):
             q_target = q_target.tolist()
+        if len(q_target) != len(state.q):
+            raise ConfigError(f"target has {len(q_target)} values; expected {len(state.q)}")
         dt = self._dt
         inv_dt = self._inv_dt
         qs = state.q

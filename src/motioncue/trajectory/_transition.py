@@ -20,6 +20,7 @@ toppra's own solver tolerance). A transition that still fails raises
 
 from __future__ import annotations
 
+import logging
 import math
 from dataclasses import dataclass
 from typing import Any
@@ -100,7 +101,6 @@ def _time_parametrise(
     import toppra.algorithm as algo
     import toppra.constraint as constraint
 
-    ta.setup_logging("WARNING")
     path = ta.SplineInterpolator(ss, qs)
     v = limits.v_max * scale
     a = limits.a_max * scale
@@ -109,11 +109,24 @@ def _time_parametrise(
         constraint.JointAccelerationConstraint(np.stack([-a, a], axis=1)),
     ]
     # uniform grid, refined geometrically near both ends where short acceleration phases
-    # of long moves live (a phase shorter than a grid interval would be stretched)
+    # of long moves live (a phase shorter than a grid interval would be stretched); toppra
+    # can fail on the tiny end intervals of an ill-conditioned path, so the plain uniform
+    # grid is the fallback
+    uniform = np.linspace(0.0, 1.0, n_grid + 1)
     ends = np.geomspace(1e-5, 1.0 / n_grid, 16)
-    grid = np.unique(np.concatenate([np.linspace(0.0, 1.0, n_grid + 1), ends, 1.0 - ends]))
-    inst = algo.TOPPRA(cons, path, gridpoints=grid, parametrizer="ParametrizeConstAccel")
-    _sdd, sd, _v = inst.compute_parameterization(0.0, 0.0)
+    refined = np.unique(np.concatenate([uniform, ends, 1.0 - ends]))
+    sd = None
+    logger = logging.getLogger("toppra")
+    level = logger.level
+    logger.setLevel(logging.ERROR)  # a failed grid is handled here, not worth a warning
+    try:
+        for grid in (refined, uniform):
+            inst = algo.TOPPRA(cons, path, gridpoints=grid, parametrizer="ParametrizeConstAccel")
+            _sdd, sd, _v = inst.compute_parameterization(0.0, 0.0)
+            if sd is not None:
+                break
+    finally:
+        logger.setLevel(level)
     if sd is None:
         raise LimitError("toppra found no feasible time parametrisation for this path")
     return grid, np.maximum(np.asarray(sd, dtype=float), 0.0)
