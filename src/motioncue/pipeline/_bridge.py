@@ -1,0 +1,499 @@
+"""The live bridge: game telemetry -> washout -> cue gate -> workspace -> IK -> output, in real time.
+
+One :class:`Bridge` runs the loop in its own thread on absolute ``perf_counter`` deadlines
+(:class:`~motioncue.pipeline._realtime.Ticker`: sleep, then spin the last part). Telemetry is
+received apart, in the telemetry source's own thread; each tick reads only its newest sample.
+Per tick:
+
+1. newest sample (``source.latest()``, never blocks);
+2. cue gate (:class:`~motioncue.pipeline._realtime.CueGate`): live when the newest sample
+   is younger than ``gate.timeout_s`` and not paused, else the gain fades to 0 (parked). The
+   bridge starts parked and ramps in; while parked the washout state is reset so a resume
+   starts clean;
+3. washout step (streaming, explicit :class:`~motioncue.washout.WashoutState`) on the newest
+   sample, held between samples (the washout runs at the frame rate);
+4. blend ``pose = pose_park + gain * (cue - pose_park)``;
+5. workspace limiting (:func:`motioncue.trajectory.limit_pose`, which also returns the
+   inverse kinematics of the pose it keeps: ``platform.inverse``'s single-pose fast path);
+6. :meth:`OutputStage.emit <motioncue.pipeline._stream.OutputStage.emit>`: real-time
+   actuator limiter (limits tightened by the pulse rounding), pulses, frame encoder, send.
+   While parked the stage is driven to the park position itself.
+
+Every frame passes the limiter, whatever the telemetry carries, so every frame respects the
+limits table of ``motioncue limits``. On :meth:`Bridge.stop` the gate fades out, the stage
+parks at rest, then the loop ends.
+
+Timing figures (:class:`BridgeStats`):
+
+* *added latency*: for each frame that uses a sample for the first time, the time from
+  ``max(sample arrival stamp, tick deadline)`` to the return of the last ``transport.send``:
+  what the bridge adds once both the datagram and the frame slot are there;
+* *sample age*: from the datagram's arrival stamp to the same send, which also contains the
+  sample-and-hold wait for the next frame slot (between 0 and one frame period: inherent to
+  a fixed frame rate, since the game sends at its own rate and phase);
+* *jitter*: ``|interval between consecutive sends - period|``.
+"""
+
+from __future__ import annotations
+
+import math
+import sys
+import threading
+import time
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+from typing import Any, Protocol
+
+import numpy as np
+
+from .._errors import ConfigError, MotioncueError
+from ._realtime import CueGate, GateConfig, Ticker
+from ._stream import OutputStage
+
+__all__ = ["Bridge", "BridgeConfig", "BridgeStats", "TelemetryInput"]
+
+
+class TelemetryInput(Protocol):
+    """What the bridge needs from a telemetry source (``motioncue.telemetry.open_source``).
+
+    ``latest()`` returns the newest :class:`~motioncue.telemetry.TelemetrySample` (or None)
+    without blocking; ``stats`` maps outcome reasons (``"skipped: truncated"``...) and the
+    counters ``datagrams``, ``samples``, ``receive errors`` to counts.
+    """
+
+    def latest(self) -> Any: ...
+
+    @property
+    def stats(self) -> Mapping[str, int]: ...
+
+
+@dataclass(frozen=True)
+class BridgeConfig:
+    """How the live loop runs.
+
+    Attributes
+    ----------
+    rate_hz : float
+        Frame rate (and washout sample rate), in (0, 1000] Hz.
+    gate : GateConfig
+        Telemetry timeout and fade times.
+    spin_s : float
+        Busy-wait before each deadline (s), in [0, 0.01].
+    stats_window : int
+        Ticks kept for the percentiles (>= 10).
+    switch_interval_s : float or None
+        While running, the interpreter's thread switch interval is lowered to this (s) so
+        that another Python thread (the telemetry receiver, an in-process emulator) holds
+        the GIL for at most this long when the loop wakes; restored on stop. None: leave it.
+    """
+
+    rate_hz: float = 100.0
+    gate: GateConfig = field(default_factory=GateConfig)
+    spin_s: float = 0.001
+    stats_window: int = 20000
+    switch_interval_s: float | None = 0.0005
+
+    def __post_init__(self) -> None:
+        if not (math.isfinite(self.rate_hz) and 0.0 < self.rate_hz <= 1000.0):
+            raise ConfigError(f"rate_hz = {self.rate_hz!r} is invalid; allowed: (0, 1000] Hz")
+        if not (math.isfinite(self.spin_s) and 0.0 <= self.spin_s <= 0.01):
+            raise ConfigError(f"spin_s = {self.spin_s!r} is invalid; allowed: [0, 0.01] s")
+        if self.stats_window < 10:
+            raise ConfigError(f"stats_window = {self.stats_window!r} is invalid; allowed: >= 10")
+        s = self.switch_interval_s
+        if s is not None and not (math.isfinite(s) and 1e-5 <= s <= 0.1):
+            raise ConfigError(
+                f"switch_interval_s = {s!r} is invalid; allowed: None or [1e-5, 0.1] s"
+            )
+
+
+@dataclass(frozen=True)
+class BridgeStats:
+    """A snapshot of the bridge (see the module docstring for the timing definitions).
+
+    Attributes
+    ----------
+    state : str
+        ``"new"``, ``"parked"``, ``"fading in"``, ``"live"``, ``"fading out"``,
+        ``"stopping"``, ``"stopped"`` or ``"failed"``.
+    gain : float
+        Cue gate gain in [0, 1] (0 = parked).
+    frames_sent : int
+        Frames encoded and sent.
+    missed_deadlines : int
+        Frame slots skipped because the loop overran a whole period.
+    samples_in, datagrams_in : int
+        Telemetry samples and datagrams the source received.
+    rate_in_hz, rate_out_hz : float
+        Telemetry sample rate and frame rate over about the last second (nan if unknown).
+    jitter_p99_ms, latency_p50_ms, latency_p99_ms, latency_max_ms, age_p99_ms : float
+        Over the last ``stats_window`` ticks; nan before there is data.
+    limiter_clamped_frames : int
+        Frames the actuator limiter changed (beyond a feasible target stream).
+    pose_clamped, pose_invalid : int
+        Ticks whose pose the workspace limiting scaled back / found non-finite.
+    washout_bad_samples : int
+        Telemetry samples the washout held since the start (NaN, inf, spikes).
+    bad_packets : int
+        Datagrams the decoder skipped (truncated, foreign, non-finite...) plus receive errors.
+    packet_reasons : dict[str, int]
+        The source's counters by reason.
+    fade_ins, fade_outs : int
+        Times the gate started fading in / out.
+    park_q_error : float
+        ``max |q - q_park|`` of the last frame (SI); 0 when parked.
+    error : str or None
+        Why the loop stopped, if it failed.
+    """
+
+    state: str
+    gain: float
+    frames_sent: int
+    missed_deadlines: int
+    samples_in: int
+    datagrams_in: int
+    rate_in_hz: float
+    rate_out_hz: float
+    jitter_p99_ms: float
+    latency_p50_ms: float
+    latency_p99_ms: float
+    latency_max_ms: float
+    age_p99_ms: float
+    limiter_clamped_frames: int
+    pose_clamped: int
+    pose_invalid: int
+    washout_bad_samples: int
+    bad_packets: int
+    packet_reasons: dict[str, int]
+    fade_ins: int
+    fade_outs: int
+    park_q_error: float
+    error: str | None
+
+    def status_line(self) -> str:
+        """One line for a terminal status display."""
+        bad = ", ".join(
+            f"{k.split(': ', 1)[-1]} {v}"
+            for k, v in sorted(self.packet_reasons.items())
+            if v and (k.startswith("skipped") or k == "receive errors")
+        )
+
+        def f(x: float, fmt: str) -> str:
+            return "-" if math.isnan(x) else format(x, fmt)
+
+        return (
+            f"{self.state:<10} gain {self.gain:4.2f} | in {f(self.rate_in_hz, '5.1f')} Hz"
+            f" out {f(self.rate_out_hz, '5.1f')} Hz | jitter p99 {f(self.jitter_p99_ms, '.2f')}"
+            f" ms | latency p99 {f(self.latency_p99_ms, '.2f')} ms | clamped"
+            f" {self.limiter_clamped_frames} lim {self.pose_clamped} ws | bad"
+            f" {self.bad_packets}{f' ({bad})' if bad else ''} | missed {self.missed_deadlines}"
+        )
+
+
+class _Ring:
+    """Fixed-size float ring written by the loop thread, read (copied) by others."""
+
+    __slots__ = ("buf", "n")
+
+    def __init__(self, size: int) -> None:
+        self.buf = np.full(size, np.nan)
+        self.n = 0
+
+    def add(self, x: float) -> None:
+        self.buf[self.n % self.buf.size] = x
+        self.n += 1
+
+    def values(self, last: int | None = None) -> np.ndarray:
+        n, size = self.n, self.buf.size
+        data = self.buf.copy()
+        k = min(n, size) if last is None else min(n, size, last)
+        if k == 0:
+            return data[:0]
+        idx = (np.arange(n - k, n)) % size
+        v = data[idx]
+        return v[np.isfinite(v)]
+
+
+def _percentile_ms(v: np.ndarray, q: float) -> float:
+    return float(np.percentile(v, q) * 1e3) if v.size else math.nan
+
+
+class Bridge:
+    """The live loop, usable in-process (tests) and from ``motioncue bridge``.
+
+    Parameters
+    ----------
+    platform : motioncue.kinematics.Platform
+    controller
+        From :func:`motioncue.output.load_controller`.
+    cueing : motioncue.washout.CueingParams
+        Washout parameters (``load_cueing("racing")``).
+    source : TelemetryInput
+        A started telemetry source (``motioncue.telemetry.open_source("f1:20777")``) or any
+        object with ``latest()`` and ``stats``. Not closed by the bridge.
+    transport : motioncue.output.Transport
+        Where frames go (anything with ``send(data, *, t_s=None)``). Not closed by the bridge.
+    limits : motioncue.trajectory.ActuatorLimits
+        The limits table in SI (``ActuatorLimits.from_platform(platform, controller, ...)``).
+    config : BridgeConfig, optional
+
+    Use ``bridge.start()``, read ``bridge.stats`` at will, ``bridge.stop()`` to park and end
+    (``with Bridge(...) as b:`` does both). The platform is assumed parked and at rest at the
+    start (as after homing).
+    """
+
+    def __init__(
+        self,
+        platform: Any,
+        controller: Any,
+        cueing: Any,
+        source: TelemetryInput,
+        transport: Any,
+        limits: Any,
+        config: BridgeConfig | None = None,
+    ) -> None:
+        from motioncue.washout import ClassicalWashout
+
+        self.platform = platform
+        self.controller = controller
+        self.source = source
+        self.transport = transport
+        self.limits = limits
+        self.config = BridgeConfig() if config is None else config
+        cfg = self.config
+        if limits.n_actuators != platform.n_actuators:
+            raise ConfigError(
+                f"limits have {limits.n_actuators} actuators; platform {platform.name!r} has "
+                f"{platform.n_actuators}"
+            )
+        self.washout = ClassicalWashout(cueing, cfg.rate_hz)
+        self.washout_state = self.washout.initial_state()
+        self.gate = CueGate(cfg.gate)
+        # built here so that configuration errors surface before start()
+        self.stage = OutputStage(platform, controller, limits, cfg.rate_hz, transport)
+        self.period_s = 1.0 / cfg.rate_hz
+        self._pose_park = [float(v) for v in platform.pose_park]
+        self._stop = threading.Event()
+        self._thread: threading.Thread | None = None
+        self._state = "new"
+        self._error: str | None = None
+        self._bad_total = 0  # washout bad samples from states reset since the start
+        self._pose_clamped = 0
+        self._pose_invalid = 0
+        self._missed = 0
+        self._park_err = 0.0
+        w = cfg.stats_window
+        self._sent_at = _Ring(w)  # perf_counter when each frame's send returned
+        self._latency = _Ring(w)
+        self._age = _Ring(w)
+        self._rate_in_prev: tuple[float, int] | None = None
+        self._rate_in = math.nan
+        self._old_switch: float | None = None
+
+    # ------------------------------------------------------------------ control
+    def start(self) -> Bridge:
+        """Start the loop thread (once). Returns self."""
+        if self._thread is not None:
+            raise MotioncueError("this bridge was already started; make a new one")
+        s = self.config.switch_interval_s
+        if s is not None:
+            self._old_switch = sys.getswitchinterval()
+            sys.setswitchinterval(min(s, self._old_switch))
+        self._state = "parked"
+        # not a daemon: the interpreter waits for the park to finish before exiting
+        self._thread = threading.Thread(target=self._run, name="motioncue-bridge")
+        self._thread.start()
+        return self
+
+    def stop(self, timeout_s: float | None = None) -> BridgeStats:
+        """Fade out, park at rest, end the loop; returns the final stats.
+
+        Parameters
+        ----------
+        timeout_s : float, optional
+            How long to wait for the park (default: the fade-out time plus an upper bound
+            of the park from anywhere, plus 2 s).
+        """
+        self._stop.set()
+        if self._thread is not None:
+            if timeout_s is None:
+                timeout_s = (
+                    self.config.gate.fade_out_s
+                    + self.stage.park_frames_bound() * self.period_s
+                    + 2.0
+                )
+            self._thread.join(timeout_s)
+            if self._thread.is_alive():
+                self._error = self._error or f"loop did not finish parking within {timeout_s} s"
+        self._restore_switch()
+        return self.stats
+
+    def wait(self, timeout_s: float | None = None) -> bool:
+        """Block until the loop thread ends (or the timeout); True if it ended."""
+        if self._thread is None:
+            return True
+        self._thread.join(timeout_s)
+        return not self._thread.is_alive()
+
+    @property
+    def running(self) -> bool:
+        return self._thread is not None and self._thread.is_alive()
+
+    def __enter__(self) -> Bridge:
+        return self.start()
+
+    def __exit__(self, *exc: object) -> None:
+        self.stop()
+
+    def _restore_switch(self) -> None:
+        if self._old_switch is not None:
+            sys.setswitchinterval(self._old_switch)
+            self._old_switch = None
+
+    # ------------------------------------------------------------------ the loop
+    def _run(self) -> None:
+        try:
+            self._loop()
+            self._state = "stopped"
+        except BaseException as exc:  # recorded, reported by stats/stop; never silent
+            self._error = f"{type(exc).__name__}: {exc}"
+            self._state = "failed"
+
+    def _loop(self) -> None:
+        cfg = self.config
+        period = self.period_s
+        source = self.source
+        gate = self.gate
+        washout, wstate = self.washout, self.washout_state
+        stage = self.stage
+        platform, limits = self.platform, self.limits
+        park = self._pose_park
+        q_park = [float(v) for v in platform.q_park]
+        from motioncue.trajectory import limit_pose
+
+        clock = time.perf_counter
+        stop = self._stop
+        cue = [0.0] * 6
+        pose = [0.0] * 6
+        clean = True
+        last_sample_t = math.nan
+        stop_ticks = -1
+        max_stop_ticks = (
+            math.ceil(cfg.gate.fade_out_s / period) + stage.park_frames_bound() + 10
+        )
+        sent_at, lat, age = self._sent_at, self._latency, self._age
+        ticker = Ticker(period, cfg.spin_s)
+        while True:
+            deadline = ticker.wait()
+            sample = source.latest()
+            now = clock()
+            stopping = stop.is_set()
+            if stopping:
+                stop_ticks += 1
+            if sample is None:
+                gain = gate.update(now, None, True)
+            else:
+                gain = gate.update(now, sample.t_s, sample.paused or stopping)
+            if gate.parked:
+                if not clean:
+                    self._bad_total += wstate.bad_samples
+                    washout.reset(wstate)
+                    clean = True
+                stage.park_step()
+            else:
+                assert sample is not None  # the gate only opens on a sample
+                washout.step(wstate, sample.f, sample.w, cue)
+                clean = False
+                for i in range(6):
+                    pose[i] = park[i] + gain * (cue[i] - park[i])
+                res = limit_pose(platform, pose, limits=limits)
+                if res.status != "ok":
+                    if res.status == "invalid":
+                        self._pose_invalid += 1
+                    else:
+                        self._pose_clamped += 1
+                stage.emit(res.q)
+            done = clock()
+            sent_at.add(done)
+            if sample is not None and sample.t_s != last_sample_t:
+                last_sample_t = sample.t_s
+                age.add(done - sample.t_s)
+                lat.add(done - max(sample.t_s, deadline))
+            self._missed = ticker.missed
+            err = 0.0
+            for a, b in zip(stage.q.tolist(), q_park, strict=True):
+                d = abs(a - b)
+                if d > err:
+                    err = d
+            self._park_err = err
+            if gate.parked:
+                self._state = "stopping" if stopping else "parked"
+            elif stopping:
+                self._state = "stopping"
+            elif gate.phase >= 1.0:
+                self._state = "live"
+            else:
+                self._state = "fading in" if gate._was_live else "fading out"
+            if stopping and ((gate.parked and stage.parked) or stop_ticks > max_stop_ticks):
+                if not stage.parked:
+                    raise MotioncueError(
+                        f"could not park within {max_stop_ticks} frames after stop"
+                    )
+                return
+
+    # ------------------------------------------------------------------ reporting
+    @property
+    def stats(self) -> BridgeStats:
+        """A snapshot of the counters and timing figures (cheap enough for ~2 Hz)."""
+        src: dict[str, int] = {}
+        try:
+            src = dict(self.source.stats)
+        except Exception as exc:  # a foreign source; report, do not fail the reader
+            src = {"receive errors": 0, f"stats unavailable: {type(exc).__name__}": 1}
+        samples = int(src.get("samples", 0))
+        now = time.perf_counter()
+        if self._rate_in_prev is not None:
+            t_prev, n_prev = self._rate_in_prev
+            if now - t_prev >= 0.25:
+                self._rate_in = (samples - n_prev) / (now - t_prev)
+                self._rate_in_prev = (now, samples)
+        else:
+            self._rate_in_prev = (now, samples)
+        rate = self.config.rate_hz
+        sent = self._sent_at.values()
+        jit = np.abs(np.diff(sent) - self.period_s)
+        recent = sent[-(int(rate) + 1) :]
+        rate_out = math.nan
+        if recent.size > 1 and recent[-1] > recent[0]:
+            rate_out = (recent.size - 1) / float(recent[-1] - recent[0])
+        lat = self._latency.values()
+        age = self._age.values()
+        bad = sum(v for k, v in src.items() if k.startswith("skipped")) + int(
+            src.get("receive errors", 0)
+        )
+        gate = self.gate
+        return BridgeStats(
+            state=self._state,
+            gain=gate.gain,
+            frames_sent=self.stage.frames,
+            missed_deadlines=self._missed,
+            samples_in=samples,
+            datagrams_in=int(src.get("datagrams", 0)),
+            rate_in_hz=self._rate_in,
+            rate_out_hz=rate_out,
+            jitter_p99_ms=_percentile_ms(jit, 99),
+            latency_p50_ms=_percentile_ms(lat, 50),
+            latency_p99_ms=_percentile_ms(lat, 99),
+            latency_max_ms=float(lat.max() * 1e3) if lat.size else math.nan,
+            age_p99_ms=_percentile_ms(age, 99),
+            limiter_clamped_frames=self.stage.clamped_frames,
+            pose_clamped=self._pose_clamped,
+            pose_invalid=self._pose_invalid,
+            washout_bad_samples=self._bad_total + self.washout_state.bad_samples,
+            bad_packets=bad,
+            packet_reasons=src,
+            fade_ins=gate.fade_ins,
+            fade_outs=gate.fade_outs,
+            park_q_error=self._park_err,
+            error=self._error,
+        )
