@@ -1,4 +1,4 @@
-"""The live bridge: game telemetry -> washout -> cue gate -> workspace -> IK -> output, in real time.
+"""The live bridge: telemetry -> washout -> cue gate -> workspace -> IK -> output, in real time.
 
 One :class:`Bridge` runs the loop in its own thread on absolute ``perf_counter`` deadlines
 (:class:`~motioncue.pipeline._realtime.Ticker`: sleep, then spin the last part). Telemetry is
@@ -114,7 +114,8 @@ class BridgeStats:
     Attributes
     ----------
     state : str
-        ``"new"``, ``"parked"``, ``"fading in"``, ``"live"``, ``"fading out"``,
+        ``"new"``; ``"parked"`` (at the park position, at rest); ``"parking"`` (gate closed,
+        the limiter still on its way to park); ``"fading in"``, ``"live"``, ``"fading out"``;
         ``"stopping"``, ``"stopped"`` or ``"failed"``.
     gain : float
         Cue gate gain in [0, 1] (0 = parked).
@@ -378,9 +379,7 @@ class Bridge:
         clean = True
         last_sample_t = math.nan
         stop_ticks = -1
-        max_stop_ticks = (
-            math.ceil(cfg.gate.fade_out_s / period) + stage.park_frames_bound() + 10
-        )
+        max_stop_ticks = math.ceil(cfg.gate.fade_out_s / period) + stage.park_frames_bound() + 10
         sent_at, lat, age = self._sent_at, self._latency, self._age
         ticker = Ticker(period, cfg.spin_s)
         while True:
@@ -426,8 +425,10 @@ class Bridge:
                 if d > err:
                     err = d
             self._park_err = err
-            if gate.parked:
-                self._state = "stopping" if stopping else "parked"
+            if stopping:
+                self._state = "stopping"
+            elif gate.parked:
+                self._state = "parked" if stage.parked else "parking"
             elif stopping:
                 self._state = "stopping"
             elif gate.phase >= 1.0:
