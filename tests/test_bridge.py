@@ -413,6 +413,8 @@ def test_configuration_errors_are_named() -> None:
         BridgeConfig(rate_hz=math.nan)
     with pytest.raises(ConfigError, match="spin_s"):
         BridgeConfig(spin_s=-1.0)
+    with pytest.raises(ConfigError, match="rt_priority"):
+        BridgeConfig(rt_priority=0)
     with pytest.raises(ConfigError, match="switch_interval_s"):
         BridgeConfig(switch_interval_s=0.0)
     platform, ctrl, lim = _mbox_setup()

@@ -62,6 +62,8 @@ def test_bridge_verb_runs_parks_and_reports(capsys: pytest.CaptureFixture[str]) 
                 "0.3",
                 "--duration",
                 "1.5",
+                "--rt-priority",
+                "5",
             ]
         )
         assert _wait_for(lambda: len(emu.trace) > 0 and emu.received == len(emu.trace))
@@ -83,6 +85,8 @@ def test_bridge_verb_names_bad_arguments(capsys: pytest.CaptureFixture[str]) -> 
     assert "--duration" in capsys.readouterr().err
     assert main([*base, "--source", "f1:0", "--fade", "0"]) == 2
     assert "fade_out_s" in capsys.readouterr().err
+    assert main([*base, "--source", "f1:0", "--rt-priority", "100"]) == 2
+    assert "rt_priority = 100 is invalid" in capsys.readouterr().err
 
 
 def test_sigterm_parks_smoothly_then_exits() -> None:

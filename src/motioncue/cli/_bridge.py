@@ -63,6 +63,13 @@ def register(sub: Any) -> None:
     parser.add_argument(
         "--duration", type=float, metavar="S", help="stop (and park) after this long"
     )
+    parser.add_argument(
+        "--rt-priority",
+        type=int,
+        metavar="N",
+        help="run the frame loop under SCHED_FIFO at priority N (1..99; Linux, root or "
+        "CAP_SYS_NICE): recommended on a busy PC, keeps other programs from delaying frames",
+    )
     parser.add_argument("--quiet", action="store_true", help="no status line")
     parser.set_defaults(run=run)
 
@@ -81,6 +88,7 @@ def run(args: argparse.Namespace) -> int:
     config = BridgeConfig(
         rate_hz=args.rate,
         gate=GateConfig(timeout_s=args.timeout, fade_out_s=args.fade, fade_in_s=args.fade),
+        rt_priority=args.rt_priority,
     )
     platform = load_platform(args.platform)
     controller = load_controller(args.controller)
@@ -109,6 +117,8 @@ def run(args: argparse.Namespace) -> int:
     finally:
         source.close()
     print(_summary(final), file=err)
+    for note in final.notes:
+        print(f"motioncue bridge: note: {note}", file=err)
     if final.error is not None:
         print(f"motioncue bridge: error: {final.error}", file=err)
         return 2

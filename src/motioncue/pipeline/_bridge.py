@@ -37,6 +37,7 @@ Timing figures (:class:`BridgeStats`):
 from __future__ import annotations
 
 import math
+import os
 import sys
 import threading
 import time
@@ -81,6 +82,11 @@ class BridgeConfig:
         Busy-wait before each deadline (s), in [0, 0.01].
     stats_window : int
         Ticks kept for the percentiles (>= 10).
+    rt_priority : int or None
+        If given (1..99), the loop thread asks for the ``SCHED_FIFO`` real-time policy at
+        this priority (Linux; needs root or ``CAP_SYS_NICE``). On a busy machine this keeps
+        other processes from delaying the frames; if it is refused the loop runs anyway
+        and ``BridgeStats.notes`` says why. None: the normal policy.
     switch_interval_s : float or None
         While running, the interpreter's thread switch interval is lowered to this (s) so
         that another Python thread (the telemetry receiver, an in-process emulator) holds
@@ -91,6 +97,7 @@ class BridgeConfig:
     gate: GateConfig = field(default_factory=GateConfig)
     spin_s: float = 0.001
     stats_window: int = 20000
+    rt_priority: int | None = None
     switch_interval_s: float | None = 0.0005
 
     def __post_init__(self) -> None:
@@ -100,6 +107,9 @@ class BridgeConfig:
             raise ConfigError(f"spin_s = {self.spin_s!r} is invalid; allowed: [0, 0.01] s")
         if self.stats_window < 10:
             raise ConfigError(f"stats_window = {self.stats_window!r} is invalid; allowed: >= 10")
+        p = self.rt_priority
+        if p is not None and not (isinstance(p, int) and 1 <= p <= 99):
+            raise ConfigError(f"rt_priority = {p!r} is invalid; allowed: None or 1..99")
         s = self.switch_interval_s
         if s is not None and not (math.isfinite(s) and 1e-5 <= s <= 0.1):
             raise ConfigError(
@@ -145,6 +155,9 @@ class BridgeStats:
         ``max |q - q_park|`` of the last frame (SI); 0 when parked.
     error : str or None
         Why the loop stopped, if it failed.
+    notes : tuple of str
+        Things the user should know that did not stop the loop (a refused real-time
+        priority).
     """
 
     state: str
@@ -170,6 +183,7 @@ class BridgeStats:
     fade_outs: int
     park_q_error: float
     error: str | None
+    notes: tuple[str, ...] = ()
 
     def status_line(self) -> str:
         """One line for a terminal status display."""
@@ -290,6 +304,7 @@ class Bridge:
         self._rate_in_prev: tuple[float, int] | None = None
         self._rate_in = math.nan
         self._old_switch: float | None = None
+        self._notes: list[str] = []
 
     # ------------------------------------------------------------------ control
     def start(self) -> Bridge:
@@ -353,6 +368,12 @@ class Bridge:
 
     # ------------------------------------------------------------------ the loop
     def _run(self) -> None:
+        prio = self.config.rt_priority
+        if prio is not None:
+            try:  # pid 0 = this thread on Linux
+                os.sched_setscheduler(0, os.SCHED_FIFO, os.sched_param(prio))
+            except (AttributeError, OSError) as exc:
+                self._notes.append(f"real-time priority {prio} refused ({exc}); normal policy")
         try:
             self._loop()
             self._state = "stopped"
@@ -497,4 +518,5 @@ class Bridge:
             fade_outs=gate.fade_outs,
             park_q_error=self._park_err,
             error=self._error,
+            notes=tuple(self._notes),
         )

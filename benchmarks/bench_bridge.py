@@ -1,0 +1,206 @@
+"""Benchmark of the live bridge (issue 6, item 5): real F1 packets -> bridge -> MBOX emulator.
+
+Three processes, as on a rig: a sender plays the moving F1 stream built from the real
+captures (Motion + Motion Ex at the game's default 60 Hz) to the bridge's UDP port; this
+process runs the :class:`~motioncue.pipeline._bridge.Bridge` (stewart6-linear, mbox6,
+``racing`` preset); a third process runs the SC-MBOX emulator on loopback. Each run lasts
+``--seconds`` (default 60 s) at 100 Hz and at 250 Hz, repeated ``--repeats`` times.
+
+Figures (median over the repeats, target, ratio = target / median):
+
+* added latency p99: from ``max(datagram arrival stamp, frame deadline)`` to the return of
+  ``transport.send`` (the bridge's own work per frame), target <= 2 ms;
+* output period jitter p99: ``|interval between sends - period|``, target <= 1 ms;
+* also printed (no target): sample age p99, from the arrival stamp to the send, which adds
+  the sample-and-hold wait for the next frame slot (0..1 period at a fixed frame rate);
+  missed deadlines; frames lost; emulator violations; the limits check of the trace.
+
+The machine is shared: the load average is printed before and after each run.
+
+Run: ``PYTHONPATH=src python benchmarks/bench_bridge.py [--seconds 60] [--repeats 3]``
+"""
+
+from __future__ import annotations
+
+import argparse
+import multiprocessing as mp
+import os
+import statistics
+import sys
+import time
+from pathlib import Path
+from typing import Any
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+
+from _timing import report
+
+
+def _emulator(port_q: Any, stop: Any, result_q: Any) -> None:
+    from motioncue.kinematics import load_platform
+    from motioncue.output import load_controller, mbox
+    from motioncue.pipeline._verify import check_frames
+    from motioncue.trajectory import ActuatorLimits
+
+    platform = load_platform("stewart6-linear")
+    ctrl = load_controller("mbox6")
+    lim = ActuatorLimits.from_platform(platform, ctrl, a_max=5.0)
+    emu = mbox.MboxEmulator(ctrl)
+    with emu:
+        port_q.put(emu.port)
+        stop.wait()
+        time.sleep(0.3)  # the last frames in flight
+        tr = emu.trace
+        chk = check_frames(tr.t_s, tr.positions, lim.to_pulses_table(platform), start_at_rest=True)
+        result_q.put(
+            {
+                "received": emu.received,
+                "violations": len(emu.violations),
+                "limits_ok": chk.ok,
+                "limits": chk.summary(),
+            }
+        )
+
+
+def _sender(port: int, stop: Any) -> None:
+    import socket
+
+    from test_bridge import F1Stream, lap_motion
+
+    stream = F1Stream(2024)
+    with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as tx:
+        t0 = time.perf_counter()
+        k = 0
+        while not stop.is_set():
+            k += 1
+            left = t0 + k / 60.0 - time.perf_counter()
+            if left > 0:
+                time.sleep(left)
+            g_lat, g_lon, g_vert, w = lap_motion(k / 60.0)
+            ex, motion = stream.frame(k, g_lat, g_lon, g_vert, w)
+            tx.sendto(ex, ("127.0.0.1", port))
+            tx.sendto(motion, ("127.0.0.1", port))
+
+
+def run_once(rate_hz: float, seconds: float, rt_priority: int | None) -> dict[str, Any]:
+    from motioncue.kinematics import load_platform
+    from motioncue.output import load_controller, open_transport
+    from motioncue.pipeline._bridge import Bridge, BridgeConfig
+    from motioncue.telemetry import TelemetrySource
+    from motioncue.trajectory import ActuatorLimits
+    from motioncue.washout import load_cueing
+
+    ctx = mp.get_context("spawn")
+    stop = ctx.Event()
+    port_q: Any = ctx.Queue()
+    result_q: Any = ctx.Queue()
+    emu = ctx.Process(target=_emulator, args=(port_q, stop, result_q))
+    emu.start()
+    emu_port = port_q.get(timeout=30)
+    platform = load_platform("stewart6-linear")
+    ctrl = load_controller("mbox6")
+    lim = ActuatorLimits.from_platform(platform, ctrl, a_max=5.0)
+    source = TelemetrySource("f1", 0)
+    transport = open_transport(f"udp://127.0.0.1:{emu_port}")
+    sender = ctx.Process(target=_sender, args=(source.port, stop))
+    load0 = os.getloadavg()
+    bridge = Bridge(
+        platform,
+        ctrl,
+        load_cueing("racing"),
+        source,
+        transport,
+        lim,
+        BridgeConfig(rate_hz=rate_hz, rt_priority=rt_priority),
+    )
+    sender.start()
+    bridge.start()
+    time.sleep(seconds)
+    live = bridge.stats  # figures of the live part (before the park at stop)
+    final = bridge.stop()
+    stop.set()
+    sender.join(10)
+    emu_result = result_q.get(timeout=30)
+    emu.join(10)
+    transport.close()
+    source.close()
+    return {
+        "latency_p99_ms": live.latency_p99_ms,
+        "latency_p50_ms": live.latency_p50_ms,
+        "latency_max_ms": live.latency_max_ms,
+        "jitter_p99_ms": live.jitter_p99_ms,
+        "age_p99_ms": live.age_p99_ms,
+        "rate_out_hz": live.rate_out_hz,
+        "samples_in": live.samples_in,
+        "missed": final.missed_deadlines,
+        "frames_sent": final.frames_sent,
+        "state": final.state,
+        "error": final.error if not final.notes else f"{final.error} {final.notes}",
+        "load": (load0, os.getloadavg()),
+        **emu_result,
+    }
+
+
+def main(argv: list[str] | None = None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--seconds", type=float, default=60.0)
+    ap.add_argument("--repeats", type=int, default=3)
+    ap.add_argument("--rates", type=float, nargs="+", default=[100.0, 250.0])
+    ap.add_argument(
+        "--rt-priority",
+        type=int,
+        default=None,
+        help="SCHED_FIFO priority of the bridge loop thread (needs root or CAP_SYS_NICE)",
+    )
+    args = ap.parse_args(argv)
+    print(
+        f"machine: {os.cpu_count()} CPUs, shared with other sessions; bridge loop policy: "
+        + ("normal" if args.rt_priority is None else f"SCHED_FIFO {args.rt_priority}"),
+        flush=True,
+    )
+    ok = True
+    for rate in args.rates:
+        runs = []
+        for r in range(args.repeats):
+            res = run_once(rate, args.seconds, args.rt_priority)
+            runs.append(res)
+            l0, l1 = res["load"]
+            print(
+                f"  {rate:g} Hz run {r + 1}: latency p50/p99/max {res['latency_p50_ms']:.3f}/"
+                f"{res['latency_p99_ms']:.3f}/{res['latency_max_ms']:.3f} ms, jitter p99 "
+                f"{res['jitter_p99_ms']:.3f} ms, sample age p99 {res['age_p99_ms']:.2f} ms, "
+                f"out {res['rate_out_hz']:.2f} Hz, {res['samples_in']} samples in, "
+                f"{res['frames_sent']} frames sent / {res['received']} received, "
+                f"{res['missed']} missed, {res['violations']} emulator violations, "
+                f"limits {res['limits']}, {res['state']}"
+                f"{'' if res['error'] is None else ' ' + res['error']}; "
+                f"load avg {l0[0]:.2f} -> {l1[0]:.2f}",
+                flush=True,
+            )
+            ok &= (
+                res["received"] == res["frames_sent"]
+                and res["violations"] == 0
+                and res["limits_ok"]
+                and res["error"] is None
+            )
+        med = {
+            k: statistics.median(r[k] for r in runs) for k in ("latency_p99_ms", "jitter_p99_ms")
+        }
+        ok &= report(
+            f"bridge {rate:g} Hz: added latency p99", med["latency_p99_ms"], "ms", 2.0, False
+        )
+        ok &= report(
+            f"bridge {rate:g} Hz: output jitter p99", med["jitter_p99_ms"], "ms", 1.0, False
+        )
+        print(
+            f"bridge {rate:g} Hz: sample age p99 (incl. hold to the next frame slot) "
+            f"{statistics.median(r['age_p99_ms'] for r in runs):.2f} ms, period "
+            f"{1e3 / rate:.1f} ms (no target)",
+            flush=True,
+        )
+    return 0 if ok else 1
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
