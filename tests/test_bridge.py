@@ -380,6 +380,25 @@ def test_spikes_nan_and_inf_in_the_telemetry_never_break_the_limits() -> None:
     assert np.abs(p - platform.drives.to_pulses(platform.q_park)).max() > 1000  # it moved
 
 
+def test_a_source_that_forgets_its_sample_fades_out_instead_of_failing() -> None:
+    platform, ctrl, lim = _imax_setup()
+    src, tr = FakeSource(), ListTransport()
+    bridge = Bridge(platform, ctrl, load_cueing("racing"), src, tr, lim, BridgeConfig(200.0, GATE))
+    bridge.start()
+    try:
+        end = time.monotonic() + 0.6
+        while time.monotonic() < end:
+            src.put((3.0, -2.0, 9.8), (0.0, 0.0, 0.5))
+            time.sleep(0.01)
+        assert bridge.stats.state == "live"
+        src.sample = None
+        assert _wait_for(lambda: bridge.stats.state == "parked", 2.0)
+        assert bridge.stats.error is None and bridge.stats.fade_outs == 1
+    finally:
+        final = bridge.stop()
+    assert final.state == "stopped" and final.error is None
+
+
 def test_no_telemetry_at_all_stays_parked_and_stop_is_quick() -> None:
     platform, ctrl, lim = _mbox_setup()
     src, tr = FakeSource(), ListTransport()

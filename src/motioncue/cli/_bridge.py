@@ -119,6 +119,13 @@ def run(args: argparse.Namespace) -> int:
     print(_summary(final), file=err)
     for note in final.notes:
         print(f"motioncue bridge: note: {note}", file=err)
+    if args.rt_priority is None and final.jitter_p99_ms > 1.0:
+        print(
+            f"motioncue bridge: note: output jitter p99 {final.jitter_p99_ms:.2f} ms; other "
+            "programs delayed the frame loop: --rt-priority 10 (root or CAP_SYS_NICE) "
+            "prevents that",
+            file=err,
+        )
     if final.error is not None:
         print(f"motioncue bridge: error: {final.error}", file=err)
         return 2

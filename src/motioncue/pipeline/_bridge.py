@@ -399,6 +399,7 @@ class Bridge:
         pose = [0.0] * 6
         clean = True
         last_sample_t = math.nan
+        held: Any = None  # newest sample seen (a source may forget it; the cue fades out)
         stop_ticks = -1
         max_stop_ticks = math.ceil(cfg.gate.fade_out_s / period) + stage.park_frames_bound() + 10
         sent_at, lat, age = self._sent_at, self._latency, self._age
@@ -407,13 +408,15 @@ class Bridge:
             deadline = ticker.wait()
             sample = source.latest()
             now = clock()
+            if sample is not None:
+                held = sample
             stopping = stop.is_set()
             if stopping:
                 stop_ticks += 1
-            if sample is None:
+            if held is None:
                 gain = gate.update(now, None, True)
             else:
-                gain = gate.update(now, sample.t_s, sample.paused or stopping)
+                gain = gate.update(now, held.t_s, held.paused or stopping)
             if gate.parked:
                 if not clean:
                     self._bad_total += wstate.bad_samples
@@ -421,8 +424,8 @@ class Bridge:
                     clean = True
                 stage.park_step()
             else:
-                assert sample is not None  # the gate only opens on a sample
-                washout.step(wstate, sample.f, sample.w, cue)
+                assert held is not None  # the gate only opens on a sample
+                washout.step(wstate, held.f, held.w, cue)
                 clean = False
                 for i in range(6):
                     pose[i] = park[i] + gain * (cue[i] - park[i])
@@ -450,8 +453,6 @@ class Bridge:
                 self._state = "stopping"
             elif gate.parked:
                 self._state = "parked" if stage.parked else "parking"
-            elif stopping:
-                self._state = "stopping"
             elif gate.phase >= 1.0:
                 self._state = "live"
             else:
