@@ -7,6 +7,8 @@ import tomllib
 
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 import motioncue
 from motioncue import ConfigError
@@ -284,6 +286,18 @@ def test_jacobian_against_finite_differences(platform: Platform) -> None:
         assert np.allclose(jac[:, :, k], fd, atol=2e-8, rtol=1e-8), k
 
 
+def test_blocked_batches_match_single_block(platform: Platform) -> None:
+    """Batches longer than one internal block give the same numbers as short ones."""
+    poses = np.random.default_rng(15).uniform(-0.02, 0.02, (20000, 6))
+    q = platform.inverse(poses)
+    jac = platform.jacobian(poses)
+    res = platform.check(poses)
+    for lo, hi in ((0, 100), (8100, 8300), (19900, 20000)):
+        assert np.allclose(platform.inverse(poses[lo:hi]), q[lo:hi], rtol=0, atol=1e-15)
+        assert np.allclose(platform.jacobian(poses[lo:hi]), jac[lo:hi], rtol=0, atol=1e-15)
+        assert np.array_equal(platform.check(poses[lo:hi]).ok, res.ok[lo:hi])
+
+
 def test_forward_with_guess_and_reports_iterations(platform: Platform) -> None:
     pose = _random_reachable(platform, 1, seed=7)[0]
     q = platform.inverse(pose)
@@ -388,3 +402,118 @@ def test_wrong_shapes_rejected(platform: Platform) -> None:
         platform.inverse(np.zeros(5))
     with pytest.raises(ConfigError, match="shape"):
         platform.forward(np.zeros(platform.n_actuators + 1))
+
+
+def _random_user_rotary(rng: np.random.Generator) -> Stewart6Rotary:
+    """A random crank-and-rod hexapod built directly in SI, cranks near horizontal at neutral."""
+    while True:
+        rb, rp = rng.uniform(0.2, 0.5), rng.uniform(0.15, 0.45)
+        hb, hp = rng.uniform(5, 20), rng.uniform(35, 55)
+        crank, rod = rng.uniform(0.06, 0.15), rng.uniform(0.25, 0.6)
+        base, plat, zero = [], [], []
+        for i in range(6):
+            c = 120.0 * (i // 2)
+            s = -1.0 if i % 2 == 0 else 1.0
+            a, b = math.radians(c + s * hb), math.radians(c + s * hp)
+            base.append([rb * math.cos(a), rb * math.sin(a), 0.0])
+            plat.append([rp * math.cos(b), rp * math.sin(b), 0.0])
+            zero.append([-s * math.sin(a), s * math.cos(a), 0.0])
+        base_a, plat_a, zero_a = np.array(base), np.array(plat), np.array(zero)
+        tip = base_a[0] + crank * zero_a[0]
+        span = float(np.linalg.norm(plat_a[0, :2] - tip[:2]))
+        if span >= rod:
+            continue
+        height = math.sqrt(rod**2 - span**2)  # crank horizontal at neutral
+        axes = np.cross(zero_a, [0.0, 0.0, 1.0])
+        p = Stewart6Rotary(
+            base_a, axes, zero_a, crank, rod, plat_a, height, (-math.radians(60), math.radians(60))
+        )
+        if np.linalg.cond(p.jacobian(np.zeros(6))) < 50:
+            return p
+
+
+def test_fk_of_ik_round_trip_user_rotary_geometries() -> None:
+    rng = np.random.default_rng(11)
+    worst = 0.0
+    count = 0
+    for _ in range(8):
+        p = _random_user_rotary(rng)
+        assert np.allclose(p.neutral_absolute, 0.0, atol=1e-9)
+        poses = _random_reachable(p, 150, seed=int(rng.integers(1 << 30)))
+        for pose, qi in zip(poses, p.inverse(poses), strict=True):
+            fk = p.forward(qi)
+            assert fk.converged
+            worst = max(worst, float(np.max(np.abs(fk.pose - pose))))
+            count += 1
+    assert count == 1200 and worst < 1e-9
+
+
+def test_seat_constructors_in_si_match_configs() -> None:
+    cfg = _config("seat3")
+    g = cfg["geometry"]
+    loaded = load_platform("seat3")
+    built = Seat3(
+        np.array(g["base_anchors_mm"]) * 1e-3,
+        np.array(g["platform_anchors_mm"]) * 1e-3,
+        g["neutral_height_mm"] * 1e-3,
+        (loaded.q_min[0] + 0.37, loaded.q_max[0] + 0.37),
+    )
+    poses = _random_reachable(loaded, 100, seed=12)
+    assert np.allclose(built.inverse(poses), loaded.inverse(poses), atol=1e-15)
+    assert np.allclose(built.q_min, loaded.q_min) and np.allclose(built.q_max, loaded.q_max)
+    cfg = _config("seat2-yaw")
+    g = cfg["geometry"]
+    loaded2 = load_platform("seat2-yaw")
+    built2 = Seat2Yaw(
+        np.array(g["base_anchors_mm"]) * 1e-3,
+        np.array(g["platform_anchors_mm"]) * 1e-3,
+        g["neutral_height_mm"] * 1e-3,
+        (0.313, 0.407),
+        (-math.pi, math.pi),
+    )
+    poses = _random_reachable(loaded2, 100, seed=13)
+    assert np.allclose(built2.inverse(poses), loaded2.inverse(poses), atol=1e-15)
+    with pytest.raises(ConfigError, match="yaw_range"):
+        Seat2Yaw(np.zeros((2, 3)), np.zeros((2, 3)), 0.3, (0.2, 0.4), (0.1, 1.0))
+
+
+def test_seat2_yaw_mirror() -> None:
+    p = load_platform("seat2-yaw")
+    poses = _random_reachable(p, 200, seed=14)
+    mirrored = poses * np.array([1, -1, 1, -1, 1, -1])
+    q, qm = p.inverse(poses), p.inverse(mirrored)
+    assert np.allclose(qm[:, [1, 0]], q[:, :2], atol=1e-12)
+    assert np.allclose(qm[:, 2], -q[:, 2])
+
+
+def test_si_constructor_rejects_bad_geometry() -> None:
+    good = load_platform("stewart6-linear")
+    with pytest.raises(ConfigError, match="base_anchors"):
+        Stewart6Linear(np.zeros((5, 3)), good.legs.plat, 0.45, (0.485, 0.625))
+    with pytest.raises(ConfigError, match="neutral_height"):
+        Stewart6Linear(good.legs.base, good.legs.plat, math.nan, (0.485, 0.625))
+    with pytest.raises(ConfigError, match="stroke"):
+        Stewart6Linear(good.legs.base, good.legs.plat, 0.45, (0.625, 0.485))
+    # six vertical legs cannot hold x, y or yaw
+    ring = np.array([[math.cos(a), math.sin(a), 0.0] for a in np.radians(np.arange(0, 360, 60))])
+    with pytest.raises(ConfigError, match="singular at the neutral pose"):
+        Stewart6Linear(ring, ring, 1.0, (0.9, 1.1))
+    # neutral outside the stroke
+    with pytest.raises(ConfigError, match="neutral"):
+        Stewart6Linear(good.legs.base, good.legs.plat, 0.45, (0.6, 0.7))
+
+
+@settings(max_examples=200)
+@given(
+    name=st.sampled_from(BUNDLED),
+    pose=st.lists(st.floats(-10.0, 10.0, allow_nan=False), min_size=6, max_size=6),
+)
+def test_any_finite_pose_gives_finite_positions(name: str, pose: list[float]) -> None:
+    """Wild but finite requests never produce NaN: positions stay finite, check() says why."""
+    p = load_platform(name)
+    q = p.inverse(np.array(pose))
+    assert np.all(np.isfinite(q))
+    res = p.check(np.array([pose]))
+    assert np.all(np.isfinite(res.q)) and np.all(np.isfinite(res.overshoot))
+    assert np.array_equal(res.q[0], q) or np.allclose(res.q[0], q, atol=1e-12)
+    assert res.ok[0] == bool(np.all(res.in_stroke[0] & res.reachable[0]))

@@ -184,3 +184,18 @@ def test_module_entry_point_subprocess() -> None:
     out = json.loads(res.stdout)
     yaw = out["actuators"][2]
     assert yaw["position"] == pytest.approx(90.0) and yaw["pulses"] == 60 * 10000 // 4
+
+
+def test_import_stays_light() -> None:
+    """Pinocchio and matplotlib load only when forces or plots are asked for."""
+    env = {**os.environ, "PYTHONPATH": str(SRC)}
+    code = (
+        "import sys, motioncue\n"
+        "p = motioncue.load_platform('stewart6-linear'); p.inverse([0, 0, 0, 0, 0, 0])\n"
+        "heavy = [m for m in ('pinocchio', 'matplotlib', 'casadi', 'toppra') if m in sys.modules]\n"
+        "print(heavy)\n"
+    )
+    res = subprocess.run(
+        [sys.executable, "-c", code], capture_output=True, text=True, env=env, check=True
+    )
+    assert res.stdout.strip() == "[]"

@@ -232,6 +232,8 @@ def test_drive_rejects_nonfinite_and_bad_shapes() -> None:
         d.to_pulses(np.array([0.0, math.nan, 0.0]))
     with pytest.raises(ConfigError, match="shape"):
         d.to_pulses(np.zeros(4))
+    with pytest.raises(ConfigError, match="2\\*\\*62"):
+        d.to_pulses(np.array([0.0, 1e300, 0.0]))
     with pytest.raises(ConfigError, match="direction"):
         Drive(("linear",), np.array([100]), np.array([0.005]), np.array([0]), np.array([0.0]))
     with pytest.raises(ConfigError, match="pulses_per_rev"):

@@ -203,3 +203,23 @@ def test_bad_inputs_rejected() -> None:
     bad[1, 3] = math.nan
     with pytest.raises(ConfigError, match="poses"):
         actuator_forces(p, bad, [0.0, 1.0], PAYLOAD)
+
+
+def test_motor_torque_and_speed_for_sizing() -> None:
+    """Ideal screw: torque = F * lead / (2 pi); speed = dq/dt, checked by differencing IK."""
+    p = load_platform("stewart6-linear")
+    t = np.linspace(0, 2, 4001)
+    poses, vel, acc = _trajectory(t)
+    res = actuator_forces(p, poses, t, PAYLOAD, velocities=vel, accelerations=acc)
+    assert np.allclose(res.motor_torque_nm, res.forces * 0.005 / (2 * math.pi), rtol=1e-12)
+    q = p.inverse(poses)
+    q_dot = np.gradient(q, t, axis=0)
+    assert np.allclose(res.speed[5:-5], q_dot[5:-5], atol=1e-6)
+    assert np.allclose(res.motor_rpm, res.speed / 0.005 * 60.0, rtol=1e-12)
+    assert np.allclose(res.peak_motor_rpm, np.abs(res.motor_rpm).max(axis=0))
+    assert np.allclose(res.peak_motor_torque_nm, np.abs(res.motor_torque_nm).max(axis=0))
+    # rotary: crank torque / gear ratio, rpm = crank speed * gear ratio
+    r = load_platform("stewart6-rotary")
+    rr = actuator_forces(r, poses * 0.5, t, PAYLOAD)
+    assert np.allclose(rr.motor_torque_nm, rr.forces / 50.0, rtol=1e-12)
+    assert np.allclose(rr.motor_rpm, rr.speed * 50.0 / (2 * math.pi) * 60.0, rtol=1e-12)

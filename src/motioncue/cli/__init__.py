@@ -17,7 +17,7 @@ from .._errors import MotioncueError
 __all__ = ["build_parser", "main"]
 
 # Verb modules, in the order of the data flow. Each registers one or more verbs.
-_VERB_MODULES: tuple[str, ...] = ("_record", "_kinematics")
+_VERB_MODULES: tuple[str, ...] = ("_record", "_cue", "_kinematics", "_control")
 
 
 def build_parser() -> argparse.ArgumentParser:

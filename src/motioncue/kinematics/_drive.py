@@ -174,7 +174,10 @@ class Drive:
     def to_pulses(self, q: np.ndarray) -> np.ndarray:
         """Pulses ``(..., n)`` int64 for actuator positions ``q``; rounds to the nearest pulse."""
         q = self._check("q", q)
-        return np.rint((q - self.q_home) * self.pulses_per_unit).astype(np.int64)
+        pulses = np.rint((q - self.q_home) * self.pulses_per_unit)
+        if np.any(np.abs(pulses) >= 2.0**62):
+            raise ConfigError(f"q = {q!r} is beyond any pulse count (|pulses| >= 2**62)")
+        return pulses.astype(np.int64)
 
     def from_pulses(self, pulses: np.ndarray) -> np.ndarray:
         """Actuator positions ``(..., n)`` for pulses (exact inverse of :meth:`to_pulses`)."""

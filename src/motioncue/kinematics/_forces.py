@@ -90,6 +90,13 @@ class ForceResult:
     condition
         ``(N,)`` condition number of the leg Jacobian on the produced DOFs (large: near a
         singular pose, forces unreliable).
+    speed
+        ``(N, n)`` actuator speeds ``J @ pose_rate`` (m/s or rad/s).
+    motor_torque_nm
+        ``(N, n)`` motor torque through an ideal (lossless) screw or gearbox:
+        ``force * travel_per_rev / (2 pi)``. Divide by the transmission efficiency.
+    motor_rpm
+        ``(N, n)`` motor speed (rev/min), signed like ``speed``.
     """
 
     t_s: np.ndarray
@@ -98,6 +105,19 @@ class ForceResult:
     peak_index: np.ndarray
     wrench: np.ndarray
     condition: np.ndarray
+    speed: np.ndarray
+    motor_torque_nm: np.ndarray
+    motor_rpm: np.ndarray
+
+    @property
+    def peak_motor_torque_nm(self) -> np.ndarray:
+        """``(n,)`` largest motor torque magnitude per actuator (ideal transmission)."""
+        return np.max(np.abs(self.motor_torque_nm), axis=0)
+
+    @property
+    def peak_motor_rpm(self) -> np.ndarray:
+        """``(n,)`` largest motor speed magnitude per actuator (rev/min)."""
+        return np.max(np.abs(self.motor_rpm), axis=0)
 
 
 def _derivative(t: np.ndarray, y: np.ndarray) -> np.ndarray:
@@ -224,6 +244,16 @@ def actuator_forces(
     condition = np.linalg.cond(jac)
     peak_index = np.argmax(np.abs(forces), axis=0)
     peak = np.abs(forces[peak_index, np.arange(forces.shape[1])])
+    speed = np.einsum("nik,nk->ni", jac, vel[:, idx])
+    travel = platform.drives.units_per_rev
     return ForceResult(
-        t_s=t, forces=forces, peak=peak, peak_index=peak_index, wrench=wrench, condition=condition
+        t_s=t,
+        forces=forces,
+        peak=peak,
+        peak_index=peak_index,
+        wrench=wrench,
+        condition=condition,
+        speed=speed,
+        motor_torque_nm=forces * travel / (2.0 * math.pi),
+        motor_rpm=speed / travel * 60.0,
     )

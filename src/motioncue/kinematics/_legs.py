@@ -76,21 +76,28 @@ class LegSet:
         return (drot @ self.rot_part).reshape(drot.shape[0], 3, self.n, 3)
 
     def jacobian_one(
-        self, d: list, q: list[float], drot: tuple[tuple[float, ...], ...]
+        self, d: list, q: list[float], t: tuple[float, float, float], angles: tuple
     ) -> list[list[float]]:
-        """Rows ``dq_i/dpose`` (6 floats each) for one pose, without numpy."""
+        """Rows ``dq_i/dpose`` (6 floats each) for one pose, without numpy.
+
+        With ``g = dq_i/dP_i`` and ``r = R p_i``, the Euler-angle columns are
+        ``g . (e_k x r) = e_k . (r x g)`` where ``e_k`` are the columns of the Euler-rate
+        matrix E (world axes of the roll, pitch and yaw rotations).
+        """
+        _, pitch, yaw = angles
+        cp, sp = math.cos(pitch), math.sin(pitch)
+        cy, sy = math.cos(yaw), math.sin(yaw)
+        e0x, e0y, e0z = cy * cp, sy * cp, -sp
+        x, y, z = t
         rows = []
-        for (px, py, pz, _, _, _), (gx, gy, gz) in zip(
-            self._one, self.gradient_one(d, q), strict=True
+        for (dx, dy, dz), (_, _, _, bx, by, bz), (gx, gy, gz) in zip(
+            d, self._one, self.gradient_one(d, q), strict=True
         ):
-            row = [gx, gy, gz]
-            for r in drot:
-                row.append(
-                    gx * (r[0] * px + r[1] * py + r[2] * pz)
-                    + gy * (r[3] * px + r[4] * py + r[5] * pz)
-                    + gz * (r[6] * px + r[7] * py + r[8] * pz)
-                )
-            rows.append(row)
+            rx, ry, rz = dx - x + bx, dy - y + by, dz - z + bz
+            mx = ry * gz - rz * gy
+            my = rz * gx - rx * gz
+            mz = rx * gy - ry * gx
+            rows.append([gx, gy, gz, mx * e0x + my * e0y + mz * e0z, -mx * sy + my * cy, mz])
         return rows
 
     # Implemented by the subclasses.
@@ -123,6 +130,20 @@ class LinearLegs(LegSet):
         self.length0 = np.sqrt(np.einsum("ij,ij->i", d0, d0))
         self._matrix_t = np.ascontiguousarray(self.matrix.T)
         self._l0 = self.length0.tolist()
+
+    def q_pose_one(self, r: tuple[float, ...], x: float, y: float, z: float) -> list[float]:
+        """Positions for one pose from R's entries and the translation (fused, no numpy)."""
+        r0, r1, r2, r3, r4, r5, r6, r7, r8 = r
+        sqrt = math.sqrt
+        return [
+            sqrt(
+                (x + r0 * px + r1 * py + r2 * pz - bx) ** 2
+                + (y + r3 * px + r4 * py + r5 * pz - by) ** 2
+                + (z + r6 * px + r7 * py + r8 * pz - bz) ** 2
+            )
+            - l0
+            for (px, py, pz, bx, by, bz), l0 in zip(self._one, self._l0, strict=True)
+        ]
 
     def q_from_features_t(self, feat_t: np.ndarray) -> np.ndarray:
         """Positions ``(n, N)`` from transposed features ``(13, N)`` (the fast batch path)."""

@@ -59,7 +59,7 @@ def load_platform(name_or_path: str | Path) -> Platform:
     return platform_from_dict(load_toml(path), where=path.name, name=path.stem)
 
 
-def _ring(g: ConfigReader, which: str, n: int) -> np.ndarray:
+def _ring(g: ConfigReader, which: str) -> np.ndarray:
     """Anchors of a symmetric ring: pairs centred at 0, 120, 240 deg (pair 1 at the front, +x),
     each pair at +-``pair_angle`` about its centre, first the clockwise one."""
     radius = g.number(f"{which}_radius_mm", lo=0.0, lo_open=True) * _MM
@@ -98,7 +98,7 @@ def _anchors(g: ConfigReader, n: int) -> tuple[np.ndarray, np.ndarray]:
             f"{g.where}: missing key 'base_anchors_mm' (and 'platform_anchors_mm'): "
             f"{n} [x, y, z] triples in mm"
         )
-    return _ring(g, "base", n), _ring(g, "platform", n)
+    return _ring(g, "base"), _ring(g, "platform")
 
 
 def _per_actuator(
@@ -302,7 +302,12 @@ def _rotary(
     name: str,
 ) -> Platform:
     """Crank-and-rod hexapod: crank axes radial (horizontal), crank at angle 0 horizontal and
-    tangential, pointing away from its pair's centre; positive angle lifts the crank tip."""
+    tangential, pointing away from its pair's centre; positive angle lifts the crank tip.
+
+    The crank directions follow from the pivots' angles about the base origin with legs in
+    pairs, clockwise one first (as the ring layout orders them, and as explicit anchor lists
+    must). Other crank arrangements: build :class:`Stewart6Rotary` in Python.
+    """
     g.finish()
     c = cfg.table("crank")
     crank = _per_actuator(c, "crank_mm", 6, None, lo=0.0, lo_open=True) * _MM

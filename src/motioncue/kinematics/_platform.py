@@ -18,7 +18,7 @@ import numpy.typing as npt
 from .._errors import ConfigError
 from ._drive import Drive
 from ._legs import CrankLegs, LegSet, LinearLegs
-from ._rotation import drot_one, rot9, rot9_derivatives, rot_one
+from ._rotation import rot9, rot9_derivatives, rot_one
 
 __all__ = [
     "DOF_NAMES",
@@ -32,7 +32,8 @@ __all__ = [
 ]
 
 DOF_NAMES = ("x", "y", "z", "roll", "pitch", "yaw")
-_CHUNK = 65536  # poses per block in batch inverse kinematics (bounds temporary memory)
+_CHUNK = 2048  # poses per block in batch IK: temporaries stay in cache, BLAS stays single-threaded
+_JAC_CHUNK = 8192  # poses per block in batch Jacobians (bounds temporary memory)
 _NO_REACH = np.ones((0, 0), dtype=bool)
 
 
@@ -191,6 +192,8 @@ class Platform:
         a(self, "_leg_mask", np.asarray(leg_pose_mask, dtype=float))
         a(self, "_leg_mask_list", [bool(v) for v in leg_pose_mask])
         a(self, "_all_dof_legs", all(bool(v) for v in leg_pose_mask))
+        fast = self._all_dof_legs and not yaw_axis and isinstance(legs, LinearLegs)
+        a(self, "_fast_linear", legs if fast else None)
         a(self, "_yaw_axis", bool(yaw_axis))
         a(self, "_dof_idx", np.flatnonzero(np.asarray(dof_mask, dtype=bool)))
         a(self, "q_neutral", _readonly(np.zeros(n)))
@@ -213,6 +216,13 @@ class Platform:
         if isinstance(legs, CrankLegs) and not np.all(legs.reachable0):
             bad = [names[i] for i in np.flatnonzero(~legs.reachable0)]
             raise ConfigError(f"crank legs {bad} cannot reach their rod at the neutral pose")
+        jac0 = self._jacobian_one([0.0] * 6)[:, self._dof_idx]
+        if not np.linalg.cond(jac0) < 1e10:
+            raise ConfigError(
+                "the geometry is singular at the neutral pose (the actuators cannot hold "
+                f"{', '.join(DOF_NAMES[i] for i in self._dof_idx)} there)"
+            )
+        a(self, "_jac0_inv", np.linalg.inv(jac0))
         fk = self.forward(home)
         if not fk.converged:
             raise ConfigError(
@@ -238,6 +248,8 @@ class Platform:
     _leg_mask: np.ndarray
     _leg_mask_list: list[bool]
     _all_dof_legs: bool
+    _fast_linear: LinearLegs | None
+    _jac0_inv: np.ndarray
     _yaw_axis: bool
     _dof_idx: np.ndarray
 
@@ -293,19 +305,31 @@ class Platform:
         return q_legs, reach
 
     def _inverse_one(self, pose: list[float]) -> list[float]:
+        fast = self._fast_linear
+        if fast is not None:
+            total = sum(pose)  # NaN or inf anywhere makes this NaN or inf
+            if total - total == 0.0:
+                x, y, z, roll, pitch, yaw = pose
+                return fast.q_pose_one(rot_one(roll, pitch, yaw), x, y, z)
         return self._inverse_one_checked(pose)[0]
 
     def _inverse_one_checked(self, pose: list[float]) -> tuple[list[float], bool]:
+        _, q, reachable = self._eval_one(pose)
+        return q, reachable
+
+    def _eval_one(self, pose: list[float]) -> tuple[list, list[float], bool]:
+        """Leg vectors, actuator positions and reachability for one pose (plain floats)."""
         for v in pose:
             if not math.isfinite(v):
                 raise _bad_input("poses", np.asarray(pose))
         m = self._leg_mask_list
         x, y, z, roll, pitch, yaw = (v if keep else 0.0 for v, keep in zip(pose, m, strict=True))
         legs = self._legs
-        q, reachable = legs.q_one_checked(legs.vectors_one(rot_one(roll, pitch, yaw), (x, y, z)))
+        d = legs.vectors_one(rot_one(roll, pitch, yaw), (x, y, z))
+        q, reachable = legs.q_one_checked(d)
         if self._yaw_axis:
             q.append(pose[5])
-        return q, reachable
+        return d, q, reachable
 
     def inverse(self, poses: Any) -> np.ndarray:
         """Actuator positions for poses, in closed form.
@@ -341,22 +365,23 @@ class Platform:
     def _inverse_batch(
         self, arr: np.ndarray, want_reach: bool = False
     ) -> tuple[np.ndarray, np.ndarray]:
+        """q ``(..., n)`` and, when ``want_reach``, reachable ``(..., n)`` (else empty)."""
         lead = arr.shape[:-1]
         flat = arr.reshape(-1, 6)
         total = flat.shape[0]
         n = self.n_actuators
         if total <= _CHUNK:
             q, reach = self._ik_block(flat, want_reach)
-            if not want_reach:
-                reach = np.ones(q.shape, dtype=bool)
         else:
             q = np.empty((total, n))
-            reach = np.empty((total, n), dtype=bool) if want_reach else np.ones((total, n), bool)
+            reach = np.empty((total, n), dtype=bool) if want_reach else _NO_REACH
             for start in range(0, total, _CHUNK):
                 stop = min(start + _CHUNK, total)
                 q[start:stop], r = self._ik_block(flat[start:stop], want_reach)
                 if want_reach:
                     reach[start:stop] = r
+        if not want_reach:
+            return q.reshape(*lead, n), _NO_REACH
         return q.reshape(*lead, n), reach.reshape(*lead, n)
 
     # --- Jacobian -----------------------------------------------------------------------
@@ -369,7 +394,13 @@ class Platform:
         arr = _as_poses(poses)
         lead = arr.shape[:-1]
         flat = arr.reshape(-1, 6)
-        return self._jacobian_block(flat).reshape(*lead, self.n_actuators, 6)
+        n = self.n_actuators
+        if flat.shape[0] <= _JAC_CHUNK:
+            return self._jacobian_block(flat).reshape(*lead, n, 6)
+        out = np.empty((flat.shape[0], n, 6))
+        for start in range(0, flat.shape[0], _JAC_CHUNK):
+            out[start : start + _JAC_CHUNK] = self._jacobian_block(flat[start : start + _JAC_CHUNK])
+        return out.reshape(*lead, n, 6)
 
     def _jacobian_block(self, flat: np.ndarray) -> np.ndarray:
         legs = self._legs
@@ -391,14 +422,20 @@ class Platform:
             jac[:, -1, 5] = 1.0
         return jac
 
-    def _jacobian_one(self, pose: list[float]) -> np.ndarray:
-        m = self._leg_mask_list
-        x, y, z, roll, pitch, yaw = (v if keep else 0.0 for v, keep in zip(pose, m, strict=True))
+    def _jacobian_one(
+        self, pose: list[float], d: list | None = None, q: list[float] | None = None
+    ) -> np.ndarray:
+        """``(n, 6)`` Jacobian for one pose; ``d`` and ``q`` from :meth:`_eval_one` if known."""
+        if d is None or q is None:
+            d, q, _ = self._eval_one(pose)
+        x, y, z, roll, pitch, yaw = (
+            v if keep else 0.0 for v, keep in zip(pose, self._leg_mask_list, strict=True)
+        )
         legs = self._legs
-        d = legs.vectors_one(rot_one(roll, pitch, yaw), (x, y, z))
-        rows = legs.jacobian_one(d, legs.q_one(d), drot_one(roll, pitch, yaw))
-        jac = np.array(rows)
-        jac *= self._leg_mask
+        rows = legs.jacobian_one(d, q[: legs.n], (x, y, z), (roll, pitch, yaw))
+        jac: np.ndarray = np.array(rows, dtype=float)
+        if not self._all_dof_legs:
+            jac *= self._leg_mask
         if self._yaw_axis:
             jac = np.vstack([jac, [0.0, 0.0, 0.0, 0.0, 0.0, 1.0]])
         return jac
@@ -434,46 +471,57 @@ class Platform:
             raise ConfigError(f"q has shape {qv.shape}; expected ({self.n_actuators},)")
         if not np.isfinite(qv).all():
             raise _bad_input("q", qv)
-        pose = np.zeros(6)
+        pose = [0.0] * 6
+        idx = [int(k) for k in self._dof_idx]
         if guess is not None:
             g = np.asarray(guess, dtype=float)
             if g.shape != (6,) or not np.isfinite(g).all():
                 raise ConfigError(f"guess = {g!r} is invalid; allowed: 6 finite numbers")
-            pose[self._dof_idx] = g[self._dof_idx]
+            for k in idx:
+                pose[k] = float(g[k])
         target = qv.tolist()
-        idx = self._dof_idx
-        cur = self._inverse_one(pose.tolist())
+        all_dof = len(idx) == 6
+        d, cur, _ = self._eval_one(pose)
         r = [c - t for c, t in zip(cur, target, strict=True)]
         sq = sum(v * v for v in r)
         iterations = 0
         # Newton with backtracking: a full step is taken whenever it lowers the residual (the
         # usual case, quadratic convergence); otherwise, or when it leaves the region where
         # every crank reaches its rod, the step is halved.
-        while max(abs(v) for v in r) > tol and iterations < max_iter:
+        while max(map(abs, r)) > tol and iterations < max_iter:
             iterations += 1
-            jac = self._jacobian_one(pose.tolist())[:, idx]
-            try:
-                step = np.linalg.solve(jac, r)
-            except np.linalg.LinAlgError:
-                break
-            if not np.isfinite(step).all():
+            if iterations == 1 and guess is None:
+                step = (self._jac0_inv @ r).tolist()  # Jacobian at neutral, inverted once
+            else:
+                jac = self._jacobian_one(pose, d, cur)
+                if not all_dof:
+                    jac = jac[:, idx]
+                try:
+                    step = np.linalg.solve(jac, r).tolist()
+                except np.linalg.LinAlgError:
+                    break
+            if not all(math.isfinite(v) for v in step):
                 break
             alpha = 1.0
             for _ in range(30):
-                trial = pose.copy()
-                trial[idx] -= alpha * step
-                cur, reachable = self._inverse_one_checked(trial.tolist())
-                r_new = [c - t for c, t in zip(cur, target, strict=True)]
+                trial = pose[:]
+                for j, k in enumerate(idx):
+                    trial[k] -= alpha * step[j]
+                d_new, cur_new, reachable = self._eval_one(trial)
+                r_new = [c - t for c, t in zip(cur_new, target, strict=True)]
                 sq_new = sum(v * v for v in r_new)
                 if sq_new < sq and reachable:
                     break
                 alpha *= 0.5
             else:
                 break
-            pose, r, sq = trial, r_new, sq_new
-        residual = max(abs(v) for v in r)
+            pose, d, cur, r, sq = trial, d_new, cur_new, r_new, sq_new
+        residual = max(map(abs, r))
         return FKResult(
-            pose=pose, converged=bool(residual <= tol), iterations=iterations, residual=residual
+            pose=np.array(pose),
+            converged=bool(residual <= tol),
+            iterations=iterations,
+            residual=residual,
         )
 
     # --- checks -------------------------------------------------------------------------

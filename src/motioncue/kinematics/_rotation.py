@@ -11,7 +11,6 @@ import math
 import numpy as np
 
 __all__ = [
-    "drot_one",
     "euler_rate_matrix",
     "rot9",
     "rot9_derivatives",
@@ -103,48 +102,6 @@ def rot_one(roll: float, pitch: float, yaw: float) -> tuple[float, ...]:
         -sp,
         cp * sr,
         cp * cr,
-    )
-
-
-def drot_one(roll: float, pitch: float, yaw: float) -> tuple[tuple[float, ...], ...]:
-    """dR/droll, dR/dpitch, dR/dyaw for one attitude (nine entries each, plain floats)."""
-    cr, sr = math.cos(roll), math.sin(roll)
-    cp, sp = math.cos(pitch), math.sin(pitch)
-    cy, sy = math.cos(yaw), math.sin(yaw)
-    return (
-        (
-            0.0,
-            cy * sp * cr + sy * sr,
-            -cy * sp * sr + sy * cr,
-            0.0,
-            sy * sp * cr - cy * sr,
-            -sy * sp * sr - cy * cr,
-            0.0,
-            cp * cr,
-            -cp * sr,
-        ),
-        (
-            -cy * sp,
-            cy * cp * sr,
-            cy * cp * cr,
-            -sy * sp,
-            sy * cp * sr,
-            sy * cp * cr,
-            -cp,
-            -sp * sr,
-            -sp * cr,
-        ),
-        (
-            -sy * cp,
-            -sy * sp * sr - cy * cr,
-            -sy * sp * cr + cy * sr,
-            cy * cp,
-            cy * sp * sr - sy * cr,
-            cy * sp * cr + sy * sr,
-            0.0,
-            0.0,
-            0.0,
-        ),
     )
 
 

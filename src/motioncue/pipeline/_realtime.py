@@ -15,7 +15,26 @@ import numpy as np
 
 from .._errors import ConfigError
 
-__all__ = ["CueGate", "GateConfig", "LoopStats", "Ticker"]
+__all__ = ["CueGate", "GateConfig", "LoopStats", "Ticker", "wait_until"]
+
+
+def wait_until(deadline: float, spin_s: float = 0.001) -> float:
+    """Sleep, then spin, until ``perf_counter() >= deadline``; return how late we already were.
+
+    Returns
+    -------
+    float
+        ``max(0, now - deadline)`` at entry (s): 0 when the deadline was still ahead.
+    """
+    now = time.perf_counter()
+    if now >= deadline:
+        return now - deadline
+    remaining = deadline - now
+    if remaining > spin_s:
+        time.sleep(remaining - spin_s)
+    while time.perf_counter() < deadline:
+        pass
+    return 0.0
 
 
 class Ticker:
@@ -53,11 +72,7 @@ class Ticker:
             self.missed += skipped
             self.k += skipped
             deadline = self.t0 + self.k * self.period_s
-        remaining = deadline - now
-        if remaining > self.spin_s:
-            time.sleep(remaining - self.spin_s)
-        while time.perf_counter() < deadline:
-            pass
+        wait_until(deadline, self.spin_s)
         return deadline
 
 

@@ -1,3 +1,46 @@
-"""motioncue.washout (see the package docstring of motioncue)."""
+"""Motion cueing: vehicle specific force and angular velocity to platform poses.
 
-__all__: list[str] = []
+The classical washout of Reid & Nahon (:class:`ClassicalWashout`), its parameters
+(:class:`CueingParams`, :func:`load_cueing` for ``configs/cueing/*.toml``) and the evaluation
+of cue quality through vestibular models (:func:`evaluate_cueing`).
+
+Example
+-------
+>>> from motioncue.washout import ClassicalWashout, load_cueing
+>>> design = ClassicalWashout(load_cueing("racing"), fs_hz=100.0)
+>>> state = design.initial_state()
+>>> pose = design.step(state, (0.0, 0.0, 9.80665), (0.0, 0.0, 0.0))
+>>> [round(v, 12) for v in pose]
+[0.0, 0.0, 0.0, 0.0, 0.0, 0.0]
+"""
+
+from ._classical import ClassicalWashout, WashoutResult, WashoutState
+from ._evaluate import (
+    AXIS_NAMES,
+    OTOLITH,
+    SEMICIRCULAR_CANAL,
+    CueingEvaluation,
+    VestibularModel,
+    evaluate_cueing,
+    simulator_motion,
+)
+from ._params import DOF_NAMES, GRAVITY_M_S2, CueingParams, load_cueing
+from ._plot import plot_cueing
+
+__all__ = [
+    "AXIS_NAMES",
+    "DOF_NAMES",
+    "GRAVITY_M_S2",
+    "OTOLITH",
+    "SEMICIRCULAR_CANAL",
+    "ClassicalWashout",
+    "CueingEvaluation",
+    "CueingParams",
+    "VestibularModel",
+    "WashoutResult",
+    "WashoutState",
+    "evaluate_cueing",
+    "load_cueing",
+    "plot_cueing",
+    "simulator_motion",
+]

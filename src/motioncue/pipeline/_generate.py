@@ -1,0 +1,238 @@
+"""Offline ride generation: recording -> cueing -> workspace -> IK -> limits -> frames.
+
+One function, :func:`generate_ride`, runs the whole chain on arrays and returns the ride with
+a :class:`GenerateReport` of every stage (what was clamped, optimised and how far, how long
+each stage took). Frames are verified independently against the limits table before a ride
+is returned: an unsafe ride is never produced (``LimitError``).
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from .._errors import LimitError
+from ._ridefile import Ride
+from ._verify import FrameCheck, check_frames
+
+__all__ = ["GenerateReport", "Progress", "generate_ride", "pulse_rounding_limits"]
+
+Progress = Callable[[str, float], None]
+"""``progress(stage_description, fraction_done)``."""
+
+
+@dataclass(frozen=True, eq=False)
+class GenerateReport:
+    """What each stage did.
+
+    Attributes
+    ----------
+    t_s : ndarray, (N,)
+        Frame times of the whole ride (ramp in, cue, ramp out).
+    cue_slice : slice
+        Frames of the cued part (between the ramps).
+    f_vehicle, w_vehicle : ndarray, (M, 3)
+        Resampled vehicle motion of the cued part.
+    poses_cue : ndarray, (M, 6)
+        Washout output.
+    poses : ndarray, (N, 6)
+        Poses after workspace limiting (ramps included).
+    q_desired, q : ndarray, (N, n)
+        Actuator positions before and after the offline limits (SI).
+    bad_samples : int
+        Input samples the washout held (NaN, inf, spikes).
+    poses_clamped : int
+        Cue poses outside the workspace, scaled back toward neutral.
+    max_pose_scale_loss : float
+        Largest fraction of a pose removed by workspace limiting (0 = none).
+    optimisation : Any
+        The :class:`motioncue.trajectory.OptimisedRide` of the limits stage.
+    frame_check : FrameCheck
+        Independent finite-difference check of the frames against the limits table.
+    stage_s : dict[str, float]
+        Wall time per stage.
+    """
+
+    t_s: np.ndarray
+    cue_slice: slice
+    f_vehicle: np.ndarray
+    w_vehicle: np.ndarray
+    poses_cue: np.ndarray
+    poses: np.ndarray
+    q_desired: np.ndarray
+    q: np.ndarray
+    bad_samples: int
+    poses_clamped: int
+    max_pose_scale_loss: float
+    optimisation: Any
+    frame_check: FrameCheck
+    stage_s: dict[str, float] = field(default_factory=dict)
+
+
+def pulse_rounding_limits(limits: Any, platform: Any, dt_s: float) -> Any:
+    """Limits tightened so that rounding to whole pulses cannot push a frame past them.
+
+    Rounding moves each frame by at most half a pulse, so a speed by at most ``1 / dt`` and a
+    second difference by at most ``2 / dt^2`` pulses; the stroke ends of the pulse table are
+    already rounded inwards.
+    """
+    from motioncue.trajectory import ActuatorLimits
+
+    ppu = np.abs(np.asarray(platform.drives.pulses_per_unit, dtype=float))
+    v_margin = 1.0 / (ppu * dt_s)
+    a_margin = 2.0 / (ppu * dt_s * dt_s)
+    half = 0.5 / ppu
+    if np.any(limits.v_max <= 2 * v_margin) or np.any(limits.a_max <= 2 * a_margin):
+        raise LimitError(
+            f"frame period {dt_s * 1e3:.3f} ms is too short for the pulse resolution: rounding "
+            "alone would use more than half of the speed or acceleration limit"
+        )
+    j_max = None
+    if limits.j_max is not None:
+        j_max = limits.j_max - 4.0 / (ppu * dt_s**3)
+        if np.any(j_max <= 0):
+            raise LimitError("jerk limit is below the pulse rounding at this frame rate")
+    return ActuatorLimits(
+        limits.q_min + half,
+        limits.q_max - half,
+        limits.v_max - v_margin,
+        limits.a_max - a_margin,
+        j_max,
+        limits.names,
+        limits.kinds,
+        limits.sources,
+    )
+
+
+def generate_ride(
+    recording: Any,
+    platform: Any,
+    controller: Any,
+    cueing: Any,
+    *,
+    rate_hz: float = 100.0,
+    limits: Any = None,
+    source: str = "",
+    platform_name: str | None = None,
+    controller_name: str | None = None,
+    progress: Progress | None = None,
+) -> tuple[Ride, GenerateReport]:
+    """Turn a vehicle-motion recording into a ride file's frames.
+
+    Parameters
+    ----------
+    recording : motioncue.telemetry._recording.Recording
+        Vehicle specific force and angular velocity (any sample times).
+    platform : motioncue.kinematics.Platform
+    controller
+        A controller description from :func:`motioncue.output.load_controller`.
+    cueing : motioncue.washout.CueingParams
+    rate_hz : float
+        Output frame rate.
+    limits : motioncue.trajectory.ActuatorLimits, optional
+        Default: derived from the platform and controller.
+
+    Returns
+    -------
+    ride, report
+    """
+    from motioncue.telemetry._recording import resample
+    from motioncue.trajectory import ActuatorLimits, limit_pose, limit_ride, transition
+    from motioncue.washout import ClassicalWashout
+
+    def step(name: str, frac: float) -> None:
+        if progress is not None:
+            progress(name, frac)
+
+    stage_s: dict[str, float] = {}
+    clock = time.perf_counter()
+
+    def lap(name: str) -> None:
+        nonlocal clock
+        now = time.perf_counter()
+        stage_s[name] = now - clock
+        clock = now
+
+    dt = 1.0 / rate_hz
+    if limits is None:
+        limits = ActuatorLimits.from_platform(platform, controller)
+    table = limits.to_pulses_table(platform)
+    tight = pulse_rounding_limits(limits, platform, dt)
+
+    step("resample", 0.0)
+    rec = resample(recording, rate_hz)
+    lap("resample")
+    step("cueing", 0.1)
+    wres = ClassicalWashout(cueing, fs_hz=rate_hz).run(rec.f, rec.w)
+    lap("cueing")
+    step("workspace", 0.2)
+    plim = limit_pose(platform, wres.poses)
+    poses_cue_ok = np.asarray(plim.pose, dtype=float)
+    lap("workspace")
+    step("ramps", 0.35)
+    ramp_in = transition(platform, platform.pose_park, poses_cue_ok[0], tight, rate_hz)
+    ramp_out = transition(platform, poses_cue_ok[-1], platform.pose_park, tight, rate_hz)
+    lap("ramps")
+    step("inverse kinematics", 0.45)
+    poses = np.concatenate([ramp_in.poses[:-1], poses_cue_ok, ramp_out.poses[1:]])
+    q_desired = platform.inverse(poses)
+    lap("inverse kinematics")
+    step("actuator limits (casadi)", 0.5)
+    opt = limit_ride(q_desired, dt, tight, q0=platform.q_park, v0=np.zeros(platform.n_actuators))
+    lap("actuator limits")
+    step("pulses", 0.9)
+    q = np.asarray(opt.q, dtype=float)
+    pulses = platform.drives.to_pulses(q)
+    t_s = np.arange(len(q)) * dt
+    check = check_frames(t_s, pulses, table, start_at_rest=True)
+    if not check.ok:
+        raise LimitError(f"generated frames fail the independent limits check: {check.summary()}")
+    lap("pulses and check")
+    n_in = len(ramp_in.poses) - 1
+    cue = slice(n_in, n_in + len(poses_cue_ok))
+    status = np.asarray(plim.status)
+    clamped = int(np.count_nonzero(status != "ok")) if status.ndim else int(status != "ok")
+    loss = float(np.max(1.0 - np.asarray(plim.scale, dtype=float), initial=0.0))
+    n_frames = len(t_s)
+    ride = Ride(
+        platform=platform_name or platform.name,
+        controller=controller_name or controller.name,
+        rate_hz=rate_hz,
+        actuator_names=platform.actuator_names,
+        t_s=t_s,
+        pulses=pulses,
+        dout=np.zeros(n_frames, dtype=np.uint16),
+        dacs=np.zeros((n_frames, 2), dtype=np.uint16),
+        limits={"actuators": table},
+        source=source,
+        notes={
+            "cue_frames": [cue.start, cue.stop],
+            "bad_samples": int(wres.bad_samples),
+            "poses_clamped": clamped,
+            "max_deviation_si": float(opt.max_deviation),
+            "optimisation_status": str(opt.status),
+            "frame_check": check.summary(),
+        },
+    )
+    step("done", 1.0)
+    report = GenerateReport(
+        t_s=t_s,
+        cue_slice=cue,
+        f_vehicle=rec.f,
+        w_vehicle=rec.w,
+        poses_cue=np.asarray(wres.poses),
+        poses=poses,
+        q_desired=q_desired,
+        q=q,
+        bad_samples=int(wres.bad_samples),
+        poses_clamped=clamped,
+        max_pose_scale_loss=loss,
+        optimisation=opt,
+        frame_check=check,
+        stage_s=stage_s,
+    )
+    return ride, report

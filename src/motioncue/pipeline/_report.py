@@ -1,0 +1,150 @@
+"""Ride reports: cue quality, poses, and actuators against their limits (PNG + JSON + text)."""
+
+from __future__ import annotations
+
+import json
+import math
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from ._generate import GenerateReport
+from ._ridefile import Ride
+from ._verify import limits_arrays
+
+__all__ = ["delivered_poses", "plot_actuators", "write_report"]
+
+
+def delivered_poses(platform: Any, report: GenerateReport) -> np.ndarray:
+    """Poses the platform really makes after the actuator limits, to first order.
+
+    ``pose + J^+ (q - q_desired)`` with the Jacobian at the workspace-limited pose: exact to
+    first order in the (millimetre-sized) optimisation deviation, and vectorised.
+    """
+    poses = np.asarray(report.poses, dtype=float)
+    dq = np.asarray(report.q, dtype=float) - np.asarray(report.q_desired, dtype=float)
+    mask = np.asarray(platform.dof_mask, dtype=bool)
+    jac = platform.jacobian(poses)[..., mask]
+    dpose = np.einsum("nij,nj->ni", np.linalg.pinv(jac), dq)
+    out = poses.copy()
+    out[:, mask] += dpose
+    return out
+
+
+def plot_actuators(
+    ride: Ride, path: str | Path, q_desired_pulses: np.ndarray | None = None
+) -> Path:
+    """Positions against the stroke, speeds and accelerations against their limits (pulses)."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    lim = limits_arrays(ride.limits)
+    t = ride.t_s
+    p = ride.pulses.astype(float)
+    v = np.gradient(p, t, axis=0)
+    v[1:] = np.diff(p, axis=0) / np.diff(t)[:, None]
+    a = np.zeros_like(v)
+    a[1:] = np.diff(v, axis=0) / np.diff(t)[:, None]
+    names = ride.actuator_names
+    fig, axes = plt.subplots(3, 1, figsize=(13, 11), sharex=True, layout="constrained")
+    for i, name in enumerate(names):
+        (line,) = axes[0].plot(t, p[:, i], lw=0.9, label=name)
+        if q_desired_pulses is not None:
+            axes[0].plot(t, q_desired_pulses[:, i], lw=0.6, ls=":", color=line.get_color())
+        axes[1].plot(t, v[:, i] / lim["v"][i], lw=0.8, color=line.get_color())
+        axes[2].plot(t, a[:, i] / lim["a"][i], lw=0.8, color=line.get_color())
+    for lo, hi in zip(lim["lo"], lim["hi"], strict=True):
+        axes[0].axhline(lo, color="k", lw=0.5, ls="--")
+        axes[0].axhline(hi, color="k", lw=0.5, ls="--")
+    axes[0].set_ylabel("position [pulses]\n(dashed: stroke ends; dotted: desired)")
+    axes[0].legend(loc="upper right", ncol=len(names))
+    for ax, what in ((axes[1], "speed"), (axes[2], "acceleration")):
+        ax.axhline(1.0, color="r", lw=0.8)
+        ax.axhline(-1.0, color="r", lw=0.8)
+        ax.set_ylabel(f"{what} / limit")
+        ax.set_ylim(-1.15, 1.15)
+    axes[2].set_xlabel("t [s]")
+    for ax in axes:
+        ax.grid(alpha=0.3)
+    fig.suptitle(f"{ride.platform} on {ride.controller}: actuators against their limits")
+    path = Path(path)
+    fig.savefig(path, dpi=90)
+    plt.close(fig)
+    return path
+
+
+def write_report(
+    out_dir: str | Path,
+    ride: Ride,
+    report: GenerateReport,
+    platform: Any,
+    cueing: Any,
+) -> dict[str, Any]:
+    """Write ``cueing.png``, ``actuators.png``, ``metrics.json`` and ``summary.txt``.
+
+    Returns the metrics dictionary (also written as JSON).
+    """
+    from motioncue.washout import evaluate_cueing, plot_cueing
+
+    out = Path(out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    poses = delivered_poses(platform, report)[report.cue_slice]
+    ev = evaluate_cueing(
+        report.f_vehicle,
+        report.w_vehicle,
+        poses,
+        ride.rate_hz,
+        workspace=getattr(cueing, "workspace", None),
+    )
+    plot_cueing(ev, poses, out / "cueing.png", title=f"{ride.source} on {ride.platform}")
+    desired = platform.drives.to_pulses(report.q_desired)
+    plot_actuators(ride, out / "actuators.png", desired)
+    opt = report.optimisation
+    check = report.frame_check
+
+    def fin(x: Any) -> Any:
+        arr = np.asarray(x, dtype=float)
+        return [None if not math.isfinite(v) else float(v) for v in arr.ravel()]
+
+    metrics: dict[str, Any] = {
+        "frames": ride.n_frames,
+        "duration_s": ride.duration_s,
+        "rate_hz": ride.rate_hz,
+        "bad_samples": report.bad_samples,
+        "poses_clamped": report.poses_clamped,
+        "max_pose_scale_loss": report.max_pose_scale_loss,
+        "optimisation": {
+            "status": str(opt.status),
+            "max_deviation_si": float(opt.max_deviation),
+            "where_frame_actuator": [int(i) for i in opt.where_index],
+            "windows": int(opt.n_windows),
+        },
+        "limit_use": {
+            "stroke": fin(check.stroke_use),
+            "speed": fin(check.speed_use),
+            "accel": fin(check.accel_use),
+        },
+        "cue": {
+            "axes": ["fx", "fy", "fz", "wx", "wy", "wz"],
+            "rms_error": fin(ev.rms_error),
+            "correlation": fin(ev.correlation),
+            "delay_s": fin(ev.delay_s),
+            "false_cue_count": [int(c) for c in ev.false_cue_count],
+            "false_cue_time_s": fin(ev.false_cue_time_s),
+            "workspace_use": fin(ev.workspace_use),
+        },
+        "stage_s": report.stage_s,
+    }
+    (out / "metrics.json").write_text(json.dumps(metrics, indent=2))
+    (out / "summary.txt").write_text(
+        f"ride: {ride.n_frames} frames, {ride.duration_s:.1f} s at {ride.rate_hz:g} Hz\n"
+        f"limits check: {check.summary()}\n"
+        f"optimisation: {opt.status}, max deviation {opt.max_deviation * 1e3:.2f} mm\n"
+        f"input samples held: {report.bad_samples}; poses clamped: {report.poses_clamped}\n\n"
+        + ev.summary()
+        + "\n"
+    )
+    return metrics

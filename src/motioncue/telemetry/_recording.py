@@ -1,0 +1,219 @@
+"""Vehicle-motion recordings: the CSV format, and resampling to a uniform rate.
+
+A recording CSV has a header row naming the columns ``t, fx, fy, fz, wx, wy, wz`` (any
+order; extra columns are ignored): time (s), specific force (m/s^2) and angular velocity
+(rad/s) in the vehicle body frame of conventions.md (x forward, y left, z up; at rest and
+level ``f = [0, 0, +9.80665]``).
+"""
+
+from __future__ import annotations
+
+import csv
+import math
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from .._errors import ConfigError
+
+__all__ = [
+    "RECORDING_COLUMNS",
+    "Recording",
+    "read_recording_csv",
+    "resample",
+    "write_recording_csv",
+]
+
+RECORDING_COLUMNS: tuple[str, ...] = ("t", "fx", "fy", "fz", "wx", "wy", "wz")
+
+
+@dataclass(frozen=True, eq=False)
+class Recording:
+    """Vehicle motion over time.
+
+    Attributes
+    ----------
+    t_s : (N,) array
+        Sample times (s), finite (not necessarily sorted or uniform; see :func:`resample`).
+    f : (N, 3) array
+        Specific force (m/s^2), body frame; non-finite values are NaN (bad samples).
+    w : (N, 3) array
+        Angular velocity (rad/s), body frame; non-finite values are NaN.
+    """
+
+    t_s: NDArray[np.float64]
+    f: NDArray[np.float64]
+    w: NDArray[np.float64]
+
+    def __init__(self, t_s: ArrayLike, f: ArrayLike, w: ArrayLike) -> None:
+        t = np.array(t_s, dtype=float)
+        fa = np.array(f, dtype=float)
+        wa = np.array(w, dtype=float)
+        n = t.shape[0] if t.ndim == 1 else -1
+        if t.ndim != 1 or fa.shape != (n, 3) or wa.shape != (n, 3):
+            raise ConfigError(
+                f"Recording needs t (N,), f (N, 3), w (N, 3); got {t.shape}, {fa.shape}, {wa.shape}"
+            )
+        if not np.isfinite(t).all():
+            raise ConfigError("Recording: sample times must be finite")
+        fa[~np.isfinite(fa)] = np.nan
+        wa[~np.isfinite(wa)] = np.nan
+        for a in (t, fa, wa):
+            a.flags.writeable = False
+        object.__setattr__(self, "t_s", t)
+        object.__setattr__(self, "f", fa)
+        object.__setattr__(self, "w", wa)
+
+    def __len__(self) -> int:
+        return int(self.t_s.shape[0])
+
+
+def _parse(cell: str, where: str, column: str) -> float:
+    text = cell.strip()
+    if text == "":
+        return math.nan
+    try:
+        return float(text)
+    except ValueError:
+        raise ConfigError(f"{where}: column {column!r}: {cell!r} is not a number") from None
+
+
+def read_recording_csv(path: str | Path) -> Recording:
+    """Read a recording CSV.
+
+    Parameters
+    ----------
+    path
+        CSV with a header row containing at least ``t, fx, fy, fz, wx, wy, wz``.
+
+    Returns
+    -------
+    Recording
+
+    Raises
+    ------
+    ConfigError
+        Unreadable file, missing column (named), a row with too few fields or an unparsable
+        number (line and column named), or a non-finite time. Empty cells, ``nan`` and
+        ``inf`` in the motion columns are kept as NaN: they are bad samples the washout holds
+        and counts.
+    """
+    p = Path(path)
+    try:
+        with open(p, newline="", encoding="utf-8") as fh:
+            reader = csv.reader(fh)
+            try:
+                header = next(reader)
+            except StopIteration:
+                raise ConfigError(f"{p}: empty file, expected a header row") from None
+            names = [h.strip() for h in header]
+            missing = [c for c in RECORDING_COLUMNS if c not in names]
+            if missing:
+                raise ConfigError(
+                    f"{p}: missing column(s) {', '.join(missing)}; header has {', '.join(names)}"
+                )
+            cols = [names.index(c) for c in RECORDING_COLUMNS]
+            need = max(cols) + 1
+            rows: list[list[float]] = []
+            for row in reader:
+                line = reader.line_num
+                if not row or all(not c.strip() for c in row):
+                    continue
+                where = f"{p}:{line}"
+                if len(row) < need:
+                    raise ConfigError(f"{where}: {len(row)} fields, need at least {need}")
+                values = [
+                    _parse(row[i], where, c) for i, c in zip(cols, RECORDING_COLUMNS, strict=True)
+                ]
+                if not math.isfinite(values[0]):
+                    raise ConfigError(f"{where}: time {row[cols[0]]!r} is not a finite number")
+                rows.append(values)
+    except OSError as exc:
+        raise ConfigError(f"{p}: cannot read: {exc}") from exc
+    data = np.array(rows, dtype=float).reshape(-1, 7)
+    return Recording(data[:, 0], data[:, 1:4], data[:, 4:7])
+
+
+def write_recording_csv(path: str | Path, rec: Recording) -> None:
+    """Write ``rec`` as a recording CSV (header ``t,fx,fy,fz,wx,wy,wz``; NaN as ``nan``).
+
+    Floats are written with ``repr`` precision, so :func:`read_recording_csv` returns the
+    same numbers.
+    """
+    p = Path(path)
+    data = np.column_stack([rec.t_s, rec.f, rec.w])
+    try:
+        with open(p, "w", newline="", encoding="utf-8") as fh:
+            fh.write(",".join(RECORDING_COLUMNS) + "\n")
+            for row in data.tolist():
+                fh.write(",".join(repr(v) for v in row) + "\n")
+    except OSError as exc:
+        raise ConfigError(f"{p}: cannot write: {exc}") from exc
+
+
+def resample(rec: Recording, fs_hz: float) -> Recording:
+    """Resample to a uniform grid by linear interpolation.
+
+    Rule: samples are sorted by time (stable); of several samples with the same time the
+    last one in the file wins (a later packet supersedes an earlier one). The grid starts at
+    the earliest time, ``t_k = t_0 + k / fs``, and ends at the last grid point not after the
+    latest time. Each grid value interpolates linearly between the two samples around it; a
+    grid point on a sample (within a millionth of the grid period, absorbing rounding of
+    the times) takes that sample's values, and one strictly between two
+    samples of which one is NaN is NaN (left for the washout to hold and count). A
+    recording of one sample gives one sample; an empty one gives an empty one.
+
+    Parameters
+    ----------
+    rec : Recording
+    fs_hz : float
+        Target rate, > 0.
+
+    Returns
+    -------
+    Recording
+        Uniformly sampled at ``fs_hz``.
+    """
+    if (
+        isinstance(fs_hz, bool)
+        or not isinstance(fs_hz, int | float)
+        or not math.isfinite(fs_hz)
+        or fs_hz <= 0
+    ):
+        raise ConfigError(f"fs_hz = {fs_hz!r} is invalid; allowed: a finite number > 0")
+    n = len(rec)
+    if n == 0:
+        return rec
+    order = np.argsort(rec.t_s, kind="stable")
+    t = rec.t_s[order]
+    data = np.column_stack([rec.f, rec.w])[order]
+    # keep the last of each run of equal times
+    last = np.ones(n, dtype=bool)
+    last[:-1] = t[1:] != t[:-1]
+    t = t[last]
+    data = data[last]
+    span = float(t[-1] - t[0])
+    count = math.floor(span * fs_hz * (1.0 + 1e-12) + 1e-9) + 1
+    grid = t[0] + np.arange(count) / fs_hz
+    if t.shape[0] == 1:
+        out = np.repeat(data, count, axis=0)
+    else:
+        j = np.clip(np.searchsorted(t, grid, side="right") - 1, 0, t.shape[0] - 2)
+        t0 = t[j]
+        t1 = t[j + 1]
+        frac = np.clip((grid - t0) / (t1 - t0), 0.0, 1.0)[:, None]
+        d0 = data[j]
+        d1 = data[j + 1]
+        out = d0 + frac * (d1 - d0)
+        bad = ~(np.isfinite(d0) & np.isfinite(d1))
+        out[bad] = np.nan
+        # on a sample (within 1e-6 of a grid period): exactly that sample, even if its
+        # neighbour is NaN
+        tol = 1e-6 / fs_hz
+        on0 = (grid - t0) <= tol
+        on1 = ~on0 & ((t1 - grid) <= tol)
+        out[on0] = d0[on0]
+        out[on1] = d1[on1]
+    return Recording(grid, out[:, :3], out[:, 3:])

@@ -1,0 +1,606 @@
+"""The classical washout algorithm (Reid & Nahon), streaming and batch with equal numbers.
+
+References
+----------
+* L. D. Reid, M. A. Nahon, "Flight simulation motion-base drive algorithms: Part 1 -
+  Developing and testing the equations", UTIAS Report No. 296, University of Toronto, 1985.
+* L. D. Reid, M. A. Nahon, "... Part 2 - Selecting the system parameters", UTIAS Report
+  No. 307, 1986.
+* M. A. Nahon, L. D. Reid, "Simulator motion-drive algorithms: a designer's perspective",
+  Journal of Guidance, Control, and Dynamics 13(2), 1990, 356-362.
+
+Signal flow (per sample; frames, signs and units of conventions.md)
+-------------------------------------------------------------------
+0. **Bad input.** A sample whose six values are not all finite, or whose specific-force
+   deviation ``|f - [0, 0, g]|`` or angular velocity exceeds ``reject_*`` on any axis, is
+   replaced by the last good sample (rest, ``f = [0, 0, g], w = 0``, before the first) and
+   counted.
+1. **Scaling and smooth limiting.** ``f_s = [0, 0, g] + L_f(k_f * (f - [0, 0, g]))``,
+   ``w_s = L_w(k_w * w)`` with the limiter ``L`` of :func:`~._filters.soft_limit`.
+2. **Tilt coordination.** ``f_s,x`` and ``f_s,y`` pass the low-pass
+   ``G_T(s) = wt^2 / (s^2 + 2 zt wt s + wt^2)``. The tilt that makes gravity supply that
+   force in the platform frame (``R^T [0, 0, g]`` has x component ``-g sin(pitch)`` and y
+   component ``g sin(roll) cos(pitch)``) is ``pitch* = -asin(f_x,lp / g)`` (forward
+   acceleration -> nose up, negative pitch about the left-pointing y axis) and
+   ``roll* = asin(f_y,lp / g)`` (rightward force -> left side down, rider pressed left).
+   Each target is smoothly limited to ``tilt_limit`` and then rate limited:
+   ``tilt[n] = tilt[n-1] + clip(target - tilt[n-1], -r/fs, r/fs)`` (the limit bounds the
+   tilt; roll and pitch also carry the high-passed rotational cue of step 3).
+3. **Rotational channel.** Body rates are turned into Euler-angle rates
+   ``e = T(beta) w_s`` (ZYX: ``roll' = p + tan(pitch)(q sin(roll) + r cos(roll))``,
+   ``pitch' = q cos(roll) - r sin(roll)``, ``yaw' = (q sin(roll) + r cos(roll))/cos(pitch)``),
+   then high-passed and integrated in one stable filter
+   ``H_R(s)/s = s / (s^2 + 2 zr wr s + wr^2)`` (``H_R`` the second-order high-pass
+   ``s^2/(s^2 + 2 zr wr s + wr^2)``): ``beta_hp = H_R/s * e``. The tilt is added:
+   ``[roll, pitch, yaw] = [beta_hp,roll + tilt_roll, beta_hp,pitch + tilt_pitch, beta_hp,yaw]``.
+   As in Reid & Nahon the high-pass comes after the (nonlinear) rate transformation, so
+   every angular-velocity input washes out through a stable filter. ``T`` is evaluated at
+   the attitude ``beta_pred = H_R/s * w_s + tilt`` (the small-angle prediction of the
+   platform attitude) rather than at the previous output: this keeps the whole algorithm a
+   feed-forward cascade (no feedback from output to input), which is what lets the batch
+   run be vectorised with exactly the streaming numbers. The two differ only at second
+   order in the high-passed angles.
+4. **Translational channel.** The scaled force is taken to the inertial frame with the
+   platform attitude and gravity removed, ``a = R(roll, pitch, yaw) f_s - [0, 0, g]``
+   (``R = Rz Ry Rx``), then high-passed and integrated twice in one stable filter
+   ``P(s) = H_T(s)/s^2`` with
+   ``H_T(s) = s^2/(s^2 + 2 zeta wn s + wn^2) * s/(s + wb)``, i.e.
+   ``P(s) = 1/(s^2 + 2 zeta wn s + wn^2) * s/(s + wb)``. With ``wb > 0`` a sustained
+   acceleration returns the platform to neutral; with ``wb = 0``
+   (``P = 1/(s^2 + 2 zeta wn s + wn^2)``) it leaves an offset ``a / wn^2``.
+5. Components the machine cannot move (``dofs``) are zero, and are zero in ``R`` and ``T``.
+
+Discretisation
+--------------
+Each continuous factor (one second-order or one first-order section) is discretised by
+the bilinear (Tustin) transform prewarped at its own characteristic frequency (``wn`` of
+a second-order factor, ``wb`` of the break) at the run's sample rate: ``s = K (z - 1) /
+(z + 1)`` with ``K = w / tan(w / (2 fs))`` (:func:`scipy.signal.bilinear` with
+``fs = K / 2``), so each factor's response is exact at its own ``w``. It is executed as a
+second-order section in transposed direct form II (the recurrence of
+:func:`scipy.signal.sosfilt`). Streaming runs that recurrence on plain floats; batch calls
+``sosfilt``. A factor whose frequency is not below Nyquist is rejected at construction.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable, MutableSequence, Sequence
+from dataclasses import dataclass, field
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from .._errors import ConfigError
+from ._filters import Section, rate_limit_array, soft_limit, soft_limit_array, tustin_section
+from ._params import GRAVITY_M_S2, CueingParams
+
+__all__ = ["ClassicalWashout", "WashoutResult", "WashoutState"]
+
+_IDENTITY: Section = (1.0, 0.0, 0.0, 1.0, 0.0, 0.0)
+_MIN_COS_PITCH = 1e-3
+
+# Section order (each section owns two delay states in WashoutState.z):
+# 0, 1: tilt low-pass x, y; 2, 3: rotational prediction roll, pitch (yaw does not enter T);
+# 4-6: rotational high-pass+integrator roll, pitch, yaw; 7-12: translational x1, x2, y1, y2,
+# z1, z2 (the second section of an axis is the identity when its wb is 0).
+_N_SECTIONS = 13
+
+
+@dataclass(eq=False)
+class WashoutState:
+    """The changing state of one washout run (mutable; see :meth:`ClassicalWashout.step`).
+
+    Attributes
+    ----------
+    z : list of 26 floats
+        Delay states of the 13 second-order sections.
+    tilt : list of 2 floats
+        Rate-limited tilt ``[roll, pitch]`` (rad) of the last sample.
+    hold : list of 6 floats
+        Last good input ``[fx, fy, fz, wx, wy, wz]`` (used for bad samples).
+    bad_samples : int
+        Samples replaced by the last good one since the last reset.
+    samples : int
+        Samples processed since the last reset.
+    """
+
+    z: list[float] = field(default_factory=lambda: [0.0] * (2 * _N_SECTIONS))
+    tilt: list[float] = field(default_factory=lambda: [0.0, 0.0])
+    hold: list[float] = field(default_factory=lambda: [0.0, 0.0, GRAVITY_M_S2, 0.0, 0.0, 0.0])
+    bad_samples: int = 0
+    samples: int = 0
+
+
+@dataclass(frozen=True, eq=False)
+class WashoutResult:
+    """Outcome of a batch run.
+
+    Attributes
+    ----------
+    poses : (N, 6) array
+        Platform pose ``[x, y, z, roll, pitch, yaw]`` (m, rad) per sample.
+    bad_samples : int
+        Input samples that were NaN/inf or spikes, replaced by the last good sample.
+    bad_mask : (N,) bool array
+        Which samples those were.
+    tilt : (N, 2) array
+        The rate-limited tilt-coordination angles ``[roll, pitch]`` (rad).
+    f_used, w_used : (N, 3) arrays
+        The input after bad samples were held (unscaled), for evaluation.
+    fs_hz : float
+        Sample rate.
+    """
+
+    poses: NDArray[np.float64]
+    bad_samples: int
+    bad_mask: NDArray[np.bool_]
+    tilt: NDArray[np.float64]
+    f_used: NDArray[np.float64]
+    w_used: NDArray[np.float64]
+    fs_hz: float
+
+
+_StepFn = Callable[
+    [WashoutState, Sequence[float], Sequence[float], MutableSequence[float] | None],
+    MutableSequence[float],
+]
+
+
+def _sos(*sections: Section) -> NDArray[np.float64]:
+    return np.array(sections, dtype=float)
+
+
+@dataclass(frozen=True, eq=False)
+class ClassicalWashout:
+    """The classical washout of :class:`CueingParams` discretised at ``fs_hz``.
+
+    Parameters
+    ----------
+    params : CueingParams
+    fs_hz : float
+        Sample rate of the run (> 0); every filter frequency must be below Nyquist.
+
+    Notes
+    -----
+    Frozen: it holds only the discretised coefficients. The changing state lives in a
+    :class:`WashoutState` from :meth:`initial_state`, passed explicitly to :meth:`step` and
+    optionally to :meth:`run`; both give the same numbers (to rounding).
+    """
+
+    params: CueingParams
+    fs_hz: float
+    tilt_lp: Section = field(init=False)
+    rot: tuple[Section, Section, Section] = field(init=False)
+    trans: tuple[tuple[Section, Section], ...] = field(init=False)
+    _step_impl: _StepFn = field(init=False, repr=False)
+    _sos: dict[int, NDArray[np.float64]] = field(init=False, repr=False)
+
+    def __post_init__(self) -> None:
+        fs = self.fs_hz
+        if isinstance(fs, bool) or not isinstance(fs, int | float) or not math.isfinite(fs):
+            raise ConfigError(f"fs_hz = {fs!r} is invalid; allowed: a finite number > 0")
+        if fs <= 0.0:
+            raise ConfigError(f"fs_hz = {fs!r} is invalid; allowed: a finite number > 0")
+        object.__setattr__(self, "fs_hz", float(fs))
+        p = self.params
+        wt, zt = p.tilt_wn_rad_s, p.tilt_zeta
+        tilt_lp = tustin_section([wt * wt], [1.0, 2.0 * zt * wt, wt * wt], fs, wt)
+        rot = tuple(
+            tustin_section([1.0, 0.0], [1.0, 2.0 * z * w, w * w], fs, w)
+            for w, z in zip(p.rot_wn_rad_s, p.rot_zeta, strict=True)
+        )
+        trans = []
+        for w, z, wb in zip(p.trans_wn_rad_s, p.trans_zeta, p.trans_wb_rad_s, strict=True):
+            if wb > 0.0:
+                first = tustin_section([1.0, 0.0], [1.0, 2.0 * z * w, w * w], fs, w)
+                second = tustin_section([1.0], [1.0, wb], fs, wb)
+            else:
+                first = tustin_section([1.0], [1.0, 2.0 * z * w, w * w], fs, w)
+                second = _IDENTITY
+            trans.append((first, second))
+        object.__setattr__(self, "tilt_lp", tilt_lp)
+        object.__setattr__(self, "rot", (rot[0], rot[1], rot[2]))
+        object.__setattr__(self, "trans", tuple(trans))
+        object.__setattr__(self, "_step_impl", self._make_step())
+        sos = {0: _sos(tilt_lp), 1: _sos(tilt_lp)}
+        for k, sec in enumerate(rot):
+            if k < 2:
+                sos[2 + k] = _sos(sec)  # prediction (roll, pitch) at 2, 3
+            sos[4 + k] = _sos(sec)  # high-pass + integrator at 4, 5, 6
+        for k, secs in enumerate(trans):
+            sos[7 + 2 * k] = _sos(*secs)
+        object.__setattr__(self, "_sos", sos)
+
+    # ------------------------------------------------------------------ continuous designs
+    def continuous(self) -> dict[str, list[tuple[tuple[float, ...], tuple[float, ...]]]]:
+        """The continuous transfer functions the sections were discretised from.
+
+        Returns
+        -------
+        dict
+            ``{"tilt": [(num, den)], "rot": [3 x (num, den)], "trans": [3 x (num, den)]}``,
+            polynomials in ``s`` highest power first (``trans`` is the product ``P(s)``).
+        """
+        p = self.params
+        wt, zt = p.tilt_wn_rad_s, p.tilt_zeta
+        out: dict[str, list[tuple[tuple[float, ...], tuple[float, ...]]]] = {
+            "tilt": [((wt * wt,), (1.0, 2.0 * zt * wt, wt * wt))],
+            "rot": [
+                ((1.0, 0.0), (1.0, 2.0 * z * w, w * w))
+                for w, z in zip(p.rot_wn_rad_s, p.rot_zeta, strict=True)
+            ],
+            "trans": [],
+        }
+        for w, z, wb in zip(p.trans_wn_rad_s, p.trans_zeta, p.trans_wb_rad_s, strict=True):
+            den2 = (1.0, 2.0 * z * w, w * w)
+            if wb > 0.0:
+                out["trans"].append(((1.0, 0.0), tuple(np.polymul(den2, [1.0, wb]).tolist())))
+            else:
+                out["trans"].append(((1.0,), den2))
+        return out
+
+    # ------------------------------------------------------------------ state
+    def initial_state(self) -> WashoutState:
+        """A fresh state: platform at neutral, vehicle at rest, no samples seen."""
+        return WashoutState()
+
+    def reset(self, state: WashoutState) -> None:
+        """Put ``state`` back to :meth:`initial_state` (in place, keeping its lists)."""
+        z = state.z
+        for i in range(len(z)):
+            z[i] = 0.0
+        state.tilt[0] = 0.0
+        state.tilt[1] = 0.0
+        state.hold[:] = [0.0, 0.0, GRAVITY_M_S2, 0.0, 0.0, 0.0]
+        state.bad_samples = 0
+        state.samples = 0
+
+    # ------------------------------------------------------------------ streaming
+    def step(
+        self,
+        state: WashoutState,
+        f: Sequence[float],
+        w: Sequence[float],
+        out: MutableSequence[float] | None = None,
+    ) -> MutableSequence[float]:
+        """Advance one sample.
+
+        Parameters
+        ----------
+        state : WashoutState
+            Updated in place.
+        f : 3 floats
+            Specific force (m/s^2, body frame).
+        w : 3 floats
+            Angular velocity (rad/s, body frame).
+        out : mutable sequence of 6 floats, optional
+            Written in place and returned (no allocation); a new list otherwise.
+
+        Returns
+        -------
+        The pose ``[x, y, z, roll, pitch, yaw]`` (m, rad); always finite.
+        """
+        return self._step_impl(state, f, w, out)
+
+    def _make_step(self) -> _StepFn:
+        p = self.params
+        g = GRAVITY_M_S2
+        fs = self.fs_hz
+        rf, rw = p.reject_f_m_s2, p.reject_w_rad_s
+        knee = p.soft_knee
+        kfx, kfy, kfz = p.f_scale
+        lfx, lfy, lfz = p.f_limit_m_s2
+        afx, afy, afz = (knee * v for v in p.f_limit_m_s2)
+        kwx, kwy, kwz = p.w_scale
+        lwx, lwy, lwz = p.w_limit_rad_s
+        awx, awy, awz = (knee * v for v in p.w_limit_rad_s)
+        tl = p.tilt_limit_rad
+        atl = knee * tl
+        st = p.tilt_rate_limit_rad_s / fs
+        mx, my, mz, mr, mp, myaw = (1.0 if d else 0.0 for d in p.dofs)
+        lb0, lb1, lb2, _, la1, la2 = self.tilt_lp
+        r0, r1, r2 = self.rot
+        t0a, t0b = self.trans[0]
+        t1a, t1b = self.trans[1]
+        t2a, t2b = self.trans[2]
+        asin, sin, cos = math.asin, math.sin, math.cos
+        soft = soft_limit
+        mincos = _MIN_COS_PITCH
+
+        def bq(c: Section, z: list[float], i: int, x: float) -> float:
+            y = c[0] * x + z[i]
+            z[i] = c[1] * x - c[4] * y + z[i + 1]
+            z[i + 1] = c[2] * x - c[5] * y
+            return y
+
+        def step(
+            state: WashoutState,
+            f: Sequence[float],
+            w: Sequence[float],
+            out: MutableSequence[float] | None,
+        ) -> MutableSequence[float]:
+            fx, fy, fz = f[0], f[1], f[2]
+            wx, wy, wz = w[0], w[1], w[2]
+            h = state.hold
+            state.samples += 1
+            # NaN fails every comparison and inf fails <= bound: both land in the else.
+            if (
+                abs(fx) <= rf
+                and abs(fy) <= rf
+                and abs(fz - g) <= rf
+                and abs(wx) <= rw
+                and abs(wy) <= rw
+                and abs(wz) <= rw
+            ):
+                h[0] = fx
+                h[1] = fy
+                h[2] = fz
+                h[3] = wx
+                h[4] = wy
+                h[5] = wz
+            else:
+                state.bad_samples += 1
+                fx, fy, fz, wx, wy, wz = h[0], h[1], h[2], h[3], h[4], h[5]
+            # 1. scaling and smooth limiting
+            sx = kfx * fx
+            if sx > afx or sx < -afx:
+                sx = soft(sx, lfx, knee)
+            sy = kfy * fy
+            if sy > afy or sy < -afy:
+                sy = soft(sy, lfy, knee)
+            sz = kfz * (fz - g)
+            if sz > afz or sz < -afz:
+                sz = soft(sz, lfz, knee)
+            fzs = g + sz
+            qx = kwx * wx
+            if qx > awx or qx < -awx:
+                qx = soft(qx, lwx, knee)
+            qy = kwy * wy
+            if qy > awy or qy < -awy:
+                qy = soft(qy, lwy, knee)
+            qz = kwz * wz
+            if qz > awz or qz < -awz:
+                qz = soft(qz, lwz, knee)
+            z = state.z
+            # 2. tilt coordination
+            ylx = lb0 * sx + z[0]
+            z[0] = lb1 * sx - la1 * ylx + z[1]
+            z[1] = lb2 * sx - la2 * ylx
+            yly = lb0 * sy + z[2]
+            z[2] = lb1 * sy - la1 * yly + z[3]
+            z[3] = lb2 * sy - la2 * yly
+            u = ylx / g
+            u = 1.0 if u > 1.0 else (-1.0 if u < -1.0 else u)
+            tp = -asin(u)
+            if tp > atl or tp < -atl:
+                tp = soft(tp, tl, knee)
+            u = yly / g
+            u = 1.0 if u > 1.0 else (-1.0 if u < -1.0 else u)
+            tr = asin(u)
+            if tr > atl or tr < -atl:
+                tr = soft(tr, tl, knee)
+            tilt = state.tilt
+            prev = tilt[0]
+            d = tr - prev
+            if d > st:
+                tr = prev + st
+            elif d < -st:
+                tr = prev - st
+            tilt[0] = tr
+            prev = tilt[1]
+            d = tp - prev
+            if d > st:
+                tp = prev + st
+            elif d < -st:
+                tp = prev - st
+            tilt[1] = tp
+            tr *= mr
+            tp *= mp
+            # 3. rotational channel
+            pr = mr * (bq(r0, z, 4, qx) + tr)
+            pp = mp * (bq(r1, z, 6, qy) + tp)
+            sphi = sin(pr)
+            cphi = cos(pr)
+            cth = cos(pp)
+            if cth < mincos:
+                cth = mincos
+            tth = sin(pp) / cth
+            qr = sphi * qy + cphi * qz
+            e_roll = qx + tth * qr
+            e_pitch = cphi * qy - sphi * qz
+            e_yaw = qr / cth
+            roll = mr * (bq(r0, z, 8, e_roll) + tr)
+            pitch = mp * (bq(r1, z, 10, e_pitch) + tp)
+            yaw = myaw * bq(r2, z, 12, e_yaw)
+            # 4. translational channel: a = R f_s - [0, 0, g]
+            sphi = sin(roll)
+            cphi = cos(roll)
+            sth = sin(pitch)
+            cth = cos(pitch)
+            sps = sin(yaw)
+            cps = cos(yaw)
+            # R = Rz Ry Rx: with Ry Rx f_s = [u, v, c], R f_s = [cps u - sps v, sps u + cps v, c]
+            vv = sphi * sy + cphi * fzs
+            u = cth * sx + sth * vv
+            v = cphi * sy - sphi * fzs
+            ax = cps * u - sps * v
+            ay = sps * u + cps * v
+            az = -sth * sx + cth * vv - g
+            x = mx * bq(t0b, z, 16, bq(t0a, z, 14, ax))
+            y = my * bq(t1b, z, 20, bq(t1a, z, 18, ay))
+            zz = mz * bq(t2b, z, 24, bq(t2a, z, 22, az))
+            if out is None:
+                return [x, y, zz, roll, pitch, yaw]
+            out[0] = x
+            out[1] = y
+            out[2] = zz
+            out[3] = roll
+            out[4] = pitch
+            out[5] = yaw
+            return out
+
+        return step
+
+    # ------------------------------------------------------------------ batch
+    def run(self, f: ArrayLike, w: ArrayLike, state: WashoutState | None = None) -> WashoutResult:
+        """Run over a whole recording (vectorised; the same numbers as :meth:`step`).
+
+        Parameters
+        ----------
+        f, w : (N, 3) array_like
+            Specific force (m/s^2) and angular velocity (rad/s), body frame, at ``fs_hz``.
+        state : WashoutState, optional
+            Start from this state and leave it at the end state (to continue a stream);
+            a fresh :meth:`initial_state` otherwise.
+
+        Returns
+        -------
+        WashoutResult
+
+        Notes
+        -----
+        The recording is processed in blocks of :attr:`BLOCK` samples, each continuing from
+        the state the previous one left (so that the working arrays stay in cache).
+        """
+        f_arr = np.asarray(f, dtype=float)
+        w_arr = np.asarray(w, dtype=float)
+        if f_arr.ndim != 2 or f_arr.shape[1] != 3 or w_arr.shape != f_arr.shape:
+            raise ConfigError(
+                f"f and w must both have shape (N, 3); got {f_arr.shape} and {w_arr.shape}"
+            )
+        if state is None:
+            state = self.initial_state()
+        n = f_arr.shape[0]
+        poses = np.empty((6, n))
+        used = np.empty((6, n))
+        tilt = np.empty((2, n))
+        bad_mask = np.zeros(n, dtype=bool)
+        n_bad = 0
+        for lo in range(0, n, self.BLOCK):
+            hi = min(n, lo + self.BLOCK)
+            n_bad += self._run_block(
+                f_arr[lo:hi],
+                w_arr[lo:hi],
+                state,
+                poses[:, lo:hi],
+                used[:, lo:hi],
+                tilt[:, lo:hi],
+                bad_mask[lo:hi],
+            )
+        return WashoutResult(
+            poses=poses.T,
+            bad_samples=n_bad,
+            bad_mask=bad_mask,
+            tilt=tilt.T,
+            f_used=used[:3].T,
+            w_used=used[3:].T,
+            fs_hz=self.fs_hz,
+        )
+
+    BLOCK = 32768
+    """Samples per block of :meth:`run`."""
+
+    def _run_block(
+        self,
+        f_arr: NDArray[np.float64],
+        w_arr: NDArray[np.float64],
+        state: WashoutState,
+        poses: NDArray[np.float64],
+        used: NDArray[np.float64],
+        tilt_out: NDArray[np.float64],
+        bad_mask: NDArray[np.bool_],
+    ) -> int:
+        """One block of :meth:`run`: fills the (6, n), (6, n), (2, n), (n,) outputs in place,
+        advances ``state`` and returns the number of bad samples."""
+        from scipy.signal import sosfilt
+
+        p = self.params
+        g = GRAVITY_M_S2
+        n = f_arr.shape[0]
+        # 0. bad input: hold the last good sample (NaN fails every comparison, as in step)
+        fdev = np.abs(f_arr - np.array([0.0, 0.0, g]))
+        wdev = np.abs(w_arr)
+        n_bad = 0
+        if fdev.max(initial=0.0) <= p.reject_f_m_s2 and wdev.max(initial=0.0) <= p.reject_w_rad_s:
+            used[:3] = f_arr.T
+            used[3:] = w_arr.T
+        else:
+            good = (fdev <= p.reject_f_m_s2).all(axis=1) & (wdev <= p.reject_w_rad_s).all(axis=1)
+            bad_mask[:] = ~good
+            n_bad = int(bad_mask.sum())
+            idx = np.where(good, np.arange(n), -1)
+            np.maximum.accumulate(idx, out=idx)
+            raw = np.concatenate([f_arr, w_arr], axis=1)
+            held = np.where((idx >= 0)[:, None], raw[np.maximum(idx, 0)], np.array(state.hold))
+            used[:] = held.T
+        fx, fy, fz, wx, wy, wz = used
+        # 1. scaling and smooth limiting
+        knee = p.soft_knee
+        sx = soft_limit_array(p.f_scale[0] * fx, p.f_limit_m_s2[0], knee)
+        sy = soft_limit_array(p.f_scale[1] * fy, p.f_limit_m_s2[1], knee)
+        sz = soft_limit_array(p.f_scale[2] * (fz - g), p.f_limit_m_s2[2], knee)
+        fzs = g + sz
+        qx = soft_limit_array(p.w_scale[0] * wx, p.w_limit_rad_s[0], knee)
+        qy = soft_limit_array(p.w_scale[1] * wy, p.w_limit_rad_s[1], knee)
+        qz = soft_limit_array(p.w_scale[2] * wz, p.w_limit_rad_s[2], knee)
+        z = np.array(state.z).reshape(_N_SECTIONS, 2)
+        zf = z.copy()
+
+        def filt(secs: Sequence[Section], x: NDArray[np.float64], k: int) -> NDArray[np.float64]:
+            y, zout = sosfilt(self._sos[k], x, zi=z[k : k + len(secs)])
+            zf[k : k + len(secs)] = zout
+            return np.asarray(y)
+
+        # 2. tilt coordination
+        ylx = filt([self.tilt_lp], sx, 0)
+        yly = filt([self.tilt_lp], sy, 1)
+        tp = soft_limit_array(-np.arcsin(np.clip(ylx / g, -1.0, 1.0)), p.tilt_limit_rad, knee)
+        tr = soft_limit_array(np.arcsin(np.clip(yly / g, -1.0, 1.0)), p.tilt_limit_rad, knee)
+        st = p.tilt_rate_limit_rad_s / self.fs_hz
+        tr = rate_limit_array(tr, st, state.tilt[0])
+        tp = rate_limit_array(tp, st, state.tilt[1])
+        mx, my, mz, mr, mp, myaw = (1.0 if d else 0.0 for d in p.dofs)
+        tilt_out[0] = tr
+        tilt_out[1] = tp
+        tr = tr * mr
+        tp = tp * mp
+        # 3. rotational channel
+        pr = mr * (filt([self.rot[0]], qx, 2) + tr)
+        pp = mp * (filt([self.rot[1]], qy, 3) + tp)
+        sphi = np.sin(pr)
+        cphi = np.cos(pr)
+        cth = np.maximum(np.cos(pp), _MIN_COS_PITCH)
+        tth = np.sin(pp) / cth
+        qr = sphi * qy + cphi * qz
+        roll = mr * (filt([self.rot[0]], qx + tth * qr, 4) + tr)
+        pitch = mp * (filt([self.rot[1]], cphi * qy - sphi * qz, 5) + tp)
+        yaw = myaw * filt([self.rot[2]], qr / cth, 6)
+        # 4. translational channel
+        sphi = np.sin(roll)
+        cphi = np.cos(roll)
+        sth = np.sin(pitch)
+        cth = np.cos(pitch)
+        sps = np.sin(yaw)
+        cps = np.cos(yaw)
+        vv = sphi * sy + cphi * fzs
+        u = cth * sx + sth * vv
+        v = cphi * sy - sphi * fzs
+        ax = cps * u - sps * v
+        ay = sps * u + cps * v
+        az = -sth * sx + cth * vv - g
+        poses[0] = mx * filt(self.trans[0], ax, 7)
+        poses[1] = my * filt(self.trans[1], ay, 9)
+        poses[2] = mz * filt(self.trans[2], az, 11)
+        poses[3] = roll
+        poses[4] = pitch
+        poses[5] = yaw
+        # leave the state where a stream would be
+        if n:
+            state.z[:] = zf.ravel().tolist()
+            state.tilt[0] = float(tilt_out[0, -1])
+            state.tilt[1] = float(tilt_out[1, -1])
+            state.hold[:] = used[:, -1].tolist()
+        state.bad_samples += n_bad
+        state.samples += n
+        return n_bad

@@ -1,0 +1,256 @@
+"""Cueing parameters: one frozen dataclass, loaded from ``configs/cueing/*.toml``.
+
+Human units live only in the TOML keys (``limit_deg_s``, ``half_range_mm``); the loader
+converts them once to SI, so every field of :class:`CueingParams` is in metres, radians,
+seconds, m/s^2 and rad/s.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from pathlib import Path
+
+from .._config import ConfigReader, find_config, load_toml
+from .._errors import ConfigError
+
+__all__ = ["DOF_NAMES", "GRAVITY_M_S2", "CueingParams", "load_cueing"]
+
+GRAVITY_M_S2 = 9.80665
+"""Standard gravity (the ``g`` of ``f = a - g`` in conventions.md)."""
+
+DOF_NAMES: tuple[str, ...] = ("x", "y", "z", "roll", "pitch", "yaw")
+
+_D2R = math.pi / 180.0
+
+Vec3 = tuple[float, float, float]
+
+
+def _vec3(values: tuple[float, ...]) -> Vec3:
+    return (values[0], values[1], values[2])
+
+
+def _check(name: str, values: tuple[float, ...], lo: float, lo_open: bool, hi: float) -> None:
+    for v in values:
+        bad = (v <= lo if lo_open else v < lo) or v > hi or not math.isfinite(v)
+        if bad:
+            left = "(" if lo_open else "["
+            raise ConfigError(
+                f"CueingParams.{name} = {values!r} is invalid; each in {left}{lo}, {hi}]"
+            )
+
+
+@dataclass(frozen=True)
+class CueingParams:
+    """Every tunable of the classical washout, in SI units.
+
+    Per-axis tuples are ordered x, y, z (forces, translations) or roll, pitch, yaw
+    (rates, rotations), in the body/platform frame of conventions.md.
+
+    Attributes
+    ----------
+    name : str
+        Preset name (the TOML file's stem) or a user label.
+    dofs : tuple of 6 bool
+        Which pose components ``[x, y, z, roll, pitch, yaw]`` the machine moves; the others
+        are held at zero (a 3-DOF seat: ``z, roll, pitch``).
+    f_scale, w_scale : 3-tuples
+        Gain on the specific-force deviation from rest ``f - [0, 0, g]`` and on the angular
+        velocity.
+    f_limit_m_s2, w_limit_rad_s : 3-tuples
+        Smooth limit applied after scaling (the output never exceeds it).
+    soft_knee : float
+        Fraction of the limit up to which the limiter is the identity; above it the signal
+        bends smoothly (C1, tanh) towards the limit. ``1.0`` is a hard clip.
+    trans_wn_rad_s, trans_zeta : 3-tuples
+        Natural frequency and damping of the translational second-order high-pass
+        ``s^2 / (s^2 + 2 zeta wn s + wn^2)``.
+    trans_wb_rad_s : 3-tuple
+        Third-order break ``s / (s + wb)``; ``0`` leaves the high-pass second order, in which
+        case a sustained acceleration leaves a displacement offset ``a / wn^2``.
+    tilt_wn_rad_s, tilt_zeta : float
+        Tilt-coordination low-pass ``wn^2 / (s^2 + 2 zeta wn s + wn^2)`` on ``f_x, f_y``.
+    tilt_rate_limit_rad_s : float
+        Largest tilt angular rate (per axis).
+    tilt_limit_rad : float
+        Largest tilt angle (smooth limit, same knee as the input limiter).
+    rot_wn_rad_s, rot_zeta : 3-tuples
+        Rotational second-order high-pass on the Euler-angle rates.
+    reject_f_m_s2, reject_w_rad_s : float
+        Input samples whose specific-force deviation or angular velocity exceeds these (any
+        axis) are spikes: held at the last good sample and counted, like NaN and inf.
+    workspace : 6-tuple
+        Half range of each DOF about neutral (m, rad), for the workspace-use metric.
+    """
+
+    name: str = "default"
+    dofs: tuple[bool, bool, bool, bool, bool, bool] = (True, True, True, True, True, True)
+    f_scale: Vec3 = (0.5, 0.5, 0.3)
+    f_limit_m_s2: Vec3 = (6.0, 6.0, 4.0)
+    w_scale: Vec3 = (0.5, 0.5, 0.5)
+    w_limit_rad_s: Vec3 = (0.5, 0.5, 0.5)
+    soft_knee: float = 0.7
+    trans_wn_rad_s: Vec3 = (4.0, 4.0, 6.0)
+    trans_zeta: Vec3 = (1.0, 1.0, 1.0)
+    trans_wb_rad_s: Vec3 = (0.5, 0.5, 0.5)
+    tilt_wn_rad_s: float = 5.0
+    tilt_zeta: float = 1.0
+    tilt_rate_limit_rad_s: float = 3.0 * _D2R
+    tilt_limit_rad: float = 12.0 * _D2R
+    rot_wn_rad_s: Vec3 = (1.0, 1.0, 0.5)
+    rot_zeta: Vec3 = (1.0, 1.0, 1.0)
+    reject_f_m_s2: float = 100.0
+    reject_w_rad_s: float = 20.0
+    workspace: tuple[float, float, float, float, float, float] = (
+        0.1,
+        0.1,
+        0.1,
+        15.0 * _D2R,
+        15.0 * _D2R,
+        20.0 * _D2R,
+    )
+
+    def __post_init__(self) -> None:
+        if len(self.dofs) != 6 or not all(isinstance(d, bool) for d in self.dofs):
+            raise ConfigError(f"CueingParams.dofs = {self.dofs!r} is invalid; 6 booleans")
+        for name in ("f_scale", "w_scale"):  # a negative gain would cue the wrong way
+            _check(name, getattr(self, name), 0.0, False, 100.0)
+        for name in (
+            "f_limit_m_s2",
+            "w_limit_rad_s",
+            "trans_wn_rad_s",
+            "trans_zeta",
+            "rot_wn_rad_s",
+            "rot_zeta",
+        ):
+            _check(name, getattr(self, name), 0.0, True, 1e6)
+        _check("trans_wb_rad_s", self.trans_wb_rad_s, 0.0, False, 1e6)
+        _check("soft_knee", (self.soft_knee,), 0.0, True, 1.0)
+        for name in ("tilt_wn_rad_s", "tilt_zeta", "tilt_rate_limit_rad_s"):
+            _check(name, (getattr(self, name),), 0.0, True, 1e6)
+        _check("tilt_limit_rad", (self.tilt_limit_rad,), 0.0, True, math.radians(60.0))
+        _check("reject_f_m_s2", (self.reject_f_m_s2,), 0.0, True, 1e9)
+        _check("reject_w_rad_s", (self.reject_w_rad_s,), 0.0, True, 1e9)
+        if len(self.workspace) != 6:
+            raise ConfigError(f"CueingParams.workspace = {self.workspace!r}; 6 numbers")
+        _check("workspace", self.workspace, 0.0, False, 1e6)
+
+
+def load_cueing(name_or_path: str | Path) -> CueingParams:
+    """Load a cueing preset by bundled name (``racing``) or from a TOML path.
+
+    The file layout (every key required unless marked optional; unknown keys are rejected)::
+
+        description = "..."                        # optional
+        dofs = ["x", "y", "z", "roll", "pitch", "yaw"]
+        [scaling]
+        f_scale = [0.5, 0.5, 0.3]
+        f_limit_m_s2 = [6.0, 6.0, 4.0]
+        w_scale = [0.5, 0.5, 0.5]
+        w_limit_deg_s = [30.0, 30.0, 30.0]
+        soft_knee = 0.7
+        [translational]
+        wn_rad_s = [4.0, 4.0, 6.0]
+        zeta = [1.0, 1.0, 1.0]
+        wb_rad_s = [0.5, 0.5, 0.5]                 # 0 = second order only
+        [tilt]
+        wn_rad_s = 5.0
+        zeta = 1.0
+        rate_limit_deg_s = 3.0
+        limit_deg = 12.0
+        [rotational]
+        wn_rad_s = [1.0, 1.0, 0.5]
+        zeta = [1.0, 1.0, 1.0]
+        [input]
+        reject_f_m_s2 = 100.0
+        reject_w_deg_s = 1000.0
+        [workspace]
+        half_range_mm = [100.0, 100.0, 100.0]
+        half_range_deg = [15.0, 15.0, 20.0]
+
+    Raises
+    ------
+    ConfigError
+        Unknown preset, missing or unknown key, or a value out of range (named).
+    """
+    path = find_config("cueing", name_or_path)
+    top = ConfigReader(load_toml(path), path.name)
+    top.string("description", "")
+    dof_list = top.raw("dofs")
+    if (
+        not isinstance(dof_list, list)
+        or not dof_list
+        or any(d not in DOF_NAMES for d in dof_list)
+        or len(set(dof_list)) != len(dof_list)
+    ):
+        raise top.error("dofs", dof_list, f"a list of distinct names from {DOF_NAMES}")
+    dofs = tuple(n in dof_list for n in DOF_NAMES)
+
+    sc = top.table("scaling")
+    f_scale = _vec3(sc.vector("f_scale", 3))
+    f_limit = _vec3(sc.vector("f_limit_m_s2", 3))
+    w_scale = _vec3(sc.vector("w_scale", 3))
+    w_limit = _vec3(tuple(v * _D2R for v in sc.vector("w_limit_deg_s", 3)))
+    knee = sc.number("soft_knee", lo=0.0, hi=1.0, lo_open=True)
+    sc.finish()
+
+    tr = top.table("translational")
+    t_wn = _vec3(tr.vector("wn_rad_s", 3))
+    t_zeta = _vec3(tr.vector("zeta", 3))
+    t_wb = _vec3(tr.vector("wb_rad_s", 3))
+    tr.finish()
+
+    ti = top.table("tilt")
+    tilt_wn = ti.number("wn_rad_s", lo=0.0, lo_open=True)
+    tilt_zeta = ti.number("zeta", lo=0.0, lo_open=True)
+    tilt_rate = ti.number("rate_limit_deg_s", lo=0.0, lo_open=True) * _D2R
+    tilt_limit = ti.number("limit_deg", lo=0.0, hi=60.0, lo_open=True) * _D2R
+    ti.finish()
+
+    ro = top.table("rotational")
+    r_wn = _vec3(ro.vector("wn_rad_s", 3))
+    r_zeta = _vec3(ro.vector("zeta", 3))
+    ro.finish()
+
+    inp = top.table("input")
+    reject_f = inp.number("reject_f_m_s2", lo=0.0, lo_open=True)
+    reject_w = inp.number("reject_w_deg_s", lo=0.0, lo_open=True) * _D2R
+    inp.finish()
+
+    ws = top.table("workspace")
+    lin = ws.vector("half_range_mm", 3)
+    ang = ws.vector("half_range_deg", 3)
+    ws.finish()
+    top.finish()
+
+    try:
+        return CueingParams(
+            name=path.stem,
+            dofs=(dofs[0], dofs[1], dofs[2], dofs[3], dofs[4], dofs[5]),
+            f_scale=f_scale,
+            f_limit_m_s2=f_limit,
+            w_scale=w_scale,
+            w_limit_rad_s=w_limit,
+            soft_knee=knee,
+            trans_wn_rad_s=t_wn,
+            trans_zeta=t_zeta,
+            trans_wb_rad_s=t_wb,
+            tilt_wn_rad_s=tilt_wn,
+            tilt_zeta=tilt_zeta,
+            tilt_rate_limit_rad_s=tilt_rate,
+            tilt_limit_rad=tilt_limit,
+            rot_wn_rad_s=r_wn,
+            rot_zeta=r_zeta,
+            reject_f_m_s2=reject_f,
+            reject_w_rad_s=reject_w,
+            workspace=(
+                lin[0] * 1e-3,
+                lin[1] * 1e-3,
+                lin[2] * 1e-3,
+                ang[0] * _D2R,
+                ang[1] * _D2R,
+                ang[2] * _D2R,
+            ),
+        )
+    except ConfigError as exc:
+        raise ConfigError(f"{path.name}: {exc}") from exc
