@@ -61,7 +61,7 @@ def _wait(cond: object, timeout_s: float = 3.0) -> bool:
 def test_registry_lists_the_three_games_with_their_default_ports() -> None:
     assert {n: g.default_port for n, g in GAMES.items()} == {
         "f1": 20777,
-        "forza": 5300,
+        "forza": 5301,
         "beamng": 4444,
     }
     for name, info in GAMES.items():

@@ -5,13 +5,13 @@ body frame, x forward, y left, z up; specific force ``f = a - g`` in m/s^2, ``(0
 +9.80665)`` at rest; angular velocity in rad/s) and flags paused or menu states. Games:
 
 * ``f1``: EA SPORTS F1 23 / 24 / 25 (Motion + Motion Ex, Session for pause), port 20777
-* ``forza``: Forza Motorsport 7 / 2023 and Forza Horizon 4 / 5 / 6 Data Out, port 5300
+* ``forza``: Forza Motorsport 7 / 2023 and Forza Horizon 4 / 5 / 6 Data Out, port 5301
 * ``beamng``: BeamNG.drive MotionSim (``BNG1``), port 4444
 
 Typical use::
 
     from motioncue.telemetry import open_source
-    src = open_source("f1")            # or "forza:5300", "replay:lap.mctr?speed=1"
+    src = open_source("f1")            # or "forza:5301", "replay:lap.mctr?speed=1"
     s = src.latest(max_age_s=0.25)     # TelemetrySample | None, never blocks
     src.close()
 
