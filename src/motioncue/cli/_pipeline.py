@@ -25,7 +25,7 @@ def register(sub: Any) -> None:
     g.add_argument("--input", required=True, metavar="REC")
     g.add_argument("--platform", required=True, metavar="P")
     g.add_argument("--controller", required=True, metavar="C")
-    g.add_argument("--preset", default="racing", metavar="NAME", help="cueing preset")
+    g.add_argument("--preset", default="racing-hexapod", metavar="NAME", help="cueing preset")
     g.add_argument("--rate", type=float, default=100.0, metavar="HZ", help="frame rate")
     g.add_argument("--out", required=True, metavar="RIDE")
     g.add_argument("--pcap", metavar="FILE", help="also write the exact datagrams as a pcap")

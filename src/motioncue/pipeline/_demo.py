@@ -88,7 +88,7 @@ def run_demo(
     lap = config_dir("recordings") / "lap.csv"
     platform = load_platform("stewart6-linear")
     controller = load_controller("mbox6")
-    cueing = load_cueing("racing")
+    cueing = load_cueing("racing-hexapod")
     limits = ActuatorLimits.from_platform(platform, controller)
     log(f"demo: {lap.name} (a {rate_hz:g} Hz vehicle-model lap) -> stewart6-linear on mbox6")
     t0 = time.perf_counter()
