@@ -165,3 +165,18 @@ def test_random_rides_are_feasible_and_no_worse_than_the_limiter(seed, N, dt):
     assert res.objective <= res.objective_realtime * (1 + 1e-12)
     if res.status == "unchanged":
         assert np.array_equal(res.q, q)
+
+
+def test_ride_plot_is_written(tmp_path):
+    from motioncue.trajectory import plot_ride
+
+    lim = _lim()
+    q = _ride(N=300)
+    q[100:120] += 0.1
+    res = limit_ride(q, DT, lim)
+    rt = RealtimeLimiter(lim, DT)
+    q_rt = rt.run(rt.initial_state(q[0]), q)
+    out = plot_ride(q, res.q, DT, lim, tmp_path / "ride.png", q_realtime=q_rt, title="test")
+    data = out.read_bytes()
+    assert data[:8] == b"\x89PNG\r\n\x1a\n"
+    assert len(data) > 10_000

@@ -8,6 +8,7 @@ speed ``(q[k]-q[k-1])/dt``, acceleration ``(q[k]-2q[k-1]+q[k-2])/dt**2``, jerk
 
 from ._limits import ActuatorLimits, LimitCheck, check_trajectory, finite_differences
 from ._offline import OptimisedRide, limit_ride
+from ._plot import plot_ride
 from ._realtime import LimiterState, RealtimeLimiter, braking_distance, braking_speed_cap
 from ._transition import (
     Transition,
@@ -37,6 +38,7 @@ __all__ = [
     "limit_pose",
     "limit_ride",
     "park_path",
+    "plot_ride",
     "resume_path",
     "transition",
     "transition_q",
