@@ -85,8 +85,8 @@ class Transport(abc.ABC):
     """
 
     @abc.abstractmethod
-    def send(self, data: bytes) -> None:
-        """Send one message."""
+    def send(self, data: bytes, *, t_s: float | None = None) -> None:
+        """Send one message; ``t_s`` is the frame time (pcap time stamps), ignored by links."""
 
     def recv(self, timeout_s: float) -> bytes | None:
         """Receive one message, or ``None`` after ``timeout_s``. Send-only links return None."""

@@ -83,7 +83,7 @@ class SerialTransport(Transport):
             )
         return cls(target.path, baud, bytesize, parity, stopbits)
 
-    def send(self, data: bytes) -> None:
+    def send(self, data: bytes, *, t_s: float | None = None) -> None:
         import serial
 
         try:

@@ -1,0 +1,258 @@
+"""``motioncue emulate | send | inspect``: talk to a controller, or pretend to be one.
+
+The verbs dispatch on the controller's kind: each kind module (``motioncue.output.imax``,
+``motioncue.output.mbox``, ...) exposes the hooks
+
+* ``emulator(controller, host, port, **options)`` -> an emulator with ``start()``,
+  ``stop()``, ``port``, ``received``, ``trace``, ``violations`` (``options``:
+  ``homing_time_s``); a kind that listens on another link instead provides
+  ``emulator_at(controller, target_url, **options)`` (its emulator may expose ``where``);
+* ``send_verb(controller, transport, verb, args, *, who, save, out)`` -> exit status;
+* ``inspect_decode(datagram) -> str`` and ``split_stream(raw_bytes) -> list[bytes]``;
+* optionally ``transport_options(controller, target_url) -> dict`` for ``open_transport``,
+  and ``run_emulator(controller, duration_s, *, trace_csv)`` -> exit status for a kind
+  that runs its own emulator session (used when ``--listen`` is not given).
+
+A new kind plugs in by providing these functions; nothing here changes.
+"""
+
+from __future__ import annotations
+
+import argparse
+import importlib
+import sys
+import time
+from pathlib import Path
+from types import ModuleType
+from typing import Any
+
+from .._errors import ConfigError, ProtocolError
+
+__all__ = ["register"]
+
+# kinds tried in order by ``inspect`` when no --controller is given (add new kinds here)
+_INSPECT_KINDS = ("mbox", "imax", "easysmc")
+
+
+def _kind_module(kind: str) -> ModuleType:
+    return importlib.import_module(f"motioncue.output.{kind}")
+
+
+def _controller(name: str) -> tuple[Any, ModuleType]:
+    from ..output import load_controller
+
+    ctrl = load_controller(name)
+    return ctrl, _kind_module(ctrl.kind)
+
+
+def register(sub: Any) -> None:
+    p = sub.add_parser(
+        "emulate",
+        help="run a controller emulator (UDP on loopback)",
+        description="Emulate a controller: decode and check every datagram, "
+        "reply as the manual says, report the trace and violations.",
+    )
+    p.add_argument("--controller", required=True, help="bundled name (mbox6) or TOML path")
+    p.add_argument(
+        "--listen",
+        default=None,
+        help="udp://HOST:PORT to listen on (default: the controller's "
+        "default target; port 0 = any free port)",
+    )
+    p.add_argument(
+        "--duration",
+        type=float,
+        default=None,
+        metavar="S",
+        help="stop after S seconds (default: until Ctrl-C)",
+    )
+    p.add_argument("--homing-time", type=float, default=1.0, metavar="S")
+    p.add_argument(
+        "--trace-csv",
+        type=Path,
+        default=None,
+        help="write the trace (t_s, frame, axis positions) here on exit",
+    )
+    p.add_argument(
+        "--plot",
+        type=Path,
+        default=None,
+        help="write a PNG of the trace (positions per axis, violations in red)",
+    )
+    p.set_defaults(run=_run_emulate)
+
+    p = sub.add_parser(
+        "send",
+        help="send one command to a controller",
+        description="Send a command: estop on|off, reset, home, park, "
+        "outputs BITS, read REG [COUNT], write REG VALUE...",
+    )
+    p.add_argument("--controller", required=True)
+    p.add_argument(
+        "--target",
+        default=None,
+        help="udp://HOST:PORT, pcap:PATH, file:PATH or serial://... "
+        "(default: the controller's default target)",
+    )
+    p.add_argument(
+        "--node", default="all", help="Who fields: 'all' (0xFFFF/0xFFFF, default) or XX.YY (hex)"
+    )
+    p.add_argument("--no-reply", action="store_true", help="ask for no reply (WhoReply 0)")
+    p.add_argument(
+        "--save",
+        action="store_true",
+        help="write parameters so they survive power-off (MBOX FX, IMAX PA0f=2)",
+    )
+    p.add_argument("verb", help="estop | reset | home | park | outputs | read | write")
+    p.add_argument("args", nargs="*")
+    p.set_defaults(run=_run_send)
+
+    p = sub.add_parser(
+        "inspect",
+        help="decode a capture, one line per message",
+        description="Decode a pcap (UDP payloads) or a raw file: capture.",
+    )
+    p.add_argument("file", type=Path)
+    p.add_argument(
+        "--controller",
+        default=None,
+        help="decode as this controller's kind (default: try each kind)",
+    )
+    p.add_argument("--raw", action="store_true", help="the file holds raw bytes (file: target)")
+    p.set_defaults(run=_run_inspect)
+
+
+def _run_emulate(args: argparse.Namespace) -> int:
+    from ..output import parse_target
+
+    ctrl, kind = _controller(args.controller)
+    if hasattr(kind, "run_emulator") and args.listen is None:
+        # kinds that run their own emulator session (the EasySmc serves a pseudo-terminal)
+        return int(kind.run_emulator(ctrl, args.duration, trace_csv=args.trace_csv))
+    url = parse_target(args.listen or ctrl.default_target)
+    if url.scheme == "udp":
+        emu = kind.emulator(ctrl, url.host, url.port, homing_time_s=args.homing_time)
+        emu.start()
+        where = f"udp://{url.host}:{emu.port}"
+    elif hasattr(kind, "emulator_at"):  # kinds on other links (serial, ...) listen by URL
+        emu = kind.emulator_at(ctrl, url, homing_time_s=args.homing_time)
+        emu.start()
+        where = str(getattr(emu, "where", args.listen))
+    else:
+        raise ConfigError(
+            f"--listen {args.listen!r}: the {ctrl.kind} emulator listens on udp://HOST:PORT"
+        )
+    print(f"emulating {ctrl.name} ({ctrl.kind}, {ctrl.n_axes} axes) on {where}", flush=True)
+    t_end = None if args.duration is None else time.monotonic() + args.duration
+    try:
+        while t_end is None or time.monotonic() < t_end:
+            time.sleep(0.05 if t_end is None else max(0.0, min(0.05, t_end - time.monotonic())))
+    except KeyboardInterrupt:
+        pass
+    finally:
+        emu.stop()
+    trace = emu.trace
+    violations = emu.violations
+    print(
+        f"received {emu.received} datagrams, played {len(trace)} trace points, "
+        f"{len(violations)} violation(s)"
+    )
+    errors = list(getattr(emu, "internal_errors", []))
+    for e in errors[:10]:
+        print(f"  emulator error: {e}")
+    for v in violations[:50]:
+        axis = "" if v.axis is None else f" axis {v.axis}"
+        print(f"  {v.t_s:9.3f} s {v.kind}{axis}: {v.detail}")
+    if args.trace_csv is not None:
+        with open(args.trace_csv, "w") as fh:
+            cols = ",".join(f"axis{i}" for i in range(ctrl.n_axes))
+            fh.write(f"t_s,frame,{cols}\n")
+            for t, f, row in zip(trace.t_s, trace.frames, trace.positions, strict=True):
+                fh.write(f"{t:.6f},{f}," + ",".join(str(int(v)) for v in row) + "\n")
+    if args.plot is not None:
+        from ..output._trace_plot import plot_trace
+
+        plot_trace(
+            trace,
+            args.plot,
+            violations=violations,
+            title=f"{ctrl.name}: {len(trace)} frames, {len(violations)} violation(s)",
+        )
+        print(f"wrote {args.plot}")
+    return 1 if violations or errors else 0
+
+
+def _run_send(args: argparse.Namespace) -> int:
+    from ..output import open_transport, parse_target
+    from ..output._udp_common import parse_node
+
+    ctrl, kind = _controller(args.controller)
+    accept, reply = parse_node(args.node)
+    if args.no_reply:
+        reply = 0
+    target = parse_target(args.target or ctrl.default_target)
+    options = kind.transport_options(ctrl, target) if hasattr(kind, "transport_options") else {}
+    with open_transport(target, **options) as transport:
+        return int(
+            kind.send_verb(
+                ctrl,
+                transport,
+                args.verb,
+                list(args.args),
+                who=(accept, reply),
+                save=args.save,
+                out=sys.stdout,
+            )
+        )
+
+
+def _payloads(path: Path, raw: bool, kind: ModuleType | None) -> list[tuple[str, bytes]]:
+    from ..output import read_pcap
+
+    if not raw:
+        head = path.read_bytes()[:4] if path.exists() else b""
+        if head in (
+            b"\xd4\xc3\xb2\xa1",
+            b"\xa1\xb2\xc3\xd4",
+            b"\x4d\x3c\xb2\xa1",
+            b"\xa1\xb2\x3c\x4d",
+        ):
+            return [
+                (f"{p.t_s:.6f} {p.src[0]}:{p.src[1]} > {p.dst[0]}:{p.dst[1]}", p.payload)
+                for p in read_pcap(path)
+            ]
+    try:
+        blob = path.read_bytes()
+    except OSError as exc:
+        raise ConfigError(f"cannot read {path}: {exc}") from exc
+    kinds = [kind] if kind is not None else [_kind_module(k) for k in _INSPECT_KINDS]
+    errors = []
+    for k in kinds:
+        try:
+            return [(f"#{i}", m) for i, m in enumerate(k.split_stream(blob))]
+        except ProtocolError as exc:
+            errors.append(f"{k.__name__.rsplit('.', 1)[-1]}: {exc}")
+    raise ProtocolError(f"{path}: cannot split the raw bytes into messages ({'; '.join(errors)})")
+
+
+def _run_inspect(args: argparse.Namespace) -> int:
+    kind = _controller(args.controller)[1] if args.controller else None
+    kinds = [kind] if kind is not None else [_kind_module(k) for k in _INSPECT_KINDS]
+    bad = 0
+    for where, payload in _payloads(args.file, args.raw, kind):
+        line = None
+        errors = []
+        for k in kinds:
+            try:
+                text = k.inspect_decode(payload)
+            except ProtocolError as exc:
+                errors.append(str(exc))
+                continue
+            label = "" if len(kinds) == 1 else f"{k.__name__.rsplit('.', 1)[-1]} "
+            line = f"{where} {label}{text}"
+            break
+        if line is None:
+            bad += 1
+            line = f"{where} UNDECODED {payload.hex().upper()} ({'; '.join(errors)})"
+        print(line)
+    return 1 if bad else 0

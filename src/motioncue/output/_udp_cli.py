@@ -1,0 +1,137 @@
+"""Helpers the ``send`` / ``inspect`` hooks of the UDP controller kinds share."""
+
+from __future__ import annotations
+
+import dataclasses
+import enum
+import math
+import time
+from collections.abc import Callable, Sequence
+from typing import Any, TextIO
+
+from .._errors import ConfigError, ProtocolError
+from ._transport import Transport, TransportURL
+from ._udp_common import format_who
+
+__all__ = ["describe", "exchange", "park", "parse_bits", "parse_value", "transport_options"]
+
+
+def transport_options(controller: Any, url: TransportURL, *, fixed_source_port: bool) -> dict:
+    """Options for ``open_transport`` taken from the controller's addresses.
+
+    ``pcap:`` packets are written from the host address to the controller address of the
+    config; a ``udp://`` target that is not loopback sends from the host port when the
+    controller only accepts that source port (IMAX PA24).
+    """
+    if url.scheme == "pcap":
+        return {"src": controller.host_address, "dst": controller.controller_address}
+    loopback = url.host in ("localhost", "::1") or url.host.startswith("127.")
+    if url.scheme == "udp" and fixed_source_port and not loopback:
+        return {"local_port": controller.host_address[1]}
+    return {}
+
+
+def _fmt(name: str, value: Any) -> str:
+    if isinstance(value, enum.Enum):
+        return value.name
+    if name.startswith("who_"):
+        return format_who(value)
+    if isinstance(value, tuple):
+        return "[" + ",".join(str(v) for v in value) + "]"
+    if name in ("base_dout", "ext_dout", "port_out", "port", "outputs", "inputs", "function"):
+        return f"0x{value:X}"
+    return str(value)
+
+
+def describe(msg: Any) -> str:
+    """One line naming a decoded message and its fields."""
+    name = type(msg).__name__
+    parts = []
+    if hasattr(msg, "function") and not any(f.name == "function" for f in dataclasses.fields(msg)):
+        parts.append(f"function=0x{msg.function:04X}")
+    for f in dataclasses.fields(msg):
+        value = getattr(msg, f.name)
+        if dataclasses.is_dataclass(value) and not isinstance(value, type):
+            parts.append(describe(value))
+            continue
+        parts.append(f"{f.name}={_fmt(f.name, value)}")
+    return f"{name} " + " ".join(parts)
+
+
+def parse_value(text: str, what: str = "value") -> int:
+    """An integer in decimal, 0x.. hexadecimal or 0b.. binary."""
+    try:
+        return int(text, 0)
+    except ValueError as exc:
+        raise ConfigError(f"{what} {text!r} is not an integer (decimal, 0x.. or 0b..)") from exc
+
+
+def parse_bits(text: str, n_bits: int) -> int:
+    value = parse_value(text, "output bits")
+    if not 0 <= value < 1 << n_bits:
+        raise ConfigError(f"output bits {text!r}: allowed 0 .. {(1 << n_bits) - 1:#x}")
+    return value
+
+
+def exchange(
+    transport: Transport,
+    data: bytes,
+    decode: Callable[[bytes], Any],
+    is_reply: Callable[[Any], bool],
+    expect_reply: bool,
+    out: TextIO,
+) -> Any | None:
+    """Send a command; if the link and the Who fields ask for one, wait for its reply.
+
+    Prints what was sent and what came back; returns the decoded reply or ``None``.
+    """
+    print(f"sent {describe(decode(data))} [{data.hex().upper()}]", file=out)
+    request = getattr(transport, "request", None)
+    if not expect_reply or request is None:
+        transport.send(data)
+        return None
+
+    def accept(raw: bytes) -> bool:
+        try:
+            return bool(is_reply(decode(raw)))
+        except ProtocolError:
+            return False
+
+    raw = request(data, accept)
+    reply = decode(raw)
+    print(f"reply {describe(reply)}", file=out)
+    return reply
+
+
+def park(
+    controller: Any,
+    transport: Transport,
+    current: Sequence[int],
+    out: TextIO,
+    *,
+    period_s: float = 0.02,
+    speed_fraction: float = 0.25,
+    realtime: bool = True,
+) -> int:
+    """Bring every axis from ``current`` to 0 (the homed origin) on a raised-cosine ramp
+    whose peak speed is ``speed_fraction`` of the axis limit; frames every ``period_s``.
+    Returns the number of frames sent."""
+    vmax = controller.max_speed_pulses_s
+    duration = 1.0
+    for p, v in zip(current, vmax, strict=True):
+        if math.isfinite(v) and v > 0:
+            duration = max(duration, math.pi * abs(p) / (2 * speed_fraction * v))
+    n = max(1, math.ceil(duration / period_s))
+    enc = controller.frame_encoder(absolute_time=False, t0_s=-period_s)
+    start = time.monotonic()
+    for k in range(1, n + 1):
+        s = 0.5 * (1 + math.cos(math.pi * k / n))
+        pulses = [round(p * s) for p in current]
+        for msg in enc.encode((k - 1) * period_s, pulses):
+            if realtime:
+                delay = start + (k - 1) * period_s - time.monotonic()
+                if delay > 0:
+                    time.sleep(delay)
+            transport.send(msg)
+    print(f"parked: {n} frames over {n * period_s:.2f} s from {list(current)} to 0", file=out)
+    return n

@@ -1,0 +1,404 @@
+"""Machinery shared by the IMAX and SC-MBOX emulators: the UDP server thread, Who
+addressing, the playback timeline with its buffer, the per-axis trace and violations.
+
+An emulator is usable in two ways:
+
+* in-process and deterministic: ``replies = emu.handle(datagram, now_s)``;
+* as a UDP server: ``emu.start()`` (port 0 picks a free port, see ``emu.port``), then
+  ``emu.stop()``; or ``with emu: ...``.
+
+The *timeline* is the controller's playback time in seconds: 0 at the first frame after
+start-up or homing; each later frame is reached ``duration`` after the previous one, where
+``duration`` is the frame's time step, or the manual's jog / rewind / fast-forward time.
+The trace records ``(timeline time, commanded positions)`` for every frame played, so it
+can be compared directly with the positions the host meant at the frame times.
+"""
+
+from __future__ import annotations
+
+import collections
+import socket
+import struct
+import sys
+import threading
+import time
+from collections.abc import Sequence
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from .._errors import TransportError
+
+__all__ = ["Playback", "Trace", "UdpEmulatorBase", "Violation", "wall_clock", "who_matches"]
+
+# kernel receive time stamps (struct timespec); Python does not name the option, Linux's
+# generic value is 35 (also the control-message type SCM_TIMESTAMPNS)
+_SO_TIMESTAMPNS = getattr(socket, "SO_TIMESTAMPNS", 35 if sys.platform == "linux" else None)
+_TIMESPEC = struct.Struct("@ll")
+
+
+def wall_clock() -> float:
+    """The emulators' clock: seconds of wall time (comparable with kernel receive stamps)."""
+    return time.time()
+
+
+@dataclass(frozen=True)
+class Violation:
+    """Something a real controller would refuse or a platform would not survive.
+
+    Attributes
+    ----------
+    t_s : float
+        Timeline time (s) of the frame concerned (or of the last frame for malformed data).
+    kind : str
+        ``speed``, ``stroke``, ``malformed``, ``sequence`` or ``buffer``.
+    axis : int or None
+        Axis index (0-based) for speed and stroke.
+    detail : str
+        Human-readable description with the values.
+    """
+
+    t_s: float
+    kind: str
+    axis: int | None
+    detail: str
+
+
+@dataclass(frozen=True)
+class Trace:
+    """Commanded positions in time, one row per frame played.
+
+    Attributes
+    ----------
+    t_s : numpy.ndarray, shape (N,)
+        Timeline times (s).
+    positions : numpy.ndarray, shape (N, n_axes), int64
+        Commanded motor positions (pulses).
+    frames : numpy.ndarray, shape (N,), int64
+        Frame numbers as sent (-1 for points the controller made itself: e-stop, homing).
+    """
+
+    t_s: np.ndarray
+    positions: np.ndarray
+    frames: np.ndarray
+
+    def axis(self, i: int) -> tuple[np.ndarray, np.ndarray]:
+        """``(t_s, positions)`` of axis ``i``."""
+        return self.t_s, self.positions[:, i]
+
+    def __len__(self) -> int:
+        return len(self.t_s)
+
+
+def who_matches(who: int, node: int) -> bool:
+    """Does Who code ``who`` (0xFFFF all, XX.FF column, FF.YY row, XX.YY node, 0 none)
+    select the controller whose node is ``node`` (``XX.YY``)?"""
+    if who == 0:
+        return False
+    if who == 0xFFFF:
+        return True
+    hi, lo = who >> 8, who & 0xFF
+    return (hi == 0xFF or hi == node >> 8) and (lo == 0xFF or lo == node & 0xFF)
+
+
+class Playback:
+    """Timeline, buffer and trace of one emulated controller (explicit state).
+
+    Parameters
+    ----------
+    n_axes : int
+    capacity : int
+        Frames the buffer holds (FIFO) before refusing with buffer-full.
+    fifo : bool
+        ``True``: every frame is played in order. ``False``: only the latest frame; a frame
+        not yet started is replaced by a newer one.
+    max_speed_pulses_s : sequence of float or None
+        Per-axis speed limits for the ``speed`` violation (None = none).
+    stroke_pulses : tuple[int, int] or None
+        Allowed position range for the ``stroke`` violation (None = none).
+    """
+
+    def __init__(
+        self,
+        n_axes: int,
+        capacity: int,
+        fifo: bool,
+        max_speed_pulses_s: Sequence[float] | None,
+        stroke_pulses: tuple[int, int] | None,
+    ) -> None:
+        self.n_axes = n_axes
+        self.capacity = capacity
+        self.fifo = fifo
+        self.max_speed = None if max_speed_pulses_s is None else tuple(max_speed_pulses_s)
+        self.stroke = stroke_pulses
+        self.rows_t: list[float] = []
+        self.rows_p: list[tuple[int, ...]] = []
+        self.rows_f: list[int] = []
+        self.violations: list[Violation] = []
+        self.position: tuple[int, ...] = (0,) * n_axes  # last commanded (end of timeline)
+        self.t_end = 0.0  # timeline time of the last frame
+        self.play_t = 0.0  # timeline time the controller has reached
+        self.started = False
+        self.last_wall: float | None = None
+        self.pending: collections.deque[float] = collections.deque()  # end times not reached
+        self.rate = 1.0
+        self.fast_rate = 1.0
+        self.last_frame_no: int | None = None
+        self.frames_played = 0
+        self.frames_dropped = 0
+
+    # -- time ---------------------------------------------------------------------------
+    def advance(self, now_s: float) -> None:
+        """Move the controller's playback clock to wall time ``now_s``."""
+        if self.last_wall is None:
+            self.last_wall = now_s
+            return
+        dt = max(0.0, now_s - self.last_wall)
+        self.last_wall = now_s
+        if not self.started:
+            return
+        rate = self.fast_rate if len(self.pending) > 1 else self.rate
+        self.play_t = min(self.t_end, self.play_t + dt * rate)
+        while self.pending and self.pending[0] <= self.play_t + 1e-9:
+            self.pending.popleft()
+
+    @property
+    def depth(self) -> int:
+        """Frames received and not yet completely played."""
+        return len(self.pending)
+
+    @property
+    def full(self) -> bool:
+        return len(self.pending) >= self.capacity
+
+    # -- frames -------------------------------------------------------------------------
+    def play(self, frame_no: int, duration_s: float, positions: Sequence[int]) -> None:
+        """Append a frame reached ``duration_s`` after the previous one (or at 0 if first)."""
+        positions = tuple(int(p) for p in positions)
+        base = None
+        if not self.fifo and len(self.pending) > 1 and self.rows_t:
+            # latest-frame mode: the frame not yet started is replaced by this one, which
+            # keeps its own place in time (the replaced frame's time + this step)
+            self.pending.pop()
+            base = self.rows_t.pop()
+            self.rows_p.pop()
+            self.rows_f.pop()
+            self.frames_dropped += 1
+            self.t_end = self.rows_t[-1] if self.rows_t else 0.0
+            self.position = self.rows_p[-1] if self.rows_p else (0,) * self.n_axes
+        if not self.started:
+            self.started = True
+            t = 0.0
+            self.play_t = 0.0
+            move_s = duration_s
+        else:
+            t = (self.t_end if base is None else base) + duration_s
+            move_s = t - self.t_end if self.rows_t else duration_s
+        self._check(t, move_s, positions, frame_no)
+        # frame numbers count up by one; 0 starts a new run (a new encoder)
+        expected = None if self.last_frame_no is None else (self.last_frame_no + 1) & 0xFFFFFFFF
+        if expected is not None and frame_no not in (expected, 0):
+            self.violations.append(
+                Violation(
+                    t,
+                    "sequence",
+                    None,
+                    f"frame {frame_no} after frame {self.last_frame_no} (lost or reordered)",
+                )
+            )
+        self.last_frame_no = frame_no
+        self.rows_t.append(t)
+        self.rows_p.append(positions)
+        self.rows_f.append(frame_no)
+        self.pending.append(t)
+        self.t_end = t
+        self.position = positions
+        self.frames_played += 1
+
+    def jump(self, duration_s: float, positions: Sequence[int]) -> None:
+        """A move the controller makes by itself (e-stop, homing): clears the buffer."""
+        positions = tuple(int(p) for p in positions)
+        self.pending.clear()
+        t = (self.play_t if self.started else 0.0) + duration_s
+        self.started = True
+        self.rows_t.append(t)
+        self.rows_p.append(positions)
+        self.rows_f.append(-1)
+        self.t_end = self.play_t = t
+        self.position = positions
+
+    def restart(self) -> None:
+        """After homing the next frame starts a new run (its time is the new origin)."""
+        self.last_frame_no = None
+
+    def _check(self, t: float, duration_s: float, positions: tuple[int, ...], frame: int) -> None:
+        if self.stroke is not None:
+            lo, hi = self.stroke
+            for i, p in enumerate(positions):
+                if not lo <= p <= hi:
+                    self.violations.append(
+                        Violation(
+                            t,
+                            "stroke",
+                            i,
+                            f"frame {frame}: axis {i} at {p} pulses, allowed [{lo}, {hi}]",
+                        )
+                    )
+        if self.max_speed is not None:
+            for i, (p, q, vmax) in enumerate(
+                zip(positions, self.position, self.max_speed, strict=True)
+            ):
+                if vmax <= 0 or p == q:
+                    continue
+                v = abs(p - q) / duration_s if duration_s > 0 else float("inf")
+                if v > vmax * (1 + 1e-9):
+                    self.violations.append(
+                        Violation(
+                            t,
+                            "speed",
+                            i,
+                            f"frame {frame}: axis {i} moves {p - q} pulses in "
+                            f"{duration_s * 1e3:.1f} ms = {v:.0f} pulses/s > {vmax:.0f}",
+                        )
+                    )
+
+    def trace(self) -> Trace:
+        n = self.n_axes
+        return Trace(
+            np.asarray(self.rows_t, dtype=float),
+            np.asarray(self.rows_p, dtype=np.int64).reshape(-1, n),
+            np.asarray(self.rows_f, dtype=np.int64),
+        )
+
+
+class UdpEmulatorBase:
+    """The UDP server loop and thread shared by both emulators.
+
+    Subclasses implement :meth:`handle` (one datagram -> reply datagrams) and
+    :meth:`periodic` (status reports due at wall time ``now_s``).
+    """
+
+    def __init__(self, host: str = "127.0.0.1", port: int = 0) -> None:
+        self._host = host
+        self._port = port
+        self._sock: socket.socket | None = None
+        self._thread: threading.Thread | None = None
+        self._stop = threading.Event()
+        self.lock = threading.RLock()
+        self.last_peer: tuple[str, int] | None = None
+        self.received = 0
+        self._stamped = False
+        self.internal_errors: list[str] = []  # emulator bugs met while serving (none expected)
+
+    # -- subclass hooks -----------------------------------------------------------------
+    def handle(self, data: bytes, now_s: float) -> list[bytes]:  # pragma: no cover - abstract
+        raise NotImplementedError
+
+    def periodic(self, now_s: float) -> list[bytes]:
+        return []
+
+    # -- server -------------------------------------------------------------------------
+    @property
+    def port(self) -> int:
+        """The UDP port the emulator listens on (after :meth:`start`)."""
+        return self._port
+
+    def start(self) -> UdpEmulatorBase:
+        """Bind and serve in a daemon thread."""
+        try:
+            sock = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
+            sock.setsockopt(socket.SOL_SOCKET, socket.SO_RCVBUF, 1 << 21)
+            sock.bind((self._host, self._port))
+        except OSError as exc:
+            raise TransportError(
+                f"emulator cannot listen on {self._host}:{self._port}: {exc}"
+            ) from exc
+        self._stamped = False
+        if _SO_TIMESTAMPNS is not None:
+            try:
+                sock.setsockopt(socket.SOL_SOCKET, _SO_TIMESTAMPNS, 1)
+                self._stamped = True
+            except OSError:
+                pass
+        sock.settimeout(0.02)
+        self._port = int(sock.getsockname()[1])
+        self._sock = sock
+        self._stop.clear()
+        self._thread = threading.Thread(target=self._serve, name="motioncue-emulator", daemon=True)
+        self._thread.start()
+        return self
+
+    def serve_forever(self) -> None:
+        """Serve in the calling thread until :meth:`stop` (or Ctrl-C)."""
+        if self._sock is None:
+            self.start()
+        assert self._thread is not None
+        try:
+            while self._thread.is_alive():
+                self._thread.join(0.2)
+        finally:
+            self.stop()
+
+    def _serve(self) -> None:
+        sock = self._sock
+        assert sock is not None
+        while not self._stop.is_set():
+            try:
+                data, peer, now = self._receive(sock)
+            except TimeoutError:
+                data, peer, now = b"", None, wall_clock()
+            except OSError:
+                break
+            with self.lock:
+                try:
+                    if peer is not None:
+                        self.last_peer = peer
+                        self.received += 1
+                        replies = self.handle(data, now)
+                    else:
+                        replies = []
+                    reports = self.periodic(now)
+                except Exception as exc:  # keep serving; the error is reported
+                    self.internal_errors.append(f"{type(exc).__name__}: {exc}")
+                    replies, reports = [], []
+            target = peer or self.last_peer
+            if target is None:
+                continue
+            for out in (*replies, *reports):
+                try:
+                    sock.sendto(out, target)
+                except OSError:
+                    pass
+
+    def _receive(self, sock: socket.socket) -> tuple[bytes, Any, float]:
+        """One datagram, its sender and its arrival time: the kernel's receive stamp when
+        the OS gives one (so a busy emulator thread does not distort the playback model),
+        else the time it is read."""
+        if not self._stamped:
+            data, peer = sock.recvfrom(65536)
+            return data, peer, wall_clock()
+        data, ancillary, _flags, peer = sock.recvmsg(65536, 64)
+        for level, kind, cdata in ancillary:
+            if level == socket.SOL_SOCKET and kind == _SO_TIMESTAMPNS and len(cdata) >= 8:
+                sec, nsec = _TIMESPEC.unpack_from(cdata.ljust(_TIMESPEC.size, b"\0"))
+                return data, peer, sec + nsec * 1e-9
+        return data, peer, wall_clock()
+
+    def stop(self) -> None:
+        """Stop serving and close the socket (idempotent)."""
+        self._stop.set()
+        if self._thread is not None and self._thread is not threading.current_thread():
+            self._thread.join(2.0)
+        if self._sock is not None:
+            self._sock.close()
+        self._sock = None
+        self._thread = None
+
+    def __enter__(self) -> UdpEmulatorBase:
+        if self._sock is None:
+            self.start()
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.stop()

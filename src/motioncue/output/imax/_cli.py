@@ -1,0 +1,191 @@
+"""Hooks the ``emulate`` / ``send`` / ``inspect`` verbs call for an IMAX controller."""
+
+from __future__ import annotations
+
+import re
+from typing import Any, TextIO
+
+from ..._errors import ConfigError, ProtocolError
+from .._transport import Transport, TransportURL
+from .._udp_cli import describe, exchange, park, parse_bits, parse_value
+from .._udp_cli import transport_options as _transport_options
+from .._udp_common import CONFIRM_SERVO, HEADER, WHO_ALL, decode_header
+from ._controller import ImaxController
+from ._emulator import ImaxEmulator
+from ._messages import (
+    CHANNEL_DP,
+    CHANNEL_DPF,
+    CHANNEL_PA,
+    F_ABS,
+    F_READ,
+    F_REL,
+    F_STATUS,
+    F_VIB_ABS,
+    F_VIB_REL,
+    F_WRITE,
+    RegisterRead,
+    RegisterReply,
+    RegisterWrite,
+    ReplyStatus,
+    axes_of_channel,
+    decode,
+    frame_size,
+)
+from ._params import pa_name
+
+__all__ = [
+    "VERBS",
+    "emulator",
+    "inspect_decode",
+    "send_verb",
+    "split_stream",
+    "transport_options",
+]
+
+VERBS = ("estop", "reset", "home", "park", "outputs", "read", "write")
+_DP = re.compile(r"^dp[ _]?([0-9a-f]{1,2})$", re.IGNORECASE)
+_DPF = re.compile(r"^dpf[ _]?([0-9a-f])$", re.IGNORECASE)
+
+
+def emulator(
+    controller: ImaxController, host: str = "127.0.0.1", port: int = 0, **options: Any
+) -> ImaxEmulator:
+    """An (unstarted) emulator of ``controller`` listening on ``host:port``."""
+    return ImaxEmulator(controller, host, port, **options)
+
+
+def register(name: str, *, for_write: bool) -> tuple[int, int, str]:
+    """``(channel, address, label)``: ``PA80``, ``DP06``, ``DPF0`` (= DP F0)."""
+    text = name.strip()
+    m = _DPF.match(text)
+    if m:
+        a = int(m.group(1), 16)
+        return (CHANNEL_DPF, a, f"DPF{a:X}") if for_write else (CHANNEL_DP, 0xF0 + a, f"DPF{a:X}")
+    m = _DP.match(text)
+    if m:
+        a = int(m.group(1), 16)
+        return CHANNEL_DP, a, f"DP{a:02x}"
+    pa = pa_name(text)
+    return CHANNEL_PA, int(pa[2:], 16), pa
+
+
+def transport_options(controller: Any, url: TransportURL) -> dict:
+    """``open_transport`` options for this controller: pcap addresses from the config;
+    the IMAX only accepts commands sent from port PA24 (2.3.1), so a
+    non-loopback ``udp://`` target sends from it."""
+    return _transport_options(controller, url, fixed_source_port=True)
+
+
+def send_verb(
+    controller: ImaxController,
+    transport: Transport,
+    verb: str,
+    args: list[str],
+    *,
+    who: tuple[int, int] = (WHO_ALL, WHO_ALL),
+    save: bool = False,
+    out: TextIO,
+) -> int:
+    """Run one ``motioncue send`` verb; returns the exit status (0 ok, 1 error reply)."""
+    accept, reply_who = who
+
+    def is_reply(base: int) -> Any:
+        return lambda r: isinstance(r, RegisterReply) and r.function & 0xFFF0 == base & 0xFFF0
+
+    def write(channel: int, start: int, values: tuple[int, ...]) -> Any:
+        msg = RegisterWrite(channel, start, values, accept, reply_who)
+        return exchange(transport, msg.encode(), decode, is_reply(F_WRITE), reply_who != 0, out)
+
+    def read(channel: int, start: int, count: int) -> Any:
+        msg = RegisterRead(channel, start, count, accept, reply_who)
+        return exchange(transport, msg.encode(), decode, is_reply(F_READ), reply_who != 0, out)
+
+    def nargs(n: int) -> None:
+        if len(args) != n:
+            raise ConfigError(f"send {verb}: expected {n} argument(s), got {args!r}")
+
+    if verb == "estop":
+        raise ConfigError(
+            "the IMAX has no e-stop command over UDP: its e-stop is wired to inputs "
+            "X01..X12 (PA90 bit 0, PA91, PA92; manual 5.6). Stop streaming or send 'park'."
+        )
+    if verb == "reset":
+        nargs(0)
+        reply = write(CHANNEL_PA, 0x08, (1,))  # PA08 = 1: manual reset (5.2, 5.13)
+    elif verb == "home":
+        nargs(0)
+        reply = write(CHANNEL_DPF, 0, (0,))  # DPF0 = 0 homes; reads 2 when done (2.3.3)
+    elif verb == "outputs":
+        nargs(1)
+        reply = write(CHANNEL_DPF, 1, (parse_bits(args[0], 12),))  # DPF1 (5.12)
+    elif verb == "read":
+        if len(args) not in (1, 2):
+            raise ConfigError("send read REG [COUNT]")
+        channel, start, _label = register(args[0], for_write=False)
+        count = parse_value(args[1], "count") if len(args) == 2 else 1
+        reply = read(channel, start, count)
+        if isinstance(reply, RegisterReply) and reply.status == ReplyStatus.OK:
+            for i, v in enumerate(reply.values):
+                name = f"DP{start + i:02X}" if channel == CHANNEL_DP else f"PA{start + i:02x}"
+                print(f"{name} = {v} (0x{v:04X})", file=out)
+    elif verb == "write":
+        if len(args) < 2:
+            raise ConfigError("send write REG VALUE...")
+        channel, start, _label = register(args[0], for_write=True)
+        reply = write(channel, start, tuple(parse_value(v) & 0xFFFF for v in args[1:]))
+        if save and channel == CHANNEL_PA:
+            write(CHANNEL_PA, 0x0F, (2,))  # PA0f = 2: save parameters
+    elif verb == "park":
+        nargs(0)
+        if getattr(transport, "request", None) is None:
+            raise ConfigError("send park needs a udp:// target: it reads the positions first")
+        reply = read(CHANNEL_DP, 0, 0x27)
+        if not isinstance(reply, RegisterReply) or reply.status != ReplyStatus.OK:
+            return 1
+        dp = reply.values
+        current = []
+        for a in (0x06, 0x08, 0x0A, 0x21, 0x23, 0x25)[: controller.n_axes]:
+            v = dp[a] | dp[a + 1] << 16
+            current.append(v - (1 << 32) if v & 0x80000000 else v)
+        park(controller, transport, current, out)
+        return 0
+    else:
+        raise ConfigError(f"send {verb!r}: allowed {', '.join(VERBS)}")
+    if isinstance(reply, RegisterReply) and reply.status != ReplyStatus.OK:
+        print(f"error reply: {reply.status.name}, code {reply.error_code}", file=out)
+        return 1
+    return 0
+
+
+def inspect_decode(data: bytes) -> str:
+    """One line describing an IMAX datagram (raises :class:`ProtocolError`)."""
+    return describe(decode(data))
+
+
+def split_stream(blob: bytes) -> list[bytes]:
+    """Cut a raw ``file:`` capture of host -> controller datagrams into datagrams."""
+    out = []
+    off = 0
+    while off < len(blob):
+        if blob[off : off + 2] == b"\x33\xcc" and blob[off + 4 : off + 6] == b"\x31\x01":
+            n = int.from_bytes(blob[off + 8 : off + 10], "big")
+            size = 16 + 8 * n
+        else:
+            h = decode_header(blob[off : off + HEADER.size])
+            f = h.function
+            if f in (F_ABS, F_REL):
+                size = frame_size(axes_of_channel(h.channel))
+            elif f in (F_VIB_ABS, F_VIB_REL):
+                size = 22 + 8 * axes_of_channel(h.channel)
+            elif (f & 0xFFF0) in (F_READ & 0xFFF0, F_WRITE & 0xFFF0, 0x2100, 0x2200) and f & 0xF:
+                count = int.from_bytes(blob[off + 14 : off + 16], "big")
+                size = HEADER.size + 4 + 2 * count
+            elif h.confirm == CONFIRM_SERVO and f == F_STATUS:
+                raise ProtocolError(f"byte {off}: malformed status report")
+            else:
+                raise ProtocolError(f"byte {off}: cannot size IMAX function 0x{f:04X}")
+        if off + size > len(blob):
+            raise ProtocolError(f"byte {off}: message of {size} bytes truncated")
+        out.append(blob[off : off + size])
+        off += size
+    return out

@@ -1,0 +1,283 @@
+"""The IMAX controller description (frozen) and its frame encoder (explicit state)."""
+
+from __future__ import annotations
+
+import dataclasses
+import struct
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+from numbers import Integral
+from types import MappingProxyType
+from typing import Any, ClassVar
+
+from ..._config import ConfigReader
+from ..._errors import ConfigError, LimitError, ProtocolError
+from .._transport import parse_target
+from .._udp_common import CONFIRM_MAIN, PASSCODE, WHO_ALL, FrameClock, check_int32
+from ._messages import (
+    F_ABS,
+    F_REL,
+    F_VIB_ABS,
+    F_VIB_REL,
+    _frame_struct,
+    _vib_struct,
+    channel_of_axes,
+)
+from ._params import PA_SPEC, pa_name
+
+__all__ = ["ImaxController", "ImaxFrameEncoder", "controller_from_config"]
+
+
+def validate_parameters(values: Mapping[str, Any], where: str) -> dict[str, int]:
+    """Defaults overridden by ``values``; names canonical, values within range."""
+    out = {name: spec[2] for name, spec in PA_SPEC.items()}
+    for key, value in values.items():
+        try:
+            name = pa_name(key)
+        except ConfigError as exc:
+            raise ConfigError(f"{where}: {exc}") from None
+        if name not in PA_SPEC:
+            raise ConfigError(f"{where}: {key} is not an IMAX parameter this package knows")
+        lo, hi, _, meaning = PA_SPEC[name]
+        if isinstance(value, bool) or not isinstance(value, int) or not lo <= value <= hi:
+            raise ConfigError(
+                f"{where}: {name} = {value!r} is invalid ({meaning}); "
+                f"allowed: an integer in [{lo}, {hi}]"
+            )
+        out[name] = value
+    return out
+
+
+@dataclass(frozen=True)
+class ImaxController:
+    """An IMAX / SMC multi-axis controller (up to 12 axes; 3 and 6 are common).
+
+    Attributes
+    ----------
+    name : str
+    n_axes : int
+        Axes this controller drives (PA02).
+    default_target : str
+        Loopback URL used when the user names no target.
+    parameters : Mapping[str, int]
+        PA00..PAff by name (``"PA80"``, ``"PAa0"``).
+    stroke_mm : float
+        Usable actuator stroke above mechanical zero (0 = unchecked). Not an IMAX parameter:
+        the manual's PA42 is "axis 1 lift" in 2.3.1 but "maximum stroke" in 5.7.
+    buffer_frames : int
+        Depth of the emulated frame buffer (not stated in the manual).
+    """
+
+    kind: ClassVar[str] = "imax"
+
+    name: str
+    n_axes: int
+    default_target: str
+    parameters: Mapping[str, int]
+    stroke_mm: float = 0.0
+    buffer_frames: int = 256
+
+    def __post_init__(self) -> None:
+        if not 2 <= self.n_axes <= 12:
+            raise ConfigError(f"IMAX {self.name}: axes = {self.n_axes}; allowed: 2..12")
+        parse_target(self.default_target)
+        params = validate_parameters(self.parameters, f"IMAX {self.name}")
+        if params["PA02"] != self.n_axes:
+            raise ConfigError(
+                f"IMAX {self.name}: PA02 = {params['PA02']} but axes = "
+                f"{self.n_axes}; they must agree"
+            )
+        object.__setattr__(self, "parameters", MappingProxyType(params))
+        if not self.stroke_mm >= 0:
+            raise ConfigError(f"IMAX {self.name}: stroke_mm = {self.stroke_mm}; allowed >= 0")
+
+    @property
+    def max_frame_rate_hz(self) -> float | None:
+        """1000 / PA59 (minimum communication period), ``None`` when PA59 = 0."""
+        period = self.parameters["PA59"]
+        return None if period == 0 else 1000.0 / period
+
+    @property
+    def pulses_per_rev(self) -> int:
+        """Quadrature counts per motor turn: 4 x 5000 lines (PA54 = 0) or 4 x 2500."""
+        return 20000 if self.parameters["PA54"] == 0 else 10000
+
+    @property
+    def lead_mm(self) -> float:
+        return self.parameters["PA41"] / 10.0
+
+    @property
+    def pulses_per_mm(self) -> float:
+        return self.pulses_per_rev / self.lead_mm
+
+    def max_speed_rpm(self, axis: int) -> float:
+        """Smallest of PA07, PA8x (when > 0) and PAax x PAbx (5.10) for axis ``axis``."""
+        p = self.parameters
+        limits = [p["PA07"]] if p["PA07"] > 0 else []
+        if axis < 6:
+            if p[f"PA8{axis:x}"] > 0:
+                limits.append(p[f"PA8{axis:x}"])
+            limits.append(p[f"PAa{axis:x}"] * p[f"PAb{axis:x}"])
+        return float(min(limits)) if limits else float("inf")
+
+    @property
+    def max_speed_pulses_s(self) -> tuple[float, ...]:
+        return tuple(self.max_speed_rpm(i) / 60.0 * self.pulses_per_rev for i in range(self.n_axes))
+
+    @property
+    def stroke_pulses(self) -> tuple[int, int] | None:
+        """Allowed position range: position 0 is mechanical zero + PA40 lift (5.7)."""
+        if self.stroke_mm == 0:
+            return None
+        lift = self.parameters["PA40"] / 10.0
+        return (
+            round(-lift * self.pulses_per_mm),
+            round((self.stroke_mm - lift) * self.pulses_per_mm),
+        )
+
+    @property
+    def controller_address(self) -> tuple[str, int]:
+        p = self.parameters
+        return (f"{p['PA10']}.{p['PA11']}.{p['PA12']}.{p['PA13']}", p["PA14"])
+
+    @property
+    def host_address(self) -> tuple[str, int]:
+        p = self.parameters
+        return (f"{p['PA20']}.{p['PA21']}.{p['PA22']}.{p['PA23']}", p["PA24"])
+
+    @property
+    def node(self) -> int:
+        """Who node / control id: PA12 << 8 | PA13."""
+        return (self.parameters["PA12"] << 8) | self.parameters["PA13"]
+
+    def with_parameters(self, **changes: int) -> ImaxController:
+        merged = dict(self.parameters)
+        merged.update({pa_name(k): v for k, v in changes.items()})
+        return dataclasses.replace(self, parameters=merged)
+
+    def frame_encoder(
+        self,
+        absolute_time: bool = True,
+        *,
+        t0_s: float | None = None,
+        who_accept: int = WHO_ALL,
+        who_reply: int = WHO_ALL,
+        first_frame: int = 0,
+    ) -> ImaxFrameEncoder:
+        """A fresh frame encoder (frame counter and time origin) for one run."""
+        return ImaxFrameEncoder(
+            self, FrameClock(absolute_time, t0_s, first_frame), who_accept, who_reply
+        )
+
+
+class ImaxFrameEncoder:
+    """Turns ``(t_s, pulses, dout)`` into IMAX frames (0x1301 / 0x1401), or vibration
+    frames (0x1801 / 0x1901) when ``vibration`` is given.
+
+    ``dout`` = Y01..Y12 (12 bits). The IMAX has no DACs: ``dacs`` must be ``(0, 0)``.
+    """
+
+    __slots__ = (
+        "_head",
+        "_pack",
+        "_stroke",
+        "clock",
+        "controller",
+        "n_axes",
+        "who_accept",
+        "who_reply",
+    )
+
+    def __init__(
+        self, controller: ImaxController, clock: FrameClock, who_accept: int, who_reply: int
+    ) -> None:
+        self.controller = controller
+        self.clock = clock
+        self.n_axes = controller.n_axes
+        self.who_accept = who_accept
+        self.who_reply = who_reply
+        self._pack = _frame_struct(self.n_axes, not clock.absolute_time).pack
+        self._head = (
+            CONFIRM_MAIN,
+            PASSCODE,
+            F_ABS if clock.absolute_time else F_REL,
+            channel_of_axes(self.n_axes),
+            who_accept,
+            who_reply,
+        )
+        self._stroke = controller.stroke_pulses
+
+    def encode(
+        self,
+        t_s: float,
+        pulses: Sequence[Any],
+        dout: int = 0,
+        dacs: tuple[int, int] = (0, 0),
+        vibration: Sequence[tuple[int, int]] | None = None,
+    ) -> list[bytes]:
+        """One frame datagram for ``pulses`` (len ``n_axes``) at ``t_s``.
+
+        ``vibration``: per axis ``(period in 0.125 ms, amplitude in pulses)``, both u16.
+        """
+        if len(pulses) != self.n_axes:
+            raise ProtocolError(f"{len(pulses)} positions given, the IMAX drives {self.n_axes}")
+        if isinstance(dout, bool) or not isinstance(dout, Integral) or not 0 <= dout <= 0xFFF:
+            raise ProtocolError(f"dout = {dout!r}: allowed Y01..Y12, 0 .. 0xFFF")
+        if tuple(dacs) != (0, 0):
+            raise ProtocolError(f"dacs = {dacs!r}: the IMAX has no analogue outputs")
+        dout = int(dout)
+        frame, field, abs_ms = self.clock.stamp(t_s)
+        if vibration is None:
+            try:
+                data = self._pack(*self._head, frame, field, *pulses, dout, 0)
+            except struct.error:
+                pulses = check_int32(pulses, self.n_axes)
+                data = self._pack(*self._head, frame, field, *pulses, dout, 0)
+        else:
+            pulses = check_int32(pulses, self.n_axes)
+            if len(vibration) != self.n_axes:
+                raise ProtocolError(f"{len(vibration)} vibration pairs for {self.n_axes} axes")
+            flat = [int(v) for pair in vibration for v in pair]
+            if len(flat) != 2 * self.n_axes or not all(0 <= v <= 0xFFFF for v in flat):
+                raise ProtocolError(f"vibration {vibration!r}: (period, amplitude) u16 pairs")
+            head = (
+                *self._head[:2],
+                F_VIB_ABS if self.clock.absolute_time else F_VIB_REL,
+                *self._head[3:],
+            )
+            data = _vib_struct(self.n_axes, not self.clock.absolute_time).pack(
+                *head, frame, field, *pulses, dout, *flat
+            )
+        if self._stroke is not None:
+            lo, hi = self._stroke
+            if min(pulses) < lo or max(pulses) > hi:
+                raise LimitError(
+                    f"positions {list(pulses)} leave the stroke [{lo}, {hi}] "
+                    "pulses (stroke_mm, PA40 lift)"
+                )
+        self.clock.commit(t_s, abs_ms)
+        return [data]
+
+
+def controller_from_config(reader: ConfigReader, name: str) -> ImaxController:
+    """Build an :class:`ImaxController` from a controller TOML (``kind = "imax"``)."""
+    axes = reader.integer("axes", lo=2, hi=12)
+    target = reader.string("default_target", "udp://127.0.0.1:7408")
+    try:
+        parse_target(target)
+    except ConfigError as exc:
+        raise reader.error("default_target", target, str(exc)) from None
+    stroke = reader.number("stroke_mm", 0.0, lo=0.0)
+    buffer_frames = reader.integer("buffer_frames", 256, lo=1, hi=65535)
+    params = reader.table("parameters", {})
+    values = {k: params.raw(k) for k in params.keys()}
+    params.finish()
+    values.setdefault("PA02", axes)
+    return ImaxController(
+        name=name,
+        n_axes=axes,
+        default_target=target,
+        parameters=validate_parameters(values, f"{reader.where} [parameters]"),
+        stroke_mm=stroke,
+        buffer_frames=buffer_frames,
+    )

@@ -1,0 +1,490 @@
+"""An IMAX emulator: decodes and validates every datagram, keeps the manual's state,
+replies as the manual says and records what the platform was told to do.
+
+Modelled (IMAX manual section in brackets):
+
+* frames 0x1301 / 0x1401 and vibration frames 0x1801 / 0x1901 (2.2.2.5-2.2.2.12), taking
+  axes PA95 .. PA95 + PA02 - 1 of the frame (5.9); replies 0x1x02, or x = 3 with error 21
+  (Err21, buffer overflow) when the buffer is full, x = 4 while the e-stop is active,
+  x = 5 for a frame it cannot use (command error); no reply at all when PA15 = 0.
+* playback: frame time steps; PA0a = 1 uses PA09 instead; a step of 0 or less moves within
+  PA59 ms; PA06 = 1 plays 1.5x faster while more than 2 frames wait (the manual gives no
+  rate: decision).
+* registers 0x1101 / 0x1201 on DP, PA and DPF (DPFx is DP 0xF0 + x): DPF0 = 0 homes and
+  reads 2 when done, PA08 = 1 homes and reads 0 after, DPF1 sets Y outputs, PA9d masks
+  PortOut of frames; unknown addresses answer x = 3 with error code 1, values out of range
+  error code 2 (the manual's error-code table is missing: decision).
+* PA0b: a frame later than PA0b ms after the previous one is flagged (``period``); PA0d:
+  the platform homes once frames have stopped for PA0d ms.
+* e-stop from inputs (:meth:`ImaxEmulator.set_inputs`): active when PA90 bit 0 is set and
+  every input of PA92 is on; PA91 = 0 hold then go on, 1 back to zero then go on, 2 hold
+  until a reset (DPF0 = 0 or PA08 = 1) homes the platform (5.6).
+* servo parameters 0x2101 / 0x2201: at most 6 registers of servo 1..PA02.
+* status reports 0x3101 every PA1e ms (or on a new alarm when PA1e = 0) when PA1f is 1 or 2.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+from ..._errors import ProtocolError
+from .._udp_common import decode_header
+from .._udp_emulator import (
+    Playback,
+    Trace,
+    UdpEmulatorBase,
+    Violation,
+    wall_clock,
+    who_matches,
+)
+from ._controller import ImaxController
+from ._messages import (
+    CHANNEL_DP,
+    CHANNEL_DPF,
+    CHANNEL_PA,
+    F_ABS,
+    F_REL,
+    F_VIB_ABS,
+    F_VIB_REL,
+    MotionFrame,
+    MotionFrameReply,
+    RegisterRead,
+    RegisterReply,
+    RegisterWrite,
+    ReplyStatus,
+    ServoRead,
+    ServoReply,
+    ServoWrite,
+    StatusReport,
+    VibrationFrame,
+    VibrationFrameReply,
+    channel_of_axes,
+    decode,
+)
+from ._params import PA_SPEC
+
+__all__ = ["ImaxEmulator"]
+
+ERR_ADDRESS = 1
+ERR_VALUE = 2
+ERR_BUFFER = 21  # Err21: UDP data buffer overflow (chapter 6)
+STATE_HOMING, STATE_READY, STATE_ESTOP = 0, 1, 2
+_PA_BY_ADDRESS = {int(name[2:], 16): name for name in PA_SPEC}
+_DP_POS = (0x06, 0x08, 0x0A, 0x21, 0x23, 0x25)  # low word, high word follows (2.3.3)
+
+
+class ImaxEmulator(UdpEmulatorBase):
+    """Emulated IMAX controller.
+
+    Parameters
+    ----------
+    controller : ImaxController
+    host, port : str, int
+        Where to listen when started (port 0 = any free port).
+    homing_time_s : float
+    start_homed : bool
+    """
+
+    def __init__(
+        self,
+        controller: ImaxController,
+        host: str = "127.0.0.1",
+        port: int = 0,
+        *,
+        homing_time_s: float = 1.0,
+        start_homed: bool = True,
+    ) -> None:
+        super().__init__(host, port)
+        self.controller = controller
+        self.n_axes = controller.n_axes
+        self.params: dict[str, int] = dict(controller.parameters)
+        self.dp_extra: dict[int, int] = {}
+        self.homing_time_s = float(homing_time_s)
+        self.state = STATE_READY if start_homed else STATE_HOMING
+        self._homing_until: float | None = None if start_homed else -1.0
+        self._estop_latched = False
+        self.inputs = 0
+        self.outputs = self.params["PA9f"]
+        self.alarm = 0
+        self.ignored_frames = 0
+        self.refused_frames = 0
+        self.vibration: tuple[tuple[int, int], ...] = ()
+        self.servo_params: dict[tuple[int, int], int] = {}
+        self._last_time_ms: int | None = None
+        self._resume_pending = False
+        self._last_frame_wall: float | None = None
+        self._next_report: float | None = None
+        self._reported_alarm = 0
+        self._violations: list[Violation] = []
+        stroke = controller.stroke_pulses
+        self.playback = Playback(
+            self.n_axes, controller.buffer_frames, True, controller.max_speed_pulses_s, stroke
+        )
+        self.playback.fast_rate = 1.5 if self.params["PA06"] else 1.0
+
+    @property
+    def trace(self) -> Trace:
+        with self.lock:
+            return self.playback.trace()
+
+    @property
+    def violations(self) -> list[Violation]:
+        with self.lock:
+            return [*self._violations, *self.playback.violations]
+
+    @property
+    def estop(self) -> bool:
+        return self.state == STATE_ESTOP
+
+    def set_inputs(self, bits: int, now_s: float | None = None) -> None:
+        """Set the X01..X12 inputs (logical values); may trigger or release the e-stop."""
+        now = wall_clock() if now_s is None else now_s
+        with self.lock:
+            self._tick(now)
+            self.inputs = bits
+            p = self.params
+            sel = p["PA92"]
+            active = bool(p["PA90"] & 1) and sel != 0 and (bits & sel) == sel
+            if active and self.state == STATE_READY:
+                self.state = STATE_ESTOP
+                self._estop_latched = p["PA91"] == 2
+                hold = [0] * self.n_axes if p["PA91"] == 1 else self._position_now()
+                self.playback.jump(self._safe_time(hold), hold)
+                self._bump_alarm(0)
+            elif not active and self.state == STATE_ESTOP and not self._estop_latched:
+                self.state = STATE_READY
+                self._resume_pending = True
+                self._last_time_ms = None
+
+    def _safe_time(self, target: list[int] | tuple[int, ...]) -> float:
+        """Time to reach ``target`` at the safe speeds PA70.. (at least PA59 ms)."""
+        cur = self._position_now()
+        worst = 0.0
+        for i, (a, b) in enumerate(zip(cur, target, strict=True)):
+            rpm = self.params.get(f"PA7{i:x}", 100) if i < 6 else 100
+            v = max(rpm, 1) / 60.0 * self.controller.pulses_per_rev
+            worst = max(worst, abs(b - a) / v)
+        return max(worst, self.params["PA59"] / 1000.0)
+
+    def _bump_alarm(self, code: int) -> None:
+        self.alarm = code
+
+    # -- datagrams ----------------------------------------------------------------------
+    def handle(self, data: bytes, now_s: float) -> list[bytes]:
+        self._tick(now_s)
+        try:
+            if data[:2] == b"\x33\xcc" and data[4:6] == b"\x31\x01":
+                raise ProtocolError("status report 0x3101 is sent by the controller, not to it")
+            h = decode_header(data)
+        except ProtocolError as exc:
+            return self._malformed(str(exc))
+        node = self.controller.node
+        if not who_matches(h.who_accept, node):
+            return []
+        reply = who_matches(h.who_reply, node) and self.params["PA15"] == 1
+        try:
+            msg = decode(data)
+        except ProtocolError as exc:
+            self._malformed(str(exc))
+            if reply and h.function in (F_ABS, F_REL, F_VIB_ABS, F_VIB_REL):
+                return [self._command_error(h.function)]
+            return []
+        out: Any
+        if isinstance(msg, MotionFrame | VibrationFrame):
+            out = self._frame(msg)
+        elif isinstance(msg, ServoRead | ServoWrite):
+            out = self._servo(msg)
+        elif isinstance(msg, RegisterRead):
+            out = self._read(msg)
+        elif isinstance(msg, RegisterWrite):
+            out = self._write(msg, now_s)
+        else:
+            return self._malformed(f"{type(msg).__name__} is sent by an IMAX, not to it")
+        return [out.encode()] if reply and out is not None else []
+
+    def _malformed(self, detail: str) -> list[bytes]:
+        self._violations.append(Violation(self.playback.t_end, "malformed", None, detail))
+        return []
+
+    def _command_error(self, function: int) -> bytes:
+        """x = 5 reply to a frame the controller cannot use (error code 5, zero frame)."""
+        n = self.n_axes
+        absolute = function in (F_ABS, F_VIB_ABS)
+        if function in (F_VIB_ABS, F_VIB_REL):
+            return VibrationFrameReply(
+                ReplyStatus.COMMAND_ERROR,
+                absolute,
+                5,
+                0,
+                0,
+                (0,) * n,
+                self.inputs & 0xFFFF,
+                ((0, 0),) * n,
+            ).encode()
+        return MotionFrameReply(
+            ReplyStatus.COMMAND_ERROR, absolute, 5, 0, 0, (0,) * n, self.inputs & 0xFFFF
+        ).encode()
+
+    def _reply(
+        self, msg: MotionFrame | VibrationFrame, status: ReplyStatus, code: int
+    ) -> MotionFrameReply | VibrationFrameReply:
+        channel = code if status != ReplyStatus.OK else channel_of_axes(len(msg.positions))
+        if isinstance(msg, VibrationFrame):
+            return VibrationFrameReply(
+                status,
+                msg.absolute,
+                channel,
+                msg.frame,
+                msg.time_ms,
+                msg.positions,
+                self.inputs & 0xFFFF,
+                msg.vibration,
+            )
+        return MotionFrameReply(
+            status,
+            msg.absolute,
+            channel,
+            msg.frame,
+            msg.time_ms,
+            msg.positions,
+            self.inputs & 0xFFFF,
+            msg.extend,
+        )
+
+    def _frame(self, msg: MotionFrame | VibrationFrame) -> MotionFrameReply | VibrationFrameReply:
+        p = self.params
+        off = p["PA95"]
+        if len(msg.positions) < off + self.n_axes:
+            self._malformed(
+                f"frame {msg.frame} carries {len(msg.positions)} axes; this "
+                f"controller needs axes {off + 1}..{off + self.n_axes} (PA95={off})"
+            )
+            return self._reply(msg, ReplyStatus.COMMAND_ERROR, 5)
+        if self.state == STATE_ESTOP:
+            self.ignored_frames += 1
+            return self._reply(msg, ReplyStatus.ESTOP, 4)
+        if self.state == STATE_HOMING:
+            self.ignored_frames += 1
+            return self._reply(msg, ReplyStatus.COMMAND_ERROR, 5)
+        pb = self.playback
+        if pb.full:
+            self.refused_frames += 1
+            self._bump_alarm(ERR_BUFFER)
+            self._violations.append(
+                Violation(
+                    pb.t_end,
+                    "buffer",
+                    None,
+                    f"frame {msg.frame} refused: buffer full ({pb.depth} frames, Err21)",
+                )
+            )
+            return self._reply(msg, ReplyStatus.ERROR, ERR_BUFFER)
+        if msg.absolute:
+            step = None if self._last_time_ms is None else msg.time_ms - self._last_time_ms
+            self._last_time_ms = msg.time_ms
+        else:
+            step = msg.time_ms
+        min_period = max(p["PA59"], 1) / 1000.0
+        if self._resume_pending:
+            positions = msg.positions[off : off + self.n_axes]
+            duration = self._safe_time(positions)
+            self._resume_pending = False
+        elif p["PA0a"]:
+            duration = p["PA09"] / 1000.0
+        elif step is None or step <= 0:
+            duration = min_period
+        else:
+            duration = step / 1000.0
+            if p["PA0b"] and step > p["PA0b"]:
+                self._violations.append(
+                    Violation(
+                        pb.t_end + duration,
+                        "period",
+                        None,
+                        f"frame {msg.frame} {step} ms after the previous, PA0b = {p['PA0b']} ms",
+                    )
+                )
+            if duration < min_period - 1e-9:
+                self._violations.append(
+                    Violation(
+                        pb.t_end + duration,
+                        "period",
+                        None,
+                        f"frame {msg.frame} {step} ms after the previous, PA59 = {p['PA59']} ms",
+                    )
+                )
+        pb.play(msg.frame, duration, msg.positions[off : off + self.n_axes])
+        self._last_frame_wall = pb.last_wall
+        if not p["PA9d"]:
+            self.outputs = msg.port_out & 0xFFF
+        if isinstance(msg, VibrationFrame):
+            self.vibration = msg.vibration[off : off + self.n_axes]
+        return self._reply(msg, ReplyStatus.OK, 0)
+
+    def _servo(self, msg: ServoRead | ServoWrite) -> ServoReply:
+        func = msg.FUNCTION + 1
+        if not 1 <= msg.channel <= self.n_axes:
+            n = msg.count if isinstance(msg, ServoRead) else len(msg.values)
+            return ServoReply(func + 1, ERR_ADDRESS, msg.start, (0,) * n)
+        if isinstance(msg, ServoRead):
+            vals = tuple(
+                self.servo_params.get((msg.channel, msg.start + i), 0) for i in range(msg.count)
+            )
+            return ServoReply(func, msg.channel, msg.start, vals)
+        for i, v in enumerate(msg.values):
+            self.servo_params[(msg.channel, msg.start + i)] = v
+        return ServoReply(func, msg.channel, msg.start, msg.values)
+
+    def _dp(self, address: int) -> int | None:
+        if address == 0xF0:
+            return 0 if self.state == STATE_HOMING else 2
+        if address == 0xF1:
+            return self.outputs
+        if address == 0xF2:
+            return 0
+        if address in self.dp_extra:
+            return self.dp_extra[address]
+        now = self._position_now()
+        for i, a in enumerate(_DP_POS[: self.n_axes]):
+            if address == a:
+                return now[i] & 0xFFFF
+            if address == a + 1:
+                return (now[i] >> 16) & 0xFFFF
+        table = {
+            0x48: len(self.playback.rows_t) & 0xFFFF,
+            0x49: (len(self.playback.rows_t) - self.playback.depth) & 0xFFFF,
+            0x5E: self.inputs & 0xFFFF,
+            0x66: self.outputs & 0xFFFF,
+            0xFE: 0,
+            0xFF: 1,
+        }
+        return table.get(address, 0) if address <= 0xFF else None
+
+    def _read(self, msg: RegisterRead) -> RegisterReply:
+        values = []
+        for a in range(msg.start, msg.start + msg.count):
+            if msg.channel == CHANNEL_DP:
+                v = self._dp(a)
+            else:
+                name = _PA_BY_ADDRESS.get(a)  # unmodelled PA addresses read 0
+                v = None if a > 0xFF else 0 if name is None else self.params[name] & 0xFFFF
+            if v is None:
+                return RegisterReply(0x1103, ERR_ADDRESS, msg.start, (0,) * msg.count)
+            values.append(v)
+        return RegisterReply(0x1102, msg.channel, msg.start, tuple(values))
+
+    def _write(self, msg: RegisterWrite, now_s: float) -> RegisterReply:
+        def err(code: int) -> RegisterReply:
+            return RegisterReply(0x1203, code, msg.start, msg.values)
+
+        if msg.channel in (CHANNEL_DP, CHANNEL_DPF):
+            base = 0xF0 if msg.channel == CHANNEL_DPF else 0
+            if base + msg.start + len(msg.values) > 0x100:
+                return err(ERR_ADDRESS)
+            for i, v in enumerate(msg.values):
+                a = base + msg.start + i
+                if a == 0xF0:
+                    if v == 0:
+                        self._start_homing(now_s)
+                elif a == 0xF1:
+                    self.outputs = v & 0xFFF
+                elif a == 0xF2:
+                    if v:
+                        self._start_homing(now_s)
+                else:
+                    self.dp_extra[a] = v
+            return RegisterReply(0x1202, msg.channel, msg.start, msg.values)
+        assert msg.channel == CHANNEL_PA
+        changes = {}
+        for i, v in enumerate(msg.values):
+            name = _PA_BY_ADDRESS.get(msg.start + i)
+            if name is None:
+                return err(ERR_ADDRESS)
+            lo, hi, _, _ = PA_SPEC[name]
+            if not lo <= v <= hi:
+                return err(ERR_VALUE)
+            changes[name] = v
+        for name, v in changes.items():
+            self.params[name] = v
+            if name == "PA08" and v == 1:
+                self._start_homing(now_s)
+            elif name == "PA06":
+                self.playback.fast_rate = 1.5 if v else 1.0
+            elif name == "PA0f" and v == 1:
+                self.params.update({k: spec[2] for k, spec in PA_SPEC.items()})
+                self.params["PA02"] = self.n_axes
+        return RegisterReply(0x1202, msg.channel, msg.start, msg.values)
+
+    # -- state --------------------------------------------------------------------------
+    def _start_homing(self, now_s: float) -> None:
+        self.state = STATE_HOMING
+        self._estop_latched = False
+        self._homing_until = now_s + self.homing_time_s
+        self.playback.jump(self.homing_time_s, [0] * self.n_axes)
+        self.playback.restart()
+        self._last_time_ms = None
+        self._resume_pending = False
+        self.alarm = 0
+
+    def _tick(self, now_s: float) -> None:
+        self.playback.advance(now_s)
+        idle_ms = self.params["PA0d"]  # home once frames have stopped for PA0d ms
+        if (
+            idle_ms
+            and self.state == STATE_READY
+            and self._last_frame_wall is not None
+            and now_s - self._last_frame_wall > idle_ms / 1000.0
+        ):
+            self._last_frame_wall = None
+            self._start_homing(now_s)
+        if self.state == STATE_HOMING:
+            if self._homing_until is not None and self._homing_until < 0:
+                self._homing_until = now_s + self.homing_time_s
+            if self._homing_until is not None and now_s >= self._homing_until:
+                self.state = STATE_READY
+                self._homing_until = None
+                self.params["PA08"] = 0
+
+    def _position_now(self) -> tuple[int, ...]:
+        pb = self.playback
+        if not pb.rows_t:
+            return (0,) * self.n_axes
+        t = pb.play_t
+        k = len(pb.rows_t) - 1
+        while k > 0 and pb.rows_t[k - 1] >= t:
+            k -= 1
+        if k == 0 or pb.rows_t[k] <= t:
+            return pb.rows_p[k]
+        t0, t1 = pb.rows_t[k - 1], pb.rows_t[k]
+        w = (t - t0) / (t1 - t0) if t1 > t0 else 1.0
+        return tuple(
+            round(a + (b - a) * w) for a, b in zip(pb.rows_p[k - 1], pb.rows_p[k], strict=True)
+        )
+
+    def status_report(self) -> StatusReport:
+        now = self._position_now()
+        n = self.n_axes
+        return StatusReport(
+            self.controller.node,
+            now,
+            (0,) * n,
+            (0,) * n,
+            self.alarm,
+            self.outputs & 0xFFFF,
+            self.inputs & 0xFFFF,
+        )
+
+    def periodic(self, now_s: float) -> list[bytes]:
+        p = self.params
+        if p["PA1f"] not in (1, 2):
+            return []
+        self._tick(now_s)
+        if p["PA1e"] == 0:
+            if self.alarm and self.alarm != self._reported_alarm:
+                self._reported_alarm = self.alarm
+                return [self.status_report().encode()]
+            return []
+        if self._next_report is None or now_s >= self._next_report:
+            self._next_report = now_s + p["PA1e"] / 1000.0
+            return [self.status_report().encode()]
+        return []

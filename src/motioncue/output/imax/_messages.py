@@ -1,0 +1,805 @@
+"""IMAX / SMC UDP messages (IMAX manual chapter 2), each declared once.
+
+Every message is a frozen dataclass with its ``struct.Struct`` layout beside it; ``encode``,
+``decode`` and ``size`` derive from it. :func:`decode` reads a datagram of either direction
+and returns the typed message or raises :class:`~motioncue.ProtocolError`.
+
+Replies: the last hex digit of the function code is the status ``x`` (2 running normally,
+3 error, 4 e-stop active, 5 command error or controller fault); when ``x`` is not 2 the
+channel field holds the controller's error code (2.2.2.2, 2.2.2.4, 2.2.2.6).
+
+Decisions where the manual is ambiguous or contradicts itself:
+
+* PortOut is 2 bytes in every frame (0x1301 prints 2, 0x1401 and the replies print 4).
+* Frame replies repeat the frame layout, PortOut carrying the input states; their axis
+  count follows from the length because error replies overwrite the channel.
+* Channel 0 = 3 axes, 1 = 6 axes, n = n axes (2..12); the 0x1401 table's "2: x axes" is
+  read as "x: x axes". Vibration frames use the same coding (their tables list 0 and 1).
+* 0x1801 is absolute time (function table, "绝对时间" row) although its header row says
+  "Relative Time"; 0x1902/0x1903 are the relative-time vibration replies (2.2.2.12's title
+  says absolute).
+* The read request's Extra Data is ``count`` zero words; servo replies 0x21xx / 0x22xx
+  (not printed) are taken to mirror the register replies under ConfirmCode 0x33CC.
+* Status report 0x3101 (2.2.2.15) has no Who fields: ControlID u16, ServoNum u16, then
+  ServoNum x position i32, ServoNum x torque i16, ServoNum x alarm u16, controller alarm
+  u16, outputs u16, inputs u16 (the width row of the table is garbled; columns in order).
+* 0x1001 appears in the function table ("report status") without a layout; it is refused
+  as unknown, 0x3101 being the documented report.
+"""
+
+from __future__ import annotations
+
+import enum
+import struct
+from dataclasses import dataclass
+from functools import cache
+from typing import ClassVar
+
+from ..._errors import ProtocolError
+from .._udp_common import (
+    CONFIRM_MAIN,
+    CONFIRM_SERVO,
+    HEADER,
+    PASSCODE,
+    REG_HEAD,
+    WHO_ALL,
+    WHO_NONE,
+    Header,
+    check_length,
+    decode_header,
+    u16_tuple,
+)
+
+__all__ = [
+    "CHANNEL_DP",
+    "CHANNEL_DPF",
+    "CHANNEL_PA",
+    "FUNCTION_NAMES",
+    "ImaxMessage",
+    "MotionFrame",
+    "MotionFrameReply",
+    "RegisterRead",
+    "RegisterReply",
+    "RegisterWrite",
+    "ReplyStatus",
+    "ServoRead",
+    "ServoReply",
+    "ServoWrite",
+    "StatusReport",
+    "VibrationFrame",
+    "VibrationFrameReply",
+    "axes_of_channel",
+    "channel_of_axes",
+    "decode",
+]
+
+F_READ, F_WRITE, F_ABS, F_REL = 0x1101, 0x1201, 0x1301, 0x1401
+F_VIB_ABS, F_VIB_REL = 0x1801, 0x1901
+F_SERVO_READ, F_SERVO_WRITE = 0x2101, 0x2201
+F_STATUS = 0x3101
+
+CHANNEL_DP, CHANNEL_PA, CHANNEL_DPF = 0, 1, 2
+MAX_AXES = 12
+MAX_SERVO_REGS = 6
+
+
+class ReplyStatus(enum.IntEnum):
+    """``x`` in a reply's function code 0x....x (IMAX 2.2.1)."""
+
+    OK = 2
+    ERROR = 3
+    ESTOP = 4
+    COMMAND_ERROR = 5
+
+
+FUNCTION_NAMES = {
+    F_READ: "read registers",
+    F_WRITE: "write registers",
+    F_ABS: "frame abs-time",
+    F_REL: "frame rel-time",
+    F_VIB_ABS: "vibration frame abs-time",
+    F_VIB_REL: "vibration frame rel-time",
+    F_SERVO_READ: "servo read",
+    F_SERVO_WRITE: "servo write",
+    F_STATUS: "status report",
+}
+
+
+def axes_of_channel(channel: int) -> int:
+    """Axis count of a frame channel: 0 -> 3, 1 -> 6, n -> n (2..12)."""
+    if channel == 0:
+        return 3
+    if channel == 1:
+        return 6
+    if 2 <= channel <= MAX_AXES:
+        return channel
+    raise ProtocolError(f"frame channel {channel}: allowed 0 (3 axes), 1 (6 axes), 2..12 (n)")
+
+
+def channel_of_axes(n_axes: int) -> int:
+    if n_axes == 3:
+        return 0
+    if n_axes == 6:
+        return 1
+    if 2 <= n_axes <= MAX_AXES:
+        return n_axes
+    raise ProtocolError(f"{n_axes} axes: an IMAX frame carries 2..12 axes")
+
+
+def _check_u16(value: int, what: str) -> None:
+    if isinstance(value, bool) or not isinstance(value, int) or not 0 <= value <= 0xFFFF:
+        raise ProtocolError(f"{what} = {value!r} is not in [0, 0xFFFF]")
+
+
+def _reg_unpack(data: bytes) -> tuple[int, int, tuple[int, ...]]:
+    if len(data) < HEADER.size + REG_HEAD.size or len(data) % 2:
+        raise ProtocolError(
+            f"register message: length {len(data)} bytes, expected an even length >= 16"
+        )
+    start, count = REG_HEAD.unpack_from(data, HEADER.size)
+    n = (len(data) - HEADER.size - REG_HEAD.size) // 2
+    return start, count, struct.unpack_from(f">{n}H", data, HEADER.size + REG_HEAD.size)
+
+
+# -- register access ------------------------------------------------------------------------
+@dataclass(frozen=True, slots=True)
+class RegisterRead:
+    """Host -> IMAX 0x1101: read ``count`` registers of channel 0 (DP) or 1 (PA).
+
+    Layout: header, StartAddress u16, Count u16, ``count`` zero words (Extra Data).
+    """
+
+    LAYOUT: ClassVar[struct.Struct] = REG_HEAD
+    CONFIRM: ClassVar[int] = CONFIRM_MAIN
+    FUNCTION: ClassVar[int] = F_READ
+    CHANNELS: ClassVar[tuple[int, ...]] = (CHANNEL_DP, CHANNEL_PA)
+    MAX_COUNT: ClassVar[int] = 256
+
+    channel: int
+    start: int
+    count: int
+    who_accept: int = WHO_ALL
+    who_reply: int = WHO_ALL
+
+    def __post_init__(self) -> None:
+        if self.channel not in self.CHANNELS:
+            raise ProtocolError(
+                f"{type(self).__name__}: channel {self.channel}, allowed {self.CHANNELS}"
+            )
+        for name in ("start", "who_accept", "who_reply"):
+            _check_u16(getattr(self, name), name)
+        if not 1 <= self.count <= self.MAX_COUNT:
+            raise ProtocolError(
+                f"{type(self).__name__}: count {self.count}, allowed 1..{self.MAX_COUNT}"
+            )
+
+    @property
+    def function(self) -> int:
+        return self.FUNCTION
+
+    @property
+    def size(self) -> int:
+        return HEADER.size + REG_HEAD.size + 2 * self.count
+
+    def encode(self) -> bytes:
+        return struct.pack(
+            f">6H2H{self.count}H",
+            self.CONFIRM,
+            PASSCODE,
+            self.FUNCTION,
+            self.channel,
+            self.who_accept,
+            self.who_reply,
+            self.start,
+            self.count,
+            *([0] * self.count),
+        )
+
+    @classmethod
+    def decode_parts(cls, h: Header, data: bytes):
+        start, count, pad = _reg_unpack(data)
+        if any(pad):
+            raise ProtocolError(f"{cls.__name__}: Extra Data after Count must be zero")
+        return cls(h.channel, start, count, h.who_accept, h.who_reply)
+
+
+@dataclass(frozen=True, slots=True)
+class ServoRead(RegisterRead):
+    """Host -> IMAX 0x2101 (ConfirmCode 0x33CC): read at most 6 parameters of the servo
+    drive ``channel`` (servo id); PA508 is address 0x01FC (2.2.2.13)."""
+
+    CONFIRM: ClassVar[int] = CONFIRM_SERVO
+    FUNCTION: ClassVar[int] = F_SERVO_READ
+    CHANNELS: ClassVar[tuple[int, ...]] = tuple(range(0x10000))
+    MAX_COUNT: ClassVar[int] = MAX_SERVO_REGS
+
+
+@dataclass(frozen=True, slots=True)
+class RegisterWrite:
+    """Host -> IMAX 0x1201: write ``values`` to channel 0 (DP), 1 (PA) or 2 (DPF0..DPFF).
+
+    Layout: header, StartAddress u16, Count u16, values u16.
+    """
+
+    LAYOUT: ClassVar[struct.Struct] = REG_HEAD
+    CONFIRM: ClassVar[int] = CONFIRM_MAIN
+    FUNCTION: ClassVar[int] = F_WRITE
+    CHANNELS: ClassVar[tuple[int, ...]] = (CHANNEL_DP, CHANNEL_PA, CHANNEL_DPF)
+    MAX_COUNT: ClassVar[int] = 256
+
+    channel: int
+    start: int
+    values: tuple[int, ...]
+    who_accept: int = WHO_ALL
+    who_reply: int = WHO_ALL
+
+    def __post_init__(self) -> None:
+        if self.channel not in self.CHANNELS:
+            raise ProtocolError(
+                f"{type(self).__name__}: channel {self.channel}, allowed {self.CHANNELS[:3]}"
+            )
+        for name in ("start", "who_accept", "who_reply"):
+            _check_u16(getattr(self, name), name)
+        object.__setattr__(self, "values", u16_tuple(self.values, type(self).__name__))
+        if not 1 <= len(self.values) <= self.MAX_COUNT:
+            raise ProtocolError(
+                f"{type(self).__name__}: {len(self.values)} values, allowed 1..{self.MAX_COUNT}"
+            )
+
+    @property
+    def function(self) -> int:
+        return self.FUNCTION
+
+    @property
+    def size(self) -> int:
+        return HEADER.size + REG_HEAD.size + 2 * len(self.values)
+
+    def encode(self) -> bytes:
+        n = len(self.values)
+        return struct.pack(
+            f">6H2H{n}H",
+            self.CONFIRM,
+            PASSCODE,
+            self.FUNCTION,
+            self.channel,
+            self.who_accept,
+            self.who_reply,
+            self.start,
+            n,
+            *self.values,
+        )
+
+    @classmethod
+    def decode_parts(cls, h: Header, data: bytes):
+        start, count, values = _reg_unpack(data)
+        if count != len(values):
+            raise ProtocolError(
+                f"{cls.__name__}: Count says {count} registers, the datagram carries {len(values)}"
+            )
+        return cls(h.channel, start, values, h.who_accept, h.who_reply)
+
+
+@dataclass(frozen=True, slots=True)
+class ServoWrite(RegisterWrite):
+    """Host -> IMAX 0x2201 (ConfirmCode 0x33CC): write at most 6 parameters of servo
+    ``channel`` (servo id) (2.2.2.14)."""
+
+    CONFIRM: ClassVar[int] = CONFIRM_SERVO
+    FUNCTION: ClassVar[int] = F_SERVO_WRITE
+    CHANNELS: ClassVar[tuple[int, ...]] = tuple(range(0x10000))
+    MAX_COUNT: ClassVar[int] = MAX_SERVO_REGS
+
+
+@dataclass(frozen=True, slots=True)
+class RegisterReply:
+    """IMAX -> host 0x110x (read) / 0x120x (write) reply, x = :class:`ReplyStatus`.
+
+    Layout: header (channel, or error code when x != 2), StartAddress u16, Count u16,
+    Count x u16 (the values read / written).
+    """
+
+    LAYOUT: ClassVar[struct.Struct] = REG_HEAD
+    CONFIRM: ClassVar[int] = CONFIRM_MAIN
+    BASES: ClassVar[tuple[int, int]] = (F_READ, F_WRITE)
+
+    function: int
+    channel: int
+    start: int
+    values: tuple[int, ...]
+    who_accept: int = WHO_NONE
+    who_reply: int = WHO_NONE
+
+    def __post_init__(self) -> None:
+        if (self.function & 0xFFF0) | 1 not in self.BASES or self.function & 0xF not in (
+            2,
+            3,
+            4,
+            5,
+        ):
+            raise ProtocolError(f"{type(self).__name__}: function 0x{self.function:04X}")
+        for name in ("channel", "start", "who_accept", "who_reply"):
+            _check_u16(getattr(self, name), name)
+        object.__setattr__(self, "values", u16_tuple(self.values, type(self).__name__))
+        if len(self.values) > 256:
+            raise ProtocolError(f"{type(self).__name__}: {len(self.values)} values")
+
+    @property
+    def status(self) -> ReplyStatus:
+        return ReplyStatus(self.function & 0xF)
+
+    @property
+    def error_code(self) -> int | None:
+        """The controller's error code (channel field), ``None`` for an OK reply."""
+        return None if self.status == ReplyStatus.OK else self.channel
+
+    @property
+    def size(self) -> int:
+        return HEADER.size + REG_HEAD.size + 2 * len(self.values)
+
+    def encode(self) -> bytes:
+        n = len(self.values)
+        return struct.pack(
+            f">6H2H{n}H",
+            self.CONFIRM,
+            PASSCODE,
+            self.function,
+            self.channel,
+            self.who_accept,
+            self.who_reply,
+            self.start,
+            n,
+            *self.values,
+        )
+
+    @classmethod
+    def decode_parts(cls, h: Header, data: bytes):
+        start, count, values = _reg_unpack(data)
+        if count != len(values):
+            raise ProtocolError(
+                f"{cls.__name__}: Count says {count} registers, the datagram carries {len(values)}"
+            )
+        return cls(h.function, h.channel, start, values, h.who_accept, h.who_reply)
+
+
+@dataclass(frozen=True, slots=True)
+class ServoReply(RegisterReply):
+    """IMAX -> host 0x210x / 0x220x servo-parameter reply (ConfirmCode 0x33CC)."""
+
+    CONFIRM: ClassVar[int] = CONFIRM_SERVO
+    BASES: ClassVar[tuple[int, int]] = (F_SERVO_READ, F_SERVO_WRITE)
+
+
+# -- frames -----------------------------------------------------------------------------------
+@cache
+def _frame_struct(n_axes: int, relative: bool) -> struct.Struct:
+    # header, Frame u32, Time u32 / i32, n x i32 positions, PortOut u16, Extend u32
+    return struct.Struct(f">6HI{'i' if relative else 'I'}{n_axes}iHI")
+
+
+@cache
+def _vib_struct(n_axes: int, relative: bool) -> struct.Struct:
+    # header, Frame u32, Time, n x i32, PortOut u16, n x (period u16 0.125 ms, amplitude u16)
+    return struct.Struct(f">6HI{'i' if relative else 'I'}{n_axes}iH{2 * n_axes}H")
+
+
+def frame_size(n_axes: int) -> int:
+    """Bytes of a motion frame: 12 + 8 + 4 n + 2 + 4."""
+    return _frame_struct(n_axes, False).size
+
+
+@dataclass(frozen=True, slots=True)
+class MotionFrame:
+    """Host -> IMAX timed frame, 0x1301 (absolute ms since the first frame, u32) or 0x1401
+    (ms since the previous frame, i32) (2.2.2.5, 2.2.2.7).
+
+    ``positions``: 2..12 absolute motor positions, int32 pulses (0 = mechanical zero + lift
+    PA40/PA41). ``port_out``: Y01..Y12 effect outputs (ignored when PA9d = 1).
+    ``extend``: reserved u32.
+    """
+
+    absolute: bool
+    frame: int
+    time_ms: int
+    positions: tuple[int, ...]
+    port_out: int = 0
+    extend: int = 0
+    who_accept: int = WHO_ALL
+    who_reply: int = WHO_ALL
+
+    def __post_init__(self) -> None:
+        channel_of_axes(len(self.positions))
+        self.encode()
+
+    @property
+    def function(self) -> int:
+        return F_ABS if self.absolute else F_REL
+
+    @property
+    def n_axes(self) -> int:
+        return len(self.positions)
+
+    @property
+    def size(self) -> int:
+        return frame_size(len(self.positions))
+
+    def encode(self) -> bytes:
+        n = len(self.positions)
+        try:
+            return _frame_struct(n, not self.absolute).pack(
+                CONFIRM_MAIN,
+                PASSCODE,
+                self.function,
+                channel_of_axes(n),
+                self.who_accept,
+                self.who_reply,
+                self.frame,
+                self.time_ms,
+                *self.positions,
+                self.port_out,
+                self.extend,
+            )
+        except struct.error as exc:
+            raise ProtocolError(f"IMAX frame field out of range: {exc}") from None
+
+    @classmethod
+    def decode_parts(cls, h: Header, data: bytes) -> MotionFrame:
+        n = axes_of_channel(h.channel)
+        relative = h.function == F_REL
+        layout = _frame_struct(n, relative)
+        check_length(data, layout.size, f"{n}-axis frame 0x{h.function:04X}")
+        f = layout.unpack(data)
+        return cls(
+            not relative, f[6], f[7], f[8 : 8 + n], f[8 + n], f[9 + n], h.who_accept, h.who_reply
+        )
+
+
+@dataclass(frozen=True, slots=True)
+class MotionFrameReply:
+    """IMAX -> host 0x130x / 0x140x: the frame echoed, ``port`` = input states,
+    ``channel`` = axis channel (x = 2) or error code (x != 2) (2.2.2.6, 2.2.2.8)."""
+
+    status: ReplyStatus
+    absolute: bool
+    channel: int
+    frame: int
+    time_ms: int
+    positions: tuple[int, ...]
+    port: int = 0
+    extend: int = 0
+
+    def __post_init__(self) -> None:
+        channel_of_axes(len(self.positions))
+        self.encode()
+
+    @property
+    def function(self) -> int:
+        return (F_ABS if self.absolute else F_REL) - 1 + int(self.status)
+
+    @property
+    def size(self) -> int:
+        return frame_size(len(self.positions))
+
+    def encode(self) -> bytes:
+        n = len(self.positions)
+        try:
+            return _frame_struct(n, not self.absolute).pack(
+                CONFIRM_MAIN,
+                PASSCODE,
+                self.function,
+                self.channel,
+                WHO_NONE,
+                WHO_NONE,
+                self.frame,
+                self.time_ms,
+                *self.positions,
+                self.port,
+                self.extend,
+            )
+        except struct.error as exc:
+            raise ProtocolError(f"IMAX frame reply field out of range: {exc}") from None
+
+    @classmethod
+    def decode_parts(cls, h: Header, data: bytes) -> MotionFrameReply:
+        n, rest = divmod(len(data) - frame_size(0), 4)
+        if rest or not 2 <= n <= MAX_AXES:
+            raise ProtocolError(
+                f"frame reply 0x{h.function:04X}: length {len(data)} bytes is "
+                "not 26 + 4 n for 2..12 axes"
+            )
+        relative = (h.function & 0xFFF0) == 0x1400
+        f = _frame_struct(n, relative).unpack(data)
+        return cls(
+            ReplyStatus(h.function & 0xF),
+            not relative,
+            h.channel,
+            f[6],
+            f[7],
+            f[8 : 8 + n],
+            f[8 + n],
+            f[9 + n],
+        )
+
+
+@dataclass(frozen=True, slots=True)
+class VibrationFrame:
+    """Host -> IMAX 0x1801 (absolute time) / 0x1901 (relative time) frame with per-axis
+    vibration: ``vibration[i] = (period in 0.125 ms, amplitude in pulses)`` (2.2.2.9,
+    2.2.2.11)."""
+
+    absolute: bool
+    frame: int
+    time_ms: int
+    positions: tuple[int, ...]
+    port_out: int
+    vibration: tuple[tuple[int, int], ...]
+    who_accept: int = WHO_ALL
+    who_reply: int = WHO_ALL
+
+    def __post_init__(self) -> None:
+        channel_of_axes(len(self.positions))
+        if len(self.vibration) != len(self.positions):
+            raise ProtocolError(
+                f"{len(self.vibration)} vibration pairs for {len(self.positions)} axes"
+            )
+        self.encode()
+
+    @property
+    def function(self) -> int:
+        return F_VIB_ABS if self.absolute else F_VIB_REL
+
+    @property
+    def size(self) -> int:
+        return _vib_struct(len(self.positions), False).size
+
+    def encode(self) -> bytes:
+        n = len(self.positions)
+        try:
+            return _vib_struct(n, not self.absolute).pack(
+                CONFIRM_MAIN,
+                PASSCODE,
+                self.function,
+                channel_of_axes(n),
+                self.who_accept,
+                self.who_reply,
+                self.frame,
+                self.time_ms,
+                *self.positions,
+                self.port_out,
+                *(v for pair in self.vibration for v in pair),
+            )
+        except (struct.error, TypeError) as exc:
+            raise ProtocolError(f"IMAX vibration frame field out of range: {exc}") from None
+
+    @classmethod
+    def decode_parts(cls, h: Header, data: bytes) -> VibrationFrame:
+        n = axes_of_channel(h.channel)
+        relative = h.function == F_VIB_REL
+        layout = _vib_struct(n, relative)
+        check_length(data, layout.size, f"{n}-axis vibration frame 0x{h.function:04X}")
+        f = layout.unpack(data)
+        vib = f[9 + n :]
+        return cls(
+            not relative,
+            f[6],
+            f[7],
+            f[8 : 8 + n],
+            f[8 + n],
+            tuple(zip(vib[0::2], vib[1::2], strict=True)),
+            h.who_accept,
+            h.who_reply,
+        )
+
+
+@dataclass(frozen=True, slots=True)
+class VibrationFrameReply:
+    """IMAX -> host 0x180x / 0x190x: the vibration frame echoed (``port`` = inputs)."""
+
+    status: ReplyStatus
+    absolute: bool
+    channel: int
+    frame: int
+    time_ms: int
+    positions: tuple[int, ...]
+    port: int
+    vibration: tuple[tuple[int, int], ...]
+
+    def __post_init__(self) -> None:
+        channel_of_axes(len(self.positions))
+        if len(self.vibration) != len(self.positions):
+            raise ProtocolError("one vibration pair per axis")
+        self.encode()
+
+    @property
+    def function(self) -> int:
+        return (F_VIB_ABS if self.absolute else F_VIB_REL) - 1 + int(self.status)
+
+    @property
+    def size(self) -> int:
+        return _vib_struct(len(self.positions), False).size
+
+    def encode(self) -> bytes:
+        n = len(self.positions)
+        try:
+            return _vib_struct(n, not self.absolute).pack(
+                CONFIRM_MAIN,
+                PASSCODE,
+                self.function,
+                self.channel,
+                WHO_NONE,
+                WHO_NONE,
+                self.frame,
+                self.time_ms,
+                *self.positions,
+                self.port,
+                *(v for pair in self.vibration for v in pair),
+            )
+        except (struct.error, TypeError) as exc:
+            raise ProtocolError(f"IMAX vibration reply field out of range: {exc}") from None
+
+    @classmethod
+    def decode_parts(cls, h: Header, data: bytes) -> VibrationFrameReply:
+        n, rest = divmod(len(data) - _vib_struct(0, False).size, 8)
+        if rest or not 2 <= n <= MAX_AXES:
+            raise ProtocolError(
+                f"vibration reply 0x{h.function:04X}: length {len(data)} is "
+                "not 22 + 8 n for 2..12 axes"
+            )
+        relative = (h.function & 0xFFF0) == 0x1900
+        f = _vib_struct(n, relative).unpack(data)
+        vib = f[9 + n :]
+        return cls(
+            ReplyStatus(h.function & 0xF),
+            not relative,
+            h.channel,
+            f[6],
+            f[7],
+            f[8 : 8 + n],
+            f[8 + n],
+            tuple(zip(vib[0::2], vib[1::2], strict=True)),
+        )
+
+
+# -- status report ----------------------------------------------------------------------------
+STATUS_HEAD = struct.Struct(">3HHH")  # confirm, pass, function, control id, servo count
+
+
+@cache
+def _status_struct(n: int) -> struct.Struct:
+    return struct.Struct(f">3HHH{n}i{n}h{n}H3H")
+
+
+@dataclass(frozen=True, slots=True)
+class StatusReport:
+    """IMAX -> host 0x3101 (ConfirmCode 0x33CC), sent per PA1e / PA1f (2.2.2.15, 5.11).
+
+    Attributes
+    ----------
+    control_id : int
+        PA12 << 8 | PA13 (the last two bytes of the controller's IP).
+    positions : tuple[int, ...]
+        Servo positions (pulses, i32), one per servo.
+    torques : tuple[int, ...]
+        Servo torques (i16).
+    alarms : tuple[int, ...]
+        Servo alarm codes (u16).
+    control_alarm, outputs, inputs : int
+        Controller alarm code (the display's Err number), Y outputs, X inputs.
+    """
+
+    control_id: int
+    positions: tuple[int, ...]
+    torques: tuple[int, ...]
+    alarms: tuple[int, ...]
+    control_alarm: int = 0
+    outputs: int = 0
+    inputs: int = 0
+
+    def __post_init__(self) -> None:
+        n = len(self.positions)
+        if not 0 <= n <= MAX_AXES or len(self.torques) != n or len(self.alarms) != n:
+            raise ProtocolError(
+                "status report: one position, torque and alarm per servo (at most 12)"
+            )
+        self.encode()
+
+    @property
+    def size(self) -> int:
+        return _status_struct(len(self.positions)).size
+
+    def encode(self) -> bytes:
+        n = len(self.positions)
+        try:
+            return _status_struct(n).pack(
+                CONFIRM_SERVO,
+                PASSCODE,
+                F_STATUS,
+                self.control_id,
+                n,
+                *self.positions,
+                *self.torques,
+                *self.alarms,
+                self.control_alarm,
+                self.outputs,
+                self.inputs,
+            )
+        except struct.error as exc:
+            raise ProtocolError(f"status report field out of range: {exc}") from None
+
+    @classmethod
+    def decode_parts(cls, h: Header, data: bytes) -> StatusReport:
+        if len(data) < STATUS_HEAD.size:
+            raise ProtocolError(f"status report: length {len(data)} bytes, at least 10 needed")
+        n = STATUS_HEAD.unpack_from(data)[4]
+        if n > MAX_AXES:
+            raise ProtocolError(f"status report: {n} servos, at most 12")
+        layout = _status_struct(n)
+        check_length(data, layout.size, f"status report of {n} servos")
+        f = layout.unpack(data)
+        return cls(
+            f[3], f[5 : 5 + n], f[5 + n : 5 + 2 * n], f[5 + 2 * n : 5 + 3 * n], *f[5 + 3 * n :]
+        )
+
+
+ImaxMessage = (
+    RegisterRead
+    | RegisterWrite
+    | RegisterReply
+    | ServoRead
+    | ServoWrite
+    | ServoReply
+    | MotionFrame
+    | MotionFrameReply
+    | VibrationFrame
+    | VibrationFrameReply
+    | StatusReport
+)
+
+_DECODERS: dict[tuple[int, int], object] = {
+    (CONFIRM_MAIN, F_READ): RegisterRead.decode_parts,
+    (CONFIRM_MAIN, F_WRITE): RegisterWrite.decode_parts,
+    (CONFIRM_MAIN, F_ABS): MotionFrame.decode_parts,
+    (CONFIRM_MAIN, F_REL): MotionFrame.decode_parts,
+    (CONFIRM_MAIN, F_VIB_ABS): VibrationFrame.decode_parts,
+    (CONFIRM_MAIN, F_VIB_REL): VibrationFrame.decode_parts,
+    (CONFIRM_SERVO, F_SERVO_READ): ServoRead.decode_parts,
+    (CONFIRM_SERVO, F_SERVO_WRITE): ServoWrite.decode_parts,
+    (CONFIRM_SERVO, F_STATUS): StatusReport.decode_parts,
+}
+for _x in ReplyStatus:
+    _DECODERS[(CONFIRM_MAIN, F_READ - 1 + _x)] = RegisterReply.decode_parts
+    _DECODERS[(CONFIRM_MAIN, F_WRITE - 1 + _x)] = RegisterReply.decode_parts
+    _DECODERS[(CONFIRM_MAIN, F_ABS - 1 + _x)] = MotionFrameReply.decode_parts
+    _DECODERS[(CONFIRM_MAIN, F_REL - 1 + _x)] = MotionFrameReply.decode_parts
+    _DECODERS[(CONFIRM_MAIN, F_VIB_ABS - 1 + _x)] = VibrationFrameReply.decode_parts
+    _DECODERS[(CONFIRM_MAIN, F_VIB_REL - 1 + _x)] = VibrationFrameReply.decode_parts
+    _DECODERS[(CONFIRM_SERVO, F_SERVO_READ - 1 + _x)] = ServoReply.decode_parts
+    _DECODERS[(CONFIRM_SERVO, F_SERVO_WRITE - 1 + _x)] = ServoReply.decode_parts
+
+
+def decode(data: bytes) -> ImaxMessage:
+    """Decode one IMAX datagram (either direction) into its typed message.
+
+    Raises
+    ------
+    ProtocolError
+        Short datagram, confirm code not 0x55AA / 0x33CC (or the wrong one for the
+        function), pass code not 0, unknown function, wrong channel, length or padding.
+    """
+    if len(data) >= 6 and data[:2] == b"\x33\xcc" and data[4:6] == b"\x31\x01":
+        passcode, function = struct.unpack_from(">HH", data, 2)
+        h = Header(CONFIRM_SERVO, passcode, function, 0, 0, 0)
+        if h.passcode != PASSCODE:
+            raise ProtocolError(f"pass code 0x{h.passcode:04X}, expected 0x0000")
+    else:
+        h = decode_header(data)
+    decoder = _DECODERS.get((h.confirm, h.function))
+    if decoder is None:
+        raise ProtocolError(
+            f"unknown IMAX function code 0x{h.function:04X} with confirm code 0x{h.confirm:04X}"
+        )
+    try:
+        return decoder(h, data)  # type: ignore[operator]
+    except (struct.error, ValueError) as exc:
+        if isinstance(exc, ProtocolError):
+            raise
+        raise ProtocolError(f"function 0x{h.function:04X}: {exc}") from None

@@ -1,0 +1,207 @@
+"""Hooks the ``emulate`` / ``send`` / ``inspect`` verbs call for an SC-MBOX."""
+
+from __future__ import annotations
+
+import re
+from typing import Any, TextIO
+
+from ..._errors import ConfigError, ProtocolError
+from .._transport import Transport, TransportURL
+from .._udp_cli import describe, exchange, park, parse_bits, parse_value
+from .._udp_cli import transport_options as _transport_options
+from .._udp_common import HEADER, WHO_ALL, decode_header
+from ._controller import MboxController
+from ._emulator import MboxEmulator
+from ._messages import (
+    CHANNEL_CX,
+    CHANNEL_DX,
+    CHANNEL_FX,
+    CHANNEL_FXM,
+    F_ABS,
+    F_READ,
+    F_READ_ERR,
+    F_REL,
+    F_STATUS,
+    F_WRITE,
+    F_WRITE_ERR,
+    RegisterRead,
+    RegisterReadReply,
+    RegisterWrite,
+    decode,
+    frame_size,
+)
+from ._params import fn_name
+
+__all__ = [
+    "VERBS",
+    "emulator",
+    "inspect_decode",
+    "send_verb",
+    "split_stream",
+    "transport_options",
+]
+
+VERBS = ("estop", "reset", "home", "park", "outputs", "read", "write")
+_DX = re.compile(r"^(?:dn|dx)[ _]?([0-9a-f]{1,2})$", re.IGNORECASE)
+_CX = re.compile(r"^(?:cn|cx)[ _]?([0-7])$", re.IGNORECASE)
+
+
+def emulator(
+    controller: MboxController, host: str = "127.0.0.1", port: int = 0, **options: Any
+) -> MboxEmulator:
+    """An (unstarted) emulator of ``controller`` listening on ``host:port``."""
+    return MboxEmulator(controller, host, port, **options)
+
+
+def register(name: str, *, for_write: bool, save: bool = False) -> tuple[int, int, str]:
+    """``(channel, address, label)`` of a register name: ``Fn0C1``, ``Dn4B`` / ``DX4B``
+    (read only), ``CX0`` / ``Cn0`` (write only)."""
+    m = _DX.match(name.strip())
+    if m:
+        if for_write:
+            raise ConfigError(f"{name}: DX status registers are read-only")
+        a = int(m.group(1), 16)
+        return CHANNEL_DX, a, f"Dn{a:02X}"
+    m = _CX.match(name.strip())
+    if m:
+        if not for_write:
+            raise ConfigError(f"{name}: CX control registers cannot be read over UDP")
+        a = int(m.group(1))
+        return CHANNEL_CX, a, f"CX{a}"
+    fn = fn_name(name)
+    channel = (CHANNEL_FX if save else CHANNEL_FXM) if for_write else CHANNEL_FX
+    return channel, int(fn[2:], 16), fn
+
+
+def transport_options(controller: Any, url: TransportURL) -> dict:
+    """``open_transport`` options for this controller: pcap addresses from the config;
+    the MBOX accepts any source port."""
+    return _transport_options(controller, url, fixed_source_port=False)
+
+
+def send_verb(
+    controller: MboxController,
+    transport: Transport,
+    verb: str,
+    args: list[str],
+    *,
+    who: tuple[int, int] = (WHO_ALL, WHO_ALL),
+    save: bool = False,
+    out: TextIO,
+) -> int:
+    """Run one ``motioncue send`` verb; returns the exit status (0 ok, 1 error reply)."""
+    accept, reply_who = who
+
+    def write(channel: int, start: int, values: tuple[int, ...]) -> Any:
+        msg = RegisterWrite(channel, start, values, accept, reply_who)
+        return exchange(
+            transport,
+            msg.encode(),
+            decode,
+            lambda r: r.function in (F_WRITE + 1, F_WRITE_ERR),
+            reply_who != 0,
+            out,
+        )
+
+    def read(channel: int, start: int, count: int) -> Any:
+        msg = RegisterRead(channel, start, count, accept, reply_who)
+        return exchange(
+            transport,
+            msg.encode(),
+            decode,
+            lambda r: r.function in (F_READ + 1, F_READ_ERR),
+            reply_who != 0,
+            out,
+        )
+
+    def nargs(n: int) -> None:
+        if len(args) != n:
+            raise ConfigError(f"send {verb}: expected {n} argument(s), got {args!r}")
+
+    if verb == "estop":
+        nargs(1)
+        if args[0] not in ("on", "off"):
+            raise ConfigError(f"send estop {args[0]!r}: allowed on | off")
+        # manual 4.5.2: Fn090 = 1 through FXm (channel 0, not saved)
+        reply = write(CHANNEL_FXM, 0x090, (1 if args[0] == "on" else 0,))
+    elif verb == "reset":
+        nargs(0)
+        reply = write(CHANNEL_CX, 0, (0x0001,))  # RST: leave the fault state; SON = 0 re-homes
+    elif verb == "home":
+        nargs(0)
+        reply = write(CHANNEL_CX, 0, (0x0000,))  # manual 4.5.1: play control word 0 re-homes
+    elif verb == "outputs":
+        nargs(1)
+        bits = parse_bits(args[0], 24)
+        reply = write(CHANNEL_CX, 1, (bits & 0xFFF,))
+        if bits >> 12:
+            reply = write(CHANNEL_CX, 4, (bits >> 12,))
+    elif verb == "read":
+        if len(args) not in (1, 2):
+            raise ConfigError("send read REG [COUNT]")
+        channel, start, _label = register(args[0], for_write=False)
+        count = parse_value(args[1], "count") if len(args) == 2 else 1
+        reply = read(channel, start, count)
+        if isinstance(reply, RegisterReadReply):
+            for i, v in enumerate(reply.values):
+                name = f"Dn{start + i:02X}" if channel == CHANNEL_DX else f"Fn{start + i:03X}"
+                print(f"{name} = {v} (0x{v:04X})", file=out)
+    elif verb == "write":
+        if len(args) < 2:
+            raise ConfigError("send write REG VALUE...")
+        channel, start, _label = register(args[0], for_write=True, save=save)
+        values = tuple(parse_value(v) & 0xFFFF for v in args[1:])
+        reply = write(channel, start, values)
+    elif verb == "park":
+        nargs(0)
+        if getattr(transport, "request", None) is None:
+            raise ConfigError("send park needs a udp:// target: it reads the positions first")
+        reply = read(CHANNEL_DX, 0, 0x30)
+        if not isinstance(reply, RegisterReadReply):
+            return 1
+        dx = reply.values
+        addrs = (0x0C, 0x0E, 0x10, 0x28, 0x2A, 0x2C)[: controller.n_axes]
+        current = []
+        for a in addrs:
+            v = dx[a] | dx[a + 1] << 16
+            current.append(v - (1 << 32) if v & 0x80000000 else v)
+        park(controller, transport, current, out)
+        return 0
+    else:
+        raise ConfigError(f"send {verb!r}: allowed {', '.join(VERBS)}")
+    if reply is not None and reply.function in (F_READ_ERR, F_WRITE_ERR):
+        print(f"error reply: code {reply.error_code}", file=out)
+        return 1
+    return 0
+
+
+def inspect_decode(data: bytes) -> str:
+    """One line describing an MBOX datagram (raises :class:`ProtocolError`)."""
+    return describe(decode(data))
+
+
+def split_stream(blob: bytes) -> list[bytes]:
+    """Cut a raw ``file:`` capture (datagrams back to back) into datagrams."""
+    out = []
+    off = 0
+    while off < len(blob):
+        h = decode_header(blob[off : off + HEADER.size])
+        f = h.function
+        if f & 0xFFF0 in (F_ABS & 0xFFF0, F_REL & 0xFFF0):
+            if h.channel not in (0, 1):
+                raise ProtocolError(f"byte {off}: frame channel {h.channel}")
+            size = frame_size(3 if h.channel == 0 else 6)
+        elif f in (F_READ_ERR, F_WRITE_ERR):
+            size = HEADER.size + 6
+        elif f in (F_STATUS, F_READ, F_READ + 1, F_WRITE, F_WRITE + 1):
+            if len(blob) < off + HEADER.size + 4:
+                raise ProtocolError(f"byte {off}: truncated register message")
+            count = int.from_bytes(blob[off + 14 : off + 16], "big")
+            size = HEADER.size + 4 + 2 * count
+        else:
+            raise ProtocolError(f"byte {off}: unknown MBOX function 0x{f:04X}")
+        if off + size > len(blob):
+            raise ProtocolError(f"byte {off}: message of {size} bytes truncated")
+        out.append(blob[off : off + size])
+        off += size
+    return out

@@ -1,0 +1,398 @@
+"""An SC-MBOX emulator: decodes and validates every datagram, keeps the manual's state,
+replies as the manual says and records what the platform was told to do.
+
+Behaviour modelled (manual section in brackets):
+
+* frames 0x1301/0x1401 in the configured axis mode (4.2.6-4.2.9): played through a FIFO of
+  ``buffer_frames`` (Fn01C = 1) or latest-frame-only (Fn01C = 0); reply 0x1x02, buffer full
+  0x1x03 (frame dropped), shorter than required 0x1x04; time 0 / unchanged = jog over Fn013,
+  negative / earlier = rewind over Fn014, delta above Fn015 = fast-forward over Fn016 (5.3);
+  playback speeds up by Fn012/1000 while frames are queued (5.3.3).
+* outputs and DACs carried in frames when Fn010 / Fn011 = 1, else from CX1-CX4 (5.3.1-2).
+* register read 0x1101 of DX / FX and write 0x1201 of FXm / FX / CX with replies or error
+  replies (4.2.4-4.2.5, 4.2.10).
+* e-stop by Fn090 = 1 (4.5.2, 5.20): stop per Fn091 within Fn017; frames are ignored while
+  it is on (counted in ``ignored_frames``); release by Fn090 = 0 moves on within Fn018.
+* CX0 (4.2.10): RST (bit 0) leaves the fault state; SON (bit 1) = 0 re-homes.
+* status reports 0x1001 with DX[Fn042 : Fn042 + Fn043] per Fn040 / Fn041 (4.2.3, 5.6).
+
+Decisions where the manual says nothing: a frame of the other axis mode is answered
+0x1x04 (not the data this box needs) and not played; error codes 1 = address not implemented,
+2 = value out of range; frames received while homing, faulted or in e-stop are answered
+0x1x02 and not played (the manual defines no reply for that case); DX 0x3E (state ID)
+reads 0 homing, 1 ready, 2 e-stop, 3 fault.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+from ..._errors import ProtocolError
+from .._udp_common import WHO_NONE, decode_header
+from .._udp_emulator import Playback, Trace, UdpEmulatorBase, Violation, who_matches
+from ._controller import MboxController
+from ._messages import (
+    CHANNEL_CX,
+    CHANNEL_DX,
+    F_ABS,
+    F_REL,
+    FrameStatus,
+    MotionFrame,
+    MotionFrameReply,
+    RegisterError,
+    RegisterRead,
+    RegisterReadReply,
+    RegisterWrite,
+    RegisterWriteReply,
+    StatusReport,
+    decode,
+    frame_size,
+)
+from ._params import FN_SPEC
+
+__all__ = ["MboxEmulator"]
+
+ERR_ADDRESS = 1
+ERR_VALUE = 2
+
+STATE_HOMING, STATE_READY, STATE_ESTOP, STATE_FAULT = 0, 1, 2, 3
+_FN_BY_ADDRESS = {int(name[2:], 16): name for name in FN_SPEC}
+# DX addresses of actual / commanded / UDP positions, low word first (6.1.1, 6.1.11)
+_DX_ACTUAL = (0x06, 0x08, 0x0A, 0x21, 0x24, 0x26)
+_DX_COMMAND = (0x0C, 0x0E, 0x10, 0x28, 0x2A, 0x2C)
+_DX_UDP = (0x6A, 0x6C, 0x6E, 0x70, 0x72, 0x74)
+
+
+def _s16(v: int) -> int:
+    return v - 0x10000 if v & 0x8000 else v
+
+
+class MboxEmulator(UdpEmulatorBase):
+    """Emulated SC-MBOX.
+
+    Parameters
+    ----------
+    controller : MboxController
+        The description (axis mode, parameters, speed limit, buffer depth).
+    host, port : str, int
+        Where to listen when started (port 0 = any free port; see :attr:`port`).
+    homing_time_s : float
+        How long initial positioning takes.
+    start_homed : bool
+        ``True``: ready at once; ``False``: homing first, as after power-up.
+    """
+
+    def __init__(
+        self,
+        controller: MboxController,
+        host: str = "127.0.0.1",
+        port: int = 0,
+        *,
+        homing_time_s: float = 1.0,
+        start_homed: bool = True,
+    ) -> None:
+        super().__init__(host, port)
+        self.controller = controller
+        self.n_axes = controller.n_axes
+        self.params: dict[str, int] = dict(controller.parameters)
+        self.cx = [0x0002, 0, 0, 0, 0, 0, 0, 0]
+        self.homing_time_s = float(homing_time_s)
+        self.state = STATE_READY if start_homed else STATE_HOMING
+        self._homing_until: float | None = None if start_homed else -1.0
+        self.fault_code = 0
+        self.ignored_frames = 0
+        self.refused_frames = 0
+        self.frame_dout = 0
+        self.frame_dacs = (0, 0)
+        self.frame_ext = 0
+        self.inputs = 0
+        self._last_time_ms: int | None = None
+        self._next_duration_s: float | None = None
+        self._next_report: float | None = None
+        self._violations: list[Violation] = []
+        stroke = controller.stroke_pulses
+        self.playback = Playback(
+            self.n_axes,
+            controller.buffer_frames,
+            bool(self.params["Fn01C"]),
+            controller.max_speed_pulses_s,
+            stroke,
+        )
+        self._set_rate()
+
+    # -- what tests look at -------------------------------------------------------------
+    @property
+    def trace(self) -> Trace:
+        with self.lock:
+            return self.playback.trace()
+
+    @property
+    def violations(self) -> list[Violation]:
+        with self.lock:
+            return [*self._violations, *self.playback.violations]
+
+    @property
+    def estop(self) -> bool:
+        return self.state == STATE_ESTOP
+
+    def inject_fault(self, code: int) -> None:
+        """Put the box in the fault state (e.g. 2520 over-speed); RST in CX0 clears it."""
+        with self.lock:
+            self.fault_code = code
+            self.state = STATE_FAULT
+
+    # -- datagrams ----------------------------------------------------------------------
+    def handle(self, data: bytes, now_s: float) -> list[bytes]:
+        """Process one datagram at wall time ``now_s``; return the reply datagrams."""
+        self._tick(now_s)
+        try:
+            h = decode_header(data)
+        except ProtocolError as exc:
+            return self._malformed(str(exc))
+        node = self.controller.node
+        if not who_matches(h.who_accept, node):
+            return []
+        reply = who_matches(h.who_reply, node)
+        if h.function in (F_ABS, F_REL) and h.channel == (0 if self.n_axes == 3 else 1):
+            need = frame_size(self.n_axes)
+            if len(data) < need:
+                self._malformed(f"frame 0x{h.function:04X} of {len(data)} bytes, {need} needed")
+                if not reply:
+                    return []
+                padded = data + bytes(need - len(data))
+                frame = MotionFrame.decode_parts(h, padded)
+                return [MotionFrameReply(FrameStatus.SHORT_FRAME, frame).encode()]
+        try:
+            msg = decode(data)
+        except ProtocolError as exc:
+            return self._malformed(str(exc))
+        out: Any
+        if isinstance(msg, MotionFrame):
+            out = self._frame(msg)
+        elif isinstance(msg, RegisterRead):
+            out = self._read(msg)
+        elif isinstance(msg, RegisterWrite):
+            out = self._write(msg, now_s)
+        else:
+            return self._malformed(f"{type(msg).__name__} is sent by an MBOX, not to it")
+        return [out.encode()] if reply and out is not None else []
+
+    def _malformed(self, detail: str) -> list[bytes]:
+        self._violations.append(Violation(self.playback.t_end, "malformed", None, detail))
+        return []
+
+    def _frame(self, msg: MotionFrame) -> MotionFrameReply:
+        if msg.n_axes != self.n_axes:
+            # a frame of the other axis mode: not enough (or not the) data for this box
+            self._malformed(
+                f"frame {msg.line}: {msg.n_axes}-axis frame (channel "
+                f"{0 if msg.n_axes == 3 else 1}) to a box in {self.n_axes}-axis mode"
+            )
+            return MotionFrameReply(FrameStatus.SHORT_FRAME, msg)
+        pb = self.playback
+        if self.state != STATE_READY:
+            self.ignored_frames += 1
+            return MotionFrameReply(FrameStatus.OK, msg)
+        if pb.fifo and pb.full:
+            self.refused_frames += 1
+            self._violations.append(
+                Violation(
+                    pb.t_end,
+                    "buffer",
+                    None,
+                    f"frame {msg.line} refused: buffer full ({pb.depth} frames)",
+                )
+            )
+            return MotionFrameReply(FrameStatus.BUFFER_FULL, msg)
+        p = self.params
+        if msg.absolute:
+            step = None if self._last_time_ms is None else msg.time_ms - self._last_time_ms
+            self._last_time_ms = msg.time_ms
+        else:
+            step = msg.time_ms
+        if self._next_duration_s is not None:
+            duration = self._next_duration_s
+            self._next_duration_s = None
+        elif step is None or step == 0:
+            duration = p["Fn013"] / 1000.0  # jog
+        elif step < 0:
+            duration = p["Fn014"] / 10.0  # rewind
+        elif p["Fn015"] > 0 and step > p["Fn015"] * 100:
+            duration = p["Fn016"] / 10.0  # fast-forward
+        else:
+            duration = step / 1000.0
+        pb.play(msg.line, duration, msg.positions)
+        if p["Fn010"]:
+            self.frame_dout, self.frame_ext = msg.base_dout, msg.ext_dout
+        if p["Fn011"]:
+            self.frame_dacs = (msg.dac1, msg.dac2)
+        return MotionFrameReply(FrameStatus.OK, msg)
+
+    def _read(self, msg: RegisterRead) -> RegisterReadReply | RegisterError:
+        if msg.channel == CHANNEL_DX:
+            if msg.start + msg.count > 256:
+                return RegisterError(0x1103, msg.channel, msg.start, msg.count, ERR_ADDRESS)
+            dx = self.dx()
+            return RegisterReadReply(
+                msg.channel, msg.start, tuple(dx[msg.start : msg.start + msg.count])
+            )
+        if msg.start + msg.count > 0x200:  # Fn000 .. Fn1FF
+            return RegisterError(0x1103, msg.channel, msg.start, msg.count, ERR_ADDRESS)
+        values = []
+        for a in range(msg.start, msg.start + msg.count):
+            name = _FN_BY_ADDRESS.get(a)  # parameters this package does not model read 0
+            values.append(0 if name is None else self.params[name] & 0xFFFF)
+        return RegisterReadReply(msg.channel, msg.start, tuple(values))
+
+    def _write(self, msg: RegisterWrite, now_s: float) -> RegisterWriteReply | RegisterError:
+        def err(code: int) -> RegisterError:
+            return RegisterError(0x1203, msg.channel, msg.start, len(msg.values), code)
+
+        if msg.channel == CHANNEL_CX:
+            if msg.start + len(msg.values) > 5:
+                return err(ERR_ADDRESS)
+            for i, v in enumerate(msg.values):
+                self._write_cx(msg.start + i, v, now_s)
+            return RegisterWriteReply(msg.channel, msg.start, msg.values)
+        changes = {}
+        for i, v in enumerate(msg.values):
+            name = _FN_BY_ADDRESS.get(msg.start + i)
+            if name is None:
+                return err(ERR_ADDRESS)
+            lo, hi, _, _ = FN_SPEC[name]
+            value = _s16(v) if lo < 0 else v
+            if not lo <= value <= hi:
+                return err(ERR_VALUE)
+            changes[name] = value
+        for name, value in changes.items():
+            old = self.params[name]
+            self.params[name] = value
+            if name == "Fn090" and value != old:
+                self._set_estop(value == 1)
+            elif name == "Fn01C":
+                self.playback.fifo = bool(value)
+            elif name == "Fn012":
+                self._set_rate()
+        return RegisterWriteReply(msg.channel, msg.start, msg.values)
+
+    def _write_cx(self, index: int, value: int, now_s: float) -> None:
+        self.cx[index] = value
+        if index == 0:
+            if value & 0x1 and self.state == STATE_FAULT:
+                self.fault_code = 0
+                self.state = STATE_READY
+            if not value & 0x2 and self.state != STATE_HOMING:
+                self._start_homing(now_s)
+
+    # -- state --------------------------------------------------------------------------
+    def _set_rate(self) -> None:
+        fn012 = self.params["Fn012"]
+        self.playback.fast_rate = fn012 / 1000.0 if fn012 >= 1000 else 1.0
+
+    def _set_estop(self, on: bool) -> None:
+        pb = self.playback
+        p = self.params
+        if on:
+            if self.state == STATE_HOMING:
+                self.params["Fn090"] = 0  # cleared during initial positioning (5.20)
+                return
+            self.state = STATE_ESTOP
+            method = p["Fn091"]
+            hold = list(self._position_now())
+            if method == 0:
+                hold = [0] * self.n_axes
+            elif method == 2:
+                mean = round(sum(hold[:3]) / 3)
+                hold[:3] = [mean] * 3
+            elif method < 0:
+                hold[:3] = [hold[-method - 1]] * 3
+            pb.jump(p["Fn017"] / 10.0, hold)
+        elif self.state == STATE_ESTOP:
+            self.state = STATE_READY
+            self._next_duration_s = p["Fn018"] / 10.0
+            self._last_time_ms = None
+
+    def _start_homing(self, now_s: float) -> None:
+        self.state = STATE_HOMING
+        self._homing_until = now_s + self.homing_time_s
+        self.params["Fn090"] = 0
+        self.playback.jump(self.homing_time_s, [0] * self.n_axes)
+        self.playback.restart()
+        self._last_time_ms = None
+        self._next_duration_s = None
+
+    def _tick(self, now_s: float) -> None:
+        self.playback.advance(now_s)
+        if self.state == STATE_HOMING:
+            if self._homing_until is not None and self._homing_until < 0:
+                self._homing_until = now_s + self.homing_time_s
+            if self._homing_until is not None and now_s >= self._homing_until:
+                self.state = STATE_READY
+                self._homing_until = None
+
+    def _position_now(self) -> tuple[int, ...]:
+        """Commanded position at the playback clock (linear between frames)."""
+        pb = self.playback
+        if not pb.rows_t:
+            return (0,) * self.n_axes
+        t = pb.play_t
+        rows_t = pb.rows_t
+        k = len(rows_t) - 1
+        while k > 0 and rows_t[k - 1] >= t:
+            k -= 1
+        if k == 0 or rows_t[k] <= t:
+            return pb.rows_p[k]
+        t0, t1 = rows_t[k - 1], rows_t[k]
+        w = (t - t0) / (t1 - t0) if t1 > t0 else 1.0
+        return tuple(
+            round(a + (b - a) * w) for a, b in zip(pb.rows_p[k - 1], pb.rows_p[k], strict=True)
+        )
+
+    def dx(self) -> list[int]:
+        """The 256 DX status words as the box would report them."""
+        dx = [0] * 256
+        now = self._position_now()
+        cmd = self.playback.position
+        for i in range(self.n_axes):
+            for table, value in ((_DX_ACTUAL, now[i]), (_DX_COMMAND, cmd[i]), (_DX_UDP, cmd[i])):
+                a = table[i]
+                dx[a], dx[a + 1] = value & 0xFFFF, (value >> 16) & 0xFFFF
+        dx[0x38] = dx[0x3B] = self.fault_code & 0xFFFF
+        dx[0x3E] = self.state
+        dx[0x40] = self.cx[0]
+        dx[0x4A] = dx[0x4B] = self.playback.depth & 0xFFFF
+        dx[0x5E] = self.inputs & 0xFF
+        dx[0x5F] = (self.inputs ^ self.params["Fn09D"]) & 0xFF
+        dacs = self.frame_dacs if self.params["Fn011"] else (self.cx[2], self.cx[3])
+        dx[0x60], dx[0x61] = dacs
+        dx[0x64] = self.frame_dout if self.params["Fn010"] else self.cx[1]
+        dx[0x66] = dx[0x64] ^ self.params["Fn08D"]
+        return dx
+
+    @property
+    def outputs(self) -> tuple[int, int, tuple[int, int]]:
+        """``(dout, ext_dout, (dac1, dac2))`` currently driven."""
+        p = self.params
+        dout = self.frame_dout if p["Fn010"] else self.cx[1]
+        ext = self.frame_ext if p["Fn010"] else self.cx[4]
+        dacs = self.frame_dacs if p["Fn011"] else (self.cx[2], self.cx[3])
+        return dout, ext, dacs
+
+    def periodic(self, now_s: float) -> list[bytes]:
+        """Status reports due at ``now_s`` (Fn040 mode, Fn041 interval)."""
+        p = self.params
+        mode, every = p["Fn040"], p["Fn041"]
+        if mode == 0 or every == 0 or (mode == 2 and self.state != STATE_FAULT):
+            self._next_report = None
+            return []
+        interval = every if every > 0 else -every / 1000.0
+        if self._next_report is None:
+            self._next_report = now_s
+        if now_s < self._next_report:
+            return []
+        self._next_report = now_s + interval
+        self._tick(now_s)
+        start, count = p["Fn042"], max(1, p["Fn043"])
+        dx = self.dx()
+        words = tuple(dx[start : start + count]) or (0,)
+        return [StatusReport(CHANNEL_DX, start, words, WHO_NONE, WHO_NONE).encode()]
