@@ -125,3 +125,44 @@ def test_cli_table_and_error(capsys):
     assert "250.0 mm/s" in out and "4000 mm/s^2" in out and "[-10000, 270000]" in out
     assert main(["limits", "--platform", "stewart6-linear"]) == 2
     assert "max-speed" in capsys.readouterr().err
+
+
+def test_bundled_controllers(hexapod):
+    from motioncue.output import load_controller
+
+    imax = load_controller("imax6")
+    lim = ActuatorLimits.from_platform(hexapod, imax)
+    # imax6.toml: PA07 = 3000 rpm, PAa x PAb = 2 x 1500 = 3000 rpm, 5 mm lead
+    np.testing.assert_allclose(lim.v_max, 0.25)
+    np.testing.assert_allclose(lim.a_max, 125.0)
+    mbox = load_controller("mbox6")
+    lim = ActuatorLimits.from_platform(hexapod, mbox, a_max=4.0)
+    np.testing.assert_allclose(lim.v_max, mbox.max_motor_speed_rpm / 60 * 0.005)
+    seat = motioncue.load_platform("seat3")
+    with pytest.raises(ConfigError, match="max-speed"):
+        ActuatorLimits.from_platform(seat, load_controller("easysmc"))
+    lim = ActuatorLimits.from_platform(seat, load_controller("easysmc"), v_max=0.2, a_max=3.0)
+    np.testing.assert_allclose(lim.v_max, 0.2)
+
+
+def test_platform_carried_limits_take_part():
+    p = motioncue.load_platform("seat3")
+    fake = SimpleNamespace(
+        **{k: getattr(p, k) for k in ("n_actuators", "actuator_kinds", "actuator_names",
+                                       "q_min", "q_max", "drives", "name")},
+        v_max=np.array([0.1, 0.2, 0.3]), a_max=2.0,
+    )  # fmt: skip
+    lim = ActuatorLimits.from_platform(fake, v_max=0.15)
+    np.testing.assert_allclose(lim.v_max, [0.1, 0.15, 0.15])
+    np.testing.assert_allclose(lim.a_max, 2.0)
+    assert "platform config" in lim.sources["v_max"]
+
+
+def test_cli_with_a_bundled_controller(capsys):
+    rc = main(["limits", "--platform", "stewart6-linear", "--controller", "imax6", "--json"])
+    assert rc == 0
+    data = json.loads(capsys.readouterr().out)
+    assert len(data["actuators"]) == 6
+    a = data["actuators"][0]
+    assert a["max_speed_pulses_s"] == pytest.approx(0.25 * 2e6)
+    assert a["stroke_pulses"] == [-10000, 270000]

@@ -31,7 +31,12 @@ Acceleration (``a_max``)
     limit should be given as an override.
 
 Jerk (``j_max``)
-    Only from the override (no controller parameter defines it).
+    Only from the override or the platform (no controller parameter defines it).
+
+Platform
+    A platform description that carries ``v_max`` / ``a_max`` / ``j_max`` (SI, per actuator)
+    takes part in the minimum like any other source (the bundled platform configs do not
+    carry them yet).
 
 A quantity with no source raises :class:`~motioncue.ConfigError` naming what to give.
 """
@@ -165,6 +170,16 @@ def limits_from_platform(
                 f"controller kind {kind!r} is unknown; allowed: imax | mbox | easysmc"
             )
 
+    # a platform description may carry its own actuator limits (SI arrays v_max / a_max /
+    # j_max), e.g. the servo's rated speed; they take part like any other source
+    for attr, cands in (("v_max", v_cands), ("a_max", a_cands)):
+        own = getattr(platform, attr, None)
+        if own is not None:
+            arr = _per_axis(f"platform {attr}", own, n)
+            if arr is not None:
+                cands.append((arr, "platform config"))
+    if j_max is None and getattr(platform, "j_max", None) is not None:
+        j_max = platform.j_max
     ov_v = _per_axis("v_max", v_max, n)
     ov_a = _per_axis("a_max", a_max, n)
     if ov_v is not None:
