@@ -280,3 +280,10 @@ def test_wrong_target_length_is_refused():
     with pytest.raises(ConfigError, match="expected 2"):
         rt.step(state, [0.1])
     assert state.n_frames == 0
+
+
+def test_scalar_initial_speed_is_broadcast():
+    lim = ActuatorLimits([0.0, 0.0], [0.3, 0.3], [0.4, 0.4], [6.0, 6.0])
+    rt = RealtimeLimiter(lim, 0.01)
+    assert rt.initial_state([0.1, 0.1], 0).v == [0.0, 0.0]
+    assert rt.initial_state([0.1, 0.1], 0.1).v == [0.1, 0.1]

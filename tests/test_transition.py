@@ -159,3 +159,12 @@ def test_random_transitions_respect_every_limit_when_sampled(name, seed, rate):
     chk = check_trajectory(padded, dt, lim, history=np.stack([tr.q[0], tr.q[0]]))
     assert chk.ok, chk
     np.testing.assert_allclose(tr.poses[-1], ends[1], atol=1e-12)
+
+
+def test_unsupported_pose_components_are_zeroed():
+    p = motioncue.load_platform("seat3")  # heave, roll, pitch only
+    lim = ActuatorLimits(p.q_min, p.q_max, np.full(3, 0.2), np.full(3, 3.0))
+    tr = transition(p, np.zeros(6), [0.05, 0.05, 0.01, 0.05, 0.0, 0.3], lim, 100.0)
+    assert np.all(tr.poses[:, ~p.dof_mask] == 0.0)
+    np.testing.assert_allclose(tr.q, p.inverse(tr.poses), atol=1e-12)
+    assert tr.check.ok

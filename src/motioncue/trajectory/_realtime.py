@@ -227,6 +227,8 @@ class RealtimeLimiter:
     def initial_state(self, q0: Any, v0: Any = None) -> LimiterState:
         """State for a stream whose last sent frame is ``q0`` (n,) moving at ``v0`` (n,).
 
+        ``v0`` may be a scalar (same speed on every axis; default 0, at rest).
+
         Raises
         ------
         LimitError
@@ -236,6 +238,8 @@ class RealtimeLimiter:
         n = self.n_actuators
         q = np.asarray(q0, dtype=float).reshape(-1)
         v = np.zeros(n) if v0 is None else np.asarray(v0, dtype=float).reshape(-1)
+        if v.size == 1:
+            v = np.full(n, float(v[0]))
         if q.shape != (n,) or v.shape != (n,):
             raise ConfigError(f"initial state needs {n} positions and speeds")
         if not self.is_admissible(q, v):

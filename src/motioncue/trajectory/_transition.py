@@ -215,7 +215,10 @@ def transition(
 def transition_through(
     platform: Any, keyframes: Any, limits: ActuatorLimits, rate_hz: float, *, n_grid: int = 100
 ) -> Transition:
-    """Fastest move through keyframe poses (K, 6), K >= 2, timing free, rest at both ends."""
+    """Fastest move through keyframe poses (K, 6), K >= 2, timing free, rest at both ends.
+
+    Pose components the platform cannot produce (``~platform.dof_mask``) are set to zero.
+    """
     poses = np.asarray(keyframes, dtype=float)
     if poses.ndim != 2 or poses.shape[1] != 6 or poses.shape[0] < 2:
         raise ConfigError(f"keyframes have shape {poses.shape}; expected (K >= 2, 6)")
@@ -227,6 +230,9 @@ def transition_through(
         )
     if poses.shape[0] > 2 and np.any(np.all(np.diff(poses, axis=0) == 0, axis=1)):
         raise ConfigError("keyframes must differ from their neighbours")
+    # components the machine cannot produce are held at zero (as the inverse kinematics
+    # does), so that the poses returned are the poses the frames produce
+    poses = np.where(np.asarray(platform.dof_mask, dtype=bool), poses, 0.0)
     pose_of_s = _pose_path(poses)
 
     def q_of_s(s: np.ndarray) -> np.ndarray:
