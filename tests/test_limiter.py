@@ -287,3 +287,21 @@ def test_scalar_initial_speed_is_broadcast():
     rt = RealtimeLimiter(lim, 0.01)
     assert rt.initial_state([0.1, 0.1], 0).v == [0.0, 0.0]
     assert rt.initial_state([0.1, 0.1], 0.1).v == [0.1, 0.1]
+
+
+def test_check_trajectory_measures_violations_by_the_definitions():
+    """The checker itself can fail: closed-form differences of a hand-made sequence."""
+    lim = ActuatorLimits([0.0], [1.0], [1.0], [10.0], [1000.0])
+    dt = 0.1
+    q = np.array([[0.0], [0.0], [0.2], [0.2], [1.05]])
+    chk = check_trajectory(q, dt, lim, relative=False)
+    # speeds 0, 2, 0, 8.5 -> 7.5 over; accels 20, -20, 85 -> 75 over; stroke 0.05 over
+    assert chk.speed == pytest.approx(7.5)
+    assert chk.accel == pytest.approx(75.0)
+    # jerks (q3-3q2+3q1-q0)/dt^3: (0.2-0.6+0)/1e-3 = -400, (1.05-0.6+0.6-0)/1e-3 = 1050
+    assert chk.jerk == pytest.approx(50.0)
+    assert chk.stroke == pytest.approx(0.05)
+    assert not chk.ok
+    rel = check_trajectory(q, dt, lim)
+    assert rel.speed == pytest.approx(7.5) and rel.accel == pytest.approx(7.5)
+    assert check_trajectory(q[:2], dt, lim).ok
