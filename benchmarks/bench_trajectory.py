@@ -118,7 +118,8 @@ def main() -> int:
     print(f"  status {res.status}, max deviation {res.max_deviation * 1e3:.2f} mm at frame "
           f"{res.where_index[0]} actuator {res.where_index[1] + 1}, windows {res.n_windows}, "
           f"objective {res.objective:.4g} vs real-time limiter {res.objective_realtime:.4g}, "
-          f"check ok {res.check.ok}")  # fmt: skip
+          f"check ok {res.check.ok}, repaired frames {res.n_repaired}, "
+          f"solver failures {res.n_solver_failures}")  # fmt: skip
     report(f"offline ride optimisation, {seconds / 60:.0f} min, 100 Hz, 6 actuators", samples,
            20.0, "s", 1.0)  # fmt: skip
 

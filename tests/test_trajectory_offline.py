@@ -57,6 +57,7 @@ def test_infeasible_ride_is_feasible_and_no_worse_than_the_realtime_limiter(seed
     assert res.status == "optimised"
     assert res.check.ok, res.check
     assert res.n_repaired == 0
+    assert res.n_solver_failures == 0
     # same initial state as limit_ride's default: at rest at the first frame
     rt = RealtimeLimiter(lim, DT)
     q_rt = rt.run(rt.initial_state(q[0]), q)
@@ -124,6 +125,7 @@ def test_long_window_is_solved_in_chunks_close_to_one_piece():
     for r in (one, many):
         assert r.check.ok
         assert r.n_repaired == 0
+        assert r.n_solver_failures == 0
     assert many.objective <= one.objective * 1.02
     assert many.objective <= many.objective_realtime
 
