@@ -1,0 +1,137 @@
+"""Benchmarks of motioncue.trajectory: the figures issue 4 names, median of repeats vs target.
+
+Run: ``PYTHONPATH=src python benchmarks/bench_trajectory.py`` (add ``--quick`` for a short
+offline ride). Prints one line per figure: median, target, ratio (median / target; <= 1 is
+within target).
+"""
+
+from __future__ import annotations
+
+import argparse
+import statistics
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "src"))
+
+import motioncue
+from motioncue.trajectory import (
+    ActuatorLimits,
+    RealtimeLimiter,
+    limit_pose,
+    limit_ride,
+    unpark_path,
+)
+
+
+def report(name: str, samples: list[float], target: float, unit: str, scale: float) -> None:
+    med = statistics.median(samples)
+    print(
+        f"{name:<58} median {med * scale:10.2f} {unit:<3} target {target * scale:8.2f} {unit:<3}"
+        f" ratio {med / target:6.3f}  (n={len(samples)})"
+    )
+
+
+def hexapod_limits(p):
+    return ActuatorLimits.from_platform(p, v_max=0.25, a_max=4.0)
+
+
+def ride(p, seconds: float, rate: float, seed: int = 0) -> np.ndarray:
+    """Synthetic cueing output: band-limited pose motion plus bumps, through the IK.
+
+    Roughly one frame in ten breaks a speed/acceleration/stroke limit (printed).
+    """
+    rng = np.random.default_rng(seed)
+    t = np.arange(int(seconds * rate)) / rate
+    amp = np.array([0.03, 0.03, 0.025, 0.06, 0.06, 0.1])
+    poses = np.zeros((t.size, 6))
+    for _ in range(8):
+        f = rng.uniform(0.05, 1.2, 6)
+        ph = rng.uniform(0, 2 * np.pi, 6)
+        poses += amp / 4 * np.sin(2 * np.pi * f * t[:, None] + ph)
+    for k in rng.integers(0, t.size - 50, int(seconds / 10)):  # bumps: 0.2 s kicks
+        poses[k : k + 20, 2] += 0.02 * rng.choice([-1, 1])
+    poses -= poses[0]
+    poses = limit_pose(p, poses).pose
+    return p.inverse(poses)
+
+
+def main() -> int:
+    ap = argparse.ArgumentParser()
+    ap.add_argument("--quick", action="store_true", help="1-minute offline ride instead of 10")
+    args = ap.parse_args()
+    print(f"python {sys.version.split()[0]}; machine shared with other sessions (loaded)")
+    p = motioncue.load_platform("stewart6-linear")
+    lim = hexapod_limits(p)
+    dt = 0.01
+
+    # 1. real-time limiter step, 6 actuators
+    rt = RealtimeLimiter(lim, dt)
+    rng = np.random.default_rng(1)
+    feasible = ride(p, 20.0, 100.0)
+    feasible = rt.run(rt.initial_state(feasible[0]), feasible)  # made feasible
+    adversarial = (rng.uniform(-0.2, 0.2, (2000, 6))).tolist()
+    for label, stream in (("feasible", feasible.tolist()), ("adversarial", adversarial)):
+        samples = []
+        for _ in range(7):
+            state = rt.initial_state(np.asarray(stream[0]).clip(lim.q_min, lim.q_max))
+            step = rt.step
+            t0 = time.perf_counter()
+            for row in stream:
+                step(state, row)
+            samples.append((time.perf_counter() - t0) / len(stream))
+        report(f"limiter step, 6 actuators, {label} stream", samples, 20e-6, "us", 1e6)
+
+    # 2. workspace limiting per pose (single calls and batches of 1000)
+    poses = rng.normal(0.0, [0.03, 0.03, 0.02, 0.1, 0.1, 0.2], (1000, 6))
+    frac = np.mean(~p.check(poses).ok)
+    samples = []
+    for _ in range(5):
+        t0 = time.perf_counter()
+        limit_pose(p, poses)
+        samples.append((time.perf_counter() - t0) / len(poses))
+    report(f"workspace limiting per pose, batch of 1000 ({frac:.0%} clamped)", samples, 100e-6,
+           "us", 1e6)  # fmt: skip
+    samples = []
+    for pose in poses[:300]:
+        t0 = time.perf_counter()
+        limit_pose(p, pose)
+        samples.append(time.perf_counter() - t0)
+    report(f"workspace limiting, one pose per call ({frac:.0%} clamped)", samples, 100e-6,
+           "us", 1e6)  # fmt: skip
+
+    # 3. offline optimisation of a 10-minute, 100 Hz, 6-actuator ride
+    seconds = 60.0 if args.quick else 600.0
+    q_des = ride(p, seconds, 100.0, seed=2)
+    state = rt.initial_state(q_des[0])
+    rt.run(state, q_des)
+    print(f"  ride: {q_des.shape[0]} frames x 6, the real-time limiter changes "
+          f"{state.n_clamped / q_des.shape[0]:.1%} of the frames")  # fmt: skip
+    samples = []
+    for _ in range(3):
+        t0 = time.perf_counter()
+        res = limit_ride(q_des, dt, lim)
+        samples.append(time.perf_counter() - t0)
+    print(f"  status {res.status}, max deviation {res.max_deviation * 1e3:.2f} mm at frame "
+          f"{res.where_index[0]} actuator {res.where_index[1] + 1}, windows {res.n_windows}, "
+          f"objective {res.objective:.4g} vs real-time limiter {res.objective_realtime:.4g}, "
+          f"check ok {res.check.ok}, repaired frames {res.n_repaired}, "
+          f"solver failures {res.n_solver_failures}")  # fmt: skip
+    report(f"offline ride optimisation, {seconds / 60:.0f} min, 100 Hz, 6 actuators", samples,
+           20.0, "s", 1.0)  # fmt: skip
+
+    # 4. one toppra transition (parked -> neutral and neutral -> a pose, 100 Hz)
+    samples = []
+    for _ in range(9):
+        t0 = time.perf_counter()
+        unpark_path(p, lim, 100.0)
+        samples.append(time.perf_counter() - t0)
+    report("toppra transition, parked -> neutral, 100 Hz", samples, 50e-3, "ms", 1e3)
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

@@ -1,0 +1,334 @@
+"""Per-actuator limits (stroke, speed, acceleration, optional jerk) and their discrete check.
+
+Discrete-time definitions (used everywhere in :mod:`motioncue.trajectory`, in the tests and
+in every check a user may run on frames that were sent): on a frame grid of period ``dt``,
+
+* speed        ``v[k] = (q[k] - q[k-1]) / dt``
+* acceleration ``a[k] = (q[k] - 2 q[k-1] + q[k-2]) / dt**2``
+* jerk         ``j[k] = (q[k] - 3 q[k-1] + 3 q[k-2] - q[k-3]) / dt**3``
+
+A trajectory respects the limits when every frame is within ``[q_min, q_max]`` and every
+finite difference that can be formed is within ``+-v_max``, ``+-a_max`` (``+-j_max``).
+"""
+
+from __future__ import annotations
+
+import json
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from .._errors import ConfigError
+
+__all__ = ["ActuatorLimits", "LimitCheck", "check_trajectory", "finite_differences"]
+
+
+def _vec(name: str, value: Any, n: int | None) -> np.ndarray:
+    arr = np.array(value, dtype=float).reshape(-1)
+    if n is not None and arr.shape != (n,):
+        raise ConfigError(f"{name} has {arr.size} values; expected {n} (one per actuator)")
+    if not np.all(np.isfinite(arr)):
+        raise ConfigError(f"{name} = {arr.tolist()} is invalid; allowed: finite numbers")
+    arr.setflags(write=False)
+    return arr
+
+
+@dataclass(frozen=True, eq=False)
+class ActuatorLimits:
+    """Limits of each actuator, in SI (m, m/s, m/s^2, m/s^3; rad... for rotary actuators).
+
+    Parameters
+    ----------
+    q_min, q_max : array_like, shape (n,)
+        Usable stroke (safety margin already applied), ``q_min < q_max``.
+    v_max, a_max : array_like, shape (n,)
+        Largest speed and acceleration magnitudes, ``> 0``.
+    j_max : array_like, shape (n,), optional
+        Largest jerk magnitude, ``> 0``; ``None`` = no jerk limit.
+    names : sequence of str, optional
+        Actuator names in controller order (default ``a1..an``).
+    kinds : sequence of str, optional
+        ``"linear"`` or ``"rotary"`` per actuator (default all linear).
+    sources : mapping of str to str, optional
+        Where each quantity came from (``{"v_max": "IMAX PA80..PA85 x PA41"}``), for reports.
+    """
+
+    q_min: np.ndarray
+    q_max: np.ndarray
+    v_max: np.ndarray
+    a_max: np.ndarray
+    j_max: np.ndarray | None = None
+    names: tuple[str, ...] = ()
+    kinds: tuple[str, ...] = ()
+    sources: Mapping[str, str] = field(default_factory=dict)
+
+    def __post_init__(self) -> None:
+        q_min = _vec("q_min", self.q_min, None)
+        n = q_min.size
+        if n < 1:
+            raise ConfigError("q_min is empty; allowed: at least one actuator")
+        q_max = _vec("q_max", self.q_max, n)
+        v_max = _vec("v_max", self.v_max, n)
+        a_max = _vec("a_max", self.a_max, n)
+        for i in range(n):
+            if not q_min[i] < q_max[i]:
+                raise ConfigError(
+                    f"actuator {i}: stroke [{q_min[i]}, {q_max[i]}] is invalid; "
+                    "allowed: q_min < q_max"
+                )
+        for name, arr in (("v_max", v_max), ("a_max", a_max)):
+            if np.any(arr <= 0):
+                raise ConfigError(f"{name} = {arr.tolist()} is invalid; allowed: > 0")
+        j_max = None
+        if self.j_max is not None:
+            j_max = _vec("j_max", self.j_max, n)
+            if np.any(j_max <= 0):
+                raise ConfigError(f"j_max = {j_max.tolist()} is invalid; allowed: > 0 or None")
+        names = tuple(self.names) if self.names else tuple(f"a{i + 1}" for i in range(n))
+        kinds = tuple(self.kinds) if self.kinds else ("linear",) * n
+        if len(names) != n or len(kinds) != n:
+            raise ConfigError(f"names/kinds need {n} entries; got {len(names)}/{len(kinds)}")
+        bad = [k for k in kinds if k not in ("linear", "rotary")]
+        if bad:
+            raise ConfigError(f"kinds {bad} are invalid; allowed: linear | rotary")
+        object.__setattr__(self, "q_min", q_min)
+        object.__setattr__(self, "q_max", q_max)
+        object.__setattr__(self, "v_max", v_max)
+        object.__setattr__(self, "a_max", a_max)
+        object.__setattr__(self, "j_max", j_max)
+        object.__setattr__(self, "names", names)
+        object.__setattr__(self, "kinds", kinds)
+        object.__setattr__(self, "sources", dict(self.sources))
+
+    # ------------------------------------------------------------------ basics
+    @property
+    def n_actuators(self) -> int:
+        return int(self.q_min.size)
+
+    def braking_steps(self, dt_s: float) -> int:
+        """Frames needed to stop from full speed at full deceleration (largest over actuators)."""
+        return int(np.max(np.ceil(self.v_max / (self.a_max * dt_s)))) + 1
+
+    def scaled(
+        self, *, speed: float = 1.0, accel: float = 1.0, jerk: float = 1.0
+    ) -> ActuatorLimits:
+        """The same limits with speed/acceleration/jerk multiplied by factors in (0, 1]."""
+        for name, f in (("speed", speed), ("accel", accel), ("jerk", jerk)):
+            if not 0.0 < f <= 1.0:
+                raise ConfigError(f"{name} = {f} is invalid; allowed: a factor in (0, 1]")
+        return ActuatorLimits(
+            self.q_min,
+            self.q_max,
+            self.v_max * speed,
+            self.a_max * accel,
+            None if self.j_max is None else self.j_max * jerk,
+            self.names,
+            self.kinds,
+            self.sources,
+        )
+
+    def without_jerk(self) -> ActuatorLimits:
+        """The same limits without the jerk limit."""
+        return ActuatorLimits(
+            self.q_min, self.q_max, self.v_max, self.a_max, None, self.names, self.kinds,
+            self.sources,
+        )  # fmt: skip
+
+    def contains(self, q: Any) -> np.ndarray:
+        """Whether positions ``q`` (..., n) are inside the stroke, per frame (...)."""
+        q = np.asarray(q, dtype=float)
+        with np.errstate(invalid="ignore"):
+            return np.all((q >= self.q_min) & (q <= self.q_max), axis=-1)
+
+    # ------------------------------------------------------------------ construction
+    @classmethod
+    def from_platform(
+        cls,
+        platform: Any,
+        controller: Any = None,
+        *,
+        stroke_margin: float | Sequence[float] | None = None,
+        v_max: float | Sequence[float] | None = None,
+        a_max: float | Sequence[float] | None = None,
+        j_max: float | Sequence[float] | None = None,
+    ) -> ActuatorLimits:
+        """Effective limits of a platform driven by a controller.
+
+        See :func:`motioncue.trajectory._derive.limits_from_platform` for the rules.
+        """
+        from ._derive import limits_from_platform
+
+        return limits_from_platform(
+            platform,
+            controller,
+            stroke_margin=stroke_margin,
+            v_max=v_max,
+            a_max=a_max,
+            j_max=j_max,
+        )
+
+    # ------------------------------------------------------------------ reporting
+    def to_dict(self) -> dict[str, Any]:
+        """SI table, JSON-ready."""
+        out: dict[str, Any] = {"units": "SI (m, rad, s)", "actuators": []}
+        for i in range(self.n_actuators):
+            row: dict[str, Any] = {
+                "name": self.names[i],
+                "kind": self.kinds[i],
+                "stroke": [float(self.q_min[i]), float(self.q_max[i])],
+                "max_speed": float(self.v_max[i]),
+                "max_accel": float(self.a_max[i]),
+                "max_jerk": None if self.j_max is None else float(self.j_max[i]),
+            }
+            out["actuators"].append(row)
+        out["sources"] = dict(self.sources)
+        return out
+
+    def to_pulses_table(self, platform: Any) -> list[dict[str, Any]]:
+        """Per actuator (controller order) the limits in drive pulses.
+
+        Keys: ``name``, ``pulses_per_unit``, ``stroke_pulses`` ``[min, max]`` (the pulse
+        counts of the stroke ends, ordered), ``max_speed_pulses_s``, ``max_accel_pulses_s2``,
+        ``max_jerk_pulses_s3`` (or ``None``). Stroke ends are rounded inwards so that every
+        pulse count in the range is inside the SI stroke.
+        """
+        ppu = np.asarray(platform.drives.pulses_per_unit, dtype=float).reshape(-1)
+        if ppu.size != self.n_actuators:
+            raise ConfigError(
+                f"platform has {ppu.size} drives; these limits have {self.n_actuators} actuators"
+            )
+        rows = []
+        for i in range(self.n_actuators):
+            q_home = _pulse_origin(platform, i)  # q at pulse 0
+            a = (float(self.q_min[i]) - q_home) * ppu[i]
+            b = (float(self.q_max[i]) - q_home) * ppu[i]
+            lo = int(np.ceil(min(a, b) - 1e-6))
+            hi = int(np.floor(max(a, b) + 1e-6))
+            lo, hi = _inside(platform, self, i, lo, hi)
+            rows.append(
+                {
+                    "name": self.names[i],
+                    "kind": self.kinds[i],
+                    "pulses_per_unit": float(ppu[i]),
+                    "stroke_pulses": [lo, hi],
+                    "max_speed_pulses_s": float(self.v_max[i] * abs(ppu[i])),
+                    "max_accel_pulses_s2": float(self.a_max[i] * abs(ppu[i])),
+                    "max_jerk_pulses_s3": (
+                        None if self.j_max is None else float(self.j_max[i] * abs(ppu[i]))
+                    ),
+                }
+            )
+        return rows
+
+    def to_json(self, platform: Any = None) -> str:
+        """JSON of :meth:`to_dict`; with a platform each actuator entry also carries the
+        pulse keys of :meth:`to_pulses_table` (``stroke_pulses``, ``max_speed_pulses_s``,
+        ``max_accel_pulses_s2``, ...)."""
+        data = self.to_dict()
+        if platform is not None:
+            for row, pulses in zip(data["actuators"], self.to_pulses_table(platform), strict=True):
+                row.update(pulses)
+        return json.dumps(data, indent=2)
+
+
+def _pulse_origin(platform: Any, i: int) -> float:
+    """Actuator position at pulse 0 (the homed position) of actuator i."""
+    n = len(np.asarray(platform.drives.pulses_per_unit).reshape(-1))
+    zero = np.zeros(n, dtype=np.int64)
+    return float(np.asarray(platform.drives.from_pulses(zero), dtype=float).reshape(-1)[i])
+
+
+def _inside(platform: Any, lim: ActuatorLimits, i: int, lo: int, hi: int) -> tuple[int, int]:
+    """Step the pulse range inwards until both ends map back inside the SI stroke."""
+    n = lim.n_actuators
+    for _ in range(4):
+        pulses = np.zeros((2, n), dtype=np.int64)
+        pulses[:, i] = (lo, hi)
+        q = np.asarray(platform.drives.from_pulses(pulses), dtype=float)[:, i]
+        qa, qb = min(q), max(q)
+        if qa >= lim.q_min[i] - 1e-12 and qb <= lim.q_max[i] + 1e-12:
+            break
+        lo, hi = lo + 1, hi - 1
+    return lo, hi
+
+
+def finite_differences(
+    q: Any, dt_s: float, history: Any = None
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Speed, acceleration and jerk of frames ``q`` (N, n) by the module's definitions.
+
+    ``history`` (h, n) are frames sent before ``q[0]`` (oldest first); differences that
+    need them are formed when they are given. Returns arrays of shapes (N+h-1, n),
+    (N+h-2, n), (N+h-3, n) over the concatenated frames.
+    """
+    q = np.asarray(q, dtype=float)
+    if q.ndim == 1:
+        q = q[:, None]
+    if history is not None:
+        h = np.asarray(history, dtype=float).reshape(-1, q.shape[1])
+        q = np.concatenate([h, q])
+    v = np.diff(q, axis=0) / dt_s
+    a = (q[2:] - 2.0 * q[1:-1] + q[:-2]) / dt_s**2
+    j = (q[3:] - 3.0 * q[2:-1] + 3.0 * q[1:-2] - q[:-3]) / dt_s**3
+    return v, a, j
+
+
+@dataclass(frozen=True)
+class LimitCheck:
+    """Largest violation of each limit over a trajectory (0 = none; SI units).
+
+    ``ok`` is True when every violation is within ``tol`` (absolute, SI).
+    """
+
+    stroke: float
+    speed: float
+    accel: float
+    jerk: float
+    finite: bool
+    tol: float
+
+    @property
+    def ok(self) -> bool:
+        return self.finite and max(self.stroke, self.speed, self.accel, self.jerk) <= self.tol
+
+
+def check_trajectory(
+    q: Any,
+    dt_s: float,
+    limits: ActuatorLimits,
+    *,
+    history: Any = None,
+    tol: float = 1e-9,
+    relative: bool = True,
+) -> LimitCheck:
+    """Check frames ``q`` (N, n) against ``limits`` with the module's finite differences.
+
+    Violations are reported relative to each limit (``relative=True``: 1e-9 means one part
+    in 1e9 of v_max) or in SI units; stroke violations are always in SI units.
+    """
+    q = np.asarray(q, dtype=float)
+    if q.ndim == 1:
+        q = q[:, None]
+    finite = bool(np.all(np.isfinite(q)))
+    stroke = float(np.max(np.maximum(limits.q_min - q, q - limits.q_max), initial=0.0))
+    v, a, j = finite_differences(q, dt_s, history)
+
+    def excess(x: np.ndarray, lim: np.ndarray) -> float:
+        if x.size == 0:
+            return 0.0
+        e = np.abs(x) - lim
+        if relative:
+            e = e / lim
+        return float(max(np.max(e), 0.0))
+
+    jerk = 0.0 if limits.j_max is None else excess(j, limits.j_max)
+    return LimitCheck(
+        stroke=max(stroke, 0.0),
+        speed=excess(v, limits.v_max),
+        accel=excess(a, limits.a_max),
+        jerk=jerk,
+        finite=finite,
+        tol=tol,
+    )

@@ -1,0 +1,340 @@
+"""Causal real-time actuator limiter: one frame at a time, plain floats, deterministic.
+
+Model
+-----
+The limiter works on the frame grid ``dt`` with the finite-difference definitions of
+:mod:`motioncue.trajectory._limits`. Its state is the last frame sent, ``q[k-1]``, and the
+last speed, ``v[k-1] = (q[k-1] - q[k-2]) / dt``. Choosing the next frame is choosing the
+next speed ``v``; the frame is ``q[k] = q[k-1] + v dt``.
+
+*Discrete braking distance.* From speed ``v > 0``, braking at full deceleration gives the
+speeds ``v - a dt, v - 2 a dt, ...`` until zero, so the distance still travelled after the
+current frame is ``D(v) = dt * sum_{i>=1} max(v - i a dt, 0)``. A state is **admissible**
+when ``q`` is in stroke, ``|v| <= v_max``, ``q + D(v) <= q_max`` if ``v > 0`` and
+``q - D(-v) >= q_min`` if ``v < 0``.
+
+*Allowed next speeds.* ``v`` must satisfy ``|v| <= v_max``, ``|v - v[k-1]| <= a dt`` and keep
+the next state admissible: ``v dt + D(v) <= q_max - q[k-1]`` (for ``v > 0``, and the mirror
+image for ``v < 0``). ``f(v) = v dt + D(v)`` is continuous and increasing, so this is an
+upper bound ``v <= V(q_max - q[k-1])`` with the closed form, for ``B = budget / dt`` and
+``n`` the largest integer with ``a dt n (n+1) / 2 <= B``::
+
+    V = B / (n + 1) + a dt n / 2
+
+The allowed set is an interval ``[lo, hi]`` and is never empty from an admissible state:
+the braking speed ``max(v[k-1] - a dt, 0)`` (or its mirror) is in it, because
+``(v - a dt) dt + D(v - a dt) = D(v)``. By induction every emitted frame is in stroke and
+within the speed and acceleration limits, whatever the targets are.
+
+*Choice inside the interval.* With ``vd = (target - q[k-1]) / dt`` the speed that reaches
+the target this frame and ``vt = (target - previous target) / dt`` the target's own speed:
+if ``vd`` is in ``[lo, hi]`` and ``|vd - vt| <= a dt`` (the frame lands on the target moving
+about as the target does) the target is sent **exactly**, so a feasible target stream
+passes through bit for bit (there ``q[k-1]`` equals the previous target, hence
+``vd == vt``). Otherwise the limiter chases the target: ``vt + sign(e) V(|e|)`` with
+``e = target - q[k-1]``, clipped to ``[lo, hi]``; for a held target this is the discrete
+time-optimal approach that stops on it without overshoot. Non-finite targets are replaced
+by the last finite target (counted).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from .._errors import ConfigError, LimitError
+from ._limits import ActuatorLimits
+
+__all__ = ["LimiterState", "RealtimeLimiter", "braking_distance", "braking_speed_cap"]
+
+
+def braking_distance(v: float, a_max: float, dt_s: float) -> float:
+    """Distance still travelled after a frame at speed ``|v|`` when braking at ``a_max``.
+
+    ``D(v) = dt * sum_{i>=1} max(|v| - i a dt, 0)`` (see module docstring).
+    """
+    v = abs(v)
+    adt = a_max * dt_s
+    n = math.floor(v / adt)
+    return dt_s * (n * v - adt * n * (n + 1) / 2.0)
+
+
+def braking_speed_cap(budget: float, a_max: float, dt_s: float) -> float:
+    """Largest speed ``v >= 0`` with ``v dt + D(v) <= budget`` (0 if ``budget <= 0``)."""
+    return _vcap(budget / dt_s, a_max * dt_s, math.inf)
+
+
+def _vcap(b: float, adt: float, v_big: float = math.inf) -> float:
+    """Largest v >= 0 with v + D(v)/dt <= b, all in speed units (b = budget/dt).
+
+    Returns ``v_big`` instead when the answer is at least ``v_big`` (callers pass a speed
+    above every limit, which also keeps huge budgets out of the integer search).
+    """
+    if b <= 0.0:
+        return 0.0
+    if v_big < math.inf:
+        if b >= v_big + v_big * v_big / (2.0 * adt) + adt:
+            return v_big
+    elif not b < 1e200:
+        return math.inf
+    n = int((math.sqrt(1.0 + 8.0 * b / adt) - 1.0) * 0.5)
+    while n > 0 and adt * n * (n + 1) * 0.5 > b:
+        n -= 1
+    while adt * (n + 1) * (n + 2) * 0.5 <= b:
+        n += 1
+    return b / (n + 1) + adt * n * 0.5
+
+
+class LimiterState:
+    """Changing state of a :class:`RealtimeLimiter` (one per stream).
+
+    Attributes
+    ----------
+    q : list of float, (n,)
+        Last frame sent.
+    v : list of float, (n,)
+        Last speed ``(q[k-1] - q[k-2]) / dt``.
+    last_target : list of float, (n,)
+        Last finite target (used in place of NaN/inf targets).
+    n_frames, n_clamped, n_nonfinite : int
+        Frames stepped; frames where at least one axis was modified; non-finite target
+        values replaced.
+    clamped_axes : list of int, (n,)
+        Per-axis count of modified frames.
+    max_deviation : float
+        Largest ``|q_out - target|`` over modified frames with finite targets (SI).
+    """
+
+    __slots__ = (
+        "clamped_axes",
+        "last_target",
+        "max_deviation",
+        "n_clamped",
+        "n_frames",
+        "n_nonfinite",
+        "q",
+        "v",
+    )
+
+    def __init__(self, q: list[float], v: list[float]) -> None:
+        self.q = q
+        self.v = v
+        self.last_target = list(q)
+        self.n_frames = 0
+        self.n_clamped = 0
+        self.n_nonfinite = 0
+        self.clamped_axes = [0] * len(q)
+        self.max_deviation = 0.0
+
+    def copy(self) -> LimiterState:
+        s = LimiterState(list(self.q), list(self.v))
+        s.last_target = list(self.last_target)
+        s.n_frames, s.n_clamped, s.n_nonfinite = self.n_frames, self.n_clamped, self.n_nonfinite
+        s.clamped_axes = list(self.clamped_axes)
+        s.max_deviation = self.max_deviation
+        return s
+
+    def __repr__(self) -> str:
+        return (
+            f"LimiterState(n_frames={self.n_frames}, n_clamped={self.n_clamped}, "
+            f"n_nonfinite={self.n_nonfinite}, max_deviation={self.max_deviation:.3g})"
+        )
+
+
+@dataclass(frozen=True, eq=False)
+class RealtimeLimiter:
+    """Frozen description of a causal limiter for one frame period.
+
+    Parameters
+    ----------
+    limits : ActuatorLimits
+        Stroke, speed and acceleration per actuator. A jerk limit is not handled by this
+        limiter (it raises :class:`~motioncue.ConfigError`; use ``limits.without_jerk()``
+        explicitly, and :func:`limit_ride` for jerk-limited offline rides).
+    dt_s : float
+        Frame period (s), in (0, 1].
+
+    Use ``state = rt.initial_state(q0)`` then ``q = rt.step(state, target)`` per frame.
+    """
+
+    limits: ActuatorLimits
+    dt_s: float
+    _params: tuple[tuple[float, ...], ...] = field(init=False, repr=False)
+    _dt: float = field(init=False, repr=False)
+    _inv_dt: float = field(init=False, repr=False)
+
+    def __post_init__(self) -> None:
+        if not (isinstance(self.dt_s, int | float) and 0.0 < self.dt_s <= 1.0):
+            raise ConfigError(f"dt_s = {self.dt_s!r} is invalid; allowed: a period in (0, 1] s")
+        if self.limits.j_max is not None:
+            raise ConfigError(
+                "RealtimeLimiter does not enforce jerk limits; pass limits.without_jerk() "
+                "explicitly (jerk is honoured by limit_ride)"
+            )
+        lim = self.limits
+        dt = float(self.dt_s)
+        params = tuple(
+            (
+                float(lim.q_min[i]),
+                float(lim.q_max[i]),
+                float(lim.v_max[i]),
+                float(lim.a_max[i]) * dt,
+                0.5 / float(lim.a_max[i]),
+                2.0 * float(lim.v_max[i]),
+            )
+            for i in range(lim.n_actuators)
+        )
+        object.__setattr__(self, "_params", params)
+        object.__setattr__(self, "_dt", dt)
+        object.__setattr__(self, "_inv_dt", 1.0 / dt)
+
+    @property
+    def n_actuators(self) -> int:
+        return self.limits.n_actuators
+
+    # ------------------------------------------------------------------ states
+    def is_admissible(self, q: Any, v: Any = None) -> bool:
+        """Whether ``(q, v)`` is a state from which the limits can always be kept.
+
+        Rounding slack: 1e-9 (SI) on positions and stopping points (float round-off in
+        the speed, divided by dt, moves the discrete stopping point by ~1e-12 per frame near
+        a stroke end), one part in 1e9 on speeds.
+        """
+        lim, dt = self.limits, self._dt
+        qa = np.asarray(q, dtype=float).reshape(-1)
+        va = np.zeros_like(qa) if v is None else np.asarray(v, dtype=float).reshape(-1)
+        if qa.shape != (lim.n_actuators,) or va.shape != qa.shape:
+            return False
+        for i in range(lim.n_actuators):
+            qi, vi = float(qa[i]), float(va[i])
+            if not (math.isfinite(qi) and math.isfinite(vi)):
+                return False
+            if not lim.q_min[i] - 1e-9 <= qi <= lim.q_max[i] + 1e-9:
+                return False
+            if abs(vi) > lim.v_max[i] * (1.0 + 1e-9):
+                return False
+            d = braking_distance(vi, float(lim.a_max[i]), dt)
+            if vi > 0 and qi + d > lim.q_max[i] + 1e-9:
+                return False
+            if vi < 0 and qi - d < lim.q_min[i] - 1e-9:
+                return False
+        return True
+
+    def initial_state(self, q0: Any, v0: Any = None) -> LimiterState:
+        """State for a stream whose last sent frame is ``q0`` (n,) moving at ``v0`` (n,).
+
+        ``v0`` may be a scalar (same speed on every axis; default 0, at rest).
+
+        Raises
+        ------
+        LimitError
+            If ``(q0, v0)`` is not admissible (outside the stroke, too fast, or unable to
+            stop before a stroke end).
+        """
+        n = self.n_actuators
+        q = np.asarray(q0, dtype=float).reshape(-1)
+        v = np.zeros(n) if v0 is None else np.asarray(v0, dtype=float).reshape(-1)
+        if v.size == 1:
+            v = np.full(n, float(v[0]))
+        if q.shape != (n,) or v.shape != (n,):
+            raise ConfigError(f"initial state needs {n} positions and speeds")
+        if not self.is_admissible(q, v):
+            raise LimitError(
+                f"initial state q={q.tolist()} v={v.tolist()} is not admissible for stroke "
+                f"[{self.limits.q_min.tolist()}, {self.limits.q_max.tolist()}], "
+                f"v_max={self.limits.v_max.tolist()}, a_max={self.limits.a_max.tolist()}"
+            )
+        return LimiterState([float(x) for x in q], [float(x) for x in v])
+
+    # ------------------------------------------------------------------ stepping
+    def step(self, state: LimiterState, q_target: Sequence[float] | np.ndarray) -> list[float]:
+        """Next frame (n,) for a target (n,); updates ``state``. Never returns NaN/inf."""
+        if isinstance(q_target, np.ndarray):
+            q_target = q_target.tolist()
+        if len(q_target) != len(state.q):
+            raise ConfigError(f"target has {len(q_target)} values; expected {len(state.q)}")
+        dt = self._dt
+        inv_dt = self._inv_dt
+        qs = state.q
+        vs = state.v
+        lts = state.last_target
+        out = [0.0] * len(qs)
+        clamped = False
+        i = 0
+        for qmin, qmax, vmax, adt, half_inv_a, vbig in self._params:
+            t = float(q_target[i])
+            tp = lts[i]
+            if t - t != 0.0:  # NaN or +-inf
+                t = tp
+                state.n_nonfinite += 1
+                finite = False
+            else:
+                lts[i] = t
+                finite = True
+            qp = qs[i]
+            vp = vs[i]
+            hi = vp + adt
+            if hi > vmax:
+                hi = vmax
+            lo = vp - adt
+            if lo < -vmax:
+                lo = -vmax
+            if hi > 0.0 and qp + hi * dt + hi * hi * half_inv_a > qmax:
+                cap = _vcap((qmax - qp) * inv_dt, adt, vbig)
+                if hi > cap:
+                    hi = cap
+            if lo < 0.0 and qp + lo * dt - lo * lo * half_inv_a < qmin:
+                cap = _vcap((qp - qmin) * inv_dt, adt, vbig)
+                if lo < -cap:
+                    lo = -cap
+            vd = (t - qp) * inv_dt
+            vt = (t - tp) * inv_dt
+            if lo <= vd <= hi and -adt <= vd - vt <= adt:
+                qn = t
+                vn = vd
+            else:
+                e = t - qp
+                if e > 0.0:
+                    vn = vt + _vcap(e * inv_dt, adt, vbig)
+                else:
+                    vn = vt - _vcap(-e * inv_dt, adt, vbig)
+                if vn > hi:
+                    vn = hi
+                if vn < lo:
+                    vn = lo
+                qn = qp + vn * dt
+                vn = (qn - qp) * inv_dt
+                clamped = True
+                state.clamped_axes[i] += 1
+                if finite:
+                    dev = abs(qn - t)
+                    if dev > state.max_deviation:
+                        state.max_deviation = dev
+            qs[i] = qn
+            vs[i] = vn
+            out[i] = qn
+            i += 1
+        state.n_frames += 1
+        if clamped:
+            state.n_clamped += 1
+        return out
+
+    def run(self, state: LimiterState, q_targets: Any) -> np.ndarray:
+        """Step through a whole stream of targets (N, n); returns the frames (N, n).
+
+        Same numbers as calling :meth:`step` frame by frame (it does exactly that).
+        """
+        targets = np.asarray(q_targets, dtype=float)
+        if targets.ndim != 2 or targets.shape[1] != self.n_actuators:
+            raise ConfigError(
+                f"targets have shape {targets.shape}; expected (N, {self.n_actuators})"
+            )
+        out = np.empty_like(targets)
+        step = self.step
+        for k, row in enumerate(targets.tolist()):
+            out[k] = step(state, row)
+        return out

@@ -1,0 +1,346 @@
+"""Time-optimal, limit-respecting transitions (toppra) and park / unpark / resume helpers.
+
+A transition follows a smooth geometric path ``pose(s)``, ``s in [0, 1]``: the straight line
+in pose coordinates between two poses, or a natural cubic spline through keyframes (knots at
+normalised cumulative chord length) when timing is free. The actuator path
+``q(s) = inverse(pose(s))`` is sampled densely and given to toppra with per-actuator speed and
+acceleration limits; toppra returns the fastest ``s(t)`` (piecewise constant ``s''``) that
+starts and ends at rest. Frames are sampled at ``rate_hz`` from ``t = 0`` (the start pose)
+to the first frame at or after the end, which is the end pose exactly; ``q`` of each frame
+is the inverse kinematics of its pose (not a spline approximation).
+
+Every transition is then checked with the finite differences of
+:mod:`motioncue.trajectory._limits`, starting from and ending at rest. If a check fails
+(toppra only enforces the limits at its grid points, so a curved path can exceed them
+slightly in between), the transition is recomputed with limits scaled by 0.97, up to 8 times;
+the scale used is reported (``limit_scale``; the first attempt uses ``1 - 1e-5``, room for
+toppra's own solver tolerance). A transition that still fails raises
+:class:`~motioncue.LimitError`; no frame that breaks a limit is returned.
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from .._errors import ConfigError, LimitError
+from ._limits import ActuatorLimits, LimitCheck, check_trajectory
+from ._realtime import RealtimeLimiter
+
+__all__ = [
+    "Transition",
+    "brake_to_rest",
+    "park_path",
+    "resume_path",
+    "transition",
+    "transition_q",
+    "transition_through",
+    "unpark_path",
+]
+
+_RETRY_SCALE = 0.97
+_RETRIES = 8
+
+
+@dataclass(frozen=True, eq=False)
+class Transition:
+    """Frames of a transition, sampled at the output rate.
+
+    Attributes
+    ----------
+    t_s : ndarray, (M,)
+        Frame times from the start (s); ``t_s[0] = 0`` is the start pose itself.
+    q : ndarray, (M, n)
+        Actuator positions (SI).
+    poses : ndarray, (M, 6)
+        Poses of the frames (NaN rows only for actuator-space transitions built by
+        :func:`transition_q`, which have no pose).
+    duration_s : float
+        Continuous time-optimal duration (the last frame is at ``ceil(duration * rate)``).
+    limit_scale : float
+        Factor the limits were scaled by to pass the discrete check (1.0 = full limits).
+    check : LimitCheck
+        Finite-difference check of ``q`` with rest before the first and after the last frame.
+    """
+
+    t_s: np.ndarray
+    q: np.ndarray
+    poses: np.ndarray
+    duration_s: float
+    limit_scale: float
+    check: LimitCheck
+
+    @property
+    def n_frames(self) -> int:
+        return int(self.t_s.size)
+
+
+def _pose_path(poses: np.ndarray) -> Any:
+    """Callable s -> pose (.., 6) through the keyframes, s in [0, 1]."""
+    from scipy.interpolate import CubicSpline
+
+    if poses.shape[0] == 2:
+        a, b = poses[0], poses[1]
+        return lambda s: a + np.asarray(s)[..., None] * (b - a)
+    chord = np.r_[0.0, np.cumsum(np.linalg.norm(np.diff(poses, axis=0), axis=1))]
+    if np.any(np.diff(chord) <= 0):
+        raise ConfigError("keyframes must differ from their neighbours")
+    spline = CubicSpline(chord / chord[-1], poses, axis=0, bc_type="natural")
+    return lambda s: spline(np.clip(s, 0.0, 1.0))
+
+
+def _time_parametrise(
+    ss: np.ndarray, qs: np.ndarray, limits: ActuatorLimits, scale: float, n_grid: int
+) -> tuple[np.ndarray, np.ndarray]:
+    """toppra on the spline through (ss, qs): gridpoints and s-dot at them (rest to rest)."""
+    import toppra as ta
+    import toppra.algorithm as algo
+    import toppra.constraint as constraint
+
+    path = ta.SplineInterpolator(ss, qs)
+    v = limits.v_max * scale
+    a = limits.a_max * scale
+    cons = [
+        constraint.JointVelocityConstraint(np.stack([-v, v], axis=1)),
+        constraint.JointAccelerationConstraint(np.stack([-a, a], axis=1)),
+    ]
+    # uniform grid, refined geometrically near both ends where short acceleration phases
+    # of long moves live (a phase shorter than a grid interval would be stretched); toppra
+    # can fail on the tiny end intervals of an ill-conditioned path, so the plain uniform
+    # grid is the fallback
+    uniform = np.linspace(0.0, 1.0, n_grid + 1)
+    ends = np.geomspace(1e-5, 1.0 / n_grid, 16)
+    refined = np.unique(np.concatenate([uniform, ends, 1.0 - ends]))
+    sd = None
+    logger = logging.getLogger("toppra")
+    level = logger.level
+    logger.setLevel(logging.ERROR)  # a failed grid is handled here, not worth a warning
+    try:
+        for grid in (refined, uniform):
+            inst = algo.TOPPRA(cons, path, gridpoints=grid, parametrizer="ParametrizeConstAccel")
+            _sdd, sd, _v = inst.compute_parameterization(0.0, 0.0)
+            if sd is not None:
+                break
+    finally:
+        logger.setLevel(level)
+    if sd is None:
+        raise LimitError("toppra found no feasible time parametrisation for this path")
+    return grid, np.maximum(np.asarray(sd, dtype=float), 0.0)
+
+
+def _sample_s(grid: np.ndarray, sd: np.ndarray, rate_hz: float) -> tuple[np.ndarray, float]:
+    """s at frame times k / rate for constant s'' between gridpoints; returns (s, duration)."""
+    ds = np.diff(grid)
+    dt_seg = 2.0 * ds / np.maximum(sd[:-1] + sd[1:], 1e-300)
+    t_grid = np.r_[0.0, np.cumsum(dt_seg)]
+    duration = float(t_grid[-1])
+    m = math.ceil(duration * rate_hz - 1e-9) + 1
+    t = np.arange(m) / rate_hz
+    seg = np.clip(np.searchsorted(t_grid, t, side="right") - 1, 0, ds.size - 1)
+    tau = np.minimum(t - t_grid[seg], dt_seg[seg])
+    u = (sd[seg + 1] ** 2 - sd[seg] ** 2) / (2.0 * ds[seg])
+    s = grid[seg] + sd[seg] * tau + 0.5 * u * tau**2
+    s = np.clip(s, 0.0, 1.0)
+    s[-1] = 1.0
+    return s, duration
+
+
+def _check(q: np.ndarray, rate_hz: float, limits: ActuatorLimits) -> LimitCheck:
+    dt = 1.0 / rate_hz
+    padded = np.concatenate([q, q[-1:], q[-1:]])  # rest after the end
+    return check_trajectory(padded, dt, limits.without_jerk(), history=np.stack([q[0], q[0]]))
+
+
+def _run(
+    q_of_s: Any,
+    pose_of_s: Any,
+    limits: ActuatorLimits,
+    rate_hz: float,
+    n_grid: int,
+) -> Transition:
+    if not (isinstance(rate_hz, int | float) and 1.0 <= rate_hz <= 10000.0):
+        raise ConfigError(f"rate_hz = {rate_hz!r} is invalid; allowed: [1, 10000] Hz")
+    ss = np.linspace(0.0, 1.0, max(4 * n_grid, 64) + 1)
+    qs = q_of_s(ss)
+    if not np.all(np.isfinite(qs)):
+        raise LimitError("the transition path leaves the kinematic workspace")
+    if np.any(qs < limits.q_min - 1e-12) or np.any(qs > limits.q_max + 1e-12):
+        raise LimitError("the transition path leaves the actuator stroke")
+    if np.max(np.abs(qs - qs[0])) == 0.0:  # nothing to move
+        q0 = qs[:1].copy()
+        return Transition(
+            t_s=np.zeros(1), q=q0, poses=pose_of_s(np.zeros(1)), duration_s=0.0,
+            limit_scale=1.0, check=_check(q0, rate_hz, limits),
+        )  # fmt: skip
+    scale = 1.0 - 1e-5  # room for toppra's solver tolerance (about 1e-6 on the speed)
+    for _ in range(_RETRIES + 1):
+        grid, sd = _time_parametrise(ss, qs, limits, scale, n_grid)
+        s, duration = _sample_s(grid, sd, rate_hz)
+        q = q_of_s(s)
+        chk = _check(q, rate_hz, limits)
+        if chk.ok:
+            return Transition(
+                t_s=np.arange(s.size) / rate_hz, q=q, poses=pose_of_s(s),
+                duration_s=duration, limit_scale=scale, check=chk,
+            )  # fmt: skip
+        scale *= _RETRY_SCALE
+    raise LimitError(f"transition still breaks the limits at scale {scale:.3f}: {chk}")
+
+
+def transition(
+    platform: Any,
+    pose_from: Any,
+    pose_to: Any,
+    limits: ActuatorLimits,
+    rate_hz: float,
+    *,
+    n_grid: int = 100,
+) -> Transition:
+    """Fastest move at rest from ``pose_from`` to ``pose_to`` (6,) along a straight pose line.
+
+    Raises
+    ------
+    LimitError
+        When the line leaves the workspace/stroke, or no limit-respecting timing was found.
+    """
+    a = _pose6("pose_from", pose_from)
+    b = _pose6("pose_to", pose_to)
+    return transition_through(platform, np.stack([a, b]), limits, rate_hz, n_grid=n_grid)
+
+
+def transition_through(
+    platform: Any, keyframes: Any, limits: ActuatorLimits, rate_hz: float, *, n_grid: int = 100
+) -> Transition:
+    """Fastest move through keyframe poses (K, 6), K >= 2, timing free, rest at both ends.
+
+    Pose components the platform cannot produce (``~platform.dof_mask``) are set to zero.
+    """
+    poses = np.asarray(keyframes, dtype=float)
+    if poses.ndim != 2 or poses.shape[1] != 6 or poses.shape[0] < 2:
+        raise ConfigError(f"keyframes have shape {poses.shape}; expected (K >= 2, 6)")
+    if not np.all(np.isfinite(poses)):
+        raise ConfigError("keyframes contain NaN or inf")
+    if limits.n_actuators != platform.n_actuators:
+        raise ConfigError(
+            f"limits have {limits.n_actuators} actuators; platform has {platform.n_actuators}"
+        )
+    if poses.shape[0] > 2 and np.any(np.all(np.diff(poses, axis=0) == 0, axis=1)):
+        raise ConfigError("keyframes must differ from their neighbours")
+    # components the machine cannot produce are held at zero (as the inverse kinematics
+    # does), so that the poses returned are the poses the frames produce
+    poses = np.where(np.asarray(platform.dof_mask, dtype=bool), poses, 0.0)
+    pose_of_s = _pose_path(poses)
+
+    def q_of_s(s: np.ndarray) -> np.ndarray:
+        return np.asarray(platform.inverse(pose_of_s(s)), dtype=float)
+
+    return _run(q_of_s, pose_of_s, limits, rate_hz, n_grid)
+
+
+def transition_q(
+    q_from: Any, q_to: Any, limits: ActuatorLimits, rate_hz: float, *, n_grid: int = 100
+) -> Transition:
+    """Fastest straight-line move in actuator space between two positions (n,), at rest."""
+    a = np.asarray(q_from, dtype=float).reshape(-1)
+    b = np.asarray(q_to, dtype=float).reshape(-1)
+    if a.shape != (limits.n_actuators,) or b.shape != a.shape:
+        raise ConfigError(f"q_from/q_to need {limits.n_actuators} values each")
+
+    def q_of_s(s: np.ndarray) -> np.ndarray:
+        return a + np.asarray(s)[..., None] * (b - a)
+
+    def pose_of_s(s: np.ndarray) -> np.ndarray:
+        return np.full((*np.shape(s), 6), np.nan)
+
+    return _run(q_of_s, pose_of_s, limits, rate_hz, n_grid)
+
+
+def _pose6(name: str, pose: Any) -> np.ndarray:
+    arr = np.asarray(pose, dtype=float).reshape(-1)
+    if arr.shape != (6,) or not np.all(np.isfinite(arr)):
+        raise ConfigError(f"{name} = {arr.tolist()} is invalid; allowed: 6 finite numbers")
+    return arr
+
+
+# ------------------------------------------------------------------------ park / unpark
+def brake_to_rest(limiter: RealtimeLimiter, state: Any, max_frames: int = 100000) -> np.ndarray:
+    """Frames (M, n) that bring a moving limiter state to rest as fast as the limits allow.
+
+    Each axis heads for its own stopping point ``q + D(v)`` (the discrete braking distance,
+    inside the stroke for an admissible state), which the limiter reaches at rest by
+    braking at full deceleration. ``state`` is advanced; M = 0 if already at rest.
+    """
+    from ._realtime import braking_distance
+
+    lim = limiter.limits
+    target = [
+        q + math.copysign(braking_distance(v, float(lim.a_max[i]), limiter.dt_s), v)
+        for i, (q, v) in enumerate(zip(state.q, state.v, strict=True))
+    ]
+    frames: list[list[float]] = []
+    while any(v != 0.0 for v in state.v) and len(frames) < max_frames:
+        frames.append(limiter.step(state, target))
+    return np.asarray(frames, dtype=float).reshape(-1, lim.n_actuators)
+
+
+def park_path(
+    platform: Any,
+    limits: ActuatorLimits,
+    rate_hz: float,
+    *,
+    pose_from: Any = None,
+    q_from: Any = None,
+    v_from: Any = None,
+) -> Transition:
+    """Frames from the current state to the parked pose ``platform.pose_park``.
+
+    Give the current pose (at rest), or the last frame sent ``q_from`` (n,) with its speed
+    ``v_from`` (n,): a moving platform first brakes to rest (:func:`brake_to_rest`), then
+    follows a time-optimal transition to park. Times continue across both parts.
+    """
+    dt = 1.0 / rate_hz
+    head = np.zeros((0, limits.n_actuators))
+    if q_from is not None:
+        rt = RealtimeLimiter(limits.without_jerk(), dt)
+        state = rt.initial_state(q_from, v_from)
+        head = brake_to_rest(rt, state)
+        q_rest = np.asarray(state.q)
+        fk = platform.forward(q_rest, guess=None if pose_from is None else pose_from)
+        if not fk.converged:
+            raise LimitError(f"cannot find the pose of q = {q_rest.tolist()} (FK failed)")
+        start = np.asarray(fk.pose, dtype=float)
+    elif pose_from is not None:
+        start = _pose6("pose_from", pose_from)
+    else:
+        raise ConfigError("park_path needs pose_from or q_from")
+    tr = transition(platform, start, platform.pose_park, limits, rate_hz)
+    if head.shape[0] == 0:
+        return tr
+    poses_head = np.array([platform.forward(q, guess=start).pose for q in head])
+    q = np.concatenate([head, tr.q[1:]])
+    poses = np.concatenate([poses_head, tr.poses[1:]])
+    t = np.arange(q.shape[0]) / rate_hz + dt
+    hist = np.stack([np.asarray(q_from) - np.asarray(v_from if v_from is not None else 0) * dt,
+                     np.asarray(q_from, dtype=float)])  # fmt: skip
+    padded = np.concatenate([q, q[-1:], q[-1:]])
+    chk = check_trajectory(padded, dt, limits.without_jerk(), history=hist)
+    return Transition(t, q, poses, tr.duration_s + head.shape[0] * dt, tr.limit_scale, chk)
+
+
+def unpark_path(
+    platform: Any, limits: ActuatorLimits, rate_hz: float, pose_to: Any = None
+) -> Transition:
+    """Frames from the parked pose to ``pose_to`` (default neutral, zeros), at rest."""
+    target = np.zeros(6) if pose_to is None else _pose6("pose_to", pose_to)
+    return transition(platform, platform.pose_park, target, limits, rate_hz)
+
+
+def resume_path(
+    platform: Any, pose_from: Any, pose_to: Any, limits: ActuatorLimits, rate_hz: float
+) -> Transition:
+    """Frames from a paused pose to the pose the ride resumes at (both at rest)."""
+    return transition(platform, pose_from, pose_to, limits, rate_hz)

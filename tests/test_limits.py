@@ -1,0 +1,168 @@
+"""Limits model: derivation from platform + controller parameters, pulses table, CLI."""
+
+from __future__ import annotations
+
+import json
+import math
+from types import SimpleNamespace
+
+import numpy as np
+import pytest
+
+import motioncue
+from motioncue import ConfigError
+from motioncue.cli import main
+from motioncue.trajectory import ActuatorLimits
+
+
+def _imax(**over):
+    params = {"PA07": 3000, "PA41": 50, "PA54": 0}
+    params.update({f"PA8{i}": 0 for i in range(6)})
+    params.update({f"PAa{i}": 2 for i in range(6)})
+    params.update({f"PAb{i}": 1500 for i in range(6)})
+    params.update(over)
+    return SimpleNamespace(kind="imax", n_axes=6, parameters=params, name="imax6")
+
+
+def _mbox(**over):
+    params = {"Fn0C0": 0, "Fn0C1": 2000, "Fn0C2": 50}
+    params.update(over)
+    return SimpleNamespace(
+        kind="mbox", n_axes=6, parameters=params, name="mbox6", max_motor_speed_rpm=3000.0
+    )
+
+
+@pytest.fixture(scope="module")
+def hexapod():
+    return motioncue.load_platform("stewart6-linear")
+
+
+def test_imax_speed_is_the_smallest_rpm_limit_times_the_lead(hexapod):
+    # 5 mm lead: 3000 rpm = 50 rev/s = 0.25 m/s
+    lim = ActuatorLimits.from_platform(hexapod, _imax())
+    np.testing.assert_allclose(lim.v_max, 0.25)
+    # per-axis PA81 = 1200 rpm on axis 2 -> 0.1 m/s; PAa2 x PAb2 = 2 x 900 -> 0.15 m/s
+    lim = ActuatorLimits.from_platform(hexapod, _imax(PA81=1200, PAb2=900))
+    np.testing.assert_allclose(lim.v_max, [0.25, 0.1, 0.15, 0.25, 0.25, 0.25])
+    # PAb as rpm per 1 ms ramp step: 1500 rpm/ms = 25000 rev/s^2 x 5 mm = 125 m/s^2
+    np.testing.assert_allclose(lim.a_max[0], 1500 / 1e-3 / 60 * 0.005)
+    assert "assumed" in lim.sources["a_max"]
+    # an override that is smaller wins, one that is larger does not
+    lim = ActuatorLimits.from_platform(hexapod, _imax(), v_max=0.3, a_max=4.0)
+    np.testing.assert_allclose(lim.v_max, 0.25)
+    np.testing.assert_allclose(lim.a_max, 4.0)
+
+
+def test_imax_lead_must_agree_with_the_platform(hexapod):
+    with pytest.raises(ConfigError, match="PA41"):
+        ActuatorLimits.from_platform(hexapod, _imax(PA41=100))
+
+
+def test_rotary_speed_uses_the_gear_ratio():
+    p = motioncue.load_platform("stewart6-rotary")  # 1:50 gearbox
+    lim = ActuatorLimits.from_platform(p, _imax(), a_max=10.0)
+    np.testing.assert_allclose(lim.v_max, 3000 / 60 * 2 * math.pi / 50)
+
+
+def test_mbox_stroke_from_fn0c0_and_fn0c1(hexapod):
+    lim = ActuatorLimits.from_platform(hexapod, _mbox(Fn0C0=1200), a_max=5.0)
+    q_home = np.asarray(hexapod.drives.from_pulses(np.zeros(6, dtype=np.int64)))
+    # allowed pulses [0, 120 mm x 2000]: q from q_home to q_home + 0.12 m, within the platform
+    np.testing.assert_allclose(lim.q_min, np.maximum(hexapod.q_min, q_home))
+    np.testing.assert_allclose(lim.q_max, np.minimum(hexapod.q_max, q_home + 0.12))
+    np.testing.assert_allclose(lim.v_max, 0.25)
+    rows = lim.to_pulses_table(hexapod)
+    assert rows[0]["stroke_pulses"] == [0, 240000]
+    with pytest.raises(ConfigError, match="Fn0C1"):
+        ActuatorLimits.from_platform(hexapod, _mbox(Fn0C1=1000), a_max=5.0)
+
+
+def test_missing_sources_and_axis_count_are_named(hexapod):
+    with pytest.raises(ConfigError, match="max-speed"):
+        ActuatorLimits.from_platform(hexapod)
+    with pytest.raises(ConfigError, match="max-accel"):
+        ActuatorLimits.from_platform(hexapod, v_max=0.2)
+    with pytest.raises(ConfigError, match="3 axes"):
+        ActuatorLimits.from_platform(hexapod, SimpleNamespace(kind="mbox", n_axes=3, parameters={}))
+
+
+@pytest.mark.parametrize("name", ["stewart6-linear", "stewart6-rotary", "seat3", "seat2-yaw"])
+def test_pulses_table_round_trips_inside_the_stroke(name):
+    p = motioncue.load_platform(name)
+    lim = ActuatorLimits.from_platform(p, v_max=0.2, a_max=3.0, stroke_margin=0.001)
+    rows = lim.to_pulses_table(p)
+    ppu = np.abs(np.asarray(p.drives.pulses_per_unit, dtype=float))
+    for i, row in enumerate(rows):
+        lo, hi = row["stroke_pulses"]
+        pulses = np.zeros((4, p.n_actuators), dtype=np.int64)
+        pulses[:, i] = [lo, hi, lo - 1, hi + 1]
+        q = np.asarray(p.drives.from_pulses(pulses), dtype=float)[:, i]
+        # the ends are inside, one pulse further is outside (ordered by q)
+        inside = (q >= lim.q_min[i] - 1e-12) & (q <= lim.q_max[i] + 1e-12)
+        assert inside[0] and inside[1]
+        assert not inside[2] and not inside[3]
+        assert row["max_speed_pulses_s"] == pytest.approx(0.2 * ppu[i])
+        assert row["max_accel_pulses_s2"] == pytest.approx(3.0 * ppu[i])
+
+
+def test_cli_json_has_the_pulse_keys_in_controller_order(capsys):
+    rc = main(["limits", "--platform", "seat3", "--max-speed", "0.2", "--max-accel", "3", "--json"])
+    assert rc == 0
+    data = json.loads(capsys.readouterr().out)
+    p = motioncue.load_platform("seat3")
+    assert [a["name"] for a in data["actuators"]] == list(p.actuator_names)
+    for a in data["actuators"]:
+        lo, hi = a["stroke_pulses"]
+        assert lo < hi
+        assert a["max_speed_pulses_s"] == pytest.approx(0.2 * 2e6)
+        assert a["max_accel_pulses_s2"] == pytest.approx(3.0 * 2e6)
+
+
+def test_cli_table_and_error(capsys):
+    assert main(["limits", "--platform", "stewart6-linear", "--max-speed", "0.25",
+                 "--max-accel", "4"]) == 0  # fmt: skip
+    out = capsys.readouterr().out
+    assert "250.0 mm/s" in out and "4000 mm/s^2" in out and "[-10000, 270000]" in out
+    assert main(["limits", "--platform", "stewart6-linear"]) == 2
+    assert "max-speed" in capsys.readouterr().err
+
+
+def test_bundled_controllers(hexapod):
+    from motioncue.output import load_controller
+
+    imax = load_controller("imax6")
+    lim = ActuatorLimits.from_platform(hexapod, imax)
+    # imax6.toml: PA07 = 3000 rpm, PAa x PAb = 2 x 1500 = 3000 rpm, 5 mm lead
+    np.testing.assert_allclose(lim.v_max, 0.25)
+    np.testing.assert_allclose(lim.a_max, 125.0)
+    mbox = load_controller("mbox6")
+    lim = ActuatorLimits.from_platform(hexapod, mbox, a_max=4.0)
+    np.testing.assert_allclose(lim.v_max, mbox.max_motor_speed_rpm / 60 * 0.005)
+    seat = motioncue.load_platform("seat3")
+    with pytest.raises(ConfigError, match="max-speed"):
+        ActuatorLimits.from_platform(seat, load_controller("easysmc"))
+    lim = ActuatorLimits.from_platform(seat, load_controller("easysmc"), v_max=0.2, a_max=3.0)
+    np.testing.assert_allclose(lim.v_max, 0.2)
+
+
+def test_platform_carried_limits_take_part():
+    p = motioncue.load_platform("seat3")
+    fake = SimpleNamespace(
+        **{k: getattr(p, k) for k in ("n_actuators", "actuator_kinds", "actuator_names",
+                                       "q_min", "q_max", "drives", "name")},
+        v_max=np.array([0.1, 0.2, 0.3]), a_max=2.0,
+    )  # fmt: skip
+    lim = ActuatorLimits.from_platform(fake, v_max=0.15)
+    np.testing.assert_allclose(lim.v_max, [0.1, 0.15, 0.15])
+    np.testing.assert_allclose(lim.a_max, 2.0)
+    assert "platform config" in lim.sources["v_max"]
+
+
+def test_cli_with_a_bundled_controller(capsys):
+    rc = main(["limits", "--platform", "stewart6-linear", "--controller", "imax6", "--json"])
+    assert rc == 0
+    data = json.loads(capsys.readouterr().out)
+    assert len(data["actuators"]) == 6
+    a = data["actuators"][0]
+    assert a["max_speed_pulses_s"] == pytest.approx(0.25 * 2e6)
+    assert a["stroke_pulses"] == [-10000, 270000]
