@@ -32,9 +32,22 @@ def _mbox(**over):
     )
 
 
+def _bare(name):
+    """A bundled platform without its own [limits] table: only the controller's count."""
+    import tomllib
+
+    from motioncue._config import find_config
+    from motioncue.kinematics import platform_from_dict
+
+    with open(find_config("platforms", name), "rb") as fh:
+        data = tomllib.load(fh)
+    data.pop("limits", None)
+    return platform_from_dict(data, f"{name} (no [limits])", name)
+
+
 @pytest.fixture(scope="module")
 def hexapod():
-    return motioncue.load_platform("stewart6-linear")
+    return _bare("stewart6-linear")
 
 
 def test_imax_speed_is_the_smallest_rpm_limit_times_the_lead(hexapod):
@@ -59,7 +72,7 @@ def test_imax_lead_must_agree_with_the_platform(hexapod):
 
 
 def test_rotary_speed_uses_the_gear_ratio():
-    p = motioncue.load_platform("stewart6-rotary")  # 1:50 gearbox
+    p = _bare("stewart6-rotary")  # 1:50 gearbox
     lim = ActuatorLimits.from_platform(p, _imax(), a_max=10.0)
     np.testing.assert_allclose(lim.v_max, 3000 / 60 * 2 * math.pi / 50)
 
@@ -118,12 +131,20 @@ def test_cli_json_has_the_pulse_keys_in_controller_order(capsys):
         assert a["max_accel_pulses_s2"] == pytest.approx(3.0 * 2e6)
 
 
-def test_cli_table_and_error(capsys):
+def test_cli_table_and_error(capsys, tmp_path):
     assert main(["limits", "--platform", "stewart6-linear", "--max-speed", "0.25",
                  "--max-accel", "4"]) == 0  # fmt: skip
     out = capsys.readouterr().out
     assert "250.0 mm/s" in out and "4000 mm/s^2" in out and "[-10000, 270000]" in out
-    assert main(["limits", "--platform", "stewart6-linear"]) == 2
+    import tomllib
+
+    from motioncue._config import find_config
+
+    text = find_config("platforms", "stewart6-linear").read_text()
+    bare = tmp_path / "bare.toml"
+    bare.write_text(text[: text.index("[limits]")])
+    assert "limits" not in tomllib.loads(bare.read_text())
+    assert main(["limits", "--platform", str(bare)]) == 2
     assert "max-speed" in capsys.readouterr().err
 
 
@@ -138,7 +159,7 @@ def test_bundled_controllers(hexapod):
     mbox = load_controller("mbox6")
     lim = ActuatorLimits.from_platform(hexapod, mbox, a_max=4.0)
     np.testing.assert_allclose(lim.v_max, mbox.max_motor_speed_rpm / 60 * 0.005)
-    seat = motioncue.load_platform("seat3")
+    seat = _bare("seat3")
     with pytest.raises(ConfigError, match="max-speed"):
         ActuatorLimits.from_platform(seat, load_controller("easysmc"))
     lim = ActuatorLimits.from_platform(seat, load_controller("easysmc"), v_max=0.2, a_max=3.0)

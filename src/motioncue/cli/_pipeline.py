@@ -49,7 +49,7 @@ def register(sub: Any) -> None:
         help="generate an MBOX ride from the bundled lap, play it to the emulator, compare",
     )
     d.add_argument("--out", default="out/demo", metavar="DIR")
-    d.add_argument("--speed", type=float, default=20.0, help="pacing factor for the emulator")
+    d.add_argument("--speed", type=float, default=10.0, help="pacing factor for the emulator")
     d.set_defaults(run=_demo)
 
 

@@ -26,6 +26,7 @@ class TraceComparison:
     """How the emulator's trace matches the ride it was sent."""
 
     frames_compared: int
+    frames_expected: int
     max_pulse_error: int
     max_time_error_s: float
     limits: FrameCheck
@@ -34,7 +35,8 @@ class TraceComparison:
     @property
     def ok(self) -> bool:
         return (
-            self.max_pulse_error <= 1
+            self.frames_compared == self.frames_expected
+            and self.max_pulse_error <= 1
             and self.max_time_error_s <= 1e-3
             and self.limits.ok
             and not self.violations
@@ -55,20 +57,18 @@ def compare_trace(ride: Ride, emulator: Any) -> TraceComparison:
     trace = emulator.trace
     n = min(ride.n_frames, len(trace.t_s))
     pos = np.asarray(trace.positions, dtype=np.int64)
-    err = int(np.max(np.abs(pos[:n] - ride.pulses[:n]), initial=0)) if n else 10**9
+    err = int(np.max(np.abs(pos[:n] - ride.pulses[:n]), initial=0))
     terr = float(np.max(np.abs(np.asarray(trace.t_s[:n]) - ride.t_s[:n]), initial=0.0))
-    if n < ride.n_frames:
-        err = max(err, 10**9)
     limits = check_frames(np.asarray(trace.t_s), pos, ride.limits, start_at_rest=True)
     violations = [f"{v.kind}: {v.detail}" for v in emulator.violations]
-    return TraceComparison(n, err, terr, limits, violations)
+    return TraceComparison(n, ride.n_frames, err, terr, limits, violations)
 
 
 def run_demo(
     out_dir: str | Path = "out/demo",
     *,
     rate_hz: float = 100.0,
-    speed: float = 20.0,
+    speed: float = 10.0,
     log: Callable[[str], None] = print,
 ) -> DemoResult:
     """Generate, play to the emulator, compare, and write the report (see module docstring)."""
@@ -119,8 +119,9 @@ def run_demo(
         comparison = compare_trace(ride, emu)
     play_s = time.perf_counter() - t1
     log(
-        f"emulator: {len(emu.trace.t_s)} frames traced; max error {comparison.max_pulse_error} "
-        f"pulse(s), {comparison.max_time_error_s * 1e3:.3f} ms; limits: "
+        f"emulator: {comparison.frames_compared} of {ride.n_frames} ride frames traced; "
+        f"max error {comparison.max_pulse_error} pulse(s), "
+        f"{comparison.max_time_error_s * 1e3:.3f} ms; limits: "
         f"{comparison.limits.summary()}; violations: {len(comparison.violations)}"
     )
     log("demo " + ("passed" if comparison.ok else "FAILED"))

@@ -170,7 +170,7 @@ def generate_ride(
     wres = ClassicalWashout(cueing, fs_hz=rate_hz).run(rec.f, rec.w)
     lap("cueing")
     step("workspace", 0.2)
-    plim = limit_pose(platform, wres.poses)
+    plim = limit_pose(platform, wres.poses, limits=tight)
     poses_cue_ok = np.asarray(plim.pose, dtype=float)
     lap("workspace")
     step("ramps", 0.35)
@@ -178,7 +178,10 @@ def generate_ride(
     ramp_out = transition(platform, poses_cue_ok[-1], platform.pose_park, tight, rate_hz)
     lap("ramps")
     step("inverse kinematics", 0.45)
-    poses = np.concatenate([ramp_in.poses[:-1], poses_cue_ok, ramp_out.poses[1:]])
+    # ... and one more frame at park, so the ride ends at rest there
+    poses = np.concatenate(
+        [ramp_in.poses[:-1], poses_cue_ok, ramp_out.poses[1:], ramp_out.poses[-1:]]
+    )
     q_desired = platform.inverse(poses)
     lap("inverse kinematics")
     step("actuator limits (casadi)", 0.5)
@@ -302,17 +305,14 @@ def generate_keyframe_ride(
             arrive.append(int(np.argmin(np.linalg.norm(q_all - qk, axis=1))))
     else:
         first = transition(platform, park, poses[0], tight, rate_hz)
-        segments.append(first.q)
-        n_frames = len(first.q)
+        move = np.vstack([first.q, first.q[-1:]])  # arrive, then one frame at rest
+        need = len(move) - 1
+        wait = round(times[0] * rate_hz) - need if np.isfinite(times[0]) else 0
+        if wait < 0:
+            late, max_late = 1, -wait * dt
+        segments.append(np.vstack([np.repeat(move[:1], max(wait, 0), axis=0), move]))
+        n_frames = len(segments[0])
         arrive.append(n_frames - 1)
-        if np.isfinite(times[0]) and first.duration_s > times[0] + 1e-9:
-            late, max_late = 1, first.duration_s - times[0]
-        elif np.isfinite(times[0]):
-            hold = round(times[0] * rate_hz) - (n_frames - 1)
-            if hold > 0:
-                segments.insert(0, np.repeat(first.q[:1], hold, axis=0))
-                n_frames += hold
-                arrive[-1] += hold
         for k in range(1, len(poses)):
             tr = transition(platform, poses[k - 1], poses[k], tight, rate_hz)
             need = len(tr.q) - 1
@@ -320,18 +320,21 @@ def generate_keyframe_ride(
                 slot = round((times[k] - times[k - 1]) * rate_hz)
             else:
                 slot = need
-            if slot < need:
+            if slot - 1 < need:
                 late += 1
-                max_late = max(max_late, (need - slot) * dt)
-                seg = tr.q
+                max_late = max(max_late, (need + 1 - slot) * dt)
+                seg = np.vstack([tr.q, tr.q[-1:]])
             else:
-                seg = _stretch(tr.q, max(slot, 1) / max(need, 1), rate_hz, slot + 1)
+                # arrive one frame early and hold, so the keyframe's frame is at rest there
+                seg = _stretch(tr.q, (slot - 1) / max(need, 1), rate_hz, slot)
+                seg = np.vstack([seg, seg[-1:]])
             segments.append(seg[1:])
             n_frames += len(seg) - 1
             arrive.append(n_frames - 1)
         back = transition(platform, poses[-1], park, tight, rate_hz)
         segments.append(back.q[1:])
         q_all = np.concatenate(segments)
+    q_all = np.vstack([q_all, q_all[-1:]])  # one more frame at park: the ride ends at rest
     opt = limit_ride(q_all, dt, tight, q0=platform.q_park, v0=np.zeros(platform.n_actuators))
     q = np.asarray(opt.q, dtype=float)
     pulses = platform.drives.to_pulses(q)

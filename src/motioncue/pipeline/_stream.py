@@ -64,6 +64,7 @@ class OutputStage:
     _limiter: Any = None
     _state: Any = None
     _encoder: Any = None
+    _streamer: Any = None
 
     def __post_init__(self) -> None:
         from motioncue.trajectory import RealtimeLimiter
@@ -75,6 +76,14 @@ class OutputStage:
         self._state = self._limiter.initial_state(q0)
         self.last_pulses = self.platform.drives.to_pulses(np.asarray(q0, dtype=float))
         self._encoder = make_frame_encoder(self.controller, self.rate_hz, self.last_pulses)
+        if self.controller.kind == "easysmc" and _is_serial(self.transport):
+            # A live serial link: commands go through the flow-controlled streamer that keeps
+            # the controller's 63-command buffer fed without overflowing it.
+            from motioncue.output.easysmc import EasySmcLink, EasySmcStreamer
+
+            link = EasySmcLink(self.transport)
+            self._streamer = EasySmcStreamer.for_controller(self.controller, link, self.rate_hz)
+            self._streamer.send_all(self.controller.setup_commands())
 
     @property
     def q(self) -> np.ndarray:
@@ -94,8 +103,15 @@ class OutputStage:
         pulses = self.platform.drives.to_pulses(np.asarray(q_out, dtype=float))
         if not np.all(np.isfinite(q_out)):  # the limiter guarantees this; never send NaN
             raise LimitError("limiter produced a non-finite position; frame not sent")
-        for msg in self._encoder.encode(self.t_s, [int(p) for p in pulses], dout, dacs):
-            self.transport.send(msg, t_s=self.t_s)
+        frame = [int(p) for p in pulses]
+        if self._streamer is not None:
+            self._streamer.send_all(self._encoder.encode_commands(self.t_s, frame, dout, dacs))
+            if (self.frames + 1) % self._streamer.poll_every_frames == 0:
+                for addr in self._streamer.sent:
+                    self._streamer.poll(addr)
+        else:
+            for msg in self._encoder.encode(self.t_s, frame, dout, dacs):
+                self.transport.send(msg, t_s=self.t_s)
         self.last_pulses = pulses
         self.frames += 1
         self.t_s += self.dt_s
@@ -116,6 +132,12 @@ class OutputStage:
         span = float(np.max(lim.q_max - lim.q_min))
         v, a = float(np.min(lim.v_max)), float(np.min(lim.a_max))
         return math.ceil((span / v + 2 * v / a) / self.dt_s) + 10
+
+
+def _is_serial(transport: Any) -> bool:
+    from motioncue.output._transport_serial import SerialTransport
+
+    return isinstance(transport, SerialTransport)
 
 
 @dataclass(frozen=True)
