@@ -33,7 +33,9 @@ def _targets(draw, lim, length):
     span = hi - lo
     seg = np.repeat((lo + span * draw(st.floats(-0.5, 1.5)))[None, :], length, axis=0)
     if kind == "spike":
-        seg[draw(st.integers(0, length - 1))] = draw(st.sampled_from([1e3, -1e300]))
+        seg[draw(st.integers(0, length - 1))] = draw(
+            st.sampled_from([1e3, -1e300, 1.7e308, -1.7e308])
+        )
     elif kind == "chatter":
         seg += draw(st.floats(0, 2)) * span * (2 * (np.arange(length) % 2) - 1)[:, None]
     elif kind == "nan":
@@ -41,7 +43,7 @@ def _targets(draw, lim, length):
     elif kind == "inf":
         seg[::3] = np.inf
     elif kind == "far":
-        seg[:] = draw(st.sampled_from([-1e9, 1e9]))
+        seg[:] = draw(st.sampled_from([-1e9, 1e9, 1.7e308, -1.7e308]))
     elif kind == "noise":
         rng = np.random.default_rng(draw(st.integers(0, 2**32 - 1)))
         seg = lo + span * rng.uniform(-1, 2, (length, lim.n_actuators))

@@ -281,6 +281,11 @@ class JerkLimiter:
                 finite = True
             q, v, a = state.q[i], state.v[i], state.a[i]
             want = (t - q) * inv_dt
+            # beyond 2 v_max every wanted speed acts alike; clamping keeps inf/NaN out
+            if want > 2.0 * vmax:
+                want = 2.0 * vmax
+            elif want < -2.0 * vmax:
+                want = -2.0 * vmax
             v1, a1, landed = _vstep(
                 v, a, want, state.last_want[i], vmax, amax, jdt, half_inv_j, abig, dt, inv_dt
             )
