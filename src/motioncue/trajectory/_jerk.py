@@ -48,6 +48,7 @@ __all__ = ["JerkLimiter", "JerkLimiterState"]
 
 _MAX_BRAKE_FRAMES = 1_000_000
 _BISECT = 10
+_BOUND_FACTOR = 1.0
 
 
 def _vstep(
@@ -192,12 +193,13 @@ class JerkLimiter:
         return None
 
     def _bound(self, i: int, v: float, a: float) -> float:
-        """Conservative bound (x2) on how far P moves from ``(v, a)`` either way."""
+        """Conservative bound on how far P moves from ``(v, a)`` either way (peak speed
+        times a stopping time, padded; checked against the simulation by the tests)."""
         _, _, _, amax, _, _, _, jmax = self._params[i]
         dt = float(self.dt_s)
         v_pk = abs(v) + a * a / (2.0 * jmax) + abs(a) * dt
         t_stop = v_pk / amax + 2.0 * amax / jmax + abs(a) / jmax + 4.0 * dt
-        return 2.0 * v_pk * t_stop
+        return _BOUND_FACTOR * v_pk * t_stop
 
     def _admissible(
         self, state: JerkLimiterState | None, i: int, q: float, v: float, a: float,
