@@ -139,10 +139,27 @@ def test_bundled_controllers(hexapod):
     lim = ActuatorLimits.from_platform(hexapod, mbox, a_max=4.0)
     np.testing.assert_allclose(lim.v_max, mbox.max_motor_speed_rpm / 60 * 0.005)
     seat = motioncue.load_platform("seat3")
-    with pytest.raises(ConfigError, match="max-speed"):
+    with pytest.raises(ConfigError, match="max-accel"):
         ActuatorLimits.from_platform(seat, load_controller("easysmc"))
+    # easysmc.toml: A3_feed_hz = 20000 pulses/s cap, 2000 pulses/mm -> 10 mm/s
     lim = ActuatorLimits.from_platform(seat, load_controller("easysmc"), v_max=0.2, a_max=3.0)
-    np.testing.assert_allclose(lim.v_max, 0.2)
+    np.testing.assert_allclose(lim.v_max, 0.01)
+    assert "feed cap" in lim.sources["v_max"]
+
+
+def test_easysmc_soft_limits_narrow_the_stroke():
+    seat = motioncue.load_platform("seat3")
+    params = {"A3_feed_hz": 400000}
+    ctl = SimpleNamespace(
+        kind="easysmc", n_axes=3, parameters=params, name="e",
+        units=(SimpleNamespace(axes="XYZ"),),
+        soft_limits=lambda: ((-5000, 100000), (-20000, 200000), (0, 50000)),
+    )  # fmt: skip
+    lim = ActuatorLimits.from_platform(seat, ctl, a_max=3.0)
+    q = np.asarray(seat.drives.from_pulses(np.array([[-5000, -20000, 0], [100000, 200000, 50000]])))
+    np.testing.assert_allclose(lim.q_min, np.maximum(seat.q_min, q[0]))
+    np.testing.assert_allclose(lim.q_max, np.minimum(seat.q_max, q[1]))
+    np.testing.assert_allclose(lim.v_max, 0.2)  # 400000 pulses/s at 2000 pulses/mm
 
 
 def test_platform_carried_limits_take_part():
