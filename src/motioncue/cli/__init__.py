@@ -17,7 +17,14 @@ from .._errors import MotioncueError
 __all__ = ["build_parser", "main"]
 
 # Verb modules, in the order of the data flow. Each registers one or more verbs.
-_VERB_MODULES: tuple[str, ...] = ("_cue", "_kinematics", "_limits", "_control")
+_VERB_MODULES: tuple[str, ...] = (
+    "_record",
+    "_cue",
+    "_kinematics",
+    "_limits",
+    "_pipeline",
+    "_control",
+)
 
 
 def build_parser() -> argparse.ArgumentParser:

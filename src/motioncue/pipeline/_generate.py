@@ -236,3 +236,133 @@ def generate_ride(
         stage_s=stage_s,
     )
     return ride, report
+
+
+def _stretch(q: np.ndarray, factor: float, rate_hz: float, n_out: int) -> np.ndarray:
+    """Resample a rest-to-rest move ``q (M, n)`` slowed down by ``factor >= 1`` to ``n_out``
+    frames: speeds scale by ``1/factor`` and accelerations by ``1/factor^2``."""
+    from scipy.interpolate import CubicSpline
+
+    t_src = np.arange(len(q)) / rate_hz
+    t_new = np.minimum(np.arange(n_out) / rate_hz / factor, t_src[-1])
+    if len(q) < 2:
+        return np.repeat(q[:1], n_out, axis=0)
+    spline = CubicSpline(t_src, q, axis=0, bc_type="clamped")
+    out = spline(t_new)
+    out[-1] = q[-1]
+    return np.asarray(out)
+
+
+def generate_keyframe_ride(
+    keyframes: Any,
+    platform: Any,
+    controller: Any,
+    *,
+    rate_hz: float = 100.0,
+    limits: Any = None,
+    source: str = "",
+    platform_name: str | None = None,
+    controller_name: str | None = None,
+) -> tuple[Ride, dict[str, Any]]:
+    """A ride through authored pose keyframes, without cueing.
+
+    Timing rule: when no keyframe has a time, the ride is the time-optimal move through all of
+    them (toppra, not stopping at keyframes). When times are given, the platform reaches each
+    keyframe at its time, at rest: each segment is the time-optimal rest-to-rest move slowed
+    down to fill its interval; a segment that cannot be done in its interval arrives late by the
+    overrun (counted in ``late_keyframes``), and later keyframes shift by it. A keyframe with a
+    free time (empty cell) is reached as soon as possible. The ride starts and ends parked.
+    Effect outputs (``dout``, DACs) switch at the frame each keyframe is reached.
+
+    Returns
+    -------
+    ride, info
+        ``info`` has ``late_keyframes``, ``max_late_s`` and ``keyframe_frames``.
+    """
+    from motioncue.trajectory import ActuatorLimits, limit_ride, transition, transition_through
+
+    dt = 1.0 / rate_hz
+    if limits is None:
+        limits = ActuatorLimits.from_platform(platform, controller)
+    table = limits.to_pulses_table(platform)
+    tight = pulse_rounding_limits(limits, platform, dt)
+    poses = np.asarray(keyframes.poses, dtype=float)
+    times = np.asarray(keyframes.t_s, dtype=float)
+    park = np.asarray(platform.pose_park, dtype=float)
+    segments: list[np.ndarray] = []
+    arrive: list[int] = []
+    late = 0
+    max_late = 0.0
+    if not np.any(np.isfinite(times)):
+        tr = transition_through(platform, np.vstack([park, poses, park]), tight, rate_hz)
+        q_all = tr.q
+        # frames at which each keyframe is reached: nearest path samples
+        q_kf = platform.inverse(poses)
+        for qk in q_kf:
+            arrive.append(int(np.argmin(np.linalg.norm(q_all - qk, axis=1))))
+    else:
+        first = transition(platform, park, poses[0], tight, rate_hz)
+        segments.append(first.q)
+        n_frames = len(first.q)
+        arrive.append(n_frames - 1)
+        if np.isfinite(times[0]) and first.duration_s > times[0] + 1e-9:
+            late, max_late = 1, first.duration_s - times[0]
+        elif np.isfinite(times[0]):
+            hold = round(times[0] * rate_hz) - (n_frames - 1)
+            if hold > 0:
+                segments.insert(0, np.repeat(first.q[:1], hold, axis=0))
+                n_frames += hold
+                arrive[-1] += hold
+        for k in range(1, len(poses)):
+            tr = transition(platform, poses[k - 1], poses[k], tight, rate_hz)
+            need = len(tr.q) - 1
+            if np.isfinite(times[k]) and np.isfinite(times[k - 1]):
+                slot = round((times[k] - times[k - 1]) * rate_hz)
+            else:
+                slot = need
+            if slot < need:
+                late += 1
+                max_late = max(max_late, (need - slot) * dt)
+                seg = tr.q
+            else:
+                seg = _stretch(tr.q, max(slot, 1) / max(need, 1), rate_hz, slot + 1)
+            segments.append(seg[1:])
+            n_frames += len(seg) - 1
+            arrive.append(n_frames - 1)
+        back = transition(platform, poses[-1], park, tight, rate_hz)
+        segments.append(back.q[1:])
+        q_all = np.concatenate(segments)
+    opt = limit_ride(q_all, dt, tight, q0=platform.q_park, v0=np.zeros(platform.n_actuators))
+    q = np.asarray(opt.q, dtype=float)
+    pulses = platform.drives.to_pulses(q)
+    t_s = np.arange(len(q)) * dt
+    check = check_frames(t_s, pulses, table, start_at_rest=True)
+    if not check.ok:
+        raise LimitError(f"keyframe ride fails the independent limits check: {check.summary()}")
+    dout = np.zeros(len(q), dtype=np.int64)
+    dacs = np.zeros((len(q), 2), dtype=np.int64)
+    for k, frame in enumerate(arrive):
+        dout[frame:] = keyframes.dout[k]
+        dacs[frame:] = keyframes.dacs[k]
+    dout[arrive[-1] + 1 :] = 0  # effects off while parking
+    dacs[arrive[-1] + 1 :] = 0
+    ride = Ride(
+        platform=platform_name or platform.name,
+        controller=controller_name or controller.name,
+        rate_hz=rate_hz,
+        actuator_names=platform.actuator_names,
+        t_s=t_s,
+        pulses=pulses,
+        dout=dout,
+        dacs=dacs,
+        limits={"actuators": table},
+        source=source,
+        notes={
+            "keyframe_frames": arrive,
+            "late_keyframes": late,
+            "max_late_s": max_late,
+            "optimisation_status": str(opt.status),
+            "frame_check": check.summary(),
+        },
+    )
+    return ride, {"late_keyframes": late, "max_late_s": max_late, "keyframe_frames": arrive}

@@ -1,0 +1,332 @@
+"""Raw datagram recordings: the ``.mctr`` container, its writer, reader and the recorder.
+
+File layout (little-endian), version 1::
+
+    magic     8 bytes   b"MCTLMREC"
+    version   uint16    1
+    meta_len  uint32    length of the metadata that follows
+    meta      meta_len bytes of UTF-8 JSON: {"game": "f1", "port": 20777,
+              "created_utc": "2026-11-21T11:00:00Z", "writer": "motioncue 0.1.0"}
+    records   until end of file, each:
+        t_s     float64   receive time, seconds since the recording started
+                          (time.perf_counter() differences)
+        length  uint32    datagram length in bytes (at most 65507, the UDP payload limit)
+        data    length bytes, exactly as received
+
+The datagrams are stored undecoded, so a recording replays through any decoder version and
+keeps the packets a decoder skipped. A recorder killed mid-write leaves a short last record:
+the reader keeps every complete record and reports ``truncated_tail``.
+"""
+
+from __future__ import annotations
+
+import datetime as _dt
+import json
+import math
+import os
+import socket
+import struct
+import time
+from collections.abc import Callable, Iterator
+from dataclasses import dataclass, field
+from typing import BinaryIO
+
+from .._errors import ConfigError, ProtocolError, TransportError
+from ._registry import GAMES
+from ._sample import TelemetrySample
+
+__all__ = [
+    "FILE_HEADER",
+    "MAGIC",
+    "MAX_DATAGRAM",
+    "RECORD_HEADER",
+    "VERSION",
+    "DatagramRecording",
+    "RecordSummary",
+    "RecordingWriter",
+    "decode_recording",
+    "iter_recording_samples",
+    "read_recording_file",
+    "record",
+]
+
+MAGIC = b"MCTLMREC"
+VERSION = 1
+FILE_HEADER = struct.Struct("<8sHI")
+"""magic, version, metadata length."""
+RECORD_HEADER = struct.Struct("<dI")
+"""receive time (s since start), datagram length."""
+MAX_DATAGRAM = 65507
+_MAX_META = 1 << 20
+
+
+@dataclass(frozen=True)
+class DatagramRecording:
+    """A recording file read back.
+
+    Attributes
+    ----------
+    game : str
+        Registered game name the datagrams came from.
+    port : int
+        UDP port they were received on.
+    meta : dict
+        The whole metadata header.
+    t_s : list of float
+        Receive times (s since the recording started), one per datagram.
+    datagrams : list of bytes
+        The datagrams, as received.
+    truncated_tail : bool
+        True if the file ended inside a record (recorder killed); that record is dropped.
+    """
+
+    game: str
+    port: int
+    meta: dict[str, object]
+    t_s: list[float]
+    datagrams: list[bytes]
+    truncated_tail: bool = False
+
+    def __len__(self) -> int:
+        return len(self.datagrams)
+
+
+class RecordingWriter:
+    """Write a recording file record by record (flushes on close; context manager).
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        File to create (overwritten).
+    game : str
+        Registered game name.
+    port : int
+        Port the datagrams are received on (metadata only).
+    """
+
+    def __init__(self, path: str | os.PathLike[str], game: str, port: int) -> None:
+        if game not in GAMES:
+            raise ConfigError(f"unknown game {game!r}; known games: {', '.join(sorted(GAMES))}")
+        from .. import __version__
+
+        meta = {
+            "game": game,
+            "port": int(port),
+            "created_utc": _dt.datetime.now(_dt.UTC).strftime("%Y-%m-%dT%H:%M:%SZ"),
+            "writer": f"motioncue {__version__}",
+        }
+        blob = json.dumps(meta, sort_keys=True).encode()
+        try:
+            self._fh: BinaryIO = open(path, "wb")
+        except OSError as exc:
+            raise TransportError(f"cannot create recording {os.fspath(path)!r}: {exc}") from exc
+        self._fh.write(FILE_HEADER.pack(MAGIC, VERSION, len(blob)) + blob)
+        self.count = 0
+        self.nbytes = 0
+
+    def write(self, t_s: float, datagram: bytes) -> None:
+        """Append one datagram received ``t_s`` seconds after the recording started."""
+        if len(datagram) > MAX_DATAGRAM:
+            raise ProtocolError(f"datagram of {len(datagram)} bytes exceeds {MAX_DATAGRAM}")
+        if not math.isfinite(t_s):
+            raise ProtocolError(f"receive time {t_s!r} is not finite")
+        self._fh.write(RECORD_HEADER.pack(t_s, len(datagram)) + datagram)
+        self.count += 1
+        self.nbytes += len(datagram)
+
+    def close(self) -> None:
+        if not self._fh.closed:
+            self._fh.close()
+
+    def __enter__(self) -> RecordingWriter:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()
+
+
+def read_recording_file(path: str | os.PathLike[str]) -> DatagramRecording:
+    """Read a recording written by :func:`record` / :class:`RecordingWriter`.
+
+    Raises
+    ------
+    ProtocolError
+        Wrong magic, unsupported version, bad metadata or an impossible record length.
+    TransportError
+        The file cannot be read.
+    """
+    try:
+        with open(path, "rb") as fh:
+            blob = fh.read()
+    except OSError as exc:
+        raise TransportError(f"cannot read recording {os.fspath(path)!r}: {exc}") from exc
+    name = os.fspath(path)
+    if len(blob) < FILE_HEADER.size:
+        raise ProtocolError(f"{name}: {len(blob)} bytes is too short for a recording header")
+    magic, version, meta_len = FILE_HEADER.unpack_from(blob)
+    if magic != MAGIC:
+        raise ProtocolError(f"{name}: not a motioncue recording (magic {magic!r})")
+    if version != VERSION:
+        raise ProtocolError(f"{name}: recording version {version} unsupported (reads {VERSION})")
+    if meta_len > _MAX_META or FILE_HEADER.size + meta_len > len(blob):
+        raise ProtocolError(f"{name}: metadata length {meta_len} exceeds the file")
+    pos = FILE_HEADER.size
+    try:
+        meta = json.loads(blob[pos : pos + meta_len].decode())
+        game = str(meta["game"])
+        port = int(meta["port"])
+    except (ValueError, KeyError, TypeError) as exc:
+        raise ProtocolError(f"{name}: bad metadata: {exc}") from exc
+    pos += meta_len
+    times: list[float] = []
+    datagrams: list[bytes] = []
+    truncated = False
+    end = len(blob)
+    while pos < end:
+        if pos + RECORD_HEADER.size > end:
+            truncated = True
+            break
+        t_s, n = RECORD_HEADER.unpack_from(blob, pos)
+        if n > MAX_DATAGRAM or not math.isfinite(t_s):
+            raise ProtocolError(f"{name}: corrupt record at byte {pos} (length {n}, t {t_s})")
+        pos += RECORD_HEADER.size
+        if pos + n > end:
+            truncated = True
+            break
+        times.append(t_s)
+        datagrams.append(blob[pos : pos + n])
+        pos += n
+    return DatagramRecording(game, port, meta, times, datagrams, truncated)
+
+
+def decode_recording(
+    rec: DatagramRecording | str | os.PathLike[str],
+) -> tuple[list[TelemetrySample], dict[str, int]]:
+    """Decode a whole recording as fast as possible, with the recorded receive times.
+
+    Returns
+    -------
+    samples : list of TelemetrySample
+        The samples in order; ``t_s`` is the recorded receive time.
+    stats : dict of str to int
+        The decoder's outcome counters.
+    """
+    from ._registry import decoder_for
+
+    if not isinstance(rec, DatagramRecording):
+        rec = read_recording_file(rec)
+    dec = decoder_for(rec.game)
+    samples = []
+    for t_s, data in zip(rec.t_s, rec.datagrams, strict=True):
+        s = dec.feed(data, t_s)
+        if s is not None:
+            samples.append(s)
+    return samples, dict(dec.stats)
+
+
+def iter_recording_samples(rec: DatagramRecording) -> Iterator[TelemetrySample]:
+    """Yield the samples of a recording lazily (recorded receive times)."""
+    from ._registry import decoder_for
+
+    dec = decoder_for(rec.game)
+    for t_s, data in zip(rec.t_s, rec.datagrams, strict=True):
+        s = dec.feed(data, t_s)
+        if s is not None:
+            yield s
+
+
+@dataclass
+class RecordSummary:
+    """What :func:`record` did."""
+
+    path: str
+    game: str
+    host: str
+    port: int
+    datagrams: int = 0
+    nbytes: int = 0
+    duration_s: float = 0.0
+    stats: dict[str, int] = field(default_factory=dict)
+
+
+def record(
+    source: str,
+    out: str | os.PathLike[str],
+    seconds: float | None = None,
+    *,
+    should_stop: Callable[[], bool] | None = None,
+    on_ready: Callable[[int], None] | None = None,
+) -> RecordSummary:
+    """Record raw datagrams of a game's UDP stream to a file.
+
+    Parameters
+    ----------
+    source : str
+        ``GAME``, ``GAME:PORT`` or ``GAME:HOST:PORT`` (default host 127.0.0.1; use
+        ``0.0.0.0`` to receive from another machine or a console).
+    out : str or os.PathLike
+        Recording file to create.
+    seconds : float, optional
+        Stop after this long; None records until ``should_stop()`` or Ctrl-C.
+    should_stop : callable, optional
+        Polled about every 0.1 s; True ends the recording.
+    on_ready : callable, optional
+        Called with the bound port once the socket listens (port 0 binds a free port).
+
+    Returns
+    -------
+    RecordSummary
+        Datagram count, bytes, duration and the decoder's counters (each datagram is also
+        decoded, to report what the recording holds; the file keeps every datagram).
+    """
+    from ._registry import decoder_for
+    from ._source import parse_live_spec
+
+    game, host, port = parse_live_spec(source)
+    if seconds is not None and not (math.isfinite(seconds) and seconds > 0):
+        raise ConfigError(f"seconds = {seconds!r} must be > 0")
+    dec = decoder_for(game)
+    sock = _bind_udp(host, port)
+    bound_port = sock.getsockname()[1]
+    summary = RecordSummary(os.fspath(out), game, host, bound_port)
+    buf = bytearray(MAX_DATAGRAM + 1)
+    try:
+        with RecordingWriter(out, game, bound_port) as writer:
+            if on_ready is not None:
+                on_ready(bound_port)
+            t0 = time.perf_counter()
+            deadline = math.inf if seconds is None else t0 + seconds
+            try:
+                while True:
+                    now = time.perf_counter()
+                    if now >= deadline or (should_stop is not None and should_stop()):
+                        break
+                    sock.settimeout(min(0.1, max(deadline - now, 1e-3)))
+                    try:
+                        n = sock.recv_into(buf)
+                    except TimeoutError:
+                        continue
+                    t = time.perf_counter()
+                    data = bytes(buf[:n])
+                    writer.write(t - t0, data)
+                    dec.feed(data, t - t0)
+            except KeyboardInterrupt:
+                pass
+            summary.datagrams = writer.count
+            summary.nbytes = writer.nbytes
+            summary.duration_s = time.perf_counter() - t0
+    finally:
+        sock.close()
+    summary.stats = dict(dec.stats)
+    return summary
+
+
+def _bind_udp(host: str, port: int) -> socket.socket:
+    sock = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
+    try:
+        sock.setsockopt(socket.SOL_SOCKET, socket.SO_RCVBUF, 1 << 20)
+        sock.bind((host, port))
+    except OSError as exc:
+        sock.close()
+        raise TransportError(f"cannot listen on udp://{host}:{port}: {exc}") from exc
+    return sock

@@ -1,0 +1,288 @@
+"""EA SPORTS F1 23 / F1 24 / F1 25 UDP telemetry (Motion, Motion Ex and Session packets).
+
+Layouts
+-------
+From EA's public "Data Output from F1 23 / F1 24 / F1 25 Game" UDP specifications (the F1 25
+C++ structure file, ``(c) 2025 Electronic Arts``, and the F1 23/24 specification texts). All
+little-endian, packed:
+
+* Header, 29 bytes, the same in F1 23, 24 and 25: ``uint16 packetFormat`` (2023/2024/2025),
+  ``uint8 gameYear, gameMajorVersion, gameMinorVersion, packetVersion, packetId``,
+  ``uint64 sessionUID``, ``float sessionTime``, ``uint32 frameIdentifier,
+  overallFrameIdentifier``, ``uint8 playerCarIndex, secondaryPlayerCarIndex``.
+* Motion (id 0), 1349 bytes: header + 22 x CarMotionData (60 bytes): ``float
+  worldPosition[3], worldVelocity[3]``, ``int16 worldForwardDir[3], worldRightDir[3]``
+  (normalised, divide by 32767), ``float gForceLateral, gForceLongitudinal, gForceVertical,
+  yaw, pitch, roll``.
+* Motion Ex (id 13), player car only: 8 x ``float[4]`` wheel arrays (suspension position,
+  velocity, acceleration, wheel speed, slip ratio, slip angle, lateral force, longitudinal
+  force), ``float heightOfCOGAboveGround, localVelocity[3], angularVelocity[3],
+  angularAcceleration[3], frontWheelsAngle``, ``float wheelVertForce[4]`` = 188 bytes common
+  to all three years; F1 24 appends 5 floats (aero heights, roll angles, chassis yaw) -> 237
+  bytes; F1 25 also ``chassisPitch, wheelCamber[4], wheelCamberGain[4]`` -> 273 bytes.
+* Session (id 1): after the header ``uint8 weather, int8 trackTemperature, int8
+  airTemperature, uint8 totalLaps, uint16 trackLength, uint8 sessionType, int8 trackId, uint8
+  formula, uint16 sessionTimeLeft, uint16 sessionDuration, uint8 pitSpeedLimit, uint8
+  gamePaused, uint8 isSpectating, uint8 spectatorCarIndex`` (17 bytes read; the rest unused).
+
+Axes (derived from the specification's field names and checked on real captured packets)
+--------------------------------------------------------------------------------------
+The world frame has +Y up (``worldPositionY`` is height). The car's local frame, in which
+Motion Ex gives ``localVelocity`` and ``angularVelocity``, is **x left, y up, z forward**:
+
+* ``localVelocity`` equals the world velocity projected on ``(-worldRightDir,
+  worldRightDir x worldForwardDir, worldForwardDir)``; on the F1 23 capture (Motion and Motion
+  Ex of the same frame) the three components agree to 1e-3 m/s, the x sign being opposite to
+  the right direction. So local x is *left*, local z forward, local y = right x forward = up.
+* (left, up, forward) is right-handed (left x up = forward), so ISO 8855 is a cyclic
+  relabelling, a proper rotation: ``x_iso = z_local, y_iso = x_local, z_iso = y_local``.
+  Angular velocity (a pseudovector) maps the same way: ``w_iso = (w_z, w_x, w_y)``.
+* On the F1 24 capture (a fast left-hand corner) ``angularVelocity.y = +0.378 rad/s`` with
+  ``localVelocity.z = 29 m/s`` gives a centripetal ``w x v`` of +11 m/s^2 along local +x,
+  the wheels' lateral forces are all positive along local x, and ``gForceLateral = +1.35``:
+  the lateral g-force is positive toward the car's **left** (ISO +y).
+* ``gForceLongitudinal`` is positive forward (it is negative together with the summed
+  longitudinal tyre forces when lifting at 73 m/s in the F1 23 capture).
+* The g-forces are kinematic acceleration in g **without gravity**: ``gForceVertical`` is
+  0.03 at 73 m/s on a level straight (F1 23 capture), not ~1.
+
+Conversion
+----------
+With ``G0 = 9.80665``, ``F = worldForwardDir / 32767``, ``R = worldRightDir / 32767`` and
+``U = R x F`` (the car's up axis in world coordinates), the body components of world up are
+``(F_y, -R_y, U_y)`` (forward, left, up), so::
+
+    f = G0 * (gForceLongitudinal + F_y,  gForceLateral - R_y,  gForceVertical + U_y)
+    w = (angularVelocity.z, angularVelocity.x, angularVelocity.y)     # Motion Ex
+
+A car at rest on level ground (g-forces 0, F_y = R_y = 0, U_y = 1) gives ``(0, 0, G0)``.
+
+Pairing and pause
+-----------------
+A sample is emitted for each Motion packet, combined with the latest Motion Ex of the same
+session within :data:`F1Decoder.max_ex_age_s` of session time (the game sends both every
+frame; the Motion Ex may be a frame older). ``paused`` follows the Session packet's
+``gamePaused`` ("network game only" per EA) or ``isSpectating``, and is also set when Motion
+packets keep coming with a frozen ``sessionTime`` (:data:`FROZEN_REPEATS` repeats in a row,
+so one duplicated datagram does not pause). In single-player the game
+stops sending Motion packets when not in control (pause menu, replays): sources detect that
+as missing packets (``latest(max_age_s=...)``).
+"""
+
+from __future__ import annotations
+
+import math
+import struct
+from dataclasses import dataclass
+
+from .._errors import ConfigError
+from ._registry import GameInfo, register_game
+from ._sample import G0_M_S2, Decoder, DecodeResult
+
+__all__ = [
+    "CAR_MOTION",
+    "F1_FORMATS",
+    "HEADER",
+    "MOTION_EX_CORE",
+    "MOTION_EX_SIZES",
+    "MOTION_SIZE",
+    "SESSION_HEAD",
+    "F1Decoder",
+    "F1Header",
+]
+
+DEFAULT_PORT = 20777
+
+HEADER = struct.Struct("<HBBBBBQfIIBB")
+"""Packet header, 29 bytes (F1 23, 24, 25)."""
+
+CAR_MOTION = struct.Struct("<6f6h6f")
+"""CarMotionData, 60 bytes: position[3], velocity[3], forward[3] i16, right[3] i16,
+gForceLateral, gForceLongitudinal, gForceVertical, yaw, pitch, roll."""
+
+MOTION_EX_CORE = struct.Struct("<32f" + "f3f3f3ff" + "4f")
+"""Motion Ex body common to F1 23/24/25, 188 bytes (see module docstring)."""
+
+SESSION_HEAD = struct.Struct("<BbbBHBbBHHBBBB")
+"""First 17 bytes of the Session body, up to spectatorCarIndex."""
+
+NUM_CARS = 22
+MOTION_SIZE = HEADER.size + NUM_CARS * CAR_MOTION.size  # 1349
+MOTION_EX_SIZES: dict[int, int] = {
+    2023: HEADER.size + MOTION_EX_CORE.size,  # 217
+    2024: HEADER.size + MOTION_EX_CORE.size + 5 * 4,  # 237
+    2025: HEADER.size + MOTION_EX_CORE.size + 14 * 4,  # 273
+}
+F1_FORMATS = frozenset(MOTION_EX_SIZES)
+"""``packetFormat`` values decoded (F1 23, F1 24, F1 25)."""
+
+FROZEN_REPEATS = 2
+"""Motion packets repeating the previous one's session time this many times in a row mean the
+game is paused while still sending (time frozen): the samples are flagged ``paused``."""
+
+_PLAUSIBLE_F1_FORMATS = range(2017, 2036)  # older/newer F1 games: "unsupported format"
+_ID_MOTION, _ID_SESSION, _ID_MOTION_EX = 0, 1, 13
+_MAX_PACKET_ID = 15
+_EX_LOCAL_VELOCITY = 33  # float index in MOTION_EX_CORE
+_EX_ANGULAR_VELOCITY = 36
+_INV_NORM = 1.0 / 32767.0
+_VEC3 = struct.Struct("<3f")
+
+
+@dataclass(frozen=True, slots=True)
+class F1Header:
+    """The decoded 29-byte packet header."""
+
+    packet_format: int
+    game_year: int
+    game_major_version: int
+    game_minor_version: int
+    packet_version: int
+    packet_id: int
+    session_uid: int
+    session_time: float
+    frame_identifier: int
+    overall_frame_identifier: int
+    player_car_index: int
+    secondary_player_car_index: int
+
+    @classmethod
+    def unpack(cls, data: bytes) -> F1Header:
+        return cls(*HEADER.unpack_from(data))
+
+    def pack(self) -> bytes:
+        return HEADER.pack(
+            self.packet_format,
+            self.game_year,
+            self.game_major_version,
+            self.game_minor_version,
+            self.packet_version,
+            self.packet_id,
+            self.session_uid,
+            self.session_time,
+            self.frame_identifier,
+            self.overall_frame_identifier,
+            self.player_car_index,
+            self.secondary_player_car_index,
+        )
+
+
+class F1Decoder(Decoder):
+    """Stateful decoder of F1 23/24/25 datagrams (Motion + Motion Ex + Session).
+
+    Outcome reasons counted in ``stats``: ``sample``, ``partial: no motion ex``,
+    ``partial: motion ex stored``, ``state: session``, ``ignored: other packet id``,
+    ``skipped: truncated``, ``skipped: wrong size``, ``skipped: foreign``,
+    ``skipped: unsupported format``, ``skipped: bad player index``, ``skipped: non-finite``,
+    ``skipped: out of range``.
+
+    Parameters
+    ----------
+    max_ex_age_s : float
+        Largest session-time difference (s) between a Motion packet and the Motion Ex whose
+        angular velocity it is paired with.
+    """
+
+    game = "f1"
+
+    def __init__(self, max_ex_age_s: float = 0.1) -> None:
+        super().__init__()
+        if not (math.isfinite(max_ex_age_s) and max_ex_age_s > 0):
+            raise ConfigError(f"max_ex_age_s = {max_ex_age_s!r} must be a finite number > 0")
+        self.max_ex_age_s = float(max_ex_age_s)
+        self.reset()
+
+    def reset(self) -> None:
+        self._ex_uid: int | None = None
+        self._ex_time = 0.0
+        self._ex_w = (0.0, 0.0, 0.0)
+        self._paused_uid: int | None = None
+        self._paused = False
+        self._last_motion: tuple[int, float] | None = None
+        self._frozen_repeats = 0
+
+    def _decode(self, datagram: bytes, t_s: float) -> DecodeResult:
+        n = len(datagram)
+        if n < HEADER.size:
+            return DecodeResult("skipped", "skipped: truncated")
+        (fmt, _year, _maj, _min, _ver, pid, uid, stime, _frame, _oframe, player, _sec) = (
+            HEADER.unpack_from(datagram)
+        )
+        if fmt not in F1_FORMATS:
+            if fmt in _PLAUSIBLE_F1_FORMATS and pid <= _MAX_PACKET_ID:
+                return DecodeResult("skipped", "skipped: unsupported format")
+            return DecodeResult("skipped", "skipped: foreign")
+        if pid > _MAX_PACKET_ID:
+            return DecodeResult("skipped", "skipped: foreign")
+        if pid == _ID_MOTION:
+            return self._motion(datagram, n, uid, stime, player, t_s)
+        if pid == _ID_MOTION_EX:
+            return self._motion_ex(datagram, n, fmt, uid, stime)
+        if pid == _ID_SESSION:
+            return self._session(datagram, n, uid)
+        return DecodeResult("ignored", "ignored: other packet id")
+
+    def _motion(
+        self, data: bytes, n: int, uid: int, stime: float, player: int, t_s: float
+    ) -> DecodeResult:
+        if n != MOTION_SIZE:
+            return DecodeResult(
+                "skipped", "skipped: truncated" if n < MOTION_SIZE else "skipped: wrong size"
+            )
+        if player >= NUM_CARS:
+            return DecodeResult("skipped", "skipped: bad player index")
+        (_px, _py, _pz, _vx, _vy, _vz, fx, fy, fz, rx, ry, rz, g_lat, g_lon, g_vert, *_) = (
+            CAR_MOTION.unpack_from(data, HEADER.size + player * CAR_MOTION.size)
+        )
+        if self._ex_uid != uid or not abs(stime - self._ex_time) <= self.max_ex_age_s:
+            return DecodeResult("partial", "partial: no motion ex")
+        if self._last_motion is not None and self._last_motion == (uid, stime):
+            self._frozen_repeats += 1
+        else:
+            self._frozen_repeats = 0
+        self._last_motion = (uid, stime)
+        up_y = (rz * fx - rx * fz) * (_INV_NORM * _INV_NORM)  # (R x F)_y
+        f = (
+            G0_M_S2 * (g_lon + fy * _INV_NORM),
+            G0_M_S2 * (g_lat - ry * _INV_NORM),
+            G0_M_S2 * (g_vert + up_y),
+        )
+        paused = (self._paused and self._paused_uid == uid) or (
+            self._frozen_repeats >= FROZEN_REPEATS
+        )
+        return self._make(t_s, f, self._ex_w, paused)
+
+    def _motion_ex(self, data: bytes, n: int, fmt: int, uid: int, stime: float) -> DecodeResult:
+        size = MOTION_EX_SIZES[fmt]
+        if n != size:
+            return DecodeResult(
+                "skipped", "skipped: truncated" if n < size else "skipped: wrong size"
+            )
+        wx, wy, wz = _VEC3.unpack_from(data, HEADER.size + 4 * _EX_ANGULAR_VELOCITY)
+        w = (wz, wx, wy)
+        for v in w:  # reject here so a bad Motion Ex never pairs with later Motion packets
+            if not math.isfinite(v):
+                return DecodeResult("skipped", "skipped: non-finite")
+        self._ex_uid, self._ex_time, self._ex_w = uid, stime, w
+        return DecodeResult("partial", "partial: motion ex stored")
+
+    def _session(self, data: bytes, n: int, uid: int) -> DecodeResult:
+        if n < HEADER.size + SESSION_HEAD.size:
+            return DecodeResult("skipped", "skipped: truncated")
+        head = SESSION_HEAD.unpack_from(data, HEADER.size)
+        game_paused, spectating = head[11], head[12]
+        if game_paused > 1 or spectating > 1:
+            return DecodeResult("skipped", "skipped: foreign")
+        self._paused_uid = uid
+        self._paused = bool(game_paused or spectating)
+        return DecodeResult("state", "state: session")
+
+
+INFO = register_game(
+    GameInfo(
+        name="f1",
+        default_port=DEFAULT_PORT,
+        decoder=F1Decoder,
+        title="EA SPORTS F1 23 / F1 24 / F1 25 (Motion, Motion Ex, Session)",
+    )
+)

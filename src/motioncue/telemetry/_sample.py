@@ -1,0 +1,205 @@
+"""What every telemetry decoder produces: a body-frame motion sample, and a counted outcome.
+
+Frames and units follow ``docs/conventions.md``: ISO 8855 body axes (x forward, y left,
+z up), specific force ``f = a - g`` in m/s^2 (at rest, level: ``f = [0, 0, +9.80665]``),
+angular velocity ``w`` in the body frame in rad/s.
+"""
+
+from __future__ import annotations
+
+import math
+from abc import ABC, abstractmethod
+from collections.abc import Sequence
+from dataclasses import dataclass
+from typing import TYPE_CHECKING, Literal
+
+if TYPE_CHECKING:
+    import numpy as np
+    from numpy.typing import NDArray
+
+__all__ = [
+    "G0_M_S2",
+    "MAX_ABS_F_M_S2",
+    "MAX_ABS_W_RAD_S",
+    "DecodeResult",
+    "Decoder",
+    "SampleArrays",
+    "TelemetrySample",
+    "samples_to_arrays",
+    "up_in_body_from_angles",
+]
+
+G0_M_S2 = 9.80665
+"""Standard gravity (m/s^2); also the unit the F1 games use for their g-forces."""
+
+MAX_ABS_F_M_S2 = 1000.0
+"""Largest specific-force component a decoder passes on (about 100 g).
+
+Real crashes in the games reach tens of g; values beyond this are garbage (a foreign packet
+whose bytes happened to pass the checks), not physics. Spikes below it are the washout and
+limits stages' business.
+"""
+
+MAX_ABS_W_RAD_S = 100.0
+"""Largest angular-velocity component a decoder passes on (about 16 turns per second)."""
+
+Vec3 = tuple[float, float, float]
+
+
+@dataclass(frozen=True, slots=True)
+class TelemetrySample:
+    """One vehicle-motion sample in the ISO 8855 body frame.
+
+    Attributes
+    ----------
+    t_s : float
+        Time of the sample (s). Live sources stamp ``time.perf_counter()`` at the arrival of
+        the datagram that completed the sample; replays of files stamp the recorded time.
+    f : tuple of 3 float
+        Specific force ``a - g`` in the body frame (m/s^2); ``(0, 0, +9.80665)`` at rest, level.
+    w : tuple of 3 float
+        Angular velocity in the body frame (rad/s): roll rate, pitch rate, yaw rate.
+    paused : bool
+        True when the game says it is paused, in a menu or not driving (the pipeline parks).
+    game : str
+        Registered name of the game that produced it (``"f1"``, ``"forza"``, ``"beamng"``).
+    """
+
+    t_s: float
+    f: Vec3
+    w: Vec3
+    paused: bool
+    game: str
+
+
+DecodeStatus = Literal["sample", "partial", "state", "ignored", "skipped"]
+
+
+@dataclass(frozen=True, slots=True)
+class DecodeResult:
+    """Outcome of decoding one datagram.
+
+    Attributes
+    ----------
+    status : {"sample", "partial", "state", "ignored", "skipped"}
+        ``sample``: a new sample is in ``sample``. ``partial``: the datagram was valid but a
+        sample needs another one too (F1 Motion without a Motion Ex yet). ``state``: valid,
+        carried game state only (F1 Session: paused flag). ``ignored``: valid, of a kind that
+        carries no motion (F1 lap data...). ``skipped``: rejected, see reason.
+    reason : str
+        The counter key this outcome was counted under in ``Decoder.stats``.
+    sample : TelemetrySample or None
+        The sample when ``status == "sample"``, else None.
+    """
+
+    status: DecodeStatus
+    reason: str
+    sample: TelemetrySample | None = None
+
+
+class Decoder(ABC):
+    """Base class of the per-game decoders: ``feed`` never raises, every outcome is counted.
+
+    Subclasses implement :meth:`_decode`, which returns a :class:`DecodeResult` for anything
+    it recognises or rejects; an exception escaping it is a bug in the decoder, which
+    :meth:`decode` still catches and counts (as ``"skipped: decoder error <Type>"``) so that
+    a live loop never dies on a datagram.
+
+    Attributes
+    ----------
+    game : str
+        Registered name of the game.
+    stats : dict of str to int
+        Count of outcomes by reason, e.g. ``{"sample": 812, "skipped: truncated": 3}``.
+    """
+
+    game: str = ""
+
+    def __init__(self) -> None:
+        self.stats: dict[str, int] = {}
+
+    def _count(self, reason: str) -> None:
+        self.stats[reason] = self.stats.get(reason, 0) + 1
+
+    def decode(self, datagram: bytes, t_s: float) -> DecodeResult:
+        """Decode one datagram received at ``t_s``; never raises, counts the outcome."""
+        try:
+            result = self._decode(datagram, t_s)
+        except Exception as exc:  # a decoder bug must not kill the live loop
+            result = DecodeResult("skipped", f"skipped: decoder error {type(exc).__name__}")
+        self._count(result.reason)
+        return result
+
+    def feed(self, datagram: bytes, t_s: float) -> TelemetrySample | None:
+        """Decode one datagram; return the new sample, or None if it yields none. Never raises."""
+        return self.decode(datagram, t_s).sample
+
+    def reset(self) -> None:  # noqa: B027 - stateless decoders have nothing to forget
+        """Forget game state carried between datagrams (counters are kept)."""
+
+    @abstractmethod
+    def _decode(self, datagram: bytes, t_s: float) -> DecodeResult:
+        """Decode one datagram (may assume nothing about its content)."""
+
+    # -- helpers for subclasses ------------------------------------------------------------
+    def _make(self, t_s: float, f: Vec3, w: Vec3, paused: bool) -> DecodeResult:
+        """Check a converted sample for non-finite or absurd values and wrap it."""
+        for v in f:
+            if not math.isfinite(v):
+                return DecodeResult("skipped", "skipped: non-finite")
+            if abs(v) > MAX_ABS_F_M_S2:
+                return DecodeResult("skipped", "skipped: out of range")
+        for v in w:
+            if not math.isfinite(v):
+                return DecodeResult("skipped", "skipped: non-finite")
+            if abs(v) > MAX_ABS_W_RAD_S:
+                return DecodeResult("skipped", "skipped: out of range")
+        return DecodeResult("sample", "sample", TelemetrySample(t_s, f, w, paused, self.game))
+
+
+def up_in_body_from_angles(pitch_rad: float, roll_rad: float) -> Vec3:
+    """World "up" unit vector in ISO 8855 body axes, from ISO pitch and roll.
+
+    With ``R = Rz(yaw) Ry(pitch) Rx(roll)`` (conventions.md), the body components of the world
+    up axis are the last row of ``R``: ``(-sin(pitch), sin(roll) cos(pitch),
+    cos(roll) cos(pitch))``. Since ``-g = G0 * up``, a decoder whose game reports kinematic
+    acceleration ``a`` (gravity excluded) builds the specific force as ``a + G0 * up``.
+
+    Parameters
+    ----------
+    pitch_rad : float
+        ISO pitch (rad), positive nose down.
+    roll_rad : float
+        ISO roll (rad), positive right side down.
+    """
+    cp = math.cos(pitch_rad)
+    return (-math.sin(pitch_rad), math.sin(roll_rad) * cp, math.cos(roll_rad) * cp)
+
+
+def samples_to_arrays(samples: Sequence[TelemetrySample]) -> SampleArrays:
+    """Stack samples into arrays for offline work (ride files, plots, washout in batch).
+
+    Returns
+    -------
+    SampleArrays
+        ``t_s`` (N,) s, ``f`` (N, 3) m/s^2, ``w`` (N, 3) rad/s, ``paused`` (N,) bool; N may
+        be 0 (shapes (0,), (0, 3)).
+    """
+    import numpy as np
+
+    n = len(samples)
+    t_s = np.fromiter((s.t_s for s in samples), dtype=float, count=n)
+    f = np.array([s.f for s in samples], dtype=float).reshape(n, 3)
+    w = np.array([s.w for s in samples], dtype=float).reshape(n, 3)
+    paused = np.fromiter((s.paused for s in samples), dtype=bool, count=n)
+    return SampleArrays(t_s, f, w, paused)
+
+
+@dataclass(frozen=True)
+class SampleArrays:
+    """Samples as arrays: ``t_s`` (N,), ``f`` (N, 3), ``w`` (N, 3), ``paused`` (N,)."""
+
+    t_s: NDArray[np.float64]
+    f: NDArray[np.float64]
+    w: NDArray[np.float64]
+    paused: NDArray[np.bool_]

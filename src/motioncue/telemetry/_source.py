@@ -1,0 +1,321 @@
+"""Telemetry sources: a live UDP receiver and a real-time replay of recording files.
+
+Both run their own thread, decode each datagram on arrival and publish the newest sample in
+a last-value slot (a plain attribute: assigning a reference is atomic under the GIL) plus a
+bounded deque for consumers that want every sample. The consumer never blocks: ``latest()``
+and ``drain()`` are a few attribute reads.
+
+Source specs (``open_source``)::
+
+    f1                 live UDP, the game's default port, bound on 127.0.0.1
+    f1:20777           live UDP on port 20777
+    f1:0.0.0.0:20777   bound on every interface (a console or another PC sends)
+    replay:FILE        a recording, replayed with its original timing
+    replay:FILE?speed=2    twice as fast; speed=0 replays as fast as possible
+"""
+
+from __future__ import annotations
+
+import math
+import os
+import threading
+import time
+from collections import deque
+from collections.abc import Callable
+from dataclasses import replace
+from urllib.parse import parse_qs
+
+from .._errors import ConfigError
+from ._container import MAX_DATAGRAM, _bind_udp, read_recording_file
+from ._registry import GAMES, decoder_for
+from ._sample import Decoder, TelemetrySample
+
+__all__ = ["ReplaySource", "TelemetrySource", "open_source", "parse_live_spec"]
+
+DEFAULT_HOST = "127.0.0.1"
+
+
+def parse_live_spec(spec: str) -> tuple[str, str, int]:
+    """Split ``GAME[:[HOST:]PORT]`` into (game, host, port); port 0 binds a free port.
+
+    Raises
+    ------
+    ConfigError
+        Unknown game, or a port that is not an integer in 0..65535.
+    """
+    parts = spec.split(":")
+    game = parts[0]
+    if game not in GAMES:
+        raise ConfigError(
+            f"source {spec!r}: unknown game {game!r}; known: {', '.join(sorted(GAMES))}"
+            " (or replay:FILE)"
+        )
+    host, port_text = DEFAULT_HOST, None
+    if len(parts) == 2:
+        port_text = parts[1]
+    elif len(parts) == 3:
+        host, port_text = parts[1] or DEFAULT_HOST, parts[2]
+    elif len(parts) > 3:
+        raise ConfigError(f"source {spec!r}: expected GAME, GAME:PORT or GAME:HOST:PORT")
+    if port_text is None:
+        return game, host, GAMES[game].default_port
+    try:
+        port = int(port_text)
+    except ValueError:
+        port = -1
+    if not 0 <= port <= 65535:
+        raise ConfigError(f"source {spec!r}: port {port_text!r} is not an integer in 0..65535")
+    return game, host, port
+
+
+class _ThreadedSource:
+    """Shared last-value slot, history deque, counters and thread handling."""
+
+    game: str
+
+    def __init__(self, decoder: Decoder, history: int) -> None:
+        if history < 1:
+            raise ConfigError(f"history = {history!r} must be >= 1")
+        self.decoder = decoder
+        self.game = decoder.game
+        self._latest: TelemetrySample | None = None
+        self._history: deque[TelemetrySample] = deque(maxlen=history)
+        self._datagrams = 0
+        self._samples = 0
+        self._errors = 0
+        self._stop = threading.Event()
+        self._thread: threading.Thread | None = None
+        self.last_datagram_s = math.nan
+        """perf_counter time of the last datagram of any kind (nan before the first)."""
+
+    def _start(self, name: str) -> None:
+        self._thread = threading.Thread(target=self._run, name=name, daemon=True)
+        self._thread.start()
+
+    def _run(self) -> None:  # pragma: no cover - overridden
+        raise NotImplementedError
+
+    def _deliver(self, data: bytes, t_s: float) -> None:
+        self._datagrams += 1
+        self.last_datagram_s = t_s
+        sample = self.decoder.feed(data, t_s)
+        if sample is not None:
+            self._history.append(sample)
+            self._latest = sample
+            self._samples += 1
+
+    def latest(self, max_age_s: float | None = None) -> TelemetrySample | None:
+        """The newest sample, or None before the first one. Never blocks.
+
+        Parameters
+        ----------
+        max_age_s : float, optional
+            If given and the newest sample is older than this (``time.perf_counter()`` minus
+            its ``t_s``), it is returned with ``paused=True``: the game stopped sending
+            (F1 and Forza pause menus, BeamNG pause all just go quiet).
+        """
+        s = self._latest
+        if s is not None and max_age_s is not None and not s.paused:
+            if time.perf_counter() - s.t_s > max_age_s:
+                return replace(s, paused=True)
+        return s
+
+    def drain(self) -> list[TelemetrySample]:
+        """Every sample since the previous call (at most ``history`` of them), oldest first."""
+        out = []
+        pop = self._history.popleft
+        try:
+            while True:
+                out.append(pop())
+        except IndexError:
+            pass
+        return out
+
+    @property
+    def stats(self) -> dict[str, int]:
+        """Source counters (``datagrams``, ``samples``, ``receive errors``) and the decoder's."""
+        d = {
+            "datagrams": self._datagrams,
+            "samples": self._samples,
+            "receive errors": self._errors,
+        }
+        d.update(dict(self.decoder.stats))
+        return d
+
+    @property
+    def running(self) -> bool:
+        return self._thread is not None and self._thread.is_alive()
+
+    def close(self) -> None:
+        """Stop the thread and release the socket or file. Idempotent."""
+        self._stop.set()
+        if self._thread is not None and self._thread is not threading.current_thread():
+            self._thread.join(timeout=2.0)
+
+    def __enter__(self) -> _ThreadedSource:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()
+
+
+class TelemetrySource(_ThreadedSource):
+    """Live UDP receiver: binds a port, receives and decodes in its own thread.
+
+    Each datagram is stamped with ``time.perf_counter()`` on arrival and fed to the game's
+    decoder; the newest sample is available from :meth:`latest` without blocking.
+
+    Parameters
+    ----------
+    game : str
+        Registered game name.
+    port : int, optional
+        UDP port (default: the game's); 0 binds a free port (see :attr:`port`).
+    host : str
+        Address to bind; 127.0.0.1 by default, ``0.0.0.0`` for every interface.
+    history : int
+        Samples kept for :meth:`drain`.
+    on_datagram : callable, optional
+        Called in the receiver thread with ``(t_s, datagram)`` for every datagram (e.g. to
+        record while bridging). It must be quick; an exception from it is counted as a
+        receive error.
+    """
+
+    def __init__(
+        self,
+        game: str,
+        port: int | None = None,
+        host: str = DEFAULT_HOST,
+        *,
+        history: int = 1024,
+        on_datagram: Callable[[float, bytes], None] | None = None,
+    ) -> None:
+        super().__init__(decoder_for(game), history)
+        self._on_datagram = on_datagram
+        self._sock = _bind_udp(host, GAMES[game].default_port if port is None else port)
+        self._sock.settimeout(0.05)
+        self.host = host
+        self.port: int = self._sock.getsockname()[1]
+        self._start(f"motioncue-telemetry-{game}")
+
+    def _run(self) -> None:
+        buf = bytearray(MAX_DATAGRAM + 1)
+        sock = self._sock
+        recv_into = sock.recv_into
+        clock = time.perf_counter
+        try:
+            while not self._stop.is_set():
+                try:
+                    n = recv_into(buf)
+                except TimeoutError:
+                    continue
+                except OSError:
+                    if self._stop.is_set():
+                        break
+                    self._errors += 1
+                    time.sleep(0.01)
+                    continue
+                t = clock()
+                data = bytes(buf[:n])
+                try:
+                    if self._on_datagram is not None:
+                        self._on_datagram(t, data)
+                except Exception:
+                    self._errors += 1
+                try:
+                    self._deliver(data, t)
+                except Exception:  # never let the receiver thread die
+                    self._errors += 1
+        finally:
+            sock.close()
+
+    def __repr__(self) -> str:
+        return f"TelemetrySource({self.game!r}, udp://{self.host}:{self.port})"
+
+
+class ReplaySource(_ThreadedSource):
+    """Replays a recording file through the game's decoder, with its original timing.
+
+    Samples are stamped with ``time.perf_counter()`` at replay, like a live source, so a
+    consumer cannot tell the difference. ``speed`` scales time (2 = twice as fast); 0 replays
+    as fast as possible. :attr:`done` is set when the file is exhausted.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        Recording written by ``motioncue record``.
+    speed : float
+        Time scale, >= 0.
+    history : int
+        Samples kept for :meth:`drain`.
+    """
+
+    def __init__(
+        self, path: str | os.PathLike[str], speed: float = 1.0, *, history: int = 1024
+    ) -> None:
+        if not (math.isfinite(speed) and speed >= 0):
+            raise ConfigError(f"replay speed = {speed!r} must be >= 0 (0 = as fast as possible)")
+        self.recording = read_recording_file(path)
+        super().__init__(decoder_for(self.recording.game), history)
+        self.path = os.fspath(path)
+        self.speed = float(speed)
+        self.done = threading.Event()
+        self._start(f"motioncue-replay-{self.game}")
+
+    def _run(self) -> None:
+        rec = self.recording
+        clock = time.perf_counter
+        try:
+            if not rec.t_s:
+                return
+            t_first = rec.t_s[0]
+            t0 = clock()
+            for t_rec, data in zip(rec.t_s, rec.datagrams, strict=True):
+                if self._stop.is_set():
+                    return
+                if self.speed > 0:
+                    due = t0 + (t_rec - t_first) / self.speed
+                    while True:
+                        left = due - clock()
+                        if left <= 0 or self._stop.is_set():
+                            break
+                        time.sleep(min(left, 0.05))
+                self._deliver(data, clock())
+        finally:
+            self.done.set()
+
+    def __repr__(self) -> str:
+        return f"ReplaySource({self.path!r}, speed={self.speed})"
+
+
+def open_source(spec: str, *, history: int = 1024) -> TelemetrySource | ReplaySource:
+    """Open a live or replay telemetry source from a spec string (see module docstring).
+
+    Raises
+    ------
+    ConfigError
+        Unknown game, bad port or bad replay option.
+    TransportError
+        The port cannot be bound or the file cannot be read.
+    ProtocolError
+        The file is not a recording.
+    """
+    if spec.startswith("replay:"):
+        rest = spec[len("replay:") :]
+        path, _, query = rest.partition("?")
+        if not path:
+            raise ConfigError(f"source {spec!r}: replay needs a file, replay:FILE[?speed=X]")
+        opts = parse_qs(query, keep_blank_values=True, strict_parsing=False)
+        unknown = set(opts) - {"speed"}
+        if unknown:
+            raise ConfigError(f"source {spec!r}: unknown replay option(s) {sorted(unknown)}")
+        speed = 1.0
+        if "speed" in opts:
+            text = opts["speed"][-1]
+            try:
+                speed = float(text)
+            except ValueError:
+                raise ConfigError(f"source {spec!r}: speed {text!r} is not a number") from None
+        return ReplaySource(path, speed, history=history)
+    game, host, port = parse_live_spec(spec)
+    return TelemetrySource(game, port, host, history=history)
