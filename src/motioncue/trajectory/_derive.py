@@ -37,9 +37,9 @@ Jerk (``j_max``)
     Only from the override or the platform (no controller parameter defines it).
 
 Platform
-    A platform description that carries ``v_max`` / ``a_max`` / ``j_max`` (SI, per actuator)
-    takes part in the minimum like any other source (the bundled platform configs do not
-    carry them yet).
+    A platform description that carries ``v_max`` / ``a_max`` / ``j_max`` (SI, per actuator;
+    the platform config's optional ``[limits]`` table) takes part in the minimum like any
+    other source.
 
 A quantity with no source raises :class:`~motioncue.ConfigError` naming what to give.
 """
@@ -205,8 +205,6 @@ def limits_from_platform(
             arr = _per_axis(f"platform {attr}", own, n)
             if arr is not None:
                 cands.append((arr, "platform config"))
-    if j_max is None and getattr(platform, "j_max", None) is not None:
-        j_max = platform.j_max
     ov_v = _per_axis("v_max", v_max, n)
     ov_a = _per_axis("a_max", a_max, n)
     if ov_v is not None:
@@ -226,7 +224,17 @@ def limits_from_platform(
     a = np.min(np.stack([c for c, _ in a_cands]), axis=0)
     sources["v_max"] = "min of: " + "; ".join(s for _, s in v_cands)
     sources["a_max"] = "min of: " + "; ".join(s for _, s in a_cands)
-    j = _per_axis("j_max", j_max, n)
-    if j is not None:
-        sources["j_max"] = "given"
+    j_cands: list[tuple[np.ndarray, str]] = []
+    own_j = getattr(platform, "j_max", None)
+    if own_j is not None:
+        arr = _per_axis("platform j_max", own_j, n)
+        if arr is not None:
+            j_cands.append((arr, "platform config"))
+    ov_j = _per_axis("j_max", j_max, n)
+    if ov_j is not None:
+        j_cands.append((ov_j, "given"))
+    j = None
+    if j_cands:
+        j = np.min(np.stack([c for c, _ in j_cands]), axis=0)
+        sources["j_max"] = "min of: " + "; ".join(s for _, s in j_cands)
     return ActuatorLimits(q_min, q_max, v, a, j, tuple(platform.actuator_names), kinds, sources)
