@@ -65,7 +65,7 @@ def _segment(draw, n, lim, length):
     seg = np.repeat(level[None, :], length, axis=0)
     if kind == "spike":
         k = draw(st.integers(0, length - 1))
-        seg[k] = draw(st.sampled_from([1e3, -1e3, 1e300, -1e300])) * np.ones(n)
+        seg[k] = draw(st.sampled_from([1e3, -1e3, 1e300, -1e300, 1.7e308])) * np.ones(n)
     elif kind == "impulse":
         seg[::3] += span * draw(st.floats(-3, 3))
     elif kind == "chatter":
@@ -76,7 +76,7 @@ def _segment(draw, n, lim, length):
     elif kind == "inf":
         seg[:: max(1, length // 3)] = draw(st.sampled_from([np.inf, -np.inf]))
     elif kind == "far":
-        seg[:] = draw(st.sampled_from([-1e6, 1e6, 1e12, -1e12]))
+        seg[:] = draw(st.sampled_from([-1e6, 1e6, 1e12, -1e12, 1.7e308, -1.7e308]))
     elif kind == "noise":
         seed = draw(st.integers(0, 2**32 - 1))
         seg = lo + span * np.random.default_rng(seed).uniform(-1, 2, (length, n))

@@ -19,6 +19,7 @@ Contents
   :func:`resume_path`, :func:`brake_to_rest` built on them and on the limiter.
 """
 
+from ._jerk import JerkLimiter, JerkLimiterState
 from ._limits import ActuatorLimits, LimitCheck, check_trajectory, finite_differences
 from ._offline import OptimisedRide, limit_ride
 from ._plot import plot_ride
@@ -37,6 +38,8 @@ from ._workspace import PoseLimitResult, limit_pose
 
 __all__ = [
     "ActuatorLimits",
+    "JerkLimiter",
+    "JerkLimiterState",
     "LimitCheck",
     "LimiterState",
     "OptimisedRide",
