@@ -230,3 +230,44 @@ def test_demo_runs_and_passes(tmp_path: Path) -> None:
     assert res.comparison.ok, res.comparison
     for name in ("cueing.png", "actuators.png", "metrics.json", "summary.txt"):
         assert (res.report_dir / name).stat().st_size > 0
+
+
+class _Capture:
+    def __init__(self) -> None:
+        self.messages: list[bytes] = []
+
+    def send(self, data: bytes, *, t_s: float | None = None) -> None:
+        self.messages.append(data)
+
+
+@pytest.mark.parametrize("jerk", [None, 5000.0])
+def test_output_stage_keeps_every_limit_on_adversarial_targets(jerk: float | None) -> None:
+    from motioncue.pipeline import OutputStage
+
+    p, c, lim0 = _setup("stewart6-linear", "mbox6")
+    lim = ActuatorLimits(lim0.q_min, lim0.q_max, lim0.v_max, lim0.a_max,
+                         None if jerk is None else np.full(6, jerk))  # fmt: skip
+    stage = OutputStage(p, c, lim, 100.0, _Capture())
+    rng = np.random.default_rng(3)
+    out = [stage.last_pulses.copy()]
+    for k in range(600):
+        target = rng.uniform(-0.2, 0.2, 6) if k % 50 < 25 else np.full(6, np.nan)
+        if k % 97 == 0:
+            target = np.full(6, 1e300)
+        out.append(stage.emit(target))
+    for _ in range(stage.park_frames_bound()):
+        if stage.park_step():
+            break
+        out.append(stage.last_pulses.copy())
+    out.append(stage.last_pulses.copy())
+    pulses = np.asarray(out, dtype=float)
+    t = np.arange(len(pulses)) / 100.0
+    table = lim.to_pulses_table(p)
+    chk = check_frames(t, pulses, table, start_at_rest=True)
+    assert chk.ok, chk.summary()
+    assert stage.parked and stage.clamped_frames > 500
+    np.testing.assert_array_equal(pulses[-1], p.drives.to_pulses(p.q_park))
+    if jerk is not None:
+        jmax = np.array([row["max_jerk_pulses_s3"] for row in table])
+        j = np.diff(pulses, 3, axis=0) * 100.0**3
+        assert np.all(np.abs(j) <= jmax * (1 + 1e-9))

@@ -67,11 +67,14 @@ class OutputStage:
     _streamer: Any = None
 
     def __post_init__(self) -> None:
-        from motioncue.trajectory import RealtimeLimiter
+        from motioncue.trajectory import JerkLimiter, RealtimeLimiter
 
         self.dt_s = 1.0 / self.rate_hz
         tight = pulse_rounding_limits(self.limits, self.platform, self.dt_s)
-        self._limiter = RealtimeLimiter(tight, self.dt_s)
+        # a configured jerk limit needs the jerk-aware limiter (slower, still well inside a
+        # frame); without one the acceleration-limited limiter is exact and cheaper
+        limiter_cls = RealtimeLimiter if tight.j_max is None else JerkLimiter
+        self._limiter = limiter_cls(tight, self.dt_s)
         q0 = self.platform.q_park if self.q_start is None else np.asarray(self.q_start, float)
         self._state = self._limiter.initial_state(q0)
         self.last_pulses = self.platform.drives.to_pulses(np.asarray(q0, dtype=float))
