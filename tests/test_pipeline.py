@@ -165,6 +165,17 @@ def test_bad_keyframe_files_are_named(tmp_path: Path) -> None:
         read_keyframes_csv(_keyframe_file(tmp_path, ["2,0,0,0,0,0,0,0", "1,0,0,0,0,0,0,0"]))
 
 
+def _throttle(emu):  # type: ignore[no-untyped-def]
+    """Back-pressure: stay at most 200 frames ahead of the in-process emulator."""
+
+    def wait(sent: int) -> None:
+        deadline = time.monotonic() + 5.0
+        while sent - emu.received > 200 and time.monotonic() < deadline:
+            time.sleep(0.002)
+
+    return wait
+
+
 def _emulator(controller, n_frames: int):  # type: ignore[no-untyped-def]
     if controller.kind == "mbox":
         from motioncue.output.mbox import MboxEmulator
@@ -183,7 +194,7 @@ def test_play_to_the_emulator_matches_the_ride(platform: str, controller: str) -
     preset = "racing-hexapod" if p.n_actuators == 6 else "cinema-seat-3dof"
     ride, _ = generate_ride(_lap(6.0), p, c, load_cueing(preset), limits=lim)
     with _emulator(c, ride.n_frames) as emu, open_transport(f"udp://127.0.0.1:{emu.port}") as tr:
-        rep = play_ride(ride, p, c, lim, tr, speed=25.0)
+        rep = play_ride(ride, p, c, lim, tr, speed=25.0, spin_s=0.0, throttle=_throttle(emu))
         deadline = time.monotonic() + 5
         while emu.received < rep.frames_sent and time.monotonic() < deadline:
             time.sleep(0.01)
@@ -200,7 +211,10 @@ def test_stopping_a_ride_parks_smoothly_within_limits() -> None:
     stop_at = ride.n_frames // 2
     calls = iter(range(10**9))
     with _emulator(c, ride.n_frames) as emu, open_transport(f"udp://127.0.0.1:{emu.port}") as tr:
-        rep = play_ride(ride, p, c, lim, tr, speed=25.0, stop=lambda: next(calls) >= stop_at)
+        rep = play_ride(
+            ride, p, c, lim, tr, speed=25.0, stop=lambda: next(calls) >= stop_at,
+            spin_s=0.0, throttle=_throttle(emu),
+        )  # fmt: skip
         deadline = time.monotonic() + 5
         while emu.received < rep.frames_sent and time.monotonic() < deadline:
             time.sleep(0.01)

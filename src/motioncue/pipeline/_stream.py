@@ -166,6 +166,8 @@ def play_ride(
     speed: float = 1.0,
     paced: bool = True,
     stop: Any = None,
+    spin_s: float = 0.001,
+    throttle: Any = None,
 ) -> PlayReport:
     """Stream a ride's frames on time, from park, then park.
 
@@ -183,6 +185,12 @@ def play_ride(
         False: send as fast as possible (files and pcaps).
     stop : callable, optional
         Polled each frame; True stops the ride (then parks).
+    spin_s : float
+        Busy-wait before each deadline (s) for low jitter; 0 sleeps only (kinder to other
+        threads of this process, such as an in-process emulator).
+    throttle : callable, optional
+        Called with the number of frames sent before each frame; may block (back-pressure
+        from a receiver that reports its progress).
     """
     stage = OutputStage(platform, controller, limits, ride.rate_hz, transport)
     q_frames = platform.drives.from_pulses(ride.pulses)
@@ -195,9 +203,11 @@ def play_ride(
             if stop is not None and stop():
                 interrupted = True
                 break
+            if throttle is not None:
+                throttle(stage.frames)
             if paced:
                 deadline = t0 + float(ride.t_s[k]) / speed
-                if wait_until(deadline) > 0.5 * stage.dt_s / speed:
+                if wait_until(deadline, spin_s) > 0.5 * stage.dt_s / speed:
                     late += 1
             stage.emit(q_frames[k], int(ride.dout[k]), (int(ride.dacs[k, 0]), int(ride.dacs[k, 1])))
             sent += 1
@@ -208,7 +218,7 @@ def play_ride(
     t_park = time.perf_counter()
     while not stage.parked and park < bound:
         if paced:
-            wait_until(t_park + (park + 1) * stage.dt_s / speed)
+            wait_until(t_park + (park + 1) * stage.dt_s / speed, spin_s)
         stage.park_step()
         park += 1
     return PlayReport(
