@@ -285,3 +285,59 @@ def test_output_stage_keeps_every_limit_on_adversarial_targets(jerk: float | Non
         jmax = np.array([row["max_jerk_pulses_s3"] for row in table])
         j = np.diff(pulses, 3, axis=0) * 100.0**3
         assert np.all(np.abs(j) <= jmax * (1 + 1e-9))
+
+
+def test_play_over_serial_to_the_easysmc_emulator(tmp_path: Path) -> None:
+    """A seat3 ride at 20 Hz through pyserial on the emulator's pty (19200 baud line).
+
+    The factory EasySmc settings allow only 10 mm/s, so the test controller raises the
+    start frequency, feed and acceleration to what a servo drive takes (manual ranges).
+    """
+    from motioncue._config import find_config
+    from motioncue.output.easysmc import (
+        EasySmcEmulator,
+        EasySmcLink,
+        EasySmcStreamer,
+        send_commands,
+    )
+
+    text = find_config("controllers", "easysmc").read_text()
+    for key, value in (("_start_hz", 400000), ("A3_feed_hz", 400000),
+                       ("A3_acc_a_hz_s", 20000000), ("A3_acc_b_hz_s", 20000000)):  # fmt: skip
+        lines = []
+        for line in text.splitlines():
+            name = line.split("=")[0].strip()
+            if name.endswith(key) and not line.startswith("#"):
+                line = f"{name} = {value}"
+            lines.append(line)
+        text = "\n".join(lines) + "\n"
+    path = tmp_path / "easysmc-servo.toml"
+    path.write_text(text)
+    c = load_controller(path)
+    p = load_platform("seat3")
+    lim = ActuatorLimits.from_platform(p, c)
+    ride, _ = generate_ride(_lap(3.0), p, c, load_cueing("cinema-seat-3dof"), rate_hz=20.0,
+                            limits=lim)  # fmt: skip
+    emu = EasySmcEmulator((0,), line_baud=c.baud).start()
+    try:
+        with open_transport(f"serial://{emu.path}?baud={c.baud}") as tr:
+            # the EasySmc homes on command (motioncue send ... home), not by itself
+            streamer = EasySmcStreamer.for_controller(c, EasySmcLink(tr), 20.0)
+            streamer.send_all(send_commands(c, ["home"]))
+            streamer.drain(timeout_s=10.0)
+            rep = play_ride(ride, p, c, lim, tr)
+            deadline = time.monotonic() + 10.0
+            model = emu.models[0]
+            while model.last_done < model.received and time.monotonic() < deadline:
+                time.sleep(0.05)
+    finally:
+        emu.stop()
+    assert not rep.interrupted and rep.ride_frames_sent == ride.n_frames
+    assert emu.violations == []
+    frames = [e for e in emu.trace if e.addr == 0][-rep.frames_sent :]
+    assert len(frames) == rep.frames_sent
+    got = np.array([e.positions[:3] for e in frames[: ride.n_frames]])
+    assert np.max(np.abs(got - ride.pulses)) <= 1
+    t = np.array([e.t_s for e in frames[: ride.n_frames]])
+    # paced by each move's own speed: one frame period apart, within one period
+    assert np.all(np.abs(np.diff(t) - 0.05) <= 0.05)
