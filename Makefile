@@ -13,7 +13,7 @@ $(BIN)/.installed: pyproject.toml
 	touch $@
 
 demo: $(BIN)/.installed
-	$(BIN)/motioncue workspace --platform stewart6-linear
+	$(BIN)/motioncue demo
 
 test: $(BIN)/.installed
 	$(BIN)/python -m pytest

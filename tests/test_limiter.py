@@ -65,7 +65,7 @@ def _segment(draw, n, lim, length):
     seg = np.repeat(level[None, :], length, axis=0)
     if kind == "spike":
         k = draw(st.integers(0, length - 1))
-        seg[k] = draw(st.sampled_from([1e3, -1e3, 1e300, -1e300])) * np.ones(n)
+        seg[k] = draw(st.sampled_from([1e3, -1e3, 1e300, -1e300, 1.7e308])) * np.ones(n)
     elif kind == "impulse":
         seg[::3] += span * draw(st.floats(-3, 3))
     elif kind == "chatter":
@@ -76,7 +76,7 @@ def _segment(draw, n, lim, length):
     elif kind == "inf":
         seg[:: max(1, length // 3)] = draw(st.sampled_from([np.inf, -np.inf]))
     elif kind == "far":
-        seg[:] = draw(st.sampled_from([-1e6, 1e6, 1e12, -1e12]))
+        seg[:] = draw(st.sampled_from([-1e6, 1e6, 1e12, -1e12, 1.7e308, -1.7e308]))
     elif kind == "noise":
         seed = draw(st.integers(0, 2**32 - 1))
         seg = lo + span * np.random.default_rng(seed).uniform(-1, 2, (length, n))
@@ -280,3 +280,28 @@ def test_wrong_target_length_is_refused():
     with pytest.raises(ConfigError, match="expected 2"):
         rt.step(state, [0.1])
     assert state.n_frames == 0
+
+
+def test_scalar_initial_speed_is_broadcast():
+    lim = ActuatorLimits([0.0, 0.0], [0.3, 0.3], [0.4, 0.4], [6.0, 6.0])
+    rt = RealtimeLimiter(lim, 0.01)
+    assert rt.initial_state([0.1, 0.1], 0).v == [0.0, 0.0]
+    assert rt.initial_state([0.1, 0.1], 0.1).v == [0.1, 0.1]
+
+
+def test_check_trajectory_measures_violations_by_the_definitions():
+    """The checker itself can fail: closed-form differences of a hand-made sequence."""
+    lim = ActuatorLimits([0.0], [1.0], [1.0], [10.0], [1000.0])
+    dt = 0.1
+    q = np.array([[0.0], [0.0], [0.2], [0.2], [1.05]])
+    chk = check_trajectory(q, dt, lim, relative=False)
+    # speeds 0, 2, 0, 8.5 -> 7.5 over; accels 20, -20, 85 -> 75 over; stroke 0.05 over
+    assert chk.speed == pytest.approx(7.5)
+    assert chk.accel == pytest.approx(75.0)
+    # jerks (q3-3q2+3q1-q0)/dt^3: (0.2-0.6+0)/1e-3 = -400, (1.05-0.6+0.6-0)/1e-3 = 1050
+    assert chk.jerk == pytest.approx(50.0)
+    assert chk.stroke == pytest.approx(0.05)
+    assert not chk.ok
+    rel = check_trajectory(q, dt, lim)
+    assert rel.speed == pytest.approx(7.5) and rel.accel == pytest.approx(7.5)
+    assert check_trajectory(q[:2], dt, lim).ok

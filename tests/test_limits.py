@@ -37,7 +37,14 @@ def hexapod():
     return motioncue.load_platform("stewart6-linear")
 
 
+def _bare(p):
+    """The platform without its own [limits] (to test the controller rules alone)."""
+    keys = ("n_actuators", "actuator_kinds", "actuator_names", "q_min", "q_max", "drives", "name")
+    return SimpleNamespace(**{k: getattr(p, k) for k in keys})
+
+
 def test_imax_speed_is_the_smallest_rpm_limit_times_the_lead(hexapod):
+    hexapod = _bare(hexapod)
     # 5 mm lead: 3000 rpm = 50 rev/s = 0.25 m/s
     lim = ActuatorLimits.from_platform(hexapod, _imax())
     np.testing.assert_allclose(lim.v_max, 0.25)
@@ -59,7 +66,7 @@ def test_imax_lead_must_agree_with_the_platform(hexapod):
 
 
 def test_rotary_speed_uses_the_gear_ratio():
-    p = motioncue.load_platform("stewart6-rotary")  # 1:50 gearbox
+    p = _bare(motioncue.load_platform("stewart6-rotary"))  # 1:50 gearbox
     lim = ActuatorLimits.from_platform(p, _imax(), a_max=10.0)
     np.testing.assert_allclose(lim.v_max, 3000 / 60 * 2 * math.pi / 50)
 
@@ -79,9 +86,9 @@ def test_mbox_stroke_from_fn0c0_and_fn0c1(hexapod):
 
 def test_missing_sources_and_axis_count_are_named(hexapod):
     with pytest.raises(ConfigError, match="max-speed"):
-        ActuatorLimits.from_platform(hexapod)
+        ActuatorLimits.from_platform(_bare(hexapod))
     with pytest.raises(ConfigError, match="max-accel"):
-        ActuatorLimits.from_platform(hexapod, v_max=0.2)
+        ActuatorLimits.from_platform(_bare(hexapod), v_max=0.2)
     with pytest.raises(ConfigError, match="3 axes"):
         ActuatorLimits.from_platform(hexapod, SimpleNamespace(kind="mbox", n_axes=3, parameters={}))
 
@@ -123,5 +130,91 @@ def test_cli_table_and_error(capsys):
                  "--max-accel", "4"]) == 0  # fmt: skip
     out = capsys.readouterr().out
     assert "250.0 mm/s" in out and "4000 mm/s^2" in out and "[-10000, 270000]" in out
-    assert main(["limits", "--platform", "stewart6-linear"]) == 2
+    # the bundled platform carries its own limits: no override needed
+    assert main(["limits", "--platform", "stewart6-linear"]) == 0
+    assert "12000 mm/s^2" in capsys.readouterr().out
+
+
+def test_cli_names_what_is_missing(tmp_path, capsys):
+    from motioncue._config import find_config
+
+    text = find_config("platforms", "seat3").read_text()
+    bare = tmp_path / "bare-seat.toml"
+    bare.write_text(text[: text.index("[limits]")])
+    assert main(["limits", "--platform", str(bare)]) == 2
     assert "max-speed" in capsys.readouterr().err
+    assert main(["limits", "--platform", str(bare), "--max-speed", "0.1", "--max-accel", "2"]) == 0
+
+
+def test_bundled_controllers(hexapod):
+    from motioncue.output import load_controller
+
+    imax = load_controller("imax6")
+    lim = ActuatorLimits.from_platform(_bare(hexapod), imax)
+    # imax6.toml: PA07 = 3000 rpm, PAa x PAb = 2 x 1500 = 3000 rpm, 5 mm lead
+    np.testing.assert_allclose(lim.v_max, 0.25)
+    np.testing.assert_allclose(lim.a_max, 125.0)
+    # with the platform's own [limits] (250 mm/s, 12 m/s^2) the smaller values win
+    lim = ActuatorLimits.from_platform(hexapod, imax)
+    np.testing.assert_allclose(lim.v_max, 0.25)
+    np.testing.assert_allclose(lim.a_max, 12.0)
+    assert "platform config" in lim.sources["a_max"] and "IMAX" in lim.sources["a_max"]
+    mbox = load_controller("mbox6")
+    lim = ActuatorLimits.from_platform(hexapod, mbox, a_max=4.0)
+    np.testing.assert_allclose(lim.v_max, mbox.max_motor_speed_rpm / 60 * 0.005)
+    seat = motioncue.load_platform("seat3")
+    with pytest.raises(ConfigError, match="max-accel"):
+        ActuatorLimits.from_platform(_bare(seat), load_controller("easysmc"))
+    # easysmc.toml: A3_feed_hz = 20000 pulses/s cap, 2000 pulses/mm -> 10 mm/s
+    lim = ActuatorLimits.from_platform(seat, load_controller("easysmc"), v_max=0.2, a_max=3.0)
+    np.testing.assert_allclose(lim.v_max, 0.01)
+    np.testing.assert_allclose(lim.a_max, 3.0)  # below the seat's own 10 m/s^2
+    assert "feed cap" in lim.sources["v_max"]
+
+
+def test_easysmc_soft_limits_narrow_the_stroke():
+    seat = motioncue.load_platform("seat3")
+    params = {"A3_feed_hz": 400000}
+    ctl = SimpleNamespace(
+        kind="easysmc", n_axes=3, parameters=params, name="e",
+        units=(SimpleNamespace(axes="XYZ"),),
+        soft_limits=lambda: ((-5000, 100000), (-20000, 200000), (0, 50000)),
+    )  # fmt: skip
+    lim = ActuatorLimits.from_platform(seat, ctl, a_max=3.0)
+    q = np.asarray(seat.drives.from_pulses(np.array([[-5000, -20000, 0], [100000, 200000, 50000]])))
+    np.testing.assert_allclose(lim.q_min, np.maximum(seat.q_min, q[0]))
+    np.testing.assert_allclose(lim.q_max, np.minimum(seat.q_max, q[1]))
+    np.testing.assert_allclose(lim.v_max, 0.2)  # 400000 pulses/s at 2000 pulses/mm
+
+
+def test_platform_carried_limits_take_part():
+    p = motioncue.load_platform("seat3")
+    fake = SimpleNamespace(
+        **{k: getattr(p, k) for k in ("n_actuators", "actuator_kinds", "actuator_names",
+                                       "q_min", "q_max", "drives", "name")},
+        v_max=np.array([0.1, 0.2, 0.3]), a_max=2.0,
+    )  # fmt: skip
+    lim = ActuatorLimits.from_platform(fake, v_max=0.15)
+    np.testing.assert_allclose(lim.v_max, [0.1, 0.15, 0.15])
+    np.testing.assert_allclose(lim.a_max, 2.0)
+    assert "platform config" in lim.sources["v_max"]
+
+
+def test_cli_with_a_bundled_controller(capsys):
+    rc = main(["limits", "--platform", "stewart6-linear", "--controller", "imax6", "--json"])
+    assert rc == 0
+    data = json.loads(capsys.readouterr().out)
+    assert len(data["actuators"]) == 6
+    a = data["actuators"][0]
+    assert a["max_speed_pulses_s"] == pytest.approx(0.25 * 2e6)
+    assert a["stroke_pulses"] == [-10000, 270000]
+
+
+def test_jerk_from_platform_and_override_take_the_minimum():
+    p = motioncue.load_platform("seat3").with_actuator_limits(j_max=[100.0, 200.0, 300.0])
+    lim = ActuatorLimits.from_platform(p)
+    np.testing.assert_allclose(lim.j_max, [100.0, 200.0, 300.0])
+    assert lim.sources["j_max"] == "min of: platform config"
+    lim = ActuatorLimits.from_platform(p, j_max=150.0)
+    np.testing.assert_allclose(lim.j_max, [100.0, 150.0, 150.0])
+    assert ActuatorLimits.from_platform(motioncue.load_platform("seat3")).j_max is None

@@ -61,7 +61,7 @@ def _wait(cond: object, timeout_s: float = 3.0) -> bool:
 def test_registry_lists_the_three_games_with_their_default_ports() -> None:
     assert {n: g.default_port for n, g in GAMES.items()} == {
         "f1": 20777,
-        "forza": 5300,
+        "forza": 5301,
         "beamng": 4444,
     }
     for name, info in GAMES.items():
@@ -486,3 +486,52 @@ def test_other_games_packets_are_skipped() -> None:
                         "skipped: wrong size",
                         "skipped: truncated",
                     )
+
+
+# -- offline: datagram recordings as vehicle-motion recordings -----------------------------
+def test_load_motion_reads_both_a_csv_and_a_datagram_recording(tmp_path: Path) -> None:
+    import numpy as np
+
+    from motioncue.telemetry import Recording, load_motion, write_recording_csv
+    from motioncue.telemetry._forza import ForzaMotion
+
+    csv_path = tmp_path / "m.csv"
+    rec = Recording([0.0, 0.5], [[0, 0, 9.8], [1, 2, 3]], [[0, 0, 0], [0.1, 0.2, 0.3]])
+    write_recording_csv(csv_path, rec)
+    back = load_motion(csv_path)
+    assert np.array_equal(back.f, rec.f) and np.array_equal(back.t_s, rec.t_s)
+
+    def forza(race_on: int, ax: float) -> bytes:
+        z = (0.0, 0.0, 0.0)
+        return ForzaMotion(race_on, 1, 1, 1, 1, (ax, 0, 0), z, z, 0, 0, 0).pack() + bytes(164)
+
+    path = tmp_path / "f.mctr"
+    with RecordingWriter(path, "forza", 5300) as w:
+        w.write(10.0, forza(0, 0.0))  # menu
+        w.write(10.5, b"junk")
+        w.write(11.0, forza(1, 2.0))
+        w.write(11.25, forza(1, -1.0))
+    motion = load_motion(path)
+    assert motion.t_s.tolist() == [0.0, 0.25]  # relative to the first kept sample
+    assert motion.f[:, 1].tolist() == pytest.approx([-2.0, 1.0])  # Forza +X right = ISO -y
+    assert motion.f[:, 2] == pytest.approx(9.80665)
+    with_menu = load_motion(path, include_paused=True)
+    assert len(with_menu) == 3 and with_menu.t_s[-1] == pytest.approx(1.25)
+
+    empty = tmp_path / "e.mctr"
+    with RecordingWriter(empty, "beamng", 4444) as w:
+        w.write(0.0, b"xx")
+    with pytest.raises(ConfigError, match=r"no usable motion samples \(skipped: foreign: 1\)"):
+        load_motion(empty)
+
+
+def test_importing_the_readers_does_not_load_numpy() -> None:
+    import subprocess
+    import sys
+
+    code = (
+        "import sys, motioncue.telemetry as t; assert 'numpy' not in sys.modules; "
+        "t.Recording; assert 'numpy' in sys.modules"
+    )
+    env = dict(os.environ, PYTHONPATH=str(Path(__file__).resolve().parents[1] / "src"))
+    subprocess.run([sys.executable, "-c", code], check=True, env=env, timeout=60)

@@ -159,3 +159,38 @@ def test_random_transitions_respect_every_limit_when_sampled(name, seed, rate):
     chk = check_trajectory(padded, dt, lim, history=np.stack([tr.q[0], tr.q[0]]))
     assert chk.ok, chk
     np.testing.assert_allclose(tr.poses[-1], ends[1], atol=1e-12)
+
+
+def test_unsupported_pose_components_are_zeroed():
+    p = motioncue.load_platform("seat3")  # heave, roll, pitch only
+    lim = ActuatorLimits(p.q_min, p.q_max, np.full(3, 0.2), np.full(3, 3.0))
+    tr = transition(p, np.zeros(6), [0.05, 0.05, 0.01, 0.05, 0.0, 0.3], lim, 100.0)
+    assert np.all(tr.poses[:, ~p.dof_mask] == 0.0)
+    np.testing.assert_allclose(tr.q, p.inverse(tr.poses), atol=1e-12)
+    assert tr.check.ok
+
+
+def test_jerk_limited_transitions_and_park(hexapod):
+    lim = ActuatorLimits.from_platform(hexapod, v_max=0.25, a_max=4.0, j_max=60.0)
+    dt = 0.01
+    for tr in (
+        unpark_path(hexapod, lim, 100.0),
+        transition(hexapod, POSES[0][0], POSES[0][1], lim, 100.0),
+        transition_q(np.zeros(6), np.full(6, 0.05), lim, 100.0),
+    ):
+        padded = np.concatenate([tr.q, np.repeat(tr.q[-1:], 3, axis=0)])
+        chk = check_trajectory(padded, dt, lim, history=np.repeat(tr.q[:1], 3, axis=0))
+        assert chk.ok and chk.jerk <= 1e-9, chk
+        assert tr.duration_s == pytest.approx((tr.n_frames - 1) * dt)
+        if not np.isnan(tr.poses).any():
+            np.testing.assert_allclose(hexapod.inverse(tr.poses), tr.q, atol=1e-9)
+    # without the jerk limit the same move is faster (toppra's bang-coast-bang)
+    fast = transition_q(np.zeros(6), np.full(6, 0.05), lim.without_jerk(), 100.0)
+    assert fast.n_frames < tr.n_frames
+    # park from a moving state: brake (jerk-limited), then transition, all within limits
+    q_from = np.full(6, 0.01)
+    v_from = np.array([0.1, -0.1, 0.05, 0.0, 0.2, -0.2])
+    a_from = np.array([1.0, 0.0, -1.0, 0.5, 0.0, 0.0])
+    park = park_path(hexapod, lim, 100.0, q_from=q_from, v_from=v_from, a_from=a_from)
+    assert park.check.ok and park.check.jerk <= 1e-9
+    np.testing.assert_allclose(park.q[-1], hexapod.q_park, atol=1e-9)

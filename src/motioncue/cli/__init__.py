@@ -22,8 +22,9 @@ _VERB_MODULES: tuple[str, ...] = (
     "_cue",
     "_kinematics",
     "_limits",
-    "_control",
+    "_pipeline",
     "_bridge",
+    "_control",
 )
 
 

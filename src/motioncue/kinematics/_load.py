@@ -287,8 +287,45 @@ def platform_from_dict(data: dict, where: str = "<dict>", name: str = "platform"
                 actuator_names=names,
                 description=description,
             )
+    platform = _actuator_limits(cfg, platform, kind)
     cfg.finish()
     return platform
+
+
+def _actuator_limits(cfg: ConfigReader, platform: Platform, kind: str) -> Platform:
+    """The optional ``[limits]`` table: the actuators' own speed/acceleration/jerk limits.
+
+    Linear legs: ``max_speed_mm_s``, ``max_accel_mm_s2``, ``max_jerk_mm_s3``; crank legs:
+    ``max_speed_deg_s``, ``max_accel_deg_s2``, ``max_jerk_deg_s3`` (each one number or one per
+    leg). The yaw axis of ``seat2-yaw``: ``yaw_max_speed_deg_s``, ``yaw_max_accel_deg_s2``,
+    ``yaw_max_jerk_deg_s3``. A quantity is used when it is given for every actuator.
+    """
+    if not cfg.has("limits"):
+        return platform
+    lim = cfg.table("limits")
+    unit, scale = ("deg", math.pi / 180.0) if kind == "stewart6-rotary" else ("mm", _MM)
+    n_legs = _N_LEGS[kind]
+    values: dict[str, np.ndarray | None] = {}
+    for key, what, suffix in (("v_max", "speed", "s"), ("a_max", "accel", "s2"),
+                              ("j_max", "jerk", "s3")):  # fmt: skip
+        name = f"max_{what}_{unit}_{suffix}"
+        legs = (
+            _per_actuator(lim, name, n_legs, None, lo=0.0, lo_open=True) * scale
+            if lim.has(name)
+            else None
+        )
+        if kind == "seat2-yaw":
+            yaw_name = f"yaw_max_{what}_deg_{suffix}"
+            yaw = lim.number(yaw_name, lo=0.0, lo_open=True) if lim.has(yaw_name) else None
+            if (legs is None) != (yaw is None):
+                raise lim.error(
+                    name if legs is None else yaw_name, None, f"both {name} and {yaw_name}"
+                )
+            if legs is not None and yaw is not None:
+                legs = np.append(legs, math.radians(yaw))
+        values[key] = legs
+    lim.finish()
+    return platform.with_actuator_limits(**values)
 
 
 def _rotary(

@@ -136,7 +136,38 @@ class Platform:
         At the neutral pose, pin-to-pin length (m) of linear actuators, crank angle from its
         zero direction (rad) of rotary ones: absolute position = ``q + neutral_absolute``.
     drives : Drive
+    v_max, a_max, j_max : ndarray (n,) or None
+        The actuators' own speed, acceleration and jerk limits (SI: m/s, m/s^2, m/s^3 or
+        rad/s...), when the configuration gives them (see :meth:`with_actuator_limits`);
+        :func:`motioncue.trajectory.ActuatorLimits.from_platform` combines them with the
+        controller's.
     """
+
+    v_max: np.ndarray | None = None
+    a_max: np.ndarray | None = None
+    j_max: np.ndarray | None = None
+
+    def with_actuator_limits(
+        self,
+        v_max: npt.ArrayLike | None = None,
+        a_max: npt.ArrayLike | None = None,
+        j_max: npt.ArrayLike | None = None,
+    ) -> Platform:
+        """A copy carrying the actuators' own limits (each a number or ``n`` numbers, > 0)."""
+        import copy
+
+        out = copy.copy(self)
+        for key, value in (("v_max", v_max), ("a_max", a_max), ("j_max", j_max)):
+            if value is None:
+                continue
+            arr = np.broadcast_to(np.asarray(value, dtype=float), (self.n_actuators,)).copy()
+            if not np.all(np.isfinite(arr) & (arr > 0)):
+                raise ConfigError(
+                    f"{key} = {np.asarray(value).tolist()} is invalid; allowed: finite numbers "
+                    f"> 0, one or {self.n_actuators}"
+                )
+            object.__setattr__(out, key, _readonly(arr))
+        return out
 
     def __init__(
         self,

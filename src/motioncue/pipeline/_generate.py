@@ -108,6 +108,26 @@ def pulse_rounding_limits(limits: Any, platform: Any, dt_s: float) -> Any:
     )
 
 
+def _finish(
+    q_desired: np.ndarray, platform: Any, tight: Any, table: list[dict[str, Any]], dt: float
+) -> tuple[Any, np.ndarray, np.ndarray, np.ndarray, FrameCheck]:
+    """Offline limits (casadi), whole pulses, and the independent check every ride must pass.
+
+    The ride starts from the park position at rest. Returns ``(optimisation, q, pulses, t_s,
+    check)``; raises :class:`LimitError` rather than return frames that break a limit.
+    """
+    from motioncue.trajectory import limit_ride
+
+    opt = limit_ride(q_desired, dt, tight, q0=platform.q_park, v0=np.zeros(platform.n_actuators))
+    q = np.asarray(opt.q, dtype=float)
+    pulses = platform.drives.to_pulses(q)
+    t_s = np.arange(len(q)) * dt
+    check = check_frames(t_s, pulses, table, start_at_rest=True)
+    if not check.ok:
+        raise LimitError(f"generated frames fail the independent limits check: {check.summary()}")
+    return opt, q, pulses, t_s, check
+
+
 def generate_ride(
     recording: Any,
     platform: Any,
@@ -141,7 +161,7 @@ def generate_ride(
     ride, report
     """
     from motioncue.telemetry._recording import resample
-    from motioncue.trajectory import ActuatorLimits, limit_pose, limit_ride, transition
+    from motioncue.trajectory import ActuatorLimits, limit_pose, transition
     from motioncue.washout import ClassicalWashout
 
     def step(name: str, frac: float) -> None:
@@ -170,7 +190,7 @@ def generate_ride(
     wres = ClassicalWashout(cueing, fs_hz=rate_hz).run(rec.f, rec.w)
     lap("cueing")
     step("workspace", 0.2)
-    plim = limit_pose(platform, wres.poses)
+    plim = limit_pose(platform, wres.poses, limits=tight)
     poses_cue_ok = np.asarray(plim.pose, dtype=float)
     lap("workspace")
     step("ramps", 0.35)
@@ -178,20 +198,15 @@ def generate_ride(
     ramp_out = transition(platform, poses_cue_ok[-1], platform.pose_park, tight, rate_hz)
     lap("ramps")
     step("inverse kinematics", 0.45)
-    poses = np.concatenate([ramp_in.poses[:-1], poses_cue_ok, ramp_out.poses[1:]])
+    # ... and one more frame at park, so the ride ends at rest there
+    poses = np.concatenate(
+        [ramp_in.poses[:-1], poses_cue_ok, ramp_out.poses[1:], ramp_out.poses[-1:]]
+    )
     q_desired = platform.inverse(poses)
     lap("inverse kinematics")
     step("actuator limits (casadi)", 0.5)
-    opt = limit_ride(q_desired, dt, tight, q0=platform.q_park, v0=np.zeros(platform.n_actuators))
-    lap("actuator limits")
-    step("pulses", 0.9)
-    q = np.asarray(opt.q, dtype=float)
-    pulses = platform.drives.to_pulses(q)
-    t_s = np.arange(len(q)) * dt
-    check = check_frames(t_s, pulses, table, start_at_rest=True)
-    if not check.ok:
-        raise LimitError(f"generated frames fail the independent limits check: {check.summary()}")
-    lap("pulses and check")
+    opt, q, pulses, t_s, check = _finish(q_desired, platform, tight, table, dt)
+    lap("actuator limits, pulses and check")
     n_in = len(ramp_in.poses) - 1
     cue = slice(n_in, n_in + len(poses_cue_ok))
     status = np.asarray(plim.status)
@@ -236,3 +251,127 @@ def generate_ride(
         stage_s=stage_s,
     )
     return ride, report
+
+
+def _stretch(q: np.ndarray, factor: float, rate_hz: float, n_out: int) -> np.ndarray:
+    """Resample a rest-to-rest move ``q (M, n)`` slowed down by ``factor >= 1`` to ``n_out``
+    frames: speeds scale by ``1/factor`` and accelerations by ``1/factor^2``."""
+    from scipy.interpolate import CubicSpline
+
+    t_src = np.arange(len(q)) / rate_hz
+    t_new = np.minimum(np.arange(n_out) / rate_hz / factor, t_src[-1])
+    if len(q) < 2:
+        return np.repeat(q[:1], n_out, axis=0)
+    spline = CubicSpline(t_src, q, axis=0, bc_type="clamped")
+    out = spline(t_new)
+    out[-1] = q[-1]
+    return np.asarray(out)
+
+
+def generate_keyframe_ride(
+    keyframes: Any,
+    platform: Any,
+    controller: Any,
+    *,
+    rate_hz: float = 100.0,
+    limits: Any = None,
+    source: str = "",
+    platform_name: str | None = None,
+    controller_name: str | None = None,
+) -> tuple[Ride, dict[str, Any]]:
+    """A ride through authored pose keyframes, without cueing.
+
+    Timing rule: when no keyframe has a time, the ride is the time-optimal move through all of
+    them (toppra, not stopping at keyframes). When times are given, the platform reaches each
+    keyframe at its time, at rest: each segment is the time-optimal rest-to-rest move slowed
+    down to fill its interval; a segment that cannot be done in its interval arrives late by the
+    overrun (counted in ``late_keyframes``), and later keyframes shift by it. A keyframe with a
+    free time (empty cell) is reached as soon as possible. The ride starts and ends parked.
+    Effect outputs (``dout``, DACs) switch at the frame each keyframe is reached.
+
+    Returns
+    -------
+    ride, info
+        ``info`` has ``late_keyframes``, ``max_late_s`` and ``keyframe_frames``.
+    """
+    from motioncue.trajectory import ActuatorLimits, transition, transition_through
+
+    dt = 1.0 / rate_hz
+    if limits is None:
+        limits = ActuatorLimits.from_platform(platform, controller)
+    table = limits.to_pulses_table(platform)
+    tight = pulse_rounding_limits(limits, platform, dt)
+    poses = np.asarray(keyframes.poses, dtype=float)
+    times = np.asarray(keyframes.t_s, dtype=float)
+    park = np.asarray(platform.pose_park, dtype=float)
+    segments: list[np.ndarray] = []
+    arrive: list[int] = []
+    late = 0
+    max_late = 0.0
+    if not np.any(np.isfinite(times)):
+        tr = transition_through(platform, np.vstack([park, poses, park]), tight, rate_hz)
+        q_all = tr.q
+        # frames at which each keyframe is reached: nearest path samples
+        q_kf = platform.inverse(poses)
+        for qk in q_kf:
+            arrive.append(int(np.argmin(np.linalg.norm(q_all - qk, axis=1))))
+    else:
+        first = transition(platform, park, poses[0], tight, rate_hz)
+        move = np.vstack([first.q, first.q[-1:]])  # arrive, then one frame at rest
+        need = len(move) - 1
+        wait = round(times[0] * rate_hz) - need if np.isfinite(times[0]) else 0
+        if wait < 0:
+            late, max_late = 1, -wait * dt
+        segments.append(np.vstack([np.repeat(move[:1], max(wait, 0), axis=0), move]))
+        n_frames = len(segments[0])
+        arrive.append(n_frames - 1)
+        for k in range(1, len(poses)):
+            tr = transition(platform, poses[k - 1], poses[k], tight, rate_hz)
+            need = len(tr.q) - 1
+            if np.isfinite(times[k]) and np.isfinite(times[k - 1]):
+                slot = round((times[k] - times[k - 1]) * rate_hz)
+            else:
+                slot = need
+            if slot - 1 < need:
+                late += 1
+                max_late = max(max_late, (need + 1 - slot) * dt)
+                seg = np.vstack([tr.q, tr.q[-1:]])
+            else:
+                # arrive one frame early and hold, so the keyframe's frame is at rest there
+                seg = _stretch(tr.q, (slot - 1) / max(need, 1), rate_hz, slot)
+                seg = np.vstack([seg, seg[-1:]])
+            segments.append(seg[1:])
+            n_frames += len(seg) - 1
+            arrive.append(n_frames - 1)
+        back = transition(platform, poses[-1], park, tight, rate_hz)
+        segments.append(back.q[1:])
+        q_all = np.concatenate(segments)
+    q_all = np.vstack([q_all, q_all[-1:]])  # one more frame at park: the ride ends at rest
+    opt, q, pulses, t_s, check = _finish(q_all, platform, tight, table, dt)
+    dout = np.zeros(len(q), dtype=np.int64)
+    dacs = np.zeros((len(q), 2), dtype=np.int64)
+    for k, frame in enumerate(arrive):
+        dout[frame:] = keyframes.dout[k]
+        dacs[frame:] = keyframes.dacs[k]
+    dout[arrive[-1] + 1 :] = 0  # effects off while parking
+    dacs[arrive[-1] + 1 :] = 0
+    ride = Ride(
+        platform=platform_name or platform.name,
+        controller=controller_name or controller.name,
+        rate_hz=rate_hz,
+        actuator_names=platform.actuator_names,
+        t_s=t_s,
+        pulses=pulses,
+        dout=dout,
+        dacs=dacs,
+        limits={"actuators": table},
+        source=source,
+        notes={
+            "keyframe_frames": arrive,
+            "late_keyframes": late,
+            "max_late_s": max_late,
+            "optimisation_status": str(opt.status),
+            "frame_check": check.summary(),
+        },
+    )
+    return ride, {"late_keyframes": late, "max_late_s": max_late, "keyframe_frames": arrive}

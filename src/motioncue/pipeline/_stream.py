@@ -64,17 +64,29 @@ class OutputStage:
     _limiter: Any = None
     _state: Any = None
     _encoder: Any = None
+    _streamer: Any = None
 
     def __post_init__(self) -> None:
-        from motioncue.trajectory import RealtimeLimiter
+        from motioncue.trajectory import JerkLimiter, RealtimeLimiter
 
         self.dt_s = 1.0 / self.rate_hz
         tight = pulse_rounding_limits(self.limits, self.platform, self.dt_s)
-        self._limiter = RealtimeLimiter(tight, self.dt_s)
+        # a configured jerk limit needs the jerk-aware limiter (slower, still well inside a
+        # frame); without one the acceleration-limited limiter is exact and cheaper
+        limiter_cls = RealtimeLimiter if tight.j_max is None else JerkLimiter
+        self._limiter = limiter_cls(tight, self.dt_s)
         q0 = self.platform.q_park if self.q_start is None else np.asarray(self.q_start, float)
         self._state = self._limiter.initial_state(q0)
         self.last_pulses = self.platform.drives.to_pulses(np.asarray(q0, dtype=float))
         self._encoder = make_frame_encoder(self.controller, self.rate_hz, self.last_pulses)
+        if self.controller.kind == "easysmc" and _is_serial(self.transport):
+            # A live serial link: commands go through the flow-controlled streamer that keeps
+            # the controller's 63-command buffer fed without overflowing it.
+            from motioncue.output.easysmc import EasySmcLink, EasySmcStreamer
+
+            link = EasySmcLink(self.transport)
+            self._streamer = EasySmcStreamer.for_controller(self.controller, link, self.rate_hz)
+            self._streamer.send_all(self.controller.setup_commands())
 
     @property
     def q(self) -> np.ndarray:
@@ -94,8 +106,15 @@ class OutputStage:
         pulses = self.platform.drives.to_pulses(np.asarray(q_out, dtype=float))
         if not np.all(np.isfinite(q_out)):  # the limiter guarantees this; never send NaN
             raise LimitError("limiter produced a non-finite position; frame not sent")
-        for msg in self._encoder.encode(self.t_s, [int(p) for p in pulses], dout, dacs):
-            self.transport.send(msg, t_s=self.t_s)
+        frame = [int(p) for p in pulses]
+        if self._streamer is not None:
+            self._streamer.send_all(self._encoder.encode_commands(self.t_s, frame, dout, dacs))
+            if (self.frames + 1) % self._streamer.poll_every_frames == 0:
+                for addr in self._streamer.sent:
+                    self._streamer.poll(addr)
+        else:
+            for msg in self._encoder.encode(self.t_s, frame, dout, dacs):
+                self.transport.send(msg, t_s=self.t_s)
         self.last_pulses = pulses
         self.frames += 1
         self.t_s += self.dt_s
@@ -116,6 +135,12 @@ class OutputStage:
         span = float(np.max(lim.q_max - lim.q_min))
         v, a = float(np.min(lim.v_max)), float(np.min(lim.a_max))
         return math.ceil((span / v + 2 * v / a) / self.dt_s) + 10
+
+
+def _is_serial(transport: Any) -> bool:
+    from motioncue.output._transport_serial import SerialTransport
+
+    return isinstance(transport, SerialTransport)
 
 
 @dataclass(frozen=True)
@@ -141,6 +166,8 @@ def play_ride(
     speed: float = 1.0,
     paced: bool = True,
     stop: Any = None,
+    spin_s: float = 0.001,
+    throttle: Any = None,
 ) -> PlayReport:
     """Stream a ride's frames on time, from park, then park.
 
@@ -158,6 +185,12 @@ def play_ride(
         False: send as fast as possible (files and pcaps).
     stop : callable, optional
         Polled each frame; True stops the ride (then parks).
+    spin_s : float
+        Busy-wait before each deadline (s) for low jitter; 0 sleeps only (kinder to other
+        threads of this process, such as an in-process emulator).
+    throttle : callable, optional
+        Called with the number of frames sent before each frame; may block (back-pressure
+        from a receiver that reports its progress).
     """
     stage = OutputStage(platform, controller, limits, ride.rate_hz, transport)
     q_frames = platform.drives.from_pulses(ride.pulses)
@@ -170,9 +203,11 @@ def play_ride(
             if stop is not None and stop():
                 interrupted = True
                 break
+            if throttle is not None:
+                throttle(stage.frames)
             if paced:
                 deadline = t0 + float(ride.t_s[k]) / speed
-                if wait_until(deadline) > 0.5 * stage.dt_s / speed:
+                if wait_until(deadline, spin_s) > 0.5 * stage.dt_s / speed:
                     late += 1
             stage.emit(q_frames[k], int(ride.dout[k]), (int(ride.dacs[k, 0]), int(ride.dacs[k, 1])))
             sent += 1
@@ -183,7 +218,7 @@ def play_ride(
     t_park = time.perf_counter()
     while not stage.parked and park < bound:
         if paced:
-            wait_until(t_park + (park + 1) * stage.dt_s / speed)
+            wait_until(t_park + (park + 1) * stage.dt_s / speed, spin_s)
         stage.park_step()
         park += 1
     return PlayReport(

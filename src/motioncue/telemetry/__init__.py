@@ -5,13 +5,13 @@ body frame, x forward, y left, z up; specific force ``f = a - g`` in m/s^2, ``(0
 +9.80665)`` at rest; angular velocity in rad/s) and flags paused or menu states. Games:
 
 * ``f1``: EA SPORTS F1 23 / 24 / 25 (Motion + Motion Ex, Session for pause), port 20777
-* ``forza``: Forza Motorsport 7 / 2023 and Forza Horizon 4 / 5 / 6 Data Out, port 5300
+* ``forza``: Forza Motorsport 7 / 2023 and Forza Horizon 4 / 5 / 6 Data Out, port 5301
 * ``beamng``: BeamNG.drive MotionSim (``BNG1``), port 4444
 
 Typical use::
 
     from motioncue.telemetry import open_source
-    src = open_source("f1")            # or "forza:5300", "replay:lap.mctr?speed=1"
+    src = open_source("f1")            # or "forza:5301", "replay:lap.mctr?speed=1"
     s = src.latest(max_age_s=0.25)     # TelemetrySample | None, never blocks
     src.close()
 
@@ -23,6 +23,7 @@ recorded (:func:`record`, ``motioncue record``) to a documented container and re
 from __future__ import annotations
 
 import importlib
+from typing import TYPE_CHECKING, Any
 
 from ._container import (
     DatagramRecording,
@@ -33,6 +34,7 @@ from ._container import (
     read_recording_file,
     record,
 )
+from ._motion import is_datagram_recording, load_motion, samples_to_recording
 from ._registry import GAMES, GameInfo, decoder_for, register_game
 from ._sample import (
     G0_M_S2,
@@ -44,6 +46,9 @@ from ._sample import (
 )
 from ._source import ReplaySource, TelemetrySource, open_source
 
+if TYPE_CHECKING:
+    from ._recording import Recording, read_recording_csv, resample, write_recording_csv
+
 __all__ = [
     "G0_M_S2",
     "GAMES",
@@ -52,6 +57,7 @@ __all__ = [
     "Decoder",
     "GameInfo",
     "RecordSummary",
+    "Recording",
     "RecordingWriter",
     "ReplaySource",
     "SampleArrays",
@@ -59,13 +65,32 @@ __all__ = [
     "TelemetrySource",
     "decode_recording",
     "decoder_for",
+    "is_datagram_recording",
     "iter_recording_samples",
+    "load_motion",
     "open_source",
+    "read_recording_csv",
     "read_recording_file",
     "record",
     "register_game",
+    "resample",
     "samples_to_arrays",
+    "samples_to_recording",
+    "write_recording_csv",
 ]
+
+# The vehicle-motion CSV recordings (numpy-backed) load on first use, so that importing the
+# telemetry readers for the live path stays light.
+_LAZY = {"Recording", "read_recording_csv", "resample", "write_recording_csv"}
+
+
+def __getattr__(name: str) -> Any:
+    if name in _LAZY:
+        from . import _recording
+
+        return getattr(_recording, name)
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+
 
 # One module per game; each registers itself in GAMES on import.
 _GAME_MODULES: tuple[str, ...] = ("_f1", "_forza", "_beamng")

@@ -55,7 +55,9 @@ from ._sample import G0_M_S2, Decoder, DecodeResult, up_in_body_from_angles
 
 __all__ = ["FORZA_LAYOUTS", "SLED_HEAD", "SLED_SIZE", "ForzaDecoder", "ForzaMotion"]
 
-DEFAULT_PORT = 5300  # Forza has no default port; 5300 is the usual choice of tools
+# Forza has no default port. Tools often use 5300, but the Forza Horizon 6 documentation asks
+# to avoid 5200-5300 (the game binds its own outgoing socket there), so: the first one above.
+DEFAULT_PORT = 5301
 
 SLED_HEAD = struct.Struct("<iI3f3f3f3f3f")
 """IsRaceOn, TimestampMS, 3 rpm, acceleration[3], velocity[3], angular velocity[3],

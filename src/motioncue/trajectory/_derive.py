@@ -13,11 +13,14 @@ Stroke
       positions sent would be wrong and a :class:`~motioncue.ConfigError` is raised.
     * IMAX: the manual defines no stroke parameter (PA42 is called "maximum stroke" in 5.7
       but "axis-1 lift" in the parameter table), so none is taken from it.
+    * EasySmc 2300: the per-axis soft limits (commands 21..23/27..29, AF), in pulses.
 
 Speed (``v_max``)
     The smallest of: the override ``v_max``; IMAX ``PA07`` (global, rpm), ``PA8x`` (per axis,
     rpm, 0 = none), ``PAax x PAbx`` (per axis; 5.10: their product is the axis' maximum
-    speed in rpm); MBOX ``max_motor_speed_rpm`` when the controller description has it.
+    speed in rpm); MBOX ``max_motor_speed_rpm`` when the controller description has it;
+    EasySmc: the ``A3_feed_hz`` / ``A6_feed_hz`` cap (pulses/s; a necessary bound only, as
+    each frame's move also ramps at the controller's accelerations from its start frequency).
     rpm become SI through the platform's drive: ``rpm / 60 * units_per_rev`` (the screw lead
     for a cylinder, ``2 pi / gear_ratio`` for a crank). IMAX ``PA41`` (lead, 0.1 mm) must
     agree with the platform's lead for linear actuators.
@@ -31,7 +34,12 @@ Acceleration (``a_max``)
     limit should be given as an override.
 
 Jerk (``j_max``)
-    Only from the override (no controller parameter defines it).
+    Only from the override or the platform (no controller parameter defines it).
+
+Platform
+    A platform description that carries ``v_max`` / ``a_max`` / ``j_max`` (SI, per actuator;
+    the platform config's optional ``[limits]`` table) takes part in the minimum like any
+    other source.
 
 A quantity with no source raises :class:`~motioncue.ConfigError` naming what to give.
 """
@@ -160,11 +168,43 @@ def limits_from_platform(
                 v_cands.append(
                     (np.full(n, float(rpm_m)) / 60.0 * units_per_rev, "MBOX max_motor_speed_rpm")
                 )
-        elif kind is not None and kind != "easysmc":
+        elif kind == "easysmc":
+            ppu = np.abs(np.asarray(drives.pulses_per_unit, dtype=float))
+            soft = getattr(controller, "soft_limits", None)
+            if callable(soft):
+                pulses = np.array(soft(), dtype=np.int64).T  # (2, n): negative, positive
+                ends = np.asarray(drives.from_pulses(pulses), dtype=float)
+                lo, hi = np.minimum(ends[0], ends[1]), np.maximum(ends[0], ends[1])
+                q_min, q_max = np.maximum(q_min, lo), np.minimum(q_max, hi)
+                sources["stroke"] += " within EasySmc soft limits (21..29, AF)"
+            units = getattr(controller, "units", ())
+            caps = [
+                float(params[f"{'A3' if u.axes == 'XYZ' else 'A6'}_feed_hz"])
+                for u in units
+                for _ in u.axes
+                if f"{'A3' if u.axes == 'XYZ' else 'A6'}_feed_hz" in params
+            ]
+            if len(caps) == n:
+                v_cands.append(
+                    (
+                        np.asarray(caps) / ppu,
+                        "EasySmc A3/A6 feed cap, pulses/s (necessary only: each frame's move "
+                        "also ramps at the A3/A6 accelerations from the start frequency)",
+                    )
+                )
+        elif kind is not None:
             raise ConfigError(
                 f"controller kind {kind!r} is unknown; allowed: imax | mbox | easysmc"
             )
 
+    # a platform description may carry its own actuator limits (SI arrays v_max / a_max /
+    # j_max), e.g. the servo's rated speed; they take part like any other source
+    for attr, cands in (("v_max", v_cands), ("a_max", a_cands)):
+        own = getattr(platform, attr, None)
+        if own is not None:
+            arr = _per_axis(f"platform {attr}", own, n)
+            if arr is not None:
+                cands.append((arr, "platform config"))
     ov_v = _per_axis("v_max", v_max, n)
     ov_a = _per_axis("a_max", a_max, n)
     if ov_v is not None:
@@ -184,7 +224,17 @@ def limits_from_platform(
     a = np.min(np.stack([c for c, _ in a_cands]), axis=0)
     sources["v_max"] = "min of: " + "; ".join(s for _, s in v_cands)
     sources["a_max"] = "min of: " + "; ".join(s for _, s in a_cands)
-    j = _per_axis("j_max", j_max, n)
-    if j is not None:
-        sources["j_max"] = "given"
+    j_cands: list[tuple[np.ndarray, str]] = []
+    own_j = getattr(platform, "j_max", None)
+    if own_j is not None:
+        arr = _per_axis("platform j_max", own_j, n)
+        if arr is not None:
+            j_cands.append((arr, "platform config"))
+    ov_j = _per_axis("j_max", j_max, n)
+    if ov_j is not None:
+        j_cands.append((ov_j, "given"))
+    j = None
+    if j_cands:
+        j = np.min(np.stack([c for c, _ in j_cands]), axis=0)
+        sources["j_max"] = "min of: " + "; ".join(s for _, s in j_cands)
     return ActuatorLimits(q_min, q_max, v, a, j, tuple(platform.actuator_names), kinds, sources)

@@ -28,8 +28,9 @@ Solution strategy (so that 10-minute rides work):
 5. the objective is compared with the real-time limiter's output on the same input; if the
    limiter happened to be closer (possible in principle because windows and chunks are
    local), the limiter's output is returned (status ``"realtime"``). With a jerk limit the
-   limiter's output competes only when it happens to meet the jerk limit too. If no
-   candidate meets every limit, :class:`~motioncue.LimitError` is raised (never returned).
+   baseline is the :class:`JerkLimiter`, and the solver's result must meet the jerk limit
+   by itself (the exact repair pass is second order); if it does not, the baseline is
+   returned. If no candidate meets every limit, :class:`~motioncue.LimitError` is raised.
 
 The input is returned unchanged (status ``"unchanged"``) when it is already feasible.
 Non-finite desired frames get weight 0 (the optimiser bridges them).
@@ -45,6 +46,7 @@ from typing import Any
 import numpy as np
 
 from .._errors import ConfigError, LimitError
+from ._jerk import JerkLimiter
 from ._limits import ActuatorLimits, LimitCheck, check_trajectory
 from ._realtime import RealtimeLimiter
 
@@ -80,6 +82,9 @@ class OptimisedRide:
     n_repaired : int
         Frames the final exact limiter pass had to change (0 when the solver met the
         tightened limits; any change is counted and reported, never hidden).
+    n_solver_failures : int
+        Chunks where Ipopt did not report success (their result still went through the
+        exact repair and the check; counted so that it is never silent).
     solve_time_s : float
         Wall time of the whole call.
     """
@@ -94,6 +99,7 @@ class OptimisedRide:
     check: LimitCheck
     n_windows: int
     n_repaired: int
+    n_solver_failures: int
     solve_time_s: float
 
 
@@ -204,9 +210,10 @@ def _windows(bad: np.ndarray, pad: int, n_frames: int) -> list[tuple[int, int]]:
     """Merged [start, end) windows around bad frames, grown by pad, rounded to _BLOCK."""
     idx = np.flatnonzero(bad)
     out: list[tuple[int, int]] = []
+    gap = _BLOCK + 4  # closer windows are merged: rounding and joins never reach the next
     for k in idx:
         s, e = max(0, int(k) - pad), min(n_frames, int(k) + pad + 1)
-        if out and s <= out[-1][1]:
+        if out and s <= out[-1][1] + gap:
             out[-1] = (out[-1][0], max(out[-1][1], e))
         else:
             out.append((s, e))
@@ -215,7 +222,7 @@ def _windows(bad: np.ndarray, pad: int, n_frames: int) -> list[tuple[int, int]]:
         length = _BLOCK * math.ceil((e - s) / _BLOCK)
         e2 = min(n_frames, s + length)
         s2 = max(0, e2 - length)
-        if rounded and s2 <= rounded[-1][1]:
+        if rounded and s2 <= rounded[-1][1] + gap:
             rounded[-1] = (rounded[-1][0], max(rounded[-1][1], e2))
         else:
             rounded.append((s2, e2))
@@ -275,6 +282,9 @@ def limit_ride(
     w = np.where(finite, w, 0.0)
 
     rt = RealtimeLimiter(limits.without_jerk(), dt_s)
+    # the real-time baseline: with a jerk limit, the jerk-limited limiter (so it competes
+    # on equal terms); the exact repair pass uses the second-order limiter in both cases
+    baseline: Any = rt if limits.j_max is None else JerkLimiter(limits, dt_s)
     if q0 is None:
         first = np.array(
             [qd[np.argmax(finite[:, i]), i] if finite[:, i].any() else np.nan for i in range(n)]
@@ -284,11 +294,13 @@ def limit_ride(
     q0 = np.asarray(q0, dtype=float).reshape(n)
     v0 = np.zeros(n) if v0 is None else np.asarray(v0, dtype=float).reshape(n)
     hist = np.stack([q0 - 2 * v0 * dt_s, q0 - v0 * dt_s, q0])  # oldest first, 3 frames
-    state = rt.initial_state(q0, v0)  # raises if the initial state is not admissible
-    q_rt = rt.run(state, qd)
+    state = baseline.initial_state(q0, v0)  # raises if the state is not admissible
+    q_rt = baseline.run(state, qd)
     obj_rt = float(np.sum(w * np.where(finite, q_rt - qd, 0.0) ** 2))
 
-    def result(q: np.ndarray, status: str, n_windows: int, n_rep: int) -> OptimisedRide:
+    def result(
+        q: np.ndarray, status: str, n_windows: int, n_rep: int, n_failed: int = 0
+    ) -> OptimisedRide:
         dev = np.where(finite, np.abs(q - qd), 0.0)
         k, i = np.unravel_index(int(np.argmax(dev)), dev.shape)
         cnt = np.maximum(finite.sum(axis=0), 1)
@@ -305,6 +317,7 @@ def limit_ride(
             check=check_trajectory(q, dt_s, limits, history=hist),
             n_windows=n_windows,
             n_repaired=n_rep,
+            n_solver_failures=n_failed,
             solve_time_s=time.perf_counter() - t_start,
         )
 
@@ -334,6 +347,7 @@ def limit_ride(
                      limits.q_min - span, limits.q_max + span)  # fmt: skip
     q_opt = np.where(finite, qd, q_rt).copy()
     n_windows = 0
+    n_failed = 0
     for i in range(n):
         s_i = float(limits.a_max[i]) * dt_s**2  # scale: one unit = full accel for one frame
         off = float(0.5 * (limits.q_min[i] + limits.q_max[i]))
@@ -380,7 +394,8 @@ def limit_ride(
                 if last and not at_end:
                     # join to the fixed (desired, feasible) frames after the solved range
                     tail = x_all[H0 + start + length : H0 + start + length + h]
-                x, _ok = sol.solve(xd, ww, hist_x, tail, bounds, xi)
+                x, ok = sol.solve(xd, ww, hist_x, tail, bounds, xi)
+                n_failed += 0 if ok else 1
                 keep = min(m, length) if last else length - overlap
                 x_all[H0 + start : H0 + start + keep] = x[:keep]
                 if last:
@@ -392,10 +407,10 @@ def limit_ride(
     state2 = rt.initial_state(q0, v0)
     q_fin = rt.run(state2, q_opt)
     n_rep = int(state2.n_clamped)
-    out = result(q_fin, "optimised", n_windows, n_rep)
-    fallback = result(q_rt, "realtime", n_windows, n_rep)
-    # the real-time limiter's output competes only where it meets every limit (it does not
-    # enforce jerk, so with a jerk limit it may not)
+    out = result(q_fin, "optimised", n_windows, n_rep, n_failed)
+    fallback = result(q_rt, "realtime", n_windows, n_rep, n_failed)
+    # the real-time limiter's output competes where it meets every limit (always, up to
+    # round-off; checked rather than assumed)
     if fallback.check.ok and (not out.check.ok or out.objective > obj_rt):
         return fallback
     if not out.check.ok:

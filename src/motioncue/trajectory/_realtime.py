@@ -152,9 +152,9 @@ class RealtimeLimiter:
     Parameters
     ----------
     limits : ActuatorLimits
-        Stroke, speed and acceleration per actuator. A jerk limit is not handled by this
-        limiter (it raises :class:`~motioncue.ConfigError`; use ``limits.without_jerk()``
-        explicitly, and :func:`limit_ride` for jerk-limited offline rides).
+        Stroke, speed and acceleration per actuator. With a jerk limit this class raises
+        :class:`~motioncue.ConfigError`: use :class:`JerkLimiter` (or pass
+        ``limits.without_jerk()`` explicitly).
     dt_s : float
         Frame period (s), in (0, 1].
 
@@ -172,8 +172,8 @@ class RealtimeLimiter:
             raise ConfigError(f"dt_s = {self.dt_s!r} is invalid; allowed: a period in (0, 1] s")
         if self.limits.j_max is not None:
             raise ConfigError(
-                "RealtimeLimiter does not enforce jerk limits; pass limits.without_jerk() "
-                "explicitly (jerk is honoured by limit_ride)"
+                "RealtimeLimiter does not enforce jerk limits; use JerkLimiter, or pass "
+                "limits.without_jerk() explicitly"
             )
         lim = self.limits
         dt = float(self.dt_s)
@@ -227,6 +227,8 @@ class RealtimeLimiter:
     def initial_state(self, q0: Any, v0: Any = None) -> LimiterState:
         """State for a stream whose last sent frame is ``q0`` (n,) moving at ``v0`` (n,).
 
+        ``v0`` may be a scalar (same speed on every axis; default 0, at rest).
+
         Raises
         ------
         LimitError
@@ -236,6 +238,8 @@ class RealtimeLimiter:
         n = self.n_actuators
         q = np.asarray(q0, dtype=float).reshape(-1)
         v = np.zeros(n) if v0 is None else np.asarray(v0, dtype=float).reshape(-1)
+        if v.size == 1:
+            v = np.full(n, float(v[0]))
         if q.shape != (n,) or v.shape != (n,):
             raise ConfigError(f"initial state needs {n} positions and speeds")
         if not self.is_admissible(q, v):

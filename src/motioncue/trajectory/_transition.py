@@ -16,6 +16,11 @@ slightly in between), the transition is recomputed with limits scaled by 0.97, u
 the scale used is reported (``limit_scale``; the first attempt uses ``1 - 1e-5``, room for
 toppra's own solver tolerance). A transition that still fails raises
 :class:`~motioncue.LimitError`; no frame that breaks a limit is returned.
+
+toppra knows no jerk limit. With a jerk limit in ``limits``, the sampled frames are passed
+through the :class:`JerkLimiter` from rest, which then settles on the end position at rest;
+frames it changed leave the geometric path slightly (their poses come from the forward
+kinematics), ``duration_s`` becomes the time of the last frame, and the check includes jerk.
 """
 
 from __future__ import annotations
@@ -28,6 +33,7 @@ from typing import Any
 import numpy as np
 
 from .._errors import ConfigError, LimitError
+from ._jerk import JerkLimiter
 from ._limits import ActuatorLimits, LimitCheck, check_trajectory
 from ._realtime import RealtimeLimiter
 
@@ -44,6 +50,7 @@ __all__ = [
 
 _RETRY_SCALE = 0.97
 _RETRIES = 8
+_MAX_SETTLE_FRAMES = 100_000
 
 
 @dataclass(frozen=True, eq=False)
@@ -161,6 +168,7 @@ def _run(
     limits: ActuatorLimits,
     rate_hz: float,
     n_grid: int,
+    pose_of_q: Any = None,
 ) -> Transition:
     if not (isinstance(rate_hz, int | float) and 1.0 <= rate_hz <= 10000.0):
         raise ConfigError(f"rate_hz = {rate_hz!r} is invalid; allowed: [1, 10000] Hz")
@@ -183,12 +191,55 @@ def _run(
         q = q_of_s(s)
         chk = _check(q, rate_hz, limits)
         if chk.ok:
-            return Transition(
+            tr = Transition(
                 t_s=np.arange(s.size) / rate_hz, q=q, poses=pose_of_s(s),
                 duration_s=duration, limit_scale=scale, check=chk,
             )  # fmt: skip
+            return tr if limits.j_max is None else _jerk_smooth(tr, limits, rate_hz, pose_of_q)
         scale *= _RETRY_SCALE
     raise LimitError(f"transition still breaks the limits at scale {scale:.3f}: {chk}")
+
+
+def _jerk_smooth(
+    tr: Transition, limits: ActuatorLimits, rate_hz: float, pose_of_q: Any
+) -> Transition:
+    """Pass a toppra transition through the :class:`JerkLimiter` from rest and let it
+    settle on the end position at rest (toppra knows no jerk limit)."""
+    dt = 1.0 / rate_hz
+    jl = JerkLimiter(limits, dt)
+    state = jl.initial_state(tr.q[0])
+    rows = [tr.q[0].tolist()]
+    for row in tr.q[1:].tolist():
+        rows.append(jl.step(state, row))
+    end = tr.q[-1].tolist()
+    for _ in range(_MAX_SETTLE_FRAMES):
+        if state.q == end and not any(state.v) and not any(state.a):
+            break
+        rows.append(jl.step(state, end))
+    else:
+        raise LimitError("the jerk-limited transition did not settle at its end position")
+    q = np.asarray(rows, dtype=float)
+    poses = np.full((q.shape[0], 6), np.nan)
+    m = tr.q.shape[0]
+    same = np.zeros(q.shape[0], dtype=bool)
+    same[:m] = np.all(q[:m] == tr.q, axis=1)
+    poses[:m][same[:m]] = tr.poses[same[:m]]
+    if pose_of_q is not None:
+        guess = tr.poses[0]
+        for k in range(q.shape[0]):
+            if same[k]:
+                guess = poses[k]
+                continue
+            poses[k] = pose_of_q(q[k], guess)
+            guess = poses[k]
+    padded = np.concatenate([q, q[-1:], q[-1:], q[-1:]])
+    chk = check_trajectory(padded, dt, limits, history=np.stack([q[0], q[0], q[0]]))
+    if not chk.ok:
+        raise LimitError(f"jerk-limited transition breaks a limit: {chk}")
+    return Transition(
+        t_s=np.arange(q.shape[0]) / rate_hz, q=q, poses=poses,
+        duration_s=(q.shape[0] - 1) / rate_hz, limit_scale=tr.limit_scale, check=chk,
+    )  # fmt: skip
 
 
 def transition(
@@ -215,7 +266,10 @@ def transition(
 def transition_through(
     platform: Any, keyframes: Any, limits: ActuatorLimits, rate_hz: float, *, n_grid: int = 100
 ) -> Transition:
-    """Fastest move through keyframe poses (K, 6), K >= 2, timing free, rest at both ends."""
+    """Fastest move through keyframe poses (K, 6), K >= 2, timing free, rest at both ends.
+
+    Pose components the platform cannot produce (``~platform.dof_mask``) are set to zero.
+    """
     poses = np.asarray(keyframes, dtype=float)
     if poses.ndim != 2 or poses.shape[1] != 6 or poses.shape[0] < 2:
         raise ConfigError(f"keyframes have shape {poses.shape}; expected (K >= 2, 6)")
@@ -227,12 +281,21 @@ def transition_through(
         )
     if poses.shape[0] > 2 and np.any(np.all(np.diff(poses, axis=0) == 0, axis=1)):
         raise ConfigError("keyframes must differ from their neighbours")
+    # components the machine cannot produce are held at zero (as the inverse kinematics
+    # does), so that the poses returned are the poses the frames produce
+    poses = np.where(np.asarray(platform.dof_mask, dtype=bool), poses, 0.0)
     pose_of_s = _pose_path(poses)
 
     def q_of_s(s: np.ndarray) -> np.ndarray:
         return np.asarray(platform.inverse(pose_of_s(s)), dtype=float)
 
-    return _run(q_of_s, pose_of_s, limits, rate_hz, n_grid)
+    def pose_of_q(q: np.ndarray, guess: np.ndarray) -> np.ndarray:
+        fk = platform.forward(q, guess=guess)
+        if not fk.converged:
+            raise LimitError(f"cannot find the pose of q = {q.tolist()} (FK failed)")
+        return np.asarray(fk.pose, dtype=float)
+
+    return _run(q_of_s, pose_of_s, limits, rate_hz, n_grid, pose_of_q)
 
 
 def transition_q(
@@ -261,23 +324,29 @@ def _pose6(name: str, pose: Any) -> np.ndarray:
 
 
 # ------------------------------------------------------------------------ park / unpark
-def brake_to_rest(limiter: RealtimeLimiter, state: Any, max_frames: int = 100000) -> np.ndarray:
+def brake_to_rest(limiter: Any, state: Any, max_frames: int = 100000) -> np.ndarray:
     """Frames (M, n) that bring a moving limiter state to rest as fast as the limits allow.
 
-    Each axis heads for its own stopping point ``q + D(v)`` (the discrete braking distance,
-    inside the stroke for an admissible state), which the limiter reaches at rest by
-    braking at full deceleration. ``state`` is advanced; M = 0 if already at rest.
+    :class:`RealtimeLimiter`: each axis heads for its own stopping point ``q + D(v)`` (the
+    discrete braking distance, inside the stroke for an admissible state), which the
+    limiter reaches at rest by braking at full deceleration. :class:`JerkLimiter`: each
+    frame asks to stay where the last frame is, which makes it apply its braking policy.
+    ``state`` is advanced; M = 0 if already at rest.
     """
     from ._realtime import braking_distance
 
     lim = limiter.limits
-    target = [
-        q + math.copysign(braking_distance(v, float(lim.a_max[i]), limiter.dt_s), v)
-        for i, (q, v) in enumerate(zip(state.q, state.v, strict=True))
-    ]
     frames: list[list[float]] = []
-    while any(v != 0.0 for v in state.v) and len(frames) < max_frames:
-        frames.append(limiter.step(state, target))
+    if isinstance(limiter, JerkLimiter):
+        while (any(state.v) or any(state.a)) and len(frames) < max_frames:
+            frames.append(limiter.step(state, list(state.q)))
+    else:
+        target = [
+            q + math.copysign(braking_distance(v, float(lim.a_max[i]), limiter.dt_s), v)
+            for i, (q, v) in enumerate(zip(state.q, state.v, strict=True))
+        ]
+        while any(v != 0.0 for v in state.v) and len(frames) < max_frames:
+            frames.append(limiter.step(state, target))
     return np.asarray(frames, dtype=float).reshape(-1, lim.n_actuators)
 
 
@@ -289,24 +358,46 @@ def park_path(
     pose_from: Any = None,
     q_from: Any = None,
     v_from: Any = None,
+    a_from: Any = None,
 ) -> Transition:
     """Frames from the current state to the parked pose ``platform.pose_park``.
 
     Give the current pose (at rest), or the last frame sent ``q_from`` (n,) with its speed
-    ``v_from`` (n,): a moving platform first brakes to rest (:func:`brake_to_rest`), then
-    follows a time-optimal transition to park. Times continue across both parts.
+    ``v_from`` (n,) (and acceleration ``a_from`` (n,) when the limits have a jerk limit): a
+    moving platform first brakes to rest (:func:`brake_to_rest`), then follows a
+    time-optimal transition to park. Times continue across both parts; ``t_s[0]`` is the
+    first frame after ``q_from``.
     """
     dt = 1.0 / rate_hz
     head = np.zeros((0, limits.n_actuators))
+    hist = None
     if q_from is not None:
-        rt = RealtimeLimiter(limits.without_jerk(), dt)
-        state = rt.initial_state(q_from, v_from)
-        head = brake_to_rest(rt, state)
+        q_f = np.asarray(q_from, dtype=float).reshape(-1)
+        v_f = (
+            np.zeros_like(q_f)
+            if v_from is None
+            else np.broadcast_to(np.asarray(v_from, float), q_f.shape)
+        )
+        a_f = (
+            np.zeros_like(q_f)
+            if a_from is None
+            else np.broadcast_to(np.asarray(a_from, float), q_f.shape)
+        )
+        limiter: Any
+        if limits.j_max is None:
+            limiter = RealtimeLimiter(limits, dt)
+            state = limiter.initial_state(q_f, v_f)
+        else:
+            limiter = JerkLimiter(limits, dt)
+            state = limiter.initial_state(q_f, v_f, a_f)
+        head = brake_to_rest(limiter, state)
         q_rest = np.asarray(state.q)
         fk = platform.forward(q_rest, guess=None if pose_from is None else pose_from)
         if not fk.converged:
             raise LimitError(f"cannot find the pose of q = {q_rest.tolist()} (FK failed)")
         start = np.asarray(fk.pose, dtype=float)
+        q_m1 = q_f - v_f * dt  # the frames sent before q_from (speed, acceleration)
+        hist = np.stack([q_m1 - (v_f - a_f * dt) * dt, q_m1, q_f])
     elif pose_from is not None:
         start = _pose6("pose_from", pose_from)
     else:
@@ -318,10 +409,10 @@ def park_path(
     q = np.concatenate([head, tr.q[1:]])
     poses = np.concatenate([poses_head, tr.poses[1:]])
     t = np.arange(q.shape[0]) / rate_hz + dt
-    hist = np.stack([np.asarray(q_from) - np.asarray(v_from if v_from is not None else 0) * dt,
-                     np.asarray(q_from, dtype=float)])  # fmt: skip
-    padded = np.concatenate([q, q[-1:], q[-1:]])
-    chk = check_trajectory(padded, dt, limits.without_jerk(), history=hist)
+    padded = np.concatenate([q, q[-1:], q[-1:], q[-1:]])
+    chk = check_trajectory(padded, dt, limits, history=hist)
+    if not chk.ok:
+        raise LimitError(f"park path breaks a limit: {chk}")
     return Transition(t, q, poses, tr.duration_s + head.shape[0] * dt, tr.limit_scale, chk)
 
 

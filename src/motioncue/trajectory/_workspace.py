@@ -20,13 +20,14 @@ Rule (documented, deterministic):
 Single poses on platforms whose actuators are all linear (no reachability question, only
 the stroke) take a faster path for the real-time loop: the same ray, with ``s`` found by a
 bracketing root search (Illinois variant of regula falsi) on the largest stroke overshoot,
-to within 1e-7, keeping the bracket ``[feasible, infeasible]``; the returned pose is always
+to within 1e-6 in ``s``, keeping the bracket ``[feasible, infeasible]``; the returned pose is always
 an evaluated feasible one. Where the feasible part of the ray is an interval (the usual,
 star-shaped workspace) both paths find the same boundary (to the grid's resolution).
 """
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 from typing import Any
 
@@ -39,6 +40,7 @@ __all__ = ["PoseLimitResult", "limit_pose"]
 
 _GRID = 16
 _ROUNDS = 3
+_SINGLE_TOL = 1e-6  # bracket width of the single-pose root search (in the scale s)
 
 STATUS = ("ok", "clamped", "invalid", "unreachable")
 
@@ -152,41 +154,51 @@ def _limit_one_linear(
     platform: Any, pose: np.ndarray, limits: ActuatorLimits | None
 ) -> PoseLimitResult:
     """Fast single-pose path for all-linear platforms (see module docstring)."""
-    mask = np.asarray(platform.dof_mask, dtype=bool)
     if not np.all(np.isfinite(pose)):
         zero = np.zeros(6)
         q0 = np.asarray(platform.inverse(zero), dtype=float)
         return PoseLimitResult(zero, "invalid", 0.0, zero.copy(), np.zeros(6, bool), q0)
+    mask = platform.dof_mask
     dropped = (pose != 0.0) & ~mask
     req = np.where(mask, pose, 0.0)
-    lo_b = platform.q_min if limits is None else np.maximum(platform.q_min, limits.q_min)
-    hi_b = platform.q_max if limits is None else np.minimum(platform.q_max, limits.q_max)
+    if limits is None:
+        lo_l, hi_l = platform.q_min.tolist(), platform.q_max.tolist()
+    else:
+        lo_l = np.maximum(platform.q_min, limits.q_min).tolist()
+        hi_l = np.minimum(platform.q_max, limits.q_max).tolist()
+    # feasible = inside the stroke by 1e-12 (m), room for the last-bit differences between
+    # the platform's single-pose and batch inverse kinematics
     tol = 1e-12
-    lo_l = [float(x) for x in lo_b]
-    hi_l = [float(x) for x in hi_b]
     base = req.tolist()
     inverse = platform.inverse
+    bounds = list(zip(lo_l, hi_l, strict=True))
 
     def over(sc: float) -> tuple[float, np.ndarray]:
         q = inverse([sc * b for b in base])
-        worst = -np.inf
-        for qi, a, b in zip(q.tolist(), lo_l, hi_l, strict=True):
-            worst = max(worst, qi - b, a - qi)
+        worst = -math.inf
+        for qi, (a, b) in zip(q.tolist(), bounds, strict=True):
+            if qi - b > worst:
+                worst = qi - b
+            if a - qi > worst:
+                worst = a - qi
         return worst + tol, q
 
-    # feasible = inside the stroke by 1e-12 (m), room for the last-bit differences between
-    # the platform's single-pose and batch inverse kinematics
     g1, q1 = over(1.0)
     if g1 - tol <= 0.0:
         return PoseLimitResult(req, "ok", 1.0, pose - req, dropped, q1)
-    g0, q0 = over(0.0)
+    # neutral: q = q_neutral, no inverse kinematics needed
+    g0 = tol + max(
+        max(qn - b, a - qn) for qn, (a, b) in zip(platform.q_neutral.tolist(), bounds, strict=True)
+    )
     if g0 > 0.0:
         zero = np.zeros(6)
-        return PoseLimitResult(zero, "unreachable", 0.0, pose.copy(), dropped, q0)
-    lo, hi, glo, ghi, qlo = 0.0, 1.0, g0, g1, q0
+        return PoseLimitResult(zero, "unreachable", 0.0, pose.copy(), dropped,
+                               np.asarray(platform.q_neutral, dtype=float).copy())  # fmt: skip
+    lo, hi, glo, ghi = 0.0, 1.0, g0, g1
+    qlo: np.ndarray | None = None
     side = 0
     for _ in range(60):
-        if hi - lo <= 1e-7:
+        if hi - lo <= _SINGLE_TOL:
             break
         sc = (lo * ghi - hi * glo) / (ghi - glo)
         if not lo < sc < hi:
@@ -203,4 +215,6 @@ def _limit_one_linear(
                 glo *= 0.5
             side = 1
     out = lo * req
+    if qlo is None:
+        qlo = np.asarray(platform.inverse(out), dtype=float)
     return PoseLimitResult(out, "clamped", lo, pose - out, dropped, qlo)

@@ -1,0 +1,365 @@
+"""Causal real-time limiter with a jerk limit (stroke, speed, acceleration and jerk).
+
+Built on the second-order limiter of :mod:`motioncue.trajectory._realtime`, one derivative
+up, plus a position safety check by exact simulation of a braking policy:
+
+*Velocity level.* Speed ``v`` is treated as the "position" of a second-order system whose
+"stroke" is ``[-v_max, v_max]``, "speed" is the acceleration (``<= a_max``) and
+"acceleration" is the jerk (``<= j_max``). The second-order step (same closed-form braking
+bound, same proof) turns any wanted next speed into one that keeps ``|v| <= v_max``,
+``|a| <= a_max`` and ``|j| <= j_max``, from any admissible ``(v, a)``.
+
+*Braking policy P.* Wanting speed 0 at the velocity level, frame after frame, is a
+deterministic state feedback that brings ``(v, a)`` to exactly ``(0, 0)`` (the second-order
+chase of a held target lands on it without overshoot) within every limit. A state
+``(q, v, a)`` is **admissible** when ``q`` is in stroke, ``(v, a)`` is admissible at the
+velocity level, and every position P visits until rest stays in stroke (found by
+simulating P, tracking the lowest and highest position since the speed may reverse once
+when ``a`` opposes ``v``; or accepted without simulation when a conservative bound on the
+excursion already keeps it inside).
+
+*Step.* The candidate is the velocity-level step towards the speed that lands on the
+target this frame; when that lands exactly (the velocity-level step passes it through) and
+the new state is admissible, the target is sent exactly, so a stream P-admissible at every
+frame passes bit for bit. Otherwise the limiter searches (bisection, 10 steps) for the
+largest wanted speed towards the target whose next state is admissible and whose stopping
+point does not pass the target (approach without overshoot); if none does, it sends P's
+action, which is admissible by construction because P is a state feedback (the state it
+leads to continues the same braking). Every emitted frame therefore keeps every limit.
+
+Cost: P is simulated only near a stroke end or while limiting; a frame far from the ends
+costs about as much as the second-order limiter's.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from .._errors import ConfigError, LimitError
+from ._limits import ActuatorLimits
+from ._realtime import _vcap
+
+__all__ = ["JerkLimiter", "JerkLimiterState"]
+
+_MAX_BRAKE_FRAMES = 1_000_000
+_BISECT = 10
+_BOUND_FACTOR = 1.0
+
+
+def _vstep(
+    v: float,
+    a: float,
+    want: float,
+    want_prev: float,
+    vmax: float,
+    amax: float,
+    jdt: float,
+    half_inv_j: float,
+    abig: float,
+    dt: float,
+    inv_dt: float,
+) -> tuple[float, float, bool]:
+    """One second-order limiter step at the velocity level; (v', a', landed exactly)."""
+    hi = a + jdt
+    if hi > amax:
+        hi = amax
+    lo = a - jdt
+    if lo < -amax:
+        lo = -amax
+    if hi > 0.0 and v + hi * dt + hi * hi * half_inv_j > vmax:
+        cap = _vcap((vmax - v) * inv_dt, jdt, abig)
+        if hi > cap:
+            hi = cap
+    if lo < 0.0 and v + lo * dt - lo * lo * half_inv_j < -vmax:
+        cap = _vcap((v + vmax) * inv_dt, jdt, abig)
+        if lo < -cap:
+            lo = -cap
+    ad = (want - v) * inv_dt
+    at = (want - want_prev) * inv_dt
+    if lo <= ad <= hi and -jdt <= ad - at <= jdt:
+        return want, ad, True
+    e = want - v
+    if e > 0.0:
+        an = at + _vcap(e * inv_dt, jdt, abig)
+    else:
+        an = at - _vcap(-e * inv_dt, jdt, abig)
+    if an > hi:
+        an = hi
+    if an < lo:
+        an = lo
+    vn = v + an * dt
+    return vn, (vn - v) * inv_dt, False
+
+
+class JerkLimiterState:
+    """Changing state of a :class:`JerkLimiter`: last frame ``q``, its speed ``v`` and
+    acceleration ``a`` (finite differences), the last finite target and the last speed
+    wanted at the velocity level; counters as :class:`LimiterState`."""
+
+    __slots__ = (
+        "a",
+        "clamped_axes",
+        "last_target",
+        "last_want",
+        "max_deviation",
+        "n_clamped",
+        "n_frames",
+        "n_nonfinite",
+        "n_simulated",
+        "q",
+        "v",
+    )
+
+    def __init__(self, q: list[float], v: list[float], a: list[float]) -> None:
+        self.q, self.v, self.a = q, v, a
+        self.last_target = list(q)
+        self.last_want = list(v)
+        self.n_frames = self.n_clamped = self.n_nonfinite = self.n_simulated = 0
+        self.clamped_axes = [0] * len(q)
+        self.max_deviation = 0.0
+
+    def __repr__(self) -> str:
+        return (
+            f"JerkLimiterState(n_frames={self.n_frames}, n_clamped={self.n_clamped}, "
+            f"n_nonfinite={self.n_nonfinite}, max_deviation={self.max_deviation:.3g})"
+        )
+
+
+@dataclass(frozen=True, eq=False)
+class JerkLimiter:
+    """Frozen description of a causal limiter with a jerk limit (see module docstring).
+
+    Parameters
+    ----------
+    limits : ActuatorLimits
+        Must have ``j_max``.
+    dt_s : float
+        Frame period (s), in (0, 1].
+    """
+
+    limits: ActuatorLimits
+    dt_s: float
+    _params: tuple[tuple[float, ...], ...] = field(init=False, repr=False)
+
+    def __post_init__(self) -> None:
+        if not (isinstance(self.dt_s, int | float) and 0.0 < self.dt_s <= 1.0):
+            raise ConfigError(f"dt_s = {self.dt_s!r} is invalid; allowed: a period in (0, 1] s")
+        lim = self.limits
+        if lim.j_max is None:
+            raise ConfigError("JerkLimiter needs limits with j_max; use RealtimeLimiter")
+        dt = float(self.dt_s)
+        params = tuple(
+            (
+                float(lim.q_min[i]),
+                float(lim.q_max[i]),
+                float(lim.v_max[i]),
+                float(lim.a_max[i]),
+                float(lim.j_max[i]) * dt,
+                0.5 / float(lim.j_max[i]),
+                2.0 * float(lim.a_max[i]),
+                float(lim.j_max[i]),
+            )
+            for i in range(lim.n_actuators)
+        )
+        object.__setattr__(self, "_params", params)
+
+    @property
+    def n_actuators(self) -> int:
+        return self.limits.n_actuators
+
+    # ------------------------------------------------------------------ braking policy
+    def stopping_offset(self, i: int, v: float, a: float) -> tuple[float, float] | None:
+        """Lowest and highest offset (signed, SI) axis ``i`` reaches under the braking
+        policy P from ``(v, a)`` until rest (exact simulation; the speed may reverse once
+        when ``a`` opposes ``v``); ``None`` if it does not come to rest."""
+        _, _, vmax, amax, jdt, half_inv_j, abig, _ = self._params[i]
+        dt = float(self.dt_s)
+        inv_dt = 1.0 / dt
+        d = lo = hi = 0.0
+        for _ in range(_MAX_BRAKE_FRAMES):
+            if v == 0.0 and a == 0.0:
+                return lo, hi
+            v, a, _ = _vstep(v, a, 0.0, 0.0, vmax, amax, jdt, half_inv_j, abig, dt, inv_dt)
+            d += v * dt
+            if d < lo:
+                lo = d
+            elif d > hi:
+                hi = d
+        return None
+
+    def _bound(self, i: int, v: float, a: float) -> float:
+        """Conservative bound on how far P moves from ``(v, a)`` either way (peak speed
+        times a stopping time, padded; checked against the simulation by the tests)."""
+        _, _, _, amax, _, _, _, jmax = self._params[i]
+        dt = float(self.dt_s)
+        v_pk = abs(v) + a * a / (2.0 * jmax) + abs(a) * dt
+        t_stop = v_pk / amax + 2.0 * amax / jmax + abs(a) / jmax + 4.0 * dt
+        return _BOUND_FACTOR * v_pk * t_stop
+
+    def _admissible(
+        self, state: JerkLimiterState | None, i: int, q: float, v: float, a: float,
+        lo: float, hi: float,
+    ) -> bool:  # fmt: skip
+        """q in [lo, hi] and P's stopping point too (bound first, then simulation)."""
+        if not lo - 1e-9 <= q <= hi + 1e-9:
+            return False
+        b = self._bound(i, v, a)
+        if lo <= q - b and q + b <= hi:
+            return True
+        if state is not None:
+            state.n_simulated += 1
+        ext = self.stopping_offset(i, v, a)
+        return ext is not None and lo - 1e-9 <= q + ext[0] and q + ext[1] <= hi + 1e-9
+
+    # ------------------------------------------------------------------ states
+    def is_admissible(self, q: Any, v: Any = None, a: Any = None) -> bool:
+        """Whether ``(q, v, a)`` (each (n,)) is admissible (module docstring)."""
+        n = self.n_actuators
+        qa = np.asarray(q, dtype=float).reshape(-1)
+        va = np.zeros(n) if v is None else np.asarray(v, dtype=float).reshape(-1)
+        aa = np.zeros(n) if a is None else np.asarray(a, dtype=float).reshape(-1)
+        if qa.shape != (n,) or va.shape != (n,) or aa.shape != (n,):
+            return False
+        dt = float(self.dt_s)
+        for i in range(n):
+            qmin, qmax, vmax, amax, _jdt, _h, _ab, jmax = self._params[i]
+            qi, vi, ai = float(qa[i]), float(va[i]), float(aa[i])
+            if not all(math.isfinite(x) for x in (qi, vi, ai)):
+                return False
+            if abs(vi) > vmax * (1 + 1e-9) or abs(ai) > amax * (1 + 1e-9):
+                return False
+            # velocity level: able to bring a to 0 without passing +-v_max
+            d = _second_order_distance(ai, jmax, dt)
+            if (ai > 0 and vi + d > vmax + 1e-9) or (ai < 0 and vi - d < -vmax - 1e-9):
+                return False
+            if not self._admissible(None, i, qi, vi, ai, qmin, qmax):
+                return False
+        return True
+
+    def initial_state(self, q0: Any, v0: Any = None, a0: Any = None) -> JerkLimiterState:
+        """State after a last frame ``q0`` moving at ``v0`` with acceleration ``a0`` (n,).
+
+        Raises
+        ------
+        LimitError
+            If the state is not admissible.
+        """
+        n = self.n_actuators
+        q = np.asarray(q0, dtype=float).reshape(-1)
+        v = np.zeros(n) if v0 is None else np.broadcast_to(np.asarray(v0, float), (n,))
+        a = np.zeros(n) if a0 is None else np.broadcast_to(np.asarray(a0, float), (n,))
+        if q.shape != (n,):
+            raise ConfigError(f"initial state needs {n} positions")
+        if not self.is_admissible(q, v, a):
+            raise LimitError(
+                f"initial state q={q.tolist()} v={v.tolist()} a={a.tolist()} is not admissible"
+            )
+        return JerkLimiterState([float(x) for x in q], [float(x) for x in v], [float(x) for x in a])
+
+    # ------------------------------------------------------------------ stepping
+    def step(self, state: JerkLimiterState, q_target: Sequence[float] | np.ndarray) -> list[float]:
+        """Next frame (n,) for a target (n,); updates ``state``. Never returns NaN/inf."""
+        if isinstance(q_target, np.ndarray):
+            q_target = q_target.tolist()
+        if len(q_target) != len(state.q):
+            raise ConfigError(f"target has {len(q_target)} values; expected {len(state.q)}")
+        dt = float(self.dt_s)
+        inv_dt = 1.0 / dt
+        out = [0.0] * len(state.q)
+        clamped = False
+        for i, (qmin, qmax, vmax, amax, jdt, half_inv_j, abig, _j) in enumerate(self._params):
+            t = float(q_target[i])
+            if t - t != 0.0:
+                t = state.last_target[i]
+                state.n_nonfinite += 1
+                finite = False
+            else:
+                state.last_target[i] = t
+                finite = True
+            q, v, a = state.q[i], state.v[i], state.a[i]
+            want = (t - q) * inv_dt
+            # beyond 2 v_max every wanted speed acts alike; clamping keeps inf/NaN out
+            if want > 2.0 * vmax:
+                want = 2.0 * vmax
+            elif want < -2.0 * vmax:
+                want = -2.0 * vmax
+            v1, a1, landed = _vstep(
+                v, a, want, state.last_want[i], vmax, amax, jdt, half_inv_j, abig, dt, inv_dt
+            )
+            if landed:
+                q1 = t
+            else:
+                q1 = q + v1 * dt
+            v1 = (q1 - q) * inv_dt
+            a1 = (v1 - v) * inv_dt
+            state.last_want[i] = want  # the target's own speed as seen from the last frame
+            if landed and self._admissible(state, i, q1, v1, a1, qmin, qmax):
+                state.q[i], state.v[i], state.a[i] = q1, v1, a1
+                out[i] = q1
+                continue
+            # limiting: the largest wanted speed towards the target (held, no feed-forward
+            # of its rate) whose next state is admissible and stops before the target
+            # (approach without overshoot); first the full one, then bisection towards 0
+            lo_w, hi_w = qmin, qmax
+            if t > q:
+                hi_w = min(t, qmax)
+            elif t < q:
+                lo_w = max(t, qmin)
+            best = None
+            w_lo, w_hi = 0.0, want
+            for k in range(_BISECT + 1):
+                w = want if k == 0 else 0.5 * (w_lo + w_hi)
+                vb, ab_, _l = _vstep(v, a, w, w, vmax, amax, jdt, half_inv_j, abig, dt, inv_dt)
+                qb = q + vb * dt
+                vb = (qb - q) * inv_dt
+                ab_ = (vb - v) * inv_dt
+                if self._admissible(state, i, qb, vb, ab_, lo_w, hi_w):
+                    best = (qb, vb, ab_)
+                    if k == 0:
+                        break
+                    w_lo = w
+                else:
+                    w_hi = w
+            if best is None:  # P's action: admissible by construction
+                vb, ab_, _l = _vstep(v, a, 0.0, 0.0, vmax, amax, jdt, half_inv_j, abig, dt, inv_dt)
+                qb = q + vb * dt
+                vb = (qb - q) * inv_dt
+                ab_ = (vb - v) * inv_dt
+                best = (qb, vb, ab_)
+            qn, vn, an = best
+            state.q[i], state.v[i], state.a[i] = qn, vn, an
+            out[i] = qn
+            if qn != t:
+                clamped = True
+                state.clamped_axes[i] += 1
+                if finite:
+                    state.max_deviation = max(state.max_deviation, abs(qn - t))
+        state.n_frames += 1
+        if clamped:
+            state.n_clamped += 1
+        return out
+
+    def run(self, state: JerkLimiterState, q_targets: Any) -> np.ndarray:
+        """Step through targets (N, n); returns the frames (N, n) (same as :meth:`step`)."""
+        targets = np.asarray(q_targets, dtype=float)
+        if targets.ndim != 2 or targets.shape[1] != self.n_actuators:
+            raise ConfigError(
+                f"targets have shape {targets.shape}; expected (N, {self.n_actuators})"
+            )
+        out = np.empty_like(targets)
+        for k, row in enumerate(targets.tolist()):
+            out[k] = self.step(state, row)
+        return out
+
+
+def _second_order_distance(a: float, j: float, dt: float) -> float:
+    """Velocity still gained after a frame at acceleration |a| when braking it at jerk j."""
+    a = abs(a)
+    jdt = j * dt
+    n = math.floor(a / jdt)
+    return dt * (n * a - jdt * n * (n + 1) / 2.0)

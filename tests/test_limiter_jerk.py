@@ -1,0 +1,155 @@
+"""Jerk-limited real-time limiter: every limit from any admissible state, pass-through."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+from hypothesis import assume, given, settings
+from hypothesis import strategies as st
+
+from motioncue import ConfigError, LimitError
+from motioncue.trajectory import ActuatorLimits, JerkLimiter, check_trajectory
+
+TOL = 1e-9
+
+
+@st.composite
+def jerk_limits(draw):
+    n = draw(st.integers(1, 4))
+    q_min = np.array([draw(st.floats(-0.3, 0.3)) for _ in range(n)])
+    span = np.array([draw(st.floats(0.02, 0.6)) for _ in range(n)])
+    v = np.array([draw(st.floats(0.05, 1.0)) for _ in range(n)])
+    a = np.array([draw(st.floats(1.0, 30.0)) for _ in range(n)])
+    j = np.array([draw(st.floats(20.0, 1000.0)) for _ in range(n)])
+    dt = draw(st.sampled_from([0.004, 0.01, 0.0166667, 0.02]))
+    return ActuatorLimits(q_min, q_min + span, v, a, j), dt
+
+
+def _targets(draw, lim, length):
+    kind = draw(st.sampled_from(["step", "spike", "chatter", "nan", "inf", "far", "noise"]))
+    lo, hi = lim.q_min, lim.q_max
+    span = hi - lo
+    seg = np.repeat((lo + span * draw(st.floats(-0.5, 1.5)))[None, :], length, axis=0)
+    if kind == "spike":
+        seg[draw(st.integers(0, length - 1))] = draw(
+            st.sampled_from([1e3, -1e300, 1.7e308, -1.7e308])
+        )
+    elif kind == "chatter":
+        seg += draw(st.floats(0, 2)) * span * (2 * (np.arange(length) % 2) - 1)[:, None]
+    elif kind == "nan":
+        seg[draw(st.integers(0, length - 1)) :] = np.nan
+    elif kind == "inf":
+        seg[::3] = np.inf
+    elif kind == "far":
+        seg[:] = draw(st.sampled_from([-1e9, 1e9, 1.7e308, -1.7e308]))
+    elif kind == "noise":
+        rng = np.random.default_rng(draw(st.integers(0, 2**32 - 1)))
+        seg = lo + span * rng.uniform(-1, 2, (length, lim.n_actuators))
+    return seg
+
+
+@st.composite
+def scenario(draw):
+    lim, dt = draw(jerk_limits())
+    jl = JerkLimiter(lim, dt)
+    # an admissible start: either at rest anywhere in stroke, or a state the limiter itself
+    # reached (reachable states are admissible by induction) after a random warm-up
+    frac = np.array([draw(st.floats(0, 1)) for _ in range(lim.n_actuators)])
+    q0 = lim.q_min + frac * (lim.q_max - lim.q_min)
+    state = jl.initial_state(q0)
+    hist = [q0, q0, q0]
+    if draw(st.booleans()):
+        warm = _targets(draw, lim, draw(st.integers(1, 40)))
+        out = jl.run(state, warm)
+        hist = [*list(np.concatenate([np.stack(hist), out])[-3:])]
+    parts = [_targets(draw, lim, draw(st.integers(1, 50))) for _ in range(draw(st.integers(1, 4)))]
+    return jl, state, np.stack(hist), np.concatenate(parts)
+
+
+@settings(max_examples=150)
+@given(scenario())
+def test_adversarial_streams_keep_every_limit_including_jerk(case):
+    jl, state, hist, targets = case
+    lim, dt = jl.limits, jl.dt_s
+    q_start = np.array(state.q)
+    np.testing.assert_allclose(hist[-1], q_start, atol=0)
+    assert jl.is_admissible(state.q, state.v, state.a)
+    out = jl.run(state, targets)
+    chk = check_trajectory(out, dt, lim, history=hist)
+    assert chk.finite
+    assert chk.stroke <= TOL and chk.speed <= TOL and chk.accel <= TOL, chk
+    assert chk.jerk <= TOL, chk
+    assert jl.is_admissible(state.q, state.v, state.a)
+
+
+@settings(max_examples=80)
+@given(scenario(), st.floats(0.3, 0.95))
+def test_streams_of_a_tighter_limiter_pass_through_exactly(case, shrink):
+    jl, state, _hist, targets = case
+    lim, dt = jl.limits, jl.dt_s
+    assume(all(v == 0.0 for v in state.v) and all(a == 0.0 for a in state.a))
+    mid = 0.5 * (lim.q_min + lim.q_max)
+    half = 0.5 * (lim.q_max - lim.q_min) * shrink
+    tight = ActuatorLimits(
+        mid - half, mid + half, lim.v_max * shrink, lim.a_max * shrink, lim.j_max * shrink
+    )
+    q0 = np.clip(np.array(state.q), tight.q_min, tight.q_max)
+    jt = JerkLimiter(tight, dt)
+    feasible = jt.run(jt.initial_state(q0), targets)
+    st2 = jl.initial_state(q0)
+    out = jl.run(st2, feasible)
+    assert np.array_equal(out, feasible)
+    assert st2.n_clamped == 0
+
+
+@settings(max_examples=100)
+@given(jerk_limits(), st.floats(-1, 1), st.floats(-1, 1))
+def test_stopping_bound_covers_the_simulated_braking(case, fv, fa):
+    lim, dt = case
+    jl = JerkLimiter(lim, dt)
+    for i in range(lim.n_actuators):
+        v = fv * float(lim.v_max[i])
+        a = fa * float(lim.a_max[i])
+        ext = jl.stopping_offset(i, v, a)
+        if ext is None:
+            continue
+        assert ext[0] <= 0.0 <= ext[1]
+        assert max(-ext[0], ext[1]) <= jl._bound(i, v, a)
+
+
+def test_step_target_is_approached_without_overshoot_at_full_speed():
+    lim = ActuatorLimits([0.0], [0.3], [0.4], [6.0], [100.0])
+    jl = JerkLimiter(lim, 0.01)
+    out = jl.run(jl.initial_state([0.05]), np.full((150, 1), 0.25))[:, 0]
+    assert np.all(np.diff(out) >= -1e-12)
+    assert out.max() <= 0.25 + 1e-12 and out[-1] == 0.25
+    assert np.max(np.diff(out)) / 0.01 == pytest.approx(0.4, rel=1e-6)  # reaches v_max
+    chk = check_trajectory(out[:, None], 0.01, lim, history=np.full((3, 1), 0.05))
+    assert chk.ok
+
+
+def test_full_speed_towards_a_stroke_end_stops_in_time():
+    lim = ActuatorLimits([0.0], [0.3], [0.4], [6.0], [100.0])
+    jl = JerkLimiter(lim, 0.01)
+    # reach full speed upwards from the bottom, then keep asking for far beyond the top
+    state = jl.initial_state([0.0])
+    out = jl.run(state, np.full((200, 1), 1e6))[:, 0]
+    chk = check_trajectory(out[:, None], 0.01, lim, history=np.zeros((3, 1)))
+    assert chk.ok, chk
+    assert out[-1] == pytest.approx(0.3, abs=1e-9)
+    assert state.v[0] == 0.0 and state.a[0] == 0.0
+
+
+def test_validation():
+    with pytest.raises(ConfigError, match="j_max"):
+        JerkLimiter(ActuatorLimits([0.0], [0.3], [0.4], [6.0]), 0.01)
+    jl = JerkLimiter(ActuatorLimits([0.0], [0.3], [0.4], [6.0], [100.0]), 0.01)
+    with pytest.raises(LimitError):
+        jl.initial_state([0.29], [0.4], [0.0])  # cannot stop before 0.3
+    with pytest.raises(LimitError):
+        jl.initial_state([0.1], [0.0], [7.0])  # beyond a_max
+    assert not jl.is_admissible([0.1], [math.nan], [0.0])
+    with pytest.raises(ConfigError, match="expected 1"):
+        jl.step(jl.initial_state([0.1]), [0.1, 0.2])
