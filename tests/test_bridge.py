@@ -35,7 +35,7 @@ from motioncue.trajectory import ActuatorLimits
 from motioncue.washout import load_cueing
 
 DATA = Path("/work/shared/data/f1")
-GATE = GateConfig(timeout_s=0.1, fade_out_s=0.3, fade_in_s=0.3)
+GATE = GateConfig(timeout_s=0.25, fade_out_s=0.3, fade_in_s=0.3)
 
 
 # -- a moving F1 stream built from the real captures ---------------------------------------

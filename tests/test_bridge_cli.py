@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import json
 import os
 import signal
 import socket
@@ -17,7 +18,6 @@ from motioncue.cli import main
 from motioncue.kinematics import load_platform
 from motioncue.output import imax, load_controller, mbox
 from motioncue.pipeline._verify import check_frames
-from motioncue.trajectory import ActuatorLimits
 from test_bridge import Sender, _wait_for
 
 SRC = Path(__file__).resolve().parents[1] / "src"
@@ -29,11 +29,17 @@ def _free_udp_port() -> int:
         return int(s.getsockname()[1])
 
 
-def _check(emu: Any, platform_name: str, ctrl_name: str, **limit_kw: float) -> None:
+def _printed_limits(capsys: pytest.CaptureFixture[str], *args: str) -> Any:
+    """The limits table exactly as ``motioncue limits --json`` prints it."""
+    capsys.readouterr()
+    assert main(["limits", *args, "--json"]) == 0
+    return json.loads(capsys.readouterr().out)
+
+
+def _check(emu: Any, platform_name: str, table: Any) -> None:
     platform = load_platform(platform_name)
-    lim = ActuatorLimits.from_platform(platform, load_controller(ctrl_name), **limit_kw)
     tr = emu.trace
-    chk = check_frames(tr.t_s, tr.positions, lim.to_pulses_table(platform), start_at_rest=True)
+    chk = check_frames(tr.t_s, tr.positions, table, start_at_rest=True)
     assert chk.ok, chk.summary()
     assert emu.violations == []
     park = platform.drives.to_pulses(platform.q_park)
@@ -72,7 +78,7 @@ def test_bridge_verb_runs_parks_and_reports(capsys: pytest.CaptureFixture[str]) 
     assert "live" in err and "gain 1.00" in err  # status lines
     assert "bridge stopped:" in err and "parked error 0" in err
     assert "telemetry: " in err and "sample " in err
-    _check(emu, "seat3", "imax3")
+    _check(emu, "seat3", _printed_limits(capsys, "--platform", "seat3", "--controller", "imax3"))
 
 
 def test_bridge_verb_names_bad_arguments(capsys: pytest.CaptureFixture[str]) -> None:
@@ -89,7 +95,7 @@ def test_bridge_verb_names_bad_arguments(capsys: pytest.CaptureFixture[str]) -> 
     assert "rt_priority = 100 is invalid" in capsys.readouterr().err
 
 
-def test_sigterm_parks_smoothly_then_exits() -> None:
+def test_sigterm_parks_smoothly_then_exits(capsys: pytest.CaptureFixture[str]) -> None:
     port = _free_udp_port()
     ctrl = load_controller("mbox6")
     emu = mbox.MboxEmulator(ctrl)
@@ -132,4 +138,7 @@ def test_sigterm_parks_smoothly_then_exits() -> None:
         assert proc.returncode == 0, err
         assert _wait_for(lambda: emu.received == len(emu.trace))
     assert "bridge stopped:" in err
-    _check(emu, "stewart6-linear", "mbox6", a_max=5.0)
+    table = _printed_limits(
+        capsys, "--platform", "stewart6-linear", "--controller", "mbox6", "--max-accel", "5"
+    )
+    _check(emu, "stewart6-linear", table)
