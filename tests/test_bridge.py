@@ -447,3 +447,93 @@ def test_configuration_errors_are_named() -> None:
             bridge.start()
     finally:
         bridge.stop()
+
+
+# -- deterministic stepping against an independent composition of the stages -------------
+class TimelineSource:
+    """Samples on a fake timeline; ``now`` picks the newest one that has arrived."""
+
+    def __init__(self, samples: list[TelemetrySample]) -> None:
+        self.samples = samples
+        self.now = -math.inf
+        self.stats = {"samples": 0}
+
+    def latest(self) -> TelemetrySample | None:
+        arrived = [s for s in self.samples if s.t_s <= self.now]
+        return arrived[-1] if arrived else None
+
+
+def test_stepping_equals_washout_blend_ik_and_limiter_composed_offline() -> None:
+    """Oracle: the documented per-frame chain rebuilt from batch calls of each stage.
+
+    Held input at each frame -> gate gain by its definition (raised cosine of a phase moving
+    by dt / fade toward live or parked) -> ``ClassicalWashout.run`` over the open frames ->
+    blend with the park pose -> ``platform.inverse`` in batch -> ``RealtimeLimiter.run``
+    with the pulse-rounding limits -> pulses. Mild motion, so no pose needs limiting.
+    """
+    from motioncue.pipeline._generate import pulse_rounding_limits
+    from motioncue.trajectory import RealtimeLimiter
+    from motioncue.washout import ClassicalWashout
+
+    platform, ctrl, lim = _mbox_setup()
+    rate, fs_in = 100.0, 60.0
+    gate_cfg = GateConfig(timeout_s=0.25, fade_out_s=0.5, fade_in_s=0.4)
+    t_end_samples = 3.0
+    samples = []
+    for k in range(int(t_end_samples * fs_in)):
+        t = 0.123 + k / fs_in
+        f = (2.0 * math.sin(1.3 * t), -1.5 * math.sin(0.9 * t), 9.80665 + 0.5 * math.sin(7 * t))
+        w = (0.1 * math.sin(2 * t), 0.05 * math.cos(3 * t), 0.2 * math.sin(0.7 * t))
+        samples.append(TelemetrySample(t, f, w, 110 <= k < 170, "test"))  # a 1 s pause
+    src, tr = TimelineSource(samples), ListTransport()
+    cueing = load_cueing("racing")
+    bridge = Bridge(platform, ctrl, cueing, src, tr, lim, BridgeConfig(rate, gate_cfg))
+    n = int(4.5 * rate)
+    deadlines = [k / rate for k in range(1, n + 1)]
+    for d in deadlines:
+        src.now = d
+        bridge.step(d)
+    assert bridge.stats.pose_clamped == 0 and bridge.stats.pose_invalid == 0
+    _, pulses = _decode_frames(tr.sent)
+
+    # --- the oracle
+    dt = 1.0 / rate
+    phase, gains, held = 0.0, [], []
+    for d in deadlines:
+        arrived = [s for s in samples if s.t_s <= d]
+        s = arrived[-1] if arrived else None
+        live = s is not None and not s.paused and d - s.t_s <= gate_cfg.timeout_s
+        phase = min(1.0, phase + dt / gate_cfg.fade_in_s) if live else phase
+        phase = phase if live else max(0.0, phase - dt / gate_cfg.fade_out_s)
+        gains.append(0.5 * (1 - math.cos(math.pi * phase)))
+        held.append(s)
+    gains_a = np.array(gains)
+    open_ = gains_a > 0
+    wash = ClassicalWashout(cueing, rate)
+    poses = np.tile(platform.pose_park, (n, 1))
+    k = 0
+    while k < n:  # each run of open frames starts from a fresh washout state
+        if not open_[k]:
+            k += 1
+            continue
+        j = k
+        while j < n and open_[j]:
+            j += 1
+        f = np.array([held[i].f for i in range(k, j)])
+        w = np.array([held[i].w for i in range(k, j)])
+        cue = wash.run(f, w).poses
+        poses[k:j] = platform.pose_park + gains_a[k:j, None] * (cue - platform.pose_park)
+        k = j
+    assert np.count_nonzero(open_) > 200 and np.count_nonzero(~open_[50:]) > 20
+    q_target = np.asarray(platform.inverse(poses), dtype=float)
+    q_target[~open_] = platform.q_park
+    rt = RealtimeLimiter(pulse_rounding_limits(lim, platform, dt), dt)
+    q = rt.run(rt.initial_state(platform.q_park), q_target)
+    expected = platform.drives.to_pulses(q)
+    assert pulses.shape == expected.shape
+    diff = np.abs(pulses - expected)
+    assert diff.max() <= 1  # float rounding of batch vs streaming may flip a half pulse
+    assert np.mean(diff == 0) > 0.99
+    # the pause parked the platform in between, and the end is parked
+    assert gains_a[int(2.7 * rate)] == 0.0 and gains_a[-1] == 0.0  # parked in the pause
+    np.testing.assert_array_equal(pulses[-1], platform.drives.to_pulses(platform.q_park))

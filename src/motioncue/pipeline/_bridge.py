@@ -305,6 +305,16 @@ class Bridge:
         self._rate_in = math.nan
         self._old_switch: float | None = None
         self._notes: list[str] = []
+        # per-frame state of step()
+        from motioncue.trajectory import limit_pose
+
+        self._limit_pose = limit_pose
+        self._q_park = [float(v) for v in platform.q_park]
+        self._cue = [0.0] * 6
+        self._pose = [0.0] * 6
+        self._held: Any = None  # newest sample seen (a source may forget it; the cue fades)
+        self._clean = True  # washout state fresh (reset while parked)
+        self._last_sample_t = math.nan
 
     # ------------------------------------------------------------------ control
     def start(self) -> Bridge:
@@ -384,85 +394,95 @@ class Bridge:
     def _loop(self) -> None:
         cfg = self.config
         period = self.period_s
-        source = self.source
-        gate = self.gate
-        washout, wstate = self.washout, self.washout_state
         stage = self.stage
-        platform, limits = self.platform, self.limits
-        park = self._pose_park
-        q_park = [float(v) for v in platform.q_park]
-        from motioncue.trajectory import limit_pose
-
-        clock = time.perf_counter
         stop = self._stop
-        cue = [0.0] * 6
-        pose = [0.0] * 6
-        clean = True
-        last_sample_t = math.nan
-        held: Any = None  # newest sample seen (a source may forget it; the cue fades out)
-        stop_ticks = -1
+        step = self.step
         max_stop_ticks = math.ceil(cfg.gate.fade_out_s / period) + stage.park_frames_bound() + 10
-        sent_at, lat, age = self._sent_at, self._latency, self._age
+        stop_ticks = 0
         ticker = Ticker(period, cfg.spin_s)
         while True:
             deadline = ticker.wait()
-            sample = source.latest()
-            now = clock()
-            if sample is not None:
-                held = sample
             stopping = stop.is_set()
+            step(deadline, stopping)
+            self._missed = ticker.missed
             if stopping:
                 stop_ticks += 1
-            if held is None:
-                gain = gate.update(now, None, True)
-            else:
-                gain = gate.update(now, held.t_s, held.paused or stopping)
-            if gate.parked:
-                if not clean:
-                    self._bad_total += wstate.bad_samples
-                    washout.reset(wstate)
-                    clean = True
-                stage.park_step()
-            else:
-                assert held is not None  # the gate only opens on a sample
-                washout.step(wstate, held.f, held.w, cue)
-                clean = False
-                for i in range(6):
-                    pose[i] = park[i] + gain * (cue[i] - park[i])
-                res = limit_pose(platform, pose, limits=limits)
-                if res.status != "ok":
-                    if res.status == "invalid":
-                        self._pose_invalid += 1
-                    else:
-                        self._pose_clamped += 1
-                stage.emit(res.q)
-            done = clock()
-            sent_at.add(done)
-            if sample is not None and sample.t_s != last_sample_t:
-                last_sample_t = sample.t_s
-                age.add(done - sample.t_s)
-                lat.add(done - max(sample.t_s, deadline))
-            self._missed = ticker.missed
-            err = 0.0
-            for a, b in zip(stage.q.tolist(), q_park, strict=True):
-                d = abs(a - b)
-                if d > err:
-                    err = d
-            self._park_err = err
-            if stopping:
-                self._state = "stopping"
-            elif gate.parked:
-                self._state = "parked" if stage.parked else "parking"
-            elif gate.phase >= 1.0:
-                self._state = "live"
-            else:
-                self._state = "fading in" if gate._was_live else "fading out"
-            if stopping and ((gate.parked and stage.parked) or stop_ticks > max_stop_ticks):
-                if not stage.parked:
+                if self.gate.parked and stage.parked:
+                    return
+                if stop_ticks > max_stop_ticks:
                     raise MotioncueError(
                         f"could not park within {max_stop_ticks} frames after stop"
                     )
-                return
+
+    def step(self, deadline_s: float, stopping: bool = False) -> None:
+        """One frame: newest sample -> gate -> washout -> blend -> workspace -> IK -> emit.
+
+        The loop thread calls this once per frame slot. Tests and simulations may call it
+        directly instead of :meth:`start` (never both), on ``perf_counter`` times (the
+        gate compares ``deadline_s`` with the samples' arrival stamps).
+
+        Parameters
+        ----------
+        deadline_s : float
+            The frame slot's deadline (``perf_counter`` s). In the loop the gate is advanced
+            to the current time (the deadline or just after it); when stepped by hand, to
+            ``deadline_s`` itself.
+        stopping : bool
+            Close the gate (fade out and park) whatever the telemetry says.
+        """
+        sample = self.source.latest()
+        now = max(time.perf_counter(), deadline_s) if self._thread is not None else deadline_s
+        if sample is not None:
+            self._held = sample
+        held = self._held
+        gate = self.gate
+        if held is None:
+            gain = gate.update(now, None, True)
+        else:
+            gain = gate.update(now, held.t_s, held.paused or stopping)
+        stage = self.stage
+        if gate.parked:
+            if not self._clean:
+                wstate = self.washout_state
+                self._bad_total += wstate.bad_samples
+                self.washout.reset(wstate)
+                self._clean = True
+            stage.park_step()
+        else:
+            cue = self._cue
+            self.washout.step(self.washout_state, held.f, held.w, cue)
+            self._clean = False
+            park = self._pose_park
+            pose = self._pose
+            for i in range(6):
+                pose[i] = park[i] + gain * (cue[i] - park[i])
+            res = self._limit_pose(self.platform, pose, limits=self.limits)
+            if res.status != "ok":
+                if res.status == "invalid":
+                    self._pose_invalid += 1
+                else:
+                    self._pose_clamped += 1
+            stage.emit(res.q)
+        done = time.perf_counter()
+        self._sent_at.add(done)
+        if sample is not None and sample.t_s != self._last_sample_t:
+            self._last_sample_t = sample.t_s
+            self._age.add(done - sample.t_s)
+            self._latency.add(done - max(sample.t_s, deadline_s))
+        err = 0.0
+        for a, b in zip(stage.q.tolist(), self._q_park, strict=True):
+            d = abs(a - b)
+            if d > err:
+                err = d
+        self._park_err = err
+        if stopping:
+            self._state = "stopping"
+        elif gate.parked:
+            self._state = "parked" if stage.parked else "parking"
+        elif gate.phase >= 1.0:
+            self._state = "live"
+        else:
+            self._state = "fading in" if gate._was_live else "fading out"
 
     # ------------------------------------------------------------------ reporting
     @property
