@@ -21,7 +21,12 @@ Per tick:
 
 Every frame passes the limiter, whatever the telemetry carries, so every frame respects the
 limits table of ``motioncue limits``. On :meth:`Bridge.stop` the gate fades out, the stage
-parks at rest, then the loop ends.
+parks at rest, then the loop ends. One frame's work is :meth:`Bridge.step`, which tests and
+simulations may call by hand on their own clock instead of starting the thread.
+
+On a busy PC the scheduler may hold the loop back by several milliseconds;
+``BridgeConfig(rt_priority=...)`` (``--rt-priority``) runs the loop thread under
+``SCHED_FIFO`` where the system allows it (``benchmarks/bench_bridge.py`` measures both).
 
 Timing figures (:class:`BridgeStats`):
 
