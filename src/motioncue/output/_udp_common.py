@@ -25,6 +25,7 @@ import numbers
 import struct
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
+from functools import cache
 from typing import Any
 
 from .._errors import ConfigError, ProtocolError
@@ -45,6 +46,7 @@ __all__ = [
     "format_who",
     "param_lookup",
     "parse_node",
+    "timed_frame_struct",
     "u16_tuple",
 ]
 
@@ -56,6 +58,17 @@ WHO_NONE = 0x0000
 
 HEADER = struct.Struct(">6H")
 REG_HEAD = struct.Struct(">HH")
+
+
+@cache
+def timed_frame_struct(n_axes: int, relative: bool, tail: str) -> struct.Struct:
+    """Layout of a timed motion frame (0x1301 / 0x1401 in both manuals, IMAX 0x1801 / 0x1901).
+
+    Header, frame number u32, time u32 (absolute) or i32 (relative), ``n_axes`` x i32
+    positions, then ``tail`` (struct codes of the kind's outputs: MBOX ``"4H"`` BaseDout,
+    DAC1, DAC2, ExtDout; IMAX ``"HI"`` PortOut, Extend).
+    """
+    return struct.Struct(f">6HI{'i' if relative else 'I'}{n_axes}i{tail}")
 
 
 @dataclass(frozen=True, slots=True)

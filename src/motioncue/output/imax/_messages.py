@@ -47,6 +47,7 @@ from .._udp_common import (
     Header,
     check_length,
     decode_header,
+    timed_frame_struct,
     u16_tuple,
 )
 from .._udp_registers import (
@@ -259,13 +260,13 @@ class ServoReply(RegisterReply):
 @cache
 def _frame_struct(n_axes: int, relative: bool) -> struct.Struct:
     # header, Frame u32, Time u32 / i32, n x i32 positions, PortOut u16, Extend u32
-    return struct.Struct(f">6HI{'i' if relative else 'I'}{n_axes}iHI")
+    return timed_frame_struct(n_axes, relative, "HI")
 
 
 @cache
 def _vib_struct(n_axes: int, relative: bool) -> struct.Struct:
     # header, Frame u32, Time, n x i32, PortOut u16, n x (period u16 0.125 ms, amplitude u16)
-    return struct.Struct(f">6HI{'i' if relative else 'I'}{n_axes}iH{2 * n_axes}H")
+    return timed_frame_struct(n_axes, relative, f"H{2 * n_axes}H")
 
 
 def frame_size(n_axes: int) -> int:

@@ -34,6 +34,7 @@ from .._udp_common import (
     Header,
     check_length,
     decode_header,
+    timed_frame_struct,
 )
 from .._udp_registers import RegisterReadShape, RegisterValuesShape, check_u16
 
@@ -188,7 +189,7 @@ class FrameStatus(enum.IntEnum):
 def _frame_struct(n_axes: int, relative: bool) -> struct.Struct:
     # header, Line u32, Time u32 (abs) / i32 (delta), n x i32 positions,
     # BaseDout u16, DAC1 u16, DAC2 u16, ExtDout u16
-    return struct.Struct(f">6HI{'i' if relative else 'I'}{n_axes}i4H")
+    return timed_frame_struct(n_axes, relative, "4H")
 
 
 def frame_size(n_axes: int) -> int:
