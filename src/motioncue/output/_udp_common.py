@@ -23,7 +23,7 @@ from __future__ import annotations
 import math
 import numbers
 import struct
-from collections.abc import Callable, Mapping, Sequence
+from collections.abc import Callable, Iterable, Mapping, Sequence
 from dataclasses import dataclass
 from functools import cache
 from typing import Any
@@ -44,6 +44,7 @@ __all__ = [
     "check_length",
     "decode_header",
     "format_who",
+    "pack_timed_frame",
     "param_lookup",
     "parse_node",
     "timed_frame_struct",
@@ -69,6 +70,27 @@ def timed_frame_struct(n_axes: int, relative: bool, tail: str) -> struct.Struct:
     DAC1, DAC2, ExtDout; IMAX ``"HI"`` PortOut, Extend).
     """
     return struct.Struct(f">6HI{'i' if relative else 'I'}{n_axes}i{tail}")
+
+
+def pack_timed_frame(
+    layout: struct.Struct,
+    head: tuple[int, int, int, int],
+    number: int,
+    time_ms: int,
+    positions: Sequence[int],
+    tail: Iterable[int],
+    what: str,
+) -> bytes:
+    """Encode a timed frame of :func:`timed_frame_struct` ``layout``.
+
+    ``head`` = (function, channel, who_accept, who_reply); ``tail`` the kind's trailing
+    fields (unpacked inside the guard, so a malformed one is reported too). A field out of
+    its range raises :class:`ProtocolError` naming ``what``.
+    """
+    try:
+        return layout.pack(CONFIRM_MAIN, PASSCODE, *head, number, time_ms, *positions, *tail)
+    except (struct.error, TypeError) as exc:
+        raise ProtocolError(f"{what} field out of range: {exc}") from None
 
 
 @dataclass(frozen=True, slots=True)

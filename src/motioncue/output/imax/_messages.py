@@ -34,6 +34,7 @@ import struct
 from collections.abc import Sequence
 from dataclasses import dataclass
 from functools import cache
+from itertools import chain
 from typing import ClassVar, Self
 
 from ..._errors import ProtocolError
@@ -47,6 +48,7 @@ from .._udp_common import (
     Header,
     check_length,
     decode_header,
+    pack_timed_frame,
     timed_frame_struct,
     u16_tuple,
 )
@@ -311,22 +313,15 @@ class MotionFrame:
 
     def encode(self) -> bytes:
         n = len(self.positions)
-        try:
-            return _frame_struct(n, not self.absolute).pack(
-                CONFIRM_MAIN,
-                PASSCODE,
-                self.function,
-                channel_of_axes(n),
-                self.who_accept,
-                self.who_reply,
-                self.frame,
-                self.time_ms,
-                *self.positions,
-                self.port_out,
-                self.extend,
-            )
-        except struct.error as exc:
-            raise ProtocolError(f"IMAX frame field out of range: {exc}") from None
+        return pack_timed_frame(
+            _frame_struct(n, not self.absolute),
+            (self.function, channel_of_axes(n), self.who_accept, self.who_reply),
+            self.frame,
+            self.time_ms,
+            self.positions,
+            (self.port_out, self.extend),
+            "IMAX frame",
+        )
 
     @classmethod
     def decode_parts(cls, h: Header, data: bytes) -> MotionFrame:
@@ -367,23 +362,15 @@ class MotionFrameReply:
         return frame_size(len(self.positions))
 
     def encode(self) -> bytes:
-        n = len(self.positions)
-        try:
-            return _frame_struct(n, not self.absolute).pack(
-                CONFIRM_MAIN,
-                PASSCODE,
-                self.function,
-                self.channel,
-                WHO_NONE,
-                WHO_NONE,
-                self.frame,
-                self.time_ms,
-                *self.positions,
-                self.port,
-                self.extend,
-            )
-        except struct.error as exc:
-            raise ProtocolError(f"IMAX frame reply field out of range: {exc}") from None
+        return pack_timed_frame(
+            _frame_struct(len(self.positions), not self.absolute),
+            (self.function, self.channel, WHO_NONE, WHO_NONE),
+            self.frame,
+            self.time_ms,
+            self.positions,
+            (self.port, self.extend),
+            "IMAX frame reply",
+        )
 
     @classmethod
     def decode_parts(cls, h: Header, data: bytes) -> MotionFrameReply:
@@ -440,22 +427,15 @@ class VibrationFrame:
 
     def encode(self) -> bytes:
         n = len(self.positions)
-        try:
-            return _vib_struct(n, not self.absolute).pack(
-                CONFIRM_MAIN,
-                PASSCODE,
-                self.function,
-                channel_of_axes(n),
-                self.who_accept,
-                self.who_reply,
-                self.frame,
-                self.time_ms,
-                *self.positions,
-                self.port_out,
-                *(v for pair in self.vibration for v in pair),
-            )
-        except (struct.error, TypeError) as exc:
-            raise ProtocolError(f"IMAX vibration frame field out of range: {exc}") from None
+        return pack_timed_frame(
+            _vib_struct(n, not self.absolute),
+            (self.function, channel_of_axes(n), self.who_accept, self.who_reply),
+            self.frame,
+            self.time_ms,
+            self.positions,
+            chain((self.port_out,), (v for pair in self.vibration for v in pair)),
+            "IMAX vibration frame",
+        )
 
     @classmethod
     def decode_parts(cls, h: Header, data: bytes) -> VibrationFrame:
@@ -505,23 +485,15 @@ class VibrationFrameReply:
         return _vib_struct(len(self.positions), False).size
 
     def encode(self) -> bytes:
-        n = len(self.positions)
-        try:
-            return _vib_struct(n, not self.absolute).pack(
-                CONFIRM_MAIN,
-                PASSCODE,
-                self.function,
-                self.channel,
-                WHO_NONE,
-                WHO_NONE,
-                self.frame,
-                self.time_ms,
-                *self.positions,
-                self.port,
-                *(v for pair in self.vibration for v in pair),
-            )
-        except (struct.error, TypeError) as exc:
-            raise ProtocolError(f"IMAX vibration reply field out of range: {exc}") from None
+        return pack_timed_frame(
+            _vib_struct(len(self.positions), not self.absolute),
+            (self.function, self.channel, WHO_NONE, WHO_NONE),
+            self.frame,
+            self.time_ms,
+            self.positions,
+            chain((self.port,), (v for pair in self.vibration for v in pair)),
+            "IMAX vibration reply",
+        )
 
     @classmethod
     def decode_parts(cls, h: Header, data: bytes) -> VibrationFrameReply:

@@ -34,6 +34,7 @@ from .._udp_common import (
     Header,
     check_length,
     decode_header,
+    pack_timed_frame,
     timed_frame_struct,
 )
 from .._udp_registers import RegisterReadShape, RegisterValuesShape, check_u16
@@ -256,24 +257,15 @@ class MotionFrame:
 
     def encode(self) -> bytes:
         n = len(self.positions)
-        try:
-            return _frame_struct(n, not self.absolute).pack(
-                CONFIRM_MAIN,
-                PASSCODE,
-                F_ABS if self.absolute else F_REL,
-                _CHANNEL_OF_AXES[n],
-                self.who_accept,
-                self.who_reply,
-                self.line,
-                self.time_ms,
-                *self.positions,
-                self.base_dout,
-                self.dac1,
-                self.dac2,
-                self.ext_dout,
-            )
-        except (struct.error, KeyError) as exc:
-            raise ProtocolError(f"frame field out of range: {exc}") from None
+        return pack_timed_frame(
+            _frame_struct(n, not self.absolute),
+            (self.function, _CHANNEL_OF_AXES[n], self.who_accept, self.who_reply),
+            self.line,
+            self.time_ms,
+            self.positions,
+            (self.base_dout, self.dac1, self.dac2, self.ext_dout),
+            "frame",
+        )
 
     @classmethod
     def decode_parts(cls, h: Header, data: bytes) -> MotionFrame:
