@@ -61,12 +61,10 @@ from .._udp_registers import (
     unpack_values,
 )
 
-__all__ = [
+__all__ = [  # what the package exports from here
     "CHANNEL_DP",
     "CHANNEL_DPF",
     "CHANNEL_PA",
-    "FUNCTION_NAMES",
-    "ImaxMessage",
     "MotionFrame",
     "MotionFrameReply",
     "RegisterRead",
@@ -82,6 +80,7 @@ __all__ = [
     "axes_of_channel",
     "channel_of_axes",
     "decode",
+    "frame_size",
 ]
 
 F_READ, F_WRITE, F_ABS, F_REL = 0x1101, 0x1201, 0x1301, 0x1401

@@ -39,14 +39,12 @@ from .._udp_common import (
 )
 from .._udp_registers import RegisterReadShape, RegisterValuesShape, check_u16
 
-__all__ = [
+__all__ = [  # what the package exports from here
     "CHANNEL_CX",
     "CHANNEL_DX",
     "CHANNEL_FX",
     "CHANNEL_FXM",
-    "FUNCTION_NAMES",
     "FrameStatus",
-    "MboxMessage",
     "MotionFrame",
     "MotionFrameReply",
     "RegisterError",
