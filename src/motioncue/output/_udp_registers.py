@@ -62,6 +62,16 @@ def _allowed(channels: Sequence[int]) -> str:
     return str(tuple(channels))
 
 
+def _check_address(msg: RegisterReadShape | RegisterValuesShape) -> None:
+    """Channel among the message's CHANNELS; StartAddress and Who fields u16."""
+    if msg.channel not in msg.CHANNELS:
+        raise ProtocolError(
+            f"{type(msg).__name__}: channel {msg.channel}, allowed {_allowed(msg.CHANNELS)}"
+        )
+    for name in ("start", "who_accept", "who_reply"):
+        check_u16(getattr(msg, name), name)
+
+
 def pack_registers(
     confirm: int,
     function: int,
@@ -120,12 +130,7 @@ class RegisterReadShape:
     who_reply: int = WHO_ALL
 
     def __post_init__(self) -> None:
-        if self.channel not in self.CHANNELS:
-            raise ProtocolError(
-                f"{type(self).__name__}: channel {self.channel}, allowed {_allowed(self.CHANNELS)}"
-            )
-        for name in ("start", "who_accept", "who_reply"):
-            check_u16(getattr(self, name), name)
+        _check_address(self)
         if not 1 <= self.count <= self.MAX_COUNT:
             raise ProtocolError(
                 f"{type(self).__name__}: count {self.count}, allowed 1..{self.MAX_COUNT}"
@@ -181,12 +186,7 @@ class RegisterValuesShape:
     who_reply: int = WHO_NONE
 
     def __post_init__(self) -> None:
-        if self.channel not in self.CHANNELS:
-            raise ProtocolError(
-                f"{type(self).__name__}: channel {self.channel}, allowed {_allowed(self.CHANNELS)}"
-            )
-        for name in ("start", "who_accept", "who_reply"):
-            check_u16(getattr(self, name), name)
+        _check_address(self)
         object.__setattr__(self, "values", u16_tuple(self.values, type(self).__name__))
         if not 1 <= len(self.values) <= self.MAX_COUNT:
             raise ProtocolError(
