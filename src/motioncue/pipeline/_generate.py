@@ -108,6 +108,26 @@ def pulse_rounding_limits(limits: Any, platform: Any, dt_s: float) -> Any:
     )
 
 
+def _finish(
+    q_desired: np.ndarray, platform: Any, tight: Any, table: list[dict[str, Any]], dt: float
+) -> tuple[Any, np.ndarray, np.ndarray, np.ndarray, FrameCheck]:
+    """Offline limits (casadi), whole pulses, and the independent check every ride must pass.
+
+    The ride starts from the park position at rest. Returns ``(optimisation, q, pulses, t_s,
+    check)``; raises :class:`LimitError` rather than return frames that break a limit.
+    """
+    from motioncue.trajectory import limit_ride
+
+    opt = limit_ride(q_desired, dt, tight, q0=platform.q_park, v0=np.zeros(platform.n_actuators))
+    q = np.asarray(opt.q, dtype=float)
+    pulses = platform.drives.to_pulses(q)
+    t_s = np.arange(len(q)) * dt
+    check = check_frames(t_s, pulses, table, start_at_rest=True)
+    if not check.ok:
+        raise LimitError(f"generated frames fail the independent limits check: {check.summary()}")
+    return opt, q, pulses, t_s, check
+
+
 def generate_ride(
     recording: Any,
     platform: Any,
@@ -141,7 +161,7 @@ def generate_ride(
     ride, report
     """
     from motioncue.telemetry._recording import resample
-    from motioncue.trajectory import ActuatorLimits, limit_pose, limit_ride, transition
+    from motioncue.trajectory import ActuatorLimits, limit_pose, transition
     from motioncue.washout import ClassicalWashout
 
     def step(name: str, frac: float) -> None:
@@ -185,16 +205,8 @@ def generate_ride(
     q_desired = platform.inverse(poses)
     lap("inverse kinematics")
     step("actuator limits (casadi)", 0.5)
-    opt = limit_ride(q_desired, dt, tight, q0=platform.q_park, v0=np.zeros(platform.n_actuators))
-    lap("actuator limits")
-    step("pulses", 0.9)
-    q = np.asarray(opt.q, dtype=float)
-    pulses = platform.drives.to_pulses(q)
-    t_s = np.arange(len(q)) * dt
-    check = check_frames(t_s, pulses, table, start_at_rest=True)
-    if not check.ok:
-        raise LimitError(f"generated frames fail the independent limits check: {check.summary()}")
-    lap("pulses and check")
+    opt, q, pulses, t_s, check = _finish(q_desired, platform, tight, table, dt)
+    lap("actuator limits, pulses and check")
     n_in = len(ramp_in.poses) - 1
     cue = slice(n_in, n_in + len(poses_cue_ok))
     status = np.asarray(plim.status)
@@ -282,7 +294,7 @@ def generate_keyframe_ride(
     ride, info
         ``info`` has ``late_keyframes``, ``max_late_s`` and ``keyframe_frames``.
     """
-    from motioncue.trajectory import ActuatorLimits, limit_ride, transition, transition_through
+    from motioncue.trajectory import ActuatorLimits, transition, transition_through
 
     dt = 1.0 / rate_hz
     if limits is None:
@@ -335,13 +347,7 @@ def generate_keyframe_ride(
         segments.append(back.q[1:])
         q_all = np.concatenate(segments)
     q_all = np.vstack([q_all, q_all[-1:]])  # one more frame at park: the ride ends at rest
-    opt = limit_ride(q_all, dt, tight, q0=platform.q_park, v0=np.zeros(platform.n_actuators))
-    q = np.asarray(opt.q, dtype=float)
-    pulses = platform.drives.to_pulses(q)
-    t_s = np.arange(len(q)) * dt
-    check = check_frames(t_s, pulses, table, start_at_rest=True)
-    if not check.ok:
-        raise LimitError(f"keyframe ride fails the independent limits check: {check.summary()}")
+    opt, q, pulses, t_s, check = _finish(q_all, platform, tight, table, dt)
     dout = np.zeros(len(q), dtype=np.int64)
     dacs = np.zeros((len(q), 2), dtype=np.int64)
     for k, frame in enumerate(arrive):
