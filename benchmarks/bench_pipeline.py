@@ -18,14 +18,14 @@ import numpy as np
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "src"))
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
-from _timing import report  # noqa: E402
-from motioncue._config import config_dir  # noqa: E402
-from motioncue.kinematics import load_platform  # noqa: E402
-from motioncue.output import load_controller  # noqa: E402
-from motioncue.pipeline import generate_ride  # noqa: E402
-from motioncue.telemetry._recording import Recording, read_recording_csv  # noqa: E402
-from motioncue.trajectory import ActuatorLimits  # noqa: E402
-from motioncue.washout import load_cueing  # noqa: E402
+from _timing import report
+from motioncue._config import config_dir
+from motioncue.kinematics import load_platform
+from motioncue.output import load_controller
+from motioncue.pipeline import generate_ride
+from motioncue.telemetry._recording import Recording, read_recording_csv
+from motioncue.trajectory import ActuatorLimits
+from motioncue.washout import load_cueing
 
 
 def ten_minutes() -> Recording:

@@ -102,3 +102,37 @@ def test_play_to_a_file_and_refusals(tmp_path: Path, capsys: pytest.CaptureFixtu
     assert main(["generate", "--input", str(tmp_path / "missing.csv"), "--platform", "seat3",
                  "--controller", "mbox3", "--out", str(ride_path)]) == 2  # fmt: skip
     assert "does not exist" in capsys.readouterr().err
+
+
+def test_sigterm_stops_play_and_parks(tmp_path: Path) -> None:
+    import os
+    import signal
+    import socket
+    import subprocess
+    import sys
+    import time
+
+    rec = _lap_excerpt(tmp_path / "rec.csv", 20.0)
+    ride_path = tmp_path / "r.ride"
+    args = ["generate", "--input", str(rec), "--platform", "stewart6-linear", "--controller",
+            "mbox6", "--out", str(ride_path), "--quiet"]  # fmt: skip
+    assert main(args) == 0
+    sink = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
+    sink.bind(("127.0.0.1", 0))
+    env = dict(os.environ, PYTHONPATH=str(Path(__file__).resolve().parents[1] / "src"))
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "motioncue", "play", str(ride_path), "--target",
+         f"udp://127.0.0.1:{sink.getsockname()[1]}"],
+        stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env,
+    )  # fmt: skip
+    try:
+        sink.settimeout(20.0)
+        sink.recv(2048)  # playing
+        time.sleep(0.5)
+        proc.send_signal(signal.SIGTERM)
+        out, err = proc.communicate(timeout=30)
+    finally:
+        proc.kill()
+        sink.close()
+    assert proc.returncode == 130, err
+    assert "interrupted and parked" in out

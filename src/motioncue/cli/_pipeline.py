@@ -173,8 +173,23 @@ def _play(args: argparse.Namespace) -> int:
         f"play: {args.ride} -> {target} ({ride.n_frames} frames, {ride.duration_s:.1f} s)",
         file=sys.stderr,
     )
-    with open_transport(target) as link:
-        rep = play_ride(ride, platform, controller, limits, link, speed=args.speed, paced=paced)
+    import signal
+    import threading
+
+    stop = threading.Event()
+
+    def on_term(signum: int, frame: Any) -> None:
+        stop.set()  # SIGTERM: stop the ride and park, as Ctrl-C does
+
+    previous = signal.signal(signal.SIGTERM, on_term)
+    try:
+        with open_transport(target) as link:
+            rep = play_ride(
+                ride, platform, controller, limits, link, speed=args.speed, paced=paced,
+                stop=stop.is_set,
+            )  # fmt: skip
+    finally:
+        signal.signal(signal.SIGTERM, previous)
     print(
         f"sent {rep.frames_sent} frames ({rep.ride_frames_sent} of the ride, {rep.park_frames} "
         f"parking); limiter changed {rep.clamped_frames}; late {rep.late_frames}; "

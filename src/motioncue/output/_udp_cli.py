@@ -7,13 +7,30 @@ import enum
 import math
 import time
 from collections.abc import Callable, Sequence
+from dataclasses import dataclass
 from typing import Any, TextIO
 
 from .._errors import ConfigError, ProtocolError
 from ._transport import Transport, TransportURL
 from ._udp_common import format_who
 
-__all__ = ["describe", "exchange", "park", "parse_bits", "parse_value", "transport_options"]
+__all__ = [
+    "VERBS",
+    "RegisterLink",
+    "describe",
+    "exchange",
+    "need_args",
+    "park",
+    "parse_bits",
+    "parse_value",
+    "positions_from_words",
+    "require_request",
+    "split_datagrams",
+    "transport_options",
+]
+
+VERBS = ("estop", "reset", "home", "park", "outputs", "read", "write")
+"""The ``motioncue send`` verbs every UDP controller kind answers."""
 
 
 def transport_options(controller: Any, url: TransportURL, *, fixed_source_port: bool) -> dict:
@@ -135,3 +152,82 @@ def park(
             transport.send(msg)
     print(f"parked: {n} frames over {n * period_s:.2f} s from {list(current)} to 0", file=out)
     return n
+
+
+def need_args(verb: str, args: Sequence[str], n: int) -> None:
+    """Raise :class:`ConfigError` unless ``send verb`` got exactly ``n`` arguments."""
+    if len(args) != n:
+        raise ConfigError(f"send {verb}: expected {n} argument(s), got {args!r}")
+
+
+def require_request(transport: Transport) -> None:
+    """``send park`` reads the positions first, so it needs a link that answers."""
+    if getattr(transport, "request", None) is None:
+        raise ConfigError("send park needs a udp:// target: it reads the positions first")
+
+
+def positions_from_words(words: Sequence[int], addresses: Sequence[int]) -> list[int]:
+    """Signed 32-bit positions from register pairs, low word at each address, high after."""
+    out = []
+    for a in addresses:
+        v = words[a] | words[a + 1] << 16
+        out.append(v - (1 << 32) if v & 0x80000000 else v)
+    return out
+
+
+def _is_reply_to(function: int) -> Callable[[Any], bool]:
+    """A decoded message answering request ``function`` (0x..01 -> 0x..0x, x != 1)."""
+    base = function & 0xFFF0
+
+    def is_reply(msg: Any) -> bool:
+        f = getattr(msg, "function", None)
+        return f is not None and f & 0xFFF0 == base and f != function
+
+    return is_reply
+
+
+@dataclass(frozen=True)
+class RegisterLink:
+    """Register reads and writes of one ``send`` command: encode the kind's request with
+    the command's Who fields, send it and (when a reply is asked for) wait for the reply
+    to that request, printing both to ``out``."""
+
+    transport: Transport
+    decode: Callable[[bytes], Any]
+    read_request: Callable[..., Any]
+    write_request: Callable[..., Any]
+    who: tuple[int, int]
+    out: TextIO
+
+    def _exchange(self, msg: Any) -> Any | None:
+        return exchange(
+            self.transport,
+            msg.encode(),
+            self.decode,
+            _is_reply_to(msg.function),
+            self.who[1] != 0,
+            self.out,
+        )
+
+    def read(self, channel: int, start: int, count: int) -> Any | None:
+        return self._exchange(self.read_request(channel, start, count, *self.who))
+
+    def write(self, channel: int, start: int, values: tuple[int, ...]) -> Any | None:
+        return self._exchange(self.write_request(channel, start, values, *self.who))
+
+
+def split_datagrams(blob: bytes, size_at: Callable[[bytes, int], int]) -> list[bytes]:
+    """Cut a raw ``file:`` capture (datagrams back to back) into datagrams.
+
+    ``size_at(blob, offset)`` gives the size of the datagram starting at ``offset`` from
+    its header, or raises :class:`ProtocolError`.
+    """
+    out = []
+    off = 0
+    while off < len(blob):
+        size = size_at(blob, off)
+        if off + size > len(blob):
+            raise ProtocolError(f"byte {off}: message of {size} bytes truncated")
+        out.append(blob[off : off + size])
+        off += size
+    return out

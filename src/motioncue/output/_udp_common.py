@@ -23,8 +23,9 @@ from __future__ import annotations
 import math
 import numbers
 import struct
-from collections.abc import Callable, Mapping, Sequence
+from collections.abc import Callable, Iterable, Mapping, Sequence
 from dataclasses import dataclass
+from functools import cache
 from typing import Any
 
 from .._errors import ConfigError, ProtocolError
@@ -43,8 +44,10 @@ __all__ = [
     "check_length",
     "decode_header",
     "format_who",
+    "pack_timed_frame",
     "param_lookup",
     "parse_node",
+    "timed_frame_struct",
     "u16_tuple",
 ]
 
@@ -56,6 +59,38 @@ WHO_NONE = 0x0000
 
 HEADER = struct.Struct(">6H")
 REG_HEAD = struct.Struct(">HH")
+
+
+@cache
+def timed_frame_struct(n_axes: int, relative: bool, tail: str) -> struct.Struct:
+    """Layout of a timed motion frame (0x1301 / 0x1401 in both manuals, IMAX 0x1801 / 0x1901).
+
+    Header, frame number u32, time u32 (absolute) or i32 (relative), ``n_axes`` x i32
+    positions, then ``tail`` (struct codes of the kind's outputs: MBOX ``"4H"`` BaseDout,
+    DAC1, DAC2, ExtDout; IMAX ``"HI"`` PortOut, Extend).
+    """
+    return struct.Struct(f">6HI{'i' if relative else 'I'}{n_axes}i{tail}")
+
+
+def pack_timed_frame(
+    layout: struct.Struct,
+    head: tuple[int, int, int, int],
+    number: int,
+    time_ms: int,
+    positions: Sequence[int],
+    tail: Iterable[int],
+    what: str,
+) -> bytes:
+    """Encode a timed frame of :func:`timed_frame_struct` ``layout``.
+
+    ``head`` = (function, channel, who_accept, who_reply); ``tail`` the kind's trailing
+    fields (unpacked inside the guard, so a malformed one is reported too). A field out of
+    its range raises :class:`ProtocolError` naming ``what``.
+    """
+    try:
+        return layout.pack(CONFIRM_MAIN, PASSCODE, *head, number, time_ms, *positions, *tail)
+    except (struct.error, TypeError) as exc:
+        raise ProtocolError(f"{what} field out of range: {exc}") from None
 
 
 @dataclass(frozen=True, slots=True)

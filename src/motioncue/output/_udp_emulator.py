@@ -30,7 +30,21 @@ import numpy as np
 
 from .._errors import TransportError
 
-__all__ = ["Playback", "Trace", "UdpEmulatorBase", "Violation", "wall_clock", "who_matches"]
+__all__ = [
+    "STATE_ESTOP",
+    "STATE_HOMING",
+    "STATE_READY",
+    "ControllerEmulator",
+    "Playback",
+    "Trace",
+    "UdpEmulatorBase",
+    "Violation",
+    "wall_clock",
+    "who_matches",
+]
+
+# controller states both emulators share (the MBOX adds a fault state)
+STATE_HOMING, STATE_READY, STATE_ESTOP = 0, 1, 2
 
 # kernel receive time stamps (struct timespec); Python does not name the option, Linux's
 # generic value is 35 (also the control-message type SCM_TIMESTAMPNS)
@@ -402,3 +416,86 @@ class UdpEmulatorBase:
 
     def __exit__(self, *exc: object) -> None:
         self.stop()
+
+
+class ControllerEmulator(UdpEmulatorBase):
+    """State and views both controller emulators keep on top of the server loop.
+
+    The controller description, a mutable copy of its parameters, the homing / ready /
+    e-stop state, frame counters, the violations met while decoding, and the
+    :class:`Playback` (built by the subclass, whose buffer rules differ).
+    """
+
+    playback: Playback
+
+    def __init__(
+        self,
+        controller: Any,
+        host: str,
+        port: int,
+        *,
+        homing_time_s: float,
+        start_homed: bool,
+    ) -> None:
+        super().__init__(host, port)
+        self.controller = controller
+        self.n_axes: int = controller.n_axes
+        self.params: dict[str, int] = dict(controller.parameters)
+        self.homing_time_s = float(homing_time_s)
+        self.state = STATE_READY if start_homed else STATE_HOMING
+        # -1: homing starts at the first datagram's wall time
+        self._homing_until: float | None = None if start_homed else -1.0
+        self.ignored_frames = 0
+        self.refused_frames = 0
+        self._last_time_ms: int | None = None
+        self._next_report: float | None = None
+        self._violations: list[Violation] = []
+
+    @property
+    def trace(self) -> Trace:
+        with self.lock:
+            return self.playback.trace()
+
+    @property
+    def violations(self) -> list[Violation]:
+        with self.lock:
+            return [*self._violations, *self.playback.violations]
+
+    @property
+    def estop(self) -> bool:
+        return self.state == STATE_ESTOP
+
+    def _malformed(self, detail: str) -> list[bytes]:
+        """Record a datagram the controller cannot use; no reply."""
+        self._violations.append(Violation(self.playback.t_end, "malformed", None, detail))
+        return []
+
+    def _homing_done(self, now_s: float) -> bool:
+        """Advance homing to ``now_s``; ``True`` when it has just finished."""
+        if self.state != STATE_HOMING:
+            return False
+        if self._homing_until is not None and self._homing_until < 0:
+            self._homing_until = now_s + self.homing_time_s
+        if self._homing_until is not None and now_s >= self._homing_until:
+            self.state = STATE_READY
+            self._homing_until = None
+            return True
+        return False
+
+    def _position_now(self) -> tuple[int, ...]:
+        """Commanded position at the playback clock (linear between frames)."""
+        pb = self.playback
+        if not pb.rows_t:
+            return (0,) * self.n_axes
+        t = pb.play_t
+        rows_t = pb.rows_t
+        k = len(rows_t) - 1
+        while k > 0 and rows_t[k - 1] >= t:
+            k -= 1
+        if k == 0 or rows_t[k] <= t:
+            return pb.rows_p[k]
+        t0, t1 = rows_t[k - 1], rows_t[k]
+        w = (t - t0) / (t1 - t0) if t1 > t0 else 1.0
+        return tuple(
+            round(a + (b - a) * w) for a, b in zip(pb.rows_p[k - 1], pb.rows_p[k], strict=True)
+        )

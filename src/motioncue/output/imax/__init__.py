@@ -35,58 +35,20 @@ Contradictions in the manual and the decisions taken (more in ``_messages``):
   motor turn are taken as 4 x encoder lines (PA54: 20000 or 10000).
 """
 
+from . import _messages
 from ._cli import emulator, inspect_decode, send_verb, split_stream, transport_options
 from ._controller import ImaxController, ImaxFrameEncoder, controller_from_config
 from ._emulator import ImaxEmulator
-from ._messages import (
-    CHANNEL_DP,
-    CHANNEL_DPF,
-    CHANNEL_PA,
-    MotionFrame,
-    MotionFrameReply,
-    RegisterRead,
-    RegisterReply,
-    RegisterWrite,
-    ReplyStatus,
-    ServoRead,
-    ServoReply,
-    ServoWrite,
-    StatusReport,
-    VibrationFrame,
-    VibrationFrameReply,
-    axes_of_channel,
-    channel_of_axes,
-    decode,
-    frame_size,
-)
+from ._messages import *  # noqa: F403 - the message API is _messages.__all__
 from ._params import PA_SPEC, pa_address, pa_name
 
 __all__ = [
-    "CHANNEL_DP",
-    "CHANNEL_DPF",
-    "CHANNEL_PA",
     "PA_SPEC",
     "ImaxController",
     "ImaxEmulator",
     "ImaxFrameEncoder",
-    "MotionFrame",
-    "MotionFrameReply",
-    "RegisterRead",
-    "RegisterReply",
-    "RegisterWrite",
-    "ReplyStatus",
-    "ServoRead",
-    "ServoReply",
-    "ServoWrite",
-    "StatusReport",
-    "VibrationFrame",
-    "VibrationFrameReply",
-    "axes_of_channel",
-    "channel_of_axes",
     "controller_from_config",
-    "decode",
     "emulator",
-    "frame_size",
     "inspect_decode",
     "pa_address",
     "pa_name",
@@ -94,3 +56,4 @@ __all__ = [
     "split_stream",
     "transport_options",
 ]
+__all__ += _messages.__all__

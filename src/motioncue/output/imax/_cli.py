@@ -7,11 +7,22 @@ from typing import Any, TextIO
 
 from ..._errors import ConfigError, ProtocolError
 from .._transport import Transport, TransportURL
-from .._udp_cli import describe, exchange, park, parse_bits, parse_value
+from .._udp_cli import (
+    VERBS,
+    RegisterLink,
+    describe,
+    need_args,
+    park,
+    parse_bits,
+    parse_value,
+    positions_from_words,
+    require_request,
+    split_datagrams,
+)
 from .._udp_cli import transport_options as _transport_options
 from .._udp_common import CONFIRM_SERVO, HEADER, WHO_ALL, decode_header
 from ._controller import ImaxController
-from ._emulator import ImaxEmulator
+from ._emulator import _DP_POS, ImaxEmulator
 from ._messages import (
     CHANNEL_DP,
     CHANNEL_DPF,
@@ -42,7 +53,6 @@ __all__ = [
     "transport_options",
 ]
 
-VERBS = ("estop", "reset", "home", "park", "outputs", "read", "write")
 _DP = re.compile(r"^dp[ _]?([0-9a-f]{1,2})$", re.IGNORECASE)
 _DPF = re.compile(r"^dpf[ _]?([0-9a-f])$", re.IGNORECASE)
 
@@ -87,22 +97,11 @@ def send_verb(
     out: TextIO,
 ) -> int:
     """Run one ``motioncue send`` verb; returns the exit status (0 ok, 1 error reply)."""
-    accept, reply_who = who
-
-    def is_reply(base: int) -> Any:
-        return lambda r: isinstance(r, RegisterReply) and r.function & 0xFFF0 == base & 0xFFF0
-
-    def write(channel: int, start: int, values: tuple[int, ...]) -> Any:
-        msg = RegisterWrite(channel, start, values, accept, reply_who)
-        return exchange(transport, msg.encode(), decode, is_reply(F_WRITE), reply_who != 0, out)
-
-    def read(channel: int, start: int, count: int) -> Any:
-        msg = RegisterRead(channel, start, count, accept, reply_who)
-        return exchange(transport, msg.encode(), decode, is_reply(F_READ), reply_who != 0, out)
+    link = RegisterLink(transport, decode, RegisterRead, RegisterWrite, who, out)
+    write, read = link.write, link.read
 
     def nargs(n: int) -> None:
-        if len(args) != n:
-            raise ConfigError(f"send {verb}: expected {n} argument(s), got {args!r}")
+        need_args(verb, args, n)
 
     if verb == "estop":
         raise ConfigError(
@@ -137,17 +136,12 @@ def send_verb(
             write(CHANNEL_PA, 0x0F, (2,))  # PA0f = 2: save parameters
     elif verb == "park":
         nargs(0)
-        if getattr(transport, "request", None) is None:
-            raise ConfigError("send park needs a udp:// target: it reads the positions first")
+        require_request(transport)
         reply = read(CHANNEL_DP, 0, 0x27)
         if not isinstance(reply, RegisterReply) or reply.status != ReplyStatus.OK:
             return 1
-        dp = reply.values
-        current = []
-        for a in (0x06, 0x08, 0x0A, 0x21, 0x23, 0x25)[: controller.n_axes]:
-            v = dp[a] | dp[a + 1] << 16
-            current.append(v - (1 << 32) if v & 0x80000000 else v)
-        park(controller, transport, current, out)
+        positions = positions_from_words(reply.values, _DP_POS[: controller.n_axes])
+        park(controller, transport, positions, out)
         return 0
     else:
         raise ConfigError(f"send {verb!r}: allowed {', '.join(VERBS)}")
@@ -162,30 +156,25 @@ def inspect_decode(data: bytes) -> str:
     return describe(decode(data))
 
 
+def _size_at(blob: bytes, off: int) -> int:
+    """Size of the IMAX datagram at ``off`` of a capture, from its header."""
+    if blob[off : off + 2] == b"\x33\xcc" and blob[off + 4 : off + 6] == b"\x31\x01":
+        n = int.from_bytes(blob[off + 8 : off + 10], "big")
+        return 16 + 8 * n
+    h = decode_header(blob[off : off + HEADER.size])
+    f = h.function
+    if f in (F_ABS, F_REL):
+        return frame_size(axes_of_channel(h.channel))
+    if f in (F_VIB_ABS, F_VIB_REL):
+        return 22 + 8 * axes_of_channel(h.channel)
+    if (f & 0xFFF0) in (F_READ & 0xFFF0, F_WRITE & 0xFFF0, 0x2100, 0x2200) and f & 0xF:
+        count = int.from_bytes(blob[off + 14 : off + 16], "big")
+        return HEADER.size + 4 + 2 * count
+    if h.confirm == CONFIRM_SERVO and f == F_STATUS:
+        raise ProtocolError(f"byte {off}: malformed status report")
+    raise ProtocolError(f"byte {off}: cannot size IMAX function 0x{f:04X}")
+
+
 def split_stream(blob: bytes) -> list[bytes]:
     """Cut a raw ``file:`` capture of host -> controller datagrams into datagrams."""
-    out = []
-    off = 0
-    while off < len(blob):
-        if blob[off : off + 2] == b"\x33\xcc" and blob[off + 4 : off + 6] == b"\x31\x01":
-            n = int.from_bytes(blob[off + 8 : off + 10], "big")
-            size = 16 + 8 * n
-        else:
-            h = decode_header(blob[off : off + HEADER.size])
-            f = h.function
-            if f in (F_ABS, F_REL):
-                size = frame_size(axes_of_channel(h.channel))
-            elif f in (F_VIB_ABS, F_VIB_REL):
-                size = 22 + 8 * axes_of_channel(h.channel)
-            elif (f & 0xFFF0) in (F_READ & 0xFFF0, F_WRITE & 0xFFF0, 0x2100, 0x2200) and f & 0xF:
-                count = int.from_bytes(blob[off + 14 : off + 16], "big")
-                size = HEADER.size + 4 + 2 * count
-            elif h.confirm == CONFIRM_SERVO and f == F_STATUS:
-                raise ProtocolError(f"byte {off}: malformed status report")
-            else:
-                raise ProtocolError(f"byte {off}: cannot size IMAX function 0x{f:04X}")
-        if off + size > len(blob):
-            raise ProtocolError(f"byte {off}: message of {size} bytes truncated")
-        out.append(blob[off : off + size])
-        off += size
-    return out
+    return split_datagrams(blob, _size_at)

@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import dataclasses
 import struct
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
@@ -11,9 +10,16 @@ from types import MappingProxyType
 from typing import Any, ClassVar
 
 from ..._config import ConfigReader
-from ..._errors import ConfigError, LimitError, ProtocolError
+from ..._errors import ConfigError, ProtocolError
 from .._transport import parse_target
-from .._udp_common import CONFIRM_MAIN, PASSCODE, WHO_ALL, FrameClock, check_int32
+from .._udp_common import FrameClock, check_int32
+from .._udp_controller import (
+    UdpController,
+    UdpFrameEncoder,
+    config_parameters,
+    config_target,
+)
+from .._udp_controller import validate_parameters as _validate
 from ._messages import (
     F_ABS,
     F_REL,
@@ -30,26 +36,11 @@ __all__ = ["ImaxController", "ImaxFrameEncoder", "controller_from_config"]
 
 def validate_parameters(values: Mapping[str, Any], where: str) -> dict[str, int]:
     """Defaults overridden by ``values``; names canonical, values within range."""
-    out = {name: spec[2] for name, spec in PA_SPEC.items()}
-    for key, value in values.items():
-        try:
-            name = pa_name(key)
-        except ConfigError as exc:
-            raise ConfigError(f"{where}: {exc}") from None
-        if name not in PA_SPEC:
-            raise ConfigError(f"{where}: {key} is not an IMAX parameter this package knows")
-        lo, hi, _, meaning = PA_SPEC[name]
-        if isinstance(value, bool) or not isinstance(value, int) or not lo <= value <= hi:
-            raise ConfigError(
-                f"{where}: {name} = {value!r} is invalid ({meaning}); "
-                f"allowed: an integer in [{lo}, {hi}]"
-            )
-        out[name] = value
-    return out
+    return _validate(values, where, PA_SPEC, pa_name, "is not an IMAX parameter this package knows")
 
 
 @dataclass(frozen=True)
-class ImaxController:
+class ImaxController(UdpController["ImaxFrameEncoder"]):
     """An IMAX / SMC multi-axis controller (up to 12 axes; 3 and 6 are common).
 
     Attributes
@@ -69,6 +60,15 @@ class ImaxController:
     """
 
     kind: ClassVar[str] = "imax"
+    CONTROLLER_PARAMS: ClassVar[tuple[str, str, str, str, str]] = (
+        "PA10",
+        "PA11",
+        "PA12",
+        "PA13",
+        "PA14",
+    )
+    HOST_PARAMS: ClassVar[tuple[str, str, str, str, str]] = ("PA20", "PA21", "PA22", "PA23", "PA24")
+    canonical_name = staticmethod(pa_name)
 
     name: str
     n_axes: int
@@ -135,77 +135,32 @@ class ImaxController:
             round((self.stroke_mm - lift) * self.pulses_per_mm),
         )
 
-    @property
-    def controller_address(self) -> tuple[str, int]:
-        p = self.parameters
-        return (f"{p['PA10']}.{p['PA11']}.{p['PA12']}.{p['PA13']}", p["PA14"])
-
-    @property
-    def host_address(self) -> tuple[str, int]:
-        p = self.parameters
-        return (f"{p['PA20']}.{p['PA21']}.{p['PA22']}.{p['PA23']}", p["PA24"])
-
-    @property
-    def node(self) -> int:
-        """Who node / control id: PA12 << 8 | PA13."""
-        return (self.parameters["PA12"] << 8) | self.parameters["PA13"]
-
-    def with_parameters(self, **changes: int) -> ImaxController:
-        merged = dict(self.parameters)
-        merged.update({pa_name(k): v for k, v in changes.items()})
-        return dataclasses.replace(self, parameters=merged)
-
-    def frame_encoder(
-        self,
-        absolute_time: bool = True,
-        *,
-        t0_s: float | None = None,
-        who_accept: int = WHO_ALL,
-        who_reply: int = WHO_ALL,
-        first_frame: int = 0,
-    ) -> ImaxFrameEncoder:
-        """A fresh frame encoder (frame counter and time origin) for one run."""
-        return ImaxFrameEncoder(
-            self, FrameClock(absolute_time, t0_s, first_frame), who_accept, who_reply
-        )
+    def _encoder(self, clock: FrameClock, who_accept: int, who_reply: int) -> ImaxFrameEncoder:
+        return ImaxFrameEncoder(self, clock, who_accept, who_reply)
 
 
-class ImaxFrameEncoder:
+class ImaxFrameEncoder(UdpFrameEncoder):
     """Turns ``(t_s, pulses, dout)`` into IMAX frames (0x1301 / 0x1401), or vibration
     frames (0x1801 / 0x1901) when ``vibration`` is given.
 
     ``dout`` = Y01..Y12 (12 bits). The IMAX has no DACs: ``dacs`` must be ``(0, 0)``.
     """
 
-    __slots__ = (
-        "_head",
-        "_pack",
-        "_stroke",
-        "clock",
-        "controller",
-        "n_axes",
-        "who_accept",
-        "who_reply",
-    )
+    __slots__ = ()
+    STROKE_SOURCE: ClassVar[str] = "stroke_mm, PA40 lift"
 
     def __init__(
         self, controller: ImaxController, clock: FrameClock, who_accept: int, who_reply: int
     ) -> None:
-        self.controller = controller
-        self.clock = clock
-        self.n_axes = controller.n_axes
-        self.who_accept = who_accept
-        self.who_reply = who_reply
-        self._pack = _frame_struct(self.n_axes, not clock.absolute_time).pack
-        self._head = (
-            CONFIRM_MAIN,
-            PASSCODE,
-            F_ABS if clock.absolute_time else F_REL,
-            channel_of_axes(self.n_axes),
+        super().__init__(
+            controller,
+            clock,
             who_accept,
             who_reply,
+            layout=_frame_struct(controller.n_axes, not clock.absolute_time),
+            functions=(F_ABS, F_REL),
+            channel=channel_of_axes(controller.n_axes),
         )
-        self._stroke = controller.stroke_pulses
 
     def encode(
         self,
@@ -248,13 +203,7 @@ class ImaxFrameEncoder:
             data = _vib_struct(self.n_axes, not self.clock.absolute_time).pack(
                 *head, frame, field, *pulses, dout, *flat
             )
-        if self._stroke is not None:
-            lo, hi = self._stroke
-            if min(pulses) < lo or max(pulses) > hi:
-                raise LimitError(
-                    f"positions {list(pulses)} leave the stroke [{lo}, {hi}] "
-                    "pulses (stroke_mm, PA40 lift)"
-                )
+        self._check_stroke(pulses)
         self.clock.commit(t_s, abs_ms)
         return [data]
 
@@ -262,16 +211,10 @@ class ImaxFrameEncoder:
 def controller_from_config(reader: ConfigReader, name: str) -> ImaxController:
     """Build an :class:`ImaxController` from a controller TOML (``kind = "imax"``)."""
     axes = reader.integer("axes", lo=2, hi=12)
-    target = reader.string("default_target", "udp://127.0.0.1:7408")
-    try:
-        parse_target(target)
-    except ConfigError as exc:
-        raise reader.error("default_target", target, str(exc)) from None
+    target = config_target(reader)
     stroke = reader.number("stroke_mm", 0.0, lo=0.0)
     buffer_frames = reader.integer("buffer_frames", 256, lo=1, hi=65535)
-    params = reader.table("parameters", {})
-    values = {k: params.raw(k) for k in params.keys()}
-    params.finish()
+    values = config_parameters(reader)
     values.setdefault("PA02", axes)
     return ImaxController(
         name=name,

@@ -30,9 +30,11 @@ from typing import Any
 from ..._errors import ProtocolError
 from .._udp_common import decode_header
 from .._udp_emulator import (
+    STATE_ESTOP,
+    STATE_HOMING,
+    STATE_READY,
+    ControllerEmulator,
     Playback,
-    Trace,
-    UdpEmulatorBase,
     Violation,
     wall_clock,
     who_matches,
@@ -68,12 +70,11 @@ __all__ = ["ImaxEmulator"]
 ERR_ADDRESS = 1
 ERR_VALUE = 2
 ERR_BUFFER = 21  # Err21: UDP data buffer overflow (chapter 6)
-STATE_HOMING, STATE_READY, STATE_ESTOP = 0, 1, 2
 _PA_BY_ADDRESS = {int(name[2:], 16): name for name in PA_SPEC}
 _DP_POS = (0x06, 0x08, 0x0A, 0x21, 0x23, 0x25)  # low word, high word follows (2.3.3)
 
 
-class ImaxEmulator(UdpEmulatorBase):
+class ImaxEmulator(ControllerEmulator):
     """Emulated IMAX controller.
 
     Parameters
@@ -94,47 +95,25 @@ class ImaxEmulator(UdpEmulatorBase):
         homing_time_s: float = 1.0,
         start_homed: bool = True,
     ) -> None:
-        super().__init__(host, port)
-        self.controller = controller
-        self.n_axes = controller.n_axes
-        self.params: dict[str, int] = dict(controller.parameters)
+        super().__init__(
+            controller, host, port, homing_time_s=homing_time_s, start_homed=start_homed
+        )
+        self.controller: ImaxController = controller
         self.dp_extra: dict[int, int] = {}
-        self.homing_time_s = float(homing_time_s)
-        self.state = STATE_READY if start_homed else STATE_HOMING
-        self._homing_until: float | None = None if start_homed else -1.0
         self._estop_latched = False
         self.inputs = 0
         self.outputs = self.params["PA9f"]
         self.alarm = 0
-        self.ignored_frames = 0
-        self.refused_frames = 0
         self.vibration: tuple[tuple[int, int], ...] = ()
         self.servo_params: dict[tuple[int, int], int] = {}
-        self._last_time_ms: int | None = None
         self._resume_pending = False
         self._last_frame_wall: float | None = None
-        self._next_report: float | None = None
         self._reported_alarm = 0
-        self._violations: list[Violation] = []
         stroke = controller.stroke_pulses
         self.playback = Playback(
             self.n_axes, controller.buffer_frames, True, controller.max_speed_pulses_s, stroke
         )
         self.playback.fast_rate = 1.5 if self.params["PA06"] else 1.0
-
-    @property
-    def trace(self) -> Trace:
-        with self.lock:
-            return self.playback.trace()
-
-    @property
-    def violations(self) -> list[Violation]:
-        with self.lock:
-            return [*self._violations, *self.playback.violations]
-
-    @property
-    def estop(self) -> bool:
-        return self.state == STATE_ESTOP
 
     def set_inputs(self, bits: int, now_s: float | None = None) -> None:
         """Set the X01..X12 inputs (logical values); may trigger or release the e-stop."""
@@ -201,10 +180,6 @@ class ImaxEmulator(UdpEmulatorBase):
         else:
             return self._malformed(f"{type(msg).__name__} is sent by an IMAX, not to it")
         return [out.encode()] if reply and out is not None else []
-
-    def _malformed(self, detail: str) -> list[bytes]:
-        self._violations.append(Violation(self.playback.t_end, "malformed", None, detail))
-        return []
 
     def _command_error(self, function: int) -> bytes:
         """x = 5 reply to a frame the controller cannot use (error code 5, zero frame)."""
@@ -437,29 +412,8 @@ class ImaxEmulator(UdpEmulatorBase):
         ):
             self._last_frame_wall = None
             self._start_homing(now_s)
-        if self.state == STATE_HOMING:
-            if self._homing_until is not None and self._homing_until < 0:
-                self._homing_until = now_s + self.homing_time_s
-            if self._homing_until is not None and now_s >= self._homing_until:
-                self.state = STATE_READY
-                self._homing_until = None
-                self.params["PA08"] = 0
-
-    def _position_now(self) -> tuple[int, ...]:
-        pb = self.playback
-        if not pb.rows_t:
-            return (0,) * self.n_axes
-        t = pb.play_t
-        k = len(pb.rows_t) - 1
-        while k > 0 and pb.rows_t[k - 1] >= t:
-            k -= 1
-        if k == 0 or pb.rows_t[k] <= t:
-            return pb.rows_p[k]
-        t0, t1 = pb.rows_t[k - 1], pb.rows_t[k]
-        w = (t - t0) / (t1 - t0) if t1 > t0 else 1.0
-        return tuple(
-            round(a + (b - a) * w) for a, b in zip(pb.rows_p[k - 1], pb.rows_p[k], strict=True)
-        )
+        if self._homing_done(now_s):
+            self.params["PA08"] = 0  # PA08 = 1 homes, then reads 0
 
     def status_report(self) -> StatusReport:
         now = self._position_now()

@@ -31,15 +31,16 @@ from __future__ import annotations
 
 import enum
 import struct
+from collections.abc import Sequence
 from dataclasses import dataclass
 from functools import cache
-from typing import ClassVar
+from itertools import chain
+from typing import ClassVar, Self
 
 from ..._errors import ProtocolError
 from .._udp_common import (
     CONFIRM_MAIN,
     CONFIRM_SERVO,
-    HEADER,
     PASSCODE,
     REG_HEAD,
     WHO_ALL,
@@ -47,15 +48,23 @@ from .._udp_common import (
     Header,
     check_length,
     decode_header,
+    pack_timed_frame,
+    timed_frame_struct,
     u16_tuple,
 )
+from .._udp_registers import (
+    RegisterReadShape,
+    RegisterValuesShape,
+    check_u16,
+    pack_registers,
+    register_struct,
+    unpack_values,
+)
 
-__all__ = [
+__all__ = [  # what the package exports from here
     "CHANNEL_DP",
     "CHANNEL_DPF",
     "CHANNEL_PA",
-    "FUNCTION_NAMES",
-    "ImaxMessage",
     "MotionFrame",
     "MotionFrameReply",
     "RegisterRead",
@@ -71,6 +80,7 @@ __all__ = [
     "axes_of_channel",
     "channel_of_axes",
     "decode",
+    "frame_size",
 ]
 
 F_READ, F_WRITE, F_ABS, F_REL = 0x1101, 0x1201, 0x1301, 0x1401
@@ -126,81 +136,16 @@ def channel_of_axes(n_axes: int) -> int:
     raise ProtocolError(f"{n_axes} axes: an IMAX frame carries 2..12 axes")
 
 
-def _check_u16(value: int, what: str) -> None:
-    if isinstance(value, bool) or not isinstance(value, int) or not 0 <= value <= 0xFFFF:
-        raise ProtocolError(f"{what} = {value!r} is not in [0, 0xFFFF]")
-
-
-def _reg_unpack(data: bytes) -> tuple[int, int, tuple[int, ...]]:
-    if len(data) < HEADER.size + REG_HEAD.size or len(data) % 2:
-        raise ProtocolError(
-            f"register message: length {len(data)} bytes, expected an even length >= 16"
-        )
-    start, count = REG_HEAD.unpack_from(data, HEADER.size)
-    n = (len(data) - HEADER.size - REG_HEAD.size) // 2
-    return start, count, struct.unpack_from(f">{n}H", data, HEADER.size + REG_HEAD.size)
-
-
 # -- register access ------------------------------------------------------------------------
 @dataclass(frozen=True, slots=True)
-class RegisterRead:
+class RegisterRead(RegisterReadShape):
     """Host -> IMAX 0x1101: read ``count`` registers of channel 0 (DP) or 1 (PA).
 
     Layout: header, StartAddress u16, Count u16, ``count`` zero words (Extra Data).
     """
 
-    LAYOUT: ClassVar[struct.Struct] = REG_HEAD
-    CONFIRM: ClassVar[int] = CONFIRM_MAIN
     FUNCTION: ClassVar[int] = F_READ
-    CHANNELS: ClassVar[tuple[int, ...]] = (CHANNEL_DP, CHANNEL_PA)
-    MAX_COUNT: ClassVar[int] = 256
-
-    channel: int
-    start: int
-    count: int
-    who_accept: int = WHO_ALL
-    who_reply: int = WHO_ALL
-
-    def __post_init__(self) -> None:
-        if self.channel not in self.CHANNELS:
-            raise ProtocolError(
-                f"{type(self).__name__}: channel {self.channel}, allowed {self.CHANNELS}"
-            )
-        for name in ("start", "who_accept", "who_reply"):
-            _check_u16(getattr(self, name), name)
-        if not 1 <= self.count <= self.MAX_COUNT:
-            raise ProtocolError(
-                f"{type(self).__name__}: count {self.count}, allowed 1..{self.MAX_COUNT}"
-            )
-
-    @property
-    def function(self) -> int:
-        return self.FUNCTION
-
-    @property
-    def size(self) -> int:
-        return HEADER.size + REG_HEAD.size + 2 * self.count
-
-    def encode(self) -> bytes:
-        return struct.pack(
-            f">6H2H{self.count}H",
-            self.CONFIRM,
-            PASSCODE,
-            self.FUNCTION,
-            self.channel,
-            self.who_accept,
-            self.who_reply,
-            self.start,
-            self.count,
-            *([0] * self.count),
-        )
-
-    @classmethod
-    def decode_parts(cls, h: Header, data: bytes):
-        start, count, pad = _reg_unpack(data)
-        if any(pad):
-            raise ProtocolError(f"{cls.__name__}: Extra Data after Count must be zero")
-        return cls(h.channel, start, count, h.who_accept, h.who_reply)
+    CHANNELS: ClassVar[Sequence[int]] = (CHANNEL_DP, CHANNEL_PA)
 
 
 @dataclass(frozen=True, slots=True)
@@ -210,73 +155,22 @@ class ServoRead(RegisterRead):
 
     CONFIRM: ClassVar[int] = CONFIRM_SERVO
     FUNCTION: ClassVar[int] = F_SERVO_READ
-    CHANNELS: ClassVar[tuple[int, ...]] = tuple(range(0x10000))
+    CHANNELS: ClassVar[Sequence[int]] = range(0x10000)
     MAX_COUNT: ClassVar[int] = MAX_SERVO_REGS
 
 
 @dataclass(frozen=True, slots=True)
-class RegisterWrite:
+class RegisterWrite(RegisterValuesShape):
     """Host -> IMAX 0x1201: write ``values`` to channel 0 (DP), 1 (PA) or 2 (DPF0..DPFF).
 
     Layout: header, StartAddress u16, Count u16, values u16.
     """
 
-    LAYOUT: ClassVar[struct.Struct] = REG_HEAD
-    CONFIRM: ClassVar[int] = CONFIRM_MAIN
     FUNCTION: ClassVar[int] = F_WRITE
-    CHANNELS: ClassVar[tuple[int, ...]] = (CHANNEL_DP, CHANNEL_PA, CHANNEL_DPF)
-    MAX_COUNT: ClassVar[int] = 256
+    CHANNELS: ClassVar[Sequence[int]] = (CHANNEL_DP, CHANNEL_PA, CHANNEL_DPF)
 
-    channel: int
-    start: int
-    values: tuple[int, ...]
     who_accept: int = WHO_ALL
     who_reply: int = WHO_ALL
-
-    def __post_init__(self) -> None:
-        if self.channel not in self.CHANNELS:
-            raise ProtocolError(
-                f"{type(self).__name__}: channel {self.channel}, allowed {self.CHANNELS[:3]}"
-            )
-        for name in ("start", "who_accept", "who_reply"):
-            _check_u16(getattr(self, name), name)
-        object.__setattr__(self, "values", u16_tuple(self.values, type(self).__name__))
-        if not 1 <= len(self.values) <= self.MAX_COUNT:
-            raise ProtocolError(
-                f"{type(self).__name__}: {len(self.values)} values, allowed 1..{self.MAX_COUNT}"
-            )
-
-    @property
-    def function(self) -> int:
-        return self.FUNCTION
-
-    @property
-    def size(self) -> int:
-        return HEADER.size + REG_HEAD.size + 2 * len(self.values)
-
-    def encode(self) -> bytes:
-        n = len(self.values)
-        return struct.pack(
-            f">6H2H{n}H",
-            self.CONFIRM,
-            PASSCODE,
-            self.FUNCTION,
-            self.channel,
-            self.who_accept,
-            self.who_reply,
-            self.start,
-            n,
-            *self.values,
-        )
-
-    @classmethod
-    def decode_parts(cls, h: Header, data: bytes):
-        start, count, values = _reg_unpack(data)
-        if count != len(values):
-            raise ProtocolError(
-                f"{cls.__name__}: Count says {count} registers, the datagram carries {len(values)}"
-            )
-        return cls(h.channel, start, values, h.who_accept, h.who_reply)
 
 
 @dataclass(frozen=True, slots=True)
@@ -286,7 +180,7 @@ class ServoWrite(RegisterWrite):
 
     CONFIRM: ClassVar[int] = CONFIRM_SERVO
     FUNCTION: ClassVar[int] = F_SERVO_WRITE
-    CHANNELS: ClassVar[tuple[int, ...]] = tuple(range(0x10000))
+    CHANNELS: ClassVar[Sequence[int]] = range(0x10000)
     MAX_COUNT: ClassVar[int] = MAX_SERVO_REGS
 
 
@@ -295,7 +189,8 @@ class RegisterReply:
     """IMAX -> host 0x110x (read) / 0x120x (write) reply, x = :class:`ReplyStatus`.
 
     Layout: header (channel, or error code when x != 2), StartAddress u16, Count u16,
-    Count x u16 (the values read / written).
+    Count x u16 (the values read / written). Unlike the MBOX's, the function code is a
+    field: its last digit carries the status, and the channel the error code.
     """
 
     LAYOUT: ClassVar[struct.Struct] = REG_HEAD
@@ -318,7 +213,7 @@ class RegisterReply:
         ):
             raise ProtocolError(f"{type(self).__name__}: function 0x{self.function:04X}")
         for name in ("channel", "start", "who_accept", "who_reply"):
-            _check_u16(getattr(self, name), name)
+            check_u16(getattr(self, name), name)
         object.__setattr__(self, "values", u16_tuple(self.values, type(self).__name__))
         if len(self.values) > 256:
             raise ProtocolError(f"{type(self).__name__}: {len(self.values)} values")
@@ -334,30 +229,23 @@ class RegisterReply:
 
     @property
     def size(self) -> int:
-        return HEADER.size + REG_HEAD.size + 2 * len(self.values)
+        return register_struct(len(self.values)).size
 
     def encode(self) -> bytes:
-        n = len(self.values)
-        return struct.pack(
-            f">6H2H{n}H",
+        return pack_registers(
             self.CONFIRM,
-            PASSCODE,
             self.function,
             self.channel,
             self.who_accept,
             self.who_reply,
             self.start,
-            n,
-            *self.values,
+            len(self.values),
+            self.values,
         )
 
     @classmethod
-    def decode_parts(cls, h: Header, data: bytes):
-        start, count, values = _reg_unpack(data)
-        if count != len(values):
-            raise ProtocolError(
-                f"{cls.__name__}: Count says {count} registers, the datagram carries {len(values)}"
-            )
+    def decode_parts(cls, h: Header, data: bytes) -> Self:
+        start, values = unpack_values(data, cls.__name__)
         return cls(h.function, h.channel, start, values, h.who_accept, h.who_reply)
 
 
@@ -373,13 +261,13 @@ class ServoReply(RegisterReply):
 @cache
 def _frame_struct(n_axes: int, relative: bool) -> struct.Struct:
     # header, Frame u32, Time u32 / i32, n x i32 positions, PortOut u16, Extend u32
-    return struct.Struct(f">6HI{'i' if relative else 'I'}{n_axes}iHI")
+    return timed_frame_struct(n_axes, relative, "HI")
 
 
 @cache
 def _vib_struct(n_axes: int, relative: bool) -> struct.Struct:
     # header, Frame u32, Time, n x i32, PortOut u16, n x (period u16 0.125 ms, amplitude u16)
-    return struct.Struct(f">6HI{'i' if relative else 'I'}{n_axes}iH{2 * n_axes}H")
+    return timed_frame_struct(n_axes, relative, f"H{2 * n_axes}H")
 
 
 def frame_size(n_axes: int) -> int:
@@ -424,22 +312,15 @@ class MotionFrame:
 
     def encode(self) -> bytes:
         n = len(self.positions)
-        try:
-            return _frame_struct(n, not self.absolute).pack(
-                CONFIRM_MAIN,
-                PASSCODE,
-                self.function,
-                channel_of_axes(n),
-                self.who_accept,
-                self.who_reply,
-                self.frame,
-                self.time_ms,
-                *self.positions,
-                self.port_out,
-                self.extend,
-            )
-        except struct.error as exc:
-            raise ProtocolError(f"IMAX frame field out of range: {exc}") from None
+        return pack_timed_frame(
+            _frame_struct(n, not self.absolute),
+            (self.function, channel_of_axes(n), self.who_accept, self.who_reply),
+            self.frame,
+            self.time_ms,
+            self.positions,
+            (self.port_out, self.extend),
+            "IMAX frame",
+        )
 
     @classmethod
     def decode_parts(cls, h: Header, data: bytes) -> MotionFrame:
@@ -480,23 +361,15 @@ class MotionFrameReply:
         return frame_size(len(self.positions))
 
     def encode(self) -> bytes:
-        n = len(self.positions)
-        try:
-            return _frame_struct(n, not self.absolute).pack(
-                CONFIRM_MAIN,
-                PASSCODE,
-                self.function,
-                self.channel,
-                WHO_NONE,
-                WHO_NONE,
-                self.frame,
-                self.time_ms,
-                *self.positions,
-                self.port,
-                self.extend,
-            )
-        except struct.error as exc:
-            raise ProtocolError(f"IMAX frame reply field out of range: {exc}") from None
+        return pack_timed_frame(
+            _frame_struct(len(self.positions), not self.absolute),
+            (self.function, self.channel, WHO_NONE, WHO_NONE),
+            self.frame,
+            self.time_ms,
+            self.positions,
+            (self.port, self.extend),
+            "IMAX frame reply",
+        )
 
     @classmethod
     def decode_parts(cls, h: Header, data: bytes) -> MotionFrameReply:
@@ -553,22 +426,15 @@ class VibrationFrame:
 
     def encode(self) -> bytes:
         n = len(self.positions)
-        try:
-            return _vib_struct(n, not self.absolute).pack(
-                CONFIRM_MAIN,
-                PASSCODE,
-                self.function,
-                channel_of_axes(n),
-                self.who_accept,
-                self.who_reply,
-                self.frame,
-                self.time_ms,
-                *self.positions,
-                self.port_out,
-                *(v for pair in self.vibration for v in pair),
-            )
-        except (struct.error, TypeError) as exc:
-            raise ProtocolError(f"IMAX vibration frame field out of range: {exc}") from None
+        return pack_timed_frame(
+            _vib_struct(n, not self.absolute),
+            (self.function, channel_of_axes(n), self.who_accept, self.who_reply),
+            self.frame,
+            self.time_ms,
+            self.positions,
+            chain((self.port_out,), (v for pair in self.vibration for v in pair)),
+            "IMAX vibration frame",
+        )
 
     @classmethod
     def decode_parts(cls, h: Header, data: bytes) -> VibrationFrame:
@@ -618,23 +484,15 @@ class VibrationFrameReply:
         return _vib_struct(len(self.positions), False).size
 
     def encode(self) -> bytes:
-        n = len(self.positions)
-        try:
-            return _vib_struct(n, not self.absolute).pack(
-                CONFIRM_MAIN,
-                PASSCODE,
-                self.function,
-                self.channel,
-                WHO_NONE,
-                WHO_NONE,
-                self.frame,
-                self.time_ms,
-                *self.positions,
-                self.port,
-                *(v for pair in self.vibration for v in pair),
-            )
-        except (struct.error, TypeError) as exc:
-            raise ProtocolError(f"IMAX vibration reply field out of range: {exc}") from None
+        return pack_timed_frame(
+            _vib_struct(len(self.positions), not self.absolute),
+            (self.function, self.channel, WHO_NONE, WHO_NONE),
+            self.frame,
+            self.time_ms,
+            self.positions,
+            chain((self.port,), (v for pair in self.vibration for v in pair)),
+            "IMAX vibration reply",
+        )
 
     @classmethod
     def decode_parts(cls, h: Header, data: bytes) -> VibrationFrameReply:

@@ -34,54 +34,25 @@ Contradictions in the manual and the decisions taken:
   FIFO depth: see :mod:`motioncue.output.mbox._emulator` for the decisions.
 """
 
+from . import _messages
 from ._cli import emulator, inspect_decode, send_verb, split_stream, transport_options
 from ._controller import MboxController, MboxFrameEncoder, controller_from_config
 from ._emulator import MboxEmulator
-from ._messages import (
-    CHANNEL_CX,
-    CHANNEL_DX,
-    CHANNEL_FX,
-    CHANNEL_FXM,
-    FrameStatus,
-    MotionFrame,
-    MotionFrameReply,
-    RegisterError,
-    RegisterRead,
-    RegisterReadReply,
-    RegisterWrite,
-    RegisterWriteReply,
-    StatusReport,
-    decode,
-    frame_size,
-)
+from ._messages import *  # noqa: F403 - the message API is _messages.__all__
 from ._params import FN_SPEC, fn_address, fn_name
 
 __all__ = [
-    "CHANNEL_CX",
-    "CHANNEL_DX",
-    "CHANNEL_FX",
-    "CHANNEL_FXM",
     "FN_SPEC",
-    "FrameStatus",
     "MboxController",
     "MboxEmulator",
     "MboxFrameEncoder",
-    "MotionFrame",
-    "MotionFrameReply",
-    "RegisterError",
-    "RegisterRead",
-    "RegisterReadReply",
-    "RegisterWrite",
-    "RegisterWriteReply",
-    "StatusReport",
     "controller_from_config",
-    "decode",
     "emulator",
     "fn_address",
     "fn_name",
-    "frame_size",
     "inspect_decode",
     "send_verb",
     "split_stream",
     "transport_options",
 ]
+__all__ += _messages.__all__

@@ -7,11 +7,22 @@ from typing import Any, TextIO
 
 from ..._errors import ConfigError, ProtocolError
 from .._transport import Transport, TransportURL
-from .._udp_cli import describe, exchange, park, parse_bits, parse_value
+from .._udp_cli import (
+    VERBS,
+    RegisterLink,
+    describe,
+    need_args,
+    park,
+    parse_bits,
+    parse_value,
+    positions_from_words,
+    require_request,
+    split_datagrams,
+)
 from .._udp_cli import transport_options as _transport_options
 from .._udp_common import HEADER, WHO_ALL, decode_header
 from ._controller import MboxController
-from ._emulator import MboxEmulator
+from ._emulator import _DX_COMMAND, MboxEmulator
 from ._messages import (
     CHANNEL_CX,
     CHANNEL_DX,
@@ -41,7 +52,6 @@ __all__ = [
     "transport_options",
 ]
 
-VERBS = ("estop", "reset", "home", "park", "outputs", "read", "write")
 _DX = re.compile(r"^(?:dn|dx)[ _]?([0-9a-f]{1,2})$", re.IGNORECASE)
 _CX = re.compile(r"^(?:cn|cx)[ _]?([0-7])$", re.IGNORECASE)
 
@@ -90,33 +100,11 @@ def send_verb(
     out: TextIO,
 ) -> int:
     """Run one ``motioncue send`` verb; returns the exit status (0 ok, 1 error reply)."""
-    accept, reply_who = who
-
-    def write(channel: int, start: int, values: tuple[int, ...]) -> Any:
-        msg = RegisterWrite(channel, start, values, accept, reply_who)
-        return exchange(
-            transport,
-            msg.encode(),
-            decode,
-            lambda r: r.function in (F_WRITE + 1, F_WRITE_ERR),
-            reply_who != 0,
-            out,
-        )
-
-    def read(channel: int, start: int, count: int) -> Any:
-        msg = RegisterRead(channel, start, count, accept, reply_who)
-        return exchange(
-            transport,
-            msg.encode(),
-            decode,
-            lambda r: r.function in (F_READ + 1, F_READ_ERR),
-            reply_who != 0,
-            out,
-        )
+    link = RegisterLink(transport, decode, RegisterRead, RegisterWrite, who, out)
+    write, read = link.write, link.read
 
     def nargs(n: int) -> None:
-        if len(args) != n:
-            raise ConfigError(f"send {verb}: expected {n} argument(s), got {args!r}")
+        need_args(verb, args, n)
 
     if verb == "estop":
         nargs(1)
@@ -154,18 +142,12 @@ def send_verb(
         reply = write(channel, start, values)
     elif verb == "park":
         nargs(0)
-        if getattr(transport, "request", None) is None:
-            raise ConfigError("send park needs a udp:// target: it reads the positions first")
+        require_request(transport)
         reply = read(CHANNEL_DX, 0, 0x30)
         if not isinstance(reply, RegisterReadReply):
             return 1
-        dx = reply.values
-        addrs = (0x0C, 0x0E, 0x10, 0x28, 0x2A, 0x2C)[: controller.n_axes]
-        current = []
-        for a in addrs:
-            v = dx[a] | dx[a + 1] << 16
-            current.append(v - (1 << 32) if v & 0x80000000 else v)
-        park(controller, transport, current, out)
+        positions = positions_from_words(reply.values, _DX_COMMAND[: controller.n_axes])
+        park(controller, transport, positions, out)
         return 0
     else:
         raise ConfigError(f"send {verb!r}: allowed {', '.join(VERBS)}")
@@ -180,28 +162,24 @@ def inspect_decode(data: bytes) -> str:
     return describe(decode(data))
 
 
+def _size_at(blob: bytes, off: int) -> int:
+    """Size of the MBOX datagram at ``off`` of a capture, from its header."""
+    h = decode_header(blob[off : off + HEADER.size])
+    f = h.function
+    if f & 0xFFF0 in (F_ABS & 0xFFF0, F_REL & 0xFFF0):
+        if h.channel not in (0, 1):
+            raise ProtocolError(f"byte {off}: frame channel {h.channel}")
+        return frame_size(3 if h.channel == 0 else 6)
+    if f in (F_READ_ERR, F_WRITE_ERR):
+        return HEADER.size + 6
+    if f in (F_STATUS, F_READ, F_READ + 1, F_WRITE, F_WRITE + 1):
+        if len(blob) < off + HEADER.size + 4:
+            raise ProtocolError(f"byte {off}: truncated register message")
+        count = int.from_bytes(blob[off + 14 : off + 16], "big")
+        return HEADER.size + 4 + 2 * count
+    raise ProtocolError(f"byte {off}: unknown MBOX function 0x{f:04X}")
+
+
 def split_stream(blob: bytes) -> list[bytes]:
     """Cut a raw ``file:`` capture (datagrams back to back) into datagrams."""
-    out = []
-    off = 0
-    while off < len(blob):
-        h = decode_header(blob[off : off + HEADER.size])
-        f = h.function
-        if f & 0xFFF0 in (F_ABS & 0xFFF0, F_REL & 0xFFF0):
-            if h.channel not in (0, 1):
-                raise ProtocolError(f"byte {off}: frame channel {h.channel}")
-            size = frame_size(3 if h.channel == 0 else 6)
-        elif f in (F_READ_ERR, F_WRITE_ERR):
-            size = HEADER.size + 6
-        elif f in (F_STATUS, F_READ, F_READ + 1, F_WRITE, F_WRITE + 1):
-            if len(blob) < off + HEADER.size + 4:
-                raise ProtocolError(f"byte {off}: truncated register message")
-            count = int.from_bytes(blob[off + 14 : off + 16], "big")
-            size = HEADER.size + 4 + 2 * count
-        else:
-            raise ProtocolError(f"byte {off}: unknown MBOX function 0x{f:04X}")
-        if off + size > len(blob):
-            raise ProtocolError(f"byte {off}: message of {size} bytes truncated")
-        out.append(blob[off : off + size])
-        off += size
-    return out
+    return split_datagrams(blob, _size_at)

@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import dataclasses
 import struct
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
@@ -11,9 +10,16 @@ from types import MappingProxyType
 from typing import Any, ClassVar
 
 from ..._config import ConfigReader
-from ..._errors import ConfigError, LimitError, ProtocolError
+from ..._errors import ConfigError, ProtocolError
 from .._transport import parse_target
-from .._udp_common import CONFIRM_MAIN, PASSCODE, WHO_ALL, FrameClock, check_int32
+from .._udp_common import FrameClock, check_int32
+from .._udp_controller import (
+    UdpController,
+    UdpFrameEncoder,
+    config_parameters,
+    config_target,
+)
+from .._udp_controller import validate_parameters as _validate
 from ._messages import F_ABS, F_REL, _frame_struct
 from ._params import FN_SPEC, fn_name
 
@@ -26,29 +32,12 @@ def _freeze(params: Mapping[str, int]) -> Mapping[str, int]:
 
 def validate_parameters(values: Mapping[str, Any], where: str) -> dict[str, int]:
     """Factory defaults overridden by ``values``; names canonical, values within range."""
-    out = {name: spec[2] for name, spec in FN_SPEC.items()}
-    for key, value in values.items():
-        try:
-            name = fn_name(key)
-        except ConfigError as exc:
-            raise ConfigError(f"{where}: {exc}") from None
-        if name not in FN_SPEC:
-            raise ConfigError(
-                f"{where}: {key} is not an MBOX parameter this package knows "
-                f"(known: {', '.join(FN_SPEC)})"
-            )
-        lo, hi, _, meaning = FN_SPEC[name]
-        if isinstance(value, bool) or not isinstance(value, int) or not lo <= value <= hi:
-            raise ConfigError(
-                f"{where}: {name} = {value!r} is invalid ({meaning}); "
-                f"allowed: an integer in [{lo}, {hi}]"
-            )
-        out[name] = value
-    return out
+    unknown = f"is not an MBOX parameter this package knows (known: {', '.join(FN_SPEC)})"
+    return _validate(values, where, FN_SPEC, fn_name, unknown)
 
 
 @dataclass(frozen=True)
-class MboxController:
+class MboxController(UdpController["MboxFrameEncoder"]):
     """An SC-MBOX motion-platform controller (3-axis or 6-axis mode).
 
     Attributes
@@ -69,6 +58,22 @@ class MboxController:
     """
 
     kind: ClassVar[str] = "mbox"
+    # IP bytes and port of the box (receive port Fn025) and of the host (Fn034)
+    CONTROLLER_PARAMS: ClassVar[tuple[str, str, str, str, str]] = (
+        "Fn020",
+        "Fn021",
+        "Fn022",
+        "Fn023",
+        "Fn025",
+    )
+    HOST_PARAMS: ClassVar[tuple[str, str, str, str, str]] = (
+        "Fn030",
+        "Fn031",
+        "Fn032",
+        "Fn033",
+        "Fn034",
+    )
+    canonical_name = staticmethod(fn_name)
 
     name: str
     n_axes: int
@@ -123,40 +128,8 @@ class MboxController:
         v = self.max_motor_speed_rpm / 60.0 * self.lead_mm * self.pulses_per_mm
         return (v,) * self.n_axes
 
-    @property
-    def controller_address(self) -> tuple[str, int]:
-        p = self.parameters
-        return (f"{p['Fn020']}.{p['Fn021']}.{p['Fn022']}.{p['Fn023']}", p["Fn025"])
-
-    @property
-    def host_address(self) -> tuple[str, int]:
-        p = self.parameters
-        return (f"{p['Fn030']}.{p['Fn031']}.{p['Fn032']}.{p['Fn033']}", p["Fn034"])
-
-    @property
-    def node(self) -> int:
-        """Who node ``XX.YY`` of this box: the last two bytes of its IP (Fn022.Fn023)."""
-        return (self.parameters["Fn022"] << 8) | self.parameters["Fn023"]
-
-    def with_parameters(self, **changes: int) -> MboxController:
-        """A copy with some parameters changed (``ctrl.with_parameters(Fn0C0=3000)``)."""
-        merged = dict(self.parameters)
-        merged.update({fn_name(k): v for k, v in changes.items()})
-        return dataclasses.replace(self, parameters=merged)
-
-    def frame_encoder(
-        self,
-        absolute_time: bool = True,
-        *,
-        t0_s: float | None = None,
-        who_accept: int = WHO_ALL,
-        who_reply: int = WHO_ALL,
-        first_frame: int = 0,
-    ) -> MboxFrameEncoder:
-        """A fresh frame encoder (frame counter and time origin) for one run."""
-        return MboxFrameEncoder(
-            self, FrameClock(absolute_time, t0_s, first_frame), who_accept, who_reply
-        )
+    def _encoder(self, clock: FrameClock, who_accept: int, who_reply: int) -> MboxFrameEncoder:
+        return MboxFrameEncoder(self, clock, who_accept, who_reply)
 
 
 def _integer(value: Any, what: str) -> int:
@@ -165,7 +138,7 @@ def _integer(value: Any, what: str) -> int:
     return int(value)
 
 
-class MboxFrameEncoder:
+class MboxFrameEncoder(UdpFrameEncoder):
     """Turns ``(t_s, pulses, dout, dacs)`` into MBOX frame datagrams, numbering frames.
 
     ``dout`` carries 24 effect outputs: bits 0-11 go to BaseDout, bits 12-23 to ExtDout.
@@ -175,36 +148,21 @@ class MboxFrameEncoder:
     Nothing is counted for a refused frame.
     """
 
-    __slots__ = (
-        "_dac_max",
-        "_head",
-        "_pack",
-        "_stroke",
-        "clock",
-        "controller",
-        "n_axes",
-        "who_accept",
-        "who_reply",
-    )
+    __slots__ = ("_dac_max",)
+    STROKE_SOURCE: ClassVar[str] = "Fn0C0 x Fn0C1"
 
     def __init__(
         self, controller: MboxController, clock: FrameClock, who_accept: int, who_reply: int
     ) -> None:
-        self.controller = controller
-        self.clock = clock
-        self.n_axes = controller.n_axes
-        self.who_accept = who_accept
-        self.who_reply = who_reply
-        self._pack = _frame_struct(controller.n_axes, not clock.absolute_time).pack
-        self._head = (
-            CONFIRM_MAIN,
-            PASSCODE,
-            F_ABS if clock.absolute_time else F_REL,
-            0 if controller.n_axes == 3 else 1,
+        super().__init__(
+            controller,
+            clock,
             who_accept,
             who_reply,
+            layout=_frame_struct(controller.n_axes, not clock.absolute_time),
+            functions=(F_ABS, F_REL),
+            channel=0 if controller.n_axes == 3 else 1,
         )
-        self._stroke = controller.stroke_pulses
         self._dac_max = (controller.parameters["Fn078"], controller.parameters["Fn079"])
 
     def encode(
@@ -233,11 +191,7 @@ class MboxFrameEncoder:
                 *self._head, frame, field, *pulses, dout & 0xFFF, d1, d2, dout >> 12
             )  # integral floats
         if self._stroke is not None:
-            lo, hi = self._stroke
-            if min(pulses) < lo or max(pulses) > hi:
-                raise LimitError(
-                    f"positions {list(pulses)} leave the stroke [{lo}, {hi}] pulses (Fn0C0 x Fn0C1)"
-                )
+            self._check_stroke(pulses)
         self.clock.commit(t_s, abs_ms)
         return [data]
 
@@ -247,15 +201,9 @@ def controller_from_config(reader: ConfigReader, name: str) -> MboxController:
     axes = reader.integer("axes", lo=3, hi=6)
     if axes not in (3, 6):
         raise reader.error("axes", axes, "3 or 6")
-    target = reader.string("default_target", "udp://127.0.0.1:7408")
-    try:
-        parse_target(target)
-    except ConfigError as exc:
-        raise reader.error("default_target", target, str(exc)) from None
+    target = config_target(reader)
     rpm = reader.number("max_motor_speed_rpm", 3000.0, lo=0.0, lo_open=True)
-    params = reader.table("parameters", {})
-    values = {k: params.raw(k) for k in params.keys()}
-    params.finish()
+    values = config_parameters(reader)
     buffer_frames = reader.integer("buffer_frames", 256, lo=1, hi=65535)
     return MboxController(
         name=name,

@@ -29,7 +29,15 @@ from typing import Any
 
 from ..._errors import ProtocolError
 from .._udp_common import WHO_NONE, decode_header
-from .._udp_emulator import Playback, Trace, UdpEmulatorBase, Violation, who_matches
+from .._udp_emulator import (
+    STATE_ESTOP,
+    STATE_HOMING,
+    STATE_READY,
+    ControllerEmulator,
+    Playback,
+    Violation,
+    who_matches,
+)
 from ._controller import MboxController
 from ._messages import (
     CHANNEL_CX,
@@ -55,7 +63,7 @@ __all__ = ["MboxEmulator"]
 ERR_ADDRESS = 1
 ERR_VALUE = 2
 
-STATE_HOMING, STATE_READY, STATE_ESTOP, STATE_FAULT = 0, 1, 2, 3
+STATE_FAULT = 3  # after STATE_HOMING, STATE_READY, STATE_ESTOP = 0, 1, 2
 _FN_BY_ADDRESS = {int(name[2:], 16): name for name in FN_SPEC}
 # DX addresses of actual / commanded / UDP positions, low word first (6.1.1, 6.1.11)
 _DX_ACTUAL = (0x06, 0x08, 0x0A, 0x21, 0x24, 0x26)
@@ -67,7 +75,7 @@ def _s16(v: int) -> int:
     return v - 0x10000 if v & 0x8000 else v
 
 
-class MboxEmulator(UdpEmulatorBase):
+class MboxEmulator(ControllerEmulator):
     """Emulated SC-MBOX.
 
     Parameters
@@ -91,25 +99,17 @@ class MboxEmulator(UdpEmulatorBase):
         homing_time_s: float = 1.0,
         start_homed: bool = True,
     ) -> None:
-        super().__init__(host, port)
-        self.controller = controller
-        self.n_axes = controller.n_axes
-        self.params: dict[str, int] = dict(controller.parameters)
+        super().__init__(
+            controller, host, port, homing_time_s=homing_time_s, start_homed=start_homed
+        )
+        self.controller: MboxController = controller
         self.cx = [0x0002, 0, 0, 0, 0, 0, 0, 0]
-        self.homing_time_s = float(homing_time_s)
-        self.state = STATE_READY if start_homed else STATE_HOMING
-        self._homing_until: float | None = None if start_homed else -1.0
         self.fault_code = 0
-        self.ignored_frames = 0
-        self.refused_frames = 0
         self.frame_dout = 0
         self.frame_dacs = (0, 0)
         self.frame_ext = 0
         self.inputs = 0
-        self._last_time_ms: int | None = None
         self._next_duration_s: float | None = None
-        self._next_report: float | None = None
-        self._violations: list[Violation] = []
         stroke = controller.stroke_pulses
         self.playback = Playback(
             self.n_axes,
@@ -119,21 +119,6 @@ class MboxEmulator(UdpEmulatorBase):
             stroke,
         )
         self._set_rate()
-
-    # -- what tests look at -------------------------------------------------------------
-    @property
-    def trace(self) -> Trace:
-        with self.lock:
-            return self.playback.trace()
-
-    @property
-    def violations(self) -> list[Violation]:
-        with self.lock:
-            return [*self._violations, *self.playback.violations]
-
-    @property
-    def estop(self) -> bool:
-        return self.state == STATE_ESTOP
 
     def inject_fault(self, code: int) -> None:
         """Put the box in the fault state (e.g. 2520 over-speed); RST in CX0 clears it."""
@@ -176,10 +161,6 @@ class MboxEmulator(UdpEmulatorBase):
         else:
             return self._malformed(f"{type(msg).__name__} is sent by an MBOX, not to it")
         return [out.encode()] if reply and out is not None else []
-
-    def _malformed(self, detail: str) -> list[bytes]:
-        self._violations.append(Violation(self.playback.t_end, "malformed", None, detail))
-        return []
 
     def _frame(self, msg: MotionFrame) -> MotionFrameReply:
         if msg.n_axes != self.n_axes:
@@ -323,30 +304,7 @@ class MboxEmulator(UdpEmulatorBase):
 
     def _tick(self, now_s: float) -> None:
         self.playback.advance(now_s)
-        if self.state == STATE_HOMING:
-            if self._homing_until is not None and self._homing_until < 0:
-                self._homing_until = now_s + self.homing_time_s
-            if self._homing_until is not None and now_s >= self._homing_until:
-                self.state = STATE_READY
-                self._homing_until = None
-
-    def _position_now(self) -> tuple[int, ...]:
-        """Commanded position at the playback clock (linear between frames)."""
-        pb = self.playback
-        if not pb.rows_t:
-            return (0,) * self.n_axes
-        t = pb.play_t
-        rows_t = pb.rows_t
-        k = len(rows_t) - 1
-        while k > 0 and rows_t[k - 1] >= t:
-            k -= 1
-        if k == 0 or rows_t[k] <= t:
-            return pb.rows_p[k]
-        t0, t1 = rows_t[k - 1], rows_t[k]
-        w = (t - t0) / (t1 - t0) if t1 > t0 else 1.0
-        return tuple(
-            round(a + (b - a) * w) for a, b in zip(pb.rows_p[k - 1], pb.rows_p[k], strict=True)
-        )
+        self._homing_done(now_s)
 
     def dx(self) -> list[int]:
         """The 256 DX status words as the box would report them."""

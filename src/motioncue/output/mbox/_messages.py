@@ -19,6 +19,7 @@ from __future__ import annotations
 
 import enum
 import struct
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from functools import cache
 from typing import ClassVar
@@ -28,23 +29,22 @@ from .._udp_common import (
     CONFIRM_MAIN,
     HEADER,
     PASSCODE,
-    REG_HEAD,
     WHO_ALL,
     WHO_NONE,
     Header,
     check_length,
     decode_header,
-    u16_tuple,
+    pack_timed_frame,
+    timed_frame_struct,
 )
+from .._udp_registers import RegisterReadShape, RegisterValuesShape, check_u16
 
-__all__ = [
+__all__ = [  # what the package exports from here
     "CHANNEL_CX",
     "CHANNEL_DX",
     "CHANNEL_FX",
     "CHANNEL_FXM",
-    "FUNCTION_NAMES",
     "FrameStatus",
-    "MboxMessage",
     "MotionFrame",
     "MotionFrameReply",
     "RegisterError",
@@ -92,186 +92,51 @@ _HEAD4 = struct.Struct(">4H")
 _CHANNEL_OF_AXES = {3: 0, 6: 1}
 
 
-def _check_u16(value: int, what: str) -> None:
-    if isinstance(value, bool) or not isinstance(value, int) or not 0 <= value <= 0xFFFF:
-        raise ProtocolError(f"{what} = {value!r} is not in [0, 0xFFFF]")
-
-
-def _reg_pack(
-    function: int,
-    channel: int,
-    accept: int,
-    reply: int,
-    start: int,
-    count: int,
-    words: tuple[int, ...],
-) -> bytes:
-    return struct.pack(
-        f">6H2H{len(words)}H",
-        CONFIRM_MAIN,
-        PASSCODE,
-        function,
-        channel,
-        accept,
-        reply,
-        start,
-        count,
-        *words,
-    )
-
-
-def _reg_unpack(data: bytes) -> tuple[int, int, tuple[int, ...]]:
-    """StartAddress, Count and the words after them."""
-    if len(data) < HEADER.size + REG_HEAD.size or len(data) % 2:
-        raise ProtocolError(
-            f"register message: length {len(data)} bytes, expected an even length >= 16"
-        )
-    start, count = REG_HEAD.unpack_from(data, HEADER.size)
-    n = (len(data) - HEADER.size - REG_HEAD.size) // 2
-    return start, count, struct.unpack_from(f">{n}H", data, HEADER.size + REG_HEAD.size)
-
-
 @dataclass(frozen=True, slots=True)
-class RegisterRead:
+class RegisterRead(RegisterReadShape):
     """Host -> MBOX 0x1101: read ``count`` registers of ``channel`` (0 DX, 1 FX) from ``start``.
 
     Layout: header, StartAddress u16, Count u16, ``count`` zero words (Extra Data).
     """
 
-    LAYOUT: ClassVar[struct.Struct] = REG_HEAD
     FUNCTION: ClassVar[int] = F_READ
-
-    channel: int
-    start: int
-    count: int
-    who_accept: int = WHO_ALL
-    who_reply: int = WHO_ALL
-
-    def __post_init__(self) -> None:
-        if self.channel not in (CHANNEL_DX, CHANNEL_FX):
-            raise ProtocolError(f"read channel {self.channel}: allowed 0 (DX), 1 (FX)")
-        for name in ("start", "who_accept", "who_reply"):
-            _check_u16(getattr(self, name), name)
-        if not 1 <= self.count <= 256:
-            raise ProtocolError(f"read count {self.count}: allowed 1..256")
-
-    @property
-    def function(self) -> int:
-        return self.FUNCTION
-
-    @property
-    def size(self) -> int:
-        return HEADER.size + REG_HEAD.size + 2 * self.count
-
-    def encode(self) -> bytes:
-        return _reg_pack(
-            F_READ,
-            self.channel,
-            self.who_accept,
-            self.who_reply,
-            self.start,
-            self.count,
-            (0,) * self.count,
-        )
-
-    @classmethod
-    def decode_parts(cls, h: Header, data: bytes) -> RegisterRead:
-        start, count, pad = _reg_unpack(data)
-        if any(pad):
-            raise ProtocolError("read request: Extra Data after Count must be zero")
-        if h.channel not in (CHANNEL_DX, CHANNEL_FX):
-            raise ProtocolError(f"read request: channel {h.channel}, allowed 0 (DX), 1 (FX)")
-        return cls(h.channel, start, count, h.who_accept, h.who_reply)
+    CHANNELS: ClassVar[Sequence[int]] = (CHANNEL_DX, CHANNEL_FX)
 
 
 @dataclass(frozen=True, slots=True)
-class _RegisterValues:
-    """Header, StartAddress u16, Count u16 (= len(values)), values u16 each."""
-
-    LAYOUT: ClassVar[struct.Struct] = REG_HEAD
-    FUNCTION: ClassVar[int] = 0
-    CHANNELS: ClassVar[tuple[int, ...]] = (0, 1, 2)
-
-    channel: int
-    start: int
-    values: tuple[int, ...]
-    who_accept: int = WHO_NONE
-    who_reply: int = WHO_NONE
-
-    def __post_init__(self) -> None:
-        if self.channel not in self.CHANNELS:
-            raise ProtocolError(
-                f"{type(self).__name__}: channel {self.channel}, allowed {self.CHANNELS}"
-            )
-        for name in ("start", "who_accept", "who_reply"):
-            _check_u16(getattr(self, name), name)
-        object.__setattr__(self, "values", u16_tuple(self.values, type(self).__name__))
-        if not 1 <= len(self.values) <= 256:
-            raise ProtocolError(f"{type(self).__name__}: {len(self.values)} values, allowed 1..256")
-
-    @property
-    def function(self) -> int:
-        return self.FUNCTION
-
-    @property
-    def size(self) -> int:
-        return HEADER.size + REG_HEAD.size + 2 * len(self.values)
-
-    def encode(self) -> bytes:
-        return _reg_pack(
-            self.FUNCTION,
-            self.channel,
-            self.who_accept,
-            self.who_reply,
-            self.start,
-            len(self.values),
-            self.values,
-        )
-
-    @classmethod
-    def decode_parts(cls, h: Header, data: bytes):
-        start, count, values = _reg_unpack(data)
-        if count != len(values):
-            raise ProtocolError(
-                f"{cls.__name__}: Count says {count} registers, the datagram carries "
-                f"{len(values)} (length {len(data)} bytes, expected {16 + 2 * count})"
-            )
-        return cls(h.channel, start, values, h.who_accept, h.who_reply)
-
-
-@dataclass(frozen=True, slots=True)
-class RegisterReadReply(_RegisterValues):
+class RegisterReadReply(RegisterValuesShape):
     """MBOX -> host 0x1102: the values read (channel 0 DX, 1 FX)."""
 
     FUNCTION: ClassVar[int] = F_READ_OK
-    CHANNELS: ClassVar[tuple[int, ...]] = (CHANNEL_DX, CHANNEL_FX)
+    CHANNELS: ClassVar[Sequence[int]] = (CHANNEL_DX, CHANNEL_FX)
 
 
 @dataclass(frozen=True, slots=True)
-class RegisterWrite(_RegisterValues):
+class RegisterWrite(RegisterValuesShape):
     """Host -> MBOX 0x1201: write ``values`` to channel 0 FXm (not saved), 1 FX, 2 CX."""
 
     FUNCTION: ClassVar[int] = F_WRITE
-    CHANNELS: ClassVar[tuple[int, ...]] = (CHANNEL_FXM, CHANNEL_FX, CHANNEL_CX)
+    CHANNELS: ClassVar[Sequence[int]] = (CHANNEL_FXM, CHANNEL_FX, CHANNEL_CX)
 
     who_accept: int = WHO_ALL
     who_reply: int = WHO_ALL
 
 
 @dataclass(frozen=True, slots=True)
-class RegisterWriteReply(_RegisterValues):
+class RegisterWriteReply(RegisterValuesShape):
     """MBOX -> host 0x1202: the write was done; echoes the values written."""
 
     FUNCTION: ClassVar[int] = F_WRITE_OK
+    CHANNELS: ClassVar[Sequence[int]] = (CHANNEL_FXM, CHANNEL_FX, CHANNEL_CX)
 
 
 @dataclass(frozen=True, slots=True)
-class StatusReport(_RegisterValues):
+class StatusReport(RegisterValuesShape):
     """MBOX -> host 0x1001 (4.2.3): DX registers from Fn042, Fn043 of them, sent when
     Fn040 asks for reports. Channel 0 (DX)."""
 
     FUNCTION: ClassVar[int] = F_STATUS
-    CHANNELS: ClassVar[tuple[int, ...]] = (CHANNEL_DX,)
+    CHANNELS: ClassVar[Sequence[int]] = (CHANNEL_DX,)
 
 
 @dataclass(frozen=True, slots=True)
@@ -295,7 +160,7 @@ class RegisterError:
         if self.function not in (F_READ_ERR, F_WRITE_ERR):
             raise ProtocolError(f"error reply function 0x{self.function:04X}: 0x1103 or 0x1203")
         for name in ("channel", "start", "count", "error_code", "who_accept", "who_reply"):
-            _check_u16(getattr(self, name), name)
+            check_u16(getattr(self, name), name)
 
     size: ClassVar[int] = HEADER.size + 6
 
@@ -323,7 +188,7 @@ class FrameStatus(enum.IntEnum):
 def _frame_struct(n_axes: int, relative: bool) -> struct.Struct:
     # header, Line u32, Time u32 (abs) / i32 (delta), n x i32 positions,
     # BaseDout u16, DAC1 u16, DAC2 u16, ExtDout u16
-    return struct.Struct(f">6HI{'i' if relative else 'I'}{n_axes}i4H")
+    return timed_frame_struct(n_axes, relative, "4H")
 
 
 def frame_size(n_axes: int) -> int:
@@ -390,24 +255,15 @@ class MotionFrame:
 
     def encode(self) -> bytes:
         n = len(self.positions)
-        try:
-            return _frame_struct(n, not self.absolute).pack(
-                CONFIRM_MAIN,
-                PASSCODE,
-                F_ABS if self.absolute else F_REL,
-                _CHANNEL_OF_AXES[n],
-                self.who_accept,
-                self.who_reply,
-                self.line,
-                self.time_ms,
-                *self.positions,
-                self.base_dout,
-                self.dac1,
-                self.dac2,
-                self.ext_dout,
-            )
-        except (struct.error, KeyError) as exc:
-            raise ProtocolError(f"frame field out of range: {exc}") from None
+        return pack_timed_frame(
+            _frame_struct(n, not self.absolute),
+            (self.function, _CHANNEL_OF_AXES[n], self.who_accept, self.who_reply),
+            self.line,
+            self.time_ms,
+            self.positions,
+            (self.base_dout, self.dac1, self.dac2, self.ext_dout),
+            "frame",
+        )
 
     @classmethod
     def decode_parts(cls, h: Header, data: bytes) -> MotionFrame:
@@ -482,7 +338,7 @@ MboxMessage = (
     | MotionFrameReply
 )
 
-_DECODERS = {
+_DECODERS: dict[int, Callable[[Header, bytes], MboxMessage]] = {
     F_STATUS: StatusReport.decode_parts,
     F_READ: RegisterRead.decode_parts,
     F_READ_OK: RegisterReadReply.decode_parts,

@@ -1,0 +1,197 @@
+"""What the IMAX and SC-MBOX controller descriptions and frame encoders share.
+
+Both keep their parameters by manual name with factory defaults, address the box and the
+host by four IP-byte parameters and a port parameter, take the Who node from the last two
+IP bytes, and encode timed frames with a :class:`~._udp_common.FrameClock` and a stroke
+check. The differences (parameter tables and names, frame tails, output checks) stay in
+each kind's ``_controller`` module as data or as its own ``encode``.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import struct
+from collections.abc import Callable, Mapping, Sequence
+from typing import Any, ClassVar, Generic, Self, TypeVar
+
+from .._config import ConfigReader
+from .._errors import ConfigError, LimitError
+from ._transport import parse_target
+from ._udp_common import CONFIRM_MAIN, PASSCODE, WHO_ALL, FrameClock
+
+__all__ = [
+    "UdpController",
+    "UdpFrameEncoder",
+    "config_parameters",
+    "config_target",
+    "validate_parameters",
+]
+
+ParamSpec = Mapping[str, tuple[int, int, int, str]]
+EncoderT = TypeVar("EncoderT")
+
+
+def validate_parameters(
+    values: Mapping[str, Any],
+    where: str,
+    spec: ParamSpec,
+    canonical: Callable[[str], str],
+    unknown: str,
+) -> dict[str, int]:
+    """Defaults of ``spec`` overridden by ``values``; names canonical, values within range.
+
+    ``spec`` maps name -> ``(lo, hi, default, meaning)``; ``canonical`` normalises a name
+    (raising :class:`ConfigError`); ``unknown`` ends the message for a name ``spec`` lacks.
+    """
+    out = {name: entry[2] for name, entry in spec.items()}
+    for key, value in values.items():
+        try:
+            name = canonical(key)
+        except ConfigError as exc:
+            raise ConfigError(f"{where}: {exc}") from None
+        if name not in spec:
+            raise ConfigError(f"{where}: {key} {unknown}")
+        lo, hi, _, meaning = spec[name]
+        if isinstance(value, bool) or not isinstance(value, int) or not lo <= value <= hi:
+            raise ConfigError(
+                f"{where}: {name} = {value!r} is invalid ({meaning}); "
+                f"allowed: an integer in [{lo}, {hi}]"
+            )
+        out[name] = value
+    return out
+
+
+def config_target(reader: ConfigReader) -> str:
+    """``default_target`` of a controller TOML (loopback by default), checked."""
+    target = reader.string("default_target", "udp://127.0.0.1:7408")
+    try:
+        parse_target(target)
+    except ConfigError as exc:
+        raise reader.error("default_target", target, str(exc)) from None
+    return target
+
+
+def config_parameters(reader: ConfigReader) -> dict[str, Any]:
+    """The raw ``[parameters]`` table of a controller TOML (validated by the kind)."""
+    params = reader.table("parameters", {})
+    values = {k: params.raw(k) for k in params.keys()}
+    params.finish()
+    return values
+
+
+class UdpController(Generic[EncoderT]):
+    """Mixin of the frozen controller dataclasses: addresses, node, parameter changes and
+    the frame-encoder factory.
+
+    A subclass names, as class data, the parameters holding the controller's IP bytes
+    and port (``CONTROLLER_PARAMS``) and the host's (``HOST_PARAMS``), the parameter-name
+    normaliser (``canonical_name``), and builds its encoder in :meth:`_encoder`.
+    """
+
+    CONTROLLER_PARAMS: ClassVar[tuple[str, str, str, str, str]]
+    HOST_PARAMS: ClassVar[tuple[str, str, str, str, str]]
+    parameters: Mapping[str, int]
+
+    @staticmethod
+    def canonical_name(text: str) -> str:  # pragma: no cover - overridden
+        raise NotImplementedError
+
+    def _address(self, names: tuple[str, str, str, str, str]) -> tuple[str, int]:
+        p = self.parameters
+        return (".".join(str(p[n]) for n in names[:4]), p[names[4]])
+
+    @property
+    def controller_address(self) -> tuple[str, int]:
+        """``(ip, port)`` of the controller, from its parameters."""
+        return self._address(self.CONTROLLER_PARAMS)
+
+    @property
+    def host_address(self) -> tuple[str, int]:
+        """``(ip, port)`` of the host, from the controller's parameters."""
+        return self._address(self.HOST_PARAMS)
+
+    @property
+    def node(self) -> int:
+        """Who node ``XX.YY`` of this controller: the last two bytes of its IP."""
+        c, d = self.CONTROLLER_PARAMS[2:4]
+        return (self.parameters[c] << 8) | self.parameters[d]
+
+    def with_parameters(self, **changes: int) -> Self:
+        """A copy with some parameters changed (``ctrl.with_parameters(PA59=2)``)."""
+        merged = dict(self.parameters)
+        merged.update({self.canonical_name(k): v for k, v in changes.items()})
+        return dataclasses.replace(self, parameters=merged)  # type: ignore[type-var]
+
+    def _encoder(self, clock: FrameClock, who_accept: int, who_reply: int) -> EncoderT:
+        raise NotImplementedError  # pragma: no cover - overridden
+
+    def frame_encoder(
+        self,
+        absolute_time: bool = True,
+        *,
+        t0_s: float | None = None,
+        who_accept: int = WHO_ALL,
+        who_reply: int = WHO_ALL,
+        first_frame: int = 0,
+    ) -> EncoderT:
+        """A fresh frame encoder (frame counter and time origin) for one run."""
+        return self._encoder(FrameClock(absolute_time, t0_s, first_frame), who_accept, who_reply)
+
+
+class UdpFrameEncoder:
+    """State both frame encoders keep: the clock, the fixed header fields and the stroke.
+
+    ``layout`` is the kind's frame layout, ``functions`` its (absolute, relative) function
+    codes, ``channel`` the header channel for this axis count. ``STROKE_SOURCE`` names the
+    settings a stroke violation comes from.
+    """
+
+    __slots__ = (
+        "_head",
+        "_pack",
+        "_stroke",
+        "clock",
+        "controller",
+        "n_axes",
+        "who_accept",
+        "who_reply",
+    )
+
+    STROKE_SOURCE: ClassVar[str] = "stroke"
+
+    def __init__(
+        self,
+        controller: Any,
+        clock: FrameClock,
+        who_accept: int,
+        who_reply: int,
+        *,
+        layout: struct.Struct,
+        functions: tuple[int, int],
+        channel: int,
+    ) -> None:
+        self.controller = controller
+        self.clock = clock
+        self.n_axes: int = controller.n_axes
+        self.who_accept = who_accept
+        self.who_reply = who_reply
+        self._pack = layout.pack
+        self._head = (
+            CONFIRM_MAIN,
+            PASSCODE,
+            functions[0] if clock.absolute_time else functions[1],
+            channel,
+            who_accept,
+            who_reply,
+        )
+        self._stroke: tuple[int, int] | None = controller.stroke_pulses
+
+    def _check_stroke(self, pulses: Sequence[int]) -> None:
+        """Raise :class:`LimitError` when a position leaves the stroke (if one is set)."""
+        if self._stroke is not None:
+            lo, hi = self._stroke
+            if min(pulses) < lo or max(pulses) > hi:
+                raise LimitError(
+                    f"positions {list(pulses)} leave the stroke [{lo}, {hi}] "
+                    f"pulses ({self.STROKE_SOURCE})"
+                )
