@@ -646,7 +646,49 @@ def _length_stroke(legs: LinearLegs, stroke: Any) -> tuple[np.ndarray, np.ndarra
     return arr[:, 0] - legs.length0, arr[:, 1] - legs.length0
 
 
-class Stewart6Linear(Platform):
+class _LinearLegPlatform(Platform):
+    """Platforms whose actuators are all linear legs between base and platform anchors.
+
+    Subclasses fix the leg count, the degrees of freedom the legs produce and the default name.
+    """
+
+    _N_LEGS: int = 6
+    _DOF_MASK: tuple[bool, ...] = (True,) * 6
+    _DEFAULT_NAME: str = ""
+
+    def __init__(
+        self,
+        base_anchors: Any,
+        platform_anchors: Any,
+        neutral_height: float,
+        stroke: Any,
+        *,
+        drives: Drive | None = None,
+        name: str | None = None,
+        actuator_names: Sequence[str] | None = None,
+        description: str = "",
+    ) -> None:
+        n = self._N_LEGS
+        legs = LinearLegs(
+            _anchors("base_anchors", base_anchors, n),
+            _anchors("platform_anchors", platform_anchors, n),
+            _finite("neutral_height", neutral_height),
+        )
+        q_min, q_max = _length_stroke(legs, stroke)
+        super().__init__(
+            name=self._DEFAULT_NAME if name is None else name,
+            actuator_names=_names(actuator_names, n),
+            legs=legs,
+            leg_pose_mask=list(self._DOF_MASK),
+            dof_mask=list(self._DOF_MASK),
+            q_min=q_min,
+            q_max=q_max,
+            drives=drives,
+            description=description,
+        )
+
+
+class Stewart6Linear(_LinearLegPlatform):
     """6-DOF hexapod with six linear actuators (electric cylinders), SI geometry.
 
     Parameters
@@ -664,74 +706,21 @@ class Stewart6Linear(Platform):
         Drives (pulses); default 5 mm lead, 10000 pulses/rev, homed at the usable minimum.
     """
 
-    def __init__(
-        self,
-        base_anchors: Any,
-        platform_anchors: Any,
-        neutral_height: float,
-        stroke: Any,
-        *,
-        drives: Drive | None = None,
-        name: str = "stewart6-linear",
-        actuator_names: Sequence[str] | None = None,
-        description: str = "",
-    ) -> None:
-        legs = LinearLegs(
-            _anchors("base_anchors", base_anchors, 6),
-            _anchors("platform_anchors", platform_anchors, 6),
-            _finite("neutral_height", neutral_height),
-        )
-        q_min, q_max = _length_stroke(legs, stroke)
-        super().__init__(
-            name=name,
-            actuator_names=_names(actuator_names, 6),
-            legs=legs,
-            leg_pose_mask=[True] * 6,
-            dof_mask=[True] * 6,
-            q_min=q_min,
-            q_max=q_max,
-            drives=drives,
-            description=description,
-        )
+    _N_LEGS = 6
+    _DOF_MASK = (True,) * 6
+    _DEFAULT_NAME = "stewart6-linear"
 
 
-class Seat3(Platform):
+class Seat3(_LinearLegPlatform):
     """3-actuator heave/pitch/roll seat: three linear legs, x, y and yaw held by a central
     guide (so the platform frame origin is the centre of rotation).
 
     Parameters are those of :class:`Stewart6Linear` with ``(3, 3)`` anchors.
     """
 
-    def __init__(
-        self,
-        base_anchors: Any,
-        platform_anchors: Any,
-        neutral_height: float,
-        stroke: Any,
-        *,
-        drives: Drive | None = None,
-        name: str = "seat3",
-        actuator_names: Sequence[str] | None = None,
-        description: str = "",
-    ) -> None:
-        legs = LinearLegs(
-            _anchors("base_anchors", base_anchors, 3),
-            _anchors("platform_anchors", platform_anchors, 3),
-            _finite("neutral_height", neutral_height),
-        )
-        q_min, q_max = _length_stroke(legs, stroke)
-        mask = [False, False, True, True, True, False]
-        super().__init__(
-            name=name,
-            actuator_names=_names(actuator_names, 3),
-            legs=legs,
-            leg_pose_mask=mask,
-            dof_mask=mask,
-            q_min=q_min,
-            q_max=q_max,
-            drives=drives,
-            description=description,
-        )
+    _N_LEGS = 3
+    _DOF_MASK = (False, False, True, True, True, False)
+    _DEFAULT_NAME = "seat3"
 
 
 class Seat2Yaw(Platform):
