@@ -49,6 +49,7 @@ from .._errors import ConfigError, LimitError
 from ._jerk import JerkLimiter
 from ._limits import ActuatorLimits, LimitCheck, check_trajectory
 from ._realtime import RealtimeLimiter
+from ._ride_qp import ConicChunkSolver
 
 __all__ = ["OptimisedRide", "limit_ride"]
 
@@ -264,6 +265,32 @@ def limit_ride(
     -------
     OptimisedRide
     """
+    return _limit_ride(
+        q_desired, dt_s, limits, weights=weights, q0=q0, v0=v0, pad_s=pad_s, chunk=chunk
+    )
+
+
+def _limit_ride(
+    q_desired: Any,
+    dt_s: float,
+    limits: ActuatorLimits,
+    *,
+    weights: Any = None,
+    q0: Any = None,
+    v0: Any = None,
+    pad_s: float = 1.0,
+    chunk: int = 1024,
+    backend: str = "qp",
+) -> OptimisedRide:
+    """:func:`limit_ride` with a choice of window solver.
+
+    ``backend="qp"`` (the default of :func:`limit_ride`): the sparse QP solver
+    (:class:`~motioncue.trajectory._ride_qp.ConicChunkSolver`), with Ipopt as the retry
+    for any window it does not solve; ``backend="ipopt"``: Ipopt only (the reference the
+    tests compare the QP path with).
+    """
+    if backend not in ("qp", "ipopt"):
+        raise ConfigError(f"backend = {backend!r} is invalid; allowed: 'qp', 'ipopt'")
     t_start = time.perf_counter()
     qd = np.array(q_desired, dtype=float)
     if qd.ndim != 2 or qd.shape[1] != limits.n_actuators or qd.shape[0] < 1:
@@ -334,12 +361,33 @@ def limit_ride(
     overlap = max(2 * n_stop, _BLOCK)
     chunk = max(int(chunk), overlap + _BLOCK)
     chunk = _BLOCK * math.ceil(chunk / _BLOCK)
-    solvers: dict[int, _ChunkSolver] = {}
+    ipopt_solvers: dict[int, _ChunkSolver] = {}
+    qp_solvers: dict[tuple[int, bool], ConicChunkSolver] = {}
 
-    def solver_for(length: int) -> _ChunkSolver:
-        if length not in solvers:
-            solvers[length] = _ChunkSolver(length, jerk)
-        return solvers[length]
+    def solve_chunk(
+        length: int,
+        xd: np.ndarray,
+        ww: np.ndarray,
+        hist_x: np.ndarray,
+        tail: np.ndarray | None,
+        bounds: tuple[float, float, float, float, float],
+        xi: np.ndarray,
+    ) -> tuple[np.ndarray, bool]:
+        if backend == "qp":
+            key = (length, tail is not None)
+            if key not in qp_solvers:
+                qp_solvers[key] = ConicChunkSolver(length, jerk, tail is not None)
+            x, ok = qp_solvers[key].solve(xd, ww, hist_x, tail, bounds, xi)
+            if ok:
+                return x, ok
+        # Ipopt: the reference backend, and the retry for a window the QP solver missed
+        if length not in ipopt_solvers:
+            ipopt_solvers[length] = _ChunkSolver(length, jerk)
+        x, ok = ipopt_solvers[length].solve(xd, ww, hist_x, tail, bounds, xi)
+        if not np.all(np.isfinite(x)):
+            # never seen; keeps NaN out of the repair pass (which then limits the start point)
+            x, ok = np.clip(xi, bounds[0], bounds[1]), False
+        return x, ok
 
     # desired values far outside the stroke are pulled to within one stroke length of it
     span = limits.q_max - limits.q_min
@@ -378,7 +426,6 @@ def limit_ride(
                 else:
                     length = chunk
                     last = False
-                sol = solver_for(length)
                 xd = np.zeros(length)
                 ww = np.zeros(length)
                 xi = np.zeros(length)
@@ -394,7 +441,7 @@ def limit_ride(
                 if last and not at_end:
                     # join to the fixed (desired, feasible) frames after the solved range
                     tail = x_all[H0 + start + length : H0 + start + length + h]
-                x, ok = sol.solve(xd, ww, hist_x, tail, bounds, xi)
+                x, ok = solve_chunk(length, xd, ww, hist_x, tail, bounds, xi)
                 n_failed += 0 if ok else 1
                 keep = min(m, length) if last else length - overlap
                 x_all[H0 + start : H0 + start + keep] = x[:keep]
