@@ -16,8 +16,10 @@ Solution strategy (so that 10-minute rides work):
    the discrete braking bound, or a non-finite value) are found with vectorised finite
    differences; they are grown by ``pad_s`` on both sides and merged into windows;
 2. outside the windows the desired frames are kept as they are (they are feasible there);
-   each window is solved with casadi + Ipopt, joined to the frames before it (fixed
-   history) and after it (fixed desired frames: the join differences are constraints);
+   each window is solved as a sparse convex QP (casadi ``conic`` with PIQP, one solver
+   built per window length and reused, see :mod:`._ride_qp`; Ipopt is the retry for a
+   window the QP solver does not solve), joined to the frames before it (fixed history)
+   and after it (fixed desired frames: the join differences are constraints);
 3. a window longer than ``chunk`` frames is solved in overlapping chunks: the first
    ``chunk - overlap`` frames of each chunk are kept; ``overlap`` is at least the number of
    frames needed to stop, which makes the kept end state able to stop in stroke, so the
@@ -66,7 +68,7 @@ class OptimisedRide:
     q : ndarray, (N, n)
         Feasible trajectory on the input's grid (SI).
     status : str
-        ``"unchanged"`` (input feasible, returned as is), ``"optimised"`` (casadi solution),
+        ``"unchanged"`` (input feasible, returned as is), ``"optimised"`` (solver solution),
         ``"realtime"`` (the real-time limiter's output was closer and is returned).
     max_deviation : float
         Largest ``|q - q_desired|`` over finite desired frames (SI).
@@ -84,8 +86,9 @@ class OptimisedRide:
         Frames the final exact limiter pass had to change (0 when the solver met the
         tightened limits; any change is counted and reported, never hidden).
     n_solver_failures : int
-        Chunks where Ipopt did not report success (their result still went through the
-        exact repair and the check; counted so that it is never silent).
+        Chunks where no solver reported success (neither the QP solver nor the Ipopt
+        retry); their result still went through the exact repair and the check; counted so
+        that it is never silent.
     solve_time_s : float
         Wall time of the whole call.
     """
