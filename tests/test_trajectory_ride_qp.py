@@ -162,6 +162,33 @@ def test_a_window_the_qp_misses_is_retried_with_ipopt(monkeypatch):
     assert res.objective == ref.objective
 
 
+def test_a_window_the_tight_qp_misses_is_retried_with_default_tolerances(monkeypatch):
+    q, dt, lim = _random_ride(11, True)
+    ref = _limit_ride(q, dt, lim, backend="ipopt")
+    calls = {"loose": 0, "ipopt": 0}
+    qp_solve, ip_solve = ConicChunkSolver.solve, _ChunkSolver.solve
+
+    def tight_fails(self, xd, *a):
+        if not self.loose:
+            return np.full(xd.shape, np.nan), False
+        calls["loose"] += 1
+        return qp_solve(self, xd, *a)
+
+    def count_ip(self, *a):
+        calls["ipopt"] += 1
+        return ip_solve(self, *a)
+
+    monkeypatch.setattr(ConicChunkSolver, "solve", tight_fails)
+    monkeypatch.setattr(_ChunkSolver, "solve", count_ip)
+    res = limit_ride(q, dt, lim)
+    assert calls["loose"] >= res.n_windows > 0
+    assert calls["ipopt"] == 0
+    assert res.n_solver_failures == 0
+    assert res.check.ok, res.check
+    # PIQP's default tolerances: same optimum as Ipopt within 1e-6 relative
+    assert res.objective == pytest.approx(ref.objective, rel=1e-6)
+
+
 def test_windows_no_solver_solves_are_counted_and_still_limited(monkeypatch):
     q, dt, lim = _random_ride(7, False)
 

@@ -365,7 +365,7 @@ def _limit_ride(
     chunk = max(int(chunk), overlap + _BLOCK)
     chunk = _BLOCK * math.ceil(chunk / _BLOCK)
     ipopt_solvers: dict[int, _ChunkSolver] = {}
-    qp_solvers: dict[tuple[int, bool], ConicChunkSolver] = {}
+    qp_solvers: dict[tuple[int, bool, bool], ConicChunkSolver] = {}
 
     def solve_chunk(
         length: int,
@@ -376,10 +376,12 @@ def _limit_ride(
         bounds: tuple[float, float, float, float, float],
         xi: np.ndarray,
     ) -> tuple[np.ndarray, bool]:
-        if backend == "qp":
-            key = (length, tail is not None)
+        # QP with tight tolerances, then with PIQP's default ones (windows with very large
+        # scaled numbers, where the tight ones are below round-off), then Ipopt
+        for loose in (False, True) if backend == "qp" else ():
+            key = (length, tail is not None, loose)
             if key not in qp_solvers:
-                qp_solvers[key] = ConicChunkSolver(length, jerk, tail is not None)
+                qp_solvers[key] = ConicChunkSolver(length, jerk, tail is not None, loose)
             x, ok = qp_solvers[key].solve(xd, ww, hist_x, tail, bounds, xi)
             if ok:
                 return x, ok

@@ -26,7 +26,7 @@ from typing import Any
 
 import numpy as np
 
-__all__ = ["ConicChunkSolver", "difference_rows"]
+__all__ = ["PIQP_OPTIONS", "PIQP_OPTIONS_LOOSE", "ConicChunkSolver", "difference_rows"]
 
 _COEF = {1: (1.0, -1.0), 2: (1.0, -2.0, 1.0), 3: (1.0, -3.0, 3.0, -1.0)}
 
@@ -40,9 +40,19 @@ PIQP_OPTIONS: dict[str, Any] = {
     "max_iter": 250,
     "verbose": False,
 }
+# PIQP's own default tolerances: the second attempt for a window whose numbers are so large
+# (short frame periods make the scaled positions large) that the tight ones are below
+# round-off and the solver stops at its iteration limit
+PIQP_OPTIONS_LOOSE: dict[str, Any] = {
+    **PIQP_OPTIONS,
+    "eps_abs": 1e-8,
+    "eps_rel": 1e-9,
+    "eps_duality_gap_abs": 1e-8,
+    "eps_duality_gap_rel": 1e-9,
+}
 
 
-def difference_rows(length: int, jerk: bool, tail: bool) -> tuple[np.ndarray, np.ndarray]:
+def difference_rows(length: int, jerk: bool, tail: bool) -> tuple[Any, np.ndarray]:
     """Difference rows over the stacked frames ``[hist (h), x (length), tail (h)]``.
 
     Parameters
@@ -56,24 +66,30 @@ def difference_rows(length: int, jerk: bool, tail: bool) -> tuple[np.ndarray, np
 
     Returns
     -------
-    M : ndarray, (m, h + L + h)
+    M : scipy.sparse.csc_matrix, (m, h + L + h)
         One row per constraint: first differences, then second, then (jerk) third.
     order : ndarray of int, (m,)
         Difference order (1, 2 or 3) of each row.
     """
+    import scipy.sparse as sps
+
     h = 3 if jerk else 2
-    orders = (1, 2, 3) if jerk else (1, 2)
-    n_rows = sum(length + (o if tail else 0) for o in orders)
-    M = np.zeros((n_rows, h + length + h))
-    order = np.zeros(n_rows, dtype=int)
-    r = 0
-    for o in orders:
-        for k in range(length + (o if tail else 0)):
-            for j, c in enumerate(_COEF[o]):
-                M[r, h + k - j] = c
-            order[r] = o
-            r += 1
-    return M, order
+    rows, cols, vals, orders = [], [], [], []
+    r0 = 0
+    for o in (1, 2, 3) if jerk else (1, 2):
+        k = np.arange(length + (o if tail else 0))  # frame of each row (window index)
+        for j, c in enumerate(_COEF[o]):
+            rows.append(r0 + k)
+            cols.append(h + k - j)
+            vals.append(np.full(k.size, c))
+        orders.append(np.full(k.size, o))
+        r0 += k.size
+    M = sps.csc_matrix(
+        (np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))),
+        shape=(r0, h + length + h),
+    )
+    M.sort_indices()
+    return M, np.concatenate(orders)
 
 
 class ConicChunkSolver:
@@ -88,9 +104,12 @@ class ConicChunkSolver:
     tail : bool
         Whether the window joins fixed frames after it (a ``tail`` is then required by
         :meth:`solve`).
+    loose : bool
+        Use PIQP's default tolerances (:data:`PIQP_OPTIONS_LOOSE`) instead of the tight
+        ones (:data:`PIQP_OPTIONS`).
     """
 
-    def __init__(self, length: int, jerk: bool, tail: bool) -> None:
+    def __init__(self, length: int, jerk: bool, tail: bool, loose: bool = False) -> None:
         import casadi as ca
         import scipy.sparse as sps
 
@@ -99,12 +118,13 @@ class ConicChunkSolver:
         self.length = length
         self.jerk = jerk
         self.tail = tail
+        self.loose = loose
         self.h = h
         self._order = order
         self._M_hist = M[:, :h]
         self._M_tail = M[:, h + length :]
         A = sps.csc_matrix(M[:, h : h + length])
-        A.sort_indices()
+        A.sort_indices()  # casadi's Sparsity wants sorted row indices per column
         a_sp = ca.Sparsity(A.shape[0], A.shape[1], A.indptr.tolist(), A.indices.tolist())
         self._a = ca.DM(a_sp, A.data)
         self._h_sp = ca.Sparsity.diag(length)
@@ -113,7 +133,7 @@ class ConicChunkSolver:
             "ride_chunk_qp",
             "piqp",
             {"h": self._h_sp, "a": a_sp},
-            {"piqp": dict(PIQP_OPTIONS), "error_on_fail": False},
+            {"piqp": dict(PIQP_OPTIONS_LOOSE if loose else PIQP_OPTIONS), "error_on_fail": False},
         )
 
     def solve(
