@@ -17,8 +17,9 @@ Solution strategy (so that 10-minute rides work):
    differences; they are grown by ``pad_s`` on both sides and merged into windows;
 2. outside the windows the desired frames are kept as they are (they are feasible there);
    each window is solved as a sparse convex QP (casadi ``conic`` with PIQP, one solver
-   built per window length and reused, see :mod:`._ride_qp`; Ipopt is the retry for a
-   window the QP solver does not solve), joined to the frames before it (fixed history)
+   built per window length and reused, see :mod:`._ride_qp`; a window it does not solve
+   is retried at PIQP's default tolerances, then with Ipopt), joined to the frames before
+   it (fixed history)
    and after it (fixed desired frames: the join differences are constraints);
 3. a window longer than ``chunk`` frames is solved in overlapping chunks: the first
    ``chunk - overlap`` frames of each chunk are kept; ``overlap`` is at least the number of
@@ -288,9 +289,9 @@ def _limit_ride(
     """:func:`limit_ride` with a choice of window solver.
 
     ``backend="qp"`` (the default of :func:`limit_ride`): the sparse QP solver
-    (:class:`~motioncue.trajectory._ride_qp.ConicChunkSolver`), with Ipopt as the retry
-    for any window it does not solve; ``backend="ipopt"``: Ipopt only (the reference the
-    tests compare the QP path with).
+    (:class:`~motioncue.trajectory._ride_qp.ConicChunkSolver`), retried at PIQP's default
+    tolerances and then with Ipopt for any window it does not solve; ``backend="ipopt"``:
+    Ipopt only (the reference the tests compare the QP path with).
     """
     if backend not in ("qp", "ipopt"):
         raise ConfigError(f"backend = {backend!r} is invalid; allowed: 'qp', 'ipopt'")
