@@ -19,8 +19,8 @@ Solution strategy (so that 10-minute rides work):
    each window is solved as a sparse convex QP (casadi ``conic`` with PIQP, one solver
    built per window length and reused, see :mod:`._ride_qp`; a window it does not solve
    is retried at PIQP's default tolerances, then with Ipopt), joined to the frames before
-   it (fixed history)
-   and after it (fixed desired frames: the join differences are constraints);
+   it (fixed history) and after it (fixed desired frames: the join differences are
+   constraints);
 3. a window longer than ``chunk`` frames is solved in overlapping chunks: the first
    ``chunk - overlap`` frames of each chunk are kept; ``overlap`` is at least the number of
    frames needed to stop, which makes the kept end state able to stop in stroke, so the
