@@ -52,7 +52,8 @@ def main() -> int:
         stages = ", ".join(f"{k} {v:.2f}" for k, v in rep.stage_s.items())
         print(
             f"  [{preset}] {ride.n_frames} frames; optimisation {rep.optimisation.status}, "
-            f"{rep.optimisation.n_windows} windows; stages (s): {stages}"
+            f"{rep.optimisation.n_windows} windows, {rep.optimisation.n_repaired} frames "
+            f"repaired, {rep.optimisation.n_solver_failures} solver failures; stages (s): {stages}"
         )
         report(f"generate 10 min @100 Hz, {preset}", statistics.median(times), "s", 5.0, False)
     return 0

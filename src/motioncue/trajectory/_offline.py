@@ -16,8 +16,11 @@ Solution strategy (so that 10-minute rides work):
    the discrete braking bound, or a non-finite value) are found with vectorised finite
    differences; they are grown by ``pad_s`` on both sides and merged into windows;
 2. outside the windows the desired frames are kept as they are (they are feasible there);
-   each window is solved with casadi + Ipopt, joined to the frames before it (fixed
-   history) and after it (fixed desired frames: the join differences are constraints);
+   each window is solved as a sparse convex QP (casadi ``conic`` with PIQP, one solver
+   built per window length and reused, see :mod:`._ride_qp`; a window it does not solve
+   is retried at PIQP's default tolerances, then with Ipopt), joined to the frames before
+   it (fixed history) and after it (fixed desired frames: the join differences are
+   constraints);
 3. a window longer than ``chunk`` frames is solved in overlapping chunks: the first
    ``chunk - overlap`` frames of each chunk are kept; ``overlap`` is at least the number of
    frames needed to stop, which makes the kept end state able to stop in stroke, so the
@@ -49,6 +52,7 @@ from .._errors import ConfigError, LimitError
 from ._jerk import JerkLimiter
 from ._limits import ActuatorLimits, LimitCheck, check_trajectory
 from ._realtime import RealtimeLimiter
+from ._ride_qp import ConicChunkSolver
 
 __all__ = ["OptimisedRide", "limit_ride"]
 
@@ -65,7 +69,7 @@ class OptimisedRide:
     q : ndarray, (N, n)
         Feasible trajectory on the input's grid (SI).
     status : str
-        ``"unchanged"`` (input feasible, returned as is), ``"optimised"`` (casadi solution),
+        ``"unchanged"`` (input feasible, returned as is), ``"optimised"`` (solver solution),
         ``"realtime"`` (the real-time limiter's output was closer and is returned).
     max_deviation : float
         Largest ``|q - q_desired|`` over finite desired frames (SI).
@@ -83,8 +87,9 @@ class OptimisedRide:
         Frames the final exact limiter pass had to change (0 when the solver met the
         tightened limits; any change is counted and reported, never hidden).
     n_solver_failures : int
-        Chunks where Ipopt did not report success (their result still went through the
-        exact repair and the check; counted so that it is never silent).
+        Chunks where no solver reported success (neither the QP solver nor the Ipopt
+        retry); their result still went through the exact repair and the check; counted so
+        that it is never silent.
     solve_time_s : float
         Wall time of the whole call.
     """
@@ -264,6 +269,32 @@ def limit_ride(
     -------
     OptimisedRide
     """
+    return _limit_ride(
+        q_desired, dt_s, limits, weights=weights, q0=q0, v0=v0, pad_s=pad_s, chunk=chunk
+    )
+
+
+def _limit_ride(
+    q_desired: Any,
+    dt_s: float,
+    limits: ActuatorLimits,
+    *,
+    weights: Any = None,
+    q0: Any = None,
+    v0: Any = None,
+    pad_s: float = 1.0,
+    chunk: int = 1024,
+    backend: str = "qp",
+) -> OptimisedRide:
+    """:func:`limit_ride` with a choice of window solver.
+
+    ``backend="qp"`` (the default of :func:`limit_ride`): the sparse QP solver
+    (:class:`~motioncue.trajectory._ride_qp.ConicChunkSolver`), retried at PIQP's default
+    tolerances and then with Ipopt for any window it does not solve; ``backend="ipopt"``:
+    Ipopt only (the reference the tests compare the QP path with).
+    """
+    if backend not in ("qp", "ipopt"):
+        raise ConfigError(f"backend = {backend!r} is invalid; allowed: 'qp', 'ipopt'")
     t_start = time.perf_counter()
     qd = np.array(q_desired, dtype=float)
     if qd.ndim != 2 or qd.shape[1] != limits.n_actuators or qd.shape[0] < 1:
@@ -334,12 +365,35 @@ def limit_ride(
     overlap = max(2 * n_stop, _BLOCK)
     chunk = max(int(chunk), overlap + _BLOCK)
     chunk = _BLOCK * math.ceil(chunk / _BLOCK)
-    solvers: dict[int, _ChunkSolver] = {}
+    ipopt_solvers: dict[int, _ChunkSolver] = {}
+    qp_solvers: dict[tuple[int, bool, bool], ConicChunkSolver] = {}
 
-    def solver_for(length: int) -> _ChunkSolver:
-        if length not in solvers:
-            solvers[length] = _ChunkSolver(length, jerk)
-        return solvers[length]
+    def solve_chunk(
+        length: int,
+        xd: np.ndarray,
+        ww: np.ndarray,
+        hist_x: np.ndarray,
+        tail: np.ndarray | None,
+        bounds: tuple[float, float, float, float, float],
+        xi: np.ndarray,
+    ) -> tuple[np.ndarray, bool]:
+        # QP with tight tolerances, then with PIQP's default ones (windows with very large
+        # scaled numbers, where the tight ones are below round-off), then Ipopt
+        for loose in (False, True) if backend == "qp" else ():
+            key = (length, tail is not None, loose)
+            if key not in qp_solvers:
+                qp_solvers[key] = ConicChunkSolver(length, jerk, tail is not None, loose)
+            x, ok = qp_solvers[key].solve(xd, ww, hist_x, tail, bounds, xi)
+            if ok:
+                return x, ok
+        # Ipopt: the reference backend, and the retry for a window the QP solver missed
+        if length not in ipopt_solvers:
+            ipopt_solvers[length] = _ChunkSolver(length, jerk)
+        x, ok = ipopt_solvers[length].solve(xd, ww, hist_x, tail, bounds, xi)
+        if not np.all(np.isfinite(x)):
+            # never seen; keeps NaN out of the repair pass (which then limits the start point)
+            x, ok = np.clip(xi, bounds[0], bounds[1]), False
+        return x, ok
 
     # desired values far outside the stroke are pulled to within one stroke length of it
     span = limits.q_max - limits.q_min
@@ -378,7 +432,6 @@ def limit_ride(
                 else:
                     length = chunk
                     last = False
-                sol = solver_for(length)
                 xd = np.zeros(length)
                 ww = np.zeros(length)
                 xi = np.zeros(length)
@@ -394,7 +447,7 @@ def limit_ride(
                 if last and not at_end:
                     # join to the fixed (desired, feasible) frames after the solved range
                     tail = x_all[H0 + start + length : H0 + start + length + h]
-                x, ok = sol.solve(xd, ww, hist_x, tail, bounds, xi)
+                x, ok = solve_chunk(length, xd, ww, hist_x, tail, bounds, xi)
                 n_failed += 0 if ok else 1
                 keep = min(m, length) if last else length - overlap
                 x_all[H0 + start : H0 + start + keep] = x[:keep]
