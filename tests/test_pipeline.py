@@ -71,6 +71,15 @@ def test_generate_respects_every_limit_and_round_trips(tmp_path: Path) -> None:
     cue = rep.cue_slice
     dev = np.abs(rep.q[cue] - rep.q_desired[cue])
     assert np.median(dev) < 1e-9
+    # the ramp in from park is gentle: a fraction of the limits, not the machine's full
+    # capability (checked before rounding to whole pulses, which adds up to 2 pulses/dt^2)
+    from motioncue.trajectory import check_trajectory
+
+    gentle = lim.scaled(speed=0.3, accel=0.1)  # the documented ramp fractions
+    history = np.repeat(rep.q[:1], 2, axis=0)  # at rest at park before the first frame
+    ramp = check_trajectory(rep.q[: cue.start], 0.01, gentle, history=history)
+    assert ramp.ok, ramp
+    assert cue.start > 50  # it takes its time (> 0.5 s)
 
 
 def test_generate_is_safe_on_a_recording_full_of_spikes_and_nan() -> None:

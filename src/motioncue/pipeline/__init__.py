@@ -8,6 +8,8 @@ controller encoder -> transport; offline (:func:`generate_ride`) and on time
 from ._bridge import Bridge, BridgeConfig, BridgeStats
 from ._demo import DemoResult, compare_trace, run_demo
 from ._generate import (
+    RAMP_ACCEL,
+    RAMP_SPEED,
     GenerateReport,
     generate_keyframe_ride,
     generate_ride,
@@ -20,6 +22,8 @@ from ._stream import OutputStage, PlayReport, make_frame_encoder, play_ride
 from ._verify import FrameCheck, check_frames
 
 __all__ = [
+    "RAMP_ACCEL",
+    "RAMP_SPEED",
     "RIDE_FORMAT",
     "RIDE_FORMAT_VERSION",
     "Bridge",

@@ -19,7 +19,20 @@ from .._errors import LimitError
 from ._ridefile import Ride
 from ._verify import FrameCheck, check_frames
 
-__all__ = ["GenerateReport", "Progress", "generate_ride", "pulse_rounding_limits"]
+__all__ = [
+    "RAMP_ACCEL",
+    "RAMP_SPEED",
+    "GenerateReport",
+    "Progress",
+    "generate_ride",
+    "pulse_rounding_limits",
+]
+
+RAMP_SPEED = 0.3
+"""Ramps between park and the ride use this fraction of the speed limits ..."""
+RAMP_ACCEL = 0.1
+"""... and of the acceleration limits: a rider is lifted from park gently (about 0.1 g on the
+bundled hexapod), not at the machine's full capability."""
 
 Progress = Callable[[str, float], None]
 """``progress(stage_description, fraction_done)``."""
@@ -194,8 +207,9 @@ def generate_ride(
     poses_cue_ok = np.asarray(plim.pose, dtype=float)
     lap("workspace")
     step("ramps", 0.35)
-    ramp_in = transition(platform, platform.pose_park, poses_cue_ok[0], tight, rate_hz)
-    ramp_out = transition(platform, poses_cue_ok[-1], platform.pose_park, tight, rate_hz)
+    gentle = tight.scaled(speed=RAMP_SPEED, accel=RAMP_ACCEL)
+    ramp_in = transition(platform, platform.pose_park, poses_cue_ok[0], gentle, rate_hz)
+    ramp_out = transition(platform, poses_cue_ok[-1], platform.pose_park, gentle, rate_hz)
     lap("ramps")
     step("inverse kinematics", 0.45)
     # ... and one more frame at park, so the ride ends at rest there
@@ -316,7 +330,8 @@ def generate_keyframe_ride(
         for qk in q_kf:
             arrive.append(int(np.argmin(np.linalg.norm(q_all - qk, axis=1))))
     else:
-        first = transition(platform, park, poses[0], tight, rate_hz)
+        gentle = tight.scaled(speed=RAMP_SPEED, accel=RAMP_ACCEL)
+        first = transition(platform, park, poses[0], gentle, rate_hz)
         move = np.vstack([first.q, first.q[-1:]])  # arrive, then one frame at rest
         need = len(move) - 1
         wait = round(times[0] * rate_hz) - need if np.isfinite(times[0]) else 0
@@ -343,7 +358,7 @@ def generate_keyframe_ride(
             segments.append(seg[1:])
             n_frames += len(seg) - 1
             arrive.append(n_frames - 1)
-        back = transition(platform, poses[-1], park, tight, rate_hz)
+        back = transition(platform, poses[-1], park, gentle, rate_hz)
         segments.append(back.q[1:])
         q_all = np.concatenate(segments)
     q_all = np.vstack([q_all, q_all[-1:]])  # one more frame at park: the ride ends at rest
