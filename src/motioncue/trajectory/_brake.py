@@ -27,14 +27,6 @@ _PAD_FRAMES = 1.0
 _EPS = 1e-9
 
 
-def _d0(vp: float, amax: float, jmax: float) -> float:
-    """Continuous time-optimal braking distance from speed ``vp >= 0`` at zero
-    acceleration: half the speed times the stopping time (trapezoid or triangle)."""
-    if vp * jmax >= amax * amax:
-        return 0.5 * vp * (vp / amax + amax / jmax)
-    return vp * math.sqrt(vp / jmax)
-
-
 def brake_bound(v: float, a: float, amax: float, jmax: float, dt: float) -> tuple[float, float]:
     """Conservative bounds ``(down, up)`` (m, both >= 0) on how far P moves below and
     above the start from speed ``v`` (m/s) and acceleration ``a`` (m/s^2), with limits
@@ -42,19 +34,35 @@ def brake_bound(v: float, a: float, amax: float, jmax: float, dt: float) -> tupl
     flip = v < 0.0 or (v == 0.0 and a < 0.0)
     if flip:
         v, a = -v, -a
+    a2 = amax * amax
+    rev = 0.0
     if a >= 0.0:  # speed still rises to its peak while a is wound down
         vp = v + a * a * 0.5 / jmax + a * dt
-        fwd = vp * (a / jmax + _PAD_FRAMES * dt) + _d0(vp, amax, jmax)
-        rev = 0.0
+        fwd = vp * (a / jmax + _PAD_FRAMES * dt)
     else:  # already braking; may reverse once when a strongly opposes v
-        aa = -a
         vp = v + a * a * 0.5 / jmax
-        fwd = vp * _PAD_FRAMES * dt + _d0(vp, amax, jmax)
-        vr = a * a * 0.5 / jmax + aa * dt - v
+        fwd = vp * _PAD_FRAMES * dt
+        t1 = -a / jmax
+        if v >= a * a * 0.5 / jmax:
+            # on the braking profile from (vp, 0): what is left of it, the part covered
+            # while a went from 0 to its present value taken off
+            fwd -= vp * t1 - jmax * t1 * t1 * t1 / 6.0
+        else:  # stops while a is wound back (then reverses): at most v for that time
+            fwd += v * t1
+            vp = 0.0
+        vr = a * a * 0.5 / jmax - a * dt - v
         if vr > 0.0:
-            rev = vr * (aa / jmax + _PAD_FRAMES * dt) + _d0(vr, amax, jmax)
-        else:
-            rev = 0.0
+            rev = vr * (-a / jmax + _PAD_FRAMES * dt)
+            # + braking distance from (vr, 0): half the speed times the stopping time
+            if vr * jmax >= a2:
+                rev += 0.5 * vr * (vr / amax + amax / jmax)
+            else:
+                rev += vr * math.sqrt(vr / jmax)
+    # + braking distance from (vp, 0): half the speed times the stopping time
+    if vp * jmax >= a2:
+        fwd += 0.5 * vp * (vp / amax + amax / jmax)
+    else:
+        fwd += vp * math.sqrt(vp / jmax)
     return (fwd, rev) if flip else (rev, fwd)
 
 
@@ -80,6 +88,7 @@ def stops_within(
     inv_dt = 1.0 / dt
     lo_e = lo - _EPS
     hi_e = hi + _EPS
+    big = abig + abig * abig / (2.0 * jdt) + jdt
     d = 0.0
     for _ in range(_MAX_BRAKE_FRAMES):
         if v == 0.0 and a == 0.0:
@@ -104,10 +113,21 @@ def stops_within(
             v, a = 0.0, ad
         else:
             e = 0.0 - v
-            if e > 0.0:
-                an = _vcap(e * inv_dt, jdt, abig)
+            # _vcap(|e| / dt, jdt, abig), inlined (same operations, same result)
+            bud = e * inv_dt if e > 0.0 else -e * inv_dt
+            if bud <= 0.0:
+                an = 0.0
+            elif bud >= big:
+                an = abig
             else:
-                an = -_vcap(-e * inv_dt, jdt, abig)
+                n = int((math.sqrt(1.0 + 8.0 * bud / jdt) - 1.0) * 0.5)
+                while n > 0 and jdt * n * (n + 1) * 0.5 > bud:
+                    n -= 1
+                while jdt * (n + 1) * (n + 2) * 0.5 <= bud:
+                    n += 1
+                an = bud / (n + 1) + jdt * n * 0.5
+            if not e > 0.0:
+                an = -an
             if an > up:
                 an = up
             if an < dn:

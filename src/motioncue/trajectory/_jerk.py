@@ -311,13 +311,19 @@ class JerkLimiter:
                 lo_w = max(t, qmin)
             best = None
             w_lo, w_hi = 0.0, want
+            # wanted speeds beyond what one frame can reach give the same next state (the
+            # step saturates): remember each decided state (q, v fixed: qb decides it)
+            seen: dict[float, bool] = {}
             for k in range(_BISECT + 1):
                 w = want if k == 0 else 0.5 * (w_lo + w_hi)
                 vb, ab_, _l = _vstep(v, a, w, w, vmax, amax, jdt, half_inv_j, abig, dt, inv_dt)
                 qb = q + vb * dt
                 vb = (qb - q) * inv_dt
                 ab_ = (vb - v) * inv_dt
-                if self._admissible(state, i, qb, vb, ab_, lo_w, hi_w):
+                ok = seen.get(qb)
+                if ok is None:
+                    ok = seen[qb] = self._admissible(state, i, qb, vb, ab_, lo_w, hi_w)
+                if ok:
                     best = (qb, vb, ab_)
                     if k == 0:
                         break
