@@ -27,8 +27,11 @@ point does not pass the target (approach without overshoot); if none does, it se
 action, which is admissible by construction because P is a state feedback (the state it
 leads to continues the same braking). Every emitted frame therefore keeps every limit.
 
-Cost: P is simulated only near a stroke end or while limiting; a frame far from the ends
-costs about as much as the second-order limiter's.
+Cost: P is simulated only when the closed-form one-sided bounds of
+:mod:`._brake` cannot decide (near a stroke end, or near the target while limiting), and
+then only until the answer is known; a bisection remembers the states it has decided
+(saturated wanted speeds repeat the same next state). Frames are bit-identical to the
+full simulation's.
 """
 
 from __future__ import annotations
