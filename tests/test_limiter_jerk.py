@@ -153,3 +153,75 @@ def test_validation():
     assert not jl.is_admissible([0.1], [math.nan], [0.0])
     with pytest.raises(ConfigError, match="expected 1"):
         jl.step(jl.initial_state([0.1]), [0.1, 0.2])
+
+
+@st.composite
+def soft_jerk_limits(draw):
+    """Limits whose braking never meets the +-v_max caps (a^2/(2j) + a dt <= v_max), as
+    real cylinders: the braking simulation then also takes its closed-form staircase exit."""
+    lim, dt = draw(jerk_limits())
+    amax = np.array([draw(st.floats(0.5, 8.0)) for _ in range(lim.n_actuators)])
+    jmax = np.array([draw(st.floats(40.0, 1000.0)) for _ in range(lim.n_actuators)])
+    vmax = np.maximum(lim.v_max, amax * amax / (2.0 * jmax) + amax * dt)
+    return ActuatorLimits(lim.q_min, lim.q_max, vmax, amax, jmax), dt
+
+
+@st.composite
+def braking_states(draw):
+    """Limits, an axis and a velocity-level-admissible (v, a), with the simulated extent."""
+    lim, dt = draw(st.one_of(jerk_limits(), soft_jerk_limits()))
+    jl = JerkLimiter(lim, dt)
+    i = draw(st.integers(0, lim.n_actuators - 1))
+    vmax, amax, jmax = float(lim.v_max[i]), float(lim.a_max[i]), float(lim.j_max[i])
+    a = draw(st.one_of(st.floats(-amax, amax), st.sampled_from([-amax, 0.0, amax])))
+    v = draw(
+        st.one_of(
+            st.floats(-vmax, vmax),
+            st.floats(-1.0, 1.0).map(lambda f: f * a * a / (2.0 * jmax)),  # reversal zone
+        )
+    )
+    vs, acc = [0.0] * lim.n_actuators, [0.0] * lim.n_actuators
+    vs[i], acc[i] = v, a
+    assume(jl.is_admissible([0.0] * lim.n_actuators, vs, acc))
+    return jl, i, v, a, dt
+
+
+@settings(max_examples=300)
+@given(braking_states())
+def test_one_sided_braking_bounds_cover_the_simulated_extent(case):
+    from motioncue.trajectory._brake import brake_bound
+
+    jl, i, v, a, dt = case
+    lim = jl.limits
+    ext = jl.stopping_offset(i, v, a)
+    assert ext is not None
+    down, up = brake_bound(v, a, float(lim.a_max[i]), float(lim.j_max[i]), dt)
+    assert down >= 0.0 and up >= 0.0
+    assert -ext[0] <= down and ext[1] <= up
+
+
+@settings(max_examples=300)
+@given(
+    braking_states(),
+    st.sampled_from(["top", "bottom", "far", "mid"]),
+    st.one_of(st.floats(-1.0, 1.0), st.sampled_from([0.0, 1e-10, -1e-10, 2e-9, -2e-9])),
+)
+def test_fast_admissibility_decides_as_the_exact_simulation(case, where, frac):
+    """The bound test and the early-exit simulation give the exact simulation's answer,
+    for states whose braking ends near a stroke end (within a few frames) and far from it."""
+    jl, i, v, a, dt = case
+    lim = jl.limits
+    lo, hi = float(lim.q_min[i]), float(lim.q_max[i])
+    ext = jl.stopping_offset(i, v, a)
+    assert ext is not None
+    scale = (abs(v) + abs(a) * dt) * dt * 3.0 if abs(frac) > 1e-8 else 1.0
+    if where == "top":
+        q = hi - ext[1] + frac * scale
+    elif where == "bottom":
+        q = lo - ext[0] + frac * scale
+    elif where == "far":
+        q = lo + (hi - lo) * (0.5 + 0.5 * frac)
+    else:
+        q = 0.5 * (lo + hi) + frac * scale
+    exact = lo - 1e-9 <= q <= hi + 1e-9 and lo - 1e-9 <= q + ext[0] and q + ext[1] <= hi + 1e-9
+    assert jl._admissible(None, i, q, v, a, lo, hi) == exact

@@ -27,8 +27,11 @@ point does not pass the target (approach without overshoot); if none does, it se
 action, which is admissible by construction because P is a state feedback (the state it
 leads to continues the same braking). Every emitted frame therefore keeps every limit.
 
-Cost: P is simulated only near a stroke end or while limiting; a frame far from the ends
-costs about as much as the second-order limiter's.
+Cost: P is simulated only when the closed-form one-sided bounds of
+:mod:`._brake` cannot decide (near a stroke end, or near the target while limiting), and
+then only until the answer is known; a bisection remembers the states it has decided
+(saturated wanted speeds repeat the same next state). Frames are bit-identical to the
+full simulation's.
 """
 
 from __future__ import annotations
@@ -41,6 +44,7 @@ from typing import Any
 import numpy as np
 
 from .._errors import ConfigError, LimitError
+from ._brake import brake_bound, stops_within
 from ._limits import ActuatorLimits
 from ._realtime import _vcap
 
@@ -48,7 +52,6 @@ __all__ = ["JerkLimiter", "JerkLimiterState"]
 
 _MAX_BRAKE_FRAMES = 1_000_000
 _BISECT = 10
-_BOUND_FACTOR = 1.0
 
 
 def _vstep(
@@ -193,13 +196,10 @@ class JerkLimiter:
         return None
 
     def _bound(self, i: int, v: float, a: float) -> float:
-        """Conservative bound on how far P moves from ``(v, a)`` either way (peak speed
-        times a stopping time, padded; checked against the simulation by the tests)."""
+        """Conservative bound on how far P moves from ``(v, a)`` either way (closed form,
+        see :func:`._brake.brake_bound`; checked against the simulation by the tests)."""
         _, _, _, amax, _, _, _, jmax = self._params[i]
-        dt = float(self.dt_s)
-        v_pk = abs(v) + a * a / (2.0 * jmax) + abs(a) * dt
-        t_stop = v_pk / amax + 2.0 * amax / jmax + abs(a) / jmax + 4.0 * dt
-        return _BOUND_FACTOR * v_pk * t_stop
+        return max(brake_bound(v, a, amax, jmax, float(self.dt_s)))
 
     def _admissible(
         self, state: JerkLimiterState | None, i: int, q: float, v: float, a: float,
@@ -208,13 +208,15 @@ class JerkLimiter:
         """q in [lo, hi] and P's stopping point too (bound first, then simulation)."""
         if not lo - 1e-9 <= q <= hi + 1e-9:
             return False
-        b = self._bound(i, v, a)
-        if lo <= q - b and q + b <= hi:
+        _, _, vmax, amax, jdt, half_inv_j, abig, jmax = self._params[i]
+        dt = float(self.dt_s)
+        down, up = brake_bound(v, a, amax, jmax, dt)
+        if lo <= q - down and q + up <= hi:
             return True
         if state is not None:
             state.n_simulated += 1
-        ext = self.stopping_offset(i, v, a)
-        return ext is not None and lo - 1e-9 <= q + ext[0] and q + ext[1] <= hi + 1e-9
+        # exact simulation of P, stopped as soon as the answer is known
+        return stops_within(q, v, a, lo, hi, vmax, amax, jdt, half_inv_j, abig, jmax, dt)
 
     # ------------------------------------------------------------------ states
     def is_admissible(self, q: Any, v: Any = None, a: Any = None) -> bool:
@@ -312,13 +314,19 @@ class JerkLimiter:
                 lo_w = max(t, qmin)
             best = None
             w_lo, w_hi = 0.0, want
+            # wanted speeds beyond what one frame can reach give the same next state (the
+            # step saturates): remember each decided state (q, v fixed: qb decides it)
+            seen: dict[float, bool] = {}
             for k in range(_BISECT + 1):
                 w = want if k == 0 else 0.5 * (w_lo + w_hi)
                 vb, ab_, _l = _vstep(v, a, w, w, vmax, amax, jdt, half_inv_j, abig, dt, inv_dt)
                 qb = q + vb * dt
                 vb = (qb - q) * inv_dt
                 ab_ = (vb - v) * inv_dt
-                if self._admissible(state, i, qb, vb, ab_, lo_w, hi_w):
+                ok = seen.get(qb)
+                if ok is None:
+                    ok = seen[qb] = self._admissible(state, i, qb, vb, ab_, lo_w, hi_w)
+                if ok:
                     best = (qb, vb, ab_)
                     if k == 0:
                         break
