@@ -26,6 +26,7 @@ from motioncue.pipeline import (
     load_ride,
     play_ride,
     read_keyframes_csv,
+    receiver_throttle,
     save_ride,
 )
 from motioncue.telemetry._recording import Recording, read_recording_csv
@@ -175,14 +176,7 @@ def test_bad_keyframe_files_are_named(tmp_path: Path) -> None:
 
 
 def _throttle(emu):  # type: ignore[no-untyped-def]
-    """Back-pressure: stay at most 200 frames ahead of the in-process emulator."""
-
-    def wait(sent: int) -> None:
-        deadline = time.monotonic() + 5.0
-        while sent - emu.received > 200 and time.monotonic() < deadline:
-            time.sleep(0.002)
-
-    return wait
+    return receiver_throttle(lambda: emu.received)
 
 
 def _emulator(controller, n_frames: int):  # type: ignore[no-untyped-def]

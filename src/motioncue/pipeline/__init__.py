@@ -18,7 +18,7 @@ from ._generate import (
 from ._inputs import Keyframes, load_generate_input, read_keyframes_csv
 from ._report import delivered_poses, plot_actuators, write_report
 from ._ridefile import RIDE_FORMAT, RIDE_FORMAT_VERSION, Ride, load_ride, save_ride
-from ._stream import OutputStage, PlayReport, make_frame_encoder, play_ride
+from ._stream import OutputStage, PlayReport, make_frame_encoder, play_ride, receiver_throttle
 from ._verify import FrameCheck, check_frames
 
 __all__ = [
@@ -48,6 +48,7 @@ __all__ = [
     "plot_actuators",
     "pulse_rounding_limits",
     "read_keyframes_csv",
+    "receiver_throttle",
     "run_demo",
     "save_ride",
     "write_report",

@@ -81,7 +81,7 @@ def run_demo(
 
     from ._generate import generate_ride
     from ._report import write_report
-    from ._stream import play_ride
+    from ._stream import play_ride, receiver_throttle
 
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
@@ -113,17 +113,10 @@ def run_demo(
     with MboxEmulator(emu_ctrl) as emu, open_transport(f"udp://127.0.0.1:{emu.port}") as link:
         log(f"playing to the MBOX emulator on udp://127.0.0.1:{emu.port} at {speed:g}x")
 
-        def throttle(sent: int) -> None:
-            # The emulator shares this process (and its GIL): never run more than 200
-            # frames ahead of what it has taken in, so a busy machine slows the demo down
-            # instead of overflowing the socket and losing frames.
-            t_wait = time.monotonic() + 5.0
-            while sent - emu.received > 200 and time.monotonic() < t_wait:
-                time.sleep(0.002)
-
         played = play_ride(
-            ride, platform, controller, limits, link, speed=speed, spin_s=0.0, throttle=throttle
-        )
+            ride, platform, controller, limits, link, speed=speed, spin_s=0.0,
+            throttle=receiver_throttle(lambda: emu.received),
+        )  # fmt: skip
         deadline = time.monotonic() + 5.0
         while emu.received < played.frames_sent and time.monotonic() < deadline:
             time.sleep(0.01)

@@ -223,8 +223,7 @@ def generate_ride(
     lap("actuator limits, pulses and check")
     n_in = len(ramp_in.poses) - 1
     cue = slice(n_in, n_in + len(poses_cue_ok))
-    status = np.asarray(plim.status)
-    clamped = int(np.count_nonzero(status != "ok")) if status.ndim else int(status != "ok")
+    clamped = int(np.count_nonzero(np.asarray(plim.status) != "ok"))
     loss = float(np.max(1.0 - np.asarray(plim.scale, dtype=float), initial=0.0))
     n_frames = len(t_s)
     ride = Ride(

@@ -123,11 +123,9 @@ def load_generate_input(path: str | Path) -> tuple[str, Any, dict[str, int]]:
     path = Path(path)
     if not path.is_file():
         raise ConfigError(f"input {str(path)!r} does not exist")
-    with open(path, "rb") as fh:
-        head = fh.read(8)
-    from motioncue.telemetry._container import MAGIC
+    from motioncue.telemetry._motion import is_datagram_recording
 
-    if head == MAGIC:
+    if is_datagram_recording(path):
         return "recording", *_telemetry_recording(path)
     with open(path, newline="", errors="replace") as fh:
         first = next(csv.reader(fh), [])
@@ -145,18 +143,17 @@ def load_generate_input(path: str | Path) -> tuple[str, Any, dict[str, int]]:
 
 
 def _telemetry_recording(path: Path) -> tuple[Any, dict[str, int]]:
-    from motioncue.telemetry import decode_recording
+    """Decode a ``motioncue record`` file. Paused stretches become rest (the vehicle is not
+    moving while the game is paused), so the cue washes out there instead of interpolating
+    across the pause."""
+    from motioncue.telemetry import decode_recording, samples_to_arrays
     from motioncue.telemetry._recording import Recording
 
     samples, stats = decode_recording(path)
     if not samples:
         raise ConfigError(f"{path}: no usable telemetry samples ({stats})")
-    t = np.array([s.t_s for s in samples])
-    f = np.array([s.f for s in samples], dtype=float)
-    w = np.array([s.w for s in samples], dtype=float)
-    paused = np.array([s.paused for s in samples])
-    # While the game is paused the vehicle is not moving: rest, so the cue washes out.
-    f[paused] = (0.0, 0.0, 9.80665)
-    w[paused] = 0.0
-    order = np.argsort(t, kind="stable")
-    return Recording(t[order] - t[order][0], f[order], w[order]), stats
+    a = samples_to_arrays(samples)
+    f, w = a.f.copy(), a.w.copy()
+    f[a.paused] = (0.0, 0.0, 9.80665)
+    w[a.paused] = 0.0
+    return Recording(a.t_s - a.t_s[0], f, w), stats

@@ -44,7 +44,7 @@ def plot_actuators(
     lim = limits_arrays(ride.limits)
     t = ride.t_s
     p = ride.pulses.astype(float)
-    v = np.gradient(p, t, axis=0)
+    v = np.zeros_like(p)
     v[1:] = np.diff(p, axis=0) / np.diff(t)[:, None]
     a = np.zeros_like(v)
     a[1:] = np.diff(v, axis=0) / np.diff(t)[:, None]

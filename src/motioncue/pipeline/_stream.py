@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import math
 import time
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -20,7 +21,7 @@ from ._generate import pulse_rounding_limits
 from ._realtime import wait_until
 from ._ridefile import Ride
 
-__all__ = ["OutputStage", "PlayReport", "make_frame_encoder", "play_ride"]
+__all__ = ["OutputStage", "PlayReport", "make_frame_encoder", "play_ride", "receiver_throttle"]
 
 
 def make_frame_encoder(controller: Any, rate_hz: float, start_pulses: Any = None) -> Any:
@@ -135,6 +136,24 @@ class OutputStage:
         span = float(np.max(lim.q_max - lim.q_min))
         v, a = float(np.min(lim.v_max)), float(np.min(lim.a_max))
         return math.ceil((span / v + 2 * v / a) / self.dt_s) + 10
+
+
+def receiver_throttle(
+    received: Callable[[], int], ahead: int = 200, timeout_s: float = 5.0
+) -> Callable[[int], None]:
+    """A ``throttle`` for :func:`play_ride`: never run more than ``ahead`` frames ahead of
+    what a receiver reports it has taken in (``received()``), waiting at most ``timeout_s``.
+
+    For a receiver in this process (an emulator sharing the GIL), so that a busy machine slows
+    the player down instead of overflowing the socket and losing frames.
+    """
+
+    def wait(sent: int) -> None:
+        deadline = time.monotonic() + timeout_s
+        while sent - received() > ahead and time.monotonic() < deadline:
+            time.sleep(0.002)
+
+    return wait
 
 
 def _is_serial(transport: Any) -> bool:
