@@ -100,13 +100,12 @@ class OutputStage:
 
     def emit(self, q_target: Any, dout: int = 0, dacs: tuple[int, int] = (0, 0)) -> np.ndarray:
         """Limit, encode and send one frame toward ``q_target (n,)`` (SI); returns the pulses."""
-        q_out = self._limiter.step(self._state, q_target)
-        target = np.asarray(q_target, dtype=float)
-        if not np.array_equal(np.asarray(q_out), target):
-            self.clamped_frames += 1
-        pulses = self.platform.drives.to_pulses(np.asarray(q_out, dtype=float))
+        q_out = np.asarray(self._limiter.step(self._state, q_target), dtype=float)
         if not np.all(np.isfinite(q_out)):  # the limiter guarantees this; never send NaN
             raise LimitError("limiter produced a non-finite position; frame not sent")
+        if not np.array_equal(q_out, np.asarray(q_target, dtype=float)):
+            self.clamped_frames += 1
+        pulses = self.platform.drives.to_pulses(q_out)
         frame = [int(p) for p in pulses]
         if self._streamer is not None:
             self._streamer.send_all(self._encoder.encode_commands(self.t_s, frame, dout, dacs))
