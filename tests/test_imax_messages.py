@@ -323,10 +323,13 @@ def test_encoder_refuses_non_finite_and_out_of_range(bad):
 
 
 def test_stroke_from_config_with_lift_offset():
-    ctrl = load_controller("imax6")
-    assert ctrl.pulses_per_mm == 20000 / 5.0  # 4 x 5000 lines, 5 mm lead
-    assert ctrl.stroke_pulses is None
     import dataclasses
+
+    # counts per turn from PA54 (4 x 5000 lines) when the config gives none
+    ctrl = dataclasses.replace(load_controller("imax6"), counts_per_rev=None)
+    assert ctrl.pulses_per_mm == 20000 / 5.0  # 4 x 5000 lines, 5 mm lead
+    assert load_controller("imax6").pulses_per_mm == 10000 / 5.0  # counts_per_rev = 10000
+    assert ctrl.stroke_pulses is None
 
     c2 = dataclasses.replace(ctrl, stroke_mm=100.0)
     assert c2.stroke_pulses == (-40_000, 360_000)  # lift PA40 = 10 mm
@@ -343,8 +346,9 @@ def test_bundled_imax_configs():
     assert c6.controller_address == ("192.168.15.201", 7408)
     assert c6.host_address == ("192.168.15.101", 8410)
     assert c6.max_frame_rate_hz == 1000.0  # PA59 = 1 ms
-    # min(PA07 3000, PAa0 x PAb0 = 2 x 1500) rpm x 20000 pulses / turn / 60 s
-    assert c6.max_speed_pulses_s[0] == pytest.approx(1_000_000.0)
+    # min(PA07 3000, PAa0 x PAb0 = 2 x 1500) rpm x 10000 counts / turn (counts_per_rev) / 60 s
+    assert c6.counts_per_rev == 10000
+    assert c6.max_speed_pulses_s[0] == pytest.approx(500_000.0)
     assert c6.with_parameters(PA80=600).max_speed_rpm(0) == 600
 
 

@@ -12,24 +12,24 @@ import pytest
 import motioncue
 from motioncue import ConfigError
 from motioncue.cli import main
+from motioncue.output import load_controller
 from motioncue.trajectory import ActuatorLimits
 
 
 def _imax(**over):
-    params = {"PA07": 3000, "PA41": 50, "PA54": 0}
+    """imax6 (10000 counts per motor turn, as the bundled platforms) with PA changes."""
+    params = {"PA07": 3000, "PA41": 50, "PA54": 0, "PA06": 0}
     params.update({f"PA8{i}": 0 for i in range(6)})
     params.update({f"PAa{i}": 2 for i in range(6)})
     params.update({f"PAb{i}": 1500 for i in range(6)})
     params.update(over)
-    return SimpleNamespace(kind="imax", n_axes=6, parameters=params, name="imax6")
+    return load_controller("imax6").with_parameters(**params)
 
 
 def _mbox(**over):
-    params = {"Fn0C0": 0, "Fn0C1": 2000, "Fn0C2": 50}
+    params = {"Fn0C0": 0, "Fn0C1": 2000, "Fn0C2": 50, "Fn012": 1000}
     params.update(over)
-    return SimpleNamespace(
-        kind="mbox", n_axes=6, parameters=params, name="mbox6", max_motor_speed_rpm=3000.0
-    )
+    return load_controller("mbox6").with_parameters(**params)
 
 
 @pytest.fixture(scope="module")
@@ -82,6 +82,34 @@ def test_mbox_stroke_from_fn0c0_and_fn0c1(hexapod):
     assert rows[0]["stroke_pulses"] == [0, 240000]
     with pytest.raises(ConfigError, match="Fn0C1"):
         ActuatorLimits.from_platform(hexapod, _mbox(Fn0C1=1000), a_max=5.0)
+
+
+def test_catch_up_divides_speed_and_acceleration(hexapod):
+    # MBOX 5.3.3: Fn012 = 1500 plays frames 1.5x as fast as stamped; the motor must still
+    # keep 0.25 m/s and 4 m/s^2, so the host plans with 0.25/1.5 and 4/1.5^2
+    lim = ActuatorLimits.from_platform(_bare(hexapod), _mbox(Fn012=1500), a_max=4.0, j_max=50.0)
+    np.testing.assert_allclose(lim.v_max, 0.25 / 1.5)
+    np.testing.assert_allclose(lim.a_max, 4.0 / 1.5**2)
+    np.testing.assert_allclose(lim.j_max, 50.0 / 1.5**3)
+    assert "catch-up" in lim.sources["v_max"] and lim.sources["catch_up"] == "1.5"
+    # automatic speed control (Fn012 < 1000) and IMAX fast-forward state no speed: refused
+    with pytest.raises(motioncue.LimitError, match="Fn012"):
+        ActuatorLimits.from_platform(hexapod, _mbox(Fn012=900))
+    with pytest.raises(motioncue.LimitError, match="PA06"):
+        ActuatorLimits.from_platform(hexapod, _imax(PA06=1))
+
+
+def test_counts_per_turn_must_agree_with_the_drive(hexapod):
+    import dataclasses
+
+    # PA54 = 0 read as 4 x 5000 lines = 20000 counts per turn; the hexapod's drive says 10000
+    imax = dataclasses.replace(_imax(), counts_per_rev=None)
+    with pytest.raises(ConfigError, match=r"20000 pulses per motor turn.*PA54.*10000"):
+        ActuatorLimits.from_platform(hexapod, imax)
+    # PA54 = 1 (2500 lines) reads 10000: accepted
+    ActuatorLimits.from_platform(hexapod, dataclasses.replace(_imax(PA54=1), counts_per_rev=None))
+    with pytest.raises(ConfigError, match="counts_per_rev = 20000"):
+        ActuatorLimits.from_platform(hexapod, dataclasses.replace(_imax(), counts_per_rev=20000))
 
 
 def test_missing_sources_and_axis_count_are_named(hexapod):
@@ -161,7 +189,9 @@ def test_bundled_controllers(hexapod):
     assert "platform config" in lim.sources["a_max"] and "IMAX" in lim.sources["a_max"]
     mbox = load_controller("mbox6")
     lim = ActuatorLimits.from_platform(hexapod, mbox, a_max=4.0)
-    np.testing.assert_allclose(lim.v_max, mbox.max_motor_speed_rpm / 60 * 0.005)
+    # mbox6.toml keeps the factory Fn012 = 1200: frames may be played 1.2x as fast
+    np.testing.assert_allclose(lim.v_max, mbox.max_motor_speed_rpm / 60 * 0.005 / 1.2)
+    np.testing.assert_allclose(lim.a_max, 4.0 / 1.2**2)
     seat = motioncue.load_platform("seat3")
     with pytest.raises(ConfigError, match="max-accel"):
         ActuatorLimits.from_platform(_bare(seat), load_controller("easysmc"))
@@ -173,13 +203,14 @@ def test_bundled_controllers(hexapod):
 
 
 def test_easysmc_soft_limits_narrow_the_stroke():
+    import dataclasses
+
     seat = motioncue.load_platform("seat3")
-    params = {"A3_feed_hz": 400000}
-    ctl = SimpleNamespace(
-        kind="easysmc", n_axes=3, parameters=params, name="e",
-        units=(SimpleNamespace(axes="XYZ"),),
-        soft_limits=lambda: ((-5000, 100000), (-20000, 200000), (0, 50000)),
-    )  # fmt: skip
+    params = {
+        "A3_feed_hz": 400000, "27_XFMAX": -5000, "21_XZMAX": 100000, "28_YFMAX": -20000,
+        "22_YZMAX": 200000, "29_ZFMAX": 0, "23_ZZMAX": 50000,
+    }  # fmt: skip
+    ctl = dataclasses.replace(load_controller("easysmc"), parameters=params)
     lim = ActuatorLimits.from_platform(seat, ctl, a_max=3.0)
     q = np.asarray(seat.drives.from_pulses(np.array([[-5000, -20000, 0], [100000, 200000, 50000]])))
     np.testing.assert_allclose(lim.q_min, np.maximum(seat.q_min, q[0]))

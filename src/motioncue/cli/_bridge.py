@@ -87,19 +87,23 @@ def run(args: argparse.Namespace) -> int:
 
     if args.duration is not None and not (math.isfinite(args.duration) and args.duration > 0):
         raise ConfigError(f"--duration {args.duration!r} is invalid; allowed: a number > 0")
+    from ..output._controller_api import snap_rate_hz
+
+    controller = load_controller(args.controller)
     config = BridgeConfig(
-        rate_hz=args.rate,
+        rate_hz=snap_rate_hz(args.rate, controller),
         gate=GateConfig(timeout_s=args.timeout, fade_out_s=args.fade, fade_in_s=args.fade),
         rt_priority=args.rt_priority or None,
     )
     platform = load_platform(args.platform)
-    controller = load_controller(args.controller)
+    controller.check_rate(config.rate_hz)
     limits = ActuatorLimits.from_platform(
         platform,
         controller,
         stroke_margin=args.stroke_margin,
         v_max=args.max_speed,
         a_max=args.max_accel,
+        rate_hz=config.rate_hz,
     )
     cueing = load_cueing(args.preset)
     err = sys.stderr

@@ -28,6 +28,13 @@ def register(sub: Any) -> None:
     parser.add_argument(
         "--stroke-margin", type=float, help="extra margin at each stroke end, m (rad)"
     )
+    parser.add_argument(
+        "--rate",
+        type=float,
+        metavar="HZ",
+        help="frame rate, for controllers whose limits depend on it (EasySmc; checked against "
+        "the controller's clock)",
+    )
     parser.add_argument("--json", action="store_true", help="print JSON instead of a table")
     parser.set_defaults(run=run)
 
@@ -42,6 +49,8 @@ def run(args: argparse.Namespace) -> int:
         from ..output._controllers import load_controller
 
         controller = load_controller(args.controller)
+        if args.rate is not None:
+            controller.check_rate(args.rate)
     lim = ActuatorLimits.from_platform(
         platform,
         controller,
@@ -49,6 +58,7 @@ def run(args: argparse.Namespace) -> int:
         v_max=args.max_speed,
         a_max=args.max_accel,
         j_max=args.max_jerk,
+        rate_hz=args.rate,
     )
     if args.json:
         print(lim.to_json(platform))

@@ -89,7 +89,11 @@ def _generate(args: argparse.Namespace) -> int:
         raise ConfigError(f"--rate {args.rate!r} is invalid; allowed: (0, 2000] Hz")
     platform = load_platform(args.platform)
     controller = load_controller(args.controller)
-    limits = ActuatorLimits.from_platform(platform, controller)
+    from ..output._controller_api import snap_rate_hz
+
+    args.rate = snap_rate_hz(args.rate, controller)
+    controller.check_rate(args.rate)
+    limits = ActuatorLimits.from_platform(platform, controller, rate_hz=args.rate)
     kind, data, counters = load_generate_input(args.input)
     if counters:
         skipped = {k: v for k, v in counters.items() if k != "ok" and v}
@@ -160,7 +164,8 @@ def _play(args: argparse.Namespace) -> int:
             f"controller {controller.name} drives {controller.n_axes} axes; platform "
             f"{platform.name} has {platform.n_actuators} actuators"
         )
-    limits = ActuatorLimits.from_platform(platform, controller)
+    controller.check_rate(ride.rate_hz)
+    limits = ActuatorLimits.from_platform(platform, controller, rate_hz=ride.rate_hz)
     table = limits.to_pulses_table(platform)
     if ride.limits.get("actuators") != table:
         print(

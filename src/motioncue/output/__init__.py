@@ -7,6 +7,7 @@ positions into timed frames; ``open_transport(url)`` opens ``udp://``, ``pcap:``
 (:mod:`motioncue.output.imax`, :mod:`motioncue.output.mbox`).
 """
 
+from ._controller_api import Controller, DriveExpectations, FrameEncoder, PulseLimits
 from ._controllers import CONTROLLER_KINDS, load_controller
 from ._transport import Transport, TransportURL, parse_target
 from ._transports_file import FileTransport, PcapPacket, PcapTransport, read_pcap
@@ -16,9 +17,13 @@ from ._udp_emulator import Trace, Violation
 
 __all__ = [
     "CONTROLLER_KINDS",
+    "Controller",
+    "DriveExpectations",
     "FileTransport",
+    "FrameEncoder",
     "PcapPacket",
     "PcapTransport",
+    "PulseLimits",
     "Trace",
     "Transport",
     "TransportURL",

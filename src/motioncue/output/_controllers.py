@@ -9,26 +9,27 @@ from __future__ import annotations
 
 import importlib
 from pathlib import Path
-from typing import Any
 
 from .._config import ConfigReader, find_config, load_toml
+from ._controller_api import Controller
 
 __all__ = ["CONTROLLER_KINDS", "load_controller"]
 
 CONTROLLER_KINDS = ("imax", "mbox", "easysmc")
 
 
-def load_controller(name_or_path: str | Path) -> Any:
+def load_controller(name_or_path: str | Path) -> Controller:
     """Load a bundled controller config by name (``mbox6``) or from a TOML path.
 
     Returns
     -------
-    The kind's frozen controller description (see ``motioncue.output.<kind>``).
+    Controller
+        The kind's frozen controller description (see ``motioncue.output.<kind>``).
     """
     path = find_config("controllers", name_or_path)
     reader = ConfigReader(load_toml(path), path.name)
     kind = reader.string("kind", choices=CONTROLLER_KINDS)
     module = importlib.import_module(f"motioncue.output.{kind}")
-    controller = module.controller_from_config(reader, path.stem)
+    controller: Controller = module.controller_from_config(reader, path.stem)
     reader.finish()
     return controller

@@ -16,6 +16,7 @@ from typing import Any, ClassVar, Generic, Self, TypeVar
 
 from .._config import ConfigReader
 from .._errors import ConfigError, LimitError
+from ._controller_api import check_whole_ms_rate
 from ._transport import parse_target
 from ._udp_common import CONFIRM_MAIN, PASSCODE, WHO_ALL, FrameClock
 
@@ -90,7 +91,33 @@ class UdpController(Generic[EncoderT]):
 
     CONTROLLER_PARAMS: ClassVar[tuple[str, str, str, str, str]]
     HOST_PARAMS: ClassVar[tuple[str, str, str, str, str]]
+    LABEL: ClassVar[str] = "controller"
+    RATE_CAP_SOURCE: ClassVar[str] = "1 ms time stamps"
     parameters: Mapping[str, int]
+    name: str
+
+    @property
+    def max_frame_rate_hz(self) -> float | None:  # pragma: no cover - overridden
+        raise NotImplementedError
+
+    @property
+    def time_resolution_s(self) -> float:
+        """Frame times travel as whole milliseconds (0x1301 / 0x1401 of both manuals)."""
+        return 1e-3
+
+    def check_rate(self, rate_hz: float) -> None:
+        """Refuse a frame rate whose period is not a whole number of ms, or above the cap
+        (see :func:`~._controller_api.check_whole_ms_rate`)."""
+        cap = self.max_frame_rate_hz
+        source = self.RATE_CAP_SOURCE
+        if cap is None or cap > 1000.0:
+            cap, source = 1000.0, "1 ms time stamps"
+        check_whole_ms_rate(rate_hz, cap, f"{self.LABEL} {self.name}", source)
+
+    def run_encoder(self, rate_hz: float, start_pulses: Sequence[int] | None = None) -> EncoderT:
+        """A fresh absolute-time frame encoder for one run at ``rate_hz`` (checked)."""
+        self.check_rate(rate_hz)
+        return self.frame_encoder(absolute_time=True)
 
     @staticmethod
     def canonical_name(text: str) -> str:  # pragma: no cover - overridden

@@ -74,7 +74,7 @@ def run_demo(
     """Generate, play to the emulator, compare, and write the report (see module docstring)."""
     from motioncue.kinematics import load_platform
     from motioncue.output import load_controller, open_transport
-    from motioncue.output.mbox import MboxEmulator
+    from motioncue.output.mbox import MboxController, MboxEmulator
     from motioncue.telemetry._recording import read_recording_csv
     from motioncue.trajectory import ActuatorLimits
     from motioncue.washout import load_cueing
@@ -88,8 +88,10 @@ def run_demo(
     lap = config_dir("recordings") / "lap.csv"
     platform = load_platform("stewart6-linear")
     controller = load_controller("mbox6")
+    if not isinstance(controller, MboxController):  # the bundled mbox6.toml says kind = mbox
+        raise TypeError(f"bundled mbox6 is a {type(controller).__name__}")
     cueing = load_cueing("racing-hexapod")
-    limits = ActuatorLimits.from_platform(platform, controller)
+    limits = ActuatorLimits.from_platform(platform, controller, rate_hz=rate_hz)
     log(f"demo: {lap.name} (a {rate_hz:g} Hz vehicle-model lap) -> stewart6-linear on mbox6")
     t0 = time.perf_counter()
     ride, report = generate_ride(

@@ -16,6 +16,7 @@ from typing import Any
 import numpy as np
 
 from .._errors import LimitError
+from ..trajectory._derive import pulse_rounding_limits
 from ._ridefile import Ride
 from ._verify import FrameCheck, check_frames
 
@@ -84,41 +85,6 @@ class GenerateReport:
     optimisation: Any
     frame_check: FrameCheck
     stage_s: dict[str, float] = field(default_factory=dict)
-
-
-def pulse_rounding_limits(limits: Any, platform: Any, dt_s: float) -> Any:
-    """Limits tightened so that rounding to whole pulses cannot push a frame past them.
-
-    Rounding moves each frame by at most half a pulse, so a speed by at most ``1 / dt`` and a
-    second difference by at most ``2 / dt^2`` pulses; the stroke ends of the pulse table are
-    already rounded inwards.
-    """
-    from motioncue.trajectory import ActuatorLimits
-
-    ppu = np.abs(np.asarray(platform.drives.pulses_per_unit, dtype=float))
-    v_margin = 1.0 / (ppu * dt_s)
-    a_margin = 2.0 / (ppu * dt_s * dt_s)
-    half = 0.5 / ppu
-    if np.any(limits.v_max <= 2 * v_margin) or np.any(limits.a_max <= 2 * a_margin):
-        raise LimitError(
-            f"frame period {dt_s * 1e3:.3f} ms is too short for the pulse resolution: rounding "
-            "alone would use more than half of the speed or acceleration limit"
-        )
-    j_max = None
-    if limits.j_max is not None:
-        j_max = limits.j_max - 4.0 / (ppu * dt_s**3)
-        if np.any(j_max <= 0):
-            raise LimitError("jerk limit is below the pulse rounding at this frame rate")
-    return ActuatorLimits(
-        limits.q_min + half,
-        limits.q_max - half,
-        limits.v_max - v_margin,
-        limits.a_max - a_margin,
-        j_max,
-        limits.names,
-        limits.kinds,
-        limits.sources,
-    )
 
 
 def _finish(
@@ -190,9 +156,10 @@ def generate_ride(
         stage_s[name] = now - clock
         clock = now
 
+    controller.check_rate(rate_hz)  # before any work: a rate the controller's clock can carry
     dt = 1.0 / rate_hz
     if limits is None:
-        limits = ActuatorLimits.from_platform(platform, controller)
+        limits = ActuatorLimits.from_platform(platform, controller, rate_hz=rate_hz)
     table = limits.to_pulses_table(platform)
     tight = pulse_rounding_limits(limits, platform, dt)
 
@@ -309,9 +276,10 @@ def generate_keyframe_ride(
     """
     from motioncue.trajectory import ActuatorLimits, transition, transition_through
 
+    controller.check_rate(rate_hz)  # before any work: a rate the controller's clock can carry
     dt = 1.0 / rate_hz
     if limits is None:
-        limits = ActuatorLimits.from_platform(platform, controller)
+        limits = ActuatorLimits.from_platform(platform, controller, rate_hz=rate_hz)
     table = limits.to_pulses_table(platform)
     tight = pulse_rounding_limits(limits, platform, dt)
     poses = np.asarray(keyframes.poses, dtype=float)

@@ -25,12 +25,11 @@ __all__ = ["OutputStage", "PlayReport", "make_frame_encoder", "play_ride", "rece
 
 
 def make_frame_encoder(controller: Any, rate_hz: float, start_pulses: Any = None) -> Any:
-    """A fresh frame encoder for any controller kind (absolute-time frames where they exist)."""
-    if controller.kind == "easysmc":
-        return controller.frame_encoder(
-            rate_hz, None if start_pulses is None else [int(p) for p in start_pulses]
-        )
-    return controller.frame_encoder(absolute_time=True)
+    """A fresh frame encoder for one run at ``rate_hz`` (absolute-time frames where they
+    exist); the controller refuses a rate its clock cannot carry."""
+    return controller.run_encoder(
+        rate_hz, None if start_pulses is None else [int(p) for p in start_pulses]
+    )
 
 
 @dataclass

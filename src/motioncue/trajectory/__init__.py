@@ -8,7 +8,8 @@ speed ``(q[k]-q[k-1])/dt``, acceleration ``(q[k]-2q[k-1]+q[k-2])/dt**2``, jerk
 Contents
 --------
 - :class:`ActuatorLimits` (``from_platform(platform, controller, ...)``, ``to_pulses_table``,
-  ``to_json``): stroke, speed, acceleration, optional jerk per actuator, in SI.
+  ``to_json``): stroke, speed, acceleration, optional jerk per actuator, in SI;
+  :func:`pulse_rounding_limits` tightens them by the rounding to whole pulses.
 - :class:`RealtimeLimiter` / :class:`LimiterState`: causal, one frame at a time
   (``state = rt.initial_state(q0); q = rt.step(state, target)``; ``rt.run`` for a stream).
 - :func:`limit_ride` -> :class:`OptimisedRide`: offline casadi optimisation of a whole ride
@@ -19,6 +20,7 @@ Contents
   :func:`resume_path`, :func:`brake_to_rest` built on them and on the limiter.
 """
 
+from ._derive import limits_from_platform, pulse_rounding_limits
 from ._jerk import JerkLimiter, JerkLimiterState
 from ._limits import ActuatorLimits, LimitCheck, check_trajectory, finite_differences
 from ._offline import OptimisedRide, limit_ride
@@ -53,8 +55,10 @@ __all__ = [
     "finite_differences",
     "limit_pose",
     "limit_ride",
+    "limits_from_platform",
     "park_path",
     "plot_ride",
+    "pulse_rounding_limits",
     "resume_path",
     "transition",
     "transition_q",

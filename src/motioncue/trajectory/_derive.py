@@ -1,45 +1,31 @@
 """Effective actuator limits from platform + drive + controller parameters (+ overrides).
 
-Rules, each recorded in :attr:`ActuatorLimits.sources`:
+The controller is used only through its interface (:class:`motioncue.output.Controller`):
+``drive_expectations()``, ``pulse_limits(rate_hz)`` and ``catch_up_factor``. No controller
+kind is named here. Rules, each recorded in :attr:`ActuatorLimits.sources`:
+
+Agreement
+    The controller's pulses per motor turn and screw lead (linear actuators) must equal the
+    platform's drive, otherwise the positions sent would be other lengths than planned: a
+    :class:`~motioncue.ConfigError` names both values.
 
 Stroke
     The platform's usable stroke ``[q_min, q_max]`` (its config already keeps ``margin_mm``
     from each end stop), shrunk by ``stroke_margin`` (SI, optional extra margin), and
-    intersected with the controller's own stroke where it defines one:
+    intersected with the controller's stroke in pulses where its parameters set one.
 
-    * SC-MBOX: ``Fn0C0`` is the stroke in 0.1 mm from the homed origin (pulse 0) and
-      ``Fn0C1`` the pulses per mm; allowed pulses ``[0, Fn0C0/10 * Fn0C1]`` (Fn0C0 = 0: no
-      limit). ``Fn0C1`` must agree with the platform's drive (pulses per mm), otherwise the
-      positions sent would be wrong and a :class:`~motioncue.ConfigError` is raised.
-    * IMAX: the manual defines no stroke parameter (PA42 is called "maximum stroke" in 5.7
-      but "axis-1 lift" in the parameter table), so none is taken from it.
-    * EasySmc 2300: the per-axis soft limits (commands 21..23/27..29, AF), in pulses.
+Speed, acceleration (``v_max``, ``a_max``)
+    The smallest of: the override; the platform's own ``[limits]``; the controller's
+    pulse limits converted through the drive (``pulses / |pulses_per_unit|``).
 
-Speed (``v_max``)
-    The smallest of: the override ``v_max``; IMAX ``PA07`` (global, rpm), ``PA8x`` (per axis,
-    rpm, 0 = none), ``PAax x PAbx`` (per axis; 5.10: their product is the axis' maximum
-    speed in rpm); MBOX ``max_motor_speed_rpm`` when the controller description has it;
-    EasySmc: the ``A3_feed_hz`` / ``A6_feed_hz`` cap (pulses/s; a necessary bound only, as
-    each frame's move also ramps at the controller's accelerations from its start frequency).
-    rpm become SI through the platform's drive: ``rpm / 60 * units_per_rev`` (the screw lead
-    for a cylinder, ``2 pi / gear_ratio`` for a crank). IMAX ``PA41`` (lead, 0.1 mm) must
-    agree with the platform's lead for linear actuators.
-
-Acceleration (``a_max``)
-    The smallest of: the override ``a_max``; IMAX ``PAbx`` read as the speed change in rpm
-    per control period (5.10: the speed ramps up in ``PAax`` steps of ``PAbx`` rpm); the
-    manual does not state the control period, taken as ``IMAX_RAMP_PERIOD_S`` = 1 ms (an
-    assumption, stated in ``sources``). With the manual's example (PAa0 = 2, PAb0 = 1500) and
-    a 5 mm lead that is 125 m/s^2: the controller's ramp is no practical limit and a rider
-    limit should be given as an override.
+Catch-up
+    A controller that may play frames ``c = catch_up_factor`` times faster than their time
+    stamps (MBOX Fn012 = 1200: ``c = 1.2``) moves the motors ``c`` times as fast as the frames
+    say, and accelerates ``c**2`` as hard. The limits are planned on the host's clock, so every
+    speed limit is divided by ``c`` and every acceleration (jerk) limit by ``c**2`` (``c**3``).
 
 Jerk (``j_max``)
     Only from the override or the platform (no controller parameter defines it).
-
-Platform
-    A platform description that carries ``v_max`` / ``a_max`` / ``j_max`` (SI, per actuator;
-    the platform config's optional ``[limits]`` table) takes part in the minimum like any
-    other source.
 
 A quantity with no source raises :class:`~motioncue.ConfigError` naming what to give.
 """
@@ -51,12 +37,10 @@ from typing import Any
 
 import numpy as np
 
-from .._errors import ConfigError
+from .._errors import ConfigError, LimitError
 from ._limits import ActuatorLimits
 
-__all__ = ["IMAX_RAMP_PERIOD_S", "limits_from_platform"]
-
-IMAX_RAMP_PERIOD_S = 1e-3
+__all__ = ["limits_from_platform", "pulse_rounding_limits"]
 
 
 def _per_axis(name: str, value: float | Sequence[float] | None, n: int) -> np.ndarray | None:
@@ -70,13 +54,6 @@ def _per_axis(name: str, value: float | Sequence[float] | None, n: int) -> np.nd
     return arr
 
 
-def _param(params: Any, name: str) -> int | None:
-    try:
-        return int(params[name]) if name in params else None
-    except (TypeError, KeyError):
-        return None
-
-
 def limits_from_platform(
     platform: Any,
     controller: Any = None,
@@ -85,8 +62,14 @@ def limits_from_platform(
     v_max: float | Sequence[float] | None = None,
     a_max: float | Sequence[float] | None = None,
     j_max: float | Sequence[float] | None = None,
+    rate_hz: float | None = None,
 ) -> ActuatorLimits:
-    """See the module docstring for the rules. Overrides are SI (m or rad based)."""
+    """See the module docstring for the rules. Overrides are SI (m or rad based).
+
+    ``rate_hz``: the frame rate, for controllers whose limits depend on it (an EasySmc frame
+    is a move that must ramp up and down within one period); None gives the limits that hold
+    at any rate.
+    """
     n = int(platform.n_actuators)
     kinds = tuple(platform.actuator_kinds)
     q_min = np.array(platform.q_min, dtype=float)
@@ -100,102 +83,41 @@ def limits_from_platform(
         sources["stroke"] += f" minus extra margin {margin.tolist()}"
 
     drives = platform.drives
-    units_per_rev = np.abs(np.asarray(drives.units_per_rev, dtype=float))
+    ppu = np.abs(np.asarray(drives.pulses_per_unit, dtype=float))
     v_cands: list[tuple[np.ndarray, str]] = []
     a_cands: list[tuple[np.ndarray, str]] = []
+    catch_up = 1.0
 
     if controller is not None:
-        kind = getattr(controller, "kind", None)
-        params = getattr(controller, "parameters", {}) or {}
-        n_axes = int(getattr(controller, "n_axes", n))
+        who = f"controller {getattr(controller, 'name', '?')!r}"
+        n_axes = int(controller.n_axes)
         if n_axes != n:
             raise ConfigError(
-                f"controller {getattr(controller, 'name', kind)!r} drives {n_axes} axes; "
-                f"platform {getattr(platform, 'name', '?')!r} has {n} actuators"
+                f"{who} drives {n_axes} axes; platform {getattr(platform, 'name', '?')!r} has "
+                f"{n} actuators"
             )
-        if kind == "imax":
-            lead = _param(params, "PA41")
-            for i in range(n):
-                if kinds[i] == "linear" and lead:
-                    ours = units_per_rev[i] * 1e4  # 0.1 mm
-                    if abs(ours - lead) > 1e-6 * max(lead, 1):
-                        raise ConfigError(
-                            f"IMAX PA41 = {lead} (0.1 mm) disagrees with the platform's lead "
-                            f"{units_per_rev[i] * 1e3:g} mm on actuator {i + 1}"
-                        )
-            rpm = np.full(n, np.inf)
-            acc_rpm_s = np.full(n, np.inf)
-            pa07 = _param(params, "PA07")
-            if pa07:
-                rpm = np.minimum(rpm, pa07)
-            for i in range(min(n, 6)):
-                p8 = _param(params, f"PA8{i:x}")
-                if p8:
-                    rpm[i] = min(rpm[i], p8)
-                fa, fb = _param(params, f"PAa{i:x}"), _param(params, f"PAb{i:x}")
-                if fa and fb:
-                    rpm[i] = min(rpm[i], fa * fb)
-                    acc_rpm_s[i] = fb / IMAX_RAMP_PERIOD_S
-            if np.all(np.isfinite(rpm)):
-                v_cands.append((rpm / 60.0 * units_per_rev, "IMAX min(PA07, PA8x, PAax*PAbx) rpm"))
-            if np.all(np.isfinite(acc_rpm_s)):
-                a_cands.append(
-                    (
-                        acc_rpm_s / 60.0 * units_per_rev,
-                        f"IMAX PAbx rpm per {IMAX_RAMP_PERIOD_S * 1e3:g} ms ramp step (assumed)",
-                    )
-                )
-        elif kind == "mbox":
-            c0 = _param(params, "Fn0C0")
-            c1 = _param(params, "Fn0C1")
-            c1 = 2000 if c1 is None else c1  # factory default
-            ppu = np.abs(np.asarray(drives.pulses_per_unit, dtype=float))
-            for i in range(n):
-                if kinds[i] == "linear" and abs(ppu[i] / 1000.0 - c1) > 1e-6 * c1:
-                    raise ConfigError(
-                        f"MBOX Fn0C1 = {c1} pulses/mm disagrees with the platform's drive "
-                        f"({ppu[i] / 1000.0:g} pulses/mm) on actuator {i + 1}"
-                    )
-            if c0:
-                pulses = np.zeros((2, n), dtype=np.int64)
-                pulses[1] = round(c0 / 10.0 * c1)
-                ends = np.asarray(drives.from_pulses(pulses), dtype=float)
-                lo, hi = np.minimum(ends[0], ends[1]), np.maximum(ends[0], ends[1])
-                q_min, q_max = np.maximum(q_min, lo), np.minimum(q_max, hi)
-                sources["stroke"] += f" within MBOX Fn0C0 = {c0} (0.1 mm), Fn0C1 = {c1}"
-            rpm_m = getattr(controller, "max_motor_speed_rpm", None)
-            if rpm_m:
-                v_cands.append(
-                    (np.full(n, float(rpm_m)) / 60.0 * units_per_rev, "MBOX max_motor_speed_rpm")
-                )
-        elif kind == "easysmc":
-            ppu = np.abs(np.asarray(drives.pulses_per_unit, dtype=float))
-            soft = getattr(controller, "soft_limits", None)
-            if callable(soft):
-                pulses = np.array(soft(), dtype=np.int64).T  # (2, n): negative, positive
-                ends = np.asarray(drives.from_pulses(pulses), dtype=float)
-                lo, hi = np.minimum(ends[0], ends[1]), np.maximum(ends[0], ends[1])
-                q_min, q_max = np.maximum(q_min, lo), np.minimum(q_max, hi)
-                sources["stroke"] += " within EasySmc soft limits (21..29, AF)"
-            units = getattr(controller, "units", ())
-            caps = [
-                float(params[f"{'A3' if u.axes == 'XYZ' else 'A6'}_feed_hz"])
-                for u in units
-                for _ in u.axes
-                if f"{'A3' if u.axes == 'XYZ' else 'A6'}_feed_hz" in params
-            ]
-            if len(caps) == n:
-                v_cands.append(
-                    (
-                        np.asarray(caps) / ppu,
-                        "EasySmc A3/A6 feed cap, pulses/s (necessary only: each frame's move "
-                        "also ramps at the A3/A6 accelerations from the start frequency)",
-                    )
-                )
-        elif kind is not None:
-            raise ConfigError(
-                f"controller kind {kind!r} is unknown; allowed: imax | mbox | easysmc"
+        _check_drives(platform, controller.drive_expectations(), who)
+        catch_up = float(controller.catch_up_factor)
+        if not (np.isfinite(catch_up) and catch_up >= 1.0):
+            raise ConfigError(f"{who}: catch_up_factor = {catch_up!r}; allowed: >= 1")
+        pl = controller.pulse_limits(rate_hz)
+        if pl.has_stroke:
+            pulses = np.stack([pl.stroke_lo, pl.stroke_hi])
+            finite = np.isfinite(pulses)
+            ends = np.asarray(
+                drives.from_pulses(np.where(finite, pulses, 0.0).round().astype(np.int64)),
+                dtype=float,
             )
+            lo_si, hi_si = np.minimum(ends[0], ends[1]), np.maximum(ends[0], ends[1])
+            # an axis without a controller stroke keeps the platform's
+            has = finite[0] & finite[1]
+            q_min = np.where(has, np.maximum(q_min, lo_si), q_min)
+            q_max = np.where(has, np.minimum(q_max, hi_si), q_max)
+            sources["stroke"] += f" within {pl.sources.get('stroke', who + ' stroke')}"
+        if pl.has_speed:
+            v_cands.append((pl.max_speed_pulses_s / ppu, pl.sources.get("v_max", who)))
+        if pl.has_accel:
+            a_cands.append((pl.max_accel_pulses_s2 / ppu, pl.sources.get("a_max", who)))
 
     # a platform description may carry its own actuator limits (SI arrays v_max / a_max /
     # j_max), e.g. the servo's rated speed; they take part like any other source
@@ -217,8 +139,8 @@ def limits_from_platform(
         )
     if not a_cands:
         raise ConfigError(
-            "no maximum acceleration known: give a_max (--max-accel; m/s^2 or rad/s^2) "
-            "or an IMAX controller"
+            "no maximum acceleration known: give a_max (--max-accel; m/s^2 or rad/s^2), a "
+            "[limits] table in the platform config, or a controller that sets one"
         )
     v = np.min(np.stack([c for c, _ in v_cands]), axis=0)
     a = np.min(np.stack([c for c, _ in a_cands]), axis=0)
@@ -237,4 +159,74 @@ def limits_from_platform(
     if j_cands:
         j = np.min(np.stack([c for c, _ in j_cands]), axis=0)
         sources["j_max"] = "min of: " + "; ".join(s for _, s in j_cands)
+    if catch_up != 1.0:
+        v, a = v / catch_up, a / catch_up**2
+        note = (
+            f"; divided by the controller's catch-up factor {catch_up:g} (speed), "
+            f"{catch_up:g}^2 (acceleration): it may play frames that much faster than stamped"
+        )
+        sources["v_max"] += note
+        sources["a_max"] += note
+        if j is not None:
+            j = j / catch_up**3
+            sources["j_max"] += f"; divided by {catch_up:g}^3 (catch-up)"
+    sources["catch_up"] = f"{catch_up:g}"
     return ActuatorLimits(q_min, q_max, v, a, j, tuple(platform.actuator_names), kinds, sources)
+
+
+def _check_drives(platform: Any, expect: Any, who: str) -> None:
+    """Refuse a platform drive that disagrees with what the controller's parameters say."""
+    drives = platform.drives
+    kinds = tuple(platform.actuator_kinds)
+    ppr = np.asarray(drives.pulses_per_rev, dtype=float).reshape(-1)
+    lead = np.abs(np.asarray(drives.units_per_rev, dtype=float).reshape(-1))
+    pname = getattr(platform, "name", "?")
+    if expect.pulses_per_rev is not None:
+        for i, value in enumerate(ppr):
+            if abs(value - expect.pulses_per_rev) > 1e-9 * max(value, 1.0):
+                raise ConfigError(
+                    f"{who}: {expect.pulses_per_rev:g} pulses per motor turn "
+                    f"({expect.pulses_per_rev_source}) disagrees with platform {pname!r}'s "
+                    f"drive on actuator {i + 1}: {value:g} pulses per turn; the positions sent "
+                    "would be wrong. Make them agree"
+                )
+    if expect.lead_m is not None:
+        for i, kind in enumerate(kinds):
+            if kind == "linear" and abs(lead[i] - expect.lead_m) > 1e-9 * expect.lead_m:
+                raise ConfigError(
+                    f"{who}: lead {expect.lead_m * 1e3:g} mm ({expect.lead_source}) disagrees "
+                    f"with platform {pname!r}'s lead {lead[i] * 1e3:g} mm on actuator {i + 1}"
+                )
+
+
+def pulse_rounding_limits(limits: ActuatorLimits, platform: Any, dt_s: float) -> ActuatorLimits:
+    """Limits tightened so that rounding to whole pulses cannot push a frame past them.
+
+    Rounding moves each frame by at most half a pulse, so a speed by at most ``1 / dt`` and a
+    second difference by at most ``2 / dt^2`` pulses; the stroke ends of the pulse table are
+    already rounded inwards.
+    """
+    ppu = np.abs(np.asarray(platform.drives.pulses_per_unit, dtype=float))
+    v_margin = 1.0 / (ppu * dt_s)
+    a_margin = 2.0 / (ppu * dt_s * dt_s)
+    half = 0.5 / ppu
+    if np.any(limits.v_max <= 2 * v_margin) or np.any(limits.a_max <= 2 * a_margin):
+        raise LimitError(
+            f"frame period {dt_s * 1e3:.3f} ms is too short for the pulse resolution: rounding "
+            "alone would use more than half of the speed or acceleration limit"
+        )
+    j_max = None
+    if limits.j_max is not None:
+        j_max = limits.j_max - 4.0 / (ppu * dt_s**3)
+        if np.any(j_max <= 0):
+            raise LimitError("jerk limit is below the pulse rounding at this frame rate")
+    return ActuatorLimits(
+        limits.q_min + half,
+        limits.q_max - half,
+        limits.v_max - v_margin,
+        limits.a_max - a_margin,
+        j_max,
+        limits.names,
+        limits.kinds,
+        limits.sources,
+    )

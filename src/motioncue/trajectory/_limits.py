@@ -153,8 +153,10 @@ class ActuatorLimits:
         v_max: float | Sequence[float] | None = None,
         a_max: float | Sequence[float] | None = None,
         j_max: float | Sequence[float] | None = None,
+        rate_hz: float | None = None,
     ) -> ActuatorLimits:
-        """Effective limits of a platform driven by a controller.
+        """Effective limits of a platform driven by a controller (at frame rate ``rate_hz``
+        where the controller's limits depend on it).
 
         See :func:`motioncue.trajectory._derive.limits_from_platform` for the rules.
         """
@@ -167,6 +169,7 @@ class ActuatorLimits:
             v_max=v_max,
             a_max=a_max,
             j_max=j_max,
+            rate_hz=rate_hz,
         )
 
     # ------------------------------------------------------------------ reporting

@@ -15,6 +15,7 @@ from types import MappingProxyType
 
 from ..._config import ConfigReader
 from ..._errors import ConfigError, LimitError, ProtocolError
+from .._controller_api import DriveExpectations, PulseLimits
 from .._transport import parse_target
 from ._profile import feed_for_duration, move_duration_s
 from ._protocol import (
@@ -267,6 +268,69 @@ class EasySmcController:
     def max_frame_rate_hz(self) -> float:
         """Highest frame rate the link carries (see :class:`LinkBudget`)."""
         return self.link_budget().max_frame_rate_hz
+
+    @property
+    def buffer_frames(self) -> int:
+        """Frames the 63-command buffer holds (a frame is 1 + len(move codes) commands)."""
+        return 63 // (1 + max(len(u.move_codes) for u in self.units))
+
+    @property
+    def time_resolution_s(self) -> None:
+        """Frames carry no time: each is a move whose feed makes it last one period."""
+        return None
+
+    @property
+    def catch_up_factor(self) -> float:
+        """Moves run at the feed the host sets: never faster than planned."""
+        return 1.0
+
+    @property
+    def dout_max(self) -> int:
+        """16 output bits per unit (X0-1 .. U0-4)."""
+        return (1 << (16 * len(self.units))) - 1
+
+    @property
+    def dac_max(self) -> tuple[int, int]:
+        """No analogue outputs."""
+        return (0, 0)
+
+    def check_rate(self, rate_hz: float) -> None:
+        """Refuse a frame rate the link cannot carry (:class:`LinkBudget`)."""
+        self.link_budget().check(rate_hz)
+
+    def run_encoder(
+        self, rate_hz: float, start_pulses: Sequence[int] | None = None
+    ) -> EasySmcFrameEncoder:
+        """A fresh encoder for frames at ``rate_hz`` from ``start_pulses`` (checked)."""
+        self.check_rate(rate_hz)
+        return self.frame_encoder(rate_hz, None if start_pulses is None else list(start_pulses))
+
+    def pulse_limits(self, rate_hz: float | None = None) -> PulseLimits:
+        """Stroke: the soft limits (21..29, AF). Speed: the A3 / A6 feed (pulses/s), a
+        necessary bound only: each frame's move also ramps at the A3/A6 accelerations from
+        the start frequency."""
+        soft = self.soft_limits()
+        caps = [
+            float(self.parameters[f"{'A3' if u.axes == 'XYZ' else 'A6'}_feed_hz"])
+            for u in self.units
+            for _ in u.axes
+        ]
+        return PulseLimits(
+            self.n_axes,
+            [lo for lo, _ in soft],
+            [hi for _, hi in soft],
+            caps,
+            None,
+            {
+                "stroke": "EasySmc soft limits (21..29, AF)",
+                "v_max": "EasySmc A3/A6 feed cap, pulses/s (necessary only: each frame's move "
+                "also ramps at the A3/A6 accelerations from the start frequency)",
+            },
+        )
+
+    def drive_expectations(self) -> DriveExpectations:
+        """The EasySmc counts pulses only: nothing to compare with the drives."""
+        return DriveExpectations()
 
     def soft_limits(self) -> tuple[tuple[int, int], ...]:
         """Per-axis ``(negative, positive)`` soft limits in pulses, in axis order."""

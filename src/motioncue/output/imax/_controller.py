@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import math
 import struct
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
@@ -10,7 +11,8 @@ from types import MappingProxyType
 from typing import Any, ClassVar
 
 from ..._config import ConfigReader
-from ..._errors import ConfigError, ProtocolError
+from ..._errors import ConfigError, LimitError, ProtocolError
+from .._controller_api import DriveExpectations, PulseLimits
 from .._transport import parse_target
 from .._udp_common import FrameClock, check_int32
 from .._udp_controller import (
@@ -31,7 +33,11 @@ from ._messages import (
 )
 from ._params import PA_SPEC, pa_name
 
-__all__ = ["ImaxController", "ImaxFrameEncoder", "controller_from_config"]
+__all__ = ["IMAX_RAMP_PERIOD_S", "ImaxController", "ImaxFrameEncoder", "controller_from_config"]
+
+IMAX_RAMP_PERIOD_S = 1e-3
+"""Control period of the IMAX speed ramp (5.10: the speed rises in PAax steps of PAbx rpm);
+the manual does not state it: 1 ms is an assumption, named in the limits' sources."""
 
 
 def validate_parameters(values: Mapping[str, Any], where: str) -> dict[str, int]:
@@ -57,6 +63,12 @@ class ImaxController(UdpController["ImaxFrameEncoder"]):
         the manual's PA42 is "axis 1 lift" in 2.3.1 but "maximum stroke" in 5.7.
     buffer_frames : int
         Depth of the emulated frame buffer (not stated in the manual).
+    counts_per_rev : int or None
+        What one motor turn is in frame positions. The manual gives positions no unit
+        ("the motor's absolute position"; vibration amplitudes are "pulses"), and two readings
+        fit it: quadrature encoder counts, 4 x the PA54 encoder lines (20000 for 5000 lines,
+        10000 for 2500), or the servo's command pulses at its electronic gear. None takes the
+        first reading; give the number your drives use (the bundled configs: 10000).
     """
 
     kind: ClassVar[str] = "imax"
@@ -76,6 +88,9 @@ class ImaxController(UdpController["ImaxFrameEncoder"]):
     parameters: Mapping[str, int]
     stroke_mm: float = 0.0
     buffer_frames: int = 256
+    counts_per_rev: int | None = None
+    LABEL: ClassVar[str] = "IMAX"
+    RATE_CAP_SOURCE: ClassVar[str] = "1000 / PA59, the minimum communication period"
 
     def __post_init__(self) -> None:
         if not 2 <= self.n_axes <= 12:
@@ -88,8 +103,14 @@ class ImaxController(UdpController["ImaxFrameEncoder"]):
                 f"{self.n_axes}; they must agree"
             )
         object.__setattr__(self, "parameters", MappingProxyType(params))
-        if not self.stroke_mm >= 0:
+        if not (math.isfinite(self.stroke_mm) and self.stroke_mm >= 0):
             raise ConfigError(f"IMAX {self.name}: stroke_mm = {self.stroke_mm}; allowed >= 0")
+        c = self.counts_per_rev
+        bad = isinstance(c, bool) or not isinstance(c, int) or not 1 <= c <= 1 << 24
+        if c is not None and bad:
+            raise ConfigError(
+                f"IMAX {self.name}: counts_per_rev = {c!r}; allowed: an integer in [1, 2**24]"
+            )
 
     @property
     def max_frame_rate_hz(self) -> float | None:
@@ -99,8 +120,16 @@ class ImaxController(UdpController["ImaxFrameEncoder"]):
 
     @property
     def pulses_per_rev(self) -> int:
-        """Quadrature counts per motor turn: 4 x 5000 lines (PA54 = 0) or 4 x 2500."""
+        """Frame position counts per motor turn: ``counts_per_rev`` when configured, else
+        4 x the PA54 encoder lines (5000 lines: 20000; 2500 lines: 10000)."""
+        if self.counts_per_rev is not None:
+            return self.counts_per_rev
         return 20000 if self.parameters["PA54"] == 0 else 10000
+
+    def _pulses_per_rev_source(self) -> str:
+        if self.counts_per_rev is not None:
+            return f"IMAX {self.name} counts_per_rev = {self.counts_per_rev}"
+        return f"IMAX PA54 = {self.parameters['PA54']}: 4 x encoder lines"
 
     @property
     def lead_mm(self) -> float:
@@ -123,6 +152,65 @@ class ImaxController(UdpController["ImaxFrameEncoder"]):
     @property
     def max_speed_pulses_s(self) -> tuple[float, ...]:
         return tuple(self.max_speed_rpm(i) / 60.0 * self.pulses_per_rev for i in range(self.n_axes))
+
+    @property
+    def catch_up_factor(self) -> float:
+        """1 with PA06 = 0 (every frame played as stamped). PA06 = 1 fast-forwards when more
+        than two frames are buffered, at a speed the manual does not state: refused."""
+        if self.parameters["PA06"]:
+            raise LimitError(
+                f"IMAX {self.name}: PA06 = 1 fast-forwards buffered frames at a speed the "
+                "manual does not state, so no speed limit can be guaranteed; set PA06 = 0"
+            )
+        return 1.0
+
+    @property
+    def dout_max(self) -> int:
+        """PortOut Y01..Y12."""
+        return 0xFFF
+
+    @property
+    def dac_max(self) -> tuple[int, int]:
+        """The IMAX has no analogue outputs."""
+        return (0, 0)
+
+    def pulse_limits(self, rate_hz: float | None = None) -> PulseLimits:
+        """Stroke from ``stroke_mm`` above the PA40 lift; speed min(PA07, PA8x, PAax x PAbx)
+        rpm; acceleration PAbx rpm per ramp step of :data:`IMAX_RAMP_PERIOD_S` (assumed)."""
+        n = self.n_axes
+        ppr = self.pulses_per_rev
+        p = self.parameters
+        rpm = [self.max_speed_rpm(i) for i in range(n)]
+        acc = [
+            p[f"PAb{i:x}"] / IMAX_RAMP_PERIOD_S / 60.0 * ppr
+            if i < 6 and p[f"PAa{i:x}"] and p[f"PAb{i:x}"]
+            else math.inf
+            for i in range(n)
+        ]
+        sources = {
+            "v_max": f"IMAX min(PA07, PA8x, PAax x PAbx) rpm x {self._pulses_per_rev_source()}",
+            "a_max": f"IMAX PAbx rpm per {IMAX_RAMP_PERIOD_S * 1e3:g} ms ramp step (assumed)",
+        }
+        stroke = self.stroke_pulses
+        if stroke is not None:
+            sources["stroke"] = f"IMAX stroke_mm = {self.stroke_mm:g} above the PA40 lift"
+        return PulseLimits(
+            n,
+            None if stroke is None else [stroke[0]] * n,
+            None if stroke is None else [stroke[1]] * n,
+            [r / 60.0 * ppr for r in rpm],
+            acc,
+            sources,
+        )
+
+    def drive_expectations(self) -> DriveExpectations:
+        """Counts per motor turn (see ``counts_per_rev``); PA41 the screw lead."""
+        return DriveExpectations(
+            pulses_per_rev=float(self.pulses_per_rev),
+            pulses_per_rev_source=self._pulses_per_rev_source(),
+            lead_m=self.lead_mm * 1e-3,
+            lead_source=f"IMAX PA41 = {self.parameters['PA41']} (0.1 mm)",
+        )
 
     @property
     def stroke_pulses(self) -> tuple[int, int] | None:
@@ -214,6 +302,7 @@ def controller_from_config(reader: ConfigReader, name: str) -> ImaxController:
     target = config_target(reader)
     stroke = reader.number("stroke_mm", 0.0, lo=0.0)
     buffer_frames = reader.integer("buffer_frames", 256, lo=1, hi=65535)
+    counts = reader.integer("counts_per_rev", 0, lo=0, hi=1 << 24)
     values = config_parameters(reader)
     values.setdefault("PA02", axes)
     return ImaxController(
@@ -223,4 +312,5 @@ def controller_from_config(reader: ConfigReader, name: str) -> ImaxController:
         parameters=validate_parameters(values, f"{reader.where} [parameters]"),
         stroke_mm=stroke,
         buffer_frames=buffer_frames,
+        counts_per_rev=counts or None,
     )

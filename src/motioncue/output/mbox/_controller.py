@@ -10,7 +10,8 @@ from types import MappingProxyType
 from typing import Any, ClassVar
 
 from ..._config import ConfigReader
-from ..._errors import ConfigError, ProtocolError
+from ..._errors import ConfigError, LimitError, ProtocolError
+from .._controller_api import DriveExpectations, PulseLimits
 from .._transport import parse_target
 from .._udp_common import FrameClock, check_int32
 from .._udp_controller import (
@@ -58,6 +59,7 @@ class MboxController(UdpController["MboxFrameEncoder"]):
     """
 
     kind: ClassVar[str] = "mbox"
+    LABEL: ClassVar[str] = "MBOX"
     # IP bytes and port of the box (receive port Fn025) and of the host (Fn034)
     CONTROLLER_PARAMS: ClassVar[tuple[str, str, str, str, str]] = (
         "Fn020",
@@ -102,7 +104,7 @@ class MboxController(UdpController["MboxFrameEncoder"]):
     # -- derived ------------------------------------------------------------------------
     @property
     def max_frame_rate_hz(self) -> float | None:
-        """The MBOX manual states no frame-rate limit."""
+        """The MBOX manual states no frame-rate limit (its 1 ms time stamps cap it at 1 kHz)."""
         return None
 
     @property
@@ -116,6 +118,11 @@ class MboxController(UdpController["MboxFrameEncoder"]):
         return self.parameters["Fn0C2"] / 10.0
 
     @property
+    def pulses_per_rev(self) -> float:
+        """Pulses per motor turn: Fn0C1 (pulses/mm) x Fn0C2 (lead)."""
+        return self.pulses_per_mm * self.lead_mm
+
+    @property
     def stroke_pulses(self) -> tuple[int, int] | None:
         """Allowed position range ``(0, Fn0C0 x Fn0C1)`` in pulses (0 is the homed origin);
         ``None`` when Fn0C0 = 0 (no stroke limit)."""
@@ -127,6 +134,61 @@ class MboxController(UdpController["MboxFrameEncoder"]):
         """Per-axis speed limit: rpm / 60 x lead x pulses per mm."""
         v = self.max_motor_speed_rpm / 60.0 * self.lead_mm * self.pulses_per_mm
         return (v,) * self.n_axes
+
+    @property
+    def catch_up_factor(self) -> float:
+        """Fn012 / 1000: the box plays frames this much faster than their time stamps (5.3.3:
+        1000 = as stamped; the factory 1200 drains its buffer, the motors moving 1.2x as fast
+        as the frames say). Fn012 < 1000 selects automatic speed control (Fn01D-01F) whose
+        fastest speed the manual does not state: refused, since no limit could be kept."""
+        fn012 = self.parameters["Fn012"]
+        if fn012 < 1000:
+            raise LimitError(
+                f"MBOX {self.name}: Fn012 = {fn012} selects automatic playback speed "
+                "(Fn01D..Fn01F), whose fastest speed the manual does not state, so no speed "
+                "limit can be guaranteed; set Fn012 >= 1000 (1000 = as stamped, factory 1200)"
+            )
+        return fn012 / 1000.0
+
+    @property
+    def dout_max(self) -> int:
+        """24 effect outputs: BaseDout (bits 0-11) and ExtDout (bits 12-23)."""
+        return 0xFFFFFF
+
+    @property
+    def dac_max(self) -> tuple[int, int]:
+        """DAC1 / DAC2 full scale: Fn078 / Fn079."""
+        return (self.parameters["Fn078"], self.parameters["Fn079"])
+
+    def pulse_limits(self, rate_hz: float | None = None) -> PulseLimits:
+        """Stroke from Fn0C0 x Fn0C1 (0 = none); speed from ``max_motor_speed_rpm`` (the
+        servo's, not an MBOX parameter). The MBOX sets no acceleration limit."""
+        n = self.n_axes
+        stroke = self.stroke_pulses
+        sources = {
+            "v_max": f"MBOX {self.name} max_motor_speed_rpm = {self.max_motor_speed_rpm:g} "
+            f"x Fn0C2 lead {self.lead_mm:g} mm x Fn0C1 {self.pulses_per_mm:g} pulses/mm",
+        }
+        if stroke is not None:
+            sources["stroke"] = f"MBOX Fn0C0 = {self.parameters['Fn0C0']} (0.1 mm) x Fn0C1"
+        return PulseLimits(
+            n,
+            None if stroke is None else [stroke[0]] * n,
+            None if stroke is None else [stroke[1]] * n,
+            self.max_speed_pulses_s,
+            None,
+            sources,
+        )
+
+    def drive_expectations(self) -> DriveExpectations:
+        """Fn0C1 x Fn0C2 pulses per motor turn; Fn0C2 the screw lead."""
+        return DriveExpectations(
+            pulses_per_rev=self.pulses_per_rev,
+            pulses_per_rev_source=f"MBOX Fn0C1 = {self.parameters['Fn0C1']} pulses/mm x "
+            f"Fn0C2 = {self.parameters['Fn0C2']} (0.1 mm)",
+            lead_m=self.lead_mm * 1e-3,
+            lead_source=f"MBOX Fn0C2 = {self.parameters['Fn0C2']} (0.1 mm)",
+        )
 
     def _encoder(self, clock: FrameClock, who_accept: int, who_reply: int) -> MboxFrameEncoder:
         return MboxFrameEncoder(self, clock, who_accept, who_reply)
