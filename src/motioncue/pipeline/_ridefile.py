@@ -44,6 +44,7 @@ from .._errors import ConfigError, MotioncueError
 __all__ = [
     "MAX_RIDE_BYTES",
     "MAX_RIDE_RATE_HZ",
+    "MIN_RIDE_RATE_HZ",
     "RIDE_FORMAT",
     "RIDE_FORMAT_VERSION",
     "Ride",
@@ -53,6 +54,8 @@ __all__ = [
 
 RIDE_FORMAT = "motioncue-ride"
 RIDE_FORMAT_VERSION = 1
+MIN_RIDE_RATE_HZ = 1.0
+"""Smallest ``rate_hz`` a ride may declare (the players' limiters take periods up to 1 s)."""
 MAX_RIDE_RATE_HZ = 10_000.0
 """Largest ``rate_hz`` a ride may declare (no controller takes frames faster than 1 kHz;
 each controller's own cap is checked by :func:`~motioncue.pipeline.check_ride_for`)."""
@@ -74,7 +77,7 @@ class Ride:
     platform, controller : str
         Names (or paths) of the platform and controller configs the frames were made for.
     rate_hz : float
-        Nominal frame rate, in ``(0, MAX_RIDE_RATE_HZ]``.
+        Nominal frame rate, in ``[MIN_RIDE_RATE_HZ, MAX_RIDE_RATE_HZ]``.
     actuator_names : tuple[str, ...]
         Controller axis order (at least one, non-empty strings).
     t_s : ndarray, shape (N,)
@@ -143,11 +146,11 @@ class Ride:
             isinstance(rate, bool)
             or not isinstance(rate, int | float | np.integer | np.floating)
             or not math.isfinite(float(rate))
-            or not 0 < float(rate) <= MAX_RIDE_RATE_HZ
+            or not MIN_RIDE_RATE_HZ <= float(rate) <= MAX_RIDE_RATE_HZ
         ):
             raise ConfigError(
-                f"ride rate_hz = {rate!r} is invalid; allowed: a number in (0, "
-                f"{MAX_RIDE_RATE_HZ:g}] Hz"
+                f"ride rate_hz = {rate!r} is invalid; allowed: a number in "
+                f"[{MIN_RIDE_RATE_HZ:g}, {MAX_RIDE_RATE_HZ:g}] Hz"
             )
         t = _numeric("t_s", self.t_s, "fiu")
         pulses = _numeric("pulses", self.pulses, "iu")
