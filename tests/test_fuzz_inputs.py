@@ -259,7 +259,7 @@ def _mutate_array(rng: random.Random, arr: np.ndarray, name: str) -> bytes:
         except (TypeError, ValueError, OverflowError):
             return _npy(np.array([str(x) for x in a.reshape(-1)], dtype=object))
     if op == 1:  # shape
-        shapes = [a.reshape(-1), a[:-1], a[1:], a[None], np.zeros((0,) + a.shape[1:], a.dtype),
+        shapes = [a.reshape(-1), a[:-1], a[1:], a[None], np.zeros((0, *a.shape[1:]), a.dtype),
                   np.array(a.reshape(-1)[0]), a.T, np.concatenate([a, a]), a[..., :1]]  # fmt: skip
         return _npy(np.ascontiguousarray(rng.choice(shapes)))
     if op == 2:  # extreme values
@@ -395,7 +395,10 @@ def _uncompressed(ride: Ride) -> bytes:
     return buf.getvalue()
 
 
-def _case(rng: random.Random, bases: list[tuple[Rig, Ride, bytes, bytes]]) -> tuple[Rig, bytes, str]:
+Base = tuple[Rig, Ride, bytes, bytes]
+
+
+def _case(rng: random.Random, bases: list[Base]) -> tuple[Rig, bytes, str]:
     rig, ride, compressed, stored = rng.choice(bases)
     r = rng.random()
     if r < 0.25:
@@ -413,8 +416,8 @@ def _play_flow(rig: Rig, data: bytes) -> tuple[str, MemoryTransport]:
     link = MemoryTransport()
     try:
         ride = load_ride(data, name="fuzz.ride")
-        check_ride_for(ride, rig.platform, rig.controller, rig.limits,
-                       platform_name=rig.platform_name, controller_name=rig.controller_name)  # fmt: skip
+        names = {"platform_name": rig.platform_name, "controller_name": rig.controller_name}
+        check_ride_for(ride, rig.platform, rig.controller, rig.limits, **names)
     except MotioncueError as exc:
         assert not link.sent
         return type(exc).__name__, link

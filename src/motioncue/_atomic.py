@@ -32,6 +32,11 @@ __all__ = [
     "partial_name_prefix",
 ]
 
+_UMASK = os.umask(0o022)
+os.umask(_UMASK)
+_FILE_MODE = 0o666 & ~_UMASK
+"""Mode of published files: what ``open(path, "w")`` would give (``mkstemp`` makes 0600)."""
+
 PARTIAL_MARK = ".partial-"
 """Every temporary output file name contains this (``.r.ride.partial-1a2b3c4d``)."""
 
@@ -84,6 +89,7 @@ class AtomicFile:
                     prefix=partial_name_prefix(self.path), suffix="", dir=folder
                 )
                 self.tmp_path = Path(tmp)
+                os.fchmod(fd, _FILE_MODE)
                 self._fh = os.fdopen(fd, "wb")
         except OSError as exc:
             raise TransportError(f"cannot write {what} {str(self.path)!r}: {exc}") from exc
@@ -114,9 +120,7 @@ class AtomicFile:
         except BaseException as exc:
             self._remove_tmp()
             if isinstance(exc, OSError | ValueError):
-                raise TransportError(
-                    f"cannot write {self.what} {str(self.path)!r}: {exc}"
-                ) from exc
+                raise TransportError(f"cannot write {self.what} {str(self.path)!r}: {exc}") from exc
             raise
         return self.path
 
@@ -189,7 +193,10 @@ class Staging:
             fd, tmp = tempfile.mkstemp(prefix=partial_name_prefix(final), dir=_folder(final))
         except OSError as exc:
             raise TransportError(f"cannot write {str(final)!r}: {exc}") from exc
-        os.close(fd)
+        try:
+            os.fchmod(fd, _FILE_MODE)
+        finally:
+            os.close(fd)
         self._files.append((Path(tmp), final))
         return Path(tmp)
 

@@ -138,7 +138,9 @@ def _generate(args: argparse.Namespace) -> int:
             from ..output import open_transport
 
             with open_transport(f"pcap:{staged.file(args.pcap)}") as link:
-                play_ride(ride, platform, controller, limits, link, paced=False)
+                rep = play_ride(ride, platform, controller, limits, link, paced=False)
+                if rep.interrupted:  # Ctrl-C: the player parked, but the pcap is not the ride
+                    raise KeyboardInterrupt
         if args.report:
             folder = staged.directory(args.report)
             if report is None:

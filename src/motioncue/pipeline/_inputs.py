@@ -136,7 +136,7 @@ def read_keyframes_csv(path: str | Path) -> Keyframes:
     t = np.asarray(times, dtype=float)
     given = t[np.isfinite(t)]
     if np.any(given < 0):
-        raise ConfigError(f"{path}: keyframe time {given[given < 0][0]!r} s is negative")
+        raise ConfigError(f"{path}: keyframe time {float(given[given < 0][0])!r} s is negative")
     if np.any(np.diff(given) <= 0):
         raise ConfigError(f"{path}: keyframe times must increase")
     out_bits = np.asarray(dout, dtype=float)
@@ -243,14 +243,14 @@ def check_recording(rec: Any, where: str, *, csv_times: bool = True) -> None:
             k = int(np.flatnonzero(dt <= 0)[0])
             what = "repeats" if dt[k] == 0 else "goes back to"
             raise ConfigError(
-                f"{where}: time {what} {t[k + 1]!r} s at sample {k + 1} after {t[k]!r} s at "
+                f"{where}: time {what} {float(t[k + 1])!r} s at sample {k + 1} after {float(t[k])!r} s at "
                 f"sample {k}; recording times must increase"
             )
         if np.any(dt > MAX_GAP_S):
             k = int(np.argmax(dt))
             raise ConfigError(
-                f"{where}: a gap of {dt[k]:.6g} s between samples {k} (t = {t[k]!r} s) and "
-                f"{k + 1} (t = {t[k + 1]!r} s); at most {MAX_GAP_S:g} s allowed (split the "
+                f"{where}: a gap of {dt[k]:.6g} s between samples {k} (t = {float(t[k])!r} s) and "
+                f"{k + 1} (t = {float(t[k + 1])!r} s); at most {MAX_GAP_S:g} s allowed (split the "
                 "recording)"
             )
 

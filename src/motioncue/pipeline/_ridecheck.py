@@ -221,11 +221,12 @@ def _worst(
         "speed": np.abs(v) / lim["v"],
         "acceleration": np.abs(a) / lim["a"],
     }
-    what, frame, axis = max(
-        ((q, *np.unravel_index(int(np.argmax(u)), u.shape)) for q, u in uses.items()),
-        key=lambda item: uses[item[0]][item[1], item[2]],
-    )
-    frame, axis = int(frame), int(axis)
+    best: tuple[float, str, int, int] = (-1.0, "stroke", 0, 0)
+    for quantity, u in uses.items():
+        k, i = np.unravel_index(int(np.argmax(u)), u.shape)
+        if float(u[k, i]) > best[0]:
+            best = (float(u[k, i]), quantity, int(k), int(i))
+    _, what, frame, axis = best
     use = float(uses[what][frame, axis])
     if what == "stroke":
         detail = (

@@ -165,7 +165,7 @@ class Ride:
             raise ConfigError("ride t_s must be finite and strictly increasing")
         if t[0] != 0.0 or t[-1] > MAX_RIDE_DURATION_S:
             raise ConfigError(
-                f"ride t_s runs from {t[0]!r} to {t[-1]!r} s; allowed: from 0 to at most "
+                f"ride t_s runs from {float(t[0])!r} to {float(t[-1])!r} s; allowed: from 0 to at most "
                 f"{MAX_RIDE_DURATION_S:.0f} s (the u32 ms frame clock)"
             )
         if pulses.shape != (n_frames, n_axes):
@@ -264,19 +264,19 @@ def _json_default(obj: Any) -> Any:
     raise TypeError(f"not JSON serialisable: {type(obj).__name__}")
 
 
-def _read_source(source: str | os.PathLike[str] | bytes | BinaryIO, name: str | None) -> tuple[
-    bytes, str
-]:
+def _read_source(
+    source: str | os.PathLike[str] | bytes | BinaryIO, name: str | None
+) -> tuple[bytes, str]:
     if isinstance(source, bytes | bytearray | memoryview):
         return bytes(source), name or "<ride bytes>"
     if hasattr(source, "read"):
         where = name or str(getattr(source, "name", "<ride stream>"))
         try:
-            data = source.read(MAX_RIDE_BYTES + 1)  # type: ignore[union-attr]
+            data = source.read(MAX_RIDE_BYTES + 1)
         except OSError as exc:
             raise ConfigError(f"{where}: cannot read: {exc}") from exc
     else:
-        path = Path(source)  # type: ignore[arg-type]
+        path = Path(source)
         where = name or str(path)
         try:
             with open(path, "rb") as fh:
@@ -433,9 +433,7 @@ def load_ride(
             platform=_header_value(header, "platform", where, str, _REQUIRED),
             controller=_header_value(header, "controller", where, str, _REQUIRED),
             rate_hz=_header_value(header, "rate_hz", where, int | float, _REQUIRED),
-            actuator_names=tuple(
-                _header_value(header, "actuator_names", where, list, _REQUIRED)
-            ),
+            actuator_names=tuple(_header_value(header, "actuator_names", where, list, _REQUIRED)),
             t_s=arrays["t_s"],
             pulses=arrays["pulses"],
             dout=arrays["dout"],
