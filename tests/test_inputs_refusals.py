@@ -251,7 +251,7 @@ def test_a_ride_under_another_name_with_the_same_limits_table_is_accepted() -> N
     ride = _ride(platform="configs/platforms/seat3.toml")
     check_ride_for(ride, p, c, lim, platform_name="seat3", controller_name="mbox3")
     other = _ride(platform="configs/platforms/seat3.toml", limits={})
-    with pytest.raises(ConfigError, match="made for platform 'configs/platforms/seat3.toml'"):
+    with pytest.raises(ConfigError, match=r"made for platform 'configs/platforms/seat3\.toml'"):
         check_ride_for(other, p, c, lim, platform_name="seat3", controller_name="mbox3")
 
 
@@ -393,8 +393,9 @@ def test_corrupt_zip_members_are_config_errors(
 
 def test_pickled_and_absurd_arrays_are_refused_before_allocation() -> None:
     ride = _ride()
-    base = {"header": np.frombuffer(json.dumps(ride.header()).encode(), dtype=np.uint8),
-            "t_s": ride.t_s, "pulses": ride.pulses, "dout": ride.dout, "dacs": ride.dacs}  # fmt: skip
+    header = np.frombuffer(json.dumps(ride.header()).encode(), dtype=np.uint8)
+    base = {"header": header, "t_s": ride.t_s, "pulses": ride.pulses, "dout": ride.dout,
+            "dacs": ride.dacs}  # fmt: skip
     buf = io.BytesIO()
     np.savez(buf, **{**base, "pulses": np.array([[1, None]], dtype=object)})
     with pytest.raises(ConfigError, match="dtype object"):

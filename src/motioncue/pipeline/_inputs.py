@@ -243,8 +243,8 @@ def check_recording(rec: Any, where: str, *, csv_times: bool = True) -> None:
             k = int(np.flatnonzero(dt <= 0)[0])
             what = "repeats" if dt[k] == 0 else "goes back to"
             raise ConfigError(
-                f"{where}: time {what} {float(t[k + 1])!r} s at sample {k + 1} after {float(t[k])!r} s at "
-                f"sample {k}; recording times must increase"
+                f"{where}: time {what} {float(t[k + 1])!r} s at sample {k + 1} after "
+                f"{float(t[k])!r} s at sample {k}; recording times must increase"
             )
         if np.any(dt > MAX_GAP_S):
             k = int(np.argmax(dt))

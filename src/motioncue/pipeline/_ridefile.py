@@ -165,8 +165,8 @@ class Ride:
             raise ConfigError("ride t_s must be finite and strictly increasing")
         if t[0] != 0.0 or t[-1] > MAX_RIDE_DURATION_S:
             raise ConfigError(
-                f"ride t_s runs from {float(t[0])!r} to {float(t[-1])!r} s; allowed: from 0 to at most "
-                f"{MAX_RIDE_DURATION_S:.0f} s (the u32 ms frame clock)"
+                f"ride t_s runs from {float(t[0])!r} to {float(t[-1])!r} s; allowed: from 0 to "
+                f"at most {MAX_RIDE_DURATION_S:.0f} s (the u32 ms frame clock)"
             )
         if pulses.shape != (n_frames, n_axes):
             raise ConfigError(f"ride pulses shape {pulses.shape} != ({n_frames}, {n_axes})")
