@@ -72,9 +72,13 @@ class _Bar:
 
 
 def _generate(args: argparse.Namespace) -> int:
+    """Make the ride in memory, check it as ``play`` would, then publish the ride, the pcap
+    and the report together: a refusal at any step leaves none of them."""
+    from .._atomic import Staging
     from ..kinematics import load_platform
     from ..output import load_controller
     from ..pipeline import (
+        check_ride_for,
         generate_keyframe_ride,
         generate_ride,
         load_generate_input,
@@ -82,6 +86,7 @@ def _generate(args: argparse.Namespace) -> int:
         save_ride,
         write_report,
     )
+    from ..pipeline._inputs import check_generate_size, held_warning
     from ..trajectory import ActuatorLimits
     from ..washout import load_cueing
 
@@ -93,8 +98,14 @@ def _generate(args: argparse.Namespace) -> int:
 
     args.rate = snap_rate_hz(args.rate, controller)
     controller.check_rate(args.rate)
+    if args.pcap and controller.kind == "easysmc":
+        raise ConfigError(
+            "--pcap is for the UDP controllers; for the EasySmc use "
+            "'motioncue play RIDE --target file:PATH' (raw serial bytes)"
+        )
     limits = ActuatorLimits.from_platform(platform, controller, rate_hz=args.rate)
     kind, data, counters = load_generate_input(args.input)
+    check_generate_size(kind, data, args.rate, args.input)
     if counters:
         skipped = {k: v for k, v in counters.items() if k != "ok" and v}
         print(
@@ -120,30 +131,35 @@ def _generate(args: argparse.Namespace) -> int:
             data, platform, controller, cueing, rate_hz=args.rate, limits=limits,
             source=Path(args.input).name, progress=bar, **names,
         )  # fmt: skip
-    save_ride(args.out, ride)
+        warning = held_warning(report.bad_samples, len(report.f_vehicle))
+        if warning:
+            print(warning, file=sys.stderr)
+    # the checks play will make: a ride that would be refused there is not published here
+    check_ride_for(ride, platform, controller, limits, **names)
+    with Staging() as staged:
+        save_ride(staged.file(args.out), ride)
+        if args.pcap:
+            from ..output import open_transport
+
+            with open_transport(f"pcap:{staged.file(args.pcap)}") as link:
+                rep = play_ride(ride, platform, controller, limits, link, paced=False)
+                if rep.interrupted:  # Ctrl-C: the player parked, but the pcap is not the ride
+                    raise KeyboardInterrupt
+        if args.report:
+            folder = staged.directory(args.report)
+            if report is None:
+                from ..pipeline import plot_actuators
+
+                plot_actuators(ride, folder / "actuators.png")
+            else:
+                write_report(folder, ride, report, platform, load_cueing(args.preset))
     print(
         f"ride: {args.out}: {ride.n_frames} frames, {ride.duration_s:.1f} s at {ride.rate_hz:g} "
         f"Hz; {ride.notes.get('frame_check', '')}",
     )
     if args.pcap:
-        if controller.kind == "easysmc":
-            raise ConfigError(
-                "--pcap is for the UDP controllers; for the EasySmc use "
-                "'motioncue play RIDE --target file:PATH' (raw serial bytes)"
-            )
-        from ..output import open_transport
-
-        with open_transport(f"pcap:{args.pcap}") as link:
-            play_ride(ride, platform, controller, limits, link, paced=False)
         print(f"pcap: {args.pcap}")
     if args.report:
-        if report is None:
-            from ..pipeline import plot_actuators
-
-            Path(args.report).mkdir(parents=True, exist_ok=True)
-            plot_actuators(ride, Path(args.report) / "actuators.png")
-        else:
-            write_report(args.report, ride, report, platform, load_cueing(args.preset))
         print(f"report: {args.report}/")
     return 0
 
@@ -151,14 +167,16 @@ def _generate(args: argparse.Namespace) -> int:
 def _play(args: argparse.Namespace) -> int:
     from ..kinematics import load_platform
     from ..output import load_controller, open_transport
-    from ..pipeline import load_ride, play_ride
+    from ..pipeline import check_ride_for, load_ride, play_ride
     from ..trajectory import ActuatorLimits
 
     if not (0 < args.speed <= 1000):
         raise ConfigError(f"--speed {args.speed!r} is invalid; allowed: (0, 1000]")
     ride = load_ride(args.ride)
-    platform = load_platform(args.platform or ride.platform)
-    controller = load_controller(args.controller or ride.controller)
+    platform_name = args.platform or ride.platform
+    controller_name = args.controller or ride.controller
+    platform = load_platform(platform_name)
+    controller = load_controller(controller_name)
     if controller.n_axes != platform.n_actuators:
         raise ConfigError(
             f"controller {controller.name} drives {controller.n_axes} axes; platform "
@@ -166,12 +184,11 @@ def _play(args: argparse.Namespace) -> int:
         )
     controller.check_rate(ride.rate_hz)
     limits = ActuatorLimits.from_platform(platform, controller, rate_hz=ride.rate_hz)
-    table = limits.to_pulses_table(platform)
-    if ride.limits.get("actuators") != table:
-        print(
-            "note: the ride was made with other limits; the current ones are enforced",
-            file=sys.stderr,
-        )
+    # nothing is sent unless the ride belongs to this rig and keeps its limits now
+    check_ride_for(
+        ride, platform, controller, limits,
+        platform_name=platform_name, controller_name=controller_name,
+    )  # fmt: skip
     target = args.target or controller.default_target
     paced = not target.startswith(("file:", "pcap:"))
     print(

@@ -110,8 +110,11 @@ def _per_actuator(
     integer: bool = False,
     lo: float = -math.inf,
     lo_open: bool = False,
+    hi: float = 1e12,
 ) -> np.ndarray:
-    """A number, or a list of ``n`` numbers, one per actuator (``default`` None: required)."""
+    """A number, or a list of ``n`` numbers, one per actuator (``default`` None: required),
+    each in ``[lo, hi]`` (``hi`` defaults to 1e12: no quantity of a motion platform in its
+    config units is larger, and larger ones overflow the pulse arithmetic)."""
     if not r.has(key) and default is None:
         raise ConfigError(f"{r.where}: missing key {key!r}")
     if r.has(key) and isinstance(r.raw(key), list):
@@ -122,10 +125,10 @@ def _per_actuator(
         vals = (r.number(key, default),) * n
     arr = np.array(vals, dtype=float)
     below = arr <= lo if lo_open else arr < lo
-    if np.any(below) or (integer and np.any(arr != np.round(arr))):
+    if np.any(below) or np.any(arr > hi) or (integer and np.any(arr != np.round(arr))):
         what = "integers" if integer else "numbers"
         sign = ">" if lo_open else ">="
-        raise r.error(key, r.raw(key), f"{what} {sign} {lo}, one or a list of {n}")
+        raise r.error(key, r.raw(key), f"{what} {sign} {lo} and <= {hi:g}, one or a list of {n}")
     return arr
 
 
@@ -155,7 +158,7 @@ def _pulses_per_rev(r: ConfigReader, n: int, travel_per_rev_mm: np.ndarray | Non
     if not r.has("pulses_per_rev"):
         alt = " or 'pulses_per_mm'" if travel_per_rev_mm is not None else ""
         raise ConfigError(f"{r.where}: missing key 'pulses_per_rev'{alt}")
-    return _per_actuator(r, "pulses_per_rev", n, None, integer=True, lo=1)
+    return _per_actuator(r, "pulses_per_rev", n, None, integer=True, lo=1, hi=_INT32_MAX)
 
 
 def _linear_stroke(cfg: ConfigReader, n: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -266,8 +269,8 @@ def platform_from_dict(data: dict, where: str = "<dict>", name: str = "platform"
             y = cfg.table("yaw")
             lo_deg = y.number("min_deg", lo=-360.0, hi=0.0, hi_open=True)
             hi_deg = y.number("max_deg", lo=0.0, hi=360.0, lo_open=True)
-            gear = y.number("gear_ratio", lo=0.0, lo_open=True)
-            ppr = y.integer("pulses_per_rev", lo=1)
+            gear = y.number("gear_ratio", lo=0.0, hi=1e12, lo_open=True)
+            ppr = y.integer("pulses_per_rev", lo=1, hi=_INT32_MAX)
             direction = y.integer("direction", 1)
             if direction not in (-1, 1):
                 raise y.error("direction", direction, "+1 or -1")
@@ -289,7 +292,31 @@ def platform_from_dict(data: dict, where: str = "<dict>", name: str = "platform"
             )
     platform = _actuator_limits(cfg, platform, kind)
     cfg.finish()
+    _check_pulse_range(platform, where)
     return platform
+
+
+_INT32_MAX = 2**31 - 1
+
+
+def _check_pulse_range(platform: Platform, where: str) -> None:
+    """Every stroke position must be a pulse count the controllers' frames carry (int32):
+    refuses absurd strokes, leads, gear ratios and pulse counts (``pulses_per_rev = 1e20``)
+    with the numbers, before they overflow anywhere downstream."""
+    drives = platform.drives
+    ppu = np.asarray(drives.pulses_per_unit, dtype=float)
+    with np.errstate(over="ignore", invalid="ignore"):
+        ends = np.stack([platform.q_min, platform.q_max]) - drives.q_home
+        pulses = ends * ppu
+    bad = ~np.isfinite(pulses) | (np.abs(pulses) > _INT32_MAX)
+    if np.any(bad):
+        k, i = (int(x) for x in np.argwhere(bad)[0])
+        raise ConfigError(
+            f"{where}: actuator {platform.actuator_names[i]!r}: its stroke end is "
+            f"{pulses[k, i]:.6g} pulses from the homed position (pulses per unit "
+            f"{ppu[i]:.6g}); allowed: within the int32 positions of the controllers' frames "
+            f"(|pulses| <= {_INT32_MAX}); check the stroke, lead / gear ratio and pulses"
+        )
 
 
 def _actuator_limits(cfg: ConfigReader, platform: Platform, kind: str) -> Platform:

@@ -5,18 +5,26 @@ checksum computed), UDP (checksum computed), in the classic libpcap format (micr
 time stamps, link type 1). Time stamps are ``epoch_s + t_s`` where ``t_s`` is the frame
 time given to :meth:`PcapTransport.send` (offline generation), or the wall clock when no
 time is given.
+
+Both write atomically (:mod:`motioncue._atomic`): the data goes to ``.NAME.partial-XXXX`` and
+is renamed to ``NAME`` by :meth:`close` after a normal end. Leaving the ``with`` block on an
+exception (or Ctrl-C), or calling :meth:`discard`, removes it: a refused or failed run leaves
+no file, and a killed one leaves only the obviously unfinished temporary name.
 """
 
 from __future__ import annotations
 
 import ipaddress
+import math
 import struct
 import time
 from collections.abc import Iterator
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any, BinaryIO
+from types import TracebackType
+from typing import Any
 
+from .._atomic import AtomicFile
 from .._errors import ConfigError, ProtocolError, TransportError
 from ._transport import Transport, TransportURL
 
@@ -73,28 +81,45 @@ def ethernet_ipv4_udp(
     return ETHERNET.pack(_mac_for(dip), SRC_MAC if sip != dip else _mac_for(sip), 0x0800) + ip + udp
 
 
-class FileTransport(Transport):
+class _AtomicFileTransport(Transport):
+    """A transport writing one file atomically: published by :meth:`close`, removed by
+    :meth:`discard` or by leaving the ``with`` block on an exception."""
+
+    _out: AtomicFile
+
+    def close(self) -> None:
+        """Publish the file under its name (nothing happens after :meth:`discard`)."""
+        self._out.commit()
+
+    def discard(self) -> None:
+        """Remove what was written; no file is left under the name."""
+        self._out.discard()
+
+    def __exit__(
+        self,
+        exc_type: type[BaseException] | None,
+        exc: BaseException | None,
+        tb: TracebackType | None,
+    ) -> None:
+        if exc_type is None:
+            self.close()
+        else:
+            self.discard()
+
+
+class FileTransport(_AtomicFileTransport):
     """Raw bytes, one message after the other, no framing (``file:PATH``)."""
 
     def __init__(self, path: str | Path) -> None:
         self.path = Path(path)
-        try:
-            self._fh: BinaryIO = open(self.path, "wb")
-        except OSError as exc:
-            raise TransportError(f"cannot write {self.path}: {exc}") from exc
+        self._out = AtomicFile(self.path, "file")
 
     @classmethod
     def from_url(cls, url: TransportURL, **options: Any) -> FileTransport:
         return cls(url.path, **options)
 
     def send(self, data: bytes, *, t_s: float | None = None) -> None:
-        try:
-            self._fh.write(data)
-        except (OSError, ValueError) as exc:
-            raise TransportError(f"cannot write {self.path}: {exc}") from exc
-
-    def close(self) -> None:
-        self._fh.close()
+        self._out.write(data)
 
 
 def _address(value: tuple[str, int] | str, what: str) -> tuple[str, int]:
@@ -113,7 +138,7 @@ def _address(value: tuple[str, int] | str, what: str) -> tuple[str, int]:
     return value
 
 
-class PcapTransport(Transport):
+class PcapTransport(_AtomicFileTransport):
     """Datagrams written as a libpcap capture (``pcap:PATH``).
 
     Parameters
@@ -139,11 +164,8 @@ class PcapTransport(Transport):
         self.dst = _address(dst, "pcap destination")
         self.epoch_s = time.time() if epoch_s is None else float(epoch_s)
         self._ident = 0
-        try:
-            self._fh: BinaryIO = open(self.path, "wb")
-            self._fh.write(PCAP_GLOBAL.pack(0xA1B2C3D4, 2, 4, 0, 0, 65535, LINKTYPE_ETHERNET))
-        except OSError as exc:
-            raise TransportError(f"cannot write {self.path}: {exc}") from exc
+        self._out = AtomicFile(self.path, "pcap")
+        self._out.write(PCAP_GLOBAL.pack(0xA1B2C3D4, 2, 4, 0, 0, 65535, LINKTYPE_ETHERNET))
 
     @classmethod
     def from_url(cls, url: TransportURL, **options: Any) -> PcapTransport:
@@ -159,17 +181,17 @@ class PcapTransport(Transport):
     ) -> None:
         """Append one packet, stamped ``epoch_s + t_s`` (or now)."""
         ts = time.time() if t_s is None else self.epoch_s + t_s
+        if not math.isfinite(ts) or ts < 0:
+            raise ProtocolError(f"pcap time stamp {ts!r} s is not a finite time after 1970")
         frame = ethernet_ipv4_udp(src or self.src, dst or self.dst, data, self._ident)
         self._ident = (self._ident + 1) & 0xFFFF
         sec = int(ts)
         usec = min(999_999, round((ts - sec) * 1e6))
         try:
-            self._fh.write(PCAP_RECORD.pack(sec, usec, len(frame), len(frame)) + frame)
-        except (OSError, ValueError) as exc:
-            raise TransportError(f"cannot write {self.path}: {exc}") from exc
-
-    def close(self) -> None:
-        self._fh.close()
+            record = PCAP_RECORD.pack(sec, usec, len(frame), len(frame))
+        except struct.error as exc:
+            raise ProtocolError(f"pcap time stamp {ts!r} s does not fit the format") from exc
+        self._out.write(record + frame)
 
 
 @dataclass(frozen=True)

@@ -5,6 +5,19 @@ Pose-keyframe CSV: a header row with ``x, y, z, roll, pitch, yaw`` (m, rad; or `
 and ``roll_deg ...`` columns in human units) and optionally ``t`` (s; an empty cell means the
 timing of that keyframe is free), ``dout`` (effect output bits, held from that keyframe on),
 ``dac1`` and ``dac2``.
+
+What ``generate`` refuses or warns about (nothing half-understood becomes a ride):
+
+- a recording with no samples (a header-only CSV), or with fewer than two valid samples
+  (all six motion columns finite): refused;
+- in a recording CSV, a time not after the previous one (duplicated or decreasing times),
+  or a gap over ``MAX_GAP_S``: refused, naming the samples;
+- an input that would make more than ``MAX_GENERATE_FRAMES`` frames at the chosen rate
+  (a recording's span, or the last keyframe time): refused with the numbers;
+- a recording of which more than ``HELD_WARNING_FRACTION`` of the samples were held by the
+  washout (non-finite, spikes): the ride is made, with a loud warning giving the fraction
+  (:func:`held_warning`);
+- keyframe times that are negative or not increasing: refused.
 """
 
 from __future__ import annotations
@@ -19,7 +32,24 @@ import numpy as np
 
 from .._errors import ConfigError
 
-__all__ = ["Keyframes", "load_generate_input", "read_keyframes_csv"]
+__all__ = [
+    "HELD_WARNING_FRACTION",
+    "MAX_GAP_S",
+    "MAX_GENERATE_FRAMES",
+    "Keyframes",
+    "check_generate_size",
+    "check_recording",
+    "held_warning",
+    "load_generate_input",
+    "read_keyframes_csv",
+]
+
+MAX_GAP_S = 60.0
+"""Largest time between two samples of a recording CSV (a longer gap is missing data)."""
+MAX_GENERATE_FRAMES = 2_000_000
+"""Most frames ``generate`` makes (about 5.5 h at 100 Hz)."""
+HELD_WARNING_FRACTION = 0.2
+"""Warn when more than this fraction of the input samples were held by the washout."""
 
 _POSE = ("x", "y", "z", "roll", "pitch", "yaw")
 _HUMAN = {"x_mm": 1e-3, "y_mm": 1e-3, "z_mm": 1e-3}
@@ -51,8 +81,15 @@ class Keyframes:
 def read_keyframes_csv(path: str | Path) -> Keyframes:
     """Read a pose-keyframe CSV (see the module docstring); errors name line and column."""
     path = Path(path)
-    with open(path, newline="") as fh:
-        rows = list(csv.reader(fh))
+    try:
+        with open(path, newline="", encoding="utf-8") as fh:
+            rows = list(csv.reader(fh))
+    except OSError as exc:
+        raise ConfigError(f"{path}: cannot read: {exc}") from exc
+    except UnicodeDecodeError as exc:
+        raise ConfigError(f"{path}: not a text (UTF-8) CSV file: {exc}") from exc
+    except csv.Error as exc:
+        raise ConfigError(f"{path}: not a readable CSV file: {exc}") from exc
     if not rows:
         raise ConfigError(f"{path}: empty file")
     header = [h.strip() for h in rows[0]]
@@ -98,6 +135,8 @@ def read_keyframes_csv(path: str | Path) -> Keyframes:
         raise ConfigError(f"{path}: no keyframes")
     t = np.asarray(times, dtype=float)
     given = t[np.isfinite(t)]
+    if np.any(given < 0):
+        raise ConfigError(f"{path}: keyframe time {float(given[given < 0][0])!r} s is negative")
     if np.any(np.diff(given) <= 0):
         raise ConfigError(f"{path}: keyframe times must increase")
     out_bits = np.asarray(dout, dtype=float)
@@ -127,13 +166,20 @@ def load_generate_input(path: str | Path) -> tuple[str, Any, dict[str, int]]:
 
     if is_datagram_recording(path):
         return "recording", *_telemetry_recording(path)
-    with open(path, newline="", errors="replace") as fh:
-        first = next(csv.reader(fh), [])
+    try:
+        with open(path, newline="", errors="replace") as fh:
+            first = next(csv.reader(fh), [])
+    except OSError as exc:
+        raise ConfigError(f"{path}: cannot read: {exc}") from exc
+    except csv.Error as exc:
+        raise ConfigError(f"{path}: not a readable CSV file: {exc}") from exc
     names = {h.strip() for h in first}
     if {"fx", "fy", "fz", "wx", "wy", "wz"} <= names:
         from motioncue.telemetry._recording import read_recording_csv
 
-        return "recording", read_recording_csv(path), {}
+        rec = read_recording_csv(path)
+        check_recording(rec, str(path), csv_times=True)
+        return "recording", rec, {}
     if {"roll", "pitch"} <= names or {"roll_deg", "pitch_deg"} <= names:
         return "keyframes", read_keyframes_csv(path), {}
     raise ConfigError(
@@ -156,4 +202,87 @@ def _telemetry_recording(path: Path) -> tuple[Any, dict[str, int]]:
     f, w = a.f.copy(), a.w.copy()
     f[a.paused] = (0.0, 0.0, 9.80665)
     w[a.paused] = 0.0
-    return Recording(a.t_s - a.t_s[0], f, w), stats
+    rec = Recording(a.t_s - a.t_s[0], f, w)
+    check_recording(rec, str(path), csv_times=False)
+    return rec, stats
+
+
+def check_recording(rec: Any, where: str, *, csv_times: bool = True) -> None:
+    """Refuse a recording ``generate`` cannot make a meaningful ride from.
+
+    Parameters
+    ----------
+    rec : motioncue.telemetry._recording.Recording
+    where : str
+        The file, for messages.
+    csv_times : bool
+        Also refuse times that do not increase and gaps over :data:`MAX_GAP_S` (for
+        recording CSVs; telemetry recordings are ordered by their receive times, and a pause
+        without packets is no error there).
+
+    Raises
+    ------
+    ConfigError
+        No samples, fewer than two valid ones, or (``csv_times``) bad times; the message
+        names the counts or the samples (numbered from 0, in file order).
+    """
+    n = len(rec)
+    if n == 0:
+        raise ConfigError(f"{where}: the recording has no samples (only a header?)")
+    valid = np.all(np.isfinite(rec.f), axis=1) & np.all(np.isfinite(rec.w), axis=1)
+    n_valid = int(np.count_nonzero(valid))
+    if n_valid < 2:
+        raise ConfigError(
+            f"{where}: {n_valid} of {n} samples are valid (all of fx, fy, fz, wx, wy, wz "
+            "finite); a ride needs at least 2"
+        )
+    if csv_times:
+        t = np.asarray(rec.t_s, dtype=float)
+        dt = np.diff(t)
+        if np.any(dt <= 0):
+            k = int(np.flatnonzero(dt <= 0)[0])
+            what = "repeats" if dt[k] == 0 else "goes back to"
+            raise ConfigError(
+                f"{where}: time {what} {float(t[k + 1])!r} s at sample {k + 1} after "
+                f"{float(t[k])!r} s at sample {k}; recording times must increase"
+            )
+        if np.any(dt > MAX_GAP_S):
+            k = int(np.argmax(dt))
+            raise ConfigError(
+                f"{where}: a gap of {dt[k]:.6g} s between samples {k} (t = {float(t[k])!r} s) and "
+                f"{k + 1} (t = {float(t[k + 1])!r} s); at most {MAX_GAP_S:g} s allowed (split the "
+                "recording)"
+            )
+
+
+def check_generate_size(kind: str, data: Any, rate_hz: float, where: str) -> None:
+    """Refuse an input that would make more than :data:`MAX_GENERATE_FRAMES` frames."""
+    if kind == "recording":
+        t = np.asarray(data.t_s, dtype=float)
+        span = float(t.max() - t.min()) if t.size else 0.0
+        what = f"the recording spans {span:.6g} s"
+    else:
+        t = np.asarray(data.t_s, dtype=float)
+        given = t[np.isfinite(t)]
+        span = float(given.max()) if given.size else 0.0
+        what = f"the last keyframe is at {span:.6g} s"
+    frames = span * rate_hz
+    if not frames <= MAX_GENERATE_FRAMES:
+        raise ConfigError(
+            f"{where}: {what}: {frames:.6g} frames at {rate_hz:g} Hz, more than the "
+            f"{MAX_GENERATE_FRAMES} generate makes"
+        )
+
+
+def held_warning(bad_samples: int, n_samples: int) -> str | None:
+    """The warning for a recording of which many samples were held, or None."""
+    if n_samples <= 0:
+        return None
+    frac = bad_samples / n_samples
+    if frac <= HELD_WARNING_FRACTION:
+        return None
+    return (
+        f"WARNING: {frac:.0%} of the input samples ({bad_samples} of {n_samples}) were "
+        "non-finite or spikes and were held by the washout: much of this ride follows held "
+        "values, not the recording"
+    )

@@ -12,31 +12,60 @@ A ride file is a NumPy ``.npz`` archive (zip; readable without motioncue) holdin
 ``pulses``
     ``(N, n)`` int32 absolute motor positions in pulses, controller axis order.
 ``dout``
-    ``(N,)`` uint16 digital effect outputs.
+    ``(N,)`` uint16 digital effect outputs (bits 0-15; the MBOX's ExtDout bits 16-23 and a
+    second EasySmc unit's outputs are not carried by ride files).
 ``dacs``
     ``(N, 2)`` uint16 analogue outputs (controller units).
 
-Loading checks everything a player relies on: version, shapes, dtypes, monotonic times,
-and that every frame respects the limits table stored in the header.
+Loading trusts nothing in the file: every archive member is parsed by hand (no pickles, only
+plain numeric dtypes, sizes checked against the shapes before anything is allocated), the
+header's keys and types are checked, and :class:`Ride` checks shapes, ranges and times. Any
+damage becomes a :class:`~motioncue.ConfigError` naming the file. Whether the frames suit the
+rig about to be driven is :func:`motioncue.pipeline.check_ride_for`'s job.
+
+Writing is atomic (:mod:`motioncue._atomic`): a refused or interrupted save leaves no file.
 """
 
 from __future__ import annotations
 
 import io
 import json
+import math
+import os
 import zipfile
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
+from typing import Any, BinaryIO
 
 import numpy as np
 
-from .._errors import ConfigError
+from .._errors import ConfigError, MotioncueError
 
-__all__ = ["RIDE_FORMAT", "RIDE_FORMAT_VERSION", "Ride", "load_ride", "save_ride"]
+__all__ = [
+    "MAX_RIDE_BYTES",
+    "MAX_RIDE_RATE_HZ",
+    "MIN_RIDE_RATE_HZ",
+    "RIDE_FORMAT",
+    "RIDE_FORMAT_VERSION",
+    "Ride",
+    "load_ride",
+    "save_ride",
+]
 
 RIDE_FORMAT = "motioncue-ride"
 RIDE_FORMAT_VERSION = 1
+MIN_RIDE_RATE_HZ = 1.0
+"""Smallest ``rate_hz`` a ride may declare (the players' limiters take periods up to 1 s)."""
+MAX_RIDE_RATE_HZ = 10_000.0
+"""Largest ``rate_hz`` a ride may declare (no controller takes frames faster than 1 kHz;
+each controller's own cap is checked by :func:`~motioncue.pipeline.check_ride_for`)."""
+MAX_RIDE_DURATION_S = 0xFFFFFFFF / 1000.0
+"""Last frame time allowed: the u32 millisecond time field of the MBOX/IMAX frames."""
+MAX_RIDE_BYTES = 1 << 30
+"""Largest ride file, and largest array in one, that :func:`load_ride` reads (1 GiB)."""
+_MAX_HEADER_BYTES = 16 << 20
+_ARRAY_KINDS = {"header": "u", "t_s": "fiu", "pulses": "iu", "dout": "iu", "dacs": "iu"}
+_ARRAY_NDIM = {"header": 1, "t_s": 1, "pulses": 2, "dout": 1, "dacs": 2}
 
 
 @dataclass(frozen=True, eq=False)
@@ -48,17 +77,18 @@ class Ride:
     platform, controller : str
         Names (or paths) of the platform and controller configs the frames were made for.
     rate_hz : float
-        Nominal frame rate.
+        Nominal frame rate, in ``[MIN_RIDE_RATE_HZ, MAX_RIDE_RATE_HZ]``.
     actuator_names : tuple[str, ...]
-        Controller axis order.
+        Controller axis order (at least one, non-empty strings).
     t_s : ndarray, shape (N,)
-        Frame times (s), strictly increasing, starting at 0.
+        Frame times (s), finite, strictly increasing, starting at exactly 0 and ending by
+        ``MAX_RIDE_DURATION_S`` (u32 ms).
     pulses : ndarray, shape (N, n), int32
         Absolute motor positions (pulses).
     dout : ndarray, shape (N,), uint16
-        Digital effect outputs.
+        Digital effect outputs (whole numbers in 0 .. 65535).
     dacs : ndarray, shape (N, 2), uint16
-        Analogue outputs.
+        Analogue outputs (whole numbers in 0 .. 65535).
     limits : dict
         The effective limits table in pulses (stroke, speed, acceleration per actuator).
     effects : tuple[str, ...]
@@ -67,6 +97,11 @@ class Ride:
         What the ride was made from.
     notes : dict
         Free-form metadata (cue metrics, optimisation report...).
+
+    Raises
+    ------
+    ConfigError
+        Any field of the wrong type, shape or range (named, with the value or shape).
     """
 
     platform: str
@@ -83,39 +118,78 @@ class Ride:
     notes: dict[str, Any] = field(default_factory=dict)
 
     def __post_init__(self) -> None:
-        t = np.asarray(self.t_s, dtype=np.float64)
-        pulses = np.asarray(self.pulses)
+        for name in ("platform", "controller", "source"):
+            if not isinstance(getattr(self, name), str):
+                raise ConfigError(
+                    f"ride {name} = {getattr(self, name)!r} is invalid; allowed: a string"
+                )
+        names = self.actuator_names
+        if (
+            not isinstance(names, list | tuple)
+            or not names
+            or not all(isinstance(a, str) and a for a in names)
+        ):
+            raise ConfigError(
+                f"ride actuator_names = {names!r} is invalid; allowed: one or more non-empty "
+                "strings"
+            )
+        effects = self.effects
+        if not isinstance(effects, list | tuple) or not all(isinstance(e, str) for e in effects):
+            raise ConfigError(f"ride effects = {effects!r} is invalid; allowed: a list of strings")
+        for name in ("limits", "notes"):
+            if not isinstance(getattr(self, name), dict):
+                raise ConfigError(
+                    f"ride {name} = {getattr(self, name)!r} is invalid; allowed: a table (dict)"
+                )
+        rate = self.rate_hz
+        if (
+            isinstance(rate, bool)
+            or not isinstance(rate, int | float | np.integer | np.floating)
+            or not math.isfinite(float(rate))
+            or not MIN_RIDE_RATE_HZ <= float(rate) <= MAX_RIDE_RATE_HZ
+        ):
+            raise ConfigError(
+                f"ride rate_hz = {rate!r} is invalid; allowed: a number in "
+                f"[{MIN_RIDE_RATE_HZ:g}, {MAX_RIDE_RATE_HZ:g}] Hz"
+            )
+        t = _numeric("t_s", self.t_s, "fiu")
+        pulses = _numeric("pulses", self.pulses, "iu")
+        dout = _numeric("dout", self.dout, "iu")
+        dacs = _numeric("dacs", self.dacs, "iu")
         n_frames = t.shape[0] if t.ndim == 1 else -1
-        n_axes = len(self.actuator_names)
+        n_axes = len(names)
         if t.ndim != 1 or n_frames < 1:
             raise ConfigError(f"ride t_s must be a non-empty 1-D array, got shape {t.shape}")
+        t = t.astype(np.float64)
         if not np.all(np.isfinite(t)) or np.any(np.diff(t) <= 0):
             raise ConfigError("ride t_s must be finite and strictly increasing")
+        if t[0] != 0.0 or t[-1] > MAX_RIDE_DURATION_S:
+            raise ConfigError(
+                f"ride t_s runs from {float(t[0])!r} to {float(t[-1])!r} s; allowed: from 0 to "
+                f"at most {MAX_RIDE_DURATION_S:.0f} s (the u32 ms frame clock)"
+            )
         if pulses.shape != (n_frames, n_axes):
             raise ConfigError(f"ride pulses shape {pulses.shape} != ({n_frames}, {n_axes})")
-        if not np.issubdtype(pulses.dtype, np.integer):
-            raise ConfigError(f"ride pulses must be integers, got {pulses.dtype}")
         i32 = np.iinfo(np.int32)
         if pulses.size and (pulses.min() < i32.min or pulses.max() > i32.max):
             raise ConfigError("ride pulses exceed the int32 range of the wire formats")
-        dout = np.asarray(self.dout)
-        dacs = np.asarray(self.dacs)
         if dout.shape != (n_frames,) or dacs.shape != (n_frames, 2):
             raise ConfigError(
                 f"ride dout shape {dout.shape} / dacs shape {dacs.shape} do not match "
                 f"{n_frames} frames"
             )
-        for name, arr in (("dout", dout), ("dacs", dacs)):
-            if arr.size and (arr.min() < 0 or arr.max() > 0xFFFF):
-                raise ConfigError(f"ride {name} outside 0..65535")
-        if not (np.isfinite(self.rate_hz) and self.rate_hz > 0):
-            raise ConfigError(f"ride rate_hz = {self.rate_hz!r} must be > 0")
+        for name, arr, top in (("dout", dout, 0xFFFF), ("dacs", dacs, 0xFFFF)):
+            if arr.size and (arr.min() < 0 or arr.max() > top):
+                raise ConfigError(
+                    f"ride {name} outside 0..{top} (found {int(arr.min())}..{int(arr.max())})"
+                )
+        object.__setattr__(self, "rate_hz", float(rate))
         object.__setattr__(self, "t_s", t)
         object.__setattr__(self, "pulses", pulses.astype(np.int32))
         object.__setattr__(self, "dout", dout.astype(np.uint16))
         object.__setattr__(self, "dacs", dacs.astype(np.uint16))
-        object.__setattr__(self, "actuator_names", tuple(self.actuator_names))
-        object.__setattr__(self, "effects", tuple(self.effects))
+        object.__setattr__(self, "actuator_names", tuple(names))
+        object.__setattr__(self, "effects", tuple(effects))
 
     @property
     def n_frames(self) -> int:
@@ -141,9 +215,21 @@ class Ride:
         }
 
 
-def save_ride(path: str | Path, ride: Ride) -> Path:
-    """Write ``ride`` to ``path`` (``.npz`` appended by nobody: the name is kept as given)."""
-    path = Path(path)
+def _numeric(name: str, value: Any, kinds: str) -> np.ndarray:
+    """``value`` as an array of a plain numeric dtype of one of ``kinds`` (no bool, object,
+    complex or structured data)."""
+    try:
+        arr = np.asarray(value)
+    except (TypeError, ValueError, OverflowError) as exc:
+        raise ConfigError(f"ride {name} is not an array of numbers ({exc})") from exc
+    if arr.dtype.kind not in kinds or arr.dtype.fields is not None:
+        allowed = {"fiu": "real numbers", "iu": "integers", "u": "unsigned bytes"}[kinds]
+        raise ConfigError(f"ride {name} has dtype {arr.dtype}; allowed: {allowed}")
+    return arr
+
+
+def ride_bytes(ride: Ride) -> bytes:
+    """The bytes of a ride file for ``ride`` (what :func:`save_ride` writes)."""
     header = json.dumps(ride.header(), indent=1, sort_keys=True, default=_json_default)
     buf = io.BytesIO()
     np.savez_compressed(
@@ -154,8 +240,20 @@ def save_ride(path: str | Path, ride: Ride) -> Path:
         dout=ride.dout,
         dacs=ride.dacs,
     )
-    path.write_bytes(buf.getvalue())
-    return path
+    return buf.getvalue()
+
+
+def save_ride(path: str | Path, ride: Ride) -> Path:
+    """Write ``ride`` to ``path`` atomically (the name is kept as given, no suffix added).
+
+    Raises
+    ------
+    TransportError
+        The file cannot be written (nothing is left under ``path``).
+    """
+    from .._atomic import atomic_write_bytes
+
+    return atomic_write_bytes(Path(path), ride_bytes(ride), "ride file")
 
 
 def _json_default(obj: Any) -> Any:
@@ -166,45 +264,186 @@ def _json_default(obj: Any) -> Any:
     raise TypeError(f"not JSON serialisable: {type(obj).__name__}")
 
 
-def load_ride(path: str | Path) -> Ride:
-    """Read a ride file, refusing other formats and newer versions with a clear message."""
-    path = Path(path)
+def _read_source(
+    source: str | os.PathLike[str] | bytes | BinaryIO, name: str | None
+) -> tuple[bytes, str]:
+    if isinstance(source, bytes | bytearray | memoryview):
+        return bytes(source), name or "<ride bytes>"
+    if hasattr(source, "read"):
+        where = name or str(getattr(source, "name", "<ride stream>"))
+        try:
+            data = source.read(MAX_RIDE_BYTES + 1)
+        except OSError as exc:
+            raise ConfigError(f"{where}: cannot read: {exc}") from exc
+    else:
+        path = Path(source)
+        where = name or str(path)
+        try:
+            with open(path, "rb") as fh:
+                data = fh.read(MAX_RIDE_BYTES + 1)
+        except OSError as exc:
+            raise ConfigError(f"{where}: cannot read ride file: {exc}") from exc
+    if not isinstance(data, bytes):
+        raise ConfigError(f"{where}: not a motioncue ride file (read {type(data).__name__})")
+    if len(data) > MAX_RIDE_BYTES:
+        raise ConfigError(
+            f"{where}: larger than {MAX_RIDE_BYTES} bytes; not a ride file motioncue reads"
+        )
+    return data, where
+
+
+def _read_member(zf: zipfile.ZipFile, info: zipfile.ZipInfo, key: str, where: str) -> np.ndarray:
+    """One ``.npy`` member, parsed by hand: version 1/2 header, plain dtype of the allowed
+    kinds, sizes checked before reading."""
+    if info.file_size > MAX_RIDE_BYTES:
+        raise ConfigError(f"{where}: array {key!r} claims {info.file_size} bytes; too large")
+    with zf.open(info) as fp:
+        version = np.lib.format.read_magic(fp)
+        if version == (1, 0):
+            shape, fortran, dtype = np.lib.format.read_array_header_1_0(fp)
+        elif version == (2, 0):
+            shape, fortran, dtype = np.lib.format.read_array_header_2_0(fp)
+        else:
+            raise ConfigError(
+                f"{where}: array {key!r} has .npy version {version}; allowed 1.0, 2.0"
+            )
+        if (
+            dtype.hasobject
+            or dtype.fields is not None
+            or dtype.subdtype is not None
+            or dtype.kind not in _ARRAY_KINDS[key]
+            or dtype.itemsize > 8
+        ):
+            raise ConfigError(f"{where}: array {key!r} has dtype {dtype}; not a ride array")
+        if len(shape) != _ARRAY_NDIM[key]:
+            raise ConfigError(
+                f"{where}: array {key!r} has shape {shape}; expected {_ARRAY_NDIM[key]}-D"
+            )
+        count = math.prod(int(d) for d in shape)
+        nbytes = count * dtype.itemsize
+        if nbytes > MAX_RIDE_BYTES or (key == "header" and nbytes > _MAX_HEADER_BYTES):
+            raise ConfigError(f"{where}: array {key!r} of shape {shape} is too large")
+        raw = fp.read(nbytes)
+        if len(raw) != nbytes:
+            raise ConfigError(
+                f"{where}: array {key!r} holds {len(raw)} bytes; its shape {shape} needs {nbytes}"
+            )
+    arr = np.frombuffer(raw, dtype=dtype, count=count)
+    return arr.reshape(shape[::-1]).T if fortran else arr.reshape(shape)
+
+
+def _read_arrays(data: bytes, where: str) -> dict[str, np.ndarray]:
+    arrays: dict[str, np.ndarray] = {}
+    key = "?"
     try:
-        with np.load(path, allow_pickle=False) as z:
-            arrays = {k: z[k] for k in z.files}
-    except (OSError, ValueError, zipfile.BadZipFile, EOFError) as exc:
-        raise ConfigError(f"{path}: not a motioncue ride file ({exc})") from exc
+        zf = zipfile.ZipFile(io.BytesIO(data))
+        with zf:
+            for info in zf.infolist():
+                if not info.filename.endswith(".npy") or info.filename[:-4] not in _ARRAY_KINDS:
+                    continue
+                key = info.filename[:-4]
+                arrays[key] = _read_member(zf, info, key, where)
+    except MotioncueError:
+        raise
+    except Exception as exc:  # any damage of an untrusted archive is refused
+        # zipfile, zlib and numpy's header parser raise many kinds (BadZipFile, zlib.error,
+        # NotImplementedError for unknown compression, RuntimeError for encryption,
+        # struct.error, OverflowError, EOFError, MemoryError, ...): all mean a damaged file
+        what = "not a zip archive" if key == "?" and not arrays else f"damaged array {key!r}"
+        raise ConfigError(
+            f"{where}: not a motioncue ride file ({what}: {type(exc).__name__}: {exc})"
+        ) from exc
+    return arrays
+
+
+def _header_value(header: dict[str, Any], key: str, where: str, kind: Any, default: Any) -> Any:
+    value = header.get(key, default)
+    if value is _REQUIRED:
+        raise ConfigError(f"{where}: ride header lacks {key!r}")
+    if not isinstance(value, kind) or (isinstance(value, bool) and kind is not bool):
+        raise ConfigError(f"{where}: ride header {key} = {_short(value)} has the wrong type")
+    return value
+
+
+def _short(value: Any) -> str:
+    text = repr(value)
+    return text if len(text) <= 80 else text[:77] + "..."
+
+
+_REQUIRED = object()
+
+
+def load_ride(
+    source: str | os.PathLike[str] | bytes | BinaryIO, *, name: str | None = None
+) -> Ride:
+    """Read a ride file, refusing anything that is not a valid ride with a clear message.
+
+    Parameters
+    ----------
+    source : path, bytes or binary file object
+        The ride file, or its bytes.
+    name : str, optional
+        What to call the source in messages (default: the path).
+
+    Raises
+    ------
+    ConfigError
+        Unreadable or damaged file, another format, a newer version, a header key missing
+        or of the wrong type, an array of the wrong dtype, shape or range; the message starts
+        with the file's name. Nothing else escapes, whatever the bytes.
+    """
+    data, where = _read_source(source, name)
+    arrays = _read_arrays(data, where)
     missing = {"header", "t_s", "pulses", "dout", "dacs"} - set(arrays)
     if missing:
-        raise ConfigError(f"{path}: not a motioncue ride file (missing {sorted(missing)})")
+        raise ConfigError(f"{where}: not a motioncue ride file (missing {sorted(missing)})")
     try:
         header = json.loads(arrays["header"].tobytes().decode("utf-8"))
-    except (UnicodeDecodeError, json.JSONDecodeError) as exc:
-        raise ConfigError(f"{path}: ride header is not valid JSON ({exc})") from exc
-    if not isinstance(header, dict) or header.get("format") != RIDE_FORMAT:
-        raise ConfigError(f"{path}: not a motioncue ride file (format {header.get('format')!r})")
+    except (UnicodeDecodeError, ValueError, RecursionError) as exc:
+        raise ConfigError(f"{where}: ride header is not valid JSON ({exc})") from exc
+    if not isinstance(header, dict):
+        raise ConfigError(
+            f"{where}: not a motioncue ride file (header is {type(header).__name__}, not a table)"
+        )
+    if header.get("format") != RIDE_FORMAT:
+        raise ConfigError(
+            f"{where}: not a motioncue ride file (format {_short(header.get('format'))})"
+        )
     version = header.get("format_version")
-    if not isinstance(version, int) or version < 1:
-        raise ConfigError(f"{path}: ride format_version {version!r} is invalid")
+    if isinstance(version, bool) or not isinstance(version, int) or version < 1:
+        raise ConfigError(f"{where}: ride format_version {_short(version)} is invalid")
     if version > RIDE_FORMAT_VERSION:
         raise ConfigError(
-            f"{path}: ride file format version {version} is newer than this motioncue "
+            f"{where}: ride file format version {version} is newer than this motioncue "
             f"understands (up to {RIDE_FORMAT_VERSION}); upgrade motioncue to play it"
+        )
+    get = header.get
+    n_frames = get("n_frames")
+    if n_frames is not None and (
+        isinstance(n_frames, bool)
+        or not isinstance(n_frames, int)
+        or n_frames != arrays["t_s"].shape[0]
+    ):
+        raise ConfigError(
+            f"{where}: ride header n_frames = {_short(n_frames)} but t_s holds "
+            f"{arrays['t_s'].shape[0]} frames"
         )
     try:
         return Ride(
-            platform=str(header["platform"]),
-            controller=str(header["controller"]),
-            rate_hz=float(header["rate_hz"]),
-            actuator_names=tuple(header["actuator_names"]),
+            platform=_header_value(header, "platform", where, str, _REQUIRED),
+            controller=_header_value(header, "controller", where, str, _REQUIRED),
+            rate_hz=_header_value(header, "rate_hz", where, int | float, _REQUIRED),
+            actuator_names=tuple(_header_value(header, "actuator_names", where, list, _REQUIRED)),
             t_s=arrays["t_s"],
             pulses=arrays["pulses"],
             dout=arrays["dout"],
             dacs=arrays["dacs"],
-            limits=dict(header.get("limits", {})),
-            effects=tuple(header.get("effects", ())),
-            source=str(header.get("source", "")),
-            notes=dict(header.get("notes", {})),
+            limits=_header_value(header, "limits", where, dict, {}),
+            effects=tuple(_header_value(header, "effects", where, list, [])),
+            source=_header_value(header, "source", where, str, ""),
+            notes=_header_value(header, "notes", where, dict, {}),
         )
-    except (KeyError, TypeError) as exc:
-        raise ConfigError(f"{path}: ride header lacks or mistypes {exc}") from exc
+    except ConfigError as exc:
+        if str(exc).startswith(where):
+            raise
+        raise ConfigError(f"{where}: {exc}") from exc

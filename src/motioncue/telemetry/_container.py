@@ -14,8 +14,11 @@ File layout (little-endian), version 1::
         data    length bytes, exactly as received
 
 The datagrams are stored undecoded, so a recording replays through any decoder version and
-keeps the packets a decoder skipped. A recorder killed mid-write leaves a short last record:
-the reader keeps every complete record and reports ``truncated_tail``.
+keeps the packets a decoder skipped. The writer is atomic (:mod:`motioncue._atomic`): it
+writes ``.NAME.partial-XXXX`` and renames it to ``NAME`` when the recording ends normally
+(Ctrl-C ends a recording normally); an error discards it. A recorder killed by SIGKILL leaves
+the partial file, whose last record may be short: the reader (given that file) keeps every
+complete record and reports ``truncated_tail``.
 """
 
 from __future__ import annotations
@@ -29,8 +32,9 @@ import struct
 import time
 from collections.abc import Callable, Iterator
 from dataclasses import dataclass, field
-from typing import BinaryIO
+from types import TracebackType
 
+from .._atomic import AtomicFile
 from .._errors import ConfigError, ProtocolError, TransportError
 from ._registry import GAMES
 from ._sample import TelemetrySample
@@ -92,7 +96,8 @@ class DatagramRecording:
 
 
 class RecordingWriter:
-    """Write a recording file record by record (flushes on close; context manager).
+    """Write a recording file record by record (context manager; atomic: published by
+    :meth:`close` or a normal exit, discarded by :meth:`discard` or an exception).
 
     Parameters
     ----------
@@ -116,11 +121,8 @@ class RecordingWriter:
             "writer": f"motioncue {__version__}",
         }
         blob = json.dumps(meta, sort_keys=True).encode()
-        try:
-            self._fh: BinaryIO = open(path, "wb")
-        except OSError as exc:
-            raise TransportError(f"cannot create recording {os.fspath(path)!r}: {exc}") from exc
-        self._fh.write(FILE_HEADER.pack(MAGIC, VERSION, len(blob)) + blob)
+        self._out = AtomicFile(path, "recording")
+        self._out.write(FILE_HEADER.pack(MAGIC, VERSION, len(blob)) + blob)
         self.count = 0
         self.nbytes = 0
 
@@ -130,19 +132,31 @@ class RecordingWriter:
             raise ProtocolError(f"datagram of {len(datagram)} bytes exceeds {MAX_DATAGRAM}")
         if not math.isfinite(t_s):
             raise ProtocolError(f"receive time {t_s!r} is not finite")
-        self._fh.write(RECORD_HEADER.pack(t_s, len(datagram)) + datagram)
+        self._out.write(RECORD_HEADER.pack(t_s, len(datagram)) + datagram)
         self.count += 1
         self.nbytes += len(datagram)
 
     def close(self) -> None:
-        if not self._fh.closed:
-            self._fh.close()
+        """Publish the recording under its name."""
+        self._out.commit()
+
+    def discard(self) -> None:
+        """Remove what was written; no file is left under the name."""
+        self._out.discard()
 
     def __enter__(self) -> RecordingWriter:
         return self
 
-    def __exit__(self, *exc: object) -> None:
-        self.close()
+    def __exit__(
+        self,
+        exc_type: type[BaseException] | None,
+        exc: BaseException | None,
+        tb: TracebackType | None,
+    ) -> None:
+        if exc_type is None:
+            self.close()
+        else:
+            self.discard()
 
 
 def read_recording_file(path: str | os.PathLike[str]) -> DatagramRecording:

@@ -19,6 +19,7 @@ from numpy.typing import ArrayLike, NDArray
 from .._errors import ConfigError
 
 __all__ = [
+    "MAX_RESAMPLED_FRAMES",
     "RECORDING_COLUMNS",
     "Recording",
     "read_recording_csv",
@@ -27,6 +28,9 @@ __all__ = [
 ]
 
 RECORDING_COLUMNS: tuple[str, ...] = ("t", "fx", "fy", "fz", "wx", "wy", "wz")
+MAX_RESAMPLED_FRAMES = 2_000_000
+"""Most samples :func:`resample` makes (about 5.5 h at 100 Hz): a longer grid comes from a
+damaged or absurd recording (a time gap of 1e6 s) and would exhaust memory."""
 
 
 @dataclass(frozen=True, eq=False)
@@ -132,28 +136,35 @@ def read_recording_csv(path: str | Path) -> Recording:
                 rows.append(values)
     except OSError as exc:
         raise ConfigError(f"{p}: cannot read: {exc}") from exc
+    except UnicodeDecodeError as exc:
+        raise ConfigError(f"{p}: not a text (UTF-8) CSV file: {exc}") from exc
+    except csv.Error as exc:
+        raise ConfigError(f"{p}: not a readable CSV file: {exc}") from exc
     data = np.array(rows, dtype=float).reshape(-1, 7)
     return Recording(data[:, 0], data[:, 1:4], data[:, 4:7])
 
 
 def write_recording_csv(path: str | Path, rec: Recording) -> None:
-    """Write ``rec`` as a recording CSV (header ``t,fx,fy,fz,wx,wy,wz``; NaN as ``nan``).
+    """Write ``rec`` as a recording CSV (header ``t,fx,fy,fz,wx,wy,wz``; NaN as ``nan``),
+    atomically (a temporary name renamed on success).
 
     Floats are written with ``repr`` precision, so :func:`read_recording_csv` returns the
     same numbers.
     """
+    from .._atomic import atomic_write_bytes
+    from .._errors import TransportError
+
     p = Path(path)
     data = np.column_stack([rec.t_s, rec.f, rec.w])
+    lines = [",".join(RECORDING_COLUMNS)]
+    lines += [",".join(repr(v) for v in row) for row in data.tolist()]
     try:
-        with open(p, "w", newline="", encoding="utf-8") as fh:
-            fh.write(",".join(RECORDING_COLUMNS) + "\n")
-            for row in data.tolist():
-                fh.write(",".join(repr(v) for v in row) + "\n")
-    except OSError as exc:
-        raise ConfigError(f"{p}: cannot write: {exc}") from exc
+        atomic_write_bytes(p, ("\n".join(lines) + "\n").encode("utf-8"), "recording CSV")
+    except TransportError as exc:
+        raise ConfigError(f"{p}: cannot write: {exc.__cause__ or exc}") from exc
 
 
-def resample(rec: Recording, fs_hz: float) -> Recording:
+def resample(rec: Recording, fs_hz: float, max_frames: int = MAX_RESAMPLED_FRAMES) -> Recording:
     """Resample to a uniform grid by linear interpolation.
 
     Rule: samples are sorted by time (stable); of several samples with the same time the
@@ -170,6 +181,9 @@ def resample(rec: Recording, fs_hz: float) -> Recording:
     rec : Recording
     fs_hz : float
         Target rate, > 0.
+    max_frames : int
+        Refuse a grid of more samples than this (:class:`ConfigError` naming the span, the
+        count and the largest gap) instead of exhausting memory.
 
     Returns
     -------
@@ -195,7 +209,16 @@ def resample(rec: Recording, fs_hz: float) -> Recording:
     t = t[last]
     data = data[last]
     span = float(t[-1] - t[0])
-    count = math.floor(span * fs_hz * (1.0 + 1e-12) + 1e-9) + 1
+    frames = span * fs_hz * (1.0 + 1e-12) + 1e-9
+    if not frames < max_frames:
+        gaps = np.diff(t)
+        k = int(np.argmax(gaps)) if gaps.size else 0
+        gap = f"; its largest gap is {gaps[k]:.6g} s (samples {k} and {k + 1})" if gaps.size else ""
+        raise ConfigError(
+            f"the recording spans {span:.6g} s: {frames:.6g} samples at {fs_hz:g} Hz, more than "
+            f"the {max_frames} allowed{gap}"
+        )
+    count = math.floor(frames) + 1
     grid = t[0] + np.arange(count) / fs_hz
     if t.shape[0] == 1:
         out = np.repeat(data, count, axis=0)

@@ -1,0 +1,236 @@
+"""Is this ride fit for the rig about to be driven? Checked before anything is sent.
+
+A ride file is untrusted input: it may have been made for another platform or controller, by
+an older motioncue with other limits, edited, or damaged. :func:`check_ride_for` checks it
+against the rig about to be driven (the platform and controller configs as loaded now, and
+the limits derived from them now), in this order, and refuses with the first problem:
+
+1. **Actuators.** The ride's actuator names (count, order and names) are the platform's, and
+   the controller drives that many axes.
+2. **Made for this rig.** The ride's ``platform`` and ``controller`` names are the names of
+   the configs about to be used. A ride whose names differ is refused, naming both, unless
+   the limits table stored in the ride is exactly the table the rig allows now (the same
+   configs under another name or path). Rule of thumb for users: play a ride with the
+   platform and controller it was generated for; regenerate it for another rig.
+3. **Timing.** ``rate_hz`` is at most the controller's frame-rate cap, and every step of
+   ``t_s`` is ``1 / rate_hz`` (relative tolerance 1e-9, plus the float rounding of long
+   rides).
+4. **Outputs.** ``dout`` and the DACs are within what the controller's frames carry
+   (``controller.dout_max`` / ``dac_max``): MBOX 24 output bits and DACs up to Fn078 /
+   Fn079; IMAX Y01..Y12 (``dout <= 0xFFF``) and no DACs; EasySmc 16 output bits per unit
+   and no DACs.
+5. **Limits, on the controller's clock.** The frames are checked by the independent
+   finite-difference checker (:func:`~motioncue.pipeline.check_frames`) against the limits
+   table of the current limits (``limits.to_pulses_table(platform)``, already divided by the
+   controller's catch-up factor), starting at rest and ending at rest (a rest frame is added
+   before the first and after the last frame). The frame times are those the controller
+   reads (``controller.time_resolution_s``: whole milliseconds for MBOX and IMAX), so a ride
+   whose rounded periods make it faster than the limits is refused, and frames sharing one
+   time stamp are refused. The message names the worst
+   actuator, the quantity, its value against the limit, and the frame.
+
+Refusals are :class:`~motioncue.ConfigError` (1-4, the ride does not belong to this rig) or
+:class:`~motioncue.LimitError` (3's rate cap and 5, the rig cannot do it).
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+from .._errors import ConfigError, LimitError
+from ._ridefile import Ride
+from ._verify import check_frames, limits_arrays
+
+__all__ = ["check_ride_for", "wire_times_s"]
+
+def wire_times_s(t_s: np.ndarray, controller: Any) -> np.ndarray:
+    """Frame times as the controller reads them: rounded to its time resolution from the
+    first frame (whole ms for MBOX and IMAX, whose frames carry a u32 ms time); the times
+    themselves for a controller whose frames carry none."""
+    t = np.asarray(t_s, dtype=float)
+    res = controller.time_resolution_s
+    if res:
+        return np.rint((t - t[0]) / res) * res
+    return t
+
+
+def check_ride_for(
+    ride: Ride,
+    platform: Any,
+    controller: Any,
+    limits: Any,
+    *,
+    platform_name: str,
+    controller_name: str,
+) -> None:
+    """Refuse a ride that does not belong to, or is unsafe on, the rig about to be driven.
+
+    Parameters
+    ----------
+    ride : Ride
+        As returned by :func:`~motioncue.pipeline.load_ride`.
+    platform : motioncue.kinematics.Platform
+    controller
+        From :func:`motioncue.output.load_controller`.
+    limits : motioncue.trajectory.ActuatorLimits
+        The limits of the rig now (from the platform and controller above).
+    platform_name, controller_name : str
+        The names (or paths) the platform and controller were loaded by.
+
+    Raises
+    ------
+    ConfigError
+        Another rig's ride (actuators, names), ``rate_hz`` not matching ``t_s``, outputs the
+        controller cannot carry. Both values are named.
+    LimitError
+        A frame rate above the controller's cap, or frames outside the current limits on the
+        controller's clock (worst actuator, quantity and frame named).
+    """
+    names = tuple(platform.actuator_names)
+    if tuple(ride.actuator_names) != names:
+        raise ConfigError(
+            f"ride actuators {list(ride.actuator_names)} are not the actuators "
+            f"{list(names)} of platform {platform_name!r}"
+        )
+    n_axes = int(getattr(controller, "n_axes", len(names)))
+    if n_axes != len(names):
+        raise ConfigError(
+            f"controller {controller_name!r} drives {n_axes} axes; the ride and platform "
+            f"{platform_name!r} have {len(names)} actuators"
+        )
+    table = limits.to_pulses_table(platform)
+    _check_identity(ride, table, platform_name, controller_name)
+    _check_timing(ride, controller, controller_name)
+    _check_outputs(ride, controller, controller_name)
+    _check_limits(ride, controller, controller_name, table)
+
+
+def _check_identity(
+    ride: Ride, table: list[dict[str, Any]], platform_name: str, controller_name: str
+) -> None:
+    same_table = ride.limits.get("actuators") == table
+    for what, made_for, now in (
+        ("platform", ride.platform, platform_name),
+        ("controller", ride.controller, controller_name),
+    ):
+        if made_for != now and not same_table:
+            raise ConfigError(
+                f"the ride was made for {what} {made_for!r}, not {now!r}, and its limits "
+                f"table differs from what {now!r} allows; play it with --{what} {made_for} "
+                f"or generate the ride again for {now!r}"
+            )
+
+
+def _check_timing(ride: Ride, controller: Any, controller_name: str) -> None:
+    cap = getattr(controller, "max_frame_rate_hz", None)
+    if cap is not None and ride.rate_hz > float(cap) * (1.0 + 1e-9):
+        raise LimitError(
+            f"the ride's rate {ride.rate_hz:g} Hz is above the {float(cap):g} Hz controller "
+            f"{controller_name!r} carries"
+        )
+    if ride.n_frames < 2:
+        return
+    period = 1.0 / ride.rate_hz
+    steps = np.diff(ride.t_s)
+    tol = 1e-9 * period + 8.0 * np.finfo(float).eps * np.abs(ride.t_s[1:])
+    bad = np.abs(steps - period) > tol
+    if np.any(bad):
+        k = int(np.flatnonzero(bad)[0])
+        raise ConfigError(
+            f"ride rate_hz = {ride.rate_hz:g} Hz (period {period * 1e3:.6g} ms) does not match "
+            f"its frame times: frames {k} and {k + 1} are {steps[k] * 1e3:.9g} ms apart"
+        )
+
+
+def _check_outputs(ride: Ride, controller: Any, controller_name: str) -> None:
+    dout_max = int(ride.dout.max(initial=0))
+    dacs_max = ride.dacs.max(axis=0, initial=0)
+    dout_top = int(controller.dout_max)
+    dac_top = tuple(int(d) for d in controller.dac_max)
+    dac_what = "its DAC full scale" if any(dac_top) else "none: the controller has no DACs"
+    if dout_max > dout_top:
+        k = int(np.argmax(ride.dout > dout_top))
+        raise ConfigError(
+            f"ride dout = {int(ride.dout[k]):#x} at frame {k} is outside what controller "
+            f"{controller_name!r} carries (0 .. {dout_top:#x})"
+        )
+    for i in (0, 1):
+        if int(dacs_max[i]) > dac_top[i]:
+            k = int(np.argmax(ride.dacs[:, i] > dac_top[i]))
+            raise ConfigError(
+                f"ride DAC{i + 1} = {int(ride.dacs[k, i])} at frame {k} is above the "
+                f"{dac_top[i]} controller {controller_name!r} allows ({dac_what})"
+            )
+
+
+def _check_limits(
+    ride: Ride, controller: Any, controller_name: str, table: list[dict[str, Any]]
+) -> None:
+    t = wire_times_s(ride.t_s, controller)
+    if ride.n_frames > 1:
+        dt = np.diff(t)
+        if np.any(dt <= 0):
+            k = int(np.flatnonzero(dt <= 0)[0])
+            raise LimitError(
+                f"frames {k} and {k + 1} of the ride carry the same time stamp "
+                f"{t[k] * 1e3:.0f} ms on controller {controller_name!r}'s 1 ms clock; "
+                f"{ride.rate_hz:g} Hz is too fast for it"
+            )
+        last = float(dt[-1])
+    else:
+        last = 1.0 / ride.rate_hz
+    # rest after the last frame: one more frame at the same position, one period later
+    t_ext = np.append(t, t[-1] + last)
+    p_ext = np.vstack([ride.pulses, ride.pulses[-1:]]).astype(float)
+    check = check_frames(t_ext, p_ext, table, start_at_rest=True)
+    if check.ok:
+        return
+    raise LimitError(
+        f"the ride leaves the limits of the rig it is about to drive "
+        f"(on controller {controller_name!r}'s clock): "
+        f"{_worst(t_ext, p_ext, table, ride.actuator_names, ride.n_frames)}; "
+        f"{check.summary()}"
+    )
+
+
+def _worst(
+    t: np.ndarray, p: np.ndarray, table: list[dict[str, Any]], names: Any, n_frames: int
+) -> str:
+    """The worst violation: actuator, quantity, value against limit, frame (for messages)."""
+    lim = limits_arrays(table)
+    mid = 0.5 * (lim["hi"] + lim["lo"])
+    half = np.maximum(0.5 * (lim["hi"] - lim["lo"]), 0.5)
+    v = np.zeros_like(p)
+    v[1:] = np.diff(p, axis=0) / np.diff(t)[:, None]  # v[k]: into frame k; at rest before 0
+    a = np.zeros_like(p)
+    a[0] = v[0]
+    a[1:] = np.diff(v, axis=0) / np.diff(t)[:, None]
+    uses = {
+        "stroke": np.abs(p - mid) / half,
+        "speed": np.abs(v) / lim["v"],
+        "acceleration": np.abs(a) / lim["a"],
+    }
+    best: tuple[float, str, int, int] = (-1.0, "stroke", 0, 0)
+    for quantity, u in uses.items():
+        k, i = np.unravel_index(int(np.argmax(u)), u.shape)
+        if float(u[k, i]) > best[0]:
+            best = (float(u[k, i]), quantity, int(k), int(i))
+    _, what, frame, axis = best
+    use = float(uses[what][frame, axis])
+    if what == "stroke":
+        detail = (
+            f"position {p[frame, axis]:.0f} pulses outside the stroke "
+            f"[{lim['lo'][axis]:.0f}, {lim['hi'][axis]:.0f}]"
+        )
+    elif what == "speed":
+        detail = f"speed {abs(v[frame, axis]):.6g} > {lim['v'][axis]:.6g} pulses/s"
+    else:
+        detail = f"acceleration {abs(a[frame, axis]):.6g} > {lim['a'][axis]:.6g} pulses/s^2"
+    where = (
+        f"frame {frame} (t = {t[frame]:.3f} s)"
+        if frame < n_frames
+        else "after the last frame (the ride does not end at rest)"
+    )
+    return f"actuator {names[axis]!r} {what} {use:.3f} x its limit at {where}: {detail}"

@@ -1,0 +1,595 @@
+"""Mutation fuzzing of what comes in: ride files and configuration files.
+
+Acceptance (issue 10): 100 000 mutated ride files and 10 000 mutated configuration files give
+only motioncue's own errors (:class:`~motioncue.MotioncueError`), never another exception,
+and nothing is sent for a refused ride.
+
+Rides: small valid rides (a few frames, made with ``save_ride``'s writer for
+stewart6-linear/mbox6 and seat3/mbox3) are mutated byte-wise (bit flips, truncation,
+insertion, deletion, overwrites, on the compressed file and on an uncompressed variant) and
+structurally (header JSON rewritten with wrong types and values, or replaced by null, a list,
+a number; arrays swapped, re-typed, re-shaped, given extreme values; members removed,
+duplicated, renamed; ``.npy`` headers forged with absurd shapes, dtypes and versions; zip
+compression methods and flags patched). Each case runs the player's path: ``load_ride`` ->
+``check_ride_for`` -> (if accepted) ``play_ride`` into an in-memory transport. Every frame
+sent for an accepted ride is decoded here from the MBOX manual's layout (4.2.9: big-endian
+header of six u16, Line u32, Time u32 ms, n x i32 positions, BaseDout, DAC1, DAC2, ExtDout
+u16) and checked, on those whole-millisecond times and from park at rest, against the limits
+table, by finite differences written here.
+
+The default run does all 100 000 ride cases (two worker processes; about 30 s on the 2-core
+machine) and the 10 000 configuration cases; ``MOTIONCUE_FUZZ_RIDES`` /
+``MOTIONCUE_FUZZ_CONFIGS`` change the counts and ``MOTIONCUE_FUZZ_SEED`` the seed.
+"""
+
+from __future__ import annotations
+
+import io
+import json
+import math
+import os
+import random
+import re
+import struct
+import time
+import zipfile
+from collections import Counter
+from concurrent.futures import ProcessPoolExecutor
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pytest
+
+from motioncue import MotioncueError
+from motioncue._config import config_dir
+from motioncue.kinematics import load_platform
+from motioncue.output import load_controller
+from motioncue.pipeline import Ride, check_ride_for, load_ride, play_ride
+from motioncue.pipeline._ridefile import ride_bytes
+from motioncue.trajectory import ActuatorLimits
+
+N_RIDES = int(os.environ.get("MOTIONCUE_FUZZ_RIDES", "100000"))
+N_CONFIGS = int(os.environ.get("MOTIONCUE_FUZZ_CONFIGS", "10000"))
+SEED = int(os.environ.get("MOTIONCUE_FUZZ_SEED", "20261121"))
+RIGS = (("stewart6-linear", "mbox6"), ("seat3", "mbox3"))
+MBOX_HEAD = struct.Struct(">6H")
+
+
+# --------------------------------------------------------------------------- the rigs
+class MemoryTransport:
+    """Records every message; the player's only way out."""
+
+    def __init__(self) -> None:
+        self.sent: list[bytes] = []
+
+    def send(self, data: bytes, *, t_s: float | None = None) -> None:
+        self.sent.append(bytes(data))
+
+    def recv(self, timeout_s: float) -> bytes | None:
+        return None
+
+    def close(self) -> None:
+        pass
+
+    def __enter__(self) -> MemoryTransport:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        pass
+
+
+class Rig:
+    def __init__(self, platform_name: str, controller_name: str) -> None:
+        self.platform_name = platform_name
+        self.controller_name = controller_name
+        self.platform = load_platform(platform_name)
+        self.controller = load_controller(controller_name)
+        self.limits = ActuatorLimits.from_platform(self.platform, self.controller)
+        self.table = self.limits.to_pulses_table(self.platform)
+        self.park = self.platform.drives.to_pulses(self.platform.q_park).astype(np.int64)
+        self.n = self.platform.n_actuators
+
+    def rides(self) -> list[Ride]:
+        """Two small valid rides: 6 frames at 100 Hz with a little motion and effects, and
+        3 frames at 50 Hz at rest."""
+        out = []
+        for n_frames, rate, step in ((6, 100.0, 3), (3, 50.0, 0)):
+            pulses = np.repeat(self.park[None], n_frames, axis=0)
+            pulses[2:-2] += step
+            out.append(
+                Ride(
+                    platform=self.platform_name,
+                    controller=self.controller_name,
+                    rate_hz=rate,
+                    actuator_names=self.platform.actuator_names,
+                    t_s=np.arange(n_frames) / rate,
+                    pulses=pulses,
+                    dout=np.array([0, 5, 5, 7, 0, 0][:n_frames]),
+                    dacs=np.array([[0, 0], [100, 200], [100, 200], [0, 9], [0, 0], [0, 0]])[
+                        :n_frames
+                    ],
+                    limits={"actuators": self.table},
+                    source="fuzz",
+                    notes={"n": n_frames},
+                )
+            )
+        return out
+
+
+_RIGS: dict[str, Rig] = {}
+
+
+def _rig(platform_name: str, controller_name: str) -> Rig:
+    key = f"{platform_name}/{controller_name}"
+    if key not in _RIGS:
+        _RIGS[key] = Rig(platform_name, controller_name)
+    return _RIGS[key]
+
+
+# --------------------------------------------------------------------------- checking frames
+def _decode_mbox(msg: bytes, n_axes: int) -> tuple[int, np.ndarray, int, int, int, int]:
+    """(time ms, positions, BaseDout, DAC1, DAC2, ExtDout) of an MBOX 0x1301 frame."""
+    layout = struct.Struct(f">6HII{n_axes}i4H")
+    assert len(msg) == layout.size, f"frame of {len(msg)} bytes, expected {layout.size}"
+    fields = layout.unpack(msg)
+    confirm, _pass, function, channel = fields[:4]
+    assert confirm == 0x55AA and function == 0x1301
+    assert channel == (0 if n_axes == 3 else 1)
+    time_ms = fields[7]
+    pos = np.array(fields[8 : 8 + n_axes], dtype=float)
+    base, dac1, dac2, ext = fields[8 + n_axes :]
+    return time_ms, pos, base, dac1, dac2, ext
+
+
+def _check_sent(rig: Rig, sent: list[bytes]) -> None:
+    """Every frame within the limits on the controller's ms clock, from park at rest, and
+    ending parked at rest; outputs within the MBOX's ranges."""
+    assert sent, "an accepted ride sent nothing"
+    frames = [_decode_mbox(m, rig.n) for m in sent]
+    t = np.array([f[0] for f in frames], dtype=float) / 1000.0
+    p = np.array([f[1] for f in frames])
+    lo = np.array([r["stroke_pulses"][0] for r in rig.table], dtype=float)
+    hi = np.array([r["stroke_pulses"][1] for r in rig.table], dtype=float)
+    vmax = np.array([r["max_speed_pulses_s"] for r in rig.table])
+    amax = np.array([r["max_accel_pulses_s2"] for r in rig.table])
+    assert np.all(p >= lo) and np.all(p <= hi), "a frame outside the stroke"
+    dac_max = (rig.controller.parameters["Fn078"], rig.controller.parameters["Fn079"])
+    for _, _, base, d1, d2, ext in frames:
+        assert base <= 0xFFF and ext <= 0xFFF and d1 <= dac_max[0] and d2 <= dac_max[1]
+    # from park, at rest: the player's limiter starts from park one frame period before the
+    # first frame (the discrete definitions: v[k] = (p[k] - p[k-1]) / dt)
+    period = t[1] - t[0] if len(t) > 1 else 0.01
+    t_all = np.concatenate([[t[0] - period], t])
+    p_all = np.vstack([rig.park[None].astype(float), p])
+    dt = np.diff(t_all)
+    assert np.all(dt > 0), "two frames with one time stamp"
+    v = np.vstack([np.zeros((1, rig.n)), np.diff(p_all, axis=0) / dt[:, None]])
+    a = np.diff(v, axis=0) / dt[:, None]
+    assert np.all(np.abs(v) <= vmax * (1 + 1e-9)), "a frame above the speed limit"
+    assert np.all(np.abs(a) <= amax * (1 + 1e-9)), "a frame above the acceleration limit"
+    np.testing.assert_array_equal(p[-1], rig.park)  # parked
+    if len(p) > 1:
+        np.testing.assert_array_equal(p[-1], p[-2])  # at rest
+
+
+# --------------------------------------------------------------------------- ride mutations
+def _npy(arr: np.ndarray) -> bytes:
+    buf = io.BytesIO()
+    np.lib.format.write_array(buf, arr, allow_pickle=True)
+    return buf.getvalue()
+
+
+def _npy_forged(descr: str, shape: str, fortran: bool, payload: bytes, version: bytes) -> bytes:
+    header = f"{{'descr': {descr}, 'fortran_order': {fortran}, 'shape': {shape}, }}"
+    header += " " * ((64 - (len(header) + 11) % 64) % 64) + "\n"
+    raw = header.encode("latin1")
+    if version == b"\x01\x00":
+        return b"\x93NUMPY" + version + struct.pack("<H", len(raw) & 0xFFFF) + raw + payload
+    return b"\x93NUMPY" + version + struct.pack("<I", len(raw)) + raw + payload
+
+
+def _zip(members: list[tuple[str, bytes]], method: int) -> bytes:
+    buf = io.BytesIO()
+    with zipfile.ZipFile(buf, "w", compression=method) as zf:
+        for name, data in members:
+            zf.writestr(name, data)
+    return buf.getvalue()
+
+
+_WEIRD: list[Any] = [
+    None, [], {}, "", "x", "mbox6", "stewart6-linear", "seat3", 0, -1, 1, 2, 7, 10**30,
+    -(10**30), 1e308, -1e308, 1e-320, 0.5, float("nan"), float("inf"), -float("inf"), True,
+    False, [1, 2], ["1", "2", "3"], ["1", "2", "3", "4", "5", "6"], [None], [[[]]],
+    {"actuators": []}, {"actuators": None}, "\udcff" if False else "\u00e9\u4e2d", 100.0, 50.0,
+    99.99999999, 100.0000001, 1000.0, 1e4, 1e5, "100",
+]  # fmt: skip
+_HEADER_KEYS = [
+    "format", "format_version", "platform", "controller", "rate_hz", "actuator_names",
+    "n_frames", "limits", "effects", "source", "notes", "extra",
+]  # fmt: skip
+_ARRAYS = ("t_s", "pulses", "dout", "dacs")
+_DTYPES = [
+    np.float32, np.float16, np.int8, np.int16, np.int64, np.uint8, np.uint16, np.uint32,
+    np.uint64, np.bool_, np.complex128, object, "U3", "S4", "M8[s]", "m8[ms]", "V8",
+    [("a", "<i4"), ("b", "<f8")], ">f8", ">i4", np.float64, np.int32,
+]  # fmt: skip
+
+
+def _mutate_header(rng: random.Random, header: dict[str, Any]) -> bytes:
+    h = json.loads(json.dumps(header))
+    choice = rng.random()
+    if choice < 0.08:
+        whole = rng.choice([None, [], [h], 3, 2.5, "ride", True, [1, 2, 3]])
+        return json.dumps(whole).encode()
+    if choice < 0.14:
+        text = json.dumps(h)
+        options = [
+            text[: rng.randrange(len(text))].encode(),
+            b"\xff\xfe" + text.encode(),
+            text.encode("utf-16"),
+            b"[" * rng.choice([10, 1000, 100000]),
+            b'{"format": "motioncue-ride", "format_version": 1' + b"9" * 5000 + b"}",
+            text.replace("1", "1e999", 1).encode(),
+            b"",
+        ]
+        return rng.choice(options)
+    for _ in range(rng.randint(1, 3)):
+        key = rng.choice(_HEADER_KEYS)
+        op = rng.random()
+        if op < 0.25:
+            h.pop(key, None)
+        elif op < 0.35 and key in ("limits", "notes") and isinstance(h.get("limits"), dict):
+            rows = h.get("limits", {}).get("actuators") or [{}]
+            row = rng.choice(rows)
+            if isinstance(row, dict) and row:
+                row[rng.choice(list(row))] = rng.choice(_WEIRD)
+        else:
+            h[key] = rng.choice(_WEIRD)
+    return json.dumps(h).encode()
+
+
+def _mutate_array(rng: random.Random, arr: np.ndarray, name: str) -> bytes:
+    op = rng.randrange(9)
+    a = arr.copy()
+    if op == 0:  # dtype
+        dt = rng.choice(_DTYPES)
+        try:
+            return _npy(a.astype(dt))
+        except (TypeError, ValueError, OverflowError):
+            return _npy(np.array([str(x) for x in a.reshape(-1)], dtype=object))
+    if op == 1:  # shape
+        shapes = [a.reshape(-1), a[:-1], a[1:], a[None], np.zeros((0, *a.shape[1:]), a.dtype),
+                  np.array(a.reshape(-1)[0]), a.T, np.concatenate([a, a]), a[..., :1]]  # fmt: skip
+        return _npy(np.ascontiguousarray(rng.choice(shapes)))
+    if op == 2:  # extreme values
+        flat = a.reshape(-1).astype(np.float64 if name == "t_s" else np.int64)
+        k = rng.randrange(flat.size)
+        if name == "t_s":
+            flat[k] = rng.choice([math.nan, math.inf, -1.0, 1e300, flat[k] + 1e-3, 0.0, 5e6])
+        else:
+            flat[k] = rng.choice([-1, 2**31, -(2**31) - 1, 2**40, 0xFFF + 1, 0xFFFF, 0x10000,
+                                  10001, 32767, flat[k] + 10**6, flat[k] - 10**6])  # fmt: skip
+        return _npy(flat.reshape(a.shape))
+    if op == 3:  # fortran order
+        return _npy(np.asfortranarray(a))
+    if op == 4:  # scaled times / shuffled rows
+        if name == "t_s":
+            return _npy(a * rng.choice([0.5, 2.0, 1.001, 1 + 1e-8, 1000.0]))
+        rng_np = np.random.default_rng(rng.randrange(2**32))
+        return _npy(a[rng_np.permutation(len(a))])
+    if op in (5, 6):  # forged headers
+        descr = rng.choice(["'<f8'", "'<i4'", "'|O'", "'<U10'", "'<f8", "'zz'", "[('a', '<i4')]",
+                            "'<i8'", "'|V16'", "'<c16'", "123"])  # fmt: skip
+        shape = rng.choice(["(6,)", "(6, 6)", "(99999999999,)", "(10**9,)", "(-1,)",
+                            "(999999999999, 999999999999)", "()", "(6, 3)", "'x'",
+                            "(3, 2)", "(2**62, 2**62)", "(18446744073709551616,)"])  # fmt: skip
+        version = rng.choice([b"\x01\x00", b"\x02\x00", b"\x03\x00", b"\x09\x09"])
+        payload = a.tobytes()[: rng.randrange(a.nbytes + 1)] if rng.random() < 0.5 else a.tobytes()
+        return _npy_forged(descr, shape, rng.random() < 0.3, payload, version)
+    if op == 7:  # pickled object array
+        return _npy(np.array([a.tolist(), None, "x"], dtype=object))
+    data = bytearray(_npy(a))  # header bytes damaged
+    for _ in range(rng.randint(1, 4)):
+        data[rng.randrange(min(len(data), 128))] = rng.randrange(256)
+    return bytes(data)
+
+
+def _structural(rng: random.Random, ride: Ride) -> bytes:
+    arrays = {
+        "t_s": ride.t_s, "pulses": ride.pulses, "dout": ride.dout, "dacs": ride.dacs,
+    }  # fmt: skip
+    header = ride.header()
+    members: dict[str, bytes] = {k: _npy(v) for k, v in arrays.items()}
+    members["header"] = _npy(np.frombuffer(json.dumps(header).encode(), dtype=np.uint8))
+    for _ in range(rng.choice([1, 1, 1, 2, 3])):
+        op = rng.random()
+        if op < 0.35:
+            members["header"] = _npy(np.frombuffer(_mutate_header(rng, header), dtype=np.uint8))
+        elif op < 0.70:
+            name = rng.choice(_ARRAYS)
+            members[name] = _mutate_array(rng, arrays[name], name)
+        elif op < 0.78:  # swap two arrays (or the header with an array)
+            a, b = rng.sample([*_ARRAYS, "header"], 2)
+            if a in members and b in members:
+                members[a], members[b] = members[b], members[a]
+        elif op < 0.84:
+            members.pop(rng.choice([*_ARRAYS, "header"]), None)
+        elif op < 0.88:
+            name = rng.choice([*_ARRAYS, "header"])
+            members[name + rng.choice(["x", "", ".npy"])] = members.pop(name, b"")
+        elif op < 0.92:
+            members["header"] = _npy(np.array([json.dumps(header)]))  # header as a string array
+        else:
+            members["header"] = _npy(
+                np.frombuffer(json.dumps(header).encode(), dtype=np.uint8).astype(np.uint16)
+            )
+    order = list(members.items())
+    if rng.random() < 0.1:
+        order.append(rng.choice(order))  # a duplicated member
+    named = [(k if k.endswith(".npy") else k + ".npy", v) for k, v in order]
+    method = rng.choice([zipfile.ZIP_STORED, zipfile.ZIP_DEFLATED, zipfile.ZIP_DEFLATED,
+                         zipfile.ZIP_BZIP2, zipfile.ZIP_LZMA])  # fmt: skip
+    data = _zip(named, method)
+    if rng.random() < 0.1:
+        data = _zip_patch(rng, data)
+    return data
+
+
+def _zip_patch(rng: random.Random, data: bytes) -> bytes:
+    """Patch local/central headers: compression method, flags (encryption), sizes."""
+    out = bytearray(data)
+    sigs = [m.start() for m in re.finditer(rb"PK\x01\x02|PK\x03\x04", data)]
+    if not sigs:
+        return data
+    pos = rng.choice(sigs)
+    central = out[pos + 2 : pos + 4] == b"\x01\x02"
+    field = rng.choice(["method", "flags", "csize", "usize", "namelen"])
+    offsets = {  # local header / central header offsets
+        "method": (8, 10), "flags": (6, 8), "csize": (18, 20), "usize": (22, 24),
+        "namelen": (26, 28),
+    }  # fmt: skip
+    off = offsets[field][1 if central else 0] + pos
+    if field in ("method", "flags", "namelen"):
+        value = rng.choice([1, 6, 9, 14, 98, 99, 0xFFFF, 0x41])
+        out[off : off + 2] = struct.pack("<H", value)
+    else:
+        value = rng.choice([0, 1, 0xFFFFFFFF, 10**9, 2**31])
+        out[off : off + 4] = struct.pack("<I", value)
+    return bytes(out)
+
+
+def _bytewise(rng: random.Random, data: bytes) -> bytes:
+    b = bytearray(data)
+    for _ in range(rng.choice([1, 1, 2, 3, 5])):
+        if not b:
+            break
+        op = rng.randrange(6)
+        pos = rng.randrange(len(b))
+        if op == 0:
+            b[pos] ^= 1 << rng.randrange(8)
+        elif op == 1:
+            del b[rng.randrange(len(b) + 1) :]
+        elif op == 2:
+            b[pos:pos] = bytes(rng.randrange(256) for _ in range(rng.randint(1, 16)))
+        elif op == 3:
+            del b[pos : pos + rng.randint(1, 64)]
+        elif op == 4:
+            fill = rng.choice([0x00, 0xFF, rng.randrange(256)])
+            b[pos : pos + rng.randint(1, 8)] = bytes([fill]) * rng.randint(1, 8)
+        else:
+            b[pos:pos] = b[max(0, pos - 32) : pos]
+    return bytes(b)
+
+
+def _uncompressed(ride: Ride) -> bytes:
+    buf = io.BytesIO()
+    np.savez(
+        buf,
+        header=np.frombuffer(json.dumps(ride.header()).encode(), dtype=np.uint8),
+        t_s=ride.t_s,
+        pulses=ride.pulses,
+        dout=ride.dout,
+        dacs=ride.dacs,
+    )
+    return buf.getvalue()
+
+
+Base = tuple[Rig, Ride, bytes, bytes]
+
+
+def _case(rng: random.Random, bases: list[Base]) -> tuple[Rig, bytes, str]:
+    rig, ride, compressed, stored = rng.choice(bases)
+    r = rng.random()
+    if r < 0.25:
+        return rig, _bytewise(rng, compressed), "bytes/compressed"
+    if r < 0.45:
+        return rig, _bytewise(rng, stored), "bytes/stored"
+    data = _structural(rng, ride)
+    if rng.random() < 0.15:
+        return rig, _bytewise(rng, data), "structural+bytes"
+    return rig, data, "structural"
+
+
+def _play_flow(rig: Rig, data: bytes) -> tuple[str, MemoryTransport]:
+    """What ``motioncue play`` does with a ride file, into memory."""
+    link = MemoryTransport()
+    try:
+        ride = load_ride(data, name="fuzz.ride")
+        names = {"platform_name": rig.platform_name, "controller_name": rig.controller_name}
+        check_ride_for(ride, rig.platform, rig.controller, rig.limits, **names)
+    except MotioncueError as exc:
+        assert not link.sent
+        return type(exc).__name__, link
+    try:
+        play_ride(ride, rig.platform, rig.controller, rig.limits, link, paced=False)
+    except MotioncueError as exc:
+        return "play:" + type(exc).__name__, link
+    return "played", link
+
+
+def run_ride_cases(seed: int, start: int, count: int) -> tuple[Counter[str], list[str]]:
+    """Cases ``start .. start + count`` of the stream seeded by ``seed``; returns the outcome
+    counts and a description of every failure (at most 20)."""
+    bases = []
+    for names in RIGS:
+        rig = _rig(*names)
+        for ride in rig.rides():
+            bases.append((rig, ride, ride_bytes(ride), _uncompressed(ride)))
+    outcomes: Counter[str] = Counter()
+    failures: list[str] = []
+    for i in range(start, start + count):
+        rng = random.Random(seed * 1_000_003 + i)
+        rig, data, how = _case(rng, bases)
+        try:
+            outcome, link = _play_flow(rig, data)
+            if outcome == "played":
+                _check_sent(rig, link.sent)
+        except Exception as exc:  # anything but a MotioncueError is a failure
+            outcome = "FAIL"
+            if len(failures) < 20:
+                failures.append(f"case {i} ({how}): {type(exc).__name__}: {exc!s:.300}")
+        outcomes[outcome] += 1
+    return outcomes, failures
+
+
+def test_valid_base_rides_play_and_pass_the_frame_check() -> None:
+    """The fuzz's starting points are accepted and played (so mutations start from valid)."""
+    for names in RIGS:
+        rig = _rig(*names)
+        for ride in rig.rides():
+            for data in (ride_bytes(ride), _uncompressed(ride)):
+                outcome, link = _play_flow(rig, data)
+                assert outcome == "played"
+                _check_sent(rig, link.sent)
+
+
+def test_check_sent_catches_a_frame_beyond_the_limits() -> None:
+    """The frame checker of this file can fail: a frame at the stroke end right after park."""
+    rig = _rig("seat3", "mbox3")
+    ride = rig.rides()[0]
+    link = MemoryTransport()
+    play_ride(ride, rig.platform, rig.controller, rig.limits, link, paced=False)
+    layout = struct.Struct(f">6HII{rig.n}i4H")
+    fields = list(layout.unpack(link.sent[1]))
+    fields[8] = rig.table[0]["stroke_pulses"][1]
+    link.sent[1] = layout.pack(*fields)
+    with pytest.raises(AssertionError):
+        _check_sent(rig, link.sent)
+
+
+def test_mutated_ride_files_give_only_motioncue_errors_and_send_nothing_when_refused() -> None:
+    t0 = time.perf_counter()
+    workers = 2 if N_RIDES >= 2000 else 1
+    chunk = math.ceil(N_RIDES / workers)
+    jobs = [(SEED, k * chunk, min(chunk, N_RIDES - k * chunk)) for k in range(workers)]
+    outcomes: Counter[str] = Counter()
+    failures: list[str] = []
+    if workers == 1:
+        results = [run_ride_cases(*jobs[0])]
+    else:
+        import multiprocessing
+
+        ctx = multiprocessing.get_context("fork")
+        with ProcessPoolExecutor(workers, mp_context=ctx) as pool:
+            results = list(pool.map(run_ride_cases, *zip(*jobs, strict=True)))
+    for counts, fails in results:
+        outcomes.update(counts)
+        failures.extend(fails)
+    elapsed = time.perf_counter() - t0
+    print(f"\n{N_RIDES} mutated rides in {elapsed:.1f} s: {dict(outcomes)}")
+    assert sum(outcomes.values()) == N_RIDES
+    assert not failures, "\n".join(failures)
+    # the mutations reach every stage: refusals at load and at the rig check, and plays
+    assert outcomes["ConfigError"] > N_RIDES // 10
+    assert outcomes["played"] > 0
+    assert outcomes["LimitError"] > 0
+
+
+# --------------------------------------------------------------------------- configurations
+_CONFIG_VALUES = [
+    "99999999999999999999", "-99999999999999999999", "1e308", "-1e308", "1e-320", "nan",
+    "inf", "-inf", "-1", "0", "0.0", "-0.0", "1", "2", "3", "6", "12", '"x"', '""', "true",
+    "false", "[]", "[1, 2, 3]", "[1e308, 1e308, 1e308]", "[[1, 2, 3]]", "{}", "{ a = 1 }",
+    "1979-05-27", "0x7FFFFFFF", "4294967296", "65536", "-65536", "2147483648", "1e20",
+    "[0, 0, 0, 0, 0, 0]", "[-1, -1, -1, -1, -1, -1]", '["1", "2", "3"]', "0.5", "1e-9",
+    "[nan, nan, nan]", "[inf, 1, 1]", "1e6", "-1e6", "3000.0",
+]  # fmt: skip
+
+
+def _config_texts() -> list[tuple[str, str, str]]:
+    out = []
+    for kind in ("platforms", "controllers"):
+        for path in sorted(config_dir(kind).glob("*.toml")):
+            out.append((kind, path.name, path.read_text()))
+    return out
+
+
+def _mutate_config(rng: random.Random, text: str) -> str:
+    lines = text.splitlines()
+    for _ in range(rng.choice([1, 1, 1, 2, 3])):
+        idx = [i for i, ln in enumerate(lines) if "=" in ln and not ln.lstrip().startswith("#")]
+        if not idx:
+            break
+        i = rng.choice(idx)
+        key, _, value = lines[i].partition("=")
+        op = rng.random()
+        if op < 0.5:
+            lines[i] = f"{key}= {rng.choice(_CONFIG_VALUES)}"
+        elif op < 0.6:
+            del lines[i]
+        elif op < 0.7:
+            lines[i] = f"{key.strip()}_renamed = {value.strip()}"
+        elif op < 0.78:
+            lines.insert(i, lines[i])  # duplicated key (TOML error)
+        elif op < 0.86:
+            lines[i] = lines[i][: rng.randrange(len(lines[i]) + 1)]
+        elif op < 0.92:
+            lines[i] = f"{key}= {value.strip()}{rng.choice(['0000000000', '.5', 'e40', '*2'])}"
+        else:
+            j = rng.randrange(len(lines))
+            lines[i], lines[j] = lines[j], lines[i]
+    return "\n".join(lines) + "\n"
+
+
+@pytest.mark.filterwarnings("ignore::RuntimeWarning")  # absurd values overflow before refusal
+def test_mutated_config_files_give_only_motioncue_errors(tmp_path: Path) -> None:
+    t0 = time.perf_counter()
+    texts = _config_texts()
+    ok_platforms = [load_platform(n) for n in ("stewart6-linear", "seat3", "seat2-yaw")]
+    outcomes: Counter[str] = Counter()
+    failures: list[str] = []
+    for i in range(N_CONFIGS):
+        rng = random.Random(SEED * 7919 + i)
+        kind, name, text = rng.choice(texts)
+        mutated = _mutate_config(rng, text)
+        path = tmp_path / f"m{i % 50}-{name}"
+        path.write_text(mutated)
+        try:
+            if kind == "platforms":
+                platform = load_platform(path)
+                ActuatorLimits.from_platform(platform).to_pulses_table(platform)
+                for cname in ("mbox6", "imax6") if platform.n_actuators == 6 else ("mbox3",):
+                    try:
+                        lim = ActuatorLimits.from_platform(platform, load_controller(cname))
+                        lim.to_pulses_table(platform)
+                    except MotioncueError:
+                        pass
+            else:
+                controller = load_controller(path)
+                for platform in ok_platforms:
+                    if platform.n_actuators == controller.n_axes:
+                        lim = ActuatorLimits.from_platform(platform, controller)
+                        lim.to_pulses_table(platform)
+            outcomes["loaded"] += 1
+        except MotioncueError as exc:
+            outcomes[type(exc).__name__] += 1
+        except Exception as exc:
+            outcomes["FAIL"] += 1
+            if len(failures) < 20:
+                failures.append(f"case {i} ({name}): {type(exc).__name__}: {exc!s:.200}\n"
+                                f"{mutated}")  # fmt: skip
+    elapsed = time.perf_counter() - t0
+    print(f"\n{N_CONFIGS} mutated configs in {elapsed:.1f} s: {dict(outcomes)}")
+    assert not failures, "\n".join(failures)
+    assert outcomes["ConfigError"] > N_CONFIGS // 10 and outcomes["loaded"] > 0
