@@ -81,6 +81,7 @@ def run(args: argparse.Namespace) -> int:
     from ..output import load_controller, open_transport
     from ..pipeline._bridge import Bridge, BridgeConfig
     from ..pipeline._realtime import GateConfig
+    from ..pipeline._signals import SignalGuard
     from ..telemetry import open_source
     from ..trajectory import ActuatorLimits
     from ..washout import load_cueing
@@ -104,42 +105,45 @@ def run(args: argparse.Namespace) -> int:
     cueing = load_cueing(args.preset)
     # over UDP the IMAX and SC-MBOX report where their motors are: start from there
     q_start = "auto" if args.target.lower().startswith("udp:") else None
-    source = open_source(args.source)
-    try:
-        transport = open_transport(args.target)
+    # from here on SIGINT, SIGTERM, SIGHUP and SIGQUIT only set a flag: the bridge parks and
+    # nothing cuts the park or the summary short
+    with SignalGuard() as guard:
+        source = open_source(args.source)
         try:
-            bridge = Bridge(
-                platform, controller, cueing, source, transport, limits, config, q_start=q_start
-            )
-            start_notes = list(bridge.stage.notes)
-            for note in start_notes:
-                _say(f"motioncue bridge: note: {note}")
-            _say(
-                f"bridge: {source!r} -> {args.target} ({args.controller}, {args.platform}, "
-                f"preset {args.preset}, {config.rate_hz:g} Hz); Ctrl-C parks and exits"
-            )
-            final, signame = _serve(bridge, args.duration, quiet=args.quiet)
+            transport = open_transport(args.target)
+            try:
+                bridge = Bridge(
+                    platform, controller, cueing, source, transport, limits, config, q_start=q_start
+                )
+                start_notes = list(bridge.stage.notes)
+                for note in start_notes:
+                    _say(f"motioncue bridge: note: {note}")
+                _say(
+                    f"bridge: {source!r} -> {args.target} ({args.controller}, {args.platform}, "
+                    f"preset {args.preset}, {config.rate_hz:g} Hz); Ctrl-C parks and exits"
+                )
+                final = _serve(bridge, guard, args.duration, quiet=args.quiet)
+            finally:
+                transport.close()
         finally:
-            transport.close()
-    finally:
-        source.close()
-    _say(_summary(final))
-    for note in final.notes:
-        if note not in start_notes:
-            _say(f"motioncue bridge: note: {note}")
-    if not args.rt_priority and final.jitter_p99_ms > 1.0:
-        _say(
-            f"motioncue bridge: note: output jitter p99 {final.jitter_p99_ms:.2f} ms; other "
-            "programs delayed the frame loop: --rt-priority 10 (root or CAP_SYS_NICE) "
-            "prevents that"
-        )
-    if final.error is not None:
-        _say(f"motioncue bridge: error: {final.error}")
-        return 2
-    if signame is not None:
-        _say(f"motioncue bridge: stopped by {signame}; parked at rest")
-        return 130
-    return 0
+            source.close()
+        _say(_summary(final))
+        for note in final.notes:
+            if note not in start_notes:
+                _say(f"motioncue bridge: note: {note}")
+        if not args.rt_priority and final.jitter_p99_ms > 1.0:
+            _say(
+                f"motioncue bridge: note: output jitter p99 {final.jitter_p99_ms:.2f} ms; other "
+                "programs delayed the frame loop: --rt-priority 10 (root or CAP_SYS_NICE) "
+                "prevents that"
+            )
+        if final.error is not None:
+            _say(f"motioncue bridge: error: {final.error}")
+            return 2
+        if guard.first is not None:
+            _say(f"motioncue bridge: stopped by {guard.first}; parked at rest")
+            return 130
+        return 0
 
 
 def _say(line: str) -> None:
@@ -150,35 +154,33 @@ def _say(line: str) -> None:
         pass
 
 
-def _serve(bridge: Any, duration_s: float | None, *, quiet: bool) -> tuple[Any, str | None]:
+def _serve(bridge: Any, guard: Any, duration_s: float | None, *, quiet: bool) -> Any:
     """Run the bridge until the duration, a stop signal or a failure; park; final stats.
 
-    SIGINT, SIGTERM, SIGHUP and SIGQUIT only set a flag (:class:`SignalGuard`), so neither
-    they nor a second Ctrl-C can cut the park short; returns ``(stats, first signal)``.
+    ``guard`` (an active :class:`~motioncue.pipeline._signals.SignalGuard`) turns SIGINT,
+    SIGTERM, SIGHUP and SIGQUIT into a flag, so neither they nor a second Ctrl-C can cut
+    the park short.
     """
-    from ..pipeline._signals import SignalGuard
-
     try:
         tty = sys.stderr.isatty()
     except (OSError, ValueError):
         tty = False
-    with SignalGuard() as guard:
-        bridge.start()
-        t_end = math.inf if duration_s is None else time.monotonic() + duration_s
-        while bridge.running and not guard.event.is_set() and time.monotonic() < t_end:
-            guard.event.wait(min(0.5, max(0.0, t_end - time.monotonic())))
-            if not quiet:
-                _status(bridge.stats.status_line(), tty)
+    bridge.start()
+    t_end = math.inf if duration_s is None else time.monotonic() + duration_s
+    while bridge.running and not guard.event.is_set() and time.monotonic() < t_end:
+        guard.event.wait(min(0.5, max(0.0, t_end - time.monotonic())))
         if not quiet:
-            _status("parking ...", tty)
-        final = bridge.stop()
-        while not bridge.wait(1.0):  # the park takes as long as it takes; only SIGKILL ends it
-            final = bridge.stats
-        if bridge.stats.error != final.error or bridge.stats.state != final.state:
-            final = bridge.stats
-        if not quiet and tty:
-            _say("")
-    return final, guard.first
+            _status(bridge.stats.status_line(), tty)
+    if not quiet:
+        _status("parking ...", tty)
+    final = bridge.stop()
+    while not bridge.wait(1.0):  # the park takes as long as it takes; only SIGKILL ends it
+        final = bridge.stats
+    if bridge.stats.error != final.error or bridge.stats.state != final.state:
+        final = bridge.stats
+    if not quiet and tty:
+        _say("")
+    return final
 
 
 def _status(line: str, tty: bool) -> None:

@@ -156,6 +156,7 @@ def _play(args: argparse.Namespace) -> int:
     from ..kinematics import load_platform
     from ..output import load_controller, open_transport
     from ..pipeline import load_ride, play_ride
+    from ..pipeline._signals import SignalGuard
     from ..pipeline._stream import PlayAborted
     from ..trajectory import ActuatorLimits
 
@@ -187,42 +188,45 @@ def _play(args: argparse.Namespace) -> int:
         )
     # over UDP the IMAX and SC-MBOX report where their motors are: start from there
     q_start = "auto" if scheme == "udp" else None
-    _say(f"play: {args.ride} -> {target} ({ride.n_frames} frames, {ride.duration_s:.1f} s)")
-    error = None
-    with open_transport(target) as link:
-        try:
-            rep = play_ride(
-                ride, platform, controller, limits, link, speed=args.speed, paced=paced,
-                q_start=q_start,
-            )  # fmt: skip
-        except PlayAborted as exc:
-            if exc.report is None:
-                raise
-            rep, error = exc.report, str(exc)
-    for note in rep.notes:
-        _say(f"motioncue play: note: {note}")
-    if error is None and rep.refused_frames:
-        error = (
-            f"the controller refused {rep.refused_frames} of {rep.frame_replies} frames (buffer "
-            "full or not ready): the ride was not played as made; parked"
+    # from here on SIGINT, SIGTERM, SIGHUP and SIGQUIT only set a flag: the ride stops at the
+    # next frame, and nothing cuts the park or the summary short
+    with SignalGuard() as guard:
+        _say(f"play: {args.ride} -> {target} ({ride.n_frames} frames, {ride.duration_s:.1f} s)")
+        error = None
+        with open_transport(target) as link:
+            try:
+                rep = play_ride(
+                    ride, platform, controller, limits, link, speed=args.speed, paced=paced,
+                    q_start=q_start, stop=guard.event.is_set, handle_signals=False,
+                )  # fmt: skip
+            except PlayAborted as exc:
+                if exc.report is None:
+                    raise
+                rep, error = exc.report, str(exc)
+        for note in rep.notes:
+            _say(f"motioncue play: note: {note}")
+        if error is None and rep.refused_frames:
+            error = (
+                f"the controller refused {rep.refused_frames} of {rep.frame_replies} frames "
+                "(buffer full or not ready): the ride was not played as made; parked"
+            )
+        if error is not None:
+            outcome = "stopped on an error"
+        elif rep.interrupted:
+            outcome = f"interrupted and parked{f' ({guard.first})' if guard.first else ''}"
+        else:
+            outcome = "finished"
+        retried = f"; {rep.send_errors} send errors retried" if rep.send_errors else ""
+        _say(
+            f"sent {rep.frames_sent} frames ({rep.ride_frames_sent} of the ride, {rep.park_frames} "
+            f"parking); limiter changed {rep.clamped_frames}; late {rep.late_frames}{retried}; "
+            f"{outcome} in {rep.wall_s:.1f} s",
+            sys.stdout,
         )
-    if error is not None:
-        outcome = "stopped on an error"
-    elif rep.interrupted:
-        outcome = f"interrupted and parked{f' ({rep.signal})' if rep.signal else ''}"
-    else:
-        outcome = "finished"
-    retried = f"; {rep.send_errors} send errors retried" if rep.send_errors else ""
-    _say(
-        f"sent {rep.frames_sent} frames ({rep.ride_frames_sent} of the ride, {rep.park_frames} "
-        f"parking); limiter changed {rep.clamped_frames}; late {rep.late_frames}{retried}; "
-        f"{outcome} in {rep.wall_s:.1f} s",
-        sys.stdout,
-    )
-    if error is not None:
-        _say(f"motioncue play: error: {error}")
-        return 2
-    return 130 if rep.interrupted else 0
+        if error is not None:
+            _say(f"motioncue play: error: {error}")
+            return 2
+        return 130 if rep.interrupted else 0
 
 
 def controller_buffer(controller: Any) -> str:

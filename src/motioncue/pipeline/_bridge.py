@@ -163,7 +163,9 @@ class BridgeStats:
         Why the loop stopped, if it failed.
     notes : tuple of str
         Things the user should know that did not stop the loop (a refused real-time
-        priority).
+        priority, where the platform started).
+    send_errors : int
+        Transient send errors met and retried within their frame.
     """
 
     state: str
@@ -190,6 +192,7 @@ class BridgeStats:
     park_q_error: float
     error: str | None
     notes: tuple[str, ...] = ()
+    send_errors: int = 0
 
     def status_line(self) -> str:
         """One line for a terminal status display."""
@@ -570,4 +573,5 @@ class Bridge:
             park_q_error=self._park_err,
             error=self._error,
             notes=tuple(self._notes),
+            send_errors=self.stage.send_errors,
         )
