@@ -692,3 +692,23 @@ def test_checker_catches_a_jump(rig: Any) -> None:
         check_wire(lost, limits_table(), park, park)
     with pytest.raises(AssertionError, match="channel"):
         decode_wire([b"\x55\xaa\x00\x00\x13\x01\x00\x07" + bytes(44)])
+
+
+def test_imax_reports_its_position_too() -> None:
+    from motioncue.output._feedback import read_position
+    from motioncue.output.imax import ImaxEmulator
+
+    platform = load_platform(PLATFORM)
+    ctrl = load_controller("imax6")
+    lim = ActuatorLimits.from_platform(platform, ctrl)
+    with ImaxEmulator(ctrl) as emu, open_transport(f"udp://127.0.0.1:{emu.port}") as tr:
+        assert read_position(ctrl, tr) is not None
+        stage = OutputStage(platform, ctrl, lim, RATE_HZ, tr)
+        for _ in range(60):
+            stage.emit(np.asarray(platform.q_park) + 0.01)
+        rep = read_position(ctrl, tr, settle_s=3.0)
+        assert rep is not None and not rep.moving
+        np.testing.assert_array_equal(rep.pulses, stage.last_pulses)
+        assert not emu.violations
+    with open_transport("file:/dev/null") as tr:
+        assert read_position(ctrl, tr) is None  # a file cannot answer

@@ -243,6 +243,10 @@ class OutputStage:
                 # the EasySmc encoder leaves its state unchanged when it refuses a frame
                 cmds = self._encoder.encode_commands(self.t_s, frame, dout, dacs)
             else:
+                if self.frames == 0 and not np.array_equal(pulses, self.last_pulses):
+                    self._hold_first()  # sent: kept whatever happens to this frame
+                    if clock is not None:
+                        saved_clock = (clock.frame, clock._prev_ms, clock.t0_s)
                 msgs = self._encoder.encode(self.t_s, frame, dout, dacs)
                 for msg in msgs:  # one datagram per frame for the UDP controllers
                     self._send(msg)
@@ -262,6 +266,20 @@ class OutputStage:
             return pulses
         self._commit(q_out, q_target, pulses)
         return pulses
+
+    def _hold_first(self) -> None:
+        """Open the run with a frame where the motors are, at rest (outputs at zero).
+
+        The IMAX and SC-MBOX play the first frame of a run over their own jog time (IMAX
+        PA59, MBOX Fn013), not over one frame period; a first frame that moves would be
+        played that much faster. Starting with a frame at the start position makes every
+        move a frame-to-frame step on the frame clock. Called before the first moving frame
+        only (a ride that starts where the platform is needs none).
+        """
+        for msg in self._encoder.encode(self.t_s, [int(p) for p in self.last_pulses], 0, (0, 0)):
+            self._send(msg)
+        self.frames += 1
+        self.t_s += self.dt_s
 
     def _commit(self, q_out: np.ndarray, q_target: Any, pulses: np.ndarray) -> None:
         if not np.array_equal(q_out, np.asarray(q_target, dtype=float)):
