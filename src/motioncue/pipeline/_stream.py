@@ -23,6 +23,7 @@ from __future__ import annotations
 
 import errno
 import math
+import operator
 import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
@@ -81,18 +82,22 @@ def make_frame_encoder(controller: Any, rate_hz: float, start_pulses: Any = None
     return controller.frame_encoder(absolute_time=True)
 
 
-def _save(obj: Any) -> list[tuple[str, Any]]:
-    """The attributes of a limiter state (slotted, lists of floats and counters), copied."""
-    out = []
-    for name in type(obj).__slots__:
-        value = getattr(obj, name)
-        out.append((name, list(value) if isinstance(value, list) else value))
-    return out
+class _StateSaver:
+    """Copies of a limiter state's attributes (slotted: lists of floats and counters), taken
+    before each frame and put back if the frame is not sent."""
 
+    __slots__ = ("_get", "_names")
 
-def _restore(obj: Any, saved: list[tuple[str, Any]]) -> None:
-    for name, value in saved:
-        setattr(obj, name, value)
+    def __init__(self, state: Any) -> None:
+        self._names = tuple(type(state).__slots__)
+        self._get = operator.attrgetter(*self._names)
+
+    def save(self, state: Any) -> tuple[Any, ...]:
+        return tuple([v.copy() if type(v) is list else v for v in self._get(state)])
+
+    def restore(self, state: Any, saved: tuple[Any, ...]) -> None:
+        for name, value in zip(self._names, saved, strict=True):
+            setattr(state, name, value)
 
 
 @dataclass
@@ -146,6 +151,7 @@ class OutputStage:
     _state: Any = None
     _encoder: Any = None
     _streamer: Any = None
+    _saver: Any = None
 
     def __post_init__(self) -> None:
         from motioncue.trajectory import JerkLimiter, RealtimeLimiter
@@ -160,6 +166,7 @@ class OutputStage:
         self._limiter = limiter_cls(tight, self.dt_s)
         q0 = self._start_position()
         self._state = self._limiter.initial_state(q0)
+        self._saver = _StateSaver(self._state)
         self.last_pulses = self.platform.drives.to_pulses(np.asarray(q0, dtype=float))
         self._encoder = make_frame_encoder(self.controller, self.rate_hz, self.last_pulses)
         if self.controller.kind == "easysmc" and _is_serial(self.transport):
@@ -230,7 +237,7 @@ class OutputStage:
             The encoder refused the frame (output values, stroke of the controller).
         """
         state = self._state
-        saved = _save(state)
+        saved = self._saver.save(state)
         clock = getattr(self._encoder, "clock", None)
         saved_clock = None if clock is None else (clock.frame, clock._prev_ms, clock.t0_s)
         try:
@@ -251,7 +258,7 @@ class OutputStage:
                 for msg in msgs:  # one datagram per frame for the UDP controllers
                     self._send(msg)
         except BaseException:
-            _restore(state, saved)
+            self._saver.restore(state, saved)
             if saved_clock is not None and clock is not None:
                 clock.frame, clock._prev_ms, clock.t0_s = saved_clock
             raise
