@@ -4,9 +4,7 @@ from __future__ import annotations
 
 import argparse
 import math
-import signal
 import sys
-import threading
 import time
 from typing import Any
 
@@ -24,8 +22,10 @@ def register(sub: Any) -> None:
             "cueing, workspace limiting, inverse kinematics, actuator limits (the table "
             "'motioncue limits' prints), frames to --target. Starts parked and ramps in; when "
             "packets stop or the game pauses the platform fades to park and ramps back in on "
-            "resume. Ctrl-C or SIGTERM parks smoothly, then exits. A status line is refreshed "
-            "on stderr about twice a second."
+            "resume. Ctrl-C, SIGTERM, SIGHUP or SIGQUIT park smoothly (a second Ctrl-C does "
+            "not cut the park short), then exit with status 130; a failure parks too, then "
+            "exits with 2. Over udp:// the controller's reported position is the start. A "
+            "status line is refreshed on stderr about twice a second."
         ),
     )
     parser.add_argument(
@@ -81,6 +81,7 @@ def run(args: argparse.Namespace) -> int:
     from ..output import load_controller, open_transport
     from ..pipeline._bridge import Bridge, BridgeConfig
     from ..pipeline._realtime import GateConfig
+    from ..pipeline._signals import SignalGuard
     from ..telemetry import open_source
     from ..trajectory import ActuatorLimits
     from ..washout import load_cueing
@@ -106,79 +107,95 @@ def run(args: argparse.Namespace) -> int:
         rate_hz=config.rate_hz,
     )
     cueing = load_cueing(args.preset)
-    err = sys.stderr
-    source = open_source(args.source)
-    try:
-        transport = open_transport(args.target)
+    # over UDP the IMAX and SC-MBOX report where their motors are: start from there
+    q_start = "auto" if args.target.lower().startswith("udp:") else None
+    # from here on SIGINT, SIGTERM, SIGHUP and SIGQUIT only set a flag: the bridge parks and
+    # nothing cuts the park or the summary short
+    with SignalGuard() as guard:
+        source = open_source(args.source)
         try:
-            bridge = Bridge(platform, controller, cueing, source, transport, limits, config)
-            print(
-                f"bridge: {source!r} -> {args.target} ({args.controller}, {args.platform}, "
-                f"preset {args.preset}, {config.rate_hz:g} Hz); Ctrl-C parks and exits",
-                file=err,
-            )
-            final = _serve(bridge, args.duration, quiet=args.quiet)
-        finally:
-            transport.close()
-    finally:
-        source.close()
-    print(_summary(final), file=err)
-    for note in final.notes:
-        print(f"motioncue bridge: note: {note}", file=err)
-    if not args.rt_priority and final.jitter_p99_ms > 1.0:
-        print(
-            f"motioncue bridge: note: output jitter p99 {final.jitter_p99_ms:.2f} ms; other "
-            "programs delayed the frame loop: --rt-priority 10 (root or CAP_SYS_NICE) "
-            "prevents that",
-            file=err,
-        )
-    if final.error is not None:
-        print(f"motioncue bridge: error: {final.error}", file=err)
-        return 2
-    return 0
-
-
-def _serve(bridge: Any, duration_s: float | None, *, quiet: bool) -> Any:
-    """Run the bridge until the duration, Ctrl-C, SIGTERM or a failure; park; final stats."""
-    err = sys.stderr
-    tty = err.isatty()
-    term = threading.Event()
-    old_handler: Any = None
-    in_main = threading.current_thread() is threading.main_thread()
-    if in_main:
-        old_handler = signal.signal(signal.SIGTERM, lambda signum, frame: term.set())
-    try:
-        bridge.start()
-        t_end = math.inf if duration_s is None else time.monotonic() + duration_s
-        try:
-            while bridge.running and not term.is_set() and time.monotonic() < t_end:
-                term.wait(min(0.5, max(0.0, t_end - time.monotonic())))
-                if not quiet:
-                    _status(bridge.stats.status_line(), tty)
-        except KeyboardInterrupt:
-            pass
-        if not quiet:
-            _status("parking ...", tty)
-        while True:
+            transport = open_transport(args.target)
             try:
-                final = bridge.stop()
-                break
-            except KeyboardInterrupt:  # a second Ctrl-C: the park still finishes
-                print("\nmotioncue bridge: parking, please wait", file=err)
-        if not quiet and tty:
-            print(file=err)
-        return final
-    finally:
-        if in_main:
-            signal.signal(signal.SIGTERM, old_handler)
+                bridge = Bridge(
+                    platform, controller, cueing, source, transport, limits, config, q_start=q_start
+                )
+                start_notes = list(bridge.stage.notes)
+                for note in start_notes:
+                    _say(f"motioncue bridge: note: {note}")
+                _say(
+                    f"bridge: {source!r} -> {args.target} ({args.controller}, {args.platform}, "
+                    f"preset {args.preset}, {config.rate_hz:g} Hz); Ctrl-C parks and exits"
+                )
+                final = _serve(bridge, guard, args.duration, quiet=args.quiet)
+            finally:
+                transport.close()
+        finally:
+            source.close()
+        _say(_summary(final))
+        for note in final.notes:
+            if note not in start_notes:
+                _say(f"motioncue bridge: note: {note}")
+        if not args.rt_priority and final.jitter_p99_ms > 1.0:
+            _say(
+                f"motioncue bridge: note: output jitter p99 {final.jitter_p99_ms:.2f} ms; other "
+                "programs delayed the frame loop: --rt-priority 10 (root or CAP_SYS_NICE) "
+                "prevents that"
+            )
+        if final.error is not None:
+            _say(f"motioncue bridge: error: {final.error}")
+            return 2
+        if guard.first is not None:
+            _say(f"motioncue bridge: stopped by {guard.first}; parked at rest")
+            return 130
+        return 0
+
+
+def _say(line: str) -> None:
+    """One line on stderr; a terminal that is gone (SIGHUP) does not stop the program."""
+    try:
+        print(line, file=sys.stderr, flush=True)
+    except (OSError, ValueError):
+        pass
+
+
+def _serve(bridge: Any, guard: Any, duration_s: float | None, *, quiet: bool) -> Any:
+    """Run the bridge until the duration, a stop signal or a failure; park; final stats.
+
+    ``guard`` (an active :class:`~motioncue.pipeline._signals.SignalGuard`) turns SIGINT,
+    SIGTERM, SIGHUP and SIGQUIT into a flag, so neither they nor a second Ctrl-C can cut
+    the park short.
+    """
+    try:
+        tty = sys.stderr.isatty()
+    except (OSError, ValueError):
+        tty = False
+    bridge.start()
+    t_end = math.inf if duration_s is None else time.monotonic() + duration_s
+    while bridge.running and not guard.event.is_set() and time.monotonic() < t_end:
+        guard.event.wait(min(0.5, max(0.0, t_end - time.monotonic())))
+        if not quiet:
+            _status(bridge.stats.status_line(), tty)
+    if not quiet:
+        _status("parking ...", tty)
+    final = bridge.stop()
+    while not bridge.wait(1.0):  # the park takes as long as it takes; only SIGKILL ends it
+        final = bridge.stats
+    if bridge.stats.error != final.error or bridge.stats.state != final.state:
+        final = bridge.stats
+    if not quiet and tty:
+        _say("")
+    return final
 
 
 def _status(line: str, tty: bool) -> None:
-    if tty:
-        sys.stderr.write("\r" + line + "\x1b[K")
-    else:
-        sys.stderr.write(line + "\n")
-    sys.stderr.flush()
+    try:
+        if tty:
+            sys.stderr.write("\r" + line + "\x1b[K")
+        else:
+            sys.stderr.write(line + "\n")
+        sys.stderr.flush()
+    except (OSError, ValueError):
+        pass
 
 
 def _summary(st: Any) -> str:

@@ -41,7 +41,12 @@ def register(sub: Any) -> None:
     p.add_argument("--target", default=None, metavar="URL", help="default: the controller's")
     p.add_argument("--controller", default=None, help="default: the ride's controller")
     p.add_argument("--platform", default=None, help="default: the ride's platform")
-    p.add_argument("--speed", type=float, default=1.0, help="pacing factor (default 1 = real time)")
+    p.add_argument(
+        "--speed",
+        type=float,
+        default=1.0,
+        help="pacing factor (default 1 = real time; other values for pcap: and file: only)",
+    )
     p.set_defaults(run=_play)
 
     d = sub.add_parser(
@@ -168,6 +173,8 @@ def _play(args: argparse.Namespace) -> int:
     from ..kinematics import load_platform
     from ..output import load_controller, open_transport
     from ..pipeline import check_ride_for, load_ride, play_ride
+    from ..pipeline._signals import SignalGuard
+    from ..pipeline._stream import PlayAborted
     from ..trajectory import ActuatorLimits
 
     if not (0 < args.speed <= 1000):
@@ -190,34 +197,68 @@ def _play(args: argparse.Namespace) -> int:
         platform_name=platform_name, controller_name=controller_name,
     )  # fmt: skip
     target = args.target or controller.default_target
-    paced = not target.startswith(("file:", "pcap:"))
-    print(
-        f"play: {args.ride} -> {target} ({ride.n_frames} frames, {ride.duration_s:.1f} s)",
-        file=sys.stderr,
-    )
-    import signal
-    import threading
-
-    stop = threading.Event()
-
-    def on_term(signum: int, frame: Any) -> None:
-        stop.set()  # SIGTERM: stop the ride and park, as Ctrl-C does
-
-    previous = signal.signal(signal.SIGTERM, on_term)
-    try:
+    scheme = target.split(":", 1)[0].lower()
+    paced = scheme not in ("file", "pcap")
+    if args.speed != 1.0 and paced:
+        raise ConfigError(
+            f"--speed {args.speed:g} is only for pcap: and file: targets: a controller plays "
+            f"frames at their own time stamps, and its buffer ({controller_buffer(controller)}) "
+            "would overflow"
+        )
+    # over UDP the IMAX and SC-MBOX report where their motors are: start from there
+    q_start = "auto" if scheme == "udp" else None
+    # from here on SIGINT, SIGTERM, SIGHUP and SIGQUIT only set a flag: the ride stops at the
+    # next frame, and nothing cuts the park or the summary short
+    with SignalGuard() as guard:
+        _say(f"play: {args.ride} -> {target} ({ride.n_frames} frames, {ride.duration_s:.1f} s)")
+        error = None
         with open_transport(target) as link:
-            rep = play_ride(
-                ride, platform, controller, limits, link, speed=args.speed, paced=paced,
-                stop=stop.is_set,
-            )  # fmt: skip
-    finally:
-        signal.signal(signal.SIGTERM, previous)
-    print(
-        f"sent {rep.frames_sent} frames ({rep.ride_frames_sent} of the ride, {rep.park_frames} "
-        f"parking); limiter changed {rep.clamped_frames}; late {rep.late_frames}; "
-        f"{'interrupted and parked' if rep.interrupted else 'finished'} in {rep.wall_s:.1f} s"
-    )
-    return 130 if rep.interrupted else 0
+            try:
+                rep = play_ride(
+                    ride, platform, controller, limits, link, speed=args.speed, paced=paced,
+                    q_start=q_start, stop=guard.event.is_set, handle_signals=False,
+                )  # fmt: skip
+            except PlayAborted as exc:
+                if exc.report is None:
+                    raise
+                rep, error = exc.report, str(exc)
+        for note in rep.notes:
+            _say(f"motioncue play: note: {note}")
+        if error is None and rep.refused_frames:
+            error = (
+                f"the controller refused {rep.refused_frames} of {rep.frame_replies} frames "
+                "(buffer full or not ready): the ride was not played as made; parked"
+            )
+        if error is not None:
+            outcome = "stopped on an error"
+        elif rep.interrupted:
+            outcome = f"interrupted and parked{f' ({guard.first})' if guard.first else ''}"
+        else:
+            outcome = "finished"
+        retried = f"; {rep.send_errors} send errors retried" if rep.send_errors else ""
+        _say(
+            f"sent {rep.frames_sent} frames ({rep.ride_frames_sent} of the ride, {rep.park_frames} "
+            f"parking); limiter changed {rep.clamped_frames}; late {rep.late_frames}{retried}; "
+            f"{outcome} in {rep.wall_s:.1f} s",
+            sys.stdout,
+        )
+        if error is not None:
+            _say(f"motioncue play: error: {error}")
+            return 2
+        return 130 if rep.interrupted else 0
+
+
+def controller_buffer(controller: Any) -> str:
+    depth = getattr(controller, "buffer_frames", None)
+    return "a few commands" if depth is None else f"{depth} frames"
+
+
+def _say(line: str, stream: Any = None) -> None:
+    """One line; a terminal that is gone (SIGHUP) does not stop the program."""
+    try:
+        print(line, file=sys.stderr if stream is None else stream, flush=True)
+    except (OSError, ValueError):
+        pass
 
 
 def _demo(args: argparse.Namespace) -> int:

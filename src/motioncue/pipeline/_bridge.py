@@ -131,7 +131,8 @@ class BridgeStats:
     state : str
         ``"new"``; ``"parked"`` (at the park position, at rest); ``"parking"`` (gate closed,
         the limiter still on its way to park); ``"fading in"``, ``"live"``, ``"fading out"``;
-        ``"stopping"``, ``"stopped"`` or ``"failed"``.
+        ``"stopping"``, ``"stopped"``; ``"failed, parking"`` (a frame failed: parking at
+        once), then ``"failed"``.
     gain : float
         Cue gate gain in [0, 1] (0 = parked).
     frames_sent : int
@@ -162,7 +163,9 @@ class BridgeStats:
         Why the loop stopped, if it failed.
     notes : tuple of str
         Things the user should know that did not stop the loop (a refused real-time
-        priority).
+        priority, where the platform started).
+    send_errors : int
+        Transient send errors met and retried within their frame.
     """
 
     state: str
@@ -189,6 +192,7 @@ class BridgeStats:
     park_q_error: float
     error: str | None
     notes: tuple[str, ...] = ()
+    send_errors: int = 0
 
     def status_line(self) -> str:
         """One line for a terminal status display."""
@@ -257,9 +261,15 @@ class Bridge:
         The limits table in SI (``ActuatorLimits.from_platform(platform, controller, ...)``).
     config : BridgeConfig, optional
 
+    q_start : array_like or "auto", optional
+        Where the platform is (at rest) at the start: default parked (as after homing);
+        ``"auto"`` asks the controller (see :class:`~motioncue.pipeline.OutputStage`).
+
     Use ``bridge.start()``, read ``bridge.stats`` at will, ``bridge.stop()`` to park and end
-    (``with Bridge(...) as b:`` does both). The platform is assumed parked and at rest at the
-    start (as after homing).
+    (``with Bridge(...) as b:`` does both). If a frame fails (an exception anywhere in
+    :meth:`step`, a link that keeps failing) the loop parks at once by the same limiter and
+    ends in state ``"failed"`` with ``stats.error`` set; if even the park cannot be sent,
+    ``stats.error`` starts with ``PARK FAILED``.
     """
 
     def __init__(
@@ -271,6 +281,8 @@ class Bridge:
         transport: Any,
         limits: Any,
         config: BridgeConfig | None = None,
+        *,
+        q_start: Any = None,
     ) -> None:
         from motioncue.washout import ClassicalWashout
 
@@ -290,7 +302,9 @@ class Bridge:
         self.washout_state = self.washout.initial_state()
         self.gate = CueGate(cfg.gate)
         # built here so that configuration errors surface before start()
-        self.stage = OutputStage(platform, controller, limits, cfg.rate_hz, transport)
+        self.stage = OutputStage(
+            platform, controller, limits, cfg.rate_hz, transport, q_start=q_start
+        )
         self.period_s = 1.0 / cfg.rate_hz
         self._pose_park = [float(v) for v in platform.pose_park]
         self._stop = threading.Event()
@@ -309,7 +323,7 @@ class Bridge:
         self._rate_in_prev: tuple[float, int] | None = None
         self._rate_in = math.nan
         self._old_switch: float | None = None
-        self._notes: list[str] = []
+        self._notes: list[str] = list(self.stage.notes)
         # per-frame state of step()
         from motioncue.trajectory import limit_pose
 
@@ -392,9 +406,23 @@ class Bridge:
         try:
             self._loop()
             self._state = "stopped"
-        except BaseException as exc:  # recorded, reported by stats/stop; never silent
+        except BaseException as exc:  # recorded, reported by stats/stop; then park
             self._error = f"{type(exc).__name__}: {exc}"
+            self._state = "failed, parking"
+            self._park_after_failure()
             self._state = "failed"
+
+    def _park_after_failure(self) -> None:
+        """Park from wherever the last frame the link took left the platform, on time."""
+        from ._stream import park_stage
+
+        ticker = Ticker(self.period_s, self.config.spin_s)
+        try:
+            park_stage(self.stage, wait=lambda slot: ticker.wait())
+        except BaseException as exc:
+            self._error = f"{exc}; the loop had failed with {self._error}"
+        self._missed = ticker.missed
+        self._park_err = float(np.max(np.abs(self.stage.q - np.asarray(self._q_park))))
 
     def _loop(self) -> None:
         cfg = self.config
@@ -545,4 +573,5 @@ class Bridge:
             park_q_error=self._park_err,
             error=self._error,
             notes=tuple(self._notes),
+            send_errors=self.stage.send_errors,
         )

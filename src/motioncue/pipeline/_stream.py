@@ -3,12 +3,27 @@
 :class:`OutputStage` owns the safety guarantee of everything sent: every frame passes the
 real-time actuator limiter (with limits tightened by the pulse rounding, so the rounded
 pulses still respect the limits table), is encoded by the controller's frame encoder and
-sent. Parking is the same limiter driven to the park position until at rest there.
+sent. Parking is the same limiter driven to the park position until at rest there, with the
+effect outputs (digital outputs, DACs) at zero.
+
+A frame is atomic: the limiter state, the frame counter, the encoder's clock and the stage
+time advance only once the frame was encoded and handed to the link. An encoder that refuses
+a value (a DAC above full scale, a position outside the controller's stroke...) or a send
+that fails leaves the stage exactly where the motor last was, so the next frame (usually the
+first of the park) continues from there. Transient send errors (``ENOBUFS``, ``EAGAIN``,
+``EINTR``, ``ECONNREFUSED`` of an earlier datagram...) are retried within half a frame
+period and counted; a send that keeps failing raises :class:`~motioncue.TransportError`.
+
+:func:`play_ride` parks on every way out of a ride (its end, ``stop()``, SIGINT, SIGTERM,
+SIGHUP, SIGQUIT, any exception); the park itself is not interruptible (signals only set a
+flag while it runs). If the park cannot be sent it raises :class:`ParkFailed`.
 """
 
 from __future__ import annotations
 
+import errno
 import math
+import operator
 import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
@@ -16,12 +31,46 @@ from typing import Any
 
 import numpy as np
 
-from .._errors import LimitError
-from ._generate import pulse_rounding_limits
+from .._errors import ConfigError, LimitError, MotioncueError, TransportError
+from ..trajectory._derive import pulse_rounding_limits
 from ._realtime import wait_until
 from ._ridefile import Ride
+from ._signals import SignalGuard
 
-__all__ = ["OutputStage", "PlayReport", "make_frame_encoder", "play_ride", "receiver_throttle"]
+__all__ = [
+    "OutputStage",
+    "ParkFailed",
+    "PlayAborted",
+    "PlayReport",
+    "make_frame_encoder",
+    "park_stage",
+    "play_ride",
+    "receiver_throttle",
+]
+
+# errno values of a send worth retrying: the kernel is short of buffers, the call was
+# interrupted, or an ICMP error of an earlier datagram is reported on this one
+TRANSIENT_ERRNOS = frozenset(
+    getattr(errno, name)
+    for name in (
+        "ENOBUFS",
+        "EAGAIN",
+        "EWOULDBLOCK",
+        "EINTR",
+        "ECONNREFUSED",
+        "ENOMEM",
+        "EHOSTUNREACH",
+        "ENETUNREACH",
+    )
+    if hasattr(errno, name)
+)
+
+
+def _errno_of(exc: BaseException) -> int | None:
+    code = getattr(exc, "errno", None)
+    if code is None and exc.__cause__ is not None:
+        code = getattr(exc.__cause__, "errno", None)
+    return code if isinstance(code, int) else None
 
 
 def make_frame_encoder(controller: Any, rate_hz: float, start_pulses: Any = None) -> Any:
@@ -30,6 +79,24 @@ def make_frame_encoder(controller: Any, rate_hz: float, start_pulses: Any = None
     return controller.run_encoder(
         rate_hz, None if start_pulses is None else [int(p) for p in start_pulses]
     )
+
+
+class _StateSaver:
+    """Copies of a limiter state's attributes (slotted: lists of floats and counters), taken
+    before each frame and put back if the frame is not sent."""
+
+    __slots__ = ("_get", "_names")
+
+    def __init__(self, state: Any) -> None:
+        self._names = tuple(type(state).__slots__)
+        self._get = operator.attrgetter(*self._names)
+
+    def save(self, state: Any) -> tuple[Any, ...]:
+        return tuple([v.copy() if type(v) is list else v for v in self._get(state)])
+
+    def restore(self, state: Any, saved: tuple[Any, ...]) -> None:
+        for name, value in zip(self._names, saved, strict=True):
+            setattr(state, name, value)
 
 
 @dataclass
@@ -47,8 +114,23 @@ class OutputStage:
         Frame rate.
     transport : motioncue.output.Transport
         Where frames go.
-    q_start : array_like, optional
-        Where the platform is when the stage starts (default: parked, at rest).
+    q_start : array_like or "auto", optional
+        Where the platform is (at rest) when the stage starts. None (default): parked.
+        ``"auto"``: ask the controller (IMAX, SC-MBOX over ``udp://``) for its motor
+        positions and start there; if it cannot or does not answer, parked (``notes`` says
+        which). A position outside the limits, or a controller still playing frames, is
+        refused with :class:`~motioncue.LimitError` before anything is sent.
+    send_retries : int
+        Attempts after a transient send error, within half a frame period (0..100).
+
+    Attributes
+    ----------
+    frames, clamped_frames : int
+        Frames sent; frames the limiter changed.
+    send_errors : int
+        Transient send errors met (and retried).
+    notes : list of str
+        Things the user should know (where the stage started and why).
     """
 
     platform: Any
@@ -57,26 +139,33 @@ class OutputStage:
     rate_hz: float
     transport: Any
     q_start: Any = None
+    send_retries: int = 3
     frames: int = 0
     clamped_frames: int = 0
+    send_errors: int = 0
     t_s: float = 0.0
     last_pulses: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=np.int64))
+    notes: list[str] = field(default_factory=list)
     _limiter: Any = None
     _state: Any = None
     _encoder: Any = None
     _streamer: Any = None
+    _saver: Any = None
 
     def __post_init__(self) -> None:
         from motioncue.trajectory import JerkLimiter, RealtimeLimiter
 
+        if not (isinstance(self.send_retries, int) and 0 <= self.send_retries <= 100):
+            raise ConfigError(f"send_retries = {self.send_retries!r}; allowed: 0..100")
         self.dt_s = 1.0 / self.rate_hz
         tight = pulse_rounding_limits(self.limits, self.platform, self.dt_s)
         # a configured jerk limit needs the jerk-aware limiter (slower, still well inside a
         # frame); without one the acceleration-limited limiter is exact and cheaper
         limiter_cls = RealtimeLimiter if tight.j_max is None else JerkLimiter
         self._limiter = limiter_cls(tight, self.dt_s)
-        q0 = self.platform.q_park if self.q_start is None else np.asarray(self.q_start, float)
+        q0 = self._start_position()
         self._state = self._limiter.initial_state(q0)
+        self._saver = _StateSaver(self._state)
         self.last_pulses = self.platform.drives.to_pulses(np.asarray(q0, dtype=float))
         self._encoder = make_frame_encoder(self.controller, self.rate_hz, self.last_pulses)
         if self.controller.kind == "easysmc" and _is_serial(self.transport):
@@ -88,6 +177,41 @@ class OutputStage:
             self._streamer = EasySmcStreamer.for_controller(self.controller, link, self.rate_hz)
             self._streamer.send_all(self.controller.setup_commands())
 
+    def _start_position(self) -> np.ndarray:
+        park = np.asarray(self.platform.q_park, dtype=float)
+        if self.q_start is None:
+            return park
+        if isinstance(self.q_start, str):
+            if self.q_start != "auto":
+                raise ConfigError(f"q_start = {self.q_start!r}; allowed: None, 'auto', positions")
+            from motioncue.output._feedback import read_position
+
+            rep = read_position(self.controller, self.transport)
+            if rep is None:
+                self.notes.append(
+                    "start: the controller did not report its position; assuming parked at rest"
+                )
+                return park
+            if rep.moving:
+                raise LimitError(
+                    f"the controller reports it is still playing frames ({rep.depth} buffered, "
+                    f"motors at {list(rep.pulses)} pulses); wait until the platform stops"
+                )
+            q0 = np.asarray(self.platform.drives.from_pulses(np.asarray(rep.pulses)), float)
+            park_pulses = self.platform.drives.to_pulses(park)
+            off = int(np.max(np.abs(np.asarray(rep.pulses) - park_pulses)))
+            self.notes.append(
+                f"start: the controller reports motors at {list(rep.pulses)} pulses "
+                f"({'parked' if off == 0 else f'{off} pulses from park'}); starting there"
+            )
+            if not self._limiter.is_admissible(q0):
+                raise LimitError(
+                    f"the controller reports motors at {list(rep.pulses)} pulses, outside the "
+                    "limits table; move the platform home (motioncue send ... home) first"
+                )
+            return q0
+        return np.asarray(self.q_start, dtype=float)
+
     @property
     def q(self) -> np.ndarray:
         """Position of the last frame sent (SI, limiter state)."""
@@ -98,29 +222,106 @@ class OutputStage:
         return bool(np.all(np.abs(np.asarray(self._state.v, dtype=float)) < 1e-12))
 
     def emit(self, q_target: Any, dout: int = 0, dacs: tuple[int, int] = (0, 0)) -> np.ndarray:
-        """Limit, encode and send one frame toward ``q_target (n,)`` (SI); returns the pulses."""
-        q_out = np.asarray(self._limiter.step(self._state, q_target), dtype=float)
-        if not np.all(np.isfinite(q_out)):  # the limiter guarantees this; never send NaN
-            raise LimitError("limiter produced a non-finite position; frame not sent")
-        if not np.array_equal(q_out, np.asarray(q_target, dtype=float)):
-            self.clamped_frames += 1
-        pulses = self.platform.drives.to_pulses(q_out)
-        frame = [int(p) for p in pulses]
+        """Limit, encode and send one frame toward ``q_target (n,)`` (SI); returns the pulses.
+
+        Atomic: on any exception (a refused output value, an encoder or link error) the
+        stage is left as it was before the call, at the last frame the link took.
+
+        Raises
+        ------
+        TransportError
+            The link kept failing (after ``send_retries`` retries of transient errors, or
+            at once for other errors).
+        ProtocolError, LimitError
+            The encoder refused the frame (output values, stroke of the controller).
+        """
+        state = self._state
+        saved = self._saver.save(state)
+        clock = getattr(self._encoder, "clock", None)
+        saved_clock = None if clock is None else (clock.frame, clock._prev_ms, clock.t0_s)
+        try:
+            q_out = np.asarray(self._limiter.step(state, q_target), dtype=float)
+            if not np.all(np.isfinite(q_out)):  # the limiter guarantees this; never send NaN
+                raise LimitError("limiter produced a non-finite position; frame not sent")
+            pulses = self.platform.drives.to_pulses(q_out)
+            frame = [int(p) for p in pulses]
+            if self._streamer is not None:
+                # the EasySmc encoder leaves its state unchanged when it refuses a frame
+                cmds = self._encoder.encode_commands(self.t_s, frame, dout, dacs)
+            else:
+                if self.frames == 0 and not np.array_equal(pulses, self.last_pulses):
+                    self._hold_first()  # sent: kept whatever happens to this frame
+                    if clock is not None:
+                        saved_clock = (clock.frame, clock._prev_ms, clock.t0_s)
+                msgs = self._encoder.encode(self.t_s, frame, dout, dacs)
+                for msg in msgs:  # one datagram per frame for the UDP controllers
+                    self._send(msg)
+        except BaseException:
+            self._saver.restore(state, saved)
+            if saved_clock is not None and clock is not None:
+                clock.frame, clock._prev_ms, clock.t0_s = saved_clock
+            raise
         if self._streamer is not None:
-            self._streamer.send_all(self._encoder.encode_commands(self.t_s, frame, dout, dacs))
-            if (self.frames + 1) % self._streamer.poll_every_frames == 0:
+            # A serial command may have reached the controller before the link failed, so
+            # the frame counts as sent whatever happens from here.
+            self._commit(q_out, q_target, pulses)
+            self._streamer.send_all(cmds)
+            if self.frames % self._streamer.poll_every_frames == 0:
                 for addr in self._streamer.sent:
                     self._streamer.poll(addr)
-        else:
-            for msg in self._encoder.encode(self.t_s, frame, dout, dacs):
-                self.transport.send(msg, t_s=self.t_s)
+            return pulses
+        self._commit(q_out, q_target, pulses)
+        return pulses
+
+    def _hold_first(self) -> None:
+        """Open the run with a frame where the motors are, at rest (outputs at zero).
+
+        The IMAX and SC-MBOX play the first frame of a run over their own jog time (IMAX
+        PA59, MBOX Fn013), not over one frame period; a first frame that moves would be
+        played that much faster. Starting with a frame at the start position makes every
+        move a frame-to-frame step on the frame clock. Called before the first moving frame
+        only (a ride that starts where the platform is needs none).
+        """
+        for msg in self._encoder.encode(self.t_s, [int(p) for p in self.last_pulses], 0, (0, 0)):
+            self._send(msg)
+        self.frames += 1
+        self.t_s += self.dt_s
+
+    def _commit(self, q_out: np.ndarray, q_target: Any, pulses: np.ndarray) -> None:
+        if not np.array_equal(q_out, np.asarray(q_target, dtype=float)):
+            self.clamped_frames += 1
         self.last_pulses = pulses
         self.frames += 1
         self.t_s += self.dt_s
-        return pulses
+
+    def _send(self, msg: bytes) -> None:
+        """Send one datagram, retrying transient errors within half a frame period."""
+        attempt = 0
+        deadline = math.inf
+        while True:
+            try:
+                self.transport.send(msg, t_s=self.t_s)
+                return
+            except OSError as exc:  # TransportError is an OSError
+                code = _errno_of(exc)
+                if code not in TRANSIENT_ERRNOS:
+                    if isinstance(exc, TransportError):
+                        raise
+                    raise TransportError(f"send: {exc}") from exc
+                self.send_errors += 1
+                attempt += 1
+                now = time.perf_counter()
+                if deadline == math.inf:
+                    deadline = now + 0.5 * self.dt_s
+                if attempt > self.send_retries or now >= deadline:
+                    raise TransportError(
+                        f"send failed {attempt} time(s) in a row within half a frame period "
+                        f"({500 * self.dt_s:.1f} ms): {exc}"
+                    ) from exc
+                time.sleep(min(deadline - now, 0.0002 * 2**attempt))
 
     def park_step(self) -> bool:
-        """One frame toward the park position; True once parked and at rest."""
+        """One frame toward the park position, outputs at zero; True once parked and at rest."""
         self.emit(self.platform.q_park)
         return self.parked
 
@@ -134,6 +335,66 @@ class OutputStage:
         span = float(np.max(lim.q_max - lim.q_min))
         v, a = float(np.min(lim.v_max)), float(np.min(lim.a_max))
         return math.ceil((span / v + 2 * v / a) / self.dt_s) + 10
+
+
+class PlayAborted(MotioncueError):
+    """A ride stopped on an error; the platform was parked. ``report`` says what was sent."""
+
+    def __init__(self, message: str, report: PlayReport | None = None) -> None:
+        super().__init__(message)
+        self.report = report
+
+
+class ParkFailed(PlayAborted):
+    """The park could not be sent (link down): the platform may not be at rest at park."""
+
+
+def park_stage(
+    stage: OutputStage,
+    *,
+    wait: Callable[[int], object] | None = None,
+    give_up_s: float = 1.0,
+) -> int:
+    """Drive ``stage`` to the park position and rest there; returns the frames sent.
+
+    Each frame goes through the same limiter with the effect outputs at zero. A frame that
+    fails (transport, encoder) is tried again at the next slot, the stage staying at the
+    last frame the link took, until failures have lasted ``give_up_s`` seconds of frames.
+
+    Parameters
+    ----------
+    wait : callable, optional
+        Called with the slot number (1, 2, ...) before each frame; blocks until its time
+        (None: as fast as possible).
+
+    Raises
+    ------
+    ParkFailed
+        The park could not be sent, or did not reach rest at park within the bound.
+    """
+    bound = stage.park_frames_bound()
+    max_failures = max(5, math.ceil(give_up_s * stage.rate_hz))
+    sent = failures = slot = 0
+    while not stage.parked:
+        if sent >= bound:
+            raise ParkFailed(f"PARK FAILED: not at rest at park after {sent} frames")
+        slot += 1
+        if wait is not None:
+            wait(slot)
+        try:
+            stage.park_step()
+        except Exception as exc:
+            failures += 1
+            if failures >= max_failures:
+                raise ParkFailed(
+                    f"PARK FAILED after {sent} park frames: {failures} frames in a row could "
+                    f"not be sent ({type(exc).__name__}: {exc}); the platform may be stopped "
+                    "away from park or still moving: check it before anyone gets on"
+                ) from exc
+            continue
+        failures = 0
+        sent += 1
+    return sent
 
 
 def receiver_throttle(
@@ -160,9 +421,41 @@ def _is_serial(transport: Any) -> bool:
     return isinstance(transport, SerialTransport)
 
 
+def _is_live(transport: Any) -> bool:
+    """A link to a real controller (UDP or serial), as opposed to a file or a capture."""
+    from motioncue.output._transports_udp import UdpTransport
+
+    return isinstance(transport, UdpTransport) or _is_serial(transport)
+
+
 @dataclass(frozen=True)
 class PlayReport:
-    """What ``play`` did: frames sent, clamped by the limiter, parking, timing."""
+    """What ``play`` did: frames sent, clamped by the limiter, parking, timing, the link.
+
+    Attributes
+    ----------
+    frames_sent, ride_frames_sent, park_frames : int
+        All frames sent; those of the ride; those of the park (after the ride or its stop).
+    clamped_frames : int
+        Frames the limiter changed.
+    interrupted : bool
+        The ride was stopped before its end (``stop()``, a signal, an error).
+    late_frames : int
+        Frames sent more than half a period after their time.
+    wall_s : float
+        Wall time of the whole play, park included (s).
+    signal : str or None
+        The first stop signal received (``"SIGTERM"``), if any.
+    refused_frames, frame_replies : int
+        Frames the controller said it did not take (buffer full, e-stop...), out of the
+        frame replies read (0 when the link cannot read replies).
+    send_errors : int
+        Transient send errors met and retried.
+    notes : tuple of str
+        Where the ride started and why, and similar remarks.
+    error : str or None
+        Why the ride stopped early, when an error stopped it (the platform was parked).
+    """
 
     frames_sent: int
     ride_frames_sent: int
@@ -171,6 +464,12 @@ class PlayReport:
     park_frames: int
     late_frames: int
     wall_s: float
+    signal: str | None = None
+    refused_frames: int = 0
+    frame_replies: int = 0
+    send_errors: int = 0
+    notes: tuple[str, ...] = ()
+    error: str | None = None
 
 
 def play_ride(
@@ -185,21 +484,34 @@ def play_ride(
     stop: Any = None,
     spin_s: float = 0.001,
     throttle: Any = None,
+    q_start: Any = None,
+    handle_signals: bool = True,
 ) -> PlayReport:
-    """Stream a ride's frames on time, from park, then park.
+    """Stream a ride's frames on time, then park; every way out of the ride parks.
 
-    The platform is assumed parked and at rest at the start (as after homing). Each frame
-    passes the real-time limiter; a ride made by ``generate`` is feasible and starts at park,
-    so the limiter changes nothing but rounding. A ride that starts elsewhere is ramped into
-    by the limiter. On ``KeyboardInterrupt`` (Ctrl-C) or when ``stop()`` returns True the
-    ride stops and the platform is parked smoothly before returning.
+    Each frame passes the real-time limiter; a ride made by ``generate`` is feasible and
+    starts at park, so the limiter changes nothing but rounding. A ride that starts
+    elsewhere (or a platform that starts elsewhere, ``q_start``) is ramped into by the
+    limiter. The ride ends at its last frame, when ``stop()`` returns True, on SIGINT,
+    SIGTERM, SIGHUP or SIGQUIT (``handle_signals``, main thread), on ``KeyboardInterrupt``,
+    or on any exception; in every case the platform is then parked at rest by the same
+    limiter, effect outputs at zero. Signals during the park are recorded and ignored.
+
+    The ride itself is not judged here: check it first with
+    :func:`~motioncue.pipeline.check_ride_for` (``motioncue play`` does, before anything is
+    sent), which refuses another rig's ride, a rate its controller cannot carry, outputs out
+    of range and frames outside the current limits on the controller's clock. Whatever the
+    ride holds, every frame sent here still passes the limiter.
 
     Parameters
     ----------
     speed : float
-        Playback speed factor for the pacing (frames keep their own time stamps).
+        Playback speed factor for the pacing (frames keep their own time stamps). Other
+        than 1 on a live link (``udp://``, serial) only with a ``throttle``: a receiver
+        in this process whose buffer holds the ride (the demo's emulator); a controller's
+        buffer (``controller.buffer_frames``) would overflow.
     paced : bool
-        False: send as fast as possible (files and pcaps).
+        False: send as fast as possible (``pcap:`` and ``file:`` targets only).
     stop : callable, optional
         Polled each frame; True stops the ride (then parks).
     spin_s : float
@@ -208,37 +520,92 @@ def play_ride(
     throttle : callable, optional
         Called with the number of frames sent before each frame; may block (back-pressure
         from a receiver that reports its progress).
+    q_start : array_like or "auto", optional
+        Where the platform is at the start (see :class:`OutputStage`); default parked.
+    handle_signals : bool
+        Install flag-only handlers for the stop signals while playing (main thread only).
+
+    Returns
+    -------
+    PlayReport
+
+    Raises
+    ------
+    PlayAborted
+        An error stopped the ride; the platform was parked (``exc.report``).
+    ParkFailed
+        The park could not be sent: the platform may not be at rest at park.
+    ConfigError
+        ``speed`` or ``paced`` not allowed for this link (nothing sent).
     """
-    stage = OutputStage(platform, controller, limits, ride.rate_hz, transport)
+    if not (math.isfinite(speed) and speed > 0):
+        raise ConfigError(f"speed = {speed!r} is invalid; allowed: a number > 0")
+    live = _is_live(transport)
+    if live and not paced:
+        raise ConfigError("paced=False sends as fast as possible: only for pcap: and file: targets")
+    if live and speed != 1.0 and throttle is None:
+        raise ConfigError(
+            f"speed {speed:g}: a controller plays frames at their own time stamps, so anything "
+            f"but 1 overflows its buffer ({getattr(controller, 'buffer_frames', '?')} frames); "
+            "other speeds are for pcap: and file: targets"
+        )
+    stage = OutputStage(platform, controller, limits, ride.rate_hz, transport, q_start=q_start)
+    from motioncue.output._feedback import FrameReplies
+
+    replies = FrameReplies(transport) if live and controller.kind != "easysmc" else None
+    guard = SignalGuard()
     q_frames = platform.drives.from_pulses(ride.pulses)
-    t0 = time.perf_counter()
-    late = 0
+    n = ride.n_frames
+    late = sent = 0
     interrupted = False
-    sent = 0
-    try:
-        for k in range(ride.n_frames):
-            if stop is not None and stop():
-                interrupted = True
-                break
-            if throttle is not None:
-                throttle(stage.frames)
-            if paced:
-                deadline = t0 + float(ride.t_s[k]) / speed
-                if wait_until(deadline, spin_s) > 0.5 * stage.dt_s / speed:
-                    late += 1
-            stage.emit(q_frames[k], int(ride.dout[k]), (int(ride.dacs[k, 0]), int(ride.dacs[k, 1])))
-            sent += 1
-    except KeyboardInterrupt:
-        interrupted = True
+    failure: Exception | None = None
+    park_error: ParkFailed | None = None
     park = 0
-    bound = stage.park_frames_bound()
-    t_park = time.perf_counter()
-    while not stage.parked and park < bound:
-        if paced:
-            wait_until(t_park + (park + 1) * stage.dt_s / speed, spin_s)
-        stage.park_step()
-        park += 1
-    return PlayReport(
+    t0 = time.perf_counter()
+    try:
+        if handle_signals:
+            guard.__enter__()
+        flagged = guard.event.is_set
+        try:
+            for k in range(n):
+                if flagged() or (stop is not None and stop()):
+                    interrupted = True
+                    break
+                if throttle is not None:
+                    throttle(stage.frames)
+                if paced:
+                    deadline = t0 + float(ride.t_s[k]) / speed
+                    if wait_until(deadline, spin_s) > 0.5 * stage.dt_s / speed:
+                        late += 1
+                stage.emit(
+                    q_frames[k], int(ride.dout[k]), (int(ride.dacs[k, 0]), int(ride.dacs[k, 1]))
+                )
+                sent += 1
+                if replies is not None:
+                    replies.poll()
+        except KeyboardInterrupt:
+            interrupted = True
+        except Exception as exc:  # whatever stopped the ride, the platform is parked
+            interrupted = True
+            failure = exc
+        t_park = time.perf_counter()
+
+        def wait(slot: int) -> None:
+            wait_until(t_park + slot * stage.dt_s / speed, spin_s)
+
+        frames_before = stage.frames
+        try:
+            park_stage(stage, wait=wait if paced else None)
+            if replies is not None:
+                _confirm_park(stage, replies, paced)
+        except ParkFailed as exc:
+            park_error = exc
+        park = stage.frames - frames_before
+    finally:
+        if handle_signals:
+            guard.__exit__(None, None, None)
+    error = None if failure is None else f"{type(failure).__name__}: {failure}"
+    report = PlayReport(
         frames_sent=stage.frames,
         ride_frames_sent=sent,
         clamped_frames=stage.clamped_frames,
@@ -246,4 +613,42 @@ def play_ride(
         park_frames=park,
         late_frames=late,
         wall_s=time.perf_counter() - t0,
+        signal=guard.first,
+        refused_frames=0 if replies is None else replies.refused,
+        frame_replies=0 if replies is None else replies.replies,
+        send_errors=stage.send_errors,
+        notes=tuple(stage.notes),
+        error=error,
+    )
+    if park_error is not None:
+        if error is not None:
+            park_error.args = (f"{park_error} (the ride had stopped at frame {sent}: {error})",)
+        park_error.report = report
+        raise park_error
+    if failure is not None:
+        raise PlayAborted(
+            f"ride stopped at frame {sent} of {n} ({error}); the platform was parked at rest",
+            report,
+        ) from failure
+    return report
+
+
+def _confirm_park(stage: OutputStage, replies: Any, paced: bool, tries: int = 50) -> None:
+    """Read the replies to the last frames; while the controller answers the final park
+    frame with a refusal (buffer full), send it again (at rest at park) until taken."""
+    if replies.replies == 0:
+        replies.poll(0.05)
+        if replies.replies == 0:
+            return  # this controller does not answer frames: nothing to confirm
+    for _ in range(tries):
+        last = stage.frames - 1
+        replies.poll(0.25, until_frame=last)
+        if replies.last_refused_frame != last:
+            return
+        if paced:
+            time.sleep(stage.dt_s)
+        stage.park_step()
+    raise ParkFailed(
+        f"PARK NOT CONFIRMED: the controller refused the final park frame {tries} times "
+        f"({replies.refused} frames refused in all); check the platform"
     )

@@ -1,0 +1,222 @@
+"""What an IMAX or SC-MBOX tells the host back: where the platform is, and which frames it
+refused.
+
+* :func:`read_position` asks the controller for its motor positions with one register read
+  (MBOX 0x1101 on channel 0, the Dn status registers: actual positions Dn06.., commanded
+  positions Dn0C.., buffer depth Dn4B, manual 003 section 6.1; IMAX 0x1101 on channel 0, the
+  DP registers: positions DP06.., receive / use pointers DP48 / DP49, manual 000 2.3.3).
+  A link that cannot answer (``pcap:``, ``file:``, serial) or a controller that does not
+  answer within the timeout gives ``None``: the caller then assumes the park position.
+* :class:`FrameReplies` counts the frame replies waiting on a link without blocking: both
+  kinds answer a frame 0x1301 / 0x1401 with 0x1x02 when it was taken and another last digit
+  when it was not (MBOX 0x1x03 buffer full, 0x1x04 short frame; IMAX 0x1x03 error, e.g.
+  Err21 buffer overflow, 0x1x04 e-stop active, 0x1x05 command error).
+"""
+
+from __future__ import annotations
+
+import struct
+import time
+from collections.abc import Sequence
+from dataclasses import dataclass
+from typing import Any
+
+from .._errors import MotioncueError, ProtocolError
+
+__all__ = ["FrameReplies", "ReportedPosition", "read_position"]
+
+_HEAD = struct.Struct(">HHHH")  # confirm, pass, function, channel
+_FRAME_NO = struct.Struct(">I")  # frame number right after the 12-byte header
+_CONFIRM_MAIN = 0x55AA
+_FRAME_BASES = (0x1300, 0x1400, 0x1800, 0x1900)  # timed and vibration frames (and replies)
+
+
+@dataclass(frozen=True)
+class ReportedPosition:
+    """Motor positions a controller reported.
+
+    Attributes
+    ----------
+    pulses : tuple of int
+        Actual motor positions (encoder pulses), one per axis.
+    moving : bool
+        The controller still had frames to play (buffer depth > 0, or actual and
+        commanded positions differ) when it last answered.
+    depth : int
+        Frames in its buffer at that time.
+    """
+
+    pulses: tuple[int, ...]
+    moving: bool
+    depth: int
+
+
+def _signed32(lo: int, hi: int) -> int:
+    v = lo | hi << 16
+    return v - (1 << 32) if v & 0x80000000 else v
+
+
+def _words(values: Sequence[int], addresses: Sequence[int]) -> tuple[int, ...]:
+    return tuple(_signed32(values[a], values[a + 1]) for a in addresses)
+
+
+def _mbox_read(controller: Any) -> tuple[bytes, Any]:
+    from .mbox._emulator import _DX_ACTUAL, _DX_COMMAND
+    from .mbox._messages import CHANNEL_DX, RegisterRead, RegisterReadReply, decode
+
+    n = controller.n_axes
+    count = 0x4C  # Dn00 .. Dn4B: positions, commanded positions, buffer depth
+
+    def parse(data: bytes) -> ReportedPosition | None:
+        try:
+            msg = decode(data)
+        except ProtocolError:
+            return None
+        if not (
+            isinstance(msg, RegisterReadReply)
+            and msg.channel == CHANNEL_DX
+            and msg.start == 0
+            and len(msg.values) == count
+        ):
+            return None
+        actual = _words(msg.values, _DX_ACTUAL[:n])
+        command = _words(msg.values, _DX_COMMAND[:n])
+        depth = msg.values[0x4B]
+        return ReportedPosition(actual, depth > 0 or actual != command, depth)
+
+    return RegisterRead(CHANNEL_DX, 0, count).encode(), parse
+
+
+def _imax_read(controller: Any) -> tuple[bytes, Any]:
+    from .imax._emulator import _DP_POS
+    from .imax._messages import CHANNEL_DP, RegisterRead, RegisterReply, ReplyStatus, decode
+
+    n = controller.n_axes
+    count = 0x4A  # DP00 .. DP49: positions, receive and use pointers
+
+    def parse(data: bytes) -> ReportedPosition | None:
+        try:
+            msg = decode(data)
+        except ProtocolError:
+            return None
+        if not (
+            isinstance(msg, RegisterReply)
+            and msg.function == 0x1102
+            and msg.status == ReplyStatus.OK
+            and msg.start == 0
+            and len(msg.values) == count
+        ):
+            return None
+        depth = (msg.values[0x48] - msg.values[0x49]) & 0xFFFF
+        return ReportedPosition(_words(msg.values, _DP_POS[:n]), depth > 0, depth)
+
+    return RegisterRead(CHANNEL_DP, 0, count).encode(), parse
+
+
+def read_position(
+    controller: Any, transport: Any, *, timeout_s: float = 0.2, settle_s: float = 1.0
+) -> ReportedPosition | None:
+    """Ask the controller where its motors are; ``None`` if it cannot or does not say.
+
+    Parameters
+    ----------
+    controller
+        An IMAX or SC-MBOX description (other kinds: ``None``).
+    transport
+        The link; one without ``request`` (``pcap:``, ``file:``, serial) gives ``None``.
+    timeout_s : float
+        How long to wait for each reply (s).
+    settle_s : float
+        While the controller reports it is still playing frames, ask again for up to this
+        long (s); the last answer is returned (``moving`` tells whether it settled).
+
+    Returns
+    -------
+    ReportedPosition or None
+    """
+    kind = getattr(controller, "kind", None)
+    if kind not in ("mbox", "imax") or getattr(transport, "request", None) is None:
+        return None
+    request, parse = (_mbox_read if kind == "mbox" else _imax_read)(controller)
+    deadline = time.monotonic() + settle_s
+    last: ReportedPosition | None = None
+    while True:
+        try:
+            reply = transport.request(
+                request, lambda d: parse(d) is not None, timeout_s=timeout_s, retries=0
+            )
+        except MotioncueError:
+            return last
+        last = parse(reply)
+        if last is None or not last.moving or time.monotonic() >= deadline:
+            return last
+        time.sleep(0.02)
+
+
+class FrameReplies:
+    """Counts frame replies waiting on a link (never blocks).
+
+    Parameters
+    ----------
+    transport
+        Anything with ``recv(timeout_s)``; a link without it counts nothing.
+
+    Attributes
+    ----------
+    accepted, refused : int
+        Frame replies that said the frame was taken / not taken.
+    refused_codes : dict[int, int]
+        Refusals by reply function code (``0x1303`` MBOX buffer full, IMAX error...).
+    last_refused_frame : int or None
+        Number of the newest refused frame.
+    """
+
+    def __init__(self, transport: Any) -> None:
+        recv = getattr(transport, "recv", None)
+        self._recv = recv
+        self.accepted = 0
+        self.refused = 0
+        self.refused_codes: dict[int, int] = {}
+        self.last_refused_frame: int | None = None
+        self.last_accepted_frame: int | None = None
+
+    @property
+    def replies(self) -> int:
+        return self.accepted + self.refused
+
+    def poll(self, wait_s: float = 0.0, until_frame: int | None = None) -> None:
+        """Read every reply already waiting; with ``wait_s``, keep reading for up to that
+        long (stopping early once frame ``until_frame`` has been answered)."""
+        recv = self._recv
+        if recv is None:
+            return
+        deadline = time.monotonic() + wait_s
+        while True:
+            try:
+                data = recv(max(0.0, deadline - time.monotonic()))
+            except (OSError, MotioncueError):
+                return
+            if data is None:  # nothing more within the wait
+                return
+            number = self._count(data)
+            if until_frame is not None and number == until_frame:
+                deadline = 0.0  # answered: only read what is already waiting
+
+    def _count(self, data: bytes) -> int | None:
+        if len(data) < 16:
+            return None
+        confirm, passcode, function, _channel = _HEAD.unpack_from(data)
+        if confirm != _CONFIRM_MAIN or passcode or function & 0xFFF0 not in _FRAME_BASES:
+            return None
+        status = function & 0xF
+        if status == 1:  # a frame, not a reply (our own broadcast echoed back)
+            return None
+        number = int(_FRAME_NO.unpack_from(data, 12)[0])
+        if status == 2:
+            self.accepted += 1
+            self.last_accepted_frame = number
+        else:
+            self.refused += 1
+            self.refused_codes[function] = self.refused_codes.get(function, 0) + 1
+            self.last_refused_frame = number
+        return number
