@@ -24,8 +24,8 @@ def register(sub: Any) -> None:
             "cueing, workspace limiting, inverse kinematics, actuator limits (the table "
             "'motioncue limits' prints), frames to --target. Starts parked and ramps in; when "
             "packets stop or the game pauses the platform fades to park and ramps back in on "
-            "resume. Ctrl-C or SIGTERM parks smoothly, then exits. A status line is refreshed "
-            "on stderr about twice a second."
+            "resume. Ctrl-C or SIGTERM parks smoothly, then exits; so does the end of a "
+            "replayed recording. A status line is refreshed on stderr about twice a second."
         ),
     )
     parser.add_argument(
@@ -147,7 +147,12 @@ def _serve(bridge: Any, duration_s: float | None, *, quiet: bool) -> Any:
         bridge.start()
         t_end = math.inf if duration_s is None else time.monotonic() + duration_s
         try:
-            while bridge.running and not term.is_set() and time.monotonic() < t_end:
+            while (
+                bridge.running
+                and not bridge.source_finished
+                and not term.is_set()
+                and time.monotonic() < t_end
+            ):
                 term.wait(min(0.5, max(0.0, t_end - time.monotonic())))
                 if not quiet:
                     _status(bridge.stats.status_line(), tty)
