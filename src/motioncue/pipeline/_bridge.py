@@ -211,7 +211,9 @@ class BridgeStats:
             f" ms | latency p99 {f(self.latency_p99_ms, '.2f')} ms | clamped"
             f" {self.limiter_clamped_frames} lim {self.pose_clamped} ws | bad"
             f" {self.bad_packets}{f' ({bad})' if bad else ''} | missed {self.missed_deadlines}"
-        )
+            + ("".join(f" | {k}" for k, v in sorted(self.packet_reasons.items())
+                       if v and k.startswith("note: ")))
+        )  # fmt: skip
 
 
 class _Ring:
