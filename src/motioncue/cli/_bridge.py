@@ -24,8 +24,9 @@ def register(sub: Any) -> None:
             "packets stop or the game pauses the platform fades to park and ramps back in on "
             "resume. Ctrl-C, SIGTERM, SIGHUP or SIGQUIT park smoothly (a second Ctrl-C does "
             "not cut the park short), then exit with status 130; a failure parks too, then "
-            "exits with 2. Over udp:// the controller's reported position is the start. A "
-            "status line is refreshed on stderr about twice a second."
+            "exits with 2; the end of a replayed recording parks, then exits with 0. Over "
+            "udp:// the controller's reported position is the start. A status line is "
+            "refreshed on stderr about twice a second."
         ),
     )
     parser.add_argument(
@@ -171,7 +172,12 @@ def _serve(bridge: Any, guard: Any, duration_s: float | None, *, quiet: bool) ->
         tty = False
     bridge.start()
     t_end = math.inf if duration_s is None else time.monotonic() + duration_s
-    while bridge.running and not guard.event.is_set() and time.monotonic() < t_end:
+    while (
+        bridge.running
+        and not bridge.source_finished
+        and not guard.event.is_set()
+        and time.monotonic() < t_end
+    ):
         guard.event.wait(min(0.5, max(0.0, t_end - time.monotonic())))
         if not quiet:
             _status(bridge.stats.status_line(), tty)

@@ -112,10 +112,14 @@ def _generate(args: argparse.Namespace) -> int:
     kind, data, counters = load_generate_input(args.input)
     check_generate_size(kind, data, args.rate, args.input)
     if counters:
-        skipped = {k: v for k, v in counters.items() if k != "ok" and v}
+        skipped = {k: v for k, v in counters.items() if k.startswith("skipped") and v}
         print(
-            f"telemetry: {counters.get('ok', 0)} packets used; skipped {skipped}", file=sys.stderr
+            f"telemetry: {counters.get('sample', 0)} samples used; skipped {skipped}",
+            file=sys.stderr,
         )
+        for k, v in sorted(counters.items()):
+            if k.startswith("note: ") and v:
+                print(f"telemetry: {k} ({v} samples)", file=sys.stderr)
     bar = _Bar(not args.quiet)
     names = {"platform_name": args.platform, "controller_name": args.controller}
     if kind == "keyframes":

@@ -20,8 +20,9 @@ Per tick:
    While parked the stage is driven to the park position itself.
 
 Every frame passes the limiter, whatever the telemetry carries, so every frame respects the
-limits table of ``motioncue limits``. On :meth:`Bridge.stop` the gate fades out, the stage
-parks at rest, then the loop ends. One frame's work is :meth:`Bridge.step`, which tests and
+limits table of ``motioncue limits``. On :meth:`Bridge.stop`, or when the source reports
+``finished`` (the end of a replayed recording), the gate fades out, the stage parks at rest,
+then the loop ends. One frame's work is :meth:`Bridge.step`, which tests and
 simulations may call by hand on their own clock instead of starting the thread.
 
 On a busy PC the scheduler may hold the loop back by several milliseconds;
@@ -64,7 +65,10 @@ class TelemetryInput(Protocol):
 
     ``latest()`` returns the newest :class:`~motioncue.telemetry.TelemetrySample` (or None)
     without blocking; ``stats`` maps outcome reasons (``"skipped: truncated"``...) and the
-    counters ``datagrams``, ``samples``, ``receive errors`` to counts.
+    counters ``datagrams``, ``samples``, ``receive errors`` to counts. An optional boolean
+    property ``finished`` (the telemetry sources have it: False for live receivers, True at
+    the end of a replayed file) tells the bridge that nothing more will come: it then fades
+    out, parks and ends as on :meth:`Bridge.stop`. A source without it never finishes.
     """
 
     def latest(self) -> Any: ...
@@ -211,7 +215,9 @@ class BridgeStats:
             f" ms | latency p99 {f(self.latency_p99_ms, '.2f')} ms | clamped"
             f" {self.limiter_clamped_frames} lim {self.pose_clamped} ws | bad"
             f" {self.bad_packets}{f' ({bad})' if bad else ''} | missed {self.missed_deadlines}"
-        )
+            + ("".join(f" | {k}" for k, v in sorted(self.packet_reasons.items())
+                       if v and k.startswith("note: ")))
+        )  # fmt: skip
 
 
 class _Ring:
@@ -236,6 +242,19 @@ class _Ring:
         idx = (np.arange(n - k, n)) % size
         v = data[idx]
         return v[np.isfinite(v)]
+
+
+def _telemetry_notes(reasons: Mapping[str, int], finished: bool) -> tuple[str, ...]:
+    """Notes from the source: its ``note: ...`` counters (e.g. F1 angular velocity derived
+    from the orientation) and the end of a replay."""
+    notes = tuple(
+        f"telemetry: {k[len('note: ') :]} ({v} samples)"
+        for k, v in sorted(reasons.items())
+        if k.startswith("note: ") and v
+    )
+    if finished:
+        notes += ("telemetry: the source finished (end of the replay); faded out and parked",)
+    return notes
 
 
 def _percentile_ms(v: np.ndarray, q: float) -> float:
@@ -384,6 +403,14 @@ class Bridge:
     def running(self) -> bool:
         return self._thread is not None and self._thread.is_alive()
 
+    @property
+    def source_finished(self) -> bool:
+        """True once the telemetry source reports ``finished`` (end of a replay).
+
+        The loop then fades out, parks and ends by itself, as after :meth:`stop`.
+        """
+        return getattr(self.source, "finished", False) is True
+
     def __enter__(self) -> Bridge:
         return self.start()
 
@@ -435,7 +462,7 @@ class Bridge:
         ticker = Ticker(period, cfg.spin_s)
         while True:
             deadline = ticker.wait()
-            stopping = stop.is_set()
+            stopping = stop.is_set() or self.source_finished
             step(deadline, stopping)
             self._missed = ticker.missed
             if stopping:
@@ -461,8 +488,10 @@ class Bridge:
             to the current time (the deadline or just after it); when stepped by hand, to
             ``deadline_s`` itself.
         stopping : bool
-            Close the gate (fade out and park) whatever the telemetry says.
+            Close the gate (fade out and park) whatever the telemetry says; also done when
+            the source reports ``finished``.
         """
+        stopping = stopping or self.source_finished
         sample = self.source.latest()
         now = max(time.perf_counter(), deadline_s) if self._thread is not None else deadline_s
         if sample is not None:
@@ -572,6 +601,6 @@ class Bridge:
             fade_outs=gate.fade_outs,
             park_q_error=self._park_err,
             error=self._error,
-            notes=tuple(self._notes),
+            notes=tuple(self._notes) + _telemetry_notes(src, self.source_finished),
             send_errors=self.stage.send_errors,
         )

@@ -57,16 +57,57 @@ With ``G0 = 9.80665``, ``F = worldForwardDir / 32767``, ``R = worldRightDir / 32
 
 A car at rest on level ground (g-forces 0, F_y = R_y = 0, U_y = 1) gives ``(0, 0, G0)``.
 
+Orientation (``yaw``, ``pitch``, ``roll`` of CarMotionData, rad)
+-----------------------------------------------------------------
+With the car's local axes (left, up, forward) equal to the world axes (X, Y, Z) at zero
+angles, the orientation is the intrinsic yaw-pitch-roll rotation
+
+    R = Ry(yaw) Rx(pitch) Rz(roll)        (world <- local; Rx, Ry, Rz right-handed)
+
+so ``forward = (cos p sin y, -sin p, cos p cos y)`` and ``right = -R (1, 0, 0) = -(cos r cos y
++ sin r sin p sin y, sin r cos p, -cos r sin y + sin r sin p cos y)``. Relabelled to ISO 8855
+(x forward, y left, z up) these are exactly the ISO yaw (about up, nose left positive), pitch
+(about the left axis, nose down positive) and roll (about forward, right side down positive)
+of a Z-Y-X sequence, and the world up in body axes is ``up_in_body_from_angles(pitch, roll)``.
+Checked on every car of both real Motion captures: the float angles give the packed int16
+``worldForwardDir`` and ``worldRightDir`` (normalised: they are up to 1.7e-4 short) to one
+int16 step, 1/32767, signs included (e.g.
+pitch -0.0193 with forward Y +0.0193, roll +0.0241 with right Y -0.0241). Those cars are all
+nearly level, so the order of pitch and roll (a second-order effect, ~1e-6 here) is not
+seen in the data; yaw-pitch-roll is the order the names and ISO imply.
+
+Angular velocity without Motion Ex
+----------------------------------
+Motion Ex is sent for the player's car only and can be switched off; an older packet mix or a
+game set up that way sends Motion alone. Then the body rates come from the orientation of two
+consecutive Motion packets of the same session and player car, ``dt`` of session time apart
+(``0 < dt <=`` :data:`F1Decoder.max_orientation_dt_s`): the angle differences (yaw and roll
+wrapped into [-pi, pi)) over ``dt`` are the Euler-angle rates, turned into body rates by the
+Z-Y-X kinematic matrix evaluated at the mid-point angles::
+
+    w_x = roll' - yaw' sin(pitch)
+    w_y = pitch' cos(roll) + yaw' sin(roll) cos(pitch)
+    w_z = yaw' cos(roll) cos(pitch) - pitch' sin(roll)
+
+It is the mean rate over the last interval, so it lags the Motion Ex value by about
+``dt / 2``; the session time is a float32, so at 700 s of session ``dt`` is known to 61 us
+(0.4 % of a 60 Hz period). The first Motion packet after a gap (or of a session) has no
+predecessor and stays ``partial: no motion ex``. Each sample made this way is also counted
+under :data:`NOTE_W_FROM_ORIENTATION`, which the bridge, ``record`` and ``generate`` report.
+Near pitch +-90 deg (a car on its nose) the Euler angles are degenerate and the derived rate
+is unreliable; such values are caught by the range check or held by the washout.
+
 Pairing and pause
 -----------------
 A sample is emitted for each Motion packet, combined with the latest Motion Ex of the same
 session within :data:`F1Decoder.max_ex_age_s` of session time (the game sends both every
-frame; the Motion Ex may be a frame older). ``paused`` follows the Session packet's
-``gamePaused`` ("network game only" per EA) or ``isSpectating``, and is also set when Motion
-packets keep coming with a frozen ``sessionTime`` (:data:`FROZEN_REPEATS` repeats in a row,
-so one duplicated datagram does not pause). In single-player the game
-stops sending Motion packets when not in control (pause menu, replays): sources detect that
-as missing packets (``latest(max_age_s=...)``).
+frame; the Motion Ex may be a frame older); without one, with the angular velocity derived
+from the orientation (above). A Motion Ex always takes precedence. ``paused`` follows the
+Session packet's ``gamePaused`` ("network game only" per EA) or ``isSpectating``, and is also
+set when Motion packets keep coming with a frozen ``sessionTime`` (:data:`FROZEN_REPEATS`
+repeats in a row, so one duplicated datagram does not pause). In single-player the game stops
+sending Motion packets when not in control (pause menu, replays): sources detect that as
+missing packets (``latest(max_age_s=...)``).
 """
 
 from __future__ import annotations
@@ -77,7 +118,7 @@ from dataclasses import dataclass
 
 from .._errors import ConfigError
 from ._registry import GameInfo, register_game
-from ._sample import G0_M_S2, Decoder, DecodeResult
+from ._sample import G0_M_S2, Decoder, DecodeResult, Vec3
 
 __all__ = [
     "CAR_MOTION",
@@ -86,6 +127,7 @@ __all__ = [
     "MOTION_EX_CORE",
     "MOTION_EX_SIZES",
     "MOTION_SIZE",
+    "NOTE_W_FROM_ORIENTATION",
     "SESSION_HEAD",
     "F1Decoder",
     "F1Header",
@@ -120,6 +162,11 @@ FROZEN_REPEATS = 2
 """Motion packets repeating the previous one's session time this many times in a row mean the
 game is paused while still sending (time frozen): the samples are flagged ``paused``."""
 
+NOTE_W_FROM_ORIENTATION = (
+    "note: angular velocity derived from the Motion orientation (no Motion Ex packets)"
+)
+"""Counter key of the samples whose angular velocity was derived from the orientation."""
+
 _PLAUSIBLE_F1_FORMATS = range(2017, 2036)  # older/newer F1 games: "unsupported format"
 _ID_MOTION, _ID_SESSION, _ID_MOTION_EX = 0, 1, 13
 _MAX_PACKET_ID = 15
@@ -127,6 +174,11 @@ _EX_LOCAL_VELOCITY = 33  # float index in MOTION_EX_CORE
 _EX_ANGULAR_VELOCITY = 36
 _INV_NORM = 1.0 / 32767.0
 _VEC3 = struct.Struct("<3f")
+
+
+def _wrap_pi(angle_rad: float) -> float:
+    """``angle_rad`` wrapped into [-pi, pi) (rad)."""
+    return (angle_rad + math.pi) % (2.0 * math.pi) - math.pi
 
 
 @dataclass(frozen=True, slots=True)
@@ -174,22 +226,32 @@ class F1Decoder(Decoder):
     ``partial: motion ex stored``, ``state: session``, ``ignored: other packet id``,
     ``skipped: truncated``, ``skipped: wrong size``, ``skipped: foreign``,
     ``skipped: unsupported format``, ``skipped: bad player index``, ``skipped: non-finite``,
-    ``skipped: out of range``.
+    ``skipped: out of range``. Samples whose angular velocity was derived from the
+    orientation (no Motion Ex) are counted under ``sample`` and also under
+    :data:`NOTE_W_FROM_ORIENTATION`.
 
     Parameters
     ----------
     max_ex_age_s : float
         Largest session-time difference (s) between a Motion packet and the Motion Ex whose
         angular velocity it is paired with.
+    max_orientation_dt_s : float
+        Largest session-time difference (s) between two Motion packets whose orientations
+        are differentiated when there is no Motion Ex (the games send 10 to 60 Hz).
     """
 
     game = "f1"
 
-    def __init__(self, max_ex_age_s: float = 0.1) -> None:
+    def __init__(self, max_ex_age_s: float = 0.1, max_orientation_dt_s: float = 0.25) -> None:
         super().__init__()
         if not (math.isfinite(max_ex_age_s) and max_ex_age_s > 0):
             raise ConfigError(f"max_ex_age_s = {max_ex_age_s!r} must be a finite number > 0")
+        if not (math.isfinite(max_orientation_dt_s) and 0 < max_orientation_dt_s <= 1.0):
+            raise ConfigError(
+                f"max_orientation_dt_s = {max_orientation_dt_s!r} is invalid; allowed: (0, 1] s"
+            )
         self.max_ex_age_s = float(max_ex_age_s)
+        self.max_orientation_dt_s = float(max_orientation_dt_s)
         self.reset()
 
     def reset(self) -> None:
@@ -200,6 +262,10 @@ class F1Decoder(Decoder):
         self._paused = False
         self._last_motion: tuple[int, float] | None = None
         self._frozen_repeats = 0
+        # previous player orientation: (session uid, player index, session time, yaw, pitch,
+        # roll), and the body rate last derived from it
+        self._att: tuple[int, int, float, float, float, float] | None = None
+        self._att_w: Vec3 | None = None
 
     def _decode(self, datagram: bytes, t_s: float) -> DecodeResult:
         n = len(datagram)
@@ -231,10 +297,16 @@ class F1Decoder(Decoder):
             )
         if player >= NUM_CARS:
             return DecodeResult("skipped", "skipped: bad player index")
-        (_px, _py, _pz, _vx, _vy, _vz, fx, fy, fz, rx, ry, rz, g_lat, g_lon, g_vert, *_) = (
-            CAR_MOTION.unpack_from(data, HEADER.size + player * CAR_MOTION.size)
-        )
-        if self._ex_uid != uid or not abs(stime - self._ex_time) <= self.max_ex_age_s:
+        (_px, _py, _pz, _vx, _vy, _vz, fx, fy, fz, rx, ry, rz, g_lat, g_lon, g_vert, yaw, pitch,
+         roll) = CAR_MOTION.unpack_from(data, HEADER.size + player * CAR_MOTION.size)  # fmt: skip
+        w_att = self._orientation_rate(uid, player, stime, yaw, pitch, roll)
+        if self._ex_uid == uid and abs(stime - self._ex_time) <= self.max_ex_age_s:
+            w, derived = self._ex_w, False
+        elif w_att is not None:
+            w, derived = w_att, True
+        elif not (math.isfinite(yaw) and math.isfinite(pitch) and math.isfinite(roll)):
+            return DecodeResult("skipped", "skipped: non-finite")
+        else:
             return DecodeResult("partial", "partial: no motion ex")
         if self._last_motion is not None and self._last_motion == (uid, stime):
             self._frozen_repeats += 1
@@ -250,7 +322,49 @@ class F1Decoder(Decoder):
         paused = (self._paused and self._paused_uid == uid) or (
             self._frozen_repeats >= FROZEN_REPEATS
         )
-        return self._make(t_s, f, self._ex_w, paused)
+        result = self._make(t_s, f, w, paused)
+        if derived and result.status == "sample":
+            self._count(NOTE_W_FROM_ORIENTATION)
+        return result
+
+    def _orientation_rate(
+        self, uid: int, player: int, stime: float, yaw: float, pitch: float, roll: float
+    ) -> Vec3 | None:
+        """Body rate (ISO, rad/s) from this and the previous player orientation, or None.
+
+        Always keeps the newest orientation, so the rate is ready when a Motion Ex goes
+        missing. A repeated session time (a duplicate or a frozen game) repeats the last rate.
+        """
+        if not (math.isfinite(yaw) and math.isfinite(pitch) and math.isfinite(roll)):
+            return None  # keep the previous orientation; this packet gives no rate
+        prev = self._att
+        self._att = (uid, player, stime, yaw, pitch, roll)
+        if prev is None or prev[0] != uid or prev[1] != player:
+            self._att_w = None
+            return None
+        dt = stime - prev[2]
+        if dt == 0.0:
+            self._att = prev
+            return self._att_w
+        if not 0.0 < dt <= self.max_orientation_dt_s:  # after a gap, or time went back
+            self._att_w = None
+            return None
+        d_yaw = _wrap_pi(yaw - prev[3])
+        d_pitch = _wrap_pi(pitch - prev[4])
+        d_roll = _wrap_pi(roll - prev[5])
+        pitch_m = prev[4] + 0.5 * d_pitch  # mid-point angles
+        roll_m = prev[5] + 0.5 * d_roll
+        inv = 1.0 / dt
+        yaw_dot, pitch_dot, roll_dot = d_yaw * inv, d_pitch * inv, d_roll * inv
+        sp, cp = math.sin(pitch_m), math.cos(pitch_m)
+        sr, cr = math.sin(roll_m), math.cos(roll_m)
+        w = (
+            roll_dot - yaw_dot * sp,
+            pitch_dot * cr + yaw_dot * sr * cp,
+            yaw_dot * cr * cp - pitch_dot * sr,
+        )
+        self._att_w = w
+        return w
 
     def _motion_ex(self, data: bytes, n: int, fmt: int, uid: int, stime: float) -> DecodeResult:
         size = MOTION_EX_SIZES[fmt]

@@ -146,6 +146,14 @@ class _ThreadedSource:
     def running(self) -> bool:
         return self._thread is not None and self._thread.is_alive()
 
+    @property
+    def finished(self) -> bool:
+        """True once the source will deliver nothing more (end of a replayed file).
+
+        Always False for a live receiver: a game that goes quiet may resume at any time.
+        """
+        return False
+
     def close(self) -> None:
         """Stop the thread and release the socket or file. Idempotent."""
         self._stop.set()
@@ -238,7 +246,9 @@ class ReplaySource(_ThreadedSource):
 
     Samples are stamped with ``time.perf_counter()`` at replay, like a live source, so a
     consumer cannot tell the difference. ``speed`` scales time (2 = twice as fast); 0 replays
-    as fast as possible. :attr:`done` is set when the file is exhausted.
+    as fast as possible. :attr:`done` is set, and :attr:`finished` becomes True, when the
+    file is exhausted (or the replay thread ended for any other reason): a bridge then fades
+    out, parks and ends instead of waiting for more telemetry.
 
     Parameters
     ----------
@@ -283,6 +293,11 @@ class ReplaySource(_ThreadedSource):
                 self._deliver(data, clock())
         finally:
             self.done.set()
+
+    @property
+    def finished(self) -> bool:
+        """True once every datagram of the file has been delivered (or the replay stopped)."""
+        return self.done.is_set()
 
     def __repr__(self) -> str:
         return f"ReplaySource({self.path!r}, speed={self.speed})"
