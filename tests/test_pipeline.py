@@ -331,7 +331,10 @@ def test_play_over_serial_to_the_easysmc_emulator(tmp_path: Path) -> None:
             rep = play_ride(ride, p, c, lim, tr)
             deadline = time.monotonic() + 10.0
             model = emu.models[0]
-            while model.last_done < model.received and time.monotonic() < deadline:
+            while time.monotonic() < deadline:  # the model advances when synced
+                emu.sync()
+                if model.last_done >= model.received:
+                    break
                 time.sleep(0.05)
     finally:
         emu.stop()

@@ -29,9 +29,17 @@ from ._controller import (
     Unit,
     controller_from_config,
 )
-from ._emulator import BUFFER_DEPTH, ControllerModel, EasySmcEmulator, TraceEntry, Violation
+from ._emulator import (
+    BUFFER_DEPTH,
+    ControllerModel,
+    EasySmcEmulator,
+    FrameLimits,
+    TraceEntry,
+    Violation,
+    frame_limits,
+)
 from ._link import EasySmcLink, EasySmcStreamer, StreamStats
-from ._profile import feed_for_duration, move_duration_s, move_progress
+from ._profile import feed_for_duration, max_distance, move_duration_s, move_progress
 from ._protocol import (
     COMMANDS,
     MANUAL_DECISIONS,
@@ -94,6 +102,7 @@ __all__ = [
     "ErrorCode",
     "ErrorReply",
     "ExecStatus",
+    "FrameLimits",
     "LinkBudget",
     "ReadReply",
     "Start",
@@ -122,8 +131,10 @@ __all__ = [
     "encode_usb_write",
     "encode_usb_write_reply",
     "feed_for_duration",
+    "frame_limits",
     "inspect_bytes",
     "inspect_decode",
+    "max_distance",
     "move_duration_s",
     "move_progress",
     "run_emulator",

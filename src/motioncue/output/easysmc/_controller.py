@@ -4,6 +4,11 @@ The controller has no time stamp: each motion frame becomes a relative interpola
 queued with start condition 4 ("in sequence"), whose feed is chosen so that the move lasts one
 frame period (XYZ: ``A3`` then ``57``; XYZU: ``A6`` then ``5B`` + ``5C``). Six axes use two
 controllers on one RS485 bus (addresses 00 and 01), each receiving its own pair.
+
+Both the link and the controller's own ramp are constraints of a ride: ``check_rate`` refuses a
+frame rate the link cannot carry, and ``pulse_limits(rate)`` bounds each frame's step by the
+longest move that ramps up and down within one period (:meth:`EasySmcController.max_frame_pulses`),
+so that every frame the limiter produces is accepted and ends on time.
 """
 
 from __future__ import annotations
@@ -17,7 +22,7 @@ from ..._config import ConfigReader
 from ..._errors import ConfigError, LimitError, ProtocolError
 from .._controller_api import DriveExpectations, PulseLimits
 from .._transport import parse_target
-from ._profile import feed_for_duration, move_duration_s
+from ._profile import feed_for_duration, max_distance, move_duration_s
 from ._protocol import (
     MAX_MAGNITUDE,
     Command,
@@ -281,7 +286,9 @@ class EasySmcController:
 
     @property
     def catch_up_factor(self) -> float:
-        """Moves run at the feed the host sets: never faster than planned."""
+        """Moves run at the feed the host sets, so frames are never played ahead of their
+        times: each move ends at or up to one feed rounding before its frame's time (the feed
+        is rounded up to whole hertz), and the next move is timed to its own frame's time."""
         return 1.0
 
     @property
@@ -295,8 +302,21 @@ class EasySmcController:
         return (0, 0)
 
     def check_rate(self, rate_hz: float) -> None:
-        """Refuse a frame rate the link cannot carry (:class:`LinkBudget`)."""
-        self.link_budget().check(rate_hz)
+        """Refuse a frame rate the link cannot carry (:class:`LinkBudget`), naming the
+        highest one it can (:class:`~motioncue.ConfigError`)."""
+        if isinstance(rate_hz, bool) or not isinstance(rate_hz, int | float):
+            raise ConfigError(f"frame rate {rate_hz!r} is not a number")
+        try:
+            self.link_budget().check(rate_hz)
+        except LimitError as exc:
+            top = self.max_frame_rate_hz
+            hint = (
+                f"; the highest rate this link carries is {top:.1f} Hz: use at most "
+                f"{math.floor(top * 10) / 10:g} Hz (e.g. {max(1, math.floor(top)):d} Hz)"
+                if math.isfinite(rate_hz) and rate_hz > 0
+                else ""
+            )
+            raise ConfigError(f"{exc}{hint}") from exc
 
     def run_encoder(
         self, rate_hz: float, start_pulses: Sequence[int] | None = None
@@ -305,27 +325,98 @@ class EasySmcController:
         self.check_rate(rate_hz)
         return self.frame_encoder(rate_hz, None if start_pulses is None else list(start_pulses))
 
+    def unit_profile(self, unit: Unit) -> tuple[int, int, int, int]:
+        """``(F0, A, F, B)`` of a frame move of ``unit``: the start frequency (02 DAT2, see
+        ``MANUAL_DECISIONS``), and the A3 (XYZ) or A6 (XYZU) acceleration, feed cap and
+        deceleration (Hz, Hz/s)."""
+        prefix = "A3" if unit.axes == "XYZ" else "A6"
+        p = self.parameters
+        return (
+            self.start_frequency_hz(),
+            p[f"{prefix}_acc_a_hz_s"],
+            p[f"{prefix}_feed_hz"],
+            p[f"{prefix}_acc_b_hz_s"],
+        )
+
+    def max_frame_pulses(self, rate_hz: float) -> tuple[int, ...]:
+        """Largest move per frame (pulses, per axis) the encoder accepts at ``rate_hz`` from
+        any state it can be in, and the controller runs within the frame's period.
+
+        Each frame's move starts and ends at the start frequency ``F0`` (so frames do not
+        constrain one another's speed or acceleration) and must last at most one period
+        ``T = 1 / rate_hz``: the encoder rounds the feed up and waits down, so no move ends
+        after its frame's time and the next move always has at least ``T``. Within ``T`` a
+        move covers at most :func:`~motioncue.output.easysmc.max_distance` ``(T, F, F0, A,
+        B)`` pulses along its longest axis; this is that, rounded down to whole pulses.
+        """
+        if isinstance(rate_hz, bool) or not isinstance(rate_hz, int | float):
+            raise ConfigError(f"frame rate {rate_hz!r} is not a number")
+        if not (math.isfinite(rate_hz) and rate_hz > 0):
+            raise ConfigError(f"frame rate {rate_hz!r} Hz is invalid; allowed: > 0")
+        period_s = 1.0 / float(rate_hz)
+        out: list[int] = []
+        for u in self.units:
+            f0, acc_a, cap, acc_b = self.unit_profile(u)
+            # the tiny relative margin keeps the bound on the accepted side of the
+            # encoder's floating-point feed computation
+            d = math.floor(max_distance(period_s, cap, f0, acc_a, acc_b) * (1.0 - 1e-9))
+            if d < 1:
+                raise ConfigError(
+                    f"at {rate_hz:g} Hz an EasySmc frame move ({'A3' if u.axes == 'XYZ' else 'A6'}"
+                    f": F0 = {f0} Hz, A = {acc_a} Hz/s, feed <= {cap} Hz, B = {acc_b} Hz/s) "
+                    "covers less than one pulse: raise the start frequency or the accelerations"
+                )
+            out.extend([d] * len(u.axes))
+        return tuple(out)
+
     def pulse_limits(self, rate_hz: float | None = None) -> PulseLimits:
-        """Stroke: the soft limits (21..29, AF). Speed: the A3 / A6 feed (pulses/s), a
-        necessary bound only: each frame's move also ramps at the A3/A6 accelerations from
-        the start frequency."""
+        """Limits of frames at ``rate_hz`` (or at any rate, for ``None``).
+
+        Stroke: the soft limits (21..29, AF).
+
+        Speed, ``rate_hz`` given: :meth:`max_frame_pulses` per period, i.e.
+        ``floor(D(T)) / T`` with ``D(T)`` the longest move the A3/A6 ramps (from the start
+        frequency ``F0``, at ``A`` up to at most the feed cap ``F``, at ``B`` down to ``F0``)
+        cover in one period ``T``. Any frame sequence whose per-frame steps stay within it is
+        accepted by the encoder and every move ends within its period (the encoder never lets
+        a move end late, so each move has a full period); one pulse more per frame is refused.
+        At the factory settings (F0 = 2 kHz, A = B = 20 kHz/s) this is 2240 pulses/s at 20 Hz.
+        No acceleration limit: every move starts and ends at ``F0`` whatever the previous one
+        did, and the motor's own acceleration is the controller's ``A`` / ``B``.
+
+        Speed, ``rate_hz`` None: the feed cap ``F`` (the motor's peak pulse rate within any
+        move), a necessary bound only.
+
+        Within a frame the motor runs up to the frame's feed, which may be up to twice the
+        frame's mean rate (a triangular move from a low ``F0``) but never above ``F``: keep
+        ``F`` at most the drive's rated speed in pulses/s.
+        """
         soft = self.soft_limits()
-        caps = [
-            float(self.parameters[f"{'A3' if u.axes == 'XYZ' else 'A6'}_feed_hz"])
-            for u in self.units
-            for _ in u.axes
-        ]
+        sources = {"stroke": "EasySmc soft limits (21..29, AF)"}
+        if rate_hz is None:
+            caps = [float(self.unit_profile(u)[2]) for u in self.units for _ in u.axes]
+            sources["v_max"] = (
+                "EasySmc A3/A6 feed cap, pulses/s (necessary only: each frame's move also "
+                "ramps at the A3/A6 accelerations from the start frequency within its period)"
+            )
+        else:
+            per_frame = self.max_frame_pulses(rate_hz)
+            caps = [float(d) * float(rate_hz) for d in per_frame]
+            f0, acc_a, cap, acc_b = self.unit_profile(self.units[0])
+            sources["v_max"] = (
+                f"EasySmc frame move within one period at {float(rate_hz):g} Hz: "
+                f"{per_frame[0]} pulses per frame = longest move from the start frequency "
+                f"F0 = {f0} Hz at A = {acc_a} Hz/s up to at most the feed cap F = {cap} Hz and "
+                f"down at B = {acc_b} Hz/s to F0 in T = {1e3 / float(rate_hz):.2f} ms "
+                "(02 DAT2, A3/A6), rounded down to whole pulses"
+            )
         return PulseLimits(
             self.n_axes,
             [lo for lo, _ in soft],
             [hi for _, hi in soft],
             caps,
             None,
-            {
-                "stroke": "EasySmc soft limits (21..29, AF)",
-                "v_max": "EasySmc A3/A6 feed cap, pulses/s (necessary only: each frame's move "
-                "also ramps at the A3/A6 accelerations from the start frequency)",
-            },
+            sources,
         )
 
     def drive_expectations(self) -> DriveExpectations:
@@ -536,8 +627,6 @@ class EasySmcFrameEncoder:
 
         t0 = t if self.t0_s is None else self.t0_s
         end_s = (t - t0) + self.period_s  # controller time at which this frame must end
-        params = ctrl.parameters
-        f0 = ctrl.start_frequency_hz()
         cmds: list[Command] = []
         new_states: list[_UnitState] = []
         i = 0
@@ -559,22 +648,24 @@ class EasySmcFrameEncoder:
             want_s = end_s - st.done_s
             dist = max(abs(d) for d in deltas)
             if dist == 0:
-                ms = max(0, round(want_s * 1e3))
+                # whole ms, rounded down: the wait never ends after the frame's time, so the
+                # next move has at least one full period (pulse_limits relies on it)
+                ms = max(0, math.floor(want_s * 1e3 + 1e-6))
                 if ms > MAX_MAGNITUDE:
                     raise LimitError(f"wait of {ms} ms exceeds one word")
                 cmds.append(Command(0x19, ((1 << 24) | ms,), Start.SEQUENCE, a))
                 new_states.append(_UnitState(goal, st.done_s + ms / 1e3, st.feed_hz))
                 continue
             prefix = "A3" if unit.axes == "XYZ" else "A6"
-            acc_a, cap, acc_b = (
-                params[f"{prefix}_acc_a_hz_s"],
-                params[f"{prefix}_feed_hz"],
-                params[f"{prefix}_acc_b_hz_s"],
-            )
+            f0, acc_a, cap, acc_b = ctrl.unit_profile(unit)
             if want_s <= 0:
                 raise LimitError(f"unit {a:02X} is {-want_s * 1e3:.1f} ms behind its schedule")
             feed = feed_for_duration(dist, want_s, f0, acc_a, acc_b)
-            feed_i = max(1, round(feed))
+            # whole hertz, rounded up: the move never ends after the frame's time (a higher
+            # feed is never slower), so the next move has at least one full period and a
+            # frame within pulse_limits(rate) is always accepted; the feed (the motor's peak
+            # pulse rate) stays within the cap, which is a whole number
+            feed_i = max(1, math.ceil(feed * (1.0 - 1e-12)))
             if feed_i > cap:
                 raise LimitError(
                     f"unit {a:02X}: {dist} pulses in {want_s * 1e3:.1f} ms needs {feed_i} Hz, "

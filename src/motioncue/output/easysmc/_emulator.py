@@ -11,6 +11,11 @@ outside the soft limits, above 2 MHz, a ``5B`` not followed by ``5C``...).
 pseudo-terminal: it prints / exposes ``path`` for pyserial, decodes and validates every byte
 it receives and answers as the manual says (write, read, and error-99 replies: no such command,
 manual mode, buffer full, checksum).
+
+Given the controller description (and the frame rate), the emulator also checks frames with
+the description's own numbers (:func:`frame_limits`, from ``controller.pulse_limits``): each
+frame move's feed within the A3/A6 cap, each axis's step within the per-frame bound, and each
+move ending within its frame's period on the controller's clock.
 """
 
 from __future__ import annotations
@@ -21,8 +26,9 @@ import select
 import threading
 import time
 from collections import deque
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
+from typing import Any
 
 from ..._errors import ConfigError, ProtocolError, TransportError
 from ._profile import move_duration_s, move_progress
@@ -43,7 +49,15 @@ from ._protocol import (
     word_from_signed,
 )
 
-__all__ = ["BUFFER_DEPTH", "ControllerModel", "EasySmcEmulator", "TraceEntry", "Violation"]
+__all__ = [
+    "BUFFER_DEPTH",
+    "ControllerModel",
+    "EasySmcEmulator",
+    "FrameLimits",
+    "TraceEntry",
+    "Violation",
+    "frame_limits",
+]
 
 BUFFER_DEPTH = 63
 MAX_PULSE_HZ = 2_000_000  # manual ch. 2 item 3
@@ -181,6 +195,53 @@ class Violation:
 
 
 @dataclass(frozen=True)
+class FrameLimits:
+    """What a controller description allows the frame moves of one unit.
+
+    Attributes
+    ----------
+    speed_code : int
+        The unit's frame speed command (``0xA3`` XYZ, ``0xA6`` XYZU); moves run at its feed
+        are frame moves.
+    feed_cap_hz : float
+        Largest feed a frame may set (``pulse_limits(None)``: the A3/A6 feed cap).
+    max_frame_pulses : Mapping[str, float] or None
+        Largest step of each axis (letter) in one frame (``pulse_limits(rate)`` x period);
+        None when the frame rate is not known.
+    period_s : float or None
+        Frame period; each frame (move or wait) must end within it on the controller's clock
+        (time the controller sat idle between frames excepted). None: not checked.
+    """
+
+    speed_code: int
+    feed_cap_hz: float
+    max_frame_pulses: Mapping[str, float] | None = None
+    period_s: float | None = None
+
+
+def frame_limits(controller: Any, frame_rate_hz: float | None = None) -> dict[int, FrameLimits]:
+    """Per unit address, the limits of frame moves as the controller description states
+    them: ``controller.pulse_limits(None)`` (feed cap) and ``controller.pulse_limits(rate)``
+    (per-frame step), the same numbers the limits of a ride are derived from."""
+    cap = controller.pulse_limits(None).max_speed_pulses_s
+    step = None
+    period = None
+    if frame_rate_hz is not None:
+        period = 1.0 / float(frame_rate_hz)
+        step = controller.pulse_limits(frame_rate_hz).max_speed_pulses_s * period
+    out: dict[int, FrameLimits] = {}
+    i = 0
+    for u in controller.units:
+        n = len(u.axes)
+        per_axis = None if step is None else {a: float(step[i + j]) for j, a in enumerate(u.axes)}
+        out[u.address] = FrameLimits(
+            0xA3 if u.axes == "XYZ" else 0xA6, float(min(cap[i : i + n])), per_axis, period
+        )
+        i += n
+    return out
+
+
+@dataclass(frozen=True)
 class TraceEntry:
     """Logical positions (pulses, X Y Z U) of one controller at a time (s since start)."""
 
@@ -219,10 +280,25 @@ class ControllerModel:
         DIP address 0..3.
     physical_offset : sequence of int
         Distance of each axis from its home switch at power-up (pulses), for homing time.
+    limits : FrameLimits, optional
+        Check frame moves against a controller description (:func:`frame_limits`):
+        violations ``feed`` (above the configured cap), ``speed`` (an axis steps more in one
+        frame than the description allows) and ``late`` (a frame ends after its period).
     """
 
-    def __init__(self, address: int = 0, physical_offset: Sequence[int] = (0, 0, 0, 0)) -> None:
+    def __init__(
+        self,
+        address: int = 0,
+        physical_offset: Sequence[int] = (0, 0, 0, 0),
+        limits: FrameLimits | None = None,
+    ) -> None:
         self.address = address
+        self.limits = limits
+        # frame schedule on the controller's clock: each frame job (frame move or timed
+        # wait) is due one period after the previous one's due time, plus any time the
+        # controller spent idle or on other jobs in between
+        self._frame_due_s: float | None = None
+        self._frame_end_s = 0.0
         self.params = _factory_params()
         self.soft = {a: [MAX_MAGNITUDE, -MAX_MAGNITUDE] for a in _AXES}
         self.manual_params = {i: (2000 if i <= 3 else 1000) for i in range(1, 10)}
@@ -404,7 +480,9 @@ class ControllerModel:
                 # the 5B and 5C pair is one move; give the 5B its (zero-length) slot
                 self._enqueue_plain(first, c5b, now_s)
             deltas = [*xy, signed_from_word(cmd.words[0]), signed_from_word(cmd.words[1])]
-            self._enqueue_move(number, cmd, now_s, deltas)
+            # the pair is one XYZU move: its start frequency is its first axis's (X, 02
+            # DAT2; MANUAL_DECISIONS "interpolation feed reference"); a lone 5C is a ZU move
+            self._enqueue_move(number, cmd, now_s, deltas, "Z" if first == number else "X")
             return
         if code in _MOVE_SPEED:
             axes = _MOVE_SPEED[code][1]
@@ -437,6 +515,9 @@ class ControllerModel:
             i = (0x41, 0x42, 0x43, 0x47).index(code)
             speed = self.params[(0x01, 0x08, 0x13, 0xAC)[i]][0]
             duration = abs(self.physical[i]) / max(speed, 1)
+        timed_wait = code == 0x19 and cmd.words[0] >> 24 == 1
+        if timed_wait or duration > 0:
+            self._frame_schedule(number, start, start + duration, timed_wait)
         origin = tuple(self._planned_position())
         end = list(origin)
         if code in (0x24, 0x25, 0x26):
@@ -454,10 +535,61 @@ class ControllerModel:
             )
         )
 
-    def _enqueue_move(self, number: int, cmd: Command, now_s: float, deltas: list[int]) -> None:
+    def _frame_schedule(self, number: int, start_s: float, end_s: float, frame: bool) -> None:
+        """Check that a frame job ends within its period (``limits.period_s``).
+
+        A frame is due one period after the previous frame's due time; time between the end
+        of the previous frame and this one's start (idle, homing...) moves the schedule on by
+        as much. Non-frame timed jobs only make such a gap.
+        """
+        lim = self.limits
+        if lim is None or lim.period_s is None:
+            return
+        if not frame:
+            self._frame_end_s = max(self._frame_end_s, end_s)
+            return
+        gap = max(0.0, start_s - self._frame_end_s)
+        if self._frame_due_s is None:
+            due = start_s + lim.period_s
+        else:
+            due = self._frame_due_s + gap + lim.period_s
+        if end_s > due + 1e-6:
+            self._flag(
+                "late",
+                f"command {number}: frame ends {(end_s - due) * 1e3:.3f} ms after its "
+                f"{lim.period_s * 1e3:.2f} ms period",
+            )
+        self._frame_due_s = due
+        self._frame_end_s = end_s
+
+    def _check_frame_move(self, number: int, speed_code: int, feed: int, deltas: list[int]) -> None:
+        lim = self.limits
+        if lim is None or speed_code != lim.speed_code:
+            return
+        if feed > lim.feed_cap_hz:
+            self._flag(
+                "feed",
+                f"command {number}: feed {feed} Hz above the configured cap "
+                f"{lim.feed_cap_hz:g} Hz (pulse_limits)",
+            )
+        if lim.max_frame_pulses is None:
+            return
+        for i, a in enumerate(_AXES):
+            most = lim.max_frame_pulses.get(a)
+            if most is not None and abs(deltas[i]) > most * (1 + 1e-9):
+                self._flag(
+                    "speed",
+                    f"command {number}: axis {a} steps {abs(deltas[i])} pulses in one frame, "
+                    f"above {most:g} (pulse_limits at {1.0 / (lim.period_s or 1.0):g} Hz)",
+                    a,
+                )
+
+    def _enqueue_move(
+        self, number: int, cmd: Command, now_s: float, deltas: list[int], lead: str = ""
+    ) -> None:
         self._moves_seen = True
         speed_code, axes = _MOVE_SPEED[cmd.code]
-        lead = axes[0]
+        lead = lead or axes[0]
         acc_a, feed, acc_b = self.params[speed_code]
         if lead == "U":
             f0 = self.params[0xAC][1]
@@ -489,8 +621,13 @@ class ControllerModel:
             )
             deltas = [0, 0, 0, 0]
             dist = 0
+        if not self.small_segment:
+            self._check_frame_move(number, speed_code, feed, deltas)
         duration = move_duration_s(dist, feed, f0, acc_a, acc_b)
         start = self._start_time(now_s)
+        if dist:
+            frame = self.limits is not None and speed_code == self.limits.speed_code
+            self._frame_schedule(number, start, start + duration, frame and not self.small_segment)
         end = [o + d for o, d in zip(origin, deltas, strict=True)]
         self.queue.append(
             _Job(
@@ -531,6 +668,7 @@ class ControllerModel:
         origin = self._planned_position()
         start = self._start_time(now_s)
         duration = move_duration_s(dist, max(feed, 1), f0, max(acc_a, 1), max(acc_b, 1))
+        self._frame_schedule(number, start, start + duration, False)
         end = [o + d for o, d in zip(origin, deltas, strict=True)]
         self.queue.append(
             _Job(
@@ -622,6 +760,8 @@ class ControllerModel:
                 self.halt = None
                 self._last_end_s = now_s
                 self._moves_seen = False
+                self._frame_due_s = None  # the next frame starts a new schedule
+                self._frame_end_s = now_s
             return  # loop test: nothing but the reply
         code = cmd.words[0]
         brake_axes = {0x00: "XYZU", 0x02: "X", 0x04: "Y", 0x06: "Z", 0x12: "U"}
@@ -745,6 +885,11 @@ class EasySmcEmulator:
         Simulate the serial line: every byte received and sent occupies the line for
         10 bits at this rate (8N1), so a host cannot push more than the real link carries.
         None (default): bytes pass as fast as the pseudo-terminal moves them.
+    controller : EasySmcController, optional
+        Check frames with this description's numbers (:func:`frame_limits`): feed cap
+        always; per-frame steps and frame periods when ``frame_rate_hz`` is given too.
+    frame_rate_hz : float, optional
+        The frame rate the host streams at (needs ``controller``).
 
     Use ``start()`` (thread), ``path`` (give it to pyserial), ``trace``, ``violations``,
     ``stop()``; or call :meth:`feed` with bytes directly (no pty).
@@ -755,14 +900,20 @@ class EasySmcEmulator:
         addresses: Sequence[int] = (0,),
         clock: Callable[[], float] = time.monotonic,
         line_baud: int | None = None,
+        *,
+        controller: Any = None,
+        frame_rate_hz: float | None = None,
     ) -> None:
         if not addresses or len(set(addresses)) != len(addresses):
             raise ConfigError(f"addresses {addresses!r} must be distinct and non-empty")
         if line_baud is not None and line_baud <= 0:
             raise ConfigError(f"line_baud {line_baud} must be positive")
+        if frame_rate_hz is not None and controller is None:
+            raise ConfigError("frame_rate_hz needs the controller description (controller=)")
+        limits = {} if controller is None else frame_limits(controller, frame_rate_hz)
         self.line_baud = line_baud
         self._line_free = 0.0
-        self.models = {a: ControllerModel(a) for a in addresses}
+        self.models = {a: ControllerModel(a, limits=limits.get(a)) for a in addresses}
         self._clock = clock
         self._epoch = clock()
         self._buffer = b""

@@ -16,7 +16,7 @@ import math
 
 from ..._errors import LimitError
 
-__all__ = ["feed_for_duration", "move_duration_s", "move_progress"]
+__all__ = ["feed_for_duration", "max_distance", "move_duration_s", "move_progress"]
 
 
 def _peak(distance: float, feed: float, f0: float, a: float, b: float) -> float:
@@ -73,6 +73,35 @@ def move_progress(
         return da + peak * (t_s - ta), peak
     u = t_s - ta - tc
     return da + peak * tc + peak * u - 0.5 * b_hz_s * u * u, peak - b_hz_s * u
+
+
+def max_distance(
+    duration_s: float, feed_cap_hz: float, f0_hz: float, a_hz_s: float, b_hz_s: float
+) -> float:
+    """Longest move (pulses, real) that lasts at most ``duration_s`` with a feed of at most
+    ``feed_cap_hz``.
+
+    The move starts at the start frequency ``F0``, ramps at ``A`` and ``B`` and never runs
+    faster than the cap ``F``; with ``k = 1/A + 1/B``:
+
+    * ``F <= F0``: no ramp, the whole move at ``F``: ``D = F T``;
+    * ``T <= (F - F0) k`` (the cap cannot be reached in time): a triangle whose peak is
+      ``F0 + T / k``: ``D = F0 T + T^2 / (2 k)``;
+    * otherwise a trapezoid at the cap: ``D = F T - (F - F0)^2 k / 2``.
+
+    :func:`feed_for_duration` finds a feed of at most ``F`` for every distance up to this
+    one (and :func:`move_duration_s` of that feed is ``duration_s``); one pulse more needs
+    a feed above ``F`` or accelerations above ``A``, ``B``.
+    """
+    t = float(duration_s)
+    if not t > 0:
+        return 0.0
+    if feed_cap_hz <= f0_hz:
+        return feed_cap_hz * t
+    k = 1.0 / a_hz_s + 1.0 / b_hz_s
+    if t <= (feed_cap_hz - f0_hz) * k:
+        return f0_hz * t + t * t / (2.0 * k)
+    return feed_cap_hz * t - (feed_cap_hz - f0_hz) ** 2 * k / 2.0
 
 
 def feed_for_duration(

@@ -418,7 +418,7 @@ def emulator(
             "the EasySmc emulator serves a pseudo-terminal (its path is printed); "
             f"it takes no host/port/options (got {host!r}, {port!r}, {sorted(options)})"
         )
-    return EasySmcEmulator(tuple(u.address for u in ctrl.units))
+    return EasySmcEmulator(tuple(u.address for u in ctrl.units), controller=ctrl)
 
 
 def run_emulator(
@@ -429,6 +429,7 @@ def run_emulator(
     trace_csv: str | Path | None = None,
     line_baud: bool = True,
     ready: Callable[[EasySmcEmulator], None] | None = None,
+    frame_rate_hz: float | None = None,
 ) -> int:
     """Serve a pseudo-terminal until ``duration_s`` passes or Ctrl-C; print a summary.
 
@@ -440,11 +441,17 @@ def run_emulator(
         Hold each byte for its time on a line at the controller's baud (default True).
     ready : callable, optional
         Called with the running emulator once its path is printed (tests, tools).
+    frame_rate_hz : float, optional
+        The rate frames will be streamed at: also check each frame's steps and period with
+        ``ctrl.pulse_limits(frame_rate_hz)`` (the feed cap is always checked).
 
     Returns 0, or 1 when violations were flagged.
     """
     emu = EasySmcEmulator(
-        tuple(u.address for u in ctrl.units), line_baud=ctrl.baud if line_baud else None
+        tuple(u.address for u in ctrl.units),
+        line_baud=ctrl.baud if line_baud else None,
+        controller=ctrl,
+        frame_rate_hz=frame_rate_hz,
     ).start()
     out(
         f"EasySmc emulator ({ctrl.name}, addresses "
