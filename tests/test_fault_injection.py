@@ -195,6 +195,9 @@ class FaultyController:
     def frame_encoder(self, *args: Any, **kwargs: Any) -> Any:
         return FaultyEncoder(self._inner.frame_encoder(*args, **kwargs), self)
 
+    def run_encoder(self, *args: Any, **kwargs: Any) -> Any:  # what the output stage calls
+        return FaultyEncoder(self._inner.run_encoder(*args, **kwargs), self)
+
 
 class FaultyEncoder:
     def __init__(self, inner: Any, owner: FaultyController) -> None:
