@@ -17,6 +17,7 @@ can be compared directly with the positions the host meant at the frame times.
 from __future__ import annotations
 
 import collections
+import math
 import socket
 import struct
 import sys
@@ -29,6 +30,7 @@ from typing import Any
 import numpy as np
 
 from .._errors import TransportError
+from ._controller_api import PulseLimits
 
 __all__ = [
     "STATE_ESTOP",
@@ -66,9 +68,12 @@ class Violation:
     t_s : float
         Timeline time (s) of the frame concerned (or of the last frame for malformed data).
     kind : str
-        ``speed``, ``stroke``, ``malformed``, ``sequence`` or ``buffer``.
+        ``stroke``, ``speed``, ``accel`` (judged on the controller's clock, see
+        :class:`Playback`), ``jog`` (a moving frame stamped with the previous frame's ms, which
+        the controller moves over its own jog time), ``period`` (IMAX PA59 / PA0b),
+        ``malformed``, ``sequence`` or ``buffer``.
     axis : int or None
-        Axis index (0-based) for speed and stroke.
+        Axis index (0-based) for stroke, speed and accel.
     detail : str
         Human-readable description with the values.
     """
@@ -116,8 +121,26 @@ def who_matches(who: int, node: int) -> bool:
     return (hi == 0xFF or hi == node >> 8) and (lo == 0xFF or lo == node & 0xFF)
 
 
+# a segment on the controller's clock: per-axis speed (pulses/s), duration (s), stamped
+_Motion = tuple[tuple[float, ...], float, bool]
+
+
 class Playback:
-    """Timeline, buffer and trace of one emulated controller (explicit state).
+    """Timeline, buffer, trace and limit checks of one emulated controller (explicit state).
+
+    Every frame is judged on the clock the controller really plays it on: its duration is
+    its timeline step (the stamp difference, or the controller's own jog / rewind /
+    fast-forward time) divided by ``catch_up``, the factor by which the controller plays
+    faster than the stamps. On that clock an axis's speed is its step over the duration,
+    and its acceleration the change of speed over the mean of the two durations (twice the
+    second divided difference of position over time). Where the previous segment was timed
+    by the controller itself (a jog, including the first frame of a run, a rewind, a
+    fast-forward, the move after an e-stop) the new segment's own duration is used instead
+    of the mean: the motor is taken to have moved at the previous speed until one segment
+    before (at rest before the first frame), as a planner starting from rest assumes.
+    A new run (frame number 0 after other frames) starts from rest too. The frames are
+    judged as the contiguous stream they describe: when the buffer runs dry the motors stop
+    at the drives' own ramp, which no frame describes, so underruns are not judged here.
 
     Parameters
     ----------
@@ -127,10 +150,15 @@ class Playback:
     fifo : bool
         ``True``: every frame is played in order. ``False``: only the latest frame; a frame
         not yet started is replaced by a newer one.
-    max_speed_pulses_s : sequence of float or None
-        Per-axis speed limits for the ``speed`` violation (None = none).
-    stroke_pulses : tuple[int, int] or None
-        Allowed position range for the ``stroke`` violation (None = none).
+    limits : PulseLimits or None
+        Stroke, speed and acceleration the frames must keep, in pulses on the controller's
+        clock (``controller.pulse_limits()``; ``inf`` = none; ``None``: no checks). Frames
+        outside give ``stroke``, ``speed`` and ``accel`` violations.
+    catch_up : float
+        How much faster than the timeline (the stamps) the controller plays, >= 1.
+    catch_up_above : int
+        The controller plays at ``catch_up`` while more than this many frames are queued
+        (0: always). The checks always divide by ``catch_up``: any frame may be played fast.
     """
 
     def __init__(
@@ -138,14 +166,23 @@ class Playback:
         n_axes: int,
         capacity: int,
         fifo: bool,
-        max_speed_pulses_s: Sequence[float] | None,
-        stroke_pulses: tuple[int, int] | None,
+        limits: PulseLimits | None = None,
+        *,
+        catch_up: float = 1.0,
+        catch_up_above: int = 0,
     ) -> None:
         self.n_axes = n_axes
         self.capacity = capacity
         self.fifo = fifo
-        self.max_speed = None if max_speed_pulses_s is None else tuple(max_speed_pulses_s)
-        self.stroke = stroke_pulses
+        self.catch_up = 1.0
+        self.catch_up_above = 0
+        self.set_catch_up(catch_up, catch_up_above)
+        self._lo: tuple[float, ...] | None = None
+        self._hi: tuple[float, ...] | None = None
+        self._vmax: tuple[float, ...] | None = None
+        self._amax: tuple[float, ...] | None = None
+        self.limits: PulseLimits | None = None
+        self.set_limits(limits)
         self.rows_t: list[float] = []
         self.rows_p: list[tuple[int, ...]] = []
         self.rows_f: list[int] = []
@@ -156,11 +193,41 @@ class Playback:
         self.started = False
         self.last_wall: float | None = None
         self.pending: collections.deque[float] = collections.deque()  # end times not reached
-        self.rate = 1.0
-        self.fast_rate = 1.0
         self.last_frame_no: int | None = None
         self.frames_played = 0
         self.frames_dropped = 0
+        # the last segment on the controller's clock: per-axis speed (pulses/s), duration
+        # (s), whether the duration came from the stamps; and the same before the last
+        # frame (restored when a latest-frame controller replaces that frame)
+        self._rest: _Motion = ((0.0,) * n_axes, 0.0, False)
+        self._motion: _Motion = self._rest
+        self._motion_before: _Motion = self._rest
+
+    def set_catch_up(self, catch_up: float, above: int = 0) -> None:
+        """Play (and judge) frames ``catch_up`` times as fast as stamped, while more than
+        ``above`` frames are queued."""
+        if not (math.isfinite(catch_up) and catch_up >= 1.0):
+            raise ValueError(f"catch_up = {catch_up!r}; allowed: a finite number >= 1")
+        self.catch_up = float(catch_up)
+        self.catch_up_above = int(above)
+
+    def set_limits(self, limits: PulseLimits | None) -> None:
+        """Judge later frames against ``limits`` (``None``: no checks)."""
+        self.limits = limits
+        if limits is None:
+            self._lo = self._hi = self._vmax = self._amax = None
+            return
+        if limits.n_axes != self.n_axes:
+            raise ValueError(f"limits for {limits.n_axes} axes; the controller has {self.n_axes}")
+
+        def per_axis(values: Any) -> tuple[float, ...] | None:
+            out = tuple(float(v) for v in values)
+            return out if any(math.isfinite(v) for v in out) else None
+
+        self._lo = per_axis(limits.stroke_lo)
+        self._hi = per_axis(limits.stroke_hi)
+        self._vmax = per_axis(limits.max_speed_pulses_s)
+        self._amax = per_axis(limits.max_accel_pulses_s2)
 
     # -- time ---------------------------------------------------------------------------
     def advance(self, now_s: float) -> None:
@@ -172,7 +239,7 @@ class Playback:
         self.last_wall = now_s
         if not self.started:
             return
-        rate = self.fast_rate if len(self.pending) > 1 else self.rate
+        rate = self.catch_up if len(self.pending) > self.catch_up_above else 1.0
         self.play_t = min(self.t_end, self.play_t + dt * rate)
         while self.pending and self.pending[0] <= self.play_t + 1e-9:
             self.pending.popleft()
@@ -187,8 +254,12 @@ class Playback:
         return len(self.pending) >= self.capacity
 
     # -- frames -------------------------------------------------------------------------
-    def play(self, frame_no: int, duration_s: float, positions: Sequence[int]) -> None:
-        """Append a frame reached ``duration_s`` after the previous one (or at 0 if first)."""
+    def play(
+        self, frame_no: int, duration_s: float, positions: Sequence[int], *, stamped: bool = True
+    ) -> None:
+        """Append a frame reached ``duration_s`` (timeline) after the previous one (or at 0
+        if first). ``stamped``: the duration is the frames' stamp difference, not a time the
+        controller chose itself (jog, rewind, fast-forward, e-stop release)."""
         positions = tuple(int(p) for p in positions)
         base = None
         if not self.fifo and len(self.pending) > 1 and self.rows_t:
@@ -201,6 +272,7 @@ class Playback:
             self.frames_dropped += 1
             self.t_end = self.rows_t[-1] if self.rows_t else 0.0
             self.position = self.rows_p[-1] if self.rows_p else (0,) * self.n_axes
+            self._motion = self._motion_before
         if not self.started:
             self.started = True
             t = 0.0
@@ -209,7 +281,10 @@ class Playback:
         else:
             t = (self.t_end if base is None else base) + duration_s
             move_s = t - self.t_end if self.rows_t else duration_s
-        self._check(t, move_s, positions, frame_no)
+        if frame_no == 0 and self.last_frame_no is not None:
+            self._motion = self._rest  # a new run (a new encoder) starts from rest
+        self._motion_before = self._motion
+        self._check(t, move_s, positions, frame_no, stamped)
         # frame numbers count up by one; 0 starts a new run (a new encoder)
         expected = None if self.last_frame_no is None else (self.last_frame_no + 1) & 0xFFFFFFFF
         if expected is not None and frame_no not in (expected, 0):
@@ -231,7 +306,8 @@ class Playback:
         self.frames_played += 1
 
     def jump(self, duration_s: float, positions: Sequence[int]) -> None:
-        """A move the controller makes by itself (e-stop, homing): clears the buffer."""
+        """A move the controller makes by itself (e-stop, homing): clears the buffer; the
+        motors are at rest afterwards."""
         positions = tuple(int(p) for p in positions)
         self.pending.clear()
         t = (self.play_t if self.started else 0.0) + duration_s
@@ -241,39 +317,71 @@ class Playback:
         self.rows_f.append(-1)
         self.t_end = self.play_t = t
         self.position = positions
+        self._motion = self._motion_before = self._rest
 
     def restart(self) -> None:
         """After homing the next frame starts a new run (its time is the new origin)."""
         self.last_frame_no = None
 
-    def _check(self, t: float, duration_s: float, positions: tuple[int, ...], frame: int) -> None:
-        if self.stroke is not None:
-            lo, hi = self.stroke
+    def _check(
+        self, t: float, move_s: float, positions: tuple[int, ...], frame: int, stamped: bool
+    ) -> None:
+        """Judge the move to ``positions`` over ``move_s`` of timeline on the controller's
+        clock, and remember its speeds for the next frame's acceleration."""
+        lo, hi, vmax, amax = self._lo, self._hi, self._vmax, self._amax
+        if lo is not None or hi is not None:
             for i, p in enumerate(positions):
-                if not lo <= p <= hi:
+                a_lo = -math.inf if lo is None else lo[i]
+                a_hi = math.inf if hi is None else hi[i]
+                if not a_lo <= p <= a_hi:
                     self.violations.append(
                         Violation(
                             t,
                             "stroke",
                             i,
-                            f"frame {frame}: axis {i} at {p} pulses, allowed [{lo}, {hi}]",
+                            f"frame {frame}: axis {i} at {p} pulses, allowed "
+                            f"[{_num(a_lo)}, {_num(a_hi)}]",
                         )
                     )
-        if self.max_speed is not None:
-            for i, (p, q, vmax) in enumerate(
-                zip(positions, self.position, self.max_speed, strict=True)
-            ):
-                if vmax <= 0 or p == q:
-                    continue
-                v = abs(p - q) / duration_s if duration_s > 0 else float("inf")
-                if v > vmax * (1 + 1e-9):
+        dur = move_s / self.catch_up
+        prev_v, prev_dur, prev_stamped = self._motion
+        if dur <= 0.0:  # a move in no time (IMAX PA0a = 1 with PA09 = 0)
+            for i, (p, q) in enumerate(zip(positions, self.position, strict=True)):
+                if p != q and vmax is not None:
+                    self.violations.append(
+                        Violation(t, "speed", i, f"frame {frame}: axis {i} moves {p - q} in 0 ms")
+                    )
+            self._motion = self._rest
+            return
+        speeds = tuple((p - q) / dur for p, q in zip(positions, self.position, strict=True))
+        self._motion = (speeds, dur, stamped)
+        clock = f"{move_s * 1e3:.1f} ms / catch-up {self.catch_up:g}" if self.catch_up != 1 else ""
+        if vmax is not None:
+            for i, v in enumerate(speeds):
+                if abs(v) > vmax[i] * (1 + 1e-9):
                     self.violations.append(
                         Violation(
                             t,
                             "speed",
                             i,
-                            f"frame {frame}: axis {i} moves {p - q} pulses in "
-                            f"{duration_s * 1e3:.1f} ms = {v:.0f} pulses/s > {vmax:.0f}",
+                            f"frame {frame}: axis {i} moves {positions[i] - self.position[i]} "
+                            f"pulses in {dur * 1e3:.3f} ms{f' ({clock})' if clock else ''} "
+                            f"= {abs(v):.0f} pulses/s > {vmax[i]:.0f}",
+                        )
+                    )
+        if amax is not None:
+            h = 0.5 * (dur + prev_dur) if stamped and prev_stamped else dur
+            for i, (v, u) in enumerate(zip(speeds, prev_v, strict=True)):
+                a = abs(v - u) / h
+                if a > amax[i] * (1 + 1e-9):
+                    self.violations.append(
+                        Violation(
+                            t,
+                            "accel",
+                            i,
+                            f"frame {frame}: axis {i} speed {u:.0f} -> {v:.0f} pulses/s over "
+                            f"{h * 1e3:.3f} ms on the controller's clock = {a:.4g} pulses/s^2 "
+                            f"> {amax[i]:.4g}",
                         )
                     )
 
@@ -284,6 +392,11 @@ class Playback:
             np.asarray(self.rows_p, dtype=np.int64).reshape(-1, n),
             np.asarray(self.rows_f, dtype=np.int64),
         )
+
+
+def _num(x: float) -> str:
+    """A limit for a message: whole pulses, or +-inf."""
+    return f"{x:.0f}" if math.isfinite(x) else str(x)
 
 
 class UdpEmulatorBase:
@@ -464,6 +577,22 @@ class ControllerEmulator(UdpEmulatorBase):
     @property
     def estop(self) -> bool:
         return self.state == STATE_ESTOP
+
+    def _same_stamp(self, frame: int, positions: Sequence[int], jog_s: float, source: str) -> None:
+        """Flag a frame carrying the previous frame's ms stamp (or relative time 0 within a
+        run) that moves: the host meant it to follow at once, the controller moves over
+        its jog time ``jog_s`` (``source`` names the parameter) instead."""
+        pb = self.playback
+        if tuple(positions) != pb.position:
+            pb.violations.append(
+                Violation(
+                    pb.t_end + jog_s,
+                    "jog",
+                    None,
+                    f"frame {frame} has the previous frame's ms stamp but moves: the "
+                    f"controller moves it over {source} = {jog_s * 1e3:g} ms",
+                )
+            )
 
     def _malformed(self, detail: str) -> list[bytes]:
         """Record a datagram the controller cannot use; no reply."""
