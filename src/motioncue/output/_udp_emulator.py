@@ -181,6 +181,8 @@ class Playback:
         self._hi: tuple[float, ...] | None = None
         self._vmax: tuple[float, ...] | None = None
         self._amax: tuple[float, ...] | None = None
+        self._vlim: tuple[float, ...] | None = None
+        self._alim: tuple[float, ...] | None = None
         self.limits: PulseLimits | None = None
         self.set_limits(limits)
         self.rows_t: list[float] = []
@@ -215,7 +217,7 @@ class Playback:
         """Judge later frames against ``limits`` (``None``: no checks)."""
         self.limits = limits
         if limits is None:
-            self._lo = self._hi = self._vmax = self._amax = None
+            self._lo = self._hi = self._vmax = self._amax = self._vlim = self._alim = None
             return
         if limits.n_axes != self.n_axes:
             raise ValueError(f"limits for {limits.n_axes} axes; the controller has {self.n_axes}")
@@ -228,6 +230,9 @@ class Playback:
         self._hi = per_axis(limits.stroke_hi)
         self._vmax = per_axis(limits.max_speed_pulses_s)
         self._amax = per_axis(limits.max_accel_pulses_s2)
+        # what is compared (a rounding's worth above the limits)
+        self._vlim = None if self._vmax is None else tuple(v * (1 + 1e-9) for v in self._vmax)
+        self._alim = None if self._amax is None else tuple(a * (1 + 1e-9) for a in self._amax)
 
     # -- time ---------------------------------------------------------------------------
     def advance(self, now_s: float) -> None:
@@ -328,7 +333,7 @@ class Playback:
     ) -> None:
         """Judge the move to ``positions`` over ``move_s`` of timeline on the controller's
         clock, and remember its speeds for the next frame's acceleration."""
-        lo, hi, vmax, amax = self._lo, self._hi, self._vmax, self._amax
+        lo, hi, vmax = self._lo, self._hi, self._vmax
         if lo is not None or hi is not None:
             for i, p in enumerate(positions):
                 a_lo = -math.inf if lo is None else lo[i]
@@ -343,47 +348,60 @@ class Playback:
                             f"[{_num(a_lo)}, {_num(a_hi)}]",
                         )
                     )
-        dur = move_s / self.catch_up
         prev_v, prev_dur, prev_stamped = self._motion
-        if dur <= 0.0:  # a move in no time (IMAX PA0a = 1 with PA09 = 0)
-            for i, (p, q) in enumerate(zip(positions, self.position, strict=True)):
-                if p != q and vmax is not None:
+        q = self.position
+        if move_s <= 0.0:  # a move in no time (IMAX PA0a = 1 with PA09 = 0)
+            for i, (p, r) in enumerate(zip(positions, q, strict=True)):
+                if p != r and vmax is not None:
                     self.violations.append(
-                        Violation(t, "speed", i, f"frame {frame}: axis {i} moves {p - q} in 0 ms")
+                        Violation(t, "speed", i, f"frame {frame}: axis {i} moves {p - r} in 0 ms")
                     )
             self._motion = self._rest
             return
-        speeds = tuple((p - q) / dur for p, q in zip(positions, self.position, strict=True))
+        dur = move_s / self.catch_up
+        inv = 1.0 / dur
+        speeds = tuple([(p - r) * inv for p, r in zip(positions, q, strict=True)])
         self._motion = (speeds, dur, stamped)
-        clock = f"{move_s * 1e3:.1f} ms / catch-up {self.catch_up:g}" if self.catch_up != 1 else ""
-        if vmax is not None:
-            for i, v in enumerate(speeds):
-                if abs(v) > vmax[i] * (1 + 1e-9):
-                    self.violations.append(
-                        Violation(
-                            t,
-                            "speed",
-                            i,
-                            f"frame {frame}: axis {i} moves {positions[i] - self.position[i]} "
-                            f"pulses in {dur * 1e3:.3f} ms{f' ({clock})' if clock else ''} "
-                            f"= {abs(v):.0f} pulses/s > {vmax[i]:.0f}",
-                        )
-                    )
-        if amax is not None:
+        vlim, alim = self._vlim, self._alim
+        if vlim is not None:
+            for i, (v, lim) in enumerate(zip(speeds, vlim, strict=True)):
+                if v > lim or -v > lim:
+                    self._speed_violation(t, frame, i, positions[i] - q[i], move_s)
+        if alim is not None:
             h = 0.5 * (dur + prev_dur) if stamped and prev_stamped else dur
-            for i, (v, u) in enumerate(zip(speeds, prev_v, strict=True)):
-                a = abs(v - u) / h
-                if a > amax[i] * (1 + 1e-9):
-                    self.violations.append(
-                        Violation(
-                            t,
-                            "accel",
-                            i,
-                            f"frame {frame}: axis {i} speed {u:.0f} -> {v:.0f} pulses/s over "
-                            f"{h * 1e3:.3f} ms on the controller's clock = {a:.4g} pulses/s^2 "
-                            f"> {amax[i]:.4g}",
-                        )
-                    )
+            inv_h = 1.0 / h
+            for i, (v, u, lim) in enumerate(zip(speeds, prev_v, alim, strict=True)):
+                if abs(v - u) * inv_h > lim:
+                    self._accel_violation(t, frame, i, u, v, h)
+
+    def _speed_violation(self, t: float, frame: int, i: int, step: int, move_s: float) -> None:
+        assert self._vmax is not None
+        dur = move_s / self.catch_up
+        clock = (
+            f" ({move_s * 1e3:.1f} ms / catch-up {self.catch_up:g})" if self.catch_up != 1 else ""
+        )
+        self.violations.append(
+            Violation(
+                t,
+                "speed",
+                i,
+                f"frame {frame}: axis {i} moves {step} pulses in {dur * 1e3:.3f} ms{clock} "
+                f"= {abs(step) / dur:.0f} pulses/s > {self._vmax[i]:.0f}",
+            )
+        )
+
+    def _accel_violation(self, t: float, frame: int, i: int, u: float, v: float, h: float) -> None:
+        assert self._amax is not None
+        self.violations.append(
+            Violation(
+                t,
+                "accel",
+                i,
+                f"frame {frame}: axis {i} speed {u:.0f} -> {v:.0f} pulses/s over {h * 1e3:.3f} "
+                f"ms on the controller's clock = {abs(v - u) / h:.4g} pulses/s^2 "
+                f"> {self._amax[i]:.4g}",
+            )
+        )
 
     def trace(self) -> Trace:
         n = self.n_axes
