@@ -12,6 +12,14 @@ start-up or homing; each later frame is reached ``duration`` after the previous 
 ``duration`` is the frame's time step, or the manual's jog / rewind / fast-forward time.
 The trace records ``(timeline time, commanded positions)`` for every frame played, so it
 can be compared directly with the positions the host meant at the frame times.
+
+Limits: each frame is judged with the numbers the controller description implies
+(``controller.pulse_limits()``: stroke, speed and, where finite, acceleration, in pulses),
+on the controller's own clock: the timeline step divided by the controller's catch-up
+factor (MBOX Fn012/1000, always; IMAX 1.5 with PA06 = 1), acceleration by the second
+divided difference on that clock (see :class:`Playback`). A frame that moves although it
+carries the previous frame's millisecond stamp is flagged ``jog``: the controller moves it
+over its own jog time (MBOX Fn013, IMAX PA59), not at once as the host meant.
 """
 
 from __future__ import annotations
