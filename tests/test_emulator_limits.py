@@ -248,3 +248,24 @@ def test_a_stream_at_2khz_carries_same_ms_stamps_and_is_flagged():
     for k in range(10):
         emu.handle(enc.encode(k * 0.0005, [k] * 6)[0], k * 0.0005)
     assert sum(v.kind == "jog" for v in emu.violations) >= 4
+
+
+# -- parameters written by the host ------------------------------------------------------------
+def test_mbox_stroke_written_over_udp_is_checked_and_a_useless_one_is_reported():
+    emu = mbox.MboxEmulator(_mbox(Fn012=1000))
+    # Fn0C0 = 100 (10 mm) x Fn0C1 2000 pulses/mm: positions 0 .. 20 000
+    emu.handle(mbox.RegisterWrite(1, 0x0C0, (100,)).encode(), 0.0)
+    _feed(emu, [0, 100, 200], [0, 20_000, 20_001])
+    assert _kinds(emu) == [("stroke", i) for i in range(6)]
+    # Fn0C0 = 1 with Fn0C1 = 1: a stroke of 0.1 pulse, no usable limit: reported, no crash
+    emu2 = mbox.MboxEmulator(_mbox(Fn012=1000))
+    emu2.handle(mbox.RegisterWrite(1, 0x0C1, (1,)).encode(), 0.0)
+    emu2.handle(mbox.RegisterWrite(1, 0x0C0, (1,)).encode(), 0.0)
+    assert [v.kind for v in emu2.violations] == ["config"]
+
+
+def test_imax_speed_written_over_udp_is_checked():
+    emu = imax.ImaxEmulator(_imax())
+    emu.handle(imax.RegisterWrite(imax.CHANNEL_PA, 0x07, (1500,)).encode(), 0.0)  # PA07
+    _feed(emu, [10 * k for k in range(5)], _ramp_then_cruise(2600, 5))  # 260 000 > 250 000
+    assert set(_kinds(emu)) == {("speed", i) for i in range(6)}

@@ -37,7 +37,7 @@ from typing import Any
 
 import numpy as np
 
-from .._errors import TransportError
+from .._errors import MotioncueError, TransportError
 from ._controller_api import PulseLimits
 
 __all__ = [
@@ -79,7 +79,8 @@ class Violation:
         ``stroke``, ``speed``, ``accel`` (judged on the controller's clock, see
         :class:`Playback`), ``jog`` (a moving frame stamped with the previous frame's ms, which
         the controller moves over its own jog time), ``period`` (IMAX PA59 / PA0b),
-        ``malformed``, ``sequence`` or ``buffer``.
+        ``malformed``, ``sequence``, ``buffer`` or ``config`` (parameters written that
+        imply no usable limits).
     axis : int or None
         Axis index (0-based) for stroke, speed and accel.
     detail : str
@@ -619,6 +620,21 @@ class ControllerEmulator(UdpEmulatorBase):
                     f"controller moves it over {source} = {jog_s * 1e3:g} ms",
                 )
             )
+
+    def _apply_limits(self, changed: dict[str, int]) -> None:
+        """Judge later frames with the limits of the description with ``changed``
+        parameters (as written by the host). Parameters that imply no usable limits (a
+        stroke of less than a pulse) are flagged ``config`` and the limits stay as they were.
+        """
+        try:
+            ctrl = self.controller.with_parameters(**changed) if changed else self.controller
+            limits = ctrl.pulse_limits()
+        except MotioncueError as exc:
+            self._violations.append(
+                Violation(self.playback.t_end, "config", None, f"limits unchanged: {exc}")
+            )
+            return
+        self.playback.set_limits(limits)
 
     def _malformed(self, detail: str) -> list[bytes]:
         """Record a datagram the controller cannot use; no reply."""

@@ -428,9 +428,7 @@ class ImaxEmulator(ControllerEmulator):
         they come from."""
         ctrl = self.controller
         changed = {k: self.params[k] for k in _LIMIT_PARAMS if self.params[k] != ctrl.parameters[k]}
-        if changed:
-            ctrl = ctrl.with_parameters(**changed)
-        self.playback.set_limits(ctrl.pulse_limits())
+        self._apply_limits(changed)
 
     def _start_homing(self, now_s: float) -> None:
         self.state = STATE_HOMING

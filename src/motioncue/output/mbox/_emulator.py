@@ -286,11 +286,11 @@ class MboxEmulator(ControllerEmulator):
 
     def _set_limits(self) -> None:
         """Stroke and speed from the description with the current Fn0C0..Fn0C2."""
-        ctrl = self.controller
         keys = ("Fn0C0", "Fn0C1", "Fn0C2")
-        if any(self.params[k] != ctrl.parameters[k] for k in keys):
-            ctrl = ctrl.with_parameters(**{k: self.params[k] for k in keys})
-        self.playback.set_limits(ctrl.pulse_limits())
+        changed = {
+            k: self.params[k] for k in keys if self.params[k] != self.controller.parameters[k]
+        }
+        self._apply_limits(changed)
 
     def _set_estop(self, on: bool) -> None:
         pb = self.playback
