@@ -76,14 +76,15 @@ def test_estop_capture_holds_ignores_frames_and_release_uses_fn018():
     emu = mbox.MboxEmulator(_ctrl())
     enc = emu.controller.frame_encoder()
     _stream(emu, enc, 10, pos=lambda k: [1000 * k] * 6)
-    # frame 9 arrived at wall 0.18 while frame 8 (t = 0.16) was being reached; 10 ms later
-    # the box is half way from frame 8 (8000) to frame 9 (9000)
+    # frame 9 arrived at wall 0.18 when frame 8 (t = 0.16) had been reached; the box plays
+    # Fn012 / 1000 = 1.2x as fast as stamped (5.3.3), so 10 ms later it is 12 ms, 60 %, of
+    # the way from frame 8 (8000) to frame 9 (9000)
     (rep,) = emu.handle(ESTOP_ON, 0.19)
     assert mbox.decode(rep) == mbox.RegisterWriteReply(0, 0x90, (1,))
     assert emu.estop
     tr = emu.trace
-    assert tr.frames[-1] == -1 and tr.t_s[-1] == pytest.approx(0.17 + 1.0)  # Fn017 = 1.0 s
-    assert (tr.positions[-1] == 8500).all()
+    assert tr.frames[-1] == -1 and tr.t_s[-1] == pytest.approx(0.172 + 1.0)  # Fn017 = 1.0 s
+    assert (tr.positions[-1] == 8600).all()
     dx = mbox.decode(emu.handle(mbox.RegisterRead(0, 0x3E, 1).encode(), 0.2)[0])
     assert dx.values == (2,)  # state: e-stop
     n = len(emu.trace)

@@ -12,11 +12,20 @@ start-up or homing; each later frame is reached ``duration`` after the previous 
 ``duration`` is the frame's time step, or the manual's jog / rewind / fast-forward time.
 The trace records ``(timeline time, commanded positions)`` for every frame played, so it
 can be compared directly with the positions the host meant at the frame times.
+
+Limits: each frame is judged with the numbers the controller description implies
+(``controller.pulse_limits()``: stroke, speed and, where finite, acceleration, in pulses),
+on the controller's own clock: the timeline step divided by the controller's catch-up
+factor (MBOX Fn012/1000, always; IMAX 1.5 with PA06 = 1), acceleration by the second
+divided difference on that clock (see :class:`Playback`). A frame that moves although it
+carries the previous frame's millisecond stamp is flagged ``jog``: the controller moves it
+over its own jog time (MBOX Fn013, IMAX PA59), not at once as the host meant.
 """
 
 from __future__ import annotations
 
 import collections
+import math
 import socket
 import struct
 import sys
@@ -28,7 +37,8 @@ from typing import Any
 
 import numpy as np
 
-from .._errors import TransportError
+from .._errors import MotioncueError, TransportError
+from ._controller_api import PulseLimits
 
 __all__ = [
     "STATE_ESTOP",
@@ -66,9 +76,13 @@ class Violation:
     t_s : float
         Timeline time (s) of the frame concerned (or of the last frame for malformed data).
     kind : str
-        ``speed``, ``stroke``, ``malformed``, ``sequence`` or ``buffer``.
+        ``stroke``, ``speed``, ``accel`` (judged on the controller's clock, see
+        :class:`Playback`), ``jog`` (a moving frame stamped with the previous frame's ms, which
+        the controller moves over its own jog time), ``period`` (IMAX PA59 / PA0b),
+        ``malformed``, ``sequence``, ``buffer`` or ``config`` (parameters written that
+        imply no usable limits).
     axis : int or None
-        Axis index (0-based) for speed and stroke.
+        Axis index (0-based) for stroke, speed and accel.
     detail : str
         Human-readable description with the values.
     """
@@ -116,8 +130,26 @@ def who_matches(who: int, node: int) -> bool:
     return (hi == 0xFF or hi == node >> 8) and (lo == 0xFF or lo == node & 0xFF)
 
 
+# a segment on the controller's clock: per-axis speed (pulses/s), duration (s), stamped
+_Motion = tuple[tuple[float, ...], float, bool]
+
+
 class Playback:
-    """Timeline, buffer and trace of one emulated controller (explicit state).
+    """Timeline, buffer, trace and limit checks of one emulated controller (explicit state).
+
+    Every frame is judged on the clock the controller really plays it on: its duration is
+    its timeline step (the stamp difference, or the controller's own jog / rewind /
+    fast-forward time) divided by ``catch_up``, the factor by which the controller plays
+    faster than the stamps. On that clock an axis's speed is its step over the duration,
+    and its acceleration the change of speed over the mean of the two durations (twice the
+    second divided difference of position over time). Where the previous segment was timed
+    by the controller itself (a jog, including the first frame of a run, a rewind, a
+    fast-forward, the move after an e-stop) the new segment's own duration is used instead
+    of the mean: the motor is taken to have moved at the previous speed until one segment
+    before (at rest before the first frame), as a planner starting from rest assumes.
+    A new run (frame number 0 after other frames) starts from rest too. The frames are
+    judged as the contiguous stream they describe: when the buffer runs dry the motors stop
+    at the drives' own ramp, which no frame describes, so underruns are not judged here.
 
     Parameters
     ----------
@@ -127,10 +159,15 @@ class Playback:
     fifo : bool
         ``True``: every frame is played in order. ``False``: only the latest frame; a frame
         not yet started is replaced by a newer one.
-    max_speed_pulses_s : sequence of float or None
-        Per-axis speed limits for the ``speed`` violation (None = none).
-    stroke_pulses : tuple[int, int] or None
-        Allowed position range for the ``stroke`` violation (None = none).
+    limits : PulseLimits or None
+        Stroke, speed and acceleration the frames must keep, in pulses on the controller's
+        clock (``controller.pulse_limits()``; ``inf`` = none; ``None``: no checks). Frames
+        outside give ``stroke``, ``speed`` and ``accel`` violations.
+    catch_up : float
+        How much faster than the timeline (the stamps) the controller plays, >= 1.
+    catch_up_above : int
+        The controller plays at ``catch_up`` while more than this many frames are queued
+        (0: always). The checks always divide by ``catch_up``: any frame may be played fast.
     """
 
     def __init__(
@@ -138,14 +175,25 @@ class Playback:
         n_axes: int,
         capacity: int,
         fifo: bool,
-        max_speed_pulses_s: Sequence[float] | None,
-        stroke_pulses: tuple[int, int] | None,
+        limits: PulseLimits | None = None,
+        *,
+        catch_up: float = 1.0,
+        catch_up_above: int = 0,
     ) -> None:
         self.n_axes = n_axes
         self.capacity = capacity
         self.fifo = fifo
-        self.max_speed = None if max_speed_pulses_s is None else tuple(max_speed_pulses_s)
-        self.stroke = stroke_pulses
+        self.catch_up = 1.0
+        self.catch_up_above = 0
+        self.set_catch_up(catch_up, catch_up_above)
+        self._lo: tuple[float, ...] | None = None
+        self._hi: tuple[float, ...] | None = None
+        self._vmax: tuple[float, ...] | None = None
+        self._amax: tuple[float, ...] | None = None
+        self._vlim: tuple[float, ...] | None = None
+        self._alim: tuple[float, ...] | None = None
+        self.limits: PulseLimits | None = None
+        self.set_limits(limits)
         self.rows_t: list[float] = []
         self.rows_p: list[tuple[int, ...]] = []
         self.rows_f: list[int] = []
@@ -156,11 +204,44 @@ class Playback:
         self.started = False
         self.last_wall: float | None = None
         self.pending: collections.deque[float] = collections.deque()  # end times not reached
-        self.rate = 1.0
-        self.fast_rate = 1.0
         self.last_frame_no: int | None = None
         self.frames_played = 0
         self.frames_dropped = 0
+        # the last segment on the controller's clock: per-axis speed (pulses/s), duration
+        # (s), whether the duration came from the stamps; and the same before the last
+        # frame (restored when a latest-frame controller replaces that frame)
+        self._rest: _Motion = ((0.0,) * n_axes, 0.0, False)
+        self._motion: _Motion = self._rest
+        self._motion_before: _Motion = self._rest
+
+    def set_catch_up(self, catch_up: float, above: int = 0) -> None:
+        """Play (and judge) frames ``catch_up`` times as fast as stamped, while more than
+        ``above`` frames are queued."""
+        if not (math.isfinite(catch_up) and catch_up >= 1.0):
+            raise ValueError(f"catch_up = {catch_up!r}; allowed: a finite number >= 1")
+        self.catch_up = float(catch_up)
+        self.catch_up_above = int(above)
+
+    def set_limits(self, limits: PulseLimits | None) -> None:
+        """Judge later frames against ``limits`` (``None``: no checks)."""
+        self.limits = limits
+        if limits is None:
+            self._lo = self._hi = self._vmax = self._amax = self._vlim = self._alim = None
+            return
+        if limits.n_axes != self.n_axes:
+            raise ValueError(f"limits for {limits.n_axes} axes; the controller has {self.n_axes}")
+
+        def per_axis(values: Any) -> tuple[float, ...] | None:
+            out = tuple(float(v) for v in values)
+            return out if any(math.isfinite(v) for v in out) else None
+
+        self._lo = per_axis(limits.stroke_lo)
+        self._hi = per_axis(limits.stroke_hi)
+        self._vmax = per_axis(limits.max_speed_pulses_s)
+        self._amax = per_axis(limits.max_accel_pulses_s2)
+        # what is compared (a rounding's worth above the limits)
+        self._vlim = None if self._vmax is None else tuple(v * (1 + 1e-9) for v in self._vmax)
+        self._alim = None if self._amax is None else tuple(a * (1 + 1e-9) for a in self._amax)
 
     # -- time ---------------------------------------------------------------------------
     def advance(self, now_s: float) -> None:
@@ -172,7 +253,7 @@ class Playback:
         self.last_wall = now_s
         if not self.started:
             return
-        rate = self.fast_rate if len(self.pending) > 1 else self.rate
+        rate = self.catch_up if len(self.pending) > self.catch_up_above else 1.0
         self.play_t = min(self.t_end, self.play_t + dt * rate)
         while self.pending and self.pending[0] <= self.play_t + 1e-9:
             self.pending.popleft()
@@ -187,8 +268,12 @@ class Playback:
         return len(self.pending) >= self.capacity
 
     # -- frames -------------------------------------------------------------------------
-    def play(self, frame_no: int, duration_s: float, positions: Sequence[int]) -> None:
-        """Append a frame reached ``duration_s`` after the previous one (or at 0 if first)."""
+    def play(
+        self, frame_no: int, duration_s: float, positions: Sequence[int], *, stamped: bool = True
+    ) -> None:
+        """Append a frame reached ``duration_s`` (timeline) after the previous one (or at 0
+        if first). ``stamped``: the duration is the frames' stamp difference, not a time the
+        controller chose itself (jog, rewind, fast-forward, e-stop release)."""
         positions = tuple(int(p) for p in positions)
         base = None
         if not self.fifo and len(self.pending) > 1 and self.rows_t:
@@ -201,6 +286,7 @@ class Playback:
             self.frames_dropped += 1
             self.t_end = self.rows_t[-1] if self.rows_t else 0.0
             self.position = self.rows_p[-1] if self.rows_p else (0,) * self.n_axes
+            self._motion = self._motion_before
         if not self.started:
             self.started = True
             t = 0.0
@@ -209,7 +295,10 @@ class Playback:
         else:
             t = (self.t_end if base is None else base) + duration_s
             move_s = t - self.t_end if self.rows_t else duration_s
-        self._check(t, move_s, positions, frame_no)
+        if frame_no == 0 and self.last_frame_no is not None:
+            self._motion = self._rest  # a new run (a new encoder) starts from rest
+        self._motion_before = self._motion
+        self._check(t, move_s, positions, frame_no, stamped)
         # frame numbers count up by one; 0 starts a new run (a new encoder)
         expected = None if self.last_frame_no is None else (self.last_frame_no + 1) & 0xFFFFFFFF
         if expected is not None and frame_no not in (expected, 0):
@@ -231,7 +320,8 @@ class Playback:
         self.frames_played += 1
 
     def jump(self, duration_s: float, positions: Sequence[int]) -> None:
-        """A move the controller makes by itself (e-stop, homing): clears the buffer."""
+        """A move the controller makes by itself (e-stop, homing): clears the buffer; the
+        motors are at rest afterwards."""
         positions = tuple(int(p) for p in positions)
         self.pending.clear()
         t = (self.play_t if self.started else 0.0) + duration_s
@@ -241,41 +331,86 @@ class Playback:
         self.rows_f.append(-1)
         self.t_end = self.play_t = t
         self.position = positions
+        self._motion = self._motion_before = self._rest
 
     def restart(self) -> None:
         """After homing the next frame starts a new run (its time is the new origin)."""
         self.last_frame_no = None
 
-    def _check(self, t: float, duration_s: float, positions: tuple[int, ...], frame: int) -> None:
-        if self.stroke is not None:
-            lo, hi = self.stroke
+    def _check(
+        self, t: float, move_s: float, positions: tuple[int, ...], frame: int, stamped: bool
+    ) -> None:
+        """Judge the move to ``positions`` over ``move_s`` of timeline on the controller's
+        clock, and remember its speeds for the next frame's acceleration."""
+        lo, hi, vmax = self._lo, self._hi, self._vmax
+        if lo is not None or hi is not None:
             for i, p in enumerate(positions):
-                if not lo <= p <= hi:
+                a_lo = -math.inf if lo is None else lo[i]
+                a_hi = math.inf if hi is None else hi[i]
+                if not a_lo <= p <= a_hi:
                     self.violations.append(
                         Violation(
                             t,
                             "stroke",
                             i,
-                            f"frame {frame}: axis {i} at {p} pulses, allowed [{lo}, {hi}]",
+                            f"frame {frame}: axis {i} at {p} pulses, allowed "
+                            f"[{_num(a_lo)}, {_num(a_hi)}]",
                         )
                     )
-        if self.max_speed is not None:
-            for i, (p, q, vmax) in enumerate(
-                zip(positions, self.position, self.max_speed, strict=True)
-            ):
-                if vmax <= 0 or p == q:
-                    continue
-                v = abs(p - q) / duration_s if duration_s > 0 else float("inf")
-                if v > vmax * (1 + 1e-9):
+        prev_v, prev_dur, prev_stamped = self._motion
+        q = self.position
+        if move_s <= 0.0:  # a move in no time (IMAX PA0a = 1 with PA09 = 0)
+            for i, (p, r) in enumerate(zip(positions, q, strict=True)):
+                if p != r and vmax is not None:
                     self.violations.append(
-                        Violation(
-                            t,
-                            "speed",
-                            i,
-                            f"frame {frame}: axis {i} moves {p - q} pulses in "
-                            f"{duration_s * 1e3:.1f} ms = {v:.0f} pulses/s > {vmax:.0f}",
-                        )
+                        Violation(t, "speed", i, f"frame {frame}: axis {i} moves {p - r} in 0 ms")
                     )
+            self._motion = self._rest
+            return
+        dur = move_s / self.catch_up
+        inv = 1.0 / dur
+        speeds = tuple([(p - r) * inv for p, r in zip(positions, q, strict=True)])
+        self._motion = (speeds, dur, stamped)
+        vlim, alim = self._vlim, self._alim
+        if vlim is not None:
+            for i, (v, lim) in enumerate(zip(speeds, vlim, strict=True)):
+                if v > lim or -v > lim:
+                    self._speed_violation(t, frame, i, positions[i] - q[i], move_s)
+        if alim is not None:
+            h = 0.5 * (dur + prev_dur) if stamped and prev_stamped else dur
+            inv_h = 1.0 / h
+            for i, (v, u, lim) in enumerate(zip(speeds, prev_v, alim, strict=True)):
+                if abs(v - u) * inv_h > lim:
+                    self._accel_violation(t, frame, i, u, v, h)
+
+    def _speed_violation(self, t: float, frame: int, i: int, step: int, move_s: float) -> None:
+        assert self._vmax is not None
+        dur = move_s / self.catch_up
+        clock = (
+            f" ({move_s * 1e3:.1f} ms / catch-up {self.catch_up:g})" if self.catch_up != 1 else ""
+        )
+        self.violations.append(
+            Violation(
+                t,
+                "speed",
+                i,
+                f"frame {frame}: axis {i} moves {step} pulses in {dur * 1e3:.3f} ms{clock} "
+                f"= {abs(step) / dur:.0f} pulses/s > {self._vmax[i]:.0f}",
+            )
+        )
+
+    def _accel_violation(self, t: float, frame: int, i: int, u: float, v: float, h: float) -> None:
+        assert self._amax is not None
+        self.violations.append(
+            Violation(
+                t,
+                "accel",
+                i,
+                f"frame {frame}: axis {i} speed {u:.0f} -> {v:.0f} pulses/s over {h * 1e3:.3f} "
+                f"ms on the controller's clock = {abs(v - u) / h:.4g} pulses/s^2 "
+                f"> {self._amax[i]:.4g}",
+            )
+        )
 
     def trace(self) -> Trace:
         n = self.n_axes
@@ -284,6 +419,11 @@ class Playback:
             np.asarray(self.rows_p, dtype=np.int64).reshape(-1, n),
             np.asarray(self.rows_f, dtype=np.int64),
         )
+
+
+def _num(x: float) -> str:
+    """A limit for a message: whole pulses, or +-inf."""
+    return f"{x:.0f}" if math.isfinite(x) else str(x)
 
 
 class UdpEmulatorBase:
@@ -464,6 +604,37 @@ class ControllerEmulator(UdpEmulatorBase):
     @property
     def estop(self) -> bool:
         return self.state == STATE_ESTOP
+
+    def _same_stamp(self, frame: int, positions: Sequence[int], jog_s: float, source: str) -> None:
+        """Flag a frame carrying the previous frame's ms stamp (or relative time 0 within a
+        run) that moves: the host meant it to follow at once, the controller moves over
+        its jog time ``jog_s`` (``source`` names the parameter) instead."""
+        pb = self.playback
+        if tuple(positions) != pb.position:
+            pb.violations.append(
+                Violation(
+                    pb.t_end + jog_s,
+                    "jog",
+                    None,
+                    f"frame {frame} has the previous frame's ms stamp but moves: the "
+                    f"controller moves it over {source} = {jog_s * 1e3:g} ms",
+                )
+            )
+
+    def _apply_limits(self, changed: dict[str, int]) -> None:
+        """Judge later frames with the limits of the description with ``changed``
+        parameters (as written by the host). Parameters that imply no usable limits (a
+        stroke of less than a pulse) are flagged ``config`` and the limits stay as they were.
+        """
+        try:
+            ctrl = self.controller.with_parameters(**changed) if changed else self.controller
+            limits = ctrl.pulse_limits()
+        except MotioncueError as exc:
+            self._violations.append(
+                Violation(self.playback.t_end, "config", None, f"limits unchanged: {exc}")
+            )
+            return
+        self.playback.set_limits(limits)
 
     def _malformed(self, detail: str) -> list[bytes]:
         """Record a datagram the controller cannot use; no reply."""

@@ -18,7 +18,9 @@ message                        class
 
 Contradictions in the manual and the decisions taken (more in ``_messages``):
 
-* PortOut: 2 bytes in 0x1301, 4 in 0x1401 and the replies. 2 bytes everywhere.
+* PortOut: 2 bytes in 0x1301, 4 in 0x1401, the replies and the vibration frames. The
+  controller's ``port_out_bytes`` (2 or 4, default 2) chooses one width for all frames and
+  replies; :func:`decode` without a width accepts either (the lengths differ).
 * 0x1801's header row says "Relative Time", its data row "absolute time": absolute.
 * 2.2.2.12's title says "absolute" for the 0x1902 reply: it is the relative one.
 * 0x1401's channel row reads "2: x axes": read as "x: x axes" like 0x1301.

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import functools
 import re
 from typing import Any, TextIO
 
@@ -34,6 +35,7 @@ from ._messages import (
     F_VIB_ABS,
     F_VIB_REL,
     F_WRITE,
+    PORT_OUT_BYTES,
     RegisterRead,
     RegisterReply,
     RegisterWrite,
@@ -41,6 +43,7 @@ from ._messages import (
     axes_of_channel,
     decode,
     frame_size,
+    vibration_frame_size,
 )
 from ._params import pa_name
 
@@ -152,21 +155,23 @@ def send_verb(
 
 
 def inspect_decode(data: bytes) -> str:
-    """One line describing an IMAX datagram (raises :class:`ProtocolError`)."""
+    """One line describing an IMAX datagram (raises :class:`ProtocolError`); frames of
+    either PortOut width are read (their lengths differ)."""
     return describe(decode(data))
 
 
-def _size_at(blob: bytes, off: int) -> int:
-    """Size of the IMAX datagram at ``off`` of a capture, from its header."""
+def _size_at(blob: bytes, off: int, port_out_bytes: int = 2) -> int:
+    """Size of the IMAX datagram at ``off`` of a capture, from its header, frames having
+    a PortOut of ``port_out_bytes``."""
     if blob[off : off + 2] == b"\x33\xcc" and blob[off + 4 : off + 6] == b"\x31\x01":
         n = int.from_bytes(blob[off + 8 : off + 10], "big")
         return 16 + 8 * n
     h = decode_header(blob[off : off + HEADER.size])
     f = h.function
     if f in (F_ABS, F_REL):
-        return frame_size(axes_of_channel(h.channel))
+        return frame_size(axes_of_channel(h.channel), port_out_bytes)
     if f in (F_VIB_ABS, F_VIB_REL):
-        return 22 + 8 * axes_of_channel(h.channel)
+        return vibration_frame_size(axes_of_channel(h.channel), port_out_bytes)
     if (f & 0xFFF0) in (F_READ & 0xFFF0, F_WRITE & 0xFFF0, 0x2100, 0x2200) and f & 0xF:
         count = int.from_bytes(blob[off + 14 : off + 16], "big")
         return HEADER.size + 4 + 2 * count
@@ -175,6 +180,17 @@ def _size_at(blob: bytes, off: int) -> int:
     raise ProtocolError(f"byte {off}: cannot size IMAX function 0x{f:04X}")
 
 
-def split_stream(blob: bytes) -> list[bytes]:
-    """Cut a raw ``file:`` capture of host -> controller datagrams into datagrams."""
-    return split_datagrams(blob, _size_at)
+def split_stream(blob: bytes, port_out_bytes: int | None = None) -> list[bytes]:
+    """Cut a raw ``file:`` capture of host -> controller datagrams into datagrams.
+
+    A raw capture does not say how wide PortOut is (``port_out_bytes``, 2 or 4); ``None``
+    tries 2, then 4: with the wrong width the next message's header is misplaced and the
+    split fails."""
+    widths = PORT_OUT_BYTES if port_out_bytes is None else (port_out_bytes,)
+    errors = []
+    for width in widths:
+        try:
+            return split_datagrams(blob, functools.partial(_size_at, port_out_bytes=width))
+        except ProtocolError as exc:
+            errors.append(f"PortOut {width} bytes: {exc}")
+    raise ProtocolError("; ".join(errors))

@@ -27,6 +27,7 @@ from ._messages import (
     F_REL,
     F_VIB_ABS,
     F_VIB_REL,
+    PORT_OUT_BYTES,
     _frame_struct,
     _vib_struct,
     channel_of_axes,
@@ -69,6 +70,11 @@ class ImaxController(UdpController["ImaxFrameEncoder"]):
         fit it: quadrature encoder counts, 4 x the PA54 encoder lines (20000 for 5000 lines,
         10000 for 2500), or the servo's command pulses at its electronic gear. None takes the
         first reading; give the number your drives use (the bundled configs: 10000).
+    port_out_bytes : int
+        Width of PortOut in frames and frame replies, 2 or 4 bytes. The manual prints 2 in
+        the 0x1301 frame (2.2.2.5) and 4 in the 0x1401 frame, the replies and the vibration
+        frames (2.2.2.7-2.2.2.12); one width is used for all (see
+        :mod:`motioncue.output.imax._messages`). Default 2.
     """
 
     kind: ClassVar[str] = "imax"
@@ -89,6 +95,7 @@ class ImaxController(UdpController["ImaxFrameEncoder"]):
     stroke_mm: float = 0.0
     buffer_frames: int = 256
     counts_per_rev: int | None = None
+    port_out_bytes: int = 2
     LABEL: ClassVar[str] = "IMAX"
     RATE_CAP_SOURCE: ClassVar[str] = "1000 / PA59, the minimum communication period"
 
@@ -110,6 +117,12 @@ class ImaxController(UdpController["ImaxFrameEncoder"]):
         if c is not None and bad:
             raise ConfigError(
                 f"IMAX {self.name}: counts_per_rev = {c!r}; allowed: an integer in [1, 2**24]"
+            )
+        w = self.port_out_bytes
+        if type(w) is not int or w not in PORT_OUT_BYTES:
+            raise ConfigError(
+                f"IMAX {self.name}: port_out_bytes = {w!r}; allowed: 2 or 4 (the manual "
+                "prints PortOut as 2 bytes in 0x1301 and 4 in 0x1401)"
             )
 
     @property
@@ -231,10 +244,11 @@ class ImaxFrameEncoder(UdpFrameEncoder):
     """Turns ``(t_s, pulses, dout)`` into IMAX frames (0x1301 / 0x1401), or vibration
     frames (0x1801 / 0x1901) when ``vibration`` is given.
 
-    ``dout`` = Y01..Y12 (12 bits). The IMAX has no DACs: ``dacs`` must be ``(0, 0)``.
+    ``dout`` = Y01..Y12 (12 bits), in a PortOut field of the controller's
+    ``port_out_bytes``. The IMAX has no DACs: ``dacs`` must be ``(0, 0)``.
     """
 
-    __slots__ = ()
+    __slots__ = ("_vib_layout",)
     STROKE_SOURCE: ClassVar[str] = "stroke_mm, PA40 lift"
 
     def __init__(
@@ -245,9 +259,14 @@ class ImaxFrameEncoder(UdpFrameEncoder):
             clock,
             who_accept,
             who_reply,
-            layout=_frame_struct(controller.n_axes, not clock.absolute_time),
+            layout=_frame_struct(
+                controller.n_axes, not clock.absolute_time, controller.port_out_bytes
+            ),
             functions=(F_ABS, F_REL),
             channel=channel_of_axes(controller.n_axes),
+        )
+        self._vib_layout = _vib_struct(
+            controller.n_axes, not clock.absolute_time, controller.port_out_bytes
         )
 
     def encode(
@@ -288,9 +307,7 @@ class ImaxFrameEncoder(UdpFrameEncoder):
                 F_VIB_ABS if self.clock.absolute_time else F_VIB_REL,
                 *self._head[3:],
             )
-            data = _vib_struct(self.n_axes, not self.clock.absolute_time).pack(
-                *head, frame, field, *pulses, dout, *flat
-            )
+            data = self._vib_layout.pack(*head, frame, field, *pulses, dout, *flat)
         self._check_stroke(pulses)
         self.clock.commit(t_s, abs_ms)
         return [data]
@@ -303,6 +320,9 @@ def controller_from_config(reader: ConfigReader, name: str) -> ImaxController:
     stroke = reader.number("stroke_mm", 0.0, lo=0.0)
     buffer_frames = reader.integer("buffer_frames", 256, lo=1, hi=65535)
     counts = reader.integer("counts_per_rev", 0, lo=0, hi=1 << 24)
+    port_out_bytes = reader.integer("port_out_bytes", 2, lo=2, hi=4)
+    if port_out_bytes not in PORT_OUT_BYTES:
+        raise reader.error("port_out_bytes", port_out_bytes, "2 or 4")
     values = config_parameters(reader)
     values.setdefault("PA02", axes)
     return ImaxController(
@@ -313,4 +333,5 @@ def controller_from_config(reader: ConfigReader, name: str) -> ImaxController:
         stroke_mm=stroke,
         buffer_frames=buffer_frames,
         counts_per_rev=counts or None,
+        port_out_bytes=port_out_bytes,
     )

@@ -8,8 +8,15 @@ Modelled (IMAX manual section in brackets):
   (Err21, buffer overflow) when the buffer is full, x = 4 while the e-stop is active,
   x = 5 for a frame it cannot use (command error); no reply at all when PA15 = 0.
 * playback: frame time steps; PA0a = 1 uses PA09 instead; a step of 0 or less moves within
-  PA59 ms; PA06 = 1 plays 1.5x faster while more than 2 frames wait (the manual gives no
-  rate: decision).
+  PA59 ms (a moving frame with the previous frame's stamp is flagged ``jog``); PA06 = 1
+  plays 1.5x faster while more than 2 frames wait (the manual gives no rate: decision),
+  and every frame is then judged at 1.5x (any may be played fast).
+* limits: stroke, speed and acceleration of ``ImaxController.pulse_limits`` (``stroke_mm``
+  above the PA40 lift; min(PA07, PA8x, PAax x PAbx) rpm and PAbx per ramp step, in
+  ``counts_per_rev`` per turn), judged on the controller's clock; a PA write of the
+  parameters they come from updates them.
+* PortOut of frames and replies is the controller's ``port_out_bytes`` wide; a frame of
+  the other width is malformed (answered x = 5).
 * registers 0x1101 / 0x1201 on DP, PA and DPF (DPFx is DP 0xF0 + x): DPF0 = 0 homes and
   reads 2 when done, PA08 = 1 homes and reads 0 after, DPF1 sets Y outputs, PA9d masks
   PortOut of frames; unknown addresses answer x = 3 with error code 1, values out of range
@@ -72,6 +79,11 @@ ERR_VALUE = 2
 ERR_BUFFER = 21  # Err21: UDP data buffer overflow (chapter 6)
 _PA_BY_ADDRESS = {int(name[2:], 16): name for name in PA_SPEC}
 _DP_POS = (0x06, 0x08, 0x0A, 0x21, 0x23, 0x25)  # low word, high word follows (2.3.3)
+# parameters the limits come from: PA07 speed, PA40 lift, PA41 lead, PA54 encoder lines,
+# PA8x speed, PAax / PAbx ramp (ImaxController.pulse_limits)
+_LIMIT_PARAMS = frozenset(
+    ["PA07", "PA40", "PA41", "PA54"] + [f"PA{g}{i:x}" for g in "8ab" for i in range(6)]
+)
 
 
 class ImaxEmulator(ControllerEmulator):
@@ -109,11 +121,10 @@ class ImaxEmulator(ControllerEmulator):
         self._resume_pending = False
         self._last_frame_wall: float | None = None
         self._reported_alarm = 0
-        stroke = controller.stroke_pulses
-        self.playback = Playback(
-            self.n_axes, controller.buffer_frames, True, controller.max_speed_pulses_s, stroke
-        )
-        self.playback.fast_rate = 1.5 if self.params["PA06"] else 1.0
+        self.port_out_bytes = controller.port_out_bytes
+        self.playback = Playback(self.n_axes, controller.buffer_frames, True)
+        self._set_limits()
+        self._set_rate()
 
     def set_inputs(self, bits: int, now_s: float | None = None) -> None:
         """Set the X01..X12 inputs (logical values); may trigger or release the e-stop."""
@@ -162,7 +173,7 @@ class ImaxEmulator(ControllerEmulator):
             return []
         reply = who_matches(h.who_reply, node) and self.params["PA15"] == 1
         try:
-            msg = decode(data)
+            msg = decode(data, self.port_out_bytes)
         except ProtocolError as exc:
             self._malformed(str(exc))
             if reply and h.function in (F_ABS, F_REL, F_VIB_ABS, F_VIB_REL):
@@ -195,9 +206,17 @@ class ImaxEmulator(ControllerEmulator):
                 (0,) * n,
                 self.inputs & 0xFFFF,
                 ((0, 0),) * n,
+                self.port_out_bytes,
             ).encode()
         return MotionFrameReply(
-            ReplyStatus.COMMAND_ERROR, absolute, 5, 0, 0, (0,) * n, self.inputs & 0xFFFF
+            ReplyStatus.COMMAND_ERROR,
+            absolute,
+            5,
+            0,
+            0,
+            (0,) * n,
+            self.inputs & 0xFFFF,
+            port_out_bytes=self.port_out_bytes,
         ).encode()
 
     def _reply(
@@ -214,6 +233,7 @@ class ImaxEmulator(ControllerEmulator):
                 msg.positions,
                 self.inputs & 0xFFFF,
                 msg.vibration,
+                self.port_out_bytes,
             )
         return MotionFrameReply(
             status,
@@ -224,6 +244,7 @@ class ImaxEmulator(ControllerEmulator):
             msg.positions,
             self.inputs & 0xFFFF,
             msg.extend,
+            self.port_out_bytes,
         )
 
     def _frame(self, msg: MotionFrame | VibrationFrame) -> MotionFrameReply | VibrationFrameReply:
@@ -260,14 +281,19 @@ class ImaxEmulator(ControllerEmulator):
         else:
             step = msg.time_ms
         min_period = max(p["PA59"], 1) / 1000.0
+        positions = msg.positions[off : off + self.n_axes]
+        stamped = True  # False: the controller times the move itself
         if self._resume_pending:
-            positions = msg.positions[off : off + self.n_axes]
             duration = self._safe_time(positions)
             self._resume_pending = False
+            stamped = False
         elif p["PA0a"]:
-            duration = p["PA09"] / 1000.0
+            duration = p["PA09"] / 1000.0  # a fixed period, as regular as stamps
         elif step is None or step <= 0:
             duration = min_period
+            stamped = False
+            if step == 0 and msg.frame != 0 and pb.last_frame_no is not None:
+                self._same_stamp(msg.frame, positions, duration, "PA59")
         else:
             duration = step / 1000.0
             if p["PA0b"] and step > p["PA0b"]:
@@ -288,7 +314,7 @@ class ImaxEmulator(ControllerEmulator):
                         f"frame {msg.frame} {step} ms after the previous, PA59 = {p['PA59']} ms",
                     )
                 )
-        pb.play(msg.frame, duration, msg.positions[off : off + self.n_axes])
+        pb.play(msg.frame, duration, positions, stamped=stamped)
         self._last_frame_wall = pb.last_wall
         if not p["PA9d"]:
             self.outputs = msg.port_out & 0xFFF
@@ -383,14 +409,27 @@ class ImaxEmulator(ControllerEmulator):
             self.params[name] = v
             if name == "PA08" and v == 1:
                 self._start_homing(now_s)
-            elif name == "PA06":
-                self.playback.fast_rate = 1.5 if v else 1.0
             elif name == "PA0f" and v == 1:
                 self.params.update({k: spec[2] for k, spec in PA_SPEC.items()})
                 self.params["PA02"] = self.n_axes
+        self._set_rate()
+        if changes.keys() & (_LIMIT_PARAMS | {"PA0f"}):
+            self._set_limits()
         return RegisterReply(0x1202, msg.channel, msg.start, msg.values)
 
     # -- state --------------------------------------------------------------------------
+    def _set_rate(self) -> None:
+        """PA06 = 1: fast-forward while more than 2 frames are buffered (5.2's table), at
+        1.5x (the manual gives no rate: decision); every frame is then judged at 1.5x."""
+        self.playback.set_catch_up(1.5 if self.params["PA06"] else 1.0, 2)
+
+    def _set_limits(self) -> None:
+        """Stroke, speed and acceleration from the description with the current PA values
+        they come from."""
+        ctrl = self.controller
+        changed = {k: self.params[k] for k in _LIMIT_PARAMS if self.params[k] != ctrl.parameters[k]}
+        self._apply_limits(changed)
+
     def _start_homing(self, now_s: float) -> None:
         self.state = STATE_HOMING
         self._estop_latched = False

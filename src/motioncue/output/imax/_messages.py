@@ -10,7 +10,18 @@ channel field holds the controller's error code (2.2.2.2, 2.2.2.4, 2.2.2.6).
 
 Decisions where the manual is ambiguous or contradicts itself:
 
-* PortOut is 2 bytes in every frame (0x1301 prints 2, 0x1401 and the replies print 4).
+* PortOut's width is configuration (``port_out_bytes`` of the controller, 2 or 4; default
+  2), passed to every frame message and to :func:`decode`. The manual prints it two ways:
+  2 bytes (``$.$``) in the 0x1301 absolute-time frame (2.2.2.5), 4 bytes (``L*``) in the
+  0x1401 relative-time frame (2.2.2.7), in every frame reply (2.2.2.6, 2.2.2.8) and in the
+  vibration frames and replies (2.2.2.9-2.2.2.12). The two frames are otherwise the same
+  layout and a controller is unlikely to differ between them, so one width is used for all
+  frames and replies of a controller: 2 (0x1301's table; the 12 outputs fit in 2 bytes and
+  the ``L*`` elsewhere copied from the neighbouring columns) or 4 (the majority of the
+  tables; 0x1301's ``$.$`` the slip). The frame lengths tell the two apart (26 + 4 n or
+  28 + 4 n bytes for n axes, vibration 22 + 8 n or 24 + 8 n), so :func:`decode` without a
+  width accepts either (for tools such as ``inspect``); the emulator and the replies use
+  the configured width only.
 * Frame replies repeat the frame layout, PortOut carrying the input states; their axis
   count follows from the length because error replies overwrite the channel.
 * Channel 0 = 3 axes, 1 = 6 axes, n = n axes (2..12); the 0x1401 table's "2: x axes" is
@@ -65,6 +76,7 @@ __all__ = [  # what the package exports from here
     "CHANNEL_DP",
     "CHANNEL_DPF",
     "CHANNEL_PA",
+    "PORT_OUT_BYTES",
     "MotionFrame",
     "MotionFrameReply",
     "RegisterRead",
@@ -91,6 +103,11 @@ F_STATUS = 0x3101
 CHANNEL_DP, CHANNEL_PA, CHANNEL_DPF = 0, 1, 2
 MAX_AXES = 12
 MAX_SERVO_REGS = 6
+PORT_OUT_BYTES = (2, 4)
+"""The two readings of the manual for PortOut's width in frames and replies (module notes)."""
+_FRAME_FUNCTIONS = frozenset(
+    base - 1 + x for base in (0x1301, 0x1401, 0x1801, 0x1901) for x in (1, 2, 3, 4, 5)
+)
 
 
 class ReplyStatus(enum.IntEnum):
@@ -258,21 +275,73 @@ class ServoReply(RegisterReply):
 
 
 # -- frames -----------------------------------------------------------------------------------
-@cache
-def _frame_struct(n_axes: int, relative: bool) -> struct.Struct:
-    # header, Frame u32, Time u32 / i32, n x i32 positions, PortOut u16, Extend u32
-    return timed_frame_struct(n_axes, relative, "HI")
+def check_port_out_bytes(port_out_bytes: object) -> int:
+    """``port_out_bytes`` if it is 2 or 4, else :class:`ProtocolError`."""
+    if type(port_out_bytes) is not int or port_out_bytes not in PORT_OUT_BYTES:
+        raise ProtocolError(
+            f"PortOut width {port_out_bytes!r} bytes; allowed: 2 or 4 (see the IMAX notes)"
+        )
+    return port_out_bytes
+
+
+def _port_code(port_out_bytes: int) -> str:
+    return "H" if check_port_out_bytes(port_out_bytes) == 2 else "I"
 
 
 @cache
-def _vib_struct(n_axes: int, relative: bool) -> struct.Struct:
-    # header, Frame u32, Time, n x i32, PortOut u16, n x (period u16 0.125 ms, amplitude u16)
-    return timed_frame_struct(n_axes, relative, f"H{2 * n_axes}H")
+def _frame_struct(n_axes: int, relative: bool, port_out_bytes: int = 2) -> struct.Struct:
+    # header, Frame u32, Time u32 / i32, n x i32 positions, PortOut u16 / u32, Extend u32
+    return timed_frame_struct(n_axes, relative, f"{_port_code(port_out_bytes)}I")
 
 
-def frame_size(n_axes: int) -> int:
-    """Bytes of a motion frame: 12 + 8 + 4 n + 2 + 4."""
-    return _frame_struct(n_axes, False).size
+@cache
+def _vib_struct(n_axes: int, relative: bool, port_out_bytes: int = 2) -> struct.Struct:
+    # header, Frame u32, Time, n x i32, PortOut u16 / u32, n x (period u16 0.125 ms,
+    # amplitude u16)
+    return timed_frame_struct(n_axes, relative, f"{_port_code(port_out_bytes)}{2 * n_axes}H")
+
+
+def frame_size(n_axes: int, port_out_bytes: int = 2) -> int:
+    """Bytes of a motion frame: 12 + 8 + 4 n + PortOut (2 or 4) + 4."""
+    return _frame_struct(n_axes, False, port_out_bytes).size
+
+
+def vibration_frame_size(n_axes: int, port_out_bytes: int = 2) -> int:
+    """Bytes of a vibration frame: 12 + 8 + 4 n + PortOut (2 or 4) + 4 n."""
+    return _vib_struct(n_axes, False, port_out_bytes).size
+
+
+def _width_of(size: int, sizes: dict[int, int], port_out_bytes: int | None, what: str) -> int:
+    """The PortOut width of a ``size``-byte message whose size per width is ``sizes``:
+    the given width (checked), or, for ``None``, the one the length fits."""
+    if port_out_bytes is not None:
+        expected = sizes[check_port_out_bytes(port_out_bytes)]
+        if size != expected:
+            raise ProtocolError(
+                f"{what}: length {size} bytes, expected {expected} (PortOut {port_out_bytes} bytes)"
+            )
+        return port_out_bytes
+    for width, expected in sizes.items():
+        if size == expected:
+            return width
+    raise ProtocolError(
+        f"{what}: length {size} bytes, expected {sizes[2]} (PortOut 2 bytes) or "
+        f"{sizes[4]} (4 bytes)"
+    )
+
+
+def _reply_axes(
+    size: int, fixed: int, per_axis: int, port_out_bytes: int | None, what: str
+) -> tuple[int, int]:
+    """``(n_axes, width)`` of a reply of ``size`` bytes = ``fixed`` + PortOut + ``per_axis``
+    x n: the given width, or for ``None`` the one whose n is a whole 2..12."""
+    widths = PORT_OUT_BYTES if port_out_bytes is None else (check_port_out_bytes(port_out_bytes),)
+    for width in widths:
+        n, rest = divmod(size - fixed - width, per_axis)
+        if not rest and 2 <= n <= MAX_AXES:
+            return n, width
+    forms = " or ".join(f"{fixed + w} + {per_axis} n" for w in widths)
+    raise ProtocolError(f"{what}: length {size} bytes is not {forms} for 2..12 axes")
 
 
 @dataclass(frozen=True, slots=True)
@@ -282,7 +351,8 @@ class MotionFrame:
 
     ``positions``: 2..12 absolute motor positions, int32 pulses (0 = mechanical zero + lift
     PA40/PA41). ``port_out``: Y01..Y12 effect outputs (ignored when PA9d = 1).
-    ``extend``: reserved u32.
+    ``extend``: reserved u32. ``port_out_bytes``: PortOut's width on the wire, 2 or 4 (the
+    manual prints both; module notes).
     """
 
     absolute: bool
@@ -293,9 +363,11 @@ class MotionFrame:
     extend: int = 0
     who_accept: int = WHO_ALL
     who_reply: int = WHO_ALL
+    port_out_bytes: int = 2
 
     def __post_init__(self) -> None:
         channel_of_axes(len(self.positions))
+        check_port_out_bytes(self.port_out_bytes)
         self.encode()
 
     @property
@@ -308,12 +380,12 @@ class MotionFrame:
 
     @property
     def size(self) -> int:
-        return frame_size(len(self.positions))
+        return frame_size(len(self.positions), self.port_out_bytes)
 
     def encode(self) -> bytes:
         n = len(self.positions)
         return pack_timed_frame(
-            _frame_struct(n, not self.absolute),
+            _frame_struct(n, not self.absolute, self.port_out_bytes),
             (self.function, channel_of_axes(n), self.who_accept, self.who_reply),
             self.frame,
             self.time_ms,
@@ -323,14 +395,23 @@ class MotionFrame:
         )
 
     @classmethod
-    def decode_parts(cls, h: Header, data: bytes) -> MotionFrame:
+    def decode_parts(cls, h: Header, data: bytes, port_out_bytes: int | None = None) -> MotionFrame:
+        """The frame in ``data`` (PortOut ``port_out_bytes`` wide; ``None``: either)."""
         n = axes_of_channel(h.channel)
         relative = h.function == F_REL
-        layout = _frame_struct(n, relative)
-        check_length(data, layout.size, f"{n}-axis frame 0x{h.function:04X}")
-        f = layout.unpack(data)
+        sizes = {w: frame_size(n, w) for w in PORT_OUT_BYTES}
+        width = _width_of(len(data), sizes, port_out_bytes, f"{n}-axis frame 0x{h.function:04X}")
+        f = _frame_struct(n, relative, width).unpack(data)
         return cls(
-            not relative, f[6], f[7], f[8 : 8 + n], f[8 + n], f[9 + n], h.who_accept, h.who_reply
+            not relative,
+            f[6],
+            f[7],
+            f[8 : 8 + n],
+            f[8 + n],
+            f[9 + n],
+            h.who_accept,
+            h.who_reply,
+            width,
         )
 
 
@@ -347,9 +428,11 @@ class MotionFrameReply:
     positions: tuple[int, ...]
     port: int = 0
     extend: int = 0
+    port_out_bytes: int = 2
 
     def __post_init__(self) -> None:
         channel_of_axes(len(self.positions))
+        check_port_out_bytes(self.port_out_bytes)
         self.encode()
 
     @property
@@ -358,11 +441,11 @@ class MotionFrameReply:
 
     @property
     def size(self) -> int:
-        return frame_size(len(self.positions))
+        return frame_size(len(self.positions), self.port_out_bytes)
 
     def encode(self) -> bytes:
         return pack_timed_frame(
-            _frame_struct(len(self.positions), not self.absolute),
+            _frame_struct(len(self.positions), not self.absolute, self.port_out_bytes),
             (self.function, self.channel, WHO_NONE, WHO_NONE),
             self.frame,
             self.time_ms,
@@ -372,15 +455,15 @@ class MotionFrameReply:
         )
 
     @classmethod
-    def decode_parts(cls, h: Header, data: bytes) -> MotionFrameReply:
-        n, rest = divmod(len(data) - frame_size(0), 4)
-        if rest or not 2 <= n <= MAX_AXES:
-            raise ProtocolError(
-                f"frame reply 0x{h.function:04X}: length {len(data)} bytes is "
-                "not 26 + 4 n for 2..12 axes"
-            )
+    def decode_parts(
+        cls, h: Header, data: bytes, port_out_bytes: int | None = None
+    ) -> MotionFrameReply:
+        """The reply in ``data`` (PortOut ``port_out_bytes`` wide; ``None``: either)."""
+        n, width = _reply_axes(
+            len(data), frame_size(0, 2) - 2, 4, port_out_bytes, f"frame reply 0x{h.function:04X}"
+        )
         relative = (h.function & 0xFFF0) == 0x1400
-        f = _frame_struct(n, relative).unpack(data)
+        f = _frame_struct(n, relative, width).unpack(data)
         return cls(
             ReplyStatus(h.function & 0xF),
             not relative,
@@ -390,6 +473,7 @@ class MotionFrameReply:
             f[8 : 8 + n],
             f[8 + n],
             f[9 + n],
+            width,
         )
 
 
@@ -407,9 +491,11 @@ class VibrationFrame:
     vibration: tuple[tuple[int, int], ...]
     who_accept: int = WHO_ALL
     who_reply: int = WHO_ALL
+    port_out_bytes: int = 2
 
     def __post_init__(self) -> None:
         channel_of_axes(len(self.positions))
+        check_port_out_bytes(self.port_out_bytes)
         if len(self.vibration) != len(self.positions):
             raise ProtocolError(
                 f"{len(self.vibration)} vibration pairs for {len(self.positions)} axes"
@@ -422,12 +508,12 @@ class VibrationFrame:
 
     @property
     def size(self) -> int:
-        return _vib_struct(len(self.positions), False).size
+        return vibration_frame_size(len(self.positions), self.port_out_bytes)
 
     def encode(self) -> bytes:
         n = len(self.positions)
         return pack_timed_frame(
-            _vib_struct(n, not self.absolute),
+            _vib_struct(n, not self.absolute, self.port_out_bytes),
             (self.function, channel_of_axes(n), self.who_accept, self.who_reply),
             self.frame,
             self.time_ms,
@@ -437,12 +523,16 @@ class VibrationFrame:
         )
 
     @classmethod
-    def decode_parts(cls, h: Header, data: bytes) -> VibrationFrame:
+    def decode_parts(
+        cls, h: Header, data: bytes, port_out_bytes: int | None = None
+    ) -> VibrationFrame:
+        """The frame in ``data`` (PortOut ``port_out_bytes`` wide; ``None``: either)."""
         n = axes_of_channel(h.channel)
         relative = h.function == F_VIB_REL
-        layout = _vib_struct(n, relative)
-        check_length(data, layout.size, f"{n}-axis vibration frame 0x{h.function:04X}")
-        f = layout.unpack(data)
+        sizes = {w: vibration_frame_size(n, w) for w in PORT_OUT_BYTES}
+        what = f"{n}-axis vibration frame 0x{h.function:04X}"
+        width = _width_of(len(data), sizes, port_out_bytes, what)
+        f = _vib_struct(n, relative, width).unpack(data)
         vib = f[9 + n :]
         return cls(
             not relative,
@@ -453,6 +543,7 @@ class VibrationFrame:
             tuple(zip(vib[0::2], vib[1::2], strict=True)),
             h.who_accept,
             h.who_reply,
+            width,
         )
 
 
@@ -468,9 +559,11 @@ class VibrationFrameReply:
     positions: tuple[int, ...]
     port: int
     vibration: tuple[tuple[int, int], ...]
+    port_out_bytes: int = 2
 
     def __post_init__(self) -> None:
         channel_of_axes(len(self.positions))
+        check_port_out_bytes(self.port_out_bytes)
         if len(self.vibration) != len(self.positions):
             raise ProtocolError("one vibration pair per axis")
         self.encode()
@@ -481,11 +574,11 @@ class VibrationFrameReply:
 
     @property
     def size(self) -> int:
-        return _vib_struct(len(self.positions), False).size
+        return vibration_frame_size(len(self.positions), self.port_out_bytes)
 
     def encode(self) -> bytes:
         return pack_timed_frame(
-            _vib_struct(len(self.positions), not self.absolute),
+            _vib_struct(len(self.positions), not self.absolute, self.port_out_bytes),
             (self.function, self.channel, WHO_NONE, WHO_NONE),
             self.frame,
             self.time_ms,
@@ -495,15 +588,19 @@ class VibrationFrameReply:
         )
 
     @classmethod
-    def decode_parts(cls, h: Header, data: bytes) -> VibrationFrameReply:
-        n, rest = divmod(len(data) - _vib_struct(0, False).size, 8)
-        if rest or not 2 <= n <= MAX_AXES:
-            raise ProtocolError(
-                f"vibration reply 0x{h.function:04X}: length {len(data)} is "
-                "not 22 + 8 n for 2..12 axes"
-            )
+    def decode_parts(
+        cls, h: Header, data: bytes, port_out_bytes: int | None = None
+    ) -> VibrationFrameReply:
+        """The reply in ``data`` (PortOut ``port_out_bytes`` wide; ``None``: either)."""
+        n, width = _reply_axes(
+            len(data),
+            vibration_frame_size(0, 2) - 2,
+            8,
+            port_out_bytes,
+            f"vibration reply 0x{h.function:04X}",
+        )
         relative = (h.function & 0xFFF0) == 0x1900
-        f = _vib_struct(n, relative).unpack(data)
+        f = _vib_struct(n, relative, width).unpack(data)
         vib = f[9 + n :]
         return cls(
             ReplyStatus(h.function & 0xF),
@@ -514,6 +611,7 @@ class VibrationFrameReply:
             f[8 : 8 + n],
             f[8 + n],
             tuple(zip(vib[0::2], vib[1::2], strict=True)),
+            width,
         )
 
 
@@ -634,15 +732,22 @@ for _x in ReplyStatus:
     _DECODERS[(CONFIRM_SERVO, F_SERVO_WRITE - 1 + _x)] = ServoReply.decode_parts
 
 
-def decode(data: bytes) -> ImaxMessage:
+def decode(data: bytes, port_out_bytes: int | None = None) -> ImaxMessage:
     """Decode one IMAX datagram (either direction) into its typed message.
+
+    ``port_out_bytes``: PortOut's width in frames and frame replies, 2 or 4 (the
+    controller's ``port_out_bytes``); ``None`` accepts either, telling them apart by the
+    length (module notes). Other messages have no PortOut.
 
     Raises
     ------
     ProtocolError
         Short datagram, confirm code not 0x55AA / 0x33CC (or the wrong one for the
-        function), pass code not 0, unknown function, wrong channel, length or padding.
+        function), pass code not 0, unknown function, wrong channel, length or padding,
+        a frame of the other PortOut width than ``port_out_bytes``.
     """
+    if port_out_bytes is not None:
+        check_port_out_bytes(port_out_bytes)
     if len(data) >= 6 and data[:2] == b"\x33\xcc" and data[4:6] == b"\x31\x01":
         passcode, function = struct.unpack_from(">HH", data, 2)
         h = Header(CONFIRM_SERVO, passcode, function, 0, 0, 0)
@@ -656,6 +761,8 @@ def decode(data: bytes) -> ImaxMessage:
             f"unknown IMAX function code 0x{h.function:04X} with confirm code 0x{h.confirm:04X}"
         )
     try:
+        if h.confirm == CONFIRM_MAIN and h.function in _FRAME_FUNCTIONS:
+            return decoder(h, data, port_out_bytes)  # type: ignore[operator]
         return decoder(h, data)  # type: ignore[operator]
     except (struct.error, ValueError) as exc:
         if isinstance(exc, ProtocolError):

@@ -7,7 +7,11 @@ Behaviour modelled (manual section in brackets):
   ``buffer_frames`` (Fn01C = 1) or latest-frame-only (Fn01C = 0); reply 0x1x02, buffer full
   0x1x03 (frame dropped), shorter than required 0x1x04; time 0 / unchanged = jog over Fn013,
   negative / earlier = rewind over Fn014, delta above Fn015 = fast-forward over Fn016 (5.3);
-  playback speeds up by Fn012/1000 while frames are queued (5.3.3).
+  every frame is played Fn012/1000 times as fast as stamped when Fn012 >= 1000 (5.3.3; see
+  ``_set_rate`` for why always, not only while frames are queued).
+* limits: stroke and speed of ``MboxController.pulse_limits`` (Fn0C0 x Fn0C1, the servo's
+  rpm x Fn0C2 x Fn0C1), judged on the box's clock (stamp step / catch-up); a moving frame
+  with the previous frame's stamp is flagged ``jog`` (the box moves it over Fn013).
 * outputs and DACs carried in frames when Fn010 / Fn011 = 1, else from CX1-CX4 (5.3.1-2).
 * register read 0x1101 of DX / FX and write 0x1201 of FXm / FX / CX with replies or error
   replies (4.2.4-4.2.5, 4.2.10).
@@ -110,14 +114,8 @@ class MboxEmulator(ControllerEmulator):
         self.frame_ext = 0
         self.inputs = 0
         self._next_duration_s: float | None = None
-        stroke = controller.stroke_pulses
-        self.playback = Playback(
-            self.n_axes,
-            controller.buffer_frames,
-            bool(self.params["Fn01C"]),
-            controller.max_speed_pulses_s,
-            stroke,
-        )
+        self.playback = Playback(self.n_axes, controller.buffer_frames, bool(self.params["Fn01C"]))
+        self._set_limits()
         self._set_rate()
 
     def inject_fault(self, code: int) -> None:
@@ -191,18 +189,22 @@ class MboxEmulator(ControllerEmulator):
             self._last_time_ms = msg.time_ms
         else:
             step = msg.time_ms
+        stamped = False  # the box times the move itself unless the stamps do
         if self._next_duration_s is not None:
             duration = self._next_duration_s
             self._next_duration_s = None
         elif step is None or step == 0:
             duration = p["Fn013"] / 1000.0  # jog
+            if step == 0 and msg.line != 0 and pb.last_frame_no is not None:
+                self._same_stamp(msg.line, msg.positions, duration, "Fn013")
         elif step < 0:
             duration = p["Fn014"] / 10.0  # rewind
         elif p["Fn015"] > 0 and step > p["Fn015"] * 100:
             duration = p["Fn016"] / 10.0  # fast-forward
         else:
             duration = step / 1000.0
-        pb.play(msg.line, duration, msg.positions)
+            stamped = True
+        pb.play(msg.line, duration, msg.positions, stamped=stamped)
         if p["Fn010"]:
             self.frame_dout, self.frame_ext = msg.base_dout, msg.ext_dout
         if p["Fn011"]:
@@ -254,6 +256,8 @@ class MboxEmulator(ControllerEmulator):
                 self.playback.fifo = bool(value)
             elif name == "Fn012":
                 self._set_rate()
+        if changes.keys() & {"Fn0C0", "Fn0C1", "Fn0C2"}:
+            self._set_limits()
         return RegisterWriteReply(msg.channel, msg.start, msg.values)
 
     def _write_cx(self, index: int, value: int, now_s: float) -> None:
@@ -267,8 +271,26 @@ class MboxEmulator(ControllerEmulator):
 
     # -- state --------------------------------------------------------------------------
     def _set_rate(self) -> None:
+        """Fn012 >= 1000: every frame is played Fn012/1000 times as fast as stamped (5.3.3).
+
+        The manual states no condition on the buffer: 1000 is "the rated speed", larger
+        values play faster and "may make the platform move in steps" (阶梯感), which only
+        happens when the box finishes each frame early and waits for the next, i.e. when it
+        plays fast with nothing queued. So the box is modelled as always playing at that
+        speed (it waits at the last frame received), and every frame is judged on it.
+        Fn012 < 1000 selects an automatic speed (Fn01D..Fn01F) the manual does not
+        quantify; the emulator plays it as stamped (the controller description refuses it
+        for planning, see ``MboxController.catch_up_factor``)."""
         fn012 = self.params["Fn012"]
-        self.playback.fast_rate = fn012 / 1000.0 if fn012 >= 1000 else 1.0
+        self.playback.set_catch_up(fn012 / 1000.0 if fn012 >= 1000 else 1.0)
+
+    def _set_limits(self) -> None:
+        """Stroke and speed from the description with the current Fn0C0..Fn0C2."""
+        keys = ("Fn0C0", "Fn0C1", "Fn0C2")
+        changed = {
+            k: self.params[k] for k in keys if self.params[k] != self.controller.parameters[k]
+        }
+        self._apply_limits(changed)
 
     def _set_estop(self, on: bool) -> None:
         pb = self.playback
