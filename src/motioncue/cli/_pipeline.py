@@ -103,10 +103,10 @@ def _generate(args: argparse.Namespace) -> int:
 
     args.rate = snap_rate_hz(args.rate, controller)
     controller.check_rate(args.rate)
-    if args.pcap and controller.kind == "easysmc":
+    if args.pcap and controller.link_kind != "udp":
         raise ConfigError(
-            "--pcap is for the UDP controllers; for the EasySmc use "
-            "'motioncue play RIDE --target file:PATH' (raw serial bytes)"
+            f"--pcap is for controllers on UDP; {args.controller} talks {controller.link_kind}: "
+            "use 'motioncue play RIDE --target file:PATH' (the raw bytes)"
         )
     limits = ActuatorLimits.from_platform(platform, controller, rate_hz=args.rate)
     kind, data, counters = load_generate_input(args.input)

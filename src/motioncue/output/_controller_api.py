@@ -164,6 +164,11 @@ class Controller(Protocol):
         Largest digital-output word a frame may carry.
     dac_max : tuple[int, int]
         Largest analogue outputs (``(0, 0)``: none).
+    link_kind : str
+        How frames travel: ``udp``, ``serial`` or ``usb``.
+    replies_to_frames : bool
+        The controller answers each frame on the link (taken / refused), so a player can
+        count refusals.
     """
 
     kind: Any
@@ -189,6 +194,12 @@ class Controller(Protocol):
     @property
     def dac_max(self) -> tuple[int, int]: ...
 
+    @property
+    def link_kind(self) -> str: ...
+
+    @property
+    def replies_to_frames(self) -> bool: ...
+
     def pulse_limits(self, rate_hz: float | None = None) -> PulseLimits:
         """Limits the parameters imply (for frames at ``rate_hz`` when they depend on it)."""
         ...
@@ -200,6 +211,17 @@ class Controller(Protocol):
     def check_rate(self, rate_hz: float) -> None:
         """Raise :class:`~motioncue.ConfigError` for a frame rate the controller cannot
         carry on its own clock, naming the rates it can."""
+        ...
+
+    def position_query(self) -> Any:
+        """``(request datagram, reply parser)`` asking where the motors are
+        (:data:`~motioncue.output._feedback.PositionQuery`), or None when it cannot be asked."""
+        ...
+
+    def command_streamer(self, transport: Any, rate_hz: float) -> Any:
+        """A flow-controlled command stream for ``transport`` when frames must be fed
+        through one (its ``send_all``, ``poll``, ``sent`` and ``poll_every_frames``, and the
+        encoder's ``encode_commands``), else None: frames are sent as encoded."""
         ...
 
     def run_encoder(

@@ -17,13 +17,19 @@ from __future__ import annotations
 
 import struct
 import time
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from typing import Any
 
-from .._errors import MotioncueError, ProtocolError
+from .._errors import MotioncueError
 
-__all__ = ["FrameReplies", "ReportedPosition", "read_position"]
+__all__ = [
+    "FrameReplies",
+    "PositionQuery",
+    "ReportedPosition",
+    "read_position",
+    "words_to_positions",
+]
 
 _HEAD = struct.Struct(">HHHH")  # confirm, pass, function, channel
 _FRAME_NO = struct.Struct(">I")  # frame number right after the 12-byte header
@@ -56,61 +62,14 @@ def _signed32(lo: int, hi: int) -> int:
     return v - (1 << 32) if v & 0x80000000 else v
 
 
-def _words(values: Sequence[int], addresses: Sequence[int]) -> tuple[int, ...]:
+def words_to_positions(values: Sequence[int], addresses: Sequence[int]) -> tuple[int, ...]:
+    """32-bit signed positions from 16-bit registers (low word at each address, high word
+    after it)."""
     return tuple(_signed32(values[a], values[a + 1]) for a in addresses)
 
 
-def _mbox_read(controller: Any) -> tuple[bytes, Any]:
-    from .mbox._emulator import _DX_ACTUAL, _DX_COMMAND
-    from .mbox._messages import CHANNEL_DX, RegisterRead, RegisterReadReply, decode
-
-    n = controller.n_axes
-    count = 0x4C  # Dn00 .. Dn4B: positions, commanded positions, buffer depth
-
-    def parse(data: bytes) -> ReportedPosition | None:
-        try:
-            msg = decode(data)
-        except ProtocolError:
-            return None
-        if not (
-            isinstance(msg, RegisterReadReply)
-            and msg.channel == CHANNEL_DX
-            and msg.start == 0
-            and len(msg.values) == count
-        ):
-            return None
-        actual = _words(msg.values, _DX_ACTUAL[:n])
-        command = _words(msg.values, _DX_COMMAND[:n])
-        depth = msg.values[0x4B]
-        return ReportedPosition(actual, depth > 0 or actual != command, depth)
-
-    return RegisterRead(CHANNEL_DX, 0, count).encode(), parse
-
-
-def _imax_read(controller: Any) -> tuple[bytes, Any]:
-    from .imax._emulator import _DP_POS
-    from .imax._messages import CHANNEL_DP, RegisterRead, RegisterReply, ReplyStatus, decode
-
-    n = controller.n_axes
-    count = 0x4A  # DP00 .. DP49: positions, receive and use pointers
-
-    def parse(data: bytes) -> ReportedPosition | None:
-        try:
-            msg = decode(data)
-        except ProtocolError:
-            return None
-        if not (
-            isinstance(msg, RegisterReply)
-            and msg.function == 0x1102
-            and msg.status == ReplyStatus.OK
-            and msg.start == 0
-            and len(msg.values) == count
-        ):
-            return None
-        depth = (msg.values[0x48] - msg.values[0x49]) & 0xFFFF
-        return ReportedPosition(_words(msg.values, _DP_POS[:n]), depth > 0, depth)
-
-    return RegisterRead(CHANNEL_DP, 0, count).encode(), parse
+PositionQuery = tuple[bytes, Callable[[bytes], "ReportedPosition | None"]]
+"""A request datagram and the parser of its reply (``None`` for a datagram that is not it)."""
 
 
 def read_position(
@@ -121,7 +80,8 @@ def read_position(
     Parameters
     ----------
     controller
-        An IMAX or SC-MBOX description (other kinds: ``None``).
+        A controller description; one whose ``position_query()`` gives None (or that has
+        none) gives ``None``.
     transport
         The link; one without ``request`` (``pcap:``, ``file:``, serial) gives ``None``.
     timeout_s : float
@@ -134,10 +94,13 @@ def read_position(
     -------
     ReportedPosition or None
     """
-    kind = getattr(controller, "kind", None)
-    if kind not in ("mbox", "imax") or getattr(transport, "request", None) is None:
+    query = getattr(controller, "position_query", None)
+    if query is None or getattr(transport, "request", None) is None:
         return None
-    request, parse = (_mbox_read if kind == "mbox" else _imax_read)(controller)
+    asked = query()
+    if asked is None:
+        return None
+    request, parse = asked
     deadline = time.monotonic() + settle_s
     last: ReportedPosition | None = None
     while True:

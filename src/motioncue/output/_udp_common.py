@@ -251,6 +251,14 @@ class FrameClock:
         self.frame = (self.frame + 1) & 0xFFFFFFFF
         self._prev_ms = abs_ms
 
+    def snapshot(self) -> tuple[int, int | None, float | None]:
+        """The clock's state, for :meth:`restore` (a frame encoded but never sent)."""
+        return (self.frame, self._prev_ms, self.t0_s)
+
+    def restore(self, state: tuple[int, int | None, float | None]) -> None:
+        """Go back to a :meth:`snapshot`."""
+        self.frame, self._prev_ms, self.t0_s = state
+
     def step(self, t_s: float) -> tuple[int, int]:
         """Return ``(frame_number, time_field)`` for a frame at ``t_s`` and advance."""
         frame, field, abs_ms = self.stamp(t_s)

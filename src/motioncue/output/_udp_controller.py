@@ -101,6 +101,20 @@ class UdpController(Generic[EncoderT]):
         raise NotImplementedError
 
     @property
+    def link_kind(self) -> str:
+        """Frames travel as UDP datagrams."""
+        return "udp"
+
+    @property
+    def replies_to_frames(self) -> bool:
+        """Both kinds answer each frame (0x1x02 taken; another last digit refused)."""
+        return True
+
+    def command_streamer(self, transport: Any, rate_hz: float) -> None:
+        """Datagrams are sent as encoded: no command stream to keep fed."""
+        return None
+
+    @property
     def time_resolution_s(self) -> float:
         """Frame times travel as whole milliseconds (0x1301 / 0x1401 of both manuals)."""
         return 1e-3

@@ -168,14 +168,9 @@ class OutputStage:
         self._saver = _StateSaver(self._state)
         self.last_pulses = self.platform.drives.to_pulses(np.asarray(q0, dtype=float))
         self._encoder = make_frame_encoder(self.controller, self.rate_hz, self.last_pulses)
-        if self.controller.kind == "easysmc" and _is_serial(self.transport):
-            # A live serial link: commands go through the flow-controlled streamer that keeps
-            # the controller's 63-command buffer fed without overflowing it.
-            from motioncue.output.easysmc import EasySmcLink, EasySmcStreamer
-
-            link = EasySmcLink(self.transport)
-            self._streamer = EasySmcStreamer.for_controller(self.controller, link, self.rate_hz)
-            self._streamer.send_all(self.controller.setup_commands())
+        # a controller fed through a command stream (the EasySmc on a live serial link:
+        # its 63-command buffer kept fed without overflowing) gives its streamer here
+        self._streamer = self.controller.command_streamer(self.transport, self.rate_hz)
 
     def _start_position(self) -> np.ndarray:
         park = np.asarray(self.platform.q_park, dtype=float)
@@ -238,7 +233,7 @@ class OutputStage:
         state = self._state
         saved = self._saver.save(state)
         clock = getattr(self._encoder, "clock", None)
-        saved_clock = None if clock is None else (clock.frame, clock._prev_ms, clock.t0_s)
+        saved_clock = None if clock is None else clock.snapshot()
         try:
             q_out = np.asarray(self._limiter.step(state, q_target), dtype=float)
             if not np.all(np.isfinite(q_out)):  # the limiter guarantees this; never send NaN
@@ -252,14 +247,14 @@ class OutputStage:
                 if self.frames == 0 and not np.array_equal(pulses, self.last_pulses):
                     self._hold_first()  # sent: kept whatever happens to this frame
                     if clock is not None:
-                        saved_clock = (clock.frame, clock._prev_ms, clock.t0_s)
+                        saved_clock = clock.snapshot()
                 msgs = self._encoder.encode(self.t_s, frame, dout, dacs)
                 for msg in msgs:  # one datagram per frame for the UDP controllers
                     self._send(msg)
         except BaseException:
             self._saver.restore(state, saved)
             if saved_clock is not None and clock is not None:
-                clock.frame, clock._prev_ms, clock.t0_s = saved_clock
+                clock.restore(saved_clock)
             raise
         if self._streamer is not None:
             # A serial command may have reached the controller before the link failed, so
@@ -552,7 +547,7 @@ def play_ride(
     stage = OutputStage(platform, controller, limits, ride.rate_hz, transport, q_start=q_start)
     from motioncue.output._feedback import FrameReplies
 
-    replies = FrameReplies(transport) if live and controller.kind != "easysmc" else None
+    replies = FrameReplies(transport) if live and controller.replies_to_frames else None
     guard = SignalGuard()
     q_frames = platform.drives.from_pulses(ride.pulses)
     n = ride.n_frames

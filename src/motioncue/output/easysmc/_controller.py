@@ -17,6 +17,7 @@ import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from types import MappingProxyType
+from typing import Any
 
 from ..._config import ConfigReader
 from ..._errors import ConfigError, LimitError, ProtocolError
@@ -300,6 +301,34 @@ class EasySmcController:
     def dac_max(self) -> tuple[int, int]:
         """No analogue outputs."""
         return (0, 0)
+
+    @property
+    def link_kind(self) -> str:
+        """``serial`` or ``usb``."""
+        return self.link
+
+    @property
+    def replies_to_frames(self) -> bool:
+        """Frame commands are answered on the serial link, read by the streamer."""
+        return False
+
+    def position_query(self) -> None:
+        """The EasySmc is not asked where it is (``play`` expects it homed, at park)."""
+        return None
+
+    def command_streamer(self, transport: Any, rate_hz: float) -> Any:
+        """On a live serial link, the flow-controlled streamer that keeps the 63-command
+        buffer fed without overflowing it (after this controller's set-up commands); None
+        for files and captures, which take the commands as encoded."""
+        from .._transport_serial import SerialTransport
+
+        if not isinstance(transport, SerialTransport):
+            return None
+        from ._link import EasySmcLink, EasySmcStreamer
+
+        streamer = EasySmcStreamer.for_controller(self, EasySmcLink(transport), rate_hz)
+        streamer.send_all(self.setup_commands())
+        return streamer
 
     def check_rate(self, rate_hz: float) -> None:
         """Refuse a frame rate the link cannot carry (:class:`LinkBudget`), naming the

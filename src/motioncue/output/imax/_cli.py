@@ -23,7 +23,7 @@ from .._udp_cli import (
 from .._udp_cli import transport_options as _transport_options
 from .._udp_common import CONFIRM_SERVO, HEADER, WHO_ALL, decode_header
 from ._controller import ImaxController
-from ._emulator import _DP_POS, ImaxEmulator
+from ._emulator import ImaxEmulator
 from ._messages import (
     CHANNEL_DP,
     CHANNEL_DPF,
@@ -45,7 +45,7 @@ from ._messages import (
     frame_size,
     vibration_frame_size,
 )
-from ._params import pa_name
+from ._params import DP_POS, pa_name
 
 __all__ = [
     "VERBS",
@@ -143,7 +143,7 @@ def send_verb(
         reply = read(CHANNEL_DP, 0, 0x27)
         if not isinstance(reply, RegisterReply) or reply.status != ReplyStatus.OK:
             return 1
-        positions = positions_from_words(reply.values, _DP_POS[: controller.n_axes])
+        positions = positions_from_words(reply.values, DP_POS[: controller.n_axes])
         park(controller, transport, positions, out)
         return 0
     else:

@@ -13,6 +13,7 @@ from typing import Any, ClassVar
 from ..._config import ConfigReader
 from ..._errors import ConfigError, LimitError, ProtocolError
 from .._controller_api import DriveExpectations, PulseLimits
+from .._feedback import PositionQuery, ReportedPosition, words_to_positions
 from .._transport import parse_target
 from .._udp_common import FrameClock, check_int32
 from .._udp_controller import (
@@ -32,7 +33,7 @@ from ._messages import (
     _vib_struct,
     channel_of_axes,
 )
-from ._params import PA_SPEC, pa_name
+from ._params import DP_POS, DP_RECEIVE, DP_USE, PA_SPEC, pa_name
 
 __all__ = ["IMAX_RAMP_PERIOD_S", "ImaxController", "ImaxFrameEncoder", "controller_from_config"]
 
@@ -215,6 +216,32 @@ class ImaxController(UdpController["ImaxFrameEncoder"]):
             acc,
             sources,
         )
+
+    def position_query(self) -> PositionQuery:
+        """One register read of DP00..DP49 (2.3.3): axis positions and the receive / use
+        pointers of the frame buffer; moving while frames wait in it."""
+        from ._messages import CHANNEL_DP, RegisterRead, RegisterReply, ReplyStatus, decode
+
+        n = self.n_axes
+        count = DP_USE + 1
+
+        def parse(data: bytes) -> ReportedPosition | None:
+            try:
+                msg = decode(data)
+            except ProtocolError:
+                return None
+            if not (
+                isinstance(msg, RegisterReply)
+                and msg.function == 0x1102
+                and msg.status == ReplyStatus.OK
+                and msg.start == 0
+                and len(msg.values) == count
+            ):
+                return None
+            depth = (msg.values[DP_RECEIVE] - msg.values[DP_USE]) & 0xFFFF
+            return ReportedPosition(words_to_positions(msg.values, DP_POS[:n]), depth > 0, depth)
+
+        return RegisterRead(CHANNEL_DP, 0, count).encode(), parse
 
     def drive_expectations(self) -> DriveExpectations:
         """Counts per motor turn (see ``counts_per_rev``); PA41 the screw lead."""

@@ -70,7 +70,7 @@ from ._messages import (
     channel_of_axes,
     decode,
 )
-from ._params import PA_SPEC
+from ._params import DP_POS, PA_SPEC
 
 __all__ = ["ImaxEmulator"]
 
@@ -78,7 +78,7 @@ ERR_ADDRESS = 1
 ERR_VALUE = 2
 ERR_BUFFER = 21  # Err21: UDP data buffer overflow (chapter 6)
 _PA_BY_ADDRESS = {int(name[2:], 16): name for name in PA_SPEC}
-_DP_POS = (0x06, 0x08, 0x0A, 0x21, 0x23, 0x25)  # low word, high word follows (2.3.3)
+_DP_POS = DP_POS  # low word, high word follows (2.3.3)
 # parameters the limits come from: PA07 speed, PA40 lift, PA41 lead, PA54 encoder lines,
 # PA8x speed, PAax / PAbx ramp (ImaxController.pulse_limits)
 _LIMIT_PARAMS = frozenset(

@@ -22,7 +22,7 @@ from .._udp_cli import (
 from .._udp_cli import transport_options as _transport_options
 from .._udp_common import HEADER, WHO_ALL, decode_header
 from ._controller import MboxController
-from ._emulator import _DX_COMMAND, MboxEmulator
+from ._emulator import MboxEmulator
 from ._messages import (
     CHANNEL_CX,
     CHANNEL_DX,
@@ -41,7 +41,7 @@ from ._messages import (
     decode,
     frame_size,
 )
-from ._params import fn_name
+from ._params import DX_COMMAND, fn_name
 
 __all__ = [
     "VERBS",
@@ -146,7 +146,7 @@ def send_verb(
         reply = read(CHANNEL_DX, 0, 0x30)
         if not isinstance(reply, RegisterReadReply):
             return 1
-        positions = positions_from_words(reply.values, _DX_COMMAND[: controller.n_axes])
+        positions = positions_from_words(reply.values, DX_COMMAND[: controller.n_axes])
         park(controller, transport, positions, out)
         return 0
     else:

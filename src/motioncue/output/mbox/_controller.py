@@ -12,6 +12,7 @@ from typing import Any, ClassVar
 from ..._config import ConfigReader
 from ..._errors import ConfigError, LimitError, ProtocolError
 from .._controller_api import DriveExpectations, PulseLimits
+from .._feedback import PositionQuery, ReportedPosition, words_to_positions
 from .._transport import parse_target
 from .._udp_common import FrameClock, check_int32
 from .._udp_controller import (
@@ -22,7 +23,7 @@ from .._udp_controller import (
 )
 from .._udp_controller import validate_parameters as _validate
 from ._messages import F_ABS, F_REL, _frame_struct
-from ._params import FN_SPEC, fn_name
+from ._params import DX_ACTUAL, DX_COMMAND, DX_DEPTH, FN_SPEC, fn_name
 
 __all__ = ["MboxController", "MboxFrameEncoder", "controller_from_config"]
 
@@ -179,6 +180,33 @@ class MboxController(UdpController["MboxFrameEncoder"]):
             None,
             sources,
         )
+
+    def position_query(self) -> PositionQuery:
+        """One register read of Dn00..Dn4B (6.1): actual and commanded positions, and the
+        frames waiting in the buffer (Dn4B); moving while any wait or the two differ."""
+        from ._messages import CHANNEL_DX, RegisterRead, RegisterReadReply, decode
+
+        n = self.n_axes
+        count = DX_DEPTH + 1
+
+        def parse(data: bytes) -> ReportedPosition | None:
+            try:
+                msg = decode(data)
+            except ProtocolError:
+                return None
+            if not (
+                isinstance(msg, RegisterReadReply)
+                and msg.channel == CHANNEL_DX
+                and msg.start == 0
+                and len(msg.values) == count
+            ):
+                return None
+            actual = words_to_positions(msg.values, DX_ACTUAL[:n])
+            command = words_to_positions(msg.values, DX_COMMAND[:n])
+            depth = msg.values[DX_DEPTH]
+            return ReportedPosition(actual, depth > 0 or actual != command, depth)
+
+        return RegisterRead(CHANNEL_DX, 0, count).encode(), parse
 
     def drive_expectations(self) -> DriveExpectations:
         """Fn0C1 x Fn0C2 pulses per motor turn; Fn0C2 the screw lead."""

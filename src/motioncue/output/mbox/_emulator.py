@@ -60,7 +60,7 @@ from ._messages import (
     decode,
     frame_size,
 )
-from ._params import FN_SPEC
+from ._params import DX_ACTUAL, DX_COMMAND, DX_UDP, FN_SPEC
 
 __all__ = ["MboxEmulator"]
 
@@ -70,9 +70,7 @@ ERR_VALUE = 2
 STATE_FAULT = 3  # after STATE_HOMING, STATE_READY, STATE_ESTOP = 0, 1, 2
 _FN_BY_ADDRESS = {int(name[2:], 16): name for name in FN_SPEC}
 # DX addresses of actual / commanded / UDP positions, low word first (6.1.1, 6.1.11)
-_DX_ACTUAL = (0x06, 0x08, 0x0A, 0x21, 0x24, 0x26)
-_DX_COMMAND = (0x0C, 0x0E, 0x10, 0x28, 0x2A, 0x2C)
-_DX_UDP = (0x6A, 0x6C, 0x6E, 0x70, 0x72, 0x74)
+_DX_ACTUAL, _DX_COMMAND, _DX_UDP = DX_ACTUAL, DX_COMMAND, DX_UDP
 
 
 def _s16(v: int) -> int:

@@ -95,3 +95,13 @@ def fn_name(text: str) -> str:
 def fn_address(name: str) -> int:
     """Register address of an Fn parameter."""
     return int(fn_name(name)[2:], 16)
+
+# Dn status registers (6.1.1, 6.1.11): 32-bit positions, low word first, per axis
+DX_ACTUAL = (0x06, 0x08, 0x0A, 0x21, 0x24, 0x26)
+"""Actual motor positions."""
+DX_COMMAND = (0x0C, 0x0E, 0x10, 0x28, 0x2A, 0x2C)
+"""Commanded motor positions."""
+DX_UDP = (0x6A, 0x6C, 0x6E, 0x70, 0x72, 0x74)
+"""Positions of the last UDP frame."""
+DX_DEPTH = 0x4B
+"""Frames waiting in the UDP buffer."""
