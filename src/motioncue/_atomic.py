@@ -20,13 +20,14 @@ import stat
 import tempfile
 from pathlib import Path
 from types import TracebackType
-from typing import BinaryIO
+from typing import BinaryIO, Self
 
 from ._errors import TransportError
 
 __all__ = [
     "PARTIAL_MARK",
     "AtomicFile",
+    "PublishOnExit",
     "Staging",
     "atomic_write_bytes",
     "partial_name_prefix",
@@ -54,7 +55,32 @@ def _is_special(path: Path) -> bool:
     return not stat.S_ISREG(mode)
 
 
-class AtomicFile:
+class PublishOnExit:
+    """Mixin: a ``with`` block that ends normally publishes (:meth:`_publish`), one that
+    raises (or Ctrl-C) discards (:meth:`discard`): nothing half-written is left."""
+
+    def _publish(self) -> None:  # pragma: no cover - overridden
+        raise NotImplementedError
+
+    def discard(self) -> None:  # pragma: no cover - overridden
+        raise NotImplementedError
+
+    def __enter__(self) -> Self:
+        return self
+
+    def __exit__(
+        self,
+        exc_type: type[BaseException] | None,
+        exc: BaseException | None,
+        tb: TracebackType | None,
+    ) -> None:
+        if exc_type is None:
+            self._publish()
+        else:
+            self.discard()
+
+
+class AtomicFile(PublishOnExit):
     """A binary file published under its name only by :meth:`commit`.
 
     Parameters
@@ -148,19 +174,8 @@ class AtomicFile:
     def closed(self) -> bool:
         return self._done
 
-    def __enter__(self) -> AtomicFile:
-        return self
-
-    def __exit__(
-        self,
-        exc_type: type[BaseException] | None,
-        exc: BaseException | None,
-        tb: TracebackType | None,
-    ) -> None:
-        if exc_type is None:
-            self.commit()
-        else:
-            self.discard()
+    def _publish(self) -> None:
+        self.commit()
 
 
 def atomic_write_bytes(path: str | os.PathLike[str], data: bytes, what: str = "file") -> Path:
@@ -170,7 +185,7 @@ def atomic_write_bytes(path: str | os.PathLike[str], data: bytes, what: str = "f
     return Path(path)
 
 
-class Staging:
+class Staging(PublishOnExit):
     """Several outputs prepared under temporary names and published together.
 
     :meth:`file` and :meth:`directory` return temporary paths next to the final ones; write
@@ -237,19 +252,8 @@ class Staging:
             shutil.rmtree(tmp, ignore_errors=True)
         self._files, self._dirs = [], []
 
-    def __enter__(self) -> Staging:
-        return self
-
-    def __exit__(
-        self,
-        exc_type: type[BaseException] | None,
-        exc: BaseException | None,
-        tb: TracebackType | None,
-    ) -> None:
-        if exc_type is None:
-            self.publish()
-        else:
-            self.discard()
+    def _publish(self) -> None:
+        self.publish()
 
 
 def _folder(path: Path) -> Path:

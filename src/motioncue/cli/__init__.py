@@ -14,7 +14,7 @@ from collections.abc import Sequence
 
 from .._errors import MotioncueError
 
-__all__ = ["build_parser", "main"]
+__all__ = ["build_parser", "console", "main"]
 
 # Verb modules, in the order of the data flow. Each registers one or more verbs.
 _VERB_MODULES: tuple[str, ...] = (
@@ -59,3 +59,21 @@ def main(argv: Sequence[str] | None = None) -> int:
     except KeyboardInterrupt:
         print(f"motioncue {args.verb}: interrupted", file=sys.stderr)
         return 130
+
+
+def console() -> None:
+    """Entry point of the ``motioncue`` command and ``python -m motioncue``: :func:`main`,
+    then exit with its status.
+
+    Past :func:`main` the platform is parked: the stop signals are blocked so that a late
+    Ctrl-C or SIGTERM cannot turn a clean exit into a death by signal (or a traceback) while
+    the interpreter shuts down. (Not done inside :func:`main`, which tests call in-process.)
+    """
+    import signal
+
+    status = main()
+    names = ("SIGINT", "SIGTERM", "SIGHUP", "SIGQUIT")
+    signal.pthread_sigmask(
+        signal.SIG_BLOCK, [getattr(signal, n) for n in names if hasattr(signal, n)]
+    )
+    raise SystemExit(status)

@@ -21,10 +21,9 @@ import time
 from collections.abc import Iterator
 from dataclasses import dataclass
 from pathlib import Path
-from types import TracebackType
 from typing import Any
 
-from .._atomic import AtomicFile
+from .._atomic import AtomicFile, PublishOnExit
 from .._errors import ConfigError, ProtocolError, TransportError
 from ._transport import Transport, TransportURL
 
@@ -81,7 +80,7 @@ def ethernet_ipv4_udp(
     return ETHERNET.pack(_mac_for(dip), SRC_MAC if sip != dip else _mac_for(sip), 0x0800) + ip + udp
 
 
-class _AtomicFileTransport(Transport):
+class _AtomicFileTransport(PublishOnExit, Transport):
     """A transport writing one file atomically: published by :meth:`close`, removed by
     :meth:`discard` or by leaving the ``with`` block on an exception."""
 
@@ -95,16 +94,8 @@ class _AtomicFileTransport(Transport):
         """Remove what was written; no file is left under the name."""
         self._out.discard()
 
-    def __exit__(
-        self,
-        exc_type: type[BaseException] | None,
-        exc: BaseException | None,
-        tb: TracebackType | None,
-    ) -> None:
-        if exc_type is None:
-            self.close()
-        else:
-            self.discard()
+    def _publish(self) -> None:
+        self.close()
 
 
 class FileTransport(_AtomicFileTransport):

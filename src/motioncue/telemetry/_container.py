@@ -32,9 +32,8 @@ import struct
 import time
 from collections.abc import Callable, Iterator
 from dataclasses import dataclass, field
-from types import TracebackType
 
-from .._atomic import AtomicFile
+from .._atomic import AtomicFile, PublishOnExit
 from .._errors import ConfigError, ProtocolError, TransportError
 from ._registry import GAMES
 from ._sample import TelemetrySample
@@ -95,7 +94,7 @@ class DatagramRecording:
         return len(self.datagrams)
 
 
-class RecordingWriter:
+class RecordingWriter(PublishOnExit):
     """Write a recording file record by record (context manager; atomic: published by
     :meth:`close` or a normal exit, discarded by :meth:`discard` or an exception).
 
@@ -144,19 +143,8 @@ class RecordingWriter:
         """Remove what was written; no file is left under the name."""
         self._out.discard()
 
-    def __enter__(self) -> RecordingWriter:
-        return self
-
-    def __exit__(
-        self,
-        exc_type: type[BaseException] | None,
-        exc: BaseException | None,
-        tb: TracebackType | None,
-    ) -> None:
-        if exc_type is None:
-            self.close()
-        else:
-            self.discard()
+    def _publish(self) -> None:
+        self.close()
 
 
 def read_recording_file(path: str | os.PathLike[str]) -> DatagramRecording:
