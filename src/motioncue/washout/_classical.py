@@ -36,7 +36,8 @@ Signal flow (per sample; frames, signs and units of conventions.md)
    ``u[n] = clip(wanted, u[n-1] - d, u[n-1] + d)``. So ``|u[n]| <= r/fs`` and
    ``|u[n] - u[n-1]| <= a/fs^2`` always: tilt rate at most ``r`` and tilt acceleration
    (backward difference) at most ``a``; a step in the target gives the time-optimal
-   trapezoid (or triangle) under both limits, to within one sample.
+   trapezoid (or triangle) under both limits, to within one sample (an overshoot below
+   ``a/fs^2`` where braking would have to start between two samples).
 3. **Rotational channel.** Body rates are turned into Euler-angle rates
    ``e = T(beta) w_s`` (ZYX: ``roll' = p + tan(pitch)(q sin(roll) + r cos(roll))``,
    ``pitch' = q cos(roll) - r sin(roll)``, ``yaw' = (q sin(roll) + r cos(roll))/cos(pitch)``),
