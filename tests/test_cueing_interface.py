@@ -191,7 +191,8 @@ def test_a_registered_algorithm_runs_in_cue_generate_and_bridge_by_name(
     CALLS.clear()
     ride = tmp_path / "r.ride"
     rc = main(["generate", "--input", str(rec), "--platform", "seat3", "--controller", "mbox3",
-               "--preset", str(preset), "--rate", "100", "--out", str(ride), "--quiet"])  # fmt: skip
+               "--preset", str(preset), "--rate", "100", "--out", str(ride),
+               "--quiet"])  # fmt: skip
     assert rc == 0, capsys.readouterr().err
     assert [c[:2] for c in CALLS] == [("run", 100.0)] and ride.exists()
 
@@ -202,7 +203,8 @@ def test_a_registered_algorithm_runs_in_cue_generate_and_bridge_by_name(
     limits = ActuatorLimits.from_platform(platform, ctrl, rate_hz=100.0)
 
     class Source:
-        stats = {"samples": 1}
+        def __init__(self) -> None:
+            self.stats = {"samples": 1}
 
         def latest(self) -> TelemetrySample:
             return TelemetrySample(time.perf_counter(), (0.0, 0.0, G + 3.0), (0, 0, 0), False, "t")
