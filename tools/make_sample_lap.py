@@ -1,30 +1,78 @@
-"""Generate the bundled sample recording ``configs/recordings/lap.csv``.
+"""Generate the bundled sample drives (``configs/recordings/*.csv``): the demo lap and more.
 
-A reproducible, documented lap: a point-mass vehicle with a GT-class grip envelope is driven
-round a closed circuit at the limit of a quasi-steady lap-time simulation (the classic
-forward/backward speed-profile pass over the track's curvature), then dressed with the motion
-a rider actually feels:
+With no arguments: the bundled demo lap ``configs/recordings/lap.csv``, byte for byte as
+before. With ``--track T --car C [--laps N] --seed S --out F``: a car on a track. With
+``--flight P --seed S --out F``: a light aircraft's traffic circuit. The commands that wrote
+every bundled drive, and its set (tuning, held-out, demo), are in
+``configs/recordings/drives.toml``; tests regenerate each file and compare byte for byte.
 
-- longitudinal acceleration ``v dv/ds`` (engine power, drag and braking limits);
-- lateral acceleration ``v^2 kappa`` and yaw rate ``v kappa``;
-- a crest and a dip (vertical curvature ``v^2 kappa_v``) and the grade of a hill;
-- body roll and pitch on the suspension (second-order, 1.0 deg/g roll, 0.6 deg/g pitch);
-- road texture (band-limited vertical noise) and kerb strikes in three corners.
+The demo lap (:func:`make_lap`, unchanged)
+    A point-mass vehicle with a GT-class grip envelope is driven round a closed circuit at
+    the limit of a quasi-steady lap-time simulation (the classic forward/backward
+    speed-profile pass over the track's curvature), then dressed with the motion a rider
+    feels: longitudinal acceleration ``v dv/ds`` (power, drag and braking limits); lateral
+    acceleration ``v^2 kappa`` and yaw rate ``v kappa``; a crest and a dip (``v^2
+    kappa_v``) and the grade of a hill; body roll and pitch on the suspension (second order,
+    1.0 deg/g roll, 0.6 deg/g pitch); road texture (band-limited vertical noise) and kerb
+    strikes. Its specific force is built in a level, heading-aligned frame and rotated by
+    roll and pitch (small-angle treatment of the grade).
 
-Specific force and angular velocity are expressed in the ISO 8855 body frame of
-conventions.md: ``f = a - g`` (at rest, level: ``[0, 0, +9.80665]``), ``w`` body rates from
-the Euler rates of R = Rz(yaw) Ry(pitch) Rx(roll).
+Cars on tracks (:func:`make_drive`: :class:`Track`, :class:`Car`, a seed)
+    - Track: corners of constant radius on linear curvature ramps (clothoids), straights,
+      an elevation profile (harmonics over the lap plus Gaussian crests and dips), kerbs;
+      a circuit (laps) or a point-to-point stage (stops at the finish).
+    - Speed: the same quasi-steady forward/backward pass, from a standing start, with a
+      friction circle ``mu N`` where the normal load per mass is ``g cos(grade) + v^2
+      kappa_vertical + downforce v^2`` (a crest unloads the car, downforce loads it),
+      power ``P/(m v)``, drag, the grade's share of gravity, a traction share for
+      driving; the driver uses 94-99 % of the grip, differently each lap and from corner
+      to corner (the seed).
+    - One trajectory: speed, heading (integrated curvature times speed) and height give
+      the world velocity; the road texture (6-20 Hz, growing with speed) and kerb strikes
+      (22 Hz) are small vertical displacements of the body added to it. The attitude is
+      yaw = heading + body slip, pitch = suspension pitch - grade, roll = suspension roll
+      (+ a little texture rocking). Suspension: second-order modes driven by the path's
+      lateral and longitudinal accelerations.
+    - Body slip (rally on gravel): grows with the square of the grip used up to
+      ``slide_deg`` at the limit, with the driver's corrections (seeded low-frequency
+      noise), through a 0.8 Hz second-order lag: the car yaws more than its path.
+    - Simplifications: a point mass on a friction circle (no tyre model, no load
+      transfer, no gears); the suspension does not feed back into the path; ``s`` is the
+      horizontal distance; no camber or banking; the car's yaw dynamics in a slide are
+      prescribed, not simulated.
 
-Run ``python tools/make_sample_lap.py`` to rewrite the file; a test checks that the bundled
-file is exactly what this script produces.
+Light aircraft (:func:`make_flight`: :class:`Flight`, a seed)
+    - A trainer (30-45 m/s) flies a traffic circuit: at rest, take-off roll, rotation,
+      climb-out, crosswind and downwind turns, level at 300 m, an optional 360 degree turn
+      at 45 degrees of bank, base and final turns while descending at 3 m/s, flare,
+      touch-down, roll-out to a stop.
+    - Ground speed, height, heading and angle of attack are piecewise-linear schedules
+      smoothed by a moving Hann window (twice continuously differentiable; exactly at rest
+      at both ends); turns last ``angle / (g tan(bank) / V)``.
+    - Turbulence at height: velocity perturbations along the lift (body z, to 1.2 Hz),
+      sideways and along track (to 0.4 Hz), scaled to a given RMS acceleration; runway
+      roughness on the wheels.
+    - Attitude: yaw = the track (no sideslip), pitch = -(flight-path angle + angle of
+      attack) (nose up is negative pitch in ISO 8855), roll = the bank that puts the specific
+      force in the body x-z plane, so turns are coordinated: ``fy = 0`` and, in a steady
+      level turn, ``|f| = g / cos(bank)``. The lift-direction gusts, added after the bank is
+      chosen, leave ``|fy|`` under about 0.06 g.
+    - Simplifications: no aerodynamic model (thrust, drag and lift are whatever the
+      trajectory needs); no wind, no sideslip; the landing point is not tied to the runway.
+
+Common to all new drives (:func:`body_motion`): from one trajectory (world velocity ``v(t)``
+and Euler angles), ``f = R^T (dv/dt + [0, 0, g])`` (central differences; at rest and level
+``[0, 0, +9.80665]``) and ``w`` from the Euler rates of ``R = Rz(yaw) Ry(pitch) Rx(roll)``,
+all in the ISO 8855 body frame of conventions.md. CSV columns ``t,fx,fy,fz,wx,wy,wz,speed``
+(speed = ``|v|``, m/s), 100 Hz, 6 decimals (the time with 2).
 """
 
 from __future__ import annotations
 
 import argparse
 import sys
-from typing import NamedTuple
 from pathlib import Path
+from typing import NamedTuple
 
 import numpy as np
 from scipy import signal
@@ -537,14 +585,13 @@ def make_drive(track: Track, car: Car, seed: int, laps: int = 1) -> dict[str, np
     s_knots, k_knots = track.knots()
     length = float(s_knots[-1])
     ds = 0.25
-    s_lap = np.arange(0.0, length, ds)
     s = np.arange(0.0, laps * length if track.closed else length, ds)
     kappa = np.interp(np.mod(s, length), s_knots, k_knots)
     _, slope = track.elevation(s, length)
     curv_v = np.gradient(slope, ds) / (1.0 + slope * slope) ** 1.5
     # The driver: pushes to 94-99 % of the grip, differently each lap and corner to corner.
     push_lap = rng.uniform(0.94, 0.99, size=laps)[np.minimum((s // length).astype(int), laps - 1)]
-    push = push_lap * (1.0 + 0.01 * np.interp(s, s[:: 400], rng.standard_normal(len(s[::400]))))
+    push = push_lap * (1.0 + 0.01 * np.interp(s, s[::400], rng.standard_normal(len(s[::400]))))
     push = np.minimum(push, 1.0)
     v_s = _speed_profile_car(s, kappa, slope, curv_v, push, car, stop_at_end=not track.closed)
     # time along the road (s is horizontal distance; v_s horizontal speed)
@@ -632,8 +679,6 @@ def make_flight(flight: Flight, seed: int) -> dict[str, np.ndarray]:
     yaw is the track (no sideslip), the pitch is the flight-path angle plus the angle of
     attack, and the roll is the bank that keeps the turn coordinated (``fy = 0``).
     """
-    from scipy.ndimage import gaussian_filter1d
-
     rng = np.random.default_rng(seed)
     d = flight.direction
 
@@ -648,7 +693,6 @@ def make_flight(flight: Flight, seed: int) -> dict[str, np.ndarray]:
         (27.0, 31.0, 0.0, 0.0, 7.0),  # rotate
         (30.0, 32.0, 0.0, 0.0, 6.0),  # lift-off
     ]
-    heading = 0.0
 
     def add(dt: float, v: float, dh_rate: float, dpsi: float, aoa: float) -> None:
         t0, _, h0, psi0, _ = knots[-1]
@@ -679,13 +723,18 @@ def make_flight(flight: Flight, seed: int) -> dict[str, np.ndarray]:
     t = np.arange(0.0, k[-1, 0], 1 / FS_HZ)
     n = len(t)
 
-    def smooth(col: int, sigma_s: float) -> np.ndarray:
-        return gaussian_filter1d(np.interp(t, k[:, 0], k[:, col]), sigma_s * FS_HZ, mode="nearest")
+    def smooth(col: int, half_s: float) -> np.ndarray:
+        # piecewise linear through the knots, then a moving Hann window of +-half_s: twice
+        # continuously differentiable, and exactly at rest where the knots rest that long
+        half = round(half_s * FS_HZ)
+        win = np.hanning(2 * half + 3)[1:-1]
+        x = np.pad(np.interp(t, k[:, 0], k[:, col]), half, mode="edge")
+        return np.convolve(x, win / np.sum(win), mode="valid")
 
-    v_h = smooth(1, 1.5)
-    h = smooth(2, 2.0)
-    psi = np.deg2rad(smooth(3, 1.2))
-    aoa = np.deg2rad(smooth(4, 0.8))
+    v_h = smooth(1, 3.0)
+    h = smooth(2, 4.0)
+    psi = np.deg2rad(smooth(3, 2.4))
+    aoa = np.deg2rad(smooth(4, 1.6))
     airborne = _smoothstep((h - 0.5) / 15.0)
     on_ground = 1.0 - _smoothstep(h / 0.3)
     # Gusts as velocity perturbations of the flight path at height: along the lift (to 1.2 Hz),
