@@ -242,7 +242,7 @@ def test_cars_are_pushed_outward_in_a_turn(drive) -> None:  # type: ignore[no-un
     # sliding rally car counter-steers, so its yaw rate leads or lags the path's
     turning = (np.abs(c["wz"]) > 0.2) & (c["speed"] > 10.0) & (np.abs(c["fy"]) > 0.3 * G)
     agree = np.mean(np.sign(c["fy"][turning]) == np.sign(c["wz"][turning]))
-    assert agree > (0.9 if "rally" in drive.name else 0.99), (drive.name, agree)
+    assert agree > (0.97 if "rally" in drive.name else 0.999), (drive.name, agree)
 
 
 # -- physics of the generator's trajectories --------------------------------------------------
