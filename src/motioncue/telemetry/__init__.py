@@ -47,6 +47,7 @@ from ._sample import (
 from ._source import ReplaySource, TelemetrySource, open_source
 
 if TYPE_CHECKING:
+    from ._drives import SampleDrive, sample_drive_manifest, sample_drives
     from ._recording import Recording, read_recording_csv, resample, write_recording_csv
 
 __all__ = [
@@ -61,6 +62,7 @@ __all__ = [
     "RecordingWriter",
     "ReplaySource",
     "SampleArrays",
+    "SampleDrive",
     "TelemetrySample",
     "TelemetrySource",
     "decode_recording",
@@ -74,6 +76,8 @@ __all__ = [
     "record",
     "register_game",
     "resample",
+    "sample_drive_manifest",
+    "sample_drives",
     "samples_to_arrays",
     "samples_to_recording",
     "write_recording_csv",
@@ -82,6 +86,7 @@ __all__ = [
 # The vehicle-motion CSV recordings (numpy-backed) load on first use, so that importing the
 # telemetry readers for the live path stays light.
 _LAZY = {"Recording", "read_recording_csv", "resample", "write_recording_csv"}
+_LAZY_DRIVES = {"SampleDrive", "sample_drive_manifest", "sample_drives"}  # the bundled drives
 
 
 def __getattr__(name: str) -> Any:
@@ -89,6 +94,10 @@ def __getattr__(name: str) -> Any:
         from . import _recording
 
         return getattr(_recording, name)
+    if name in _LAZY_DRIVES:
+        from . import _drives
+
+        return getattr(_drives, name)
     raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
 
 
