@@ -377,7 +377,9 @@ class Bridge:
         ----------
         timeout_s : float, optional
             How long to wait for the park (default: the fade-out time plus an upper bound
-            of the park from anywhere, plus 2 s).
+            of the park from anywhere, plus 2 s). A loop still parking after that (a loaded
+            machine) goes on parking: the stats' state is then not yet ``"stopped"`` or
+            ``"failed"``, and :meth:`wait` waits for the end.
         """
         self._stop.set()
         if self._thread is not None:
@@ -389,7 +391,7 @@ class Bridge:
                 )
             self._thread.join(timeout_s)
             if self._thread.is_alive():
-                self._error = self._error or f"loop did not finish parking within {timeout_s} s"
+                return self.stats  # still parking: the switch interval is restored at the end
         self._restore_switch()
         return self.stats
 
@@ -439,6 +441,9 @@ class Bridge:
             self._state = "failed, parking"
             self._park_after_failure()
             self._state = "failed"
+        finally:
+            if self._stop.is_set():  # stop() may have stopped waiting for the park
+                self._restore_switch()
 
     def _park_after_failure(self) -> None:
         """Park from wherever the last frame the link took left the platform, on time."""
