@@ -183,6 +183,19 @@ OMCT_PATHS: tuple[OmctPath, ...] = (
 
 _PATHS_BY_NAME = {p.name: p for p in OMCT_PATHS}
 
+_SHORT = {
+    "p->p": "roll",
+    "q->q": "pitch",
+    "r->r": "yaw",
+    "ax->ax": "surge",
+    "ay->ay": "sway",
+    "az->az": "heave",
+    "ax->q": "surge to pitch, tilt",
+    "ay->p": "sway to roll, tilt",
+    "q->ax": "pitch to surge",
+    "p->ay": "roll to sway",
+}
+
 
 def _path(name_or_path: str | OmctPath) -> OmctPath:
     if isinstance(name_or_path, OmctPath):
@@ -704,11 +717,10 @@ def plot_omct(result: OmctResult, design: Any, path: Any, *, title: str = "") ->
         ax_g.plot(w_pts[ok], gains[ok], "o", ms=5, mfc="none", label="measured chain")
         limited = np.array([pt.workspace_clamped + pt.actuator_limited > 0 for pt in pts])
         if np.any(limited & ok):
-            ax_g.plot(w_pts[limited & ok], gains[limited & ok], "x", ms=7, color="C3",
-                      label="a limit was reached")  # fmt: skip
+            ax_g.plot(w_pts[limited & ok], gains[limited & ok], "x", ms=7, color="C3")  # fmt: skip
         if np.any(ok) or np.any(lin_gain > 0.0):
             ax_g.set_yscale("log")
-        ax_g.set_title(f"{name}: {info[name].description.split(' (')[0]}", fontsize=9)
+        ax_g.set_title(f"{name} ({_SHORT[name]})", fontsize=9)
         unit = info[name].gain_unit
         ax_g.set_ylabel("gain" + ("" if unit == "-" else f" [{unit}]"), fontsize=8)
         ax_g.grid(which="both", alpha=0.3)
@@ -721,8 +733,14 @@ def plot_omct(result: OmctResult, design: Any, path: Any, *, title: str = "") ->
         ax_p.set_xlabel("frequency [rad/s]", fontsize=8)
         ax_p.grid(which="both", alpha=0.3)
         ax_p.tick_params(which="both", labelsize=8)
-        if k == 0:
-            ax_g.legend(fontsize=7, loc="best")
+    from matplotlib.lines import Line2D
+
+    handles = [
+        Line2D([], [], color="C0", lw=1.2, label="linear washout, analytic (python-control)"),
+        Line2D([], [], color="C1", marker="o", mfc="none", ls="", label="measured: whole chain"),
+        Line2D([], [], color="C3", marker="x", ls="", label="workspace or actuator limit reached"),
+    ]
+    fig.legend(handles=handles, loc="outside lower center", ncol=3, fontsize=9)
     head = title or "Objective motion cueing test"
     fig.suptitle(
         f"{head}\n{result.rate_hz:g} Hz frames; input amplitudes: motioncue's (x"
