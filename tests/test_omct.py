@@ -79,7 +79,13 @@ def test_first_harmonic_and_platform_motion():
     tt = np.arange(400) * 0.01
     poses[:, 0] = 0.01 * np.sin(15.849 * tt)
     f, _ = platform_motion(poses, 0.01)
-    assert np.allclose(f[:, 0], -0.01 * 15.849**2 * np.sin(15.849 * tt[2:-2]), atol=2e-4)
+    assert np.allclose(f[:, 0], -0.01 * 15.849**2 * np.sin(15.849 * tt[4:-4]), atol=2e-4)
+    # a head 0.5 m forward of the origin on a platform turning at 0.25 rad/s (yaw, level):
+    # centripetal -r^2 h_x towards the axis, nothing tangential at a constant rate
+    poses = np.zeros((50, 6))
+    poses[:, 5] = 0.25 * np.arange(50) * 0.01
+    f, _ = platform_motion(poses, 0.01, (0.5, 0.0, 0.0))
+    assert np.allclose(f, [-0.25**2 * 0.5, 0.0, g], atol=1e-9)
 
 
 def test_no_limit_reached_matches_linear_washout(chain):

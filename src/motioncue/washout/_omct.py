@@ -230,6 +230,12 @@ def _tf(num: Sequence[float], den: Sequence[float]) -> Any:
     return control.tf(list(num), list(den))
 
 
+def _head_offset(params: Any) -> tuple[float, float, float]:
+    """The rider's head offset of the preset (m), zero where the washout has none."""
+    h = getattr(params, "head_offset_m", (0.0, 0.0, 0.0))
+    return (float(h[0]), float(h[1]), float(h[2]))
+
+
 def _linear_systems(design: Any) -> dict[str, Any]:
     """The continuous small-signal transfer function of every path (python-control)."""
     import control
@@ -239,26 +245,49 @@ def _linear_systems(design: Any) -> dict[str, Any]:
     g = GRAVITY_M_S2
     s = control.tf("s")
     one = _tf([1.0], [1.0])
+    zero = _tf([0.0], [1.0])
     g_t = _tf(*cont["tilt"][0])
-    h_r = [s * _tf(*nd) for nd in cont["rot"]]
-    h_t = [s * s * _tf(*nd) for nd in cont["trans"]]
     kf, kw = p.f_scale, p.w_scale
+    kt = getattr(p, "tilt_scale", None) or (kf[0], kf[1])
     mx, my, mz, mr, mp, myaw = (1.0 if d else 0.0 for d in p.dofs)
-    # a translational DOF the machine does not move passes no translational cue (H_T -> 0)
-    ht = [h_t[0] * mx, h_t[1] * my, h_t[2] * mz]
-    # ... and a rotational DOF it does not move neither rotates nor tilts
-    return {
-        "p->p": kw[0] * mr * h_r[0],
-        "q->q": kw[1] * mp * h_r[1],
-        "r->r": kw[2] * myaw * h_r[2],
-        "ax->ax": kf[0] * (mp * g_t + ht[0] * (one - mp * g_t)),
-        "ay->ay": kf[1] * (mr * g_t + ht[1] * (one - mr * g_t)),
-        "az->az": kf[2] * ht[2],
-        "ax->q": -kf[0] * mp / g * s * g_t,
-        "ay->p": kf[1] * mr / g * s * g_t,
-        "q->ax": -g * kw[1] * mp * (one - ht[0]) * _tf(*cont["rot"][1]),
-        "p->ay": g * kw[0] * mr * (one - ht[1]) * _tf(*cont["rot"][0]),
+    # a DOF the machine does not move passes no cue: its filters are zero
+    h_r = [m * s * _tf(*nd) for m, nd in zip((mr, mp, myaw), cont["rot"], strict=True)]
+    ht = [m * s * s * _tf(*nd) for m, nd in zip((mx, my, mz), cont["trans"], strict=True)]
+    # angle of the rotational channel per unit input rate (H_R / s)
+    ang = [m * _tf(*nd) for m, nd in zip((mr, mp, myaw), cont["rot"], strict=True)]
+    tilt_x = mp * kt[0] * g_t  # f_x -> -g * pitch (tilt-coordination force)
+    tilt_y = mr * kt[1] * g_t  # f_y -> +g * roll
+    # linear platform response: body rates W (per input) and specific force at the origin
+    rates: dict[str, list[Any]] = {
+        "p": [kw[0] * h_r[0], zero, zero],
+        "q": [zero, kw[1] * h_r[1], zero],
+        "r": [zero, zero, kw[2] * h_r[2]],
+        "ax": [zero, -s * tilt_x / g, zero],
+        "ay": [s * tilt_y / g, zero, zero],
+        "az": [zero, zero, zero],
     }
+    force: dict[str, list[Any]] = {
+        "p": [zero, g * kw[0] * (one - ht[1]) * ang[0], zero],
+        "q": [-g * kw[1] * (one - ht[0]) * ang[1], zero, zero],
+        "r": [zero, zero, zero],
+        "ax": [tilt_x + ht[0] * (kf[0] * one - tilt_x), zero, zero],
+        "ay": [zero, tilt_y + ht[1] * (kf[1] * one - tilt_y), zero],
+        "az": [zero, zero, kf[2] * ht[2]],
+    }
+    hx, hy, hz = _head_offset(p)
+    if hx or hy or hz:
+        # the head feels W' x h on top of the origin; the washout feeds -W' x h to the
+        # translational channel, which cancels its high-passed part: (1 - H_T) (s W x h)
+        for key, wv in rates.items():
+            dw = [s * c for c in wv]
+            cross = [dw[1] * hz - dw[2] * hy, dw[2] * hx - dw[0] * hz, dw[0] * hy - dw[1] * hx]
+            force[key] = [force[key][i] + (one - ht[i]) * cross[i] for i in range(3)]
+    out: dict[str, Any] = {}
+    for path in OMCT_PATHS:
+        src = path.name.split("->")[0]
+        table = rates if path.output_kind == "w" else force
+        out[path.name] = table[src][path.output_axis]
+    return out
 
 
 def linear_response(
@@ -475,20 +504,26 @@ def _d2(x: NDArray[np.float64], dt: float) -> NDArray[np.float64]:
 
 
 def platform_motion(
-    poses: NDArray[np.float64], dt_s: float
+    poses: NDArray[np.float64], dt_s: float, point_m: Sequence[float] = (0.0, 0.0, 0.0)
 ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
-    """Specific force and angular velocity of the platform origin, in the platform frame.
+    """Specific force at a point of the platform and the platform's angular velocity, both
+    in the platform frame.
 
     Parameters
     ----------
     poses : (N, 6) array
         ``[x, y, z, roll, pitch, yaw]`` (m, rad) on a uniform grid of period ``dt_s``.
+    dt_s : float
+    point_m : 3 floats
+        The point ``h`` (platform frame, from the platform origin, m) where the specific
+        force is measured: the rider's head.
 
     Returns
     -------
-    f, w : (N - 4, 3) arrays
-        For samples 2 .. N-3: ``f = R^T (a + [0, 0, g])`` (m/s^2) and the body angular
-        velocity (rad/s), ``R = Rz(yaw) Ry(pitch) Rx(roll)``.
+    f, w : (N - 8, 3) arrays
+        For samples 4 .. N-5: ``f = R^T (a + [0, 0, g]) + W' x h + W x (W x h)`` (m/s^2; ``a``
+        the inertial acceleration of the origin) and the body angular velocity ``W``
+        (rad/s), ``R = Rz(yaw) Ry(pitch) Rx(roll)``.
     """
     pos = poses[:, :3]
     ang = poses[:, 3:]
@@ -509,7 +544,13 @@ def platform_motion(
     v2x = ct * v1x - st * v1z
     v2z = st * v1x + ct * v1z
     f = np.column_stack([v2x, cf * v1y + sf * v2z, -sf * v1y + cf * v2z])
-    return f, w
+    h = np.asarray(point_m, dtype=float)
+    w_in = w[2:-2]
+    f_in = f[2:-2]
+    if np.any(h != 0.0):
+        dw = _d1(w, dt_s)  # body angular acceleration (the body derivative of W)
+        f_in = f_in + np.cross(dw, h) + np.cross(w_in, np.cross(w_in, h))
+    return f_in, w_in
 
 
 def _first_harmonic(y: NDArray[Any], t: NDArray[Any], w: float) -> complex:
@@ -592,6 +633,7 @@ def run_omct(
     limiter: Any = (RealtimeLimiter if tight.j_max is None else JerkLimiter)(tight, dt)
     q_neutral = np.asarray(platform.inverse(np.zeros(6)), dtype=float)
     settle_s = 12.0 / _slowest_decay_rate(design)
+    head = _head_offset(design.params)
     g = GRAVITY_M_S2
     linear = _linear_systems(design)
     points: list[OmctPoint] = []
@@ -606,7 +648,7 @@ def run_omct(
             n_settle = max(2, math.ceil(settle_s / period))
             n_per = period * fs
             n_meas = round(MEASURE_PERIODS * n_per)
-            n_total = math.ceil(n_settle * n_per) + n_meas + 4
+            n_total = math.ceil(n_settle * n_per) + n_meas + 8
             t = np.arange(n_total) * dt
             u = amp * np.sin(w * t)
             f_in = np.zeros((n_total, 3))
@@ -624,11 +666,11 @@ def run_omct(
             for k in changed.tolist():
                 fk = platform.forward(q_out[k], guess=out_poses[k])
                 out_poses[k] = np.asarray(fk.pose, dtype=float)
-            f_out, w_out = platform_motion(out_poses, dt)
+            f_out, w_out = platform_motion(out_poses, dt, head)
             y_all = (f_out if p.output_kind == "f" else w_out)[:, p.output_axis]
-            sl = slice(n_total - 2 - n_meas, n_total - 2)  # measured periods, interior
+            sl = slice(n_total - 4 - n_meas, n_total - 4)  # measured periods, interior
             t_m = t[sl]
-            y = y_all[sl.start - 2 : sl.stop - 2]
+            y = y_all[sl.start - 4 : sl.stop - 4]
             h_in = _first_harmonic(u[sl], t_m, w)
             h_out = _first_harmonic(y, t_m, w)
             ratio = h_out / h_in
