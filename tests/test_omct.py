@@ -85,7 +85,7 @@ def test_first_harmonic_and_platform_motion():
     poses = np.zeros((50, 6))
     poses[:, 5] = 0.25 * np.arange(50) * 0.01
     f, _ = platform_motion(poses, 0.01, (0.5, 0.0, 0.0))
-    assert np.allclose(f, [-0.25**2 * 0.5, 0.0, g], atol=1e-9)
+    assert np.allclose(f, [-(0.25**2) * 0.5, 0.0, g], atol=1e-9)
 
 
 def test_no_limit_reached_matches_linear_washout(chain):
@@ -103,6 +103,39 @@ def test_no_limit_reached_matches_linear_washout(chain):
         assert abs(pt.phase_error_deg) < 1.0, (where, pt.phase_deg, pt.linear_phase_deg)
     worst = max(abs(pt.gain_error) for pt in res.points)
     assert worst > 0.0  # measured, not copied from the oracle
+
+
+_HAS_TILT_HEAD = {"tilt_scale", "head_offset_m"} <= set(
+    getattr(load_cueing("racing-hexapod"), "__dataclass_fields__", {})
+)
+
+
+@pytest.mark.skipif(
+    not _HAS_TILT_HEAD, reason="the washout's tilt gain and head offset come with cueing-core"
+)
+def test_tilt_gain_and_head_offset_match_linear_washout():
+    """With a separate tilt gain the linear match holds at 100 Hz; with a head offset the
+    force is measured at the head, and the match holds at 1000 Hz (the washout forms the
+    head's angular acceleration by backward differences: a one-frame lag of that term,
+    up to 11 % / 5 deg at 15.8 rad/s and 100 Hz, 1.2 % at 1000 Hz)."""
+    platform = load_platform("stewart6-linear")
+    base = load_cueing("racing-hexapod")
+    for rate, kw, paths, freqs in (
+        (100.0, {"tilt_scale": (0.35, 0.3)}, ["ax->ax", "ay->p"], OMCT_FREQUENCIES_RAD_S),
+        (1000.0, {"head_offset_m": (0.1, -0.05, 0.6)}, ["ax->ax", "p->ay"], [1.0, 3.981, 10.0]),
+    ):
+        limits = ActuatorLimits.from_platform(platform, load_controller("mbox6"), rate_hz=rate)
+        design = ClassicalWashout(dataclasses.replace(base, **kw), rate)
+        plain = ClassicalWashout(base, rate)
+        res = run_omct(design, platform, limits, paths=paths, frequencies_rad_s=freqs,
+                       amplitude_scale=0.1)  # fmt: skip
+        for pt in res.points:
+            where = f"{kw} {pt.path} at {pt.frequency_rad_s:.3f} rad/s"
+            assert pt.workspace_clamped == 0 and pt.actuator_limited == 0, where
+            assert abs(pt.gain_error) < 0.01 and abs(pt.phase_error_deg) < 1.0, (where, pt)
+            # the feature changes the response: the oracle is not the plain washout's
+            h0 = linear_response(plain, pt.path, [pt.frequency_rad_s])[0]
+            assert abs(pt.gain / abs(h0) - 1.0) > 0.02 or pt.frequency_rad_s > 5.0, where
 
 
 def test_reached_workspace_lowers_the_gain(chain):

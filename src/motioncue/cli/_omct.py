@@ -69,6 +69,12 @@ def run(args: argparse.Namespace) -> int:
     if not (math.isfinite(scale) and 0.0 < scale <= 100.0):
         raise ConfigError(f"--amplitude-scale {scale!r} is invalid; allowed: (0, 100]")
     params = load_cueing(args.preset)
+    algorithm = getattr(params, "algorithm", "classical")
+    if algorithm != "classical":
+        raise ConfigError(
+            f"preset {params.name!r} uses the cueing algorithm {algorithm!r}; the OMCT's "
+            "analytic comparison is defined for the classical washout only"
+        )
     platform = load_platform(args.platform)
     controller = load_controller(args.controller)
     controller.check_rate(rate)
