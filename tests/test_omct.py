@@ -192,7 +192,7 @@ _BASE = ["omct", "--preset", "racing-hexapod", "--platform", "stewart6-linear",
 
 
 def test_cli_json_table(capsys):
-    assert main([*_BASE, "--paths", "r->r", "ay->p", "--json"]) == 0
+    assert main([*_BASE, "--paths", "r->r", "ay-p", "--json"]) == 0  # ay-p: shell-safe
     data = json.loads(capsys.readouterr().out)
     assert data["preset"] == "racing-hexapod" and data["rate_hz"] == 100.0
     assert {p["path"] for p in data["paths"]} == {"r->r", "ay->p"}
@@ -223,6 +223,7 @@ def test_cli_text_table_and_plot(tmp_path, capsys):
         (["--preset", "racing", "--platform", "stewart6-linear", "--controller", "nope"],
          "nope"),
         ([*_BASE[1:], "--paths", "x->y"], "x->y"),
+        ([*_BASE[1:], "--paths", "ax-"], "quote"),
         ([*_BASE[1:], "--amplitude-scale", "0"], "--amplitude-scale"),
         ([*_BASE[1:], "--rate", "nan"], "--rate"),
         ([*_BASE[1:], "--rate", "333.3"], "333.3"),

@@ -48,7 +48,10 @@ def register(sub: Any) -> None:
         help="multiply every input amplitude by X, in (0, 100] (default 1)",
     )
     parser.add_argument(
-        "--paths", nargs="+", metavar="PATH", help="only these paths (default: all ten)"
+        "--paths",
+        nargs="+",
+        metavar="PATH",
+        help="only these paths, as in-out (ax-q) or quoted in->out ('ax->q'); default: all ten",
     )
     parser.add_argument("--json", action="store_true", help="print the table as JSON")
     parser.add_argument("--plot", metavar="FILE.png", help="write the plot in the OMCT format")

@@ -200,11 +200,20 @@ _SHORT = {
 def _path(name_or_path: str | OmctPath) -> OmctPath:
     if isinstance(name_or_path, OmctPath):
         return name_or_path
+    key = str(name_or_path).strip()
+    if "->" not in key and key.count("-") == 1:
+        key = key.replace("-", "->")  # "ax-q": the shell-safe spelling of "ax->q"
     try:
-        return _PATHS_BY_NAME[name_or_path]
+        return _PATHS_BY_NAME[key]
     except KeyError:
+        hint = (
+            " (a shell reads '>' as a redirection: quote the name, 'ax->q', or write ax-q)"
+            if str(name_or_path).strip().endswith("-")
+            else ""
+        )
         raise ConfigError(
             f"OMCT path {name_or_path!r} is unknown; allowed: {', '.join(_PATHS_BY_NAME)}"
+            f" (or in-out, e.g. ax-q){hint}"
         ) from None
 
 
@@ -458,8 +467,10 @@ class OmctResult:
             "OMCT: frequency response of the whole chain (cueing, workspace limiting, "
             "actuator limits)",
             "  "
-            + ", ".join(f"{k} {v}" for k, v in self.labels.items())
-            + f", {self.rate_hz:g} Hz frames, amplitudes x{self.amplitude_scale:g}",
+            + ", ".join(
+                [f"{k} {v}" for k, v in self.labels.items()]
+                + [f"{self.rate_hz:g} Hz frames", f"amplitudes x{self.amplitude_scale:g}"]
+            ),
             "columns: w = test frequency (rad/s); amp = input amplitude (m/s^2 for ax/ay/az, "
             "deg/s for p/q/r);",
             "  gain, phase = measured first harmonic of the platform output over the input "
