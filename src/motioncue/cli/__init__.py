@@ -20,6 +20,7 @@ __all__ = ["build_parser", "console", "main"]
 _VERB_MODULES: tuple[str, ...] = (
     "_record",
     "_cue",
+    "_omct",
     "_kinematics",
     "_limits",
     "_pipeline",
