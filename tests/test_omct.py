@@ -105,14 +105,6 @@ def test_no_limit_reached_matches_linear_washout(chain):
     assert worst > 0.0  # measured, not copied from the oracle
 
 
-_HAS_TILT_HEAD = {"tilt_scale", "head_offset_m"} <= set(
-    getattr(load_cueing("racing-hexapod"), "__dataclass_fields__", {})
-)
-
-
-@pytest.mark.skipif(
-    not _HAS_TILT_HEAD, reason="the washout's tilt gain and head offset come with cueing-core"
-)
 def test_tilt_gain_and_head_offset_match_linear_washout():
     """With a separate tilt gain the linear match holds at 100 Hz; with a head offset the
     force is measured at the head, and the match holds at 1000 Hz (the washout forms the

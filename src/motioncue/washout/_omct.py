@@ -251,7 +251,7 @@ def _tf(num: Sequence[float], den: Sequence[float]) -> Any:
 
 def _head_offset(params: Any) -> tuple[float, float, float]:
     """The rider's head offset of the preset (m), zero where the washout has none."""
-    h = getattr(params, "head_offset_m", (0.0, 0.0, 0.0))
+    h = params.head_offset_m
     return (float(h[0]), float(h[1]), float(h[2]))
 
 
@@ -267,7 +267,7 @@ def _linear_systems(design: Any) -> dict[str, Any]:
     zero = _tf([0.0], [1.0])
     g_t = _tf(*cont["tilt"][0])
     kf, kw = p.f_scale, p.w_scale
-    kt = getattr(p, "tilt_scale", None) or (kf[0], kf[1])
+    kt = p.tilt_scale or (kf[0], kf[1])
     mx, my, mz, mr, mp, myaw = (1.0 if d else 0.0 for d in p.dofs)
     # a DOF the machine does not move passes no cue: its filters are zero
     h_r = [m * s * _tf(*nd) for m, nd in zip((mr, mp, myaw), cont["rot"], strict=True)]
