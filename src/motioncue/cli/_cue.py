@@ -29,6 +29,13 @@ def register(sub: argparse._SubParsersAction) -> None:
     parser.add_argument("--fs", required=True, type=float, metavar="HZ", help="sample rate")
     parser.add_argument("--out", required=True, metavar="POSES.csv", help="poses CSV to write")
     parser.add_argument("--plot", metavar="FILE.png", help="also write a cue-quality plot")
+    parser.add_argument(
+        "--vestibular",
+        default="telban-cardullo-2005",
+        metavar="SET",
+        help="vestibular model set for the evaluation: telban-cardullo-2005 (default) or "
+        "reid-nahon-zacharias",
+    )
     parser.set_defaults(run=run)
 
 
@@ -36,10 +43,11 @@ def run(args: argparse.Namespace) -> int:
     import numpy as np
 
     from ..telemetry._recording import read_recording_csv, resample
-    from ..washout import ClassicalWashout, evaluate_cueing, load_cueing
+    from ..washout import ClassicalWashout, evaluate_cueing, get_model_set, load_cueing
 
     if not math.isfinite(args.fs) or args.fs <= 0:
         raise ConfigError(f"--fs {args.fs!r} is invalid; allowed: a finite number > 0")
+    get_model_set(args.vestibular)  # an unknown set is refused before any file is written
     params = load_cueing(args.preset)
     rec = read_recording_csv(args.input)
     if len(rec) == 0:
@@ -56,7 +64,15 @@ def run(args: argparse.Namespace) -> int:
                 fh.write(",".join(repr(v) for v in row) + "\n")
     except OSError as exc:
         raise ConfigError(f"{out}: cannot write: {exc}") from exc
-    ev = evaluate_cueing(res.f_used, res.w_used, res.poses, args.fs, workspace=params.workspace)
+    ev = evaluate_cueing(
+        res.f_used,
+        res.w_used,
+        res.poses,
+        args.fs,
+        workspace=params.workspace,
+        model=args.vestibular,
+        head_offset_m=getattr(params, "head_offset_m", None),
+    )
     print(
         f"motioncue cue: {len(rec)} samples -> {len(uniform)} at {args.fs:g} Hz, "
         f"preset {params.name}; bad samples held: {res.bad_samples}; wrote {out}"
@@ -76,7 +92,8 @@ def run(args: argparse.Namespace) -> int:
             res.poses,
             args.plot,
             t_s=uniform.t_s,
-            title=f"{Path(args.input).name} - preset {params.name} at {args.fs:g} Hz",
+            title=f"{Path(args.input).name} at {args.fs:g} Hz",
+            preset=params.name,
         )
         print(f"motioncue cue: plot written to {path}")
     return 0

@@ -273,6 +273,8 @@ class CueingEvaluation:
         if notes:
             lines.append(_NOTES)
         return "\n".join(lines)
+
+
 def _delay(sim: NDArray[np.float64], veh: NDArray[np.float64], fs_hz: float, max_lag: int) -> float:
     from scipy.signal import correlate, correlation_lags
 

@@ -77,7 +77,7 @@ eight times the bilinear transform's.
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping, Sequence
+from collections.abc import Mapping
 from dataclasses import dataclass, field
 from functools import lru_cache
 from typing import Any
@@ -187,8 +187,12 @@ def _tustin_sos(factors: tuple[tuple[Poly, Poly], ...], fs_hz: float) -> NDArray
     return sos
 
 
-def _canal_tc(tau_a: float, tau_l: float, tau_lead: float, tau_s: float, src: str, axis: str) -> VestibularModel:
-    lead: tuple[Poly, Poly] = ((tau_lead, 1.0), (tau_s, 1.0)) if tau_lead else ((1.0,), (tau_s, 1.0))
+def _canal_tc(
+    tau_a: float, tau_l: float, tau_lead: float, tau_s: float, src: str, axis: str
+) -> VestibularModel:
+    lead: tuple[Poly, Poly] = ((tau_lead, 1.0), (tau_s, 1.0))
+    if not tau_lead:
+        lead = ((1.0,), (tau_s, 1.0))
     return VestibularModel(
         name=f"semicircular canal ({axis})",
         factors=(
@@ -350,7 +354,7 @@ def _stack(f: ArrayLike, w: ArrayLike, what: str) -> NDArray[np.float64]:
 
 
 def normalised_error_rms(
-    err: NDArray[np.float64], thresholds: Sequence[float], weights: NDArray[np.float64]
+    err: NDArray[np.float64], thresholds: ArrayLike, weights: NDArray[np.float64]
 ) -> float:
     """``sqrt(sum_i w_i mean((e_i / thr_i)^2) / sum_i w_i)`` of an (N, 6) perceived error."""
     if err.shape[0] == 0:
