@@ -76,8 +76,8 @@ def plot_cueing(
     p = np.asarray(poses, dtype=float)
     n = p.shape[0]
     t = np.arange(n) / evaluation.fs_hz if t_s is None else np.asarray(t_s, dtype=float)
-    fig = plt.figure(figsize=(13, 21), layout="constrained")
-    grid = fig.add_gridspec(5, 2, height_ratios=[1, 1, 1, 1, 2.4])
+    fig = plt.figure(figsize=(13, 20), layout="constrained")
+    grid = fig.add_gridspec(5, 2, height_ratios=[1, 1, 1, 1, 2.0])
     for i, name in enumerate(AXIS_NAMES):
         ax = fig.add_subplot(grid[i % 3, i // 3])
         k = 180.0 / math.pi if i >= 3 else 1.0
@@ -93,6 +93,8 @@ def plot_cueing(
             label="simulator",
         )
         ax.set_ylabel(f"perceived {name} [{_UNITS[i]}]")
+        if i % 3 == 2:
+            ax.set_xlabel("t [s]")
         ax.grid(alpha=0.3)
         ax.legend(loc="upper right", fontsize=8)
     ax = fig.add_subplot(grid[3, 0])
