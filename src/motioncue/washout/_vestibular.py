@@ -18,7 +18,7 @@ Two named model sets, selectable by name (:data:`MODEL_SETS`, :func:`get_model_s
 
           f_hat / f = K (1 + 10 s) / ((1 + 5 s)(1 + 0.016 s)),  published K = 0.4
 
-* ``reid-nahon-zacharias``
+``reid-nahon-zacharias``
     L. D. Reid, M. A. Nahon, *Flight simulation motion-base drive algorithms: part 1*,
     UTIAS Report 296, 1985 (vestibular models as an evaluation tool, taken from
     G. L. Zacharias, *Motion cue models for pilot-vehicle analysis*, AMRL-TR-78-2, 1978):
@@ -50,19 +50,23 @@ The published otolith gain ``K = 0.4`` converts to afferent firing rate. Here bo
 models are normalised to **unit steady-state (DC) gain** (``K = 1``), so a sustained
 specific force is perceived at its own value in m/s^2. Their lead makes the mid-band gain
 ``tau_a / tau_L``: 2.0 for Telban & Cardullo, 2.48 for Young & Meiry. Short pulses of
-specific force are therefore "perceived" up to about twice their size by the model, for the
-vehicle and the simulator alike; this is the model, not a scale error.
+specific force (between about 0.1 and 10 rad/s) are therefore "perceived" up to 2 to 2.5
+times their size by the model, for the vehicle and the simulator alike; this is the model's
+rate sensitivity, not a scale error. Plots and tables show this normalised output and say
+so in their notes.
 
 Perception thresholds
 ---------------------
-Per axis, from Reid & Nahon (1985) (from Zacharias 1978), also the values Telban & Cardullo
-use: specific force 0.17 m/s^2 (x, y), 0.28 m/s^2 (z); angular velocity 3.0 deg/s (roll),
-3.6 deg/s (pitch), 2.6 deg/s (yaw).
+Per axis, from Reid & Nahon (1985) (from Zacharias 1978): specific force 0.17 m/s^2 (x, y),
+0.28 m/s^2 (z); angular velocity 3.0 deg/s (roll), 3.6 deg/s (pitch), 2.6 deg/s (yaw). Both
+sets use them (Telban & Cardullo work with the same values; as above, not checked against
+their printed page). They replace the earlier single 0.17 m/s^2 and 3 deg/s for all axes.
 
 Discretisation
 --------------
 Each model is a continuous LTI system (:meth:`VestibularModel.to_control` gives the
-:class:`control.TransferFunction`; its frequency responses are used for plots and checks).
+:class:`control.TransferFunction`, whose poles, zeros, DC gain and frequency response the
+tests check against the published constants).
 It is discretised by the bilinear (Tustin) transform, poles, zeros and gain mapped in
 closed form, and run as second-order sections (:func:`scipy.signal.sosfilt`). The error is
 stated exactly: the discrete frequency response is the continuous one at the warped
