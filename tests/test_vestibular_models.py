@@ -277,6 +277,17 @@ def test_perceived_motion_error_refuses_bad_signals() -> None:
         perceived_motion_error(z, z, z, z, 0.0)
 
 
+@pytest.mark.parametrize("n", [0, 1, 2])
+def test_tiny_inputs_evaluate_without_error(n: int) -> None:
+    f = np.tile([0.0, 0.0, G], (n, 1))
+    z = np.zeros((n, 3))
+    for name in MODEL_SETS:
+        ev = evaluate_cueing(f, z, np.zeros((n, 6)), 100.0, model=name)
+        assert ev.perceived_error == 0.0
+        assert ev.perceived_sim.shape == (n, 6)
+        assert perceived_motion_error(f, z, f, z, 100.0, model=name) == 0.0
+
+
 def head_specific_force_oracle(
     theta: np.ndarray, dtheta: np.ndarray, ddtheta: np.ndarray, r: np.ndarray
 ) -> np.ndarray:

@@ -281,6 +281,8 @@ class VestibularModelSet:
         arr = np.asarray(x, dtype=float)
         if arr.ndim != 2 or arr.shape[1] != 6:
             raise ConfigError(f"need an (N, 6) array of fx, fy, fz, wx, wy, wz; got {arr.shape}")
+        if arr.shape[0] == 0:
+            return arr.copy()
         xt = np.ascontiguousarray(arr.T)
         out = np.empty_like(xt)
         for model, idx in _groups(self):
