@@ -445,3 +445,28 @@ def test_cue_cli_selects_the_model_set(tmp_path: Path, capsys) -> None:
     err = capsys.readouterr().err
     assert err.startswith("motioncue cue: error: vestibular model set 'nope' is unknown")
     assert not (tmp_path / "c.csv").exists()
+
+
+def test_generate_report_carries_units_thresholds_and_objective(tmp_path: Path) -> None:
+    import json
+
+    from motioncue._config import config_dir
+
+    lines = (config_dir("recordings") / "lap.csv").read_text().splitlines()
+    rec = tmp_path / "rec.csv"
+    rec.write_text(
+        "\n".join([lines[0], *[ln for ln in lines[1:] if float(ln.split(",")[0]) <= 3.0]]) + "\n"
+    )
+    rep = tmp_path / "rep"
+    rc = main(["generate", "--input", str(rec), "--platform", "stewart6-linear",
+               "--controller", "mbox6", "--out", str(tmp_path / "r.ride"),
+               "--report", str(rep), "--quiet"])  # fmt: skip
+    assert rc == 0
+    cue = json.loads((rep / "metrics.json").read_text())["cue"]
+    assert cue["units"] == ["m/s^2"] * 3 + ["rad/s"] * 3
+    assert cue["model_set"] == DEFAULT_MODEL_SET
+    np.testing.assert_allclose(cue["thresholds"], THR)
+    assert math.isfinite(cue["perceived_motion_error"]) and cue["perceived_motion_error"] > 0
+    assert len(cue["missed_cue_time_s"]) == 6
+    summary = (rep / "summary.txt").read_text()
+    assert "perceived-motion error J =" in summary and "Notes" in summary
