@@ -44,7 +44,11 @@ def register(sub: Any) -> None:
         metavar="URL",
         help="udp://HOST:PORT, serial:///dev/ttyUSB0?baud=19200, pcap:PATH or file:PATH",
     )
-    parser.add_argument("--preset", default="racing", help="cueing preset name or .toml path")
+    parser.add_argument(
+        "--preset",
+        default=None,
+        help="cueing preset name or .toml path (default: the platform's default_preset)",
+    )
     parser.add_argument("--rate", type=float, default=100.0, metavar="HZ", help="frame rate")
     parser.add_argument("--max-speed", type=float, help="speed limit, m/s (rad/s for cranks)")
     parser.add_argument("--max-accel", type=float, help="acceleration limit, m/s^2 (rad/s^2)")
@@ -85,7 +89,7 @@ def run(args: argparse.Namespace) -> int:
     from ..pipeline._signals import SignalGuard
     from ..telemetry import open_source
     from ..trajectory import ActuatorLimits
-    from ..washout import load_cueing
+    from ._preset import choose_preset
 
     if args.duration is not None and not (math.isfinite(args.duration) and args.duration > 0):
         raise ConfigError(f"--duration {args.duration!r} is invalid; allowed: a number > 0")
@@ -107,7 +111,7 @@ def run(args: argparse.Namespace) -> int:
         a_max=args.max_accel,
         rate_hz=config.rate_hz,
     )
-    cueing = load_cueing(args.preset)
+    cueing, preset_source = choose_preset(args.preset, platform, args.platform)
     # over UDP the IMAX and SC-MBOX report where their motors are: start from there
     q_start = "auto" if args.target.lower().startswith("udp:") else None
     # from here on SIGINT, SIGTERM, SIGHUP and SIGQUIT only set a flag: the bridge parks and
@@ -125,7 +129,7 @@ def run(args: argparse.Namespace) -> int:
                     _say(f"motioncue bridge: note: {note}")
                 _say(
                     f"bridge: {source!r} -> {args.target} ({args.controller}, {args.platform}, "
-                    f"preset {args.preset}, {config.rate_hz:g} Hz); Ctrl-C parks and exits"
+                    f"preset {preset_source}, {config.rate_hz:g} Hz); Ctrl-C parks and exits"
                 )
                 final = _serve(bridge, guard, args.duration, quiet=args.quiet)
             finally:

@@ -25,7 +25,12 @@ def register(sub: Any) -> None:
     g.add_argument("--input", required=True, metavar="REC")
     g.add_argument("--platform", required=True, metavar="P")
     g.add_argument("--controller", required=True, metavar="C")
-    g.add_argument("--preset", default="racing-hexapod", metavar="NAME", help="cueing preset")
+    g.add_argument(
+        "--preset",
+        default=None,
+        metavar="NAME",
+        help="cueing preset name or .toml path (default: the platform's default_preset)",
+    )
     g.add_argument("--rate", type=float, default=100.0, metavar="HZ", help="frame rate")
     g.add_argument("--out", required=True, metavar="RIDE")
     g.add_argument("--pcap", metavar="FILE", help="also write the exact datagrams as a pcap")
@@ -93,7 +98,7 @@ def _generate(args: argparse.Namespace) -> int:
     )
     from ..pipeline._inputs import check_generate_size, held_warning
     from ..trajectory import ActuatorLimits
-    from ..washout import load_cueing
+    from ._preset import choose_preset
 
     if not (0 < args.rate <= 2000):
         raise ConfigError(f"--rate {args.rate!r} is invalid; allowed: (0, 2000] Hz")
@@ -135,7 +140,8 @@ def _generate(args: argparse.Namespace) -> int:
                 file=sys.stderr,
             )
     else:
-        cueing = load_cueing(args.preset)
+        cueing, preset_source = choose_preset(args.preset, platform, args.platform)
+        print(f"cueing: preset {preset_source}", file=sys.stderr)
         ride, report = generate_ride(
             data, platform, controller, cueing, rate_hz=args.rate, limits=limits,
             source=Path(args.input).name, progress=bar, **names,
@@ -161,7 +167,7 @@ def _generate(args: argparse.Namespace) -> int:
 
                 plot_actuators(ride, folder / "actuators.png")
             else:
-                write_report(folder, ride, report, platform, load_cueing(args.preset))
+                write_report(folder, ride, report, platform, cueing)
     print(
         f"ride: {args.out}: {ride.n_frames} frames, {ride.duration_s:.1f} s at {ride.rate_hz:g} "
         f"Hz; {ride.notes.get('frame_check', '')}",

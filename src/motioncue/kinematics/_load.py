@@ -5,6 +5,8 @@ Layout of a platform file::
     kind = "stewart6-linear"          # | stewart6-rotary | seat3 | seat2-yaw
     description = "..."
     actuators = ["1", "2", ...]       # controller order
+    default_preset = "racing-hexapod" # optional: the cueing preset used when a command is
+                                      # given no --preset (a bundled name or a path)
 
     [geometry]                        # anchors: a symmetric ring layout or explicit lists
     [stroke]                          # linear legs: retracted_length_mm, stroke_mm, margin_mm
@@ -217,6 +219,12 @@ def platform_from_dict(data: dict, where: str = "<dict>", name: str = "platform"
     cfg = ConfigReader(data, where)
     kind = cfg.string("kind", choices=KINDS)
     description = cfg.string("description", "")
+    default_preset = cfg.string("default_preset", "") or None
+    if default_preset is not None:
+        try:
+            find_config("cueing", default_preset)
+        except ConfigError as exc:
+            raise cfg.error("default_preset", default_preset, f"a cueing preset ({exc})") from exc
     n_legs = _N_LEGS[kind]
     n_act = n_legs + (1 if kind == "seat2-yaw" else 0)
     names_raw = cfg.raw("actuators")
@@ -291,6 +299,8 @@ def platform_from_dict(data: dict, where: str = "<dict>", name: str = "platform"
                 description=description,
             )
     platform = _actuator_limits(cfg, platform, kind)
+    if default_preset is not None:
+        platform = platform.with_default_preset(default_preset)
     cfg.finish()
     _check_pulse_range(platform, where)
     return platform

@@ -141,11 +141,23 @@ class Platform:
         rad/s...), when the configuration gives them (see :meth:`with_actuator_limits`);
         :func:`motioncue.trajectory.ActuatorLimits.from_platform` combines them with the
         controller's.
+    default_preset : str or None
+        The cueing preset (name or path) made for this machine, used by ``generate``,
+        ``bridge`` and ``cue`` when no ``--preset`` is given (the file's ``default_preset``).
     """
 
     v_max: np.ndarray | None = None
     a_max: np.ndarray | None = None
     j_max: np.ndarray | None = None
+    default_preset: str | None = None
+
+    def with_default_preset(self, preset: str | None) -> Platform:
+        """A copy naming ``preset`` (a cueing preset name or path) as its default."""
+        import copy
+
+        out = copy.copy(self)
+        object.__setattr__(out, "default_preset", preset)
+        return out
 
     def with_actuator_limits(
         self,

@@ -270,7 +270,8 @@ class Bridge:
     controller
         From :func:`motioncue.output.load_controller`.
     cueing : motioncue.washout.CueingParams
-        Washout parameters (``load_cueing("racing")``).
+        Cueing preset (``load_cueing("racing")``); its ``algorithm`` picks the cueing
+        algorithm (:func:`motioncue.washout.make_cueing`), stepped with an explicit state.
     source : TelemetryInput
         A started telemetry source (``motioncue.telemetry.open_source("f1:20777")``) or any
         object with ``latest()`` and ``stats``. Not closed by the bridge.
@@ -303,7 +304,7 @@ class Bridge:
         *,
         q_start: Any = None,
     ) -> None:
-        from motioncue.washout import ClassicalWashout
+        from motioncue.washout import make_cueing
 
         self.platform = platform
         self.controller = controller
@@ -317,7 +318,7 @@ class Bridge:
                 f"limits have {limits.n_actuators} actuators; platform {platform.name!r} has "
                 f"{platform.n_actuators}"
             )
-        self.washout = ClassicalWashout(cueing, cfg.rate_hz)
+        self.washout = make_cueing(cueing, cfg.rate_hz)
         self.washout_state = self.washout.initial_state()
         self.gate = CueGate(cfg.gate)
         # built here so that configuration errors surface before start()

@@ -130,6 +130,8 @@ def generate_ride(
     controller
         A controller description from :func:`motioncue.output.load_controller`.
     cueing : motioncue.washout.CueingParams
+        The preset; its ``algorithm`` picks the cueing algorithm
+        (:func:`motioncue.washout.make_cueing`).
     rate_hz : float
         Output frame rate.
     limits : motioncue.trajectory.ActuatorLimits, optional
@@ -141,7 +143,7 @@ def generate_ride(
     """
     from motioncue.telemetry._recording import resample
     from motioncue.trajectory import ActuatorLimits, limit_pose, transition
-    from motioncue.washout import ClassicalWashout
+    from motioncue.washout import make_cueing
 
     def step(name: str, frac: float) -> None:
         if progress is not None:
@@ -167,7 +169,7 @@ def generate_ride(
     rec = resample(recording, rate_hz)
     lap("resample")
     step("cueing", 0.1)
-    wres = ClassicalWashout(cueing, fs_hz=rate_hz).run(rec.f, rec.w)
+    wres = make_cueing(cueing, rate_hz).run(rec.f, rec.w)
     lap("cueing")
     step("workspace", 0.2)
     plim = limit_pose(platform, wres.poses, limits=tight)

@@ -1,19 +1,32 @@
 """Motion cueing: vehicle specific force and angular velocity to platform poses.
 
-The classical washout of Reid & Nahon (:class:`ClassicalWashout`), its parameters
-(:class:`CueingParams`, :func:`load_cueing` for ``configs/cueing/*.toml``) and the evaluation
-of cue quality through vestibular models (:func:`evaluate_cueing`).
+The cueing interface (:class:`CueingAlgorithm`; :func:`make_cueing` builds the algorithm a
+preset names with ``algorithm = "..."``, :func:`register_cueing` adds one), the classical
+washout of Reid & Nahon (:class:`ClassicalWashout`, registered as ``"classical"``), its
+parameters (:class:`CueingParams`, :func:`load_cueing` for ``configs/cueing/*.toml``) and the
+evaluation of cue quality through vestibular models (:func:`evaluate_cueing`).
 
 Example
 -------
->>> from motioncue.washout import ClassicalWashout, load_cueing
->>> design = ClassicalWashout(load_cueing("racing"), fs_hz=100.0)
+>>> from motioncue.washout import load_cueing, make_cueing
+>>> design = make_cueing(load_cueing("racing"), fs_hz=100.0)
+>>> type(design).__name__
+'ClassicalWashout'
 >>> state = design.initial_state()
 >>> pose = design.step(state, (0.0, 0.0, 9.80665), (0.0, 0.0, 0.0))
 >>> [round(v, 12) for v in pose]
 [0.0, 0.0, 0.0, 0.0, 0.0, 0.0]
 """
 
+from ._algorithm import (
+    CueingAlgorithm,
+    CueingFactory,
+    CueingResult,
+    cueing_algorithms,
+    make_cueing,
+    register_cueing,
+    unregister_cueing,
+)
 from ._classical import ClassicalWashout, WashoutResult, WashoutState
 from ._evaluate import (
     AXIS_NAMES,
@@ -45,16 +58,23 @@ __all__ = [
     "OTOLITH",
     "SEMICIRCULAR_CANAL",
     "ClassicalWashout",
+    "CueingAlgorithm",
     "CueingEvaluation",
+    "CueingFactory",
     "CueingParams",
+    "CueingResult",
     "VestibularModel",
     "VestibularModelSet",
     "WashoutResult",
     "WashoutState",
+    "cueing_algorithms",
     "evaluate_cueing",
     "get_model_set",
     "load_cueing",
+    "make_cueing",
     "perceived_motion_error",
     "plot_cueing",
+    "register_cueing",
     "simulator_motion",
+    "unregister_cueing",
 ]

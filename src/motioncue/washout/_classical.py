@@ -17,7 +17,9 @@ Signal flow (per sample; frames, signs and units of conventions.md)
    counted.
 1. **Scaling and smooth limiting.** ``f_s = [0, 0, g] + L_f(k_f * (f - [0, 0, g]))``,
    ``w_s = L_w(k_w * w)`` with the limiter ``L`` of :func:`~._filters.soft_limit`.
-2. **Tilt coordination.** ``f_s,x`` and ``f_s,y`` pass the low-pass
+2. **Tilt coordination.** ``f_t = f_s`` (x, y) or, when ``tilt_scale = (kt_x, kt_y)`` is set,
+   ``f_t = [kt_x f_x, kt_y f_y]`` (its own gain, without the translational force limit:
+   the tilt angle has its own limit). ``f_t,x`` and ``f_t,y`` pass the low-pass
    ``G_T(s) = wt^2 / (s^2 + 2 zt wt s + wt^2)``. The tilt that makes gravity supply that
    force in the platform frame (``R^T [0, 0, g]`` has x component ``-g sin(pitch)`` and y
    component ``g sin(roll) cos(pitch)``) is ``pitch* = -asin(f_x,lp / g)`` (forward
@@ -26,6 +28,16 @@ Signal flow (per sample; frames, signs and units of conventions.md)
    Each target is smoothly limited to ``tilt_limit`` and then rate limited:
    ``tilt[n] = tilt[n-1] + clip(target - tilt[n-1], -r/fs, r/fs)`` (the limit bounds the
    tilt; roll and pitch also carry the high-passed rotational cue of step 3).
+   With ``tilt_accel_limit_rad_s2 = a`` the tilt is also acceleration limited
+   (:func:`rate_accel_limit_step`): with the per-sample step ``u[n] = tilt[n] - tilt[n-1]``,
+   ``d = a / fs^2`` and ``e = target - tilt[n-1]``, the wanted step is
+   ``sign(e) min(r/fs, |e|, d (sqrt(1/4 + 2|e|/d) - 1/2))`` (the last term is the largest
+   step from which braking by ``d`` per sample stops at the target), and then
+   ``u[n] = clip(wanted, u[n-1] - d, u[n-1] + d)``. So ``|u[n]| <= r/fs`` and
+   ``|u[n] - u[n-1]| <= a/fs^2`` always: tilt rate at most ``r`` and tilt acceleration
+   (backward difference) at most ``a``; a step in the target gives the time-optimal
+   trapezoid (or triangle) under both limits, to within one sample (an overshoot below
+   ``a/fs^2`` where braking would have to start between two samples).
 3. **Rotational channel.** Body rates are turned into Euler-angle rates
    ``e = T(beta) w_s`` (ZYX: ``roll' = p + tan(pitch)(q sin(roll) + r cos(roll))``,
    ``pitch' = q cos(roll) - r sin(roll)``, ``yaw' = (q sin(roll) + r cos(roll))/cos(pitch)``),
@@ -48,6 +60,21 @@ Signal flow (per sample; frames, signs and units of conventions.md)
    ``P(s) = 1/(s^2 + 2 zeta wn s + wn^2) * s/(s + wb)``. With ``wb > 0`` a sustained
    acceleration returns the platform to neutral; with ``wb = 0``
    (``P = 1/(s^2 + 2 zeta wn s + wn^2)``) it leaves an offset ``a / wn^2``.
+
+   **Head offset.** With the rider's head at ``h = head_offset_m`` (platform frame, from the
+   platform origin), a platform whose origin has specific force ``f_o`` (platform frame) and
+   which turns with body angular velocity ``W`` and acceleration ``W'`` gives the head
+   ``f_head = f_o + W' x h + W x (W x h)`` (tangential and centripetal terms; ``x`` the
+   cross product). The cue wants ``f_head = f_s``, so the translational channel is fed
+   ``a = R (f_s - W' x h - W x (W x h)) - [0, 0, g]`` instead. ``W`` and ``W'`` are those of
+   this algorithm's own output attitude ``(roll, pitch, yaw)[n]``, by backward differences:
+   ``e' = (beta[n] - beta[n-1]) fs``, ``W = [roll' - yaw' sin(pitch),
+   pitch' cos(roll) + yaw' cos(pitch) sin(roll), -pitch' sin(roll) + yaw' cos(pitch)
+   cos(roll)]`` at ``beta[n]``, ``W'[n] = (W[n] - W[n-1]) fs`` (zero before the first
+   sample). Example: a head ``h_z`` above the origin and a small pitch ``theta`` (nose down
+   positive) swing the head forward by ``h_z theta``: the term is ``W' x h = [h_z theta'',
+   0, 0]``, so the platform origin is moved back by the high-passed ``h_z theta``,
+   ``x = -h_z H_T(s) theta`` to first order. ``h = 0`` is the formula without these terms.
 5. Components the machine cannot move (``dofs``) are zero, and are zero in ``R`` and ``T``.
 
 Discretisation
@@ -75,7 +102,7 @@ from .._errors import ConfigError
 from ._filters import Section, rate_limit_array, soft_limit, soft_limit_array, tustin_section
 from ._params import GRAVITY_M_S2, CueingParams
 
-__all__ = ["ClassicalWashout", "WashoutResult", "WashoutState"]
+__all__ = ["ClassicalWashout", "WashoutResult", "WashoutState", "rate_accel_limit_step"]
 
 _IDENTITY: Section = (1.0, 0.0, 0.0, 1.0, 0.0, 0.0)
 _MIN_COS_PITCH = 1e-3
@@ -99,6 +126,13 @@ class WashoutState:
         Rate-limited tilt ``[roll, pitch]`` (rad) of the last sample.
     hold : list of 6 floats
         Last good input ``[fx, fy, fz, wx, wy, wz]`` (used for bad samples).
+    tilt_rate : list of 2 floats
+        Tilt rate ``[roll, pitch]`` (rad/s) of the last sample (kept when the tilt is
+        acceleration limited).
+    attitude : list of 3 floats
+        Output ``[roll, pitch, yaw]`` (rad) of the last sample (kept with a head offset).
+    omega : list of 3 floats
+        Platform body angular velocity (rad/s) of the last sample (kept with a head offset).
     bad_samples : int
         Samples replaced by the last good one since the last reset.
     samples : int
@@ -107,6 +141,9 @@ class WashoutState:
 
     z: list[float] = field(default_factory=lambda: [0.0] * (2 * _N_SECTIONS))
     tilt: list[float] = field(default_factory=lambda: [0.0, 0.0])
+    tilt_rate: list[float] = field(default_factory=lambda: [0.0, 0.0])
+    attitude: list[float] = field(default_factory=lambda: [0.0, 0.0, 0.0])
+    omega: list[float] = field(default_factory=lambda: [0.0, 0.0, 0.0])
     hold: list[float] = field(default_factory=lambda: [0.0, 0.0, GRAVITY_M_S2, 0.0, 0.0, 0.0])
     bad_samples: int = 0
     samples: int = 0
@@ -141,10 +178,76 @@ class WashoutResult:
     fs_hz: float
 
 
+def _rate_accel_limit_array(
+    target: NDArray[np.float64],
+    step_max: float,
+    accel_step: float,
+    tilt: list[float],
+    tilt_rate: list[float],
+    k: int,
+    fs: float,
+) -> NDArray[np.float64]:
+    """:func:`rate_accel_limit_step` over a signal (the loop on floats, so that it gives
+    exactly the streaming numbers), continuing from and updating ``tilt[k]`` (rad) and
+    ``tilt_rate[k]`` (rad/s)."""
+    prev = tilt[k]
+    rate = tilt_rate[k]
+    out: list[float] = []
+    append = out.append
+    for x in target.tolist():
+        u = rate_accel_limit_step(x, prev, rate / fs, step_max, accel_step)
+        prev = prev + u
+        rate = u * fs
+        append(prev)
+    tilt_rate[k] = rate
+    return np.array(out, dtype=np.float64)
+
+
 _StepFn = Callable[
     [WashoutState, Sequence[float], Sequence[float], MutableSequence[float] | None],
     MutableSequence[float],
 ]
+
+
+def rate_accel_limit_step(
+    target: float, prev: float, u_prev: float, step_max: float, accel_step: float
+) -> float:
+    """One sample of the rate- and acceleration-limited follower of the tilt (step 2 above).
+
+    Parameters
+    ----------
+    target : float
+        Where the output should go (rad).
+    prev : float
+        Output of the previous sample (rad).
+    u_prev : float
+        Previous per-sample step ``prev - prev_before`` (rad).
+    step_max : float
+        Largest step per sample, ``rate_limit / fs`` (rad), > 0.
+    accel_step : float
+        Largest change of the step per sample, ``accel_limit / fs^2`` (rad), > 0.
+
+    Returns
+    -------
+    float
+        This sample's step ``u`` (rad): the output is ``prev + u``; ``|u| <= step_max`` when
+        ``|u_prev| <= step_max``, and ``|u - u_prev| <= accel_step``.
+    """
+    e = target - prev
+    ae = -e if e < 0.0 else e
+    u = step_max if step_max < ae else ae
+    stop = accel_step * (math.sqrt(0.25 + 2.0 * ae / accel_step) - 0.5)
+    if stop < u:
+        u = stop
+    if e < 0.0:
+        u = -u
+    lo = u_prev - accel_step
+    hi = u_prev + accel_step
+    if u < lo:
+        u = lo
+    elif u > hi:
+        u = hi
+    return u
 
 
 def _sos(*sections: Section) -> NDArray[np.float64]:
@@ -250,8 +353,10 @@ class ClassicalWashout:
         z = state.z
         for i in range(len(z)):
             z[i] = 0.0
-        state.tilt[0] = 0.0
-        state.tilt[1] = 0.0
+        state.tilt[:] = [0.0, 0.0]
+        state.tilt_rate[:] = [0.0, 0.0]
+        state.attitude[:] = [0.0, 0.0, 0.0]
+        state.omega[:] = [0.0, 0.0, 0.0]
         state.hold[:] = [0.0, 0.0, GRAVITY_M_S2, 0.0, 0.0, 0.0]
         state.bad_samples = 0
         state.samples = 0
@@ -298,6 +403,13 @@ class ClassicalWashout:
         tl = p.tilt_limit_rad
         atl = knee * tl
         st = p.tilt_rate_limit_rad_s / fs
+        accel = p.tilt_accel_limit_rad_s2
+        sa = 0.0 if accel is None else accel / (fs * fs)
+        ra_step = rate_accel_limit_step
+        own_tilt = p.tilt_scale is not None
+        ktx, kty = (1.0, 1.0) if p.tilt_scale is None else p.tilt_scale
+        hx, hy, hz = p.head_offset_m
+        head = hx != 0.0 or hy != 0.0 or hz != 0.0
         mx, my, mz, mr, mp, myaw = (1.0 if d else 0.0 for d in p.dofs)
         lb0, lb1, lb2, _, la1, la2 = self.tilt_lp
         r0, r1, r2 = self.rot
@@ -364,12 +476,18 @@ class ClassicalWashout:
                 qz = soft(qz, lwz, knee)
             z = state.z
             # 2. tilt coordination
-            ylx = lb0 * sx + z[0]
-            z[0] = lb1 * sx - la1 * ylx + z[1]
-            z[1] = lb2 * sx - la2 * ylx
-            yly = lb0 * sy + z[2]
-            z[2] = lb1 * sy - la1 * yly + z[3]
-            z[3] = lb2 * sy - la2 * yly
+            if own_tilt:
+                tix = ktx * fx
+                tiy = kty * fy
+            else:
+                tix = sx
+                tiy = sy
+            ylx = lb0 * tix + z[0]
+            z[0] = lb1 * tix - la1 * ylx + z[1]
+            z[1] = lb2 * tix - la2 * ylx
+            yly = lb0 * tiy + z[2]
+            z[2] = lb1 * tiy - la1 * yly + z[3]
+            z[3] = lb2 * tiy - la2 * yly
             u = ylx / g
             u = 1.0 if u > 1.0 else (-1.0 if u < -1.0 else u)
             tp = -asin(u)
@@ -381,19 +499,30 @@ class ClassicalWashout:
             if tr > atl or tr < -atl:
                 tr = soft(tr, tl, knee)
             tilt = state.tilt
-            prev = tilt[0]
-            d = tr - prev
-            if d > st:
-                tr = prev + st
-            elif d < -st:
-                tr = prev - st
+            if sa > 0.0:
+                trate = state.tilt_rate
+                prev = tilt[0]
+                u = ra_step(tr, prev, trate[0] / fs, st, sa)
+                tr = prev + u
+                trate[0] = u * fs
+                prev = tilt[1]
+                u = ra_step(tp, prev, trate[1] / fs, st, sa)
+                tp = prev + u
+                trate[1] = u * fs
+            else:
+                prev = tilt[0]
+                d = tr - prev
+                if d > st:
+                    tr = prev + st
+                elif d < -st:
+                    tr = prev - st
+                prev = tilt[1]
+                d = tp - prev
+                if d > st:
+                    tp = prev + st
+                elif d < -st:
+                    tp = prev - st
             tilt[0] = tr
-            prev = tilt[1]
-            d = tp - prev
-            if d > st:
-                tp = prev + st
-            elif d < -st:
-                tp = prev - st
             tilt[1] = tp
             tr *= mr
             tp *= mp
@@ -420,13 +549,42 @@ class ClassicalWashout:
             cth = cos(pitch)
             sps = sin(yaw)
             cps = cos(yaw)
-            # R = Rz Ry Rx: with Ry Rx f_s = [u, v, c], R f_s = [cps u - sps v, sps u + cps v, c]
-            vv = sphi * sy + cphi * fzs
-            u = cth * sx + sth * vv
-            v = cphi * sy - sphi * fzs
+            hfx = sx
+            hfy = sy
+            hfz = fzs
+            if head:
+                # f_o = f_s - W' x h - W x (W x h), W and W' by backward differences
+                att = state.attitude
+                om = state.omega
+                dr = (roll - att[0]) * fs
+                dp = (pitch - att[1]) * fs
+                dyw = (yaw - att[2]) * fs
+                att[0] = roll
+                att[1] = pitch
+                att[2] = yaw
+                ycp = dyw * cth
+                wx_ = dr - dyw * sth
+                wy_ = dp * cphi + ycp * sphi
+                wz_ = -dp * sphi + ycp * cphi
+                ax_ = (wx_ - om[0]) * fs
+                ay_ = (wy_ - om[1]) * fs
+                az_ = (wz_ - om[2]) * fs
+                om[0] = wx_
+                om[1] = wy_
+                om[2] = wz_
+                cx = wy_ * hz - wz_ * hy
+                cy = wz_ * hx - wx_ * hz
+                cz = wx_ * hy - wy_ * hx
+                hfx = hfx - ((ay_ * hz - az_ * hy) + (wy_ * cz - wz_ * cy))
+                hfy = hfy - ((az_ * hx - ax_ * hz) + (wz_ * cx - wx_ * cz))
+                hfz = hfz - ((ax_ * hy - ay_ * hx) + (wx_ * cy - wy_ * cx))
+            # R = Rz Ry Rx: with Ry Rx f = [u, v, c], R f = [cps u - sps v, sps u + cps v, c]
+            vv = sphi * hfy + cphi * hfz
+            u = cth * hfx + sth * vv
+            v = cphi * hfy - sphi * hfz
             ax = cps * u - sps * v
             ay = sps * u + cps * v
-            az = -sth * sx + cth * vv - g
+            az = -sth * hfx + cth * vv - g
             x = mx * bq(t0b, z, 16, bq(t0a, z, 14, ax))
             y = my * bq(t1b, z, 20, bq(t1a, z, 18, ay))
             zz = mz * bq(t2b, z, 24, bq(t2a, z, 22, az))
@@ -553,13 +711,24 @@ class ClassicalWashout:
             return np.asarray(y)
 
         # 2. tilt coordination
-        ylx = filt([self.tilt_lp], sx, 0)
-        yly = filt([self.tilt_lp], sy, 1)
+        if p.tilt_scale is None:
+            tix, tiy = sx, sy
+        else:
+            tix = p.tilt_scale[0] * fx
+            tiy = p.tilt_scale[1] * fy
+        ylx = filt([self.tilt_lp], tix, 0)
+        yly = filt([self.tilt_lp], tiy, 1)
         tp = soft_limit_array(-np.arcsin(np.clip(ylx / g, -1.0, 1.0)), p.tilt_limit_rad, knee)
         tr = soft_limit_array(np.arcsin(np.clip(yly / g, -1.0, 1.0)), p.tilt_limit_rad, knee)
-        st = p.tilt_rate_limit_rad_s / self.fs_hz
-        tr = rate_limit_array(tr, st, state.tilt[0])
-        tp = rate_limit_array(tp, st, state.tilt[1])
+        fs = self.fs_hz
+        st = p.tilt_rate_limit_rad_s / fs
+        if p.tilt_accel_limit_rad_s2 is None:
+            tr = rate_limit_array(tr, st, state.tilt[0])
+            tp = rate_limit_array(tp, st, state.tilt[1])
+        else:
+            sa = p.tilt_accel_limit_rad_s2 / (fs * fs)
+            tr = _rate_accel_limit_array(tr, st, sa, state.tilt, state.tilt_rate, 0, fs)
+            tp = _rate_accel_limit_array(tp, st, sa, state.tilt, state.tilt_rate, 1, fs)
         mx, my, mz, mr, mp, myaw = (1.0 if d else 0.0 for d in p.dofs)
         tilt_out[0] = tr
         tilt_out[1] = tp
@@ -583,12 +752,36 @@ class ClassicalWashout:
         cth = np.cos(pitch)
         sps = np.sin(yaw)
         cps = np.cos(yaw)
-        vv = sphi * sy + cphi * fzs
-        u = cth * sx + sth * vv
-        v = cphi * sy - sphi * fzs
+        hfx, hfy, hfz = sx, sy, fzs
+        hx, hy, hz = p.head_offset_m
+        if (hx != 0.0 or hy != 0.0 or hz != 0.0) and n:
+            # the same operations as step, on arrays (backward differences from the state)
+            att = state.attitude
+            dr = np.diff(roll, prepend=att[0]) * fs
+            dp = np.diff(pitch, prepend=att[1]) * fs
+            dyw = np.diff(yaw, prepend=att[2]) * fs
+            ycp = dyw * cth
+            wx_ = dr - dyw * sth
+            wy_ = dp * cphi + ycp * sphi
+            wz_ = -dp * sphi + ycp * cphi
+            om = state.omega
+            ax_ = np.diff(wx_, prepend=om[0]) * fs
+            ay_ = np.diff(wy_, prepend=om[1]) * fs
+            az_ = np.diff(wz_, prepend=om[2]) * fs
+            cx = wy_ * hz - wz_ * hy
+            cy = wz_ * hx - wx_ * hz
+            cz = wx_ * hy - wy_ * hx
+            hfx = hfx - ((ay_ * hz - az_ * hy) + (wy_ * cz - wz_ * cy))
+            hfy = hfy - ((az_ * hx - ax_ * hz) + (wz_ * cx - wx_ * cz))
+            hfz = hfz - ((ax_ * hy - ay_ * hx) + (wx_ * cy - wy_ * cx))
+            state.attitude[:] = [float(roll[-1]), float(pitch[-1]), float(yaw[-1])]
+            state.omega[:] = [float(wx_[-1]), float(wy_[-1]), float(wz_[-1])]
+        vv = sphi * hfy + cphi * hfz
+        u = cth * hfx + sth * vv
+        v = cphi * hfy - sphi * hfz
         ax = cps * u - sps * v
         ay = sps * u + cps * v
-        az = -sth * sx + cth * vv - g
+        az = -sth * hfx + cth * vv - g
         poses[0] = mx * filt(self.trans[0], ax, 7)
         poses[1] = my * filt(self.trans[1], ay, 9)
         poses[2] = mz * filt(self.trans[2], az, 11)

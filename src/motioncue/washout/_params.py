@@ -51,6 +51,9 @@ class CueingParams:
     ----------
     name : str
         Preset name (the TOML file's stem) or a user label.
+    algorithm : str
+        Name of the cueing algorithm in the registry of :mod:`._algorithm` that runs these
+        parameters (``"classical"``: :class:`~._classical.ClassicalWashout`).
     dofs : tuple of 6 bool
         Which pose components ``[x, y, z, roll, pitch, yaw]`` the machine moves; the others
         are held at zero (a 3-DOF seat: ``z, roll, pitch``).
@@ -74,6 +77,19 @@ class CueingParams:
         Largest tilt angular rate (per axis).
     tilt_limit_rad : float
         Largest tilt angle (smooth limit, same knee as the input limiter).
+    tilt_scale : 2-tuple or None
+        Gain on ``f_x, f_y`` feeding the tilt coordination, separate from the translational
+        ``f_scale`` (and not bounded by ``f_limit_m_s2``: the tilt has its own
+        ``tilt_limit_rad``). ``None`` (the default) feeds the tilt the translational channel's
+        scaled and limited force, as before this key existed.
+    tilt_accel_limit_rad_s2 : float or None
+        Largest tilt angular acceleration (per axis, rad/s^2), on top of
+        ``tilt_rate_limit_rad_s``; ``None`` (the default): rate limit only.
+    head_offset_m : 3-tuple
+        The rider's head (the vestibular system) relative to the platform origin, platform
+        frame ``[x fwd, y left, z up]`` (m). The translational channel removes the specific
+        force the platform's own rotation causes there (see :mod:`._classical`);
+        ``(0, 0, 0)`` (the default) cues at the origin.
     rot_wn_rad_s, rot_zeta : 3-tuples
         Rotational second-order high-pass on the Euler-angle rates.
     reject_f_m_s2, reject_w_rad_s : float
@@ -84,6 +100,7 @@ class CueingParams:
     """
 
     name: str = "default"
+    algorithm: str = "classical"
     dofs: tuple[bool, bool, bool, bool, bool, bool] = (True, True, True, True, True, True)
     f_scale: Vec3 = (0.5, 0.5, 0.3)
     f_limit_m_s2: Vec3 = (6.0, 6.0, 4.0)
@@ -97,6 +114,9 @@ class CueingParams:
     tilt_zeta: float = 1.0
     tilt_rate_limit_rad_s: float = 3.0 * _D2R
     tilt_limit_rad: float = 12.0 * _D2R
+    tilt_scale: tuple[float, float] | None = None
+    tilt_accel_limit_rad_s2: float | None = None
+    head_offset_m: Vec3 = (0.0, 0.0, 0.0)
     rot_wn_rad_s: Vec3 = (1.0, 1.0, 0.5)
     rot_zeta: Vec3 = (1.0, 1.0, 1.0)
     reject_f_m_s2: float = 100.0
@@ -111,6 +131,23 @@ class CueingParams:
     )
 
     def __post_init__(self) -> None:
+        if not isinstance(self.algorithm, str) or not self.algorithm:
+            raise ConfigError(
+                f"CueingParams.algorithm = {self.algorithm!r} is invalid; a registered name"
+            )
+        if self.tilt_scale is not None:
+            if len(self.tilt_scale) != 2:
+                raise ConfigError(
+                    f"CueingParams.tilt_scale = {self.tilt_scale!r} is invalid; 2 numbers"
+                )
+            _check("tilt_scale", self.tilt_scale, 0.0, False, 100.0)
+        if self.tilt_accel_limit_rad_s2 is not None:
+            _check("tilt_accel_limit_rad_s2", (self.tilt_accel_limit_rad_s2,), 0.0, True, 1e6)
+        if len(self.head_offset_m) != 3:
+            raise ConfigError(
+                f"CueingParams.head_offset_m = {self.head_offset_m!r} is invalid; 3 numbers"
+            )
+        _check("head_offset_m", tuple(abs(v) for v in self.head_offset_m), 0.0, False, 10.0)
         if len(self.dofs) != 6 or not all(isinstance(d, bool) for d in self.dofs):
             raise ConfigError(f"CueingParams.dofs = {self.dofs!r} is invalid; 6 booleans")
         for name in ("f_scale", "w_scale"):  # a negative gain would cue the wrong way
@@ -142,6 +179,7 @@ def load_cueing(name_or_path: str | Path) -> CueingParams:
     The file layout (every key required unless marked optional; unknown keys are rejected)::
 
         description = "..."                        # optional
+        algorithm = "classical"                    # optional (default); a registered name
         dofs = ["x", "y", "z", "roll", "pitch", "yaw"]
         [scaling]
         f_scale = [0.5, 0.5, 0.3]
@@ -158,6 +196,10 @@ def load_cueing(name_or_path: str | Path) -> CueingParams:
         zeta = 1.0
         rate_limit_deg_s = 3.0
         limit_deg = 12.0
+        scale = [0.5, 0.5]                         # optional: tilt gain on f_x, f_y
+                                                   #   (default: the [scaling] force)
+        accel_limit_deg_s2 = 20.0                  # optional: tilt acceleration limit
+                                                   #   (default: none)
         [rotational]
         wn_rad_s = [1.0, 1.0, 0.5]
         zeta = [1.0, 1.0, 1.0]
@@ -167,15 +209,26 @@ def load_cueing(name_or_path: str | Path) -> CueingParams:
         [workspace]
         half_range_mm = [100.0, 100.0, 100.0]
         half_range_deg = [15.0, 15.0, 20.0]
+        [head]                                     # optional table
+        offset_mm = [0.0, 0.0, 0.0]                # rider's head from the platform origin,
+                                                   #   platform frame x fwd, y left, z up
 
     Raises
     ------
     ConfigError
-        Unknown preset, missing or unknown key, or a value out of range (named).
+        Unknown preset, missing or unknown key, or a value out of range (named); an
+        ``algorithm`` that is not registered (the message lists the known ones).
     """
+    from ._algorithm import check_algorithm_name
+
     path = find_config("cueing", name_or_path)
     top = ConfigReader(load_toml(path), path.name)
     top.string("description", "")
+    algorithm = top.string("algorithm", "classical")
+    try:
+        check_algorithm_name(algorithm)
+    except ConfigError as exc:
+        raise ConfigError(f"{path.name}: {exc}") from exc
     dof_list = top.raw("dofs")
     if (
         not isinstance(dof_list, list)
@@ -205,6 +258,13 @@ def load_cueing(name_or_path: str | Path) -> CueingParams:
     tilt_zeta = ti.number("zeta", lo=0.0, lo_open=True)
     tilt_rate = ti.number("rate_limit_deg_s", lo=0.0, lo_open=True) * _D2R
     tilt_limit = ti.number("limit_deg", lo=0.0, hi=60.0, lo_open=True) * _D2R
+    tilt_scale = None
+    if ti.has("scale"):
+        ks = ti.vector("scale", 2)
+        tilt_scale = (ks[0], ks[1])
+    tilt_accel = None
+    if ti.has("accel_limit_deg_s2"):
+        tilt_accel = ti.number("accel_limit_deg_s2", lo=0.0, lo_open=True) * _D2R
     ti.finish()
 
     ro = top.table("rotational")
@@ -221,11 +281,17 @@ def load_cueing(name_or_path: str | Path) -> CueingParams:
     lin = ws.vector("half_range_mm", 3)
     ang = ws.vector("half_range_deg", 3)
     ws.finish()
+    head: Vec3 = (0.0, 0.0, 0.0)
+    if top.has("head"):
+        hd = top.table("head")
+        head = _vec3(tuple(v * 1e-3 for v in hd.vector("offset_mm", 3)))
+        hd.finish()
     top.finish()
 
     try:
         return CueingParams(
             name=path.stem,
+            algorithm=algorithm,
             dofs=(dofs[0], dofs[1], dofs[2], dofs[3], dofs[4], dofs[5]),
             f_scale=f_scale,
             f_limit_m_s2=f_limit,
@@ -239,6 +305,9 @@ def load_cueing(name_or_path: str | Path) -> CueingParams:
             tilt_zeta=tilt_zeta,
             tilt_rate_limit_rad_s=tilt_rate,
             tilt_limit_rad=tilt_limit,
+            tilt_scale=tilt_scale,
+            tilt_accel_limit_rad_s2=tilt_accel,
+            head_offset_m=head,
             rot_wn_rad_s=r_wn,
             rot_zeta=r_zeta,
             reject_f_m_s2=reject_f,

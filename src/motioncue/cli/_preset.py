@@ -1,0 +1,54 @@
+"""The cueing preset of a command: ``--preset`` if given, else the platform's default."""
+
+from __future__ import annotations
+
+from typing import Any
+
+from .._errors import ConfigError
+
+__all__ = ["FALLBACK_PRESET", "choose_preset"]
+
+FALLBACK_PRESET = "racing"
+"""Used when neither ``--preset`` nor the platform file names a preset."""
+
+
+def choose_preset(preset: str | None, platform: Any, platform_label: str | None) -> tuple[Any, str]:
+    """Load the cueing preset a command runs with, and say where it came from.
+
+    Parameters
+    ----------
+    preset : str or None
+        The ``--preset`` argument (a name or a path), ``None`` when not given.
+    platform : motioncue.kinematics.Platform or None
+        Its ``default_preset`` is used when ``preset`` is ``None``.
+    platform_label : str or None
+        How the user named the platform (for the message).
+
+    Returns
+    -------
+    params : motioncue.washout.CueingParams
+    source : str
+        ``"NAME (--preset)"``, ``"NAME (default of platform P)"`` or
+        ``"NAME (fallback: platform P names no default_preset)"``.
+
+    Raises
+    ------
+    ConfigError
+        No preset and no platform, or the preset cannot be loaded.
+    """
+    from ..washout import load_cueing
+
+    if preset is not None:
+        params = load_cueing(preset)
+        return params, f"{params.name} (--preset)"
+    if platform is None:
+        raise ConfigError(
+            "no cueing preset: give --preset NAME, or --platform P to use its default"
+        )
+    label = platform_label or platform.name
+    default = getattr(platform, "default_preset", None)
+    if default:
+        params = load_cueing(default)
+        return params, f"{params.name} (default of platform {label})"
+    params = load_cueing(FALLBACK_PRESET)
+    return params, f"{params.name} (fallback: platform {label} names no default_preset)"

@@ -1,0 +1,291 @@
+"""The cueing interface: protocol, registry by name, and the platforms' default presets.
+
+The registry test registers a toy algorithm with one line and shows that ``cue``,
+``generate`` and the bridge run it when a preset says ``algorithm = "NAME"``.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+import tomllib
+from collections.abc import Iterator, MutableSequence, Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pytest
+
+from motioncue import ConfigError
+from motioncue._config import bundled_names, config_dir, find_config
+from motioncue.cli import main
+from motioncue.kinematics import load_platform
+from motioncue.output import load_controller
+from motioncue.pipeline._bridge import Bridge, BridgeConfig
+from motioncue.pipeline._realtime import GateConfig
+from motioncue.telemetry import TelemetrySample
+from motioncue.telemetry._recording import read_recording_csv, resample
+from motioncue.trajectory import ActuatorLimits
+from motioncue.washout import (
+    ClassicalWashout,
+    CueingAlgorithm,
+    CueingParams,
+    CueingResult,
+    cueing_algorithms,
+    load_cueing,
+    make_cueing,
+    register_cueing,
+    unregister_cueing,
+)
+
+G = 9.80665
+HEAVE_GAIN_S2 = 0.002  # toy: heave (m) per m/s^2 of vertical specific-force deviation
+HEAVE_MAX_M = 0.01
+
+
+# -- a toy algorithm that follows the protocol (and shares nothing with the classical one) ----
+@dataclass(eq=False)
+class _ToyState:
+    bad_samples: int = 0
+    steps: int = 0
+
+
+@dataclass(frozen=True)
+class _ToyResult:
+    poses: np.ndarray
+    bad_samples: int
+
+
+CALLS: list[tuple[str, float, int]] = []  # (method, fs_hz, samples)
+
+
+@dataclass(frozen=True, eq=False)
+class HeaveToy:
+    """Pose ``[0, 0, clip(k (f_z - g), +-0.01 m), 0, 0, 0]``; non-finite f_z counts as bad
+    and gives heave 0."""
+
+    params: CueingParams
+    fs_hz: float
+    _tag: str = field(default="toy", repr=False)
+
+    def initial_state(self) -> _ToyState:
+        return _ToyState()
+
+    def reset(self, state: _ToyState) -> None:
+        state.bad_samples = 0
+        state.steps = 0
+
+    def step(
+        self,
+        state: _ToyState,
+        f: Sequence[float],
+        w: Sequence[float],
+        out: MutableSequence[float] | None = None,
+    ) -> MutableSequence[float]:
+        CALLS.append(("step", self.fs_hz, 1))
+        state.steps += 1
+        fz = f[2]
+        if not math.isfinite(fz):
+            state.bad_samples += 1
+            fz = G
+        heave = min(HEAVE_MAX_M, max(-HEAVE_MAX_M, HEAVE_GAIN_S2 * (fz - G)))
+        pose = [0.0, 0.0, heave, 0.0, 0.0, 0.0]
+        if out is None:
+            return pose
+        out[:] = pose
+        return out
+
+    def run(self, f: Any, w: Any, state: _ToyState | None = None) -> _ToyResult:
+        fz = np.asarray(f, dtype=float)[:, 2]
+        CALLS.append(("run", self.fs_hz, len(fz)))
+        bad = ~np.isfinite(fz)
+        heave = np.clip(HEAVE_GAIN_S2 * (np.where(bad, G, fz) - G), -HEAVE_MAX_M, HEAVE_MAX_M)
+        poses = np.zeros((len(fz), 6))
+        poses[:, 2] = heave
+        if state is not None:
+            state.bad_samples += int(bad.sum())
+        return _ToyResult(poses, int(bad.sum()))
+
+
+@pytest.fixture
+def toy() -> Iterator[str]:
+    CALLS.clear()
+    register_cueing("heave-toy", HeaveToy)  # the one line an algorithm needs
+    try:
+        yield "heave-toy"
+    finally:
+        unregister_cueing("heave-toy")
+
+
+def _preset_file(tmp_path: Path, base: str, algorithm: str) -> Path:
+    text = find_config("cueing", base).read_text()
+    assert 'algorithm = "classical"' in text
+    path = tmp_path / f"{algorithm}.toml"
+    path.write_text(text.replace('algorithm = "classical"', f'algorithm = "{algorithm}"'))
+    return path
+
+
+def _lap_excerpt(path: Path, seconds: float) -> Path:
+    lines = (config_dir("recordings") / "lap.csv").read_text().splitlines()
+    keep = [lines[0]] + [ln for ln in lines[1:] if float(ln.split(",")[0]) <= seconds]
+    path.write_text("\n".join(keep) + "\n")
+    return path
+
+
+# -- protocol and registry ---------------------------------------------------------------------
+def test_classical_is_the_registered_default_and_follows_the_protocol() -> None:
+    assert "classical" in cueing_algorithms()
+    design = make_cueing(load_cueing("racing"), 100.0)
+    assert type(design) is ClassicalWashout and isinstance(design, CueingAlgorithm)
+    res = design.run(np.tile([1.0, 0.0, G], (50, 1)), np.zeros((50, 3)))
+    assert isinstance(res, CueingResult) and res.poses.shape == (50, 6)
+    assert CueingParams().algorithm == "classical"
+    for name in bundled_names("cueing"):  # every bundled preset names its algorithm
+        data = tomllib.loads(find_config("cueing", name).read_text())
+        assert data["algorithm"] == "classical", name
+        assert load_cueing(name).algorithm == "classical"
+
+
+def test_unknown_algorithm_is_refused_naming_the_known_ones(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    path = _preset_file(tmp_path, "racing", "mpc")
+    with pytest.raises(ConfigError, match=r"algorithm = 'mpc' is unknown.*classical"):
+        load_cueing(path)
+    with pytest.raises(ConfigError, match=r"'nope' is unknown; known cueing algorithms: classical"):
+        make_cueing(CueingParams(algorithm="nope"), 100.0)
+    with pytest.raises(ConfigError, match="already registered"):
+        register_cueing("classical", ClassicalWashout)
+    with pytest.raises(ConfigError, match="invalid"):
+        register_cueing("two words", ClassicalWashout)
+    rec = _lap_excerpt(tmp_path / "rec.csv", 1.0)
+    out = tmp_path / "poses.csv"
+    rc = main(["cue", "--input", str(rec), "--preset", str(path), "--fs", "50", "--out", str(out)])
+    err = capsys.readouterr().err
+    assert rc == 2 and err.startswith("motioncue cue: error: ") and "'mpc' is unknown" in err
+    assert len(err.strip().splitlines()) == 1 and not out.exists()
+
+
+def test_a_registered_algorithm_runs_in_cue_generate_and_bridge_by_name(
+    toy: str, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    preset = _preset_file(tmp_path, "cinema-seat-3dof", toy)
+    params = load_cueing(preset)
+    assert params.algorithm == toy and isinstance(make_cueing(params, 50.0), HeaveToy)
+    rec = _lap_excerpt(tmp_path / "rec.csv", 4.0)
+
+    # cue: the poses CSV is the toy's closed form on the resampled recording
+    out = tmp_path / "poses.csv"
+    argv = ["cue", "--input", str(rec), "--preset", str(preset), "--fs", "50"]
+    assert main([*argv, "--out", str(out)]) == 0
+    table = np.loadtxt(out, delimiter=",", skiprows=1)
+    uniform = resample(read_recording_csv(rec), 50.0)
+    heave = np.clip(HEAVE_GAIN_S2 * (uniform.f[:, 2] - G), -HEAVE_MAX_M, HEAVE_MAX_M)
+    np.testing.assert_array_equal(table[:, 3], heave)
+    assert np.abs(heave).max() > 1e-4
+    np.testing.assert_array_equal(table[:, [1, 2, 4, 5, 6]], 0.0)
+    assert ("run", 50.0, len(uniform)) in CALLS
+
+    # generate: the ride's cueing stage is the toy's run at the frame rate
+    CALLS.clear()
+    ride = tmp_path / "r.ride"
+    rc = main(["generate", "--input", str(rec), "--platform", "seat3", "--controller", "mbox3",
+               "--preset", str(preset), "--rate", "100", "--out", str(ride),
+               "--quiet"])  # fmt: skip
+    assert rc == 0, capsys.readouterr().err
+    assert [c[:2] for c in CALLS] == [("run", 100.0)] and ride.exists()
+
+    # bridge: the live loop steps the toy with an explicit state, one step per open frame
+    CALLS.clear()
+    platform = load_platform("seat3")
+    ctrl = load_controller("mbox3")
+    limits = ActuatorLimits.from_platform(platform, ctrl, rate_hz=100.0)
+
+    class Source:
+        def __init__(self) -> None:
+            self.stats = {"samples": 1}
+
+        def latest(self) -> TelemetrySample:
+            return TelemetrySample(time.perf_counter(), (0.0, 0.0, G + 3.0), (0, 0, 0), False, "t")
+
+    class Sink:
+        def send(self, data: bytes, *, t_s: float | None = None) -> None:
+            pass
+
+    gate = GateConfig(timeout_s=10.0, fade_out_s=0.1, fade_in_s=0.1)
+    bridge = Bridge(platform, ctrl, params, Source(), Sink(), limits, BridgeConfig(100.0, gate))
+    assert isinstance(bridge.washout, HeaveToy)
+    assert isinstance(bridge.washout_state, _ToyState)
+    for k in range(1, 31):
+        bridge.step(k / 100.0)
+    assert len(CALLS) >= 20 and all(c == ("step", 100.0, 1) for c in CALLS)
+    assert bridge.washout_state.steps == len(CALLS)
+
+
+# -- the platforms' default presets -------------------------------------------------------------
+def test_every_bundled_platform_names_a_loadable_default_preset() -> None:
+    expected = {
+        "stewart6-linear": "racing-hexapod",
+        "stewart6-rotary": "racing",
+        "seat3": "cinema-seat-3dof",
+        "seat2-yaw": "cinema-seat-3dof",
+    }
+    assert set(bundled_names("platforms")) == set(expected)
+    for name, preset in expected.items():
+        platform = load_platform(name)
+        assert platform.default_preset == preset
+        assert load_cueing(preset).name == preset
+
+
+def test_platform_default_preset_is_checked_and_optional(tmp_path: Path) -> None:
+    text = find_config("platforms", "seat3").read_text()
+    assert 'default_preset = "cinema-seat-3dof"' in text
+    bad = tmp_path / "bad.toml"
+    bad.write_text(text.replace('"cinema-seat-3dof"', '"no-such-preset"', 1))
+    with pytest.raises(ConfigError, match="default_preset = 'no-such-preset' is invalid"):
+        load_platform(bad)
+    none = tmp_path / "none.toml"
+    none.write_text(text.replace('default_preset = "cinema-seat-3dof"', "", 1))
+    assert load_platform(none).default_preset is None
+
+
+def test_generate_and_cue_use_the_platform_default_and_say_so(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    rec = _lap_excerpt(tmp_path / "rec.csv", 3.0)
+    common = ["generate", "--input", str(rec), "--platform", "seat3", "--controller", "mbox3",
+              "--quiet"]  # fmt: skip
+    a, b = tmp_path / "a.ride", tmp_path / "b.ride"
+    assert main([*common, "--out", str(a)]) == 0
+    assert "cueing: preset cinema-seat-3dof (default of platform seat3)" in capsys.readouterr().err
+    assert main([*common, "--preset", "cinema-seat-3dof", "--out", str(b)]) == 0
+    assert "cinema-seat-3dof (--preset)" in capsys.readouterr().err
+    assert a.read_bytes() == b.read_bytes()  # the same ride as naming the preset
+
+    out = tmp_path / "p.csv"
+    cue = ["cue", "--input", str(rec), "--fs", "50", "--out", str(out)]
+    assert main([*cue, "--platform", "stewart6-linear"]) == 0
+    said = capsys.readouterr().out
+    assert "preset racing-hexapod (default of platform stewart6-linear)" in said
+    assert main([*cue]) == 2
+    err = capsys.readouterr().err
+    assert "motioncue cue: error: no cueing preset: give --preset NAME, or --platform P" in err
+
+    # a platform file without default_preset: the fallback is used and named
+    plain = tmp_path / "plain.toml"
+    text = find_config("platforms", "stewart6-linear").read_text()
+    plain.write_text(text.replace('default_preset = "racing-hexapod"', "", 1))
+    assert main([*cue, "--platform", str(plain)]) == 0
+    assert "preset racing (fallback: platform" in capsys.readouterr().out
+
+
+def test_bridge_verb_names_the_platform_default_preset(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    rc = main(["bridge", "--source", "f1:127.0.0.1:0", "--platform", "seat3", "--controller",
+               "imax3", "--target", f"file:{tmp_path / 'out.bin'}", "--duration", "0.2",
+               "--rt-priority", "0", "--quiet"])  # fmt: skip
+    err = capsys.readouterr().err
+    assert rc == 0, err
+    assert "preset cinema-seat-3dof (default of platform seat3)" in err
