@@ -9,6 +9,8 @@ import pytest
 from scipy import signal
 
 from motioncue.washout import (
+    DEFAULT_MODEL_SET,
+    MODEL_SETS,
     OTOLITH,
     SEMICIRCULAR_CANAL,
     ClassicalWashout,
@@ -148,7 +150,8 @@ def test_false_cue_counted_with_duration() -> None:
     poses = np.zeros((n, 6))
     poses[:, 4] = np.arcsin(0.5 * f[:, 0] / G)
     ev = evaluate_cueing(f, np.zeros((n, 3)), poses, fs)
-    perceived = OTOLITH.apply(f[:, 0], fs)
+    # the default model set's otolith (Telban & Cardullo 2005)
+    perceived = MODEL_SETS[DEFAULT_MODEL_SET].otolith[0].apply(f[:, 0], fs)
     np.testing.assert_allclose(ev.perceived_sim[:, 0], -0.5 * perceived, atol=1e-12)
     # a false cue wherever |0.5 perceived| > 0.17: the onset and the undershoot after it
     mask = np.abs(0.5 * perceived) > 0.17

@@ -39,6 +39,13 @@ def register(sub: argparse._SubParsersAction) -> None:
     parser.add_argument("--fs", required=True, type=float, metavar="HZ", help="sample rate")
     parser.add_argument("--out", required=True, metavar="POSES.csv", help="poses CSV to write")
     parser.add_argument("--plot", metavar="FILE.png", help="also write a cue-quality plot")
+    parser.add_argument(
+        "--vestibular",
+        default="telban-cardullo-2005",
+        metavar="SET",
+        help="vestibular model set for the evaluation: telban-cardullo-2005 (default) or "
+        "reid-nahon-zacharias",
+    )
     parser.set_defaults(run=run)
 
 
@@ -46,11 +53,12 @@ def run(args: argparse.Namespace) -> int:
     import numpy as np
 
     from ..telemetry._recording import read_recording_csv, resample
-    from ..washout import evaluate_cueing, make_cueing
+    from ..washout import evaluate_cueing, get_model_set, make_cueing
     from ._preset import choose_preset
 
     if not math.isfinite(args.fs) or args.fs <= 0:
         raise ConfigError(f"--fs {args.fs!r} is invalid; allowed: a finite number > 0")
+    get_model_set(args.vestibular)  # an unknown set is refused before any file is written
     platform = None
     if args.platform is not None:
         from ..kinematics import load_platform
@@ -75,7 +83,15 @@ def run(args: argparse.Namespace) -> int:
     # the input as the algorithm used it (bad samples held) when it reports it
     f_used = getattr(res, "f_used", uniform.f)
     w_used = getattr(res, "w_used", uniform.w)
-    ev = evaluate_cueing(f_used, w_used, res.poses, args.fs, workspace=params.workspace)
+    ev = evaluate_cueing(
+        f_used,
+        w_used,
+        res.poses,
+        args.fs,
+        workspace=params.workspace,
+        model=args.vestibular,
+        head_offset_m=getattr(params, "head_offset_m", None),
+    )
     print(
         f"motioncue cue: {len(rec)} samples -> {len(uniform)} at {args.fs:g} Hz, "
         f"preset {preset_source}; bad samples held: {res.bad_samples}; wrote {out}"
@@ -95,7 +111,13 @@ def run(args: argparse.Namespace) -> int:
             res.poses,
             args.plot,
             t_s=uniform.t_s,
-            title=f"{Path(args.input).name} - preset {params.name} at {args.fs:g} Hz",
+            title=f"{Path(args.input).name} at {args.fs:g} Hz",
+            preset=params.name,
+            platform=(
+                f"{args.platform} (named for its preset; poses not limited to it)"
+                if args.platform
+                else None
+            ),
         )
         print(f"motioncue cue: plot written to {path}")
     return 0

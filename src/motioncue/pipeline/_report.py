@@ -98,8 +98,16 @@ def write_report(
         poses,
         ride.rate_hz,
         workspace=getattr(cueing, "workspace", None),
+        head_offset_m=getattr(cueing, "head_offset_m", None),
     )
-    plot_cueing(ev, poses, out / "cueing.png", title=f"{ride.source} on {ride.platform}")
+    plot_cueing(
+        ev,
+        poses,
+        out / "cueing.png",
+        title=f"{ride.source} on {ride.platform}",
+        preset=getattr(cueing, "name", None),
+        platform=ride.platform,
+    )
     desired = platform.drives.to_pulses(report.q_desired)
     plot_actuators(ride, out / "actuators.png", desired)
     opt = report.optimisation
@@ -129,11 +137,18 @@ def write_report(
         },
         "cue": {
             "axes": ["fx", "fy", "fz", "wx", "wy", "wz"],
+            "units": ["m/s^2", "m/s^2", "m/s^2", "rad/s", "rad/s", "rad/s"],
+            "model_set": ev.model_set,
+            "thresholds": fin(ev.thresholds),
+            "perceived_motion_error": float(ev.perceived_error),
+            "weights": fin(ev.weights),
+            "head_offset_m": fin(ev.head_offset_m),
             "rms_error": fin(ev.rms_error),
             "correlation": fin(ev.correlation),
             "delay_s": fin(ev.delay_s),
             "false_cue_count": [int(c) for c in ev.false_cue_count],
             "false_cue_time_s": fin(ev.false_cue_time_s),
+            "missed_cue_time_s": fin(ev.missed_cue_time_s),
             "workspace_use": fin(ev.workspace_use),
         },
         "stage_s": report.stage_s,

@@ -39,11 +39,22 @@ from ._evaluate import (
 )
 from ._params import DOF_NAMES, GRAVITY_M_S2, CueingParams, load_cueing
 from ._plot import plot_cueing
+from ._vestibular import (
+    DEFAULT_MODEL_SET,
+    DEFAULT_WEIGHTS,
+    MODEL_SETS,
+    VestibularModelSet,
+    get_model_set,
+    perceived_motion_error,
+)
 
 __all__ = [
     "AXIS_NAMES",
+    "DEFAULT_MODEL_SET",
+    "DEFAULT_WEIGHTS",
     "DOF_NAMES",
     "GRAVITY_M_S2",
+    "MODEL_SETS",
     "OTOLITH",
     "SEMICIRCULAR_CANAL",
     "ClassicalWashout",
@@ -53,12 +64,15 @@ __all__ = [
     "CueingParams",
     "CueingResult",
     "VestibularModel",
+    "VestibularModelSet",
     "WashoutResult",
     "WashoutState",
     "cueing_algorithms",
     "evaluate_cueing",
+    "get_model_set",
     "load_cueing",
     "make_cueing",
+    "perceived_motion_error",
     "plot_cueing",
     "register_cueing",
     "simulator_motion",

@@ -1,58 +1,50 @@
 """Cue quality: vestibular models applied to the vehicle's and the simulator's motion.
 
-Vestibular models (continuous, per axis, identical on the three axes)
----------------------------------------------------------------------
-Semicircular canals (angular velocity -> perceived angular velocity), the Young & Oman
-torsion-pendulum model with adaptation and rate sensitivity, with the parameters used in
-motion-cueing work by Telban & Cardullo:
+The vestibular models, their sources and the perception thresholds are in
+:mod:`motioncue.washout._vestibular` (named model sets; default ``telban-cardullo-2005``,
+also ``reid-nahon-zacharias``). Both models are applied to deviations from rest:
+``f - [0, 0, g]`` and ``w``, so zero initial filter states mean "upright and still".
 
-    w_hat / w = 80 s * 5.73 s * (1 + 0.06 s) / ((1 + 80 s)(1 + 5.73 s)(1 + 0.005 s))
-
-(long time constant 5.73 s, adaptation 80 s, lead 0.06 s, short time constant 0.005 s;
-unit gain in the mid band ``1/5.73 << w << 1/0.06`` rad/s).
-
-Otoliths (specific force -> perceived specific force), Young & Meiry (1968):
-
-    f_hat / f = K (1 + 13.2 s) / ((1 + 5.33 s)(1 + 0.66 s))
-
-with ``K = 1`` here (Young & Meiry's ``K = 0.4`` converts to afferent firing units; unit
-DC gain keeps perceived force in m/s^2), so the mid-band gain is ``13.2 / 5.33 = 2.48``.
-
-Sources
--------
-* L. R. Young, C. M. Oman, "Model for vestibular adaptation to horizontal rotation",
-  Aerospace Medicine 40(10), 1969, 1076-1080.
-* L. R. Young, J. L. Meiry, "A revised dynamic otolith model", Aerospace Medicine 39(6),
-  1968, 606-608.
-* R. J. Telban, F. M. Cardullo, "Motion cueing algorithm development: human-centered
-  linear and nonlinear approaches", NASA/CR-2005-213747, 2005 (the canal parameters above
-  and the use of both models for cue evaluation).
-* L. D. Reid, M. A. Nahon, UTIAS Report 296, 1985 (vestibular models as an evaluation tool
-  for washout algorithms).
-
-Both models are applied to deviations from rest: ``f - [0, 0, g]`` and ``w``, so zero
-initial filter states mean "upright and still". Each first-order factor is discretised by
-the bilinear transform (no prewarp, so any sample rate works) and run as one section.
+Conventions
+-----------
+ISO 8855 body axes (x forward, y left, z up), attitude ``R = Rz(yaw) Ry(pitch) Rx(roll)``
+(platform frame to inertial), specific force ``f = R^T (a - g_vec)`` with
+``g_vec = [0, 0, -g]``, so at rest ``f = [0, 0, g]``.
 
 Simulator motion
 ----------------
 From the poses, the platform's inertial acceleration ``a`` is the second difference of the
-position, its attitude ``R = Rz Ry Rx`` and its Euler rates first differences of the angles.
-The rider feels ``f_sim = R^T (a + [0, 0, g])`` (which contains the gravity component of
-tilt) and ``w_sim = E(roll, pitch) * [roll', pitch', yaw']`` (Euler rates to body rates).
+position, its attitude ``R`` and its Euler rates first differences of the angles. At the
+platform origin the rider feels ``f_o = R^T (a + [0, 0, g])`` (which contains the gravity
+component of tilt) and ``w = E(roll, pitch) * [roll', pitch', yaw']`` (Euler rates to body
+rates). At the head, offset ``r`` (m, platform frame) from the origin,
+``f_head = f_o + alpha x r + w x (w x r)`` with ``alpha = dw/dt`` (body frame; the
+derivative of the body components of ``w`` equals the body components of the inertial
+angular acceleration because ``w x w = 0``).
 """
 
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from .._errors import ConfigError
-from ._filters import Section, tustin_section
 from ._params import GRAVITY_M_S2
+from ._vestibular import (
+    AXIS_NAMES,
+    AXIS_UNITS,
+    DEFAULT_MODEL_SET,
+    TC_CANAL,
+    YM_OTOLITH,
+    VestibularModel,
+    VestibularModelSet,
+    check_weights,
+    get_model_set,
+    normalised_error_rms,
+)
 
 __all__ = [
     "AXIS_NAMES",
@@ -64,75 +56,10 @@ __all__ = [
     "simulator_motion",
 ]
 
-AXIS_NAMES: tuple[str, ...] = ("fx", "fy", "fz", "wx", "wy", "wz")
-
-Poly = tuple[float, ...]
-
-
-@dataclass(frozen=True)
-class VestibularModel:
-    """A continuous vestibular transfer function as a product of first-order factors.
-
-    Attributes
-    ----------
-    name : str
-    factors : tuple of (num, den)
-        Polynomials in ``s``, highest power first; the model is their product.
-    source : str
-        Where the transfer function is published.
-    """
-
-    name: str
-    factors: tuple[tuple[Poly, Poly], ...]
-    source: str
-
-    def transfer_function(self) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
-        """``(num, den)`` of the whole model, highest power of ``s`` first."""
-        num = np.array([1.0])
-        den = np.array([1.0])
-        for b, a in self.factors:
-            num = np.polymul(num, b)
-            den = np.polymul(den, a)
-        return num, den
-
-    def response(self, w_rad_s: ArrayLike) -> NDArray[np.complex128]:
-        """Frequency response ``H(j w)`` of the continuous model."""
-        s = 1j * np.asarray(w_rad_s, dtype=float)
-        h = np.ones_like(s)
-        for b, a in self.factors:
-            h = h * np.polyval(b, s) / np.polyval(a, s)
-        return h
-
-    def sos(self, fs_hz: float) -> NDArray[np.float64]:
-        """Second-order sections of the bilinear-discretised model at ``fs_hz``."""
-        secs: list[Section] = [tustin_section(b, a, fs_hz, None) for b, a in self.factors]
-        return np.array(secs)
-
-    def apply(self, x: ArrayLike, fs_hz: float) -> NDArray[np.float64]:
-        """Filter ``x`` (N,) or (N, k) along time from rest."""
-        from scipy.signal import sosfilt
-
-        return np.asarray(sosfilt(self.sos(fs_hz), np.asarray(x, dtype=float), axis=0))
-
-
-SEMICIRCULAR_CANAL = VestibularModel(
-    name="semicircular canals",
-    factors=(
-        ((80.0, 0.0), (80.0, 1.0)),  # adaptation: 80 s / (1 + 80 s)
-        ((5.73, 0.0), (5.73, 1.0)),  # cupula long time constant: 5.73 s / (1 + 5.73 s)
-        ((0.06, 1.0), (0.005, 1.0)),  # rate sensitivity lead / short time constant
-    ),
-    source="Young & Oman 1969 form, parameters of Telban & Cardullo 2005 (NASA/CR-2005-213747)",
-)
-
-OTOLITH = VestibularModel(
-    name="otoliths",
-    factors=(
-        ((13.2, 1.0), (5.33, 1.0)),  # (1 + 13.2 s) / (1 + 5.33 s)
-        ((1.0,), (0.66, 1.0)),  # 1 / (1 + 0.66 s)
-    ),
-    source="Young & Meiry 1968, unit DC gain",
-)
+#: The Telban & Cardullo (2005) canal (the default set's, identical on the three axes).
+SEMICIRCULAR_CANAL: VestibularModel = TC_CANAL
+#: The Young & Meiry (1968) otolith with unit DC gain (the ``reid-nahon-zacharias`` set's).
+OTOLITH: VestibularModel = YM_OTOLITH
 
 
 def _rot_columns(
@@ -155,8 +82,20 @@ def _rot_columns(
     return r
 
 
+def _check_offset(head_offset_m: ArrayLike | None) -> NDArray[np.float64] | None:
+    if head_offset_m is None:
+        return None
+    r = np.asarray(head_offset_m, dtype=float)
+    if r.shape != (3,) or not np.all(np.isfinite(r)) or np.any(np.abs(r) > 10.0):
+        raise ConfigError(
+            f"head offset {np.asarray(head_offset_m).tolist()!r} is invalid; allowed: three "
+            "finite numbers (x, y, z in m from the platform origin, each within +-10 m)"
+        )
+    return r if np.any(r) else None
+
+
 def simulator_motion(
-    poses: ArrayLike, fs_hz: float
+    poses: ArrayLike, fs_hz: float, *, head_offset_m: ArrayLike | None = None
 ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
     """Specific force and angular velocity the rider of the platform feels.
 
@@ -165,11 +104,14 @@ def simulator_motion(
     poses : (N, 6) array_like
         ``[x, y, z, roll, pitch, yaw]`` (m, rad) sampled at ``fs_hz``, starting at rest.
     fs_hz : float
+    head_offset_m : (3,) array_like, optional
+        Position of the rider's head relative to the platform origin, platform frame (m,
+        ISO 8855). Default: the origin (zero offset, the numbers of earlier versions).
 
     Returns
     -------
     f_sim : (N, 3) array
-        ``R^T (a + [0, 0, g])`` in the platform frame (m/s^2).
+        ``R^T (a + [0, 0, g]) + alpha x r + w x (w x r)`` in the platform frame (m/s^2).
     w_sim : (N, 3) array
         Body angular velocity of the platform (rad/s).
 
@@ -177,8 +119,10 @@ def simulator_motion(
     -----
     Derivatives are central differences (no delay; second order in the sample period):
     ``v[n] = (p[n+1] - p[n-1]) fs / 2``, ``a[n] = (p[n+1] - 2 p[n] + p[n-1]) fs^2``, with
-    the pose held constant before the first and after the last sample.
+    the pose held constant before the first and after the last sample; ``alpha`` is the
+    central difference of ``w`` with ``w`` held the same way.
     """
+    r_head = _check_offset(head_offset_m)
     p = np.asarray(poses, dtype=float)
     if p.ndim != 2 or p.shape[1] != 6:
         raise ConfigError(f"poses must have shape (N, 6); got {p.shape}")
@@ -200,15 +144,44 @@ def simulator_motion(
         ],
         axis=1,
     )
+    if r_head is not None and p.shape[0] > 0:
+        wpad = np.concatenate([w_sim[:1], w_sim, w_sim[-1:]], axis=0)
+        alpha = (wpad[2:] - wpad[:-2]) * (0.5 * fs_hz)
+        rr = np.broadcast_to(r_head, w_sim.shape)
+        f_sim = f_sim + np.cross(alpha, rr) + np.cross(w_sim, np.cross(w_sim, rr))
     return f_sim, w_sim
+
+
+_NOTES = """Notes
+  Perceived motion: each channel through the vestibular model set named above (otoliths
+  for fx fy fz, semicircular canals for wx wy wz), vehicle and simulator alike, from rest.
+  unit     unit of the perceived signal (rad/s channels are shown in deg/s here).
+  thr      perception threshold of the axis, in that unit (source: the model set).
+  rms err  RMS over time of (perceived simulator - perceived vehicle), in that unit.
+  err/thr  rms err divided by thr: the error in just-perceptible steps.
+  corr     Pearson correlation of perceived simulator and perceived vehicle (1 = same
+           shape; blank when either is constant).
+  delay s  lag (s) maximising their cross-correlation within the search window; > 0: the
+           simulator's cue comes late; blank when no peak inside the window.
+  false n  episodes where |perceived simulator| > thr with the sign opposite to the
+           vehicle's (a cue in the wrong direction); false s: their total time (s).
+  missed s time (s) when |perceived vehicle| > thr but |perceived simulator| <= thr.
+  J        perceived-motion error: sqrt(sum_i w_i mean((sim_i - veh_i)/thr_i)^2 / sum_i w_i),
+           dimensionless (in thresholds); the tuning objective.
+  Otolith gain: the otolith models are normalised to unit steady-state gain (published
+  K = 0.4 is in afferent firing units), so a sustained force is perceived at its value;
+  their lead gives a mid-band gain tau_a/tau_L (2.0 Telban-Cardullo, 2.48 Young-Meiry), so
+  brief pulses appear up to that factor larger, for vehicle and simulator alike.
+  workspace use: max |pose| / half range per DOF (100% = at the limit)."""
 
 
 @dataclass(frozen=True, eq=False)
 class CueingEvaluation:
     """Perceived motion of vehicle and simulator, and the cue-quality metrics.
 
-    Per-axis arrays are ordered ``fx, fy, fz, wx, wy, wz`` (:data:`AXIS_NAMES`), except
-    ``workspace_use`` which is per DOF ``x, y, z, roll, pitch, yaw``.
+    Per-axis arrays are ordered ``fx, fy, fz, wx, wy, wz`` (:data:`AXIS_NAMES`; units
+    m/s^2 and rad/s), except ``workspace_use`` which is per DOF
+    ``x, y, z, roll, pitch, yaw``.
 
     Attributes
     ----------
@@ -231,7 +204,17 @@ class CueingEvaluation:
         ``max |pose| / half range`` per DOF (0 for an unused DOF, inf if a DOF with zero
         range moved).
     thresholds : (6,) array
-        The false-cue thresholds used (m/s^2, rad/s).
+        The perception thresholds used (m/s^2, rad/s).
+    missed_cue_count, missed_cue_time_s : (6,) arrays
+        Episodes and total time with ``|vehicle| > threshold`` and ``|sim| <= threshold``.
+    perceived_error : float
+        :func:`perceived_motion_error` of the run (dimensionless, in thresholds).
+    weights : (6,) array
+        The channel weights of ``perceived_error``.
+    model_set : str
+        Name of the vestibular model set.
+    head_offset_m : (3,) array
+        Head position used for the simulator's specific force (m, platform frame).
     """
 
     fs_hz: float
@@ -244,20 +227,51 @@ class CueingEvaluation:
     false_cue_time_s: NDArray[np.float64]
     workspace_use: NDArray[np.float64]
     thresholds: NDArray[np.float64]
+    missed_cue_count: NDArray[np.int64] = field(default_factory=lambda: np.zeros(6, np.int64))
+    missed_cue_time_s: NDArray[np.float64] = field(default_factory=lambda: np.zeros(6))
+    perceived_error: float = math.nan
+    weights: NDArray[np.float64] = field(default_factory=lambda: np.ones(6))
+    model_set: str = DEFAULT_MODEL_SET
+    head_offset_m: NDArray[np.float64] = field(default_factory=lambda: np.zeros(3))
 
-    def summary(self) -> str:
-        """A plain-text table of the metrics."""
-        head = f"{'axis':>5} {'rms err':>9} {'corr':>6} {'delay s':>8} {'false':>6} {'false s':>8}"
+    def table(self) -> str:
+        """The per-axis metrics table with a units row (no notes)."""
+
+        def num(v: float, fmt: str) -> str:
+            return format(v, fmt) if math.isfinite(v) else ""
+
+        head = (
+            f"{'axis':<5} {'unit':<6} {'thr':>6} {'rms err':>8} {'err/thr':>7} {'corr':>6} "
+            f"{'delay s':>7} {'false n':>7} {'false s':>7} {'missed s':>8}"
+        )
         lines = [head]
         for i, name in enumerate(AXIS_NAMES):
+            k = 180.0 / math.pi if i >= 3 else 1.0
+            unit = "deg/s" if i >= 3 else AXIS_UNITS[i]
             lines.append(
-                f"{name:>5} {self.rms_error[i]:9.4f} {self.correlation[i]:6.3f} "
-                f"{self.delay_s[i]:8.3f} {int(self.false_cue_count[i]):6d} "
-                f"{self.false_cue_time_s[i]:8.2f}"
+                f"{name:<5} {unit:<6} {self.thresholds[i] * k:6.2f} "
+                f"{self.rms_error[i] * k:8.3f} {self.rms_error[i] / self.thresholds[i]:7.2f} "
+                f"{num(self.correlation[i], '6.3f'):>6} {num(self.delay_s[i], '7.2f'):>7} "
+                f"{int(self.false_cue_count[i]):7d} {self.false_cue_time_s[i]:7.2f} "
+                f"{self.missed_cue_time_s[i]:8.2f}"
             )
+        return "\n".join(lines)
+
+    def summary(self, *, notes: bool = True) -> str:
+        """A plain-text table of the metrics, the objective, and (default) the notes."""
         dofs = ("x", "y", "z", "roll", "pitch", "yaw")
         use = "  ".join(f"{d} {u:.0%}" for d, u in zip(dofs, self.workspace_use, strict=True))
-        lines.append(f"workspace use: {use}")
+        w = " ".join(f"{v:g}" for v in self.weights)
+        r = ", ".join(f"{v:g}" for v in self.head_offset_m)
+        lines = [
+            f"vestibular models: {self.model_set}; head offset [{r}] m",
+            self.table(),
+            f"perceived-motion error J = {self.perceived_error:.3f} thresholds "
+            f"(weights fx fy fz wx wy wz: {w})",
+            f"workspace use: {use}",
+        ]
+        if notes:
+            lines.append(_NOTES)
         return "\n".join(lines)
 
 
@@ -290,8 +304,10 @@ def evaluate_cueing(
     fs_hz: float,
     *,
     workspace: ArrayLike | None = None,
-    f_threshold_m_s2: float = 0.17,
-    w_threshold_rad_s: float = math.radians(3.0),
+    model: str | VestibularModelSet = DEFAULT_MODEL_SET,
+    thresholds: ArrayLike | None = None,
+    weights: ArrayLike | None = None,
+    head_offset_m: ArrayLike | None = None,
     max_lag_s: float = 1.0,
 ) -> CueingEvaluation:
     """Compare the motion the rider of the platform perceives with the vehicle's.
@@ -306,9 +322,15 @@ def evaluate_cueing(
     fs_hz : float
     workspace : (6,) array_like, optional
         Half range per DOF (m, rad) for ``workspace_use``; NaN use if omitted.
-    f_threshold_m_s2, w_threshold_rad_s : float
-        Perceived magnitude above which a cue of the wrong sign counts as a false cue
-        (defaults: 0.17 m/s^2 and 3 deg/s, customary vestibular thresholds).
+    model : str or VestibularModelSet
+        Vestibular model set (default ``"telban-cardullo-2005"``).
+    thresholds : (6,) array_like, optional
+        Perception thresholds (m/s^2 x3, rad/s x3) for the false- and missed-cue metrics and
+        the objective; default: the model set's (Reid & Nahon 1985).
+    weights : (6,) array_like, optional
+        Channel weights of the perceived-motion error (default all 1).
+    head_offset_m : (3,) array_like, optional
+        Rider's head relative to the platform origin (m, platform frame); default zero.
     max_lag_s : float
         Largest delay searched by the cross-correlation.
 
@@ -316,6 +338,16 @@ def evaluate_cueing(
     -------
     CueingEvaluation
     """
+    ms = get_model_set(model)
+    wts = check_weights(weights)
+    thr = np.asarray(ms.thresholds if thresholds is None else thresholds, dtype=float)
+    if thr.shape != (6,) or not np.all(np.isfinite(thr)) or np.any(thr <= 0.0):
+        raise ConfigError(
+            f"thresholds {np.asarray(thresholds).tolist()!r} are invalid; allowed: 6 finite "
+            "numbers > 0 (m/s^2 x3, rad/s x3)"
+        )
+    if not (math.isfinite(fs_hz) and fs_hz > 0.0):
+        raise ConfigError(f"sample rate {fs_hz!r} Hz is invalid; allowed: a finite number > 0")
     f_v = np.asarray(f_vehicle, dtype=float)
     w_v = np.asarray(w_vehicle, dtype=float)
     p = np.asarray(poses, dtype=float)
@@ -327,21 +359,18 @@ def evaluate_cueing(
     if not (np.isfinite(f_v).all() and np.isfinite(w_v).all() and np.isfinite(p).all()):
         raise ConfigError("evaluate_cueing needs finite inputs (use WashoutResult.f_used/w_used)")
     rest = np.array([0.0, 0.0, GRAVITY_M_S2])
-    f_s, w_s = simulator_motion(p, fs_hz)
-    oto = OTOLITH.sos(fs_hz)
-    scc = SEMICIRCULAR_CANAL.sos(fs_hz)
-    from scipy.signal import sosfilt
-
-    pv = np.concatenate([sosfilt(oto, f_v - rest, axis=0), sosfilt(scc, w_v, axis=0)], axis=1)
-    ps = np.concatenate([sosfilt(oto, f_s - rest, axis=0), sosfilt(scc, w_s, axis=0)], axis=1)
+    f_s, w_s = simulator_motion(p, fs_hz, head_offset_m=head_offset_m)
+    pv = ms.filter(np.concatenate([f_v - rest, w_v], axis=1), fs_hz)
+    ps = ms.filter(np.concatenate([f_s - rest, w_s], axis=1), fs_hz)
     err = ps - pv
     rms = np.sqrt(np.mean(err * err, axis=0)) if n else np.zeros(6)
     corr = np.full(6, math.nan)
     delay = np.full(6, math.nan)
     max_lag = max(0, round(max_lag_s * fs_hz))
-    thr = np.array([f_threshold_m_s2] * 3 + [w_threshold_rad_s] * 3)
     count = np.zeros(6, dtype=np.int64)
     ftime = np.zeros(6)
+    mcount = np.zeros(6, dtype=np.int64)
+    mtime = np.zeros(6)
     for i in range(6):
         a, b = ps[:, i], pv[:, i]
         if n > 1 and a.std() > 0.0 and b.std() > 0.0:
@@ -350,6 +379,9 @@ def evaluate_cueing(
         mask = (np.abs(a) > thr[i]) & (a * b < 0.0)
         count[i] = _episodes(mask)
         ftime[i] = float(np.count_nonzero(mask)) / fs_hz
+        missed = (np.abs(b) > thr[i]) & (np.abs(a) <= thr[i])
+        mcount[i] = _episodes(missed)
+        mtime[i] = float(np.count_nonzero(missed)) / fs_hz
     if workspace is None:
         use = np.full(6, math.nan)
     else:
@@ -358,6 +390,7 @@ def evaluate_cueing(
         with np.errstate(divide="ignore", invalid="ignore"):
             use = np.where(ws > 0.0, peak / np.where(ws > 0.0, ws, 1.0), 0.0)
         use = np.where((ws <= 0.0) & (peak > 0.0), math.inf, use)
+    r_head = np.zeros(3) if head_offset_m is None else np.asarray(head_offset_m, dtype=float)
     return CueingEvaluation(
         fs_hz=float(fs_hz),
         perceived_vehicle=pv,
@@ -369,4 +402,10 @@ def evaluate_cueing(
         false_cue_time_s=ftime,
         workspace_use=use,
         thresholds=thr,
+        missed_cue_count=mcount,
+        missed_cue_time_s=mtime,
+        perceived_error=normalised_error_rms(err, thr, wts),
+        weights=wts,
+        model_set=ms.name,
+        head_offset_m=r_head,
     )
