@@ -1,0 +1,127 @@
+"""``motioncue compare``: several cueing presets side by side, as the rider feels them."""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+from pathlib import Path
+from typing import Any
+
+from .._errors import ConfigError
+
+__all__ = ["register"]
+
+
+def register(sub: Any) -> None:
+    parser = sub.add_parser(
+        "compare",
+        help="compare cueing presets on recordings: overlay plots and a metrics table",
+        description=(
+            "Run each preset on each recording through the chain a rider gets (resample, "
+            "cueing, workspace limiting with the platform's and the controller's limits, "
+            "actuator speed/acceleration limits), evaluate the delivered motion through the "
+            "vestibular models, and write to --report DIR: one overlay plot of perceived "
+            "motion per recording (perceived-NAME.png), metrics.csv, metrics.json and "
+            "summary.txt (the table with its columns explained). Prints the table (or, with "
+            "--json, the JSON)."
+        ),
+    )
+    parser.add_argument(
+        "--input",
+        required=True,
+        nargs="+",
+        metavar="REC",
+        help="recording CSVs (t,fx,fy,fz,wx,wy,wz) or motioncue record files",
+    )
+    parser.add_argument(
+        "--presets",
+        required=True,
+        nargs="+",
+        metavar="PRESET",
+        help="cueing preset names or .toml paths",
+    )
+    parser.add_argument("--platform", required=True, help="bundled platform name or TOML path")
+    parser.add_argument("--controller", required=True, help="bundled controller name or TOML path")
+    parser.add_argument("--report", required=True, metavar="DIR", help="folder for the report")
+    parser.add_argument("--json", action="store_true", help="print the metrics as JSON")
+    parser.add_argument(
+        "--rate",
+        type=float,
+        default=100.0,
+        metavar="HZ",
+        help="frame rate, checked against the controller (default 100)",
+    )
+    parser.add_argument(
+        "--vestibular",
+        default="telban-cardullo-2005",
+        metavar="SET",
+        help="vestibular model set: telban-cardullo-2005 (default) or reid-nahon-zacharias",
+    )
+    parser.set_defaults(run=run)
+
+
+def _labels(names: list[str], short: list[str], what: str) -> list[str]:
+    """``short`` labels, falling back to the argument where two would be the same."""
+    seen: dict[str, int] = {}
+    for s in short:
+        seen[s] = seen.get(s, 0) + 1
+    labels = [s if seen[s] == 1 else n for s, n in zip(short, names, strict=True)]
+    if len(set(labels)) != len(labels):
+        dup = sorted({x for x in labels if labels.count(x) > 1})
+        raise ConfigError(f"{what} {', '.join(dup)} given more than once")
+    return labels
+
+
+def run(args: argparse.Namespace) -> int:
+    from ..kinematics import load_platform
+    from ..output import load_controller
+    from ..pipeline._inputs import check_generate_size, load_generate_input
+    from ..trajectory import ActuatorLimits
+    from ..washout import get_model_set, load_cueing
+    from ..washout._compare import compare_cueing, plot_file_names, write_compare_report
+
+    rate = args.rate
+    if not (math.isfinite(rate) and 0.0 < rate <= 1000.0):
+        raise ConfigError(f"--rate {rate!r} is invalid; allowed: (0, 1000] Hz")
+    model = get_model_set(args.vestibular)
+    platform = load_platform(args.platform)
+    controller = load_controller(args.controller)
+    controller.check_rate(rate)
+    limits = ActuatorLimits.from_platform(platform, controller, rate_hz=rate)
+    presets = [load_cueing(p) for p in args.presets]
+    preset_labels = _labels(list(args.presets), [p.name for p in presets], "preset")
+    recs = []
+    for path in args.input:
+        kind, data, _counters = load_generate_input(path)
+        if kind != "recording":
+            raise ConfigError(
+                f"{path}: pose keyframes, not a recording of vehicle motion; compare needs "
+                "recordings (t,fx,fy,fz,wx,wy,wz CSV or a motioncue record file)"
+            )
+        check_generate_size(kind, data, rate, path)
+        recs.append(data)
+    rec_labels = _labels(list(args.input), [Path(p).name for p in args.input], "recording")
+    result = compare_cueing(
+        list(zip(rec_labels, recs, strict=True)),
+        list(zip(preset_labels, presets, strict=True)),
+        platform,
+        limits,
+        rate_hz=rate,
+        model=model.name,
+        platform_name=args.platform,
+        controller_name=args.controller,
+    )
+    paths = write_compare_report(result, args.report)
+    if args.json:
+        print(json.dumps(result.to_dict(plot_file_names(result.recordings)), allow_nan=False))
+    else:
+        print(
+            f"motioncue compare: {len(presets)} preset(s) x {len(recs)} recording(s) on "
+            f"platform {args.platform}, controller {args.controller}, {rate:g} Hz, "
+            f"vestibular models {model.name}"
+        )
+        print(result.table())
+        print(f"motioncue compare: report in {args.report} ({len(paths)} files; columns "
+              "explained in summary.txt)")
+    return 0

@@ -1,0 +1,583 @@
+"""Several cueing presets side by side on the same recordings and platform, as felt.
+
+For each recording and preset the chain of a real ride is run: resample to the frame rate,
+the preset's cueing algorithm, workspace limiting (:func:`motioncue.trajectory.limit_pose`)
+with the platform's actuator limits tightened by the controller's pulse rounding, then the
+actuator speed/acceleration (and jerk) limits the live bridge applies
+(:class:`~motioncue.trajectory.RealtimeLimiter` or :class:`~motioncue.trajectory.JerkLimiter`),
+mapped back to poses by forward kinematics where they changed a frame. The delivered poses
+are evaluated with :func:`motioncue.washout.evaluate_cueing` against the vehicle's motion
+(through the chosen vestibular model set, at the preset's head offset).
+
+The result is a table with one row per recording and preset (:class:`CompareResult`), written
+as CSV, JSON and text, plus one overlay plot of perceived motion per recording.
+
+Axis names in this module: ``fx, fy, fz`` (specific force, m/s^2) and ``p, q, r`` (roll,
+pitch and yaw rate, the evaluation's ``wx, wy, wz``; shown in deg/s).
+"""
+
+from __future__ import annotations
+
+import csv
+import io
+import json
+import math
+import re
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from .._errors import ConfigError
+from ._evaluate import CueingEvaluation, evaluate_cueing
+
+__all__ = [
+    "COLUMN_NOTES",
+    "COMPARE_AXES",
+    "CompareResult",
+    "CompareRun",
+    "compare_cueing",
+    "compare_figure",
+    "run_chain",
+]
+
+COMPARE_AXES: tuple[str, ...] = ("fx", "fy", "fz", "p", "q", "r")
+"""Channel names in the comparison (``p, q, r`` = the evaluation's ``wx, wy, wz``)."""
+_UNIT = ("m/s^2", "m/s^2", "m/s^2", "deg/s", "deg/s", "deg/s")
+_PLOT_UNIT = ("m/s²", "m/s²", "m/s²", "deg/s", "deg/s", "deg/s")
+_WHAT = (
+    "longitudinal specific force",
+    "lateral specific force",
+    "vertical specific force",
+    "roll rate",
+    "pitch rate",
+    "yaw rate",
+)
+_K = (1.0, 1.0, 1.0, 180.0 / math.pi, 180.0 / math.pi, 180.0 / math.pi)
+
+
+def _unit_tag(i: int) -> str:
+    return "m_s2" if i < 3 else "deg_s"
+
+
+COLUMN_NOTES: dict[str, str] = {
+    "recording": "the input recording (file name)",
+    "preset": "the cueing preset",
+    "duration_s": "length of the resampled recording (s)",
+    "objective_J": "perceived-motion error J (dimensionless, in perception thresholds): "
+    "sqrt(sum_i w_i mean((sim_i - veh_i)/thr_i)^2 / sum_i w_i) over fx fy fz p q r; lower "
+    "is better; the tuning objective",
+    **{
+        f"corr_{a}": f"Pearson correlation of perceived simulator and perceived vehicle "
+        f"{_WHAT[i]} (1 = same shape; empty/null when either is constant)"
+        for i, a in enumerate(COMPARE_AXES)
+    },
+    **{
+        f"rms_{a}_{_unit_tag(i)}": f"RMS over time of perceived simulator minus perceived "
+        f"vehicle {_WHAT[i]} ({_UNIT[i]})"
+        for i, a in enumerate(COMPARE_AXES)
+    },
+    **{
+        f"false_cue_s_{a}": f"time (s) with |perceived simulator {a}| above its threshold and "
+        "of the opposite sign to the vehicle's (a cue in the wrong direction)"
+        for a in COMPARE_AXES
+    },
+    "false_cue_s_any": "time (s) with a false cue on at least one of the six channels",
+    "false_cue_pct_any": "false_cue_s_any as % of duration_s",
+    **{
+        f"missed_cue_s_{a}": f"time (s) with |perceived vehicle {a}| above its threshold and "
+        "|perceived simulator| at or below it (a cue the rider does not get)"
+        for a in COMPARE_AXES
+    },
+    "missed_cue_s_any": "time (s) with a missed cue on at least one of the six channels",
+    "missed_cue_pct_any": "missed_cue_s_any as % of duration_s",
+    "clamped_pct": "% of the cue poses outside the platform's workspace (incl. the "
+    "controller's stroke and pulse rounding), scaled back towards neutral",
+    "actuator_limited_pct": "% of frames changed by the actuator speed/acceleration/jerk "
+    "limits after workspace limiting",
+    "bad_samples": "input samples (NaN, inf, spikes) the cueing algorithm replaced by the "
+    "last good one",
+}
+"""Every column of the metrics table and what it means, with units."""
+
+COLUMNS: tuple[str, ...] = tuple(COLUMN_NOTES)
+
+
+def _any_time(mask: NDArray[np.bool_], fs_hz: float) -> float:
+    return float(np.count_nonzero(mask.any(axis=1))) / fs_hz
+
+
+@dataclass(frozen=True, eq=False)
+class CompareRun:
+    """One preset on one recording.
+
+    Attributes
+    ----------
+    recording, preset : str
+        Labels (unique within the comparison).
+    evaluation : CueingEvaluation
+        :func:`evaluate_cueing` of the delivered poses.
+    poses : (N, 6) array
+        Delivered poses (m, rad).
+    poses_clamped : int
+        Cue poses scaled back by workspace limiting.
+    actuator_limited : int
+        Frames changed by the actuator limiter.
+    bad_samples : int
+        Input samples the cueing algorithm held.
+    """
+
+    recording: str
+    preset: str
+    evaluation: CueingEvaluation
+    poses: NDArray[np.float64]
+    poses_clamped: int
+    actuator_limited: int
+    bad_samples: int
+
+    def row(self) -> dict[str, Any]:
+        """The metrics row: :data:`COLUMNS` to numbers (NaN where undefined)."""
+        ev = self.evaluation
+        n = ev.perceived_sim.shape[0]
+        fs = ev.fs_hz
+        dur = n / fs
+        sim, veh, thr = ev.perceived_sim, ev.perceived_vehicle, ev.thresholds
+        false_mask = (np.abs(sim) > thr) & (sim * veh < 0.0)
+        missed_mask = (np.abs(veh) > thr) & (np.abs(sim) <= thr)
+        row: dict[str, Any] = {
+            "recording": self.recording,
+            "preset": self.preset,
+            "duration_s": dur,
+            "objective_J": float(ev.perceived_error),
+        }
+        for i, a in enumerate(COMPARE_AXES):
+            row[f"corr_{a}"] = float(ev.correlation[i])
+        for i, a in enumerate(COMPARE_AXES):
+            row[f"rms_{a}_{_unit_tag(i)}"] = float(ev.rms_error[i]) * _K[i]
+        for i, a in enumerate(COMPARE_AXES):
+            row[f"false_cue_s_{a}"] = float(ev.false_cue_time_s[i])
+        fa = _any_time(false_mask, fs)
+        row["false_cue_s_any"] = fa
+        row["false_cue_pct_any"] = 100.0 * fa / dur if dur > 0 else 0.0
+        for i, a in enumerate(COMPARE_AXES):
+            row[f"missed_cue_s_{a}"] = float(ev.missed_cue_time_s[i])
+        ma = _any_time(missed_mask, fs)
+        row["missed_cue_s_any"] = ma
+        row["missed_cue_pct_any"] = 100.0 * ma / dur if dur > 0 else 0.0
+        row["clamped_pct"] = 100.0 * self.poses_clamped / n if n else 0.0
+        row["actuator_limited_pct"] = 100.0 * self.actuator_limited / n if n else 0.0
+        row["bad_samples"] = int(self.bad_samples)
+        return row
+
+
+def run_chain(
+    f_vehicle: NDArray[np.float64],
+    w_vehicle: NDArray[np.float64],
+    params: Any,
+    platform: Any,
+    limits: Any,
+    rate_hz: float,
+    *,
+    model: str = "telban-cardullo-2005",
+    recording: str = "",
+    preset: str = "",
+) -> CompareRun:
+    """Cueing, workspace limiting, actuator limits and evaluation of one preset.
+
+    Parameters
+    ----------
+    f_vehicle, w_vehicle : (N, 3) arrays
+        Vehicle specific force (m/s^2) and angular velocity (rad/s), uniform at ``rate_hz``.
+    params : CueingParams
+    platform : motioncue.kinematics.Platform
+    limits : motioncue.trajectory.ActuatorLimits
+        The platform's limits with the controller's (``ActuatorLimits.from_platform``);
+        tightened here by the pulse rounding, as in ``generate`` and the bridge.
+    rate_hz : float
+        Frame rate (Hz).
+    model : str
+        Vestibular model set.
+    recording, preset : str
+        Labels for the result.
+
+    Returns
+    -------
+    CompareRun
+    """
+    from motioncue.trajectory import JerkLimiter, RealtimeLimiter, limit_pose
+    from motioncue.trajectory._derive import pulse_rounding_limits
+
+    from ._algorithm import make_cueing
+
+    dt = 1.0 / rate_hz
+    tight = pulse_rounding_limits(limits, platform, dt)
+    res = make_cueing(params, rate_hz).run(f_vehicle, w_vehicle)
+    f_used = np.asarray(getattr(res, "f_used", f_vehicle), dtype=float)
+    w_used = np.asarray(getattr(res, "w_used", w_vehicle), dtype=float)
+    lim = limit_pose(platform, np.asarray(res.poses, dtype=float), limits=tight)
+    q_target = np.asarray(lim.q, dtype=float)
+    poses = np.array(lim.pose, dtype=float)
+    if len(poses):
+        limiter: Any = (RealtimeLimiter if tight.j_max is None else JerkLimiter)(tight, dt)
+        state = limiter.initial_state(np.asarray(platform.inverse(np.zeros(6)), dtype=float))
+        q_out = np.asarray(limiter.run(state, q_target), dtype=float)
+        changed = np.flatnonzero(np.any(q_out != q_target, axis=1))
+        for k in changed.tolist():
+            poses[k] = np.asarray(platform.forward(q_out[k], guess=poses[k]).pose, dtype=float)
+    else:
+        changed = np.zeros(0, dtype=np.int64)
+    ev = evaluate_cueing(
+        f_used,
+        w_used,
+        poses,
+        rate_hz,
+        workspace=params.workspace,
+        model=model,
+        head_offset_m=getattr(params, "head_offset_m", None),
+    )
+    return CompareRun(
+        recording=recording,
+        preset=preset,
+        evaluation=ev,
+        poses=poses,
+        poses_clamped=int(np.count_nonzero(np.asarray(lim.status) != "ok")),
+        actuator_limited=int(changed.size),
+        bad_samples=int(res.bad_samples),
+    )
+
+
+def _fmt(v: Any, spec: str) -> str:
+    if isinstance(v, float) and not math.isfinite(v):
+        return ""
+    return format(v, spec)
+
+
+@dataclass(frozen=True, eq=False)
+class CompareResult:
+    """Every run of a comparison and how it was made.
+
+    Attributes
+    ----------
+    runs : tuple of CompareRun
+        Recording-major: all presets of the first recording, then the second's, ...
+    recordings, presets : tuple of str
+        Labels, in the order given.
+    platform, controller : str
+    rate_hz : float
+    model_set : str
+    """
+
+    runs: tuple[CompareRun, ...]
+    recordings: tuple[str, ...]
+    presets: tuple[str, ...]
+    platform: str
+    controller: str
+    rate_hz: float
+    model_set: str
+    t_s: dict[str, NDArray[np.float64]] = field(default_factory=dict)
+
+    def rows(self) -> list[dict[str, Any]]:
+        """One metrics row per run (:data:`COLUMNS`)."""
+        return [r.row() for r in self.runs]
+
+    def runs_of(self, recording: str) -> list[CompareRun]:
+        return [r for r in self.runs if r.recording == recording]
+
+    def to_dict(self, plots: Sequence[str] = ()) -> dict[str, Any]:
+        """JSON-ready: the setting, the column notes, the rows (NaN as null), the plots."""
+
+        def clean(v: Any) -> Any:
+            return None if isinstance(v, float) and not math.isfinite(v) else v
+
+        return {
+            "platform": self.platform,
+            "controller": self.controller,
+            "rate_hz": self.rate_hz,
+            "vestibular_models": self.model_set,
+            "recordings": list(self.recordings),
+            "presets": list(self.presets),
+            "columns": dict(COLUMN_NOTES),
+            "rows": [{k: clean(v) for k, v in row.items()} for row in self.rows()],
+            "plots": list(plots),
+        }
+
+    def csv_text(self) -> str:
+        """The metrics as CSV (header :data:`COLUMNS`; empty cells where undefined)."""
+        buf = io.StringIO()
+        writer = csv.writer(buf, lineterminator="\n")
+        writer.writerow(COLUMNS)
+        for row in self.rows():
+            writer.writerow(
+                [
+                    "" if isinstance(v, float) and not math.isfinite(v) else repr(v)
+                    if isinstance(v, float)
+                    else v
+                    for v in (row[c] for c in COLUMNS)
+                ]
+            )
+        return buf.getvalue()
+
+    def table(self) -> str:
+        """The compact text table (one row per recording and preset), with a units row."""
+        rows = self.rows()
+        wr = max([len("recording"), *(len(r["recording"]) for r in rows)])
+        wp = max([len("preset"), *(len(r["preset"]) for r in rows)])
+        corr = " ".join(f"{'c' + a:>6}" for a in COMPARE_AXES)
+        rms = " ".join(f"{'rms ' + a:>7}" for a in COMPARE_AXES)
+        head = (
+            f"{'recording':<{wr}} {'preset':<{wp}} {'J':>6} {corr} {rms} "
+            f"{'false s':>8} {'missed s':>8} {'clamp %':>7}"
+        )
+        units = (
+            f"{'':<{wr}} {'':<{wp}} {'thr':>6} {'':>6} "
+            + " " * (7 * 5)
+            + " ".join(f"{u:>7}" for u in _UNIT)
+            + f" {'any ax':>8} {'any ax':>8} {'poses':>7}"
+        )
+        lines = [head, units]
+        for r in rows:
+            cs = " ".join(f"{_fmt(r[f'corr_{a}'], '6.3f'):>6}" for a in COMPARE_AXES)
+            rs = " ".join(
+                f"{r[f'rms_{a}_{_unit_tag(i)}']:7.3f}" for i, a in enumerate(COMPARE_AXES)
+            )
+            lines.append(
+                f"{r['recording']:<{wr}} {r['preset']:<{wp}} {r['objective_J']:6.3f} {cs} {rs} "
+                f"{r['false_cue_s_any']:8.2f} {r['missed_cue_s_any']:8.2f} "
+                f"{r['clamped_pct']:7.2f}"
+            )
+        return "\n".join(lines)
+
+    def summary(self, plots: Sequence[str] = ()) -> str:
+        """Text report: the setting, the table, per-axis cue times, the column notes."""
+        lines = [
+            f"motioncue compare: platform {self.platform}, controller {self.controller}, "
+            f"{self.rate_hz:g} Hz frames, vestibular models {self.model_set}",
+            "chain: resample -> cueing -> workspace limiting (platform + controller limits, "
+            "pulse rounding) -> actuator speed/acceleration limits -> delivered motion -> "
+            "vestibular models",
+            "",
+            self.table(),
+            "",
+            "False and missed cue time per channel (s):",
+        ]
+        rows = self.rows()
+        wr = max([len("recording"), *(len(r["recording"]) for r in rows)])
+        wp = max([len("preset"), *(len(r["preset"]) for r in rows)])
+        lines.append(
+            f"{'recording':<{wr}} {'preset':<{wp}} "
+            + " ".join(f"{'false ' + a:>8}" for a in COMPARE_AXES)
+            + " "
+            + " ".join(f"{'missed ' + a:>9}" for a in COMPARE_AXES)
+            + f" {'dur s':>8}"
+        )
+        for r in rows:
+            lines.append(
+                f"{r['recording']:<{wr}} {r['preset']:<{wp}} "
+                + " ".join(f"{r[f'false_cue_s_{a}']:8.2f}" for a in COMPARE_AXES)
+                + " "
+                + " ".join(f"{r[f'missed_cue_s_{a}']:9.2f}" for a in COMPARE_AXES)
+                + f" {r['duration_s']:8.2f}"
+            )
+        lines += [
+            "",
+            "Columns (text table: J = objective_J; c<axis> = corr_<axis>; rms <axis> = "
+            "rms_<axis>_<unit>; false s / missed s = false_cue_s_any / missed_cue_s_any; "
+            "clamp % = clamped_pct):",
+        ]
+        lines += [f"  {k:<22} {v}" for k, v in COLUMN_NOTES.items()]
+        lines += [
+            "  Perceived motion: vehicle and delivered simulator motion through the "
+            f"{self.model_set} models (otoliths for fx fy fz, semicircular canals for p q r), "
+            "from rest; thresholds are the model set's.",
+        ]
+        if plots:
+            lines += ["", "Plots (perceived motion per channel, vehicle and each preset):"]
+            lines += [f"  {p}" for p in plots]
+        return "\n".join(lines) + "\n"
+
+
+def compare_cueing(
+    recordings: Sequence[tuple[str, Any]],
+    presets: Sequence[tuple[str, Any]],
+    platform: Any,
+    limits: Any,
+    *,
+    rate_hz: float = 100.0,
+    model: str = "telban-cardullo-2005",
+    platform_name: str | None = None,
+    controller_name: str = "",
+) -> CompareResult:
+    """Run every preset on every recording through the platform's chain.
+
+    Parameters
+    ----------
+    recordings : sequence of (label, Recording)
+        Labels must be unique; recordings at any sample times (resampled to ``rate_hz``).
+    presets : sequence of (label, CueingParams)
+        Labels must be unique.
+    platform : motioncue.kinematics.Platform
+    limits : motioncue.trajectory.ActuatorLimits
+        ``ActuatorLimits.from_platform(platform, controller, rate_hz=rate_hz)``.
+    rate_hz : float
+    model : str
+        Vestibular model set name.
+
+    Returns
+    -------
+    CompareResult
+    """
+    from motioncue.telemetry._recording import resample
+
+    from ._vestibular import get_model_set
+
+    ms = get_model_set(model)
+    if not (math.isfinite(rate_hz) and rate_hz > 0.0):
+        raise ConfigError(f"rate {rate_hz!r} Hz is invalid; allowed: a finite number > 0")
+    for what, items in (("recording", recordings), ("preset", presets)):
+        labels = [k for k, _ in items]
+        if not labels:
+            raise ConfigError(f"no {what}s to compare; give at least one")
+        if len(set(labels)) != len(labels):
+            raise ConfigError(f"{what} labels repeat: {labels!r}; each must be unique")
+    runs: list[CompareRun] = []
+    t_s: dict[str, NDArray[np.float64]] = {}
+    for rec_label, rec in recordings:
+        uniform = resample(rec, rate_hz)
+        t_s[rec_label] = np.asarray(uniform.t_s, dtype=float)
+        for preset_label, params in presets:
+            runs.append(
+                run_chain(
+                    np.asarray(uniform.f, dtype=float),
+                    np.asarray(uniform.w, dtype=float),
+                    params,
+                    platform,
+                    limits,
+                    rate_hz,
+                    model=ms.name,
+                    recording=rec_label,
+                    preset=preset_label,
+                )
+            )
+    return CompareResult(
+        runs=tuple(runs),
+        recordings=tuple(k for k, _ in recordings),
+        presets=tuple(k for k, _ in presets),
+        platform=platform_name or platform.name,
+        controller=controller_name,
+        rate_hz=float(rate_hz),
+        model_set=ms.name,
+        t_s=t_s,
+    )
+
+
+def compare_figure(result: CompareResult, recording: str) -> Any:
+    """The overlay figure of one recording: perceived motion per channel, vehicle and presets.
+
+    Six panels (fx, fy, fz in m/s², p, q, r in deg/s), the vehicle as a thick dark line, each
+    preset in its own colour, the perception threshold as a grey band; one legend naming the
+    vehicle and every preset; the title names the recording, platform, controller, frame
+    rate and vestibular model set. Returns the matplotlib figure (Agg; close it after use).
+    """
+    import matplotlib
+
+    matplotlib.use("Agg")
+    from matplotlib.figure import Figure
+
+    runs = result.runs_of(recording)
+    if not runs:
+        raise ConfigError(f"recording {recording!r} is not in the comparison")
+    t = result.t_s.get(recording)
+    ev0 = runs[0].evaluation
+    if t is None or len(t) != ev0.perceived_vehicle.shape[0]:
+        t = np.arange(ev0.perceived_vehicle.shape[0]) / ev0.fs_hz
+    fig = Figure(figsize=(14, 9.5), layout="constrained")
+    axes = fig.subplots(3, 2, sharex=True)
+    colours = [f"C{k % 10}" for k in range(len(runs))]
+    handles: list[Any] = []
+    labels: list[str] = []
+    for i, name in enumerate(COMPARE_AXES):
+        ax = axes[i % 3, i // 3]
+        k = _K[i]
+        thr = float(ev0.thresholds[i]) * k
+        band = ax.axhspan(-thr, thr, color="0.88", lw=0)
+        (veh,) = ax.plot(t, ev0.perceived_vehicle[:, i] * k, color="0.1", lw=1.8)
+        lines = [
+            ax.plot(t, run.evaluation.perceived_sim[:, i] * k, color=c, lw=0.9)[0]
+            for run, c in zip(runs, colours, strict=True)
+        ]
+        ax.set_ylabel(f"perceived {name} [{_PLOT_UNIT[i]}]")
+        ax.set_title(f"{name}: {_WHAT[i]}", fontsize=9, loc="left")
+        ax.grid(alpha=0.3)
+        if i % 3 == 2:
+            ax.set_xlabel("t [s]")
+        if i == 0:
+            handles = [veh, *lines, band]
+            labels = [
+                "vehicle",
+                *(f"preset {r.preset}" for r in runs),
+                "perception threshold (±)",
+            ]
+    fig.legend(handles, labels, loc="outside lower center", ncol=min(len(labels), 4))
+    fig.suptitle(
+        f"perceived motion, recording {recording}\nplatform {result.platform} | controller "
+        f"{result.controller or 'not given'} | {result.rate_hz:g} Hz | vestibular models "
+        f"{result.model_set}"
+    )
+    return fig
+
+
+def plot_file_names(recordings: Sequence[str]) -> list[str]:
+    """File names of the overlay plots, one per recording (unique, file-system safe)."""
+    names: list[str] = []
+    for label in recordings:
+        stem = re.sub(r"[^A-Za-z0-9._-]+", "_", Path(label).stem) or "recording"
+        name = f"perceived-{stem}.png"
+        k = 2
+        while name in names:
+            name = f"perceived-{stem}-{k}.png"
+            k += 1
+        names.append(name)
+    return names
+
+
+def write_compare_report(result: CompareResult, folder: str | Path) -> dict[str, Path]:
+    """Write ``metrics.csv``, ``metrics.json``, ``summary.txt`` and one PNG per recording.
+
+    Every file is written atomically (temporary name, renamed on success). Returns the paths
+    by role (``"csv"``, ``"json"``, ``"summary"``, and the recording labels for the plots).
+    """
+    from .._atomic import atomic_write_bytes
+
+    out = Path(folder)
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise ConfigError(f"{out}: cannot create the report folder: {exc}") from exc
+    if not out.is_dir():
+        raise ConfigError(f"{out}: not a folder")
+    names = plot_file_names(result.recordings)
+    paths: dict[str, Path] = {}
+    for label, name in zip(result.recordings, names, strict=True):
+        fig = compare_figure(result, label)
+        buf = io.BytesIO()
+        fig.savefig(buf, format="png", dpi=80)
+        paths[label] = out / name
+        _write(paths[label], buf.getvalue(), atomic_write_bytes)
+    paths["csv"] = out / "metrics.csv"
+    _write(paths["csv"], result.csv_text().encode(), atomic_write_bytes)
+    paths["json"] = out / "metrics.json"
+    text = json.dumps(result.to_dict(names), indent=2, allow_nan=False) + "\n"
+    _write(paths["json"], text.encode(), atomic_write_bytes)
+    paths["summary"] = out / "summary.txt"
+    _write(paths["summary"], result.summary(names).encode(), atomic_write_bytes)
+    return paths
+
+
+def _write(path: Path, data: bytes, writer: Any) -> None:
+    try:
+        writer(path, data)
+    except OSError as exc:
+        raise ConfigError(f"{path}: cannot write: {exc}") from exc
