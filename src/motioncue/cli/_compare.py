@@ -122,6 +122,8 @@ def run(args: argparse.Namespace) -> int:
             f"vestibular models {model.name}"
         )
         print(result.table())
-        print(f"motioncue compare: report in {args.report} ({len(paths)} files; columns "
-              "explained in summary.txt)")
+        print(
+            f"motioncue compare: report in {args.report} ({len(paths)} files; columns "
+            "explained in summary.txt)"
+        )
     return 0

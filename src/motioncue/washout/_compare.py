@@ -249,6 +249,13 @@ def run_chain(
     )
 
 
+def _cell(v: Any) -> str:
+    """A CSV cell: floats in full precision, empty where undefined."""
+    if isinstance(v, float):
+        return repr(v) if math.isfinite(v) else ""
+    return str(v)
+
+
 def _fmt(v: Any, spec: str) -> str:
     if isinstance(v, float) and not math.isfinite(v):
         return ""
@@ -310,14 +317,7 @@ class CompareResult:
         writer = csv.writer(buf, lineterminator="\n")
         writer.writerow(COLUMNS)
         for row in self.rows():
-            writer.writerow(
-                [
-                    "" if isinstance(v, float) and not math.isfinite(v) else repr(v)
-                    if isinstance(v, float)
-                    else v
-                    for v in (row[c] for c in COLUMNS)
-                ]
-            )
+            writer.writerow([_cell(row[c]) for c in COLUMNS])
         return buf.getvalue()
 
     def table(self) -> str:
@@ -505,7 +505,7 @@ def compare_figure(result: CompareResult, recording: str) -> Any:
         band = ax.axhspan(-thr, thr, color="0.88", lw=0)
         (veh,) = ax.plot(t, ev0.perceived_vehicle[:, i] * k, color="0.1", lw=1.8)
         lines = [
-            ax.plot(t, run.evaluation.perceived_sim[:, i] * k, color=c, lw=0.9)[0]
+            ax.plot(t, run.evaluation.perceived_sim[:, i] * k, color=c, lw=0.9, alpha=0.85)[0]
             for run, c in zip(runs, colours, strict=True)
         ]
         ax.set_ylabel(f"perceived {name} [{_PLOT_UNIT[i]}]")

@@ -1,0 +1,330 @@
+"""``motioncue compare``: presets side by side through the rider's chain.
+
+The table is checked against an independent run of each preset alone (cueing, workspace
+limiting, actuator limiter, forward kinematics, :func:`evaluate_cueing`), the report files
+are parsed, refusals are one line with exit status 2, and the overlay plot is looked at
+(not blank; its legend names every preset).
+"""
+
+from __future__ import annotations
+
+import csv
+import json
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from motioncue.cli import main
+from motioncue.washout import load_cueing
+
+ROOT = Path(__file__).resolve().parents[1]
+LAP = ROOT / "configs" / "recordings" / "lap.csv"
+PLATFORM = "stewart6-linear"
+CONTROLLER = "mbox6"
+PRESETS = ("racing-hexapod", "racing", "cinema-seat-3dof")
+AXES = ("fx", "fy", "fz", "p", "q", "r")
+
+
+def _short_recording(path: Path, start: int, n: int) -> Path:
+    """``n`` samples of the bundled lap from sample ``start``, times from zero."""
+    with open(LAP, newline="") as fh:
+        rows = list(csv.reader(fh))
+    head, body = rows[0], rows[1 + start : 1 + start + n]
+    t0 = float(body[0][0])
+    with open(path, "w", newline="") as fh:
+        w = csv.writer(fh)
+        w.writerow(head)
+        for r in body:
+            w.writerow([f"{float(r[0]) - t0:.6f}", *r[1:]])
+    return path
+
+
+@pytest.fixture(scope="module")
+def report(tmp_path_factory: pytest.TempPathFactory) -> dict:
+    """One compare run (two recordings, three presets) with --json, kept for the tests."""
+    tmp = tmp_path_factory.mktemp("compare")
+    rec_a = _short_recording(tmp / "lap-a.csv", 0, 2500)
+    rec_b = _short_recording(tmp / "lap-b.csv", 2500, 2000)
+    head = tmp / "hexapod-head.toml"  # the rider's head 0.8 m above the platform origin
+    text = (ROOT / "configs" / "cueing" / "racing-hexapod.toml").read_text()
+    head.write_text(text + "\n[head]\noffset_mm = [100.0, 0.0, 800.0]\n")
+    presets = {p: p for p in PRESETS} | {"hexapod-head": str(head)}
+    out = tmp / "report"
+    import contextlib
+    import io
+
+    buf = io.StringIO()
+    with contextlib.redirect_stdout(buf):
+        status = main(
+            [
+                "compare",
+                "--input",
+                str(rec_a),
+                str(rec_b),
+                "--presets",
+                *presets.values(),
+                "--platform",
+                PLATFORM,
+                "--controller",
+                CONTROLLER,
+                "--report",
+                str(out),
+                "--json",
+            ]
+        )
+    assert status == 0
+    return {
+        "json": json.loads(buf.getvalue()),
+        "dir": out,
+        "recs": (rec_a, rec_b),
+        "presets": presets,
+    }
+
+
+def _alone(rec_path: Path, preset: str) -> dict:
+    """The metrics of one preset on one recording, recomputed without the compare module."""
+    from motioncue.kinematics import load_platform
+    from motioncue.output import load_controller
+    from motioncue.telemetry._recording import read_recording_csv, resample
+    from motioncue.trajectory import ActuatorLimits, JerkLimiter, RealtimeLimiter, limit_pose
+    from motioncue.trajectory._derive import pulse_rounding_limits
+    from motioncue.washout import evaluate_cueing, make_cueing
+
+    fs = 100.0
+    platform = load_platform(PLATFORM)
+    limits = ActuatorLimits.from_platform(platform, load_controller(CONTROLLER), rate_hz=fs)
+    tight = pulse_rounding_limits(limits, platform, 1.0 / fs)
+    params = load_cueing(preset)
+    u = resample(read_recording_csv(rec_path), fs)
+    res = make_cueing(params, fs).run(u.f, u.w)
+    lim = limit_pose(platform, res.poses, limits=tight)
+    cls = RealtimeLimiter if tight.j_max is None else JerkLimiter
+    limiter = cls(tight, 1.0 / fs)
+    state = limiter.initial_state(platform.inverse(np.zeros(6)))
+    q = limiter.run(state, np.asarray(lim.q))
+    poses = np.array(lim.pose, dtype=float)
+    for k in range(len(poses)):
+        if np.any(q[k] != lim.q[k]):
+            poses[k] = platform.forward(q[k], guess=poses[k]).pose
+    ev = evaluate_cueing(
+        res.f_used,
+        res.w_used,
+        poses,
+        fs,
+        workspace=params.workspace,
+        head_offset_m=params.head_offset_m,
+    )
+    n = len(poses)
+    sim, veh, thr = ev.perceived_sim, ev.perceived_vehicle, ev.thresholds
+    any_false = np.any((np.abs(sim) > thr) & (np.sign(sim) == -np.sign(veh)) & (veh != 0), axis=1)
+    any_missed = np.any((np.abs(veh) > thr) & (np.abs(sim) <= thr), axis=1)
+    return {
+        "objective_J": ev.perceived_error,
+        "corr": ev.correlation,
+        "rms": ev.rms_error * np.array([1, 1, 1, 180 / math.pi, 180 / math.pi, 180 / math.pi]),
+        "false": ev.false_cue_time_s,
+        "missed": ev.missed_cue_time_s,
+        "false_any": np.count_nonzero(any_false) / fs,
+        "missed_any": np.count_nonzero(any_missed) / fs,
+        "clamped_pct": 100.0 * np.count_nonzero(np.asarray(lim.status) != "ok") / n,
+        "duration_s": n / fs,
+    }
+
+
+def test_rows_equal_each_preset_evaluated_alone(report: dict) -> None:
+    rows = report["json"]["rows"]
+    presets: dict[str, str] = report["presets"]
+    assert [(r["recording"], r["preset"]) for r in rows] == [
+        (rec.name, p) for rec in report["recs"] for p in presets
+    ]
+    assert load_cueing(presets["hexapod-head"]).head_offset_m == pytest.approx((0.1, 0, 0.8))
+    for row, (rec, preset) in zip(
+        rows, [(rec, presets[p]) for rec in report["recs"] for p in presets], strict=True
+    ):
+        ref = _alone(rec, preset)
+        assert row["objective_J"] == pytest.approx(ref["objective_J"], rel=1e-9)
+        assert row["duration_s"] == pytest.approx(ref["duration_s"])
+        for i, a in enumerate(AXES):
+            unit = "m_s2" if i < 3 else "deg_s"
+            assert row[f"corr_{a}"] == pytest.approx(ref["corr"][i], rel=1e-9, abs=1e-12)
+            assert row[f"rms_{a}_{unit}"] == pytest.approx(ref["rms"][i], rel=1e-9)
+            assert row[f"false_cue_s_{a}"] == pytest.approx(ref["false"][i])
+            assert row[f"missed_cue_s_{a}"] == pytest.approx(ref["missed"][i])
+        assert row["false_cue_s_any"] == pytest.approx(ref["false_any"])
+        assert row["missed_cue_s_any"] == pytest.approx(ref["missed_any"])
+        assert row["clamped_pct"] == pytest.approx(ref["clamped_pct"])
+    # the presets really differ (the comparison is not one run copied)
+    js = {r["preset"]: r["objective_J"] for r in rows if r["recording"] == "lap-a.csv"}
+    assert len({round(v, 9) for v in js.values()}) == len(presets)
+    # the generic preset leaves many poses against this hexapod's stroke ends
+    clamp = {r["preset"]: r["clamped_pct"] for r in rows if r["recording"] == "lap-a.csv"}
+    assert clamp["racing"] > clamp["racing-hexapod"]
+
+
+def test_report_files_exist_and_parse(report: dict) -> None:
+    out: Path = report["dir"]
+    js = json.loads((out / "metrics.json").read_text())
+    assert js["rows"] == report["json"]["rows"]
+    assert js["platform"] == PLATFORM and js["controller"] == CONTROLLER
+    assert js["vestibular_models"] == "telban-cardullo-2005"
+    with open(out / "metrics.csv", newline="") as fh:
+        csv_rows = list(csv.DictReader(fh))
+    assert len(csv_rows) == 2 * len(report["presets"])
+    assert list(csv_rows[0]) == list(js["columns"])
+    for c, j in zip(csv_rows, js["rows"], strict=True):
+        assert c["preset"] == j["preset"] and c["recording"] == j["recording"]
+        for key in ("objective_J", "corr_fy", "rms_r_deg_s", "clamped_pct", "false_cue_s_any"):
+            assert float(c[key]) == j[key]
+    summary = (out / "summary.txt").read_text()
+    for col in js["columns"]:
+        assert col in summary
+    for unit in ("m/s^2", "deg/s"):
+        assert unit in summary
+    assert "controller mbox6" in summary and "stewart6-linear" in summary
+    assert sorted(js["plots"]) == ["perceived-lap-a.png", "perceived-lap-b.png"]
+    for name in js["plots"]:
+        assert (out / name).stat().st_size > 10_000
+
+
+def test_overlay_plot_is_not_blank(report: dict) -> None:
+    import matplotlib.image as mpimg
+
+    img = mpimg.imread(report["dir"] / "perceived-lap-a.png")
+    assert img.ndim == 3 and img.shape[0] > 500 and img.shape[1] > 800
+    grey = img[..., :3].mean(axis=2)
+    assert float(grey.var()) > 0.005  # a white page has 0
+    # coloured preset lines: many pixels far from grey
+    chroma = img[..., :3].max(axis=2) - img[..., :3].min(axis=2)
+    assert np.count_nonzero(chroma > 0.3) > 5_000
+
+
+def test_legend_and_title_name_everything(tmp_path: Path) -> None:
+    from motioncue.kinematics import load_platform
+    from motioncue.output import load_controller
+    from motioncue.telemetry._recording import read_recording_csv
+    from motioncue.trajectory import ActuatorLimits
+    from motioncue.washout._compare import compare_cueing, compare_figure
+
+    rec = read_recording_csv(_short_recording(tmp_path / "r.csv", 100, 600))
+    platform = load_platform(PLATFORM)
+    limits = ActuatorLimits.from_platform(platform, load_controller(CONTROLLER), rate_hz=100.0)
+    res = compare_cueing(
+        [("r.csv", rec)],
+        [(p, load_cueing(p)) for p in PRESETS],
+        platform,
+        limits,
+        platform_name=PLATFORM,
+        controller_name=CONTROLLER,
+        model="reid-nahon-zacharias",
+    )
+    fig = compare_figure(res, "r.csv")
+    texts = [t.get_text() for t in fig.legends[0].get_texts()]
+    for p in PRESETS:
+        assert f"preset {p}" in texts
+    assert "vehicle" in texts
+    title = fig._suptitle.get_text()
+    for word in ("r.csv", PLATFORM, CONTROLLER, "reid-nahon-zacharias"):
+        assert word in title
+    ylabels = [ax.get_ylabel() for ax in fig.axes]
+    assert sum("[m/s²]" in y for y in ylabels) == 3
+    assert sum("[deg/s]" in y for y in ylabels) == 3
+    # every panel carries one line per preset plus the vehicle
+    for ax in fig.axes:
+        assert len(ax.get_lines()) == len(PRESETS) + 1
+
+
+def _run_cli(args: list[str], capsys: pytest.CaptureFixture[str]) -> tuple[int, str, str]:
+    status = main(["compare", *args])
+    cap = capsys.readouterr()
+    return status, cap.out, cap.err
+
+
+@pytest.mark.parametrize(
+    "change",
+    [
+        {"--presets": ["racing", "no-such-preset"]},
+        {"--input": ["does-not-exist.csv"]},
+        {"--vestibular": ["no-such-set"]},
+        {"--platform": ["no-such-platform"]},
+        {"--rate": ["-5"]},
+    ],
+    ids=["preset", "recording", "vestibular", "platform", "rate"],
+)
+def test_bad_arguments_are_one_line_exit_2(
+    change: dict, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    rec = _short_recording(tmp_path / "r.csv", 0, 300)
+    opts: dict[str, list[str]] = {
+        "--input": [str(rec)],
+        "--presets": ["racing"],
+        "--platform": [PLATFORM],
+        "--controller": [CONTROLLER],
+        "--report": [str(tmp_path / "rep")],
+    }
+    opts.update(change)
+    argv = [x for k, v in opts.items() for x in (k, *v)]
+    status, out, err = _run_cli(argv, capsys)
+    assert status == 2 and out == ""
+    lines = err.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith("motioncue compare: error: ")
+    assert "Traceback" not in err
+    assert not (tmp_path / "rep").exists()  # nothing written before the refusal
+
+
+def test_keyframes_are_refused(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    kf = tmp_path / "kf.csv"
+    kf.write_text("t,x,y,z,roll,pitch,yaw\n0,0,0,0,0,0,0\n1,0.01,0,0,0,0,0\n")
+    status, _, err = _run_cli(
+        [
+            "--input",
+            str(kf),
+            "--presets",
+            "racing",
+            "--platform",
+            PLATFORM,
+            "--controller",
+            CONTROLLER,
+            "--report",
+            str(tmp_path / "rep"),
+        ],
+        capsys,
+    )
+    assert status == 2 and "keyframes" in err and len(err.strip().splitlines()) == 1
+
+
+def test_text_table_and_same_named_presets(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """Without --json the table goes to stdout; two presets with the same name are told
+    apart by their arguments."""
+    rec = _short_recording(tmp_path / "r.csv", 0, 400)
+    (tmp_path / "mine").mkdir()
+    copy = tmp_path / "mine" / "racing.toml"  # a preset's name is its file's stem
+    copy.write_text((ROOT / "configs" / "cueing" / "racing.toml").read_text())
+    assert load_cueing(str(copy)).name == "racing"
+    status, out, err = _run_cli(
+        [
+            "--input",
+            str(rec),
+            "--presets",
+            "racing",
+            str(copy),
+            "--platform",
+            PLATFORM,
+            "--controller",
+            CONTROLLER,
+            "--report",
+            str(tmp_path / "rep"),
+        ],
+        capsys,
+    )
+    assert status == 0, err
+    body = [ln for ln in out.splitlines() if ln.startswith("r.csv")]
+    assert len(body) == 2
+    labels = [ln.split()[1] for ln in body]
+    assert len(set(labels)) == 2
+    assert labels == ["racing", str(copy)]
+    assert "J" in out.splitlines()[1] and "m/s^2" in out and "deg/s" in out
+    assert (tmp_path / "rep" / "perceived-r.png").is_file()
