@@ -19,14 +19,14 @@ import tempfile
 import time
 from pathlib import Path
 
-ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT / "src"))
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "src"))
 
 import numpy as np
 
 from motioncue.telemetry import sample_drives
 from motioncue.telemetry._recording import Recording, read_recording_csv, write_recording_csv
 
+ROOT = Path(__file__).resolve().parents[1]
 TARGET_S = 10.0
 SPAN_S = 600.0
 PLATFORM = "stewart6-linear"
