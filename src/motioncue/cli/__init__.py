@@ -21,6 +21,7 @@ _VERB_MODULES: tuple[str, ...] = (
     "_record",
     "_cue",
     "_omct",
+    "_tune",
     "_kinematics",
     "_limits",
     "_pipeline",
