@@ -281,3 +281,68 @@ def test_cli_input_and_output_errors(
     assert err.startswith("motioncue tune: error: ") and "\n" not in err, err
     assert message in err
     assert not list(tmp_path.glob("*.toml")) and not list(tmp_path.glob(".*"))
+
+
+def test_local_process_pool_gives_the_in_process_result(
+    tuned_local: tuple, drives: dict, tmp_path: Path, capsys: pytest.CaptureFixture
+) -> None:
+    out = tmp_path / "tuned.toml"
+    status = main([*_tune_args(drives, out), "--workers", "2"])
+    cap = capsys.readouterr()
+    assert status == 0, cap.err
+    assert "on 2 local processes" in cap.err
+    local_out, local_stdout, _ = tuned_local
+    assert load_cueing(out) == load_cueing(local_out)
+    assert cap.out.replace(str(out), "X") == local_stdout.replace(str(local_out), "X")
+
+
+def test_budget_bounds_the_wall_time(
+    drives: dict, tmp_path: Path, capsys: pytest.CaptureFixture
+) -> None:
+    out = tmp_path / "t.toml"
+    args = _tune_args(drives, out)
+    args[args.index("--generations") + 1] = "1000"
+    args[args.index("--budget-s") + 1] = "0.5"
+    t0 = time.monotonic()
+    status = main([*args, "--workers", "1"])
+    elapsed = time.monotonic() - t0
+    cap = capsys.readouterr()
+    assert status == 0, cap.err
+    assert "wall-time budget 0.5 s" in cap.err
+    gens = [ln for ln in cap.err.splitlines() if "evaluations/s" in ln]
+    assert len(gens) == 1  # the first population is always evaluated, then it stops
+    assert elapsed < 30.0
+    assert load_cueing(out).algorithm == "classical"
+
+
+def test_no_feasible_candidate_writes_nothing(
+    tmp_path: Path, capsys: pytest.CaptureFixture
+) -> None:
+    # a base preset whose yaw (not tuned) is far beyond the workspace on a steady yaw drive:
+    # every candidate clamps most poses
+    base = load_cueing("racing-hexapod")
+    from dataclasses import replace
+
+    from motioncue.washout._tune import preset_toml
+
+    wild = replace(base, w_scale=(0.5, 0.5, 50.0), w_limit_rad_s=(0.5, 0.5, 50.0),
+                   rot_wn_rad_s=(1.5, 1.5, 0.01))  # fmt: skip
+    preset = tmp_path / "wild.toml"
+    preset.write_text(preset_toml(wild))
+    t = np.arange(0, 10.0, 0.01)
+    f = np.tile([0.0, 0.0, 9.80665], (t.size, 1))
+    w = np.zeros((t.size, 3))
+    w[t > 1.0, 2] = 0.5  # a steady 29 deg/s turn
+    rec = tmp_path / "turn.csv"
+    write_recording_csv(rec, Recording(t, f, w))
+    out = tmp_path / "t.toml"
+    status = main([
+        "tune", "--input", str(rec), "--platform", PLATFORM, "--controller", CONTROLLER,
+        "--preset", str(preset), "--out", str(out), "--generations", "1", "--popsize", "2",
+        "--workers", "1",
+    ])  # fmt: skip
+    err = capsys.readouterr().err.strip().splitlines()
+    assert status == 2
+    assert err[-1].startswith("motioncue tune: error: no feasible parameter set"), err[-1]
+    assert "nothing written" in err[-1]
+    assert not out.exists() and not list(tmp_path.glob(".t*"))
