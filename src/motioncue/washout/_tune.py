@@ -368,6 +368,7 @@ class _Evaluator:
         self.objective = objective
         self.evaluations = 0
         self.where = "in-process"
+        self._workers = workers
         self._pool: Any = None
         self._client: Any = None
         self._future: Any = None
@@ -418,7 +419,7 @@ class _Evaluator:
             )
             return [float(v) for v in self._client.gather(futures)]
         if self._pool is not None:
-            chunk = max(1, len(points) // (4 * (self._pool._max_workers or 1)))
+            chunk = max(1, len(points) // (4 * self._workers))
             return [float(v) for v in self._pool.map(_score_installed, points, chunksize=chunk)]
         return [float(self.objective(x)) for x in points]
 
@@ -530,10 +531,14 @@ def tune_cueing(
     if not (isinstance(workers, int) and 1 <= workers <= 1024):
         raise ConfigError(f"workers {workers!r} is invalid; allowed: 1 to 1024")
 
-    before = objective.metrics(objective.base, full=True)
+    t0 = time.monotonic()  # the budget counts everything, connecting included
+    evaluator = _Evaluator(objective, workers, scheduler)  # an unreachable cluster: first
+    try:
+        before = objective.metrics(objective.base, full=True)
+    except BaseException:
+        evaluator.close()
+        raise
     x0 = vector_from_params(objective.base)
-    t0 = time.monotonic()
-    evaluator = _Evaluator(objective, workers, scheduler)
     state = _RunState(last=t0)
 
     def callback(intermediate_result: Any) -> bool:
