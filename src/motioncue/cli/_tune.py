@@ -77,7 +77,8 @@ def register(sub: Any) -> None:
         "--scheduler",
         default=None,
         metavar="tcp://HOST:PORT",
-        help="evaluate on this Dask distributed scheduler instead of local processes",
+        help="evaluate on this Dask distributed scheduler instead of local processes (its "
+        "workers need motioncue installed; pip install 'motioncue[dask]')",
     )
     parser.add_argument(
         "--rate", type=float, default=100.0, metavar="HZ", help="frame rate (default 100)"

@@ -59,7 +59,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from .._errors import ConfigError, LimitError
+from .._errors import ConfigError, LimitError, TransportError
 from ._params import CueingParams
 from ._vestibular import DEFAULT_MODEL_SET, get_model_set
 
@@ -372,6 +372,7 @@ class _Evaluator:
         self._pool: Any = None
         self._client: Any = None
         self._future: Any = None
+        self._address = ""
         if scheduler is not None:
             self._start_dask(scheduler)
         elif workers > 1:
@@ -399,6 +400,7 @@ class _Evaluator:
             msg = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
             raise ConfigError(f"cannot reach the Dask scheduler {scheduler}: {msg}") from exc
         self._client = client
+        self._address = scheduler
         n = len(client.scheduler_info().get("workers", {}))
         if n == 0:
             try:
@@ -414,10 +416,16 @@ class _Evaluator:
         points = [np.asarray(x, dtype=float) for x in xs]
         self.evaluations += len(points)
         if self._client is not None:
+            from distributed import KilledWorker
+
             futures = self._client.map(
                 _score_with, [self._future] * len(points), points, pure=False
             )
-            return [float(v) for v in self._client.gather(futures)]
+            try:
+                return [float(v) for v in self._client.gather(futures)]
+            except (OSError, KilledWorker) as exc:
+                msg = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
+                raise TransportError(f"Dask cluster {self._address}: {msg}") from exc
         if self._pool is not None:
             chunk = max(1, len(points) // (4 * self._workers))
             return [float(v) for v in self._pool.map(_score_installed, points, chunksize=chunk)]
@@ -505,7 +513,8 @@ def tune_cueing(
     workers : int
         Local processes (1: in this process); ignored when ``scheduler`` is given.
     scheduler : str, optional
-        Dask scheduler address (``tcp://host:port``): evaluate there.
+        Dask scheduler address (``tcp://host:port``): evaluate there. Its workers need
+        motioncue (the same version) importable; the recordings travel with the objective.
     name : str
         Name of the tuned preset.
     progress : callable, optional
@@ -514,7 +523,9 @@ def tune_cueing(
     Raises
     ------
     ConfigError
-        A bad argument, or the scheduler cannot be reached.
+        A bad argument, or the scheduler cannot be reached (or has no worker).
+    TransportError
+        The cluster failed during the run (a lost connection, a killed worker).
     LimitError
         No feasible candidate was found (zero violations, at most 1 % clamped).
     """
