@@ -133,6 +133,9 @@ def test_tune_improves_the_held_out_objective(tuned_local: tuple, drives: dict) 
     assert "clamped poses (%)" in stdout
     gens = [ln for ln in stderr.splitlines() if "generation" in ln and "evaluations/s" in ln]
     assert len(gens) == GENERATIONS
+    assert all("best J" in ln for ln in gens)  # the base preset is feasible on these
+    best = [float(ln.split("best J")[1].split()[0]) for ln in gens]
+    assert best == sorted(best, reverse=True)  # the best never gets worse
 
 
 def test_written_preset_loads_and_meets_the_limits(tuned_local: tuple, drives: dict) -> None:

@@ -118,7 +118,7 @@ def run(args: argparse.Namespace) -> int:
     from ..trajectory import ActuatorLimits
     from ..trajectory._derive import pulse_rounding_limits
     from ..washout import get_model_set, load_cueing
-    from ..washout._tune import TuneObjective, preset_toml, tune_cueing, write_preset
+    from ..washout._tune import PENALTY_BASE, TuneObjective, preset_toml, tune_cueing, write_preset
     from ._preset import choose_preset
 
     if not (math.isfinite(args.budget_s) and args.budget_s > 0.0):
@@ -168,8 +168,9 @@ def run(args: argparse.Namespace) -> int:
     objective = TuneObjective(base, drives, platform, tight, args.rate, model=args.vestibular)
 
     def progress(gen: int, best: float, rate: float, n_eval: int) -> None:
+        shown = f"J {best:10.4f}" if best < PENALTY_BASE else "none within the limits yet"
         print(
-            f"motioncue tune: generation {gen:4d}  best {best:12.4f}  "
+            f"motioncue tune: generation {gen:4d}  best {shown}  "
             f"{rate:7.1f} evaluations/s  ({n_eval} evaluations)",
             file=sys.stderr,
             flush=True,
