@@ -22,6 +22,7 @@ _VERB_MODULES: tuple[str, ...] = (
     "_cue",
     "_omct",
     "_compare",
+    "_tune",
     "_kinematics",
     "_limits",
     "_pipeline",

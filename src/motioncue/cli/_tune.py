@@ -1,0 +1,231 @@
+"""``motioncue tune``: tune a cueing preset on recordings, within a platform's limits."""
+
+from __future__ import annotations
+
+import argparse
+import math
+import os
+import sys
+from pathlib import Path
+from typing import Any
+
+from .._errors import ConfigError
+
+__all__ = ["register"]
+
+_AXES = ("fx", "fy", "fz", "wx", "wy", "wz")
+
+
+def register(sub: Any) -> None:
+    parser = sub.add_parser(
+        "tune",
+        help="tune a cueing preset's main parameters on recordings (local or Dask)",
+        description=(
+            "Optimise the base preset's main parameters (translational scales and high-pass, "
+            "tilt scales, filter, rate and acceleration limits, rotational scale and "
+            "high-pass; bounded, log space) to minimise the mean perceived-motion error J "
+            "over the recordings, with the cheap chain of generate (cueing, workspace "
+            "limiting, evaluation of the delivered poses). A candidate that breaks an "
+            "actuator limit on any frame or clamps more than 1 %% of its poses is penalised "
+            "above every one that does not; the result must meet both or nothing is "
+            "written. Optimiser: SciPy differential evolution, seeded. Evaluations run in "
+            "local processes (--workers) or on a Dask cluster (--scheduler)."
+        ),
+    )
+    parser.add_argument(
+        "--input", required=True, nargs="+", metavar="REC", help="recording CSVs to tune on"
+    )
+    parser.add_argument("--platform", required=True, help="bundled platform name or TOML path")
+    parser.add_argument("--controller", required=True, help="bundled controller name or TOML path")
+    parser.add_argument(
+        "--preset",
+        default=None,
+        metavar="BASE",
+        help="base preset (name or .toml; default: the platform's default_preset)",
+    )
+    parser.add_argument("--out", required=True, metavar="TUNED.toml", help="preset to write")
+    parser.add_argument(
+        "--budget-s",
+        type=float,
+        default=300.0,
+        metavar="S",
+        help="wall-time budget in seconds (default 300)",
+    )
+    parser.add_argument("--seed", type=int, default=0, metavar="N", help="optimiser seed (0)")
+    parser.add_argument(
+        "--generations",
+        type=int,
+        default=100,
+        metavar="N",
+        help="most generations (default 100); the same seed and N give the same result",
+    )
+    parser.add_argument(
+        "--popsize",
+        type=int,
+        default=6,
+        metavar="K",
+        help="population per tuned parameter (default 6: 78 candidates per generation)",
+    )
+    parser.add_argument(
+        "--workers",
+        type=int,
+        default=None,
+        metavar="N",
+        help="local processes (default: the number of cores)",
+    )
+    parser.add_argument(
+        "--scheduler",
+        default=None,
+        metavar="tcp://HOST:PORT",
+        help="evaluate on this Dask distributed scheduler instead of local processes (its "
+        "workers need motioncue installed; pip install 'motioncue[dask]')",
+    )
+    parser.add_argument(
+        "--rate", type=float, default=100.0, metavar="HZ", help="frame rate (default 100)"
+    )
+    parser.add_argument(
+        "--vestibular",
+        default="telban-cardullo-2005",
+        metavar="SET",
+        help="vestibular model set: telban-cardullo-2005 (default) or reid-nahon-zacharias",
+    )
+    parser.set_defaults(run=run)
+
+
+def _metrics_table(before: Any, after: Any) -> str:
+    rows = [
+        ("objective J (mean, thresholds)", before.objective, after.objective, ".3f"),
+    ]
+    for i, a in enumerate(_AXES):
+        rows.append((f"correlation {a} (mean)", before.correlation[i], after.correlation[i], ".3f"))
+    for i, a in enumerate(_AXES):
+        rows.append((f"false-cue time {a} (s)", before.false_cue_time_s[i],
+                     after.false_cue_time_s[i], ".2f"))  # fmt: skip
+    rows.append(
+        ("clamped poses (%)", before.clamped_fraction * 100, after.clamped_fraction * 100, ".2f")
+    )
+    rows.append(("frames breaking a limit", before.violating_frames, after.violating_frames, "d"))
+    lines = [f"{'metric':<32} {'before':>10} {'after':>10}"]
+    for name, b, a, fmt in rows:
+        lines.append(f"{name:<32} {format(b, fmt):>10} {format(a, fmt):>10}")
+    return "\n".join(lines)
+
+
+def run(args: argparse.Namespace) -> int:
+    from ..kinematics import load_platform
+    from ..output._controllers import load_controller
+    from ..telemetry._recording import read_recording_csv, resample
+    from ..trajectory import ActuatorLimits
+    from ..trajectory._derive import pulse_rounding_limits
+    from ..washout import get_model_set, load_cueing
+    from ..washout._tune import PENALTY_BASE, TuneObjective, preset_toml, tune_cueing, write_preset
+    from ._preset import choose_preset
+
+    if not (math.isfinite(args.budget_s) and args.budget_s > 0.0):
+        raise ConfigError(f"--budget-s {args.budget_s!r} is invalid; allowed: a number > 0")
+    if not 0 <= args.seed < 2**32:
+        raise ConfigError(f"--seed {args.seed} is invalid; allowed: 0 to 2^32 - 1")
+    if args.workers is not None and args.scheduler is not None:
+        raise ConfigError("--workers and --scheduler exclude each other; give one")
+    workers = args.workers if args.workers is not None else (os.cpu_count() or 1)
+    if not 1 <= workers <= 1024:
+        raise ConfigError(f"--workers {workers} is invalid; allowed: 1 to 1024")
+    if args.scheduler is not None and not args.scheduler.startswith(("tcp://", "tls://")):
+        raise ConfigError(
+            f"--scheduler {args.scheduler!r} is invalid; allowed: tcp://HOST:PORT or tls://..."
+        )
+    if not 0 <= args.generations <= 100_000:
+        raise ConfigError(f"--generations {args.generations} is invalid; allowed: 0 to 100000")
+    if not 2 <= args.popsize <= 100:
+        raise ConfigError(f"--popsize {args.popsize} is invalid; allowed: 2 to 100")
+    if not (math.isfinite(args.rate) and 0.0 < args.rate <= 1000.0):
+        raise ConfigError(f"--rate {args.rate!r} is invalid; allowed: (0, 1000] Hz")
+    get_model_set(args.vestibular)
+    out = Path(args.out)
+    if out.suffix != ".toml":
+        raise ConfigError(f"--out {out} is invalid; allowed: a .toml file name")
+    if not out.parent.is_dir():
+        raise ConfigError(f"--out {out}: folder {out.parent} does not exist")
+
+    platform = load_platform(args.platform)
+    controller = load_controller(args.controller)
+    controller.check_rate(args.rate)
+    base, base_source = choose_preset(args.preset, platform, args.platform)
+    if base.algorithm != "classical":
+        raise ConfigError(
+            f"preset {base.name!r} uses the cueing algorithm {base.algorithm!r}; tune "
+            "optimises classical presets only"
+        )
+    limits = ActuatorLimits.from_platform(platform, controller, rate_hz=args.rate)
+    tight = pulse_rounding_limits(limits, platform, 1.0 / args.rate)
+    drives = []
+    for path in args.input:
+        rec = read_recording_csv(path)
+        if len(rec) < 2:
+            raise ConfigError(f"{path}: too short to tune on ({len(rec)} samples)")
+        uni = resample(rec, args.rate)
+        drives.append((Path(path).name, uni.f, uni.w))
+    objective = TuneObjective(base, drives, platform, tight, args.rate, model=args.vestibular)
+
+    def progress(gen: int, best: float, rate: float, n_eval: int) -> None:
+        shown = f"J {best:10.4f}" if best < PENALTY_BASE else "none within the limits yet"
+        print(
+            f"motioncue tune: generation {gen:4d}  best {shown}  "
+            f"{rate:7.1f} evaluations/s  ({n_eval} evaluations)",
+            file=sys.stderr,
+            flush=True,
+        )
+
+    name = out.stem
+    print(
+        f"motioncue tune: base preset {base_source}; {len(drives)} recording(s); platform "
+        f"{args.platform} with {args.controller} at {args.rate:g} Hz; seed {args.seed}",
+        file=sys.stderr,
+    )
+    result = tune_cueing(
+        objective,
+        seed=args.seed,
+        budget_s=args.budget_s,
+        generations=args.generations,
+        popsize=args.popsize,
+        workers=workers,
+        scheduler=args.scheduler,
+        name=name,
+        progress=progress,
+    )
+    inputs = ", ".join(Path(p).name for p in args.input)
+    comments = [
+        f"Written by motioncue tune from base preset {base.name!r}.",
+        f"Tuned on: {inputs}",
+        f"Platform {args.platform}, controller {args.controller}, {args.rate:g} Hz.",
+        f"Optimiser: scipy differential_evolution, seed {args.seed}, popsize "
+        f"{args.popsize}, {result.generations} generation(s), {result.evaluations} "
+        f"evaluations ({result.stop_reason}).",
+        "Objective: mean perceived-motion error J (thresholds; vestibular models "
+        f"{args.vestibular}) of the poses after workspace limiting; constraints: zero frames "
+        "breaking an actuator limit, at most 1 % of poses clamped.",
+        f"Objective on the tuning recordings: before {result.before.objective:.4f}, "
+        f"after {result.after.objective:.4f}.",
+    ]
+    text = preset_toml(result.params, comments)
+    # check what the file says (its decimal rounding) before it takes the name
+    check = out.with_name(f".{out.stem}.partial-check.toml")
+    try:
+        write_preset(check, text)
+        after = objective.metrics(load_cueing(check), full=True)
+        if not after.feasible:
+            raise ConfigError(f"{out}: the tuned preset breaks the limits after rounding")
+        os.replace(check, out)
+    except OSError as exc:
+        raise ConfigError(f"{out}: cannot write: {exc}") from exc
+    finally:
+        check.unlink(missing_ok=True)
+    print(
+        f"motioncue tune: {result.generations} generation(s), {result.evaluations} "
+        f"evaluations in {result.wall_s:.1f} s on {result.where} ({result.stop_reason})",
+        file=sys.stderr,
+    )
+    print(f"base {base.name} -> tuned {out} on {inputs}")
+    print(_metrics_table(result.before, after))
+    print(f"wrote {out}")
+    return 0

@@ -1,0 +1,694 @@
+"""Automatic tuning of a classical-washout preset: minimise the perceived-motion error.
+
+What is tuned
+-------------
+Thirteen main parameters of a base preset (:data:`TUNED_PARAMETERS`), each within fixed
+bounds, searched in log space (all are positive scales, frequencies or limits spanning a
+decade or more): the translational force scales (x, y, z), the translational high-pass
+natural frequency and third-order break (x and y share them), the tilt-coordination scales
+(x, y), the tilt low-pass frequency, tilt rate and acceleration limits and the tilt limit
+(the largest tilt: with the tilt scales it decides how much sustained force is cued), and the
+rotational scale and high-pass frequency (roll and pitch share them). Everything else
+(limits, dampings, yaw, input rejection, workspace, head offset) is kept from the base
+preset.
+
+The objective and the limits
+----------------------------
+Each candidate runs the cheap chain of ``generate`` on every recording (resampled once, up
+front): the cueing run, workspace limiting (:func:`motioncue.trajectory.limit_pose` with the
+pulse-rounding-tightened limits of the platform and controller) and the evaluation of the
+*delivered* poses: the mean over the recordings of :func:`perceived_motion_error` (``J``,
+in perception thresholds). The full casadi ride optimisation is not run.
+
+The platform's limits are a **penalty** (Deb's feasibility rule folded into one number): a
+candidate is feasible when its actuator positions after workspace limiting break no limit
+(stroke, speed, acceleration, and jerk where the limits have one, with the discrete
+definitions of :mod:`motioncue.trajectory._limits`) on any frame, and at most
+:data:`MAX_CLAMPED_FRACTION` (1 %) of its poses were clamped by workspace limiting.
+A feasible candidate scores ``J``; an infeasible one scores
+``PENALTY_BASE * (1 + excess)``, above every feasible candidate, ranked by how far it is
+from feasible (``excess`` = fraction of frames breaking a limit plus the clamped fraction
+above 1 %). The result must be feasible, or nothing is written.
+
+The optimiser
+-------------
+:func:`scipy.optimize.differential_evolution` (SciPy, maintained, already a dependency),
+chosen over CMA-ES (the ``cma`` package) because it is bounded natively (no repair or
+penalty for the box), is seeded and deterministic, evaluates a whole generation at once
+(``updating="deferred"``) through a map-like ``workers`` callable, so the same code runs
+the evaluations in-process, in a local process pool or on a Dask cluster, and it accepts the
+base preset as a member of the first population (``x0``), so the result is never worse than
+the base when the base is feasible. Polishing (a serial L-BFGS-B on a noisy, clamped
+objective) is off.
+
+Reproducibility: for a seed and a number of generations the candidates and their scores are
+the same wherever they are evaluated (the map returns the results in order); a run stopped
+by the wall-time budget depends on the machine's speed, so give ``generations`` for a
+bit-identical reproduction.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from collections.abc import Callable, Iterable, Sequence
+from dataclasses import dataclass, field, replace
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from .._errors import ConfigError, LimitError, TransportError
+from ._params import CueingParams
+from ._vestibular import DEFAULT_MODEL_SET, get_model_set
+
+__all__ = [
+    "MAX_CLAMPED_FRACTION",
+    "PENALTY_BASE",
+    "TUNED_PARAMETERS",
+    "ChainMetrics",
+    "TuneObjective",
+    "TuneResult",
+    "chain_metrics",
+    "params_from_vector",
+    "preset_toml",
+    "tune_cueing",
+    "vector_from_params",
+]
+
+MAX_CLAMPED_FRACTION = 0.01
+"""Largest fraction of the poses workspace limiting may clamp in a feasible candidate."""
+
+PENALTY_BASE = 1.0e6
+"""Score of an infeasible candidate at zero excess (above any feasible ``J``)."""
+
+_D2R = math.pi / 180.0
+
+
+@dataclass(frozen=True)
+class _Parameter:
+    name: str
+    lo: float
+    hi: float
+    unit: str
+
+
+TUNED_PARAMETERS: tuple[_Parameter, ...] = (
+    _Parameter("f_scale_x", 0.02, 1.0, "-"),
+    _Parameter("f_scale_y", 0.02, 1.0, "-"),
+    _Parameter("f_scale_z", 0.02, 1.0, "-"),
+    _Parameter("trans_wn_xy_rad_s", 1.0, 20.0, "rad/s"),
+    _Parameter("trans_wb_xy_rad_s", 0.05, 5.0, "rad/s"),
+    _Parameter("tilt_scale_x", 0.01, 1.0, "-"),
+    _Parameter("tilt_scale_y", 0.01, 1.0, "-"),
+    _Parameter("tilt_wn_rad_s", 1.0, 20.0, "rad/s"),
+    _Parameter("tilt_rate_limit_deg_s", 2.0, 40.0, "deg/s"),
+    _Parameter("tilt_accel_limit_deg_s2", 5.0, 500.0, "deg/s^2"),
+    _Parameter("tilt_limit_deg", 2.0, 25.0, "deg"),
+    _Parameter("w_scale_rp", 0.05, 1.0, "-"),
+    _Parameter("rot_wn_rp_rad_s", 0.2, 5.0, "rad/s"),
+)
+"""The tuned parameters, their bounds (searched in log space) and units."""
+
+
+def _log_bounds() -> list[tuple[float, float]]:
+    return [(math.log(p.lo), math.log(p.hi)) for p in TUNED_PARAMETERS]
+
+
+def vector_from_params(params: CueingParams) -> NDArray[np.float64]:
+    """The base preset as a point of the search space (log values, clipped to the bounds).
+
+    A preset without ``tilt_scale`` starts with its translational ``f_scale`` (x, y) as tilt
+    scales; one without ``tilt_accel_limit_rad_s2`` at the upper acceleration bound.
+    """
+    tilt = params.tilt_scale if params.tilt_scale is not None else params.f_scale[:2]
+    accel = params.tilt_accel_limit_rad_s2
+    values = (
+        params.f_scale[0],
+        params.f_scale[1],
+        params.f_scale[2],
+        math.sqrt(params.trans_wn_rad_s[0] * params.trans_wn_rad_s[1]),
+        math.sqrt(max(params.trans_wb_rad_s[0], 1e-9) * max(params.trans_wb_rad_s[1], 1e-9)),
+        tilt[0],
+        tilt[1],
+        params.tilt_wn_rad_s,
+        params.tilt_rate_limit_rad_s / _D2R,
+        TUNED_PARAMETERS[9].hi if accel is None else accel / _D2R,
+        params.tilt_limit_rad / _D2R,
+        math.sqrt(params.w_scale[0] * params.w_scale[1]),
+        math.sqrt(params.rot_wn_rad_s[0] * params.rot_wn_rad_s[1]),
+    )
+    out = np.empty(len(TUNED_PARAMETERS))
+    for i, (p, v) in enumerate(zip(TUNED_PARAMETERS, values, strict=True)):
+        out[i] = math.log(min(max(float(v), p.lo), p.hi))
+    return out
+
+
+def params_from_vector(base: CueingParams, x: Sequence[float], name: str = "") -> CueingParams:
+    """The base preset with the tuned parameters set from a point ``x`` (log values)."""
+    if len(x) != len(TUNED_PARAMETERS):
+        raise ConfigError(f"tuning vector has {len(x)} values; expected {len(TUNED_PARAMETERS)}")
+    v = [
+        min(max(math.exp(float(xi)), p.lo), p.hi) for xi, p in zip(x, TUNED_PARAMETERS, strict=True)
+    ]
+    return replace(
+        base,
+        name=name or base.name,
+        algorithm="classical",
+        f_scale=(v[0], v[1], v[2]),
+        trans_wn_rad_s=(v[3], v[3], base.trans_wn_rad_s[2]),
+        trans_wb_rad_s=(v[4], v[4], base.trans_wb_rad_s[2]),
+        tilt_scale=(v[5], v[6]),
+        tilt_wn_rad_s=v[7],
+        tilt_rate_limit_rad_s=v[8] * _D2R,
+        tilt_accel_limit_rad_s2=v[9] * _D2R,
+        tilt_limit_rad=v[10] * _D2R,
+        w_scale=(v[11], v[11], base.w_scale[2]),
+        rot_wn_rad_s=(v[12], v[12], base.rot_wn_rad_s[2]),
+    )
+
+
+@dataclass(frozen=True)
+class _Drive:
+    """One recording, resampled: vehicle specific force and angular velocity (N, 3)."""
+
+    label: str
+    f: NDArray[np.float64]
+    w: NDArray[np.float64]
+
+
+@dataclass(frozen=True, eq=False)
+class ChainMetrics:
+    """What the cheap chain delivers on the recordings for one parameter set.
+
+    Attributes
+    ----------
+    objective : float
+        Mean perceived-motion error ``J`` over the recordings (thresholds).
+    per_drive_objective : tuple of float
+    correlation : (6,) array
+        Mean over the recordings of the per-axis correlation (fx fy fz wx wy wz).
+    false_cue_time_s : (6,) array
+        Total false-cue time per axis over the recordings (s).
+    duration_s : float
+        Total duration of the recordings (s).
+    clamped_fraction : float
+        Fraction of all poses clamped by workspace limiting.
+    violating_frames : int
+        Frames whose actuator positions break a limit (stroke, speed, acceleration, jerk).
+    """
+
+    objective: float
+    per_drive_objective: tuple[float, ...]
+    correlation: NDArray[np.float64] = field(default_factory=lambda: np.full(6, math.nan))
+    false_cue_time_s: NDArray[np.float64] = field(default_factory=lambda: np.zeros(6))
+    duration_s: float = 0.0
+    clamped_fraction: float = 0.0
+    violating_frames: int = 0
+
+    @property
+    def feasible(self) -> bool:
+        """Zero violating frames and at most 1 % of the poses clamped."""
+        return self.violating_frames == 0 and self.clamped_fraction <= MAX_CLAMPED_FRACTION
+
+
+def _violating_frames(q: NDArray[np.float64], dt_s: float, limits: Any) -> int:
+    """Frames (of the cue, starting at rest at its first pose) breaking a limit."""
+    tol = 1e-9
+    bad = np.any((q < limits.q_min - tol) | (q > limits.q_max + tol), axis=1)
+    hist = np.concatenate([q[:1], q[:1], q[:1], q], axis=0)  # at rest before the first frame
+    v = np.diff(hist, axis=0)[2:] / dt_s
+    a = (hist[3:] - 2.0 * hist[2:-1] + hist[1:-2]) / dt_s**2
+    bad |= np.any(np.abs(v) > limits.v_max * (1.0 + tol), axis=1)
+    bad |= np.any(np.abs(a) > limits.a_max * (1.0 + tol), axis=1)
+    if limits.j_max is not None:
+        j = (hist[3:] - 3.0 * hist[2:-1] + 3.0 * hist[1:-2] - hist[:-3]) / dt_s**3
+        bad |= np.any(np.abs(j) > limits.j_max * (1.0 + tol), axis=1)
+    return int(np.count_nonzero(bad))
+
+
+class TuneObjective:
+    """The tuning objective: picklable (sent once to each process or Dask worker).
+
+    Parameters
+    ----------
+    base : CueingParams
+        Preset whose other parameters are kept.
+    drives : sequence of (label, f, w)
+        Recordings resampled to ``rate_hz``: specific force (N, 3) m/s^2, angular velocity
+        (N, 3) rad/s.
+    platform
+        A :class:`motioncue.kinematics.Platform`.
+    limits : motioncue.trajectory.ActuatorLimits
+        The limits of the chain (pulse-rounding tightened, as ``generate`` uses them).
+    rate_hz : float
+    model : str
+        Vestibular model set.
+    """
+
+    def __init__(
+        self,
+        base: CueingParams,
+        drives: Sequence[tuple[str, Any, Any]],
+        platform: Any,
+        limits: Any,
+        rate_hz: float,
+        model: str = DEFAULT_MODEL_SET,
+    ) -> None:
+        get_model_set(model)
+        if not drives:
+            raise ConfigError("tuning needs at least one recording")
+        self.base = base
+        self.drives = tuple(
+            _Drive(lbl, np.ascontiguousarray(f, float), np.ascontiguousarray(w, float))
+            for lbl, f, w in drives
+        )
+        self.platform = platform
+        self.limits = limits
+        self.rate_hz = float(rate_hz)
+        self.model = model
+
+    def metrics(self, params: CueingParams, *, full: bool = False) -> ChainMetrics:
+        """Run the cheap chain with ``params`` on every recording.
+
+        ``full``: also the per-axis correlation and false-cue time (the whole evaluation).
+        """
+        from ..trajectory import limit_pose
+        from ._algorithm import make_cueing
+        from ._evaluate import evaluate_cueing, simulator_motion
+        from ._vestibular import perceived_motion_error
+
+        design = make_cueing(params, self.rate_hz)
+        dt = 1.0 / self.rate_hz
+        js: list[float] = []
+        corr = np.zeros(6)
+        false_s = np.zeros(6)
+        n_all = clamped = violating = 0
+        for d in self.drives:
+            res = design.run(d.f, d.w)
+            f_used = getattr(res, "f_used", d.f)
+            w_used = getattr(res, "w_used", d.w)
+            lim = limit_pose(self.platform, res.poses, limits=self.limits)
+            poses = np.asarray(lim.pose, dtype=float)
+            clamped += int(np.count_nonzero(np.asarray(lim.status) != "ok"))
+            n_all += poses.shape[0]
+            violating += _violating_frames(np.asarray(lim.q, dtype=float), dt, self.limits)
+            if full:
+                ev = evaluate_cueing(
+                    f_used,
+                    w_used,
+                    poses,
+                    self.rate_hz,
+                    model=self.model,
+                    head_offset_m=params.head_offset_m,
+                )
+                js.append(float(ev.perceived_error))
+                corr += np.nan_to_num(ev.correlation, nan=0.0)
+                false_s += ev.false_cue_time_s
+            else:
+                f_s, w_s = simulator_motion(poses, self.rate_hz, head_offset_m=params.head_offset_m)
+                js.append(
+                    perceived_motion_error(f_used, w_used, f_s, w_s, self.rate_hz, model=self.model)
+                )
+        return ChainMetrics(
+            objective=float(np.mean(js)),
+            per_drive_objective=tuple(js),
+            correlation=corr / len(self.drives) if full else np.full(6, math.nan),
+            false_cue_time_s=false_s,
+            duration_s=n_all / self.rate_hz,
+            clamped_fraction=clamped / max(n_all, 1),
+            violating_frames=violating,
+        )
+
+    def score(self, m: ChainMetrics) -> float:
+        """The penalised objective of a run (see the module docstring)."""
+        if not math.isfinite(m.objective):
+            return PENALTY_BASE * 1e6
+        if m.feasible:
+            return m.objective
+        n = max(m.duration_s * self.rate_hz, 1.0)
+        excess = m.violating_frames / n + max(0.0, m.clamped_fraction - MAX_CLAMPED_FRACTION)
+        return PENALTY_BASE * (1.0 + excess)
+
+    def __call__(self, x: NDArray[np.float64]) -> float:
+        """Penalised objective of a point ``x`` of the search space (log values)."""
+        try:
+            params = params_from_vector(self.base, np.asarray(x, dtype=float).tolist())
+            return self.score(self.metrics(params))
+        except ConfigError:
+            return PENALTY_BASE * 1e6
+
+
+# --------------------------------------------------------------------- evaluation back ends
+_INSTALLED: list[TuneObjective] = []
+
+
+def _install(objective: TuneObjective) -> None:
+    _INSTALLED[:] = [objective]
+
+
+def _score_installed(x: NDArray[np.float64]) -> float:
+    return _INSTALLED[0](x)
+
+
+def _score_with(objective: TuneObjective, x: NDArray[np.float64]) -> float:
+    return objective(x)
+
+
+class _Evaluator:
+    """Map-like ``(func, xs) -> list`` for differential_evolution, counting evaluations.
+
+    ``func`` (SciPy's wrapper around the objective) is not shipped: each back end already
+    holds the objective (in-process, installed in each pool process, or scattered to the
+    Dask workers) and calls it on each ``x``; the results come back in order.
+    """
+
+    def __init__(self, objective: TuneObjective, workers: int, scheduler: str | None) -> None:
+        self.objective = objective
+        self.evaluations = 0
+        self.where = "in-process"
+        self._workers = workers
+        self._pool: Any = None
+        self._client: Any = None
+        self._future: Any = None
+        self._address = ""
+        if scheduler is not None:
+            self._start_dask(scheduler)
+        elif workers > 1:
+            import multiprocessing
+            from concurrent.futures import ProcessPoolExecutor
+
+            self._pool = ProcessPoolExecutor(
+                max_workers=workers,
+                mp_context=multiprocessing.get_context("spawn"),
+                initializer=_install,
+                initargs=(objective,),
+            )
+            self.where = f"{workers} local processes"
+
+    def _start_dask(self, scheduler: str) -> None:
+        try:
+            from distributed import Client
+        except ImportError as exc:
+            raise ConfigError(
+                "--scheduler needs the Dask distributed package: pip install 'motioncue[dask]'"
+            ) from exc
+        try:
+            client = Client(scheduler, timeout=20, set_as_default=False)
+        except (OSError, TimeoutError, ValueError) as exc:
+            msg = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
+            raise ConfigError(f"cannot reach the Dask scheduler {scheduler}: {msg}") from exc
+        self._client = client
+        self._address = scheduler
+        n = len(client.scheduler_info().get("workers", {}))
+        if n == 0:
+            try:
+                client.wait_for_workers(1, timeout=20)
+            except (OSError, TimeoutError) as exc:
+                client.close()
+                raise ConfigError(f"the Dask scheduler {scheduler} has no workers") from exc
+            n = len(client.scheduler_info().get("workers", {}))
+        self._future = client.scatter(self.objective, broadcast=True, hash=False)
+        self.where = f"Dask scheduler {scheduler} ({n} workers)"
+
+    def __call__(self, func: Callable[[Any], float], xs: Iterable[Any]) -> list[float]:
+        points = [np.asarray(x, dtype=float) for x in xs]
+        self.evaluations += len(points)
+        if self._client is not None:
+            from distributed import KilledWorker
+
+            futures = self._client.map(
+                _score_with, [self._future] * len(points), points, pure=False
+            )
+            try:
+                return [float(v) for v in self._client.gather(futures)]
+            except (OSError, KilledWorker) as exc:
+                msg = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
+                raise TransportError(f"Dask cluster {self._address}: {msg}") from exc
+        if self._pool is not None:
+            chunk = max(1, len(points) // (4 * self._workers))
+            return [float(v) for v in self._pool.map(_score_installed, points, chunksize=chunk)]
+        return [float(self.objective(x)) for x in points]
+
+    def close(self) -> None:
+        if self._pool is not None:
+            self._pool.shutdown(wait=True, cancel_futures=True)
+            self._pool = None
+        if self._client is not None:
+            self._client.close()
+            self._client = None
+
+
+# --------------------------------------------------------------------- the tuner
+@dataclass(frozen=True, eq=False)
+class TuneResult:
+    """The outcome of :func:`tune_cueing`.
+
+    Attributes
+    ----------
+    params : CueingParams
+        The tuned preset (feasible).
+    before, after : ChainMetrics
+        The base preset's and the tuned preset's full metrics on the recordings.
+    x : (13,) array
+        The best point (log values of :data:`TUNED_PARAMETERS`).
+    generations : int
+    evaluations : int
+    wall_s : float
+    stop_reason : str
+    where : str
+        Where the evaluations ran.
+    """
+
+    params: CueingParams
+    before: ChainMetrics
+    after: ChainMetrics
+    x: NDArray[np.float64]
+    generations: int
+    evaluations: int
+    wall_s: float
+    stop_reason: str
+    where: str
+
+
+@dataclass
+class _RunState:
+    last: float
+    gen: int = 0
+    gen_s: float = 0.0
+    stop: str = "converged"
+
+
+Progress = Callable[[int, float, float, int], None]
+"""``progress(generation, best_score, evaluations_per_s, evaluations)``."""
+
+
+def tune_cueing(
+    objective: TuneObjective,
+    *,
+    seed: int = 0,
+    budget_s: float = 300.0,
+    generations: int = 100,
+    popsize: int = 6,
+    workers: int = 1,
+    scheduler: str | None = None,
+    name: str = "tuned",
+    progress: Progress | None = None,
+) -> TuneResult:
+    """Minimise the penalised perceived-motion error with differential evolution.
+
+    Parameters
+    ----------
+    objective : TuneObjective
+    seed : int
+        Seed of the optimiser (same seed and generations: same result, wherever evaluated).
+    budget_s : float
+        Wall-time budget (s): no generation is started that would end past it (predicted from
+        the last one); the first population is always evaluated.
+    generations : int
+        Most generations after the first population.
+    popsize : int
+        Population size per tuned parameter (population ``popsize * 13``).
+    workers : int
+        Local processes (1: in this process); ignored when ``scheduler`` is given.
+    scheduler : str, optional
+        Dask scheduler address (``tcp://host:port``): evaluate there. Its workers need
+        motioncue (the same version) importable; the recordings travel with the objective.
+    name : str
+        Name of the tuned preset.
+    progress : callable, optional
+        Called after each generation.
+
+    Raises
+    ------
+    ConfigError
+        A bad argument, or the scheduler cannot be reached (or has no worker).
+    TransportError
+        The cluster failed during the run (a lost connection, a killed worker).
+    LimitError
+        No feasible candidate was found (zero violations, at most 1 % clamped).
+    """
+    from scipy.optimize import differential_evolution
+
+    if not (isinstance(seed, int) and 0 <= seed < 2**32):
+        raise ConfigError(f"seed {seed!r} is invalid; allowed: an integer in [0, 2^32)")
+    if not (math.isfinite(budget_s) and budget_s > 0.0):
+        raise ConfigError(f"budget {budget_s!r} s is invalid; allowed: a finite number > 0")
+    if not (isinstance(generations, int) and 0 <= generations <= 100_000):
+        raise ConfigError(f"generations {generations!r} is invalid; allowed: 0 to 100000")
+    if not (isinstance(popsize, int) and 2 <= popsize <= 100):
+        raise ConfigError(f"popsize {popsize!r} is invalid; allowed: 2 to 100")
+    if not (isinstance(workers, int) and 1 <= workers <= 1024):
+        raise ConfigError(f"workers {workers!r} is invalid; allowed: 1 to 1024")
+
+    t0 = time.monotonic()  # the budget counts everything, connecting included
+    evaluator = _Evaluator(objective, workers, scheduler)  # an unreachable cluster: first
+    try:
+        before = objective.metrics(objective.base, full=True)
+    except BaseException:
+        evaluator.close()
+        raise
+    x0 = vector_from_params(objective.base)
+    state = _RunState(last=t0)
+
+    def callback(intermediate_result: Any) -> bool:
+        now = time.monotonic()
+        state.gen += 1
+        state.gen_s = now - state.last
+        state.last = now
+        elapsed = now - t0
+        if progress is not None:
+            rate = evaluator.evaluations / elapsed if elapsed > 0 else 0.0
+            progress(state.gen, float(intermediate_result.fun), rate, evaluator.evaluations)
+        if elapsed + state.gen_s > budget_s:
+            state.stop = f"wall-time budget {budget_s:g} s"
+            return True
+        return False
+
+    try:
+        res = differential_evolution(
+            objective,
+            _log_bounds(),
+            maxiter=generations,
+            popsize=popsize,
+            rng=np.random.default_rng(seed),
+            callback=callback,
+            polish=False,
+            updating="deferred",
+            workers=evaluator,
+            x0=x0,
+            init="latinhypercube",
+            tol=1e-3,
+        )
+    finally:
+        evaluator.close()
+    wall = time.monotonic() - t0
+    if state.stop == "converged" and state.gen >= generations:
+        state.stop = f"{generations} generations"
+    best = np.asarray(res.x, dtype=float)
+    params = params_from_vector(objective.base, best.tolist(), name=name)
+    after = objective.metrics(params, full=True)
+    if not after.feasible:
+        raise LimitError(
+            f"no feasible parameter set found in {state.gen} generations "
+            f"({evaluator.evaluations} evaluations): the best breaks a limit on "
+            f"{after.violating_frames} frames and clamps {after.clamped_fraction:.2%} of "
+            f"the poses (allowed: 0 and {MAX_CLAMPED_FRACTION:.0%}); nothing written"
+        )
+    return TuneResult(
+        params=params,
+        before=before,
+        after=after,
+        x=best,
+        generations=state.gen,
+        evaluations=evaluator.evaluations,
+        wall_s=wall,
+        stop_reason=state.stop,
+        where=evaluator.where,
+    )
+
+
+# --------------------------------------------------------------------- writing the preset
+def _fmt(v: float) -> str:
+    return repr(float(v))
+
+
+def _vec(values: Iterable[float], k: float = 1.0) -> str:
+    return "[" + ", ".join(_fmt(v * k) for v in values) + "]"
+
+
+def preset_toml(params: CueingParams, comments: Sequence[str] = ()) -> str:
+    """The TOML text of a classical preset (the layout :func:`load_cueing` reads).
+
+    Angles are written in degrees, lengths in millimetres (the file's units); ``comments``
+    become ``#`` lines at the top.
+    """
+    from ._params import DOF_NAMES
+
+    r2d = 1.0 / _D2R
+    lines = [f"# {c}".rstrip() for c in comments]
+    lines += [
+        f"description = {_quote(f'{params.name}: tuned by motioncue tune')}",
+        'algorithm = "classical"',
+        "dofs = ["
+        + ", ".join(f'"{n}"' for n, on in zip(DOF_NAMES, params.dofs, strict=True) if on)
+        + "]",
+        "",
+        "[scaling]",
+        f"f_scale = {_vec(params.f_scale)}",
+        f"f_limit_m_s2 = {_vec(params.f_limit_m_s2)}",
+        f"w_scale = {_vec(params.w_scale)}",
+        f"w_limit_deg_s = {_vec(params.w_limit_rad_s, r2d)}",
+        f"soft_knee = {_fmt(params.soft_knee)}",
+        "",
+        "[translational]",
+        f"wn_rad_s = {_vec(params.trans_wn_rad_s)}",
+        f"zeta = {_vec(params.trans_zeta)}",
+        f"wb_rad_s = {_vec(params.trans_wb_rad_s)}",
+        "",
+        "[tilt]",
+        f"wn_rad_s = {_fmt(params.tilt_wn_rad_s)}",
+        f"zeta = {_fmt(params.tilt_zeta)}",
+        f"rate_limit_deg_s = {_fmt(params.tilt_rate_limit_rad_s * r2d)}",
+        f"limit_deg = {_fmt(params.tilt_limit_rad * r2d)}",
+    ]
+    if params.tilt_scale is not None:
+        lines.append(f"scale = {_vec(params.tilt_scale)}")
+    if params.tilt_accel_limit_rad_s2 is not None:
+        lines.append(f"accel_limit_deg_s2 = {_fmt(params.tilt_accel_limit_rad_s2 * r2d)}")
+    lines += [
+        "",
+        "[rotational]",
+        f"wn_rad_s = {_vec(params.rot_wn_rad_s)}",
+        f"zeta = {_vec(params.rot_zeta)}",
+        "",
+        "[input]",
+        f"reject_f_m_s2 = {_fmt(params.reject_f_m_s2)}",
+        f"reject_w_deg_s = {_fmt(params.reject_w_rad_s * r2d)}",
+        "",
+        "[workspace]",
+        f"half_range_mm = {_vec(params.workspace[:3], 1e3)}",
+        f"half_range_deg = {_vec(params.workspace[3:], r2d)}",
+        "",
+        "[head]",
+        f"offset_mm = {_vec(params.head_offset_m, 1e3)}",
+        "",
+    ]
+    return "\n".join(lines)
+
+
+def _quote(s: str) -> str:
+    return '"' + s.replace("\\", "\\\\").replace('"', '\\"') + '"'
+
+
+def write_preset(path: str | Path, text: str) -> Path:
+    """Write the preset text atomically (no half-written file on a failure)."""
+    from .._atomic import atomic_write_bytes
+
+    return atomic_write_bytes(path, text.encode("utf-8"), what="preset")
+
+
+def chain_metrics(objective: TuneObjective, params: CueingParams) -> ChainMetrics:
+    """Full metrics of ``params`` on the objective's recordings (correlation, false cues)."""
+    return objective.metrics(params, full=True)
