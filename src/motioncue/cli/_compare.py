@@ -9,6 +9,7 @@ from pathlib import Path
 from typing import Any
 
 from .._errors import ConfigError
+from ._preset import add_vestibular_option
 
 __all__ = ["register"]
 
@@ -52,12 +53,7 @@ def register(sub: Any) -> None:
         metavar="HZ",
         help="frame rate, checked against the controller (default 100)",
     )
-    parser.add_argument(
-        "--vestibular",
-        default="telban-cardullo-2005",
-        metavar="SET",
-        help="vestibular model set: telban-cardullo-2005 (default) or reid-nahon-zacharias",
-    )
+    add_vestibular_option(parser)
     parser.set_defaults(run=run)
 
 

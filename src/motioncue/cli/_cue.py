@@ -8,6 +8,7 @@ import sys
 from pathlib import Path
 
 from .._errors import ConfigError
+from ._preset import add_vestibular_option
 
 __all__ = ["register"]
 
@@ -39,13 +40,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     parser.add_argument("--fs", required=True, type=float, metavar="HZ", help="sample rate")
     parser.add_argument("--out", required=True, metavar="POSES.csv", help="poses CSV to write")
     parser.add_argument("--plot", metavar="FILE.png", help="also write a cue-quality plot")
-    parser.add_argument(
-        "--vestibular",
-        default="telban-cardullo-2005",
-        metavar="SET",
-        help="vestibular model set for the evaluation: telban-cardullo-2005 (default) or "
-        "reid-nahon-zacharias",
-    )
+    add_vestibular_option(parser)
     parser.set_defaults(run=run)
 
 

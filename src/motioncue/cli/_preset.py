@@ -6,7 +6,7 @@ from typing import Any
 
 from .._errors import ConfigError
 
-__all__ = ["FALLBACK_PRESET", "choose_preset"]
+__all__ = ["FALLBACK_PRESET", "add_vestibular_option", "choose_preset"]
 
 FALLBACK_PRESET = "racing"
 """Used when neither ``--preset`` nor the platform file names a preset."""
@@ -52,3 +52,16 @@ def choose_preset(preset: str | None, platform: Any, platform_label: str | None)
         return params, f"{params.name} (default of platform {label})"
     params = load_cueing(FALLBACK_PRESET)
     return params, f"{params.name} (fallback: platform {label} names no default_preset)"
+
+
+def add_vestibular_option(parser: Any) -> None:
+    """``--vestibular SET``: the vestibular model set of the evaluation (one definition for
+    every verb that evaluates cues; the names are those of ``washout._vestibular``'s
+    ``MODEL_SETS``, written here so that building the parser imports nothing heavy)."""
+    parser.add_argument(
+        "--vestibular",
+        default="telban-cardullo-2005",
+        metavar="SET",
+        help="vestibular model set for the evaluation: telban-cardullo-2005 (default) or "
+        "reid-nahon-zacharias",
+    )

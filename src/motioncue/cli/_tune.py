@@ -10,6 +10,7 @@ from pathlib import Path
 from typing import Any
 
 from .._errors import ConfigError
+from ._preset import add_vestibular_option
 
 __all__ = ["register"]
 
@@ -83,12 +84,7 @@ def register(sub: Any) -> None:
     parser.add_argument(
         "--rate", type=float, default=100.0, metavar="HZ", help="frame rate (default 100)"
     )
-    parser.add_argument(
-        "--vestibular",
-        default="telban-cardullo-2005",
-        metavar="SET",
-        help="vestibular model set: telban-cardullo-2005 (default) or reid-nahon-zacharias",
-    )
+    add_vestibular_option(parser)
     parser.set_defaults(run=run)
 
 
