@@ -338,8 +338,14 @@ def test_limits_are_checked_on_the_controllers_millisecond_clock() -> None:
     ride = _ride(rate_hz=rate, t_s=np.arange(n) / rate, pulses=pulses,
                  dout=np.zeros(n, int), dacs=np.zeros((n, 2), int))  # fmt: skip
     assert check_frames(ride.t_s, ride.pulses, table, start_at_rest=True).ok  # on its own grid
-    with pytest.raises(LimitError, match=r"front_left' (speed|acceleration) [\d.]+ x") as err:
+    # the controller's rate rule refuses the ride first (3.333 ms is no whole number of ms) ...
+    with pytest.raises(ConfigError, match=r"300 Hz .* whole milliseconds"):
         check_ride_for(ride, p, c, lim, platform_name="seat3", controller_name="mbox3")
+    # ... and the frame check on the controller's clock, on its own, refuses it as well
+    from motioncue.pipeline._ridecheck import _check_limits
+
+    with pytest.raises(LimitError, match=r"front_left' (speed|acceleration) [\d.]+ x") as err:
+        _check_limits(ride, c, "mbox3", table)
     # the 3/4 ms stamps make both the speed and (worse) the acceleration exceed the limits
     use = float(re.search(r"(speed|acceleration) ([\d.]+) x", str(err.value)).group(2))
     assert use > 1.0

@@ -21,13 +21,14 @@ from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from typing import Any
 
-from .._errors import MotioncueError
+from .._errors import MotioncueError, ProtocolError
 
 __all__ = [
     "FrameReplies",
     "PositionQuery",
     "ReportedPosition",
     "read_position",
+    "register_position_query",
     "words_to_positions",
 ]
 
@@ -70,6 +71,35 @@ def words_to_positions(values: Sequence[int], addresses: Sequence[int]) -> tuple
 
 PositionQuery = tuple[bytes, Callable[[bytes], "ReportedPosition | None"]]
 """A request datagram and the parser of its reply (``None`` for a datagram that is not it)."""
+
+
+def register_position_query(
+    request: bytes,
+    decode: Callable[[bytes], Any],
+    registers: Callable[[Any], Sequence[int] | None],
+    positions: Sequence[int],
+    status: Callable[[Sequence[int], tuple[int, ...]], tuple[bool, int]],
+) -> PositionQuery:
+    """A :data:`PositionQuery` for a register read (MBOX Dn, IMAX DP).
+
+    ``decode`` turns a datagram into a message (raising :class:`ProtocolError`),
+    ``registers`` gives the values of the expected reply (None for anything else),
+    ``positions`` the register of each axis' 32-bit position, and ``status(values,
+    pulses)`` returns ``(moving, buffer depth)``.
+    """
+
+    def parse(data: bytes) -> ReportedPosition | None:
+        try:
+            values = registers(decode(data))
+        except ProtocolError:
+            return None
+        if values is None:
+            return None
+        pulses = words_to_positions(values, positions)
+        moving, depth = status(values, pulses)
+        return ReportedPosition(pulses, moving, depth)
+
+    return request, parse
 
 
 def read_position(

@@ -132,8 +132,10 @@ def park(
 ) -> int:
     """Bring every axis from ``current`` to 0 (the homed origin) on a raised-cosine ramp
     whose peak speed is ``speed_fraction`` of the axis limit; frames every ``period_s``.
-    Returns the number of frames sent."""
-    vmax = controller.max_speed_pulses_s
+    Returns the number of frames sent. The axis limit is the controller's own
+    (``pulse_limits``), divided by its catch-up factor: the box may play the frames that much
+    faster than stamped."""
+    vmax = controller.pulse_limits().max_speed_pulses_s / controller.catch_up_factor
     duration = 1.0
     for p, v in zip(current, vmax, strict=True):
         if math.isfinite(v) and v > 0:

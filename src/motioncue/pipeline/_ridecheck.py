@@ -12,7 +12,8 @@ the limits derived from them now), in this order, and refuses with the first pro
    the limits table stored in the ride is exactly the table the rig allows now (the same
    configs under another name or path). Rule of thumb for users: play a ride with the
    platform and controller it was generated for; regenerate it for another rig.
-3. **Timing.** ``rate_hz`` is at most the controller's frame-rate cap, and every step of
+3. **Timing.** ``rate_hz`` passes the controller's own ``check_rate`` (its frame-rate cap;
+   whole-ms periods for MBOX and IMAX; the EasySmc link budget), and every step of
    ``t_s`` is ``1 / rate_hz`` (relative tolerance 1e-9, plus the float rounding of long
    rides).
 4. **Outputs.** ``dout`` and the DACs are within what the controller's frames carry
@@ -30,7 +31,7 @@ the limits derived from them now), in this order, and refuses with the first pro
    actuator, the quantity, its value against the limit, and the frame.
 
 Refusals are :class:`~motioncue.ConfigError` (1-4, the ride does not belong to this rig) or
-:class:`~motioncue.LimitError` (3's rate cap and 5, the rig cannot do it).
+:class:`~motioncue.LimitError` (5, the rig cannot do it).
 """
 
 from __future__ import annotations
@@ -44,6 +45,7 @@ from ._ridefile import Ride
 from ._verify import check_frames, limits_arrays
 
 __all__ = ["check_ride_for", "wire_times_s"]
+
 
 def wire_times_s(t_s: np.ndarray, controller: Any) -> np.ndarray:
     """Frame times as the controller reads them: rounded to its time resolution from the
@@ -82,11 +84,11 @@ def check_ride_for(
     Raises
     ------
     ConfigError
-        Another rig's ride (actuators, names), ``rate_hz`` not matching ``t_s``, outputs the
-        controller cannot carry. Both values are named.
+        Another rig's ride (actuators, names), a rate the controller cannot carry,
+        ``rate_hz`` not matching ``t_s``, outputs out of range. Both values are named.
     LimitError
-        A frame rate above the controller's cap, or frames outside the current limits on the
-        controller's clock (worst actuator, quantity and frame named).
+        Frames outside the current limits on the controller's clock (worst actuator,
+        quantity and frame named).
     """
     names = tuple(platform.actuator_names)
     if tuple(ride.actuator_names) != names:
@@ -124,12 +126,9 @@ def _check_identity(
 
 
 def _check_timing(ride: Ride, controller: Any, controller_name: str) -> None:
-    cap = getattr(controller, "max_frame_rate_hz", None)
-    if cap is not None and ride.rate_hz > float(cap) * (1.0 + 1e-9):
-        raise LimitError(
-            f"the ride's rate {ride.rate_hz:g} Hz is above the {float(cap):g} Hz controller "
-            f"{controller_name!r} carries"
-        )
+    # the controller's own rule: its frame-rate cap and, for whole-ms time stamps, a period
+    # of whole milliseconds (ConfigError naming the rates it can carry)
+    controller.check_rate(ride.rate_hz)
     if ride.n_frames < 2:
         return
     period = 1.0 / ride.rate_hz

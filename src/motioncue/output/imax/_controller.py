@@ -13,7 +13,7 @@ from typing import Any, ClassVar
 from ..._config import ConfigReader
 from ..._errors import ConfigError, LimitError, ProtocolError
 from .._controller_api import DriveExpectations, PulseLimits
-from .._feedback import PositionQuery, ReportedPosition, words_to_positions
+from .._feedback import PositionQuery, register_position_query
 from .._transport import parse_target
 from .._udp_common import FrameClock, check_int32
 from .._udp_controller import (
@@ -222,26 +222,24 @@ class ImaxController(UdpController["ImaxFrameEncoder"]):
         pointers of the frame buffer; moving while frames wait in it."""
         from ._messages import CHANNEL_DP, RegisterRead, RegisterReply, ReplyStatus, decode
 
-        n = self.n_axes
         count = DP_USE + 1
 
-        def parse(data: bytes) -> ReportedPosition | None:
-            try:
-                msg = decode(data)
-            except ProtocolError:
-                return None
-            if not (
+        def registers(msg: Any) -> Any:
+            ok = (
                 isinstance(msg, RegisterReply)
                 and msg.function == 0x1102
                 and msg.status == ReplyStatus.OK
                 and msg.start == 0
                 and len(msg.values) == count
-            ):
-                return None
-            depth = (msg.values[DP_RECEIVE] - msg.values[DP_USE]) & 0xFFFF
-            return ReportedPosition(words_to_positions(msg.values, DP_POS[:n]), depth > 0, depth)
+            )
+            return msg.values if ok else None
 
-        return RegisterRead(CHANNEL_DP, 0, count).encode(), parse
+        def status(values: Any, pulses: tuple[int, ...]) -> tuple[bool, int]:
+            depth = (values[DP_RECEIVE] - values[DP_USE]) & 0xFFFF
+            return depth > 0, depth
+
+        request = RegisterRead(CHANNEL_DP, 0, count).encode()
+        return register_position_query(request, decode, registers, DP_POS[: self.n_axes], status)
 
     def drive_expectations(self) -> DriveExpectations:
         """Counts per motor turn (see ``counts_per_rev``); PA41 the screw lead."""

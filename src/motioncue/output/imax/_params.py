@@ -124,6 +124,7 @@ def pa_name(text: str) -> str:
 def pa_address(name: str) -> int:
     return int(pa_name(name)[2:], 16)
 
+
 DP_POS = (0x06, 0x08, 0x0A, 0x21, 0x23, 0x25)
 """DP registers of the axis positions, low word first, high word after it (2.3.3)."""
 DP_RECEIVE, DP_USE = 0x48, 0x49

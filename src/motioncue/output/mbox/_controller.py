@@ -12,7 +12,7 @@ from typing import Any, ClassVar
 from ..._config import ConfigReader
 from ..._errors import ConfigError, LimitError, ProtocolError
 from .._controller_api import DriveExpectations, PulseLimits
-from .._feedback import PositionQuery, ReportedPosition, words_to_positions
+from .._feedback import PositionQuery, register_position_query, words_to_positions
 from .._transport import parse_target
 from .._udp_common import FrameClock, check_int32
 from .._udp_controller import (
@@ -186,27 +186,23 @@ class MboxController(UdpController["MboxFrameEncoder"]):
         frames waiting in the buffer (Dn4B); moving while any wait or the two differ."""
         from ._messages import CHANNEL_DX, RegisterRead, RegisterReadReply, decode
 
-        n = self.n_axes
-        count = DX_DEPTH + 1
+        n, count = self.n_axes, DX_DEPTH + 1
 
-        def parse(data: bytes) -> ReportedPosition | None:
-            try:
-                msg = decode(data)
-            except ProtocolError:
-                return None
-            if not (
+        def registers(msg: Any) -> Any:
+            ok = (
                 isinstance(msg, RegisterReadReply)
                 and msg.channel == CHANNEL_DX
                 and msg.start == 0
                 and len(msg.values) == count
-            ):
-                return None
-            actual = words_to_positions(msg.values, DX_ACTUAL[:n])
-            command = words_to_positions(msg.values, DX_COMMAND[:n])
-            depth = msg.values[DX_DEPTH]
-            return ReportedPosition(actual, depth > 0 or actual != command, depth)
+            )
+            return msg.values if ok else None
 
-        return RegisterRead(CHANNEL_DX, 0, count).encode(), parse
+        def status(values: Any, actual: tuple[int, ...]) -> tuple[bool, int]:
+            depth = values[DX_DEPTH]
+            return depth > 0 or actual != words_to_positions(values, DX_COMMAND[:n]), depth
+
+        request = RegisterRead(CHANNEL_DX, 0, count).encode()
+        return register_position_query(request, decode, registers, DX_ACTUAL[:n], status)
 
     def drive_expectations(self) -> DriveExpectations:
         """Fn0C1 x Fn0C2 pulses per motor turn; Fn0C2 the screw lead."""

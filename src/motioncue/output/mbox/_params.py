@@ -96,6 +96,7 @@ def fn_address(name: str) -> int:
     """Register address of an Fn parameter."""
     return int(fn_name(name)[2:], 16)
 
+
 # Dn status registers (6.1.1, 6.1.11): 32-bit positions, low word first, per axis
 DX_ACTUAL = (0x06, 0x08, 0x0A, 0x21, 0x24, 0x26)
 """Actual motor positions."""
