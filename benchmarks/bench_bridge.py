@@ -84,12 +84,12 @@ def _sender(port: int, stop: Any) -> None:
 
 
 def run_once(rate_hz: float, seconds: float, rt_priority: int | None) -> dict[str, Any]:
+    from motioncue.cueing import load_cueing
     from motioncue.kinematics import load_platform
     from motioncue.output import load_controller, open_transport
     from motioncue.pipeline._bridge import Bridge, BridgeConfig
     from motioncue.telemetry import TelemetrySource
     from motioncue.trajectory import ActuatorLimits
-    from motioncue.washout import load_cueing
 
     ctx = mp.get_context("spawn")
     stop = ctx.Event()

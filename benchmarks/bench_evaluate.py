@@ -15,7 +15,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 
 from _timing import median_time_s, report
 from bench_washout import drive
-from motioncue.washout import (
+from motioncue.cueing import (
     MODEL_SETS,
     ClassicalWashout,
     evaluate_cueing,

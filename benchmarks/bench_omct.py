@@ -16,11 +16,11 @@ from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "src"))
 
+from motioncue.cueing import ClassicalWashout, load_cueing
+from motioncue.cueing._omct import run_omct
 from motioncue.kinematics import load_platform
 from motioncue.output._controllers import load_controller
 from motioncue.trajectory import ActuatorLimits
-from motioncue.washout import ClassicalWashout, load_cueing
-from motioncue.washout._omct import run_omct
 
 TARGET_S = 30.0
 

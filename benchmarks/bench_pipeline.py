@@ -20,12 +20,12 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 
 from _timing import report
 from motioncue._config import config_dir
+from motioncue.cueing import load_cueing
 from motioncue.kinematics import load_platform
 from motioncue.output import load_controller
 from motioncue.pipeline import generate_ride
 from motioncue.telemetry._recording import Recording, read_recording_csv
 from motioncue.trajectory import ActuatorLimits
-from motioncue.washout import load_cueing
 
 
 def ten_minutes() -> Recording:

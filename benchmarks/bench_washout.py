@@ -15,7 +15,7 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "src"))
 
-from motioncue.washout import ClassicalWashout, load_cueing
+from motioncue.cueing import ClassicalWashout, load_cueing
 
 G = 9.80665
 

@@ -23,6 +23,7 @@ import numpy as np
 import pytest
 
 from motioncue import ConfigError, MotioncueError, TransportError
+from motioncue.cueing import load_cueing
 from motioncue.kinematics import load_platform
 from motioncue.output import imax, load_controller, mbox, open_transport
 from motioncue.output.mbox._messages import MotionFrame, decode
@@ -32,7 +33,6 @@ from motioncue.pipeline._verify import check_frames
 from motioncue.telemetry import TelemetrySample, TelemetrySource, open_source
 from motioncue.telemetry._f1 import CAR_MOTION, HEADER, SESSION_HEAD
 from motioncue.trajectory import ActuatorLimits
-from motioncue.washout import load_cueing
 
 DATA = Path("/work/shared/data/f1")
 GATE = GateConfig(timeout_s=0.25, fade_out_s=0.3, fade_in_s=0.3)
@@ -471,9 +471,9 @@ def test_stepping_equals_washout_blend_ik_and_limiter_composed_offline() -> None
     blend with the park pose -> ``platform.inverse`` in batch -> ``RealtimeLimiter.run``
     with the pulse-rounding limits -> pulses. Mild motion, so no pose needs limiting.
     """
+    from motioncue.cueing import ClassicalWashout
     from motioncue.pipeline._generate import pulse_rounding_limits
     from motioncue.trajectory import RealtimeLimiter
-    from motioncue.washout import ClassicalWashout
 
     platform, ctrl, lim = _mbox_setup()
     rate, fs_in = 100.0, 60.0

@@ -15,6 +15,7 @@ import numpy as np
 import pytest
 
 from motioncue.cli import main
+from motioncue.cueing import load_cueing
 from motioncue.kinematics import load_platform
 from motioncue.output import imax, load_controller, mbox, open_transport
 from motioncue.pipeline._bridge import Bridge, BridgeConfig
@@ -22,7 +23,6 @@ from motioncue.pipeline._verify import check_frames
 from motioncue.telemetry import ReplaySource, TelemetrySource, open_source
 from motioncue.telemetry._container import RecordingWriter
 from motioncue.trajectory import ActuatorLimits
-from motioncue.washout import load_cueing
 from test_bridge import DATA, GATE, F1Stream, _all_received, _check_trace, _wait_for, lap_motion
 
 pytestmark = pytest.mark.skipif(not DATA.is_dir(), reason="real F1 captures not on this machine")

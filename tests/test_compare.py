@@ -17,7 +17,7 @@ import numpy as np
 import pytest
 
 from motioncue.cli import main
-from motioncue.washout import load_cueing
+from motioncue.cueing import load_cueing
 
 ROOT = Path(__file__).resolve().parents[1]
 LAP = ROOT / "configs" / "recordings" / "lap.csv"
@@ -85,12 +85,12 @@ def report(tmp_path_factory: pytest.TempPathFactory) -> dict:
 
 def _alone(rec_path: Path, preset: str) -> dict:
     """The metrics of one preset on one recording, recomputed without the compare module."""
+    from motioncue.cueing import evaluate_cueing, make_cueing
     from motioncue.kinematics import load_platform
     from motioncue.output import load_controller
     from motioncue.telemetry._recording import read_recording_csv, resample
     from motioncue.trajectory import ActuatorLimits, JerkLimiter, RealtimeLimiter, limit_pose
     from motioncue.trajectory._derive import pulse_rounding_limits
-    from motioncue.washout import evaluate_cueing, make_cueing
 
     fs = 100.0
     platform = load_platform(PLATFORM)
@@ -201,11 +201,11 @@ def test_overlay_plot_is_not_blank(report: dict) -> None:
 
 
 def test_legend_and_title_name_everything(tmp_path: Path) -> None:
+    from motioncue.cueing._compare import compare_cueing, compare_figure
     from motioncue.kinematics import load_platform
     from motioncue.output import load_controller
     from motioncue.telemetry._recording import read_recording_csv
     from motioncue.trajectory import ActuatorLimits
-    from motioncue.washout._compare import compare_cueing, compare_figure
 
     rec = read_recording_csv(_short_recording(tmp_path / "r.csv", 100, 600))
     platform = load_platform(PLATFORM)

@@ -20,14 +20,7 @@ import pytest
 from motioncue import ConfigError
 from motioncue._config import bundled_names, config_dir, find_config
 from motioncue.cli import main
-from motioncue.kinematics import load_platform
-from motioncue.output import load_controller
-from motioncue.pipeline._bridge import Bridge, BridgeConfig
-from motioncue.pipeline._realtime import GateConfig
-from motioncue.telemetry import TelemetrySample
-from motioncue.telemetry._recording import read_recording_csv, resample
-from motioncue.trajectory import ActuatorLimits
-from motioncue.washout import (
+from motioncue.cueing import (
     ClassicalWashout,
     CueingAlgorithm,
     CueingParams,
@@ -38,6 +31,13 @@ from motioncue.washout import (
     register_cueing,
     unregister_cueing,
 )
+from motioncue.kinematics import load_platform
+from motioncue.output import load_controller
+from motioncue.pipeline._bridge import Bridge, BridgeConfig
+from motioncue.pipeline._realtime import GateConfig
+from motioncue.telemetry import TelemetrySample
+from motioncue.telemetry._recording import read_recording_csv, resample
+from motioncue.trajectory import ActuatorLimits
 
 G = 9.80665
 HEAVE_GAIN_S2 = 0.002  # toy: heave (m) per m/s^2 of vertical specific-force deviation
@@ -289,3 +289,16 @@ def test_bridge_verb_names_the_platform_default_preset(
     err = capsys.readouterr().err
     assert rc == 0, err
     assert "preset cinema-seat-3dof (default of platform seat3)" in err
+
+
+def test_old_washout_name_still_imports_with_a_deprecation_warning() -> None:
+    import importlib
+    import sys
+
+    sys.modules.pop("motioncue.washout", None)
+    with pytest.warns(DeprecationWarning, match="renamed motioncue.cueing"):
+        old = importlib.import_module("motioncue.washout")
+    import motioncue.cueing as new
+
+    assert old.ClassicalWashout is new.ClassicalWashout
+    assert set(old.__all__) == set(new.__all__)

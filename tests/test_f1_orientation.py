@@ -26,6 +26,7 @@ import pytest
 
 from motioncue import ConfigError
 from motioncue.cli import main
+from motioncue.cueing import load_cueing
 from motioncue.kinematics import load_platform
 from motioncue.output import load_controller, mbox, open_transport
 from motioncue.pipeline._bridge import Bridge, BridgeConfig
@@ -33,7 +34,6 @@ from motioncue.telemetry import TelemetrySource, open_source
 from motioncue.telemetry._f1 import CAR_MOTION, HEADER, NOTE_W_FROM_ORIENTATION, F1Decoder
 from motioncue.telemetry._sample import up_in_body_from_angles
 from motioncue.trajectory import ActuatorLimits
-from motioncue.washout import load_cueing
 from test_bridge import (
     DATA,
     GATE,

@@ -41,6 +41,7 @@ import pytest
 from motioncue import LimitError
 from motioncue._config import config_dir
 from motioncue.cli import main
+from motioncue.cueing import load_cueing
 from motioncue.kinematics import load_platform
 from motioncue.output import load_controller, open_transport
 from motioncue.output._transports_udp import UdpTransport
@@ -52,7 +53,6 @@ from motioncue.pipeline._stream import OutputStage, ParkFailed, PlayAborted
 from motioncue.telemetry import TelemetrySample, open_source
 from motioncue.telemetry._recording import Recording, read_recording_csv
 from motioncue.trajectory import ActuatorLimits
-from motioncue.washout import load_cueing
 from test_bridge import Sender
 
 SRC = Path(__file__).resolve().parents[1] / "src"

@@ -11,11 +11,8 @@ import numpy as np
 import pytest
 
 from motioncue.cli import main
-from motioncue.kinematics import load_platform
-from motioncue.output._controllers import load_controller
-from motioncue.trajectory import ActuatorLimits
-from motioncue.washout import GRAVITY_M_S2, ClassicalWashout, load_cueing
-from motioncue.washout._omct import (
+from motioncue.cueing import GRAVITY_M_S2, ClassicalWashout, load_cueing
+from motioncue.cueing._omct import (
     OMCT_FREQUENCIES_RAD_S,
     OMCT_PATHS,
     _first_harmonic,
@@ -24,6 +21,9 @@ from motioncue.washout._omct import (
     platform_motion,
     run_omct,
 )
+from motioncue.kinematics import load_platform
+from motioncue.output._controllers import load_controller
+from motioncue.trajectory import ActuatorLimits
 
 RATE_HZ = 100.0
 

@@ -16,6 +16,7 @@ import pytest
 
 from motioncue import ConfigError, LimitError
 from motioncue._config import config_dir
+from motioncue.cueing import load_cueing
 from motioncue.kinematics import load_platform
 from motioncue.output import load_controller, open_transport
 from motioncue.pipeline import (
@@ -31,7 +32,6 @@ from motioncue.pipeline import (
 )
 from motioncue.telemetry._recording import Recording, read_recording_csv
 from motioncue.trajectory import ActuatorLimits
-from motioncue.washout import load_cueing
 
 G = 9.80665
 

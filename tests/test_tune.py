@@ -20,6 +20,7 @@ import numpy as np
 import pytest
 
 from motioncue.cli import main
+from motioncue.cueing import load_cueing, make_cueing, perceived_motion_error, simulator_motion
 from motioncue.kinematics import load_platform
 from motioncue.output._controllers import load_controller
 from motioncue.telemetry import sample_drives
@@ -30,7 +31,6 @@ from motioncue.telemetry._recording import (
     write_recording_csv,
 )
 from motioncue.trajectory import ActuatorLimits, limit_pose
-from motioncue.washout import load_cueing, make_cueing, perceived_motion_error, simulator_motion
 
 SRC = Path(__file__).resolve().parents[1] / "src"
 PLATFORM, CONTROLLER, RATE = "stewart6-linear", "mbox6", 100.0
@@ -326,7 +326,7 @@ def test_no_feasible_candidate_writes_nothing(
     base = load_cueing("racing-hexapod")
     from dataclasses import replace
 
-    from motioncue.washout._tune import preset_toml
+    from motioncue.cueing._tune import preset_toml
 
     wild = replace(base, w_scale=(0.5, 0.5, 50.0), w_limit_rad_s=(0.5, 0.5, 50.0),
                    rot_wn_rad_s=(1.5, 1.5, 0.01))  # fmt: skip

@@ -17,7 +17,7 @@ from scipy import signal
 
 from motioncue._errors import ConfigError
 from motioncue.cli import main
-from motioncue.washout import (
+from motioncue.cueing import (
     AXIS_NAMES,
     DEFAULT_MODEL_SET,
     DEFAULT_WEIGHTS,

@@ -13,7 +13,7 @@ from hypothesis import strategies as st
 from hypothesis.extra import numpy as hnp
 
 from motioncue import ConfigError
-from motioncue.washout import ClassicalWashout, CueingParams, load_cueing
+from motioncue.cueing import ClassicalWashout, CueingParams, load_cueing
 
 G = 9.80665
 FS = 100.0

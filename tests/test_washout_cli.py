@@ -11,8 +11,8 @@ import numpy as np
 import pytest
 
 from motioncue.cli import main
+from motioncue.cueing import ClassicalWashout, load_cueing
 from motioncue.telemetry._recording import Recording, read_recording_csv, resample
-from motioncue.washout import ClassicalWashout, load_cueing
 
 G = 9.80665
 

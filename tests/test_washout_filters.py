@@ -9,8 +9,8 @@ from hypothesis import strategies as st
 from hypothesis.extra import numpy as hnp
 from scipy import signal
 
-from motioncue.washout import ClassicalWashout, load_cueing
-from motioncue.washout._filters import (
+from motioncue.cueing import ClassicalWashout, load_cueing
+from motioncue.cueing._filters import (
     rate_limit_array,
     rate_limit_step,
     soft_limit,

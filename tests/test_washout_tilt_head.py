@@ -17,8 +17,8 @@ from hypothesis import strategies as st
 from scipy import signal
 
 from motioncue import ConfigError
-from motioncue.washout import ClassicalWashout, CueingParams, load_cueing
-from motioncue.washout._classical import rate_accel_limit_step
+from motioncue.cueing import ClassicalWashout, CueingParams, load_cueing
+from motioncue.cueing._classical import rate_accel_limit_step
 
 G = 9.80665
 D2R = math.pi / 180.0

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 from scipy import signal
 
-from motioncue.washout import (
+from motioncue.cueing import (
     DEFAULT_MODEL_SET,
     MODEL_SETS,
     OTOLITH,

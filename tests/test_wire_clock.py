@@ -21,13 +21,13 @@ import pytest
 
 from motioncue import ConfigError
 from motioncue.cli import main
+from motioncue.cueing import load_cueing
 from motioncue.kinematics import load_platform
 from motioncue.output import load_controller
 from motioncue.pipeline._bridge import Bridge, BridgeConfig
 from motioncue.pipeline._realtime import GateConfig
 from motioncue.telemetry import TelemetrySample
 from motioncue.trajectory import ActuatorLimits
-from motioncue.washout import load_cueing
 
 RATES = (30, 50, 60, 90, 100, 120, 144, 200, 250, 300, 500, 1000)
 CONTROLLERS = {"mbox3": "seat3", "mbox6": "stewart6-linear", "imax3": "seat3",

@@ -2,7 +2,7 @@
 
 The subpackages follow the data flow:
 
-``telemetry`` -> ``washout`` -> ``kinematics`` -> ``trajectory`` -> ``output``
+``telemetry`` -> ``cueing`` -> ``kinematics`` -> ``trajectory`` -> ``output``
 
 ``import motioncue`` stays light: the heavy libraries (Pinocchio, casadi, toppra,
 matplotlib) are imported only by the functions that use them.

@@ -70,12 +70,12 @@ def _labels(names: list[str], short: list[str], what: str) -> list[str]:
 
 
 def run(args: argparse.Namespace) -> int:
+    from ..cueing import get_model_set, load_cueing
+    from ..cueing._compare import compare_cueing, plot_file_names, write_compare_report
     from ..kinematics import load_platform
     from ..output import load_controller
     from ..pipeline._inputs import check_generate_size, load_generate_input
     from ..trajectory import ActuatorLimits
-    from ..washout import get_model_set, load_cueing
-    from ..washout._compare import compare_cueing, plot_file_names, write_compare_report
 
     rate = args.rate
     if not (math.isfinite(rate) and 0.0 < rate <= 1000.0):

@@ -47,8 +47,8 @@ def register(sub: argparse._SubParsersAction) -> None:
 def run(args: argparse.Namespace) -> int:
     import numpy as np
 
+    from ..cueing import evaluate_cueing, get_model_set, make_cueing
     from ..telemetry._recording import read_recording_csv, resample
-    from ..washout import evaluate_cueing, get_model_set, make_cueing
     from ._preset import choose_preset
 
     if not math.isfinite(args.fs) or args.fs <= 0:
@@ -99,7 +99,7 @@ def run(args: argparse.Namespace) -> int:
             file=sys.stderr,
         )
     if args.plot:
-        from ..washout import plot_cueing
+        from ..cueing import plot_cueing
 
         path = plot_cueing(
             ev,

@@ -59,11 +59,11 @@ def register(sub: Any) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
+    from ..cueing import ClassicalWashout, load_cueing
+    from ..cueing._omct import plot_omct, run_omct
     from ..kinematics import load_platform
     from ..output._controllers import load_controller
     from ..trajectory import ActuatorLimits
-    from ..washout import ClassicalWashout, load_cueing
-    from ..washout._omct import plot_omct, run_omct
 
     rate = args.rate
     if not (math.isfinite(rate) and 0.0 < rate <= 1000.0):

@@ -26,7 +26,7 @@ def choose_preset(preset: str | None, platform: Any, platform_label: str | None)
 
     Returns
     -------
-    params : motioncue.washout.CueingParams
+    params : motioncue.cueing.CueingParams
     source : str
         ``"NAME (--preset)"``, ``"NAME (default of platform P)"`` or
         ``"NAME (fallback: platform P names no default_preset)"``.
@@ -36,7 +36,7 @@ def choose_preset(preset: str | None, platform: Any, platform_label: str | None)
     ConfigError
         No preset and no platform, or the preset cannot be loaded.
     """
-    from ..washout import load_cueing
+    from ..cueing import load_cueing
 
     if preset is not None:
         params = load_cueing(preset)

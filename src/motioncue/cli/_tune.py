@@ -108,13 +108,13 @@ def _metrics_table(before: Any, after: Any) -> str:
 
 
 def run(args: argparse.Namespace) -> int:
+    from ..cueing import get_model_set, load_cueing
+    from ..cueing._tune import PENALTY_BASE, TuneObjective, preset_toml, tune_cueing, write_preset
     from ..kinematics import load_platform
     from ..output._controllers import load_controller
     from ..telemetry._recording import read_recording_csv, resample
     from ..trajectory import ActuatorLimits
     from ..trajectory._derive import pulse_rounding_limits
-    from ..washout import get_model_set, load_cueing
-    from ..washout._tune import PENALTY_BASE, TuneObjective, preset_toml, tune_cueing, write_preset
     from ._preset import choose_preset
 
     if not (math.isfinite(args.budget_s) and args.budget_s > 0.0):

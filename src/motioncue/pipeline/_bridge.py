@@ -10,7 +10,7 @@ Per tick:
    is younger than ``gate.timeout_s`` and not paused, else the gain fades to 0 (parked). The
    bridge starts parked and ramps in; while parked the washout state is reset so a resume
    starts clean;
-3. washout step (streaming, explicit :class:`~motioncue.washout.WashoutState`) on the newest
+3. washout step (streaming, explicit :class:`~motioncue.cueing.WashoutState`) on the newest
    sample, held between samples (the washout runs at the frame rate);
 4. blend ``pose = pose_park + gain * (cue - pose_park)``;
 5. workspace limiting (:func:`motioncue.trajectory.limit_pose`, which also returns the
@@ -269,9 +269,9 @@ class Bridge:
     platform : motioncue.kinematics.Platform
     controller
         From :func:`motioncue.output.load_controller`.
-    cueing : motioncue.washout.CueingParams
+    cueing : motioncue.cueing.CueingParams
         Cueing preset (``load_cueing("racing")``); its ``algorithm`` picks the cueing
-        algorithm (:func:`motioncue.washout.make_cueing`), stepped with an explicit state.
+        algorithm (:func:`motioncue.cueing.make_cueing`), stepped with an explicit state.
     source : TelemetryInput
         A started telemetry source (``motioncue.telemetry.open_source("f1:20777")``) or any
         object with ``latest()`` and ``stats``. Not closed by the bridge.
@@ -304,7 +304,7 @@ class Bridge:
         *,
         q_start: Any = None,
     ) -> None:
-        from motioncue.washout import make_cueing
+        from motioncue.cueing import make_cueing
 
         self.platform = platform
         self.controller = controller

@@ -72,12 +72,12 @@ def run_demo(
     log: Callable[[str], None] = print,
 ) -> DemoResult:
     """Generate, play to the emulator, compare, and write the report (see module docstring)."""
+    from motioncue.cueing import load_cueing
     from motioncue.kinematics import load_platform
     from motioncue.output import load_controller, open_transport
     from motioncue.output.mbox import MboxController, MboxEmulator
     from motioncue.telemetry._recording import read_recording_csv
     from motioncue.trajectory import ActuatorLimits
-    from motioncue.washout import load_cueing
 
     from ._generate import generate_ride
     from ._report import write_report

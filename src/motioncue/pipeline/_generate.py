@@ -129,9 +129,9 @@ def generate_ride(
     platform : motioncue.kinematics.Platform
     controller
         A controller description from :func:`motioncue.output.load_controller`.
-    cueing : motioncue.washout.CueingParams
+    cueing : motioncue.cueing.CueingParams
         The preset; its ``algorithm`` picks the cueing algorithm
-        (:func:`motioncue.washout.make_cueing`).
+        (:func:`motioncue.cueing.make_cueing`).
     rate_hz : float
         Output frame rate.
     limits : motioncue.trajectory.ActuatorLimits, optional
@@ -141,9 +141,9 @@ def generate_ride(
     -------
     ride, report
     """
+    from motioncue.cueing import make_cueing
     from motioncue.telemetry._recording import resample
     from motioncue.trajectory import ActuatorLimits, limit_pose, transition
-    from motioncue.washout import make_cueing
 
     def step(name: str, frac: float) -> None:
         if progress is not None:

@@ -87,7 +87,7 @@ def write_report(
 
     Returns the metrics dictionary (also written as JSON).
     """
-    from motioncue.washout import evaluate_cueing, plot_cueing
+    from motioncue.cueing import evaluate_cueing, plot_cueing
 
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)

@@ -1,7 +1,7 @@
 """Cue quality: vestibular models applied to the vehicle's and the simulator's motion.
 
 The vestibular models, their sources and the perception thresholds are in
-:mod:`motioncue.washout._vestibular` (named model sets; default ``telban-cardullo-2005``,
+:mod:`motioncue.cueing._vestibular` (named model sets; default ``telban-cardullo-2005``,
 also ``reid-nahon-zacharias``). Both models are applied to deviations from rest:
 ``f - [0, 0, g]`` and ``w``, so zero initial filter states mean "upright and still".
 

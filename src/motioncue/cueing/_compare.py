@@ -6,7 +6,7 @@ with the platform's actuator limits tightened by the controller's pulse rounding
 actuator speed/acceleration (and jerk) limits the live bridge applies
 (:class:`~motioncue.trajectory.RealtimeLimiter` or :class:`~motioncue.trajectory.JerkLimiter`),
 mapped back to poses by forward kinematics where they changed a frame. The delivered poses
-are evaluated with :func:`motioncue.washout.evaluate_cueing` against the vehicle's motion
+are evaluated with :func:`motioncue.cueing.evaluate_cueing` against the vehicle's motion
 (through the chosen vestibular model set, at the preset's head offset).
 
 The result is a table with one row per recording and preset (:class:`CompareResult`), written

@@ -8,7 +8,7 @@ evaluation of cue quality through vestibular models (:func:`evaluate_cueing`).
 
 Example
 -------
->>> from motioncue.washout import load_cueing, make_cueing
+>>> from motioncue.cueing import load_cueing, make_cueing
 >>> design = make_cueing(load_cueing("racing"), fs_hz=100.0)
 >>> type(design).__name__
 'ClassicalWashout'
