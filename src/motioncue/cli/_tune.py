@@ -24,9 +24,11 @@ def register(sub: Any) -> None:
         description=(
             "Optimise the base preset's main parameters (translational scales and high-pass, "
             "tilt scales, filter, rate and acceleration limits, rotational scale and "
-            "high-pass; bounded, log space) to minimise the mean perceived-motion error J "
-            "over the recordings, with the cheap chain of generate (cueing, workspace "
-            "limiting, evaluation of the delivered poses). A candidate that breaks an "
+            "high-pass, yaw scale and high-pass; bounded, log space) to minimise the mean cue "
+            "score over the recordings (perceived-motion error J relative to standing still, "
+            "lost correlation, false and missed cues), with the cheap chain of generate "
+            "(cueing, workspace limiting, evaluation of the delivered poses). A candidate that "
+            "breaks an "
             "actuator limit on any frame or clamps more than 1 %% of its poses is penalised "
             "above every one that does not; the result must meet both or nothing is "
             "written. Optimiser: SciPy differential evolution, seeded. Evaluations run in "
@@ -65,7 +67,7 @@ def register(sub: Any) -> None:
         type=int,
         default=6,
         metavar="K",
-        help="population per tuned parameter (default 6: 78 candidates per generation)",
+        help="population per tuned parameter (default 6: 96 candidates per generation)",
     )
     parser.add_argument(
         "--workers",
@@ -90,13 +92,18 @@ def register(sub: Any) -> None:
 
 def _metrics_table(before: Any, after: Any) -> str:
     rows = [
-        ("objective J (mean, thresholds)", before.objective, after.objective, ".3f"),
+        ("objective: cue score (mean)", before.objective, after.objective, ".4f"),
+        ("perceived-motion error J (mean)", before.perceived_error, after.perceived_error, ".3f"),
     ]
     for i, a in enumerate(_AXES):
         rows.append((f"correlation {a} (mean)", before.correlation[i], after.correlation[i], ".3f"))
+    rows.append(("false cues, any axis (%)", before.false_cue_fraction * 100,
+                 after.false_cue_fraction * 100, ".2f"))  # fmt: skip
     for i, a in enumerate(_AXES):
         rows.append((f"false-cue time {a} (s)", before.false_cue_time_s[i],
                      after.false_cue_time_s[i], ".2f"))  # fmt: skip
+    rows.append(("missed cues (mean %)", before.missed_cue_fraction * 100,
+                 after.missed_cue_fraction * 100, ".2f"))  # fmt: skip
     rows.append(
         ("clamped poses (%)", before.clamped_fraction * 100, after.clamped_fraction * 100, ".2f")
     )
@@ -164,7 +171,7 @@ def run(args: argparse.Namespace) -> int:
     objective = TuneObjective(base, drives, platform, tight, args.rate, model=args.vestibular)
 
     def progress(gen: int, best: float, rate: float, n_eval: int) -> None:
-        shown = f"J {best:10.4f}" if best < PENALTY_BASE else "none within the limits yet"
+        shown = f"score {best:8.4f}" if best < PENALTY_BASE else "none within the limits yet"
         print(
             f"motioncue tune: generation {gen:4d}  best {shown}  "
             f"{rate:7.1f} evaluations/s  ({n_eval} evaluations)",
@@ -197,11 +204,13 @@ def run(args: argparse.Namespace) -> int:
         f"Optimiser: scipy differential_evolution, seed {args.seed}, popsize "
         f"{args.popsize}, {result.generations} generation(s), {result.evaluations} "
         f"evaluations ({result.stop_reason}).",
-        "Objective: mean perceived-motion error J (thresholds; vestibular models "
-        f"{args.vestibular}) of the poses after workspace limiting; constraints: zero frames "
-        "breaking an actuator limit, at most 1 % of poses clamped.",
-        f"Objective on the tuning recordings: before {result.before.objective:.4f}, "
-        f"after {result.after.objective:.4f}.",
+        "Objective: mean cue score (motioncue.cueing.cue_score: perceived-motion error J "
+        "relative to standing still, lost correlation, false and missed cues; vestibular "
+        f"models {args.vestibular}) of the poses after workspace limiting; constraints: zero "
+        "frames breaking an actuator limit, at most 1 % of poses clamped.",
+        f"Cue score on the tuning recordings: before {result.before.objective:.4f}, "
+        f"after {result.after.objective:.4f}; J before {result.before.perceived_error:.3f}, "
+        f"after {result.after.perceived_error:.3f}.",
     ]
     text = preset_toml(result.params, comments)
     # check what the file says (its decimal rounding) before it takes the name

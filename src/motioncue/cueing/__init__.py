@@ -39,6 +39,14 @@ from ._evaluate import (
 )
 from ._params import DOF_NAMES, GRAVITY_M_S2, CueingParams, load_cueing
 from ._plot import plot_cueing
+from ._score import (
+    ACTIVE_FRACTION,
+    CORRELATION_WEIGHTS,
+    FALSE_CUE_WEIGHT,
+    MISSED_CUE_WEIGHT,
+    CueScore,
+    cue_score,
+)
 from ._vestibular import (
     DEFAULT_MODEL_SET,
     DEFAULT_WEIGHTS,
@@ -49,15 +57,20 @@ from ._vestibular import (
 )
 
 __all__ = [
+    "ACTIVE_FRACTION",
     "AXIS_NAMES",
+    "CORRELATION_WEIGHTS",
     "DEFAULT_MODEL_SET",
     "DEFAULT_WEIGHTS",
     "DOF_NAMES",
+    "FALSE_CUE_WEIGHT",
     "GRAVITY_M_S2",
+    "MISSED_CUE_WEIGHT",
     "MODEL_SETS",
     "OTOLITH",
     "SEMICIRCULAR_CANAL",
     "ClassicalWashout",
+    "CueScore",
     "CueingAlgorithm",
     "CueingEvaluation",
     "CueingFactory",
@@ -67,6 +80,7 @@ __all__ = [
     "VestibularModelSet",
     "WashoutResult",
     "WashoutState",
+    "cue_score",
     "cueing_algorithms",
     "evaluate_cueing",
     "get_model_set",

@@ -2,30 +2,33 @@
 
 What is tuned
 -------------
-Thirteen main parameters of a base preset (:data:`TUNED_PARAMETERS`), each within fixed
+Sixteen main parameters of a base preset (:data:`TUNED_PARAMETERS`), each within fixed
 bounds, searched in log space (all are positive scales, frequencies or limits spanning a
 decade or more): the translational force scales (x, y, z), the translational high-pass
-natural frequency and third-order break (x and y share them), the tilt-coordination scales
-(x, y), the tilt low-pass frequency, tilt rate and acceleration limits and the tilt limit
-(the largest tilt: with the tilt scales it decides how much sustained force is cued), and the
-rotational scale and high-pass frequency (roll and pitch share them). Everything else
-(limits, dampings, yaw, input rejection, workspace, head offset) is kept from the base
-preset.
+natural frequency and third-order break (x and y share them) and the heave high-pass
+frequency, the tilt-coordination scales (x, y), the tilt low-pass frequency, tilt rate and
+acceleration limits and the tilt limit (the largest tilt: with the tilt scales it decides how
+much sustained force is cued), the rotational scale and high-pass frequency (roll and pitch
+share them) and the yaw scale and high-pass frequency. Everything else (limits, dampings,
+input rejection, workspace, head offset) is kept from the base preset.
 
 The objective and the limits
 ----------------------------
 Each candidate runs the cheap chain of ``generate`` on every recording (resampled once, up
 front): the cueing run, workspace limiting (:func:`motioncue.trajectory.limit_pose` with the
 pulse-rounding-tightened limits of the platform and controller) and the evaluation of the
-*delivered* poses: the mean over the recordings of :func:`perceived_motion_error` (``J``,
-in perception thresholds). The full casadi ride optimisation is not run.
+*delivered* poses through the vestibular models: the mean over the recordings of the cue
+score (:func:`motioncue.cueing.cue_score`: the perceived-motion error ``J`` relative to a
+platform that stands still, plus the lost correlation, the false-cue and the missed-cue
+fractions; its module says why ``J`` alone does not work on car drives). ``J`` itself is
+reported before and after. The full casadi ride optimisation is not run.
 
 The platform's limits are a **penalty** (Deb's feasibility rule folded into one number): a
 candidate is feasible when its actuator positions after workspace limiting break no limit
 (stroke, speed, acceleration, and jerk where the limits have one, with the discrete
 definitions of :mod:`motioncue.trajectory._limits`) on any frame, and at most
 :data:`MAX_CLAMPED_FRACTION` (1 %) of its poses were clamped by workspace limiting.
-A feasible candidate scores ``J``; an infeasible one scores
+A feasible candidate scores its cue score; an infeasible one scores
 ``PENALTY_BASE * (1 + excess)``, above every feasible candidate, ranked by how far it is
 from feasible (``excess`` = fraction of frames breaking a limit plus the clamped fraction
 above 1 %). The result must be feasible, or nothing is written.
@@ -60,7 +63,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from .._errors import ConfigError, LimitError, TransportError
-from ._params import CueingParams
+from ._params import GRAVITY_M_S2, CueingParams
 from ._vestibular import DEFAULT_MODEL_SET, get_model_set
 
 __all__ = [
@@ -108,6 +111,9 @@ TUNED_PARAMETERS: tuple[_Parameter, ...] = (
     _Parameter("tilt_limit_deg", 2.0, 25.0, "deg"),
     _Parameter("w_scale_rp", 0.05, 1.0, "-"),
     _Parameter("rot_wn_rp_rad_s", 0.2, 5.0, "rad/s"),
+    _Parameter("w_scale_yaw", 0.02, 1.0, "-"),
+    _Parameter("rot_wn_yaw_rad_s", 0.2, 5.0, "rad/s"),
+    _Parameter("trans_wn_z_rad_s", 1.0, 20.0, "rad/s"),
 )
 """The tuned parameters, their bounds (searched in log space) and units."""
 
@@ -138,6 +144,9 @@ def vector_from_params(params: CueingParams) -> NDArray[np.float64]:
         params.tilt_limit_rad / _D2R,
         math.sqrt(params.w_scale[0] * params.w_scale[1]),
         math.sqrt(params.rot_wn_rad_s[0] * params.rot_wn_rad_s[1]),
+        params.w_scale[2],
+        params.rot_wn_rad_s[2],
+        params.trans_wn_rad_s[2],
     )
     out = np.empty(len(TUNED_PARAMETERS))
     for i, (p, v) in enumerate(zip(TUNED_PARAMETERS, values, strict=True)):
@@ -157,15 +166,15 @@ def params_from_vector(base: CueingParams, x: Sequence[float], name: str = "") -
         name=name or base.name,
         algorithm="classical",
         f_scale=(v[0], v[1], v[2]),
-        trans_wn_rad_s=(v[3], v[3], base.trans_wn_rad_s[2]),
+        trans_wn_rad_s=(v[3], v[3], v[15]),
         trans_wb_rad_s=(v[4], v[4], base.trans_wb_rad_s[2]),
         tilt_scale=(v[5], v[6]),
         tilt_wn_rad_s=v[7],
         tilt_rate_limit_rad_s=v[8] * _D2R,
         tilt_accel_limit_rad_s2=v[9] * _D2R,
         tilt_limit_rad=v[10] * _D2R,
-        w_scale=(v[11], v[11], base.w_scale[2]),
-        rot_wn_rad_s=(v[12], v[12], base.rot_wn_rad_s[2]),
+        w_scale=(v[11], v[11], v[13]),
+        rot_wn_rad_s=(v[12], v[12], v[14]),
     )
 
 
@@ -185,12 +194,20 @@ class ChainMetrics:
     Attributes
     ----------
     objective : float
-        Mean perceived-motion error ``J`` over the recordings (thresholds).
+        Mean cue score over the recordings (:func:`motioncue.cueing.cue_score`; lower is
+        better): the tuning objective.
     per_drive_objective : tuple of float
+    perceived_error : float
+        Mean perceived-motion error ``J`` over the recordings (thresholds).
     correlation : (6,) array
-        Mean over the recordings of the per-axis correlation (fx fy fz wx wy wz).
+        Mean over the recordings of the per-axis correlation (fx fy fz wx wy wz; a constant
+        signal counts as 0).
     false_cue_time_s : (6,) array
         Total false-cue time per axis over the recordings (s).
+    false_cue_fraction : float
+        Fraction of all samples with a false cue on any axis.
+    missed_cue_fraction : float
+        Mean over the recordings of the score's missed-cue fraction.
     duration_s : float
         Total duration of the recordings (s).
     clamped_fraction : float
@@ -201,8 +218,11 @@ class ChainMetrics:
 
     objective: float
     per_drive_objective: tuple[float, ...]
+    perceived_error: float = math.nan
     correlation: NDArray[np.float64] = field(default_factory=lambda: np.full(6, math.nan))
     false_cue_time_s: NDArray[np.float64] = field(default_factory=lambda: np.zeros(6))
+    false_cue_fraction: float = 0.0
+    missed_cue_fraction: float = 0.0
     duration_s: float = 0.0
     clamped_fraction: float = 0.0
     violating_frames: int = 0
@@ -268,54 +288,89 @@ class TuneObjective:
         self.limits = limits
         self.rate_hz = float(rate_hz)
         self.model = model
+        self._models = get_model_set(model)
+        self._pv_cache: dict[int, tuple[Any, Any, Any]] = {}
+
+    def _perceived_vehicle(self, i: int, f: NDArray[np.float64], w: NDArray[np.float64]) -> Any:
+        """The vehicle's perceived motion on drive ``i`` (cached: it does not depend on the
+        tuned parameters, only on the input the algorithm used)."""
+        cached = self._pv_cache.get(i)
+        if cached is not None and np.array_equal(cached[0], f) and np.array_equal(cached[1], w):
+            return cached[2]
+        rest = np.array([0.0, 0.0, GRAVITY_M_S2])
+        pv = self._models.filter(np.concatenate([f - rest, w], axis=1), self.rate_hz)
+        self._pv_cache[i] = (np.array(f), np.array(w), pv)
+        return pv
 
     def metrics(self, params: CueingParams, *, full: bool = False) -> ChainMetrics:
         """Run the cheap chain with ``params`` on every recording.
 
-        ``full``: also the per-axis correlation and false-cue time (the whole evaluation).
+        ``full``: compute every metric even for a candidate that is infeasible by its
+        clamped poses alone; without it, such a candidate returns at once with an infinite
+        objective and its clamped fraction (the penalty ranks it by that).
         """
-        from ..trajectory import limit_pose
+        from ..trajectory import limit_pose, reachable
         from ._algorithm import make_cueing
-        from ._evaluate import evaluate_cueing, simulator_motion
-        from ._vestibular import perceived_motion_error
+        from ._evaluate import simulator_motion
+        from ._score import cue_score
+        from ._vestibular import normalised_error_rms
 
         design = make_cueing(params, self.rate_hz)
+        runs = [design.run(d.f, d.w) for d in self.drives]
+        if not full:
+            # a candidate whose cue leaves the workspace too often is infeasible whatever the
+            # rest: skip workspace limiting (slow on clamped poses) and the evaluation
+            n_req = sum(int(np.asarray(r.poses).shape[0]) for r in runs)
+            n_out = sum(
+                int(np.count_nonzero(~reachable(self.platform, r.poses, limits=self.limits)))
+                for r in runs
+            )
+            if n_out > MAX_CLAMPED_FRACTION * n_req:
+                return ChainMetrics(
+                    objective=math.inf,
+                    per_drive_objective=(),
+                    duration_s=n_req / self.rate_hz,
+                    clamped_fraction=n_out / max(n_req, 1),
+                )
         dt = 1.0 / self.rate_hz
+        thr = self._models.thresholds
+        ones = np.ones(6)
+        scores: list[float] = []
         js: list[float] = []
         corr = np.zeros(6)
         false_s = np.zeros(6)
+        false_any = 0
+        missed = 0.0
         n_all = clamped = violating = 0
-        for d in self.drives:
-            res = design.run(d.f, d.w)
-            f_used = getattr(res, "f_used", d.f)
-            w_used = getattr(res, "w_used", d.w)
+        rest = np.array([0.0, 0.0, GRAVITY_M_S2])
+        for i, (d, res) in enumerate(zip(self.drives, runs, strict=True)):
+            f_used = np.asarray(getattr(res, "f_used", d.f), dtype=float)
+            w_used = np.asarray(getattr(res, "w_used", d.w), dtype=float)
             lim = limit_pose(self.platform, res.poses, limits=self.limits)
             poses = np.asarray(lim.pose, dtype=float)
             clamped += int(np.count_nonzero(np.asarray(lim.status) != "ok"))
             n_all += poses.shape[0]
             violating += _violating_frames(np.asarray(lim.q, dtype=float), dt, self.limits)
-            if full:
-                ev = evaluate_cueing(
-                    f_used,
-                    w_used,
-                    poses,
-                    self.rate_hz,
-                    model=self.model,
-                    head_offset_m=params.head_offset_m,
-                )
-                js.append(float(ev.perceived_error))
-                corr += np.nan_to_num(ev.correlation, nan=0.0)
-                false_s += ev.false_cue_time_s
-            else:
-                f_s, w_s = simulator_motion(poses, self.rate_hz, head_offset_m=params.head_offset_m)
-                js.append(
-                    perceived_motion_error(f_used, w_used, f_s, w_s, self.rate_hz, model=self.model)
-                )
+            pv = self._perceived_vehicle(i, f_used, w_used)
+            f_s, w_s = simulator_motion(poses, self.rate_hz, head_offset_m=params.head_offset_m)
+            ps = self._models.filter(np.concatenate([f_s - rest, w_s], axis=1), self.rate_hz)
+            sc = cue_score(pv, ps, thr)
+            scores.append(sc.score)
+            js.append(normalised_error_rms(ps - pv, thr, ones))
+            corr += np.nan_to_num(sc.correlation, nan=0.0)
+            wrong = (np.abs(ps) > thr) & (ps * pv < 0.0)
+            false_s += wrong.sum(axis=0) / self.rate_hz
+            false_any += int(np.count_nonzero(wrong.any(axis=1)))
+            missed += sc.missed_fraction
+        nd = len(self.drives)
         return ChainMetrics(
-            objective=float(np.mean(js)),
-            per_drive_objective=tuple(js),
-            correlation=corr / len(self.drives) if full else np.full(6, math.nan),
+            objective=float(np.mean(scores)),
+            per_drive_objective=tuple(scores),
+            perceived_error=float(np.mean(js)),
+            correlation=corr / nd,
             false_cue_time_s=false_s,
+            false_cue_fraction=false_any / max(n_all, 1),
+            missed_cue_fraction=missed / nd,
             duration_s=n_all / self.rate_hz,
             clamped_fraction=clamped / max(n_all, 1),
             violating_frames=violating,
@@ -323,7 +378,7 @@ class TuneObjective:
 
     def score(self, m: ChainMetrics) -> float:
         """The penalised objective of a run (see the module docstring)."""
-        if not math.isfinite(m.objective):
+        if m.feasible and not math.isfinite(m.objective):
             return PENALTY_BASE * 1e6
         if m.feasible:
             return m.objective
@@ -451,7 +506,7 @@ class TuneResult:
         The tuned preset (feasible).
     before, after : ChainMetrics
         The base preset's and the tuned preset's full metrics on the recordings.
-    x : (13,) array
+    x : (16,) array
         The best point (log values of :data:`TUNED_PARAMETERS`).
     generations : int
     evaluations : int
@@ -509,7 +564,7 @@ def tune_cueing(
     generations : int
         Most generations after the first population.
     popsize : int
-        Population size per tuned parameter (population ``popsize * 13``).
+        Population size per tuned parameter (population ``popsize * 16``).
     workers : int
         Local processes (1: in this process); ignored when ``scheduler`` is given.
     scheduler : str, optional

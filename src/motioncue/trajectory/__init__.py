@@ -14,7 +14,8 @@ Contents
   (``state = rt.initial_state(q0); q = rt.step(state, target)``; ``rt.run`` for a stream).
 - :func:`limit_ride` -> :class:`OptimisedRide`: offline casadi optimisation of a whole ride
   on its own clock; :func:`plot_ride` draws it.
-- :func:`limit_pose` -> :class:`PoseLimitResult`: unreachable poses scaled towards neutral.
+- :func:`limit_pose` -> :class:`PoseLimitResult`: unreachable poses scaled towards neutral;
+  :func:`reachable`: which poses it would leave untouched.
 - :func:`transition`, :func:`transition_through`, :func:`transition_q` -> :class:`Transition`:
   toppra time-optimal moves at rest; :func:`park_path`, :func:`unpark_path`,
   :func:`resume_path`, :func:`brake_to_rest` built on them and on the limiter.
@@ -36,7 +37,7 @@ from ._transition import (
     transition_through,
     unpark_path,
 )
-from ._workspace import PoseLimitResult, limit_pose
+from ._workspace import PoseLimitResult, limit_pose, reachable
 
 __all__ = [
     "ActuatorLimits",
@@ -59,6 +60,7 @@ __all__ = [
     "park_path",
     "plot_ride",
     "pulse_rounding_limits",
+    "reachable",
     "resume_path",
     "transition",
     "transition_q",

@@ -86,6 +86,32 @@ def _feasible(platform: Any, poses: np.ndarray, limits: ActuatorLimits | None) -
     return ok
 
 
+def reachable(platform: Any, poses: Any, *, limits: ActuatorLimits | None = None) -> np.ndarray:
+    """Which poses :func:`limit_pose` leaves untouched (status ``"ok"``), without limiting.
+
+    Parameters
+    ----------
+    platform
+        A :class:`motioncue.kinematics.Platform`.
+    poses : array_like, (N, 6)
+        Requested poses (m, rad) from neutral; components the platform does not move are
+        ignored, as :func:`limit_pose` drops them.
+    limits : ActuatorLimits, optional
+
+    Returns
+    -------
+    ndarray of bool, (N,)
+        False for non-finite poses and poses outside the workspace or the limits' stroke.
+    """
+    arr = np.asarray(poses, dtype=float)
+    if arr.ndim != 2 or arr.shape[1] != 6:
+        raise ConfigError(f"poses have shape {arr.shape}; expected (N, 6)")
+    finite = np.all(np.isfinite(arr), axis=1)
+    mask = np.asarray(platform.dof_mask, dtype=bool)
+    req = np.where(finite[:, None] & mask[None, :], arr, 0.0)
+    return finite & _feasible(platform, req, limits)
+
+
 def limit_pose(
     platform: Any, pose: Any, *, limits: ActuatorLimits | None = None
 ) -> PoseLimitResult:
