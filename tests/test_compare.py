@@ -120,8 +120,11 @@ def _alone(rec_path: Path, preset: str) -> dict:
     sim, veh, thr = ev.perceived_sim, ev.perceived_vehicle, ev.thresholds
     any_false = np.any((np.abs(sim) > thr) & (np.sign(sim) == -np.sign(veh)) & (veh != 0), axis=1)
     any_missed = np.any((np.abs(veh) > thr) & (np.abs(sim) <= thr), axis=1)
+    from test_tune import _score  # the score written out from its definition
+
     return {
         "objective_J": ev.perceived_error,
+        "cue_score": _score(veh, sim, thr),
         "corr": ev.correlation,
         "rms": ev.rms_error * np.array([1, 1, 1, 180 / math.pi, 180 / math.pi, 180 / math.pi]),
         "false": ev.false_cue_time_s,
@@ -145,6 +148,7 @@ def test_rows_equal_each_preset_evaluated_alone(report: dict) -> None:
     ):
         ref = _alone(rec, preset)
         assert row["objective_J"] == pytest.approx(ref["objective_J"], rel=1e-9)
+        assert row["cue_score"] == pytest.approx(ref["cue_score"], rel=1e-9)
         assert row["duration_s"] == pytest.approx(ref["duration_s"])
         for i, a in enumerate(AXES):
             unit = "m_s2" if i < 3 else "deg_s"

@@ -33,6 +33,7 @@ from numpy.typing import NDArray
 
 from .._errors import ConfigError
 from ._evaluate import CueingEvaluation, evaluate_cueing
+from ._score import cue_score
 
 __all__ = [
     "COLUMN_NOTES",
@@ -70,6 +71,10 @@ COLUMN_NOTES: dict[str, str] = {
     "objective_J": "perceived-motion error J (dimensionless, in perception thresholds): "
     "sqrt(sum_i w_i mean((sim_i - veh_i)/thr_i)^2 / sum_i w_i) over fx fy fz p q r; lower "
     "is better; the tuning objective",
+    "cue_score": "cue score (dimensionless, lower is better; the objective of motioncue "
+    "tune): J relative to a platform that stands still, plus the lost correlation of the "
+    "perceived channels, 2 x the false-cue fraction and 0.5 x the missed-cue fraction "
+    "(motioncue.cueing.cue_score)",
     **{
         f"corr_{a}": f"Pearson correlation of perceived simulator and perceived vehicle "
         f"{_WHAT[i]} (1 = same shape; empty/null when either is constant)"
@@ -152,6 +157,7 @@ class CompareRun:
             "preset": self.preset,
             "duration_s": dur,
             "objective_J": float(ev.perceived_error),
+            "cue_score": cue_score(veh, sim, thr).score,
         }
         for i, a in enumerate(COMPARE_AXES):
             row[f"corr_{a}"] = float(ev.correlation[i])
@@ -328,14 +334,14 @@ class CompareResult:
         corr = " ".join(f"{'c' + a:>6}" for a in COMPARE_AXES)
         rms = " ".join(f"{'rms ' + a:>7}" for a in COMPARE_AXES)
         head = (
-            f"{'recording':<{wr}} {'preset':<{wp}} {'J':>6} {corr} {rms} "
-            f"{'false s':>8} {'missed s':>8} {'clamp %':>7}"
+            f"{'recording':<{wr}} {'preset':<{wp}} {'J':>6} {'score':>6} {corr} {rms} "
+            f"{'false %':>7} {'missed %':>8} {'clamp %':>7}"
         )
         units = (
-            f"{'':<{wr}} {'':<{wp}} {'thr':>6} {'':>6} "
+            f"{'':<{wr}} {'':<{wp}} {'thr':>6} {'':>6} {'':>6} "
             + " " * (7 * 5)
             + " ".join(f"{u:>7}" for u in _UNIT)
-            + f" {'any ax':>8} {'any ax':>8} {'poses':>7}"
+            + f" {'any ax':>7} {'any ax':>8} {'poses':>7}"
         )
         lines = [head, units]
         for r in rows:
@@ -344,8 +350,9 @@ class CompareResult:
                 f"{r[f'rms_{a}_{_unit_tag(i)}']:7.3f}" for i, a in enumerate(COMPARE_AXES)
             )
             lines.append(
-                f"{r['recording']:<{wr}} {r['preset']:<{wp}} {r['objective_J']:6.3f} {cs} {rs} "
-                f"{r['false_cue_s_any']:8.2f} {r['missed_cue_s_any']:8.2f} "
+                f"{r['recording']:<{wr}} {r['preset']:<{wp}} {r['objective_J']:6.3f} "
+                f"{r['cue_score']:6.3f} {cs} {rs} "
+                f"{r['false_cue_pct_any']:7.2f} {r['missed_cue_pct_any']:8.2f} "
                 f"{r['clamped_pct']:7.2f}"
             )
         return "\n".join(lines)
@@ -383,9 +390,9 @@ class CompareResult:
             )
         lines += [
             "",
-            "Columns (text table: J = objective_J; c<axis> = corr_<axis>; rms <axis> = "
-            "rms_<axis>_<unit>; false s / missed s = false_cue_s_any / missed_cue_s_any; "
-            "clamp % = clamped_pct):",
+            "Columns (text table: J = objective_J; score = cue_score; c<axis> = corr_<axis>; "
+            "rms <axis> = rms_<axis>_<unit>; false % / missed % = false_cue_pct_any / "
+            "missed_cue_pct_any; clamp % = clamped_pct):",
         ]
         lines += [f"  {k:<22} {v}" for k, v in COLUMN_NOTES.items()]
         lines += [
