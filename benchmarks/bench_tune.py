@@ -3,7 +3,7 @@
 Run: ``python benchmarks/bench_tune.py`` (with ``src`` on the path). One evaluation is what
 the tuner does for each candidate on a 10-minute recording at 100 Hz: the classical washout
 run, workspace limiting of the bundled hexapod (``stewart6-linear`` driven by ``mbox6``) and
-the perceived-motion error of the delivered poses. Measured in this process (one core): the
+the cue score of the delivered poses. Measured in this process (one core): the
 rate a pool of N processes or N single-threaded Dask workers multiplies by about N.
 """
 
