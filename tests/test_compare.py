@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import csv
 import json
+import re
 import math
 from pathlib import Path
 
@@ -49,6 +50,7 @@ def report(tmp_path_factory: pytest.TempPathFactory) -> dict:
     rec_b = _short_recording(tmp / "lap-b.csv", 2500, 2000)
     head = tmp / "hexapod-head.toml"  # the rider's head 0.8 m above the platform origin
     text = (ROOT / "configs" / "cueing" / "racing-hexapod.toml").read_text()
+    text = re.sub(r"\[head\]\noffset_mm = [^\n]*\n?", "", text)  # the preset's own [head]
     head.write_text(text + "\n[head]\noffset_mm = [100.0, 0.0, 800.0]\n")
     presets = {p: p for p in PRESETS} | {"hexapod-head": str(head)}
     out = tmp / "report"
