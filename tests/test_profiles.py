@@ -123,3 +123,26 @@ def test_bridge_profile_refusals(tmp_path: Path, capsys: pytest.CaptureFixture[s
     bad = _write(tmp_path, 'source = "dirt"\ncolour = "red"\n')
     assert main([*base, "--profile", str(bad)]) == 2
     assert "unknown key(s) 'colour'" in capsys.readouterr().err
+
+
+def test_mutated_profiles_give_only_config_errors(tmp_path: Path) -> None:
+    """2000 mutations of the bundled profiles (the config fuzzer's mutator): each one loads
+    or is refused with a ConfigError, never another exception."""
+    import random
+
+    from motioncue._config import config_dir
+    from test_fuzz_inputs import _mutate_config
+
+    texts = [(p.name, p.read_text()) for p in sorted(config_dir("profiles").glob("*.toml"))]
+    outcomes = {"loaded": 0, "refused": 0}
+    for i in range(2000):
+        rng = random.Random(4242 + i)
+        name, text = rng.choice(texts)
+        path = tmp_path / f"m{i % 20}-{name}"
+        path.write_text(_mutate_config(rng, text))
+        try:
+            load_profile(path)
+            outcomes["loaded"] += 1
+        except ConfigError:
+            outcomes["refused"] += 1
+    assert outcomes["loaded"] > 100 and outcomes["refused"] > 200, outcomes
