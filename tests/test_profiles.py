@@ -28,6 +28,7 @@ def test_bundled_profiles_load_and_name_their_game() -> None:
     assert p.effects == EffectGains(engine=0.3, road=1.2, shift=0.8)
     assert load_profile("pcars2-gt3").f_gain == (0.8, 0.8, 0.8)  # one number for all axes
     assert load_profile("xplane-ga").effects == EffectGains(engine=0.5)
+    assert load_profile("f1-24").effects == EffectGains(engine=0.2, road=0.6, shift=0.5)
 
 
 def _write(tmp_path: Path, text: str, name: str = "mine.toml") -> Path:
