@@ -1,5 +1,6 @@
-"""F1 optional channels for the effect layer: suspension velocity from Motion Ex (real
-captures), engine rpm and gear from Car Telemetry (id 6) written at the documented offsets."""
+"""Optional channels for the effect layer. F1: suspension velocity from Motion Ex (real
+captures), engine rpm and gear from Car Telemetry (id 6) written at the documented offsets.
+Forza: engine rpm and its maximum from the Sled head."""
 
 from __future__ import annotations
 
@@ -13,7 +14,7 @@ from motioncue.telemetry._f1 import CAR_TELEMETRY_SIZE
 
 DATA = Path("/work/shared/data/f1")
 
-pytestmark = pytest.mark.skipif(not DATA.is_dir(), reason="real F1 captures not on this machine")
+needs_f1 = pytest.mark.skipif(not DATA.is_dir(), reason="real F1 captures not on this machine")
 
 
 def _packets(year: int) -> tuple[bytes, bytes]:
@@ -33,6 +34,7 @@ def _car_telemetry(motion: bytes, gear: int, rpm: int, uid: int | None = None) -
     return bytes(b)
 
 
+@needs_f1
 @pytest.mark.parametrize("year", [2023, 2024])
 def test_suspension_velocity_comes_from_motion_ex_in_m_s_front_first(year: int) -> None:
     motion, ex = _packets(year)
@@ -45,6 +47,7 @@ def test_suspension_velocity_comes_from_motion_ex_in_m_s_front_first(year: int) 
     assert max(abs(v) for v in s.suspension_velocity_m_s) < 1.0  # m/s, not mm/s
 
 
+@needs_f1
 def test_car_telemetry_gives_rpm_and_gear_of_the_same_session() -> None:
     motion, ex = _packets(2024)
     assert CAR_TELEMETRY_SIZE == 1352
@@ -63,3 +66,15 @@ def test_car_telemetry_gives_rpm_and_gear_of_the_same_session() -> None:
     assert s is not None and s.gear is None
     short = _car_telemetry(motion, 4, 9000)[:-1]
     assert other.decode(short, 0.0).reason == "ignored: other packet id"
+
+
+def test_forza_passes_engine_rpm_and_its_maximum() -> None:
+    from motioncue.telemetry._forza import ForzaMotion
+
+    z = (0.0, 0.0, 0.0)
+    raw = ForzaMotion(1, 5, 8500.0, 900.0, 4321.5, z, z, z, 0.0, 0.0, 0.0).pack()
+    s = decoder_for("forza").feed(raw + bytes(232 - len(raw)), 0.0)
+    assert s is not None and s.rpm == 4321.5 and s.rpm_max == 8500.0 and s.gear is None
+    raw = ForzaMotion(1, 5, 8500.0, 900.0, float("nan"), z, z, z, 0.0, 0.0, 0.0).pack()
+    s = decoder_for("forza").feed(raw + bytes(232 - len(raw)), 0.0)
+    assert s is not None and s.rpm != s.rpm  # a bad channel is dropped, the motion is kept
