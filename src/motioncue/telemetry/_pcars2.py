@@ -177,22 +177,21 @@ class PCars2Decoder(Decoder):
         if n != TELEMETRY_SIZE:
             reason = "skipped: truncated" if n < TELEMETRY_SIZE else "skipped: wrong size"
             return DecodeResult("skipped", reason)
-        m = PCars2Telemetry.unpack(datagram)
-        pitch_x, _yaw, roll_z = m.orientation
+        (pitch_x, _yaw, roll_z, _lvx, _lvy, _lvz, _wvx, _wvy, _wvz, wx, wy, wz, ax, ay, az) = (
+            _KINEMATICS.unpack_from(datagram, 52)
+        )
         if not (math.isfinite(pitch_x) and math.isfinite(roll_z)):
             return DecodeResult("skipped", "skipped: non-finite")
-        ax, ay, az = m.local_acceleration
-        wx, wy, wz = m.angular_velocity
         ux, uy, uz = up_in_body_from_angles(-pitch_x, -roll_z)
         f = (-az + G0_M_S2 * ux, -ax + G0_M_S2 * uy, ay + G0_M_S2 * uz)
         w = (-wz, -wx, wy)
-        gear_code = m.gear_num_gears & 0x0F
-        sv = m.suspension_velocity
+        _speed, rpm, max_rpm = _ENGINE.unpack_from(datagram, 36)
+        gear_code = datagram[45] & 0x0F
         extras: dict[str, object] = {
-            "rpm": float(m.rpm),
-            "rpm_max": float(m.max_rpm),
+            "rpm": float(rpm),
+            "rpm_max": float(max_rpm),
             "gear": -1 if gear_code == 15 else gear_code,
-            "suspension_velocity_m_s": sv,
+            "suspension_velocity_m_s": _SUSPENSION.unpack_from(datagram, 328),
         }
         return self._make(t_s, f, w, self.paused, extras)
 

@@ -199,13 +199,19 @@ class _Channels(TypedDict, total=False):
 
 
 def _clean(extras: Extras) -> _Channels:
-    """Optional channels with non-finite or absurd values replaced by 'unknown'."""
+    """Optional channels with non-finite or absurd values replaced by 'unknown'.
+
+    (Chained comparisons are False for nan and reject inf: one test per value, on the path of
+    every datagram.)
+    """
     out: _Channels = {}
-    for key in ("rpm", "rpm_max"):
-        if key in extras:
-            v = extras[key]
-            ok = isinstance(v, float | int) and math.isfinite(v) and 0.0 <= v <= MAX_RPM
-            out[key] = float(v) if ok and isinstance(v, float | int) else math.nan
+    if "rpm" in extras:
+        v = extras["rpm"]
+        out["rpm"] = float(v) if isinstance(v, float | int) and 0.0 <= v <= MAX_RPM else math.nan
+    if "rpm_max" in extras:
+        v = extras["rpm_max"]
+        ok = isinstance(v, float | int) and 0.0 <= v <= MAX_RPM
+        out["rpm_max"] = float(v) if ok and isinstance(v, float | int) else math.nan
     if "gear" in extras:
         g = extras["gear"]
         out["gear"] = g if isinstance(g, int) and -1 <= g <= 20 else None
@@ -213,9 +219,10 @@ def _clean(extras: Extras) -> _Channels:
         sv = extras["suspension_velocity_m_s"]
         clean: tuple[float, float, float, float] | None = None
         if isinstance(sv, tuple) and len(sv) == 4:
-            vals = tuple(float(v) for v in sv)
-            if all(math.isfinite(v) and abs(v) <= MAX_SUSPENSION_VELOCITY_M_S for v in vals):
-                clean = (vals[0], vals[1], vals[2], vals[3])
+            a, b, c, d = (float(x) for x in sv)
+            m = MAX_SUSPENSION_VELOCITY_M_S
+            if -m <= a <= m and -m <= b <= m and -m <= c <= m and -m <= d <= m:
+                clean = (a, b, c, d)
         out["suspension_velocity_m_s"] = clean
     unknown = set(extras) - set(out)
     if unknown:
