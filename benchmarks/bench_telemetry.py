@@ -27,8 +27,11 @@ from _timing import median_time_s, report  # noqa: E402
 from motioncue.telemetry import decoder_for, open_source  # noqa: E402
 from motioncue.telemetry._beamng import BeamNGMotion  # noqa: E402
 from motioncue.telemetry._forza import ForzaMotion  # noqa: E402
+from motioncue.telemetry._pcars2 import PCars2Telemetry  # noqa: E402
+from motioncue.telemetry._xplane import pack_data  # noqa: E402
 
 F1_DIR = Path("/work/shared/data/f1/2024")
+DIRT = HERE.parent / "tests" / "data" / "dirt" / "dr2-r5turbo-noorinbee-300.bin"
 N = 20_000
 
 
@@ -48,7 +51,16 @@ def _datagrams() -> dict[str, list[bytes]]:
     z = (0.0, 0.0, 0.0)
     beamng = BeamNGMotion(z, (0.0, -20.0, 0.0), (1.0, 2.0, 3.0), (0.0, 0.0, 1.0),
                           0.01, 0.02, 0.0, 0.1, 0.2, 0.3, 0.0, 0.0, 0.0).pack()  # fmt: skip
-    return {"f1": _f1_packets(), "forza": [forza], "beamng": [beamng]}
+    xplane = pack_data({4: (0.1, -999.0, 0.0, -999.0, 1.1, 0.2, -0.1, -999.0),
+                        16: (1.0, 2.0, 3.0)})  # fmt: skip
+    dirt_raw = DIRT.read_bytes()  # 300 consecutive real DiRT Rally 2.0 datagrams
+    dirt = [dirt_raw[i : i + 264] for i in range(0, len(dirt_raw), 264)]
+    pcars2 = PCars2Telemetry(
+        1, 30.0, 5000, 8000, 0x63, (0.01, 0.5, 0.02), (0.0, 0.0, -30.0), (0.1, 0.2, 0.3),
+        (1.0, 2.0, 3.0), (0.0, 0.0, 0.0, 0.0),
+    ).pack()  # fmt: skip
+    return {"f1": _f1_packets(), "forza": [forza], "beamng": [beamng], "xplane": [xplane],
+            "dirt": dirt, "pcars2": [pcars2]}  # fmt: skip
 
 
 def bench_decode() -> bool:

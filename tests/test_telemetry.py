@@ -37,6 +37,7 @@ from motioncue.telemetry import (
 )
 from motioncue.telemetry._container import FILE_HEADER, MAGIC, RECORD_HEADER
 from motioncue.telemetry._sample import MAX_ABS_F_M_S2, MAX_ABS_W_RAD_S
+from motioncue.telemetry._xplane import pack_data
 
 F1_DIR = Path("/work/shared/data/f1")
 
@@ -58,11 +59,15 @@ def _wait(cond: object, timeout_s: float = 3.0) -> bool:
 
 
 # -- registry ----------------------------------------------------------------------------
-def test_registry_lists_the_three_games_with_their_default_ports() -> None:
+def test_registry_lists_the_games_with_their_default_ports() -> None:
     assert {n: g.default_port for n, g in GAMES.items()} == {
         "f1": 20777,
         "forza": 5301,
         "beamng": 4444,
+        "xplane": 49005,
+        "xplane11": 49005,
+        "dirt": 20777,
+        "pcars2": 5606,
     }
     for name, info in GAMES.items():
         dec = decoder_for(name)
@@ -72,7 +77,9 @@ def test_registry_lists_the_three_games_with_their_default_ports() -> None:
 
 
 def test_unknown_game_and_bad_game_info_are_named() -> None:
-    with pytest.raises(ConfigError, match=r"unknown game 'gt7'.*beamng, f1, forza"):
+    with pytest.raises(
+        ConfigError, match=r"unknown game 'gt7'.*beamng, dirt, f1, forza, pcars2, xplane, xplane11"
+    ):
         decoder_for("gt7")
     with pytest.raises(ConfigError, match="70000"):
         GameInfo("toy", 70000, decoder=lambda: decoder_for("f1"), title="x")
@@ -152,7 +159,42 @@ def _structured_random(game: str, rng: random.Random) -> bytes:
         body = bytearray(os.urandom(rng.choice((232, 311, 324, 331))))
         struct.pack_into("<i", body, 0, rng.randrange(2))
         return bytes(body)
+    if game in ("xplane", "xplane11"):
+        rows = {i: struct.unpack("<8f", os.urandom(32)) for i in (4, 16, rng.randrange(140))}
+        return pack_data(rows)
+    if game == "dirt":
+        # random floats around a valid body frame on a running game clock, so that the
+        # differences reach the conversion
+        vals = list(struct.unpack("<66f", os.urandom(264)))
+        rot = _random_rotation(rng)
+        vals[0] = next(_DIRT_CLOCK) * 0.015
+        if rng.random() < 0.5:  # plausible motion half the time, raw random floats otherwise
+            vals[8:11] = [rng.uniform(-50, 50) for _ in range(3)]
+            vals[34:36] = [rng.uniform(-3, 3) for _ in range(2)]
+            vals[21:25] = [rng.uniform(-500, 500) for _ in range(4)]
+        vals[11:14] = rot[1]
+        vals[14:17] = rot[0]
+        return struct.pack("<66f", *vals)
+    if game == "pcars2":
+        body = bytearray(os.urandom(rng.choice((559, 559, 24, 308))))
+        struct.pack_into("<BBBB", body, 8, 1, 1, {559: 0, 24: 4, 308: 1}[len(body)], 2)
+        return bytes(body)
     return b"BNG1" + os.urandom(84)
+
+
+_DIRT_CLOCK = itertools.count(1000)
+
+
+def _random_rotation(rng: random.Random) -> list[list[float]]:
+    """Rows of a random rotation matrix (Gram-Schmidt on two random vectors)."""
+    a = [rng.gauss(0, 1) for _ in range(3)]
+    na = math.sqrt(sum(x * x for x in a))
+    a = [x / na for x in a]
+    b = [rng.gauss(0, 1) for _ in range(3)]
+    d = sum(x * y for x, y in zip(a, b, strict=True))
+    b = [y - d * x for x, y in zip(a, b, strict=True)]
+    nb = math.sqrt(sum(x * x for x in b))
+    return [a, [x / nb for x in b]]
 
 
 @pytest.mark.parametrize("game", sorted(GAMES))

@@ -31,10 +31,16 @@ def register(sub: Any) -> None:
     )
     parser.add_argument(
         "--source",
-        required=True,
         metavar="GAME[:[HOST:]PORT]",
-        help="f1, forza or beamng, optionally with the port (and address) to listen on; or "
-        "replay:FILE[?speed=X] to replay a recording",
+        help="f1, forza, beamng, xplane, xplane11, dirt or pcars2, optionally with the port "
+        "(and address) to listen on; or replay:FILE[?speed=X] to replay a recording "
+        "(required unless --profile gives one)",
+    )
+    parser.add_argument(
+        "--profile",
+        metavar="NAME",
+        help="bundled profile name or .toml path binding a source, a preset, cue gains and "
+        "effects for a game or car (configs/profiles); --source and --preset override it",
     )
     parser.add_argument("--platform", required=True, help="bundled platform name or TOML path")
     parser.add_argument("--controller", required=True, help="bundled controller name or TOML path")
@@ -95,6 +101,14 @@ def run(args: argparse.Namespace) -> int:
         raise ConfigError(f"--duration {args.duration!r} is invalid; allowed: a number > 0")
     from ..output._controller_api import snap_rate_hz
 
+    profile = None
+    if args.profile is not None:
+        from ..pipeline._profile import load_profile
+
+        profile = load_profile(args.profile)
+    source_spec = args.source or (profile.source if profile is not None else None)
+    if source_spec is None:
+        raise ConfigError("give --source GAME[:[HOST:]PORT] or --profile NAME")
     controller = load_controller(args.controller)
     config = BridgeConfig(
         rate_hz=snap_rate_hz(args.rate, controller),
@@ -111,19 +125,32 @@ def run(args: argparse.Namespace) -> int:
         a_max=args.max_accel,
         rate_hz=config.rate_hz,
     )
-    cueing, preset_source = choose_preset(args.preset, platform, args.platform)
+    preset = args.preset or (profile.preset if profile is not None else None)
+    cueing, preset_source = choose_preset(preset, platform, args.platform)
+    effects = None
+    if profile is not None:
+        from ..pipeline._effects import make_effects
+
+        if args.preset is None and profile.preset is not None:
+            preset_source = f"{cueing.name} (profile {profile.name})"
+        else:
+            preset_source += f", profile {profile.name}"
+        cueing = profile.apply(cueing)
+        effects = profile.effects
+        make_effects(effects, config.rate_hz)  # refused below 100 Hz before anything opens
     # over UDP the IMAX and SC-MBOX report where their motors are: start from there
     q_start = "auto" if args.target.lower().startswith("udp:") else None
     # from here on SIGINT, SIGTERM, SIGHUP and SIGQUIT only set a flag: the bridge parks and
     # nothing cuts the park or the summary short
     with SignalGuard() as guard:
-        source = open_source(args.source)
+        source = open_source(source_spec)
         try:
             transport = open_transport(args.target)
             try:
                 bridge = Bridge(
-                    platform, controller, cueing, source, transport, limits, config, q_start=q_start
-                )
+                    platform, controller, cueing, source, transport, limits, config,
+                    q_start=q_start, effects=effects,
+                )  # fmt: skip
                 start_notes = list(bridge.stage.notes)
                 for note in start_notes:
                     _say(f"motioncue bridge: note: {note}")

@@ -25,7 +25,8 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
         "--source",
         required=True,
         metavar="GAME[:[HOST:]PORT]",
-        help="game and optional port, e.g. f1, forza:5301, beamng:0.0.0.0:4444 "
+        help="game and optional port, e.g. f1, forza:5301, beamng:0.0.0.0:4444, dirt, pcars2, "
+        "xplane "
         "(default bind address 127.0.0.1)",
     )
     p.add_argument("--out", required=True, metavar="FILE", help="recording file to write")

@@ -12,7 +12,8 @@ Per tick:
    starts clean;
 3. washout step (streaming, explicit :class:`~motioncue.cueing.WashoutState`) on the newest
    sample, held between samples (the washout runs at the frame rate);
-4. blend ``pose = pose_park + gain * (cue - pose_park)``;
+4. blend ``pose = pose_park + gain * (cue - pose_park)``, plus ``gain`` x the effect layer's
+   offsets when effects are on (:mod:`~motioncue.pipeline._effects`: engine, road, shift);
 5. workspace limiting (:func:`motioncue.trajectory.limit_pose`, which also returns the
    inverse kinematics of the pose it keeps: ``platform.inverse``'s single-pose fast path);
 6. :meth:`OutputStage.emit <motioncue.pipeline._stream.OutputStage.emit>`: real-time
@@ -54,6 +55,7 @@ from typing import Any, Protocol
 import numpy as np
 
 from .._errors import ConfigError, MotioncueError
+from ._effects import EffectGains, EffectsState, make_effects
 from ._realtime import CueGate, GateConfig, Ticker
 from ._stream import OutputStage
 
@@ -284,6 +286,10 @@ class Bridge:
     q_start : array_like or "auto", optional
         Where the platform is (at rest) at the start: default parked (as after homing);
         ``"auto"`` asks the controller (see :class:`~motioncue.pipeline.OutputStage`).
+    effects : motioncue.pipeline._effects.EffectGains, optional
+        Effect layer gains (engine, road, shift): small heave/roll/pitch added to the cued
+        pose before workspace limiting, faded with the cue. Refused (``ConfigError``) below
+        100 Hz. None or all gains 0: no effects.
 
     Use ``bridge.start()``, read ``bridge.stats`` at will, ``bridge.stop()`` to park and end
     (``with Bridge(...) as b:`` does both). If a frame fails (an exception anywhere in
@@ -303,6 +309,7 @@ class Bridge:
         config: BridgeConfig | None = None,
         *,
         q_start: Any = None,
+        effects: EffectGains | None = None,
     ) -> None:
         from motioncue.cueing import make_cueing
 
@@ -320,6 +327,10 @@ class Bridge:
             )
         self.washout = make_cueing(cueing, cfg.rate_hz)
         self.washout_state = self.washout.initial_state()
+        # effect layer (``effects``: an EffectGains; None or all gains 0: none); refused below
+        # 100 Hz. It adds to the blended pose before workspace limiting: limits see the sum.
+        self.effects = None if effects is None else make_effects(effects, cfg.rate_hz)
+        self.effects_state = EffectsState()
         self.gate = CueGate(cfg.gate)
         # built here so that configuration errors surface before start()
         self.stage = OutputStage(
@@ -514,6 +525,8 @@ class Bridge:
                 wstate = self.washout_state
                 self._bad_total += wstate.bad_samples
                 self.washout.reset(wstate)
+                if self.effects is not None:
+                    self.effects.reset(self.effects_state)
                 self._clean = True
             stage.park_step()
         else:
@@ -524,6 +537,8 @@ class Bridge:
             pose = self._pose
             for i in range(6):
                 pose[i] = park[i] + gain * (cue[i] - park[i])
+            if self.effects is not None:
+                self.effects.add(self.effects_state, held, gain, pose)
             res = self._limit_pose(self.platform, pose, limits=self.limits)
             if res.status != "ok":
                 if res.status == "invalid":

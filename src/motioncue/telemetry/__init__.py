@@ -7,6 +7,9 @@ body frame, x forward, y left, z up; specific force ``f = a - g`` in m/s^2, ``(0
 * ``f1``: EA SPORTS F1 23 / 24 / 25 (Motion + Motion Ex, Session for pause), port 20777
 * ``forza``: Forza Motorsport 7 / 2023 and Forza Horizon 4 / 5 / 6 Data Out, port 5301
 * ``beamng``: BeamNG.drive MotionSim (``BNG1``), port 4444
+* ``xplane`` / ``xplane11``: X-Plane 12 / 11 UDP ``DATA`` output (rows 4 and 16), port 49005
+* ``dirt``: Codemasters ``extradata="3"`` UDP (DiRT Rally, DiRT Rally 2.0, DiRT 4...), 20777
+* ``pcars2``: Project CARS 2 / 3 and Automobilista 2 UDP (Project CARS 2 protocol), 5606
 
 Typical use::
 
@@ -102,7 +105,7 @@ def __getattr__(name: str) -> Any:
 
 
 # One module per game; each registers itself in GAMES on import.
-_GAME_MODULES: tuple[str, ...] = ("_f1", "_forza", "_beamng")
+_GAME_MODULES: tuple[str, ...] = ("_f1", "_forza", "_beamng", "_xplane", "_dirt", "_pcars2")
 for _name in _GAME_MODULES:
     importlib.import_module(f"{__name__}.{_name}")
 del _name

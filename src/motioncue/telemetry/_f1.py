@@ -20,6 +20,12 @@ little-endian, packed:
   angularAcceleration[3], frontWheelsAngle``, ``float wheelVertForce[4]`` = 188 bytes common
   to all three years; F1 24 appends 5 floats (aero heights, roll angles, chassis yaw) -> 237
   bytes; F1 25 also ``chassisPitch, wheelCamber[4], wheelCamberGain[4]`` -> 273 bytes.
+* Car Telemetry (id 6), 1352 bytes: header + 22 x 60 bytes (``uint16 speed, float throttle,
+  steer, brake, uint8 clutch, int8 gear, uint16 engineRPM``, ...) + 3 bytes; only the player
+  car's ``gear`` (byte 15: -1 reverse, 0 neutral) and ``engineRPM`` (byte 16) are read, for the
+  effect layer. Motion Ex's ``suspensionVelocity`` (floats 4..7, wheels RL, RR, FL, FR) is in
+  mm/s on the captures (positions ~50 mm, velocities ~100): it is passed on in m/s, reordered
+  FL, FR, RL, RR.
 * Session (id 1): after the header ``uint8 weather, int8 trackTemperature, int8
   airTemperature, uint8 totalLaps, uint16 trackLength, uint8 sessionType, int8 trackId, uint8
   formula, uint16 sessionTimeLeft, uint16 sessionDuration, uint8 pitSpeedLimit, uint8
@@ -168,7 +174,9 @@ NOTE_W_FROM_ORIENTATION = (
 """Counter key of the samples whose angular velocity was derived from the orientation."""
 
 _PLAUSIBLE_F1_FORMATS = range(2017, 2036)  # older/newer F1 games: "unsupported format"
-_ID_MOTION, _ID_SESSION, _ID_MOTION_EX = 0, 1, 13
+_ID_MOTION, _ID_SESSION, _ID_MOTION_EX, _ID_CAR_TELEMETRY = 0, 1, 13, 6
+CAR_TELEMETRY_SIZE = HEADER.size + NUM_CARS * 60 + 3  # 1352
+_CAR_GEAR_RPM = struct.Struct("<bH")  # at +15 of a car's 60-byte block
 _MAX_PACKET_ID = 15
 _EX_LOCAL_VELOCITY = 33  # float index in MOTION_EX_CORE
 _EX_ANGULAR_VELOCITY = 36
@@ -265,6 +273,10 @@ class F1Decoder(Decoder):
         # previous player orientation: (session uid, player index, session time, yaw, pitch,
         # roll), and the body rate last derived from it
         self._att: tuple[int, int, float, float, float, float] | None = None
+        # player car's suspension velocity from the last Motion Ex (m/s, FL, FR, RL, RR) and
+        # (session uid, rpm, gear) from the last Car Telemetry, for the effect layer
+        self._ex_sv: tuple[float, float, float, float] | None = None
+        self._engine: tuple[int, int, int] | None = None
         self._att_w: Vec3 | None = None
 
     def _decode(self, datagram: bytes, t_s: float) -> DecodeResult:
@@ -286,6 +298,10 @@ class F1Decoder(Decoder):
             return self._motion_ex(datagram, n, fmt, uid, stime)
         if pid == _ID_SESSION:
             return self._session(datagram, n, uid)
+        if pid == _ID_CAR_TELEMETRY and n == CAR_TELEMETRY_SIZE and player < NUM_CARS:
+            gear, rpm = _CAR_GEAR_RPM.unpack_from(datagram, HEADER.size + 60 * player + 15)
+            self._engine = (uid, rpm, gear)
+            return DecodeResult("state", "state: car telemetry")
         return DecodeResult("ignored", "ignored: other packet id")
 
     def _motion(
@@ -300,8 +316,10 @@ class F1Decoder(Decoder):
         (_px, _py, _pz, _vx, _vy, _vz, fx, fy, fz, rx, ry, rz, g_lat, g_lon, g_vert, yaw, pitch,
          roll) = CAR_MOTION.unpack_from(data, HEADER.size + player * CAR_MOTION.size)  # fmt: skip
         w_att = self._orientation_rate(uid, player, stime, yaw, pitch, roll)
+        extras: dict[str, object] = {}
         if self._ex_uid == uid and abs(stime - self._ex_time) <= self.max_ex_age_s:
             w, derived = self._ex_w, False
+            extras["suspension_velocity_m_s"] = self._ex_sv
         elif w_att is not None:
             w, derived = w_att, True
         elif not (math.isfinite(yaw) and math.isfinite(pitch) and math.isfinite(roll)):
@@ -322,7 +340,10 @@ class F1Decoder(Decoder):
         paused = (self._paused and self._paused_uid == uid) or (
             self._frozen_repeats >= FROZEN_REPEATS
         )
-        result = self._make(t_s, f, w, paused)
+        engine = self._engine
+        if engine is not None and engine[0] == uid:
+            extras["rpm"], extras["gear"] = float(engine[1]), engine[2]
+        result = self._make(t_s, f, w, paused, extras or None)
         if derived and result.status == "sample":
             self._count(NOTE_W_FROM_ORIENTATION)
         return result
@@ -378,6 +399,8 @@ class F1Decoder(Decoder):
             if not math.isfinite(v):
                 return DecodeResult("skipped", "skipped: non-finite")
         self._ex_uid, self._ex_time, self._ex_w = uid, stime, w
+        rl, rr, fl, fr = struct.unpack_from("<4f", data, HEADER.size + 16)  # mm/s
+        self._ex_sv = (fl / 1e3, fr / 1e3, rl / 1e3, rr / 1e3)
         return DecodeResult("partial", "partial: motion ex stored")
 
     def _session(self, data: bytes, n: int, uid: int) -> DecodeResult:

@@ -40,6 +40,8 @@ the same left-handed rule: ISO pitch (nose down +) = ``Pitch``, ISO roll (right 
 The sign conventions of ``w`` and of the Pitch/Roll angles follow from the documented
 left-handed axes; no captured Forza datagram was available to pin them against real motion.
 
+``CurrentEngineRpm`` and ``EngineMaxRpm`` are passed on for the effect layer (engine).
+
 Pause: ``IsRaceOn == 0`` (menus, race stopped) -> ``paused``. Horizon 6 documents that no
 data is sent in menus, pauses, replays or rewinds: sources see that as missing packets.
 """
@@ -145,9 +147,8 @@ class ForzaDecoder(Decoder):
             return DecodeResult(
                 "skipped", "skipped: truncated" if n < SLED_SIZE else "skipped: wrong size"
             )
-        (race_on, _ts, _r0, _r1, _r2, ax, ay, az, _vx, _vy, _vz, wx, wy, wz, _yaw, pitch, roll) = (
-            SLED_HEAD.unpack_from(datagram)
-        )
+        (race_on, _ts, rpm_max, _idle, rpm, ax, ay, az, _vx, _vy, _vz, wx, wy, wz, _yaw, pitch,
+         roll) = SLED_HEAD.unpack_from(datagram)  # fmt: skip
         if race_on not in (0, 1):
             return DecodeResult("skipped", "skipped: foreign")
         self.layouts[layout] = self.layouts.get(layout, 0) + 1
@@ -156,7 +157,7 @@ class ForzaDecoder(Decoder):
         ux, uy, uz = up_in_body_from_angles(pitch, -roll)
         f = (az + G0_M_S2 * ux, -ax + G0_M_S2 * uy, ay + G0_M_S2 * uz)
         w = (-wz, wx, -wy)
-        return self._make(t_s, f, w, race_on == 0)
+        return self._make(t_s, f, w, race_on == 0, {"rpm": rpm, "rpm_max": rpm_max})
 
 
 INFO = register_game(

@@ -11,7 +11,7 @@ import math
 from abc import ABC, abstractmethod
 from collections.abc import Sequence
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Literal
+from typing import TYPE_CHECKING, Literal, TypedDict
 
 if TYPE_CHECKING:
     import numpy as np
@@ -63,6 +63,16 @@ class TelemetrySample:
         True when the game says it is paused, in a menu or not driving (the pipeline parks).
     game : str
         Registered name of the game that produced it (``"f1"``, ``"forza"``, ``"beamng"``).
+    rpm : float
+        Engine speed (rev/min); nan when the game does not report it. Optional channel for
+        the effect layer (:mod:`motioncue.pipeline._effects`), like the three below.
+    rpm_max : float
+        The engine's maximum (rev/min), nan when unknown.
+    gear : int or None
+        Gear engaged: 0 neutral, -1 reverse, 1.. forward; None when unknown.
+    suspension_velocity_m_s : tuple of 4 float or None
+        Suspension velocity of the wheels front-left, front-right, rear-left, rear-right
+        (m/s, positive compressing); None when unknown.
     """
 
     t_s: float
@@ -70,6 +80,10 @@ class TelemetrySample:
     w: Vec3
     paused: bool
     game: str
+    rpm: float = math.nan
+    rpm_max: float = math.nan
+    gear: int | None = None
+    suspension_velocity_m_s: tuple[float, float, float, float] | None = None
 
 
 DecodeStatus = Literal["sample", "partial", "state", "ignored", "skipped"]
@@ -142,8 +156,15 @@ class Decoder(ABC):
         """Decode one datagram (may assume nothing about its content)."""
 
     # -- helpers for subclasses ------------------------------------------------------------
-    def _make(self, t_s: float, f: Vec3, w: Vec3, paused: bool) -> DecodeResult:
-        """Check a converted sample for non-finite or absurd values and wrap it."""
+    def _make(
+        self, t_s: float, f: Vec3, w: Vec3, paused: bool, extras: Extras | None = None
+    ) -> DecodeResult:
+        """Check a converted sample for non-finite or absurd values and wrap it.
+
+        ``extras`` are the optional channels (``rpm``, ``rpm_max``, ``gear``,
+        ``suspension_velocity_m_s``); a non-finite or absurd one is dropped (set to unknown)
+        rather than costing the motion sample.
+        """
         for v in f:
             if not math.isfinite(v):
                 return DecodeResult("skipped", "skipped: non-finite")
@@ -154,7 +175,59 @@ class Decoder(ABC):
                 return DecodeResult("skipped", "skipped: non-finite")
             if abs(v) > MAX_ABS_W_RAD_S:
                 return DecodeResult("skipped", "skipped: out of range")
-        return DecodeResult("sample", "sample", TelemetrySample(t_s, f, w, paused, self.game))
+        if extras is None:
+            return DecodeResult("sample", "sample", TelemetrySample(t_s, f, w, paused, self.game))
+        return DecodeResult(
+            "sample", "sample", TelemetrySample(t_s, f, w, paused, self.game, **_clean(extras))
+        )
+
+
+Extras = dict[str, object]
+
+MAX_RPM = 100_000.0
+"""Largest engine speed passed on (rev/min); anything above is garbage."""
+
+MAX_SUSPENSION_VELOCITY_M_S = 100.0
+"""Largest suspension velocity passed on (m/s)."""
+
+
+class _Channels(TypedDict, total=False):
+    rpm: float
+    rpm_max: float
+    gear: int | None
+    suspension_velocity_m_s: tuple[float, float, float, float] | None
+
+
+def _clean(extras: Extras) -> _Channels:
+    """Optional channels with non-finite or absurd values replaced by 'unknown'.
+
+    (Chained comparisons are False for nan and reject inf: one test per value, on the path of
+    every datagram.)
+    """
+    out: _Channels = {}
+    if "rpm" in extras:
+        v = extras["rpm"]
+        out["rpm"] = float(v) if isinstance(v, float | int) and 0.0 <= v <= MAX_RPM else math.nan
+    if "rpm_max" in extras:
+        v = extras["rpm_max"]
+        ok = isinstance(v, float | int) and 0.0 <= v <= MAX_RPM
+        out["rpm_max"] = float(v) if ok and isinstance(v, float | int) else math.nan
+    if "gear" in extras:
+        g = extras["gear"]
+        out["gear"] = g if isinstance(g, int) and -1 <= g <= 20 else None
+    if "suspension_velocity_m_s" in extras:
+        sv = extras["suspension_velocity_m_s"]
+        clean: tuple[float, float, float, float] | None = None
+        if isinstance(sv, tuple) and len(sv) == 4:
+            a, b, c, d = (float(x) for x in sv)
+            m = MAX_SUSPENSION_VELOCITY_M_S
+            if -m <= a <= m and -m <= b <= m and -m <= c <= m and -m <= d <= m:
+                clean = (a, b, c, d)
+        out["suspension_velocity_m_s"] = clean
+    unknown = set(extras) - set(out)
+    if unknown:
+        raise TypeError(f"unknown sample channels {sorted(unknown)}")
+    return out
 
 
 def up_in_body_from_angles(pitch_rad: float, roll_rad: float) -> Vec3:

@@ -1,0 +1,166 @@
+"""Bridge profiles: one file binds a telemetry source, a cueing preset, cue gains and effects
+for a game or a car (``configs/profiles/*.toml``; ``motioncue bridge --profile NAME``).
+
+File layout (``source`` required, everything else optional; unknown keys are refused with
+the key named)::
+
+    description = "DiRT Rally 2.0, rally cars on gravel"   # optional
+    car = "Renault 5 Turbo"            # optional, for the reader: the car the gains suit
+    source = "dirt"                    # GAME[:[HOST:]PORT] or replay:FILE[?speed=X]
+    preset = "racing"                  # cueing preset name or .toml path (relative to this
+                                       # file); default: the platform's default preset
+    [cue]
+    f_gain = [1.0, 1.2, 0.8]           # multiplies the preset's f_scale (x, y, z); or one
+    w_gain = 1.0                       # number for all three; w_gain multiplies w_scale
+    [effects]                          # effect gains, 0..3 (motioncue.pipeline._effects)
+    engine = 0.3
+    road = 1.0
+    shift = 0.5
+
+Gains multiply the preset's scaling: ``f_gain`` 1.2 on y gives 20 % more lateral cue before
+the preset's own smooth limit (``f_limit_m_s2``), which still bounds it; the workspace and
+actuator limits bound everything after.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field, replace
+from pathlib import Path
+from typing import Any
+
+from .._config import ConfigReader, bundled_names, find_config, load_toml
+from .._errors import ConfigError
+from ._effects import EFFECT_NAMES, MAX_GAIN, EffectGains
+
+__all__ = ["MAX_CUE_GAIN", "Profile", "bundled_profiles", "load_profile"]
+
+MAX_CUE_GAIN = 5.0
+"""Largest cue gain a profile may set on one axis."""
+
+Vec3 = tuple[float, float, float]
+
+
+@dataclass(frozen=True)
+class Profile:
+    """A bridge profile (see the module docstring for the file layout).
+
+    Attributes
+    ----------
+    name : str
+        The file's stem.
+    source : str
+        Telemetry source spec (``motioncue.telemetry.open_source``).
+    preset : str or None
+        Cueing preset name or absolute path; None: the platform's default.
+    f_gain, w_gain : tuple of 3 float
+        Multipliers of the preset's ``f_scale`` and ``w_scale`` (x, y, z / roll, pitch, yaw).
+    effects : EffectGains
+        Effect layer gains.
+    description, car : str
+        Free text.
+    """
+
+    name: str
+    source: str
+    preset: str | None = None
+    f_gain: Vec3 = (1.0, 1.0, 1.0)
+    w_gain: Vec3 = (1.0, 1.0, 1.0)
+    effects: EffectGains = field(default_factory=EffectGains)
+    description: str = ""
+    car: str = ""
+
+    def apply(self, cueing: Any) -> Any:
+        """The cueing parameters with this profile's gains applied (a new object)."""
+        if self.f_gain == (1.0, 1.0, 1.0) and self.w_gain == (1.0, 1.0, 1.0):
+            return cueing
+        f = tuple(a * b for a, b in zip(cueing.f_scale, self.f_gain, strict=True))
+        w = tuple(a * b for a, b in zip(cueing.w_scale, self.w_gain, strict=True))
+        return replace(cueing, f_scale=f, w_scale=w, name=f"{cueing.name}+{self.name}")
+
+
+def bundled_profiles() -> list[str]:
+    """Names of the bundled profiles."""
+    return bundled_names("profiles")
+
+
+def _gain3(table: ConfigReader, key: str) -> Vec3:
+    if not table.has(key):
+        return (1.0, 1.0, 1.0)
+    raw = table.raw(key)
+    allowed = f"a number or a list of 3 numbers in [0, {MAX_CUE_GAIN:g}]"
+    vals = [raw] * 3 if isinstance(raw, int | float) and not isinstance(raw, bool) else raw
+    if (
+        not isinstance(vals, list)
+        or len(vals) != 3
+        or not all(
+            isinstance(v, int | float)
+            and not isinstance(v, bool)
+            and math.isfinite(v)
+            and 0.0 <= v <= MAX_CUE_GAIN
+            for v in vals
+        )
+    ):
+        raise table.error(key, raw, allowed)
+    return (float(vals[0]), float(vals[1]), float(vals[2]))
+
+
+def load_profile(name_or_path: str | Path) -> Profile:
+    """Load a bundled profile by name (``dirt-rally2``) or from a TOML path.
+
+    The source spec and the preset are checked here (an unknown game or preset is a
+    :class:`ConfigError` naming the file), so that a bad profile fails before anything opens.
+
+    Raises
+    ------
+    ConfigError
+        Unknown profile, bad TOML, unknown or missing keys, values out of range, unknown
+        game or preset.
+    """
+    from motioncue.cueing import load_cueing
+    from motioncue.telemetry._source import parse_live_spec
+
+    path = find_config("profiles", name_or_path)
+    where = path.name
+    top = ConfigReader(load_toml(path), where)
+    description = top.string("description", "")
+    car = top.string("car", "")
+    source = top.string("source")
+    preset = top.string("preset", None) if top.has("preset") else None
+    cue = top.table("cue", {})
+    f_gain = _gain3(cue, "f_gain")
+    w_gain = _gain3(cue, "w_gain")
+    cue.finish()
+    eff = top.table("effects", {})
+    gains = {}
+    for name in EFFECT_NAMES:
+        if eff.has(name):
+            gains[name] = eff.number(name, lo=0.0, hi=MAX_GAIN)
+    eff.finish()
+    top.finish()
+    if source.startswith("replay:"):
+        if source == "replay:":
+            raise top.error("source", source, "GAME[:[HOST:]PORT] or replay:FILE")
+    else:
+        try:
+            parse_live_spec(source)
+        except ConfigError as exc:
+            raise ConfigError(f"{where}: {exc}") from None
+    if preset is not None:
+        candidate = Path(preset)
+        if candidate.suffix == ".toml" and not candidate.is_absolute():
+            preset = str((path.parent / candidate).resolve())
+        try:
+            load_cueing(preset)
+        except ConfigError as exc:
+            raise ConfigError(f"{where}: preset: {exc}") from None
+    return Profile(
+        name=path.stem,
+        source=source,
+        preset=preset,
+        f_gain=f_gain,
+        w_gain=w_gain,
+        effects=EffectGains(**gains),
+        description=description,
+        car=car,
+    )

@@ -1,0 +1,149 @@
+"""Bridge profiles: bundled examples, refusals with the key named, gains, and
+``motioncue bridge --profile`` end to end on DiRT packets with effects on."""
+
+from __future__ import annotations
+
+import socket
+from pathlib import Path
+
+import pytest
+
+from motioncue import ConfigError
+from motioncue.cli import main
+from motioncue.cueing import load_cueing
+from motioncue.output import load_controller, mbox
+from motioncue.pipeline._effects import EffectGains
+from motioncue.pipeline._profile import Profile, bundled_profiles, load_profile
+from test_bridge_cli import _check, _printed_limits
+from test_bridge_games import PACKETS, Sender, _wait_for
+
+
+def test_bundled_profiles_load_and_name_their_game() -> None:
+    assert bundled_profiles() == ["dirt-rally2", "f1-24", "pcars2-gt3", "xplane-ga"]
+    games = {n: load_profile(n).source.split(":")[0] for n in bundled_profiles()}
+    assert games == {"dirt-rally2": "dirt", "f1-24": "f1", "pcars2-gt3": "pcars2",
+                     "xplane-ga": "xplane"}  # fmt: skip
+    p = load_profile("dirt-rally2")
+    assert p.preset == "racing" and p.f_gain == (1.0, 0.9, 1.0) and p.w_gain == (1.0, 1.0, 1.0)
+    assert p.effects == EffectGains(engine=0.3, road=1.2, shift=0.8)
+    assert load_profile("pcars2-gt3").f_gain == (0.8, 0.8, 0.8)  # one number for all axes
+    assert load_profile("xplane-ga").effects == EffectGains(engine=0.5)
+    assert load_profile("f1-24").effects == EffectGains(engine=0.2, road=0.6, shift=0.5)
+
+
+def _write(tmp_path: Path, text: str, name: str = "mine.toml") -> Path:
+    p = tmp_path / name
+    p.write_text(text)
+    return p
+
+
+@pytest.mark.parametrize(
+    ("text", "msg"),
+    [
+        ('source = "dirt"\nsorce = 1\n', r"mine.toml: unknown key\(s\) 'sorce'"),
+        ('source = "dirt"\n[cue]\nf_gian = 1.0\n', r"mine.toml \[cue\]: unknown key\(s\) 'f_gian'"),
+        ('source = "dirt"\n[effects]\nrumble = 1.0\n', r"\[effects\]: unknown key\(s\) 'rumble'"),
+        ('source = "dirt"\n[cue]\nf_gain = [1.0, 2.0]\n',
+         r"f_gain = \[1.0, 2.0\] is invalid; allowed: a number or a list of 3"),
+        ('source = "dirt"\n[cue]\nw_gain = -1\n', r"w_gain = -1 is invalid"),
+        ('source = "dirt"\n[effects]\nroad = 4.0\n',
+         r"road = 4.0 is invalid; allowed: a finite number in \[0.0, 3.0\]"),
+        ('source = "gt7"\n', r"mine.toml: source 'gt7': unknown game 'gt7'"),
+        ('source = "dirt:99999"\n', r"port '99999' is not an integer in 0..65535"),
+        ('source = "dirt"\npreset = "nosuch"\n',
+         r"mine.toml: preset: unknown cueing config 'nosuch'"),
+        ('preset = "racing"\n', r"mine.toml: missing key 'source'"),
+        ("source = \n", r"mine.toml: not valid TOML"),
+    ],
+)  # fmt: skip
+def test_bad_profiles_are_refused_with_the_key_named(tmp_path: Path, text: str, msg: str) -> None:
+    with pytest.raises(ConfigError, match=msg):
+        load_profile(_write(tmp_path, text))
+
+
+def test_unknown_profile_lists_the_bundled_ones() -> None:
+    with pytest.raises(ConfigError, match=r"unknown profiles config 'nosuch'; bundled: dirt-"):
+        load_profile("nosuch")
+
+
+def test_gains_multiply_the_preset_scaling() -> None:
+    racing = load_cueing("racing")
+    p = Profile("t", "dirt", f_gain=(1.0, 1.5, 0.5), w_gain=(2.0, 1.0, 0.0))
+    c = p.apply(racing)
+    f_want = [a * b for a, b in zip(racing.f_scale, (1, 1.5, 0.5), strict=True)]
+    w_want = [a * b for a, b in zip(racing.w_scale, (2, 1, 0), strict=True)]
+    assert c.f_scale == pytest.approx(f_want) and c.w_scale == pytest.approx(w_want)
+    assert c.f_limit_m_s2 == racing.f_limit_m_s2 and c.name == "racing+t"
+    assert Profile("u", "dirt").apply(racing) is racing
+    with pytest.raises(ConfigError, match="f_scale"):  # the preset's own validation still runs
+        Profile("v", "dirt", f_gain=(1e4, 1.0, 1.0)).apply(racing)
+
+
+def test_a_relative_preset_path_is_read_next_to_the_profile(tmp_path: Path) -> None:
+    (tmp_path / "sub").mkdir()
+    preset = Path(__file__).resolve().parents[1] / "configs" / "cueing" / "flight.toml"
+    (tmp_path / "sub" / "my-flight.toml").write_text(preset.read_text())
+    p = load_profile(_write(tmp_path, 'source = "xplane"\npreset = "sub/my-flight.toml"\n'))
+    assert p.preset == str((tmp_path / "sub" / "my-flight.toml").resolve())
+
+
+def _free_udp_port() -> int:
+    with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as s:
+        s.bind(("127.0.0.1", 0))
+        return int(s.getsockname()[1])
+
+
+def test_bridge_profile_runs_dirt_with_effects_inside_the_limits(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    port = _free_udp_port()
+    prof = _write(tmp_path, f'source = "dirt:{port}"\npreset = "racing"\n'
+                  "[cue]\nf_gain = 1.2\n[effects]\nengine = 1.0\nroad = 2.0\nshift = 1.0\n",
+                  "rally.toml")  # fmt: skip
+    emu = mbox.MboxEmulator(load_controller("mbox6"))
+    args = ["--platform", "stewart6-linear", "--controller", "mbox6"]
+    with emu, Sender(port, PACKETS["dirt"]):
+        code = main(["bridge", "--profile", str(prof), *args,
+                     "--target", f"udp://127.0.0.1:{emu.port}", "--rate", "250", "--fade", "0.3",
+                     "--duration", "1.5", "--rt-priority", "0"])  # fmt: skip
+        assert _wait_for(lambda: len(emu.trace) > 0 and emu.received == len(emu.trace) + 1)
+    err = capsys.readouterr().err
+    assert code == 0, err
+    assert "preset racing (profile rally)" in err and "live" in err
+    _check(emu, "stewart6-linear", _printed_limits(capsys, *args))
+
+
+def test_bridge_profile_refusals(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    base = ["bridge", "--platform", "seat3", "--controller", "imax3", "--target", "file:/dev/null"]
+    assert main(base) == 2
+    assert "give --source GAME[:[HOST:]PORT] or --profile NAME" in capsys.readouterr().err
+    assert main([*base, "--profile", "dirt-rally2", "--rate", "50"]) == 2
+    err = capsys.readouterr().err
+    assert "motioncue bridge: error: effects (engine, road, shift) need frames at >= 100 Hz" in err
+    assert "Traceback" not in err
+    bad = _write(tmp_path, 'source = "dirt"\ncolour = "red"\n')
+    assert main([*base, "--profile", str(bad)]) == 2
+    assert "unknown key(s) 'colour'" in capsys.readouterr().err
+
+
+def test_mutated_profiles_give_only_config_errors(tmp_path: Path) -> None:
+    """2000 mutations of the bundled profiles (the config fuzzer's mutator): each one loads
+    or is refused with a ConfigError, never another exception."""
+    import random
+
+    from motioncue._config import config_dir
+    from test_fuzz_inputs import _mutate_config
+
+    texts = [(p.name, p.read_text()) for p in sorted(config_dir("profiles").glob("*.toml"))]
+    outcomes = {"loaded": 0, "refused": 0}
+    for i in range(2000):
+        rng = random.Random(4242 + i)
+        name, text = rng.choice(texts)
+        path = tmp_path / f"m{i % 20}-{name}"
+        path.write_text(_mutate_config(rng, text))
+        try:
+            load_profile(path)
+            outcomes["loaded"] += 1
+        except ConfigError:
+            outcomes["refused"] += 1
+    assert outcomes["loaded"] > 100 and outcomes["refused"] > 200, outcomes
