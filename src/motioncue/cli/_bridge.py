@@ -9,6 +9,7 @@ import time
 from typing import Any
 
 from .._errors import ConfigError
+from ._common import add_set_option, load_platform_arg
 
 __all__ = ["register"]
 
@@ -78,11 +79,11 @@ def register(sub: Any) -> None:
         "delaying frames on a busy PC (default 10; 0 = normal scheduling)",
     )
     parser.add_argument("--quiet", action="store_true", help="no status line")
+    add_set_option(parser)
     parser.set_defaults(run=run)
 
 
 def run(args: argparse.Namespace) -> int:
-    from ..kinematics import load_platform
     from ..output import load_controller, open_transport
     from ..pipeline._bridge import Bridge, BridgeConfig
     from ..pipeline._realtime import GateConfig
@@ -101,7 +102,7 @@ def run(args: argparse.Namespace) -> int:
         gate=GateConfig(timeout_s=args.timeout, fade_out_s=args.fade, fade_in_s=args.fade),
         rt_priority=args.rt_priority or None,
     )
-    platform = load_platform(args.platform)
+    platform = load_platform_arg(args.platform, args.overrides)
     controller.check_rate(config.rate_hz)
     limits = ActuatorLimits.from_platform(
         platform,
@@ -111,7 +112,7 @@ def run(args: argparse.Namespace) -> int:
         a_max=args.max_accel,
         rate_hz=config.rate_hz,
     )
-    cueing, preset_source = choose_preset(args.preset, platform, args.platform)
+    cueing, preset_source = choose_preset(args.preset, platform, args.platform, args.overrides)
     # over UDP the IMAX and SC-MBOX report where their motors are: start from there
     q_start = "auto" if args.target.lower().startswith("udp:") else None
     # from here on SIGINT, SIGTERM, SIGHUP and SIGQUIT only set a flag: the bridge parks and

@@ -6,6 +6,8 @@ import argparse
 import math
 from typing import Any
 
+from ._common import add_set_option, load_platform_arg
+
 __all__ = ["register"]
 
 
@@ -36,14 +38,14 @@ def register(sub: Any) -> None:
         "the controller's clock)",
     )
     parser.add_argument("--json", action="store_true", help="print JSON instead of a table")
+    add_set_option(parser, ("platform",))
     parser.set_defaults(run=run)
 
 
 def run(args: argparse.Namespace) -> int:
-    from ..kinematics import load_platform
     from ..trajectory import ActuatorLimits
 
-    platform = load_platform(args.platform)
+    platform = load_platform_arg(args.platform, args.overrides)
     controller = None
     if args.controller:
         from ..output._controllers import load_controller

@@ -10,6 +10,7 @@ from pathlib import Path
 from typing import Any
 
 from .._errors import ConfigError
+from ._common import add_set_option, load_platform_arg
 from ._preset import add_vestibular_option
 
 __all__ = ["register"]
@@ -85,6 +86,7 @@ def register(sub: Any) -> None:
         "--rate", type=float, default=100.0, metavar="HZ", help="frame rate (default 100)"
     )
     add_vestibular_option(parser)
+    add_set_option(parser)
     parser.set_defaults(run=run)
 
 
@@ -110,7 +112,6 @@ def _metrics_table(before: Any, after: Any) -> str:
 def run(args: argparse.Namespace) -> int:
     from ..cueing import get_model_set, load_cueing
     from ..cueing._tune import PENALTY_BASE, TuneObjective, preset_toml, tune_cueing, write_preset
-    from ..kinematics import load_platform
     from ..output._controllers import load_controller
     from ..telemetry._recording import read_recording_csv, resample
     from ..trajectory import ActuatorLimits
@@ -143,10 +144,10 @@ def run(args: argparse.Namespace) -> int:
     if not out.parent.is_dir():
         raise ConfigError(f"--out {out}: folder {out.parent} does not exist")
 
-    platform = load_platform(args.platform)
+    platform = load_platform_arg(args.platform, args.overrides)
     controller = load_controller(args.controller)
     controller.check_rate(args.rate)
-    base, base_source = choose_preset(args.preset, platform, args.platform)
+    base, base_source = choose_preset(args.preset, platform, args.platform, args.overrides)
     if base.algorithm != "classical":
         raise ConfigError(
             f"preset {base.name!r} uses the cueing algorithm {base.algorithm!r}; tune "
