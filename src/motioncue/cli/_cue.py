@@ -70,7 +70,8 @@ def run(args: argparse.Namespace) -> int:
 
     from ..cueing import evaluate_cueing, get_model_set, make_cueing
     from ..pipeline._inputs import load_generate_input
-    from ..telemetry._recording import resample
+    from ..telemetry._motion import is_datagram_recording
+    from ..telemetry._recording import read_recording_csv, resample
     from ._preset import choose_preset
 
     rate_hz = args.rate
@@ -81,12 +82,12 @@ def run(args: argparse.Namespace) -> int:
     if args.platform is not None:
         platform = load_platform_arg(args.platform, args.overrides)
     params, preset_source = choose_preset(args.preset, platform, args.platform, args.overrides)
-    kind, rec, counters = load_generate_input(args.input)
-    if kind != "recording":
-        raise ConfigError(
-            f"{args.input}: pose keyframes, not a recording of vehicle motion; cue needs a "
-            "recording (t,fx,fy,fz,wx,wy,wz CSV or a motioncue record .mctr file)"
-        )
+    counters: dict[str, int] = {}
+    if is_datagram_recording(Path(args.input)):
+        # a 'motioncue record' file: decoded as generate and compare decode it
+        rec, counters = load_generate_input(args.input)[1:]
+    else:
+        rec = read_recording_csv(args.input)  # rows in any order, bad samples held below
     if len(rec) == 0:
         raise ConfigError(f"{args.input}: no samples")
     uniform = resample(rec, rate_hz)
