@@ -112,7 +112,7 @@ def test_generate_warns_with_the_percentage_when_poses_are_clamped(tmp_path: Pat
     clamped, total = (int(w) for w in warning.split("clamped ")[1].split(" poses")[0].split(" of "))
     pct = 100.0 * clamped / total
     assert pct > 1.0 and f"({pct:.1f} %" in warning
-    assert f"WARNING: {pct:.1f} % of the poses clamped" in cap.out
+    assert f"(frames within the limits; WARNING: {pct:.1f} % of the poses clamped)" in cap.out
     # the same figures in JSON, from the same numbers the ride's notes hold
     code = main(
         ["generate", "--input", str(RECORDINGS / "lap.csv"), "--platform", "seat3",
@@ -315,3 +315,46 @@ def test_play_shows_progress() -> None:
     assert len(stop_calls) == 100  # the real stop flag is still asked every frame
     lines = buf.getvalue().splitlines()
     assert lines[0] == "play: 0.0 of 4.0 s (0%)" and lines[-1] == "play: 1.0 of 4.0 s (25%)"
+
+
+def test_emulator_plot_uses_one_collection_per_axis(tmp_path: Path, monkeypatch) -> None:
+    import matplotlib.pyplot as plt
+
+    from motioncue.output._trace_plot import plot_trace
+    from motioncue.output._udp_emulator import Trace, Violation
+
+    kept = []
+    monkeypatch.setattr(plt, "close", lambda fig=None: kept.append(fig))
+    n = 500
+    trace = Trace(np.arange(n) * 0.01, np.zeros((n, 3), dtype=np.int64), np.arange(n))
+    viol = [Violation(k * 0.01, "speed", 1, "x") for k in range(200)]
+    viol += [Violation(k * 0.01, "malformed", None, "x") for k in range(0, 200, 10)]
+    plot_trace(trace, tmp_path / "t.png", violations=viol)
+    (fig,) = kept
+    axes = fig.axes
+    assert [ax.get_ylabel().splitlines()[0] for ax in axes] == ["axis 1", "axis 2", "axis 3"]
+    for ax in axes:
+        assert len(ax.lines) == 1  # the commanded positions only: no line per violation
+    # axis 2 carries its 200 violations as one marker collection, every axis the 20
+    # whole-frame violations as one line collection
+    offsets = [len(c.get_offsets()) for c in axes[1].collections if hasattr(c, "get_offsets")]
+    assert 200 in offsets
+    assert all(len(ax.collections) <= 2 for ax in axes)
+    plt.close(fig)
+
+
+def test_actuator_plot_converts_pulses_to_mm_from_the_ride_limits(tmp_path: Path) -> None:
+    from motioncue.kinematics import load_platform
+    from motioncue.pipeline._report import _si_per_pulse
+
+    kf = _keyframes(tmp_path / "kf.csv", ["0,0,0,0,0,0,0", "1,0,0,0.02,0,0,0"])
+    ride_path = tmp_path / "k.ride"
+    assert main(["generate", "--input", str(kf), "--platform", "seat3", "--controller",
+                 "mbox3", "--out", str(ride_path), "--quiet"]) == 0  # fmt: skip
+    factor, unit = _si_per_pulse(load_ride(ride_path))
+    # oracle: the platform's drive, 1 mm of stroke in pulses
+    drives = load_platform("seat3").drives
+    per_mm = float(
+        drives.to_pulses(np.full((1, 3), 1e-3))[0, 0] - drives.to_pulses(np.zeros((1, 3)))[0, 0]
+    )
+    assert unit == "mm" and factor == pytest.approx(1.0 / per_mm, rel=1e-9)

@@ -232,7 +232,9 @@ def _generate(args: argparse.Namespace) -> int:
     if summary.get("clamped_percent", 0.0) > CLAMP_WARN_PERCENT:
         # the frames keep the limits, but the ride is not the motion the preset asked for
         verdict = verdict.replace(
-            "(OK)", f"(WARNING: {summary['clamped_percent']:.1f} % of the poses clamped)"
+            "(OK)",
+            f"(frames within the limits; WARNING: {summary['clamped_percent']:.1f} % of the "
+            "poses clamped)",
         )
     ends = f"; an actuator at a stroke end for {at_end_s:.2f} s" if at_end_s > 0 else ""
     print(
