@@ -34,9 +34,8 @@ def _verbs() -> dict[str, argparse.ArgumentParser]:
     return dict(sub.choices)
 
 
-# verbs that print no result to parse: they drive hardware live until stopped, or only
-# print what another verb prints (demo compares and writes files)
-_NO_JSON = {"bridge", "demo", "tune"}
+# demo is a showcase: it runs generate, play, emulate and compare and writes their files
+_NO_JSON = {"demo"}
 
 
 def test_every_option_of_every_verb_has_help() -> None:
@@ -358,3 +357,25 @@ def test_actuator_plot_converts_pulses_to_mm_from_the_ride_limits(tmp_path: Path
         drives.to_pulses(np.full((1, 3), 1e-3))[0, 0] - drives.to_pulses(np.zeros((1, 3)))[0, 0]
     )
     assert unit == "mm" and factor == pytest.approx(1.0 / per_mm, rel=1e-9)
+
+
+def test_bridge_prints_its_final_statistics_as_json(tmp_path: Path) -> None:
+    from test_bridge_replay import write_f1_recording
+
+    rec = tmp_path / "s.mctr"
+    write_f1_recording(rec, 1.0)
+    proc = subprocess.run(
+        [sys.executable, "-m", "motioncue", "bridge", "--source", f"replay:{rec}?speed=1",
+         "--platform", "stewart6-linear", "--controller", "mbox6", "--target",
+         f"pcap:{tmp_path / 'b.pcap'}", "--quiet", "--rt-priority", "0", "--json",
+         "--max-jerk", "200"],
+        capture_output=True, text=True, env=_env(), timeout=120,
+    )  # fmt: skip
+    assert proc.returncode == 0, proc.stderr
+    stats = json.loads(proc.stdout)
+    # (how many frames a short replay yields depends on how long the bridge takes to start:
+    # the replay runs from the moment the source is opened)
+    assert stats["error"] is None and stats["frames_sent"] >= 1
+    assert stats["state"] == "stopped" and stats["park_q_error"] == 0
+    assert stats["telemetry"]["sample"] == 60
+    assert f"{stats['frames_sent']} frames sent" in proc.stderr  # the same run as the text

@@ -9,7 +9,13 @@ from pathlib import Path
 from typing import Any
 
 from .._errors import ConfigError
-from ._common import add_set_option, load_platform_arg, load_preset_arg
+from ._common import (
+    add_limit_options,
+    add_set_option,
+    limit_overrides,
+    load_platform_arg,
+    load_preset_arg,
+)
 from ._preset import add_vestibular_option
 
 __all__ = ["register"]
@@ -55,6 +61,7 @@ def register(sub: Any) -> None:
         help="frame rate, checked against the controller (default 100)",
     )
     add_vestibular_option(parser)
+    add_limit_options(parser)
     add_set_option(parser)
     parser.set_defaults(run=run)
 
@@ -85,7 +92,9 @@ def run(args: argparse.Namespace) -> int:
     platform = load_platform_arg(args.platform, args.overrides)
     controller = load_controller(args.controller)
     controller.check_rate(rate)
-    limits = ActuatorLimits.from_platform(platform, controller, rate_hz=rate)
+    limits = ActuatorLimits.from_platform(
+        platform, controller, rate_hz=rate, **limit_overrides(args)
+    )
     presets = [load_preset_arg(p, args.overrides) for p in args.presets]
     preset_labels = _labels(list(args.presets), [p.name for p in presets], "preset")
     recs = []

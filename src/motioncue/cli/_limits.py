@@ -6,7 +6,7 @@ import argparse
 import math
 from typing import Any
 
-from ._common import add_set_option, load_platform_arg
+from ._common import add_limit_options, add_set_option, limit_overrides, load_platform_arg
 
 __all__ = ["register"]
 
@@ -24,12 +24,7 @@ def register(sub: Any) -> None:
     )
     parser.add_argument("--platform", required=True, help="bundled platform name or TOML path")
     parser.add_argument("--controller", help="bundled controller name or TOML path")
-    parser.add_argument("--max-speed", type=float, help="speed limit, m/s (rad/s for cranks)")
-    parser.add_argument("--max-accel", type=float, help="acceleration limit, m/s^2 (rad/s^2)")
-    parser.add_argument("--max-jerk", type=float, help="jerk limit, m/s^3 (rad/s^3)")
-    parser.add_argument(
-        "--stroke-margin", type=float, help="extra margin at each stroke end, m (rad)"
-    )
+    add_limit_options(parser)
     parser.add_argument(
         "--rate",
         type=float,
@@ -56,11 +51,8 @@ def run(args: argparse.Namespace) -> int:
     lim = ActuatorLimits.from_platform(
         platform,
         controller,
-        stroke_margin=args.stroke_margin,
-        v_max=args.max_speed,
-        a_max=args.max_accel,
-        j_max=args.max_jerk,
         rate_hz=args.rate,
+        **limit_overrides(args),
     )
     if args.json:
         print(lim.to_json(platform))

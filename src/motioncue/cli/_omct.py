@@ -9,7 +9,13 @@ import sys
 from typing import Any
 
 from .._errors import ConfigError
-from ._common import add_set_option, load_platform_arg, load_preset_arg
+from ._common import (
+    add_limit_options,
+    add_set_option,
+    limit_overrides,
+    load_platform_arg,
+    load_preset_arg,
+)
 
 __all__ = ["register"]
 
@@ -56,6 +62,7 @@ def register(sub: Any) -> None:
     )
     parser.add_argument("--json", action="store_true", help="print the table as JSON")
     parser.add_argument("--plot", metavar="FILE.png", help="write the plot in the OMCT format")
+    add_limit_options(parser)
     add_set_option(parser)
     parser.set_defaults(run=run)
 
@@ -82,7 +89,9 @@ def run(args: argparse.Namespace) -> int:
     platform = load_platform_arg(args.platform, args.overrides)
     controller = load_controller(args.controller)
     controller.check_rate(rate)
-    limits = ActuatorLimits.from_platform(platform, controller, rate_hz=rate)
+    limits = ActuatorLimits.from_platform(
+        platform, controller, rate_hz=rate, **limit_overrides(args)
+    )
     design = ClassicalWashout(params, rate)
     labels = {
         "preset": params.name,

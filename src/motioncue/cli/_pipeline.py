@@ -75,6 +75,7 @@ def register(sub: Any) -> None:
         help="pacing factor (default 1 = real time; other values for pcap: and file: only)",
     )
     p.add_argument("--quiet", action="store_true", help="no progress line while playing")
+    add_limit_options(p)
     add_set_option(p, ("platform",))
     add_json_option(p, "the play summary")
     p.set_defaults(run=_play)
@@ -289,7 +290,9 @@ def _play(args: argparse.Namespace) -> int:
             f"{platform.name} has {platform.n_actuators} actuators"
         )
     controller.check_rate(ride.rate_hz)
-    limits = ActuatorLimits.from_platform(platform, controller, rate_hz=ride.rate_hz)
+    limits = ActuatorLimits.from_platform(
+        platform, controller, rate_hz=ride.rate_hz, **limit_overrides(args)
+    )
     # nothing is sent unless the ride belongs to this rig and keeps its limits now
     check_ride_for(
         ride, platform, controller, limits,
