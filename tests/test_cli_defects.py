@@ -208,6 +208,18 @@ def test_send_raw_takes_its_own_options_and_help_lists_it(tmp_path: Path, capsys
 
     (msg,) = easysmc.split_stream(out.read_bytes())
     assert "start 0" in easysmc.inspect_decode(msg)
+    # send's own options after the word still count (as they did before the word took the rest)
+    out2 = tmp_path / "bytes2.bin"
+    capsys.readouterr()
+    code = main(
+        ["send", "--controller", "easysmc", "raw", "01", "00007D0", "--start", "0",
+         "--target", f"file:{out2}", "--json"]
+    )  # fmt: skip
+    cap = capsys.readouterr()
+    assert code == 0, cap.err
+    assert out2.read_bytes() == out.read_bytes()
+    data = json.loads(cap.out)
+    assert data["word"] == "raw" and data["args"] == ["01", "00007D0", "--start", "0"]
     with pytest.raises(SystemExit):
         main(["send", "--help"])
     assert "raw" in capsys.readouterr().out

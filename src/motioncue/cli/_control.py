@@ -241,6 +241,7 @@ def _run_send(args: argparse.Namespace) -> int:
     from ..output import open_transport, parse_target
     from ..output._udp_common import parse_node
 
+    args.args = _send_options_after_word(args)
     ctrl, kind = _controller(args.controller)
     accept, reply = parse_node(args.node)
     if args.no_reply:
@@ -272,6 +273,29 @@ def _run_send(args: argparse.Namespace) -> int:
             }
         )
     return status
+
+
+_SEND_FLAGS = ("--no-reply", "--save", "--json")
+_SEND_VALUED = ("--target", "--node")
+
+
+def _send_options_after_word(args: argparse.Namespace) -> list[str]:
+    """``send``'s own options written after the word (``send park --target URL``) still
+    count: everything after the word is the word's, except these (which no word uses)."""
+    rest: list[str] = []
+    tokens = iter(args.args)
+    for tok in tokens:
+        name, eq, value = tok.partition("=")
+        if name in _SEND_VALUED:
+            got = value if eq else next(tokens, None)
+            if got is None:
+                raise ConfigError(f"{name} needs a value")
+            setattr(args, name[2:], got)
+        elif tok in _SEND_FLAGS:
+            setattr(args, tok[2:].replace("-", "_"), True)
+        else:
+            rest.append(tok)
+    return rest
 
 
 def _payloads(path: Path, raw: bool, kind: ModuleType | None) -> list[tuple[str, bytes]]:
