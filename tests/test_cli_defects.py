@@ -391,3 +391,20 @@ def test_bridge_prints_its_final_statistics_as_json(tmp_path: Path) -> None:
     assert stats["state"] == "stopped" and stats["park_q_error"] == 0
     assert stats["telemetry"]["sample"] == 60
     assert f"{stats['frames_sent']} frames sent" in proc.stderr  # the same run as the text
+
+
+def test_generate_reports_the_samples_of_an_mctr_recording(tmp_path: Path, capsys) -> None:
+    from motioncue.telemetry import decode_recording
+    from test_bridge_replay import write_f1_recording
+
+    rec = tmp_path / "session.mctr"
+    write_f1_recording(rec, 2.0)
+    samples, stats = decode_recording(rec)  # oracle: the decoder on its own
+    code = main(
+        ["generate", "--input", str(rec), "--platform", "seat3", "--controller", "mbox3",
+         "--out", str(tmp_path / "s.ride"), "--quiet"]
+    )  # fmt: skip
+    err = capsys.readouterr().err
+    assert code == 0, err
+    assert f"telemetry: {len(samples)} samples used; packets skipped: none" in err
+    assert len(samples) == stats["sample"] == 120

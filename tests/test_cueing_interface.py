@@ -161,7 +161,9 @@ def test_unknown_algorithm_is_refused_naming_the_known_ones(
         register_cueing("two words", ClassicalWashout)
     rec = _lap_excerpt(tmp_path / "rec.csv", 1.0)
     out = tmp_path / "poses.csv"
-    rc = main(["cue", "--input", str(rec), "--preset", str(path), "--rate", "50", "--out", str(out)])
+    rc = main(
+        ["cue", "--input", str(rec), "--preset", str(path), "--rate", "50", "--out", str(out)]
+    )
     err = capsys.readouterr().err
     assert rc == 2 and err.startswith("motioncue cue: error: ") and "'mpc' is unknown" in err
     assert len(err.strip().splitlines()) == 1 and not out.exists()

@@ -436,7 +436,9 @@ def test_record_verb_captures_datagrams_sent_to_it(
     th.start()
     out = tmp_path / "b.mctr"
     try:
-        code = main(["record", "--source", f"beamng:{port}", "--out", str(out), "--duration", "0.4"])
+        code = main(
+            ["record", "--source", f"beamng:{port}", "--out", str(out), "--duration", "0.4"]
+        )
     finally:
         stop.set()
         th.join()

@@ -146,9 +146,14 @@ def _generate(args: argparse.Namespace) -> int:
     kind, data, counters = load_generate_input(args.input)
     check_generate_size(kind, data, args.rate, args.input)
     if counters:
-        skipped = {k: v for k, v in counters.items() if k.startswith("skipped") and v}
+        skipped = ", ".join(
+            f"{k.removeprefix('skipped').strip(': ')} {v}"
+            for k, v in sorted(counters.items())
+            if k.startswith("skipped") and v
+        )
         print(
-            f"telemetry: {counters.get('sample', 0)} samples used; skipped {skipped}",
+            f"telemetry: {counters.get('sample', 0)} samples used; packets skipped: "
+            f"{skipped or 'none'}",
             file=sys.stderr,
         )
         for k, v in sorted(counters.items()):
