@@ -82,8 +82,8 @@ def plot_actuators(
         axes[1].plot(t, v[:, i] / lim["v"][i], lw=0.8, color=line.get_color())
         axes[2].plot(t, a[:, i] / lim["a"][i], lw=0.8, color=line.get_color())
     for k, (lo, hi) in enumerate(zip(lim["lo"], lim["hi"], strict=True)):
-        label = "stroke ends" if k == 0 else None
-        axes[0].axhline(lo, color="k", lw=0.6, ls=":", label=label)
+        end_label = "stroke ends" if k == 0 else None
+        axes[0].axhline(lo, color="k", lw=0.6, ls=":", label=end_label)
         axes[0].axhline(hi, color="k", lw=0.6, ls=":")
     axes[0].set_ylabel("position [pulses]")
     scale = _si_per_pulse(ride)
