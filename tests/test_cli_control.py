@@ -218,7 +218,8 @@ def test_emulate_verb_serves_and_reports(tmp_path):
     assert "malformed" in out
     assert (tmp_path / "trace.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     rows = csv.read_text().splitlines()
-    assert rows[0] == "t_s,frame,axis0,axis1,axis2" and rows[3] == "0.040000,2,2,2,2"
+    # axes numbered from 1, as the manuals (and `motioncue limits`) number them
+    assert rows[0] == "t_s,frame,axis1,axis2,axis3" and rows[3] == "0.040000,2,2,2,2"
 
 
 def test_transport_options_follow_the_config(tmp_path, capsys):

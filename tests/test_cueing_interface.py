@@ -161,7 +161,9 @@ def test_unknown_algorithm_is_refused_naming_the_known_ones(
         register_cueing("two words", ClassicalWashout)
     rec = _lap_excerpt(tmp_path / "rec.csv", 1.0)
     out = tmp_path / "poses.csv"
-    rc = main(["cue", "--input", str(rec), "--preset", str(path), "--fs", "50", "--out", str(out)])
+    rc = main(
+        ["cue", "--input", str(rec), "--preset", str(path), "--rate", "50", "--out", str(out)]
+    )
     err = capsys.readouterr().err
     assert rc == 2 and err.startswith("motioncue cue: error: ") and "'mpc' is unknown" in err
     assert len(err.strip().splitlines()) == 1 and not out.exists()
@@ -177,7 +179,7 @@ def test_a_registered_algorithm_runs_in_cue_generate_and_bridge_by_name(
 
     # cue: the poses CSV is the toy's closed form on the resampled recording
     out = tmp_path / "poses.csv"
-    argv = ["cue", "--input", str(rec), "--preset", str(preset), "--fs", "50"]
+    argv = ["cue", "--input", str(rec), "--preset", str(preset), "--rate", "50"]
     assert main([*argv, "--out", str(out)]) == 0
     table = np.loadtxt(out, delimiter=",", skiprows=1)
     uniform = resample(read_recording_csv(rec), 50.0)
@@ -264,7 +266,7 @@ def test_generate_and_cue_use_the_platform_default_and_say_so(
     assert a.read_bytes() == b.read_bytes()  # the same ride as naming the preset
 
     out = tmp_path / "p.csv"
-    cue = ["cue", "--input", str(rec), "--fs", "50", "--out", str(out)]
+    cue = ["cue", "--input", str(rec), "--rate", "50", "--out", str(out)]
     assert main([*cue, "--platform", "stewart6-linear"]) == 0
     said = capsys.readouterr().out
     assert "preset racing-hexapod (default of platform stewart6-linear)" in said

@@ -429,7 +429,10 @@ def _generate_and_play(
         "--controller", controller, "--rate", f"{rate:g}", "--out", str(ride_path),
     )  # fmt: skip
     assert code == 0, err
-    assert "(OK)" in out
+    # the frame check passed ("(OK)", or "(frames within the limits; WARNING: N % of the
+    # poses clamped)" when the preset asks more than the seat gives: issue 14)
+    assert "(OK)" in out or "(frames within the limits; WARNING: " in out
+    assert "VIOLATED" not in out
     bin_path = tmp_path / f"{controller}.bin"
     code, out, err = _cli("play", str(ride_path), "--target", f"file:{bin_path}")
     assert code == 0, err

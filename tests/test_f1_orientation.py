@@ -407,7 +407,7 @@ def test_record_and_generate_report_the_derived_angular_velocity(
     rec = tmp_path / "motion-only.mctr"
     with MotionOnlySender(port) as sender:
         assert (
-            main(["record", "--source", f"f1:{port}", "--out", str(rec), "--seconds", "1.5"]) == 0
+            main(["record", "--source", f"f1:{port}", "--out", str(rec), "--duration", "1.5"]) == 0
         )
     out = capsys.readouterr().out
     assert sender.sent > 30

@@ -444,14 +444,14 @@ def test_record_verb_writes_a_replayable_file(
     tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
     out = tmp_path / "quiet.mctr"
-    assert main(["record", "--source", "beamng:0", "--out", str(out), "--seconds", "0.2"]) == 0
+    assert main(["record", "--source", "beamng:0", "--out", str(out), "--duration", "0.2"]) == 0
     captured = capsys.readouterr()
     assert "recorded 0 datagrams" in captured.out and "recording beamng:0" in captured.err
     rec = read_recording_file(out)
     assert rec.game == "beamng" and len(rec) == 0 and rec.port > 0
     assert main(["record", "--source", "gt7", "--out", str(out)]) == 2
     assert "unknown game 'gt7'" in capsys.readouterr().err
-    assert main(["record", "--source", "f1:0", "--out", str(out), "--seconds", "-1"]) == 2
+    assert main(["record", "--source", "f1:0", "--out", str(out), "--duration", "-1"]) == 2
 
 
 def test_sample_is_frozen() -> None:
@@ -478,7 +478,9 @@ def test_record_verb_captures_datagrams_sent_to_it(
     th.start()
     out = tmp_path / "b.mctr"
     try:
-        code = main(["record", "--source", f"beamng:{port}", "--out", str(out), "--seconds", "0.4"])
+        code = main(
+            ["record", "--source", f"beamng:{port}", "--out", str(out), "--duration", "0.4"]
+        )
     finally:
         stop.set()
         th.join()

@@ -433,7 +433,7 @@ def test_cue_cli_selects_the_model_set(tmp_path: Path, capsys) -> None:
         f"{ti},{2.0 * math.sin(ti)},0,{G},0,0,{0.2 * math.sin(0.5 * ti)}" for ti in t
     ]
     rec.write_text("\n".join(rows) + "\n")
-    base = ["cue", "--input", str(rec), "--preset", "racing", "--fs", "100"]
+    base = ["cue", "--input", str(rec), "--preset", "racing", "--rate", "100"]
     assert main([*base, "--out", str(tmp_path / "a.csv")]) == 0
     out = capsys.readouterr().out
     assert "vestibular models: telban-cardullo-2005" in out and "Notes" in out

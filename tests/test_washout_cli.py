@@ -37,7 +37,7 @@ def test_cue_writes_poses_equal_to_the_library(tmp_path: Path, capsys) -> None:
     write_rec(rec_path)
     out = tmp_path / "poses.csv"
     png = tmp_path / "cue.png"
-    argv = ["cue", "--input", str(rec_path), "--preset", "racing", "--fs", "50"]
+    argv = ["cue", "--input", str(rec_path), "--preset", "racing", "--rate", "50"]
     rc = main([*argv, "--out", str(out), "--plot", str(png)])
     assert rc == 0
     captured = capsys.readouterr()
@@ -58,16 +58,16 @@ def test_cue_writes_poses_equal_to_the_library(tmp_path: Path, capsys) -> None:
 def test_cue_errors_are_one_clear_line(tmp_path: Path, capsys) -> None:
     rec_path = tmp_path / "rec.csv"
     rec_path.write_text("t,fx,fy,fz,wx,wy\n0,0,0,9.8,0,0\n")
-    argv = ["cue", "--input", str(rec_path), "--preset", "racing", "--fs", "100"]
+    argv = ["cue", "--input", str(rec_path), "--preset", "racing", "--rate", "100"]
     assert main([*argv, "--out", str(tmp_path / "p.csv")]) == 2
     assert "missing column(s) wz" in capsys.readouterr().err
     write_rec(rec_path)
-    argv = ["cue", "--input", str(rec_path), "--preset", "nope", "--fs", "100"]
+    argv = ["cue", "--input", str(rec_path), "--preset", "nope", "--rate", "100"]
     assert main([*argv, "--out", str(tmp_path / "p.csv")]) == 2
     assert "unknown cueing config 'nope'" in capsys.readouterr().err
-    argv = ["cue", "--input", str(rec_path), "--preset", "racing", "--fs", "-1"]
+    argv = ["cue", "--input", str(rec_path), "--preset", "racing", "--rate", "-1"]
     assert main([*argv, "--out", str(tmp_path / "p.csv")]) == 2
-    assert "--fs" in capsys.readouterr().err
+    assert "--rate" in capsys.readouterr().err
 
 
 @pytest.mark.timeout(120)
@@ -75,7 +75,7 @@ def test_cue_runs_as_a_module(tmp_path: Path) -> None:
     rec_path = tmp_path / "rec.csv"
     write_rec(rec_path)
     env = dict(os.environ, PYTHONPATH=str(Path(__file__).resolve().parents[1] / "src"))
-    argv = ["cue", "--input", str(rec_path), "--preset", "cinema-seat-3dof", "--fs", "100"]
+    argv = ["cue", "--input", str(rec_path), "--preset", "cinema-seat-3dof", "--rate", "100"]
     proc = subprocess.run(
         [sys.executable, "-m", "motioncue", *argv, "--out", str(tmp_path / "p.csv")],
         capture_output=True,

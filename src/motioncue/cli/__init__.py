@@ -39,7 +39,8 @@ def build_parser() -> argparse.ArgumentParser:
     from .. import __version__
 
     parser.add_argument("--version", action="version", version=f"motioncue {__version__}")
-    sub = parser.add_subparsers(dest="verb", metavar="VERB")
+    # the verb's name under its own key: a verb's positional arguments cannot overwrite it
+    sub = parser.add_subparsers(dest="_verb_name", metavar="VERB")
     for name in _VERB_MODULES:
         module = importlib.import_module(f"{__name__}.{name}")
         module.register(sub)
@@ -54,14 +55,31 @@ def main(argv: Sequence[str] | None = None) -> int:
     if run is None:
         parser.print_help()
         return 2
+    verb = args._verb_name
     try:
         return int(run(args) or 0)
     except MotioncueError as exc:
-        print(f"motioncue {args.verb}: error: {exc}", file=sys.stderr)
+        print(f"motioncue {verb}: error: {exc}", file=sys.stderr)
         return 2
     except KeyboardInterrupt:
-        print(f"motioncue {args.verb}: interrupted", file=sys.stderr)
+        print(f"motioncue {verb}: interrupted", file=sys.stderr)
         return 130
+    except BrokenPipeError:
+        # the reader went away (``motioncue inspect x.pcap | head``): not an error of ours.
+        # Point stdout at /dev/null so the interpreter's final flush does not fail again.
+        _silence_stdout()
+        return 0
+
+
+def _silence_stdout() -> None:
+    import os
+
+    try:
+        devnull = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(devnull, sys.stdout.fileno())
+        os.close(devnull)
+    except (OSError, ValueError):  # no real file descriptor (tests capture stdout)
+        pass
 
 
 def console() -> None:

@@ -9,6 +9,14 @@ import time
 from typing import Any
 
 from .._errors import ConfigError
+from ._common import (
+    add_json_option,
+    add_limit_options,
+    add_set_option,
+    limit_overrides,
+    load_platform_arg,
+    print_json,
+)
 
 __all__ = ["register"]
 
@@ -56,11 +64,7 @@ def register(sub: Any) -> None:
         help="cueing preset name or .toml path (default: the platform's default_preset)",
     )
     parser.add_argument("--rate", type=float, default=100.0, metavar="HZ", help="frame rate")
-    parser.add_argument("--max-speed", type=float, help="speed limit, m/s (rad/s for cranks)")
-    parser.add_argument("--max-accel", type=float, help="acceleration limit, m/s^2 (rad/s^2)")
-    parser.add_argument(
-        "--stroke-margin", type=float, help="extra margin at each stroke end, m (rad)"
-    )
+    add_limit_options(parser)
     parser.add_argument(
         "--timeout",
         type=float,
@@ -84,11 +88,12 @@ def register(sub: Any) -> None:
         "delaying frames on a busy PC (default 10; 0 = normal scheduling)",
     )
     parser.add_argument("--quiet", action="store_true", help="no status line")
+    add_json_option(parser, "the final statistics (after the park)")
+    add_set_option(parser)
     parser.set_defaults(run=run)
 
 
 def run(args: argparse.Namespace) -> int:
-    from ..kinematics import load_platform
     from ..output import load_controller, open_transport
     from ..pipeline._bridge import Bridge, BridgeConfig
     from ..pipeline._realtime import GateConfig
@@ -115,18 +120,16 @@ def run(args: argparse.Namespace) -> int:
         gate=GateConfig(timeout_s=args.timeout, fade_out_s=args.fade, fade_in_s=args.fade),
         rt_priority=args.rt_priority or None,
     )
-    platform = load_platform(args.platform)
+    platform = load_platform_arg(args.platform, args.overrides)
     controller.check_rate(config.rate_hz)
     limits = ActuatorLimits.from_platform(
         platform,
         controller,
-        stroke_margin=args.stroke_margin,
-        v_max=args.max_speed,
-        a_max=args.max_accel,
         rate_hz=config.rate_hz,
+        **limit_overrides(args),
     )
     preset = args.preset or (profile.preset if profile is not None else None)
-    cueing, preset_source = choose_preset(preset, platform, args.platform)
+    cueing, preset_source = choose_preset(preset, platform, args.platform, args.overrides)
     effects = None
     if profile is not None:
         from ..pipeline._effects import make_effects
@@ -164,6 +167,11 @@ def run(args: argparse.Namespace) -> int:
         finally:
             source.close()
         _say(_summary(final))
+        if args.json:
+            try:
+                print_json(_stats_dict(final))
+            except (OSError, ValueError):
+                pass
         for note in final.notes:
             if note not in start_notes:
                 _say(f"motioncue bridge: note: {note}")
@@ -249,3 +257,29 @@ def _summary(st: Any) -> str:
         f"{st.fade_ins} fade-ins; parked error {st.park_q_error:.3g}\n"
         f"telemetry: {reasons or 'nothing received'}"
     )
+
+
+def _stats_dict(st: Any) -> dict[str, Any]:
+    """The final bridge statistics for ``--json`` (NaN as None)."""
+
+    def num(x: float) -> float | None:
+        return None if math.isnan(x) else float(x)
+
+    return {
+        "state": str(st.state),
+        "error": None if st.error is None else str(st.error),
+        "frames_sent": int(st.frames_sent),
+        "missed_deadlines": int(st.missed_deadlines),
+        "latency_p50_ms": num(st.latency_p50_ms),
+        "latency_p99_ms": num(st.latency_p99_ms),
+        "jitter_p99_ms": num(st.jitter_p99_ms),
+        "limiter_clamped_frames": int(st.limiter_clamped_frames),
+        "pose_clamped": int(st.pose_clamped),
+        "pose_invalid": int(st.pose_invalid),
+        "washout_bad_samples": int(st.washout_bad_samples),
+        "fade_outs": int(st.fade_outs),
+        "fade_ins": int(st.fade_ins),
+        "park_q_error": float(st.park_q_error),
+        "telemetry": {str(k): int(v) for k, v in st.packet_reasons.items()},
+        "notes": [str(n) for n in st.notes],
+    }

@@ -9,6 +9,13 @@ from pathlib import Path
 from typing import Any
 
 from .._errors import ConfigError
+from ._common import (
+    add_limit_options,
+    add_set_option,
+    limit_overrides,
+    load_platform_arg,
+    load_preset_arg,
+)
 from ._preset import add_vestibular_option
 
 __all__ = ["register"]
@@ -54,6 +61,8 @@ def register(sub: Any) -> None:
         help="frame rate, checked against the controller (default 100)",
     )
     add_vestibular_option(parser)
+    add_limit_options(parser)
+    add_set_option(parser)
     parser.set_defaults(run=run)
 
 
@@ -70,9 +79,8 @@ def _labels(names: list[str], short: list[str], what: str) -> list[str]:
 
 
 def run(args: argparse.Namespace) -> int:
-    from ..cueing import get_model_set, load_cueing
+    from ..cueing import get_model_set
     from ..cueing._compare import compare_cueing, plot_file_names, write_compare_report
-    from ..kinematics import load_platform
     from ..output import load_controller
     from ..pipeline._inputs import check_generate_size, load_generate_input
     from ..trajectory import ActuatorLimits
@@ -81,11 +89,13 @@ def run(args: argparse.Namespace) -> int:
     if not (math.isfinite(rate) and 0.0 < rate <= 1000.0):
         raise ConfigError(f"--rate {rate!r} is invalid; allowed: (0, 1000] Hz")
     model = get_model_set(args.vestibular)
-    platform = load_platform(args.platform)
+    platform = load_platform_arg(args.platform, args.overrides)
     controller = load_controller(args.controller)
     controller.check_rate(rate)
-    limits = ActuatorLimits.from_platform(platform, controller, rate_hz=rate)
-    presets = [load_cueing(p) for p in args.presets]
+    limits = ActuatorLimits.from_platform(
+        platform, controller, rate_hz=rate, **limit_overrides(args)
+    )
+    presets = [load_preset_arg(p, args.overrides) for p in args.presets]
     preset_labels = _labels(list(args.presets), [p.name for p in presets], "preset")
     recs = []
     for path in args.input:

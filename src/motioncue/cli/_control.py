@@ -20,6 +20,7 @@ from __future__ import annotations
 
 import argparse
 import importlib
+import io
 import sys
 import time
 from pathlib import Path
@@ -27,6 +28,7 @@ from types import ModuleType
 from typing import Any
 
 from .._errors import ConfigError, ProtocolError
+from ._common import add_json_option, print_json
 
 __all__ = ["register"]
 
@@ -66,12 +68,18 @@ def register(sub: Any) -> None:
         metavar="S",
         help="stop after S seconds (default: until Ctrl-C)",
     )
-    p.add_argument("--homing-time", type=float, default=1.0, metavar="S")
+    p.add_argument(
+        "--homing-time",
+        type=float,
+        default=1.0,
+        metavar="S",
+        help="how long the emulated homing takes (default 1 s)",
+    )
     p.add_argument(
         "--trace-csv",
         type=Path,
         default=None,
-        help="write the trace (t_s, frame, axis positions) here on exit",
+        help="write the trace (t_s, frame, axis1..axisN positions in pulses) here on exit",
     )
     p.add_argument(
         "--plot",
@@ -79,15 +87,18 @@ def register(sub: Any) -> None:
         default=None,
         help="write a PNG of the trace (positions per axis, violations in red)",
     )
+    add_json_option(p, "the trace summary and the violations")
     p.set_defaults(run=_run_emulate)
 
     p = sub.add_parser(
         "send",
         help="send one command to a controller",
-        description="Send a command: estop on|off, reset, home, park, "
-        "outputs BITS, read REG [COUNT], write REG VALUE...",
+        description="Send one command. Words: estop on|off, reset, home, park, outputs BITS, "
+        "read REG [COUNT], write REG VALUE...; EasySmc also: raw CMD DATA... [--start C] "
+        "[--addr A] (hex). The send options come before the word; everything after the word "
+        "belongs to it.",
     )
-    p.add_argument("--controller", required=True)
+    p.add_argument("--controller", required=True, help="bundled name (mbox6) or TOML path")
     p.add_argument(
         "--target",
         default=None,
@@ -103,22 +114,35 @@ def register(sub: Any) -> None:
         action="store_true",
         help="write parameters so they survive power-off (MBOX FX, IMAX PA0f=2)",
     )
-    p.add_argument("verb", help="estop | reset | home | park | outputs | read | write")
-    p.add_argument("args", nargs="*")
+    add_json_option(p, "what was sent and the reply")
+    p.add_argument(
+        "word",
+        metavar="WORD",
+        help="estop | reset | home | park | outputs | read | write | raw (EasySmc)",
+    )
+    p.add_argument(
+        "args",
+        nargs=argparse.REMAINDER,
+        metavar="ARG",
+        help="the word's arguments (hex or decimal as the word says; raw takes --start/--addr)",
+    )
     p.set_defaults(run=_run_send)
 
     p = sub.add_parser(
         "inspect",
-        help="decode a capture, one line per message",
-        description="Decode a pcap (UDP payloads) or a raw file: capture.",
+        help="decode a capture, a ride file or a recording, one line per message or frame",
+        description="Decode a pcap (UDP payloads), a raw file: capture, a ride file (header, "
+        "then one line per frame: time and pulses per axis) or a 'motioncue record' .mctr "
+        "recording (metadata, then one line per datagram with the decoder's verdict).",
     )
-    p.add_argument("file", type=Path)
+    p.add_argument("file", type=Path, help="pcap, raw capture, .ride or .mctr file")
     p.add_argument(
         "--controller",
         default=None,
         help="decode as this controller's kind (default: try each kind)",
     )
     p.add_argument("--raw", action="store_true", help="the file holds raw bytes (file: target)")
+    add_json_option(p, "the decoded messages")
     p.set_defaults(run=_run_inspect)
 
 
@@ -142,7 +166,11 @@ def _run_emulate(args: argparse.Namespace) -> int:
         raise ConfigError(
             f"--listen {args.listen!r}: the {ctrl.kind} emulator listens on udp://HOST:PORT"
         )
-    print(f"emulating {ctrl.name} ({ctrl.kind}, {ctrl.n_axes} axes) on {where}", flush=True)
+    print(
+        f"emulating {ctrl.name} ({ctrl.kind}, {ctrl.n_axes} axes) on {where}",
+        flush=True,
+        file=sys.stderr if args.json else sys.stdout,
+    )
     t_end = None if args.duration is None else time.monotonic() + args.duration
     try:
         while t_end is None or time.monotonic() < t_end:
@@ -153,19 +181,48 @@ def _run_emulate(args: argparse.Namespace) -> int:
         emu.stop()
     trace = emu.trace
     violations = emu.violations
+    errors = list(getattr(emu, "internal_errors", []))
+    _write_trace(args, ctrl, trace, violations)
+    if args.json:
+        print_json(
+            {
+                "controller": ctrl.name,
+                "received": emu.received,
+                "trace_points": len(trace),
+                "violations": [
+                    {
+                        "t_s": v.t_s,
+                        "kind": v.kind,
+                        "axis": None if v.axis is None else v.axis + 1,
+                        "detail": v.detail,
+                    }
+                    for v in violations
+                ],
+                "emulator_errors": [str(e) for e in errors],
+                "trace_csv": None if args.trace_csv is None else str(args.trace_csv),
+                "plot": None if args.plot is None else str(args.plot),
+            }
+        )
+        return 1 if violations or errors else 0
     print(
         f"received {emu.received} datagrams, played {len(trace)} trace points, "
         f"{len(violations)} violation(s)"
     )
-    errors = list(getattr(emu, "internal_errors", []))
     for e in errors[:10]:
         print(f"  emulator error: {e}")
     for v in violations[:50]:
-        axis = "" if v.axis is None else f" axis {v.axis}"
+        axis = "" if v.axis is None else f" axis {v.axis + 1}"
         print(f"  {v.t_s:9.3f} s {v.kind}{axis}: {v.detail}")
+    if args.plot is not None:
+        print(f"wrote {args.plot}")
+    return 1 if violations or errors else 0
+
+
+def _write_trace(args: argparse.Namespace, ctrl: Any, trace: Any, violations: Any) -> None:
+    """The ``--trace-csv`` and ``--plot`` files (axes numbered from 1, as the manuals do)."""
     if args.trace_csv is not None:
         with open(args.trace_csv, "w") as fh:
-            cols = ",".join(f"axis{i}" for i in range(ctrl.n_axes))
+            cols = ",".join(f"axis{i + 1}" for i in range(ctrl.n_axes))
             fh.write(f"t_s,frame,{cols}\n")
             for t, f, row in zip(trace.t_s, trace.frames, trace.positions, strict=True):
                 fh.write(f"{t:.6f},{f}," + ",".join(str(int(v)) for v in row) + "\n")
@@ -178,32 +235,67 @@ def _run_emulate(args: argparse.Namespace) -> int:
             violations=violations,
             title=f"{ctrl.name}: {len(trace)} frames, {len(violations)} violation(s)",
         )
-        print(f"wrote {args.plot}")
-    return 1 if violations or errors else 0
 
 
 def _run_send(args: argparse.Namespace) -> int:
     from ..output import open_transport, parse_target
     from ..output._udp_common import parse_node
 
+    args.args = _send_options_after_word(args)
     ctrl, kind = _controller(args.controller)
     accept, reply = parse_node(args.node)
     if args.no_reply:
         reply = 0
     target = parse_target(args.target or ctrl.default_target)
     options = kind.transport_options(ctrl, target) if hasattr(kind, "transport_options") else {}
+    out: Any = io.StringIO() if args.json else sys.stdout
     with open_transport(target, **options) as transport:
-        return int(
+        status = int(
             kind.send_verb(
                 ctrl,
                 transport,
-                args.verb,
+                args.word,
                 list(args.args),
                 who=(accept, reply),
                 save=args.save,
-                out=sys.stdout,
+                out=out,
             )
         )
+    if args.json:
+        print_json(
+            {
+                "controller": ctrl.name,
+                "target": str(args.target or ctrl.default_target),
+                "word": args.word,
+                "args": list(args.args),
+                "status": status,
+                "lines": out.getvalue().splitlines(),
+            }
+        )
+    return status
+
+
+_SEND_FLAGS = ("--no-reply", "--save", "--json")
+_SEND_VALUED = ("--target", "--node")
+
+
+def _send_options_after_word(args: argparse.Namespace) -> list[str]:
+    """``send``'s own options written after the word (``send park --target URL``) still
+    count: everything after the word is the word's, except these (which no word uses)."""
+    rest: list[str] = []
+    tokens = iter(args.args)
+    for tok in tokens:
+        name, eq, value = tok.partition("=")
+        if name in _SEND_VALUED:
+            got = value if eq else next(tokens, None)
+            if got is None:
+                raise ConfigError(f"{name} needs a value")
+            setattr(args, name[2:], got)
+        elif tok in _SEND_FLAGS:
+            setattr(args, tok[2:].replace("-", "_"), True)
+        else:
+            rest.append(tok)
+    return rest
 
 
 def _payloads(path: Path, raw: bool, kind: ModuleType | None) -> list[tuple[str, bytes]]:
@@ -236,9 +328,15 @@ def _payloads(path: Path, raw: bool, kind: ModuleType | None) -> list[tuple[str,
 
 
 def _run_inspect(args: argparse.Namespace) -> int:
+    head = _head(args.file)
+    if not args.raw and head.startswith(b"PK\x03\x04"):
+        return _inspect_ride(args)
+    if not args.raw and head.startswith(b"MCTLMREC"):
+        return _inspect_recording(args)
     kind = _controller(args.controller)[1] if args.controller else None
     kinds = [kind] if kind is not None else [_kind_module(k) for k in _INSPECT_KINDS]
     bad = 0
+    rows = []
     for where, payload in _payloads(args.file, args.raw, kind):
         line = None
         errors = []
@@ -254,5 +352,98 @@ def _run_inspect(args: argparse.Namespace) -> int:
         if line is None:
             bad += 1
             line = f"{where} UNDECODED {payload.hex().upper()} ({'; '.join(errors)})"
-        print(line)
+        if args.json:
+            rows.append(
+                {"where": where, "decoded": not line.startswith(f"{where} UNDECODED"), "line": line}
+            )
+        else:
+            print(line)
+    if args.json:
+        print_json({"file": str(args.file), "messages": rows, "undecoded": bad})
     return 1 if bad else 0
+
+
+def _head(path: Path) -> bytes:
+    try:
+        with open(path, "rb") as fh:
+            return fh.read(8)
+    except OSError as exc:
+        raise ConfigError(f"cannot read {path}: {exc}") from exc
+
+
+def _inspect_ride(args: argparse.Namespace) -> int:
+    """A ride file: its header, then one line per frame (time, pulses per axis, outputs)."""
+    import numpy as np
+
+    from ..pipeline import load_ride
+
+    ride = load_ride(args.file)
+    names = [str(n) for n in ride.actuator_names]
+    header = {
+        "file": str(args.file),
+        "platform": ride.platform,
+        "controller": ride.controller,
+        "rate_hz": ride.rate_hz,
+        "frames": ride.n_frames,
+        "duration_s": ride.duration_s,
+        "actuators": names,
+        "source": ride.source,
+        "notes": ride.notes,
+        "limits": ride.limits,
+    }
+    pulses = np.asarray(ride.pulses)
+    if args.json:
+        header["t_s"] = np.asarray(ride.t_s).tolist()
+        header["pulses"] = pulses.tolist()
+        header["dout"] = np.asarray(ride.dout).tolist()
+        header["dacs"] = np.asarray(ride.dacs).tolist()
+        print_json(header)
+        return 0
+    print(
+        f"ride {args.file}: platform {ride.platform}, controller {ride.controller}, "
+        f"{ride.n_frames} frames at {ride.rate_hz:g} Hz ({ride.duration_s:.2f} s), "
+        f"source {ride.source or '-'}"
+    )
+    for key, value in sorted(ride.notes.items()):
+        print(f"  note {key}: {value}")
+    for i, name in enumerate(names):
+        lo, hi = int(pulses[:, i].min()), int(pulses[:, i].max())
+        print(f"  axis {i + 1} ({name}): pulses {lo} .. {hi}")
+    cols = " ".join(f"{f'axis{i + 1}':>9}" for i in range(len(names)))
+    print(f"{'t_s':>9} {cols} {'dout':>6} {'dac1':>5} {'dac2':>5}")
+    for k in range(ride.n_frames):
+        row = " ".join(f"{int(v):>9d}" for v in pulses[k])
+        print(
+            f"{float(ride.t_s[k]):9.3f} {row} {int(ride.dout[k]):6d} "
+            f"{int(ride.dacs[k, 0]):5d} {int(ride.dacs[k, 1]):5d}"
+        )
+    return 0
+
+
+def _inspect_recording(args: argparse.Namespace) -> int:
+    """A ``motioncue record`` file: its metadata, then one line per datagram, decoded."""
+    from ..telemetry._container import read_recording_file
+    from ..telemetry._registry import decoder_for
+
+    rec = read_recording_file(args.file)
+    meta = dict(rec.meta)
+    dec = decoder_for(rec.game)
+    rows = []
+    for t_s, data in zip(rec.t_s, rec.datagrams, strict=True):
+        before = dict(dec.stats)
+        sample = dec.feed(data, t_s)
+        if sample is not None:
+            f = ", ".join(f"{v:.3f}" for v in sample.f)
+            w = ", ".join(f"{v:.3f}" for v in sample.w)
+            verdict = f"sample f=[{f}] m/s^2 w=[{w}] rad/s"
+        else:
+            changed = [k for k, v in dec.stats.items() if v != before.get(k, 0)]
+            verdict = ", ".join(changed) or "no sample"
+        rows.append({"t_s": float(t_s), "bytes": len(data), "decoded": verdict})
+    if args.json:
+        print_json({"file": str(args.file), "meta": meta, "datagrams": rows})
+        return 0
+    print(f"recording {args.file}: {meta}; {len(rows)} datagrams")
+    for r in rows:
+        print(f"{r['t_s']:10.4f} {r['bytes']:5d} B {r['decoded']}")
+    return 0

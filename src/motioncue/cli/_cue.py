@@ -8,6 +8,13 @@ import sys
 from pathlib import Path
 
 from .._errors import ConfigError
+from ._common import (
+    add_deprecated_alias,
+    add_json_option,
+    add_set_option,
+    load_platform_arg,
+    print_json,
+)
 from ._preset import add_vestibular_option
 
 __all__ = ["register"]
@@ -18,13 +25,18 @@ def register(sub: argparse._SubParsersAction) -> None:
         "cue",
         help="washout cueing of a recording to platform poses",
         description=(
-            "Run the preset's cueing algorithm over a recording CSV (header with "
-            "t,fx,fy,fz,wx,wy,wz in s, m/s^2, rad/s, body frame; extra columns ignored), "
-            "resampled to --fs, and "
+            "Run the preset's cueing algorithm over a recording (a CSV with the header "
+            "t,fx,fy,fz,wx,wy,wz in s, m/s^2, rad/s, body frame, extra columns ignored; or a "
+            "'motioncue record' .mctr file), resampled to --rate, and "
             "write the poses CSV t,x,y,z,roll,pitch,yaw (m, rad)."
         ),
     )
-    parser.add_argument("--input", required=True, metavar="REC.csv", help="recording CSV")
+    parser.add_argument(
+        "--input",
+        required=True,
+        metavar="REC",
+        help="recording CSV (t,fx,fy,fz,wx,wy,wz) or a 'motioncue record' .mctr file",
+    )
     parser.add_argument(
         "--preset",
         default=None,
@@ -37,10 +49,19 @@ def register(sub: argparse._SubParsersAction) -> None:
         metavar="P",
         help="platform whose default_preset is used when --preset is not given",
     )
-    parser.add_argument("--fs", required=True, type=float, metavar="HZ", help="sample rate")
+    parser.add_argument(
+        "--rate",
+        type=float,
+        default=100.0,
+        metavar="HZ",
+        help="rate the recording is resampled to and the cueing runs at (default 100)",
+    )
     parser.add_argument("--out", required=True, metavar="POSES.csv", help="poses CSV to write")
     parser.add_argument("--plot", metavar="FILE.png", help="also write a cue-quality plot")
     add_vestibular_option(parser)
+    add_set_option(parser)
+    add_json_option(parser, "the summary and the cue metrics")
+    add_deprecated_alias(parser, "--fs", "--rate", type=float)
     parser.set_defaults(run=run)
 
 
@@ -48,23 +69,29 @@ def run(args: argparse.Namespace) -> int:
     import numpy as np
 
     from ..cueing import evaluate_cueing, get_model_set, make_cueing
+    from ..pipeline._inputs import load_generate_input
+    from ..telemetry._motion import is_datagram_recording
     from ..telemetry._recording import read_recording_csv, resample
     from ._preset import choose_preset
 
-    if not math.isfinite(args.fs) or args.fs <= 0:
-        raise ConfigError(f"--fs {args.fs!r} is invalid; allowed: a finite number > 0")
+    rate_hz = args.rate
+    if not (math.isfinite(rate_hz) and 0 < rate_hz <= 2000):
+        raise ConfigError(f"--rate {rate_hz!r} is invalid; allowed: (0, 2000] Hz")
     get_model_set(args.vestibular)  # an unknown set is refused before any file is written
     platform = None
     if args.platform is not None:
-        from ..kinematics import load_platform
-
-        platform = load_platform(args.platform)
-    params, preset_source = choose_preset(args.preset, platform, args.platform)
-    rec = read_recording_csv(args.input)
+        platform = load_platform_arg(args.platform, args.overrides)
+    params, preset_source = choose_preset(args.preset, platform, args.platform, args.overrides)
+    counters: dict[str, int] = {}
+    if is_datagram_recording(Path(args.input)):
+        # a 'motioncue record' file: decoded as generate and compare decode it
+        rec, counters = load_generate_input(args.input)[1:]
+    else:
+        rec = read_recording_csv(args.input)  # rows in any order, bad samples held below
     if len(rec) == 0:
         raise ConfigError(f"{args.input}: no samples")
-    uniform = resample(rec, args.fs)
-    design = make_cueing(params, args.fs)
+    uniform = resample(rec, rate_hz)
+    design = make_cueing(params, rate_hz)
     res = design.run(uniform.f, uniform.w)
     out = Path(args.out)
     table = np.column_stack([uniform.t_s, res.poses])
@@ -82,16 +109,32 @@ def run(args: argparse.Namespace) -> int:
         f_used,
         w_used,
         res.poses,
-        args.fs,
+        rate_hz,
         workspace=params.workspace,
         model=args.vestibular,
         head_offset_m=getattr(params, "head_offset_m", None),
     )
-    print(
-        f"motioncue cue: {len(rec)} samples -> {len(uniform)} at {args.fs:g} Hz, "
-        f"preset {preset_source}; bad samples held: {res.bad_samples}; wrote {out}"
-    )
-    print(ev.summary())
+    if args.json:
+        print_json(
+            {
+                "input": str(args.input),
+                "samples": len(rec),
+                "resampled": len(uniform),
+                "rate_hz": rate_hz,
+                "preset": params.name,
+                "preset_source": preset_source,
+                "bad_samples": int(res.bad_samples),
+                "telemetry": dict(counters),
+                "out": str(out),
+                "metrics": _metrics(ev),
+            }
+        )
+    else:
+        print(
+            f"motioncue cue: {len(rec)} samples -> {len(uniform)} at {rate_hz:g} Hz, "
+            f"preset {preset_source}; bad samples held: {res.bad_samples}; wrote {out}"
+        )
+        print(ev.summary())
     if res.bad_samples:
         print(
             f"motioncue cue: warning: {res.bad_samples} bad input samples (NaN/inf/spike) "
@@ -106,7 +149,7 @@ def run(args: argparse.Namespace) -> int:
             res.poses,
             args.plot,
             t_s=uniform.t_s,
-            title=f"{Path(args.input).name} at {args.fs:g} Hz",
+            title=f"{Path(args.input).name} at {rate_hz:g} Hz",
             preset=params.name,
             platform=(
                 f"{args.platform} (named for its preset; poses not limited to it)"
@@ -114,5 +157,22 @@ def run(args: argparse.Namespace) -> int:
                 else None
             ),
         )
-        print(f"motioncue cue: plot written to {path}")
+        print(
+            f"motioncue cue: plot written to {path}", file=sys.stderr if args.json else sys.stdout
+        )
     return 0
+
+
+def _metrics(ev: object) -> dict[str, object]:
+    """The evaluation's scalar metrics, for ``--json`` (numbers as floats, NaN as None)."""
+    import numpy as np
+
+    to_dict = getattr(ev, "to_dict", None)
+    if callable(to_dict):
+        return dict(to_dict())
+    out: dict[str, object] = {}
+    for name, value in vars(ev).items():
+        arr = np.asarray(value)
+        if arr.dtype.kind in "fiub" and arr.size <= 6:
+            out[name] = [None if not np.isfinite(v) else float(v) for v in arr.ravel().tolist()]
+    return out

@@ -9,6 +9,8 @@ from typing import Any
 
 import numpy as np
 
+from ._common import add_set_option, load_platform_arg
+
 __all__ = ["register"]
 
 
@@ -34,6 +36,7 @@ def register(sub: Any) -> None:
     )
     ik.add_argument("--mm-deg", action="store_true", help="pose given in mm and degrees")
     ik.add_argument("--json", action="store_true", help="print JSON instead of a table")
+    add_set_option(ik, ("platform",))
     ik.set_defaults(run=_run_ik)
 
     ws = sub.add_parser(
@@ -44,6 +47,7 @@ def register(sub: Any) -> None:
     ws.add_argument("--platform", required=True, help="bundled name or path to a .toml file")
     ws.add_argument("--plot", metavar="FILE.png", help="also save a plot of the workspace")
     ws.add_argument("--json", action="store_true", help="print JSON instead of a table")
+    add_set_option(ws, ("platform",))
     ws.set_defaults(run=_run_workspace)
 
 
@@ -60,9 +64,9 @@ def _pose_si(values: list[float], mm_deg: bool) -> np.ndarray:
 
 
 def _run_ik(args: argparse.Namespace) -> int:
-    from ..kinematics import DOF_NAMES, load_platform
+    from ..kinematics import DOF_NAMES
 
-    p = load_platform(args.platform)
+    p = load_platform_arg(args.platform, args.overrides)
     pose = _pose_si(args.pose, args.mm_deg)
     res = p.check(pose)
     pulses = p.drives.to_pulses(res.q)
@@ -133,9 +137,9 @@ def _run_ik(args: argparse.Namespace) -> int:
 
 
 def _run_workspace(args: argparse.Namespace) -> int:
-    from ..kinematics import DOF_NAMES, dof_ranges, load_platform, plot_workspace
+    from ..kinematics import DOF_NAMES, dof_ranges, plot_workspace
 
-    p = load_platform(args.platform)
+    p = load_platform_arg(args.platform, args.overrides)
     ranges = dof_ranges(p)
     table = ranges.as_dict()
     plot_path = None

@@ -6,6 +6,8 @@ import argparse
 import math
 from typing import Any
 
+from ._common import add_limit_options, add_set_option, limit_overrides, load_platform_arg
+
 __all__ = ["register"]
 
 
@@ -22,12 +24,7 @@ def register(sub: Any) -> None:
     )
     parser.add_argument("--platform", required=True, help="bundled platform name or TOML path")
     parser.add_argument("--controller", help="bundled controller name or TOML path")
-    parser.add_argument("--max-speed", type=float, help="speed limit, m/s (rad/s for cranks)")
-    parser.add_argument("--max-accel", type=float, help="acceleration limit, m/s^2 (rad/s^2)")
-    parser.add_argument("--max-jerk", type=float, help="jerk limit, m/s^3 (rad/s^3)")
-    parser.add_argument(
-        "--stroke-margin", type=float, help="extra margin at each stroke end, m (rad)"
-    )
+    add_limit_options(parser)
     parser.add_argument(
         "--rate",
         type=float,
@@ -36,14 +33,14 @@ def register(sub: Any) -> None:
         "the controller's clock)",
     )
     parser.add_argument("--json", action="store_true", help="print JSON instead of a table")
+    add_set_option(parser, ("platform",))
     parser.set_defaults(run=run)
 
 
 def run(args: argparse.Namespace) -> int:
-    from ..kinematics import load_platform
     from ..trajectory import ActuatorLimits
 
-    platform = load_platform(args.platform)
+    platform = load_platform_arg(args.platform, args.overrides)
     controller = None
     if args.controller:
         from ..output._controllers import load_controller
@@ -54,11 +51,8 @@ def run(args: argparse.Namespace) -> int:
     lim = ActuatorLimits.from_platform(
         platform,
         controller,
-        stroke_margin=args.stroke_margin,
-        v_max=args.max_speed,
-        a_max=args.max_accel,
-        j_max=args.max_jerk,
         rate_hz=args.rate,
+        **limit_overrides(args),
     )
     if args.json:
         print(lim.to_json(platform))

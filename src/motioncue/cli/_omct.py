@@ -9,6 +9,13 @@ import sys
 from typing import Any
 
 from .._errors import ConfigError
+from ._common import (
+    add_limit_options,
+    add_set_option,
+    limit_overrides,
+    load_platform_arg,
+    load_preset_arg,
+)
 
 __all__ = ["register"]
 
@@ -55,13 +62,14 @@ def register(sub: Any) -> None:
     )
     parser.add_argument("--json", action="store_true", help="print the table as JSON")
     parser.add_argument("--plot", metavar="FILE.png", help="write the plot in the OMCT format")
+    add_limit_options(parser)
+    add_set_option(parser)
     parser.set_defaults(run=run)
 
 
 def run(args: argparse.Namespace) -> int:
-    from ..cueing import ClassicalWashout, load_cueing
+    from ..cueing import ClassicalWashout
     from ..cueing._omct import plot_omct, run_omct
-    from ..kinematics import load_platform
     from ..output._controllers import load_controller
     from ..trajectory import ActuatorLimits
 
@@ -71,17 +79,19 @@ def run(args: argparse.Namespace) -> int:
     scale = args.amplitude_scale
     if not (math.isfinite(scale) and 0.0 < scale <= 100.0):
         raise ConfigError(f"--amplitude-scale {scale!r} is invalid; allowed: (0, 100]")
-    params = load_cueing(args.preset)
+    params = load_preset_arg(args.preset, args.overrides)
     algorithm = getattr(params, "algorithm", "classical")
     if algorithm != "classical":
         raise ConfigError(
             f"preset {params.name!r} uses the cueing algorithm {algorithm!r}; the OMCT's "
             "analytic comparison is defined for the classical washout only"
         )
-    platform = load_platform(args.platform)
+    platform = load_platform_arg(args.platform, args.overrides)
     controller = load_controller(args.controller)
     controller.check_rate(rate)
-    limits = ActuatorLimits.from_platform(platform, controller, rate_hz=rate)
+    limits = ActuatorLimits.from_platform(
+        platform, controller, rate_hz=rate, **limit_overrides(args)
+    )
     design = ClassicalWashout(params, rate)
     labels = {
         "preset": params.name,

@@ -9,6 +9,15 @@ from pathlib import Path
 from typing import Any
 
 from .._errors import ConfigError
+from ._common import (
+    add_json_option,
+    add_limit_options,
+    add_set_option,
+    check_set_targets,
+    limit_overrides,
+    load_platform_arg,
+    print_json,
+)
 
 __all__ = ["register"]
 
@@ -22,9 +31,14 @@ def register(sub: Any) -> None:
         "A pose-keyframe CSV (t,x,y,z,roll,pitch,yaw[,dout,dac1,dac2]) skips cueing and "
         "uses time-optimal transitions.",
     )
-    g.add_argument("--input", required=True, metavar="REC")
-    g.add_argument("--platform", required=True, metavar="P")
-    g.add_argument("--controller", required=True, metavar="C")
+    g.add_argument(
+        "--input",
+        required=True,
+        metavar="REC",
+        help="recording CSV, 'motioncue record' .mctr file, or pose-keyframe CSV",
+    )
+    g.add_argument("--platform", required=True, metavar="P", help="bundled name or TOML path")
+    g.add_argument("--controller", required=True, metavar="C", help="bundled name or TOML path")
     g.add_argument(
         "--preset",
         default=None,
@@ -32,33 +46,47 @@ def register(sub: Any) -> None:
         help="cueing preset name or .toml path (default: the platform's default_preset)",
     )
     g.add_argument("--rate", type=float, default=100.0, metavar="HZ", help="frame rate")
-    g.add_argument("--out", required=True, metavar="RIDE")
+    g.add_argument("--out", required=True, metavar="RIDE", help="ride file to write")
     g.add_argument("--pcap", metavar="FILE", help="also write the exact datagrams as a pcap")
     g.add_argument("--report", metavar="DIR", help="write plots and cue metrics here")
     g.add_argument("--quiet", action="store_true", help="no progress bar")
+    add_limit_options(g)
+    add_set_option(g)
+    add_json_option(g, "the ride's summary")
     g.set_defaults(run=_generate)
 
     p = sub.add_parser(
         "play",
         help="stream a ride file to a controller on time (ramps in from park, parks at the end)",
     )
-    p.add_argument("ride", metavar="RIDE")
-    p.add_argument("--target", default=None, metavar="URL", help="default: the controller's")
-    p.add_argument("--controller", default=None, help="default: the ride's controller")
-    p.add_argument("--platform", default=None, help="default: the ride's platform")
+    p.add_argument("ride", metavar="RIDE", help="ride file made by 'motioncue generate'")
+    p.add_argument(
+        "--target",
+        default=None,
+        metavar="URL",
+        help="udp://HOST:PORT, serial://..., pcap:PATH or file:PATH (default: the controller's)",
+    )
+    p.add_argument("--controller", default=None, metavar="C", help="default: the ride's controller")
+    p.add_argument("--platform", default=None, metavar="P", help="default: the ride's platform")
     p.add_argument(
         "--speed",
         type=float,
         default=1.0,
         help="pacing factor (default 1 = real time; other values for pcap: and file: only)",
     )
+    p.add_argument("--quiet", action="store_true", help="no progress line while playing")
+    add_limit_options(p)
+    add_set_option(p, ("platform",))
+    add_json_option(p, "the play summary")
     p.set_defaults(run=_play)
 
     d = sub.add_parser(
         "demo",
         help="generate an MBOX ride from the bundled lap, play it to the emulator, compare",
     )
-    d.add_argument("--out", default="out/demo", metavar="DIR")
+    d.add_argument(
+        "--out", default="out/demo", metavar="DIR", help="folder for the demo's files (out/demo)"
+    )
     d.add_argument("--speed", type=float, default=10.0, help="pacing factor for the emulator")
     d.set_defaults(run=_demo)
 
@@ -85,7 +113,6 @@ def _generate(args: argparse.Namespace) -> int:
     """Make the ride in memory, check it as ``play`` would, then publish the ride, the pcap
     and the report together: a refusal at any step leaves none of them."""
     from .._atomic import Staging
-    from ..kinematics import load_platform
     from ..output import load_controller
     from ..pipeline import (
         check_ride_for,
@@ -102,7 +129,7 @@ def _generate(args: argparse.Namespace) -> int:
 
     if not (0 < args.rate <= 2000):
         raise ConfigError(f"--rate {args.rate!r} is invalid; allowed: (0, 2000] Hz")
-    platform = load_platform(args.platform)
+    platform = load_platform_arg(args.platform, args.overrides)
     controller = load_controller(args.controller)
     from ..output._controller_api import snap_rate_hz
 
@@ -113,19 +140,27 @@ def _generate(args: argparse.Namespace) -> int:
             f"--pcap is for controllers on UDP; {args.controller} talks {controller.link_kind}: "
             "use 'motioncue play RIDE --target file:PATH' (the raw bytes)"
         )
-    limits = ActuatorLimits.from_platform(platform, controller, rate_hz=args.rate)
+    limits = ActuatorLimits.from_platform(
+        platform, controller, rate_hz=args.rate, **limit_overrides(args)
+    )
     kind, data, counters = load_generate_input(args.input)
     check_generate_size(kind, data, args.rate, args.input)
     if counters:
-        skipped = {k: v for k, v in counters.items() if k.startswith("skipped") and v}
+        skipped = ", ".join(
+            f"{k.removeprefix('skipped').strip(': ')} {v}"
+            for k, v in sorted(counters.items())
+            if k.startswith("skipped") and v
+        )
         print(
-            f"telemetry: {counters.get('sample', 0)} samples used; skipped {skipped}",
+            f"telemetry: {counters.get('sample', 0)} samples used; packets skipped: "
+            f"{skipped or 'none'}",
             file=sys.stderr,
         )
         for k, v in sorted(counters.items()):
             if k.startswith("note: ") and v:
                 print(f"telemetry: {k} ({v} samples)", file=sys.stderr)
-    bar = _Bar(not args.quiet)
+    bar = _Bar(not args.quiet and not args.json)
+    summary: dict[str, Any] = {}
     names = {"platform_name": args.platform, "controller_name": args.controller}
     if kind == "keyframes":
         ride, info = generate_keyframe_ride(
@@ -133,6 +168,13 @@ def _generate(args: argparse.Namespace) -> int:
             source=Path(args.input).name, **names,
         )  # fmt: skip
         report = None
+        summary["content_start_s"] = info["content_start_s"]
+        summary["late_keyframes"] = info["late_keyframes"]
+        print(
+            f"keyframes: the content's t=0 is at ride time {info['content_start_s']:.2f} s "
+            "(after the ramp out of park); a keyframe at t is reached at that + t",
+            file=sys.stderr,
+        )
         if info["late_keyframes"]:
             print(
                 f"warning: {info['late_keyframes']} keyframe(s) could not be reached on time "
@@ -140,7 +182,7 @@ def _generate(args: argparse.Namespace) -> int:
                 file=sys.stderr,
             )
     else:
-        cueing, preset_source = choose_preset(args.preset, platform, args.platform)
+        cueing, preset_source = choose_preset(args.preset, platform, args.platform, args.overrides)
         print(f"cueing: preset {preset_source}", file=sys.stderr)
         ride, report = generate_ride(
             data, platform, controller, cueing, rate_hz=args.rate, limits=limits,
@@ -149,6 +191,20 @@ def _generate(args: argparse.Namespace) -> int:
         warning = held_warning(report.bad_samples, len(report.f_vehicle))
         if warning:
             print(warning, file=sys.stderr)
+        n_poses = len(report.poses_cue)
+        pct = 100.0 * report.poses_clamped / max(n_poses, 1)
+        summary.update(
+            preset=cueing.name, poses=n_poses, poses_clamped=report.poses_clamped,
+            clamped_percent=pct,
+        )  # fmt: skip
+        if pct > CLAMP_WARN_PERCENT:
+            print(
+                f"warning: workspace limiting clamped {report.poses_clamped} of {n_poses} poses "
+                f"({pct:.1f} %, above {CLAMP_WARN_PERCENT:g} %): the preset asks more than "
+                f"{args.platform} can give; try a gentler preset, or scale it with --set "
+                "preset.scaling.f_scale=[...]",
+                file=sys.stderr,
+            )
     # the checks play will make: a ride that would be refused there is not published here
     check_ride_for(ride, platform, controller, limits, **names)
     with Staging() as staged:
@@ -168,9 +224,28 @@ def _generate(args: argparse.Namespace) -> int:
                 plot_actuators(ride, folder / "actuators.png")
             else:
                 write_report(folder, ride, report, platform, cueing)
+    at_end_s = _time_at_stroke_end_s(ride)
+    summary.update(
+        ride=str(args.out), frames=ride.n_frames, duration_s=ride.duration_s,
+        rate_hz=ride.rate_hz, platform=args.platform, controller=args.controller,
+        frame_check=ride.notes.get("frame_check", ""), stroke_end_s=at_end_s,
+        pcap=args.pcap, report=args.report,
+    )  # fmt: skip
+    if args.json:
+        print_json(summary)
+        return 0
+    verdict = ride.notes.get("frame_check", "")
+    if summary.get("clamped_percent", 0.0) > CLAMP_WARN_PERCENT:
+        # the frames keep the limits, but the ride is not the motion the preset asked for
+        verdict = verdict.replace(
+            "(OK)",
+            f"(frames within the limits; WARNING: {summary['clamped_percent']:.1f} % of the "
+            "poses clamped)",
+        )
+    ends = f"; an actuator at a stroke end for {at_end_s:.2f} s" if at_end_s > 0 else ""
     print(
         f"ride: {args.out}: {ride.n_frames} frames, {ride.duration_s:.1f} s at {ride.rate_hz:g} "
-        f"Hz; {ride.notes.get('frame_check', '')}",
+        f"Hz; {verdict}{ends}",
     )
     if args.pcap:
         print(f"pcap: {args.pcap}")
@@ -179,8 +254,27 @@ def _generate(args: argparse.Namespace) -> int:
     return 0
 
 
+CLAMP_WARN_PERCENT = 1.0
+"""Above this share of clamped poses ``generate`` warns (and never says OK)."""
+
+
+def _time_at_stroke_end_s(ride: Any) -> float:
+    """Longest total time (s) one actuator spends within 0.1 % of the half stroke from an end
+    of its pulse range (the limits table saved in the ride)."""
+    import numpy as np
+
+    rows = ride.limits.get("actuators", []) if isinstance(ride.limits, dict) else []
+    if not rows:
+        return 0.0
+    lo = np.array([r["stroke_pulses"][0] for r in rows], dtype=float)
+    hi = np.array([r["stroke_pulses"][1] for r in rows], dtype=float)
+    half = np.maximum((hi - lo) / 2.0, 1e-9)
+    use = np.abs(np.asarray(ride.pulses, dtype=float) - (hi + lo) / 2.0) / half
+    frames = np.count_nonzero(use >= 0.999, axis=0)
+    return float(frames.max(initial=0)) / float(ride.rate_hz)
+
+
 def _play(args: argparse.Namespace) -> int:
-    from ..kinematics import load_platform
     from ..output import load_controller, open_transport
     from ..pipeline import check_ride_for, load_ride, play_ride
     from ..pipeline._signals import SignalGuard
@@ -189,10 +283,11 @@ def _play(args: argparse.Namespace) -> int:
 
     if not (0 < args.speed <= 1000):
         raise ConfigError(f"--speed {args.speed!r} is invalid; allowed: (0, 1000]")
+    check_set_targets(args.overrides, ("platform",))
     ride = load_ride(args.ride)
     platform_name = args.platform or ride.platform
     controller_name = args.controller or ride.controller
-    platform = load_platform(platform_name)
+    platform = load_platform_arg(platform_name, args.overrides)
     controller = load_controller(controller_name)
     if controller.n_axes != platform.n_actuators:
         raise ConfigError(
@@ -200,7 +295,9 @@ def _play(args: argparse.Namespace) -> int:
             f"{platform.name} has {platform.n_actuators} actuators"
         )
     controller.check_rate(ride.rate_hz)
-    limits = ActuatorLimits.from_platform(platform, controller, rate_hz=ride.rate_hz)
+    limits = ActuatorLimits.from_platform(
+        platform, controller, rate_hz=ride.rate_hz, **limit_overrides(args)
+    )
     # nothing is sent unless the ride belongs to this rig and keeps its limits now
     check_ride_for(
         ride, platform, controller, limits,
@@ -222,16 +319,20 @@ def _play(args: argparse.Namespace) -> int:
     with SignalGuard() as guard:
         _say(f"play: {args.ride} -> {target} ({ride.n_frames} frames, {ride.duration_s:.1f} s)")
         error = None
+        progress = _PlayProgress(ride.n_frames, ride.rate_hz, guard.event.is_set)
+        progress.enabled = paced and not args.quiet and not args.json
         with open_transport(target) as link:
             try:
                 rep = play_ride(
                     ride, platform, controller, limits, link, speed=args.speed, paced=paced,
-                    q_start=q_start, stop=guard.event.is_set, handle_signals=False,
+                    q_start=q_start, stop=progress, handle_signals=False,
                 )  # fmt: skip
             except PlayAborted as exc:
                 if exc.report is None:
                     raise
                 rep, error = exc.report, str(exc)
+            finally:
+                progress.done()
         for note in rep.notes:
             _say(f"motioncue play: note: {note}")
         if error is None and rep.refused_frames:
@@ -246,6 +347,21 @@ def _play(args: argparse.Namespace) -> int:
         else:
             outcome = "finished"
         retried = f"; {rep.send_errors} send errors retried" if rep.send_errors else ""
+        if args.json:
+            try:
+                print_json(
+                    {
+                        "ride": str(args.ride), "target": target, "outcome": outcome,
+                        "error": error, "frames_sent": rep.frames_sent,
+                        "ride_frames_sent": rep.ride_frames_sent,
+                        "park_frames": rep.park_frames, "clamped_frames": rep.clamped_frames,
+                        "late_frames": rep.late_frames, "send_errors": rep.send_errors,
+                        "wall_s": rep.wall_s, "notes": list(rep.notes),
+                    }
+                )  # fmt: skip
+            except (OSError, ValueError):
+                pass
+            return 2 if error is not None else (130 if rep.interrupted else 0)
         _say(
             f"sent {rep.frames_sent} frames ({rep.ride_frames_sent} of the ride, {rep.park_frames} "
             f"parking); limiter changed {rep.clamped_frames}; late {rep.late_frames}{retried}; "
@@ -256,6 +372,55 @@ def _play(args: argparse.Namespace) -> int:
             _say(f"motioncue play: error: {error}")
             return 2
         return 130 if rep.interrupted else 0
+
+
+class _PlayProgress:
+    """The ``stop`` hook of ``play_ride`` (called before every frame) that also shows how far
+    the ride is: ``play: 12.0 of 59.3 s (20 %)`` on stderr, refreshed each second on a
+    terminal, every ten seconds otherwise. Cheap per frame: a counter and a clock read."""
+
+    def __init__(self, n_frames: int, rate_hz: float, stop: Any) -> None:
+        self.n_frames = n_frames
+        self.rate_hz = rate_hz
+        self.stop = stop
+        self.enabled = True
+        self.frame = 0
+        try:
+            self.tty = sys.stderr.isatty()
+        except (OSError, ValueError):
+            self.tty = False
+        self.every_s = 1.0 if self.tty else 10.0
+        self.next_t = time.monotonic() + self.every_s
+        self.shown = False
+
+    def __call__(self) -> bool:
+        self.frame += 1
+        if self.enabled and time.monotonic() >= self.next_t:
+            self.next_t += self.every_s
+            self.show()
+        return bool(self.stop())
+
+    def line(self) -> str:
+        done = min(self.frame - 1, self.n_frames)  # frames sent before this one
+        frac = done / max(self.n_frames, 1)
+        return (
+            f"play: {done / self.rate_hz:.1f} of {self.n_frames / self.rate_hz:.1f} s ({frac:.0%})"
+        )
+
+    def show(self) -> None:
+        self.shown = True
+        try:
+            if self.tty:
+                sys.stderr.write("\r" + self.line() + "\x1b[K")
+            else:
+                sys.stderr.write(self.line() + "\n")
+            sys.stderr.flush()
+        except (OSError, ValueError):
+            pass
+
+    def done(self) -> None:
+        if self.shown and self.tty:
+            _say("")
 
 
 def controller_buffer(controller: Any) -> str:

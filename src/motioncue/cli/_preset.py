@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from typing import Any
 
 from .._errors import ConfigError
@@ -12,7 +13,12 @@ FALLBACK_PRESET = "racing"
 """Used when neither ``--preset`` nor the platform file names a preset."""
 
 
-def choose_preset(preset: str | None, platform: Any, platform_label: str | None) -> tuple[Any, str]:
+def choose_preset(
+    preset: str | None,
+    platform: Any,
+    platform_label: str | None,
+    overrides: Sequence[str] | None = None,
+) -> tuple[Any, str]:
     """Load the cueing preset a command runs with, and say where it came from.
 
     Parameters
@@ -23,6 +29,8 @@ def choose_preset(preset: str | None, platform: Any, platform_label: str | None)
         Its ``default_preset`` is used when ``preset`` is ``None``.
     platform_label : str or None
         How the user named the platform (for the message).
+    overrides : sequence of str, optional
+        ``--set`` items; the ``preset.SECTION.KEY=VALUE`` ones are applied to the preset.
 
     Returns
     -------
@@ -36,7 +44,10 @@ def choose_preset(preset: str | None, platform: Any, platform_label: str | None)
     ConfigError
         No preset and no platform, or the preset cannot be loaded.
     """
-    from ..cueing import load_cueing
+    from ._common import load_preset_arg
+
+    def load_cueing(name: str) -> Any:
+        return load_preset_arg(name, overrides)
 
     if preset is not None:
         params = load_cueing(preset)

@@ -5,6 +5,8 @@ from __future__ import annotations
 import argparse
 import sys
 
+from ._common import add_deprecated_alias, add_json_option, print_json
+
 __all__ = ["register"]
 
 
@@ -31,9 +33,11 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
     )
     p.add_argument("--out", required=True, metavar="FILE", help="recording file to write")
     p.add_argument(
-        "--seconds", type=float, default=None, metavar="S", help="stop after S seconds "
+        "--duration", type=float, default=None, metavar="S", help="stop after S seconds "
         "(default: until Ctrl-C)"
     )  # fmt: skip
+    add_json_option(p, "the summary")
+    add_deprecated_alias(p, "--seconds", "--duration", type=float)
     p.set_defaults(run=run)
 
 
@@ -41,10 +45,22 @@ def run(args: argparse.Namespace) -> int:
     from ..telemetry import record
 
     def ready(port: int) -> None:
-        until = f"for {args.seconds:g} s" if args.seconds else "until Ctrl-C"
+        until = f"for {args.duration:g} s" if args.duration else "until Ctrl-C"
         print(f"recording {args.source} on port {port} to {args.out} {until}", file=sys.stderr)
 
-    summary = record(args.source, args.out, args.seconds, on_ready=ready)
+    summary = record(args.source, args.out, args.duration, on_ready=ready)
+    if args.json:
+        print_json(
+            {
+                "path": str(summary.path),
+                "game": summary.game,
+                "datagrams": summary.datagrams,
+                "bytes": summary.nbytes,
+                "duration_s": summary.duration_s,
+                "stats": dict(summary.stats),
+            }
+        )
+        return 0
     print(
         f"recorded {summary.datagrams} datagrams ({summary.nbytes} bytes) from "
         f"{summary.game} in {summary.duration_s:.1f} s to {summary.path}"

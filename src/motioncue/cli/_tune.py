@@ -10,6 +10,14 @@ from pathlib import Path
 from typing import Any
 
 from .._errors import ConfigError
+from ._common import (
+    add_json_option,
+    add_limit_options,
+    add_set_option,
+    limit_overrides,
+    load_platform_arg,
+    print_json,
+)
 from ._preset import add_vestibular_option
 
 __all__ = ["register"]
@@ -87,6 +95,9 @@ def register(sub: Any) -> None:
         "--rate", type=float, default=100.0, metavar="HZ", help="frame rate (default 100)"
     )
     add_vestibular_option(parser)
+    add_limit_options(parser)
+    add_set_option(parser)
+    add_json_option(parser, "the before/after metrics")
     parser.set_defaults(run=run)
 
 
@@ -117,8 +128,9 @@ def _metrics_table(before: Any, after: Any) -> str:
 def run(args: argparse.Namespace) -> int:
     from ..cueing import get_model_set, load_cueing
     from ..cueing._tune import PENALTY_BASE, TuneObjective, preset_toml, tune_cueing, write_preset
-    from ..kinematics import load_platform
     from ..output._controllers import load_controller
+    from ..pipeline._inputs import load_generate_input
+    from ..telemetry._motion import is_datagram_recording
     from ..telemetry._recording import read_recording_csv, resample
     from ..trajectory import ActuatorLimits
     from ..trajectory._derive import pulse_rounding_limits
@@ -150,20 +162,25 @@ def run(args: argparse.Namespace) -> int:
     if not out.parent.is_dir():
         raise ConfigError(f"--out {out}: folder {out.parent} does not exist")
 
-    platform = load_platform(args.platform)
+    platform = load_platform_arg(args.platform, args.overrides)
     controller = load_controller(args.controller)
     controller.check_rate(args.rate)
-    base, base_source = choose_preset(args.preset, platform, args.platform)
+    base, base_source = choose_preset(args.preset, platform, args.platform, args.overrides)
     if base.algorithm != "classical":
         raise ConfigError(
             f"preset {base.name!r} uses the cueing algorithm {base.algorithm!r}; tune "
             "optimises classical presets only"
         )
-    limits = ActuatorLimits.from_platform(platform, controller, rate_hz=args.rate)
+    limits = ActuatorLimits.from_platform(
+        platform, controller, rate_hz=args.rate, **limit_overrides(args)
+    )
     tight = pulse_rounding_limits(limits, platform, 1.0 / args.rate)
     drives = []
     for path in args.input:
-        rec = read_recording_csv(path)
+        if is_datagram_recording(Path(path)):  # a 'motioncue record' file
+            rec = load_generate_input(path)[1]
+        else:
+            rec = read_recording_csv(path)
         if len(rec) < 2:
             raise ConfigError(f"{path}: too short to tune on ({len(rec)} samples)")
         uni = resample(rec, args.rate)
@@ -230,7 +247,35 @@ def run(args: argparse.Namespace) -> int:
         f"evaluations in {result.wall_s:.1f} s on {result.where} ({result.stop_reason})",
         file=sys.stderr,
     )
+    if args.json:
+        print_json(
+            {
+                "base": base.name, "out": str(out), "inputs": list(args.input),
+                "generations": result.generations, "evaluations": result.evaluations,
+                "wall_s": result.wall_s, "stop_reason": str(result.stop_reason),
+                "before": _metrics_dict(result.before), "after": _metrics_dict(after),
+            }
+        )  # fmt: skip
+        return 0
     print(f"base {base.name} -> tuned {out} on {inputs}")
     print(_metrics_table(result.before, after))
     print(f"wrote {out}")
     return 0
+
+
+def _metrics_dict(m: Any) -> dict[str, Any]:
+    """A :class:`~motioncue.cueing._tune.TuneMetrics` for ``--json`` (NaN as None)."""
+
+    def num(v: float) -> float | None:
+        return float(v) if math.isfinite(v) else None
+
+    return {
+        "objective": num(m.objective),
+        "per_drive_objective": [num(v) for v in m.per_drive_objective],
+        "correlation": [num(v) for v in m.correlation],
+        "false_cue_time_s": [num(v) for v in m.false_cue_time_s],
+        "duration_s": num(m.duration_s),
+        "clamped_fraction": num(m.clamped_fraction),
+        "violating_frames": int(m.violating_frames),
+        "feasible": bool(m.feasible),
+    }

@@ -353,7 +353,7 @@ class Playback:
                             t,
                             "stroke",
                             i,
-                            f"frame {frame}: axis {i} at {p} pulses, allowed "
+                            f"frame {frame}: axis {i + 1} at {p} pulses, allowed "
                             f"[{_num(a_lo)}, {_num(a_hi)}]",
                         )
                     )
@@ -363,7 +363,9 @@ class Playback:
             for i, (p, r) in enumerate(zip(positions, q, strict=True)):
                 if p != r and vmax is not None:
                     self.violations.append(
-                        Violation(t, "speed", i, f"frame {frame}: axis {i} moves {p - r} in 0 ms")
+                        Violation(
+                            t, "speed", i, f"frame {frame}: axis {i + 1} moves {p - r} in 0 ms"
+                        )
                     )
             self._motion = self._rest
             return
@@ -394,7 +396,7 @@ class Playback:
                 t,
                 "speed",
                 i,
-                f"frame {frame}: axis {i} moves {step} pulses in {dur * 1e3:.3f} ms{clock} "
+                f"frame {frame}: axis {i + 1} moves {step} pulses in {dur * 1e3:.3f} ms{clock} "
                 f"= {abs(step) / dur:.0f} pulses/s > {self._vmax[i]:.0f}",
             )
         )
@@ -406,7 +408,7 @@ class Playback:
                 t,
                 "accel",
                 i,
-                f"frame {frame}: axis {i} speed {u:.0f} -> {v:.0f} pulses/s over {h * 1e3:.3f} "
+                f"frame {frame}: axis {i + 1} speed {u:.0f} -> {v:.0f} pulses/s over {h * 1e3:.3f} "
                 f"ms on the controller's clock = {abs(v - u) / h:.4g} pulses/s^2 "
                 f"> {self._amax[i]:.4g}",
             )

@@ -271,10 +271,26 @@ def generate_keyframe_ride(
     free time (empty cell) is reached as soon as possible. The ride starts and ends parked.
     Effect outputs (``dout``, DACs) switch at the frame each keyframe is reached.
 
+    Time base: the keyframe times are the times of the ride's content. The ramp out of park
+    comes before the content, so the content's t = 0 is at ride time ``content_start_s``
+    (``notes["content_start_s"]`` of the ride, ``info["content_start_s"]``), and a keyframe
+    timed ``t`` is reached at ride time ``content_start_s + t`` (the first keyframe is never
+    late: the ramp is given the time it needs).
+
+    Every keyframe is checked before any work: one the platform cannot reach is refused with
+    its number (1-based, as in the file), its time and the actuator (1-based, by name) that
+    cannot get there.
+
     Returns
     -------
     ride, info
-        ``info`` has ``late_keyframes``, ``max_late_s`` and ``keyframe_frames``.
+        ``info`` has ``late_keyframes``, ``max_late_s``, ``keyframe_frames`` and
+        ``content_start_s``.
+
+    Raises
+    ------
+    LimitError
+        A keyframe the platform cannot reach (named with the actuator).
     """
     from motioncue.trajectory import ActuatorLimits, transition, transition_through
 
@@ -287,6 +303,8 @@ def generate_keyframe_ride(
     poses = np.asarray(keyframes.poses, dtype=float)
     times = np.asarray(keyframes.t_s, dtype=float)
     park = np.asarray(platform.pose_park, dtype=float)
+    _check_keyframes_reachable(platform, poses, times)
+    content_start = 0.0
     segments: list[np.ndarray] = []
     arrive: list[int] = []
     late = 0
@@ -303,9 +321,11 @@ def generate_keyframe_ride(
         first = transition(platform, park, poses[0], gentle, rate_hz)
         move = np.vstack([first.q, first.q[-1:]])  # arrive, then one frame at rest
         need = len(move) - 1
-        wait = round(times[0] * rate_hz) - need if np.isfinite(times[0]) else 0
-        if wait < 0:
-            late, max_late = 1, -wait * dt
+        # the content's t = 0 comes after as many frames as the ramp out of park needs
+        t0_frames = max(round(times[0] * rate_hz), 0) if np.isfinite(times[0]) else 0
+        lead = max(need - t0_frames, 0)
+        content_start = round(lead * dt, 9)
+        wait = lead + t0_frames - need
         segments.append(np.vstack([np.repeat(move[:1], max(wait, 0), axis=0), move]))
         n_frames = len(segments[0])
         arrive.append(n_frames - 1)
@@ -352,10 +372,39 @@ def generate_keyframe_ride(
         source=source,
         notes={
             "keyframe_frames": arrive,
+            "content_start_s": content_start,
             "late_keyframes": late,
             "max_late_s": max_late,
             "optimisation_status": str(opt.status),
             "frame_check": check.summary(),
         },
     )
-    return ride, {"late_keyframes": late, "max_late_s": max_late, "keyframe_frames": arrive}
+    return ride, {
+        "late_keyframes": late,
+        "max_late_s": max_late,
+        "keyframe_frames": arrive,
+        "content_start_s": content_start,
+    }
+
+
+def _check_keyframes_reachable(platform: Any, poses: np.ndarray, times: np.ndarray) -> None:
+    """Refuse the first keyframe the platform cannot reach, naming it and the actuator."""
+    for k, pose in enumerate(poses):
+        res = platform.check(pose)
+        if bool(res.ok):
+            continue
+        bad = [i for i in range(len(res.q)) if not (res.reachable[i] and res.in_stroke[i])]
+        # the actuator furthest out (an unreachable one first)
+        i = max(bad, key=lambda j: (not res.reachable[j], abs(float(res.overshoot[j]))))
+        linear = platform.actuator_kinds[i] == "linear"
+        scale, unit = (1e3, "mm") if linear else (180.0 / np.pi, "deg")
+        why = (
+            "cannot reach it (geometry)"
+            if not res.reachable[i]
+            else f"would leave its stroke by {float(res.overshoot[i]) * scale:+.1f} {unit}"
+        )
+        when = f"t={times[k]:g} s" if np.isfinite(times[k]) else "free time"
+        others = f" (and {len(bad) - 1} more actuator(s))" if len(bad) > 1 else ""
+        name = str(platform.actuator_names[i])
+        label = f"actuator {i + 1}" + ("" if name == str(i + 1) else f" ({name})")
+        raise LimitError(f"keyframe {k + 1} ({when}) is not reachable: {label} {why}{others}")

@@ -33,9 +33,29 @@ def delivered_poses(platform: Any, report: GenerateReport) -> np.ndarray:
 
 
 def plot_actuators(
-    ride: Ride, path: str | Path, q_desired_pulses: np.ndarray | None = None
+    ride: Ride,
+    path: str | Path,
+    q_desired_pulses: np.ndarray | None = None,
+    *,
+    preset: str | None = None,
 ) -> Path:
-    """Positions against the stroke, speeds and accelerations against their limits (pulses)."""
+    """Positions against the stroke, speeds and accelerations against their limits.
+
+    Parameters
+    ----------
+    ride : Ride
+        The frames (pulses) and the limits table they were made for.
+    path : path
+        PNG file to write.
+    q_desired_pulses : (N, n) array, optional
+        The positions asked for before the actuator limits (pulses), drawn dashed on top.
+    preset : str, optional
+        The cueing preset, named in the title.
+
+    Positions are in pulses (left axis) and, when every actuator has the same pulses per unit,
+    in mm (or deg) from home on the right axis. Axes are numbered from 1, as the controllers'
+    manuals number them.
+    """
     import matplotlib
 
     matplotlib.use("Agg")
@@ -51,29 +71,60 @@ def plot_actuators(
     names = ride.actuator_names
     fig, axes = plt.subplots(3, 1, figsize=(13, 11), sharex=True, layout="constrained")
     for i, name in enumerate(names):
-        (line,) = axes[0].plot(t, p[:, i], lw=0.9, label=name)
+        label = f"axis {i + 1}" + ("" if str(name) == str(i + 1) else f" ({name})")
+        (line,) = axes[0].plot(t, p[:, i], lw=0.9, label=label)
         if q_desired_pulses is not None:
-            axes[0].plot(t, q_desired_pulses[:, i], lw=0.6, ls=":", color=line.get_color())
+            axes[0].plot(
+                t, q_desired_pulses[:, i], lw=1.3, ls=(0, (4, 2)), alpha=0.75,
+                color=line.get_color(), zorder=3,
+                label="desired (before the actuator limits)" if i == 0 else None,
+            )  # fmt: skip
         axes[1].plot(t, v[:, i] / lim["v"][i], lw=0.8, color=line.get_color())
         axes[2].plot(t, a[:, i] / lim["a"][i], lw=0.8, color=line.get_color())
-    for lo, hi in zip(lim["lo"], lim["hi"], strict=True):
-        axes[0].axhline(lo, color="k", lw=0.5, ls="--")
-        axes[0].axhline(hi, color="k", lw=0.5, ls="--")
-    axes[0].set_ylabel("position [pulses]\n(dashed: stroke ends; dotted: desired)")
-    axes[0].legend(loc="upper right", ncol=len(names))
+    for k, (lo, hi) in enumerate(zip(lim["lo"], lim["hi"], strict=True)):
+        end_label = "stroke ends" if k == 0 else None
+        axes[0].axhline(lo, color="k", lw=0.6, ls=":", label=end_label)
+        axes[0].axhline(hi, color="k", lw=0.6, ls=":")
+    axes[0].set_ylabel("position [pulses]")
+    scale = _si_per_pulse(ride)
+    if scale is not None:
+        factor, unit = scale
+        axes[0].secondary_yaxis(
+            "right", functions=(lambda x: x * factor, lambda y: y / factor)
+        ).set_ylabel(f"position from home [{unit}]")
+    axes[0].legend(loc="upper left", bbox_to_anchor=(0.0, -0.04), ncol=len(names) + 2,
+                   fontsize=8, frameon=False)  # fmt: skip
     for ax, what in ((axes[1], "speed"), (axes[2], "acceleration")):
         ax.axhline(1.0, color="r", lw=0.8)
         ax.axhline(-1.0, color="r", lw=0.8)
-        ax.set_ylabel(f"{what} / limit")
+        ax.set_ylabel(f"{what} / its limit\n(red: the limit)")
         ax.set_ylim(-1.15, 1.15)
-    axes[2].set_xlabel("t [s]")
+    axes[2].set_xlabel("ride time t [s]")
     for ax in axes:
         ax.grid(alpha=0.3)
-    fig.suptitle(f"{ride.platform} on {ride.controller}: actuators against their limits")
+    what = f"preset {preset}, " if preset else ""
+    fig.suptitle(
+        f"{what}platform {ride.platform}, controller {ride.controller}: "
+        f"actuators against their limits ({ride.rate_hz:g} Hz)"
+    )
     path = Path(path)
     fig.savefig(path, dpi=90)
     plt.close(fig)
     return path
+
+
+def _si_per_pulse(ride: Ride) -> tuple[float, str] | None:
+    """mm (or deg) per pulse when every actuator shares it, else None."""
+    rows = ride.limits.get("actuators", []) if isinstance(ride.limits, dict) else []
+    per = {(r.get("kind"), r.get("pulses_per_unit")) for r in rows}
+    if len(per) != 1:
+        return None
+    kind, ppu = next(iter(per))
+    if not isinstance(ppu, (int, float)) or ppu <= 0:
+        return None
+    if kind == "linear":
+        return 1e3 / float(ppu), "mm"
+    return 180.0 / np.pi / float(ppu), "deg"
 
 
 def write_report(
@@ -106,10 +157,10 @@ def write_report(
         out / "cueing.png",
         title=f"{ride.source} on {ride.platform}",
         preset=getattr(cueing, "name", None),
-        platform=ride.platform,
+        platform=f"{ride.platform}, controller {ride.controller}",
     )
     desired = platform.drives.to_pulses(report.q_desired)
-    plot_actuators(ride, out / "actuators.png", desired)
+    plot_actuators(ride, out / "actuators.png", desired, preset=getattr(cueing, "name", None))
     opt = report.optimisation
     check = report.frame_check
 

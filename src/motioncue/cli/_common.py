@@ -1,0 +1,257 @@
+"""Options several verbs share, defined once so that one concept has one name everywhere.
+
+* :func:`add_deprecated_alias`: an old spelling (``cue --fs``, ``record --seconds``) kept as a
+  hidden option that still works and prints a one-line deprecation note.
+* :func:`add_json_option` / :func:`print_json`: ``--json`` on every verb that prints a result.
+* :func:`add_limit_options`: ``--max-speed``, ``--max-accel``, ``--max-jerk``,
+  ``--stroke-margin`` (the actuator-limit overrides of ``motioncue limits``).
+* :func:`add_set_option`, :func:`load_platform_arg`, :func:`load_preset_arg`:
+  ``--set platform.SECTION.KEY=VALUE`` and ``--set preset.SECTION.KEY=VALUE`` overrides,
+  validated exactly like the file (an unknown key is refused with its name).
+
+Building a parser imports nothing heavy: the loaders are imported when a verb runs.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+import tempfile
+import tomllib
+from collections.abc import Sequence
+from pathlib import Path
+from typing import Any
+
+from .._errors import ConfigError
+
+__all__ = [
+    "SET_TARGETS",
+    "add_deprecated_alias",
+    "add_json_option",
+    "add_limit_options",
+    "add_set_option",
+    "apply_overrides",
+    "load_platform_arg",
+    "load_preset_arg",
+    "parse_set",
+    "print_json",
+]
+
+SET_TARGETS = ("platform", "preset")
+"""The files ``--set`` can override, named by the first word of its key."""
+
+
+class _DeprecatedAlias(argparse.Action):
+    """Store like the new option, after a one-line note on stderr naming the new spelling."""
+
+    def __init__(self, option_strings: Sequence[str], dest: str, **kwargs: Any) -> None:
+        self.new_name: str = kwargs.pop("new_name")
+        super().__init__(option_strings, dest, **kwargs)
+
+    def __call__(
+        self,
+        parser: argparse.ArgumentParser,
+        namespace: argparse.Namespace,
+        values: Any,
+        option_string: str | None = None,
+    ) -> None:
+        print(
+            f"{parser.prog}: note: {option_string} is deprecated; use {self.new_name}",
+            file=sys.stderr,
+        )
+        setattr(namespace, self.dest, values)
+
+
+def add_deprecated_alias(
+    parser: argparse.ArgumentParser, old: str, new: str, *, type: Any = str
+) -> None:
+    """Accept ``old`` as a hidden spelling of the option ``new`` (same destination).
+
+    Parameters
+    ----------
+    parser : argparse.ArgumentParser
+        The verb's parser; ``new`` must already be defined on it.
+    old, new : str
+        Option strings, e.g. ``"--fs"`` and ``"--rate"``.
+    type : callable
+        The conversion of the new option (argparse ``type``).
+    """
+    dest = new.lstrip("-").replace("-", "_")
+    parser.add_argument(
+        old, dest=dest, type=type, action=_DeprecatedAlias, new_name=new, help=argparse.SUPPRESS
+    )
+
+
+def add_json_option(parser: argparse.ArgumentParser, what: str = "the result") -> None:
+    """``--json``: print ``what`` as one JSON document on stdout instead of text."""
+    parser.add_argument(
+        "--json", action="store_true", help=f"print {what} as JSON on stdout instead of text"
+    )
+
+
+def print_json(data: Any) -> None:
+    """Print ``data`` as JSON (``NaN`` refused: the output is strict JSON)."""
+    print(json.dumps(data, indent=1, allow_nan=False, default=str))
+
+
+def add_limit_options(parser: argparse.ArgumentParser) -> None:
+    """The actuator-limit overrides; the smallest of these, the platform's and the
+    controller's value wins (see ``motioncue limits``)."""
+    parser.add_argument("--max-speed", type=float, help="speed limit, m/s (rad/s for cranks)")
+    parser.add_argument("--max-accel", type=float, help="acceleration limit, m/s^2 (rad/s^2)")
+    parser.add_argument("--max-jerk", type=float, help="jerk limit, m/s^3 (rad/s^3)")
+    parser.add_argument(
+        "--stroke-margin", type=float, help="extra margin at each stroke end, m (rad)"
+    )
+
+
+def limit_overrides(args: argparse.Namespace) -> dict[str, Any]:
+    """The keyword arguments of ``ActuatorLimits.from_platform`` set by
+    :func:`add_limit_options`."""
+    return {
+        "stroke_margin": getattr(args, "stroke_margin", None),
+        "v_max": getattr(args, "max_speed", None),
+        "a_max": getattr(args, "max_accel", None),
+        "j_max": getattr(args, "max_jerk", None),
+    }
+
+
+def add_set_option(parser: argparse.ArgumentParser, targets: Sequence[str] = SET_TARGETS) -> None:
+    """``--set TARGET.SECTION.KEY=VALUE`` (repeatable), TARGET one of ``targets``."""
+    names = " or ".join(targets)
+    example = (
+        "platform.stroke.margin_mm=5" if "platform" in targets else "preset.scaling.soft_knee=0.5"
+    )
+    parser.add_argument(
+        "--set",
+        action="append",
+        default=[],
+        dest="overrides",
+        metavar="TARGET.SECTION.KEY=VALUE",
+        help=f"override one key of the {names} file (TARGET: {', '.join(targets)}; VALUE in "
+        f"TOML syntax, e.g. {example}); checked like the file; repeatable",
+    )
+
+
+def parse_set(item: str) -> tuple[str, tuple[str, ...], Any]:
+    """Split one ``--set`` item into its target, key path and TOML value.
+
+    Returns
+    -------
+    target : str
+        ``"platform"`` or ``"preset"``.
+    path : tuple of str
+        Keys below the file's top level, e.g. ``("stroke", "margin_mm")``.
+    value
+        The value parsed as TOML (``5``, ``[1.0, 2.0]``, ``"text"``); a bare word that is
+        not TOML is taken as a string.
+
+    Raises
+    ------
+    ConfigError
+        No ``=``, no key, or an unknown target.
+    """
+    key, sep, text = item.partition("=")
+    parts = tuple(p.strip() for p in key.split("."))
+    if not sep or len(parts) < 2 or not all(parts):
+        raise ConfigError(
+            f"--set {item!r} is invalid; allowed: TARGET.SECTION.KEY=VALUE with TARGET one of "
+            f"{', '.join(SET_TARGETS)} (e.g. platform.stroke.margin_mm=5)"
+        )
+    if parts[0] not in SET_TARGETS:
+        raise ConfigError(
+            f"--set {item!r}: unknown target {parts[0]!r}; allowed: {', '.join(SET_TARGETS)}"
+        )
+    try:
+        value = tomllib.loads(f"v = {text.strip()}")["v"]
+    except tomllib.TOMLDecodeError:
+        value = text.strip()
+    return parts[0], parts[1:], value
+
+
+def apply_overrides(data: dict[str, Any], items: Sequence[tuple[tuple[str, ...], Any]]) -> None:
+    """Set each key path of ``items`` in the nested tables of ``data`` (in place).
+
+    A missing table on the way is created, so that an optional table can be given; a key
+    that is not a table where one is needed is refused. Unknown keys are left to the file's
+    own loader, which refuses them by name.
+    """
+    for path, value in items:
+        table = data
+        for i, part in enumerate(path[:-1]):
+            nxt = table.setdefault(part, {})
+            if not isinstance(nxt, dict):
+                raise ConfigError(
+                    f"--set {'.'.join(path)}: {'.'.join(path[: i + 1])} is a value, not a table"
+                )
+            table = nxt
+        table[path[-1]] = value
+
+
+def _overrides_for(
+    target: str, overrides: Sequence[str] | None
+) -> list[tuple[tuple[str, ...], Any]]:
+    out = []
+    for item in overrides or ():
+        tgt, path, value = parse_set(item)
+        if tgt == target:
+            out.append((path, value))
+    return out
+
+
+def check_set_targets(overrides: Sequence[str] | None, targets: Sequence[str]) -> None:
+    """Refuse a ``--set`` whose target this verb does not load."""
+    for item in overrides or ():
+        tgt = parse_set(item)[0]
+        if tgt not in targets:
+            raise ConfigError(
+                f"--set {item!r}: this command loads no {tgt} file; allowed targets: "
+                f"{', '.join(targets)}"
+            )
+
+
+def _overridden_copy(kind: str, name_or_path: str, items: Sequence[Any], folder: Path) -> Path:
+    """The config file with ``items`` applied, written under ``folder`` with the same name
+    (so the loaded object keeps its name)."""
+    import tomli_w
+
+    from .._config import find_config, load_toml
+
+    src = find_config(kind, name_or_path)
+    data = load_toml(src)
+    apply_overrides(data, items)
+    dst = folder / src.name
+    with open(dst, "wb") as fh:
+        tomli_w.dump(data, fh)
+    return dst
+
+
+def load_platform_arg(name_or_path: str, overrides: Sequence[str] | None = None) -> Any:
+    """:func:`motioncue.kinematics.load_platform` with the ``platform.`` items of ``--set``."""
+    from ..kinematics import load_platform
+
+    items = _overrides_for("platform", overrides)
+    if not items:
+        return load_platform(name_or_path)
+    with tempfile.TemporaryDirectory(prefix="motioncue-set-") as tmp:
+        path = _overridden_copy("platforms", name_or_path, items, Path(tmp))
+        try:
+            return load_platform(path)
+        except ConfigError as exc:
+            raise ConfigError(f"--set: {exc}") from exc
+
+
+def load_preset_arg(name_or_path: str, overrides: Sequence[str] | None = None) -> Any:
+    """:func:`motioncue.cueing.load_cueing` with the ``preset.`` items of ``--set``."""
+    from ..cueing import load_cueing
+
+    items = _overrides_for("preset", overrides)
+    if not items:
+        return load_cueing(name_or_path)
+    with tempfile.TemporaryDirectory(prefix="motioncue-set-") as tmp:
+        path = _overridden_copy("cueing", name_or_path, items, Path(tmp))
+        try:
+            return load_cueing(path)
+        except ConfigError as exc:
+            raise ConfigError(f"--set: {exc}") from exc
