@@ -10,8 +10,10 @@ Per tick:
    is younger than ``gate.timeout_s`` and not paused, else the gain fades to 0 (parked). The
    bridge starts parked and ramps in; while parked the washout state is reset so a resume
    starts clean;
-3. washout step (streaming, explicit :class:`~motioncue.cueing.WashoutState`) on the newest
-   sample, held between samples (the washout runs at the frame rate);
+3. up-sampling (:mod:`~motioncue.pipeline._upsample`, ``BridgeConfig.upsample``): the
+   telemetry at the frame's time, from the samples so far (held, interpolated, or
+   extrapolated and corrected on the next sample), then the washout step (streaming,
+   explicit :class:`~motioncue.cueing.WashoutState`; the washout runs at the frame rate);
 4. blend ``pose = pose_park + gain * (cue - pose_park)``;
 5. workspace limiting (:func:`motioncue.trajectory.limit_pose`, which also returns the
    inverse kinematics of the pose it keeps: ``platform.inverse``'s single-pose fast path);
@@ -37,7 +39,10 @@ Timing figures (:class:`BridgeStats`):
 * *sample age*: from the datagram's arrival stamp to the same send, which also contains the
   sample-and-hold wait for the next frame slot (between 0 and one frame period: inherent to
   a fixed frame rate, since the game sends at its own rate and phase);
-* *jitter*: ``|interval between consecutive sends - period|``.
+* *jitter*: ``|interval between consecutive sends - period|``;
+* *frame age*: for every frame, from the arrival stamp of the newest sample it used to
+  the return of its send (``BridgeStats.frame_age_ms`` for the last frame, percentiles
+  over the window).
 """
 
 from __future__ import annotations
@@ -100,6 +105,12 @@ class BridgeConfig:
         While running, the interpreter's thread switch interval is lowered to this (s) so
         that another Python thread (the telemetry receiver, an in-process emulator) holds
         the GIL for at most this long when the loop wakes; restored on stop. None: leave it.
+    upsample : str
+        How telemetry slower than the frame rate is brought to each frame's time
+        (:data:`motioncue.pipeline._upsample.UPSAMPLERS`): ``"hold"`` (the newest sample,
+        a step per sample), ``"interpolate"`` (one telemetry period late, no steps) or
+        ``"extrapolate"`` (no steps and no lag for smooth motion; bounded overshoot on a
+        step in the telemetry).
     """
 
     rate_hz: float = 100.0
@@ -108,8 +119,16 @@ class BridgeConfig:
     stats_window: int = 20000
     rt_priority: int | None = None
     switch_interval_s: float | None = 0.0005
+    upsample: str = "hold"
 
     def __post_init__(self) -> None:
+        from ._upsample import UPSAMPLERS
+
+        if self.upsample not in UPSAMPLERS:
+            raise ConfigError(
+                f"upsample = {self.upsample!r} is unknown; allowed: "
+                + ", ".join(sorted(UPSAMPLERS))
+            )
         if not (math.isfinite(self.rate_hz) and 0.0 < self.rate_hz <= 1000.0):
             raise ConfigError(f"rate_hz = {self.rate_hz!r} is invalid; allowed: (0, 1000] Hz")
         if not (math.isfinite(self.spin_s) and 0.0 <= self.spin_s <= 0.01):
@@ -170,6 +189,9 @@ class BridgeStats:
         priority, where the platform started).
     send_errors : int
         Transient send errors met and retried within their frame.
+    frame_age_ms, frame_age_p50_ms, frame_age_p99_ms : float
+        Age of the newest sample a frame used, at the return of its send: the last
+        frame's, and percentiles over the window (nan before there is data).
     """
 
     state: str
@@ -197,6 +219,9 @@ class BridgeStats:
     error: str | None
     notes: tuple[str, ...] = ()
     send_errors: int = 0
+    frame_age_ms: float = math.nan
+    frame_age_p50_ms: float = math.nan
+    frame_age_p99_ms: float = math.nan
 
     def status_line(self) -> str:
         """One line for a terminal status display."""
@@ -212,7 +237,8 @@ class BridgeStats:
         return (
             f"{self.state:<10} gain {self.gain:4.2f} | in {f(self.rate_in_hz, '5.1f')} Hz"
             f" out {f(self.rate_out_hz, '5.1f')} Hz | jitter p99 {f(self.jitter_p99_ms, '.2f')}"
-            f" ms | latency p99 {f(self.latency_p99_ms, '.2f')} ms | clamped"
+            f" ms | latency p99 {f(self.latency_p99_ms, '.2f')} ms | age"
+            f" {f(self.frame_age_ms, '.1f')} ms | clamped"
             f" {self.limiter_clamped_frames} lim {self.pose_clamped} ws | bad"
             f" {self.bad_packets}{f' ({bad})' if bad else ''} | missed {self.missed_deadlines}"
             + ("".join(f" | {k}" for k, v in sorted(self.packet_reasons.items())
@@ -340,6 +366,12 @@ class Bridge:
         self._sent_at = _Ring(w)  # perf_counter when each frame's send returned
         self._latency = _Ring(w)
         self._age = _Ring(w)
+        self._frame_age = _Ring(w)
+        from ._upsample import make_upsampler
+
+        self._upsampler = make_upsampler(cfg.upsample)
+        self._fw = [0.0] * 6  # telemetry at the frame's time: f (3), then w (3)
+        self._fed_t = math.nan  # stamp of the last sample given to the upsampler
         self._rate_in_prev: tuple[float, int] | None = None
         self._rate_in = math.nan
         self._old_switch: float | None = None
@@ -518,7 +550,20 @@ class Bridge:
             stage.park_step()
         else:
             cue = self._cue
-            self.washout.step(self.washout_state, held.f, held.w, cue)
+            raw = False
+            if held.t_s != self._fed_t:
+                self._fed_t = held.t_s
+                fw = (*held.f, *held.w)
+                if all(map(math.isfinite, fw)):
+                    self._upsampler.update(held.t_s, fw)
+                else:  # the washout counts and holds a bad sample; the upsampler never sees it
+                    raw = True
+            if raw:
+                self.washout.step(self.washout_state, held.f, held.w, cue)
+            else:
+                fw6 = self._fw
+                self._upsampler.value_at(now, fw6)
+                self.washout.step(self.washout_state, fw6[:3], fw6[3:], cue)
             self._clean = False
             park = self._pose_park
             pose = self._pose
@@ -533,6 +578,8 @@ class Bridge:
             stage.emit(res.q)
         done = time.perf_counter()
         self._sent_at.add(done)
+        if held is not None:
+            self._frame_age.add(done - held.t_s)
         if sample is not None and sample.t_s != self._last_sample_t:
             self._last_sample_t = sample.t_s
             self._age.add(done - sample.t_s)
@@ -579,6 +626,7 @@ class Bridge:
             rate_out = (recent.size - 1) / float(recent[-1] - recent[0])
         lat = self._latency.values()
         age = self._age.values()
+        fage = self._frame_age.values()
         bad = sum(v for k, v in src.items() if k.startswith("skipped")) + int(
             src.get("receive errors", 0)
         )
@@ -609,4 +657,7 @@ class Bridge:
             error=self._error,
             notes=tuple(self._notes) + _telemetry_notes(src, self.source_finished),
             send_errors=self.stage.send_errors,
+            frame_age_ms=float(fage[-1] * 1e3) if fage.size else math.nan,
+            frame_age_p50_ms=_percentile_ms(fage, 50),
+            frame_age_p99_ms=_percentile_ms(fage, 99),
         )
