@@ -63,7 +63,7 @@ def test_samples_equal_the_decoder_run_in_this_process() -> None:
             for pkt in (ex, motion):
                 want = oracle.feed(pkt, 0.0) or want
             assert want is not None
-            assert _wait_for(lambda: (s := src.latest()) is not None and s.t_s >= t_before)
+            assert _wait_for(lambda t0=t_before: (s := src.latest()) is not None and s.t_s >= t0)
             got = src.latest()
             assert got is not None
             assert got.f == want.f and got.w == want.w  # bit for bit

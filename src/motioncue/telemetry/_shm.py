@@ -43,6 +43,13 @@ _SAMPLE = struct.Struct("=q7dqq")  # the sample part: seq .. game
 _FIELDS = struct.Struct("=7dqq")  # the sample after seq: t, f, w, paused, game
 
 
+def _view(shm: shared_memory.SharedMemory) -> memoryview:
+    buf = shm.buf
+    if buf is None:  # closed
+        raise MotioncueError("the telemetry shared-memory block is closed")
+    return buf
+
+
 def _publish(buf: Any, seq: int, s: TelemetrySample, games: list[str]) -> int:
     """Write sample ``s`` into the block under the sequence counter; returns the new (even)
     counter. ``seq`` is the current (even) counter; only one writer may call this."""
@@ -72,7 +79,7 @@ def _child(spec: str, name: str, port_conn: Any, stop: Any, parent_pid: int) -> 
     from . import GAMES, open_source
 
     shm = shared_memory.SharedMemory(name=name)
-    buf = shm.buf
+    buf = _view(shm)
     games = sorted(GAMES)
     try:
         try:
@@ -137,7 +144,8 @@ class SharedMemorySource:
 
         self._games = sorted(GAMES)
         self._shm = shared_memory.SharedMemory(create=True, size=_SIZE)
-        self._shm.buf[:_SIZE] = bytes(_SIZE)
+        self._buf = _view(self._shm)
+        self._buf[:_SIZE] = bytes(_SIZE)
         ctx = mp.get_context("spawn")
         self._stop = ctx.Event()
         parent, child = ctx.Pipe(duplex=False)
@@ -172,19 +180,23 @@ class SharedMemorySource:
 
     def latest(self) -> TelemetrySample | None:
         """The newest sample (or None); never blocks (a torn read keeps the previous one)."""
+        if self._closed:
+            return self._last
         for _ in range(3):
-            got = _read(self._shm.buf, self._seq, self._games)
+            got = _read(self._buf, self._seq, self._games)
             if got is not None:
                 self._seq, self._last = got
                 break
-            if struct.unpack_from("=q", self._shm.buf, 0)[0] == self._seq:
+            if struct.unpack_from("=q", self._buf, 0)[0] == self._seq:
                 break  # nothing new
         return self._last
 
     @property
     def stats(self) -> dict[str, int]:
         """The child's counters (``datagrams``, ``samples``, ``receive errors``, the decoder's)."""
-        buf = self._shm.buf
+        if self._closed:
+            return dict(self._stats)
+        buf = self._buf
         d, s, e, sseq, slen = struct.unpack_from("=qqqqq", buf, _SAMPLE.size)
         if not sseq & 1 and 0 < slen <= _JSON_MAX:
             try:
@@ -193,8 +205,8 @@ class SharedMemorySource:
                     self._stats = {str(k): int(v) for k, v in blob.items()}
             except (ValueError, TypeError):
                 pass
+        self._stats.update({"datagrams": d, "samples": s, "receive errors": e})
         out = dict(self._stats)
-        out.update({"datagrams": d, "samples": s, "receive errors": e})
         if not self._closed and not self._proc.is_alive():
             out["note: telemetry process ended"] = 1
             out["receive errors"] = e + 1
@@ -219,6 +231,7 @@ class SharedMemorySource:
         if self._proc.is_alive():
             self._proc.terminate()
             self._proc.join(2.0)
+        del self._buf
         self._shm.close()
         try:
             self._shm.unlink()
