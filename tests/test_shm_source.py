@@ -195,3 +195,26 @@ def test_the_child_ends_when_its_parent_dies() -> None:
             return True
 
     assert _wait_for(gone, 5.0)
+
+
+def test_cli_port_in_use_is_one_line_error_of_the_right_kind(
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    """The child's TransportError (port taken) reaches the CLI as the same one-line error."""
+    import socket
+
+    from motioncue import TransportError
+    from motioncue.cli import main
+
+    with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as taken:
+        taken.bind(("127.0.0.1", 0))
+        port = taken.getsockname()[1]
+        with pytest.raises(TransportError):
+            SharedMemorySource(f"f1:127.0.0.1:{port}")
+        base = ["bridge", "--platform", "seat3", "--controller", "imax3"]
+        code = main([*base, "--target", "file:/dev/null", "--source", f"f1:127.0.0.1:{port}"])
+    err = capsys.readouterr().err
+    assert code == 2
+    lines = [ln for ln in err.splitlines() if "error" in ln]
+    assert len(lines) == 1 and lines[0].startswith("motioncue bridge: error: "), err
+    assert "Traceback" not in err

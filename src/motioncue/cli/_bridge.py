@@ -77,6 +77,19 @@ def register(sub: Any) -> None:
         "CAP_SYS_NICE; refused quietly with a note elsewhere): keeps other programs from "
         "delaying frames on a busy PC (default 10; 0 = normal scheduling)",
     )
+    parser.add_argument(
+        "--upsample",
+        choices=("extrapolate", "interpolate", "hold"),
+        default="extrapolate",
+        help="telemetry slower than the frame rate, per frame: extrapolated and corrected "
+        "on the next sample (default), interpolated one sample late, or held",
+    )
+    parser.add_argument(
+        "--telemetry-in-process",
+        action="store_true",
+        help="receive and decode live telemetry in the frame loop's process (default: in a "
+        "child process, through shared memory, so decoding never delays a frame)",
+    )
     parser.add_argument("--quiet", action="store_true", help="no status line")
     parser.set_defaults(run=run)
 
@@ -100,6 +113,7 @@ def run(args: argparse.Namespace) -> int:
         rate_hz=snap_rate_hz(args.rate, controller),
         gate=GateConfig(timeout_s=args.timeout, fade_out_s=args.fade, fade_in_s=args.fade),
         rt_priority=args.rt_priority or None,
+        upsample=args.upsample,
     )
     platform = load_platform(args.platform)
     controller.check_rate(config.rate_hz)
@@ -117,7 +131,12 @@ def run(args: argparse.Namespace) -> int:
     # from here on SIGINT, SIGTERM, SIGHUP and SIGQUIT only set a flag: the bridge parks and
     # nothing cuts the park or the summary short
     with SignalGuard() as guard:
-        source = open_source(args.source)
+        if args.telemetry_in_process or args.source.startswith("replay:"):
+            source: Any = open_source(args.source)
+        else:
+            from ..telemetry._shm import SharedMemorySource
+
+            source = SharedMemorySource(args.source)
         try:
             transport = open_transport(args.target)
             try:

@@ -76,8 +76,12 @@ def _read(buf: Any, known_seq: int, games: list[str]) -> tuple[int, TelemetrySam
 
 def _child(spec: str, name: str, port_conn: Any, stop: Any, parent_pid: int) -> None:
     """Receive and decode in this process; publish the newest sample and the counters."""
+    import signal
+
     from . import GAMES, open_source
 
+    # Ctrl-C reaches the whole process group: the parent parks and then closes this child
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
     shm = shared_memory.SharedMemory(name=name)
     buf = _view(shm)
     games = sorted(GAMES)
@@ -85,7 +89,7 @@ def _child(spec: str, name: str, port_conn: Any, stop: Any, parent_pid: int) -> 
         try:
             src = open_source(spec)
         except MotioncueError as exc:
-            port_conn.send(("error", str(exc)))
+            port_conn.send(("error", (type(exc).__name__, str(exc))))
             return
         port_conn.send(("port", getattr(src, "port", 0)))
         seq = 0
@@ -175,7 +179,13 @@ class SharedMemorySource:
             raise
         if kind == "error":
             self.close()
-            raise ConfigError(str(value))
+            from .. import _errors
+
+            cls_name, message = value
+            cls = getattr(_errors, cls_name, MotioncueError)
+            if not (isinstance(cls, type) and issubclass(cls, MotioncueError)):
+                cls = MotioncueError
+            raise cls(message)
         self.port: int = int(value)
 
     def latest(self) -> TelemetrySample | None:
