@@ -17,7 +17,20 @@ Figures (median over the repeats, target, ratio = target / median):
 
 The machine is shared: the load average is printed before and after each run.
 
-Run: ``PYTHONPATH=src python benchmarks/bench_bridge.py [--seconds 60] [--repeats 3]``
+Issue 13 (``--loopback``): the bridge at 250 Hz against an independent recorder that reads
+the frames with ``struct`` and stamps each with the kernel's receive time (``SO_TIMESTAMPNS``,
+``tests/_loopback.py``), with telemetry decoded in the loop's process (a thread) or in a child
+process through shared memory, with and without a process saturating one core (normal
+priority), no real-time priority. Per configuration (medians over the repeats):
+
+* output jitter p99 and max, ``|interval between kernel arrival stamps - period|``;
+* delay of a lateral-g step (0 <-> 1 g every second in the 60 Hz F1 stream) from the send
+  of its Motion packet to the first frame moving with it, p50 and max;
+* missed deadlines; sample age of the frames p50 (``BridgeStats.frame_age_p50_ms``); the
+  limits check of the recorded frames (``motioncue.pipeline._verify.check_frames``).
+
+Run: ``PYTHONPATH=src python benchmarks/bench_bridge.py [--seconds 60] [--repeats 3]``;
+``... --loopback [--seconds 20] [--repeats 3]`` for the issue-13 figures.
 """
 
 from __future__ import annotations
@@ -142,6 +155,126 @@ def run_once(rate_hz: float, seconds: float, rt_priority: int | None) -> dict[st
     }
 
 
+def run_loopback(
+    rate_hz: float, seconds: float, busy: bool, process: bool, upsample: str
+) -> dict[str, Any]:
+    """One issue-13 run (module docstring); returns its figures."""
+    import numpy as np
+
+    import _loopback as lb
+    from motioncue.cueing import load_cueing
+    from motioncue.kinematics import load_platform
+    from motioncue.output import load_controller, open_transport
+    from motioncue.pipeline._bridge import Bridge, BridgeConfig
+    from motioncue.pipeline._realtime import GateConfig
+    from motioncue.pipeline._verify import check_frames
+    from motioncue.telemetry import TelemetrySource
+    from motioncue.telemetry._shm import SharedMemorySource
+    from motioncue.trajectory import ActuatorLimits
+
+    ctx = mp.get_context("spawn")
+    stop, stop_busy = ctx.Event(), ctx.Event()
+    port_q: Any = ctx.Queue()
+    out_q: Any = ctx.Queue()
+    steps_q: Any = ctx.Queue()
+    rec = ctx.Process(target=lb.record_frames, args=(port_q, stop, out_q))
+    rec.start()
+    port = port_q.get(timeout=30)
+    hog = ctx.Process(target=lb.busy_core, args=(stop_busy,)) if busy else None
+    if hog is not None:
+        hog.start()
+    platform = load_platform("stewart6-linear")
+    ctrl = load_controller("mbox6")
+    lim = ActuatorLimits.from_platform(platform, ctrl, a_max=5.0)
+    source: Any = SharedMemorySource("f1:127.0.0.1:0") if process else TelemetrySource("f1", 0)
+    transport = open_transport(f"udp://127.0.0.1:{port}")
+    sender = ctx.Process(target=lb.send_f1, args=(source.port, stop, steps_q, 1.0))
+    gate = GateConfig(timeout_s=0.25, fade_out_s=0.3, fade_in_s=0.3)
+    bridge = Bridge(
+        platform, ctrl, load_cueing("racing"), source, transport, lim,
+        BridgeConfig(rate_hz=rate_hz, gate=gate, upsample=upsample),
+    )  # fmt: skip
+    load0 = os.getloadavg()
+    sender.start()
+    bridge.start()
+    time.sleep(seconds)
+    live = bridge.stats
+    final = bridge.stop()
+    stop.set()
+    stop_busy.set()
+    steps = steps_q.get(timeout=30)
+    res = out_q.get(timeout=60)
+    for p in (sender, rec, hog):
+        if p is not None:
+            p.join(10)
+    transport.close()
+    source.close()
+    t = np.asarray(res["t_ns"], dtype=np.int64)
+    rows = np.asarray(res["rows"], dtype=np.int64)
+    table = lim.to_pulses_table(platform)
+    chk = check_frames(rows[:, 1] / 1000.0, rows[:, 2:], table, start_at_rest=True)
+    t_live = t[0] + int(1.5e9)  # after the fade-in
+    keep = (t > t_live) & (t < t[0] + int((seconds - 0.1) * 1e9))
+    jit = lb.jitter_ms(t[keep], 1.0 / rate_hz)
+    delays, skipped = lb.step_delays_ms(t, rows[:, 2:], [s for s in steps if s > t_live])
+    return {
+        "jitter_p99_ms": lb.percentile(jit, 99),
+        "jitter_max_ms": float(jit.max()) if jit.size else float("nan"),
+        "delay_p50_ms": lb.percentile(delays, 50),
+        "delay_max_ms": float(delays.max()) if delays.size else float("nan"),
+        "steps": len(delays),
+        "steps_skipped": skipped,
+        "missed": final.missed_deadlines,
+        "age_p50_ms": live.frame_age_p50_ms,
+        "limits_ok": chk.ok,
+        "state": final.state,
+        "error": final.error,
+        "load": (load0[0], os.getloadavg()[0]),
+    }
+
+
+def main_loopback(args: argparse.Namespace) -> int:
+    """The issue-13 figures: 4 configurations x repeats, medians and ratios."""
+    ok = True
+    base: dict[str, float] = {}
+    for busy in (False, True):
+        for process in (False, True):
+            name = (
+                f"250 Hz, telemetry in a {'child process' if process else 'thread'}, "
+                f"{'one core saturated' if busy else 'no extra load'}"
+            )
+            runs = []
+            for r in range(args.repeats):
+                res = run_loopback(250.0, args.seconds, busy, process, args.upsample)
+                runs.append(res)
+                print(
+                    f"  {name} run {r + 1}: jitter p99/max {res['jitter_p99_ms']:.3f}/"
+                    f"{res['jitter_max_ms']:.2f} ms, step delay p50/max "
+                    f"{res['delay_p50_ms']:.2f}/{res['delay_max_ms']:.2f} ms "
+                    f"({res['steps']} steps, {res['steps_skipped']} not counted), "
+                    f"{res['missed']} missed, frame age p50 {res['age_p50_ms']:.2f} ms, "
+                    f"limits {'ok' if res['limits_ok'] else 'VIOLATED'}, {res['state']}; "
+                    f"load avg {res['load'][0]:.2f} -> {res['load'][1]:.2f}",
+                    flush=True,
+                )
+                ok &= bool(res["limits_ok"]) and res["error"] is None
+            med = {
+                k: statistics.median(r[k] for r in runs)
+                for k in ("jitter_p99_ms", "delay_p50_ms", "delay_max_ms", "missed")
+            }
+            key = f"{busy}"
+            ratio = ""
+            if process and key in base:
+                ratio = f" (thread / process jitter ratio {base[key] / med['jitter_p99_ms']:.2f})"
+            if not process:
+                base[key] = med["jitter_p99_ms"]
+            print(f"{name}: missed deadlines median {med['missed']:g}{ratio}", flush=True)
+            ok &= report(f"{name}: jitter p99", med["jitter_p99_ms"], "ms", 1.0, False)
+            ok &= report(f"{name}: step delay p50", med["delay_p50_ms"], "ms", 1.5, False)
+            ok &= report(f"{name}: step delay max", med["delay_max_ms"], "ms", 3.0, False)
+    return 0 if ok else 1
+
+
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--seconds", type=float, default=60.0)
@@ -153,12 +286,18 @@ def main(argv: list[str] | None = None) -> int:
         default=None,
         help="SCHED_FIFO priority of the bridge loop thread (needs root or CAP_SYS_NICE)",
     )
+    ap.add_argument("--loopback", action="store_true", help="the issue-13 figures (docstring)")
+    ap.add_argument(
+        "--upsample", default="extrapolate", help="for --loopback (default extrapolate)"
+    )
     args = ap.parse_args(argv)
     print(
         f"machine: {os.cpu_count()} CPUs, shared with other sessions; bridge loop policy: "
         + ("normal" if args.rt_priority is None else f"SCHED_FIFO {args.rt_priority}"),
         flush=True,
     )
+    if args.loopback:
+        return main_loopback(args)
     ok = True
     for rate in args.rates:
         runs = []

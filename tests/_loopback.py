@@ -106,15 +106,16 @@ def jitter_ms(t_ns: np.ndarray, period_s: float) -> np.ndarray:
 
 
 def step_delays_ms(
-    t_ns: np.ndarray, positions: np.ndarray, steps_ns: list[int], threshold: float = 30.0
+    t_ns: np.ndarray, positions: np.ndarray, steps_ns: list[int], threshold: float = 6.0
 ) -> tuple[np.ndarray, int]:
     """Delay from each step's send to the first frame that moves with it (ms).
 
     A frame moves with the step when the third difference of its positions (pulses, any
-    axis) exceeds ``threshold``: the washout's smooth motion and the pulse rounding stay far
-    below that (the rounding contributes at most 4), a step of 1 g in the specific force
-    changes the actuators' acceleration at once. Steps whose 10 frames before were not
-    quiet, or with no such frame within 50 ms, are not counted (their number is returned).
+    axis) exceeds ``threshold``: once the washout has settled on a constant input its frames
+    repeat, and the pulse rounding contributes at most 4 to a third difference; a step of
+    1 g in the specific force changes the actuators' acceleration at once. Steps whose 10
+    frames before were not quiet, or with no such frame within 50 ms, are not counted (their
+    number is returned).
     """
     t = np.asarray(t_ns, dtype=np.int64)
     p = np.asarray(positions, dtype=np.int64)

@@ -180,24 +180,32 @@ def test_a_ramp_is_reproduced_exactly_after_start_up() -> None:
 
 
 def test_a_step_overshoots_by_at_most_the_documented_bound() -> None:
-    """A 1 g step: output continuous (each frame's change at most the blend of the step
-    over one period plus the bounded slope, 5 % for the estimated period), moving from the
-    first frame after the sample, overshoot at most slope_rate_max * T^2 * 1.5 (module
-    docstring), settled to the step a few samples later."""
+    """A 1 g step without a jump threshold: output continuous (each frame's change at most
+    the blend of the step over one period plus the bounded slope, 5 % for the estimated
+    period), moving from the first frame after the sample, overshoot at most
+    slope_rate_max * T^2 * 1.5 (module docstring), settled to the step a few samples
+    later. With the threshold (the bridge's default) the step reaches the first frame after
+    the sample whole (it is blended out over T * jump / |e|, under one frame here)."""
     rate = 2000.0
     t_game, t_arr = _arrivals(60, 5)
     x = np.where(t_game >= 0.5, G, 0.0)[:, None]
     tau = np.arange(int(0.1 * FS_OUT), int(0.95 * FS_OUT)) / FS_OUT
-    y = _run(ExtrapolatingUpsampler([rate]), t_arr, x, tau)[:, 0]
     t_step = t_arr[np.argmax(t_game >= 0.5)]
     first = np.argmax(tau >= t_step)
-    assert y[first - 1] == 0.0 and y[first] > 0.0  # the first frame after it moves
     period = 1 / FS_IN
+    over = rate * period**2 * 1.5 * 1.05
+    y = _run(ExtrapolatingUpsampler([rate]), t_arr, x, tau)[:, 0]
+    assert y[first - 1] == 0.0 and y[first] > 0.0  # the first frame after it moves
     # the blend of the step over one period plus the bounded slope (rate * T) per frame
     bound = (G / period + rate * period) / FS_OUT
     assert np.max(np.abs(np.diff(y))) <= bound * 1.05
-    assert y.max() <= G + rate * period**2 * 1.5 * 1.05
-    assert y.min() >= -rate * period**2 * 1.5 * 1.05
+    assert y.max() <= G + over and y.min() >= -over
+    np.testing.assert_allclose(y[tau > 0.6], G, atol=1e-9)
+
+    y = _run(ExtrapolatingUpsampler([rate], jump=[0.5]), t_arr, x, tau)[:, 0]
+    assert y[first - 1] == 0.0
+    assert G - over <= y[first] <= G + over  # whole at once
+    assert y.max() <= G + over and y.min() >= -over
     np.testing.assert_allclose(y[tau > 0.6], G, atol=1e-9)
 
 
@@ -247,3 +255,7 @@ def test_configuration_errors_are_named() -> None:
         ExtrapolatingUpsampler([1.0, math.nan])
     with pytest.raises(ConfigError, match="horizon"):
         ExtrapolatingUpsampler([1.0], horizon=0.5)
+    with pytest.raises(ConfigError, match="jump"):
+        ExtrapolatingUpsampler([1.0, 1.0], jump=[1.0])
+    with pytest.raises(ConfigError, match="jump"):
+        ExtrapolatingUpsampler([1.0], jump=[0.0])

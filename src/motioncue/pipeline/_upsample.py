@@ -21,9 +21,14 @@ answers for any time (:meth:`~Upsampler.value_at`). Three are registered in
     derivative: m/s^4 for ``f``, rad/s^3 for ``w``), so that a step in the telemetry (a
     kerb, a crash) overshoots by at most ``slope_rate_max * T^2 * 1.5`` instead of by the
     step itself; extrapolation stops (holds) ``1.5 T`` after the last sample. When the next
-    sample arrives the difference between where the output is and where the new line
+    sample arrives the difference ``e`` between where the output is and where the new line
     starts is blended out linearly over one telemetry period ``T``, so the output is
-    continuous (no step) and moves from the first frame after the sample.
+    continuous (no step) and moves from the first frame after the sample. A difference
+    larger than ``jump`` (per channel: 0.5 m/s^2 for ``f``, 0.05 rad/s for ``w``) is a
+    surprise, not an extrapolation error (a kerb, a crash, a step in the test's lateral g):
+    it is blended out over ``T * jump / |e|``, so a step in the telemetry reaches the frames
+    at once instead of a period later, while the small corrections of smooth motion stay
+    spread over a period.
 
 Sample times are the arrival stamps of the datagrams, which jitter by a fraction of a
 millisecond on a loaded PC; a 3 % error of a 16.7 ms interval would be a 3 % error of the
@@ -168,14 +173,28 @@ class ExtrapolatingUpsampler:
     horizon : float
         Extrapolate at most this many telemetry periods past the last sample, in
         [1, 4]; then hold.
+    jump : sequence of float, shape (n,), optional
+        Corrections larger than this (the channel's unit) are blended out faster, over
+        ``T * jump / |e|`` (module docstring); each > 0, ``inf`` for never. Default: never.
     """
 
-    def __init__(self, slope_rate_max: Sequence[float], horizon: float = 1.5) -> None:
+    def __init__(
+        self,
+        slope_rate_max: Sequence[float],
+        horizon: float = 1.5,
+        jump: Sequence[float] | None = None,
+    ) -> None:
         rates = [float(v) for v in slope_rate_max]
         if not rates or not all(math.isfinite(v) and v > 0 for v in rates):
             raise ConfigError(
                 f"slope_rate_max = {list(slope_rate_max)!r} is invalid; allowed: finite > 0"
             )
+        jumps = [math.inf] * len(rates) if jump is None else [float(v) for v in jump]
+        if len(jumps) != len(rates) or not all(v > 0 for v in jumps):
+            raise ConfigError(
+                f"jump = {jump!r} is invalid; allowed: {len(rates)} values > 0 (inf: never)"
+            )
+        self.jump = tuple(jumps)
         if not (math.isfinite(horizon) and 1.0 <= horizon <= 4.0):
             raise ConfigError(f"horizon = {horizon!r} is invalid; allowed: [1, 4] periods")
         self.n = len(rates)
@@ -190,6 +209,7 @@ class ExtrapolatingUpsampler:
         self._secant = [0.0] * n  # last secant slope (per estimated period)
         self._slope = [0.0] * n  # slope used for the extrapolation
         self._err = [0.0] * n  # correction still to blend out, at _t_switch
+        self._blend = [1.0] * n  # its blend time, in telemetry periods
         self._t_switch = math.nan
 
     def _line(self, t_s: float, i: int) -> float:
@@ -228,22 +248,23 @@ class ExtrapolatingUpsampler:
         self._t_switch = t_s
         for i in range(n):
             err = before[i] - self._line(t_s, i)
-            self._err[i] = err if math.isfinite(err) else 0.0
+            err = err if math.isfinite(err) else 0.0
+            self._err[i] = err
+            big = abs(err)
+            self._blend[i] = self.jump[i] / big if big > self.jump[i] else 1.0
 
     def value_at(self, t_s: float, out: list[float]) -> None:
         period = self._clock.period_s
-        if period == period:
-            w = 1.0 - (t_s - self._t_switch) / period
-            w = 0.0 if w < 0.0 else (1.0 if w > 1.0 else w)
-        else:
-            w = 0.0
+        u = (t_s - self._t_switch) / period if period == period else math.inf
         for i in range(self.n):
+            w = 1.0 - u / self._blend[i]
+            w = 0.0 if w < 0.0 else (1.0 if w > 1.0 else w)
             out[i] = self._line(t_s, i) + w * self._err[i]
 
 
 def _extrapolating() -> ExtrapolatingUpsampler:
     # f: up to 2000 m/s^4 (a 4 g sine at 1.1 Hz); w: up to 500 rad/s^3
-    return ExtrapolatingUpsampler((2000.0,) * 3 + (500.0,) * 3)
+    return ExtrapolatingUpsampler((2000.0,) * 3 + (500.0,) * 3, jump=(0.5,) * 3 + (0.05,) * 3)
 
 
 #: name -> factory of an upsampler of the bridge's 6 channels (f then w)
