@@ -26,9 +26,9 @@ answers for any time (:meth:`~Upsampler.value_at`). Three are registered in
     continuous (no step) and moves from the first frame after the sample. A difference
     larger than ``jump`` (per channel: 0.5 m/s^2 for ``f``, 0.05 rad/s for ``w``) is a
     surprise, not an extrapolation error (a kerb, a crash, a step in the test's lateral g):
-    it is blended out over ``T * jump / |e|``, so a step in the telemetry reaches the frames
-    at once instead of a period later, while the small corrections of smooth motion stay
-    spread over a period.
+    all of it beyond ``jump`` passes at once and only ``+-jump`` is blended out over the
+    period, so a step in the telemetry reaches the next frame instead of a period later,
+    while the small corrections of smooth motion stay spread over a period.
 
 Sample times are the arrival stamps of the datagrams, which jitter by a fraction of a
 millisecond on a loaded PC; a 3 % error of a 16.7 ms interval would be a 3 % error of the
@@ -174,8 +174,9 @@ class ExtrapolatingUpsampler:
         Extrapolate at most this many telemetry periods past the last sample, in
         [1, 4]; then hold.
     jump : sequence of float, shape (n,), optional
-        Corrections larger than this (the channel's unit) are blended out faster, over
-        ``T * jump / |e|`` (module docstring); each > 0, ``inf`` for never. Default: never.
+        Corrections are clipped to ``+-jump`` (the channel's unit) before the blend: the
+        rest of a surprise passes at once (module docstring); each > 0, ``inf`` for never
+        (the default).
     """
 
     def __init__(
@@ -209,7 +210,6 @@ class ExtrapolatingUpsampler:
         self._secant = [0.0] * n  # last secant slope (per estimated period)
         self._slope = [0.0] * n  # slope used for the extrapolation
         self._err = [0.0] * n  # correction still to blend out, at _t_switch
-        self._blend = [1.0] * n  # its blend time, in telemetry periods
         self._t_switch = math.nan
 
     def _line(self, t_s: float, i: int) -> float:
@@ -249,16 +249,17 @@ class ExtrapolatingUpsampler:
         for i in range(n):
             err = before[i] - self._line(t_s, i)
             err = err if math.isfinite(err) else 0.0
-            self._err[i] = err
-            big = abs(err)
-            self._blend[i] = self.jump[i] / big if big > self.jump[i] else 1.0
+            cap = self.jump[i]
+            self._err[i] = cap if err > cap else (-cap if err < -cap else err)
 
     def value_at(self, t_s: float, out: list[float]) -> None:
         period = self._clock.period_s
-        u = (t_s - self._t_switch) / period if period == period else math.inf
-        for i in range(self.n):
-            w = 1.0 - u / self._blend[i]
+        if period == period:
+            w = 1.0 - (t_s - self._t_switch) / period
             w = 0.0 if w < 0.0 else (1.0 if w > 1.0 else w)
+        else:
+            w = 0.0
+        for i in range(self.n):
             out[i] = self._line(t_s, i) + w * self._err[i]
 
 
