@@ -64,7 +64,7 @@ def busy_core(stop: Any) -> None:
 
 def send_f1(port: int, stop: Any, steps_q: Any, step_every_s: float = 0.0) -> None:
     """The 60 Hz F1 stream to ``port``; with ``step_every_s`` the lateral g alternates
-    0 / 1 g every that many seconds (else the lap motion), and the realtime ns just before
+    0 / 1 g about every that many seconds (else the lap motion), and the realtime ns just before
     the Motion packet of each step is put on ``steps_q`` at the end (a list)."""
     import sys
     from pathlib import Path
@@ -85,7 +85,10 @@ def send_f1(port: int, stop: Any, steps_q: Any, step_every_s: float = 0.0) -> No
                 time.sleep(left)
             t = k / 60.0
             if step_every_s > 0:
-                new = 1.0 if int(t / step_every_s) % 2 else 0.0
+                # 61 packets per second-ish: a whole number of packets that is not a multiple
+                # of 6, so the steps meet the 250 Hz frame grid at each of its 6 phases
+                n_step = 6 * max(1, round(step_every_s * 10)) + 1
+                new = 1.0 if (k // n_step) % 2 else 0.0
                 ex, motion = stream.frame(k, new, 0.0, 0.0, (0.0, 0.0, 0.0))
                 tx.sendto(ex, ("127.0.0.1", port))
                 if new != level:
@@ -100,35 +103,80 @@ def send_f1(port: int, stop: Any, steps_q: Any, step_every_s: float = 0.0) -> No
     steps_q.put(steps)
 
 
-def jitter_ms(t_ns: np.ndarray, period_s: float) -> np.ndarray:
-    """``|interval between kernel arrival stamps - period|`` in ms."""
-    return np.abs(np.diff(np.asarray(t_ns, dtype=np.int64)) * 1e-6 - period_s * 1e3)
+def jitter_ms(t_ns: np.ndarray, stamp_ms: np.ndarray) -> np.ndarray:
+    """``|interval between kernel arrival stamps - interval between the frames' own time
+    stamps|`` in ms: on a fixed frame clock the stamped interval is the period."""
+    return np.abs(
+        np.diff(np.asarray(t_ns, dtype=np.int64)) * 1e-6
+        - np.diff(np.asarray(stamp_ms, dtype=np.int64)).astype(float)
+    )
+
+
+def accelerations(stamp_ms: np.ndarray, positions: np.ndarray) -> np.ndarray:
+    """Acceleration of each frame on the controller's clock (pulses/s^2, (N, n); the first
+    two rows 0): the change of speed over the mean of the two intervals."""
+    t = np.asarray(stamp_ms, dtype=float) * 1e-3
+    p = np.asarray(positions, dtype=float)
+    a = np.zeros_like(p)
+    if len(p) > 2:
+        h = np.diff(t)[:, None]
+        v = np.diff(p, axis=0) / h
+        a[2:] = (v[1:] - v[:-1]) / (0.5 * (h[1:] + h[:-1]))
+    return a
+
+
+def check_limits(
+    stamp_ms: np.ndarray, positions: np.ndarray, table: Any
+) -> tuple[float, float, bool]:
+    """Largest speed and acceleration use (fraction of the limit) and whether every frame is
+    in the stroke, on the controller's clock (its time stamps), from the pulses table of
+    ``motioncue limits``; the run starts at rest."""
+    rows = table["actuators"] if isinstance(table, dict) else table
+    lo = np.array([r["stroke_pulses"][0] for r in rows], dtype=float)
+    hi = np.array([r["stroke_pulses"][1] for r in rows], dtype=float)
+    v_max = np.array([r["max_speed_pulses_s"] for r in rows], dtype=float)
+    a_max = np.array([r["max_accel_pulses_s2"] for r in rows], dtype=float)
+    t = np.asarray(stamp_ms, dtype=float) * 1e-3
+    p = np.asarray(positions, dtype=float)
+    h0 = t[1] - t[0]
+    tt = np.concatenate([[t[0] - 2 * h0, t[0] - h0], t])
+    pp = np.vstack([p[0], p[0], p])
+    h = np.diff(tt)[:, None]
+    v = np.diff(pp, axis=0) / h
+    a = 2.0 * (v[1:] - v[:-1]) / (h[1:] + h[:-1])
+    in_stroke = bool(np.all(p >= lo) and np.all(p <= hi))
+    return float(np.max(np.abs(v) / v_max)), float(np.max(np.abs(a) / a_max)), in_stroke
 
 
 def step_delays_ms(
-    t_ns: np.ndarray, positions: np.ndarray, steps_ns: list[int], threshold: float = 6.0
+    t_ns: np.ndarray,
+    stamp_ms: np.ndarray,
+    positions: np.ndarray,
+    steps_ns: list[int],
+    threshold: float = 1.5e6,
 ) -> tuple[np.ndarray, int]:
     """Delay from each step's send to the first frame that moves with it (ms).
 
-    A frame moves with the step when the third difference of its positions (pulses, any
-    axis) exceeds ``threshold``: once the washout has settled on a constant input its frames
-    repeat, and the pulse rounding contributes at most 4 to a third difference; a step of
-    1 g in the specific force changes the actuators' acceleration at once. Steps whose 10
-    frames before were not quiet, or with no such frame within 50 ms, are not counted (their
-    number is returned).
+    A frame moves with the step when its acceleration on the controller's clock
+    (:func:`accelerations`, any axis) differs from the previous frame's by more than
+    ``threshold`` pulses/s^2: once the washout has settled on a constant input the frames
+    keep their speed, and the pulse rounding changes an acceleration by at most
+    ``4 / h^2`` pulses/s^2 (1e6 at h = 2 ms); a step of 1 g in the specific force changes
+    the actuators' acceleration at once. Steps whose 10 frames before were not quiet, or
+    with no such frame within 50 ms, are not counted (their number is returned).
     """
     t = np.asarray(t_ns, dtype=np.int64)
-    p = np.asarray(positions, dtype=np.int64)
-    d3 = np.zeros(len(p))
-    if len(p) > 3:
-        d3[3:] = np.max(np.abs(p[3:] - 3 * p[2:-1] + 3 * p[1:-2] - p[:-3]), axis=1)
+    a = accelerations(stamp_ms, positions)
+    da = np.zeros(len(a))
+    if len(a) > 3:
+        da[3:] = np.max(np.abs(np.diff(a[2:], axis=0)), axis=1)
     out, skipped = [], 0
     for s in steps_ns:
         k = int(np.searchsorted(t, s, side="right"))
-        if k < 13 or np.any(d3[k - 10 : k] > threshold):
+        if k < 13 or np.any(da[k - 10 : k] > threshold):
             skipped += 1
             continue
-        moving = np.nonzero(d3[k:] > threshold)[0]
+        moving = np.nonzero(da[k:] > threshold)[0]
         if moving.size == 0 or t[k + moving[0]] - s > 50_000_000:
             skipped += 1
             continue

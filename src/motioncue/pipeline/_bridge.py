@@ -111,6 +111,13 @@ class BridgeConfig:
         a step per sample), ``"interpolate"`` (one telemetry period late, no steps) or
         ``"extrapolate"`` (no steps and no lag for smooth motion; bounded overshoot on a
         step in the telemetry).
+    frame_clock : str
+        ``"fixed"``: a frame every period. ``"arrival"`` (SC-MBOX, IMAX: whole-ms time
+        stamps): a frame as soon as a telemetry sample arrives (at the next whole ms, at
+        least ``min_interval_ms`` after the previous frame), else every period; the frame
+        clock locks on to the game's packets (module docstring, *Frames on arrival*).
+    min_interval_ms : int
+        Shortest interval between frames on arrival (ms), 1..period.
     """
 
     rate_hz: float = 100.0
@@ -120,8 +127,14 @@ class BridgeConfig:
     rt_priority: int | None = None
     switch_interval_s: float | None = 0.0005
     upsample: str = "hold"
+    frame_clock: str = "fixed"
+    min_interval_ms: int = 2
 
     def __post_init__(self) -> None:
+        if self.frame_clock not in ("fixed", "arrival"):
+            raise ConfigError(
+                f"frame_clock = {self.frame_clock!r} is unknown; allowed: fixed, arrival"
+            )
         from ._upsample import UPSAMPLERS
 
         if self.upsample not in UPSAMPLERS:
@@ -344,13 +357,24 @@ class Bridge:
                 f"limits have {limits.n_actuators} actuators; platform {platform.name!r} has "
                 f"{platform.n_actuators}"
             )
-        self.washout = make_cueing(cueing, cfg.rate_hz)
+        self._arrival = cfg.frame_clock == "arrival"
+        # on arrival the frame intervals vary: the cueing runs on the 1 ms grid instead,
+        # stepped once per ms of each frame interval
+        self.washout = make_cueing(cueing, 1000.0 if self._arrival else cfg.rate_hz)
         self.washout_state = self.washout.initial_state()
         self.gate = CueGate(cfg.gate)
         # built here so that configuration errors surface before start()
-        self.stage = OutputStage(
-            platform, controller, limits, cfg.rate_hz, transport, q_start=q_start
-        )
+        if self._arrival:
+            from ._arrival import ArrivalOutputStage
+
+            self.stage: OutputStage = ArrivalOutputStage(
+                platform, controller, limits, cfg.rate_hz, transport, q_start=q_start,
+                min_interval_ms=cfg.min_interval_ms,
+            )  # fmt: skip
+        else:
+            self.stage = OutputStage(
+                platform, controller, limits, cfg.rate_hz, transport, q_start=q_start
+            )
         self.period_s = 1.0 / cfg.rate_hz
         self._pose_park = [float(v) for v in platform.pose_park]
         self._stop = threading.Event()
@@ -367,6 +391,8 @@ class Bridge:
         self._latency = _Ring(w)
         self._age = _Ring(w)
         self._frame_age = _Ring(w)
+        self._stamps = _Ring(w)  # frames on arrival: the stamp of each frame (s)
+        self._period_ms = round(1000.0 / cfg.rate_hz)
         from ._upsample import make_upsampler
 
         self._upsampler = make_upsampler(cfg.upsample)
@@ -466,7 +492,10 @@ class Bridge:
             except (AttributeError, OSError) as exc:
                 self._notes.append(f"real-time priority {prio} refused ({exc}); normal policy")
         try:
-            self._loop()
+            if self._arrival:
+                self._loop_arrival()
+            else:
+                self._loop()
             self._state = "stopped"
         except BaseException as exc:  # recorded, reported by stats/stop; then park
             self._error = f"{type(exc).__name__}: {exc}"
@@ -512,7 +541,71 @@ class Bridge:
                         f"could not park within {max_stop_ticks} frames after stop"
                     )
 
-    def step(self, deadline_s: float, stopping: bool = False) -> None:
+    def _loop_arrival(self) -> None:
+        """Frames on arrival: wait for the next period or a new sample, whichever is first.
+
+        Frame ``k`` carries the whole-ms stamp ``s_k`` and is sent at ``wall0 + s_k``: the
+        loop polls the source every ~0.2 ms while it sleeps and spins the last 0.3 ms. A new
+        sample moves the next frame to the next whole ms (at least ``min_interval_ms`` after
+        the previous frame). When the next sample is due within ``min_interval_ms`` after a
+        regular frame's slot (the game's period estimated from the arrivals), that frame
+        waits for the sample, up to ``period + min_interval_ms`` after the previous frame:
+        the frames lock on to the packets instead of beating with them.
+        """
+        from ._upsample import _PeriodEstimate
+
+        cfg = self.config
+        stage = self.stage
+        stop = self._stop
+        period_ms = round(1000.0 / cfg.rate_hz)
+        h_min = cfg.min_interval_ms
+        h_max = period_ms + h_min
+        tick = 1e-3
+        clock = time.perf_counter
+        max_stop_ticks = (
+            math.ceil(cfg.gate.fade_out_s / self.period_s) + stage.park_frames_bound() + 10
+        )
+        stop_ticks = 0
+        est = _PeriodEstimate()
+        seen_t = math.nan
+        wall0 = clock()
+        last = 0  # stamp of the last frame (ms); the stage opens the run at 0
+        while True:
+            due = last + period_ms
+            if est.n >= 3 and est.period_s == est.period_s:
+                pred = (est.ref_s + est.period_s - wall0) / tick
+                if pred - due < h_min and pred < last + h_max - 0.5:
+                    due = last + h_max  # the sample is expected first: wait for it
+            while True:  # wait for the due stamp, or a sample that moves it earlier
+                s = self.source.latest()
+                if s is not None and s.t_s != seen_t:
+                    seen_t = s.t_s
+                    est.update(s.t_s)
+                    due = min(due, max(last + h_min, math.ceil((s.t_s - wall0) / tick - 1e-9)))
+                left = wall0 + due * tick - clock()
+                if left <= 0.0:
+                    break
+                if left > 0.0005:
+                    time.sleep(min(0.0002, left - 0.0003))
+            late = (clock() - wall0) / tick - due
+            if late > period_ms:  # overran a whole period: skip ahead, counted
+                skip = int(late // period_ms)
+                self._missed += skip
+                due += skip * period_ms
+            stopping = stop.is_set() or self.source_finished
+            self.step(wall0 + due * tick, stopping, ticks=due - last)
+            self._stamps.add(due * tick)
+            last = due
+            if stopping:
+                stop_ticks += 1
+                if self.gate.parked and stage.parked:
+                    return
+                if stop_ticks > max_stop_ticks:
+                    raise MotioncueError(
+                        f"could not park within {max_stop_ticks} frames after stop"
+                    )
+
+    def step(self, deadline_s: float, stopping: bool = False, ticks: int | None = None) -> None:
         """One frame: newest sample -> gate -> washout -> blend -> workspace -> IK -> emit.
 
         The loop thread calls this once per frame slot. Tests and simulations may call it
@@ -528,6 +621,9 @@ class Bridge:
         stopping : bool
             Close the gate (fade out and park) whatever the telemetry says; also done when
             the source reports ``finished``.
+        ticks : int, optional
+            Frames on arrival only: this frame comes ``ticks`` ms after the previous one
+            (default: the period).
         """
         stopping = stopping or self.source_finished
         sample = self.source.latest()
@@ -547,7 +643,10 @@ class Bridge:
                 self._bad_total += wstate.bad_samples
                 self.washout.reset(wstate)
                 self._clean = True
-            stage.park_step()
+            if self._arrival:
+                stage.emit(self.platform.q_park, ticks=ticks)  # type: ignore[call-arg]
+            else:
+                stage.park_step()
         else:
             cue = self._cue
             raw = False
@@ -558,12 +657,15 @@ class Bridge:
                     self._upsampler.update(held.t_s, fw)
                 else:  # the washout counts and holds a bad sample; the upsampler never sees it
                     raw = True
-            if raw:
-                self.washout.step(self.washout_state, held.f, held.w, cue)
-            else:
-                fw6 = self._fw
-                self._upsampler.value_at(now, fw6)
-                self.washout.step(self.washout_state, fw6[:3], fw6[3:], cue)
+            # on arrival the cueing runs on the 1 ms grid: one step per ms of the interval
+            reps = (self._period_ms if ticks is None else ticks) if self._arrival else 1
+            fw6 = self._fw
+            for j in range(reps):
+                if raw and j == reps - 1:
+                    self.washout.step(self.washout_state, held.f, held.w, cue)
+                else:
+                    self._upsampler.value_at(now - (reps - 1 - j) * 1e-3, fw6)
+                    self.washout.step(self.washout_state, fw6[:3], fw6[3:], cue)
             self._clean = False
             park = self._pose_park
             pose = self._pose
@@ -575,7 +677,10 @@ class Bridge:
                     self._pose_invalid += 1
                 else:
                     self._pose_clamped += 1
-            stage.emit(res.q)
+            if self._arrival:
+                stage.emit(res.q, ticks=ticks)  # type: ignore[call-arg]
+            else:
+                stage.emit(res.q)
         done = time.perf_counter()
         self._sent_at.add(done)
         if held is not None:
@@ -619,7 +724,12 @@ class Bridge:
             self._rate_in_prev = (now, samples)
         rate = self.config.rate_hz
         sent = self._sent_at.values()
-        jit = np.abs(np.diff(sent) - self.period_s)
+        if self._arrival:  # the send intervals against the stamped intervals
+            stamps = self._stamps.values()
+            k = min(sent.size, stamps.size)
+            jit = np.abs(np.diff(sent[-k:]) - np.diff(stamps[-k:]))
+        else:
+            jit = np.abs(np.diff(sent) - self.period_s)
         recent = sent[-(int(rate) + 1) :]
         rate_out = math.nan
         if recent.size > 1 and recent[-1] > recent[0]:
