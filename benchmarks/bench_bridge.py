@@ -155,130 +155,52 @@ def run_once(rate_hz: float, seconds: float, rt_priority: int | None) -> dict[st
     }
 
 
-def run_loopback(
-    rate_hz: float,
-    seconds: float,
-    busy: bool,
-    process: bool,
-    upsample: str,
-    frame_clock: str = "arrival",
-) -> dict[str, Any]:
-    """One issue-13 run (module docstring); returns its figures."""
-    import numpy as np
-
-    import _loopback as lb
-    from motioncue.cueing import load_cueing
-    from motioncue.kinematics import load_platform
-    from motioncue.output import load_controller, open_transport
-    from motioncue.pipeline._bridge import Bridge, BridgeConfig
-    from motioncue.pipeline._realtime import GateConfig
-    from motioncue.telemetry import TelemetrySource
-    from motioncue.telemetry._shm import SharedMemorySource
-    from motioncue.trajectory import ActuatorLimits
-
-    ctx = mp.get_context("spawn")
-    stop, stop_busy = ctx.Event(), ctx.Event()
-    port_q: Any = ctx.Queue()
-    out_q: Any = ctx.Queue()
-    steps_q: Any = ctx.Queue()
-    rec = ctx.Process(target=lb.record_frames, args=(port_q, stop, out_q))
-    rec.start()
-    port = port_q.get(timeout=30)
-    hog = ctx.Process(target=lb.busy_core, args=(stop_busy,)) if busy else None
-    if hog is not None:
-        hog.start()
-    platform = load_platform("stewart6-linear")
-    ctrl = load_controller("mbox6")
-    lim = ActuatorLimits.from_platform(platform, ctrl, a_max=5.0)
-    source: Any = SharedMemorySource("f1:127.0.0.1:0") if process else TelemetrySource("f1", 0)
-    transport = open_transport(f"udp://127.0.0.1:{port}")
-    sender = ctx.Process(target=lb.send_f1, args=(source.port, stop, steps_q, 1.0))
-    gate = GateConfig(timeout_s=0.25, fade_out_s=0.3, fade_in_s=0.3)
-    bridge = Bridge(
-        platform, ctrl, load_cueing("racing"), source, transport, lim,
-        BridgeConfig(rate_hz=rate_hz, gate=gate, upsample=upsample, frame_clock=frame_clock),
-    )  # fmt: skip
-    load0 = os.getloadavg()
-    sender.start()
-    bridge.start()
-    time.sleep(seconds)
-    live = bridge.stats
-    final = bridge.stop()
-    stop.set()
-    stop_busy.set()
-    steps = steps_q.get(timeout=30)
-    res = out_q.get(timeout=60)
-    for p in (sender, rec, hog):
-        if p is not None:
-            p.join(10)
-    transport.close()
-    source.close()
-    t = np.asarray(res["t_ns"], dtype=np.int64)
-    rows = np.asarray(res["rows"], dtype=np.int64)
-    table = lim.to_pulses_table(platform)
-    v_use, a_use, in_stroke = lb.check_limits(rows[:, 1], rows[:, 2:], table)
-    t_live = t[0] + int(1.5e9)  # after the fade-in
-    keep = (t > t_live) & (t < t[0] + int((seconds - 0.1) * 1e9))
-    jit = lb.jitter_ms(t[keep], rows[keep, 1])
-    steps_live = [s for s in steps if s > t_live]
-    delays, skipped = lb.step_delays_ms(t, rows[:, 1], rows[:, 2:], steps_live)
-    return {
-        "jitter_p99_ms": lb.percentile(jit, 99),
-        "jitter_max_ms": float(jit.max()) if jit.size else float("nan"),
-        "delay_p50_ms": lb.percentile(delays, 50),
-        "delay_max_ms": float(delays.max()) if delays.size else float("nan"),
-        "steps": len(delays),
-        "steps_skipped": skipped,
-        "rate_out_hz": float((keep.sum() - 1) / ((t[keep][-1] - t[keep][0]) * 1e-9)),
-        "missed": final.missed_deadlines,
-        "age_p50_ms": live.frame_age_p50_ms,
-        "limits_ok": in_stroke and v_use <= 1.0 + 1e-9 and a_use <= 1.0 + 1e-9,
-        "limits": f"speed {v_use:.3f}, accel {a_use:.3f} of the limits",
-        "state": final.state,
-        "error": final.error,
-        "load": (load0[0], os.getloadavg()[0]),
-    }
-
-
 def main_loopback(args: argparse.Namespace) -> int:
-    """The issue-13 figures: 4 configurations x repeats, medians and ratios."""
+    """The issue-13 figures: 8 configurations x repeats, medians and ratios."""
+    import _loopback as lb
+
     ok = True
-    base: dict[str, float] = {}
+    base: dict[tuple[bool, bool], dict[str, float]] = {}
     for busy in (False, True):
-        for process in (False, True):
-            name = (
-                f"250 Hz, telemetry in a {'child process' if process else 'thread'}, "
-                f"{'one core saturated' if busy else 'no extra load'}"
-            )
-            runs = []
-            for r in range(args.repeats):
-                res = run_loopback(250.0, args.seconds, busy, process, args.upsample)
-                runs.append(res)
-                print(
-                    f"  {name} run {r + 1}: jitter p99/max {res['jitter_p99_ms']:.3f}/"
-                    f"{res['jitter_max_ms']:.2f} ms, step delay p50/max "
-                    f"{res['delay_p50_ms']:.2f}/{res['delay_max_ms']:.2f} ms "
-                    f"({res['steps']} steps, {res['steps_skipped']} not counted), "
-                    f"{res['missed']} missed, frame age p50 {res['age_p50_ms']:.2f} ms, "
-                    f"limits {'ok' if res['limits_ok'] else 'VIOLATED'}, {res['state']}; "
-                    f"load avg {res['load'][0]:.2f} -> {res['load'][1]:.2f}",
-                    flush=True,
+        for process in (True, False):
+            for clock in ("fixed", "arrival"):
+                name = (
+                    f"250 Hz {clock}, telemetry in a {'process' if process else 'thread'}, "
+                    f"{'a core saturated' if busy else 'no extra load'}"
                 )
-                ok &= bool(res["limits_ok"]) and res["error"] is None
-            med = {
-                k: statistics.median(r[k] for r in runs)
-                for k in ("jitter_p99_ms", "delay_p50_ms", "delay_max_ms", "missed")
-            }
-            key = f"{busy}"
-            ratio = ""
-            if process and key in base:
-                ratio = f" (thread / process jitter ratio {base[key] / med['jitter_p99_ms']:.2f})"
-            if not process:
-                base[key] = med["jitter_p99_ms"]
-            print(f"{name}: missed deadlines median {med['missed']:g}{ratio}", flush=True)
-            ok &= report(f"{name}: jitter p99", med["jitter_p99_ms"], "ms", 1.0, False)
-            ok &= report(f"{name}: step delay p50", med["delay_p50_ms"], "ms", 1.5, False)
-            ok &= report(f"{name}: step delay max", med["delay_max_ms"], "ms", 3.0, False)
+                runs = []
+                for r in range(args.repeats):
+                    res = lb.run_loopback(250.0, args.seconds, busy, process, args.upsample, clock)
+                    runs.append(res)
+                    print(
+                        f"  {name} run {r + 1}: jitter p99/max {res['jitter_p99_ms']:.3f}/"
+                        f"{res['jitter_max_ms']:.2f} ms, step delay p50/max "
+                        f"{res['delay_p50_ms']:.2f}/{res['delay_max_ms']:.2f} ms "
+                        f"({res['steps']} steps, {res['steps_skipped']} not counted), "
+                        f"{res['missed']} missed, {res['rate_out_hz']:.1f} frames/s, frame age "
+                        f"p50 {res['age_p50_ms']:.2f} ms, {res['limits']}, {res['state']}; "
+                        f"load avg {res['load'][0]:.2f} -> {res['load'][1]:.2f}",
+                        flush=True,
+                    )
+                    ok &= bool(res["limits_ok"]) and res["error"] is None
+                med = {
+                    k: statistics.median(r[k] for r in runs)
+                    for k in ("jitter_p99_ms", "delay_p50_ms", "delay_max_ms", "missed")
+                }
+                ratio = ""
+                if clock == "fixed":
+                    base[(busy, process)] = med
+                else:
+                    ref = base[(busy, process)]
+                    ratio = (
+                        f"; fixed / arrival: step delay p50 "
+                        f"{ref['delay_p50_ms'] / med['delay_p50_ms']:.2f}x, jitter p99 "
+                        f"{ref['jitter_p99_ms'] / med['jitter_p99_ms']:.2f}x"
+                    )
+                print(f"{name}: missed deadlines median {med['missed']:g}{ratio}", flush=True)
+                ok &= report(f"{name}: jitter p99", med["jitter_p99_ms"], "ms", 1.0, False)
+                ok &= report(f"{name}: step delay p50", med["delay_p50_ms"], "ms", 1.5, False)
+                ok &= report(f"{name}: step delay max", med["delay_max_ms"], "ms", 3.0, False)
     return 0 if ok else 1
 
 

@@ -15,8 +15,11 @@ kernel's receive time stamp (``SO_TIMESTAMPNS``, CLOCK_REALTIME ns) on the recor
 from __future__ import annotations
 
 import math
+import multiprocessing as mp
+import os
 import socket
 import struct
+import sys
 import time
 from typing import Any
 
@@ -186,3 +189,89 @@ def step_delays_ms(
 
 def percentile(v: np.ndarray, q: float) -> float:
     return float(np.percentile(v, q)) if len(v) else math.nan
+
+
+def run_loopback(
+    rate_hz: float,
+    seconds: float,
+    busy: bool,
+    process: bool,
+    upsample: str,
+    frame_clock: str = "arrival",
+) -> dict[str, Any]:
+    """One loopback run: recorder, optional busy core, 60 Hz F1 lateral-g steps about every
+    second, the bridge (stewart6-linear, mbox6, racing) in this process; returns its figures
+    (jitter on kernel stamps against the frames' own stamps, step delays, missed deadlines,
+    the limits check on the controller's clock)."""
+    lb = sys.modules[__name__]
+    from motioncue.cueing import load_cueing
+    from motioncue.kinematics import load_platform
+    from motioncue.output import load_controller, open_transport
+    from motioncue.pipeline._bridge import Bridge, BridgeConfig
+    from motioncue.pipeline._realtime import GateConfig
+    from motioncue.telemetry import TelemetrySource
+    from motioncue.telemetry._shm import SharedMemorySource
+    from motioncue.trajectory import ActuatorLimits
+
+    ctx = mp.get_context("spawn")
+    stop, stop_busy = ctx.Event(), ctx.Event()
+    port_q: Any = ctx.Queue()
+    out_q: Any = ctx.Queue()
+    steps_q: Any = ctx.Queue()
+    rec = ctx.Process(target=lb.record_frames, args=(port_q, stop, out_q))
+    rec.start()
+    port = port_q.get(timeout=30)
+    hog = ctx.Process(target=lb.busy_core, args=(stop_busy,)) if busy else None
+    if hog is not None:
+        hog.start()
+    platform = load_platform("stewart6-linear")
+    ctrl = load_controller("mbox6")
+    lim = ActuatorLimits.from_platform(platform, ctrl, a_max=5.0)
+    source: Any = SharedMemorySource("f1:127.0.0.1:0") if process else TelemetrySource("f1", 0)
+    transport = open_transport(f"udp://127.0.0.1:{port}")
+    sender = ctx.Process(target=lb.send_f1, args=(source.port, stop, steps_q, 1.0))
+    gate = GateConfig(timeout_s=0.25, fade_out_s=0.3, fade_in_s=0.3)
+    bridge = Bridge(
+        platform, ctrl, load_cueing("racing"), source, transport, lim,
+        BridgeConfig(rate_hz=rate_hz, gate=gate, upsample=upsample, frame_clock=frame_clock),
+    )  # fmt: skip
+    load0 = os.getloadavg()
+    sender.start()
+    bridge.start()
+    time.sleep(seconds)
+    live = bridge.stats
+    final = bridge.stop()
+    stop.set()
+    stop_busy.set()
+    steps = steps_q.get(timeout=30)
+    res = out_q.get(timeout=60)
+    for p in (sender, rec, hog):
+        if p is not None:
+            p.join(10)
+    transport.close()
+    source.close()
+    t = np.asarray(res["t_ns"], dtype=np.int64)
+    rows = np.asarray(res["rows"], dtype=np.int64)
+    table = lim.to_pulses_table(platform)
+    v_use, a_use, in_stroke = lb.check_limits(rows[:, 1], rows[:, 2:], table)
+    t_live = t[0] + int(1.5e9)  # after the fade-in
+    keep = (t > t_live) & (t < t[0] + int((seconds - 0.1) * 1e9))
+    jit = lb.jitter_ms(t[keep], rows[keep, 1])
+    steps_live = [s for s in steps if s > t_live]
+    delays, skipped = lb.step_delays_ms(t, rows[:, 1], rows[:, 2:], steps_live)
+    return {
+        "jitter_p99_ms": lb.percentile(jit, 99),
+        "jitter_max_ms": float(jit.max()) if jit.size else float("nan"),
+        "delay_p50_ms": lb.percentile(delays, 50),
+        "delay_max_ms": float(delays.max()) if delays.size else float("nan"),
+        "steps": len(delays),
+        "steps_skipped": skipped,
+        "rate_out_hz": float((keep.sum() - 1) / ((t[keep][-1] - t[keep][0]) * 1e-9)),
+        "missed": final.missed_deadlines,
+        "age_p50_ms": live.frame_age_p50_ms,
+        "limits_ok": in_stroke and v_use <= 1.0 + 1e-9 and a_use <= 1.0 + 1e-9,
+        "limits": f"speed {v_use:.3f}, accel {a_use:.3f} of the limits",
+        "state": final.state,
+        "error": final.error,
+        "load": (load0[0], os.getloadavg()[0]),
+    }

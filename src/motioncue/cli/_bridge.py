@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import math
 import sys
 import time
@@ -85,6 +86,14 @@ def register(sub: Any) -> None:
         "on the next sample (default), interpolated one sample late, or held",
     )
     parser.add_argument(
+        "--frames",
+        choices=("auto", "arrival", "fixed"),
+        default="auto",
+        help="arrival: a frame as soon as a telemetry sample arrives (SC-MBOX, IMAX: whole-ms "
+        "time stamps), else every period; fixed: every period; auto (default): arrival where "
+        "the controller and the limits allow it",
+    )
+    parser.add_argument(
         "--telemetry-in-process",
         action="store_true",
         help="receive and decode live telemetry in the frame loop's process (default: in a "
@@ -125,6 +134,13 @@ def run(args: argparse.Namespace) -> int:
         a_max=args.max_accel,
         rate_hz=config.rate_hz,
     )
+    frames = args.frames
+    if frames == "auto":
+        period_ms = 1000.0 / config.rate_hz
+        whole = abs(period_ms - round(period_ms)) < 1e-9 and round(period_ms) >= 2
+        stamped = getattr(controller, "time_resolution_s", None) == 1e-3
+        frames = "arrival" if whole and stamped and limits.j_max is None else "fixed"
+    config = dataclasses.replace(config, frame_clock=frames)
     cueing, preset_source = choose_preset(args.preset, platform, args.platform)
     # over UDP the IMAX and SC-MBOX report where their motors are: start from there
     q_start = "auto" if args.target.lower().startswith("udp:") else None
@@ -148,7 +164,8 @@ def run(args: argparse.Namespace) -> int:
                     _say(f"motioncue bridge: note: {note}")
                 _say(
                     f"bridge: {source!r} -> {args.target} ({args.controller}, {args.platform}, "
-                    f"preset {preset_source}, {config.rate_hz:g} Hz); Ctrl-C parks and exits"
+                    f"preset {preset_source}, {config.rate_hz:g} Hz, frames {frames}); Ctrl-C "
+                    "parks and exits"
                 )
                 final = _serve(bridge, guard, args.duration, quiet=args.quiet)
             finally:
