@@ -275,3 +275,34 @@ def run_loopback(
         "error": final.error,
         "load": (load0[0], os.getloadavg()[0]),
     }
+
+
+def bare_timer_jitter_p99_ms(seconds: float, period_s: float, busy: bool) -> float:
+    """The reference: a bare loop (sleep, then spin the last 0.3 ms) on absolute deadlines
+    in this process, with or without a busy process; p99 of ``|interval - period|`` (ms).
+    What any frame loop could achieve on this machine right now."""
+    ctx = mp.get_context("spawn")
+    stop = ctx.Event()
+    hog = ctx.Process(target=busy_core, args=(stop,)) if busy else None
+    if hog is not None:
+        hog.start()
+    try:
+        t0 = time.perf_counter() + 0.1
+        stamps = []
+        k = 0
+        while True:
+            k += 1
+            due = t0 + k * period_s
+            left = due - time.perf_counter()
+            if left > 0.0003:
+                time.sleep(left - 0.0003)
+            while time.perf_counter() < due:
+                pass
+            stamps.append(time.perf_counter())
+            if k * period_s > seconds:
+                break
+    finally:
+        stop.set()
+        if hog is not None:
+            hog.join(10)
+    return float(np.percentile(np.abs(np.diff(stamps) - period_s), 99) * 1e3)
