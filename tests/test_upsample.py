@@ -75,7 +75,9 @@ class _Spy:
         return getattr(self.inner, name)
 
 
-def _bridge_on_sines(upsample: str, seed: int) -> tuple[np.ndarray, np.ndarray, Any]:
+def _bridge_on_sines(
+    upsample: str, seed: int, frame_clock: str = "fixed"
+) -> tuple[np.ndarray, np.ndarray, Any]:
     """Bridge.step at 250 Hz on 60 Hz samples of lateral f and yaw-rate sines.
 
     Returns (frame times, telemetry the cueing got per frame (n, 6), the sine parameters).
@@ -99,19 +101,31 @@ def _bridge_on_sines(upsample: str, seed: int) -> tuple[np.ndarray, np.ndarray, 
     gate = GateConfig(timeout_s=0.25, fade_out_s=0.3, fade_in_s=0.3)
     bridge = Bridge(
         platform, ctrl, load_cueing("racing"), src, _Sink(), lim,
-        BridgeConfig(FS_OUT, gate, upsample=upsample),
+        BridgeConfig(FS_OUT, gate, upsample=upsample, frame_clock=frame_clock),
     )  # fmt: skip
     spy = _Spy(bridge.washout)
     bridge.washout = spy
     phase = np.random.default_rng(seed + 1).uniform(0, 1 / FS_OUT)  # frame grid vs packets
-    times = []
-    for k in range(int(5.8 * FS_OUT)):
-        d = 0.05 + phase + k / FS_OUT
-        src.now = d
-        n_before = len(spy.fw)
-        bridge.step(d)
-        if len(spy.fw) > n_before:
-            times.append(d)
+    times: list[float] = []
+    if frame_clock == "fixed":
+        for k in range(int(5.8 * FS_OUT)):
+            d = 0.05 + phase + k / FS_OUT
+            src.now = d
+            n_before = len(spy.fw)
+            bridge.step(d)
+            if len(spy.fw) > n_before:
+                times.append(d)
+    else:  # whole-ms frames at 2..6 ms; the cueing gets a value per ms
+        rng = np.random.default_rng(seed + 2)
+        d = 0.05 + phase
+        while d < 5.85:
+            m = int(rng.integers(2, 7))
+            d += m * 1e-3
+            src.now = d
+            n_before = len(spy.fw)
+            bridge.step(d, ticks=m)
+            if len(spy.fw) > n_before:
+                times.extend(d - (m - 1 - j) * 1e-3 for j in range(m))
     return np.array(times), np.array(spy.fw), (amp_f, hz_f, amp_w, hz_w)
 
 
@@ -122,9 +136,9 @@ def _lag_s(t: np.ndarray, y: np.ndarray, hz: float) -> float:
     return -math.atan2(b, a) / w
 
 
-def _figures(upsample: str, seed: int) -> list[tuple[float, float]]:
+def _figures(upsample: str, seed: int, frame_clock: str = "fixed") -> list[tuple[float, float]]:
     """(largest step / the sine's own largest change per frame, lag in s) per channel."""
-    t, fw, (amp_f, hz_f, amp_w, hz_w) = _bridge_on_sines(upsample, seed)
+    t, fw, (amp_f, hz_f, amp_w, hz_w) = _bridge_on_sines(upsample, seed, frame_clock)
     keep = t > t[0] + 0.5  # after the start-up of the estimates
     out = []
     for col, amp, hz in ((1, amp_f, hz_f), (5, amp_w, hz_w)):
@@ -143,6 +157,15 @@ def test_a_60hz_sine_comes_out_at_250hz_without_steps_and_without_lag(seed: int)
         assert ratio <= 1.01, ratio
         assert -0.25 / FS_IN < lag < 1.0 / FS_IN, lag
         assert lag < 0.1 / FS_IN  # in fact below a tenth of a period
+
+
+@pytest.mark.parametrize("seed", [1, 2])
+def test_frames_on_arrival_give_the_cueing_a_smooth_value_every_ms(seed: int) -> None:
+    """Frames on arrival (whole-ms intervals of 2-6 ms): the cueing runs per ms and gets
+    the up-sampled telemetry at each ms, with the same criteria per ms."""
+    for ratio, lag in _figures("extrapolate", seed, "arrival"):
+        assert ratio <= 1.01, ratio
+        assert -0.25 / FS_IN < lag < 0.1 / FS_IN, lag
 
 
 def test_the_alternatives_fail_where_expected() -> None:
@@ -260,3 +283,34 @@ def test_configuration_errors_are_named() -> None:
         ExtrapolatingUpsampler([1.0, 1.0], jump=[1.0])
     with pytest.raises(ConfigError, match="jump"):
         ExtrapolatingUpsampler([1.0], jump=[0.0])
+
+
+@pytest.mark.parametrize("frame_clock", ["fixed", "arrival"])
+def test_the_cueing_never_gets_a_value_from_before_the_first_sample(frame_clock: str) -> None:
+    """Constant telemetry that starts, stops (the gate parks) and resumes: every value the
+    cueing is given is that constant (never the up-sampler's empty state, never a stale
+    extrapolation)."""
+    platform = load_platform("stewart6-linear")
+    ctrl = load_controller("mbox6")
+    lim = ActuatorLimits.from_platform(platform, ctrl, a_max=5.0)
+    f, w = (0.3, -0.2, G), (0.01, 0.0, -0.02)
+    times = [0.2 + k / FS_IN for k in range(60)] + [2.0 + k / FS_IN for k in range(60)]
+    src = _Timeline([TelemetrySample(t, f, w, False, "test") for t in times])
+    gate = GateConfig(timeout_s=0.1, fade_out_s=0.2, fade_in_s=0.2)
+    bridge = Bridge(
+        platform, ctrl, load_cueing("racing"), src, _Sink(), lim,
+        BridgeConfig(FS_OUT, gate, upsample="extrapolate", frame_clock=frame_clock),
+    )  # fmt: skip
+    spy = _Spy(bridge.washout)
+    bridge.washout = spy
+    d = 0.0
+    rng = np.random.default_rng(4)
+    while d < 3.5:
+        m = int(rng.integers(2, 7)) if frame_clock == "arrival" else 4
+        d += m * 1e-3
+        src.now = d
+        bridge.step(d, ticks=m if frame_clock == "arrival" else None)
+    got = np.array(spy.fw)
+    assert len(got) > 500
+    np.testing.assert_allclose(got, np.tile([*f, *w], (len(got), 1)), rtol=0, atol=1e-12)
+    assert bridge.stats.fade_ins == 2

@@ -649,22 +649,39 @@ class Bridge:
                 stage.park_step()
         else:
             cue = self._cue
+            # on arrival the cueing runs on the 1 ms grid: one step per ms of the interval
+            reps = (self._period_ms if ticks is None else ticks) if self._arrival else 1
+            up = self._upsampler
+            fresh = held.t_s != self._fed_t
+            # the ms of this interval before the new sample arrived are what the telemetry
+            # was then (the up-sampler before the sample), the later ones after it
+            early: list[list[float]] = []
+            recent = held.t_s - self._fed_t <= self.config.gate.timeout_s  # False for nan
+            if fresh and reps > 1 and recent:
+                for j in range(reps):
+                    t_j = now - (reps - 1 - j) * 1e-3
+                    if t_j >= held.t_s:
+                        break
+                    v6 = [0.0] * 6
+                    up.value_at(t_j, v6)
+                    early.append(v6)
             raw = False
-            if held.t_s != self._fed_t:
+            if fresh:
                 self._fed_t = held.t_s
                 fw = (*held.f, *held.w)
                 if all(map(math.isfinite, fw)):
-                    self._upsampler.update(held.t_s, fw)
+                    up.update(held.t_s, fw)
                 else:  # the washout counts and holds a bad sample; the upsampler never sees it
                     raw = True
-            # on arrival the cueing runs on the 1 ms grid: one step per ms of the interval
-            reps = (self._period_ms if ticks is None else ticks) if self._arrival else 1
             fw6 = self._fw
             for j in range(reps):
                 if raw and j == reps - 1:
                     self.washout.step(self.washout_state, held.f, held.w, cue)
+                elif j < len(early):
+                    v6 = early[j]
+                    self.washout.step(self.washout_state, v6[:3], v6[3:], cue)
                 else:
-                    self._upsampler.value_at(now - (reps - 1 - j) * 1e-3, fw6)
+                    up.value_at(now - (reps - 1 - j) * 1e-3, fw6)
                     self.washout.step(self.washout_state, fw6[:3], fw6[3:], cue)
             self._clean = False
             park = self._pose_park
@@ -726,8 +743,8 @@ class Bridge:
         sent = self._sent_at.values()
         if self._arrival:  # the send intervals against the stamped intervals
             stamps = self._stamps.values()
-            k = min(sent.size, stamps.size)
-            jit = np.abs(np.diff(sent[-k:]) - np.diff(stamps[-k:]))
+            k = min(sent.size, stamps.size)  # by hand (step()) there are no stamps
+            jit = np.abs(np.diff(sent[sent.size - k :]) - np.diff(stamps[stamps.size - k :]))
         else:
             jit = np.abs(np.diff(sent) - self.period_s)
         recent = sent[-(int(rate) + 1) :]
