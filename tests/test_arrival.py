@@ -155,11 +155,18 @@ def test_a_failed_frame_leaves_the_stage_where_the_link_left_it() -> None:
     _check(tr)
 
 
-def test_the_bridge_on_arrival_drives_the_emulator_within_the_limits() -> None:
+@pytest.mark.parametrize(("kind", "year"), [("mbox", 2024), ("imax", 2023)])
+def test_the_bridge_on_arrival_drives_the_emulator_within_the_limits(kind: str, year: int) -> None:
     """Real F1 packets at 60 Hz, frames on arrival at 250 Hz nominal: the emulator finds no
     violation on its clock (nor the finite-difference check of the trace), the run opens
     and ends parked, frames come between the regular ones, and the stats have figures."""
-    with live_rig("mbox", 250.0, frame_clock="arrival") as (bridge, _sender, emu, platform, lim):
+    with live_rig(kind, 250.0, year, frame_clock="arrival") as (
+        bridge,
+        _sender,
+        emu,
+        platform,
+        lim,
+    ):
         end = time.monotonic() + 3.0
         while time.monotonic() < end and bridge.stats.state != "live":
             time.sleep(0.02)
