@@ -27,6 +27,14 @@ limits table of ``motioncue limits``. On :meth:`Bridge.stop`, or when the source
 then the loop ends. One frame's work is :meth:`Bridge.step`, which tests and
 simulations may call by hand on their own clock instead of starting the thread.
 
+*Frames on arrival* (``BridgeConfig(frame_clock="arrival")``, SC-MBOX and IMAX: whole-ms
+time stamps): instead of waiting for the next slot, the loop sends a frame at the next whole
+ms after a telemetry sample arrives, else one every period; when the game's next packet is
+due just after a regular slot, that frame waits for it (up to ``period + min_interval_ms``),
+so the frames lock on to the packets (60 Hz into 250 Hz: 4, 4, 4, 5 ms). The stage
+(:class:`~motioncue.pipeline._arrival.ArrivalOutputStage`) keeps the limits on the
+controller's clock for any whole-ms intervals; the cueing runs per ms.
+
 On a busy PC the scheduler may hold the loop back by several milliseconds;
 ``BridgeConfig(rt_priority=...)`` (``--rt-priority``) runs the loop thread under
 ``SCHED_FIFO`` where the system allows it (``benchmarks/bench_bridge.py`` measures both).
@@ -39,7 +47,8 @@ Timing figures (:class:`BridgeStats`):
 * *sample age*: from the datagram's arrival stamp to the same send, which also contains the
   sample-and-hold wait for the next frame slot (between 0 and one frame period: inherent to
   a fixed frame rate, since the game sends at its own rate and phase);
-* *jitter*: ``|interval between consecutive sends - period|``;
+* *jitter*: ``|interval between consecutive sends - period|`` (frames on arrival: minus the
+  interval between the two frames' own time stamps);
 * *frame age*: for every frame, from the arrival stamp of the newest sample it used to
   the return of its send (``BridgeStats.frame_age_ms`` for the last frame, percentiles
   over the window).
