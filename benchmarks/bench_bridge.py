@@ -17,7 +17,20 @@ Figures (median over the repeats, target, ratio = target / median):
 
 The machine is shared: the load average is printed before and after each run.
 
-Run: ``PYTHONPATH=src python benchmarks/bench_bridge.py [--seconds 60] [--repeats 3]``
+Issue 13 (``--loopback``): the bridge at 250 Hz against an independent recorder that reads
+the frames with ``struct`` and stamps each with the kernel's receive time (``SO_TIMESTAMPNS``,
+``tests/_loopback.py``), with telemetry decoded in the loop's process (a thread) or in a child
+process through shared memory, with and without a process saturating one core (normal
+priority), no real-time priority. Per configuration (medians over the repeats):
+
+* output jitter p99 and max, ``|interval between kernel arrival stamps - period|``;
+* delay of a lateral-g step (0 <-> 1 g every second in the 60 Hz F1 stream) from the send
+  of its Motion packet to the first frame moving with it, p50 and max;
+* missed deadlines; sample age of the frames p50 (``BridgeStats.frame_age_p50_ms``); the
+  limits check of the recorded frames on their own time stamps (``tests/_loopback.py``).
+
+Run: ``PYTHONPATH=src python benchmarks/bench_bridge.py [--seconds 60] [--repeats 3]``;
+``... --loopback [--seconds 20] [--repeats 3]`` for the issue-13 figures.
 """
 
 from __future__ import annotations
@@ -142,6 +155,55 @@ def run_once(rate_hz: float, seconds: float, rt_priority: int | None) -> dict[st
     }
 
 
+def main_loopback(args: argparse.Namespace) -> int:
+    """The issue-13 figures: 8 configurations x repeats, medians and ratios."""
+    import _loopback as lb
+
+    ok = True
+    base: dict[tuple[bool, bool], dict[str, float]] = {}
+    for busy in (False, True):
+        for process in (True, False):
+            for clock in ("fixed", "arrival"):
+                name = (
+                    f"250 Hz {clock}, telemetry in a {'process' if process else 'thread'}, "
+                    f"{'a core saturated' if busy else 'no extra load'}"
+                )
+                runs = []
+                for r in range(args.repeats):
+                    res = lb.run_loopback(250.0, args.seconds, busy, process, args.upsample, clock)
+                    runs.append(res)
+                    print(
+                        f"  {name} run {r + 1}: jitter p99/max {res['jitter_p99_ms']:.3f}/"
+                        f"{res['jitter_max_ms']:.2f} ms, step delay p50/max "
+                        f"{res['delay_p50_ms']:.2f}/{res['delay_max_ms']:.2f} ms "
+                        f"({res['steps']} steps, {res['steps_skipped']} not counted), "
+                        f"{res['missed']} missed, {res['rate_out_hz']:.1f} frames/s, frame age "
+                        f"p50 {res['age_p50_ms']:.2f} ms, {res['limits']}, {res['state']}; "
+                        f"load avg {res['load'][0]:.2f} -> {res['load'][1]:.2f}",
+                        flush=True,
+                    )
+                    ok &= bool(res["limits_ok"]) and res["error"] is None
+                med = {
+                    k: statistics.median(r[k] for r in runs)
+                    for k in ("jitter_p99_ms", "delay_p50_ms", "delay_max_ms", "missed")
+                }
+                ratio = ""
+                if clock == "fixed":
+                    base[(busy, process)] = med
+                else:
+                    ref = base[(busy, process)]
+                    ratio = (
+                        f"; fixed / arrival: step delay p50 "
+                        f"{ref['delay_p50_ms'] / med['delay_p50_ms']:.2f}x, jitter p99 "
+                        f"{ref['jitter_p99_ms'] / med['jitter_p99_ms']:.2f}x"
+                    )
+                print(f"{name}: missed deadlines median {med['missed']:g}{ratio}", flush=True)
+                ok &= report(f"{name}: jitter p99", med["jitter_p99_ms"], "ms", 1.0, False)
+                ok &= report(f"{name}: step delay p50", med["delay_p50_ms"], "ms", 1.5, False)
+                ok &= report(f"{name}: step delay max", med["delay_max_ms"], "ms", 3.0, False)
+    return 0 if ok else 1
+
+
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--seconds", type=float, default=60.0)
@@ -153,12 +215,18 @@ def main(argv: list[str] | None = None) -> int:
         default=None,
         help="SCHED_FIFO priority of the bridge loop thread (needs root or CAP_SYS_NICE)",
     )
+    ap.add_argument("--loopback", action="store_true", help="the issue-13 figures (docstring)")
+    ap.add_argument(
+        "--upsample", default="extrapolate", help="for --loopback (default extrapolate)"
+    )
     args = ap.parse_args(argv)
     print(
         f"machine: {os.cpu_count()} CPUs, shared with other sessions; bridge loop policy: "
         + ("normal" if args.rt_priority is None else f"SCHED_FIFO {args.rt_priority}"),
         flush=True,
     )
+    if args.loopback:
+        return main_loopback(args)
     ok = True
     for rate in args.rates:
         runs = []

@@ -147,7 +147,7 @@ def _imax_setup() -> tuple[Any, Any, ActuatorLimits]:
 
 @contextmanager
 def live_rig(
-    kind: str, rate_hz: float = 250.0, year: int = 2024
+    kind: str, rate_hz: float = 250.0, year: int = 2024, **config: Any
 ) -> Iterator[tuple[Bridge, Sender, Any, Any, ActuatorLimits]]:
     """Emulator on loopback, F1 receiver, bridge and sender, all started."""
     platform, ctrl, lim = _mbox_setup() if kind == "mbox" else _imax_setup()
@@ -164,7 +164,7 @@ def live_rig(
                 source,
                 transport,
                 lim,
-                BridgeConfig(rate_hz=rate_hz, gate=GATE),
+                BridgeConfig(rate_hz=rate_hz, gate=GATE, **config),
             )
             with Sender(source.port, year) as sender:
                 bridge.start()

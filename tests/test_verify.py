@@ -50,3 +50,18 @@ def test_nan_is_never_ok() -> None:
     p = np.full((5, 2), 500.0)
     p[2, 0] = np.nan
     assert not check_frames(np.arange(5) * 0.01, p, _table()).ok
+
+
+def test_irregular_frame_times_are_judged_by_the_mean_of_the_two_intervals() -> None:
+    """Closed form: samples of p = a t^2 / 2 at any times have exactly acceleration ``a``
+    by the change of speed over the mean of the two intervals (the controllers' definition,
+    frames on arrival); a limit just below ``a`` is caught, one at ``a`` is kept."""
+    rng = np.random.default_rng(3)
+    t = np.concatenate([[0.0], np.cumsum(rng.integers(2, 7, 200) * 1e-3)])
+    a = 3000.0  # pulses/s^2
+    p = (0.5 * a * t**2)[:, None] + np.zeros((1, 1))
+    table = [{"stroke_pulses": [-1e9, 1e9], "max_speed_pulses_s": 1e9, "max_accel_pulses_s2": a}]
+    chk = check_frames(t, p, table)
+    np.testing.assert_allclose(chk.accel_use, 1.0, rtol=1e-9)
+    table[0]["max_accel_pulses_s2"] = a * 0.999
+    assert not check_frames(t, p, table).ok

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import math
 import sys
 import time
@@ -87,6 +88,27 @@ def register(sub: Any) -> None:
         "CAP_SYS_NICE; refused quietly with a note elsewhere): keeps other programs from "
         "delaying frames on a busy PC (default 10; 0 = normal scheduling)",
     )
+    parser.add_argument(
+        "--upsample",
+        choices=("extrapolate", "interpolate", "hold"),
+        default="extrapolate",
+        help="telemetry slower than the frame rate, per frame: extrapolated and corrected "
+        "on the next sample (default), interpolated one sample late, or held",
+    )
+    parser.add_argument(
+        "--frames",
+        choices=("auto", "arrival", "fixed"),
+        default="auto",
+        help="arrival: a frame as soon as a telemetry sample arrives (SC-MBOX, IMAX: whole-ms "
+        "time stamps), else every period; fixed: every period; auto (default): arrival where "
+        "the controller and the limits allow it",
+    )
+    parser.add_argument(
+        "--telemetry-in-process",
+        action="store_true",
+        help="receive and decode live telemetry in the frame loop's process (default: in a "
+        "child process, through shared memory, so decoding never delays a frame)",
+    )
     parser.add_argument("--quiet", action="store_true", help="no status line")
     add_json_option(parser, "the final statistics (after the park)")
     add_set_option(parser)
@@ -119,6 +141,7 @@ def run(args: argparse.Namespace) -> int:
         rate_hz=snap_rate_hz(args.rate, controller),
         gate=GateConfig(timeout_s=args.timeout, fade_out_s=args.fade, fade_in_s=args.fade),
         rt_priority=args.rt_priority or None,
+        upsample=args.upsample,
     )
     platform = load_platform_arg(args.platform, args.overrides)
     controller.check_rate(config.rate_hz)
@@ -128,6 +151,13 @@ def run(args: argparse.Namespace) -> int:
         rate_hz=config.rate_hz,
         **limit_overrides(args),
     )
+    frames = args.frames
+    if frames == "auto":
+        period_ms = 1000.0 / config.rate_hz
+        whole = abs(period_ms - round(period_ms)) < 1e-9 and round(period_ms) >= 2
+        stamped = getattr(controller, "time_resolution_s", None) == 1e-3
+        frames = "arrival" if whole and stamped and limits.j_max is None else "fixed"
+    config = dataclasses.replace(config, frame_clock=frames)
     preset = args.preset or (profile.preset if profile is not None else None)
     cueing, preset_source = choose_preset(preset, platform, args.platform, args.overrides)
     effects = None
@@ -146,7 +176,12 @@ def run(args: argparse.Namespace) -> int:
     # from here on SIGINT, SIGTERM, SIGHUP and SIGQUIT only set a flag: the bridge parks and
     # nothing cuts the park or the summary short
     with SignalGuard() as guard:
-        source = open_source(source_spec)
+        if args.telemetry_in_process or source_spec.startswith("replay:"):
+            source: Any = open_source(source_spec)
+        else:
+            from ..telemetry._shm import SharedMemorySource
+
+            source = SharedMemorySource(source_spec)
         try:
             transport = open_transport(args.target)
             try:
@@ -159,7 +194,8 @@ def run(args: argparse.Namespace) -> int:
                     _say(f"motioncue bridge: note: {note}")
                 _say(
                     f"bridge: {source!r} -> {args.target} ({args.controller}, {args.platform}, "
-                    f"preset {preset_source}, {config.rate_hz:g} Hz); Ctrl-C parks and exits"
+                    f"preset {preset_source}, {config.rate_hz:g} Hz, frames {frames}); Ctrl-C "
+                    "parks and exits"
                 )
                 final = _serve(bridge, guard, args.duration, quiet=args.quiet)
             finally:

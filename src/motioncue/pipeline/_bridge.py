@@ -10,8 +10,10 @@ Per tick:
    is younger than ``gate.timeout_s`` and not paused, else the gain fades to 0 (parked). The
    bridge starts parked and ramps in; while parked the washout state is reset so a resume
    starts clean;
-3. washout step (streaming, explicit :class:`~motioncue.cueing.WashoutState`) on the newest
-   sample, held between samples (the washout runs at the frame rate);
+3. up-sampling (:mod:`~motioncue.pipeline._upsample`, ``BridgeConfig.upsample``): the
+   telemetry at the frame's time, from the samples so far (held, interpolated, or
+   extrapolated and corrected on the next sample), then the washout step (streaming,
+   explicit :class:`~motioncue.cueing.WashoutState`; the washout runs at the frame rate);
 4. blend ``pose = pose_park + gain * (cue - pose_park)``, plus ``gain`` x the effect layer's
    offsets when effects are on (:mod:`~motioncue.pipeline._effects`: engine, road, shift);
 5. workspace limiting (:func:`motioncue.trajectory.limit_pose`, which also returns the
@@ -26,6 +28,14 @@ limits table of ``motioncue limits``. On :meth:`Bridge.stop`, or when the source
 then the loop ends. One frame's work is :meth:`Bridge.step`, which tests and
 simulations may call by hand on their own clock instead of starting the thread.
 
+*Frames on arrival* (``BridgeConfig(frame_clock="arrival")``, SC-MBOX and IMAX: whole-ms
+time stamps): instead of waiting for the next slot, the loop sends a frame at the next whole
+ms after a telemetry sample arrives, else one every period; when the game's next packet is
+due just after a regular slot, that frame waits for it (up to ``period + min_interval_ms``),
+so the frames lock on to the packets (60 Hz into 250 Hz: 4, 4, 4, 5 ms). The stage
+(:class:`~motioncue.pipeline._arrival.ArrivalOutputStage`) keeps the limits on the
+controller's clock for any whole-ms intervals; the cueing runs per ms.
+
 On a busy PC the scheduler may hold the loop back by several milliseconds;
 ``BridgeConfig(rt_priority=...)`` (``--rt-priority``) runs the loop thread under
 ``SCHED_FIFO`` where the system allows it (``benchmarks/bench_bridge.py`` measures both).
@@ -38,7 +48,11 @@ Timing figures (:class:`BridgeStats`):
 * *sample age*: from the datagram's arrival stamp to the same send, which also contains the
   sample-and-hold wait for the next frame slot (between 0 and one frame period: inherent to
   a fixed frame rate, since the game sends at its own rate and phase);
-* *jitter*: ``|interval between consecutive sends - period|``.
+* *jitter*: ``|interval between consecutive sends - period|`` (frames on arrival: minus the
+  interval between the two frames' own time stamps);
+* *frame age*: for every frame, from the arrival stamp of the newest sample it used to
+  the return of its send (``BridgeStats.frame_age_ms`` for the last frame, percentiles
+  over the window).
 """
 
 from __future__ import annotations
@@ -102,6 +116,19 @@ class BridgeConfig:
         While running, the interpreter's thread switch interval is lowered to this (s) so
         that another Python thread (the telemetry receiver, an in-process emulator) holds
         the GIL for at most this long when the loop wakes; restored on stop. None: leave it.
+    upsample : str
+        How telemetry slower than the frame rate is brought to each frame's time
+        (:data:`motioncue.pipeline._upsample.UPSAMPLERS`): ``"hold"`` (the newest sample,
+        a step per sample), ``"interpolate"`` (one telemetry period late, no steps) or
+        ``"extrapolate"`` (no steps and no lag for smooth motion; bounded overshoot on a
+        step in the telemetry).
+    frame_clock : str
+        ``"fixed"``: a frame every period. ``"arrival"`` (SC-MBOX, IMAX: whole-ms time
+        stamps): a frame as soon as a telemetry sample arrives (at the next whole ms, at
+        least ``min_interval_ms`` after the previous frame), else every period; the frame
+        clock locks on to the game's packets (module docstring, *Frames on arrival*).
+    min_interval_ms : int
+        Shortest interval between frames on arrival (ms), 1..period.
     """
 
     rate_hz: float = 100.0
@@ -110,8 +137,22 @@ class BridgeConfig:
     stats_window: int = 20000
     rt_priority: int | None = None
     switch_interval_s: float | None = 0.0005
+    upsample: str = "hold"
+    frame_clock: str = "fixed"
+    min_interval_ms: int = 2
 
     def __post_init__(self) -> None:
+        if self.frame_clock not in ("fixed", "arrival"):
+            raise ConfigError(
+                f"frame_clock = {self.frame_clock!r} is unknown; allowed: fixed, arrival"
+            )
+        from ._upsample import UPSAMPLERS
+
+        if self.upsample not in UPSAMPLERS:
+            raise ConfigError(
+                f"upsample = {self.upsample!r} is unknown; allowed: "
+                + ", ".join(sorted(UPSAMPLERS))
+            )
         if not (math.isfinite(self.rate_hz) and 0.0 < self.rate_hz <= 1000.0):
             raise ConfigError(f"rate_hz = {self.rate_hz!r} is invalid; allowed: (0, 1000] Hz")
         if not (math.isfinite(self.spin_s) and 0.0 <= self.spin_s <= 0.01):
@@ -172,6 +213,9 @@ class BridgeStats:
         priority, where the platform started).
     send_errors : int
         Transient send errors met and retried within their frame.
+    frame_age_ms, frame_age_p50_ms, frame_age_p99_ms : float
+        Age of the newest sample a frame used, at the return of its send: the last
+        frame's, and percentiles over the window (nan before there is data).
     """
 
     state: str
@@ -199,6 +243,9 @@ class BridgeStats:
     error: str | None
     notes: tuple[str, ...] = ()
     send_errors: int = 0
+    frame_age_ms: float = math.nan
+    frame_age_p50_ms: float = math.nan
+    frame_age_p99_ms: float = math.nan
 
     def status_line(self) -> str:
         """One line for a terminal status display."""
@@ -214,7 +261,8 @@ class BridgeStats:
         return (
             f"{self.state:<10} gain {self.gain:4.2f} | in {f(self.rate_in_hz, '5.1f')} Hz"
             f" out {f(self.rate_out_hz, '5.1f')} Hz | jitter p99 {f(self.jitter_p99_ms, '.2f')}"
-            f" ms | latency p99 {f(self.latency_p99_ms, '.2f')} ms | clamped"
+            f" ms | latency p99 {f(self.latency_p99_ms, '.2f')} ms | age"
+            f" {f(self.frame_age_ms, '.1f')} ms | clamped"
             f" {self.limiter_clamped_frames} lim {self.pose_clamped} ws | bad"
             f" {self.bad_packets}{f' ({bad})' if bad else ''} | missed {self.missed_deadlines}"
             + ("".join(f" | {k}" for k, v in sorted(self.packet_reasons.items())
@@ -325,7 +373,10 @@ class Bridge:
                 f"limits have {limits.n_actuators} actuators; platform {platform.name!r} has "
                 f"{platform.n_actuators}"
             )
-        self.washout = make_cueing(cueing, cfg.rate_hz)
+        self._arrival = cfg.frame_clock == "arrival"
+        # on arrival the frame intervals vary: the cueing runs on the 1 ms grid instead,
+        # stepped once per ms of each frame interval
+        self.washout = make_cueing(cueing, 1000.0 if self._arrival else cfg.rate_hz)
         self.washout_state = self.washout.initial_state()
         # effect layer (``effects``: an EffectGains; None or all gains 0: none); refused below
         # 100 Hz. It adds to the blended pose before workspace limiting: limits see the sum.
@@ -333,9 +384,17 @@ class Bridge:
         self.effects_state = EffectsState()
         self.gate = CueGate(cfg.gate)
         # built here so that configuration errors surface before start()
-        self.stage = OutputStage(
-            platform, controller, limits, cfg.rate_hz, transport, q_start=q_start
-        )
+        if self._arrival:
+            from ._arrival import ArrivalOutputStage
+
+            self.stage: OutputStage = ArrivalOutputStage(
+                platform, controller, limits, cfg.rate_hz, transport, q_start=q_start,
+                min_interval_ms=cfg.min_interval_ms,
+            )  # fmt: skip
+        else:
+            self.stage = OutputStage(
+                platform, controller, limits, cfg.rate_hz, transport, q_start=q_start
+            )
         self.period_s = 1.0 / cfg.rate_hz
         self._pose_park = [float(v) for v in platform.pose_park]
         self._stop = threading.Event()
@@ -351,6 +410,14 @@ class Bridge:
         self._sent_at = _Ring(w)  # perf_counter when each frame's send returned
         self._latency = _Ring(w)
         self._age = _Ring(w)
+        self._frame_age = _Ring(w)
+        self._stamps = _Ring(w)  # frames on arrival: the stamp of each frame (s)
+        self._period_ms = round(1000.0 / cfg.rate_hz)
+        from ._upsample import make_upsampler
+
+        self._upsampler = make_upsampler(cfg.upsample)
+        self._fw = [0.0] * 6  # telemetry at the frame's time: f (3), then w (3)
+        self._fed_t = math.nan  # stamp of the last sample given to the upsampler
         self._rate_in_prev: tuple[float, int] | None = None
         self._rate_in = math.nan
         self._old_switch: float | None = None
@@ -445,7 +512,10 @@ class Bridge:
             except (AttributeError, OSError) as exc:
                 self._notes.append(f"real-time priority {prio} refused ({exc}); normal policy")
         try:
-            self._loop()
+            if self._arrival:
+                self._loop_arrival()
+            else:
+                self._loop()
             self._state = "stopped"
         except BaseException as exc:  # recorded, reported by stats/stop; then park
             self._error = f"{type(exc).__name__}: {exc}"
@@ -491,7 +561,71 @@ class Bridge:
                         f"could not park within {max_stop_ticks} frames after stop"
                     )
 
-    def step(self, deadline_s: float, stopping: bool = False) -> None:
+    def _loop_arrival(self) -> None:
+        """Frames on arrival: wait for the next period or a new sample, whichever is first.
+
+        Frame ``k`` carries the whole-ms stamp ``s_k`` and is sent at ``wall0 + s_k``: the
+        loop polls the source every ~0.2 ms while it sleeps and spins the last 0.3 ms. A new
+        sample moves the next frame to the next whole ms (at least ``min_interval_ms`` after
+        the previous frame). When the next sample is due within ``min_interval_ms`` after a
+        regular frame's slot (the game's period estimated from the arrivals), that frame
+        waits for the sample, up to ``period + min_interval_ms`` after the previous frame:
+        the frames lock on to the packets instead of beating with them.
+        """
+        from ._upsample import _PeriodEstimate
+
+        cfg = self.config
+        stage = self.stage
+        stop = self._stop
+        period_ms = round(1000.0 / cfg.rate_hz)
+        h_min = cfg.min_interval_ms
+        h_max = period_ms + h_min
+        tick = 1e-3
+        clock = time.perf_counter
+        max_stop_ticks = (
+            math.ceil(cfg.gate.fade_out_s / self.period_s) + stage.park_frames_bound() + 10
+        )
+        stop_ticks = 0
+        est = _PeriodEstimate()
+        seen_t = math.nan
+        wall0 = clock()
+        last = 0  # stamp of the last frame (ms); the stage opens the run at 0
+        while True:
+            due = last + period_ms
+            if est.n >= 3 and est.period_s == est.period_s:
+                pred = (est.ref_s + est.period_s - wall0) / tick
+                if pred - due < h_min and pred < last + h_max - 0.5:
+                    due = last + h_max  # the sample is expected first: wait for it
+            while True:  # wait for the due stamp, or a sample that moves it earlier
+                s = self.source.latest()
+                if s is not None and s.t_s != seen_t:
+                    seen_t = s.t_s
+                    est.update(s.t_s)
+                    due = min(due, max(last + h_min, math.ceil((s.t_s - wall0) / tick - 1e-9)))
+                left = wall0 + due * tick - clock()
+                if left <= 0.0:
+                    break
+                if left > 0.0005:
+                    time.sleep(min(0.0002, left - 0.0003))
+            late = (clock() - wall0) / tick - due
+            if late > period_ms:  # overran a whole period: skip ahead, counted
+                skip = int(late // period_ms)
+                self._missed += skip
+                due += skip * period_ms
+            stopping = stop.is_set() or self.source_finished
+            self.step(wall0 + due * tick, stopping, ticks=due - last)
+            self._stamps.add(due * tick)
+            last = due
+            if stopping:
+                stop_ticks += 1
+                if self.gate.parked and stage.parked:
+                    return
+                if stop_ticks > max_stop_ticks:
+                    raise MotioncueError(
+                        f"could not park within {max_stop_ticks} frames after stop"
+                    )
+
+    def step(self, deadline_s: float, stopping: bool = False, ticks: int | None = None) -> None:
         """One frame: newest sample -> gate -> washout -> blend -> workspace -> IK -> emit.
 
         The loop thread calls this once per frame slot. Tests and simulations may call it
@@ -507,6 +641,9 @@ class Bridge:
         stopping : bool
             Close the gate (fade out and park) whatever the telemetry says; also done when
             the source reports ``finished``.
+        ticks : int, optional
+            Frames on arrival only: this frame comes ``ticks`` ms after the previous one
+            (default: the period).
         """
         stopping = stopping or self.source_finished
         sample = self.source.latest()
@@ -528,10 +665,46 @@ class Bridge:
                 if self.effects is not None:
                     self.effects.reset(self.effects_state)
                 self._clean = True
-            stage.park_step()
+            if self._arrival:
+                stage.emit(self.platform.q_park, ticks=ticks)  # type: ignore[call-arg]
+            else:
+                stage.park_step()
         else:
             cue = self._cue
-            self.washout.step(self.washout_state, held.f, held.w, cue)
+            # on arrival the cueing runs on the 1 ms grid: one step per ms of the interval
+            reps = (self._period_ms if ticks is None else ticks) if self._arrival else 1
+            up = self._upsampler
+            fresh = held.t_s != self._fed_t
+            # the ms of this interval before the new sample arrived are what the telemetry
+            # was then (the up-sampler before the sample), the later ones after it
+            early: list[list[float]] = []
+            recent = held.t_s - self._fed_t <= self.config.gate.timeout_s  # False for nan
+            if fresh and reps > 1 and recent:
+                for j in range(reps):
+                    t_j = now - (reps - 1 - j) * 1e-3
+                    if t_j >= held.t_s:
+                        break
+                    v6 = [0.0] * 6
+                    up.value_at(t_j, v6)
+                    early.append(v6)
+            raw = False
+            if fresh:
+                self._fed_t = held.t_s
+                fw = (*held.f, *held.w)
+                if all(map(math.isfinite, fw)):
+                    up.update(held.t_s, fw)
+                else:  # the washout counts and holds a bad sample; the upsampler never sees it
+                    raw = True
+            fw6 = self._fw
+            for j in range(reps):
+                if raw and j == reps - 1:
+                    self.washout.step(self.washout_state, held.f, held.w, cue)
+                elif j < len(early):
+                    v6 = early[j]
+                    self.washout.step(self.washout_state, v6[:3], v6[3:], cue)
+                else:
+                    up.value_at(now - (reps - 1 - j) * 1e-3, fw6)
+                    self.washout.step(self.washout_state, fw6[:3], fw6[3:], cue)
             self._clean = False
             park = self._pose_park
             pose = self._pose
@@ -545,9 +718,14 @@ class Bridge:
                     self._pose_invalid += 1
                 else:
                     self._pose_clamped += 1
-            stage.emit(res.q)
+            if self._arrival:
+                stage.emit(res.q, ticks=ticks)  # type: ignore[call-arg]
+            else:
+                stage.emit(res.q)
         done = time.perf_counter()
         self._sent_at.add(done)
+        if held is not None:
+            self._frame_age.add(done - held.t_s)
         if sample is not None and sample.t_s != self._last_sample_t:
             self._last_sample_t = sample.t_s
             self._age.add(done - sample.t_s)
@@ -587,13 +765,19 @@ class Bridge:
             self._rate_in_prev = (now, samples)
         rate = self.config.rate_hz
         sent = self._sent_at.values()
-        jit = np.abs(np.diff(sent) - self.period_s)
+        if self._arrival:  # the send intervals against the stamped intervals
+            stamps = self._stamps.values()
+            k = min(sent.size, stamps.size)  # by hand (step()) there are no stamps
+            jit = np.abs(np.diff(sent[sent.size - k :]) - np.diff(stamps[stamps.size - k :]))
+        else:
+            jit = np.abs(np.diff(sent) - self.period_s)
         recent = sent[-(int(rate) + 1) :]
         rate_out = math.nan
         if recent.size > 1 and recent[-1] > recent[0]:
             rate_out = (recent.size - 1) / float(recent[-1] - recent[0])
         lat = self._latency.values()
         age = self._age.values()
+        fage = self._frame_age.values()
         bad = sum(v for k, v in src.items() if k.startswith("skipped")) + int(
             src.get("receive errors", 0)
         )
@@ -624,4 +808,7 @@ class Bridge:
             error=self._error,
             notes=tuple(self._notes) + _telemetry_notes(src, self.source_finished),
             send_errors=self.stage.send_errors,
+            frame_age_ms=float(fage[-1] * 1e3) if fage.size else math.nan,
+            frame_age_p50_ms=_percentile_ms(fage, 50),
+            frame_age_p99_ms=_percentile_ms(fage, 99),
         )

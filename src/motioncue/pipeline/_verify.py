@@ -3,8 +3,10 @@
 This is the check users can repeat with a spreadsheet: on frame times ``t`` and pulses ``p``,
 
 - speed ``v[k] = (p[k] - p[k-1]) / (t[k] - t[k-1])``;
-- acceleration ``a[k] = (v[k] - v[k-1]) / (t[k] - t[k-1])`` (on a uniform grid this is
-  ``(p[k] - 2 p[k-1] + p[k-2]) / dt^2``, the definition the limiters enforce).
+- acceleration ``a[k] = (v[k] - v[k-1]) / ((t[k] - t[k-2]) / 2)``, the change of speed
+  over the mean of the two intervals, as the controllers (and their emulators) judge it; on
+  a uniform grid this is ``(p[k] - 2 p[k-1] + p[k-2]) / dt^2``, the definition the limiters
+  enforce, and frames on arrival (whole-ms intervals that vary) are judged the same way.
 
 It deliberately shares no code with the limiters it checks.
 """
@@ -85,10 +87,16 @@ def check_frames(
     dt = np.diff(t)[:, None]
     v = np.diff(p, axis=0) / dt if len(t) > 1 else np.zeros((0, p.shape[1]))
     if start_at_rest and len(v):
+        # at rest before the first frame, for as long as the first interval
         v_prev = np.vstack([np.zeros((1, p.shape[1])), v])
-        a = np.diff(v_prev, axis=0) / dt
+        dt_prev = np.vstack([dt[:1], dt])
+        a = np.diff(v_prev, axis=0) / (0.5 * (dt_prev[1:] + dt_prev[:-1]))
     else:
-        a = np.diff(v, axis=0) / dt[1:] if len(v) > 1 else np.zeros((0, p.shape[1]))
+        a = (
+            np.diff(v, axis=0) / (0.5 * (dt[1:] + dt[:-1]))
+            if len(v) > 1
+            else np.zeros((0, p.shape[1]))
+        )
     speed_use = np.abs(v).max(axis=0, initial=0.0) / lim["v"]
     accel_use = np.abs(a).max(axis=0, initial=0.0) / lim["a"]
     worst = {

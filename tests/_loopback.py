@@ -1,0 +1,308 @@
+"""Independent loopback instruments for the bridge's timing (issue 13 acceptance).
+
+Nothing here imports the bridge, the output stage or the frame encoders: frames are read
+with ``struct`` at the SC-MBOX layout of ``docs/controllers.md`` (12-byte header, then
+Line u32, Time u32 ms, 6 x i32 positions, big-endian), and every frame's arrival is the
+kernel's receive time stamp (``SO_TIMESTAMPNS``, CLOCK_REALTIME ns) on the recording socket.
+
+* :func:`record_frames` (run in its own process): a UDP socket that records each datagram's
+  kernel stamp, line, time field and positions until told to stop;
+* :func:`busy_core` (its own process, normal priority): saturates one core;
+* :func:`send_f1` (its own process): the moving F1 stream at 60 Hz from the real captures
+  (``test_bridge.F1Stream``), optionally lateral-g steps, with the send time of each step.
+"""
+
+from __future__ import annotations
+
+import math
+import multiprocessing as mp
+import os
+import socket
+import struct
+import sys
+import time
+from typing import Any
+
+import numpy as np
+
+SO_TIMESTAMPNS = getattr(socket, "SO_TIMESTAMPNS", 35)
+_HEAD = 12
+_BODY = struct.Struct(">II6i")
+
+
+def record_frames(port_q: Any, stop: Any, out_q: Any) -> None:
+    """Record MBOX 6-axis frames with kernel receive stamps; put a dict on ``out_q``."""
+    sock = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
+    sock.setsockopt(socket.SOL_SOCKET, SO_TIMESTAMPNS, 1)
+    sock.setsockopt(socket.SOL_SOCKET, socket.SO_RCVBUF, 4 << 20)
+    sock.bind(("127.0.0.1", 0))
+    sock.settimeout(0.05)
+    port_q.put(sock.getsockname()[1])
+    stamps: list[int] = []
+    rows: list[tuple[int, ...]] = []
+    while not stop.is_set():
+        try:
+            data, anc, _flags, _addr = sock.recvmsg(2048, 256)
+        except TimeoutError:
+            continue
+        ts = 0
+        for level, kind, cdata in anc:
+            if level == socket.SOL_SOCKET and kind == SO_TIMESTAMPNS:
+                sec, nsec = struct.unpack("qq", cdata[:16])
+                ts = sec * 1_000_000_000 + nsec
+        if len(data) >= _HEAD + _BODY.size and data[:2] == b"\x55\xaa":
+            stamps.append(ts)
+            rows.append(_BODY.unpack_from(data, _HEAD))
+    sock.close()
+    out_q.put({"t_ns": stamps, "rows": rows})
+
+
+def busy_core(stop: Any) -> None:
+    """Saturate one core at normal priority until ``stop`` is set."""
+    x = 0
+    while not stop.is_set():
+        for _ in range(100_000):
+            x += 1
+
+
+def send_f1(port: int, stop: Any, steps_q: Any, step_every_s: float = 0.0) -> None:
+    """The 60 Hz F1 stream to ``port``; with ``step_every_s`` the lateral g alternates
+    0 / 1 g about every that many seconds (else the lap motion), and the realtime ns just before
+    the Motion packet of each step is put on ``steps_q`` at the end (a list)."""
+    import sys
+    from pathlib import Path
+
+    sys.path.insert(0, str(Path(__file__).resolve().parent))
+    from test_bridge import F1Stream, lap_motion
+
+    stream = F1Stream(2024)
+    steps: list[int] = []
+    with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as tx:
+        t0 = time.perf_counter()
+        k = 0
+        level = 0.0
+        while not stop.is_set():
+            k += 1
+            left = t0 + k / 60.0 - time.perf_counter()
+            if left > 0:
+                time.sleep(left)
+            t = k / 60.0
+            if step_every_s > 0:
+                # 61 packets per second-ish: a whole number of packets that is not a multiple
+                # of 6, so the steps meet the 250 Hz frame grid at each of its 6 phases
+                n_step = 6 * max(1, round(step_every_s * 10)) + 1
+                new = 1.0 if (k // n_step) % 2 else 0.0
+                ex, motion = stream.frame(k, new, 0.0, 0.0, (0.0, 0.0, 0.0))
+                tx.sendto(ex, ("127.0.0.1", port))
+                if new != level:
+                    steps.append(time.time_ns())
+                level = new
+                tx.sendto(motion, ("127.0.0.1", port))
+            else:
+                g_lat, g_lon, g_vert, w = lap_motion(t)
+                ex, motion = stream.frame(k, g_lat, g_lon, g_vert, w)
+                tx.sendto(ex, ("127.0.0.1", port))
+                tx.sendto(motion, ("127.0.0.1", port))
+    steps_q.put(steps)
+
+
+def jitter_ms(t_ns: np.ndarray, stamp_ms: np.ndarray) -> np.ndarray:
+    """``|interval between kernel arrival stamps - interval between the frames' own time
+    stamps|`` in ms: on a fixed frame clock the stamped interval is the period."""
+    return np.abs(
+        np.diff(np.asarray(t_ns, dtype=np.int64)) * 1e-6
+        - np.diff(np.asarray(stamp_ms, dtype=np.int64)).astype(float)
+    )
+
+
+def accelerations(stamp_ms: np.ndarray, positions: np.ndarray) -> np.ndarray:
+    """Acceleration of each frame on the controller's clock (pulses/s^2, (N, n); the first
+    two rows 0): the change of speed over the mean of the two intervals."""
+    t = np.asarray(stamp_ms, dtype=float) * 1e-3
+    p = np.asarray(positions, dtype=float)
+    a = np.zeros_like(p)
+    if len(p) > 2:
+        h = np.diff(t)[:, None]
+        v = np.diff(p, axis=0) / h
+        a[2:] = (v[1:] - v[:-1]) / (0.5 * (h[1:] + h[:-1]))
+    return a
+
+
+def check_limits(
+    stamp_ms: np.ndarray, positions: np.ndarray, table: Any
+) -> tuple[float, float, bool]:
+    """Largest speed and acceleration use (fraction of the limit) and whether every frame is
+    in the stroke, on the controller's clock (its time stamps), from the pulses table of
+    ``motioncue limits``; the run starts at rest."""
+    rows = table["actuators"] if isinstance(table, dict) else table
+    lo = np.array([r["stroke_pulses"][0] for r in rows], dtype=float)
+    hi = np.array([r["stroke_pulses"][1] for r in rows], dtype=float)
+    v_max = np.array([r["max_speed_pulses_s"] for r in rows], dtype=float)
+    a_max = np.array([r["max_accel_pulses_s2"] for r in rows], dtype=float)
+    t = np.asarray(stamp_ms, dtype=float) * 1e-3
+    p = np.asarray(positions, dtype=float)
+    h0 = t[1] - t[0]
+    tt = np.concatenate([[t[0] - 2 * h0, t[0] - h0], t])
+    pp = np.vstack([p[0], p[0], p])
+    h = np.diff(tt)[:, None]
+    v = np.diff(pp, axis=0) / h
+    a = 2.0 * (v[1:] - v[:-1]) / (h[1:] + h[:-1])
+    in_stroke = bool(np.all(p >= lo) and np.all(p <= hi))
+    return float(np.max(np.abs(v) / v_max)), float(np.max(np.abs(a) / a_max)), in_stroke
+
+
+def step_delays_ms(
+    t_ns: np.ndarray,
+    stamp_ms: np.ndarray,
+    positions: np.ndarray,
+    steps_ns: list[int],
+    threshold: float = 1.5e6,
+) -> tuple[np.ndarray, int]:
+    """Delay from each step's send to the first frame that moves with it (ms).
+
+    A frame moves with the step when its acceleration on the controller's clock
+    (:func:`accelerations`, any axis) differs from the previous frame's by more than
+    ``threshold`` pulses/s^2: once the washout has settled on a constant input the frames
+    keep their speed, and the pulse rounding changes an acceleration by at most
+    ``4 / h^2`` pulses/s^2 (1e6 at h = 2 ms); a step of 1 g in the specific force changes
+    the actuators' acceleration at once. Steps whose 10 frames before were not quiet, or
+    with no such frame within 50 ms, are not counted (their number is returned).
+    """
+    t = np.asarray(t_ns, dtype=np.int64)
+    a = accelerations(stamp_ms, positions)
+    da = np.zeros(len(a))
+    if len(a) > 3:
+        da[3:] = np.max(np.abs(np.diff(a[2:], axis=0)), axis=1)
+    out, skipped = [], 0
+    for s in steps_ns:
+        k = int(np.searchsorted(t, s, side="right"))
+        if k < 13 or np.any(da[k - 10 : k] > threshold):
+            skipped += 1
+            continue
+        moving = np.nonzero(da[k:] > threshold)[0]
+        if moving.size == 0 or t[k + moving[0]] - s > 50_000_000:
+            skipped += 1
+            continue
+        out.append((t[k + moving[0]] - s) * 1e-6)
+    return np.array(out, dtype=float), skipped
+
+
+def percentile(v: np.ndarray, q: float) -> float:
+    return float(np.percentile(v, q)) if len(v) else math.nan
+
+
+def run_loopback(
+    rate_hz: float,
+    seconds: float,
+    busy: bool,
+    process: bool,
+    upsample: str,
+    frame_clock: str = "arrival",
+) -> dict[str, Any]:
+    """One loopback run: recorder, optional busy core, 60 Hz F1 lateral-g steps about every
+    second, the bridge (stewart6-linear, mbox6, racing) in this process; returns its figures
+    (jitter on kernel stamps against the frames' own stamps, step delays, missed deadlines,
+    the limits check on the controller's clock)."""
+    lb = sys.modules[__name__]
+    from motioncue.cueing import load_cueing
+    from motioncue.kinematics import load_platform
+    from motioncue.output import load_controller, open_transport
+    from motioncue.pipeline._bridge import Bridge, BridgeConfig
+    from motioncue.pipeline._realtime import GateConfig
+    from motioncue.telemetry import TelemetrySource
+    from motioncue.telemetry._shm import SharedMemorySource
+    from motioncue.trajectory import ActuatorLimits
+
+    ctx = mp.get_context("spawn")
+    stop, stop_busy = ctx.Event(), ctx.Event()
+    port_q: Any = ctx.Queue()
+    out_q: Any = ctx.Queue()
+    steps_q: Any = ctx.Queue()
+    rec = ctx.Process(target=lb.record_frames, args=(port_q, stop, out_q))
+    rec.start()
+    port = port_q.get(timeout=30)
+    hog = ctx.Process(target=lb.busy_core, args=(stop_busy,)) if busy else None
+    if hog is not None:
+        hog.start()
+    platform = load_platform("stewart6-linear")
+    ctrl = load_controller("mbox6")
+    lim = ActuatorLimits.from_platform(platform, ctrl, a_max=5.0)
+    source: Any = SharedMemorySource("f1:127.0.0.1:0") if process else TelemetrySource("f1", 0)
+    transport = open_transport(f"udp://127.0.0.1:{port}")
+    sender = ctx.Process(target=lb.send_f1, args=(source.port, stop, steps_q, 1.0))
+    gate = GateConfig(timeout_s=0.25, fade_out_s=0.3, fade_in_s=0.3)
+    bridge = Bridge(
+        platform, ctrl, load_cueing("racing"), source, transport, lim,
+        BridgeConfig(rate_hz=rate_hz, gate=gate, upsample=upsample, frame_clock=frame_clock),
+    )  # fmt: skip
+    load0 = os.getloadavg()
+    sender.start()
+    bridge.start()
+    time.sleep(seconds)
+    live = bridge.stats
+    final = bridge.stop()
+    stop.set()
+    stop_busy.set()
+    steps = steps_q.get(timeout=30)
+    res = out_q.get(timeout=60)
+    for p in (sender, rec, hog):
+        if p is not None:
+            p.join(10)
+    transport.close()
+    source.close()
+    t = np.asarray(res["t_ns"], dtype=np.int64)
+    rows = np.asarray(res["rows"], dtype=np.int64)
+    table = lim.to_pulses_table(platform)
+    v_use, a_use, in_stroke = lb.check_limits(rows[:, 1], rows[:, 2:], table)
+    t_live = t[0] + int(1.5e9)  # after the fade-in
+    keep = (t > t_live) & (t < t[0] + int((seconds - 0.1) * 1e9))
+    jit = lb.jitter_ms(t[keep], rows[keep, 1])
+    steps_live = [s for s in steps if s > t_live]
+    delays, skipped = lb.step_delays_ms(t, rows[:, 1], rows[:, 2:], steps_live)
+    return {
+        "jitter_p99_ms": lb.percentile(jit, 99),
+        "jitter_max_ms": float(jit.max()) if jit.size else float("nan"),
+        "delay_p50_ms": lb.percentile(delays, 50),
+        "delay_max_ms": float(delays.max()) if delays.size else float("nan"),
+        "steps": len(delays),
+        "steps_skipped": skipped,
+        "rate_out_hz": float((keep.sum() - 1) / ((t[keep][-1] - t[keep][0]) * 1e-9)),
+        "missed": final.missed_deadlines,
+        "age_p50_ms": live.frame_age_p50_ms,
+        "limits_ok": in_stroke and v_use <= 1.0 + 1e-9 and a_use <= 1.0 + 1e-9,
+        "limits": f"speed {v_use:.3f}, accel {a_use:.3f} of the limits",
+        "state": final.state,
+        "error": final.error,
+        "load": (load0[0], os.getloadavg()[0]),
+    }
+
+
+def bare_timer_jitter_p99_ms(seconds: float, period_s: float, busy: bool) -> float:
+    """The reference: a bare loop (sleep, then spin the last 0.3 ms) on absolute deadlines
+    in this process, with or without a busy process; p99 of ``|interval - period|`` (ms).
+    What any frame loop could achieve on this machine right now."""
+    ctx = mp.get_context("spawn")
+    stop = ctx.Event()
+    hog = ctx.Process(target=busy_core, args=(stop,)) if busy else None
+    if hog is not None:
+        hog.start()
+    try:
+        t0 = time.perf_counter() + 0.1
+        stamps = []
+        k = 0
+        while True:
+            k += 1
+            due = t0 + k * period_s
+            left = due - time.perf_counter()
+            if left > 0.0003:
+                time.sleep(left - 0.0003)
+            while time.perf_counter() < due:
+                pass
+            stamps.append(time.perf_counter())
+            if k * period_s > seconds:
+                break
+    finally:
+        stop.set()
+        if hog is not None:
+            hog.join(10)
+    return float(np.percentile(np.abs(np.diff(stamps) - period_s), 99) * 1e3)
