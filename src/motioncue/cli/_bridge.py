@@ -9,6 +9,7 @@ import time
 from typing import Any
 
 from .._errors import ConfigError
+from ._monitor import add_monitor_argument, start_monitor
 
 __all__ = ["register"]
 
@@ -78,6 +79,7 @@ def register(sub: Any) -> None:
         "delaying frames on a busy PC (default 10; 0 = normal scheduling)",
     )
     parser.add_argument("--quiet", action="store_true", help="no status line")
+    add_monitor_argument(parser)
     parser.set_defaults(run=run)
 
 
@@ -89,6 +91,7 @@ def run(args: argparse.Namespace) -> int:
     from ..pipeline._signals import SignalGuard
     from ..telemetry import open_source
     from ..trajectory import ActuatorLimits
+    from ..viewer._monitor import BridgeSource
     from ._preset import choose_preset
 
     if args.duration is not None and not (math.isfinite(args.duration) and args.duration > 0):
@@ -131,7 +134,16 @@ def run(args: argparse.Namespace) -> int:
                     f"bridge: {source!r} -> {args.target} ({args.controller}, {args.platform}, "
                     f"preset {preset_source}, {config.rate_hz:g} Hz); Ctrl-C parks and exits"
                 )
-                final = _serve(bridge, guard, args.duration, quiet=args.quiet)
+                monitor = start_monitor(
+                    args.monitor, BridgeSource(bridge), platform, limits,
+                    f"bridge {args.source} -> {args.target} ({args.platform}, "
+                    f"{args.controller})", _say,
+                )  # fmt: skip
+                try:
+                    final = _serve(bridge, guard, args.duration, quiet=args.quiet)
+                finally:
+                    if monitor is not None:
+                        monitor.stop()
             finally:
                 transport.close()
         finally:

@@ -27,6 +27,7 @@ from types import ModuleType
 from typing import Any
 
 from .._errors import ConfigError, ProtocolError
+from ._monitor import add_monitor_argument, start_monitor
 
 __all__ = ["register"]
 
@@ -79,6 +80,13 @@ def register(sub: Any) -> None:
         default=None,
         help="write a PNG of the trace (positions per axis, violations in red)",
     )
+    p.add_argument(
+        "--platform",
+        default=None,
+        metavar="P",
+        help="platform the frames drive (bundled name or TOML path), for --monitor's drawing",
+    )
+    add_monitor_argument(p)
     p.set_defaults(run=_run_emulate)
 
     p = sub.add_parser(
@@ -144,12 +152,17 @@ def _run_emulate(args: argparse.Namespace) -> int:
         )
     print(f"emulating {ctrl.name} ({ctrl.kind}, {ctrl.n_axes} axes) on {where}", flush=True)
     t_end = None if args.duration is None else time.monotonic() + args.duration
+    monitor = None
     try:
+        if args.monitor is not None:
+            monitor = _emulator_monitor(args, ctrl, emu)
         while t_end is None or time.monotonic() < t_end:
             time.sleep(0.05 if t_end is None else max(0.0, min(0.05, t_end - time.monotonic())))
     except KeyboardInterrupt:
         pass
     finally:
+        if monitor is not None:
+            monitor.stop()
         emu.stop()
     trace = emu.trace
     violations = emu.violations
@@ -180,6 +193,27 @@ def _run_emulate(args: argparse.Namespace) -> int:
         )
         print(f"wrote {args.plot}")
     return 1 if violations or errors else 0
+
+
+def _emulator_monitor(args: argparse.Namespace, ctrl: Any, emu: Any) -> Any:
+    """The live page of ``emulate --monitor``: what the emulated controller plays."""
+    from ..kinematics import load_platform
+    from ..trajectory import ActuatorLimits
+    from ..viewer._monitor import EmulatorSource
+
+    if args.platform is None:
+        raise ConfigError("--monitor on emulate needs --platform (the machine to draw)")
+    platform = load_platform(args.platform)
+    if platform.n_actuators != ctrl.n_axes:
+        raise ConfigError(
+            f"--platform {args.platform}: {platform.n_actuators} actuators; the controller "
+            f"{ctrl.name} drives {ctrl.n_axes} axes"
+        )
+    limits = ActuatorLimits.from_platform(platform, ctrl)
+    return start_monitor(
+        args.monitor, EmulatorSource(emu, platform), platform, limits,
+        f"emulator {ctrl.name} ({args.platform})", lambda s: print(s, flush=True),
+    )  # fmt: skip
 
 
 def _run_send(args: argparse.Namespace) -> int:

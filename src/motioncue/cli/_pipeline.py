@@ -9,6 +9,7 @@ from pathlib import Path
 from typing import Any
 
 from .._errors import ConfigError
+from ._monitor import add_monitor_argument, start_monitor
 
 __all__ = ["register"]
 
@@ -52,6 +53,7 @@ def register(sub: Any) -> None:
         default=1.0,
         help="pacing factor (default 1 = real time; other values for pcap: and file: only)",
     )
+    add_monitor_argument(p)
     p.set_defaults(run=_play)
 
     d = sub.add_parser(
@@ -186,6 +188,7 @@ def _play(args: argparse.Namespace) -> int:
     from ..pipeline._signals import SignalGuard
     from ..pipeline._stream import PlayAborted
     from ..trajectory import ActuatorLimits
+    from ..viewer._monitor import PlaySource
 
     if not (0 < args.speed <= 1000):
         raise ConfigError(f"--speed {args.speed!r} is invalid; allowed: (0, 1000]")
@@ -222,16 +225,30 @@ def _play(args: argparse.Namespace) -> int:
     with SignalGuard() as guard:
         _say(f"play: {args.ride} -> {target} ({ride.n_frames} frames, {ride.duration_s:.1f} s)")
         error = None
-        with open_transport(target) as link:
-            try:
-                rep = play_ride(
-                    ride, platform, controller, limits, link, speed=args.speed, paced=paced,
-                    q_start=q_start, stop=guard.event.is_set, handle_signals=False,
-                )  # fmt: skip
-            except PlayAborted as exc:
-                if exc.report is None:
-                    raise
-                rep, error = exc.report, str(exc)
+        watch = None if args.monitor is None else PlaySource(ride.duration_s)
+        stop = guard.event.is_set
+        if watch is not None:
+            stop = lambda: guard.event.is_set() or watch.stopped()  # noqa: E731
+        monitor = start_monitor(
+            args.monitor, watch, platform, limits, f"play {args.ride} -> {target}", _say
+        )
+        try:
+            with open_transport(target) as link:
+                try:
+                    rep = play_ride(
+                        ride, platform, controller, limits, link, speed=args.speed,
+                        paced=paced, q_start=q_start, stop=stop, handle_signals=False,
+                        on_start=None if watch is None else watch.attach,
+                    )  # fmt: skip
+                except PlayAborted as exc:
+                    if exc.report is None:
+                        raise
+                    rep, error = exc.report, str(exc)
+        finally:
+            if watch is not None:
+                watch.finished = True
+            if monitor is not None:
+                monitor.stop()
         for note in rep.notes:
             _say(f"motioncue play: note: {note}")
         if error is None and rep.refused_frames:
