@@ -185,7 +185,7 @@ def test_view_cli_on_a_poses_csv_and_its_refusals(
 
 def test_a_ride_for_another_platform_is_refused(tmp_path: Path) -> None:
     path, _ = _ride(tmp_path)
-    with pytest.raises(ConfigError, match="3 actuators|6 actuators"):
+    with pytest.raises(ConfigError, match=r"3 actuators|6 actuators"):
         load_view_input(path, "seat3")
 
 
