@@ -289,3 +289,27 @@ def test_emulate_monitor_needs_a_platform(capsys: pytest.CaptureFixture[str]) ->
             "--duration", "0.1", "--monitor", "0"]  # fmt: skip
     assert main(argv) == 2
     assert "needs --platform" in capsys.readouterr().err
+    argv = ["emulate", "--controller", "mbox6", "--listen", "udp://127.0.0.1:0",
+            "--duration", "0.1", "--monitor", "0", "--platform", "seat3"]  # fmt: skip
+    assert main(argv) == 2
+    assert "3 actuators" in capsys.readouterr().err
+    argv = ["emulate", "--controller", "easysmc", "--duration", "0.1", "--monitor", "0"]
+    assert main(argv) == 2
+    assert "has no monitor" in capsys.readouterr().err
+
+
+def test_emulate_monitor_serves_what_the_emulator_plays(capsys: pytest.CaptureFixture[str]) -> None:
+    """emulate --monitor in-process: the snapshot follows the emulator's trace."""
+    from motioncue.output import load_controller, mbox
+    from motioncue.viewer._monitor import EmulatorSource
+
+    plat = load_platform("stewart6-linear")
+    ctrl = load_controller("mbox6")
+    with mbox.MboxEmulator(ctrl) as emu:
+        src = EmulatorSource(emu, plat)
+        snap = Monitor(src, plat).snapshot()
+        assert snap["state"] == "parked" and not snap["can_stop"]
+        q_mm = [a["q"] for a in snap["actuators"]]
+        np.testing.assert_allclose(q_mm, plat.q_park * 1e3, atol=0.01)  # 0.01 mm shown
+        with pytest.raises(ConfigError, match="cannot park"):
+            src.request_stop()

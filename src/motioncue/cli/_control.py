@@ -135,6 +135,11 @@ def _run_emulate(args: argparse.Namespace) -> int:
 
     ctrl, kind = _controller(args.controller)
     if hasattr(kind, "run_emulator") and args.listen is None:
+        if args.monitor is not None:
+            raise ConfigError(
+                f"--monitor: the {ctrl.kind} emulator session (pseudo-terminal) has no monitor; "
+                "use --monitor on the program that sends it frames (play, bridge)"
+            )
         # kinds that run their own emulator session (the EasySmc serves a pseudo-terminal)
         return int(kind.run_emulator(ctrl, args.duration, trace_csv=args.trace_csv))
     url = parse_target(args.listen or ctrl.default_target)
