@@ -14,7 +14,8 @@ run so that the shared machine's load falls on all alike:
 Figures: median over the repeats of the bridge's output jitter p99 and added latency p99
 (see ``bench_bridge.py``), missed deadlines, snapshots served; ratio = mode / off.
 
-Run: ``PYTHONPATH=src python benchmarks/bench_monitor.py [--seconds 20] [--repeats 3]``
+Run: ``PYTHONPATH=src python benchmarks/bench_monitor.py [--seconds 20] [--repeats 3]
+[--rt-priority 10]``
 """
 
 from __future__ import annotations
@@ -50,7 +51,7 @@ def _ws_client(url: str, stop: Any, count: Any) -> None:
     asyncio.run(run())
 
 
-def run_once(mode: str, seconds: float) -> dict[str, Any]:
+def run_once(mode: str, seconds: float, rt_priority: int | None) -> dict[str, Any]:
     from motioncue.cueing import load_cueing
     from motioncue.kinematics import load_platform
     from motioncue.output import load_controller, open_transport
@@ -74,7 +75,7 @@ def run_once(mode: str, seconds: float) -> dict[str, Any]:
     sender = ctx.Process(target=_sender, args=(source.port, stop))
     bridge = Bridge(
         platform, ctrl, load_cueing("racing"), source, transport, lim,
-        BridgeConfig(rate_hz=100.0, rt_priority=None),
+        BridgeConfig(rate_hz=100.0, rt_priority=rt_priority),
     )  # fmt: skip
     mon = None
     client = None
@@ -129,13 +130,18 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--seconds", type=float, default=20.0)
     ap.add_argument("--repeats", type=int, default=3)
     ap.add_argument("--modes", nargs="+", default=["off", "ws", "browser"])
+    ap.add_argument("--rt-priority", type=int, default=None, help="SCHED_FIFO of the loop")
     args = ap.parse_args(argv)
-    print(f"machine: {os.cpu_count()} CPUs, shared with other sessions; bridge at 100 Hz")
+    policy = "normal" if args.rt_priority is None else f"SCHED_FIFO {args.rt_priority}"
+    print(
+        f"machine: {os.cpu_count()} CPUs, shared with other sessions; bridge at 100 Hz, "
+        f"loop policy {policy}"
+    )
     runs: dict[str, list[dict[str, Any]]] = {m: [] for m in args.modes}
     ok = True
     for r in range(args.repeats):
         for mode in args.modes:
-            res = run_once(mode, args.seconds)
+            res = run_once(mode, args.seconds, args.rt_priority)
             runs[mode].append(res)
             ok &= res["ok"]
             print(

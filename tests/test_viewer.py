@@ -139,7 +139,7 @@ def test_a_ride_is_drawn_at_the_poses_its_pulses_make(tmp_path: Path) -> None:
 
 
 def test_the_page_holds_plotly_and_the_data_and_nothing_remote(tmp_path: Path) -> None:
-    path, _ = _ride(tmp_path, n=500, rate=50.0)
+    path, poses = _ride(tmp_path, n=500, rate=50.0)
     page = view_html(load_view_input(path))
     # no script, link or frame loads from anywhere: everything is inline
     assert not re.search(r"<(script|link|iframe|img)[^>]+(src|href)\s*=", page, re.I)
@@ -148,9 +148,31 @@ def test_the_page_holds_plotly_and_the_data_and_nothing_remote(tmp_path: Path) -
     assert blob is not None
     data = json.loads(blob.group(1))
     # 50 Hz input, 25 Hz animation: every second sample, and the last one
-    assert len(data["frames"]) == 251  # samples 0, 2, ..., 498 and 499
+    assert len(data["t"]) == 251  # samples 0, 2, ..., 498 and 499
     np.testing.assert_allclose(data["t"][:3], [0.0, 0.04, 0.08])
-    assert len(data["frames"][0]["top"]) == 6 and len(data["frames"][0]["use"]) == 6
+    assert data["legs"] == 6 and not data["base_moves"] and len(data["base"]) == 18
+    assert len(data["top"]) == 251 * 18 and len(data["use"]) == 251 * 6
+    # positions in whole mm: frame 100 is sample 200, drawn from the ride's poses
+    plat = load_platform("stewart6-linear")
+    want = scene_from_poses(plat, [0.0], poses[200][None])
+    top = np.asarray(data["top"]).reshape(251, 6, 3)[100] / 1e3
+    np.testing.assert_allclose(top, want.top[0], atol=5.1e-4)  # pulse rounding + 0.5 mm
+    use = np.asarray(data["use"]).reshape(251, 6)[100] / 1e2
+    np.testing.assert_allclose(use, want.use[0], atol=5.1e-3)
+    # the curves: actuator 1 in 0.1 mm on the shared ms clock
+    c = data["curves"]
+    assert len(c["t_ms"]) == 500 and c["t_ms"][:2] == [0, 20]
+    q1 = np.asarray(c["data"][0]["mc_y"]) / c["data"][0]["mc_div"]
+    np.testing.assert_allclose(q1, plat.inverse(poses)[:, 0] * 1e3, atol=0.06)
+
+
+def test_a_ten_minute_ride_makes_a_page_under_10_mb(tmp_path: Path) -> None:
+    path, _ = _ride(tmp_path, n=60_000, rate=100.0)
+    view = load_view_input(path)
+    # FK at 50 Hz only: samples 0, 2, ..., 59998 and the last one
+    assert view.scene.t_s.size == 30_001 and view.rate_hz == 50.0
+    size = len(view_html(view).encode())
+    assert size < 10_000_000, size
 
 
 def test_view_cli_on_a_poses_csv_and_its_refusals(

@@ -6,9 +6,13 @@ animated in time with play/pause and a slider, synchronised with the actuator po
 against their usable stroke and with the motion the rider perceives (the vestibular models
 of :mod:`motioncue.cueing` applied to the platform's motion at the origin of its frame).
 
-The 3D animation runs at most :data:`VIEW_RATE_HZ` frames a second of ride time, the curves
-at most :data:`CURVE_RATE_HZ` samples a second (every sample of a slower input), which keeps
-the page of a ten-minute ride under 10 MB.
+The input is read at most :data:`CURVE_RATE_HZ` samples a second (forward kinematics of a
+ride's pulses only for those frames); the 3D animation runs at most :data:`VIEW_RATE_HZ`
+frames a second of ride time. Longer inputs are thinned further so that the page holds at
+most :data:`MAX_CURVE_POINTS` curve samples and :data:`MAX_VIEW_FRAMES` animation frames
+(and the last sample each):
+with plotly.js (about 4.7 MB) the page of a ten-minute ride stays under 10 MB, and any ride's
+under 12 MB. The drawing's positions travel as whole millimetres.
 """
 
 from __future__ import annotations
@@ -24,7 +28,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from .._errors import ConfigError
-from ._page import DRAW_JS, frame_json, plotly_js, scene_layout
+from ._page import DRAW_JS, plotly_js, scene_layout
 from ._scene import Scene, scene_from_poses, scene_from_q
 
 __all__ = [
@@ -40,6 +44,10 @@ VIEW_RATE_HZ = 25.0
 """Largest rate (frames per second of ride time) of the 3D animation."""
 CURVE_RATE_HZ = 50.0
 """Largest sample rate of the curves (actuators, perceived motion)."""
+MAX_CURVE_POINTS = 30_000
+"""Most samples per curve in a page."""
+MAX_VIEW_FRAMES = 15_000
+"""Most 3D animation frames in a page."""
 POSE_LOWPASS_HZ = 10.0
 """Corner of the zero-phase low-pass applied to the poses before the perceived motion."""
 
@@ -101,10 +109,11 @@ def load_view_input(path: str | Path, platform: str | None = None) -> ViewInput:
                 f"{p}: the ride has {len(ride.actuator_names)} actuators, platform {name!r} "
                 f"has {plat.n_actuators}"
             )
-        q = plat.drives.from_pulses(ride.pulses)
-        scene = scene_from_q(plat, ride.t_s, q)
+        idx, rate = _thin(ride.n_frames, ride.rate_hz)
+        q = plat.drives.from_pulses(ride.pulses[idx])
+        scene = scene_from_q(plat, ride.t_s[idx], q)
         title = f"{p.name}: {name} on {ride.controller}, {ride.rate_hz:g} Hz"
-        return ViewInput(scene, ride.rate_hz, title, plat)
+        return ViewInput(scene, rate, title, plat)
     if platform is None:
         raise ConfigError(f"{p}: a poses CSV needs --platform (the ride file names its own)")
     from ..pipeline import read_keyframes_csv
@@ -118,10 +127,20 @@ def load_view_input(path: str | Path, platform: str | None = None) -> ViewInput:
     if np.any(dt <= 0):
         raise ConfigError(f"{p}: times must be strictly increasing")
     plat = load_platform(platform)
-    t = keys.t_s - keys.t_s[0]
-    scene = scene_from_poses(plat, t, keys.poses)
-    rate = 1.0 / float(np.median(dt))
-    return ViewInput(scene, rate, f"{p.name}: poses on {platform}, {rate:.4g} Hz", plat)
+    rate_in = 1.0 / float(np.median(dt))
+    idx, rate = _thin(keys.t_s.size, rate_in)
+    t = keys.t_s[idx] - keys.t_s[0]
+    scene = scene_from_poses(plat, t, keys.poses[idx])
+    return ViewInput(scene, rate, f"{p.name}: poses on {platform}, {rate_in:.4g} Hz", plat)
+
+
+def _thin(n: int, rate_hz: float) -> tuple[NDArray[np.intp], float]:
+    """Indices of the samples a page uses (and the last one), and their rate (Hz)."""
+    step = max(_step(rate_hz, CURVE_RATE_HZ), math.ceil(n / MAX_CURVE_POINTS))
+    idx = np.arange(0, n, step)
+    if idx[-1] != n - 1:
+        idx = np.append(idx, n - 1)
+    return idx, rate_hz / step
 
 
 def _step(rate_hz: float, cap_hz: float) -> int:
@@ -163,13 +182,15 @@ _CURSOR = {
 
 
 def _curves(view: ViewInput) -> dict[str, Any]:
-    """The curves figure (plotly JSON): actuators against their stroke, perceived motion."""
+    """The curves figure: actuators against their stroke, perceived motion.
+
+    Plotly JSON (layout and traces) in which a long trace carries no ``x``/``y`` but
+    ``mc_y``, whole numbers to divide by ``mc_div``, on the shared times ``t_ms``: the page
+    rebuilds them (a third of the size of plotly's own encoding).
+    """
     from plotly.subplots import make_subplots
 
     scene, plat = view.scene, view.platform
-    step = _step(view.rate_hz, CURVE_RATE_HZ)
-    idx = np.arange(0, scene.t_s.size, step)
-    t = np.round(scene.t_s[idx], 4)
     perceived, model = _perceived(scene, view.rate_hz)
     fig = make_subplots(
         rows=3,
@@ -182,31 +203,32 @@ def _curves(view: ViewInput) -> dict[str, Any]:
             f"perceived angular velocity (canal, {model})",
         ),
     )
+    packed: list[tuple[int, NDArray[np.float64], float]] = []  # (trace, values, divisor)
+
+    def series(values: NDArray[np.float64], divisor: float, **kw: Any) -> None:
+        fig.add_scatter(x=[], y=[], **kw)
+        packed.append((len(fig.data) - 1, values, divisor))
+
     colours = ["#1f77b4", "#ff7f0e", "#2ca02c", "#d62728", "#9467bd", "#8c564b", "#e377c2"]
+    t0, t1 = float(scene.t_s[0]), float(scene.t_s[-1])
     for i, name in enumerate(plat.actuator_names):
         rot = plat.actuator_kinds[i] == "rotary"
         scale, unit = (180.0 / math.pi, "deg") if rot else (1e3, "mm")
         c = colours[i % len(colours)]
-        fig.add_scatter(
-            x=t, y=np.round(scene.q[idx, i] * scale, 2), name=f"{name} ({unit})",
-            line={"color": c, "width": 1.4}, legendgroup="act", row=1, col=1,
-        )  # fmt: skip
+        series(scene.q[:, i] * scale, 10.0, name=f"{name} ({unit})",
+               line={"color": c, "width": 1.4}, legendgroup="act", row=1, col=1)  # fmt: skip
         for bound in (plat.q_min[i], plat.q_max[i]):
             fig.add_scatter(
-                x=[float(t[0]), float(t[-1])], y=[round(float(bound) * scale, 2)] * 2,
+                x=[t0, t1], y=[round(float(bound) * scale, 2)] * 2,
                 mode="lines", line={"color": c, "width": 1, "dash": "dash"},
                 showlegend=False, hoverinfo="skip", row=1, col=1,
             )  # fmt: skip
     for j, axis in enumerate(("fx", "fy", "fz")):
-        fig.add_scatter(
-            x=t, y=np.round(perceived[idx, j], 3), name=f"{axis} (m/s²)",
-            line={"width": 1.2}, legendgroup="f", row=2, col=1,
-        )  # fmt: skip
+        series(perceived[:, j], 1e3, name=f"{axis} (m/s²)", line={"width": 1.2},
+               legendgroup="f", row=2, col=1)  # fmt: skip
     for j, axis in enumerate(("roll rate", "pitch rate", "yaw rate")):
-        fig.add_scatter(
-            x=t, y=np.round(np.degrees(perceived[idx, 3 + j]), 3), name=f"{axis} (deg/s)",
-            line={"width": 1.2}, legendgroup="w", row=3, col=1,
-        )  # fmt: skip
+        series(np.degrees(perceived[:, 3 + j]), 1e2, name=f"{axis} (deg/s)",
+               line={"width": 1.2}, legendgroup="w", row=3, col=1)  # fmt: skip
     units = "mm" if all(k == "linear" for k in plat.actuator_kinds) else "mm or deg"
     fig.update_yaxes(title_text=units, row=1, col=1)
     fig.update_yaxes(title_text="m/s²", row=2, col=1)
@@ -219,21 +241,29 @@ def _curves(view: ViewInput) -> dict[str, Any]:
         template="plotly_white",
     )
     out: dict[str, Any] = json.loads(fig.to_json())
+    for k, values, divisor in packed:
+        trace = out["data"][k]
+        trace.pop("x", None)
+        trace.pop("y", None)
+        trace["mc_y"] = np.rint(values * divisor).astype(np.int64).tolist()
+        trace["mc_div"] = divisor
+    out["t_ms"] = np.rint(scene.t_s * 1e3).astype(np.int64).tolist()
     return out
 
 
 def view_html(view: ViewInput) -> str:
     """The page (see the module docstring) as one HTML string."""
     scene = view.scene
-    step = _step(view.rate_hz, VIEW_RATE_HZ)
-    idx = np.arange(0, scene.t_s.size, step)
-    if idx[-1] != scene.t_s.size - 1:
-        idx = np.append(idx, scene.t_s.size - 1)
-    frames = [frame_json(scene, int(k)) for k in idx]
+    n = scene.t_s.size
+    step = max(_step(view.rate_hz, VIEW_RATE_HZ), math.ceil(n / MAX_VIEW_FRAMES))
+    idx = np.arange(0, n, step)
+    if idx[-1] != n - 1:
+        idx = np.append(idx, n - 1)
     data = {
         "title": view.title,
-        "t": np.round(scene.t_s[idx], 4).tolist(),
-        "frames": frames,
+        "t": np.round(scene.t_s[idx], 3).tolist(),
+        "legs": int(scene.top.shape[1]),
+        **_packed(scene, idx),
         "box": scene_layout(scene),
         "curves": _curves(view),
     }
@@ -242,6 +272,27 @@ def view_html(view: ViewInput) -> str:
     return _TEMPLATE.format(
         title=title, plotly=plotly_js(), draw=DRAW_JS, data=blob, script=_SCRIPT
     )
+
+
+def _mm(a: NDArray[np.float64]) -> list[int]:
+    out: list[int] = np.rint(np.asarray(a) * 1e3).astype(np.int64).ravel().tolist()
+    return out
+
+
+def _packed(scene: Scene, idx: NDArray[np.intp]) -> dict[str, Any]:
+    """Frame data as flat integer arrays (mm: a pixel of the drawing is larger; stroke use in
+    %); a base that does not move (no yaw turntable) once."""
+    fixed = bool(np.all(scene.base[idx] == scene.base[idx[:1]]))
+    return {
+        "base": _mm(scene.base[idx[0]] if fixed else scene.base[idx]),
+        "base_moves": not fixed,
+        "joint": None if scene.joint is None else _mm(scene.joint[idx]),
+        "top": _mm(scene.top[idx]),
+        "centre": _mm(scene.centre[idx]),
+        "forward": _mm(scene.forward[idx]),
+        "use": np.rint(scene.use[idx][:, : scene.top.shape[1]] * 1e2).astype(np.int64)
+        .ravel().tolist(),
+    }  # fmt: skip
 
 
 _TEMPLATE = """<!DOCTYPE html>
@@ -270,18 +321,38 @@ body {{ font-family: sans-serif; margin: 8px; }}
 
 _SCRIPT = """
 const D = JSON.parse(document.getElementById('mc-data').textContent);
+const L = D.legs;
+function pts(arr, k, count) {  // points k*count .. of a flat mm array, in metres
+  const out = [];
+  for (let i = 0; i < count; i++) {
+    const j = 3 * (k * count + i);
+    out.push([arr[j] / 1e3, arr[j + 1] / 1e3, arr[j + 2] / 1e3]);
+  }
+  return out;
+}
+function frameAt(k) {
+  return {
+    base: pts(D.base, D.base_moves ? k : 0, L),
+    joint: D.joint ? pts(D.joint, k, L) : null,
+    top: pts(D.top, k, L),
+    centre: pts(D.centre, k, 1)[0],
+    forward: pts(D.forward, k, 1)[0],
+    use: D.use.slice(k * L, (k + 1) * L).map(u => u / 1e2),
+  };
+}
+const NF = D.t.length;
 const sceneDiv = document.getElementById('scene');
 const curvesDiv = document.getElementById('curves');
 const slider = document.getElementById('slider');
 const label = document.getElementById('time');
 const button = document.getElementById('play');
-slider.max = D.frames.length - 1;
+slider.max = NF - 1;
 let k = 0, playing = false, wall0 = 0, ride0 = 0;
 function show(i) {
-  k = Math.max(0, Math.min(D.frames.length - 1, i));
+  k = Math.max(0, Math.min(NF - 1, i));
   slider.value = k;
   label.textContent = D.t[k].toFixed(2) + ' s';
-  mcDraw(sceneDiv, D.frames[k], D.box, 'platform at ' + D.t[k].toFixed(2) + ' s');
+  mcDraw(sceneDiv, frameAt(k), D.box, 'platform at ' + D.t[k].toFixed(2) + ' s');
   Plotly.relayout(curvesDiv, {'shapes[0].x0': D.t[k], 'shapes[0].x1': D.t[k]});
 }
 function tick(now) {
@@ -294,7 +365,7 @@ function tick(now) {
   requestAnimationFrame(tick);
 }
 function play() {
-  if (k >= D.frames.length - 1) show(0);
+  if (k >= NF - 1) show(0);
   playing = true; button.textContent = 'pause';
   wall0 = performance.now(); ride0 = D.t[k];
   requestAnimationFrame(tick);
@@ -302,9 +373,13 @@ function play() {
 function pause() { playing = false; button.textContent = 'play'; }
 button.onclick = () => (playing ? pause() : play());
 slider.oninput = () => { pause(); show(parseInt(slider.value, 10)); };
+const T = D.curves.t_ms.map(v => v / 1e3);
+for (const tr of D.curves.data) {
+  if (tr.mc_y) { tr.x = T; tr.y = tr.mc_y.map(v => v / tr.mc_div); delete tr.mc_y; }
+}
 Plotly.newPlot(curvesDiv, D.curves.data, D.curves.layout, {displaylogo: false}).then(() => {
   show(0);
-  window.mcView = {show, play, pause, n: D.frames.length, frame: () => k,
+  window.mcView = {show, play, pause, n: NF, frame: () => k,
                    playing: () => playing, ready: true};
 });
 """
