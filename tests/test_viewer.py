@@ -335,3 +335,17 @@ def test_emulate_monitor_serves_what_the_emulator_plays(capsys: pytest.CaptureFi
         np.testing.assert_allclose(q_mm, plat.q_park * 1e3, atol=0.01)  # 0.01 mm shown
         with pytest.raises(ConfigError, match="cannot park"):
             src.request_stop()
+
+
+@pytest.mark.parametrize("verb", ["play", "bridge", "emulate"])
+def test_a_bad_monitor_address_is_refused_when_the_command_line_is_read(
+    verb: str, capsys: pytest.CaptureFixture[str]
+) -> None:
+    argv = {"play": ["play", "nothing.ride"],
+            "bridge": ["bridge", "--source", "f1", "--platform", "seat3", "--controller",
+                       "mbox3", "--target", "file:/nonexistent/x"],
+            "emulate": ["emulate", "--controller", "mbox6"]}[verb]  # fmt: skip
+    with pytest.raises(SystemExit) as exc:
+        main([*argv, "--monitor", "localhost:99999"])
+    assert exc.value.code == 2
+    assert "--monitor port 99999 is invalid" in capsys.readouterr().err

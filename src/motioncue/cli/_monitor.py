@@ -8,12 +8,27 @@ from typing import Any
 __all__ = ["add_monitor_argument", "start_monitor"]
 
 
+def _monitor_value(text: str) -> str:
+    """Checked when the command line is read, before anything is opened or sent."""
+    import argparse
+
+    from .._errors import ConfigError
+    from ..viewer._monitor import parse_monitor
+
+    try:
+        parse_monitor(text)
+    except ConfigError as exc:
+        raise argparse.ArgumentTypeError(str(exc)) from None
+    return text
+
+
 def add_monitor_argument(parser: Any) -> None:
     parser.add_argument(
         "--monitor",
         nargs="?",
         const="",
         default=None,
+        type=_monitor_value,
         metavar="[HOST:]PORT",
         help="serve a live page (3D pose, actuator bars, cue, telemetry timing, state, a stop "
         "button that parks) at http://HOST:PORT/ (default 127.0.0.1:8765; port 0 = any free "
