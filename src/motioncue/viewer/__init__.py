@@ -7,15 +7,29 @@ embedded, works offline); :class:`Monitor` serves the live page of ``--monitor``
 tornado) are imported when a page is made or served.
 """
 
+from ._monitor import (
+    BridgeSource,
+    EmulatorSource,
+    Monitor,
+    MonitorSource,
+    PlaySource,
+    parse_monitor,
+)
 from ._scene import Scene, scene_from_poses, scene_from_q, stroke_use
 from ._view import CURVE_RATE_HZ, VIEW_RATE_HZ, ViewInput, load_view_input, view_html, write_view
 
 __all__ = [
     "CURVE_RATE_HZ",
     "VIEW_RATE_HZ",
+    "BridgeSource",
+    "EmulatorSource",
+    "Monitor",
+    "MonitorSource",
+    "PlaySource",
     "Scene",
     "ViewInput",
     "load_view_input",
+    "parse_monitor",
     "scene_from_poses",
     "scene_from_q",
     "stroke_use",
