@@ -92,7 +92,7 @@ def monitor_png(out: Path) -> None:
         ):
             bridge = Bridge(
                 plat, ctrl, load_cueing("racing-hexapod"), src, link, lim,
-                BridgeConfig(rate_hz=100.0, rt_priority=None),
+                BridgeConfig(rate_hz=100.0, rt_priority=10),  # the CLI default
             )  # fmt: skip
             title = "bridge lap.csv -> mbox6 emulator (stewart6-linear, racing-hexapod)"
             with Monitor(BridgeSource(bridge), plat, lim, port=0, title=title) as mon:
