@@ -26,6 +26,7 @@ _VERB_MODULES: tuple[str, ...] = (
     "_kinematics",
     "_limits",
     "_pipeline",
+    "_view",
     "_bridge",
     "_control",
 )

@@ -18,6 +18,7 @@ from ._common import (
     load_platform_arg,
     print_json,
 )
+from ._monitor import add_monitor_argument, start_monitor
 
 __all__ = ["register"]
 
@@ -112,6 +113,7 @@ def register(sub: Any) -> None:
     parser.add_argument("--quiet", action="store_true", help="no status line")
     add_json_option(parser, "the final statistics (after the park)")
     add_set_option(parser)
+    add_monitor_argument(parser)
     parser.set_defaults(run=run)
 
 
@@ -122,6 +124,7 @@ def run(args: argparse.Namespace) -> int:
     from ..pipeline._signals import SignalGuard
     from ..telemetry import open_source
     from ..trajectory import ActuatorLimits
+    from ..viewer._monitor import BridgeSource
     from ._preset import choose_preset
 
     if args.duration is not None and not (math.isfinite(args.duration) and args.duration > 0):
@@ -197,7 +200,16 @@ def run(args: argparse.Namespace) -> int:
                     f"preset {preset_source}, {config.rate_hz:g} Hz, frames {frames}); Ctrl-C "
                     "parks and exits"
                 )
-                final = _serve(bridge, guard, args.duration, quiet=args.quiet)
+                monitor = start_monitor(
+                    args.monitor, BridgeSource(bridge), platform, limits,
+                    f"bridge {args.source} -> {args.target} ({args.platform}, "
+                    f"{args.controller})", _say,
+                )  # fmt: skip
+                try:
+                    final = _serve(bridge, guard, args.duration, quiet=args.quiet)
+                finally:
+                    if monitor is not None:
+                        monitor.stop()
             finally:
                 transport.close()
         finally:

@@ -29,6 +29,7 @@ from typing import Any
 
 from .._errors import ConfigError, ProtocolError
 from ._common import add_json_option, print_json
+from ._monitor import add_monitor_argument, start_monitor
 
 __all__ = ["register"]
 
@@ -88,6 +89,13 @@ def register(sub: Any) -> None:
         help="write a PNG of the trace (positions per axis, violations in red)",
     )
     add_json_option(p, "the trace summary and the violations")
+    p.add_argument(
+        "--platform",
+        default=None,
+        metavar="P",
+        help="platform the frames drive (bundled name or TOML path), for --monitor's drawing",
+    )
+    add_monitor_argument(p)
     p.set_defaults(run=_run_emulate)
 
     p = sub.add_parser(
@@ -151,6 +159,11 @@ def _run_emulate(args: argparse.Namespace) -> int:
 
     ctrl, kind = _controller(args.controller)
     if hasattr(kind, "run_emulator") and args.listen is None:
+        if args.monitor is not None:
+            raise ConfigError(
+                f"--monitor: the {ctrl.kind} emulator session (pseudo-terminal) has no monitor; "
+                "use --monitor on the program that sends it frames (play, bridge)"
+            )
         # kinds that run their own emulator session (the EasySmc serves a pseudo-terminal)
         return int(kind.run_emulator(ctrl, args.duration, trace_csv=args.trace_csv))
     url = parse_target(args.listen or ctrl.default_target)
@@ -172,12 +185,17 @@ def _run_emulate(args: argparse.Namespace) -> int:
         file=sys.stderr if args.json else sys.stdout,
     )
     t_end = None if args.duration is None else time.monotonic() + args.duration
+    monitor = None
     try:
+        if args.monitor is not None:
+            monitor = _emulator_monitor(args, ctrl, emu)
         while t_end is None or time.monotonic() < t_end:
             time.sleep(0.05 if t_end is None else max(0.0, min(0.05, t_end - time.monotonic())))
     except KeyboardInterrupt:
         pass
     finally:
+        if monitor is not None:
+            monitor.stop()
         emu.stop()
     trace = emu.trace
     violations = emu.violations
@@ -235,6 +253,27 @@ def _write_trace(args: argparse.Namespace, ctrl: Any, trace: Any, violations: An
             violations=violations,
             title=f"{ctrl.name}: {len(trace)} frames, {len(violations)} violation(s)",
         )
+
+
+def _emulator_monitor(args: argparse.Namespace, ctrl: Any, emu: Any) -> Any:
+    """The live page of ``emulate --monitor``: what the emulated controller plays."""
+    from ..kinematics import load_platform
+    from ..trajectory import ActuatorLimits
+    from ..viewer._monitor import EmulatorSource
+
+    if args.platform is None:
+        raise ConfigError("--monitor on emulate needs --platform (the machine to draw)")
+    platform = load_platform(args.platform)
+    if platform.n_actuators != ctrl.n_axes:
+        raise ConfigError(
+            f"--platform {args.platform}: {platform.n_actuators} actuators; the controller "
+            f"{ctrl.name} drives {ctrl.n_axes} axes"
+        )
+    limits = ActuatorLimits.from_platform(platform, ctrl)
+    return start_monitor(
+        args.monitor, EmulatorSource(emu, platform), platform, limits,
+        f"emulator {ctrl.name} ({args.platform})", lambda s: print(s, flush=True),
+    )  # fmt: skip
 
 
 def _run_send(args: argparse.Namespace) -> int:

@@ -18,6 +18,7 @@ from ._common import (
     load_platform_arg,
     print_json,
 )
+from ._monitor import add_monitor_argument, start_monitor
 
 __all__ = ["register"]
 
@@ -78,6 +79,7 @@ def register(sub: Any) -> None:
     add_limit_options(p)
     add_set_option(p, ("platform",))
     add_json_option(p, "the play summary")
+    add_monitor_argument(p)
     p.set_defaults(run=_play)
 
     d = sub.add_parser(
@@ -280,6 +282,7 @@ def _play(args: argparse.Namespace) -> int:
     from ..pipeline._signals import SignalGuard
     from ..pipeline._stream import PlayAborted
     from ..trajectory import ActuatorLimits
+    from ..viewer._monitor import PlaySource
 
     if not (0 < args.speed <= 1000):
         raise ConfigError(f"--speed {args.speed!r} is invalid; allowed: (0, 1000]")
@@ -319,20 +322,34 @@ def _play(args: argparse.Namespace) -> int:
     with SignalGuard() as guard:
         _say(f"play: {args.ride} -> {target} ({ride.n_frames} frames, {ride.duration_s:.1f} s)")
         error = None
-        progress = _PlayProgress(ride.n_frames, ride.rate_hz, guard.event.is_set)
+        watch = None if args.monitor is None else PlaySource(ride.duration_s)
+        stop = guard.event.is_set
+        if watch is not None:
+            stop = lambda: guard.event.is_set() or watch.stopped()  # noqa: E731
+        progress = _PlayProgress(ride.n_frames, ride.rate_hz, stop)
         progress.enabled = paced and not args.quiet and not args.json
-        with open_transport(target) as link:
-            try:
-                rep = play_ride(
-                    ride, platform, controller, limits, link, speed=args.speed, paced=paced,
-                    q_start=q_start, stop=progress, handle_signals=False,
-                )  # fmt: skip
-            except PlayAborted as exc:
-                if exc.report is None:
-                    raise
-                rep, error = exc.report, str(exc)
-            finally:
-                progress.done()
+        monitor = start_monitor(
+            args.monitor, watch, platform, limits, f"play {args.ride} -> {target}", _say
+        )
+        try:
+            with open_transport(target) as link:
+                try:
+                    rep = play_ride(
+                        ride, platform, controller, limits, link, speed=args.speed,
+                        paced=paced, q_start=q_start, stop=progress, handle_signals=False,
+                        on_start=None if watch is None else watch.attach,
+                    )  # fmt: skip
+                except PlayAborted as exc:
+                    if exc.report is None:
+                        raise
+                    rep, error = exc.report, str(exc)
+                finally:
+                    progress.done()
+        finally:
+            if watch is not None:
+                watch.finished = True
+            if monitor is not None:
+                monitor.stop()
         for note in rep.notes:
             _say(f"motioncue play: note: {note}")
         if error is None and rep.refused_frames:

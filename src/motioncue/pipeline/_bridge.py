@@ -485,6 +485,12 @@ class Bridge:
         return self._thread is not None and self._thread.is_alive()
 
     @property
+    def cue(self) -> tuple[float, ...]:
+        """The cueing algorithm's last pose ``[x, y, z, roll, pitch, yaw]`` (m, rad), before
+        the gate's blend and the workspace limiting (a copy; read by monitors)."""
+        return tuple(self._cue)
+
+    @property
     def source_finished(self) -> bool:
         """True once the telemetry source reports ``finished`` (end of a replay).
 

@@ -213,6 +213,11 @@ class OutputStage:
         return np.asarray(self._state.q, dtype=float)
 
     @property
+    def v(self) -> np.ndarray:
+        """Speed of the last frame sent (SI, limiter state); read by monitors."""
+        return np.asarray(self._state.v, dtype=float)
+
+    @property
     def at_rest(self) -> bool:
         return bool(np.all(np.abs(np.asarray(self._state.v, dtype=float)) < 1e-12))
 
@@ -481,6 +486,7 @@ def play_ride(
     throttle: Any = None,
     q_start: Any = None,
     handle_signals: bool = True,
+    on_start: Any = None,
 ) -> PlayReport:
     """Stream a ride's frames on time, then park; every way out of the ride parks.
 
@@ -519,6 +525,9 @@ def play_ride(
         Where the platform is at the start (see :class:`OutputStage`); default parked.
     handle_signals : bool
         Install flag-only handlers for the stop signals while playing (main thread only).
+    on_start : callable, optional
+        Called once with the :class:`OutputStage` before the first frame, for read-only
+        observers (the live monitor reads its ``q``, ``v``, ``t_s``); it must not send.
 
     Returns
     -------
@@ -545,6 +554,8 @@ def play_ride(
             "other speeds are for pcap: and file: targets"
         )
     stage = OutputStage(platform, controller, limits, ride.rate_hz, transport, q_start=q_start)
+    if on_start is not None:
+        on_start(stage)
     from motioncue.output._feedback import FrameReplies
 
     replies = FrameReplies(transport) if live and controller.replies_to_frames else None

@@ -1,0 +1,168 @@
+"""Benchmark: does ``--monitor`` delay the bridge's frame loop? (issue 14, item 2)
+
+The bridge of ``bench_bridge.py`` (real F1 packets from a sender process -> bridge at
+100 Hz -> SC-MBOX emulator in a third process) is run in three modes, interleaved run by
+run so that the shared machine's load falls on all alike:
+
+* ``off``: no monitor;
+* ``ws``: a :class:`~motioncue.viewer._monitor.Monitor` serving the bridge, with a WebSocket
+  client in another process taking every snapshot (the monitor's whole in-process work:
+  snapshots, forward kinematics, JSON, sends);
+* ``browser``: the same with the page open in headless Chromium (which also takes CPU
+  from the two cores).
+
+Figures: median over the repeats of the bridge's output jitter p99 and added latency p99
+(see ``bench_bridge.py``), missed deadlines, snapshots served; ratio = mode / off.
+
+Run: ``PYTHONPATH=src python benchmarks/bench_monitor.py [--seconds 20] [--repeats 3]
+[--rt-priority 10]``
+"""
+
+from __future__ import annotations
+
+import argparse
+import multiprocessing as mp
+import os
+import statistics
+import sys
+import time
+from pathlib import Path
+from typing import Any
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+
+from bench_bridge import _emulator, _sender
+
+
+def _ws_client(url: str, stop: Any, count: Any) -> None:
+    import asyncio
+
+    from tornado.websocket import websocket_connect
+
+    async def run() -> None:
+        conn = await websocket_connect(url)
+        while not stop.is_set():
+            msg = await conn.read_message()
+            if msg is None:
+                return
+            count.value += 1
+
+    asyncio.run(run())
+
+
+def run_once(mode: str, seconds: float, rt_priority: int | None) -> dict[str, Any]:
+    from motioncue.cueing import load_cueing
+    from motioncue.kinematics import load_platform
+    from motioncue.output import load_controller, open_transport
+    from motioncue.pipeline._bridge import Bridge, BridgeConfig
+    from motioncue.telemetry import TelemetrySource
+    from motioncue.trajectory import ActuatorLimits
+    from motioncue.viewer._monitor import BridgeSource, Monitor
+
+    ctx = mp.get_context("spawn")
+    stop = ctx.Event()
+    port_q: Any = ctx.Queue()
+    result_q: Any = ctx.Queue()
+    emu = ctx.Process(target=_emulator, args=(port_q, stop, result_q))
+    emu.start()
+    emu_port = port_q.get(timeout=30)
+    platform = load_platform("stewart6-linear")
+    ctrl = load_controller("mbox6")
+    lim = ActuatorLimits.from_platform(platform, ctrl, a_max=5.0)
+    source = TelemetrySource("f1", 0)
+    transport = open_transport(f"udp://127.0.0.1:{emu_port}")
+    sender = ctx.Process(target=_sender, args=(source.port, stop))
+    bridge = Bridge(
+        platform, ctrl, load_cueing("racing"), source, transport, lim,
+        BridgeConfig(rate_hz=100.0, rt_priority=rt_priority),
+    )  # fmt: skip
+    mon = None
+    client = None
+    count = ctx.Value("i", 0)
+    pw = None
+    if mode != "off":
+        mon = Monitor(BridgeSource(bridge), platform, lim, port=0).start()
+    sender.start()
+    bridge.start()
+    if mode == "ws":
+        assert mon is not None
+        client = ctx.Process(target=_ws_client, args=(f"ws://127.0.0.1:{mon.port}/ws", stop, count))
+        client.start()
+    elif mode == "browser":
+        from browser_support import browser
+
+        pw = browser()
+        page_ctx = pw.__enter__()
+        tab = page_ctx.new_page()
+        assert mon is not None
+        tab.goto(mon.url)
+    time.sleep(seconds)
+    live = bridge.stats
+    snapshots = 0 if mon is None else mon.snapshots
+    if pw is not None:
+        pw.__exit__(None, None, None)
+    final = bridge.stop()
+    stop.set()
+    if client is not None:
+        client.join(10)
+        if client.is_alive():
+            client.terminate()
+    if mon is not None:
+        mon.stop()
+    sender.join(10)
+    emu_result = result_q.get(timeout=30)
+    emu.join(10)
+    transport.close()
+    source.close()
+    return {
+        "jitter_p99_ms": live.jitter_p99_ms,
+        "latency_p99_ms": live.latency_p99_ms,
+        "missed": final.missed_deadlines,
+        "snapshots": snapshots,
+        "ok": emu_result["violations"] == 0 and emu_result["limits_ok"] and final.error is None,
+        "load": os.getloadavg()[0],
+    }
+
+
+def main(argv: list[str] | None = None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--seconds", type=float, default=20.0)
+    ap.add_argument("--repeats", type=int, default=3)
+    ap.add_argument("--modes", nargs="+", default=["off", "ws", "browser"])
+    ap.add_argument("--rt-priority", type=int, default=None, help="SCHED_FIFO of the loop")
+    args = ap.parse_args(argv)
+    policy = "normal" if args.rt_priority is None else f"SCHED_FIFO {args.rt_priority}"
+    print(
+        f"machine: {os.cpu_count()} CPUs, shared with other sessions; bridge at 100 Hz, "
+        f"loop policy {policy}"
+    )
+    runs: dict[str, list[dict[str, Any]]] = {m: [] for m in args.modes}
+    ok = True
+    for r in range(args.repeats):
+        for mode in args.modes:
+            res = run_once(mode, args.seconds, args.rt_priority)
+            runs[mode].append(res)
+            ok &= res["ok"]
+            print(
+                f"  run {r + 1} {mode:<8s} jitter p99 {res['jitter_p99_ms']:.3f} ms, latency "
+                f"p99 {res['latency_p99_ms']:.3f} ms, {res['missed']} missed, "
+                f"{res['snapshots']} snapshots, load avg {res['load']:.2f}",
+                flush=True,
+            )
+    keys = ("jitter_p99_ms", "latency_p99_ms")
+    base = {k: statistics.median(r[k] for r in runs["off"]) for k in keys}
+    for mode in args.modes:
+        j = statistics.median(r["jitter_p99_ms"] for r in runs[mode])
+        lat = statistics.median(r["latency_p99_ms"] for r in runs[mode])
+        print(
+            f"{mode:<8s} median jitter p99 {j:.3f} ms (x{j / base['jitter_p99_ms']:.2f} of off), "
+            f"latency p99 {lat:.3f} ms (x{lat / base['latency_p99_ms']:.2f}), missed "
+            f"{statistics.median(r['missed'] for r in runs[mode]):g}",
+            flush=True,
+        )
+    return 0 if ok else 1
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

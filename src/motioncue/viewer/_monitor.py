@@ -1,0 +1,700 @@
+"""The live monitor: a local web page of a running bridge, play or emulator.
+
+A :class:`Monitor` serves one page (plotly.js served by the monitor itself, from the
+``plotly`` package: no CDN) and pushes a snapshot over a WebSocket a few times a second: the
+platform in 3D, each actuator's use of stroke, speed and acceleration as bars (fractions of
+the limits the frames are held to), the cue, the telemetry rate, delay and jitter, and the
+state. Its stop button asks the job to stop, which parks by the job's own stop path.
+
+The server is tornado (https://www.tornadoweb.org/): HTTP and WebSocket in one small,
+dependency-free, long-maintained library, run on its own asyncio loop in a daemon thread.
+
+The frame loop is never delayed by the monitor: the monitor thread *reads* a
+:class:`MonitorSource` (attribute reads of the running job, no lock the loop waits on), at
+:attr:`Monitor.rate_hz`, and derives everything else (forward kinematics for the pose,
+fractions, acceleration as the change of speed between two snapshots) in its own thread.
+A slow browser only misses snapshots: a snapshot is not sent to a client while its previous
+one is still in flight.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import ipaddress
+import json
+import math
+import threading
+import time
+from collections.abc import Mapping
+from typing import Any, Protocol
+
+import numpy as np
+
+from .._errors import ConfigError, TransportError
+from ._page import DRAW_JS, frame_json, scene_layout
+from ._scene import scene_from_q
+
+__all__ = [
+    "BridgeSource",
+    "EmulatorSource",
+    "Monitor",
+    "MonitorSource",
+    "PlaySource",
+    "parse_monitor",
+]
+
+DEFAULT_MONITOR_PORT = 8765
+"""Port of ``--monitor`` without a value (loopback)."""
+
+
+class MonitorSource(Protocol):
+    """What a monitor reads from a running job (called in the monitor's thread).
+
+    ``snapshot()`` returns a mapping with, all optional but ``q``:
+
+    - ``q``: actuator positions from neutral (SI, ``n`` numbers) of the last frame;
+    - ``v``: their speeds (SI);
+    - ``t_s``: the frame clock of ``q`` (s), for the acceleration;
+    - ``state``: ``"parked"``, ``"running"``, ``"fading in"``... (the job's words);
+    - ``cue``: the cue pose ``[x, y, z, roll, pitch, yaw]`` (m, rad);
+    - ``telemetry``: ``{"rate_hz", "delay_ms", "jitter_ms"}``;
+    - ``info``: ``{label: text}`` shown as is (frames sent, ride time...).
+
+    ``request_stop()`` asks the job to stop and park; ``can_stop`` says if it can.
+    """
+
+    can_stop: bool
+
+    def snapshot(self) -> Mapping[str, Any]: ...
+
+    def request_stop(self) -> None: ...
+
+
+def _num(x: Any) -> float | None:
+    try:
+        v = float(x)
+    except (TypeError, ValueError):
+        return None
+    return v if math.isfinite(v) else None
+
+
+class BridgeSource:
+    """Reads a :class:`~motioncue.pipeline.Bridge` (its stats at most twice a second)."""
+
+    can_stop = True
+
+    def __init__(self, bridge: Any) -> None:
+        self.bridge = bridge
+        self._stats: Any = None
+        self._stats_at = -math.inf
+
+    def snapshot(self) -> Mapping[str, Any]:
+        b = self.bridge
+        now = time.monotonic()
+        if now - self._stats_at >= 0.5:
+            self._stats, self._stats_at = b.stats, now
+        st = self._stats
+        stage = b.stage
+        return {
+            "q": stage.q.tolist(),
+            "v": stage.v.tolist(),
+            "t_s": float(stage.t_s),
+            "state": st.state,
+            "cue": list(b.cue),
+            "telemetry": {
+                "rate_hz": st.rate_in_hz,
+                "delay_ms": st.latency_p50_ms,
+                "jitter_ms": st.jitter_p99_ms,
+            },
+            "info": {
+                "frames sent": str(st.frames_sent),
+                "gain": f"{st.gain:.2f}",
+                "bad packets": str(st.bad_packets),
+                "delay p99": f"{st.latency_p99_ms:.1f} ms",
+            },
+        }
+
+    def request_stop(self) -> None:
+        # Bridge.stop() sets the loop's stop flag, then waits for the park: run it in a
+        # thread of its own so the monitor's loop goes on serving while the platform parks.
+        threading.Thread(target=self.bridge.stop, name="monitor-stop", daemon=True).start()
+
+
+class PlaySource:
+    """Reads the output stage of :func:`~motioncue.pipeline.play_ride` (``on_start``).
+
+    Pass :meth:`attach` as ``play_ride(..., on_start=...)`` and :meth:`stopped` as (part
+    of) its ``stop`` callable.
+    """
+
+    can_stop = True
+
+    def __init__(self, duration_s: float) -> None:
+        self.duration_s = float(duration_s)
+        self.stage: Any = None
+        self._stop = threading.Event()
+        self.finished = False
+
+    def attach(self, stage: Any) -> None:
+        self.stage = stage
+
+    def stopped(self) -> bool:
+        return self._stop.is_set()
+
+    def request_stop(self) -> None:
+        self._stop.set()
+
+    def snapshot(self) -> Mapping[str, Any]:
+        stage = self.stage
+        if stage is None:
+            return {"state": "starting"}
+        parked = bool(stage.parked)
+        if parked and (stage.frames > 0 or self.finished):
+            state = "parked"
+        elif self._stop.is_set() or self.finished:
+            state = "parking"
+        else:
+            state = "running"
+        return {
+            "q": stage.q.tolist(),
+            "v": stage.v.tolist(),
+            "t_s": float(stage.t_s),
+            "state": state,
+            "info": {
+                "frames sent": str(stage.frames),
+                "ride time": f"{min(stage.t_s, self.duration_s):.1f} of {self.duration_s:.1f} s",
+                "limiter changed": f"{stage.clamped_frames} frames",
+            },
+        }
+
+
+class EmulatorSource:
+    """Reads an emulator's trace (what the controller plays), in pulses -> SI.
+
+    The emulator is the controller: it has no park of its own to give, so ``can_stop`` is
+    False (stop the sender; it parks).
+    """
+
+    can_stop = False
+
+    def __init__(self, emulator: Any, platform: Any) -> None:
+        self.emulator = emulator
+        self.platform = platform
+        self._last: tuple[float, np.ndarray] | None = None
+        self._v = np.zeros(platform.n_actuators)
+
+    def request_stop(self) -> None:
+        raise ConfigError("the emulator cannot park: stop the program that sends it frames")
+
+    def snapshot(self) -> Mapping[str, Any]:
+        emu = self.emulator
+        trace = emu.trace
+        n = self.platform.n_actuators
+        if len(trace) == 0:
+            q = np.asarray(self.platform.q_park, dtype=float)
+            t = 0.0
+        else:
+            pulses = np.asarray(trace.positions[-1], dtype=float)[:n]
+            q = self.platform.drives.from_pulses(pulses[None])[0]
+            t = float(trace.t_s[-1])
+        v = np.zeros(n)
+        if self._last is not None and t > self._last[0]:
+            v = (q - self._last[1]) / (t - self._last[0])
+        elif self._last is not None:
+            v = self._v
+        self._last, self._v = (t, q), v
+        state = "parked" if np.allclose(q, self.platform.q_park, atol=1e-9) else "running"
+        return {
+            "q": q.tolist(),
+            "v": v.tolist(),
+            "t_s": t,
+            "state": state,
+            "info": {
+                "datagrams": str(emu.received),
+                "trace points": str(len(trace)),
+                "violations": str(len(emu.violations)),
+            },
+        }
+
+
+def parse_monitor(value: str | None) -> tuple[str, int]:
+    """``--monitor [[HOST:]PORT]`` -> ``(host, port)``; loopback and 8765 by default.
+
+    Raises
+    ------
+    ConfigError
+        A port outside 0..65535 or not a number, an empty host.
+    """
+    if value is None or value == "":
+        return "127.0.0.1", DEFAULT_MONITOR_PORT
+    host, _, port_s = value.rpartition(":")
+    host = host.strip("[]") or "127.0.0.1"
+    try:
+        port = int(port_s)
+    except ValueError:
+        raise ConfigError(
+            f"--monitor {value!r} is invalid; allowed: PORT or HOST:PORT (port 0..65535)"
+        ) from None
+    if not 0 <= port <= 65535:
+        raise ConfigError(f"--monitor port {port} is invalid; allowed: 0..65535")
+    return host, port
+
+
+def _is_loopback(host: str) -> bool:
+    if host == "localhost":
+        return True
+    try:
+        return ipaddress.ip_address(host).is_loopback
+    except ValueError:
+        return False
+
+
+class Monitor:
+    """Serve the live page of one job.
+
+    Parameters
+    ----------
+    source : MonitorSource
+    platform : Platform
+        For the 3D drawing (forward kinematics of the snapshot's ``q``).
+    limits : ActuatorLimits, optional
+        Stroke, speed and acceleration the bars are fractions of; default the platform's
+        stroke, and no speed or acceleration bars.
+    host, port : str, int
+        Where to listen (port 0: any free port; see :attr:`url`). Loopback by default.
+    rate_hz : float
+        Snapshots a second pushed to each page, in ``[1, 60]``.
+    title : str
+        What the page says it shows.
+
+    Raises
+    ------
+    ConfigError
+        ``rate_hz`` out of range.
+    TransportError
+        The address cannot be listened on (in :meth:`start`).
+    """
+
+    def __init__(
+        self,
+        source: MonitorSource,
+        platform: Any,
+        limits: Any = None,
+        *,
+        host: str = "127.0.0.1",
+        port: int = DEFAULT_MONITOR_PORT,
+        rate_hz: float = 10.0,
+        title: str = "",
+    ) -> None:
+        if not (math.isfinite(rate_hz) and 1.0 <= rate_hz <= 60.0):
+            raise ConfigError(f"monitor rate_hz = {rate_hz!r} is invalid; allowed: 1 .. 60")
+        self.source = source
+        self.platform = platform
+        self.host, self.port = host, int(port)
+        self.rate_hz = float(rate_hz)
+        self.title = title
+        n = platform.n_actuators
+        lim = limits
+        self._q_lo = np.asarray(platform.q_min if lim is None else lim.q_min, dtype=float)
+        self._q_hi = np.asarray(platform.q_max if lim is None else lim.q_max, dtype=float)
+        self._v_max = None if lim is None else np.asarray(lim.v_max, dtype=float)
+        self._a_max = None if lim is None else np.asarray(lim.a_max, dtype=float)
+        self._names = list(platform.actuator_names)
+        self._rotary = [k == "rotary" for k in platform.actuator_kinds]
+        park = scene_from_q(platform, [0.0], np.asarray(platform.q_park, dtype=float)[None])
+        # a box that holds the platform anywhere in its stroke
+        ends = np.array([self._q_lo, self._q_hi, np.zeros(n), platform.q_park])
+        reach = [park]
+        for qq in ends:
+            try:
+                reach.append(scene_from_q(platform, [0.0], qq[None]))
+            except ConfigError:
+                pass
+        self._box = scene_layout(_merge(reach))
+        self._pose_guess: Any = None
+        self._prev: tuple[float, np.ndarray] | None = None
+        self._acc = np.zeros(n)
+        self.snapshots = 0
+        self.errors = 0
+        self.stop_requests = 0
+        self._last: dict[str, Any] = {}
+        self._thread: threading.Thread | None = None
+        self._loop: asyncio.AbstractEventLoop | None = None
+        self._clients: set[Any] = set()
+        self._sockets: list[Any] = []
+
+    # ------------------------------------------------------------------ snapshots
+    def snapshot(self) -> dict[str, Any]:
+        """Read the source once and derive what the page shows (JSON-ready, no NaN)."""
+        raw = self.source.snapshot()
+        n = len(self._names)
+        out: dict[str, Any] = {
+            "state": str(raw.get("state", "?")),
+            "can_stop": bool(getattr(self.source, "can_stop", False)),
+            "stop_requests": self.stop_requests,
+            "info": {str(k): str(v) for k, v in dict(raw.get("info", {})).items()},
+        }
+        q_raw = raw.get("q")
+        if q_raw is not None:
+            q = np.asarray(q_raw, dtype=float)
+            if q.shape == (n,) and np.all(np.isfinite(q)):
+                out.update(self._actuators(q, raw))
+        cue = raw.get("cue")
+        if cue is not None:
+            c = [_num(v) for v in cue]
+            out["cue"] = [
+                None if v is None else round(v * (1e3 if i < 3 else 180.0 / math.pi), 2)
+                for i, v in enumerate(c)
+            ]
+        tel = raw.get("telemetry")
+        if tel is not None:
+            out["telemetry"] = {k: _num(v) for k, v in dict(tel).items()}
+        self.snapshots += 1
+        self._last = out
+        return out
+
+    def _actuators(self, q: np.ndarray, raw: Mapping[str, Any]) -> dict[str, Any]:
+        from ._scene import stroke_use
+
+        plat = self.platform
+        fk = plat.forward(q, self._pose_guess)
+        if not fk.converged:
+            fk = plat.forward(q)
+        self._pose_guess = fk.pose if fk.converged else None
+        scene = scene_from_q(plat, [0.0], q[None])
+        frame = frame_json(scene, 0)
+        frac = np.where(q >= 0.0, q / self._q_hi, -q / self._q_lo)
+        v = np.asarray(raw.get("v", np.zeros_like(q)), dtype=float)
+        t = _num(raw.get("t_s"))
+        if t is not None and self._prev is not None and t > self._prev[0]:
+            self._acc = (v - self._prev[1]) / (t - self._prev[0])
+        if t is not None:
+            self._prev = (t, v)
+        speed = None if self._v_max is None else v / self._v_max
+        accel = None if self._a_max is None else self._acc / self._a_max
+        acts = []
+        for i, name in enumerate(self._names):
+            scale = 180.0 / math.pi if self._rotary[i] else 1e3
+            acts.append(
+                {
+                    "name": name,
+                    "q": round(float(q[i]) * scale, 2),
+                    "unit": "deg" if self._rotary[i] else "mm",
+                    "stroke": round(float(frac[i]), 4),
+                    "speed": None if speed is None else _num(round(float(speed[i]), 4)),
+                    "accel": None if accel is None else _num(round(float(accel[i]), 4)),
+                }
+            )
+        pose = fk.pose
+        return {
+            "frame": frame,
+            "use": float(np.max(stroke_use(plat, q))),
+            "pose": [
+                round(float(pose[i]) * (1e3 if i < 3 else 180.0 / math.pi), 2) for i in range(6)
+            ],
+            "actuators": acts,
+        }
+
+    def stop_pressed(self) -> None:
+        """The page's stop button: ask the source to stop (it parks)."""
+        self.stop_requests += 1
+        self.source.request_stop()
+
+    # ------------------------------------------------------------------ server
+    @property
+    def url(self) -> str:
+        host = self.host if ":" not in self.host else f"[{self.host}]"
+        return f"http://{host}:{self.port}/"
+
+    def start(self) -> Monitor:
+        """Listen (errors raised here) and serve from a daemon thread."""
+        from tornado.netutil import bind_sockets
+
+        try:
+            self._sockets = bind_sockets(self.port, self.host)
+        except (OSError, ValueError) as exc:
+            raise TransportError(
+                f"monitor: cannot listen on {self.host}:{self.port}: {exc}"
+            ) from exc
+        self.port = int(self._sockets[0].getsockname()[1])
+        ready = threading.Event()
+        self._thread = threading.Thread(
+            target=self._serve, args=(ready,), name="motioncue-monitor", daemon=True
+        )
+        self._thread.start()
+        ready.wait(10.0)
+        return self
+
+    def stop(self) -> None:
+        """Stop serving (idempotent)."""
+        loop = self._loop
+        if loop is not None and loop.is_running():
+            loop.call_soon_threadsafe(loop.stop)
+        if self._thread is not None:
+            self._thread.join(5.0)
+            self._thread = None
+        for s in self._sockets:
+            try:
+                s.close()
+            except OSError:
+                pass
+        self._sockets = []
+
+    def __enter__(self) -> Monitor:
+        return self.start()
+
+    def __exit__(self, *exc: object) -> None:
+        self.stop()
+
+    @property
+    def local_only(self) -> bool:
+        return _is_loopback(self.host)
+
+    def _serve(self, ready: threading.Event) -> None:
+        import tornado.web
+        from tornado.httpserver import HTTPServer
+        from tornado.ioloop import PeriodicCallback
+
+        loop = asyncio.new_event_loop()
+        asyncio.set_event_loop(loop)
+        self._loop = loop
+        app = tornado.web.Application(_handlers(self), log_function=_no_access_log)
+        server = HTTPServer(app)
+        server.add_sockets(self._sockets)
+        tick = PeriodicCallback(self._tick, 1000.0 / self.rate_hz)
+        tick.start()
+        ready.set()
+        try:
+            loop.run_forever()
+        finally:
+            tick.stop()
+            server.stop()
+            for c in list(self._clients):
+                c.close()
+            loop.run_until_complete(asyncio.sleep(0))
+            loop.close()
+
+    def _tick(self) -> None:
+        if not self._clients:
+            return
+        try:
+            msg = json.dumps(self.snapshot(), allow_nan=False)
+        except Exception as exc:  # a torn read of a running job: skip this snapshot, count it
+            self.errors += 1
+            msg = json.dumps({"state": "?", "error": f"{type(exc).__name__}: {exc}"})
+        for client in list(self._clients):
+            client.push(msg)
+
+
+def _no_access_log(handler: Any) -> None:
+    """Tornado's access log off: the terminal shows the job's own lines only."""
+
+
+def _merge(scenes: list[Any]) -> Any:
+    from ._scene import Scene
+
+    def cat(name: str) -> Any:
+        parts = [getattr(s, name) for s in scenes]
+        if any(p is None for p in parts):
+            return None
+        return np.concatenate(parts)
+
+    return Scene(
+        np.arange(len(scenes), dtype=float), cat("poses"), cat("q"), cat("base"),
+        cat("joint"), cat("top"), cat("centre"), cat("forward"), cat("use"),
+    )  # fmt: skip
+
+
+def _handlers(mon: Monitor) -> list[Any]:
+    import tornado.web
+    import tornado.websocket
+
+    from ._page import plotly_js
+
+    class Page(tornado.web.RequestHandler):
+        def get(self) -> None:
+            self.set_header("Content-Type", "text/html; charset=utf-8")
+            self.set_header("Cache-Control", "no-store")
+            self.write(_page(mon))
+
+    class PlotlyJs(tornado.web.RequestHandler):
+        def get(self) -> None:
+            self.set_header("Content-Type", "application/javascript; charset=utf-8")
+            self.set_header("Cache-Control", "max-age=3600")
+            self.write(plotly_js())
+
+    class Snapshot(tornado.web.RequestHandler):
+        def get(self) -> None:
+            self.set_header("Content-Type", "application/json")
+            self.write(json.dumps(mon.snapshot(), allow_nan=False))
+
+    class Live(tornado.websocket.WebSocketHandler):
+        _busy: Any = None
+
+        def open(self, *args: str, **kwargs: str) -> None:
+            mon._clients.add(self)
+
+        def on_close(self) -> None:
+            mon._clients.discard(self)
+
+        def on_message(self, message: str | bytes) -> None:
+            if message == "stop":
+                try:
+                    mon.stop_pressed()
+                    reply = {"stop": "requested"}
+                except Exception as exc:  # e.g. the emulator has nothing to park
+                    reply = {"stop": f"refused: {exc}"}
+                self.write_message(json.dumps(reply))
+
+        def push(self, msg: str) -> None:
+            busy = self._busy
+            if busy is not None and not busy.done():
+                return  # the browser is behind: drop this snapshot
+            try:
+                self._busy = self.write_message(msg)
+            except tornado.websocket.WebSocketClosedError:
+                mon._clients.discard(self)
+
+    class NoIcon(tornado.web.RequestHandler):
+        def get(self) -> None:
+            self.set_status(204)
+
+    return [
+        (r"/", Page),
+        (r"/plotly.js", PlotlyJs),
+        (r"/snapshot", Snapshot),
+        (r"/ws", Live),
+        (r"/favicon.ico", NoIcon),
+    ]
+
+
+def _page(mon: Monitor) -> str:
+    import html
+
+    data = json.dumps(
+        {"box": mon._box, "title": mon.title, "names": mon._names, "rate_hz": mon.rate_hz}
+    ).replace("</", "<\\/")
+    return _PAGE.format(title=html.escape(mon.title), draw=DRAW_JS, data=data, script=_SCRIPT)
+
+
+_PAGE = """<!DOCTYPE html>
+<html lang="en"><head><meta charset="utf-8">
+<title>motioncue monitor: {title}</title>
+<script src="/plotly.js"></script>
+<style>
+body {{ font-family: sans-serif; margin: 8px; }}
+#wrap {{ display: flex; gap: 12px; }}
+#scene {{ width: 55%; height: 600px; }}
+#side {{ width: 45%; }}
+#state {{ font-size: 22px; font-weight: bold; padding: 4px 10px; border-radius: 4px;
+          display: inline-block; }}
+.running, .live {{ background: #b7e4c7; }} .parked {{ background: #ddd; }}
+.fading, .parking, .stopping {{ background: #ffe08a; }} .failed {{ background: #f4a3a3; }}
+#stop {{ font-size: 20px; padding: 6px 24px; background: #d73027; color: #fff;
+         border: none; border-radius: 4px; margin-left: 16px; }}
+#stop:disabled {{ background: #aaa; }}
+table {{ border-collapse: collapse; margin-top: 8px; font-size: 13px; }}
+td, th {{ padding: 2px 6px; text-align: left; }}
+.bar {{ position: relative; width: 120px; height: 12px; background: #eee; }}
+.bar div {{ position: absolute; top: 0; height: 12px; }}
+.bar .mid {{ left: 50%; width: 1px; background: #666; }}
+</style>
+</head><body>
+<div><b>motioncue monitor</b>: {title}</div>
+<div style="margin:6px 0"><span id="state">connecting</span>
+<button id="stop" disabled>stop (park)</button> <span id="msg"></span></div>
+<div id="wrap"><div id="scene"></div><div id="side">
+<table id="acts"><thead><tr><th>actuator</th><th>position</th><th>stroke</th>
+<th>speed</th><th>acceleration</th></tr></thead><tbody></tbody></table>
+<div style="font-size:11px;color:#555">bars: fraction of each limit the frames are held
+to, centre = 0, edge = the limit (either sign); amber from 70 %, red from 90 %</div>
+<table id="cue"></table>
+<table id="info"></table>
+</div></div>
+<script>{draw}</script>
+<script id="mc-data" type="application/json">{data}</script>
+<script>{script}</script>
+</body></html>
+"""
+
+_SCRIPT = """
+const M = JSON.parse(document.getElementById('mc-data').textContent);
+const sceneDiv = document.getElementById('scene');
+const stateEl = document.getElementById('state');
+const stopBtn = document.getElementById('stop');
+const msgEl = document.getElementById('msg');
+window.mcMonitor = {snapshots: 0, last: null, drawn: null, connected: false};
+function bar(f) {
+  if (f === null || f === undefined) return '<div class="bar"></div>';
+  const a = Math.min(1, Math.abs(f));
+  const colour = a < 0.7 ? '#1a9850' : (a < 0.9 ? '#fdae61' : '#d73027');
+  const left = f >= 0 ? 50 : 50 - 50 * a;
+  return '<div class="bar" title="' + (100 * f).toFixed(0) + ' %"><div style="left:' + left +
+         '%;width:' + (50 * a) + '%;background:' + colour + '"></div><div class="mid"></div></div>';
+}
+// one 3D redraw at a time, the newest pose: a slow machine shows fewer poses, never old ones
+let pending = null, drawing = false;
+function schedule() {
+  if (drawing || pending === null) return;
+  drawing = true;
+  requestAnimationFrame(() => {
+    const f = pending; pending = null;
+    mcDraw(sceneDiv, f, M.box, 'platform (legs coloured by stroke use)').then(() => {
+      window.mcMonitor.drawn = f; window.mcMonitor.draws = (window.mcMonitor.draws || 0) + 1;
+      drawing = false; setTimeout(schedule, 0);
+    });
+  });
+}
+function fmt(x, d) { return (x === null || x === undefined) ? 'n/a' : x.toFixed(d); }
+function render(s) {
+  const st = s.state || '?';
+  stateEl.textContent = st;
+  stateEl.className = st.split(' ')[0].replace(',', '');
+  stopBtn.disabled = !s.can_stop;
+  if (s.frame) { pending = s.frame; schedule(); }
+  if (s.actuators) {
+    const rows = s.actuators.map(a => '<tr><td>' + a.name + '</td><td>' + a.q.toFixed(1) + ' ' +
+      a.unit + '</td><td>' + bar(a.stroke) + '</td><td>' + bar(a.speed) + '</td><td>' +
+      bar(a.accel) + '</td></tr>');
+    document.querySelector('#acts tbody').innerHTML = rows.join('');
+  }
+  const names = ['x mm', 'y mm', 'z mm', 'roll deg', 'pitch deg', 'yaw deg'];
+  let cue = '';
+  if (s.pose) cue += '<tr><th>pose</th>' + s.pose.map((v, i) => '<td>' + names[i] + ' ' +
+                     fmt(v, 1) + '</td>').join('') + '</tr>';
+  if (s.cue) cue += '<tr><th>cue</th>' + s.cue.map((v, i) => '<td>' + names[i] + ' ' +
+                    fmt(v, 1) + '</td>').join('') + '</tr>';
+  document.getElementById('cue').innerHTML = cue;
+  let info = '';
+  if (s.telemetry) {
+    info += '<tr><th>telemetry rate</th><td>' + fmt(s.telemetry.rate_hz, 1) + ' Hz</td></tr>';
+    info += '<tr><th>delay (p50)</th><td>' + fmt(s.telemetry.delay_ms, 1) + ' ms</td></tr>';
+    info += '<tr><th>jitter (p99)</th><td>' + fmt(s.telemetry.jitter_ms, 2) + ' ms</td></tr>';
+  }
+  for (const [k, v] of Object.entries(s.info || {})) info += '<tr><th>' + k + '</th><td>' + v +
+                                                             '</td></tr>';
+  document.getElementById('info').innerHTML = info;
+}
+function connect() {
+  const ws = new WebSocket('ws://' + location.host + '/ws');
+  window.mcMonitor.ws = ws;
+  ws.onopen = () => { window.mcMonitor.connected = true; };
+  ws.onmessage = (ev) => {
+    const s = JSON.parse(ev.data);
+    if (s.stop !== undefined) { msgEl.textContent = 'stop ' + s.stop; return; }
+    window.mcMonitor.snapshots += 1;
+    window.mcMonitor.last = s;
+    render(s);
+  };
+  ws.onclose = () => {
+    window.mcMonitor.connected = false;
+    stateEl.textContent = 'disconnected'; stateEl.className = ''; stopBtn.disabled = true;
+    setTimeout(connect, 1000);
+  };
+}
+stopBtn.onclick = () => {
+  if (window.mcMonitor.ws) window.mcMonitor.ws.send('stop');
+  msgEl.textContent = 'stop sent';
+};
+connect();
+"""

@@ -1,0 +1,126 @@
+"""Parts shared by the ride view and the live monitor pages: plotly.js, the 3D drawing.
+
+Both pages draw with plotly.js (https://plotly.com/javascript/), taken from the ``plotly``
+Python package (:func:`plotly.offline.get_plotlyjs`) and embedded in the page or served by
+the monitor itself: no CDN, nothing fetched from the network.
+"""
+
+from __future__ import annotations
+
+import json
+from functools import lru_cache
+from typing import Any
+
+import numpy as np
+
+from ._scene import Scene
+
+__all__ = ["DRAW_JS", "frame_json", "plotly_js", "scene_layout"]
+
+#: Stroke use colour scale: green at neutral, amber at 70 %, red at the end of the stroke.
+USE_COLORSCALE = [[0.0, "#1a9850"], [0.5, "#a6d96a"], [0.7, "#fdae61"], [1.0, "#d73027"]]
+
+
+@lru_cache(maxsize=1)
+def plotly_js() -> str:
+    """The minified plotly.js bundled with the ``plotly`` package (about 4.7 MB)."""
+    from plotly.offline import get_plotlyjs
+
+    return str(get_plotlyjs())
+
+
+def _r(a: Any, digits: int) -> Any:
+    return np.round(np.asarray(a, dtype=float), digits).tolist()
+
+
+def frame_json(scene: Scene, k: int) -> dict[str, Any]:
+    """Frame ``k`` of a scene as the drawing code (:data:`DRAW_JS`) takes it (m, 0.1 mm)."""
+    return {
+        "base": _r(scene.base[k], 4),
+        "joint": None if scene.joint is None else _r(scene.joint[k], 4),
+        "top": _r(scene.top[k], 4),
+        "centre": _r(scene.centre[k], 4),
+        "forward": _r(scene.forward[k], 4),
+        "use": _r(scene.use[k, : scene.top.shape[1]], 3),
+    }
+
+
+def scene_layout(scene: Scene) -> dict[str, Any]:
+    """A fixed 3D box around every point of the scene (the camera does not rescale).
+
+    Returns ``x, y, z`` ranges (m) and the ``aspect`` ratio that keeps metres equal on the
+    three axes.
+    """
+    pts = [scene.base.reshape(-1, 3), scene.top.reshape(-1, 3), scene.forward]
+    if scene.joint is not None:
+        pts.append(scene.joint.reshape(-1, 3))
+    allp = np.concatenate(pts)
+    lo, hi = allp.min(axis=0) - 0.05, allp.max(axis=0) + 0.05
+    lo[2] = min(lo[2], -0.01)
+    span = hi - lo
+    aspect = span / float(np.max(span))
+    return {
+        "x": [float(lo[0]), float(hi[0])],
+        "y": [float(lo[1]), float(hi[1])],
+        "z": [float(lo[2]), float(hi[2])],
+        "aspect": {"x": float(aspect[0]), "y": float(aspect[1]), "z": float(aspect[2])},
+    }
+
+
+#: JavaScript: ``mcScene(div, box)`` draws an empty platform; ``mcDraw(div, frame)`` moves it.
+DRAW_JS = (
+    """
+const MC_USE_SCALE = """
+    + json.dumps(USE_COLORSCALE)
+    + """;
+function mcTraces(f) {
+  const L = f.top.length;
+  const bx = [], by = [], bz = [];
+  for (let i = 0; i <= L; i++) {
+    const p = f.base[i % L]; bx.push(p[0]); by.push(p[1]); bz.push(p[2]);
+  }
+  const lx = [], ly = [], lz = [], lc = [];
+  for (let i = 0; i < L; i++) {
+    const pts = f.joint ? [f.base[i], f.joint[i], f.top[i]] : [f.base[i], f.top[i]];
+    for (const p of pts) { lx.push(p[0]); ly.push(p[1]); lz.push(p[2]); lc.push(f.use[i]); }
+    lx.push(null); ly.push(null); lz.push(null); lc.push(0);
+  }
+  const tx = [], ty = [], tz = [];
+  for (let i = 0; i <= L; i++) {
+    const p = f.top[i % L]; tx.push(p[0]); ty.push(p[1]); tz.push(p[2]);
+  }
+  tx.push(null, f.centre[0], f.forward[0]);
+  ty.push(null, f.centre[1], f.forward[1]);
+  tz.push(null, f.centre[2], f.forward[2]);
+  return [
+    {type: 'scatter3d', mode: 'lines+markers', name: 'base', x: bx, y: by, z: bz,
+     line: {color: '#555', width: 6}, marker: {size: 3, color: '#555'}, hoverinfo: 'skip'},
+    {type: 'scatter3d', mode: 'lines', name: 'legs (stroke use)', x: lx, y: ly, z: lz,
+     line: {color: lc, width: 12, colorscale: MC_USE_SCALE, cmin: 0, cmax: 1,
+            showscale: true, colorbar: {title: {text: 'stroke use'}, len: 0.6,
+            tickformat: '.0%'}},
+     hoverinfo: 'skip'},
+    {type: 'scatter3d', mode: 'lines+markers', name: 'top', x: tx, y: ty, z: tz,
+     line: {color: '#2166ac', width: 8}, marker: {size: 3, color: '#2166ac'},
+     hoverinfo: 'skip'},
+  ];
+}
+function mcLayout(box, title) {
+  return {
+    title: {text: title, font: {size: 14}}, showlegend: false, uirevision: 'keep',
+    margin: {l: 0, r: 0, t: 30, b: 0},
+    scene: {
+      aspectmode: 'manual', aspectratio: box.aspect,
+      xaxis: {range: box.x, title: {text: 'x (m, forward)'}},
+      yaxis: {range: box.y, title: {text: 'y (m, left)'}},
+      zaxis: {range: box.z, title: {text: 'z (m, up)'}},
+      camera: {eye: {x: -1.5, y: -1.3, z: 0.9}},
+    },
+  };
+}
+function mcDraw(div, f, box, title) {
+  div.mcFrame = f;
+  return Plotly.react(div, mcTraces(f), mcLayout(box, title), {displaylogo: false});
+}
+"""
+)

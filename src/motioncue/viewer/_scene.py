@@ -1,0 +1,172 @@
+"""Geometry of a platform for drawing: base anchors, legs (with crank tips), top, stroke use.
+
+Poses are ``[x, y, z, roll, pitch, yaw]`` (m, rad) from the neutral pose, ISO 8855 axes,
+``R = Rz(yaw) Ry(pitch) Rx(roll)`` (see :mod:`motioncue.kinematics`). Points are in the
+base frame (m): a platform anchor is ``[x, y, z + h] + R p_i`` with ``h`` the neutral
+height of the legs (:attr:`motioncue.kinematics.Platform.legs`). On a platform with a yaw
+turntable the legs see the pose without yaw, and the whole drawing turns with the yaw axis.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from .._errors import ConfigError
+
+__all__ = ["Scene", "scene_from_poses", "scene_from_q", "stroke_use"]
+
+
+@dataclass(frozen=True, eq=False)
+class Scene:
+    """A platform's drawing over time.
+
+    Attributes
+    ----------
+    t_s : (N,) array
+        Times (s).
+    poses : (N, 6) array
+        Poses (m, rad) from neutral.
+    q : (N, n) array
+        Actuator positions from neutral (m for linear, rad for rotary actuators).
+    base : (N, L, 3) array
+        Base-fixed end of each leg (m, base frame); L legs (a yaw axis is not a leg).
+    joint : (N, L, 3) array or None
+        Crank tips (m) of rotary legs; None for linear legs.
+    top : (N, L, 3) array
+        Platform anchors (m).
+    centre : (N, 3) array
+        Platform frame origin (m); ``forward`` (N, 3): a point ahead of it along the
+        platform's x axis, at 0.6 x the top anchors' radius (m), to show the heading.
+    use : (N, n) array
+        Stroke use per actuator, 0 at neutral, 1 at either end (:func:`stroke_use`).
+    """
+
+    t_s: NDArray[np.float64]
+    poses: NDArray[np.float64]
+    q: NDArray[np.float64]
+    base: NDArray[np.float64]
+    joint: NDArray[np.float64] | None
+    top: NDArray[np.float64]
+    centre: NDArray[np.float64]
+    forward: NDArray[np.float64]
+    use: NDArray[np.float64]
+
+
+def stroke_use(platform: Any, q: ArrayLike) -> NDArray[np.float64]:
+    """Fraction of the usable stroke in use: ``max(q / q_max, q / q_min)``, ``(..., n)``.
+
+    0 at the neutral pose, 1 on the stroke's end at either side (more beyond it); ``q_min``
+    is negative and ``q_max`` positive (:class:`~motioncue.kinematics.Platform`).
+    """
+    qa = np.asarray(q, dtype=float)
+    lo = np.asarray(platform.q_min, dtype=float)
+    hi = np.asarray(platform.q_max, dtype=float)
+    return np.maximum(qa / hi, qa / lo)
+
+
+def _rotation(angles: NDArray[np.float64]) -> NDArray[np.float64]:
+    from ..kinematics._rotation import rotation_matrix
+
+    return rotation_matrix(angles)
+
+
+def _check_times(t_s: ArrayLike, n: int) -> NDArray[np.float64]:
+    t = np.asarray(t_s, dtype=float)
+    if t.shape != (n,) or n < 1:
+        raise ConfigError(f"times must have shape ({n},) with N >= 1; got {t.shape}")
+    if not np.all(np.isfinite(t)) or np.any(np.diff(t) <= 0):
+        raise ConfigError("times must be finite and strictly increasing")
+    return t
+
+
+def scene_from_poses(platform: Any, t_s: ArrayLike, poses: ArrayLike) -> Scene:
+    """The drawing of ``poses (N, 6)`` at times ``t_s (N,)``; actuators by inverse kinematics.
+
+    Raises
+    ------
+    ConfigError
+        Shapes that do not match, times not strictly increasing, non-finite poses.
+    """
+    p = np.asarray(poses, dtype=float)
+    if p.ndim != 2 or p.shape[1] != 6:
+        raise ConfigError(f"poses must have shape (N, 6); got {p.shape}")
+    if not np.all(np.isfinite(p)):
+        raise ConfigError("poses hold NaN or inf")
+    t = _check_times(t_s, p.shape[0])
+    p = p * np.asarray(platform.dof_mask, dtype=float)
+    q = np.asarray(platform.inverse(p), dtype=float).reshape(p.shape[0], -1)
+    return _scene(platform, t, p, q)
+
+
+def scene_from_q(platform: Any, t_s: ArrayLike, q: ArrayLike) -> Scene:
+    """The drawing of actuator positions ``q (N, n)``; poses by forward kinematics.
+
+    Each frame's Newton iteration starts from the previous pose (frames of a ride are close).
+
+    Raises
+    ------
+    ConfigError
+        Shapes that do not match, non-finite positions, or positions no pose reaches.
+    """
+    qa = np.asarray(q, dtype=float)
+    n = int(platform.n_actuators)
+    if qa.ndim != 2 or qa.shape[1] != n:
+        raise ConfigError(f"actuator positions must have shape (N, {n}); got {qa.shape}")
+    t = _check_times(t_s, qa.shape[0])
+    poses = np.empty((qa.shape[0], 6))
+    guess = None
+    for k in range(qa.shape[0]):
+        fk = platform.forward(qa[k], guess)
+        if not fk.converged:
+            fk = platform.forward(qa[k])
+        if not fk.converged:
+            raise ConfigError(
+                f"frame {k} (t = {t[k]:.3f} s): no pose puts the actuators at "
+                f"{np.round(qa[k], 6).tolist()} (from neutral); is this the ride's platform?"
+            )
+        poses[k] = fk.pose
+        guess = fk.pose
+    return _scene(platform, t, poses, qa)
+
+
+def _scene(
+    platform: Any, t: NDArray[np.float64], poses: NDArray[np.float64], q: NDArray[np.float64]
+) -> Scene:
+    legs = platform.legs
+    yaw_axis = bool(platform.has_yaw_axis)
+    leg_pose = poses.copy()
+    if yaw_axis:
+        leg_pose[:, 5] = 0.0
+    rot = _rotation(leg_pose[:, 3:])
+    origin = leg_pose[:, :3] + np.array([0.0, 0.0, legs.height])
+    top = origin[:, None, :] + np.einsum("nij,lj->nli", rot, legs.plat)
+    base = np.broadcast_to(legs.base, top.shape).copy()
+    joint = None
+    if legs.kind == "rotary":
+        tips, _ = legs.crank_vectors(q[:, : legs.n])
+        joint = base + tips
+    spread = float(np.max(np.linalg.norm(legs.plat[:, :2], axis=1), initial=0.1)) or 0.1
+    forward = origin + 0.6 * spread * rot[:, :, 0]
+    if yaw_axis:
+        turn = _rotation(np.column_stack([np.zeros((len(t), 2)), poses[:, 5]]))
+
+        def spin(a: NDArray[np.float64]) -> NDArray[np.float64]:
+            return np.einsum("nij,n...j->n...i", turn, a)
+
+        top, base, origin, forward = spin(top), spin(base), spin(origin), spin(forward)
+        joint = None if joint is None else spin(joint)
+    use = stroke_use(platform, q)
+    for name, arr in (("top", top), ("use", use)):
+        if not np.all(np.isfinite(arr)):
+            raise ConfigError(f"the drawing's {name} is not finite (NaN or inf in the input)")
+    return Scene(t, poses, q, base, joint, top, origin, forward, use)
+
+
+def finite_or_none(x: float) -> float | None:
+    """``x`` when finite, else None (JSON has no NaN)."""
+    return x if math.isfinite(x) else None

@@ -1,0 +1,394 @@
+"""``motioncue view``: one self-contained HTML page of a ride or a poses CSV.
+
+The page holds plotly.js itself (from the ``plotly`` package; nothing is fetched when it is
+opened) and the ride's data: the platform in 3D (base, legs coloured by stroke use, top)
+animated in time with play/pause and a slider, synchronised with the actuator positions
+against their usable stroke and with the motion the rider perceives (the vestibular models
+of :mod:`motioncue.cueing` applied to the platform's motion at the origin of its frame).
+
+The input is read at most :data:`CURVE_RATE_HZ` samples a second (forward kinematics of a
+ride's pulses only for those frames); the 3D animation runs at most :data:`VIEW_RATE_HZ`
+frames a second of ride time. Longer inputs are thinned further so that the page holds at
+most :data:`MAX_CURVE_POINTS` curve samples and :data:`MAX_VIEW_FRAMES` animation frames
+(and the last sample each):
+with plotly.js (about 4.7 MB) the page of a ten-minute ride stays under 10 MB, and any ride's
+under 12 MB. The drawing's positions travel as whole millimetres.
+"""
+
+from __future__ import annotations
+
+import html
+import json
+import math
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from .._errors import ConfigError
+from ._page import DRAW_JS, plotly_js, scene_layout
+from ._scene import Scene, scene_from_poses, scene_from_q
+
+__all__ = [
+    "CURVE_RATE_HZ",
+    "VIEW_RATE_HZ",
+    "ViewInput",
+    "load_view_input",
+    "view_html",
+    "write_view",
+]
+
+VIEW_RATE_HZ = 25.0
+"""Largest rate (frames per second of ride time) of the 3D animation."""
+CURVE_RATE_HZ = 50.0
+"""Largest sample rate of the curves (actuators, perceived motion)."""
+MAX_CURVE_POINTS = 30_000
+"""Most samples per curve in a page."""
+MAX_VIEW_FRAMES = 15_000
+"""Most 3D animation frames in a page."""
+POSE_LOWPASS_HZ = 10.0
+"""Corner of the zero-phase low-pass applied to the poses before the perceived motion."""
+
+
+@dataclass(frozen=True, eq=False)
+class ViewInput:
+    """What a view shows.
+
+    Attributes
+    ----------
+    scene : Scene
+        The platform over time (every sample of the input).
+    rate_hz : float
+        Sample rate of the input (the ride's frame rate; a CSV's median).
+    title : str
+        What the page says it shows (file, platform, controller).
+    platform : Platform
+    """
+
+    scene: Scene
+    rate_hz: float
+    title: str
+    platform: Any
+
+
+def load_view_input(path: str | Path, platform: str | None = None) -> ViewInput:
+    """Read a ride file (``.ride``) or a poses CSV (``t,x,y,z,roll,pitch,yaw``) for a view.
+
+    Parameters
+    ----------
+    path : str or Path
+        The ride file or CSV (``_mm`` / ``_deg`` column forms accepted, as ``generate``).
+    platform : str, optional
+        Platform name or TOML path; default the ride's own, required for a CSV.
+
+    Raises
+    ------
+    ConfigError
+        Unreadable or invalid file, a CSV without a platform or with free times, a ride
+        whose positions the platform cannot reach.
+    """
+    from ..kinematics import load_platform
+
+    p = Path(path)
+    head = b""
+    try:
+        with open(p, "rb") as fh:
+            head = fh.read(4)
+    except OSError as exc:
+        raise ConfigError(f"{p}: cannot read: {exc}") from exc
+    if head.startswith(b"PK"):  # a ride file is a zip archive
+        from ..pipeline import load_ride
+
+        ride = load_ride(p)
+        name = platform or ride.platform
+        plat = load_platform(name)
+        if plat.n_actuators != len(ride.actuator_names):
+            raise ConfigError(
+                f"{p}: the ride has {len(ride.actuator_names)} actuators, platform {name!r} "
+                f"has {plat.n_actuators}"
+            )
+        idx, rate = _thin(ride.n_frames, ride.rate_hz)
+        q = plat.drives.from_pulses(ride.pulses[idx])
+        scene = scene_from_q(plat, ride.t_s[idx], q)
+        title = f"{p.name}: {name} on {ride.controller}, {ride.rate_hz:g} Hz"
+        return ViewInput(scene, rate, title, plat)
+    if platform is None:
+        raise ConfigError(f"{p}: a poses CSV needs --platform (the ride file names its own)")
+    from ..pipeline import read_keyframes_csv
+
+    keys = read_keyframes_csv(p)
+    if np.any(~np.isfinite(keys.t_s)):
+        raise ConfigError(f"{p}: every row needs a time t (a poses CSV is sampled, not keyed)")
+    if keys.t_s.size < 2:
+        raise ConfigError(f"{p}: {keys.t_s.size} row(s); a view needs at least 2")
+    dt = np.diff(keys.t_s)
+    if np.any(dt <= 0):
+        raise ConfigError(f"{p}: times must be strictly increasing")
+    plat = load_platform(platform)
+    rate_in = 1.0 / float(np.median(dt))
+    idx, rate = _thin(keys.t_s.size, rate_in)
+    t = keys.t_s[idx] - keys.t_s[0]
+    scene = scene_from_poses(plat, t, keys.poses[idx])
+    return ViewInput(scene, rate, f"{p.name}: poses on {platform}, {rate_in:.4g} Hz", plat)
+
+
+def _thin(n: int, rate_hz: float) -> tuple[NDArray[np.intp], float]:
+    """Indices of the samples a page uses (and the last one), and their rate (Hz)."""
+    step = max(_step(rate_hz, CURVE_RATE_HZ), math.ceil(n / MAX_CURVE_POINTS))
+    idx = np.arange(0, n, step)
+    if idx[-1] != n - 1:
+        idx = np.append(idx, n - 1)
+    return idx, rate_hz / step
+
+
+def _step(rate_hz: float, cap_hz: float) -> int:
+    return max(1, math.ceil(rate_hz / cap_hz - 1e-9))
+
+
+def _perceived(scene: Scene, rate_hz: float) -> tuple[NDArray[np.float64], str]:
+    """Perceived motion of the rider at every sample, ``(N, 6)``, and the model set's name.
+
+    The poses are resampled on a uniform grid, low-passed (zero phase, 2nd-order Butterworth
+    at :data:`POSE_LOWPASS_HZ`, within the band the otolith and canal models pass) so that
+    the drives' pulse rounding does not dominate the second difference, then passed through
+    :func:`motioncue.cueing.simulator_motion` and the default vestibular model set.
+    """
+    from scipy.signal import butter, sosfiltfilt
+
+    from ..cueing import GRAVITY_M_S2, get_model_set, simulator_motion
+    from ..cueing._vestibular import DEFAULT_MODEL_SET
+
+    ms = get_model_set(DEFAULT_MODEL_SET)
+    t = scene.t_s
+    uniform = np.arange(t[0], t[-1] + 0.5 / rate_hz, 1.0 / rate_hz)
+    poses = np.column_stack([np.interp(uniform, t, scene.poses[:, i]) for i in range(6)])
+    cut = POSE_LOWPASS_HZ / (0.5 * rate_hz)
+    if cut < 1.0 and uniform.size > 15:
+        sos = butter(2, cut, output="sos")
+        poses = sosfiltfilt(sos, poses - poses[0], axis=0) + poses[0]
+    f_s, w_s = simulator_motion(poses, rate_hz)
+    rest = np.array([0.0, 0.0, GRAVITY_M_S2])
+    out = ms.filter(np.concatenate([f_s - rest, w_s], axis=1), rate_hz)
+    back = np.column_stack([np.interp(t, uniform, out[:, i]) for i in range(6)])
+    return back, ms.name
+
+
+_CURSOR = {
+    "type": "line", "xref": "x", "yref": "paper", "x0": 0, "x1": 0,
+    "y0": 0, "y1": 1, "line": {"color": "#000", "width": 1.5},
+}  # fmt: skip
+
+
+def _curves(view: ViewInput) -> dict[str, Any]:
+    """The curves figure: actuators against their stroke, perceived motion.
+
+    Plotly JSON (layout and traces) in which a long trace carries no ``x``/``y`` but
+    ``mc_y``, whole numbers to divide by ``mc_div``, on the shared times ``t_ms``: the page
+    rebuilds them (a third of the size of plotly's own encoding).
+    """
+    from plotly.subplots import make_subplots
+
+    scene, plat = view.scene, view.platform
+    perceived, model = _perceived(scene, view.rate_hz)
+    fig = make_subplots(
+        rows=3,
+        cols=1,
+        shared_xaxes=True,
+        vertical_spacing=0.06,
+        subplot_titles=(
+            "actuators: position from neutral (lines) against the usable stroke (dashed)",
+            f"perceived specific force (otolith, {model})",
+            f"perceived angular velocity (canal, {model})",
+        ),
+    )
+    packed: list[tuple[int, NDArray[np.float64], float]] = []  # (trace, values, divisor)
+
+    def series(values: NDArray[np.float64], divisor: float, **kw: Any) -> None:
+        fig.add_scatter(x=[], y=[], **kw)
+        packed.append((len(fig.data) - 1, values, divisor))
+
+    colours = ["#1f77b4", "#ff7f0e", "#2ca02c", "#d62728", "#9467bd", "#8c564b", "#e377c2"]
+    t0, t1 = float(scene.t_s[0]), float(scene.t_s[-1])
+    for i, name in enumerate(plat.actuator_names):
+        rot = plat.actuator_kinds[i] == "rotary"
+        scale, unit = (180.0 / math.pi, "deg") if rot else (1e3, "mm")
+        c = colours[i % len(colours)]
+        series(scene.q[:, i] * scale, 10.0, name=f"{name} ({unit})",
+               line={"color": c, "width": 1.4}, legendgroup="act", row=1, col=1)  # fmt: skip
+        for bound in (plat.q_min[i], plat.q_max[i]):
+            fig.add_scatter(
+                x=[t0, t1], y=[round(float(bound) * scale, 2)] * 2,
+                mode="lines", line={"color": c, "width": 1, "dash": "dash"},
+                showlegend=False, hoverinfo="skip", row=1, col=1,
+            )  # fmt: skip
+    for j, axis in enumerate(("fx", "fy", "fz")):
+        series(perceived[:, j], 1e3, name=f"{axis} (m/s²)", line={"width": 1.2},
+               legendgroup="f", row=2, col=1)  # fmt: skip
+    for j, axis in enumerate(("roll rate", "pitch rate", "yaw rate")):
+        series(np.degrees(perceived[:, 3 + j]), 1e2, name=f"{axis} (deg/s)",
+               line={"width": 1.2}, legendgroup="w", row=3, col=1)  # fmt: skip
+    units = "mm" if all(k == "linear" for k in plat.actuator_kinds) else "mm or deg"
+    fig.update_yaxes(title_text=units, row=1, col=1)
+    fig.update_yaxes(title_text="m/s²", row=2, col=1)
+    fig.update_yaxes(title_text="deg/s", row=3, col=1)
+    fig.update_xaxes(title_text="ride time (s)", row=3, col=1)
+    fig.update_layout(
+        margin={"l": 60, "r": 10, "t": 40, "b": 40},
+        legend={"font": {"size": 10}},
+        shapes=[_CURSOR],
+        template="plotly_white",
+    )
+    out: dict[str, Any] = json.loads(fig.to_json())
+    for k, values, divisor in packed:
+        trace = out["data"][k]
+        trace.pop("x", None)
+        trace.pop("y", None)
+        trace["mc_y"] = np.rint(values * divisor).astype(np.int64).tolist()
+        trace["mc_div"] = divisor
+    out["t_ms"] = np.rint(scene.t_s * 1e3).astype(np.int64).tolist()
+    return out
+
+
+def view_html(view: ViewInput) -> str:
+    """The page (see the module docstring) as one HTML string."""
+    scene = view.scene
+    n = scene.t_s.size
+    step = max(_step(view.rate_hz, VIEW_RATE_HZ), math.ceil(n / MAX_VIEW_FRAMES))
+    idx = np.arange(0, n, step)
+    if idx[-1] != n - 1:
+        idx = np.append(idx, n - 1)
+    data = {
+        "title": view.title,
+        "t": np.round(scene.t_s[idx], 3).tolist(),
+        "legs": int(scene.top.shape[1]),
+        **_packed(scene, idx),
+        "box": scene_layout(scene),
+        "curves": _curves(view),
+    }
+    blob = json.dumps(data, separators=(",", ":"), allow_nan=False).replace("</", "<\\/")
+    title = html.escape(view.title)
+    return _TEMPLATE.format(
+        title=title, plotly=plotly_js(), draw=DRAW_JS, data=blob, script=_SCRIPT
+    )
+
+
+def _mm(a: NDArray[np.float64]) -> list[int]:
+    out: list[int] = np.rint(np.asarray(a) * 1e3).astype(np.int64).ravel().tolist()
+    return out
+
+
+def _packed(scene: Scene, idx: NDArray[np.intp]) -> dict[str, Any]:
+    """Frame data as flat integer arrays (mm: a pixel of the drawing is larger; stroke use in
+    %); a base that does not move (no yaw turntable) once."""
+    fixed = bool(np.all(scene.base[idx] == scene.base[idx[:1]]))
+    return {
+        "base": _mm(scene.base[idx[0]] if fixed else scene.base[idx]),
+        "base_moves": not fixed,
+        "joint": None if scene.joint is None else _mm(scene.joint[idx]),
+        "top": _mm(scene.top[idx]),
+        "centre": _mm(scene.centre[idx]),
+        "forward": _mm(scene.forward[idx]),
+        "use": np.rint(scene.use[idx][:, : scene.top.shape[1]] * 1e2).astype(np.int64)
+        .ravel().tolist(),
+    }  # fmt: skip
+
+
+_TEMPLATE = """<!DOCTYPE html>
+<html lang="en"><head><meta charset="utf-8">
+<title>motioncue view: {title}</title>
+<style>
+body {{ font-family: sans-serif; margin: 8px; }}
+#wrap {{ display: flex; gap: 8px; }}
+#scene {{ width: 48%; height: 640px; }}
+#curves {{ width: 52%; height: 640px; }}
+#bar {{ display: flex; align-items: center; gap: 10px; margin: 6px 0; }}
+#slider {{ flex: 1; }}
+</style>
+<script>{plotly}</script>
+</head><body>
+<div><b>motioncue view</b>: {title}</div>
+<div id="bar"><button id="play">play</button>
+<input id="slider" type="range" min="0" value="0" step="1">
+<span id="time">0.00 s</span></div>
+<div id="wrap"><div id="scene"></div><div id="curves"></div></div>
+<script>{draw}</script>
+<script id="mc-data" type="application/json">{data}</script>
+<script>{script}</script>
+</body></html>
+"""
+
+_SCRIPT = """
+const D = JSON.parse(document.getElementById('mc-data').textContent);
+const L = D.legs;
+function pts(arr, k, count) {  // points k*count .. of a flat mm array, in metres
+  const out = [];
+  for (let i = 0; i < count; i++) {
+    const j = 3 * (k * count + i);
+    out.push([arr[j] / 1e3, arr[j + 1] / 1e3, arr[j + 2] / 1e3]);
+  }
+  return out;
+}
+function frameAt(k) {
+  return {
+    base: pts(D.base, D.base_moves ? k : 0, L),
+    joint: D.joint ? pts(D.joint, k, L) : null,
+    top: pts(D.top, k, L),
+    centre: pts(D.centre, k, 1)[0],
+    forward: pts(D.forward, k, 1)[0],
+    use: D.use.slice(k * L, (k + 1) * L).map(u => u / 1e2),
+  };
+}
+const NF = D.t.length;
+const sceneDiv = document.getElementById('scene');
+const curvesDiv = document.getElementById('curves');
+const slider = document.getElementById('slider');
+const label = document.getElementById('time');
+const button = document.getElementById('play');
+slider.max = NF - 1;
+let k = 0, playing = false, wall0 = 0, ride0 = 0;
+function show(i) {
+  k = Math.max(0, Math.min(NF - 1, i));
+  slider.value = k;
+  label.textContent = D.t[k].toFixed(2) + ' s';
+  mcDraw(sceneDiv, frameAt(k), D.box, 'platform at ' + D.t[k].toFixed(2) + ' s');
+  Plotly.relayout(curvesDiv, {'shapes[0].x0': D.t[k], 'shapes[0].x1': D.t[k]});
+}
+function tick(now) {
+  if (!playing) return;
+  const t = ride0 + (now - wall0) / 1000;
+  let i = k;
+  while (i + 1 < D.t.length && D.t[i + 1] <= t) i++;
+  if (i !== k) show(i);
+  if (i >= D.t.length - 1) { pause(); return; }
+  requestAnimationFrame(tick);
+}
+function play() {
+  if (k >= NF - 1) show(0);
+  playing = true; button.textContent = 'pause';
+  wall0 = performance.now(); ride0 = D.t[k];
+  requestAnimationFrame(tick);
+}
+function pause() { playing = false; button.textContent = 'play'; }
+button.onclick = () => (playing ? pause() : play());
+slider.oninput = () => { pause(); show(parseInt(slider.value, 10)); };
+const T = D.curves.t_ms.map(v => v / 1e3);
+for (const tr of D.curves.data) {
+  if (tr.mc_y) { tr.x = T; tr.y = tr.mc_y.map(v => v / tr.mc_div); delete tr.mc_y; }
+}
+Plotly.newPlot(curvesDiv, D.curves.data, D.curves.layout, {displaylogo: false}).then(() => {
+  show(0);
+  window.mcView = {show, play, pause, n: NF, frame: () => k,
+                   playing: () => playing, ready: true};
+});
+"""
+
+
+def write_view(view: ViewInput, out: str | Path) -> Path:
+    """Write the page atomically to ``out``; returns its path."""
+    from .._atomic import atomic_write_bytes
+
+    path = Path(out)
+    atomic_write_bytes(path, view_html(view).encode("utf-8"))
+    return path
