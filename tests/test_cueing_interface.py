@@ -231,7 +231,7 @@ def test_every_bundled_platform_names_a_loadable_default_preset() -> None:
         "stewart6-linear": "racing-hexapod",
         "stewart6-rotary": "racing",
         "seat3": "cinema-seat-3dof",
-        "seat2-yaw": "cinema-seat-3dof",
+        "seat2-yaw": "cinema-seat-yaw",
     }
     assert set(bundled_names("platforms")) == set(expected)
     for name, preset in expected.items():
