@@ -99,10 +99,11 @@ def test_cue_reads_an_mctr_recording(tmp_path: Path, capsys) -> None:
 
 
 def test_generate_warns_with_the_percentage_when_poses_are_clamped(tmp_path: Path, capsys):
+    # the generic racing preset on the 3-DOF seat (the seat's own preset, tuned, clamps none)
     ride = tmp_path / "c.ride"
     code = main(
         ["generate", "--input", str(RECORDINGS / "lap.csv"), "--platform", "seat3",
-         "--controller", "mbox3", "--preset", "cinema-seat-3dof", "--out", str(ride), "--quiet"]
+         "--controller", "mbox3", "--preset", "racing", "--out", str(ride), "--quiet"]
     )  # fmt: skip
     cap = capsys.readouterr()
     assert code == 0, cap.err
@@ -115,7 +116,7 @@ def test_generate_warns_with_the_percentage_when_poses_are_clamped(tmp_path: Pat
     # the same figures in JSON, from the same numbers the ride's notes hold
     code = main(
         ["generate", "--input", str(RECORDINGS / "lap.csv"), "--platform", "seat3",
-         "--controller", "mbox3", "--preset", "cinema-seat-3dof", "--out", str(ride), "--json"]
+         "--controller", "mbox3", "--preset", "racing", "--out", str(ride), "--json"]
     )  # fmt: skip
     data = json.loads(capsys.readouterr().out)
     assert data["poses_clamped"] == clamped == load_ride(ride).notes["poses_clamped"]
@@ -124,18 +125,19 @@ def test_generate_warns_with_the_percentage_when_poses_are_clamped(tmp_path: Pat
 
 
 def test_generate_with_a_gentler_preset_via_set_has_no_warning(tmp_path: Path, capsys) -> None:
-    """The same lap, the preset scaled down with --set: nothing clamped, no warning."""
+    """The generic racing preset (which clamps about 70 % of the lap on this hexapod) scaled
+    down with --set: nothing clamped, no warning."""
     ride = tmp_path / "r.ride"
     code = main(
         ["generate", "--input", str(RECORDINGS / "lap.csv"), "--platform", "stewart6-linear",
-         "--controller", "mbox6", "--out", str(ride), "--quiet", "--json",
-         "--set", "preset.scaling.f_scale=[0.2, 0.2, 0.1]",
+         "--controller", "mbox6", "--preset", "racing", "--out", str(ride), "--quiet", "--json",
+         "--set", "preset.scaling.f_scale=[0.1, 0.1, 0.1]",
          "--set", "preset.scaling.w_scale=[0.2, 0.2, 0.2]", "--set", "preset.tilt.limit_deg=5.0"]
     )  # fmt: skip
     cap = capsys.readouterr()
     assert code == 0, cap.err
     data = json.loads(cap.out)
-    assert data["preset"] == "racing-hexapod"
+    assert data["preset"] == "racing"
     assert data["clamped_percent"] <= 1.0 and data["poses_clamped"] == 0
     assert "clamped" not in cap.err
 

@@ -187,6 +187,12 @@ def test_view_cli_on_a_poses_csv_and_its_refusals(
     assert main(["view", str(csv), "--platform", "seat3", "--out", str(out)]) == 0
     assert out.stat().st_size > 3_000_000
     capsys.readouterr()
+    out2 = tmp_path / "v2.html"
+    assert main(["view", str(csv), "--platform", "seat3", "--out", str(out2), "--json"]) == 0
+    data = json.loads(capsys.readouterr().out)
+    assert data["out"] == str(out2) and data["bytes"] == out2.stat().st_size
+    assert 0 < data["samples"] <= len(t)
+    assert data["duration_s"] == pytest.approx(t[-1], abs=0.05)
     cases = [
         (["view", str(csv), "--out", str(tmp_path / "x.html")], "needs --platform"),
         (["view", str(tmp_path / "none.ride"), "--out", str(tmp_path / "x.html")], "cannot read"),

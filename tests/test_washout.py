@@ -289,7 +289,7 @@ def test_bundled_presets_load() -> None:
         assert isinstance(p, CueingParams) and p.name == name
         with pytest.raises(dataclasses.FrozenInstanceError):
             p.soft_knee = 0.5  # type: ignore[misc]
-    assert load_cueing("flight").tilt_rate_limit_rad_s == pytest.approx(math.radians(3.0))
+    assert load_cueing("racing").tilt_rate_limit_rad_s == pytest.approx(math.radians(8.0))
     assert load_cueing("cinema-seat-3dof").dofs == (False, False, True, True, True, False)
 
 

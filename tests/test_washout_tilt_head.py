@@ -186,7 +186,7 @@ def test_step_target_gives_the_hand_computed_trapezoid_or_triangle(theta_deg: fl
 def test_tilt_gain_is_separate_from_the_translational_scale() -> None:
     """Oracle: lsim of the documented tilt low-pass on k_t f_x / g (small angles, no limit)."""
     fs = 500.0
-    base = load_cueing("racing-hexapod")  # f_scale 0.2, tilt limit 6 deg
+    base = load_cueing("racing")  # hand-written: f_scale 0.4, f_limit 5, no tilt accel limit
     p = dataclasses.replace(
         base, tilt_scale=(0.6, 0.5), tilt_rate_limit_rad_s=5.0, tilt_limit_rad=60.0 * D2R
     )
@@ -201,7 +201,7 @@ def test_tilt_gain_is_separate_from_the_translational_scale() -> None:
     ly = signal.lsim(lp, 0.5 * fy, t)[1]
     np.testing.assert_allclose(tilt[:, 1], -np.arcsin(lx / G), atol=2e-3 * D2R * 60)
     np.testing.assert_allclose(tilt[:, 0], np.arcsin(ly / G), atol=2e-3 * D2R * 60)
-    # steady lateral tilt: asin(0.5 * 1.0 / g), not asin(0.2 * 1.0 / g) of the force scale
+    # steady lateral tilt: asin(0.5 * 1.0 / g), not asin(0.4 * 1.0 / g) of the force scale
     assert tilt[-1, 0] == pytest.approx(-math.asin(0.5 / G), rel=1e-4)
     # a big force: the tilt is not squashed by the translational force limit (5 m/s^2)
     big = np.tile([9.0, 0.0, G], (int(3 * fs), 1))
@@ -283,7 +283,7 @@ def test_head_offset_centripetal_term_by_hand() -> None:
 def _variant(tmp_path, old: str, new: str):  # type: ignore[no-untyped-def]
     from motioncue._config import find_config
 
-    text = find_config("cueing", "racing-hexapod").read_text()
+    text = find_config("cueing", "racing").read_text()
     assert old in text
     path = tmp_path / "v.toml"
     path.write_text(text.replace(old, new, 1))
@@ -291,14 +291,15 @@ def _variant(tmp_path, old: str, new: str):  # type: ignore[no-untyped-def]
 
 
 def test_new_keys_load_in_si_and_default_to_neutral(tmp_path) -> None:  # type: ignore[no-untyped-def]
-    p = load_cueing("racing-hexapod")
+    # the hand-written generic preset (the tuned ones set every key)
+    p = load_cueing("racing")
     assert p.algorithm == "classical"
     assert p.tilt_scale is None and p.tilt_accel_limit_rad_s2 is None
     assert p.head_offset_m == (0.0, 0.0, 0.0)
     path = _variant(
         tmp_path,
-        "limit_deg = 6.0",
-        "limit_deg = 6.0\nscale = [0.3, 0.25]\naccel_limit_deg_s2 = 30.0",
+        "limit_deg = 12.0",
+        "limit_deg = 12.0\nscale = [0.3, 0.25]\naccel_limit_deg_s2 = 30.0",
     )
     text = path.read_text() + "\n[head]\noffset_mm = [100.0, 0.0, 750.0]\n"
     path.write_text(text)
@@ -311,10 +312,10 @@ def test_new_keys_load_in_si_and_default_to_neutral(tmp_path) -> None:  # type: 
 @pytest.mark.parametrize(
     ("old", "new", "match"),
     [
-        ("limit_deg = 6.0", "limit_deg = 6.0\naccel_limit_deg_s = 3.0", "unknown key"),
-        ("limit_deg = 6.0", "limit_deg = 6.0\naccel_limit_deg_s2 = 0.0", "accel_limit_deg_s2"),
-        ("limit_deg = 6.0", "limit_deg = 6.0\nscale = [0.3]", "scale"),
-        ("limit_deg = 6.0", "limit_deg = 6.0\nscale = [-0.3, 0.3]", "tilt_scale"),
+        ("limit_deg = 12.0", "limit_deg = 12.0\naccel_limit_deg_s = 3.0", "unknown key"),
+        ("limit_deg = 12.0", "limit_deg = 12.0\naccel_limit_deg_s2 = 0.0", "accel_limit_deg_s2"),
+        ("limit_deg = 12.0", "limit_deg = 12.0\nscale = [0.3]", "scale"),
+        ("limit_deg = 12.0", "limit_deg = 12.0\nscale = [-0.3, 0.3]", "tilt_scale"),
         ("[workspace]", "[head]\noffset_m = [0.0, 0.0, 0.7]\n[workspace]", "offset_mm"),
         ("[workspace]", "[head]\noffset_mm = [0.0, 0.0, 70000.0]\n[workspace]", "head_offset"),
     ],

@@ -6,6 +6,8 @@ import argparse
 from pathlib import Path
 from typing import Any
 
+from ._common import add_json_option, print_json
+
 __all__ = ["register"]
 
 
@@ -27,6 +29,7 @@ def register(sub: Any) -> None:
         help="bundled platform name or TOML path (default: the ride's; required for a CSV)",
     )
     p.add_argument("--out", required=True, type=Path, metavar="HTML", help="page to write")
+    add_json_option(p, "what was written (path, size, samples, duration)")
     p.set_defaults(run=_view)
 
 
@@ -36,6 +39,16 @@ def _view(args: argparse.Namespace) -> int:
     view = load_view_input(args.input, args.platform)
     path = write_view(view, args.out)
     size_mb = path.stat().st_size / 1e6
+    if args.json:
+        print_json(
+            {
+                "out": str(path),
+                "bytes": path.stat().st_size,
+                "samples": int(view.scene.t_s.size),
+                "duration_s": float(view.scene.t_s[-1]),
+            }
+        )
+        return 0
     print(
         f"view: {path} ({size_mb:.1f} MB, {view.scene.t_s.size} samples, "
         f"{view.scene.t_s[-1]:.1f} s); open it in a browser (no network needed)"
