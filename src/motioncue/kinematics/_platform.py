@@ -257,10 +257,13 @@ class Platform:
         A 6-axis controller (the SC-MBOX in 6-axis mode, an IMAX with PA02 = 6) always takes
         six positions per frame (MBOX manual 4.2.7/4.2.9: object channel 1 carries X Y Z U V
         W); on a rig with fewer actuators the spare axes are held at pulse 0, their homed
-        (initial-positioning) origin, in every frame. Each spare axis has a usable stroke of
-        less than half a pulse about that origin, so its stroke in pulses is ``[0, 0]``: the
-        limiter never moves it and every checker (the ride check, the emulators) flags any
-        frame that does.
+        (initial-positioning) origin, in every frame: their position is 0 whatever the pose,
+        so the limiters never move them. Their usable stroke is 1.75 pulses either side of
+        that origin, so the limits table (stroke rounded inwards to whole pulses) allows
+        ``[-1, 1]`` pulses: room for the half-pulse rounding margins the generator and the
+        player keep (two of them), and any frame moving a spare axis by more than one pulse
+        (0.5 um on a 5 mm lead) is refused by the ride check and flagged by the independent
+        frame checker that judges the emulators' traces.
 
         Parameters
         ----------
@@ -283,7 +286,7 @@ class Platform:
             raise ConfigError(
                 f"spare axes drive must be {k} linear drive(s) homed at 0 (pulse 0 = hold)"
             )
-        half = 0.25 / np.abs(np.asarray(drive.pulses_per_unit, dtype=float))
+        half = 1.75 / np.abs(np.asarray(drive.pulses_per_unit, dtype=float))
         args = dict(self._init_args)
         args.update(
             name=self.name,
