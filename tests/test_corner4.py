@@ -374,3 +374,72 @@ def test_fk_random_bad_guesses_never_stall() -> None:
             fk = p.forward(q, guess=g)
             assert fk.converged, (x.tolist(), g.tolist())
             assert np.max(np.abs(p.inverse(fk.pose) - q)) < 1e-11
+
+
+def test_bridge_live_on_corner4_tl_mbox6_parks_and_keeps_limits(
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    """The live path (F1 telemetry -> bridge -> MBOX emulator) on the corner rig."""
+    import json
+    import socket
+
+    from motioncue.cli import main
+    from motioncue.output import load_controller
+    from motioncue.output.mbox import MboxEmulator
+    from motioncue.pipeline._verify import check_frames
+    from test_bridge import Sender, _wait_for
+
+    with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as s:
+        s.bind(("127.0.0.1", 0))
+        port = int(s.getsockname()[1])
+    emu = MboxEmulator(load_controller("mbox6"))
+    with emu, Sender(port, 2023):
+        code = main(
+            ["bridge", "--source", f"f1:{port}", "--platform", "corner4-tl", "--controller",
+             "mbox6", "--target", f"udp://127.0.0.1:{emu.port}", "--rate", "100", "--fade",
+             "0.3", "--duration", "1.5"]
+        )  # fmt: skip
+        assert _wait_for(lambda: len(emu.trace) > 0 and emu.received >= len(emu.trace))
+    err = capsys.readouterr().err
+    assert code == 0, err
+    assert "parked error 0" in err
+    assert main(["limits", "--platform", "corner4-tl", "--controller", "mbox6", "--json"]) == 0
+    table = json.loads(capsys.readouterr().out)
+    tr = emu.trace
+    chk = check_frames(tr.t_s, tr.positions, table, start_at_rest=True)
+    assert chk.ok, chk.summary()
+    assert emu.violations == []
+    p = load_platform("corner4-tl")
+    np.testing.assert_array_equal(tr.positions[-1], p.drives.to_pulses(p.q_park))
+    assert np.all(tr.positions[:, 5] == 0)  # the spare axis never moved
+    assert np.abs(tr.positions[:, :5] - tr.positions[0, :5]).max() > 1000  # the cue arrived
+
+
+def test_workspace_and_ik_cli_on_a_measured_file_in_metres(tmp_path: Path) -> None:
+    text = (CONFIGS / "corner4.toml").read_text()
+    text = text.replace("base_anchors_mm = [[500.0, 300.0, 0.0], [500.0, -300.0, 0.0],",
+                        "base_anchors_m = [[0.5, 0.3, 0.0], [0.5, -0.3, 0.0],")  # fmt: skip
+    text = text.replace("                   [-500.0, 300.0, 0.0], [-500.0, -300.0, 0.0]]",
+                        "                   [-0.5, 0.3, 0.0], [-0.5, -0.3, 0.0]]", 1)  # fmt: skip
+    assert "base_anchors_m =" in text
+    path = tmp_path / "my-rig.toml"
+    path.write_text(text)
+    env = {"PYTHONPATH": str(SRC)}
+    ws = subprocess.run(
+        [sys.executable, "-m", "motioncue", "workspace", "--platform", str(path), "--json"],
+        capture_output=True, text=True, env=env, timeout=120,
+    )  # fmt: skip
+    assert ws.returncode == 0, ws.stderr
+    import json
+
+    table = json.loads(ws.stdout)
+    ranges = table["ranges"]
+    assert ranges["z"]["max"] == pytest.approx(47.0, abs=1e-3)
+    ik = subprocess.run(
+        [sys.executable, "-m", "motioncue", "ik", "--platform", str(path), "--mm-deg",
+         "--pose", "0", "0", "10", "0", "0", "0", "--json"],
+        capture_output=True, text=True, env=env, timeout=120,
+    )  # fmt: skip
+    assert ik.returncode == 0, ik.stderr
+    rows = json.loads(ik.stdout)["actuators"]
+    assert [r["position"] for r in rows[:4]] == pytest.approx([10.0] * 4, abs=1e-9)
