@@ -58,8 +58,9 @@ def load_platform(name_or_path: str | Path) -> Platform:
     Returns
     -------
     Platform
-        Frozen model (:class:`Stewart6Linear`, :class:`Stewart6Rotary`, :class:`Seat3` or
-        :class:`Seat2Yaw`).
+        Frozen model (:class:`Stewart6Linear`, :class:`Stewart6Rotary`, :class:`Seat3`,
+        :class:`Seat2Yaw` or :class:`Corner4`; a plain :class:`Platform` when the file adds a
+        ``[traction_loss]`` slider or ``spare_axes``).
 
     Raises
     ------

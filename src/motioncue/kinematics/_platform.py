@@ -114,11 +114,18 @@ def _as_poses(poses: Any) -> np.ndarray:
 
 
 class Platform:
-    """A motion platform: legs (linear or crank) plus, optionally, a direct yaw axis.
+    """A motion platform: legs (linear or crank) plus, optionally, a yaw axis (a turntable
+    under the legs, or a traction-loss slider on top) and spare controller axes.
 
     Instances are frozen. Build one with :func:`~motioncue.kinematics.load_platform` or the
     geometry classes (:class:`Stewart6Linear`, :class:`Stewart6Rotary`, :class:`Seat3`,
-    :class:`Seat2Yaw`).
+    :class:`Seat2Yaw`, :class:`Corner4`), then :meth:`with_traction_loss` and
+    :meth:`with_spare_axes`. Everything downstream (limits, limiters, rides, emulators)
+    sees only ``n_actuators`` positions with their strokes, drives and limits: a slider is
+    one more linear actuator, a spare axis one whose position is always 0 (pulse 0). There
+    may be more moving actuators than degrees of freedom (a corner rig: four legs, three);
+    the Jacobian at neutral must have full column rank, :meth:`forward` solves in least
+    squares and :meth:`project` maps positions onto the nearest rigid pose.
 
     Attributes
     ----------
