@@ -66,7 +66,7 @@ def _corner_rigs(poses: np.ndarray, one: np.ndarray, hex_rate: float, hex_one_s:
         sub = poses * p.dof_mask
         t_batch = median_time_s(lambda p=p, sub=sub: p.inverse(sub), repeats=5)
         rate = len(sub) / t_batch
-        ok &= report(f"{name} IK, 1e6 poses", rate, "poses/s", 1e6, True)
+        ok &= report(f"{name} IK, 1e6 poses", rate, "poses/s", 3e6, True)
         print(f"  ({rate / hex_rate:.2f} x the hexapod's batch rate, same process)")
         it = iter(range(1 << 62))
         small = one * p.dof_mask
@@ -75,14 +75,14 @@ def _corner_rigs(poses: np.ndarray, one: np.ndarray, hex_rate: float, hex_one_s:
             p.inverse(small[next(it) % 2000])
 
         t_one = median_time_s(ik_one, repeats=7, number=5000)
-        ok &= report(f"{name} IK, one pose per call", t_one * 1e6, "us", 30.0, False)
+        ok &= report(f"{name} IK, one pose per call", t_one * 1e6, "us", 15.0, False)
         print(f"  ({t_one / hex_one_s:.2f} x the hexapod's one-pose time)")
         qs = p.inverse(small[p.check(small).ok][:300])
         t0 = time.perf_counter()
         for q in qs:
             p.forward(q)
         t_fk = (time.perf_counter() - t0) / len(qs)
-        ok &= report(f"{name} FK (Gauss-Newton from neutral), one", t_fk * 1e6, "us", 400.0, False)
+        ok &= report(f"{name} FK (Gauss-Newton from neutral), one", t_fk * 1e6, "us", 200.0, False)
     return ok
 
 
