@@ -314,7 +314,7 @@ def test_corner4_tl_ride_on_mbox6_spare_still_twist_small_and_a_moved_spare_refu
     assert np.all(ride.pulses[:, 5] == 0)
     assert np.ptp(ride.pulses[:, 4]) > 10000  # the slider moves (more than 5 mm)
     check_ride_for(ride, c4tl, ctrl, lim, platform_name="corner4-tl", controller_name="mbox6")
-    # the per-actuator limiter keeps the four legs a rigid frame to well under 0.1 mm
+    # the per-actuator limiter keeps the four legs a rigid frame: 0.2 um measured (rounding)
     q = c4tl.drives.from_pulses(ride.pulses)
     guess = None
     worst = 0.0
@@ -322,7 +322,7 @@ def test_corner4_tl_ride_on_mbox6_spare_still_twist_small_and_a_moved_spare_refu
         fk = c4tl.forward(q[k], guess=guess)
         guess = fk.pose
         worst = max(worst, fk.residual)
-    assert worst < 1e-4
+    assert worst < 1e-5
     moved = ride.pulses.copy()
     moved[100:, 5] = 5  # the spare axis stepping 5 pulses
     with pytest.raises(LimitError, match="spare6"):

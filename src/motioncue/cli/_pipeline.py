@@ -56,7 +56,7 @@ def register(sub: Any) -> None:
 
     d = sub.add_parser(
         "demo",
-        help="generate an MBOX ride from the bundled lap, play it to the emulator, compare",
+        help="generate a ride from the bundled lap, play it to the MBOX/IMAX emulator, compare",
     )
     d.add_argument("--out", default="out/demo", metavar="DIR")
     d.add_argument("--speed", type=float, default=10.0, help="pacing factor for the emulator")
