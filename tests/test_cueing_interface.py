@@ -232,6 +232,8 @@ def test_every_bundled_platform_names_a_loadable_default_preset() -> None:
         "stewart6-rotary": "racing",
         "seat3": "cinema-seat-3dof",
         "seat2-yaw": "cinema-seat-yaw",
+        "corner4": "corner4",
+        "corner4-tl": "corner4-tl",
     }
     assert set(bundled_names("platforms")) == set(expected)
     for name, preset in expected.items():

@@ -84,12 +84,14 @@ def register(sub: Any) -> None:
 
     d = sub.add_parser(
         "demo",
-        help="generate an MBOX ride from the bundled lap, play it to the emulator, compare",
+        help="generate a ride from the bundled lap, play it to the MBOX/IMAX emulator, compare",
     )
     d.add_argument(
         "--out", default="out/demo", metavar="DIR", help="folder for the demo's files (out/demo)"
     )
     d.add_argument("--speed", type=float, default=10.0, help="pacing factor for the emulator")
+    d.add_argument("--platform", default="stewart6-linear", help="bundled platform or TOML path")
+    d.add_argument("--controller", default="mbox6", help="an MBOX or IMAX controller")
     d.set_defaults(run=_demo)
 
 
@@ -456,5 +458,7 @@ def _say(line: str, stream: Any = None) -> None:
 def _demo(args: argparse.Namespace) -> int:
     from ..pipeline import run_demo
 
-    res = run_demo(args.out, speed=args.speed)
+    res = run_demo(
+        args.out, speed=args.speed, platform_name=args.platform, controller_name=args.controller
+    )
     return 0 if res.comparison.ok else 1

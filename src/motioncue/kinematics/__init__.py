@@ -15,6 +15,7 @@ from ._load import load_platform, platform_from_dict
 from ._platform import (
     DOF_NAMES,
     CheckResult,
+    Corner4,
     FKResult,
     Platform,
     Seat2Yaw,
@@ -28,6 +29,7 @@ __all__ = [
     "DOF_NAMES",
     "STANDARD_GRAVITY",
     "CheckResult",
+    "Corner4",
     "Drive",
     "FKResult",
     "ForceResult",

@@ -239,8 +239,15 @@ def actuator_forces(
     e = euler_rate_matrix(arr[:, 3:6])
     tau = np.concatenate([wrench[:, 0:3], np.einsum("nji,nj->ni", e, wrench[:, 3:6])], axis=1)
     idx = np.flatnonzero(platform.dof_mask)
-    jac = platform.jacobian(arr)[:, :, idx]  # (N, n, k), square
-    forces = np.linalg.solve(np.transpose(jac, (0, 2, 1)), tau[:, idx, None])[..., 0]
+    jac = platform.jacobian(arr)[:, :, idx]  # (N, n, k), n >= k
+    jt = np.transpose(jac, (0, 2, 1))
+    if jac.shape[1] == jac.shape[2]:
+        forces = np.linalg.solve(jt, tau[:, idx, None])[..., 0]
+    else:
+        # more actuators than degrees of freedom (a corner rig's four legs for three): the
+        # load shares are statically indeterminate; the smallest forces (least-norm, the
+        # share of equally stiff legs on a stiff frame) are reported. Spare axes carry none.
+        forces = np.einsum("nij,nj->ni", np.linalg.pinv(jt), tau[:, idx])
     condition = np.linalg.cond(jac)
     peak_index = np.argmax(np.abs(forces), axis=0)
     peak = np.abs(forces[peak_index, np.arange(forces.shape[1])])

@@ -2,17 +2,25 @@
 
 Layout of a platform file::
 
-    kind = "stewart6-linear"          # | stewart6-rotary | seat3 | seat2-yaw
+    kind = "stewart6-linear"          # | stewart6-rotary | seat3 | seat2-yaw | corner4
     description = "..."
-    actuators = ["1", "2", ...]       # controller order
+    actuators = ["1", "2", ...]       # controller order: the legs (then the yaw axis)
+    spare_axes = ["5", "6"]           # optional: controller axes after the actuators that
+                                      # drive nothing, held at pulse 0 (a 6-axis MBOX/IMAX
+                                      # under a 4- or 5-actuator rig)
     default_preset = "racing-hexapod" # optional: the cueing preset used when a command is
                                       # given no --preset (a bundled name or a path)
 
-    [geometry]                        # anchors: a symmetric ring layout or explicit lists
+    [geometry]                        # anchors: a symmetric ring layout (hexapods) or the
+                                      # measured joint centres, one [x, y, z] per leg, in mm
+                                      # (base_anchors_mm, platform_anchors_mm) or metres
+                                      # (base_anchors_m, platform_anchors_m)
     [stroke]                          # linear legs: retracted_length_mm, stroke_mm, margin_mm
     [crank]                           # rotary legs: crank_mm, rod_mm, min_deg, max_deg
     [drive]                           # leg drives (screw lead or gear ratio, pulses, homing)
     [yaw]                             # seat2-yaw: min_deg, max_deg, gear_ratio, pulses...
+    [traction_loss]                   # optional, any kind but seat2-yaw: a yaw slider on top,
+                                      # one more linear actuator (see _traction_loss)
 
 Every value is converted to SI once, here. Unknown keys, missing keys and impossible values
 raise :class:`~motioncue.ConfigError` naming the file, the key and the value.
@@ -29,13 +37,13 @@ from .._config import ConfigReader, find_config, load_toml
 from .._errors import ConfigError
 from ._drive import Drive
 from ._legs import CrankLegs
-from ._platform import Platform, Seat2Yaw, Seat3, Stewart6Linear, Stewart6Rotary
+from ._platform import Corner4, Platform, Seat2Yaw, Seat3, Stewart6Linear, Stewart6Rotary
 
 __all__ = ["KINDS", "load_platform", "platform_from_dict"]
 
-KINDS = ("stewart6-linear", "stewart6-rotary", "seat3", "seat2-yaw")
+KINDS = ("stewart6-linear", "stewart6-rotary", "seat3", "seat2-yaw", "corner4")
 _MM = 1e-3
-_N_LEGS = {"stewart6-linear": 6, "stewart6-rotary": 6, "seat3": 3, "seat2-yaw": 2}
+_N_LEGS = {"stewart6-linear": 6, "stewart6-rotary": 6, "seat3": 3, "seat2-yaw": 2, "corner4": 4}
 
 
 def load_platform(name_or_path: str | Path) -> Platform:
@@ -44,13 +52,15 @@ def load_platform(name_or_path: str | Path) -> Platform:
     Parameters
     ----------
     name_or_path
-        Bundled names: ``stewart6-linear``, ``stewart6-rotary``, ``seat3``, ``seat2-yaw``.
+        Bundled names: ``stewart6-linear``, ``stewart6-rotary``, ``seat3``, ``seat2-yaw``,
+        ``corner4``, ``corner4-tl``.
 
     Returns
     -------
     Platform
-        Frozen model (:class:`Stewart6Linear`, :class:`Stewart6Rotary`, :class:`Seat3` or
-        :class:`Seat2Yaw`).
+        Frozen model (:class:`Stewart6Linear`, :class:`Stewart6Rotary`, :class:`Seat3`,
+        :class:`Seat2Yaw` or :class:`Corner4`; a plain :class:`Platform` when the file adds a
+        ``[traction_loss]`` slider or ``spare_axes``).
 
     Raises
     ------
@@ -76,6 +86,11 @@ def _ring(g: ConfigReader, which: str) -> np.ndarray:
 
 
 def _anchor_list(g: ConfigReader, key: str, n: int) -> np.ndarray:
+    """``key_mm`` or ``key_m``: ``n`` measured [x, y, z] joint centres, returned in metres."""
+    unit = "m" if g.has(f"{key}_m") else "mm"
+    if g.has(f"{key}_m") and g.has(f"{key}_mm"):
+        raise ConfigError(f"{g.where}: give either '{key}_mm' or '{key}_m', not both")
+    key = f"{key}_{unit}"
     value = g.raw(key)
     if (
         not isinstance(value, list)
@@ -88,17 +103,17 @@ def _anchor_list(g: ConfigReader, key: str, n: int) -> np.ndarray:
             for row in value
         )
     ):
-        raise g.error(key, value, f"a list of {n} [x, y, z] triples of finite numbers (mm)")
-    return np.array(value, dtype=float) * _MM
+        raise g.error(key, value, f"a list of {n} [x, y, z] triples of finite numbers ({unit})")
+    return np.array(value, dtype=float) * (1.0 if unit == "m" else _MM)
 
 
 def _anchors(g: ConfigReader, n: int) -> tuple[np.ndarray, np.ndarray]:
-    if g.has("base_anchors_mm") or g.has("platform_anchors_mm"):
-        return _anchor_list(g, "base_anchors_mm", n), _anchor_list(g, "platform_anchors_mm", n)
+    if any(g.has(f"{w}_anchors_{u}") for w in ("base", "platform") for u in ("mm", "m")):
+        return _anchor_list(g, "base_anchors", n), _anchor_list(g, "platform_anchors", n)
     if n != 6:
         raise ConfigError(
             f"{g.where}: missing key 'base_anchors_mm' (and 'platform_anchors_mm'): "
-            f"{n} [x, y, z] triples in mm"
+            f"{n} [x, y, z] triples in mm (or base_anchors_m, platform_anchors_m in metres)"
         )
     return _ring(g, "base"), _ring(g, "platform")
 
@@ -202,15 +217,22 @@ def _linear_drive(
     return Drive.linear(lead_mm * _MM, ppr.astype(int), home_length - neutral_length, direction)
 
 
-def _check_neutral(g: ConfigReader, lengths: np.ndarray, lo: np.ndarray, hi: np.ndarray) -> None:
+def _check_neutral(
+    g: ConfigReader,
+    lengths: np.ndarray,
+    lo: np.ndarray,
+    hi: np.ndarray,
+    names: tuple[str, ...],
+) -> None:
     bad = (lengths <= lo) | (lengths >= hi)
     if np.any(bad):
         i = int(np.flatnonzero(bad)[0])
         raise g.error(
             "neutral_height_mm",
             g.raw("neutral_height_mm"),
-            f"a height putting every leg inside its usable stroke at neutral (leg {i + 1} "
-            f"would be {lengths[i] / _MM:.6g} mm, usable {lo[i] / _MM:.6g}..{hi[i] / _MM:.6g} mm)",
+            f"a height (or anchors) putting every leg inside its usable stroke at neutral: "
+            f"actuator {names[i]!r} (leg {i + 1}) cannot reach the neutral pose, its length "
+            f"would be {lengths[i] / _MM:.6g} mm, usable {lo[i] / _MM:.6g}..{hi[i] / _MM:.6g} mm",
         )
 
 
@@ -226,7 +248,12 @@ def platform_from_dict(data: dict, where: str = "<dict>", name: str = "platform"
         except ConfigError as exc:
             raise cfg.error("default_preset", default_preset, f"a cueing preset ({exc})") from exc
     n_legs = _N_LEGS[kind]
-    n_act = n_legs + (1 if kind == "seat2-yaw" else 0)
+    has_tl = cfg.has("traction_loss")
+    if has_tl and kind == "seat2-yaw":
+        raise cfg.error(
+            "traction_loss", "...", "no [traction_loss] on seat2-yaw (its turntable is its yaw)"
+        )
+    n_act = n_legs + (1 if kind == "seat2-yaw" or has_tl else 0)
     names_raw = cfg.raw("actuators")
     if (
         not isinstance(names_raw, list)
@@ -238,39 +265,31 @@ def platform_from_dict(data: dict, where: str = "<dict>", name: str = "platform"
             "actuators", names_raw, f"{n_act} distinct non-empty names, controller order"
         )
     names = tuple(names_raw)
+    spare = _spare_names(cfg, names)
+    leg_names = names[:n_legs]
     g = cfg.table("geometry")
     base, plat = _anchors(g, n_legs)
     height = g.number("neutral_height_mm", lo=0.0, lo_open=True) * _MM
     platform: Platform
     if kind == "stewart6-rotary":
-        platform = _rotary(cfg, g, base, plat, height, names, description, name)
+        platform = _rotary(cfg, g, base, plat, height, leg_names, description, name)
     else:
         g.finish()
         retracted, lo, hi = _linear_stroke(cfg, n_legs)
         neutral = np.linalg.norm(plat + np.array([0.0, 0.0, height]) - base, axis=1)
-        _check_neutral(g, neutral, lo, hi)
+        _check_neutral(g, neutral, lo, hi, leg_names)
         drive = _linear_drive(cfg, n_legs, retracted, neutral, (lo, hi))
         stroke = np.stack([lo, hi], axis=1)
-        if kind == "stewart6-linear":
-            platform = Stewart6Linear(
+        if kind in ("stewart6-linear", "seat3", "corner4"):
+            cls = {"stewart6-linear": Stewart6Linear, "seat3": Seat3, "corner4": Corner4}[kind]
+            platform = cls(
                 base,
                 plat,
                 height,
                 stroke,
                 drives=drive,
                 name=name,
-                actuator_names=names,
-                description=description,
-            )
-        elif kind == "seat3":
-            platform = Seat3(
-                base,
-                plat,
-                height,
-                stroke,
-                drives=drive,
-                name=name,
-                actuator_names=names,
+                actuator_names=leg_names,
                 description=description,
             )
         else:
@@ -298,7 +317,12 @@ def platform_from_dict(data: dict, where: str = "<dict>", name: str = "platform"
                 actuator_names=names,
                 description=description,
             )
-    platform = _actuator_limits(cfg, platform, kind)
+    tl_limits: dict[str, float] = {}
+    if has_tl:
+        platform, tl_limits = _traction_loss(cfg.table("traction_loss"), platform, names[-1])
+    if spare:
+        platform = platform.with_spare_axes(spare)
+    platform = _actuator_limits(cfg, platform, kind, tl_limits)
     if default_preset is not None:
         platform = platform.with_default_preset(default_preset)
     cfg.finish()
@@ -329,13 +353,74 @@ def _check_pulse_range(platform: Platform, where: str) -> None:
         )
 
 
-def _actuator_limits(cfg: ConfigReader, platform: Platform, kind: str) -> Platform:
+def _spare_names(cfg: ConfigReader, names: tuple[str, ...]) -> tuple[str, ...]:
+    """The optional ``spare_axes`` list: names of controller axes held at pulse 0."""
+    if not cfg.has("spare_axes"):
+        return ()
+    raw = cfg.raw("spare_axes")
+    if (
+        not isinstance(raw, list)
+        or not 1 <= len(raw) <= 6
+        or not all(isinstance(v, str) and v for v in raw)
+        or len(set(raw) | set(names)) != len(raw) + len(names)
+    ):
+        raise cfg.error("spare_axes", raw, "1..6 distinct non-empty names, none an actuator's name")
+    return tuple(raw)
+
+
+def _traction_loss(
+    t: ConfigReader, platform: Platform, name: str
+) -> tuple[Platform, dict[str, float]]:
+    """The ``[traction_loss]`` table: a yaw slider on top, one more linear actuator (the last
+    name of ``actuators``).
+
+    Keys: ``arm_mm`` (pivot to the pin the actuator pushes, > 0), ``stroke_mm``,
+    ``margin_mm`` (kept free at each end), ``lead_mm``, ``pulses_per_rev`` or
+    ``pulses_per_mm``, ``direction``, ``home_lift_mm`` (pulse 0 this far above the retracted
+    end, as the legs' IMAX PA40), and its own limits ``max_speed_mm_s``, ``max_accel_mm_s2``,
+    ``max_jerk_mm_s3`` (optional). The slider's travel is measured from its centre (the
+    neutral pose, yaw 0).
+    """
+    arm = t.number("arm_mm", lo=0.0, hi=1e6, lo_open=True) * _MM
+    stroke = t.number("stroke_mm", lo=0.0, hi=1e6, lo_open=True) * _MM
+    margin = t.number("margin_mm", 0.0, lo=0.0) * _MM
+    if 2 * margin >= stroke:
+        raise t.error("margin_mm", margin / _MM, "less than half of stroke_mm")
+    lead = t.number("lead_mm", lo=0.0, hi=1e6, lo_open=True)
+    ppr = _pulses_per_rev(t, 1, np.array([lead]))
+    direction = _direction(t, 1)
+    lift = t.number("home_lift_mm", 0.0, lo=0.0) * _MM
+    lo, hi = -stroke / 2 + margin, stroke / 2 - margin
+    home = -stroke / 2 + lift
+    if not lo <= home <= hi:
+        raise t.error(
+            "home_lift_mm",
+            lift / _MM,
+            f"a lift in [{margin / _MM:g}, {(stroke - margin) / _MM:g}] mm (inside the usable "
+            "travel)",
+        )
+    limits: dict[str, float] = {}
+    for key, what in (("v_max", "max_speed_mm_s"), ("a_max", "max_accel_mm_s2"),
+                      ("j_max", "max_jerk_mm_s3")):  # fmt: skip
+        if t.has(what):
+            limits[key] = t.number(what, lo=0.0, hi=1e12, lo_open=True) * _MM
+    t.finish()
+    drive = Drive.linear(lead * _MM, ppr.astype(int), [home], direction)
+    out = platform.with_traction_loss(name=name, arm_m=arm, q_min=lo, q_max=hi, drive=drive)
+    return out, limits
+
+
+def _actuator_limits(
+    cfg: ConfigReader, platform: Platform, kind: str, tl_limits: dict[str, float]
+) -> Platform:
     """The optional ``[limits]`` table: the actuators' own speed/acceleration/jerk limits.
 
     Linear legs: ``max_speed_mm_s``, ``max_accel_mm_s2``, ``max_jerk_mm_s3``; crank legs:
     ``max_speed_deg_s``, ``max_accel_deg_s2``, ``max_jerk_deg_s3`` (each one number or one per
     leg). The yaw axis of ``seat2-yaw``: ``yaw_max_speed_deg_s``, ``yaw_max_accel_deg_s2``,
-    ``yaw_max_jerk_deg_s3``. A quantity is used when it is given for every actuator.
+    ``yaw_max_jerk_deg_s3``. A traction-loss slider takes its own from ``[traction_loss]``;
+    spare axes (held at pulse 0) take the legs' smallest. A quantity is used when it is given
+    for every moving actuator.
     """
     if not cfg.has("limits"):
         return platform
@@ -360,6 +445,15 @@ def _actuator_limits(cfg: ConfigReader, platform: Platform, kind: str) -> Platfo
                 )
             if legs is not None and yaw is not None:
                 legs = np.append(legs, math.radians(yaw))
+        if platform.traction_loss_arm_m is not None and legs is not None:
+            if key not in tl_limits:
+                raise ConfigError(
+                    f"{cfg.where} [traction_loss]: missing key "
+                    f"'max_{what}_mm_{suffix}' (the slider's own limit, like [limits] {name})"
+                )
+            legs = np.append(legs, tl_limits[key])
+        if legs is not None and platform.spare_axes:
+            legs = np.append(legs, [float(np.min(legs))] * platform.spare_axes)
         values[key] = legs
     lim.finish()
     return platform.with_actuator_limits(**values)

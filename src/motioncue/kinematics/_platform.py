@@ -23,6 +23,7 @@ from ._rotation import rot9, rot9_derivatives, rot_one
 __all__ = [
     "DOF_NAMES",
     "CheckResult",
+    "Corner4",
     "FKResult",
     "Platform",
     "Seat2Yaw",
@@ -35,6 +36,7 @@ DOF_NAMES = ("x", "y", "z", "roll", "pitch", "yaw")
 _CHUNK = 2048  # poses per block in batch IK: temporaries stay in cache, BLAS stays single-threaded
 _JAC_CHUNK = 8192  # poses per block in batch Jacobians (bounds temporary memory)
 _NO_REACH = np.ones((0, 0), dtype=bool)
+_TL_MAX_RAD = math.radians(89.0)  # a traction-loss slider's pin leaves its slot beyond this
 
 
 def _readonly(a: Any, dtype: Any = float) -> np.ndarray:
@@ -112,11 +114,18 @@ def _as_poses(poses: Any) -> np.ndarray:
 
 
 class Platform:
-    """A motion platform: legs (linear or crank) plus, optionally, a direct yaw axis.
+    """A motion platform: legs (linear or crank) plus, optionally, a yaw axis (a turntable
+    under the legs, or a traction-loss slider on top) and spare controller axes.
 
     Instances are frozen. Build one with :func:`~motioncue.kinematics.load_platform` or the
     geometry classes (:class:`Stewart6Linear`, :class:`Stewart6Rotary`, :class:`Seat3`,
-    :class:`Seat2Yaw`).
+    :class:`Seat2Yaw`, :class:`Corner4`), then :meth:`with_traction_loss` and
+    :meth:`with_spare_axes`. Everything downstream (limits, limiters, rides, emulators)
+    sees only ``n_actuators`` positions with their strokes, drives and limits: a slider is
+    one more linear actuator, a spare axis one whose position is always 0 (pulse 0). There
+    may be more moving actuators than degrees of freedom (a corner rig: four legs, three);
+    the Jacobian at neutral must have full column rank, :meth:`forward` solves in least
+    squares and :meth:`project` maps positions onto the nearest rigid pose.
 
     Attributes
     ----------
@@ -181,6 +190,131 @@ class Platform:
             object.__setattr__(out, key, _readonly(arr))
         return out
 
+    def with_traction_loss(
+        self,
+        *,
+        name: str,
+        arm_m: float,
+        q_min: float,
+        q_max: float,
+        drive: Drive | None = None,
+    ) -> Platform:
+        """This platform with a traction-loss slider on top: one more (linear) actuator.
+
+        The slider turns the seat about a vertical pivot through the platform frame origin; a
+        linear actuator pushes a pin ``arm_m`` behind the pivot sideways in a slot, so its
+        travel is ``arm_m * tan(yaw)``. The slider takes the pose's yaw, and the legs below
+        it see the pose without yaw (a hexapod's own yaw is held at zero). Modelling note:
+        the slider's yaw is the pose's Z-Y-X yaw, as for a turntable under the tilt; a slider
+        on top of a tilted frame turns about the frame's own vertical, a difference of second
+        order (roll times yaw) that the cueing does not resolve.
+
+        Parameters
+        ----------
+        name
+            The new actuator's name (controller order: after the legs).
+        arm_m
+            Pivot-to-pin distance (m), > 0.
+        q_min, q_max
+            Usable slider travel from its centre (m), ``q_min < 0 < q_max``.
+        drive
+            The slider's drive (one linear actuator); default 5 mm lead, 10000 pulses per
+            turn, homed at the centre.
+
+        Returns
+        -------
+        Platform
+            A new frozen platform with ``n_actuators + 1`` actuators and yaw in its
+            ``dof_mask``. The actuators' own limits are not carried over (give them again with
+            :meth:`with_actuator_limits`).
+
+        Raises
+        ------
+        ConfigError
+            The platform already has a yaw axis or spare axes, or a value is out of range.
+        """
+        if self._yaw_axis or self._n_spare:
+            raise ConfigError(
+                f"platform {self.name!r} already has a yaw axis or spare axes; a traction-loss "
+                "slider goes on a platform of legs only (give spare axes after it)"
+            )
+        args = dict(self._init_args)
+        mask = list(args["leg_pose_mask"])
+        mask[5] = False
+        dof = list(args["dof_mask"])
+        dof[5] = True
+        if drive is None:
+            drive = Drive.linear(0.005, 10000, [0.0])
+        args.update(
+            name=self.name,
+            actuator_names=(*self.actuator_names, name),
+            leg_pose_mask=mask,
+            dof_mask=dof,
+            q_min=[*self.q_min, float(q_min)],
+            q_max=[*self.q_max, float(q_max)],
+            drives=Drive.concat(self.drives, drive),
+            yaw_axis=True,
+            yaw_arm_m=_positive("arm_m", arm_m),
+        )
+        return _rebuilt(self, args)
+
+    def with_spare_axes(self, names: Sequence[str], drive: Drive | None = None) -> Platform:
+        """This platform with controller axes that drive nothing, after its actuators.
+
+        A 6-axis controller (the SC-MBOX in 6-axis mode, an IMAX with PA02 = 6) always takes
+        six positions per frame (MBOX manual 4.2.7/4.2.9: object channel 1 carries X Y Z U V
+        W); on a rig with fewer actuators the spare axes are held at pulse 0, their homed
+        (initial-positioning) origin, in every frame: their position is 0 whatever the pose,
+        so the limiters never move them. Their usable stroke is 1.75 pulses either side of
+        that origin, so the limits table (stroke rounded inwards to whole pulses) allows
+        ``[-1, 1]`` pulses: room for the half-pulse rounding margins the generator and the
+        player keep (two of them), and any frame moving a spare axis by more than one pulse
+        (0.5 um on a 5 mm lead) is refused by the ride check and flagged by the independent
+        frame checker that judges the emulators' traces.
+
+        Parameters
+        ----------
+        names
+            One name per spare axis (controller order, after the actuators).
+        drive
+            The spare axes' drive: they must agree with the controller's drive parameters
+            like the others (MBOX Fn0C1/Fn0C2); default the first actuator's lead and pulses.
+        """
+        k = len(names)
+        if k < 1:
+            raise ConfigError("names is empty; allowed: one name per spare axis")
+        if self._n_spare:
+            raise ConfigError(f"platform {self.name!r} already has spare axes")
+        if drive is None:
+            lead = float(self.drives.units_per_rev[0])
+            ppr = int(self.drives.pulses_per_rev[0])
+            drive = Drive.linear([lead] * k, [ppr] * k, [0.0] * k)
+        if drive.n != k or set(drive.kinds) != {"linear"} or np.any(drive.q_home != 0.0):
+            raise ConfigError(
+                f"spare axes drive must be {k} linear drive(s) homed at 0 (pulse 0 = hold)"
+            )
+        half = 1.75 / np.abs(np.asarray(drive.pulses_per_unit, dtype=float))
+        args = dict(self._init_args)
+        args.update(
+            name=self.name,
+            actuator_names=(*self.actuator_names, *names),
+            q_min=[*self.q_min, *(-half)],
+            q_max=[*self.q_max, *half],
+            drives=Drive.concat(self.drives, drive),
+            spare_axes=k,
+        )
+        return _rebuilt(self, args)
+
+    @property
+    def spare_axes(self) -> int:
+        """Number of trailing controller axes held at pulse 0 (see :meth:`with_spare_axes`)."""
+        return self._n_spare
+
+    @property
+    def traction_loss_arm_m(self) -> float | None:
+        """Pivot-to-pin distance (m) of a traction-loss slider, None without one."""
+        return self._yaw_arm
+
     def __init__(
         self,
         *,
@@ -193,9 +327,19 @@ class Platform:
         q_max: npt.ArrayLike,
         drives: Drive | None,
         yaw_axis: bool = False,
+        yaw_arm_m: float | None = None,
+        spare_axes: int = 0,
         description: str = "",
     ) -> None:
-        n = legs.n + (1 if yaw_axis else 0)
+        if yaw_arm_m is not None and not (yaw_axis and math.isfinite(yaw_arm_m) and yaw_arm_m > 0):
+            raise ConfigError(
+                f"yaw_arm_m = {yaw_arm_m!r} is invalid; allowed: a finite length > 0 (m), "
+                "with a yaw axis"
+            )
+        if not (isinstance(spare_axes, int) and 0 <= spare_axes <= 12):
+            raise ConfigError(f"spare_axes = {spare_axes!r} is invalid; allowed: 0..12")
+        n_moving = legs.n + (1 if yaw_axis else 0)
+        n = n_moving + spare_axes
         names = tuple(str(a) for a in actuator_names)
         if len(names) != n or len(set(names)) != n:
             raise ConfigError(
@@ -212,7 +356,8 @@ class Platform:
                     "(from neutral) does not contain the neutral pose strictly inside; "
                     "check the neutral height and the stroke"
                 )
-        kinds = (legs.kind,) * legs.n + (("rotary",) if yaw_axis else ())
+        yaw_kind = "rotary" if yaw_arm_m is None else "linear"
+        kinds = (legs.kind,) * legs.n + ((yaw_kind,) if yaw_axis else ()) + ("linear",) * spare_axes
         if drives is None:
             drives = _default_drives(kinds, q_lo)
         if drives.kinds != kinds:
@@ -235,9 +380,25 @@ class Platform:
         a(self, "_leg_mask", np.asarray(leg_pose_mask, dtype=float))
         a(self, "_leg_mask_list", [bool(v) for v in leg_pose_mask])
         a(self, "_all_dof_legs", all(bool(v) for v in leg_pose_mask))
-        fast = self._all_dof_legs and not yaw_axis and isinstance(legs, LinearLegs)
+        fast = (
+            self._all_dof_legs and not yaw_axis and not spare_axes and isinstance(legs, LinearLegs)
+        )
         a(self, "_fast_linear", legs if fast else None)
         a(self, "_yaw_axis", bool(yaw_axis))
+        a(self, "_yaw_arm", None if yaw_arm_m is None else float(yaw_arm_m))
+        a(self, "_n_spare", int(spare_axes))
+        a(self, "_tail", [0.0] * int(spare_axes))
+        a(
+            self,
+            "_init_args",
+            {
+                "name": name, "actuator_names": names, "legs": legs,
+                "leg_pose_mask": [bool(v) for v in leg_pose_mask],
+                "dof_mask": [bool(v) for v in dof_mask], "q_min": q_lo, "q_max": q_hi,
+                "drives": drives, "yaw_axis": bool(yaw_axis), "yaw_arm_m": yaw_arm_m,
+                "spare_axes": int(spare_axes), "description": description,
+            },
+        )  # fmt: skip
         a(self, "_dof_idx", np.flatnonzero(np.asarray(dof_mask, dtype=bool)))
         a(self, "q_neutral", _readonly(np.zeros(n)))
         a(self, "q_min", _readonly(q_lo))
@@ -250,22 +411,29 @@ class Platform:
             absolute = legs.theta0
         else:
             raise TypeError(f"unknown leg set {type(legs).__name__}")
-        a(self, "neutral_absolute", _readonly(np.concatenate([absolute, [0.0] * yaw_axis])))
-        if len(self._dof_idx) != n:
+        a(
+            self,
+            "neutral_absolute",
+            _readonly(np.concatenate([absolute, [0.0] * (yaw_axis + spare_axes)])),
+        )
+        if len(self._dof_idx) > n_moving:
             raise ConfigError(
-                f"{n} actuators cannot drive {len(self._dof_idx)} degrees of freedom "
-                f"({', '.join(DOF_NAMES[i] for i in self._dof_idx)})"
+                f"{n_moving} moving actuators cannot drive {len(self._dof_idx)} degrees of "
+                f"freedom ({', '.join(DOF_NAMES[i] for i in self._dof_idx)})"
             )
         if isinstance(legs, CrankLegs) and not np.all(legs.reachable0):
             bad = [names[i] for i in np.flatnonzero(~legs.reachable0)]
             raise ConfigError(f"crank legs {bad} cannot reach their rod at the neutral pose")
         jac0 = self._jacobian_one([0.0] * 6)[:, self._dof_idx]
+        # more actuators than degrees of freedom (a corner rig's fourth leg): the Jacobian
+        # must still have full column rank, and forward kinematics solves in least squares
         if not np.linalg.cond(jac0) < 1e10:
             raise ConfigError(
                 "the geometry is singular at the neutral pose (the actuators cannot hold "
                 f"{', '.join(DOF_NAMES[i] for i in self._dof_idx)} there)"
             )
-        a(self, "_jac0_inv", np.linalg.inv(jac0))
+        a(self, "_square", jac0.shape[0] == jac0.shape[1])
+        a(self, "_jac0_inv", np.linalg.pinv(jac0))
         fk = self.forward(home)
         if not fk.converged:
             raise ConfigError(
@@ -294,6 +462,11 @@ class Platform:
     _fast_linear: LinearLegs | None
     _jac0_inv: np.ndarray
     _yaw_axis: bool
+    _yaw_arm: float | None
+    _n_spare: int
+    _tail: list[float]
+    _init_args: dict[str, Any]
+    _square: bool
     _dof_idx: np.ndarray
 
     def __setattr__(self, key: str, value: Any) -> None:
@@ -340,12 +513,48 @@ class Platform:
             reach = np.ones((n_pose, legs.n), dtype=bool) if want_reach else _NO_REACH
         else:
             q_legs, reach = legs.q(legs.vectors(feat_t.T))
-        if self._yaw_axis:
-            q = np.concatenate([q_legs, poses[:, 5:6]], axis=1)
+        if self._yaw_axis or self._n_spare:
+            parts = [q_legs]
+            reach_parts = [reach]
+            if self._yaw_axis:
+                q_yaw, yaw_ok = self._yaw_q(poses[:, 5])
+                parts.append(q_yaw[:, None])
+                reach_parts.append(yaw_ok[:, None])
+            parts.append(np.zeros((n_pose, self._n_spare)))
+            q = np.concatenate(parts, axis=1)
             if want_reach:
-                reach = np.concatenate([reach, np.ones((n_pose, 1), dtype=bool)], axis=1)
+                reach_parts.append(np.ones((n_pose, self._n_spare), dtype=bool))
+                reach = np.concatenate(reach_parts, axis=1)
             return q, reach
         return q_legs, reach
+
+    def _yaw_q(self, yaw: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Yaw-axis position ``(N,)`` and reachable ``(N,)`` for yaw angles ``(N,)`` (rad).
+
+        A turntable (no arm): ``q = yaw`` (rad). A traction-loss slider with arm ``L``: a pin
+        at ``L`` behind the pivot in a slot of the seat, pushed sideways by a linear actuator:
+        ``q = L tan(yaw)`` (m); beyond +-89 deg the pin leaves any slot (unreachable, ``q``
+        held at its +-89 deg value).
+        """
+        arm = self._yaw_arm
+        if arm is None:
+            return yaw.copy(), np.ones(yaw.shape, dtype=bool)
+        ok = np.abs(yaw) < _TL_MAX_RAD
+        return arm * np.tan(np.clip(yaw, -_TL_MAX_RAD, _TL_MAX_RAD)), ok
+
+    def _yaw_q_one(self, yaw: float) -> tuple[float, bool]:
+        arm = self._yaw_arm
+        if arm is None:
+            return yaw, True
+        return arm * math.tan(min(max(yaw, -_TL_MAX_RAD), _TL_MAX_RAD)), abs(yaw) < _TL_MAX_RAD
+
+    def _yaw_dq(self, yaw: float) -> float:
+        """``d q / d yaw`` of the yaw axis (1 for a turntable, ``L / cos(yaw)^2`` for TL)."""
+        arm = self._yaw_arm
+        if arm is None:
+            return 1.0
+        c = math.cos(min(max(yaw, -_TL_MAX_RAD), _TL_MAX_RAD))
+        return arm / (c * c)
 
     def _inverse_one(self, pose: list[float]) -> list[float]:
         fast = self._fast_linear
@@ -371,7 +580,11 @@ class Platform:
         d = legs.vectors_one(rot_one(roll, pitch, yaw), (x, y, z))
         q, reachable = legs.q_one_checked(d)
         if self._yaw_axis:
-            q.append(pose[5])
+            q_yaw, yaw_ok = self._yaw_q_one(pose[5])
+            q.append(q_yaw)
+            reachable = reachable and yaw_ok
+        if self._n_spare:
+            q.extend(self._tail)
         return d, q, reachable
 
     def inverse(self, poses: Any) -> np.ndarray:
@@ -462,7 +675,11 @@ class Platform:
         jac[:, : legs.n, 3:6] = np.einsum("nij,nkij->nik", g, dp)
         jac[:, : legs.n, :] *= m
         if self._yaw_axis:
-            jac[:, -1, 5] = 1.0
+            if self._yaw_arm is None:
+                jac[:, legs.n, 5] = 1.0
+            else:
+                c = np.cos(np.clip(flat[:, 5], -_TL_MAX_RAD, _TL_MAX_RAD))
+                jac[:, legs.n, 5] = self._yaw_arm / (c * c)
         return jac
 
     def _jacobian_one(
@@ -480,7 +697,9 @@ class Platform:
         if not self._all_dof_legs:
             jac *= self._leg_mask
         if self._yaw_axis:
-            jac = np.vstack([jac, [0.0, 0.0, 0.0, 0.0, 0.0, 1.0]])
+            jac = np.vstack([jac, [0.0, 0.0, 0.0, 0.0, 0.0, self._yaw_dq(pose[5])]])
+        if self._n_spare:
+            jac = np.vstack([jac, np.zeros((self._n_spare, 6))])
         return jac
 
     # --- forward kinematics -------------------------------------------------------------
@@ -494,6 +713,15 @@ class Platform:
     ) -> FKResult:
         """Pose for actuator positions, by Newton's method on the closed-form inverse.
 
+        With more moving actuators than degrees of freedom (a corner rig's fourth leg) the
+        steps are Gauss-Newton (least squares): positions no rigid pose gives (they would twist
+        the frame) end with ``converged=False`` and ``residual`` = how far the nearest rigid
+        pose is from them (see :meth:`project`).
+
+        A starting guess from which the iteration fails (one where a crank cannot reach its
+        rod, or too far away) is abandoned for the neutral pose, which every platform reaches;
+        the result is the better of the two runs, and ``iterations`` counts both.
+
         Parameters
         ----------
         q
@@ -503,7 +731,7 @@ class Platform:
         tol
             Convergence threshold on the max abs actuator residual (m or rad).
         max_iter
-            Iteration limit.
+            Iteration limit (per start).
 
         Returns
         -------
@@ -514,33 +742,55 @@ class Platform:
             raise ConfigError(f"q has shape {qv.shape}; expected ({self.n_actuators},)")
         if not np.isfinite(qv).all():
             raise _bad_input("q", qv)
-        pose = [0.0] * 6
         idx = [int(k) for k in self._dof_idx]
-        if guess is not None:
-            g = np.asarray(guess, dtype=float)
-            if g.shape != (6,) or not np.isfinite(g).all():
-                raise ConfigError(f"guess = {g!r} is invalid; allowed: 6 finite numbers")
-            for k in idx:
-                pose[k] = float(g[k])
         target = qv.tolist()
-        all_dof = len(idx) == 6
-        d, cur, _ = self._eval_one(pose)
+        if guess is None:
+            return self._newton([0.0] * 6, target, idx, True, tol, max_iter, 0)
+        g = np.asarray(guess, dtype=float)
+        if g.shape != (6,) or not np.isfinite(g).all():
+            raise ConfigError(f"guess = {g!r} is invalid; allowed: 6 finite numbers")
+        pose = [0.0] * 6
+        for k in idx:
+            pose[k] = float(g[k])
+        first = self._newton(pose, target, idx, False, tol, max_iter, 0)
+        if first.converged:
+            return first
+        again = self._newton([0.0] * 6, target, idx, True, tol, max_iter, first.iterations)
+        return again if again.residual <= first.residual else first
+
+    def _newton(
+        self,
+        pose: list[float],
+        target: list[float],
+        idx: list[int],
+        from_neutral: bool,
+        tol: float,
+        max_iter: int,
+        done: int,
+    ) -> FKResult:
+        """Newton (Gauss-Newton) iterations from ``pose``; ``done`` iterations already spent."""
+        square = self._square
+        d, cur, reachable = self._eval_one(pose)
         r = [c - t for c, t in zip(cur, target, strict=True)]
-        sq = sum(v * v for v in r)
+        sq = sum(v * v for v in r) if reachable else math.inf
         iterations = 0
         # Newton with backtracking: a full step is taken whenever it lowers the residual (the
         # usual case, quadratic convergence); otherwise, or when it leaves the region where
-        # every crank reaches its rod, the step is halved.
-        while max(map(abs, r)) > tol and iterations < max_iter:
+        # every crank reaches its rod, the step is halved. An unreachable start cannot be
+        # improved on (its residual is not a distance): the caller restarts from neutral.
+        while reachable and max(map(abs, r)) > tol and iterations < max_iter:
             iterations += 1
-            if iterations == 1 and guess is None:
+            if iterations == 1 and from_neutral:
                 step = (self._jac0_inv @ r).tolist()  # Jacobian at neutral, inverted once
             else:
                 jac = self._jacobian_one(pose, d, cur)
-                if not all_dof:
+                if len(idx) != 6:
                     jac = jac[:, idx]
                 try:
-                    step = np.linalg.solve(jac, r).tolist()
+                    if square:
+                        step = np.linalg.solve(jac, r).tolist()
+                    else:
+                        step = np.linalg.lstsq(jac, np.asarray(r), rcond=None)[0].tolist()
                 except np.linalg.LinAlgError:
                     break
             if not all(math.isfinite(v) for v in step):
@@ -550,21 +800,62 @@ class Platform:
                 trial = pose[:]
                 for j, k in enumerate(idx):
                     trial[k] -= alpha * step[j]
-                d_new, cur_new, reachable = self._eval_one(trial)
+                d_new, cur_new, ok = self._eval_one(trial)
                 r_new = [c - t for c, t in zip(cur_new, target, strict=True)]
                 sq_new = sum(v * v for v in r_new)
-                if sq_new < sq and reachable:
+                if sq_new < sq and ok:
                     break
                 alpha *= 0.5
             else:
                 break
             pose, d, cur, r, sq = trial, d_new, cur_new, r_new, sq_new
-        residual = max(map(abs, r))
+        residual = max(map(abs, r)) if reachable else math.inf
+        if not reachable and iterations == 0:
+            iterations = 1  # the unreachable start was evaluated and given up
         return FKResult(
             pose=np.array(pose),
             converged=bool(residual <= tol),
-            iterations=iterations,
+            iterations=done + iterations,
             residual=residual,
+        )
+
+    def project(self, q: Any, *, tol: float = 1e-9) -> tuple[np.ndarray, str | None]:
+        """The actuator positions of the rigid pose nearest to ``q`` (least squares).
+
+        On a platform with as many moving actuators as degrees of freedom every reachable
+        ``q`` is its own projection. With more (a corner rig: four legs, three degrees of
+        freedom) positions that no rigid pose gives would twist the frame; they are replaced
+        by the nearest positions a rigid frame can take.
+
+        Parameters
+        ----------
+        q
+            ``(n,)`` actuator positions (m or rad, from neutral).
+        tol
+            Largest change (m or rad) accepted as "consistent" without a note.
+
+        Returns
+        -------
+        q_rigid : ndarray ``(n,)``
+            Positions of the nearest rigid pose.
+        note : str or None
+            None when ``q`` is consistent within ``tol``; otherwise one line saying which
+            actuator moved and by how much (the frame would have been twisted).
+        """
+        qv = np.asarray(q, dtype=float)
+        fk = self.forward(qv)
+        q_rigid = self.inverse(fk.pose)
+        change = q_rigid - qv
+        worst = int(np.argmax(np.abs(change)))
+        if abs(change[worst]) <= tol:
+            return q_rigid, None
+        linear = self.actuator_kinds[worst] == "linear"
+        unit, scale = ("mm", 1e3) if linear else ("deg", 180 / math.pi)
+        moved = change[worst] * scale
+        return q_rigid, (
+            f"actuator positions {np.round(qv * scale, 6).tolist()} would twist the rigid "
+            f"frame of {self.name}: no pose gives them; projected to the nearest rigid pose "
+            f"(actuator {self.actuator_names[worst]!r} moved by {moved:+.6g} {unit})"
         )
 
     # --- checks -------------------------------------------------------------------------
@@ -610,6 +901,13 @@ class Platform:
     def has_yaw_axis(self) -> bool:
         """True when the last actuator is a direct yaw axis (turntable)."""
         return self._yaw_axis
+
+
+def _rebuilt(old: Platform, args: dict[str, Any]) -> Platform:
+    out = Platform(**args)
+    if old.default_preset is not None:
+        out = out.with_default_preset(old.default_preset)
+    return out
 
 
 def _default_drives(kinds: tuple[str, ...], q_min: np.ndarray) -> Drive:
@@ -733,6 +1031,25 @@ class Seat3(_LinearLegPlatform):
     _N_LEGS = 3
     _DOF_MASK = (False, False, True, True, True, False)
     _DEFAULT_NAME = "seat3"
+
+
+class Corner4(_LinearLegPlatform):
+    """4-actuator corner rig: one linear leg under each corner of a rigid cockpit frame; heave,
+    pitch and roll, with x, y and yaw held by the frame (its guide or its own stiffness).
+
+    Three degrees of freedom on four legs: the inverse is closed form (each leg's length for
+    the pose), the fourth leg follows from the other three. Positions no rigid pose gives
+    (they would twist the frame) are found by :meth:`forward` (``converged=False``) and
+    replaced by the nearest rigid ones by :meth:`project`. Legs may stand vertical (base and
+    platform anchors one above the other) or at a measured angle.
+
+    Parameters are those of :class:`Stewart6Linear` with ``(4, 3)`` anchors, the platform
+    frame origin being the centre the frame pitches and rolls about.
+    """
+
+    _N_LEGS = 4
+    _DOF_MASK = (False, False, True, True, True, False)
+    _DEFAULT_NAME = "corner4"
 
 
 class Seat2Yaw(Platform):

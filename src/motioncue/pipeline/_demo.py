@@ -1,5 +1,8 @@
 """The demo: bundled lap -> MBOX 6-axis ride for the bundled hexapod -> emulator -> compare.
 
+Another bundled platform and MBOX or IMAX controller can be named (``corner4-tl`` on
+``mbox6``); the cueing preset is then the platform's ``default_preset``.
+
 No hardware and no network: the emulator listens on loopback in this process.
 """
 
@@ -15,6 +18,7 @@ from typing import Any
 import numpy as np
 
 from .._config import config_dir
+from .._errors import ConfigError
 from ._ridefile import Ride, save_ride
 from ._verify import FrameCheck, check_frames
 
@@ -70,11 +74,19 @@ def run_demo(
     rate_hz: float = 100.0,
     speed: float = 10.0,
     log: Callable[[str], None] = print,
+    platform_name: str = "stewart6-linear",
+    controller_name: str = "mbox6",
 ) -> DemoResult:
-    """Generate, play to the emulator, compare, and write the report (see module docstring)."""
+    """Generate, play to the emulator, compare, and write the report (see module docstring).
+
+    ``platform_name``: a bundled platform or path; ``controller_name``: an MBOX or IMAX
+    controller (name or path), played to its emulator. The cueing preset is
+    ``racing-hexapod`` for the default hexapod, else the platform's ``default_preset``.
+    """
     from motioncue.cueing import load_cueing
     from motioncue.kinematics import load_platform
     from motioncue.output import load_controller, open_transport
+    from motioncue.output.imax import ImaxController, ImaxEmulator
     from motioncue.output.mbox import MboxController, MboxEmulator
     from motioncue.telemetry._recording import read_recording_csv
     from motioncue.trajectory import ActuatorLimits
@@ -86,18 +98,34 @@ def run_demo(
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     lap = config_dir("recordings") / "lap.csv"
-    platform = load_platform("stewart6-linear")
-    controller = load_controller("mbox6")
-    if not isinstance(controller, MboxController):  # the bundled mbox6.toml says kind = mbox
-        raise TypeError(f"bundled mbox6 is a {type(controller).__name__}")
-    cueing = load_cueing("racing-hexapod")
+    platform = load_platform(platform_name)
+    controller = load_controller(controller_name)
+    emulator: Any
+    if isinstance(controller, MboxController):
+        emulator = MboxEmulator
+    elif isinstance(controller, ImaxController):
+        emulator = ImaxEmulator
+    else:
+        raise ConfigError(
+            f"controller {controller_name!r} is a {type(controller).__name__}; the demo plays "
+            "to an MBOX or IMAX emulator"
+        )
+    preset = (
+        "racing-hexapod"
+        if platform_name == "stewart6-linear"
+        else (platform.default_preset or "racing")
+    )
+    cueing = load_cueing(preset)
     limits = ActuatorLimits.from_platform(platform, controller, rate_hz=rate_hz)
-    log(f"demo: {lap.name} (a {rate_hz:g} Hz vehicle-model lap) -> stewart6-linear on mbox6")
+    log(
+        f"demo: {lap.name} (a {rate_hz:g} Hz vehicle-model lap) -> {platform_name} on "
+        f"{controller_name} (cueing preset {preset})"
+    )
     t0 = time.perf_counter()
     ride, report = generate_ride(
         read_recording_csv(lap), platform, controller, cueing, rate_hz=rate_hz,
-        limits=limits, source=lap.name, platform_name="stewart6-linear",
-        controller_name="mbox6",
+        limits=limits, source=lap.name, platform_name=platform_name,
+        controller_name=controller_name,
     )  # fmt: skip
     gen_s = time.perf_counter() - t0
     ride_path = save_ride(out / "lap.ride", ride)
@@ -112,8 +140,8 @@ def run_demo(
     # time: the emulator's timeline follows the absolute frame times, not arrival.
     emu_ctrl = dataclasses.replace(controller, buffer_frames=ride.n_frames + 1024)
     t1 = time.perf_counter()
-    with MboxEmulator(emu_ctrl) as emu, open_transport(f"udp://127.0.0.1:{emu.port}") as link:
-        log(f"playing to the MBOX emulator on udp://127.0.0.1:{emu.port} at {speed:g}x")
+    with emulator(emu_ctrl) as emu, open_transport(f"udp://127.0.0.1:{emu.port}") as link:
+        log(f"playing to the {emulator.__name__} on udp://127.0.0.1:{emu.port} at {speed:g}x")
 
         played = play_ride(
             ride, platform, controller, limits, link, speed=speed, spin_s=0.0,

@@ -188,7 +188,11 @@ def generate_ride(
     q_desired = platform.inverse(poses)
     lap("inverse kinematics")
     step("actuator limits (casadi)", 0.5)
-    opt, q, pulses, t_s, check = _finish(q_desired, platform, tight, table, dt)
+    # planned one pulse rounding inside ``tight``: rounding the plan to whole pulses then
+    # keeps every frame inside ``tight``, which is what the player's live limiter enforces, so
+    # a ride at its limits is replayed frame for frame (no frame clamped on the way out)
+    planned = pulse_rounding_limits(tight, platform, dt)
+    opt, q, pulses, t_s, check = _finish(q_desired, platform, planned, table, dt)
     lap("actuator limits, pulses and check")
     n_in = len(ramp_in.poses) - 1
     cue = slice(n_in, n_in + len(poses_cue_ok))
