@@ -166,10 +166,14 @@ class OptimalCueing:
         object.__setattr__(self, "_qp", QpSolver(self.mpc.solver, hess, a_mat.shape[0]))
 
     def _window_qp(
-        self, x0: NDArray[np.float64], d: NDArray[np.float64]
+        self,
+        x0: NDArray[np.float64],
+        d: NDArray[np.float64],
+        about: NDArray[np.float64] | None = None,
     ) -> tuple[NDArray[np.float64], ...]:
-        """Gradient and bounds of one window from state ``x0`` with vehicle motion ``d``
-        ``(n_window + 1, 6)``."""
+        """Gradient, constraint matrix and bounds of one window from state ``x0`` with vehicle
+        motion ``d`` ``(n_window + 1, 6)``; the legs linearised about neutral or, with
+        ``about`` ``(blocks, 6)``, about those poses at the block ends."""
         m = self.model
         n = self.n_window
         bs = self.mpc.block_samples
@@ -185,12 +189,27 @@ class OptimalCueing:
         g = 2.0 * np.einsum("knu,kn->u", self._gam[1:], lin)
         g += 2.0 * self._gam[-1].T @ (self._tw @ xf[-1])
         lim = self.limits
-        jac = np.asarray(lim.platform.jacobian(np.zeros(6)), dtype=float)
         ends = np.arange(1, nb + 1) * bs
         fe = xf[ends]
-        pos_free = fe[:, 0:6] @ jac.T
-        vel_free = fe[:, 6:12] @ jac.T
-        nl = jac.shape[0]
+        a_mat = self._a_mat
+        if about is None:
+            jac = np.asarray(lim.platform.jacobian(np.zeros(6)), dtype=float)
+            pos_free = fe[:, 0:6] @ jac.T
+            vel_free = fe[:, 6:12] @ jac.T
+            nl = jac.shape[0]
+        else:
+            jb = np.asarray(lim.platform.jacobian(about), dtype=float)  # (nb, nl, 6)
+            qb = np.asarray(lim.platform.inverse(about), dtype=float)  # (nb, nl)
+            off = qb - np.einsum("blj,bj->bl", jb, about) - lim.q_mid
+            pos_free = np.einsum("blj,bj->bl", jb, fe[:, 0:6]) + off
+            vel_free = np.einsum("blj,bj->bl", jb, fe[:, 6:12])
+            nl = jb.shape[1]
+            ge = self._gam[ends]
+            a_mat = a_mat.copy()
+            a_mat[: nb * nl] = np.einsum("blj,bju->blu", jb, ge[:, 0:6]).reshape(nb * nl, -1)
+            a_mat[nb * nl : 2 * nb * nl] = np.einsum("blj,bju->blu", jb, ge[:, 6:12]).reshape(
+                nb * nl, -1
+            )
         lo = [-lim.q_half - pos_free, -lim.v_max - vel_free, np.broadcast_to(-lim.a_max, (nb, nl))]
         hi = [lim.q_half - pos_free, lim.v_max - vel_free, np.broadcast_to(lim.a_max, (nb, nl))]
         tilt = [i for i in (3, 4) if self.params.dofs[i]]
@@ -208,7 +227,7 @@ class OptimalCueing:
                 if i in (3, 4):
                     lbx[j :: m.nu] = -lim.tilt_accel
                     ubx[j :: m.nu] = lim.tilt_accel
-        return g, lba, uba, lbx, ubx
+        return g, a_mat, lba, uba, lbx, ubx, xf[ends, 0:6], self._gam[ends, 0:6]
 
     # ------------------------------------------------------------------ interface
     def initial_state(self) -> MpcState:
@@ -280,9 +299,13 @@ class OptimalCueing:
             d = d_all[idx]
             if start + nw + 1 > n:  # past the end: the vehicle at rest
                 d[n - start :] = 0.0
-            g, lba, uba, lbx, ubx = self._window_qp(st.x, d)
             t0 = time.perf_counter()
-            ok, u, _, _ = self._qp.solve(g, self._a_mat, lba, uba, lbx, ubx)
+            g, a_mat, lba, uba, lbx, ubx, p_free, g_end = self._window_qp(st.x, d)
+            ok, u, _, _ = self._qp.solve(g, a_mat, lba, uba, lbx, ubx)
+            if ok:  # again with the legs linearised about this plan (sequential QP)
+                about = p_free + g_end @ u
+                g, a_mat, lba, uba, lbx, ubx, _, _ = self._window_qp(st.x, d, about)
+                ok, u, _, _ = self._qp.solve(g, a_mat, lba, uba, lbx, ubx)
             times.append((time.perf_counter() - t0) * 1e3)
             st.solves += 1
             keep = min(ns, n - start)
