@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import dataclasses
+import time
 import math
 from pathlib import Path
 
@@ -222,3 +223,32 @@ def test_optimal_is_offline_and_within_the_limits() -> None:
     q = plat.inverse(res.poses)
     assert np.all(q <= lim.q_max) and np.all(q >= lim.q_min)
     assert np.abs(res.poses).max() > 1e-3
+
+
+def test_the_bridge_runs_mpc_live_within_the_limits_and_reports_its_solves() -> None:
+    from test_bridge import GATE, FakeSource, ListTransport, _decode_frames
+
+    from motioncue.pipeline._bridge import Bridge, BridgeConfig
+    from motioncue.pipeline._verify import check_frames
+
+    platform = load_platform("stewart6-linear")
+    ctrl = load_controller("mbox6")
+    lim = ActuatorLimits.from_platform(platform, ctrl, rate_hz=FS)
+    src, tr = FakeSource(), ListTransport()
+    bridge = Bridge(
+        platform, ctrl, load_cueing("mpc-hexapod"), src, tr, lim, BridgeConfig(FS, GATE)
+    )
+    f, w = _drive(300, 200)
+    f[50] = np.nan
+    with bridge:
+        for fk, wk in zip(f, w, strict=True):
+            src.put(tuple(fk.tolist()), tuple(wk.tolist()))
+            time.sleep(1 / FS)
+        during = bridge.stats
+    final = bridge.stats
+    assert during.state == "live" and final.error is None
+    assert final.cueing["solves"] > 50 and final.cueing["p99_ms"] > 0.0
+    assert "solve p99" in final.status_line() and final.washout_bad_samples >= 1
+    t, p = _decode_frames(tr.sent)
+    chk = check_frames(t, p, lim.to_pulses_table(platform), start_at_rest=True)
+    assert chk.ok, chk.summary()

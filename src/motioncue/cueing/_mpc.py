@@ -63,6 +63,7 @@ from __future__ import annotations
 
 import math
 import time
+from collections import deque
 from collections.abc import MutableSequence, Sequence
 from dataclasses import dataclass, field
 from typing import Any
@@ -396,9 +397,11 @@ class MpcState:
     warm_u, warm_lam_a, warm_lam_x : arrays or None
         The last solution, to warm-start the next solve.
     solves, failed, late : int
-        Solves attempted, failed (infeasible or not converged), dropped as late.
-    solve_ms : list of float
-        Wall time of each solve (ms).
+        Solves attempted, failed (infeasible or not converged), dropped as late, since the
+        state was made (:meth:`MpcCueing.reset` keeps these diagnostics, so a live session's
+        figures survive the bridge's resets while parked).
+    solve_ms : deque of float
+        Wall time of the last (at most 6000) solves (ms).
     """
 
     x: NDArray[np.float64]
@@ -409,7 +412,8 @@ class MpcState:
     solves: int = 0
     failed: int = 0
     late: int = 0
-    solve_ms: list[float] = field(default_factory=list)
+    solve_ms: deque[float] = field(default_factory=lambda: deque(maxlen=6000))
+    last_ms: float = 0.0
 
     @property
     def bad_samples(self) -> int:
@@ -594,17 +598,17 @@ class MpcCueing:
         return MpcState(x=np.zeros(self.model.nx), classical=self.classical.initial_state())
 
     def reset(self, state: MpcState) -> None:
-        """Put ``state`` back to :meth:`initial_state` (in place); clears the statistics."""
+        """Put ``state`` back to :meth:`initial_state` (in place); the solve statistics are
+        kept (diagnostics of the session, not part of the algorithm's state)."""
         state.x[:] = 0.0
         self.classical.reset(state.classical)
         state.warm_u = state.warm_lam_a = state.warm_lam_x = None
-        state.solves = state.failed = state.late = 0
-        state.solve_ms.clear()
 
     def stats(self, state: MpcState) -> dict[str, float]:
-        """Solve statistics since the last reset: ``solves``, ``failed``, ``late``,
-        ``fallbacks`` (counts) and ``p50_ms``, ``p99_ms``, ``max_ms`` of the solve time."""
-        t = np.asarray(state.solve_ms[-100000:], dtype=float)
+        """Solve statistics of ``state``: ``solves``, ``failed``, ``late``, ``fallbacks``
+        (counts since the state was made) and ``p50_ms``, ``p99_ms``, ``max_ms`` of the solve
+        time over the last (at most 6000) solves; the bridge prints them."""
+        t = np.array(state.solve_ms, dtype=float)
         out: dict[str, float] = {
             "solves": float(state.solves),
             "failed": float(state.failed),
@@ -673,7 +677,8 @@ class MpcCueing:
         ok, u, la, lx = self._qp.solve(g, a_mat, lba, uba, lbx, ubx, warm)
         elapsed = time.perf_counter() - t0
         state.solves += 1
-        state.solve_ms.append(elapsed * 1e3)
+        state.last_ms = elapsed * 1e3
+        state.solve_ms.append(state.last_ms)
         if not ok:
             state.failed += 1
             state.warm_u = state.warm_lam_a = state.warm_lam_x = None
@@ -745,12 +750,13 @@ class MpcCueing:
         bad = np.zeros(n, dtype=bool)
         f_used = np.zeros((n, 3))
         w_used = np.zeros((n, 3))
-        t_start = len(st.solve_ms)
+        times = np.zeros(n)
         fb_start = st.fallbacks
         bad_start = st.bad_samples
         for k in range(n):
             before = st.bad_samples
             poses[k] = self._advance(st, fa[k].tolist(), wa[k].tolist(), None)
+            times[k] = st.last_ms
             bad[k] = st.bad_samples != before
             hold = st.classical.hold
             f_used[k] = hold[0:3]
@@ -762,6 +768,6 @@ class MpcCueing:
             f_used=f_used,
             w_used=w_used,
             fallbacks=st.fallbacks - fb_start,
-            solve_ms=np.asarray(st.solve_ms[t_start:], dtype=float),
+            solve_ms=times,
             fs_hz=self.fs_hz,
         )

@@ -239,8 +239,6 @@ class OptimalCueing:
         state.x[:] = 0.0
         self.classical.reset(state.classical)
         state.warm_u = state.warm_lam_a = state.warm_lam_x = None
-        state.solves = state.failed = state.late = 0
-        state.solve_ms.clear()
 
     def step(
         self,

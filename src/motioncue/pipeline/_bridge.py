@@ -170,6 +170,10 @@ class BridgeStats:
         priority, where the platform started).
     send_errors : int
         Transient send errors met and retried within their frame.
+    cueing : dict[str, float]
+        The cueing algorithm's own figures when it reports any (``stats(state)``; the MPC:
+        ``solves``, ``failed``, ``late``, ``fallbacks``, ``p50_ms``, ``p99_ms``, ``max_ms``
+        of its solves); empty for the classical washout.
     """
 
     state: str
@@ -197,6 +201,7 @@ class BridgeStats:
     error: str | None
     notes: tuple[str, ...] = ()
     send_errors: int = 0
+    cueing: dict[str, float] = field(default_factory=dict)
 
     def status_line(self) -> str:
         """One line for a terminal status display."""
@@ -217,6 +222,8 @@ class BridgeStats:
             f" {self.bad_packets}{f' ({bad})' if bad else ''} | missed {self.missed_deadlines}"
             + ("".join(f" | {k}" for k, v in sorted(self.packet_reasons.items())
                        if v and k.startswith("note: ")))
+            + (f" | solve p99 {self.cueing['p99_ms']:.2f} ms fallback"
+               f" {int(self.cueing['fallbacks'])}" if "p99_ms" in self.cueing else "")
         )  # fmt: skip
 
 
@@ -609,4 +616,15 @@ class Bridge:
             error=self._error,
             notes=tuple(self._notes) + _telemetry_notes(src, self.source_finished),
             send_errors=self.stage.send_errors,
+            cueing=self._cueing_stats(),
         )
+
+    def _cueing_stats(self) -> dict[str, float]:
+        """The cueing algorithm's ``stats(state)`` (MPC solve times, fallbacks), if it has it."""
+        fn = getattr(self.washout, "stats", None)
+        if not callable(fn):
+            return {}
+        try:
+            return {str(k): float(v) for k, v in dict(fn(self.washout_state)).items()}
+        except Exception as exc:  # a plug-in's report must not stop the bridge
+            return {f"stats unavailable: {type(exc).__name__}": 1.0}
