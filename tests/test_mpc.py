@@ -3,8 +3,8 @@
 from __future__ import annotations
 
 import dataclasses
-import time
 import math
+import time
 from pathlib import Path
 
 import numpy as np
@@ -226,10 +226,9 @@ def test_optimal_is_offline_and_within_the_limits() -> None:
 
 
 def test_the_bridge_runs_mpc_live_within_the_limits_and_reports_its_solves() -> None:
-    from test_bridge import GATE, FakeSource, ListTransport, _decode_frames
-
     from motioncue.pipeline._bridge import Bridge, BridgeConfig
     from motioncue.pipeline._verify import check_frames
+    from test_bridge import GATE, FakeSource, ListTransport, _decode_frames
 
     platform = load_platform("stewart6-linear")
     ctrl = load_controller("mbox6")
