@@ -195,8 +195,13 @@ def build_model(
     zx[6:12, 0:6] = np.diag(np.sqrt(mp.w_pose))
     zx[12:18, 6:12] = np.diag(np.sqrt(mp.w_vel))
     r = np.diag(np.asarray(mp.w_acc)[list(active)])
+    a = e[:nx, :nx].copy()
+    for i in range(6):  # a DOF the machine does not move stays at zero: no dynamics (and the
+        if i not in active:  # Riccati equation then sees no uncontrollable integrator)
+            a[i, :] = 0.0
+            a[6 + i, :] = 0.0
     return LinearModel(
-        a=e[:nx, :nx],
+        a=a,
         bu=e[:nx, nx : nx + nu],
         bd=e[:nx, nx + nu :],
         zx=zx,
@@ -223,7 +228,13 @@ def terminal_weight(m: LinearModel) -> NDArray[np.float64]:
     from scipy.linalg import solve_discrete_are
 
     q = m.q
-    p = solve_discrete_are(m.a, m.bu, q + 1e-12 * np.eye(m.nx), m.r)
+    try:
+        p = solve_discrete_are(m.a, m.bu, q + 1e-12 * np.eye(m.nx), m.r)
+    except (np.linalg.LinAlgError, ValueError) as exc:
+        raise ConfigError(
+            f"MPC weights give no finite Riccati solution ({exc}); allowed: w_pose, w_vel "
+            "and w_acc > 0 on every moved degree of freedom"
+        ) from None
     t = p - q
     return np.asarray(0.5 * (t + t.T))
 

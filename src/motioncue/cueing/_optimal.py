@@ -7,8 +7,10 @@ event. A long ride is cut into overlapping windows of ``window_s``; each window'
 from the state the previous windows reached, and its first ``stride_s`` are kept (the rest of
 the window only makes the kept part aware of what follows). Within a window the input (the
 platform acceleration) is held over blocks of ``block_samples`` samples; the leg lengths are
-linearised about the neutral pose (the usable stroke is ``stroke_use`` of the real one, the
-rest absorbs the linearisation), speed, acceleration and tilt limits are those of
+linearised about the neutral pose, then the window is solved again with them linearised
+about that first plan at every block end (a second sequential-QP pass; its plan is kept when
+that solve fails). The usable stroke is ``stroke_use`` of the real one (the rest absorbs what
+the linearisation misses); speed, acceleration and tilt limits are those of
 :mod:`._mpc`.
 
 The QP of a window has a constant Hessian (built once per design); its gradient comes from
@@ -303,7 +305,9 @@ class OptimalCueing:
             if ok:  # again with the legs linearised about this plan (sequential QP)
                 about = p_free + g_end @ u
                 g, a_mat, lba, uba, lbx, ubx, _, _ = self._window_qp(st.x, d, about)
-                ok, u, _, _ = self._qp.solve(g, a_mat, lba, uba, lbx, ubx)
+                ok2, u2, _, _ = self._qp.solve(g, a_mat, lba, uba, lbx, ubx)
+                if ok2:  # else keep the first plan (linearised about neutral)
+                    u = u2
             times.append((time.perf_counter() - t0) * 1e3)
             st.solves += 1
             keep = min(ns, n - start)
