@@ -25,10 +25,9 @@ import numpy as np
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "src"))
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
-from _timing import report  # noqa: E402
-
-from motioncue.cueing import load_cueing, make_cueing  # noqa: E402
-from motioncue.telemetry import sample_drives  # noqa: E402
+from _timing import report
+from motioncue.cueing import load_cueing, make_cueing
+from motioncue.telemetry import sample_drives
 
 FS = 100.0
 
