@@ -7,11 +7,12 @@ event. A long ride is cut into overlapping windows of ``window_s``; each window'
 from the state the previous windows reached, and its first ``stride_s`` are kept (the rest of
 the window only makes the kept part aware of what follows). Within a window the input (the
 platform acceleration) is held over blocks of ``block_samples`` samples; the leg lengths are
-linearised about the neutral pose, then the window is solved again with them linearised
-about that first plan at every block end (a second sequential-QP pass; its plan is kept when
-that solve fails). The usable stroke is ``stroke_use`` of the real one (the rest absorbs what
-the linearisation misses); speed, acceleration and tilt limits are those of
-:mod:`._mpc`.
+linearised about the previous window's plan where it overlaps (about the neutral pose after
+it, and everywhere when that solve fails or there is no previous plan), then the window is
+solved again with them linearised about that first plan at every block end (a second
+sequential-QP pass; the first plan is kept when that solve fails). The usable stroke is
+``stroke_use`` of the real one (the rest absorbs what the linearisation misses); speed,
+acceleration and tilt limits are those of :mod:`._mpc`.
 
 The QP of a window has a constant Hessian (built once per design); its gradient comes from
 the vehicle's motion over the window (one simulation of the model from rest); it is solved by
@@ -294,20 +295,34 @@ class OptimalCueing:
         times: list[float] = []
         fallbacks = 0
         start = 0
+        nb = nw // bs
+        shift = ns // bs
+        prev: NDArray[np.float64] | None = None  # the last plan's poses at the block ends
         while start < n:
             idx = np.minimum(np.arange(start, start + nw + 1), n - 1)
             d = d_all[idx]
             if start + nw + 1 > n:  # past the end: the vehicle at rest
                 d[n - start :] = 0.0
             t0 = time.perf_counter()
-            g, a_mat, lba, uba, lbx, ubx, p_free, g_end = self._window_qp(st.x, d)
-            ok, u, _, _ = self._qp.solve(g, a_mat, lba, uba, lbx, ubx)
+            ok = False
+            u = np.zeros(0)
+            p_free = g_end = np.zeros(0)
+            for first in (prev, None) if prev is not None else (None,):
+                g, a_mat, lba, uba, lbx, ubx, p_free, g_end = self._window_qp(st.x, d, first)
+                ok, u, _, _ = self._qp.solve(g, a_mat, lba, uba, lbx, ubx)
+                if ok:
+                    break
             if ok:  # again with the legs linearised about this plan (sequential QP)
                 about = p_free + g_end @ u
                 g, a_mat, lba, uba, lbx, ubx, _, _ = self._window_qp(st.x, d, about)
                 ok2, u2, _, _ = self._qp.solve(g, a_mat, lba, uba, lbx, ubx)
-                if ok2:  # else keep the first plan (linearised about neutral)
+                if ok2:  # else keep the first plan
                     u = u2
+                plan = p_free + g_end @ u
+                prev = np.zeros_like(plan)  # the next window starts about this plan's rest
+                prev[: nb - shift] = plan[shift:]
+            else:
+                prev = None
             times.append((time.perf_counter() - t0) * 1e3)
             st.solves += 1
             keep = min(ns, n - start)
