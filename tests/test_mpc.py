@@ -251,3 +251,16 @@ def test_the_bridge_runs_mpc_live_within_the_limits_and_reports_its_solves() -> 
     t, p = _decode_frames(tr.sent)
     chk = check_frames(t, p, lim.to_pulses_table(platform), start_at_rest=True)
     assert chk.ok, chk.summary()
+
+
+@pytest.mark.parametrize("preset", ["mpc-seat3", "optimal-seat3"])
+def test_seat3_presets_move_only_heave_roll_pitch_within_its_limits(preset: str) -> None:
+    design = make_cueing(load_cueing(preset), FS)
+    f, w = _drive(300, 600)
+    poses = np.asarray(design.run(f, w).poses)
+    assert np.all(poses[:, [0, 1, 5]] == 0.0) and np.abs(poses[:, 3:5]).max() > 1e-3
+    plat = load_platform("seat3")
+    lim = ActuatorLimits.from_platform(plat, load_controller("mbox3"), rate_hz=FS)
+    q = plat.inverse(poses)
+    assert np.all(q <= lim.q_max) and np.all(q >= lim.q_min)
+    assert np.all(np.abs(np.diff(q, axis=0)) * FS <= lim.v_max * 1.0001)
