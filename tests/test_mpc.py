@@ -119,7 +119,7 @@ def test_every_frame_is_within_the_actuator_limits(hexapod: MpcCueing) -> None:
     a = np.abs(np.diff(q, 2, axis=0)) * FS * FS
     assert np.all(v <= lim.v_max * 1.0001) and np.all(a <= lim.a_max * 1.0001)
     rates = np.abs(np.diff(res.poses[:, 3:5], axis=0)) * FS
-    assert rates.max() <= hexapod.params.tilt_rate_limit_rad_s * (1 + 1e-6)
+    assert rates.max() <= hexapod.limits.tilt_rate * (1 + 1e-6)
     assert res.fallbacks == 0 and np.abs(q).max() > 0.5 * hexapod.limits.q_half.max()
 
 
@@ -206,6 +206,11 @@ def test_mpc_table_is_validated_with_the_value_and_the_range(tmp_path: Path) -> 
         load_cueing(bad)
     with pytest.raises(ConfigError, match="stride_s"):
         MpcParams(window_s=2.0, stride_s=3.0)
+    with pytest.raises(ConfigError, match=r"tilt_rate_limit_rad_s = -1.0 is invalid"):
+        MpcParams(tilt_rate_limit_rad_s=-1.0)
+    bad.write_text(src.replace("tilt_rate_limit_deg_s = 40.0", "tilt_rate_limit_deg_s = 0"))
+    with pytest.raises(ConfigError, match="tilt_rate_limit_deg_s = 0"):
+        load_cueing(bad)
 
 
 def test_optimal_is_offline_and_within_the_limits() -> None:

@@ -37,8 +37,12 @@ blocks whose lengths grow geometrically from one sample to cover the horizon):
 * **actuator speed and acceleration**: ``|J v| <= rate_use v_max``,
   ``|J u| <= rate_use a_max`` (:class:`~motioncue.trajectory.ActuatorLimits` of the platform
   with the controller);
-* **tilt**: ``|roll'|, |pitch'| <= tilt_rate_limit_rad_s`` and, when the preset sets it,
-  ``|roll''|, |pitch''| <= tilt_accel_limit_rad_s2`` (the preset's ``[tilt]`` limits).
+* **tilt**: ``|roll'|, |pitch'| <=`` the ``[mpc]`` table's ``tilt_rate_limit_deg_s`` (default:
+  the ``[tilt]`` table's) and, when the preset sets it, ``|roll''|, |pitch''| <=
+  tilt_accel_limit_rad_s2``. These bound the *whole* roll and pitch rate (the MPC does not
+  split tilt from rotation); the perceived rotation is priced by the canal models in the
+  cost, so a bound above the 3-3.6 deg/s perception thresholds only lets the optimiser trade
+  a perceptible rotation against a missing force where that lowers the error.
 
 The condensed QP (inputs only; ``blocks x dofs`` unknowns) has a constant Hessian; its
 gradient is linear in the state and the vehicle sample, its constraint matrix changes with the
@@ -363,7 +367,11 @@ def rig_limits(params: CueingParams, mp: MpcParams, fs_hz: float) -> RigLimits:
         q_half=half,
         v_max=np.asarray(lim.v_max, dtype=float) * mp.rate_use,
         a_max=np.asarray(lim.a_max, dtype=float) * mp.rate_use,
-        tilt_rate=params.tilt_rate_limit_rad_s,
+        tilt_rate=(
+            params.tilt_rate_limit_rad_s
+            if mp.tilt_rate_limit_rad_s is None
+            else mp.tilt_rate_limit_rad_s
+        ),
         tilt_accel=math.inf if accel is None else accel,
     )
 

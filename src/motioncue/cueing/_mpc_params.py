@@ -16,6 +16,9 @@ washout is the MPC's fallback) plus one ``[mpc]`` table, read by :func:`read_mpc
     prediction_tau_s = 0.0             # vehicle prediction: 0 = held, > 0 = decays with tau
     stroke_use = 0.9                   # fraction of each actuator's stroke the plan may use
     rate_use = 0.9                     # fraction of its speed and acceleration limits
+    tilt_rate_limit_deg_s = 8.0        # optional: the plan's roll/pitch rate limit
+                                       #   (default: the [tilt] table's, which the fallback
+                                       #   washout keeps)
     solver = "daqp"                    # QP solver (a casadi conic plugin)
     deadline_ms = 6.0                  # streaming: a slower solve is dropped (fallback)
     window_s = 4.0                     # optimal only: window length
@@ -75,6 +78,9 @@ class MpcParams:
     stroke_use, rate_use : float
         Fraction (0, 1] of the stroke and of the speed/acceleration limits the plan may use
         (the rest absorbs the linearisation of the leg lengths).
+    tilt_rate_limit_rad_s : float or None
+        Largest roll and pitch rate of the plan (rad/s); ``None``: the preset's
+        ``tilt_rate_limit_rad_s`` (the classical fallback always keeps that one).
     solver : str
         QP solver, one of :data:`MPC_SOLVERS`.
     deadline_ms : float
@@ -98,6 +104,7 @@ class MpcParams:
     prediction_tau_s: float = 0.0
     stroke_use: float = 0.9
     rate_use: float = 0.9
+    tilt_rate_limit_rad_s: float | None = None
     solver: str = "daqp"
     deadline_ms: float = 6.0
     window_s: float = 4.0
@@ -121,6 +128,13 @@ class MpcParams:
         for name, v, lo, hi in checks:
             if isinstance(v, bool) or not isinstance(v, int | float) or not lo <= v <= hi:
                 raise ConfigError(f"MpcParams.{name} = {v!r} is invalid; allowed: [{lo}, {hi}]")
+        tr = self.tilt_rate_limit_rad_s
+        if tr is not None and (
+            isinstance(tr, bool) or not isinstance(tr, int | float) or not 0.0 < tr <= 100.0
+        ):
+            raise ConfigError(
+                f"MpcParams.tilt_rate_limit_rad_s = {tr!r} is invalid; allowed: (0, 100] or None"
+            )
         if self.stride_s >= self.window_s:
             raise ConfigError(
                 f"MpcParams.stride_s = {self.stride_s!r} is invalid; allowed: below "
@@ -163,5 +177,8 @@ def read_mpc_table(table: Any) -> MpcParams:
         vals[name] = table.number(name, getattr(d, name))
     for name in ("blocks", "block_samples"):
         vals[name] = table.integer(name, getattr(d, name))
+    if table.has("tilt_rate_limit_deg_s"):
+        deg = table.number("tilt_rate_limit_deg_s", lo=0.0, hi=5000.0, lo_open=True)
+        vals["tilt_rate_limit_rad_s"] = math.radians(deg)
     table.finish()
     return MpcParams(**vals)
