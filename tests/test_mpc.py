@@ -269,3 +269,22 @@ def test_seat3_presets_move_only_heave_roll_pitch_within_its_limits(preset: str)
     q = plat.inverse(poses)
     assert np.all(q <= lim.q_max) and np.all(q >= lim.q_min)
     assert np.all(np.abs(np.diff(q, axis=0)) * FS <= lim.v_max * 1.0001)
+
+
+def test_the_bridge_refuses_the_offline_optimal_algorithm_by_name() -> None:
+    from motioncue.pipeline._bridge import Bridge, BridgeConfig
+    from test_bridge import FakeSource, ListTransport
+
+    platform = load_platform("stewart6-linear")
+    ctrl = load_controller("mbox6")
+    lim = ActuatorLimits.from_platform(platform, ctrl, rate_hz=FS)
+    with pytest.raises(ConfigError, match="'optimal' needs the whole recording"):
+        Bridge(
+            platform,
+            ctrl,
+            load_cueing("optimal-hexapod"),
+            FakeSource(),
+            ListTransport(),
+            lim,
+            BridgeConfig(FS),
+        )

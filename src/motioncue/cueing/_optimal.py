@@ -27,6 +27,7 @@ from __future__ import annotations
 
 from collections.abc import MutableSequence, Sequence
 from dataclasses import dataclass, field
+from typing import ClassVar
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -92,6 +93,9 @@ class OptimalCueing:
     fs_hz : float
         Sample rate (Hz).
     """
+
+    offline: ClassVar[bool] = True
+    """Needs the whole recording: the live bridge refuses it."""
 
     params: CueingParams
     fs_hz: float

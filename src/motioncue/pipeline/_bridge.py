@@ -326,6 +326,11 @@ class Bridge:
                 f"{platform.n_actuators}"
             )
         self.washout = make_cueing(cueing, cfg.rate_hz)
+        if getattr(self.washout, "offline", False):
+            raise ConfigError(
+                f"cueing algorithm {cueing.algorithm!r} needs the whole recording; the live "
+                'bridge needs a streaming one (algorithm = "classical" or "mpc")'
+            )
         self.washout_state = self.washout.initial_state()
         self.gate = CueGate(cfg.gate)
         # built here so that configuration errors surface before start()
