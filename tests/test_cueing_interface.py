@@ -143,17 +143,19 @@ def test_classical_is_the_registered_default_and_follows_the_protocol() -> None:
     assert CueingParams().algorithm == "classical"
     for name in bundled_names("cueing"):  # every bundled preset names its algorithm
         data = tomllib.loads(find_config("cueing", name).read_text())
-        assert data["algorithm"] == "classical", name
-        assert load_cueing(name).algorithm == "classical"
+        want = name.split("-")[0] if name.startswith(("mpc-", "optimal-")) else "classical"
+        assert data["algorithm"] == want, name
+        assert load_cueing(name).algorithm == want
 
 
 def test_unknown_algorithm_is_refused_naming_the_known_ones(
     tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
-    path = _preset_file(tmp_path, "racing", "mpc")
-    with pytest.raises(ConfigError, match=r"algorithm = 'mpc' is unknown.*classical"):
+    path = _preset_file(tmp_path, "racing", "mpcx")
+    with pytest.raises(ConfigError, match=r"algorithm = 'mpcx' is unknown.*classical"):
         load_cueing(path)
-    with pytest.raises(ConfigError, match=r"'nope' is unknown; known cueing algorithms: classical"):
+    known = r"'nope' is unknown; known cueing algorithms: classical, mpc, optimal"
+    with pytest.raises(ConfigError, match=known):
         make_cueing(CueingParams(algorithm="nope"), 100.0)
     with pytest.raises(ConfigError, match="already registered"):
         register_cueing("classical", ClassicalWashout)
@@ -165,7 +167,7 @@ def test_unknown_algorithm_is_refused_naming_the_known_ones(
         ["cue", "--input", str(rec), "--preset", str(path), "--rate", "50", "--out", str(out)]
     )
     err = capsys.readouterr().err
-    assert rc == 2 and err.startswith("motioncue cue: error: ") and "'mpc' is unknown" in err
+    assert rc == 2 and err.startswith("motioncue cue: error: ") and "'mpcx' is unknown" in err
     assert len(err.strip().splitlines()) == 1 and not out.exists()
 
 

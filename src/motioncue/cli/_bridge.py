@@ -154,13 +154,6 @@ def run(args: argparse.Namespace) -> int:
         rate_hz=config.rate_hz,
         **limit_overrides(args),
     )
-    frames = args.frames
-    if frames == "auto":
-        period_ms = 1000.0 / config.rate_hz
-        whole = abs(period_ms - round(period_ms)) < 1e-9 and round(period_ms) >= 2
-        stamped = getattr(controller, "time_resolution_s", None) == 1e-3
-        frames = "arrival" if whole and stamped and limits.j_max is None else "fixed"
-    config = dataclasses.replace(config, frame_clock=frames)
     preset = args.preset or (profile.preset if profile is not None else None)
     cueing, preset_source = choose_preset(preset, platform, args.platform, args.overrides)
     effects = None
@@ -174,6 +167,17 @@ def run(args: argparse.Namespace) -> int:
         cueing = profile.apply(cueing)
         effects = profile.effects
         make_effects(effects, config.rate_hz)  # refused below 100 Hz before anything opens
+    frames = args.frames
+    if frames == "auto":
+        # frames on arrival: whole-ms stamped frames, no jerk limit, and a cueing algorithm
+        # cheap enough to step every millisecond (the classical washout; the MPC runs at the
+        # frame rate)
+        period_ms = 1000.0 / config.rate_hz
+        whole = abs(period_ms - round(period_ms)) < 1e-9 and round(period_ms) >= 2
+        stamped = getattr(controller, "time_resolution_s", None) == 1e-3
+        cheap = cueing.algorithm == "classical"
+        frames = "arrival" if whole and stamped and limits.j_max is None and cheap else "fixed"
+    config = dataclasses.replace(config, frame_clock=frames)
     # over UDP the IMAX and SC-MBOX report where their motors are: start from there
     q_start = "auto" if args.target.lower().startswith("udp:") else None
     # from here on SIGINT, SIGTERM, SIGHUP and SIGQUIT only set a flag: the bridge parks and

@@ -174,5 +174,19 @@ def make_cueing(params: CueingParams, fs_hz: float) -> CueingAlgorithm:
     return _REGISTRY[params.algorithm](params, fs_hz)
 
 
+def _mpc(params: CueingParams, fs_hz: float) -> CueingAlgorithm:
+    from ._mpc import MpcCueing  # numpy/scipy/casadi only when an MPC preset is used
+
+    return MpcCueing(params, fs_hz)
+
+
+def _optimal(params: CueingParams, fs_hz: float) -> CueingAlgorithm:
+    from ._optimal import OptimalCueing
+
+    return OptimalCueing(params, fs_hz)
+
+
 # The registry: one line per algorithm.
 register_cueing("classical", ClassicalWashout)
+register_cueing("mpc", _mpc)
+register_cueing("optimal", _optimal)

@@ -13,6 +13,7 @@ from pathlib import Path
 
 from .._config import ConfigReader, find_config, load_toml
 from .._errors import ConfigError
+from ._mpc_params import MpcParams, read_mpc_table
 
 __all__ = ["DOF_NAMES", "GRAVITY_M_S2", "CueingParams", "load_cueing"]
 
@@ -97,6 +98,9 @@ class CueingParams:
         axis) are spikes: held at the last good sample and counted, like NaN and inf.
     workspace : 6-tuple
         Half range of each DOF about neutral (m, rad), for the workspace-use metric.
+    mpc : MpcParams or None
+        Settings of the optimisation-based algorithms (``"mpc"``, ``"optimal"``), from the
+        optional ``[mpc]`` table; ``None`` when the preset has none.
     """
 
     name: str = "default"
@@ -129,6 +133,7 @@ class CueingParams:
         15.0 * _D2R,
         20.0 * _D2R,
     )
+    mpc: MpcParams | None = None
 
     def __post_init__(self) -> None:
         if not isinstance(self.algorithm, str) or not self.algorithm:
@@ -212,6 +217,8 @@ def load_cueing(name_or_path: str | Path) -> CueingParams:
         [head]                                     # optional table
         offset_mm = [0.0, 0.0, 0.0]                # rider's head from the platform origin,
                                                    #   platform frame x fwd, y left, z up
+        [mpc]                                      # optional: "mpc" and "optimal" settings
+                                                   #   (see motioncue.cueing._mpc_params)
 
     Raises
     ------
@@ -286,6 +293,7 @@ def load_cueing(name_or_path: str | Path) -> CueingParams:
         hd = top.table("head")
         head = _vec3(tuple(v * 1e-3 for v in hd.vector("offset_mm", 3)))
         hd.finish()
+    mpc = read_mpc_table(top.table("mpc")) if top.has("mpc") else None
     top.finish()
 
     try:
@@ -320,6 +328,7 @@ def load_cueing(name_or_path: str | Path) -> CueingParams:
                 ang[1] * _D2R,
                 ang[2] * _D2R,
             ),
+            mpc=mpc,
         )
     except ConfigError as exc:
         raise ConfigError(f"{path.name}: {exc}") from exc

@@ -216,6 +216,10 @@ class BridgeStats:
     frame_age_ms, frame_age_p50_ms, frame_age_p99_ms : float
         Age of the newest sample a frame used, at the return of its send: the last
         frame's, and percentiles over the window (nan before there is data).
+    cueing : dict[str, float]
+        The cueing algorithm's own figures when it reports any (``stats(state)``; the MPC:
+        ``solves``, ``failed``, ``late``, ``fallbacks``, ``p50_ms``, ``p99_ms``, ``max_ms``
+        of its solves); empty for the classical washout.
     """
 
     state: str
@@ -246,6 +250,7 @@ class BridgeStats:
     frame_age_ms: float = math.nan
     frame_age_p50_ms: float = math.nan
     frame_age_p99_ms: float = math.nan
+    cueing: dict[str, float] = field(default_factory=dict)
 
     def status_line(self) -> str:
         """One line for a terminal status display."""
@@ -267,6 +272,8 @@ class BridgeStats:
             f" {self.bad_packets}{f' ({bad})' if bad else ''} | missed {self.missed_deadlines}"
             + ("".join(f" | {k}" for k, v in sorted(self.packet_reasons.items())
                        if v and k.startswith("note: ")))
+            + (f" | solve p99 {self.cueing['p99_ms']:.2f} ms fallback"
+               f" {int(self.cueing['fallbacks'])}" if "p99_ms" in self.cueing else "")
         )  # fmt: skip
 
 
@@ -374,9 +381,20 @@ class Bridge:
                 f"{platform.n_actuators}"
             )
         self._arrival = cfg.frame_clock == "arrival"
+        if self._arrival and cueing.algorithm != "classical":
+            raise ConfigError(
+                f"frames on arrival step the cueing every millisecond; algorithm "
+                f"{cueing.algorithm!r} is meant for the frame rate: use fixed frames "
+                "(BridgeConfig frame_clock='fixed', --frames fixed)"
+            )
         # on arrival the frame intervals vary: the cueing runs on the 1 ms grid instead,
         # stepped once per ms of each frame interval
         self.washout = make_cueing(cueing, 1000.0 if self._arrival else cfg.rate_hz)
+        if getattr(self.washout, "offline", False):
+            raise ConfigError(
+                f"cueing algorithm {cueing.algorithm!r} needs the whole recording; the live "
+                'bridge needs a streaming one (algorithm = "classical" or "mpc")'
+            )
         self.washout_state = self.washout.initial_state()
         # effect layer (``effects``: an EffectGains; None or all gains 0: none); refused below
         # 100 Hz. It adds to the blended pose before workspace limiting: limits see the sum.
@@ -817,4 +835,15 @@ class Bridge:
             frame_age_ms=float(fage[-1] * 1e3) if fage.size else math.nan,
             frame_age_p50_ms=_percentile_ms(fage, 50),
             frame_age_p99_ms=_percentile_ms(fage, 99),
+            cueing=self._cueing_stats(),
         )
+
+    def _cueing_stats(self) -> dict[str, float]:
+        """The cueing algorithm's ``stats(state)`` (MPC solve times, fallbacks), if it has it."""
+        fn = getattr(self.washout, "stats", None)
+        if not callable(fn):
+            return {}
+        try:
+            return {str(k): float(v) for k, v in dict(fn(self.washout_state)).items()}
+        except Exception as exc:  # a plug-in's report must not stop the bridge
+            return {f"stats unavailable: {type(exc).__name__}": 1.0}

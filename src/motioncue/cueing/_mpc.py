@@ -1,0 +1,792 @@
+"""Model-predictive cueing (``algorithm = "mpc"``): a warm-started QP per sample.
+
+Model (per sample ``dt = 1 / fs``; frames and signs of conventions.md)
+---------------------------------------------------------------------
+* **Platform**: a double integrator per moved degree of freedom, pose ``p`` (m, rad), rate
+  ``v = p'`` and the input ``u = p''`` (m/s^2, rad/s^2), held over a sample (zero-order
+  hold, discretised exactly with the matrix exponential).
+* **What the rider gets** (linearised about neutral, with tilt coordination): specific-force
+  deviation ``s_f = [u_x - g pitch, u_y + g roll, u_z]`` (``R^T [0, 0, g]`` has x component
+  ``-g sin(pitch)`` and y component ``g sin(roll) cos(pitch)``) and angular velocity
+  ``s_w = [roll', pitch', yaw']``.
+* **Perceived error**: the model set's otolith (x, y, z) and canal (roll, pitch, yaw)
+  transfer functions (:mod:`._vestibular`) in state-space form (:func:`scipy.signal.tf2ss`)
+  driven by ``s - d``, where ``d = [f - [0, 0, g], w]`` is the vehicle's motion; their output
+  ``e`` is the perceived error (linear models: ``H s - H d = H (s - d)``), counted in
+  perception thresholds.
+* **Vehicle prediction** over the horizon: ``d[k] = d[0] exp(-k dt / tau)``
+  (``prediction_tau_s = tau``), or held (``tau = 0``).
+
+Cost over the horizon ``k = 1..N`` (``N = horizon_s fs``), with the weights of
+:class:`~._mpc_params.MpcParams`::
+
+    sum_k |W_e e_k / thr|^2 + w_pose |p_k|^2 + w_vel |v_k|^2 + w_acc |u_{k-1}|^2
+        + x_N' T x_N
+
+``T = P - Q`` with ``P`` the solution of the discrete algebraic Riccati equation of the same
+stage cost (``Q`` the state weight), so the finite-horizon cost equals the infinite-horizon one
+when no constraint is active (and the first move then equals the LQ feedback ``-K x``: the test
+checks it against :func:`scipy.linalg.solve_discrete_are`).
+
+Constraints, at the end of each move block (the input is held within a block; ``blocks``
+blocks whose lengths grow geometrically from one sample to cover the horizon):
+
+* **actuator stroke**: the leg lengths linearised about the current pose ``p0`` each sample,
+  ``q(p) ~ q(p0) + J(p0) (p - p0)`` (:meth:`Platform.inverse`, :meth:`Platform.jacobian`),
+  within ``stroke_use`` of each leg's usable stroke about its centre;
+* **actuator speed and acceleration**: ``|J v| <= rate_use v_max``,
+  ``|J u| <= rate_use a_max`` (:class:`~motioncue.trajectory.ActuatorLimits` of the platform
+  with the controller);
+* **tilt**: ``|roll'|, |pitch'| <=`` the ``[mpc]`` table's ``tilt_rate_limit_deg_s`` (default:
+  the ``[tilt]`` table's) and, when the preset sets it, ``|roll''|, |pitch''| <=
+  tilt_accel_limit_rad_s2``. These bound the *whole* roll and pitch rate (the MPC does not
+  split tilt from rotation); the perceived rotation is priced by the canal models in the
+  cost, so a bound above the 3-3.6 deg/s perception thresholds only lets the optimiser trade
+  a perceptible rotation against a missing force where that lowers the error.
+
+The condensed QP (inputs only; ``blocks x dofs`` unknowns) has a constant Hessian; its
+gradient is linear in the state and the vehicle sample, its constraint matrix changes with the
+Jacobian. It is solved densely by a casadi conic plugin (``solver``; default DAQP, a dual
+active-set solver for small dense QPs, warm-started from the previous solution; see
+``benchmarks/bench_mpc.py`` for the measured choice).
+
+Fallback
+--------
+The classical washout of the same preset runs alongside every sample (it also replaces bad
+input samples, exactly as in :mod:`._classical`). When a solve fails (infeasible, not
+converged, a non-finite result) or, in :meth:`MpcCueing.step` only, takes longer than
+``deadline_ms``, the platform model is instead driven towards the classical pose by a
+critically damped tracker ``u = wn^2 (p_c - p) - 2 wn v`` (``wn = 4 rad/s``, ``u`` clipped to
+what every actuator can follow). Pose and rate stay continuous (no jump); the next successful
+solve starts from where the platform is. Failed and late solves are counted
+(:meth:`MpcCueing.stats`). :meth:`MpcCueing.run` applies no deadline, so it gives the numbers
+of :meth:`MpcCueing.step` whenever no streaming solve was late.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from collections import deque
+from collections.abc import MutableSequence, Sequence
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from .._errors import ConfigError
+from ._classical import ClassicalWashout, WashoutState
+from ._mpc_params import MpcParams
+from ._params import GRAVITY_M_S2, CueingParams
+from ._vestibular import DEFAULT_MODEL_SET, get_model_set
+
+__all__ = ["MpcCueing", "MpcResult", "MpcState", "block_ends", "build_model", "fallback_accel"]
+
+_FALLBACK_WN = 4.0
+
+
+@dataclass(frozen=True, eq=False)
+class LinearModel:
+    """The discrete augmented model ``x+ = A x + Bu u + Bd d`` with cost matrices.
+
+    Attributes
+    ----------
+    a : (nx, nx) array
+    bu : (nx, nu) array
+        Input: acceleration of each moved DOF (``active`` order).
+    bd : (nx, 6) array
+        Vehicle motion ``d = [f - [0, 0, g], w]``.
+    zx : (18, nx) array
+        Weighted cost output from the state: ``[W_e e / thr; sqrt(w_pose) p; sqrt(w_vel) v]``.
+    zd : (18, 6) array
+        Its direct part from ``d`` (the canals' feed-through).
+    r : (nu, nu) array
+        Input weight.
+    active : tuple of int
+        Moved pose components (indices into ``[x, y, z, roll, pitch, yaw]``).
+    dt : float
+        Sample period (s).
+    """
+
+    a: NDArray[np.float64]
+    bu: NDArray[np.float64]
+    bd: NDArray[np.float64]
+    zx: NDArray[np.float64]
+    zd: NDArray[np.float64]
+    r: NDArray[np.float64]
+    active: tuple[int, ...]
+    dt: float
+
+    @property
+    def nx(self) -> int:
+        """State size."""
+        return int(self.a.shape[0])
+
+    @property
+    def nu(self) -> int:
+        """Input size (moved DOFs)."""
+        return int(self.bu.shape[1])
+
+    @property
+    def q(self) -> NDArray[np.float64]:
+        """Stage state weight ``zx' zx``."""
+        return np.asarray(self.zx.T @ self.zx)
+
+
+def build_model(
+    dofs: Sequence[bool], mp: MpcParams, fs_hz: float, model_set: str = DEFAULT_MODEL_SET
+) -> LinearModel:
+    """The discrete augmented model (platform, rider's motion, vestibular error) at ``fs_hz``.
+
+    State ``[p (6), v (6), otolith x, y, z states, canal roll, pitch, yaw states]``.
+    """
+    from scipy.linalg import expm
+    from scipy.signal import tf2ss
+
+    ms = get_model_set(model_set)
+    active = tuple(i for i in range(6) if dofs[i])
+    if not active:
+        raise ConfigError("dofs moves nothing; an MPC needs at least one degree of freedom")
+    nu = len(active)
+    g = GRAVITY_M_S2
+    # s = sx x + su u (specific-force deviation and angular velocity the platform gives)
+    filters = [tf2ss(*m.transfer_function()) for m in ms.channel_models()]
+    orders = [f[0].shape[0] for f in filters]
+    nx = 12 + sum(orders)
+    sx = np.zeros((6, nx))
+    su = np.zeros((6, nu))
+    sx[0, 4] = -g
+    sx[1, 3] = g
+    sx[3:6, 9:12] = np.eye(3)
+    for j, i in enumerate(active):
+        if i < 3:
+            su[i, j] = 1.0
+    ac = np.zeros((nx, nx))
+    bu = np.zeros((nx, nu))
+    bd = np.zeros((nx, 6))
+    ce = np.zeros((6, nx))
+    dd = np.zeros((6, 6))
+    ac[0:6, 6:12] = np.eye(6)
+    for j, i in enumerate(active):
+        bu[6 + i, j] = 1.0
+    at = 12
+    for i, (fa, fb, fc, fdd) in enumerate(filters):
+        n = orders[i]
+        sl = slice(at, at + n)
+        b = fb[:, 0]
+        ac[sl, sl] = fa
+        ac[sl, :] += np.outer(b, sx[i])
+        bu[sl, :] += np.outer(b, su[i])
+        bd[sl, i] = -b
+        ce[i, sl] = fc[0]
+        ce[i, :] += fdd[0, 0] * sx[i]
+        if np.any(fdd[0, 0] * su[i]):
+            raise ConfigError("vestibular model with feed-through from acceleration")
+        dd[i, i] = -fdd[0, 0]
+        at += n
+    dt = 1.0 / fs_hz
+    big = np.zeros((nx + nu + 6, nx + nu + 6))
+    big[:nx, :nx] = ac
+    big[:nx, nx : nx + nu] = bu
+    big[:nx, nx + nu :] = bd
+    e = expm(big * dt)
+    we = np.sqrt(np.asarray(mp.w_error)) / np.asarray(ms.thresholds)
+    zx = np.zeros((18, nx))
+    zd = np.zeros((18, 6))
+    zx[0:6] = we[:, None] * ce
+    zd[0:6] = we[:, None] * dd
+    zx[6:12, 0:6] = np.diag(np.sqrt(mp.w_pose))
+    zx[12:18, 6:12] = np.diag(np.sqrt(mp.w_vel))
+    r = np.diag(np.asarray(mp.w_acc)[list(active)])
+    a = e[:nx, :nx].copy()
+    for i in range(6):  # a DOF the machine does not move stays at zero: no dynamics (and the
+        if i not in active:  # Riccati equation then sees no uncontrollable integrator)
+            a[i, :] = 0.0
+            a[6 + i, :] = 0.0
+    return LinearModel(
+        a=a,
+        bu=e[:nx, nx : nx + nu],
+        bd=e[:nx, nx + nu :],
+        zx=zx,
+        zd=zd,
+        r=r,
+        active=active,
+        dt=dt,
+    )
+
+
+def block_ends(n_steps: int, blocks: int) -> NDArray[np.int64]:
+    """Ends (in samples, increasing, last = ``n_steps``) of at most ``blocks`` move blocks whose
+    lengths grow geometrically from one sample."""
+    if blocks >= n_steps:
+        return np.arange(1, n_steps + 1, dtype=np.int64)
+    raw = np.geomspace(1.0, float(n_steps), blocks)
+    ends = np.unique(np.round(raw).astype(np.int64))
+    ends[-1] = n_steps
+    return ends
+
+
+def terminal_weight(m: LinearModel) -> NDArray[np.float64]:
+    """``P - Q``: ``P`` of the discrete algebraic Riccati equation of the stage cost."""
+    from scipy.linalg import solve_discrete_are
+
+    q = m.q
+    try:
+        p = solve_discrete_are(m.a, m.bu, q + 1e-12 * np.eye(m.nx), m.r)
+    except (np.linalg.LinAlgError, ValueError) as exc:
+        raise ConfigError(
+            f"MPC weights give no finite Riccati solution ({exc}); allowed: w_pose, w_vel "
+            "and w_acc > 0 on every moved degree of freedom"
+        ) from None
+    t = p - q
+    return np.asarray(0.5 * (t + t.T))
+
+
+@dataclass(frozen=True, eq=False)
+class Condensed:
+    """The horizon's prediction condensed to the blocked inputs ``U`` (``nb * nu``).
+
+    ``x_k = phi[k] x0 + gam[k] U + psi[k] d`` for ``k = 0..N`` (``d`` the current vehicle
+    sample, propagated by the prediction), cost ``0.5 U' H U + (gx x0 + gd d)' U + const``.
+    """
+
+    ends: NDArray[np.int64]
+    lengths: NDArray[np.int64]
+    hess: NDArray[np.float64]
+    gx: NDArray[np.float64]
+    gd: NDArray[np.float64]
+    gam_end: NDArray[np.float64]  # (nb, 12, nU): pose and rate at block ends
+    phi_end: NDArray[np.float64]  # (nb, 12, nx)
+    psi_end: NDArray[np.float64]  # (nb, 12, 6)
+
+
+def condense(
+    m: LinearModel, ends: NDArray[np.int64], decay: NDArray[np.float64], terminal: bool
+) -> Condensed:
+    """Build :class:`Condensed` for block ``ends`` and the prediction factors ``decay[k]``
+    (``d_k = decay[k] d``, ``k = 0..N``)."""
+    n = int(ends[-1])
+    nb = len(ends)
+    nu, nx = m.nu, m.nx
+    n_u = nb * nu
+    blk = np.searchsorted(ends, np.arange(n), side="right")  # block of step j
+    q = m.q
+    zxd = m.zx.T @ m.zd  # (nx, 6)
+    gam = np.zeros((nx, n_u))
+    phi = np.eye(nx)
+    psi = np.zeros((nx, 6))
+    hess = np.zeros((n_u, n_u))
+    gx = np.zeros((n_u, nx))
+    gd = np.zeros((n_u, 6))
+    gam_end = np.zeros((nb, 12, n_u))
+    phi_end = np.zeros((nb, 12, nx))
+    psi_end = np.zeros((nb, 12, 6))
+    lengths = np.diff(np.concatenate([[0], ends]))
+    b_at = 0
+    for k in range(1, n + 1):
+        j = blk[k - 1]
+        gam = m.a @ gam
+        gam[:, j * nu : (j + 1) * nu] += m.bu
+        psi = m.a @ psi + m.bd * decay[k - 1]
+        phi = m.a @ phi
+        qg = q @ gam
+        hess += gam.T @ qg
+        gx += qg.T @ phi
+        gd += qg.T @ psi + gam.T @ zxd * decay[k]
+        if b_at < nb and k == ends[b_at]:
+            gam_end[b_at] = gam[:12]
+            phi_end[b_at] = phi[:12]
+            psi_end[b_at] = psi[:12]
+            b_at += 1
+    if terminal:
+        t = terminal_weight(m)
+        tg = t @ gam
+        hess += gam.T @ tg
+        gx += tg.T @ phi
+        gd += tg.T @ psi
+    for j in range(nb):
+        sl = slice(j * nu, (j + 1) * nu)
+        hess[sl, sl] += lengths[j] * m.r
+    hess = 0.5 * (hess + hess.T)
+    return Condensed(
+        ends=ends,
+        lengths=lengths,
+        hess=2.0 * hess,
+        gx=2.0 * gx,
+        gd=2.0 * gd,
+        gam_end=gam_end,
+        phi_end=phi_end,
+        psi_end=psi_end,
+    )
+
+
+@dataclass(frozen=True, eq=False)
+class RigLimits:
+    """Actuator-space limits the plan respects (already scaled by the ``*_use`` fractions).
+
+    Attributes
+    ----------
+    platform : motioncue.kinematics.Platform
+    q_mid, q_half : (n,) arrays
+        Centre and usable half stroke of each actuator (m or rad).
+    v_max, a_max : (n,) arrays
+        Usable speed and acceleration (per second, per second^2).
+    tilt_rate, tilt_accel : float
+        Largest roll/pitch rate (rad/s) and acceleration (rad/s^2; inf = none).
+    """
+
+    platform: Any
+    q_mid: NDArray[np.float64]
+    q_half: NDArray[np.float64]
+    v_max: NDArray[np.float64]
+    a_max: NDArray[np.float64]
+    tilt_rate: float
+    tilt_accel: float
+
+
+def rig_limits(params: CueingParams, mp: MpcParams, fs_hz: float) -> RigLimits:
+    """Load the platform and the controller's limits named by ``mp``."""
+    from motioncue.kinematics import load_platform
+    from motioncue.output._controllers import load_controller
+    from motioncue.trajectory import ActuatorLimits
+
+    platform = load_platform(mp.platform)
+    lim = ActuatorLimits.from_platform(platform, load_controller(mp.controller), rate_hz=fs_hz)
+    q_min = np.asarray(lim.q_min, dtype=float)
+    q_max = np.asarray(lim.q_max, dtype=float)
+    q0 = np.asarray(platform.inverse(np.zeros(6)), dtype=float)
+    if np.any(q0 <= q_min) or np.any(q0 >= q_max):
+        raise ConfigError(f"platform {mp.platform!r}: neutral pose outside the usable stroke")
+    # symmetric about neutral: the plan's linearisation is about poses near neutral
+    half = np.minimum(q0 - q_min, q_max - q0) * mp.stroke_use
+    accel = params.tilt_accel_limit_rad_s2
+    return RigLimits(
+        platform=platform,
+        q_mid=q0,
+        q_half=half,
+        v_max=np.asarray(lim.v_max, dtype=float) * mp.rate_use,
+        a_max=np.asarray(lim.a_max, dtype=float) * mp.rate_use,
+        tilt_rate=(
+            params.tilt_rate_limit_rad_s
+            if mp.tilt_rate_limit_rad_s is None
+            else mp.tilt_rate_limit_rad_s
+        ),
+        tilt_accel=math.inf if accel is None else accel,
+    )
+
+
+def fallback_accel(
+    m: LinearModel, lim: RigLimits, x: NDArray[np.float64], pose_c: Sequence[float]
+) -> NDArray[np.float64]:
+    """The fallback input: a critically damped tracker of the classical pose ``pose_c``,
+    ``u = wn^2 (p_c - p) - 2 wn v`` per moved DOF, clipped to :func:`fallback_cap`."""
+    wn = _FALLBACK_WN
+    cap = fallback_cap(m, lim)
+    u = np.empty(m.nu)
+    for j, i in enumerate(m.active):
+        a = wn * wn * (pose_c[i] - x[i]) - 2.0 * wn * x[6 + i]
+        u[j] = min(max(a, -cap[j]), cap[j])
+    return u
+
+
+def fallback_cap(m: LinearModel, lim: RigLimits) -> NDArray[np.float64]:
+    """Per moved DOF, an acceleration every actuator can follow when all DOFs use theirs at
+    once (``min a_max / (nu max_l |J_lj|)`` at neutral; the tilt acceleration limit)."""
+    jac = np.abs(np.asarray(lim.platform.jacobian(np.zeros(6)), dtype=float))[:, list(m.active)]
+    share = float(lim.a_max.min()) / max(1, m.nu)
+    cap = share / np.maximum(jac.max(axis=0), 1e-9)
+    if math.isfinite(lim.tilt_accel):
+        for j, i in enumerate(m.active):
+            if i in (3, 4):
+                cap[j] = min(cap[j], lim.tilt_accel)
+    return np.asarray(cap)
+
+
+@dataclass(eq=False)
+class MpcState:
+    """The changing state of one MPC run (mutable).
+
+    Attributes
+    ----------
+    x : (nx,) array
+        Model state (pose, rate, vestibular error states).
+    classical : WashoutState
+        The fallback washout's state (also holds the last good input sample).
+    warm_u, warm_lam_a, warm_lam_x : arrays or None
+        The last solution, to warm-start the next solve.
+    solves, failed, late : int
+        Solves attempted, failed (infeasible or not converged), dropped as late, since the
+        state was made (:meth:`MpcCueing.reset` keeps these diagnostics, so a live session's
+        figures survive the bridge's resets while parked).
+    solve_ms : deque of float
+        Wall time of the last (at most 6000) solves (ms).
+    """
+
+    x: NDArray[np.float64]
+    classical: WashoutState
+    warm_u: NDArray[np.float64] | None = None
+    warm_lam_a: NDArray[np.float64] | None = None
+    warm_lam_x: NDArray[np.float64] | None = None
+    solves: int = 0
+    failed: int = 0
+    late: int = 0
+    solve_ms: deque[float] = field(default_factory=lambda: deque(maxlen=6000))
+    last_ms: float = 0.0
+
+    @property
+    def bad_samples(self) -> int:
+        """Input samples replaced (NaN, inf, spikes) since the last reset."""
+        return self.classical.bad_samples
+
+    @property
+    def fallbacks(self) -> int:
+        """Samples on which the fallback ran (failed + late)."""
+        return self.failed + self.late
+
+
+@dataclass(frozen=True, eq=False)
+class MpcResult:
+    """Outcome of :meth:`MpcCueing.run`.
+
+    Attributes
+    ----------
+    poses : (N, 6) array
+        Platform poses (m, rad).
+    bad_samples : int
+    bad_mask : (N,) bool array
+    f_used, w_used : (N, 3) arrays
+        The input after bad samples were held.
+    fallbacks : int
+        Samples on which the classical fallback ran.
+    solve_ms : (N,) array
+        Wall time of each solve (ms).
+    fs_hz : float
+    """
+
+    poses: NDArray[np.float64]
+    bad_samples: int
+    bad_mask: NDArray[np.bool_]
+    f_used: NDArray[np.float64]
+    w_used: NDArray[np.float64]
+    fallbacks: int
+    solve_ms: NDArray[np.float64]
+    fs_hz: float
+
+
+class QpSolver:
+    """A dense QP ``min 0.5 u' H u + g' u  s.t.  lba <= A u <= uba, lbx <= u <= ubx`` through a
+    casadi conic plugin, built once for fixed sizes."""
+
+    def __init__(self, plugin: str, hess: NDArray[np.float64], n_rows: int) -> None:
+        import casadi
+
+        self._ca = casadi
+        n = hess.shape[0]
+        opts: dict[str, Any] = {"error_on_fail": False}
+        if plugin == "qpoases":
+            opts.update({"printLevel": "none", "sparse": False, "hessian_type": "posdef"})
+        elif plugin == "osqp":
+            opts.update(
+                {
+                    "warm_start_primal": True,
+                    "warm_start_dual": True,
+                    "osqp": {
+                        "verbose": False,
+                        "eps_abs": 1e-6,
+                        "eps_rel": 1e-6,
+                        "max_iter": 20000,
+                        "polish": True,
+                    },
+                }
+            )
+        elif plugin == "proxqp":
+            opts.update({"proxqp": {"eps_abs": 1e-8}})
+        self.h = casadi.DM(hess)
+        self.n = n
+        self.n_rows = n_rows
+        self._solver = casadi.conic(
+            "mpc_qp",
+            plugin,
+            {"h": casadi.Sparsity.dense(n, n), "a": casadi.Sparsity.dense(n_rows, n)},
+            opts,
+        )
+
+    def solve(
+        self,
+        g: NDArray[np.float64],
+        a: NDArray[np.float64],
+        lba: NDArray[np.float64],
+        uba: NDArray[np.float64],
+        lbx: NDArray[np.float64],
+        ubx: NDArray[np.float64],
+        warm: tuple[Any, Any, Any] | None = None,
+    ) -> tuple[bool, NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
+        """``(ok, u, lam_a, lam_x)``; ``ok`` false when the solver failed or returned
+        non-finite numbers."""
+        args: dict[str, Any] = {
+            "h": self.h,
+            "g": g,
+            "a": self._ca.DM(a),
+            "lba": lba,
+            "uba": uba,
+            "lbx": lbx,
+            "ubx": ubx,
+        }
+        if warm is not None and warm[0] is not None:
+            args["x0"], args["lam_a0"], args["lam_x0"] = warm
+        try:
+            res = self._solver(**args)
+            ok = bool(self._solver.stats().get("success", False))
+        except RuntimeError:
+            return False, np.zeros(self.n), np.zeros(self.n_rows), np.zeros(self.n)
+        u = np.asarray(res["x"], dtype=float).reshape(-1)
+        la = np.asarray(res["lam_a"], dtype=float).reshape(-1)
+        lx = np.asarray(res["lam_x"], dtype=float).reshape(-1)
+        ok = ok and bool(np.all(np.isfinite(u)))
+        return ok, u, la, lx
+
+
+def _lin_at(
+    limits: RigLimits, pose: NDArray[np.float64]
+) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """Leg positions and Jacobian ``(n, 6)`` at ``pose``."""
+    plat = limits.platform
+    q = np.asarray(plat.inverse(pose), dtype=float)
+    jac = np.asarray(plat.jacobian(pose), dtype=float)
+    return q, jac
+
+
+@dataclass(frozen=True, eq=False)
+class MpcCueing:
+    """Model-predictive cueing of a preset with an ``[mpc]`` table, at ``fs_hz``.
+
+    Parameters
+    ----------
+    params : CueingParams
+        Its classical tables set the fallback washout and the tilt limits; ``params.mpc``
+        (default :class:`MpcParams` when absent) the MPC.
+    fs_hz : float
+        Sample rate (Hz).
+    """
+
+    params: CueingParams
+    fs_hz: float
+    mpc: MpcParams = field(init=False)
+    classical: ClassicalWashout = field(init=False)
+    model: LinearModel = field(init=False)
+    cond: Condensed = field(init=False)
+    limits: RigLimits = field(init=False)
+    _qp: QpSolver = field(init=False, repr=False)
+
+    def __post_init__(self) -> None:
+        classical = ClassicalWashout(self.params, self.fs_hz)  # validates fs_hz
+        fs = classical.fs_hz
+        object.__setattr__(self, "fs_hz", fs)
+        mp = self.params.mpc if self.params.mpc is not None else MpcParams()
+        object.__setattr__(self, "mpc", mp)
+        object.__setattr__(self, "classical", classical)
+        model = build_model(self.params.dofs, mp, fs)
+        n = max(1, round(mp.horizon_s * fs))
+        ends = block_ends(n, mp.blocks)
+        k = np.arange(n + 1)
+        decay = (
+            np.exp(-k / (mp.prediction_tau_s * fs)) if mp.prediction_tau_s > 0 else np.ones(n + 1)
+        )
+        cond = condense(model, ends, decay, terminal=True)
+        limits = rig_limits(self.params, mp, fs)
+        object.__setattr__(self, "model", model)
+        object.__setattr__(self, "cond", cond)
+        object.__setattr__(self, "limits", limits)
+        object.__setattr__(self, "_qp", QpSolver(mp.solver, cond.hess, self.n_rows))
+
+    # ------------------------------------------------------------------ sizes
+    @property
+    def n_rows(self) -> int:
+        """Constraint rows of the QP (stroke, speed, acceleration of each leg per block, and
+        the tilt rate)."""
+        nl = self.limits.q_mid.shape[0]
+        return len(self.cond.ends) * (3 * nl + len(self._tilt_axes()))
+
+    def _tilt_axes(self) -> list[int]:
+        return [i for i in (3, 4) if self.params.dofs[i]]
+
+    # ------------------------------------------------------------------ state
+    def initial_state(self) -> MpcState:
+        """A fresh state: platform at neutral and at rest, vehicle at rest."""
+        return MpcState(x=np.zeros(self.model.nx), classical=self.classical.initial_state())
+
+    def reset(self, state: MpcState) -> None:
+        """Put ``state`` back to :meth:`initial_state` (in place); the solve statistics are
+        kept (diagnostics of the session, not part of the algorithm's state)."""
+        state.x[:] = 0.0
+        self.classical.reset(state.classical)
+        state.warm_u = state.warm_lam_a = state.warm_lam_x = None
+
+    def stats(self, state: MpcState) -> dict[str, float]:
+        """Solve statistics of ``state``: ``solves``, ``failed``, ``late``, ``fallbacks``
+        (counts since the state was made) and ``p50_ms``, ``p99_ms``, ``max_ms`` of the solve
+        time over the last (at most 6000) solves; the bridge prints them."""
+        t = np.array(state.solve_ms, dtype=float)
+        out: dict[str, float] = {
+            "solves": float(state.solves),
+            "failed": float(state.failed),
+            "late": float(state.late),
+            "fallbacks": float(state.fallbacks),
+        }
+        for name, qv in (("p50_ms", 50.0), ("p99_ms", 99.0)):
+            out[name] = float(np.percentile(t, qv)) if t.size else 0.0
+        out["max_ms"] = float(t.max()) if t.size else 0.0
+        return out
+
+    # ------------------------------------------------------------------ the QP
+    def qp_matrices(
+        self, x0: NDArray[np.float64], d: NDArray[np.float64]
+    ) -> tuple[NDArray[np.float64], ...]:
+        """``(g, A, lba, uba, lbx, ubx)`` of this sample's QP (the Hessian is ``cond.hess``)."""
+        c = self.cond
+        lim = self.limits
+        m = self.model
+        g = c.gx @ x0 + c.gd @ d
+        pose0 = x0[:6]
+        q0, jac = _lin_at(lim, pose0)
+        free = c.phi_end @ x0 + c.psi_end @ d  # (nb, 12)
+        gp = c.gam_end[:, 0:6, :]
+        gv = c.gam_end[:, 6:12, :]
+        a_pos = np.einsum("lj,bju->blu", jac, gp)
+        a_vel = np.einsum("lj,bju->blu", jac, gv)
+        nb = len(c.ends)
+        nu = m.nu
+        nl = jac.shape[0]
+        ja = jac[:, list(m.active)]  # (nl, nu)
+        a_acc = np.zeros((nb, nl, nb * nu))
+        for b in range(nb):
+            a_acc[b, :, b * nu : (b + 1) * nu] = ja
+        base = q0 - jac @ pose0 - lim.q_mid  # leg offset from centre at p = 0
+        pos_free = free[:, 0:6] @ jac.T + base  # (nb, nl)
+        vel_free = free[:, 6:12] @ jac.T
+        rows = [a_pos, a_vel, a_acc]
+        lo = [-lim.q_half - pos_free, -lim.v_max - vel_free, np.broadcast_to(-lim.a_max, (nb, nl))]
+        hi = [lim.q_half - pos_free, lim.v_max - vel_free, np.broadcast_to(lim.a_max, (nb, nl))]
+        tilt = self._tilt_axes()
+        if tilt:
+            rows.append(gv[:, [i - 0 for i in tilt], :])
+            tf = free[:, [6 + i for i in tilt]]
+            lo.append(-lim.tilt_rate - tf)
+            hi.append(lim.tilt_rate - tf)
+        a_mat = np.concatenate([r.reshape(-1, nb * nu) if r.ndim == 3 else r for r in rows], axis=0)
+        # rows were stacked per kind (block-major inside each kind); flatten the bounds alike
+        lba = np.concatenate([np.asarray(v).reshape(-1) for v in lo])
+        uba = np.concatenate([np.asarray(v).reshape(-1) for v in hi])
+        lbx = np.full(nb * nu, -np.inf)
+        ubx = np.full(nb * nu, np.inf)
+        if math.isfinite(lim.tilt_accel):
+            for j, i in enumerate(m.active):
+                if i in (3, 4):
+                    lbx[j::nu] = -lim.tilt_accel
+                    ubx[j::nu] = lim.tilt_accel
+        return g, a_mat, lba, uba, lbx, ubx
+
+    def _solve(
+        self, state: MpcState, d: NDArray[np.float64], deadline_s: float | None
+    ) -> NDArray[np.float64] | None:
+        g, a_mat, lba, uba, lbx, ubx = self.qp_matrices(state.x, d)
+        warm = (state.warm_u, state.warm_lam_a, state.warm_lam_x)
+        t0 = time.perf_counter()
+        ok, u, la, lx = self._qp.solve(g, a_mat, lba, uba, lbx, ubx, warm)
+        elapsed = time.perf_counter() - t0
+        state.solves += 1
+        state.last_ms = elapsed * 1e3
+        state.solve_ms.append(state.last_ms)
+        if not ok:
+            state.failed += 1
+            state.warm_u = state.warm_lam_a = state.warm_lam_x = None
+            return None
+        state.warm_u, state.warm_lam_a, state.warm_lam_x = u, la, lx
+        if deadline_s is not None and elapsed > deadline_s:
+            state.late += 1
+            return None
+        return u[: self.model.nu]
+
+    def _fallback(self, state: MpcState, pose_c: Sequence[float]) -> NDArray[np.float64]:
+        return fallback_accel(self.model, self.limits, state.x, pose_c)
+
+    def _advance(
+        self, state: MpcState, f: Sequence[float], w: Sequence[float], deadline_s: float | None
+    ) -> NDArray[np.float64]:
+        pose_c = self.classical.step(state.classical, f, w)
+        h = state.classical.hold
+        d = np.array([h[0], h[1], h[2] - GRAVITY_M_S2, h[3], h[4], h[5]])
+        u = self._solve(state, d, deadline_s)
+        if u is None:
+            u = self._fallback(state, pose_c)
+        m = self.model
+        state.x = m.a @ state.x + m.bu @ u + m.bd @ d
+        return state.x[:6]
+
+    # ------------------------------------------------------------------ streaming / batch
+    def step(
+        self,
+        state: MpcState,
+        f: Sequence[float],
+        w: Sequence[float],
+        out: MutableSequence[float] | None = None,
+    ) -> MutableSequence[float]:
+        """Advance one sample (a solve; see the module docstring for the deadline).
+
+        Parameters
+        ----------
+        state : MpcState
+            Updated in place.
+        f : 3 floats
+            Specific force (m/s^2, body frame).
+        w : 3 floats
+            Angular velocity (rad/s, body frame).
+        out : mutable sequence of 6 floats, optional
+            Written in place and returned.
+
+        Returns
+        -------
+        The pose ``[x, y, z, roll, pitch, yaw]`` (m, rad); always finite.
+        """
+        pose = self._advance(state, f, w, self.mpc.deadline_ms * 1e-3)
+        vals = [float(v) for v in pose]
+        if out is None:
+            return vals
+        out[:] = vals
+        return out
+
+    def run(self, f: ArrayLike, w: ArrayLike, state: MpcState | None = None) -> MpcResult:
+        """A whole recording ``f``, ``w`` (N, 3) at ``fs_hz`` (no deadline; otherwise the
+        numbers of :meth:`step`)."""
+        fa = np.asarray(f, dtype=float)
+        wa = np.asarray(w, dtype=float)
+        if fa.ndim != 2 or fa.shape[1] != 3 or wa.shape != fa.shape:
+            raise ConfigError(f"need f and w of shape (N, 3); got {fa.shape} and {wa.shape}")
+        st = self.initial_state() if state is None else state
+        n = fa.shape[0]
+        poses = np.zeros((n, 6))
+        bad = np.zeros(n, dtype=bool)
+        f_used = np.zeros((n, 3))
+        w_used = np.zeros((n, 3))
+        times = np.zeros(n)
+        fb_start = st.fallbacks
+        bad_start = st.bad_samples
+        for k in range(n):
+            before = st.bad_samples
+            poses[k] = self._advance(st, fa[k].tolist(), wa[k].tolist(), None)
+            times[k] = st.last_ms
+            bad[k] = st.bad_samples != before
+            hold = st.classical.hold
+            f_used[k] = hold[0:3]
+            w_used[k] = hold[3:6]
+        return MpcResult(
+            poses=poses,
+            bad_samples=st.bad_samples - bad_start,
+            bad_mask=bad,
+            f_used=f_used,
+            w_used=w_used,
+            fallbacks=st.fallbacks - fb_start,
+            solve_ms=times,
+            fs_hz=self.fs_hz,
+        )

@@ -1,0 +1,184 @@
+"""Parameters of the optimisation-based cueing algorithms (the ``[mpc]`` table of a preset).
+
+Kept apart from :mod:`._params` so that the classical parameters stay as they are: a preset
+with ``algorithm = "mpc"`` or ``"optimal"`` carries every classical table (the classical
+washout is the MPC's fallback) plus one ``[mpc]`` table, read by :func:`read_mpc_table`::
+
+    [mpc]
+    platform = "stewart6-linear"       # bundled name or TOML path: actuator-space limits
+    controller = "mbox6"               # bundled name or TOML path: its speed/accel limits
+    horizon_s = 1.2                    # prediction horizon (>= 1 s for real time at 100 Hz)
+    blocks = 12                        # move blocks (input held within a block)
+    w_error = [1.0, 1.0, 0.3, 1.0, 1.0, 0.3]   # perceived error, per threshold^2
+    w_pose = [30.0, 30.0, 30.0, 10.0, 10.0, 10.0]  # pose washout, per (m or rad)^2
+    w_vel = [1.0, 1.0, 1.0, 1.0, 1.0, 1.0]         # per (m/s or rad/s)^2
+    w_acc = [0.01, 0.01, 0.01, 0.1, 0.1, 0.1]      # per (m/s^2 or rad/s^2)^2
+    prediction_tau_s = 0.0             # vehicle prediction: 0 = held, > 0 = decays with tau
+    stroke_use = 0.9                   # fraction of each actuator's stroke the plan may use
+    rate_use = 0.9                     # fraction of its speed and acceleration limits
+    tilt_rate_limit_deg_s = 8.0        # optional: the plan's roll/pitch rate limit
+                                       #   (default: the [tilt] table's, which the fallback
+                                       #   washout keeps)
+    solver = "daqp"                    # QP solver (a casadi conic plugin)
+    deadline_ms = 6.0                  # streaming: a slower solve is dropped (fallback)
+    window_s = 4.0                     # optimal only: window length
+    stride_s = 2.0                     # optimal only: kept part of each window
+    block_samples = 5                  # optimal only: input held for this many samples
+
+All weights are dimensionless multipliers of the units given; the perceived error is
+measured in perception thresholds, like :func:`~._vestibular.perceived_motion_error`.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Any
+
+from .._errors import ConfigError
+
+__all__ = ["MPC_SOLVERS", "MpcParams", "read_mpc_table"]
+
+Vec6 = tuple[float, float, float, float, float, float]
+
+MPC_SOLVERS: tuple[str, ...] = ("daqp", "qpoases", "osqp", "proxqp")
+"""QP solvers (casadi conic plugins) the MPC accepts; ``daqp`` is the measured default."""
+
+
+def _vec6(name: str, v: Any, lo: float, hi: float) -> Vec6:
+    t = tuple(float(x) for x in v)
+    if len(t) != 6 or not all(math.isfinite(x) and lo <= x <= hi for x in t):
+        raise ConfigError(
+            f"MpcParams.{name} = {v!r} is invalid; allowed: 6 numbers in [{lo}, {hi}]"
+        )
+    return (t[0], t[1], t[2], t[3], t[4], t[5])
+
+
+@dataclass(frozen=True)
+class MpcParams:
+    """Settings of :class:`~._mpc.MpcCueing` and :class:`~._optimal.OptimalCueing` (SI).
+
+    Attributes
+    ----------
+    platform, controller : str
+        Platform and controller (bundled names or TOML paths) whose actuator limits
+        constrain the plan (stroke, speed, acceleration).
+    horizon_s : float
+        Prediction horizon (s), in [0.1, 10].
+    blocks : int
+        Number of move blocks over the horizon (the input is held within a block; block
+        lengths grow geometrically from one sample), in [1, 200].
+    w_error : 6 floats
+        Weight of the perceived error ``fx, fy, fz, wx, wy, wz`` (per threshold^2).
+    w_pose, w_vel, w_acc : 6 floats
+        Weights of the platform pose (per m^2, rad^2), its rate and its acceleration.
+    prediction_tau_s : float
+        Vehicle motion over the horizon: 0 holds the last sample, ``tau > 0`` lets it decay
+        as ``exp(-t / tau)`` (s).
+    stroke_use, rate_use : float
+        Fraction (0, 1] of the stroke and of the speed/acceleration limits the plan may use
+        (the rest absorbs the linearisation of the leg lengths).
+    tilt_rate_limit_rad_s : float or None
+        Largest roll and pitch rate of the plan (rad/s); ``None``: the preset's
+        ``tilt_rate_limit_rad_s`` (the classical fallback always keeps that one).
+    solver : str
+        QP solver, one of :data:`MPC_SOLVERS`.
+    deadline_ms : float
+        Streaming only: a solve slower than this is dropped and counted as late (the
+        fallback runs instead); batch runs have no deadline.
+    window_s, stride_s : float
+        ``optimal``: length of each window (s) and the part of it that is kept (s),
+        ``stride_s < window_s``.
+    block_samples : int
+        ``optimal``: samples per move block.
+    """
+
+    platform: str = "stewart6-linear"
+    controller: str = "mbox6"
+    horizon_s: float = 1.2
+    blocks: int = 12
+    w_error: Vec6 = (1.0, 1.0, 0.3, 1.0, 1.0, 0.3)
+    w_pose: Vec6 = (30.0, 30.0, 30.0, 10.0, 10.0, 10.0)
+    w_vel: Vec6 = (1.0, 1.0, 1.0, 1.0, 1.0, 1.0)
+    w_acc: Vec6 = (0.01, 0.01, 0.01, 0.1, 0.1, 0.1)
+    prediction_tau_s: float = 0.0
+    stroke_use: float = 0.9
+    rate_use: float = 0.9
+    tilt_rate_limit_rad_s: float | None = None
+    solver: str = "daqp"
+    deadline_ms: float = 6.0
+    window_s: float = 4.0
+    stride_s: float = 2.0
+    block_samples: int = 5
+
+    def __post_init__(self) -> None:
+        for name in ("w_error", "w_pose", "w_vel", "w_acc"):
+            object.__setattr__(self, name, _vec6(name, getattr(self, name), 0.0, 1e9))
+        if not any(self.w_error):
+            raise ConfigError(f"MpcParams.w_error = {self.w_error!r} is invalid; not all zero")
+        checks = (
+            ("horizon_s", self.horizon_s, 0.1, 10.0),
+            ("prediction_tau_s", self.prediction_tau_s, 0.0, 1e6),
+            ("stroke_use", self.stroke_use, 1e-3, 1.0),
+            ("rate_use", self.rate_use, 1e-3, 1.0),
+            ("deadline_ms", self.deadline_ms, 0.1, 1e6),
+            ("window_s", self.window_s, 0.2, 600.0),
+            ("stride_s", self.stride_s, 0.1, 600.0),
+        )
+        for name, v, lo, hi in checks:
+            if isinstance(v, bool) or not isinstance(v, int | float) or not lo <= v <= hi:
+                raise ConfigError(f"MpcParams.{name} = {v!r} is invalid; allowed: [{lo}, {hi}]")
+        tr = self.tilt_rate_limit_rad_s
+        if tr is not None and (
+            isinstance(tr, bool) or not isinstance(tr, int | float) or not 0.0 < tr <= 100.0
+        ):
+            raise ConfigError(
+                f"MpcParams.tilt_rate_limit_rad_s = {tr!r} is invalid; allowed: (0, 100] or None"
+            )
+        if self.stride_s >= self.window_s:
+            raise ConfigError(
+                f"MpcParams.stride_s = {self.stride_s!r} is invalid; allowed: below "
+                f"window_s = {self.window_s!r}"
+            )
+        for name, iv, ilo, ihi in (
+            ("blocks", self.blocks, 1, 200),
+            ("block_samples", self.block_samples, 1, 100),
+        ):
+            if isinstance(iv, bool) or not isinstance(iv, int) or not ilo <= iv <= ihi:
+                raise ConfigError(f"MpcParams.{name} = {iv!r} is invalid; allowed: [{ilo}, {ihi}]")
+        if self.solver not in MPC_SOLVERS:
+            raise ConfigError(
+                f"MpcParams.solver = {self.solver!r} is invalid; allowed: {', '.join(MPC_SOLVERS)}"
+            )
+        for name in ("platform", "controller"):
+            if not isinstance(getattr(self, name), str) or not getattr(self, name):
+                raise ConfigError(f"MpcParams.{name} = {getattr(self, name)!r}; a name or path")
+
+
+def read_mpc_table(table: Any) -> MpcParams:
+    """:class:`MpcParams` from the preset's ``[mpc]`` table (a ``ConfigReader``); unknown keys
+    are rejected, missing ones take the defaults of :class:`MpcParams`."""
+    d = MpcParams()
+    vals: dict[str, Any] = {}
+    for name in ("platform", "controller"):
+        vals[name] = table.string(name, getattr(d, name))
+    vals["solver"] = table.string("solver", d.solver, choices=MPC_SOLVERS)
+    for name in ("w_error", "w_pose", "w_vel", "w_acc"):
+        vals[name] = table.vector(name, 6, list(getattr(d, name)))
+    for name in (
+        "horizon_s",
+        "prediction_tau_s",
+        "stroke_use",
+        "rate_use",
+        "deadline_ms",
+        "window_s",
+        "stride_s",
+    ):
+        vals[name] = table.number(name, getattr(d, name))
+    for name in ("blocks", "block_samples"):
+        vals[name] = table.integer(name, getattr(d, name))
+    if table.has("tilt_rate_limit_deg_s"):
+        deg = table.number("tilt_rate_limit_deg_s", lo=0.0, hi=5000.0, lo_open=True)
+        vals["tilt_rate_limit_rad_s"] = math.radians(deg)
+    table.finish()
+    return MpcParams(**vals)
