@@ -12,6 +12,7 @@ ratio to the 10 s target (ratio <= 1 meets it), then where the time goes inside 
 from __future__ import annotations
 
 import os
+import re
 import statistics
 import subprocess
 import sys
@@ -61,6 +62,7 @@ def main() -> None:
         make_recording(rec)
         head = tmp / "racing-hexapod-head.toml"
         text = (ROOT / "configs" / "cueing" / "racing-hexapod.toml").read_text()
+        text = re.sub(r"\[head\]\noffset_mm = [^\n]*\n?", "", text)  # the preset's own [head]
         head.write_text(text + "\n[head]\noffset_mm = [0.0, 0.0, 800.0]\n")
         presets = ["racing-hexapod", "racing", "flight", "cinema-seat-3dof", str(head)]
         cmd = [
