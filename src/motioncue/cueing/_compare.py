@@ -70,7 +70,7 @@ COLUMN_NOTES: dict[str, str] = {
     "duration_s": "length of the resampled recording (s)",
     "objective_J": "perceived-motion error J (dimensionless, in perception thresholds): "
     "sqrt(sum_i w_i mean((sim_i - veh_i)/thr_i)^2 / sum_i w_i) over fx fy fz p q r; lower "
-    "is better; the tuning objective",
+    "is better (relative to standing still, one term of cue_score)",
     "cue_score": "cue score (dimensionless, lower is better; the objective of motioncue "
     "tune): J relative to a platform that stands still, plus the lost correlation of the "
     "perceived channels, 2 x the false-cue fraction and 0.5 x the missed-cue fraction "

@@ -167,7 +167,8 @@ _NOTES = """Notes
            vehicle's (a cue in the wrong direction); false s: their total time (s).
   missed s time (s) when |perceived vehicle| > thr but |perceived simulator| <= thr.
   J        perceived-motion error: sqrt(sum_i w_i mean((sim_i - veh_i)/thr_i)^2 / sum_i w_i),
-           dimensionless (in thresholds); the tuning objective.
+           dimensionless (in thresholds); relative to standing still, one term of the
+           cue score that motioncue tune minimises (motioncue.cueing.cue_score).
   Otolith gain: the otolith models are normalised to unit steady-state gain (published
   K = 0.4 is in afferent firing units), so a sustained force is perceived at its value;
   their lead gives a mid-band gain tau_a/tau_L (2.0 Telban-Cardullo, 2.48 Young-Meiry), so
