@@ -164,9 +164,7 @@ def intended(t):
 def test_ten_second_trajectory_over_udp(absolute):
     dt = 0.01
     # 4 x 5000 encoder lines per turn: the speed cap these amplitudes were chosen against
-    ctrl = dataclasses.replace(
-        _ctrl(), buffer_frames=2048, stroke_mm=100.0, counts_per_rev=20000
-    )
+    ctrl = dataclasses.replace(_ctrl(), buffer_frames=2048, stroke_mm=100.0, counts_per_rev=20000)
     t = np.arange(0, 10.0 + dt / 2, dt)
     q = np.rint(intended(t)).astype(np.int64)
     with imax.ImaxEmulator(ctrl) as emu, open_transport(f"udp://127.0.0.1:{emu.port}") as tr:

@@ -95,9 +95,7 @@ def sample_drive_manifest(folder: str | Path | None = None) -> list[SampleDrive]
         if unknown:
             raise ConfigError(f"{where}: unknown key(s) {', '.join(unknown)}")
         if fields["set"] not in DRIVE_SETS:
-            raise ConfigError(
-                f"{where}: set = {fields['set']!r}; allowed: {', '.join(DRIVE_SETS)}"
-            )
+            raise ConfigError(f"{where}: set = {fields['set']!r}; allowed: {', '.join(DRIVE_SETS)}")
         if fields["kind"] not in _KINDS:
             raise ConfigError(f"{where}: kind = {fields['kind']!r}; allowed: {', '.join(_KINDS)}")
         file = fields["file"]
