@@ -96,48 +96,69 @@ def _sender(port: int, stop: Any) -> None:
             tx.sendto(motion, ("127.0.0.1", port))
 
 
-def run_once(rate_hz: float, seconds: float, rt_priority: int | None) -> dict[str, Any]:
-    from motioncue.cueing import load_cueing
-    from motioncue.kinematics import load_platform
-    from motioncue.output import load_controller, open_transport
-    from motioncue.pipeline._bridge import Bridge, BridgeConfig
-    from motioncue.telemetry import TelemetrySource
-    from motioncue.trajectory import ActuatorLimits
+class Rig:
+    """The benchmark rig: an SC-MBOX emulator process, an F1 sender process replaying real
+    packets, and a bridge (stewart6-linear, ``racing``) between them, in this process.
 
-    ctx = mp.get_context("spawn")
-    stop = ctx.Event()
-    port_q: Any = ctx.Queue()
-    result_q: Any = ctx.Queue()
-    emu = ctx.Process(target=_emulator, args=(port_q, stop, result_q))
-    emu.start()
-    emu_port = port_q.get(timeout=30)
-    platform = load_platform("stewart6-linear")
-    ctrl = load_controller("mbox6")
-    lim = ActuatorLimits.from_platform(platform, ctrl, a_max=5.0)
-    source = TelemetrySource("f1", 0)
-    transport = open_transport(f"udp://127.0.0.1:{emu_port}")
-    sender = ctx.Process(target=_sender, args=(source.port, stop))
+    ``with Rig(rate_hz, rt_priority) as rig:`` builds everything; ``rig.start()`` starts the
+    sender and the bridge; ``rig.finish()`` stops the bridge (it parks), the processes and
+    the links, and returns ``(final stats, the emulator's result)``. Shared with
+    ``bench_monitor.py``.
+    """
+
+    def __init__(self, rate_hz: float, rt_priority: int | None) -> None:
+        from motioncue.cueing import load_cueing
+        from motioncue.kinematics import load_platform
+        from motioncue.output import load_controller, open_transport
+        from motioncue.pipeline._bridge import Bridge, BridgeConfig
+        from motioncue.telemetry import TelemetrySource
+        from motioncue.trajectory import ActuatorLimits
+
+        self.ctx = mp.get_context("spawn")
+        self.stop = self.ctx.Event()
+        port_q: Any = self.ctx.Queue()
+        self._result_q: Any = self.ctx.Queue()
+        self._emu = self.ctx.Process(target=_emulator, args=(port_q, self.stop, self._result_q))
+        self._emu.start()
+        emu_port = port_q.get(timeout=30)
+        self.platform = load_platform("stewart6-linear")
+        ctrl = load_controller("mbox6")
+        self.limits = ActuatorLimits.from_platform(self.platform, ctrl, a_max=5.0)
+        self._source = TelemetrySource("f1", 0)
+        self._transport = open_transport(f"udp://127.0.0.1:{emu_port}")
+        self._sender = self.ctx.Process(target=_sender, args=(self._source.port, self.stop))
+        self.bridge = Bridge(
+            self.platform, ctrl, load_cueing("racing"), self._source, self._transport,
+            self.limits, BridgeConfig(rate_hz=rate_hz, rt_priority=rt_priority),
+        )  # fmt: skip
+
+    def __enter__(self) -> Rig:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self._transport.close()
+        self._source.close()
+
+    def start(self) -> None:
+        self._sender.start()
+        self.bridge.start()
+
+    def finish(self) -> tuple[Any, dict[str, Any]]:
+        final = self.bridge.stop()
+        self.stop.set()
+        self._sender.join(10)
+        emu_result: dict[str, Any] = self._result_q.get(timeout=30)
+        self._emu.join(10)
+        return final, emu_result
+
+
+def run_once(rate_hz: float, seconds: float, rt_priority: int | None) -> dict[str, Any]:
     load0 = os.getloadavg()
-    bridge = Bridge(
-        platform,
-        ctrl,
-        load_cueing("racing"),
-        source,
-        transport,
-        lim,
-        BridgeConfig(rate_hz=rate_hz, rt_priority=rt_priority),
-    )
-    sender.start()
-    bridge.start()
-    time.sleep(seconds)
-    live = bridge.stats  # figures of the live part (before the park at stop)
-    final = bridge.stop()
-    stop.set()
-    sender.join(10)
-    emu_result = result_q.get(timeout=30)
-    emu.join(10)
-    transport.close()
-    source.close()
+    with Rig(rate_hz, rt_priority) as rig:
+        rig.start()
+        time.sleep(seconds)
+        live = rig.bridge.stats  # figures of the live part (before the park at stop)
+        final, emu_result = rig.finish()
     return {
         "latency_p99_ms": live.latency_p99_ms,
         "latency_p50_ms": live.latency_p50_ms,

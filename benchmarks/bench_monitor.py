@@ -21,7 +21,6 @@ Run: ``PYTHONPATH=src python benchmarks/bench_monitor.py [--seconds 20] [--repea
 from __future__ import annotations
 
 import argparse
-import multiprocessing as mp
 import os
 import statistics
 import sys
@@ -32,7 +31,7 @@ from typing import Any
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
-from bench_bridge import _emulator, _sender
+from bench_bridge import Rig
 
 
 def _ws_client(url: str, stop: Any, count: Any) -> None:
@@ -52,69 +51,41 @@ def _ws_client(url: str, stop: Any, count: Any) -> None:
 
 
 def run_once(mode: str, seconds: float, rt_priority: int | None) -> dict[str, Any]:
-    from motioncue.cueing import load_cueing
-    from motioncue.kinematics import load_platform
-    from motioncue.output import load_controller, open_transport
-    from motioncue.pipeline._bridge import Bridge, BridgeConfig
-    from motioncue.telemetry import TelemetrySource
-    from motioncue.trajectory import ActuatorLimits
     from motioncue.viewer._monitor import BridgeSource, Monitor
 
-    ctx = mp.get_context("spawn")
-    stop = ctx.Event()
-    port_q: Any = ctx.Queue()
-    result_q: Any = ctx.Queue()
-    emu = ctx.Process(target=_emulator, args=(port_q, stop, result_q))
-    emu.start()
-    emu_port = port_q.get(timeout=30)
-    platform = load_platform("stewart6-linear")
-    ctrl = load_controller("mbox6")
-    lim = ActuatorLimits.from_platform(platform, ctrl, a_max=5.0)
-    source = TelemetrySource("f1", 0)
-    transport = open_transport(f"udp://127.0.0.1:{emu_port}")
-    sender = ctx.Process(target=_sender, args=(source.port, stop))
-    bridge = Bridge(
-        platform, ctrl, load_cueing("racing"), source, transport, lim,
-        BridgeConfig(rate_hz=100.0, rt_priority=rt_priority),
-    )  # fmt: skip
-    mon = None
-    client = None
-    count = ctx.Value("i", 0)
-    pw = None
-    if mode != "off":
-        mon = Monitor(BridgeSource(bridge), platform, lim, port=0).start()
-    sender.start()
-    bridge.start()
-    if mode == "ws":
-        assert mon is not None
-        client = ctx.Process(target=_ws_client, args=(f"ws://127.0.0.1:{mon.port}/ws", stop, count))
-        client.start()
-    elif mode == "browser":
-        from browser_support import browser
+    with Rig(100.0, rt_priority) as rig:
+        mon = None
+        client = None
+        count = rig.ctx.Value("i", 0)
+        pw = None
+        if mode != "off":
+            mon = Monitor(BridgeSource(rig.bridge), rig.platform, rig.limits, port=0).start()
+        rig.start()
+        if mode == "ws":
+            assert mon is not None
+            url = f"ws://127.0.0.1:{mon.port}/ws"
+            client = rig.ctx.Process(target=_ws_client, args=(url, rig.stop, count))
+            client.start()
+        elif mode == "browser":
+            from browser_support import browser
 
-        pw = browser()
-        page_ctx = pw.__enter__()
-        tab = page_ctx.new_page()
-        assert mon is not None
-        tab.goto(mon.url)
-    time.sleep(seconds)
-    live = bridge.stats
-    snapshots = 0 if mon is None else mon.snapshots
-    if pw is not None:
-        pw.__exit__(None, None, None)
-    final = bridge.stop()
-    stop.set()
-    if client is not None:
-        client.join(10)
-        if client.is_alive():
-            client.terminate()
-    if mon is not None:
-        mon.stop()
-    sender.join(10)
-    emu_result = result_q.get(timeout=30)
-    emu.join(10)
-    transport.close()
-    source.close()
+            pw = browser()
+            page_ctx = pw.__enter__()
+            tab = page_ctx.new_page()
+            assert mon is not None
+            tab.goto(mon.url)
+        time.sleep(seconds)
+        live = rig.bridge.stats
+        snapshots = 0 if mon is None else mon.snapshots
+        if pw is not None:
+            pw.__exit__(None, None, None)
+        final, emu_result = rig.finish()
+        if client is not None:
+            client.join(10)
+            if client.is_alive():
+                client.terminate()
+        if mon is not None:
+            mon.stop()
     return {
         "jitter_p99_ms": live.jitter_p99_ms,
         "latency_p99_ms": live.latency_p99_ms,
