@@ -227,31 +227,30 @@ def _overridden_copy(kind: str, name_or_path: str, items: Sequence[Any], folder:
     return dst
 
 
+def _load_with_overrides(
+    load: Any, kind: str, folder: str, name_or_path: str, overrides: Sequence[str] | None
+) -> Any:
+    """``load(name_or_path)``, or ``load`` of a copy with the ``kind.`` items of ``--set``."""
+    items = _overrides_for(kind, overrides)
+    if not items:
+        return load(name_or_path)
+    with tempfile.TemporaryDirectory(prefix="motioncue-set-") as tmp:
+        path = _overridden_copy(folder, name_or_path, items, Path(tmp))
+        try:
+            return load(path)
+        except ConfigError as exc:
+            raise ConfigError(f"--set: {exc}") from exc
+
+
 def load_platform_arg(name_or_path: str, overrides: Sequence[str] | None = None) -> Any:
     """:func:`motioncue.kinematics.load_platform` with the ``platform.`` items of ``--set``."""
     from ..kinematics import load_platform
 
-    items = _overrides_for("platform", overrides)
-    if not items:
-        return load_platform(name_or_path)
-    with tempfile.TemporaryDirectory(prefix="motioncue-set-") as tmp:
-        path = _overridden_copy("platforms", name_or_path, items, Path(tmp))
-        try:
-            return load_platform(path)
-        except ConfigError as exc:
-            raise ConfigError(f"--set: {exc}") from exc
+    return _load_with_overrides(load_platform, "platform", "platforms", name_or_path, overrides)
 
 
 def load_preset_arg(name_or_path: str, overrides: Sequence[str] | None = None) -> Any:
     """:func:`motioncue.cueing.load_cueing` with the ``preset.`` items of ``--set``."""
     from ..cueing import load_cueing
 
-    items = _overrides_for("preset", overrides)
-    if not items:
-        return load_cueing(name_or_path)
-    with tempfile.TemporaryDirectory(prefix="motioncue-set-") as tmp:
-        path = _overridden_copy("cueing", name_or_path, items, Path(tmp))
-        try:
-            return load_cueing(path)
-        except ConfigError as exc:
-            raise ConfigError(f"--set: {exc}") from exc
+    return _load_with_overrides(load_cueing, "preset", "cueing", name_or_path, overrides)
