@@ -198,6 +198,7 @@ def run_loopback(
     process: bool,
     upsample: str,
     frame_clock: str = "arrival",
+    lead_ms: int | None = None,
 ) -> dict[str, Any]:
     """One loopback run: recorder, optional busy core, 60 Hz F1 lateral-g steps about every
     second, the bridge (stewart6-linear, mbox6, racing) in this process; returns its figures
@@ -233,7 +234,10 @@ def run_loopback(
     gate = GateConfig(timeout_s=0.25, fade_out_s=0.3, fade_in_s=0.3)
     bridge = Bridge(
         platform, ctrl, load_cueing("racing"), source, transport, lim,
-        BridgeConfig(rate_hz=rate_hz, gate=gate, upsample=upsample, frame_clock=frame_clock),
+        BridgeConfig(
+            rate_hz=rate_hz, gate=gate, upsample=upsample, frame_clock=frame_clock,
+            lead_ms=lead_ms,
+        ),
     )  # fmt: skip
     load0 = os.getloadavg()
     sender.start()

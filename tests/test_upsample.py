@@ -80,7 +80,8 @@ def _bridge_on_sines(
 ) -> tuple[np.ndarray, np.ndarray, Any]:
     """Bridge.step at 250 Hz on 60 Hz samples of lateral f and yaw-rate sines.
 
-    Returns (frame times, telemetry the cueing got per frame (n, 6), the sine parameters).
+    Returns (the times the cueing ran to, telemetry it got then (n, 6), the sine parameters);
+    a frame's cue is computed for ``bridge.lead_s`` after its deadline (``BridgeConfig.lead_ms``).
     """
     platform = load_platform("stewart6-linear")
     ctrl = load_controller("mbox6")
@@ -114,7 +115,7 @@ def _bridge_on_sines(
             n_before = len(spy.fw)
             bridge.step(d)
             if len(spy.fw) > n_before:
-                times.append(d)
+                times.append(d + bridge.lead_s)  # the cue is for the frame's end
     else:  # whole-ms frames at 2..6 ms; the cueing gets a value per ms
         rng = np.random.default_rng(seed + 2)
         d = 0.05 + phase
@@ -125,7 +126,7 @@ def _bridge_on_sines(
             n_before = len(spy.fw)
             bridge.step(d, ticks=m)
             if len(spy.fw) > n_before:
-                times.extend(d - (m - 1 - j) * 1e-3 for j in range(m))
+                times.extend(d + bridge.lead_s - (m - 1 - j) * 1e-3 for j in range(m))
     return np.array(times), np.array(spy.fw), (amp_f, hz_f, amp_w, hz_w)
 
 
@@ -314,3 +315,113 @@ def test_the_cueing_never_gets_a_value_from_before_the_first_sample(frame_clock:
     assert len(got) > 500
     np.testing.assert_allclose(got, np.tile([*f, *w], (len(got), 1)), rtol=0, atol=1e-12)
     assert bridge.stats.fade_ins == 2
+
+
+def _first_frames_after_a_step(lead_ms: int | None, phase_ms: float) -> tuple[float, float]:
+    """Frames on arrival stepped by hand: 60 Hz telemetry at rest, then 1 g lateral. Returns
+    (change of the actuators' largest acceleration at the first frame after the step's
+    sample, the same one frame later), pulses/s^2 on the frames' own whole-ms clock."""
+    platform = load_platform("stewart6-linear")
+    ctrl = load_controller("mbox6")
+    lim = ActuatorLimits.from_platform(platform, ctrl, a_max=5.0)
+    times = [0.2 + phase_ms * 1e-3 + k / FS_IN for k in range(300)]
+    t_step = times[168]  # about 3 s
+    samples = [
+        TelemetrySample(t, (0.0, G if t >= t_step else 0.0, G), (0.0, 0.0, 0.0), False, "test")
+        for t in times
+    ]
+    src = _Timeline(samples)
+    gate = GateConfig(timeout_s=0.25, fade_out_s=0.3, fade_in_s=0.3)
+    bridge = Bridge(
+        platform, ctrl, load_cueing("racing"), src, _Sink(), lim,
+        BridgeConfig(FS_OUT, gate, upsample="extrapolate", frame_clock="arrival",
+                     lead_ms=lead_ms),
+    )  # fmt: skip
+    stamps, pulses = [], []
+    d_ms = 0
+    seen = -math.inf
+    while d_ms < 3300:
+        # a frame every 4 ms, or 1 ms after a sample arrives (as the loop does)
+        nxt = d_ms + 4
+        k = int(np.searchsorted(src.t, d_ms * 1e-3, side="right"))
+        if k < len(src.t) and src.t[k] > seen:
+            arr = max(d_ms + 2, math.ceil(src.t[k] * 1e3))
+            if arr < nxt:
+                nxt = arr
+        src.now = nxt * 1e-3
+        s = src.latest()
+        seen = s.t_s if s is not None else seen
+        bridge.step(nxt * 1e-3, ticks=nxt - d_ms)
+        d_ms = nxt
+        stamps.append(d_ms)
+        pulses.append(np.asarray(bridge.stage.last_pulses, dtype=float))
+    t = np.array(stamps, dtype=float) * 1e-3
+    p = np.array(pulses)
+    v = np.diff(p, axis=0) / np.diff(t)[:, None]
+    a = np.diff(v, axis=0) / (0.5 * (np.diff(t)[1:] + np.diff(t)[:-1]))[:, None]
+    da = np.max(np.abs(np.diff(a, axis=0)), axis=1)  # da[i] belongs to frame i + 3
+    first = int(np.searchsorted(t, t_step, side="left"))  # the first frame after the sample
+    return float(da[first - 3]), float(da[first - 2])
+
+
+def test_the_lead_puts_a_step_into_the_first_frame_after_its_sample() -> None:
+    """Closed-form reasoning checked: a frame holding the cue of its own send time has used
+    the new sample for at most 1 ms of its interval, so its acceleration barely changes and
+    the step shows one frame later; with the default lead (the frame's cue is for the end
+    of its interval) the whole interval uses it and the step shows at once."""
+    moving = 1.5e6  # pulses/s^2: what the loopback acceptance calls moving with the step
+    for phase_ms in (0.4, 2.7):  # the sample 0.4 / 2.7 ms after the frame grid's last slot
+        lead_first, _ = _first_frames_after_a_step(None, phase_ms)
+        none_first, none_next = _first_frames_after_a_step(0, phase_ms)
+        assert lead_first > moving, (phase_ms, lead_first)
+        assert lead_first > 1.05 * none_first, (phase_ms, lead_first, none_first)
+        assert none_next > moving
+        if phase_ms > 2.0:  # no lead: the sample used for 0.3 ms of a 3 ms interval
+            assert none_first < 0.3 * moving, (none_first, none_next)
+
+
+def test_a_new_sample_continues_from_the_last_value_given_out() -> None:
+    """``t_from``: the cueing already used the extrapolation up to ``t_from`` (past the new
+    sample's arrival); the output at ``t_from`` is the same before and after the update."""
+    up = ExtrapolatingUpsampler([2000.0], jump=[math.inf])
+    rng = np.random.default_rng(7)
+    t = 0.0
+    for k in range(40):
+        t += 1 / FS_IN + rng.uniform(0, 0.5e-3)
+        t_from = t + rng.uniform(0, 5e-3)
+        before, after = [0.0], [0.0]
+        up.value_at(t_from, before)
+        up.update(t, [math.sin(3.0 * t)], t_from)
+        up.value_at(t_from, after)
+        if k >= 3:
+            assert after[0] == pytest.approx(before[0], abs=1e-12)
+
+
+def test_the_period_estimate_is_the_mean_of_the_intervals_and_follows_a_new_rate() -> None:
+    """Against the closed form (the mean of the jittered intervals), and a game that switches
+    from 60 Hz to 120 Hz is followed within a few samples."""
+    from motioncue.pipeline._upsample import _PeriodEstimate
+
+    rng = np.random.default_rng(3)
+    est = _PeriodEstimate()
+    stamps = 1.0 + np.arange(121) / FS_IN + rng.uniform(0, 0.5e-3, 121)
+    for s in stamps:
+        est.update(float(s))
+    mean = (stamps[-1] - stamps[0]) / 120
+    assert est.period_s == pytest.approx(mean, rel=2e-3)
+    assert est.period_s == pytest.approx(1 / FS_IN, rel=2e-3)
+    t = float(stamps[-1])
+    for _ in range(8):
+        t += 1 / 120.0
+        est.update(t)
+    assert est.period_s == pytest.approx(1 / 120.0, rel=1e-6)
+
+
+def test_lead_and_slice_settings_are_checked() -> None:
+    with pytest.raises(ConfigError, match="lead_ms"):
+        BridgeConfig(250.0, lead_ms=5)
+    with pytest.raises(ConfigError, match="lead_ms"):
+        BridgeConfig(250.0, lead_ms=-1)
+    with pytest.raises(ConfigError, match="slice_s"):
+        BridgeConfig(250.0, slice_s=1e-6)
+    assert BridgeConfig(250.0, lead_ms=0, slice_s=None).lead_ms == 0

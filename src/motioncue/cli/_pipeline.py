@@ -333,6 +333,12 @@ def _play(args: argparse.Namespace) -> int:
         monitor = start_monitor(
             args.monitor, watch, platform, limits, f"play {args.ride} -> {target}", _say
         )
+        if paced:  # frames on time beside a busy core (pipeline._realtime, Short slice)
+            from motioncue.pipeline._realtime import request_short_slice
+
+            note = request_short_slice(1e-4)
+            if note is not None:
+                _say(f"play: {note}")
         try:
             with open_transport(target) as link:
                 try:

@@ -36,9 +36,21 @@ so the frames lock on to the packets (60 Hz into 250 Hz: 4, 4, 4, 5 ms). The sta
 (:class:`~motioncue.pipeline._arrival.ArrivalOutputStage`) keeps the limits on the
 controller's clock for any whole-ms intervals; the cueing runs per ms.
 
-On a busy PC the scheduler may hold the loop back by several milliseconds;
-``BridgeConfig(rt_priority=...)`` (``--rt-priority``) runs the loop thread under
-``SCHED_FIFO`` where the system allows it (``benchmarks/bench_bridge.py`` measures both).
+*Lead*: a controller moves to a frame's position over the interval after the frame
+arrives, so a frame holding the cue of the moment it is sent is felt one interval late (a
+step in the telemetry shows in the frames' acceleration only one frame later). Each frame
+therefore carries the cue for the end of the interval it starts (``BridgeConfig.lead_ms``,
+default one period on arrival): the cueing runs that far ahead of the wall clock on the
+up-sampler's extrapolation, which is corrected smoothly from the last value used when the
+next sample arrives. Measured on loopback (``tests/test_latency_acceptance.py``): a lateral-g
+step reaches the first frame after its packet, 0.9-1.0 ms p50 instead of 4.7-4.9 ms.
+
+On a busy PC the scheduler may hold the loop back by several milliseconds. The loop thread
+asks for a short scheduler slice (``BridgeConfig.slice_s``, no privilege needed: see
+:mod:`~motioncue.pipeline._realtime`), which on Linux >= 6.12 lets it run as soon as it
+wakes, beside a busy core. ``BridgeConfig(rt_priority=...)`` (``--rt-priority``) runs the
+loop thread under ``SCHED_FIFO`` where the system allows it (``benchmarks/bench_bridge.py``
+measures each).
 
 Timing figures (:class:`BridgeStats`):
 
@@ -57,6 +69,7 @@ Timing figures (:class:`BridgeStats`):
 
 from __future__ import annotations
 
+import gc
 import math
 import os
 import sys
@@ -129,6 +142,19 @@ class BridgeConfig:
         clock locks on to the game's packets (module docstring, *Frames on arrival*).
     min_interval_ms : int
         Shortest interval between frames on arrival (ms), 1..period.
+    slice_s : float or None
+        The loop thread asks the scheduler for this short slice (s, [1e-4, 0.1]; Linux >=
+        6.12, no privilege, same priority: :func:`~motioncue.pipeline._realtime.
+        request_short_slice`) so that it runs as soon as it wakes beside a busy core; if
+        it is refused ``BridgeStats.notes`` says why. None: the default slice.
+    lead_ms : int or None
+        How far ahead of its send time each frame's cue is computed (ms, 0..period; None:
+        one frame period). The controller moves to a frame's position over the interval
+        after it receives the frame, so a frame that holds the cue of the moment it is sent
+        is felt one interval late; computed for the end of that interval (the telemetry
+        brought there by the up-sampler, ``upsample``), the motion reaches the rider when
+        the game sent it. The gate (timeouts, fades) keeps the wall clock; with
+        ``upsample = "hold"`` the lead changes nothing.
     """
 
     rate_hz: float = 100.0
@@ -140,6 +166,8 @@ class BridgeConfig:
     upsample: str = "hold"
     frame_clock: str = "fixed"
     min_interval_ms: int = 2
+    lead_ms: int | None = None
+    slice_s: float | None = 1e-4
 
     def __post_init__(self) -> None:
         if self.frame_clock not in ("fixed", "arrival"):
@@ -166,6 +194,15 @@ class BridgeConfig:
         if s is not None and not (math.isfinite(s) and 1e-5 <= s <= 0.1):
             raise ConfigError(
                 f"switch_interval_s = {s!r} is invalid; allowed: None or [1e-5, 0.1] s"
+            )
+        sl = self.slice_s
+        if sl is not None and not (math.isfinite(sl) and 1e-4 <= sl <= 0.1):
+            raise ConfigError(f"slice_s = {sl!r} is invalid; allowed: None or [1e-4, 0.1] s")
+        lead = self.lead_ms
+        period_ms = 1000.0 / self.rate_hz
+        if lead is not None and not (isinstance(lead, int) and 0 <= lead <= period_ms):
+            raise ConfigError(
+                f"lead_ms = {lead!r} is invalid; allowed: None or 0..{period_ms:g} ms (whole)"
             )
 
 
@@ -431,11 +468,17 @@ class Bridge:
         self._frame_age = _Ring(w)
         self._stamps = _Ring(w)  # frames on arrival: the stamp of each frame (s)
         self._period_ms = round(1000.0 / cfg.rate_hz)
+        # each frame's cue is for the end of the interval it starts (BridgeConfig.lead_ms)
+        if cfg.lead_ms is None:
+            self.lead_s = self._period_ms * 1e-3 if self._arrival else 0.0
+        else:
+            self.lead_s = cfg.lead_ms * 1e-3
         from ._upsample import make_upsampler
 
         self._upsampler = make_upsampler(cfg.upsample)
         self._fw = [0.0] * 6  # telemetry at the frame's time: f (3), then w (3)
         self._fed_t = math.nan  # stamp of the last sample given to the upsampler
+        self._t_cue = math.nan  # the time the cueing was last run up to (lead_s ahead)
         self._rate_in_prev: tuple[float, int] | None = None
         self._rate_in = math.nan
         self._old_switch: float | None = None
@@ -529,6 +572,16 @@ class Bridge:
 
     # ------------------------------------------------------------------ the loop
     def _run(self) -> None:
+        if self.config.slice_s is not None:
+            from ._realtime import request_short_slice
+
+            note = request_short_slice(self.config.slice_s)
+            if note is not None:
+                self._notes.append(note)
+        # the objects alive now (the whole application's) leave the cyclic collector's view:
+        # a full collection of them takes milliseconds in a process that imported numpy,
+        # scipy and the rest, and it would come in the middle of a frame
+        gc.freeze()
         prio = self.config.rt_priority
         if prio is not None:
             try:  # pid 0 = this thread on Linux
@@ -547,6 +600,7 @@ class Bridge:
             self._park_after_failure()
             self._state = "failed"
         finally:
+            gc.unfreeze()
             if self._stop.is_set():  # stop() may have stopped waiting for the park
                 self._restore_switch()
 
@@ -699,13 +753,16 @@ class Bridge:
             reps = (self._period_ms if ticks is None else ticks) if self._arrival else 1
             up = self._upsampler
             fresh = held.t_s != self._fed_t
-            # the ms of this interval before the new sample arrived are what the telemetry
-            # was then (the up-sampler before the sample), the later ones after it
+            # the cue is for the end of the interval this frame starts (lead_s): the cueing
+            # runs up to t_cue; the ms of this interval before the new sample arrived are
+            # what the telemetry was then (the up-sampler before the sample), the later ones
+            # after it
+            t_cue = now + self.lead_s
             early: list[list[float]] = []
             recent = held.t_s - self._fed_t <= self.config.gate.timeout_s  # False for nan
             if fresh and reps > 1 and recent:
                 for j in range(reps):
-                    t_j = now - (reps - 1 - j) * 1e-3
+                    t_j = t_cue - (reps - 1 - j) * 1e-3
                     if t_j >= held.t_s:
                         break
                     v6 = [0.0] * 6
@@ -716,7 +773,7 @@ class Bridge:
                 self._fed_t = held.t_s
                 fw = (*held.f, *held.w)
                 if all(map(math.isfinite, fw)):
-                    up.update(held.t_s, fw)
+                    up.update(held.t_s, fw, self._t_cue)
                 else:  # the washout counts and holds a bad sample; the upsampler never sees it
                     raw = True
             fw6 = self._fw
@@ -727,8 +784,9 @@ class Bridge:
                     v6 = early[j]
                     self.washout.step(self.washout_state, v6[:3], v6[3:], cue)
                 else:
-                    up.value_at(now - (reps - 1 - j) * 1e-3, fw6)
+                    up.value_at(t_cue - (reps - 1 - j) * 1e-3, fw6)
                     self.washout.step(self.washout_state, fw6[:3], fw6[3:], cue)
+            self._t_cue = t_cue
             self._clean = False
             park = self._pose_park
             pose = self._pose

@@ -32,9 +32,14 @@ answers for any time (:meth:`~Upsampler.value_at`). Three are registered in
 
 Sample times are the arrival stamps of the datagrams, which jitter by a fraction of a
 millisecond on a loaded PC; a 3 % error of a 16.7 ms interval would be a 3 % error of the
-slope. So the slopes use the estimated telemetry period ``T`` (a running mean of the
-intervals) and the extrapolation starts at a smoothed sample time (a first-order
-phase-locked loop on the arrival stamps, gain 0.1), not at the raw stamp.
+slope. So the slopes use the estimated telemetry period ``T`` (the mean of the intervals of
+the current regular run, then an exponential mean of gain 0.005; a new rate restarts it) and
+the extrapolation starts at a smoothed sample time (a first-order phase-locked loop on the
+arrival stamps, gain 0.05), not at the raw stamp.
+
+A bridge that computes each frame's cue ahead of the wall clock (``BridgeConfig.lead_ms``)
+has already used the extrapolation past a new sample's arrival; it passes that time as
+``t_from`` and the blend starts there, so the values it is given stay continuous.
 
 Measured (``benchmarks/bench_bridge.py --upsample-only``; 60 Hz telemetry of a sine with
 arrival jitter 0.3-0.8 ms, 250 Hz frames): see the README's figures table.
@@ -60,6 +65,9 @@ __all__ = [
 #: telemetry intervals outside this range (s) are gaps or duplicates, not the period
 _PERIOD_MIN_S = 0.001
 _PERIOD_MAX_S = 0.2
+#: gains of the exponential means of the period and of the sample clock (_PeriodEstimate)
+_PERIOD_GAIN = 0.005
+_CLOCK_GAIN = 0.05
 
 
 class Upsampler(Protocol):
@@ -69,8 +77,11 @@ class Upsampler(Protocol):
     ``f`` (3, m/s^2) then ``w`` (3, rad/s)); times are ``perf_counter`` seconds.
     """
 
-    def update(self, t_s: float, x: Sequence[float]) -> None:
-        """A new sample ``x (n,)`` stamped ``t_s``; stamps never decrease."""
+    def update(self, t_s: float, x: Sequence[float], t_from: float = math.nan) -> None:
+        """A new sample ``x (n,)`` stamped ``t_s``; stamps never decrease. ``t_from``: the
+        latest time a value was already given out for (a bridge that computes its cue ahead
+        of the wall clock has used the old extrapolation past ``t_s``); the output stays
+        continuous from there. nan (default) or before ``t_s``: from ``t_s``."""
         ...
 
     def value_at(self, t_s: float, out: list[float]) -> None:
@@ -83,12 +94,22 @@ class Upsampler(Protocol):
 
 
 class _PeriodEstimate:
-    """Running mean of the telemetry period and a smoothed (phase-locked) sample clock."""
+    """Running mean of the telemetry period and a smoothed (phase-locked) sample clock.
 
-    __slots__ = ("n", "period_s", "ref_s", "t_last")
+    The period is the plain mean of the intervals of the current regular run until it has
+    :data:`_PERIOD_GAIN` ``** -1`` of them, then an exponential mean with that gain; the clock
+    likewise with :data:`_CLOCK_GAIN`. Arrival stamps jitter by a fraction of a millisecond:
+    a 0.5 ms jitter moved a 0.05-gain estimate of a 16.7 ms period by about 0.5 %, and every
+    slope with it. Three intervals in a row more than 25 % off the estimate (the game changed
+    its rate) restart the mean.
+    """
+
+    __slots__ = ("n", "n_run", "off", "period_s", "ref_s", "t_last")
 
     def __init__(self) -> None:
         self.n = 0
+        self.n_run = 0  # intervals in the current mean
+        self.off = 0  # consecutive intervals far from the estimate
         self.period_s = math.nan
         self.ref_s = math.nan
         self.t_last = math.nan
@@ -103,13 +124,23 @@ class _PeriodEstimate:
             if _PERIOD_MIN_S <= dt <= _PERIOD_MAX_S and not (
                 self.period_s == self.period_s and dt > 3.0 * self.period_s
             ):
+                if (
+                    self.period_s == self.period_s
+                    and abs(dt - self.period_s) > 0.25 * self.period_s
+                ):
+                    self.off += 1
+                    if self.off >= 3:  # a new rate: start the mean afresh
+                        self.period_s, self.n_run, self.off = math.nan, 0, 0
+                else:
+                    self.off = 0
+                self.n_run += 1
                 if self.period_s != self.period_s:  # nan: the first interval
                     self.period_s = dt
                 else:
-                    self.period_s += 0.05 * (dt - self.period_s)
+                    self.period_s += max(1.0 / self.n_run, _PERIOD_GAIN) * (dt - self.period_s)
                     regular = True
                 self.ref_s += self.period_s
-                self.ref_s += 0.1 * (t_s - self.ref_s)
+                self.ref_s += max(1.0 / self.n_run, _CLOCK_GAIN) * (t_s - self.ref_s)
                 # the smoothed clock stays within a period behind, a quarter ahead
                 self.ref_s = min(t_s + 0.25 * self.period_s, max(self.ref_s, t_s - self.period_s))
             else:
@@ -126,7 +157,7 @@ class HoldUpsampler:
         self.n = n
         self._x = [0.0] * n
 
-    def update(self, t_s: float, x: Sequence[float]) -> None:
+    def update(self, t_s: float, x: Sequence[float], t_from: float = math.nan) -> None:
         self._x = [float(v) for v in x]
 
     def value_at(self, t_s: float, out: list[float]) -> None:
@@ -148,7 +179,7 @@ class InterpolatingUpsampler:
         self._x0 = [0.0] * self.n
         self._x1 = [0.0] * self.n
 
-    def update(self, t_s: float, x: Sequence[float]) -> None:
+    def update(self, t_s: float, x: Sequence[float], t_from: float = math.nan) -> None:
         first = self._clock.n == 0
         self._clock.update(t_s)
         self._x0 = [float(v) for v in x] if first else self._x1
@@ -220,7 +251,7 @@ class ExtrapolatingUpsampler:
             h = cap
         return self._x[i] + self._slope[i] * h
 
-    def update(self, t_s: float, x: Sequence[float]) -> None:
+    def update(self, t_s: float, x: Sequence[float], t_from: float = math.nan) -> None:
         c = self._clock
         n = self.n
         if c.n == 0:
@@ -228,8 +259,11 @@ class ExtrapolatingUpsampler:
             self._x = [float(v) for v in x]
             self._t_switch = t_s
             return
+        # the blend starts where the output was last given out: when the sample arrives,
+        # or later if values past its arrival were already used (t_from)
+        t_c = t_from if t_from > t_s else t_s  # False for nan
         before = [0.0] * n
-        self.value_at(t_s, before)  # where the output is when the sample arrives
+        self.value_at(t_c, before)
         regular = c.update(t_s)
         period = c.period_s
         for i in range(n):
@@ -245,9 +279,9 @@ class ExtrapolatingUpsampler:
                 self._secant[i] = (xi - self._x[i]) / period if period == period else 0.0
                 self._slope[i] = 0.0
             self._x[i] = xi
-        self._t_switch = t_s
+        self._t_switch = t_c
         for i in range(n):
-            err = before[i] - self._line(t_s, i)
+            err = before[i] - self._line(t_c, i)
             err = err if math.isfinite(err) else 0.0
             cap = self.jump[i]
             self._err[i] = cap if err > cap else (-cap if err < -cap else err)
