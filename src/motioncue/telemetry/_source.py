@@ -87,6 +87,9 @@ class _ThreadedSource:
         self._thread: threading.Thread | None = None
         self.last_datagram_s = math.nan
         """perf_counter time of the last datagram of any kind (nan before the first)."""
+        self.on_sample: Callable[[TelemetrySample], None] | None = None
+        """Called with each new sample on the receiver thread, as soon as it is decoded
+        (the shared-memory child publishes from here instead of polling)."""
 
     def _start(self, name: str) -> None:
         self._thread = threading.Thread(target=self._run, name=name, daemon=True)
@@ -103,6 +106,9 @@ class _ThreadedSource:
             self._history.append(sample)
             self._latest = sample
             self._samples += 1
+            cb = self.on_sample
+            if cb is not None:
+                cb(sample)
 
     def latest(self, max_age_s: float | None = None) -> TelemetrySample | None:
         """The newest sample, or None before the first one. Never blocks.
