@@ -81,7 +81,15 @@ from ._mpc_params import MpcParams
 from ._params import GRAVITY_M_S2, CueingParams
 from ._vestibular import DEFAULT_MODEL_SET, get_model_set
 
-__all__ = ["MpcCueing", "MpcResult", "MpcState", "block_ends", "build_model", "fallback_accel"]
+__all__ = [
+    "MpcCueing",
+    "MpcResult",
+    "MpcState",
+    "block_ends",
+    "build_model",
+    "fallback_accel",
+    "reference",
+]
 
 _FALLBACK_WN = 4.0
 
@@ -107,6 +115,10 @@ class LinearModel:
         Moved pose components (indices into ``[x, y, z, roll, pitch, yaw]``).
     dt : float
         Sample period (s).
+    ce, de : (6, nx), (6, 6) arrays
+        Unweighted perceived error ``e = ce x + de d`` (m/s^2, rad/s), for constraints on it.
+    thresholds : (6,) array
+        The model set's perception thresholds (m/s^2 x3, rad/s x3).
     """
 
     a: NDArray[np.float64]
@@ -117,6 +129,9 @@ class LinearModel:
     r: NDArray[np.float64]
     active: tuple[int, ...]
     dt: float
+    ce: NDArray[np.float64]
+    de: NDArray[np.float64]
+    thresholds: NDArray[np.float64]
 
     @property
     def nx(self) -> int:
@@ -213,7 +228,33 @@ def build_model(
         r=r,
         active=active,
         dt=dt,
+        ce=ce,
+        de=dd,
+        thresholds=np.asarray(ms.thresholds, dtype=float),
     )
+
+
+def reference(d: ArrayLike, mp: MpcParams) -> NDArray[np.float64]:
+    """The motion the plan tracks: ``L tanh(k d / L)`` per channel (``k = mp.ref_scale``,
+    ``L = mp.ref_limit``; a limit of ``1e9`` or more leaves ``k d`` as it is).
+
+    Parameters
+    ----------
+    d : (..., 6) array
+        Vehicle motion ``[f - [0, 0, g], w]`` (m/s^2, rad/s).
+    mp : MpcParams
+
+    Returns
+    -------
+    (..., 6) array
+    """
+    r = np.asarray(d, dtype=float) * np.asarray(mp.ref_scale)
+    lim = np.asarray(mp.ref_limit)
+    soft = lim < 1e9
+    if np.any(soft):
+        r = r.copy()
+        r[..., soft] = lim[soft] * np.tanh(r[..., soft] / lim[soft])
+    return np.asarray(r)
 
 
 def block_ends(n_steps: int, blocks: int) -> NDArray[np.int64]:
@@ -716,7 +757,7 @@ class MpcCueing:
     ) -> NDArray[np.float64]:
         pose_c = self.classical.step(state.classical, f, w)
         h = state.classical.hold
-        d = np.array([h[0], h[1], h[2] - GRAVITY_M_S2, h[3], h[4], h[5]])
+        d = reference([h[0], h[1], h[2] - GRAVITY_M_S2, h[3], h[4], h[5]], self.mpc)
         u = self._solve(state, d, deadline_s)
         if u is None:
             u = self._fallback(state, pose_c)
