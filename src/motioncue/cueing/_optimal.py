@@ -39,6 +39,7 @@ from ._mpc import (
     MpcState,
     QpSolver,
     RigLimits,
+    SoftGuardQp,
     build_model,
     fallback_accel,
     reference,
@@ -112,7 +113,7 @@ class OptimalCueing:
     _a_mat: NDArray[np.float64] = field(init=False, repr=False)
     _qp: QpSolver = field(init=False, repr=False)
     _a_guard: NDArray[np.float64] = field(init=False, repr=False)
-    _qp_guard: QpSolver | None = field(init=False, repr=False)
+    _qp_guard: SoftGuardQp | None = field(init=False, repr=False)
 
     def __post_init__(self) -> None:
         classical = ClassicalWashout(self.params, self.fs_hz)
@@ -176,12 +177,21 @@ class OptimalCueing:
         object.__setattr__(self, "_qp", QpSolver(self.mpc.solver, hess, a_mat.shape[0]))
         # sign guard: the perceived simulator motion ce_i (x - x_vehicle) at block ends
         guard = self._guard_channels()
-        a_guard = np.einsum("gx,bxu->bgu", m.ce[guard], ge).reshape(-1, n_u)
+        ce_thr = m.ce[guard] / m.thresholds[guard][:, None]  # rows in thresholds
+        a_guard = np.einsum("gx,bxu->bgu", ce_thr, ge).reshape(-1, n_u)
         object.__setattr__(self, "_a_guard", a_guard)
         object.__setattr__(
             self,
             "_qp_guard",
-            QpSolver(self.mpc.solver, hess, a_mat.shape[0] + a_guard.shape[0]) if guard else None,
+            SoftGuardQp(
+                self.mpc.solver,
+                hess,
+                a_mat.shape[0],
+                a_guard.shape[0],
+                self.mpc.sign_guard_weight,
+            )
+            if guard
+            else None,
         )
 
     def _guard_channels(self) -> list[int]:
@@ -195,11 +205,11 @@ class OptimalCueing:
     ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
         """Bounds of the sign-guard rows: at block ends (``xf_ends`` free state, ``xv_ends``
         the vehicle-only state, ``sign_ends`` the sign of the vehicle's perceived motion, 0
-        where unconstrained), per guarded channel."""
+        where unconstrained), per guarded channel, in thresholds."""
         m = self.model
         guard = self._guard_channels()
-        g = np.asarray(self.mpc.sign_guard)[guard] * m.thresholds[guard]
-        free = (xf_ends - xv_ends) @ m.ce[guard].T  # (nb, nG)
+        g = np.asarray(self.mpc.sign_guard)[guard]
+        free = (xf_ends - xv_ends) @ (m.ce[guard] / m.thresholds[guard][:, None]).T
         sg = sign_ends[:, guard]
         lo = np.where(sg > 0, -g - free, -np.inf)
         hi = np.where(sg < 0, g - free, np.inf)
@@ -282,12 +292,7 @@ class OptimalCueing:
         if use_guard and self._qp_guard is not None:
             glo, ghi = self._guard_bounds(qp[8], xv_ends, sign_ends)
             ok, u, _, _ = self._qp_guard.solve(
-                g,
-                np.concatenate([a_mat, self._a_guard]),
-                np.concatenate([lba, glo]),
-                np.concatenate([uba, ghi]),
-                lbx,
-                ubx,
+                g, a_mat, lba, uba, lbx, ubx, self._a_guard, glo, ghi
             )
         else:
             ok, u, _, _ = self._qp.solve(g, a_mat, lba, uba, lbx, ubx)
@@ -356,14 +361,14 @@ class OptimalCueing:
             xt = np.zeros(m.nx)
             xv_all = np.zeros((n, m.nx))
             sign_all = np.zeros((n, 6))
-            r_all = reference(d_all, self.mpc)
+            r_all, _ = reference(d_all, self.mpc, self.fs_hz)
             xv = np.zeros(m.nx)
             for k in range(n):
                 xt = m.a @ xt + m.bd @ d_all[k]
                 xv = m.a @ xv + m.bd @ r_all[k]
                 xv_all[k] = xv
                 sign_all[k] = -np.sign(m.ce @ xt + m.de @ d_all[k])
-        d_all = reference(d_all, self.mpc)
+        d_all, _ = reference(d_all, self.mpc, self.fs_hz)
         nw, ns, bs = self.n_window, self.n_stride, self.mpc.block_samples
         poses = np.zeros((n, 6))
         times: list[float] = []
@@ -389,6 +394,7 @@ class OptimalCueing:
                 xv_e = xv_all[abc]
             firsts = (prev, None) if prev is not None else (None,)
             tries = [(gd, fi) for gd in ((True, False) if guard else (False,)) for fi in firsts]
+            # (the guard is soft, so without it is only a last resort of a failed solve)
             use_guard = False
             for use_guard, first in tries:
                 qp = self._window_qp(st.x, d, first)
