@@ -213,3 +213,56 @@ def test_new_mpc_settings_are_validated_and_read_in_their_units(tmp_path: Path) 
     assert bad.read_text() != src
     with pytest.raises(ConfigError, match="ref_limit_m_s2"):
         load_cueing(bad)
+
+
+# ---------------------------------------------------------------------- tune and write
+@pytest.mark.parametrize("preset", ["mpc-hexapod", "optimal-hexapod", "optimal-seat3"])
+def test_a_plan_preset_written_by_tune_reads_back_the_same(preset: str, tmp_path: Path) -> None:
+    from motioncue.cueing._tune import params_from_vector, preset_toml, vector_from_params
+
+    base = load_cueing(preset)
+    out = tmp_path / f"{preset}.toml"
+    out.write_text(preset_toml(base, ["round trip"]))
+    back = load_cueing(out)
+    assert back.algorithm == base.algorithm and back.dofs == base.dofs
+    assert back.mpc == base.mpc
+    assert dataclasses.replace(back, name=base.name) == base
+    moved = params_from_vector(base, vector_from_params(base) + 0.1)
+    assert moved.mpc is not None and base.mpc is not None
+    assert moved.mpc.ref_limit[0] == pytest.approx(
+        min(10.0, math.exp(math.log(min(max(base.mpc.ref_limit[0], 0.3), 10.0)) + 0.1))
+    )
+    assert moved.mpc.w_pose[2:] == base.mpc.w_pose[2:] and moved.f_scale == base.f_scale
+
+
+def test_tune_drives_an_optimal_preset_and_never_returns_a_worse_one(tmp_path: Path) -> None:
+    import contextlib
+    import io
+
+    from motioncue.cli import main
+    from motioncue.telemetry import sample_drives
+    from motioncue.telemetry._recording import Recording, read_recording_csv, write_recording_csv
+
+    src = next(p for p in sample_drives("tuning", kind="car") if p.stem == "flowing-road")
+    rec = read_recording_csv(src)
+    a, b = 1000, 2500  # 15 s
+    part = tmp_path / "flowing-road-15s.csv"
+    write_recording_csv(part, Recording(rec.t_s[a:b] - rec.t_s[a], rec.f[a:b], rec.w[a:b]))
+    out = tmp_path / "tuned-optimal.toml"
+    args = [
+        "tune", "--input", str(part), "--platform", "stewart6-linear", "--controller", "mbox6",
+        "--preset", "optimal-hexapod", "--out", str(out), "--seed", "1", "--generations", "1",
+        "--popsize", "2", "--workers", "1", "--json",
+    ]  # fmt: skip
+    stdout, stderr = io.StringIO(), io.StringIO()
+    with contextlib.redirect_stdout(stdout), contextlib.redirect_stderr(stderr):
+        status = main(args)
+    assert status == 0, stderr.getvalue()
+    import json
+
+    report = json.loads(stdout.getvalue())
+    assert report["after"]["objective"] <= report["before"]["objective"] + 1e-9
+    tuned = load_cueing(out)
+    base = load_cueing("optimal-hexapod")
+    assert tuned.algorithm == "optimal" and tuned.mpc is not None and base.mpc is not None
+    assert tuned.f_scale == base.f_scale and tuned.mpc.sign_guard == base.mpc.sign_guard

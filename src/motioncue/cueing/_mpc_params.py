@@ -227,7 +227,9 @@ def read_mpc_table(table: Any) -> MpcParams:
     if table.has("ref_limit_m_s2"):
         lim[0:3] = table.vector("ref_limit_m_s2", 3)
     if table.has("ref_limit_deg_s"):
-        lim[3:6] = [min(1e9, math.radians(v)) for v in table.vector("ref_limit_deg_s", 3)]
+        lim[3:6] = [
+            1e9 if v >= 1e9 else math.radians(v) for v in table.vector("ref_limit_deg_s", 3)
+        ]
     vals["ref_limit"] = tuple(lim)
     vals["ref_scale"] = table.vector("ref_scale", 6, list(d.ref_scale))
     vals["ref_scale_hf"] = table.vector("ref_scale_hf", 6, list(d.ref_scale_hf))
