@@ -7,10 +7,10 @@ baseline. The issue asks, against that baseline: perceived fx/fy RMS error at le
 (``mpc``) and 35 % lower (``optimal``), correlation no lower, false-cue time no higher, every
 frame within the limits. What is asserted here is what the presets reach, not those numbers:
 
-* ``optimal-hexapod`` (tilt below the canal thresholds, sign guard): false cues *lower* than the
-  classical on every drive, fx RMS lower on every drive, no frame clamped or limited; its fx/fy
-  RMS gain is 4-8 % (forest-rally 8 / 5 %), its correlation lower (0.78-0.94 against 0.95-0.99).
-  The 35 % is not met.
+* ``optimal-hexapod`` (tilt below the canal thresholds, sign guard, plan tuned by ``motioncue
+  tune`` on the tuning drives): on every drive less than half the classical's false-cue time,
+  fx RMS 3-5 % lower with fx correlation no lower, fy RMS level (0 to +1.6 %), no frame clamped
+  or limited; on forest-rally both correlations are higher. The 35 % is not met.
 * ``mpc-hexapod`` (full-amplitude tracking, fast tilt): the 20 % RMS cut on forest-rally with no
   frame clamped or limited; its correlation is lower and its false-cue time ~50 % (wrong-sign
   heave and rotation): those two parts are not met.
@@ -82,24 +82,27 @@ def _row(res: CompareResult, rec: str, preset: str) -> dict[str, float]:
 
 
 @pytest.mark.parametrize("rec", ["forest-rally", "flowing-formula", "lap"])
-def test_optimal_has_fewer_false_cues_and_lower_fx_error_than_the_classical(
+def test_optimal_has_fewer_false_cues_lower_fx_error_and_fx_correlation_no_lower(
     optimal_cmp: CompareResult, rec: str
 ) -> None:
     c = _row(optimal_cmp, rec, "racing-hexapod")
     o = _row(optimal_cmp, rec, "optimal-hexapod")
-    assert o["false_cue_pct_any"] < c["false_cue_pct_any"]
-    assert o["rms_fx_m_s2"] < 0.97 * c["rms_fx_m_s2"]
-    assert o["rms_fy_m_s2"] < 1.02 * c["rms_fy_m_s2"]  # fy about level (-5 .. +1.5 %)
-    assert o["actuator_limited_pct"] == 0.0 and o["clamped_pct"] <= 0.1
+    assert o["false_cue_pct_any"] < 0.5 * c["false_cue_pct_any"]
+    assert o["rms_fx_m_s2"] < 0.98 * c["rms_fx_m_s2"]
+    assert o["corr_fx"] >= c["corr_fx"]
+    assert o["rms_fy_m_s2"] < 1.02 * c["rms_fy_m_s2"]  # fy level (0 .. +1.6 %)
+    assert o["corr_fy"] >= c["corr_fy"] - 0.015
+    assert o["actuator_limited_pct"] == 0.0 and o["clamped_pct"] == 0.0
     assert o["bad_samples"] == 0
 
 
-def test_optimal_gains_most_on_the_rally_drive(optimal_cmp: CompareResult) -> None:
+def test_optimal_meets_all_but_the_rms_size_on_the_rally_drive(optimal_cmp: CompareResult) -> None:
     c = _row(optimal_cmp, "forest-rally", "racing-hexapod")
     o = _row(optimal_cmp, "forest-rally", "optimal-hexapod")
-    assert o["rms_fx_m_s2"] <= 0.93 * c["rms_fx_m_s2"]
-    assert o["rms_fy_m_s2"] <= 0.96 * c["rms_fy_m_s2"]
-    assert o["corr_fx"] >= 0.85 and o["corr_fy"] >= 0.9
+    assert o["corr_fx"] >= c["corr_fx"] and o["corr_fy"] >= c["corr_fy"]
+    assert o["false_cue_pct_any"] <= c["false_cue_pct_any"]
+    assert o["rms_fx_m_s2"] <= 0.96 * c["rms_fx_m_s2"]
+    assert o["rms_fy_m_s2"] <= 1.001 * c["rms_fy_m_s2"]
 
 
 def test_mpc_cuts_the_rms_error_by_20_percent_on_the_rally_drive(rig, held_out) -> None:  # type: ignore[no-untyped-def]

@@ -153,7 +153,18 @@ def test_a_feasible_guard_is_met_exactly() -> None:
 # ---------------------------------------------------------------------- in the algorithms
 def test_the_optimal_sign_guard_cuts_wrong_sign_cues_on_a_drive() -> None:
     f, w = _drive(0, 3000)
-    base = _with(load_cueing("optimal-hexapod"), sign_guard=(0.0,) * 6, window_s=3.0, stride_s=2.0)
+    base = _with(  # the hand-set plan before tuning: without a guard it cues against the car
+        load_cueing("optimal-hexapod"),
+        sign_guard=(0.0,) * 6,
+        window_s=3.0,
+        stride_s=2.0,
+        ref_scale=(0.3, 0.3, 0.0, 0.0, 0.0, 0.0),
+        ref_limit=(1.5, 1.5, 1e9, 1e9, 1e9, 1e9),
+        tilt_rate_limit_rad_s=math.radians(2.5),
+        w_error=(1.0, 1.0, 0.3, 3.0, 3.0, 0.3),
+        w_pose=(30.0, 30.0, 30.0, 10.0, 10.0, 10.0),
+        w_acc=(0.01, 0.01, 0.01, 10.0, 10.0, 10.0),
+    )
     guarded = _with(base, sign_guard=(0.7, 0.7, 0.0, 0.0, 0.0, 0.0))
     times = []
     for params in (base, guarded):
@@ -201,15 +212,21 @@ def test_new_mpc_settings_are_validated_and_read_in_their_units(tmp_path: Path) 
     with pytest.raises(ConfigError, match="sign_guard_weight"):
         MpcParams(sign_guard_weight=0.0)
     src = (ROOT / "configs" / "cueing" / "optimal-hexapod.toml").read_text()
+    import tomllib
+
+    table = tomllib.loads(src)["mpc"]  # the file as a plain TOML reader sees it
     p = load_cueing("optimal-hexapod").mpc
-    assert p is not None and p.ref_scale[:2] == (0.3, 0.3) and p.ref_limit[:2] == (1.5, 1.5)
+    assert p is not None and p.ref_scale == tuple(table["ref_scale"])
+    assert p.ref_limit[:3] == tuple(table["ref_limit_m_s2"])
+    assert p.tilt_rate_limit_rad_s == pytest.approx(math.radians(table["tilt_rate_limit_deg_s"]))
     good = tmp_path / "deg.toml"
-    good.write_text(src.replace("[mpc]", "[mpc]\nref_limit_deg_s = [6.0, 6.0, 1e12]"))
+    lines = [ln for ln in src.splitlines() if not ln.startswith("ref_limit_deg_s")]
+    good.write_text("\n".join(lines).replace("[mpc]", "[mpc]\nref_limit_deg_s = [6.0, 6.0, 1e12]"))
     q = load_cueing(good).mpc
     assert q is not None
     assert q.ref_limit[3] == pytest.approx(math.radians(6.0)) and q.ref_limit[5] == 1e9
     bad = tmp_path / "bad.toml"
-    bad.write_text(src.replace("ref_limit_m_s2 = [1.5, 1.5,", "ref_limit_m_s2 = [1.5,"))
+    bad.write_text(src.replace("ref_limit_m_s2 = [", "ref_limit_m_s2 = [1.0, 2.0] # ["))
     assert bad.read_text() != src
     with pytest.raises(ConfigError, match="ref_limit_m_s2"):
         load_cueing(bad)
