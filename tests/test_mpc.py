@@ -208,7 +208,8 @@ def test_mpc_table_is_validated_with_the_value_and_the_range(tmp_path: Path) -> 
         MpcParams(window_s=2.0, stride_s=3.0)
     with pytest.raises(ConfigError, match=r"tilt_rate_limit_rad_s = -1.0 is invalid"):
         MpcParams(tilt_rate_limit_rad_s=-1.0)
-    bad.write_text(src.replace("tilt_rate_limit_deg_s = 40.0", "tilt_rate_limit_deg_s = 0"))
+    line = next(ln for ln in src.splitlines() if ln.startswith("tilt_rate_limit_deg_s = "))
+    bad.write_text(src.replace(line, "tilt_rate_limit_deg_s = 0"))
     with pytest.raises(ConfigError, match="tilt_rate_limit_deg_s = 0"):
         load_cueing(bad)
 

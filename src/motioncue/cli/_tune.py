@@ -166,10 +166,10 @@ def run(args: argparse.Namespace) -> int:
     controller = load_controller(args.controller)
     controller.check_rate(args.rate)
     base, base_source = choose_preset(args.preset, platform, args.platform, args.overrides)
-    if base.algorithm != "classical":
+    if base.algorithm not in ("classical", "mpc", "optimal"):
         raise ConfigError(
             f"preset {base.name!r} uses the cueing algorithm {base.algorithm!r}; tune "
-            "optimises classical presets only"
+            "optimises classical, mpc and optimal presets only"
         )
     limits = ActuatorLimits.from_platform(
         platform, controller, rate_hz=args.rate, **limit_overrides(args)

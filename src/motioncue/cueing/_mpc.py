@@ -81,7 +81,16 @@ from ._mpc_params import MpcParams
 from ._params import GRAVITY_M_S2, CueingParams
 from ._vestibular import DEFAULT_MODEL_SET, get_model_set
 
-__all__ = ["MpcCueing", "MpcResult", "MpcState", "block_ends", "build_model", "fallback_accel"]
+__all__ = [
+    "MpcCueing",
+    "MpcResult",
+    "MpcState",
+    "SoftGuardQp",
+    "block_ends",
+    "build_model",
+    "fallback_accel",
+    "reference",
+]
 
 _FALLBACK_WN = 4.0
 
@@ -107,6 +116,10 @@ class LinearModel:
         Moved pose components (indices into ``[x, y, z, roll, pitch, yaw]``).
     dt : float
         Sample period (s).
+    ce, de : (6, nx), (6, 6) arrays
+        Unweighted perceived error ``e = ce x + de d`` (m/s^2, rad/s), for constraints on it.
+    thresholds : (6,) array
+        The model set's perception thresholds (m/s^2 x3, rad/s x3).
     """
 
     a: NDArray[np.float64]
@@ -117,6 +130,9 @@ class LinearModel:
     r: NDArray[np.float64]
     active: tuple[int, ...]
     dt: float
+    ce: NDArray[np.float64]
+    de: NDArray[np.float64]
+    thresholds: NDArray[np.float64]
 
     @property
     def nx(self) -> int:
@@ -213,7 +229,63 @@ def build_model(
         r=r,
         active=active,
         dt=dt,
+        ce=ce,
+        de=dd,
+        thresholds=np.asarray(ms.thresholds, dtype=float),
     )
+
+
+def reference(
+    d: ArrayLike, mp: MpcParams, fs_hz: float, lp: NDArray[np.float64] | None = None
+) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """The motion the plan tracks, sample by sample, and the low-pass state after it.
+
+    Without a split (``mp.ref_split_hz = 0``) ``r = L tanh(k d / L)`` per channel
+    (``k = mp.ref_scale``, ``L = mp.ref_limit``; a limit of ``1e9`` or more leaves ``k d``).
+    With a split, ``d`` is cut by a first-order low-pass ``lo`` at ``ref_split_hz`` (exact
+    discretisation, ``lo_n = a lo_(n-1) + (1 - a) d_n``, ``a = exp(-2 pi f / fs)``) into
+    ``lo`` and ``d - lo``: ``r = L tanh(k lo / L) + k_hf (d - lo)`` (``k_hf =
+    mp.ref_scale_hf``): the slow part as a limited copy (tilt), the fast part as it comes
+    (translation).
+
+    Parameters
+    ----------
+    d : (6,) or (N, 6) array
+        Vehicle motion ``[f - [0, 0, g], w]`` (m/s^2, rad/s), one sample or a run of them.
+    mp : MpcParams
+    fs_hz : float
+        Sample rate (Hz).
+    lp : (6,) array, optional
+        Low-pass state before ``d`` (default zeros: the vehicle at rest).
+
+    Returns
+    -------
+    r : array shaped like ``d``
+    lp : (6,) array
+        The low-pass state after the last sample.
+    """
+    da = np.asarray(d, dtype=float)
+    k = np.asarray(mp.ref_scale)
+    lim = np.asarray(mp.ref_limit)
+    soft = lim < 1e9
+    state = np.zeros(6) if lp is None else np.asarray(lp, dtype=float)
+    if mp.ref_split_hz > 0.0:
+        from scipy.signal import lfilter
+
+        a = math.exp(-2.0 * math.pi * mp.ref_split_hz / fs_hz)
+        rows = da.reshape(-1, 6)
+        lo, zf = lfilter([1.0 - a], [1.0, -a], rows, axis=0, zi=(a * state)[None, :])
+        state = np.asarray(zf[0] / a if a > 0.0 else rows[-1], dtype=float)
+        lo = lo.reshape(da.shape)
+        fast = np.asarray(mp.ref_scale_hf) * (da - lo)
+        slow = lo
+    else:
+        fast = np.zeros_like(da)
+        slow = da
+    r = slow * k
+    if np.any(soft):
+        r[..., soft] = lim[soft] * np.tanh(r[..., soft] / lim[soft])
+    return np.asarray(r + fast), state
 
 
 def block_ends(n_steps: int, blocks: int) -> NDArray[np.int64]:
@@ -259,6 +331,9 @@ class Condensed:
     gam_end: NDArray[np.float64]  # (nb, 12, nU): pose and rate at block ends
     phi_end: NDArray[np.float64]  # (nb, 12, nx)
     psi_end: NDArray[np.float64]  # (nb, 12, 6)
+    ce_phi: NDArray[np.float64]  # (nb, 6, nx): perceived error (ce) of the free state
+    ce_psi: NDArray[np.float64]  # (nb, 6, 6)
+    ce_gam: NDArray[np.float64]  # (nb, 6, nU)
 
 
 def condense(
@@ -282,6 +357,9 @@ def condense(
     gam_end = np.zeros((nb, 12, n_u))
     phi_end = np.zeros((nb, 12, nx))
     psi_end = np.zeros((nb, 12, 6))
+    ce_phi = np.zeros((nb, 6, nx))
+    ce_psi = np.zeros((nb, 6, 6))
+    ce_gam = np.zeros((nb, 6, n_u))
     lengths = np.diff(np.concatenate([[0], ends]))
     b_at = 0
     for k in range(1, n + 1):
@@ -298,6 +376,9 @@ def condense(
             gam_end[b_at] = gam[:12]
             phi_end[b_at] = phi[:12]
             psi_end[b_at] = psi[:12]
+            ce_phi[b_at] = m.ce @ phi
+            ce_psi[b_at] = m.ce @ psi + m.de * decay[k]
+            ce_gam[b_at] = m.ce @ gam
             b_at += 1
     if terminal:
         t = terminal_weight(m)
@@ -318,6 +399,9 @@ def condense(
         gam_end=gam_end,
         phi_end=phi_end,
         psi_end=psi_end,
+        ce_phi=ce_phi,
+        ce_psi=ce_psi,
+        ce_gam=ce_gam,
     )
 
 
@@ -411,6 +495,11 @@ class MpcState:
     ----------
     x : (nx,) array
         Model state (pose, rate, vestibular error states).
+    xv, xt : (nx,) arrays or None
+        With a sign guard: the model driven by the tracked reference alone and by the
+        vehicle's motion alone (platform at rest), for the perceived motions it compares.
+    ref_lp : (6,) array or None
+        Low-pass state of :func:`reference` (with ``ref_split_hz``).
     classical : WashoutState
         The fallback washout's state (also holds the last good input sample).
     warm_u, warm_lam_a, warm_lam_x : arrays or None
@@ -433,6 +522,9 @@ class MpcState:
     late: int = 0
     solve_ms: deque[float] = field(default_factory=lambda: deque(maxlen=6000))
     last_ms: float = 0.0
+    xv: NDArray[np.float64] | None = None
+    xt: NDArray[np.float64] | None = None
+    ref_lp: NDArray[np.float64] | None = None
 
     @property
     def bad_samples(self) -> int:
@@ -547,6 +639,62 @@ class QpSolver:
         return ok, u, la, lx
 
 
+class SoftGuardQp:
+    """:class:`QpSolver` plus soft one-sided rows (the sign guard), each with a slack
+    ``s >= 0`` priced ``weight (s + s^2 / 2)``::
+
+        min 0.5 u' H u + g' u + weight sum(s + s^2 / 2)
+        s.t. lba <= A u <= uba,  lbx <= u <= ubx,
+             A_g u + s >= lo_g (rows with a finite lower bound),  A_g u - s <= hi_g (others)
+
+    The rows are scaled by the caller so that a slack of 1 is one perception threshold; with
+    the linear price the guard is met exactly whenever it can be, and otherwise violated as
+    little as the price allows (no infeasible solve, no switching between two QPs).
+    """
+
+    def __init__(
+        self, plugin: str, hess: NDArray[np.float64], n_rows: int, n_guard: int, weight: float
+    ) -> None:
+        n = hess.shape[0]
+        h = np.zeros((n + n_guard, n + n_guard))
+        h[:n, :n] = hess
+        h[n:, n:] = weight * np.eye(n_guard)
+        self.n = n
+        self.n_rows = n_rows
+        self.n_guard = n_guard
+        self.weight = weight
+        self._qp = QpSolver(plugin, h, n_rows + n_guard)
+
+    def solve(
+        self,
+        g: NDArray[np.float64],
+        a: NDArray[np.float64],
+        lba: NDArray[np.float64],
+        uba: NDArray[np.float64],
+        lbx: NDArray[np.float64],
+        ubx: NDArray[np.float64],
+        a_guard: NDArray[np.float64],
+        lo_guard: NDArray[np.float64],
+        hi_guard: NDArray[np.float64],
+    ) -> tuple[bool, NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
+        """``(ok, u, lam_a, lam_x)`` of the inputs ``u`` (slacks dropped)."""
+        ng = self.n_guard
+        sigma = np.where(np.isfinite(lo_guard), 1.0, -1.0)
+        a_aug = np.zeros((self.n_rows + ng, self.n + ng))
+        a_aug[: self.n_rows, : self.n] = a
+        a_aug[self.n_rows :, : self.n] = a_guard
+        a_aug[self.n_rows :, self.n :] = np.diag(sigma)
+        ok, x, la, lx = self._qp.solve(
+            np.concatenate([g, np.full(ng, self.weight)]),
+            a_aug,
+            np.concatenate([lba, lo_guard]),
+            np.concatenate([uba, hi_guard]),
+            np.concatenate([lbx, np.zeros(ng)]),
+            np.concatenate([ubx, np.full(ng, np.inf)]),
+        )
+        return ok, x[: self.n], la[: self.n_rows], lx[: self.n]
+
+
 def _lin_at(
     limits: RigLimits, pose: NDArray[np.float64]
 ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
@@ -578,6 +726,7 @@ class MpcCueing:
     cond: Condensed = field(init=False)
     limits: RigLimits = field(init=False)
     _qp: QpSolver = field(init=False, repr=False)
+    _qp_guard: SoftGuardQp | None = field(init=False, repr=False)
 
     def __post_init__(self) -> None:
         classical = ClassicalWashout(self.params, self.fs_hz)  # validates fs_hz
@@ -599,6 +748,16 @@ class MpcCueing:
         object.__setattr__(self, "cond", cond)
         object.__setattr__(self, "limits", limits)
         object.__setattr__(self, "_qp", QpSolver(mp.solver, cond.hess, self.n_rows))
+        guard = self._guard_channels()
+        object.__setattr__(
+            self,
+            "_qp_guard",
+            SoftGuardQp(
+                mp.solver, cond.hess, self.n_rows, len(ends) * len(guard), mp.sign_guard_weight
+            )
+            if guard
+            else None,
+        )
 
     # ------------------------------------------------------------------ sizes
     @property
@@ -608,18 +767,51 @@ class MpcCueing:
         nl = self.limits.q_mid.shape[0]
         return len(self.cond.ends) * (3 * nl + len(self._tilt_axes()))
 
+    def _guard_channels(self) -> list[int]:
+        return [i for i in range(6) if self.mpc.sign_guard[i] > 0.0]
+
+    def guard_rows(
+        self, state: MpcState, d_vehicle: NDArray[np.float64]
+    ) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
+        """Sign-guard rows ``(A, lo, hi)`` of this sample's QP: at each block end, the plan's
+        perceived motion on a guarded channel must not oppose the vehicle's perceived motion
+        (both predicted over the horizon, the vehicle's held or decaying from ``d_vehicle``)
+        by more than ``sign_guard`` thresholds; rows and bounds in thresholds)."""
+        c = self.cond
+        m = self.model
+        guard = self._guard_channels()
+        xv = state.xv if state.xv is not None else np.zeros(m.nx)
+        xt = state.xt if state.xt is not None else np.zeros(m.nx)
+        # perceived simulator motion = ce (x - xv) (the reference's part cancels)
+        free = np.einsum("bgx,x->bg", c.ce_phi[:, guard], state.x - xv)
+        pv = -(np.einsum("bgx,x->bg", c.ce_phi[:, guard], xt) + c.ce_psi[:, guard] @ d_vehicle)
+        thr = m.thresholds[guard]
+        g = np.asarray(self.mpc.sign_guard)[guard]
+        lo = np.where(pv > 0, -g - free / thr, -np.inf)
+        hi = np.where(pv < 0, g - free / thr, np.inf)
+        a = (c.ce_gam[:, guard] / thr[None, :, None]).reshape(-1, c.ce_gam.shape[2])
+        return a, lo.reshape(-1), hi.reshape(-1)
+
     def _tilt_axes(self) -> list[int]:
         return [i for i in (3, 4) if self.params.dofs[i]]
 
     # ------------------------------------------------------------------ state
     def initial_state(self) -> MpcState:
         """A fresh state: platform at neutral and at rest, vehicle at rest."""
-        return MpcState(x=np.zeros(self.model.nx), classical=self.classical.initial_state())
+        return MpcState(
+            x=np.zeros(self.model.nx),
+            classical=self.classical.initial_state(),
+            xv=np.zeros(self.model.nx),
+            xt=np.zeros(self.model.nx),
+        )
 
     def reset(self, state: MpcState) -> None:
         """Put ``state`` back to :meth:`initial_state` (in place); the solve statistics are
         kept (diagnostics of the session, not part of the algorithm's state)."""
         state.x[:] = 0.0
+        state.xv = np.zeros(self.model.nx)
+        state.xt = np.zeros(self.model.nx)
+        state.ref_lp = None
         self.classical.reset(state.classical)
         state.warm_u = state.warm_lam_a = state.warm_lam_x = None
 
@@ -688,12 +880,20 @@ class MpcCueing:
         return g, a_mat, lba, uba, lbx, ubx
 
     def _solve(
-        self, state: MpcState, d: NDArray[np.float64], deadline_s: float | None
+        self,
+        state: MpcState,
+        d: NDArray[np.float64],
+        deadline_s: float | None,
+        d_vehicle: NDArray[np.float64] | None = None,
     ) -> NDArray[np.float64] | None:
+        t0 = time.perf_counter()
         g, a_mat, lba, uba, lbx, ubx = self.qp_matrices(state.x, d)
         warm = (state.warm_u, state.warm_lam_a, state.warm_lam_x)
-        t0 = time.perf_counter()
-        ok, u, la, lx = self._qp.solve(g, a_mat, lba, uba, lbx, ubx, warm)
+        if self._qp_guard is not None and d_vehicle is not None:
+            ga, glo, ghi = self.guard_rows(state, d_vehicle)
+            ok, u, la, lx = self._qp_guard.solve(g, a_mat, lba, uba, lbx, ubx, ga, glo, ghi)
+        else:
+            ok, u, la, lx = self._qp.solve(g, a_mat, lba, uba, lbx, ubx, warm)
         elapsed = time.perf_counter() - t0
         state.solves += 1
         state.last_ms = elapsed * 1e3
@@ -716,12 +916,18 @@ class MpcCueing:
     ) -> NDArray[np.float64]:
         pose_c = self.classical.step(state.classical, f, w)
         h = state.classical.hold
-        d = np.array([h[0], h[1], h[2] - GRAVITY_M_S2, h[3], h[4], h[5]])
-        u = self._solve(state, d, deadline_s)
+        dv = np.array([h[0], h[1], h[2] - GRAVITY_M_S2, h[3], h[4], h[5]])
+        d, state.ref_lp = reference(dv, self.mpc, self.fs_hz, state.ref_lp)
+        u = self._solve(state, d, deadline_s, dv)
         if u is None:
             u = self._fallback(state, pose_c)
         m = self.model
         state.x = m.a @ state.x + m.bu @ u + m.bd @ d
+        if self._qp_guard is not None:
+            if state.xv is None or state.xt is None:
+                state.xv, state.xt = np.zeros(m.nx), np.zeros(m.nx)
+            state.xv = m.a @ state.xv + m.bd @ d
+            state.xt = m.a @ state.xt + m.bd @ dv
         return state.x[:6]
 
     # ------------------------------------------------------------------ streaming / batch

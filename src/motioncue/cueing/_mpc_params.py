@@ -14,6 +14,14 @@ washout is the MPC's fallback) plus one ``[mpc]`` table, read by :func:`read_mpc
     w_vel = [1.0, 1.0, 1.0, 1.0, 1.0, 1.0]         # per (m/s or rad/s)^2
     w_acc = [0.01, 0.01, 0.01, 0.1, 0.1, 0.1]      # per (m/s^2 or rad/s^2)^2
     prediction_tau_s = 0.0             # vehicle prediction: 0 = held, > 0 = decays with tau
+    ref_scale = [1.0, 1.0, 1.0, 1.0, 1.0, 1.0]    # the plan tracks ref_scale * vehicle motion
+    ref_limit_m_s2 = [4.0, 4.0, 2.0]   # optional: soft limits of that copy (fx, fy, fz)
+    ref_limit_deg_s = [5.0, 5.0, 5.0]  # optional: and of its wx, wy, wz
+    ref_split_hz = 0.5                 # optional: only the part below this is scaled and
+    ref_scale_hf = [1.0, 1.0, 0.0, 0.0, 0.0, 0.0]  # limited; the part above times this
+    sign_guard = [0.7, 0.7, 0.0, 0.0, 0.0, 0.0]  # wrong-sign perceived motion at most this
+                                       #   x threshold (0: no such constraint)
+    sign_guard_weight = 1e4            # price of one threshold over it (a soft constraint)
     stroke_use = 0.9                   # fraction of each actuator's stroke the plan may use
     rate_use = 0.9                     # fraction of its speed and acceleration limits
     tilt_rate_limit_deg_s = 8.0        # optional: the plan's roll/pitch rate limit
@@ -75,6 +83,30 @@ class MpcParams:
     prediction_tau_s : float
         Vehicle motion over the horizon: 0 holds the last sample, ``tau > 0`` lets it decay
         as ``exp(-t / tau)`` (s).
+    ref_scale : 6 floats
+        The motion the plan tracks is ``r = L tanh(k d / L)`` per channel (``k = ref_scale``,
+        ``L = ref_limit``; ``d = [f - [0, 0, g], w]``): a scaled, soft-limited copy of the
+        vehicle's motion the platform can follow, so its shape survives (chasing the full
+        motion saturates the platform and distorts it). Each ``k`` in [0, 1]; the cue quality
+        is still judged against the unscaled vehicle.
+    ref_limit : 6 floats
+        ``L`` (m/s^2 for ``fx, fy, fz``, rad/s for ``wx, wy, wz``; the TOML keys are
+        ``ref_limit_m_s2`` and ``ref_limit_deg_s``), > 0; ``1e9`` (the default) means none.
+    ref_split_hz : float
+        0 (default): no split. Otherwise the vehicle's motion is split by a first-order
+        low-pass at this frequency (Hz), in [0, 50]; ``ref_scale`` and ``ref_limit`` apply to
+        the slow part only and ``ref_scale_hf`` (6 floats in [0, 1]) to the fast part (see
+        :func:`~._mpc.reference`).
+    ref_scale_hf : 6 floats
+    sign_guard : 6 floats
+        ``optimal`` only (it knows the vehicle's future): where ``g_i > 0``, the plan's
+        perceived motion on channel ``i`` may oppose the vehicle's perceived motion by at most
+        ``g_i`` perception thresholds (a false cue is one that exceeds a threshold with the
+        wrong sign), checked at every block end against the vehicle's motion as the plan
+        knows it (``optimal``: the recording; ``mpc``: its prediction). A soft constraint
+        (:class:`~._mpc.SoftGuardQp`). Each in [0, 10]; 0 = no such constraint.
+    sign_guard_weight : float
+        Price of violating the sign guard by one threshold, in (0, 1e9].
     stroke_use, rate_use : float
         Fraction (0, 1] of the stroke and of the speed/acceleration limits the plan may use
         (the rest absorbs the linearisation of the leg lengths).
@@ -102,6 +134,12 @@ class MpcParams:
     w_vel: Vec6 = (1.0, 1.0, 1.0, 1.0, 1.0, 1.0)
     w_acc: Vec6 = (0.01, 0.01, 0.01, 0.1, 0.1, 0.1)
     prediction_tau_s: float = 0.0
+    ref_scale: Vec6 = (1.0, 1.0, 1.0, 1.0, 1.0, 1.0)
+    ref_limit: Vec6 = (1e9, 1e9, 1e9, 1e9, 1e9, 1e9)
+    ref_split_hz: float = 0.0
+    ref_scale_hf: Vec6 = (0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
+    sign_guard: Vec6 = (0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
+    sign_guard_weight: float = 1e4
     stroke_use: float = 0.9
     rate_use: float = 0.9
     tilt_rate_limit_rad_s: float | None = None
@@ -114,6 +152,10 @@ class MpcParams:
     def __post_init__(self) -> None:
         for name in ("w_error", "w_pose", "w_vel", "w_acc"):
             object.__setattr__(self, name, _vec6(name, getattr(self, name), 0.0, 1e9))
+        object.__setattr__(self, "ref_scale", _vec6("ref_scale", self.ref_scale, 0.0, 1.0))
+        object.__setattr__(self, "ref_limit", _vec6("ref_limit", self.ref_limit, 1e-6, 1e9))
+        object.__setattr__(self, "ref_scale_hf", _vec6("ref_scale_hf", self.ref_scale_hf, 0.0, 1.0))
+        object.__setattr__(self, "sign_guard", _vec6("sign_guard", self.sign_guard, 0.0, 10.0))
         if not any(self.w_error):
             raise ConfigError(f"MpcParams.w_error = {self.w_error!r} is invalid; not all zero")
         checks = (
@@ -122,6 +164,8 @@ class MpcParams:
             ("stroke_use", self.stroke_use, 1e-3, 1.0),
             ("rate_use", self.rate_use, 1e-3, 1.0),
             ("deadline_ms", self.deadline_ms, 0.1, 1e6),
+            ("sign_guard_weight", self.sign_guard_weight, 1e-9, 1e9),
+            ("ref_split_hz", self.ref_split_hz, 0.0, 50.0),
             ("window_s", self.window_s, 0.2, 600.0),
             ("stride_s", self.stride_s, 0.1, 600.0),
         )
@@ -171,12 +215,25 @@ def read_mpc_table(table: Any) -> MpcParams:
         "stroke_use",
         "rate_use",
         "deadline_ms",
+        "sign_guard_weight",
+        "ref_split_hz",
         "window_s",
         "stride_s",
     ):
         vals[name] = table.number(name, getattr(d, name))
     for name in ("blocks", "block_samples"):
         vals[name] = table.integer(name, getattr(d, name))
+    lim = list(d.ref_limit)
+    if table.has("ref_limit_m_s2"):
+        lim[0:3] = table.vector("ref_limit_m_s2", 3)
+    if table.has("ref_limit_deg_s"):
+        lim[3:6] = [
+            1e9 if v >= 1e9 else math.radians(v) for v in table.vector("ref_limit_deg_s", 3)
+        ]
+    vals["ref_limit"] = tuple(lim)
+    vals["ref_scale"] = table.vector("ref_scale", 6, list(d.ref_scale))
+    vals["ref_scale_hf"] = table.vector("ref_scale_hf", 6, list(d.ref_scale_hf))
+    vals["sign_guard"] = table.vector("sign_guard", 6, list(d.sign_guard))
     if table.has("tilt_rate_limit_deg_s"):
         deg = table.number("tilt_rate_limit_deg_s", lo=0.0, hi=5000.0, lo_open=True)
         vals["tilt_rate_limit_rad_s"] = math.radians(deg)

@@ -39,8 +39,10 @@ from ._mpc import (
     MpcState,
     QpSolver,
     RigLimits,
+    SoftGuardQp,
     build_model,
     fallback_accel,
+    reference,
     rig_limits,
     terminal_weight,
 )
@@ -110,6 +112,8 @@ class OptimalCueing:
     _tw: NDArray[np.float64] = field(init=False, repr=False)
     _a_mat: NDArray[np.float64] = field(init=False, repr=False)
     _qp: QpSolver = field(init=False, repr=False)
+    _a_guard: NDArray[np.float64] = field(init=False, repr=False)
+    _qp_guard: SoftGuardQp | None = field(init=False, repr=False)
 
     def __post_init__(self) -> None:
         classical = ClassicalWashout(self.params, self.fs_hz)
@@ -171,6 +175,45 @@ class OptimalCueing:
         object.__setattr__(self, "_tw", tw)
         object.__setattr__(self, "_a_mat", a_mat)
         object.__setattr__(self, "_qp", QpSolver(self.mpc.solver, hess, a_mat.shape[0]))
+        # sign guard: the perceived simulator motion ce_i (x - x_vehicle) at block ends
+        guard = self._guard_channels()
+        ce_thr = m.ce[guard] / m.thresholds[guard][:, None]  # rows in thresholds
+        a_guard = np.einsum("gx,bxu->bgu", ce_thr, ge).reshape(-1, n_u)
+        object.__setattr__(self, "_a_guard", a_guard)
+        object.__setattr__(
+            self,
+            "_qp_guard",
+            SoftGuardQp(
+                self.mpc.solver,
+                hess,
+                a_mat.shape[0],
+                a_guard.shape[0],
+                self.mpc.sign_guard_weight,
+            )
+            if guard
+            else None,
+        )
+
+    def _guard_channels(self) -> list[int]:
+        return [i for i in range(6) if self.mpc.sign_guard[i] > 0.0]
+
+    def _guard_bounds(
+        self,
+        xf_ends: NDArray[np.float64],
+        xv_ends: NDArray[np.float64],
+        sign_ends: NDArray[np.float64],
+    ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        """Bounds of the sign-guard rows: at block ends (``xf_ends`` free state, ``xv_ends``
+        the vehicle-only state, ``sign_ends`` the sign of the vehicle's perceived motion, 0
+        where unconstrained), per guarded channel, in thresholds."""
+        m = self.model
+        guard = self._guard_channels()
+        g = np.asarray(self.mpc.sign_guard)[guard]
+        free = (xf_ends - xv_ends) @ (m.ce[guard] / m.thresholds[guard][:, None]).T
+        sg = sign_ends[:, guard]
+        lo = np.where(sg > 0, -g - free, -np.inf)
+        hi = np.where(sg < 0, g - free, np.inf)
+        return lo.reshape(-1), hi.reshape(-1)
 
     def _window_qp(
         self,
@@ -234,7 +277,26 @@ class OptimalCueing:
                 if i in (3, 4):
                     lbx[j :: m.nu] = -lim.tilt_accel
                     ubx[j :: m.nu] = lim.tilt_accel
-        return g, a_mat, lba, uba, lbx, ubx, xf[ends, 0:6], self._gam[ends, 0:6]
+        return g, a_mat, lba, uba, lbx, ubx, xf[ends, 0:6], self._gam[ends, 0:6], xf[ends]
+
+    def _solve_window(
+        self,
+        qp: tuple[NDArray[np.float64], ...],
+        xv_ends: NDArray[np.float64],
+        sign_ends: NDArray[np.float64],
+        use_guard: bool,
+    ) -> tuple[bool, NDArray[np.float64]]:
+        """Solve one window's QP ``qp`` (from :meth:`_window_qp`), with the sign-guard rows
+        when ``use_guard``."""
+        g, a_mat, lba, uba, lbx, ubx = qp[:6]
+        if use_guard and self._qp_guard is not None:
+            glo, ghi = self._guard_bounds(qp[8], xv_ends, sign_ends)
+            ok, u, _, _ = self._qp_guard.solve(
+                g, a_mat, lba, uba, lbx, ubx, self._a_guard, glo, ghi
+            )
+        else:
+            ok, u, _, _ = self._qp.solve(g, a_mat, lba, uba, lbx, ubx)
+        return ok, u
 
     # ------------------------------------------------------------------ interface
     def initial_state(self) -> MpcState:
@@ -294,6 +356,19 @@ class OptimalCueing:
         d_all = used.copy()
         d_all[:, 2] -= GRAVITY_M_S2
         m = self.model
+        guard = self._guard_channels()
+        if guard:  # the vehicle's perceived motion (its sign) and the reference-only states
+            xt = np.zeros(m.nx)
+            xv_all = np.zeros((n, m.nx))
+            sign_all = np.zeros((n, 6))
+            r_all, _ = reference(d_all, self.mpc, self.fs_hz)
+            xv = np.zeros(m.nx)
+            for k in range(n):
+                xt = m.a @ xt + m.bd @ d_all[k]
+                xv = m.a @ xv + m.bd @ r_all[k]
+                xv_all[k] = xv
+                sign_all[k] = -np.sign(m.ce @ xt + m.de @ d_all[k])
+        d_all, _ = reference(d_all, self.mpc, self.fs_hz)
         nw, ns, bs = self.n_window, self.n_stride, self.mpc.block_samples
         poses = np.zeros((n, 6))
         times: list[float] = []
@@ -311,15 +386,25 @@ class OptimalCueing:
             ok = False
             u = np.zeros(0)
             p_free = g_end = np.zeros(0)
-            for first in (prev, None) if prev is not None else (None,):
-                g, a_mat, lba, uba, lbx, ubx, p_free, g_end = self._window_qp(st.x, d, first)
-                ok, u, _, _ = self._qp.solve(g, a_mat, lba, uba, lbx, ubx)
+            sg = xv_e = np.zeros(0)
+            if guard:
+                ab = start + np.arange(1, nb + 1) * bs - 1  # samples at the block ends
+                abc = np.minimum(ab, n - 1)
+                sg = sign_all[abc] * (ab < n)[:, None]
+                xv_e = xv_all[abc]
+            firsts = (prev, None) if prev is not None else (None,)
+            tries = [(gd, fi) for gd in ((True, False) if guard else (False,)) for fi in firsts]
+            # (the guard is soft, so without it is only a last resort of a failed solve)
+            use_guard = False
+            for use_guard, first in tries:
+                qp = self._window_qp(st.x, d, first)
+                p_free, g_end = qp[6], qp[7]
+                ok, u = self._solve_window(qp, xv_e, sg, use_guard)
                 if ok:
                     break
             if ok:  # again with the legs linearised about this plan (sequential QP)
                 about = p_free + g_end @ u
-                g, a_mat, lba, uba, lbx, ubx, _, _ = self._window_qp(st.x, d, about)
-                ok2, u2, _, _ = self._qp.solve(g, a_mat, lba, uba, lbx, ubx)
+                ok2, u2 = self._solve_window(self._window_qp(st.x, d, about), xv_e, sg, use_guard)
                 if ok2:  # else keep the first plan
                     u = u2
                 plan = p_free + g_end @ u

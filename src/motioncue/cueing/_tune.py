@@ -12,6 +12,12 @@ much sustained force is cued), the rotational scale and high-pass frequency (rol
 share them) and the yaw scale and high-pass frequency. Everything else (limits, dampings,
 input rejection, workspace, head offset) is kept from the base preset.
 
+A preset with ``algorithm = "mpc"`` or ``"optimal"`` is tuned on its plan instead
+(:data:`MPC_TUNED_PARAMETERS`: the scale and soft limit of the tracked copy of fx, fy, the
+plan's tilt-rate limit, the canal weight, the x/y pose weight and the tilt acceleration
+weight); its classical tables (the fallback washout) and every other ``[mpc]`` setting are
+kept. :func:`tuned_parameters` gives the table of a preset.
+
 The objective and the limits
 ----------------------------
 Each candidate runs the cheap chain of ``generate`` on every recording (resampled once, up
@@ -68,6 +74,7 @@ from ._vestibular import DEFAULT_MODEL_SET, get_model_set
 
 __all__ = [
     "MAX_CLAMPED_FRACTION",
+    "MPC_TUNED_PARAMETERS",
     "PENALTY_BASE",
     "TUNED_PARAMETERS",
     "ChainMetrics",
@@ -77,6 +84,7 @@ __all__ = [
     "params_from_vector",
     "preset_toml",
     "tune_cueing",
+    "tuned_parameters",
     "vector_from_params",
 ]
 
@@ -118,16 +126,66 @@ TUNED_PARAMETERS: tuple[_Parameter, ...] = (
 """The tuned parameters, their bounds (searched in log space) and units."""
 
 
-def _log_bounds() -> list[tuple[float, float]]:
-    return [(math.log(p.lo), math.log(p.hi)) for p in TUNED_PARAMETERS]
+MPC_TUNED_PARAMETERS: tuple[_Parameter, ...] = (
+    _Parameter("ref_scale_xy", 0.05, 1.0, "-"),
+    _Parameter("ref_limit_xy_m_s2", 0.3, 10.0, "m/s^2"),
+    _Parameter("plan_tilt_rate_limit_deg_s", 1.0, 40.0, "deg/s"),
+    _Parameter("w_error_rp", 0.1, 30.0, "-"),
+    _Parameter("w_pose_xy", 1.0, 300.0, "-"),
+    _Parameter("w_acc_tilt", 0.1, 100.0, "-"),
+)
+"""The tuned parameters of an ``mpc`` or ``optimal`` preset (its ``[mpc]`` table): x and y
+share each value; searched in log space like :data:`TUNED_PARAMETERS`."""
+
+_PLANS = ("mpc", "optimal")
+
+
+def tuned_parameters(params: CueingParams) -> tuple[_Parameter, ...]:
+    """The table tuned for ``params``: :data:`MPC_TUNED_PARAMETERS` for an ``mpc`` or
+    ``optimal`` preset, :data:`TUNED_PARAMETERS` otherwise."""
+    return MPC_TUNED_PARAMETERS if params.algorithm in _PLANS else TUNED_PARAMETERS
+
+
+def _log_bounds(params: CueingParams | None = None) -> list[tuple[float, float]]:
+    table = TUNED_PARAMETERS if params is None else tuned_parameters(params)
+    return [(math.log(p.lo), math.log(p.hi)) for p in table]
+
+
+def _clip_log(table: Sequence[_Parameter], values: Sequence[float]) -> NDArray[np.float64]:
+    out = np.empty(len(table))
+    for i, (p, v) in enumerate(zip(table, values, strict=True)):
+        out[i] = math.log(min(max(float(v), p.lo), p.hi))
+    return out
+
+
+def _plan_of(params: CueingParams) -> Any:
+    from ._mpc_params import MpcParams
+
+    return params.mpc if params.mpc is not None else MpcParams()
 
 
 def vector_from_params(params: CueingParams) -> NDArray[np.float64]:
     """The base preset as a point of the search space (log values, clipped to the bounds).
 
-    A preset without ``tilt_scale`` starts with its translational ``f_scale`` (x, y) as tilt
-    scales; one without ``tilt_accel_limit_rad_s2`` at the upper acceleration bound.
+    A classical preset without ``tilt_scale`` starts with its translational ``f_scale``
+    (x, y) as tilt scales; one without ``tilt_accel_limit_rad_s2`` at the upper acceleration
+    bound. An ``mpc`` or ``optimal`` preset gives its ``[mpc]`` values (x and y: their
+    geometric mean; an unset plan tilt-rate limit: the ``[tilt]`` table's).
     """
+    if params.algorithm in _PLANS:
+        mp = _plan_of(params)
+        tr = mp.tilt_rate_limit_rad_s
+        return _clip_log(
+            MPC_TUNED_PARAMETERS,
+            (
+                math.sqrt(max(mp.ref_scale[0], 1e-9) * max(mp.ref_scale[1], 1e-9)),
+                math.sqrt(mp.ref_limit[0] * mp.ref_limit[1]),
+                (params.tilt_rate_limit_rad_s if tr is None else tr) / _D2R,
+                math.sqrt(max(mp.w_error[3], 1e-9) * max(mp.w_error[4], 1e-9)),
+                math.sqrt(max(mp.w_pose[0], 1e-9) * max(mp.w_pose[1], 1e-9)),
+                math.sqrt(max(mp.w_acc[3], 1e-9) * max(mp.w_acc[4], 1e-9)),
+            ),
+        )
     tilt = params.tilt_scale if params.tilt_scale is not None else params.f_scale[:2]
     accel = params.tilt_accel_limit_rad_s2
     values = (
@@ -148,19 +206,34 @@ def vector_from_params(params: CueingParams) -> NDArray[np.float64]:
         params.rot_wn_rad_s[2],
         params.trans_wn_rad_s[2],
     )
-    out = np.empty(len(TUNED_PARAMETERS))
-    for i, (p, v) in enumerate(zip(TUNED_PARAMETERS, values, strict=True)):
-        out[i] = math.log(min(max(float(v), p.lo), p.hi))
-    return out
+    return _clip_log(TUNED_PARAMETERS, values)
 
 
 def params_from_vector(base: CueingParams, x: Sequence[float], name: str = "") -> CueingParams:
     """The base preset with the tuned parameters set from a point ``x`` (log values)."""
-    if len(x) != len(TUNED_PARAMETERS):
-        raise ConfigError(f"tuning vector has {len(x)} values; expected {len(TUNED_PARAMETERS)}")
-    v = [
-        min(max(math.exp(float(xi)), p.lo), p.hi) for xi, p in zip(x, TUNED_PARAMETERS, strict=True)
-    ]
+    table = tuned_parameters(base)
+    if len(x) != len(table):
+        raise ConfigError(f"tuning vector has {len(x)} values; expected {len(table)}")
+    v = [min(max(math.exp(float(xi)), p.lo), p.hi) for xi, p in zip(x, table, strict=True)]
+    if base.algorithm in _PLANS:
+        mp = _plan_of(base)
+
+        def xy(old: Sequence[float], value: float) -> tuple[float, ...]:
+            return (value, value, *old[2:])
+
+        def rp(old: Sequence[float], value: float) -> tuple[float, ...]:
+            return (*old[:3], value, value, old[5])
+
+        plan = replace(
+            mp,
+            ref_scale=xy(mp.ref_scale, v[0]),
+            ref_limit=xy(mp.ref_limit, v[1]),
+            tilt_rate_limit_rad_s=v[2] * _D2R,
+            w_error=rp(mp.w_error, v[3]),
+            w_pose=xy(mp.w_pose, v[4]),
+            w_acc=rp(mp.w_acc, v[5]),
+        )
+        return replace(base, name=name or base.name, mpc=plan)
     return replace(
         base,
         name=name or base.name,
@@ -624,7 +697,7 @@ def tune_cueing(
     try:
         res = differential_evolution(
             objective,
-            _log_bounds(),
+            _log_bounds(objective.base),
             maxiter=generations,
             popsize=popsize,
             rng=np.random.default_rng(seed),
@@ -674,7 +747,8 @@ def _vec(values: Iterable[float], k: float = 1.0) -> str:
 
 
 def preset_toml(params: CueingParams, comments: Sequence[str] = ()) -> str:
-    """The TOML text of a classical preset (the layout :func:`load_cueing` reads).
+    """The TOML text of a preset (the layout :func:`load_cueing` reads): the classical
+    tables, and for an ``mpc`` or ``optimal`` preset its ``[mpc]`` table.
 
     Angles are written in degrees, lengths in millimetres (the file's units); ``comments``
     become ``#`` lines at the top.
@@ -685,7 +759,7 @@ def preset_toml(params: CueingParams, comments: Sequence[str] = ()) -> str:
     lines = [f"# {c}".rstrip() for c in comments]
     lines += [
         f"description = {_quote(f'{params.name}: tuned by motioncue tune')}",
-        'algorithm = "classical"',
+        f"algorithm = {_quote(params.algorithm)}",
         "dofs = ["
         + ", ".join(f'"{n}"' for n, on in zip(DOF_NAMES, params.dofs, strict=True) if on)
         + "]",
@@ -730,7 +804,43 @@ def preset_toml(params: CueingParams, comments: Sequence[str] = ()) -> str:
         f"offset_mm = {_vec(params.head_offset_m, 1e3)}",
         "",
     ]
+    if params.algorithm in _PLANS and params.mpc is not None:
+        lines += _mpc_lines(params.mpc)
     return "\n".join(lines)
+
+
+def _mpc_lines(mp: Any) -> list[str]:
+    """The ``[mpc]`` table of :func:`preset_toml`."""
+    r2d = 1.0 / _D2R
+    lines = [
+        "[mpc]",
+        f"platform = {_quote(mp.platform)}",
+        f"controller = {_quote(mp.controller)}",
+        f"horizon_s = {_fmt(mp.horizon_s)}",
+        f"blocks = {mp.blocks}",
+    ]
+    for key in ("w_error", "w_pose", "w_vel", "w_acc", "ref_scale", "ref_scale_hf", "sign_guard"):
+        lines.append(f"{key} = {_vec(getattr(mp, key))}")
+    lines += [
+        f"ref_limit_m_s2 = {_vec(mp.ref_limit[:3])}",
+        f"ref_limit_deg_s = {_vec([min(1e9, v * r2d) for v in mp.ref_limit[3:]])}",
+    ]
+    for key in (
+        "prediction_tau_s",
+        "ref_split_hz",
+        "sign_guard_weight",
+        "stroke_use",
+        "rate_use",
+        "deadline_ms",
+        "window_s",
+        "stride_s",
+    ):
+        lines.append(f"{key} = {_fmt(getattr(mp, key))}")
+    lines.append(f"block_samples = {mp.block_samples}")
+    if mp.tilt_rate_limit_rad_s is not None:
+        lines.append(f"tilt_rate_limit_deg_s = {_fmt(mp.tilt_rate_limit_rad_s * r2d)}")
+    lines += [f"solver = {_quote(mp.solver)}", ""]
+    return lines
 
 
 def _quote(s: str) -> str:
