@@ -93,9 +93,11 @@ def _child(spec: str, name: str, port_conn: Any, stop: Any, parent_pid: int) -> 
             return
         port_conn.send(("port", getattr(src, "port", 0)))
         seq = [0]
+        view = [buf]  # emptied before the block is closed
 
         def publish(sample: TelemetrySample) -> None:  # on the receiver thread, at once
-            seq[0] = _publish(buf, seq[0], sample, games)
+            if view:
+                seq[0] = _publish(view[0], seq[0], sample, games)
 
         src.on_sample = publish
         first = src.latest()  # one that came before the hook (published twice at worst)
@@ -127,6 +129,8 @@ def _child(spec: str, name: str, port_conn: Any, stop: Any, parent_pid: int) -> 
                 time.sleep(0.05)
         finally:
             src.close()
+            src.on_sample = None
+            view.clear()
     finally:
         del buf
         shm.close()
