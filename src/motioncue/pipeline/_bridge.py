@@ -43,7 +43,7 @@ therefore carries the cue for the end of the interval it starts (``BridgeConfig.
 default one period on arrival): the cueing runs that far ahead of the wall clock on the
 up-sampler's extrapolation, which is corrected smoothly from the last value used when the
 next sample arrives. Measured on loopback (``tests/test_latency_acceptance.py``): a lateral-g
-step reaches the first frame after its packet, 0.9-1.0 ms p50 instead of 4.7-4.9 ms.
+step reaches the first frame after its packet, 0.8-0.9 ms p50 instead of 4.7-4.9 ms.
 
 On a busy PC the scheduler may hold the loop back by several milliseconds. The loop thread
 asks for a short scheduler slice (``BridgeConfig.slice_s``, no privilege needed: see
@@ -149,12 +149,13 @@ class BridgeConfig:
         it is refused ``BridgeStats.notes`` says why. None: the default slice.
     lead_ms : int or None
         How far ahead of its send time each frame's cue is computed (ms, 0..period; None:
-        one frame period). The controller moves to a frame's position over the interval
-        after it receives the frame, so a frame that holds the cue of the moment it is sent
-        is felt one interval late; computed for the end of that interval (the telemetry
-        brought there by the up-sampler, ``upsample``), the motion reaches the rider when
-        the game sent it. The gate (timeouts, fades) keeps the wall clock; with
-        ``upsample = "hold"`` the lead changes nothing.
+        one frame period with frames on arrival, 0 with fixed frames). The controller moves
+        to a frame's position over the interval after it receives the frame, so a frame
+        that holds the cue of the moment it is sent is felt one interval late; computed for
+        the end of that interval (the telemetry brought there by the up-sampler,
+        ``upsample``), the motion reaches the rider when the game sent it. The gate
+        (timeouts, fades) keeps the wall clock; with ``upsample = "hold"`` the lead changes
+        nothing.
     """
 
     rate_hz: float = 100.0
