@@ -617,13 +617,25 @@ class Bridge:
         self._missed = ticker.missed
         self._park_err = float(np.max(np.abs(self.stage.q - np.asarray(self._q_park))))
 
+    def _parked_after_stop(self, stop_ticks: int) -> bool:
+        """Both loops after a stop: True once the gate and the stage are parked; an error
+        when that takes more frames than the fade-out and the longest park need."""
+        if self.gate.parked and self.stage.parked:
+            return True
+        bound = (
+            math.ceil(self.config.gate.fade_out_s / self.period_s)
+            + self.stage.park_frames_bound()
+            + 10
+        )
+        if stop_ticks > bound:
+            raise MotioncueError(f"could not park within {bound} frames after stop")
+        return False
+
     def _loop(self) -> None:
         cfg = self.config
         period = self.period_s
-        stage = self.stage
         stop = self._stop
         step = self.step
-        max_stop_ticks = math.ceil(cfg.gate.fade_out_s / period) + stage.park_frames_bound() + 10
         stop_ticks = 0
         ticker = Ticker(period, cfg.spin_s)
         while True:
@@ -633,12 +645,8 @@ class Bridge:
             self._missed = ticker.missed
             if stopping:
                 stop_ticks += 1
-                if self.gate.parked and stage.parked:
+                if self._parked_after_stop(stop_ticks):
                     return
-                if stop_ticks > max_stop_ticks:
-                    raise MotioncueError(
-                        f"could not park within {max_stop_ticks} frames after stop"
-                    )
 
     def _loop_arrival(self) -> None:
         """Frames on arrival: wait for the next period or a new sample, whichever is first.
@@ -654,16 +662,12 @@ class Bridge:
         from ._upsample import _PeriodEstimate
 
         cfg = self.config
-        stage = self.stage
         stop = self._stop
         period_ms = round(1000.0 / cfg.rate_hz)
         h_min = cfg.min_interval_ms
         h_max = period_ms + h_min
         tick = 1e-3
         clock = time.perf_counter
-        max_stop_ticks = (
-            math.ceil(cfg.gate.fade_out_s / self.period_s) + stage.park_frames_bound() + 10
-        )
         stop_ticks = 0
         est = _PeriodEstimate()
         seen_t = math.nan
@@ -697,12 +701,8 @@ class Bridge:
             last = due
             if stopping:
                 stop_ticks += 1
-                if self.gate.parked and stage.parked:
+                if self._parked_after_stop(stop_ticks):
                     return
-                if stop_ticks > max_stop_ticks:
-                    raise MotioncueError(
-                        f"could not park within {max_stop_ticks} frames after stop"
-                    )
 
     def step(self, deadline_s: float, stopping: bool = False, ticks: int | None = None) -> None:
         """One frame: newest sample -> gate -> washout -> blend -> workspace -> IK -> emit.
