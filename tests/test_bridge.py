@@ -17,7 +17,7 @@ import time
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 from pathlib import Path
-from typing import Any
+from typing import Any, Self
 
 import numpy as np
 import pytest
@@ -87,27 +87,38 @@ def lap_motion(t: float) -> tuple[float, float, float, tuple[float, float, float
     return g_lat, g_lon, g_vert, w
 
 
-class Sender:
-    """Sends the moving F1 stream at 60 Hz to a port from a thread; ``mode`` switches live."""
+class ThreadedSender:
+    """A sender thread to ``127.0.0.1:port``, started and stopped by a ``with`` block;
+    subclasses write ``_run``, which ends when ``self._stop`` is set, and count ``sent``."""
 
-    def __init__(self, port: int, year: int = 2024) -> None:
+    def __init__(self, port: int) -> None:
         self.dest = ("127.0.0.1", port)
-        self.stream = F1Stream(year)
-        self.mode = "drive"  # drive | silent | paused
-        # bad datagrams to interleave, one per frame, made from that frame's (ex, motion)
-        self.extra: list[Callable[[bytes, bytes], bytes]] = []
-        self.motion: Callable[[float], Any] = lap_motion
         self.sent = 0
         self._stop = threading.Event()
         self._thread = threading.Thread(target=self._run, daemon=True)
 
-    def __enter__(self) -> Sender:
+    def __enter__(self) -> Self:
         self._thread.start()
         return self
 
     def __exit__(self, *exc: object) -> None:
         self._stop.set()
         self._thread.join(2.0)
+
+    def _run(self) -> None:
+        raise NotImplementedError
+
+
+class Sender(ThreadedSender):
+    """Sends the moving F1 stream at 60 Hz to a port from a thread; ``mode`` switches live."""
+
+    def __init__(self, port: int, year: int = 2024) -> None:
+        super().__init__(port)
+        self.stream = F1Stream(year)
+        self.mode = "drive"  # drive | silent | paused
+        # bad datagrams to interleave, one per frame, made from that frame's (ex, motion)
+        self.extra: list[Callable[[bytes, bytes], bytes]] = []
+        self.motion: Callable[[float], Any] = lap_motion
 
     def _run(self) -> None:
         with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as tx:

@@ -7,7 +7,6 @@ from __future__ import annotations
 
 import math
 import socket
-import threading
 import time
 from collections.abc import Callable
 
@@ -25,6 +24,7 @@ from motioncue.telemetry._dirt import pack_extradata
 from motioncue.telemetry._pcars2 import PCars2Telemetry
 from motioncue.telemetry._xplane import UNUSED, pack_data
 from motioncue.trajectory import ActuatorLimits
+from test_bridge import ThreadedSender
 
 GATE = GateConfig(timeout_s=0.25, fade_out_s=0.3, fade_in_s=0.3)
 U = UNUSED
@@ -67,23 +67,12 @@ PACKETS: dict[str, Callable[[float], bytes]] = {
 }
 
 
-class Sender:
+class Sender(ThreadedSender):
     """Sends one game's packets at 60 Hz to a port from a thread."""
 
     def __init__(self, port: int, make: Callable[[float], bytes]) -> None:
-        self.dest = ("127.0.0.1", port)
+        super().__init__(port)
         self.make = make
-        self.sent = 0
-        self._stop = threading.Event()
-        self._thread = threading.Thread(target=self._run, daemon=True)
-
-    def __enter__(self) -> Sender:
-        self._thread.start()
-        return self
-
-    def __exit__(self, *exc: object) -> None:
-        self._stop.set()
-        self._thread.join(2.0)
 
     def _run(self) -> None:
         with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as tx:

@@ -15,7 +15,6 @@ from __future__ import annotations
 import math
 import socket
 import struct
-import threading
 import time
 from collections.abc import Iterator
 from contextlib import contextmanager
@@ -38,6 +37,7 @@ from test_bridge import (
     DATA,
     GATE,
     F1Stream,
+    ThreadedSender,
     _all_received,
     _check_trace,
     _wait_for,
@@ -313,24 +313,13 @@ def test_gaps_other_sessions_time_going_back_and_bad_angles_are_handled() -> Non
 
 
 # -- the bridge on a Motion-only stream ------------------------------------------------------
-class MotionOnlySender:
+class MotionOnlySender(ThreadedSender):
     """The moving F1 stream of ``test_bridge`` at 60 Hz, Motion packets only: no Motion Ex.
     The player's orientation follows the stream's body rates (integrated with ``turn``)."""
 
     def __init__(self, port: int, year: int = 2024) -> None:
-        self.dest = ("127.0.0.1", port)
+        super().__init__(port)
         self.stream = F1Stream(year)
-        self.sent = 0
-        self._stop = threading.Event()
-        self._thread = threading.Thread(target=self._run, daemon=True)
-
-    def __enter__(self) -> MotionOnlySender:
-        self._thread.start()
-        return self
-
-    def __exit__(self, *exc: object) -> None:
-        self._stop.set()
-        self._thread.join(2.0)
 
     def _run(self) -> None:
         s = self.stream
