@@ -14,7 +14,7 @@ which depends on the *slice* each task asks for: with the default slice (about 3
 6.12 any thread may ask for a shorter slice of its own (``sched_setattr`` with
 ``SCHED_OTHER`` and ``sched_runtime``; no privilege, no change of priority or share of the
 CPU): its deadline then comes first and it runs at once when it wakes. Measured on this
-machine, a bare sleep-and-spin 250 Hz loop beside a busy core: jitter p99 0.04-0.9 ms
+machine, a bare sleep-and-spin 250 Hz loop beside a busy core: jitter p99 0.00-0.92 ms (3 runs)
 with the default slice, 0.001 ms with a 0.1 ms slice (``benchmarks/bench_bridge.py``
 measures the bridge both ways). Older kernels accept the call and ignore the slice.
 """
