@@ -16,7 +16,8 @@ which depends on the *slice* each task asks for: with the default slice (about 3
 CPU): its deadline then comes first and it runs at once when it wakes. Measured on this
 machine, a bare sleep-and-spin 250 Hz loop beside a busy core: jitter p99 0.00-0.92 ms (3 runs)
 with the default slice, 0.001 ms with a 0.1 ms slice (``benchmarks/bench_bridge.py``
-measures the bridge both ways). Older kernels accept the call and ignore the slice.
+measures the bridge both ways). Before 6.12 the kernel ignores ``sched_runtime`` of a
+fair task (the call succeeds; not tried on such a kernel here).
 """
 
 from __future__ import annotations
