@@ -8,9 +8,12 @@ purpose (:class:`~motioncue.MotioncueError`) print one clear line and exit with 
 from __future__ import annotations
 
 import argparse
+import difflib
 import importlib
+import re
 import sys
 from collections.abc import Sequence
+from typing import Any, NoReturn
 
 from .._errors import MotioncueError
 
@@ -32,8 +35,74 @@ _VERB_MODULES: tuple[str, ...] = (
 )
 
 
+def _did_you_mean(word: str, candidates: Sequence[str]) -> str:
+    """``"; did you mean X?"`` for the closest of ``candidates`` (difflib), or ``""``."""
+    close = difflib.get_close_matches(word, list(candidates), n=1, cutoff=0.6)
+    return f"; did you mean {close[0]}?" if close else ""
+
+
+class _Parser(argparse.ArgumentParser):
+    """An argument parser that names a mistyped option, in the verb's own error form.
+
+    Plain argparse leaves an unknown ``--option`` of a verb to the top-level parser (which
+    prints the top-level usage), and when the mistyped option was a required one it first
+    complains that the right spelling is missing. A verb parser built from this class
+    checks the ``--words`` it is given against its own options before parsing, and every
+    error offers the closest known spelling (:mod:`difflib`).
+    """
+
+    def parse_known_args(  # type: ignore[override]
+        self, args: Sequence[str] | None = None, namespace: argparse.Namespace | None = None
+    ) -> tuple[argparse.Namespace, list[str]]:
+        if args is not None and self._subparsers is None:
+            self._check_option_names(list(args))
+        return super().parse_known_args(args, namespace)
+
+    def _long_options(self) -> list[str]:
+        return [s for s in self._option_string_actions if s.startswith("--")]
+
+    def _check_option_names(self, args: list[str]) -> None:
+        if any(a.nargs == argparse.REMAINDER for a in self._actions):
+            return  # the words after a REMAINDER belong to it (``send ... raw --start C``)
+        known = self._long_options()
+        for token in args:
+            if token == "--":
+                break
+            if not token.startswith("--"):
+                continue
+            name = token.split("=", 1)[0]
+            if name in self._option_string_actions:
+                continue
+            if self.allow_abbrev and any(k.startswith(name) for k in known):
+                continue  # an abbreviation: argparse accepts or refuses it by name
+            self.unknown_options([name])
+
+    def unknown_options(self, words: Sequence[str]) -> NoReturn:
+        """Refuse ``words`` (not options of this parser), naming the closest spelling."""
+        hints = [
+            f"{w}{_did_you_mean(w, self._long_options())}" if w.startswith("-") else w
+            for w in words
+        ]
+        noun = "argument" if len(words) == 1 else "arguments"
+        self.error(f"unrecognized {noun}: {', '.join(hints)}")
+
+    def error(self, message: str) -> NoReturn:
+        m = re.search(r"invalid choice: '([^']*)' \(choose from (.*)\)", message)
+        if m:
+            choices = re.findall(r"'([^']*)'", m.group(2))
+            message += _did_you_mean(m.group(1), choices)
+        super().error(message)
+
+
+def _verb_parsers(parser: argparse.ArgumentParser) -> dict[str, Any]:
+    for action in parser._actions:
+        if isinstance(action, argparse._SubParsersAction):
+            return dict(action.choices)
+    return {}
+
+
 def build_parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(
+    parser = _Parser(
         prog="motioncue",
         description="Vehicle motion to electric-cylinder motion platforms.",
     )
@@ -51,7 +120,13 @@ def build_parser() -> argparse.ArgumentParser:
 def main(argv: Sequence[str] | None = None) -> int:
     """Run the command line; returns the exit status."""
     parser = build_parser()
-    args = parser.parse_args(argv)
+    args, extras = parser.parse_known_args(argv)
+    if extras:
+        # words no parser took: refused by the verb's parser, in the verb's error form
+        verb_parser = _verb_parsers(parser).get(getattr(args, "_verb_name", None) or "")
+        if isinstance(verb_parser, _Parser):
+            verb_parser.unknown_options(extras)
+        parser.error(f"unrecognized arguments: {' '.join(extras)}")
     run = getattr(args, "run", None)
     if run is None:
         parser.print_help()

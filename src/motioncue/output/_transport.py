@@ -8,6 +8,8 @@ not the transport's business; a transport moves whole messages (datagrams) or by
 from __future__ import annotations
 
 import abc
+import ipaddress
+import re
 from dataclasses import dataclass, field
 from types import TracebackType
 from urllib.parse import parse_qs, urlsplit
@@ -45,18 +47,39 @@ class TransportURL:
 _SCHEMES = ("udp", "serial", "pcap", "file")
 
 
+def _udp_hint(url: str) -> str:
+    """``"; did you mean udp://..."`` when ``url`` is a bare address (``192.168.15.201``,
+    ``192.168.15.201:7408``, ``localhost:7408``), else ``""``."""
+    host, sep, port = url.rpartition(":") if ":" in url else (url, "", "")
+    if sep and not port.isdigit():
+        return ""
+    if host == "localhost":
+        is_host = True
+    else:
+        try:
+            ipaddress.ip_address(host.strip("[]"))
+            is_host = True
+        except ValueError:
+            is_host = bool(sep) and bool(re.fullmatch(r"[A-Za-z0-9][A-Za-z0-9.-]*", host))
+    if not is_host:
+        return ""
+    return f"; did you mean udp://{host}:{port if sep else 'PORT'}?"
+
+
 def parse_target(url: str) -> TransportURL:
-    """Parse a target URL, rejecting anything not of the four forms with a clear message."""
+    """Parse a target URL, rejecting anything not of the four forms with a clear message
+    (a bare ``HOST[:PORT]`` is answered with the ``udp://`` spelling)."""
     if ":" not in url:
         raise ConfigError(
             f"target {url!r} is not a URL; use one of udp://HOST:PORT, "
-            "serial:///dev/ttyUSB0?baud=19200, pcap:PATH, file:PATH"
+            f"serial:///dev/ttyUSB0?baud=19200, pcap:PATH, file:PATH{_udp_hint(url)}"
         )
     scheme, rest = url.split(":", 1)
     scheme = scheme.lower()
     if scheme not in _SCHEMES:
         raise ConfigError(
             f"target {url!r}: scheme {scheme!r} unknown; allowed: {', '.join(_SCHEMES)}"
+            f"{_udp_hint(url)}"
         )
     if scheme in ("pcap", "file"):
         path = rest[2:] if rest.startswith("//") else rest

@@ -1,0 +1,106 @@
+"""Issue 23 items 12-17: what trips a new user (mistyped options, unexplained figures,
+missing verbs). Each test reproduced its item before the fix."""
+
+from __future__ import annotations
+
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+from motioncue import ConfigError
+from motioncue.cli import main
+from motioncue.output import parse_target
+
+ROOT = Path(__file__).resolve().parents[1]
+SRC = ROOT / "src"
+
+
+def _env() -> dict[str, str]:
+    return {**os.environ, "PYTHONPATH": str(SRC)}
+
+
+def _cli(argv: list[str], capsys: pytest.CaptureFixture[str]) -> tuple[int, str, str]:
+    try:
+        code = main(argv)
+    except SystemExit as exc:
+        code = int(exc.code or 0)
+    out, err = capsys.readouterr()
+    return code, out, err
+
+
+# --- item 12: mistyped options ---------------------------------------------------------
+
+
+def test_mistyped_required_option_is_named_with_the_right_spelling() -> None:
+    """``--controler`` used to be reported as "required: --controller"; a real process."""
+    proc = subprocess.run(
+        [sys.executable, "-m", "motioncue", "generate", "--input", "x.csv", "--platform",
+         "stewart6-linear", "--controler", "mbox6", "--out", "x.ride"],
+        capture_output=True, text=True, env=_env(), timeout=60, check=False,
+    )  # fmt: skip
+    assert proc.returncode == 2
+    last = proc.stderr.strip().splitlines()[-1]
+    assert last == (
+        "motioncue generate: error: unrecognized argument: --controler; did you mean --controller?"
+    )
+    assert "required" not in proc.stderr
+
+
+def test_mistyped_optional_option_answers_in_the_verbs_form(
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    """``--monitr`` used to get the top-level usage ("motioncue: error: ...")."""
+    code, _, err = _cli(["play", "x.ride", "--monitr"], capsys)
+    assert code == 2
+    assert err.startswith("usage: motioncue play ")
+    assert err.strip().endswith(
+        "motioncue play: error: unrecognized argument: --monitr; did you mean --monitor?"
+    )
+
+
+def test_stray_word_and_unknown_verb(capsys: pytest.CaptureFixture[str]) -> None:
+    code, _, err = _cli(["play", "a.ride", "b.ride"], capsys)
+    assert code == 2 and "motioncue play: error: unrecognized argument: b.ride" in err
+    code, _, err = _cli(["gnerate"], capsys)
+    assert code == 2 and err.strip().endswith("did you mean generate?")
+    # nothing close: no suggestion
+    code, _, err = _cli(["play", "x.ride", "--zzzzzz"], capsys)
+    assert code == 2 and "did you mean" not in err
+
+
+def test_abbreviations_and_remainder_words_still_work(
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    """A unique prefix stays an abbreviation; send's word keeps its own --options."""
+    code, _, err = _cli(["limits", "--plat", "stewart6-linear", "--controller", "mbox6",
+                         "--json"], capsys)  # fmt: skip
+    assert code == 0, err
+    code, _, err = _cli(
+        ["send", "--controller", "easysmc", "--target", "file:/dev/null", "--no-reply",
+         "raw", "0x10", "--start", "0x5b"], capsys,
+    )  # fmt: skip
+    assert "unrecognized" not in err
+
+
+@pytest.mark.parametrize(
+    ("target", "hint"),
+    [
+        ("192.168.15.201", "did you mean udp://192.168.15.201:PORT?"),
+        ("192.168.15.201:7408", "did you mean udp://192.168.15.201:7408?"),
+        ("localhost:7408", "did you mean udp://localhost:7408?"),
+    ],
+)
+def test_bare_address_as_target_gets_the_udp_spelling(target: str, hint: str) -> None:
+    with pytest.raises(ConfigError) as info:
+        parse_target(target)
+    assert str(info.value).endswith(hint)
+
+
+def test_no_udp_hint_for_what_is_not_an_address() -> None:
+    for target in ("ride.pcap", "ftp://host", "C:\\ride.bin"):
+        with pytest.raises(ConfigError) as info:
+            parse_target(target)
+        assert "did you mean" not in str(info.value)
