@@ -104,3 +104,49 @@ def test_no_udp_hint_for_what_is_not_an_address() -> None:
         with pytest.raises(ConfigError) as info:
             parse_target(target)
         assert "did you mean" not in str(info.value)
+
+
+# --- item 13: what the bridge prints ---------------------------------------------------
+
+
+def test_bridge_names_the_address_it_listens_on_and_explains_its_status_line(
+    tmp_path: Path,
+) -> None:
+    """It printed ``SharedMemorySource(port=20777, running=True)`` and "out 120 Hz ...
+    clamped 238 lim 0 ws" without a word on what the figures are."""
+    proc = subprocess.run(
+        [sys.executable, "-m", "motioncue", "bridge", "--source", "f1:127.0.0.1:0",
+         "--platform", "corner4", "--controller", "mbox6", "--target",
+         f"pcap:{tmp_path / 'b.pcap'}", "--duration", "0.3", "--fade", "0.1"],
+        capture_output=True, text=True, env=_env(), timeout=60, check=False,
+    )  # fmt: skip
+    assert proc.returncode == 0, proc.stderr
+    lines = proc.stderr.splitlines()
+    head = lines[0]
+    assert head.startswith("bridge: f1 telemetry on udp://127.0.0.1:"), head
+    port = int(head.split("udp://127.0.0.1:")[1].split()[0])
+    assert port > 0 and "SharedMemorySource" not in proc.stderr
+    legend = lines[1]
+    assert legend.startswith("status: in = telemetry samples/s; out = frames/s sent")
+    # frames on arrival: why "out" can be above --rate (60 Hz packets + the 10 ms slot)
+    assert "frames on arrival" in legend and "10 ms" in legend
+    status = next(s for s in lines if s.startswith(("parked", "live", "fading")))
+    assert " limiter 0 frames | workspace 0 poses |" in status
+    assert " ws " not in status and " lim " not in status
+
+
+def test_corner_rig_is_four_actuators_and_two_spare_axes(
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    from motioncue.kinematics import load_platform
+
+    assert load_platform("corner4").axes_text == "4 actuators and 2 spare axes (6 controller axes)"
+    assert load_platform("stewart6-linear").axes_text == "6 actuators"
+    code, _, err = _cli(["emulate", "--controller", "mbox3", "--platform", "corner4",
+                         "--monitor", "0", "--duration", "0.1"], capsys)  # fmt: skip
+    assert code == 2
+    assert "corner4: 4 actuators and 2 spare axes (6 controller axes); the controller" in err
+    code, out, _ = _cli(["ik", "--platform", "corner4", "--pose", "0", "0", "0.01", "0", "0",
+                         "0"], capsys)  # fmt: skip
+    rows = [r for r in out.splitlines() if r.startswith("spare")]
+    assert len(rows) == 2 and all(r.endswith("spare axis (held at pulse 0)") for r in rows)

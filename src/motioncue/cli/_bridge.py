@@ -200,10 +200,12 @@ def run(args: argparse.Namespace) -> int:
                 for note in start_notes:
                     _say(f"motioncue bridge: note: {note}")
                 _say(
-                    f"bridge: {source!r} -> {args.target} ({args.controller}, {args.platform}, "
-                    f"preset {preset_source}, {config.rate_hz:g} Hz, frames {frames}); Ctrl-C "
-                    "parks and exits"
+                    f"bridge: {_describe_source(source)} -> {args.target} ({args.controller}, "
+                    f"{args.platform}, preset {preset_source}, {config.rate_hz:g} Hz, frames "
+                    f"{frames}); Ctrl-C parks and exits"
                 )
+                if not args.quiet:
+                    _say(_legend(frames, config.rate_hz))
                 monitor = start_monitor(
                     args.monitor, BridgeSource(bridge), platform, limits,
                     f"bridge {args.source} -> {args.target} ({args.platform}, "
@@ -240,6 +242,34 @@ def run(args: argparse.Namespace) -> int:
             _say(f"motioncue bridge: stopped by {guard.first}; parked at rest")
             return 130
         return 0
+
+
+def _describe_source(source: Any) -> str:
+    """What the user set up: ``f1 telemetry on udp://127.0.0.1:20777`` or the replayed file."""
+    path = getattr(source, "path", None)
+    if path is not None:
+        return f"replay of {path} (speed {getattr(source, 'speed', 1.0):g})"
+    game, host, port = (getattr(source, k, None) for k in ("game", "host", "port"))
+    if game is not None and host is not None and port is not None:
+        return f"{game} telemetry on udp://{host}:{port}"
+    return repr(source)
+
+
+def _legend(frames: str, rate_hz: float) -> str:
+    """One line, once, saying what the status line's figures are."""
+    if frames == "arrival":
+        out = (
+            f"frames/s sent (frames on arrival: one on each telemetry sample and one "
+            f"{1000.0 / rate_hz:g} ms after the last when none came, so more than "
+            f"{rate_hz:g}/s when the game sends slower: 60 Hz gives 120/s)"
+        )
+    else:
+        out = f"frames/s sent (one every {1000.0 / rate_hz:g} ms)"
+    return (
+        f"status: in = telemetry samples/s; out = {out}; limiter = frames the actuator "
+        "limiter changed; workspace = poses scaled back into the workspace; bad = datagrams "
+        "skipped; missed = frame deadlines missed"
+    )
 
 
 def _say(line: str) -> None:

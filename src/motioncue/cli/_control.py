@@ -266,7 +266,7 @@ def _emulator_monitor(args: argparse.Namespace, ctrl: Any, emu: Any) -> Any:
     platform = load_platform(args.platform)
     if platform.n_actuators != ctrl.n_axes:
         raise ConfigError(
-            f"--platform {args.platform}: {platform.n_actuators} actuators; the controller "
+            f"--platform {args.platform}: {platform.axes_text}; the controller "
             f"{ctrl.name} drives {ctrl.n_axes} axes"
         )
     limits = ActuatorLimits.from_platform(platform, ctrl)

@@ -117,8 +117,9 @@ def _run_ik(args: argparse.Namespace) -> int:
         f"{'usable min':>10s} {'usable max':>10s} {'pulses':>10s}  status"
     )
     print(header)
-    for r in rows:
-        status = "ok"
+    first_spare = p.n_actuators - p.spare_axes
+    for i, r in enumerate(rows):
+        status = "ok" if i < first_spare else "spare axis (held at pulse 0)"
         if not r["reachable"]:
             status = "UNREACHABLE (closest approach shown)"
         elif not r["in_stroke"]:

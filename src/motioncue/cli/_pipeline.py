@@ -297,7 +297,7 @@ def _play(args: argparse.Namespace) -> int:
     if controller.n_axes != platform.n_actuators:
         raise ConfigError(
             f"controller {controller.name} drives {controller.n_axes} axes; platform "
-            f"{platform.name} has {platform.n_actuators} actuators"
+            f"{platform.name} has {platform.axes_text}"
         )
     controller.check_rate(ride.rate_hz)
     limits = ActuatorLimits.from_platform(

@@ -311,6 +311,19 @@ class Platform:
         return self._n_spare
 
     @property
+    def axes_text(self) -> str:
+        """The controller axes in words: ``"6 actuators"``, or for a rig with spare axes
+        ``"4 actuators and 2 spare axes (6 controller axes)"``."""
+        n = self.n_actuators - self._n_spare
+        text = f"{n} actuator{'s' if n != 1 else ''}"
+        if self._n_spare:
+            k = self._n_spare
+            text += (
+                f" and {k} spare ax{'es' if k != 1 else 'is'} ({self.n_actuators} controller axes)"
+            )
+        return text
+
+    @property
     def traction_loss_arm_m(self) -> float | None:
         """Pivot-to-pin distance (m) of a traction-loss slider, None without one."""
         return self._yaw_arm

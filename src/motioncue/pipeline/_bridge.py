@@ -302,11 +302,11 @@ class BridgeStats:
             return "-" if math.isnan(x) else format(x, fmt)
 
         return (
-            f"{self.state:<10} gain {self.gain:4.2f} | in {f(self.rate_in_hz, '5.1f')} Hz"
-            f" out {f(self.rate_out_hz, '5.1f')} Hz | jitter p99 {f(self.jitter_p99_ms, '.2f')}"
+            f"{self.state:<10} gain {self.gain:4.2f} | in {f(self.rate_in_hz, '5.1f')}/s"
+            f" out {f(self.rate_out_hz, '5.1f')}/s | jitter p99 {f(self.jitter_p99_ms, '.2f')}"
             f" ms | latency p99 {f(self.latency_p99_ms, '.2f')} ms | age"
-            f" {f(self.frame_age_ms, '.1f')} ms | clamped"
-            f" {self.limiter_clamped_frames} lim {self.pose_clamped} ws | bad"
+            f" {f(self.frame_age_ms, '.1f')} ms | limiter {self.limiter_clamped_frames} frames"
+            f" | workspace {self.pose_clamped} poses | bad"
             f" {self.bad_packets}{f' ({bad})' if bad else ''} | missed {self.missed_deadlines}"
             + ("".join(f" | {k}" for k, v in sorted(self.packet_reasons.items())
                        if v and k.startswith("note: ")))

@@ -200,6 +200,9 @@ class SharedMemorySource:
                 cls = MotioncueError
             raise cls(message)
         self.port: int = int(value)
+        from ._source import parse_live_spec
+
+        self.game, self.host = parse_live_spec(spec)[:2]
 
     def latest(self) -> TelemetrySample | None:
         """The newest sample (or None); never blocks (a torn read keeps the previous one)."""
@@ -268,4 +271,7 @@ class SharedMemorySource:
         self.close()
 
     def __repr__(self) -> str:
-        return f"SharedMemorySource(port={self.port}, running={self.running})"
+        return (
+            f"SharedMemorySource({self.game!r}, udp://{self.host}:{self.port}, "
+            f"running={self.running})"
+        )

@@ -106,8 +106,8 @@ def load_view_input(path: str | Path, platform: str | None = None) -> ViewInput:
         plat = load_platform(name)
         if plat.n_actuators != len(ride.actuator_names):
             raise ConfigError(
-                f"{p}: the ride has {len(ride.actuator_names)} actuators, platform {name!r} "
-                f"has {plat.n_actuators}"
+                f"{p}: the ride has {len(ride.actuator_names)} controller axes, platform "
+                f"{name!r} has {plat.axes_text}"
             )
         idx, rate = _thin(ride.n_frames, ride.rate_hz)
         q = plat.drives.from_pulses(ride.pulses[idx])
