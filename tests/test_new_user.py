@@ -150,3 +150,70 @@ def test_corner_rig_is_four_actuators_and_two_spare_axes(
                          "0"], capsys)  # fmt: skip
     rows = [r for r in out.splitlines() if r.startswith("spare")]
     assert len(rows) == 2 and all(r.endswith("spare axis (held at pulse 0)") for r in rows)
+
+
+# --- item 17: progress, help text, list -----------------------------------------------
+
+
+def test_list_names_every_bundled_file_and_game(capsys: pytest.CaptureFixture[str]) -> None:
+    import json
+
+    from motioncue.telemetry import GAMES
+
+    code, out, _ = _cli(["list", "--json"], capsys)
+    assert code == 0
+    listed = {k: {d["name"] for d in v} for k, v in json.loads(out).items()}
+    for kind, folder in (("platforms", "platforms"), ("controllers", "controllers"),
+                         ("presets", "cueing"), ("profiles", "profiles")):  # fmt: skip
+        assert listed[kind] == {p.stem for p in (ROOT / "configs" / folder).glob("*.toml")}
+    assert listed["games"] == set(GAMES)
+    code, out, _ = _cli(["list", "platforms"], capsys)
+    row = next(r for r in out.splitlines() if r.split()[0] == "corner4")
+    assert "4-actuator corner rig" in row and "default preset corner4" in row
+    code, _, err = _cli(["list", "platform"], capsys)
+    assert code == 2 and "did you mean platforms?" in err
+
+
+def test_help_texts(capsys: pytest.CaptureFixture[str]) -> None:
+    """``tune --help`` showed "1 %%"; ``demo --help`` had no description."""
+    code, out, _ = _cli(["tune", "--help"], capsys)
+    assert code == 0 and "%%" not in out and "more than 1 % of its poses" in " ".join(out.split())
+    code, out, _ = _cli(["demo", "--help"], capsys)
+    body = out.split("options:")[0]
+    assert "without hardware or network" in " ".join(body.split())
+
+
+def test_compare_reports_progress_on_stderr(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    import numpy as np
+
+    t = np.arange(0.0, 4.0, 0.01)
+    rows = ["t,fx,fy,fz,wx,wy,wz"] + [
+        f"{x:.2f},{np.sin(x):.4f},{0.5 * np.cos(x):.4f},9.80665,0,0,{0.1 * np.sin(x):.4f}"
+        for x in t
+    ]
+    rec = tmp_path / "short.csv"
+    rec.write_text("\n".join(rows) + "\n")
+    code, out, err = _cli(
+        ["compare", "--input", str(rec), "--presets", "racing-hexapod", "racing", "--platform",
+         "stewart6-linear", "--controller", "mbox6", "--report", str(tmp_path / "rep")], capsys,
+    )  # fmt: skip
+    assert code == 0, err
+    lines = [s for s in err.splitlines() if s.startswith("motioncue compare: ")]
+    assert lines[0].startswith("motioncue compare: run 1/2: short.csv x racing-hexapod (")
+    assert lines[1].startswith("motioncue compare: run 2/2: short.csv x racing (")
+    assert lines[2].startswith("motioncue compare: 2 run(s) done in ")
+    assert "run 1/2" not in out  # stdout keeps the table
+
+
+def test_omct_reports_progress_when_not_on_a_terminal(
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    code, _, err = _cli(["omct", "--preset", "racing-hexapod", "--platform", "stewart6-linear",
+                         "--controller", "mbox6", "--paths", "p-p", "--amplitude-scale", "0.5"],
+                        capsys)  # fmt: skip
+    assert code == 0, err
+    lines = err.splitlines()
+    assert lines[0].startswith("motioncue omct: path p->p (0 % done), ")
+    assert lines[-1].startswith("motioncue omct: done, ") and lines[-1].endswith(" s")

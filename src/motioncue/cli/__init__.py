@@ -32,6 +32,7 @@ _VERB_MODULES: tuple[str, ...] = (
     "_view",
     "_bridge",
     "_control",
+    "_list",
 )
 
 

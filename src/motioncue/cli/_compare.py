@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 import json
 import math
+import sys
 from pathlib import Path
 from typing import Any
 
@@ -78,6 +79,11 @@ def _labels(names: list[str], short: list[str], what: str) -> list[str]:
     return labels
 
 
+def _progress(line: str) -> None:
+    """One progress line on stderr (stdout keeps the table or the JSON)."""
+    print(f"motioncue compare: {line}", file=sys.stderr, flush=True)
+
+
 def run(args: argparse.Namespace) -> int:
     from ..cueing import get_model_set
     from ..cueing._compare import compare_cueing, plot_file_names, write_compare_report
@@ -117,6 +123,7 @@ def run(args: argparse.Namespace) -> int:
         model=model.name,
         platform_name=args.platform,
         controller_name=args.controller,
+        progress=_progress,
     )
     paths = write_compare_report(result, args.report)
     if args.json:

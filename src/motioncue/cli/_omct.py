@@ -6,6 +6,7 @@ import argparse
 import json
 import math
 import sys
+import time
 from typing import Any
 
 from .._errors import ConfigError
@@ -99,6 +100,8 @@ def run(args: argparse.Namespace) -> int:
         "controller": str(args.controller),
     }
     tty = sys.stderr.isatty()
+    t0 = time.perf_counter()
+    last_path = [""]
 
     def progress(what: str, frac: float) -> None:
         if tty:
@@ -108,6 +111,14 @@ def run(args: argparse.Namespace) -> int:
                 file=sys.stderr,
                 flush=True,
             )
+            return
+        # not a terminal (a log, a pipe): one line per path, and one at the end
+        path = what.split(" ", 1)[0]
+        if path != last_path[0]:
+            last_path[0] = path
+            elapsed = time.perf_counter() - t0
+            line = "done" if path == "done" else f"path {path} ({frac * 100.0:.0f} % done)"
+            print(f"motioncue omct: {line}, {elapsed:.1f} s", file=sys.stderr, flush=True)
 
     result = run_omct(
         design,

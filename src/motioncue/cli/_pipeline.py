@@ -85,6 +85,11 @@ def register(sub: Any) -> None:
     d = sub.add_parser(
         "demo",
         help="generate a ride from the bundled lap, play it to the MBOX/IMAX emulator, compare",
+        description="The whole chain without hardware or network: the bundled lap "
+        "(configs/recordings/lap.csv) becomes a ride for --platform and --controller "
+        "(generate), the ride is played on loopback to the built-in emulator of that "
+        "controller (play, emulate), the emulator's trace is compared with the ride, and a "
+        "report (cueing and actuator plots, metrics, summary) is written under --out.",
     )
     d.add_argument(
         "--out", default="out/demo", metavar="DIR", help="folder for the demo's files (out/demo)"

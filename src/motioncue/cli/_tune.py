@@ -37,7 +37,7 @@ def register(sub: Any) -> None:
             "lost correlation, false and missed cues), with the cheap chain of generate "
             "(cueing, workspace limiting, evaluation of the delivered poses). A candidate that "
             "breaks an "
-            "actuator limit on any frame or clamps more than 1 %% of its poses is penalised "
+            "actuator limit on any frame or clamps more than 1 % of its poses is penalised "
             "above every one that does not; the result must meet both or nothing is "
             "written. Optimiser: SciPy differential evolution, seeded. Evaluations run in "
             "local processes (--workers) or on a Dask cluster (--scheduler)."

@@ -23,7 +23,7 @@ import io
 import json
 import math
 import re
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -416,6 +416,7 @@ def compare_cueing(
     model: str = "telban-cardullo-2005",
     platform_name: str | None = None,
     controller_name: str = "",
+    progress: Callable[[str], None] | None = None,
 ) -> CompareResult:
     """Run every preset on every recording through the platform's chain.
 
@@ -431,11 +432,16 @@ def compare_cueing(
     rate_hz : float
     model : str
         Vestibular model set name.
+    progress : callable, optional
+        Called with one line before each run (``"run 2/6: lap x mpc-hexapod"``) and after
+        the last one (with the elapsed time, s).
 
     Returns
     -------
     CompareResult
     """
+    import time
+
     from motioncue.telemetry._recording import resample
 
     from ._vestibular import get_model_set
@@ -451,10 +457,17 @@ def compare_cueing(
             raise ConfigError(f"{what} labels repeat: {labels!r}; each must be unique")
     runs: list[CompareRun] = []
     t_s: dict[str, NDArray[np.float64]] = {}
+    n_runs = len(recordings) * len(presets)
+    t0 = time.perf_counter()
     for rec_label, rec in recordings:
         uniform = resample(rec, rate_hz)
         t_s[rec_label] = np.asarray(uniform.t_s, dtype=float)
         for preset_label, params in presets:
+            if progress is not None:
+                progress(
+                    f"run {len(runs) + 1}/{n_runs}: {rec_label} x {preset_label} "
+                    f"({time.perf_counter() - t0:.1f} s)"
+                )
             runs.append(
                 run_chain(
                     np.asarray(uniform.f, dtype=float),
@@ -468,6 +481,8 @@ def compare_cueing(
                     preset=preset_label,
                 )
             )
+    if progress is not None:
+        progress(f"{n_runs} run(s) done in {time.perf_counter() - t0:.1f} s")
     return CompareResult(
         runs=tuple(runs),
         recordings=tuple(k for k, _ in recordings),
