@@ -217,3 +217,43 @@ def test_omct_reports_progress_when_not_on_a_terminal(
     lines = err.splitlines()
     assert lines[0].startswith("motioncue omct: path p->p (0 % done), ")
     assert lines[-1].startswith("motioncue omct: done, ") and lines[-1].endswith(" s")
+
+
+# --- item 16: the evaluation's workspace line -----------------------------------------
+
+
+def _evaluation(poses_scale: float, workspace: object = None) -> object:
+    import numpy as np
+
+    from motioncue.cueing import evaluate_cueing
+
+    n = 300
+    f = np.tile([0.0, 0.0, 9.80665], (n, 1))
+    f[:, 0] = np.sin(np.arange(n) / 30.0)
+    poses = np.zeros((n, 6))
+    poses[:, 0] = poses_scale * np.sin(np.arange(n) / 30.0)
+    return evaluate_cueing(f, np.zeros((n, 3)), poses, 100.0, workspace=workspace)
+
+
+def test_summary_says_why_there_is_no_workspace_figure() -> None:
+    """``ev.summary()`` printed "workspace use: x nan%" without a workspace."""
+    text = _evaluation(0.1).summary(notes=False)  # type: ignore[attr-defined]
+    assert "nan" not in text
+    assert "workspace use: not measured (no workspace half range given)" in text
+
+
+def test_summary_explains_a_cue_beyond_the_workspace() -> None:
+    """``cue`` without a platform printed "x 171%" without a word."""
+    from motioncue.cueing import load_cueing
+
+    ws = load_cueing("racing").workspace
+    ev = _evaluation(0.5, ws)
+    use_x = float(ev.workspace_use[0])  # type: ignore[attr-defined]
+    # the peak of 0.5 sin over 300 samples at 1/30 rad: 0.5 within 1e-3
+    assert use_x == pytest.approx(0.5 / ws[0], rel=2e-3)
+    assert use_x > 1.0
+    text = ev.summary(notes=False)  # type: ignore[attr-defined]
+    line = next(s for s in text.splitlines() if s.startswith("workspace use:"))
+    assert line.startswith(f"workspace use: x {use_x:.0%}")
+    assert "above 100 %: the poses leave the workspace" in text
+    assert "above 100 %" not in _evaluation(0.0, ws).summary(notes=False)  # type: ignore[attr-defined]

@@ -260,8 +260,7 @@ class CueingEvaluation:
 
     def summary(self, *, notes: bool = True) -> str:
         """A plain-text table of the metrics, the objective, and (default) the notes."""
-        dofs = ("x", "y", "z", "roll", "pitch", "yaw")
-        use = "  ".join(f"{d} {u:.0%}" for d, u in zip(dofs, self.workspace_use, strict=True))
+        use = self._workspace_text()
         w = " ".join(f"{v:g}" for v in self.weights)
         r = ", ".join(f"{v:g}" for v in self.head_offset_m)
         lines = [
@@ -269,11 +268,34 @@ class CueingEvaluation:
             self.table(),
             f"perceived-motion error J = {self.perceived_error:.3f} thresholds "
             f"(weights fx fy fz wx wy wz: {w})",
-            f"workspace use: {use}",
+            use,
         ]
         if notes:
             lines.append(_NOTES)
         return "\n".join(lines)
+
+    def _workspace_text(self) -> str:
+        """The workspace-use line: per DOF in %, or why there is no figure."""
+        dofs = ("x", "y", "z", "roll", "pitch", "yaw")
+        use = np.asarray(self.workspace_use, dtype=float)
+        if np.all(np.isnan(use)):
+            return "workspace use: not measured (no workspace half range given)"
+
+        def one(d: str, u: float) -> str:
+            if math.isnan(u):
+                return f"{d} -"
+            if math.isinf(u):
+                return f"{d} moved (no range)"
+            return f"{d} {u:.0%}"
+
+        text = "workspace use: " + "  ".join(one(d, u) for d, u in zip(dofs, use, strict=True))
+        if np.any(use[np.isfinite(use) | np.isinf(use)] > 1.0):
+            text += (
+                "\n  above 100 %: the poses leave the workspace (this is the cue before "
+                "workspace limiting, which scales such poses back in generate, bridge and "
+                "compare)"
+            )
+        return text
 
 
 def _delay(sim: NDArray[np.float64], veh: NDArray[np.float64], fs_hz: float, max_lag: int) -> float:
