@@ -37,4 +37,5 @@ numpydoc_validation_checks: set[str] = set()
 
 html_theme = "alabaster"
 html_title = "motioncue"
-html_static_path: list[str] = []
+html_static_path = ["_static"]
+html_css_files = ["motioncue.css"]  # field names unbroken, long lines scroll

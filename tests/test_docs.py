@@ -43,7 +43,42 @@ def test_docs_build_with_warnings_as_errors(tmp_path: Path) -> None:
                  "motioncue.telemetry.open_source", "motioncue.trajectory.ActuatorLimits",
                  "motioncue.ConfigError"):  # fmt: skip
         assert f'id="{name}"' in api, name
+    # issue 23 item 16: each exception once, no private module path on the public pages
+    text = re.sub(r"<[^>]+>", "", api)
+    for exc in ("MotioncueError", "ConfigError", "ProtocolError", "LimitError", "TransportError"):
+        assert len(re.findall(rf"exception\s+motioncue[\w.]*\.{exc}\b", text)) == 1, exc
+    private = sorted(
+        set(re.findall(r"motioncue(?:\.\w+)*\._[a-z]\w*", text)) - {"motioncue._errors"}
+    )
+    assert not private, sorted(private)
+    _check_layout_in_chromium(out)
     print(f"docs built in {elapsed:.1f} s")
+
+
+def _check_layout_in_chromium(out: Path) -> None:
+    """Field names ("Parameters") on one line and no code block wider than its column, at a
+    laptop's width (issue 23 item 16: "Paramet-ers", command lines cut at the edge)."""
+    from browser_support import browser
+
+    with browser(900, 800) as ctx:
+        page = ctx.new_page()
+        for name in ("api.html", "tutorials/rig-owner.html", "tutorials/seat-maker.html",
+                     "tutorials/researcher.html"):  # fmt: skip
+            page.goto((out / name).as_uri())
+            broken = page.evaluate(
+                """() => [...document.querySelectorAll('dl.field-list > dt')]
+                    .filter(e => e.getClientRects().length > 1
+                        || e.getBoundingClientRect().height
+                           > 1.6 * parseFloat(getComputedStyle(e).lineHeight))
+                    .map(e => e.textContent.trim())"""
+            )
+            assert not broken, (name, broken[:5])
+            cut = page.evaluate(
+                """() => [...document.querySelectorAll('div.highlight pre')]
+                    .filter(e => e.scrollWidth > e.clientWidth + 1)
+                    .map(e => e.textContent.split('\\n').find(l => l.length > 80) || '')"""
+            )
+            assert not cut, (name, cut)
 
 
 def test_conventions_cited_by_docstrings_are_in_the_repository() -> None:

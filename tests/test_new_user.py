@@ -257,3 +257,33 @@ def test_summary_explains_a_cue_beyond_the_workspace() -> None:
     assert line.startswith(f"workspace use: x {use_x:.0%}")
     assert "above 100 %: the poses leave the workspace" in text
     assert "above 100 %" not in _evaluation(0.0, ws).summary(notes=False)  # type: ignore[attr-defined]
+
+
+# --- item 16: the tutorials -------------------------------------------------------------
+
+
+def test_tutorials_cover_view_monitor_profiles_corner_rigs_and_every_game() -> None:
+    from motioncue.telemetry import GAMES
+
+    docs = ROOT / "docs"
+    tutorials = " ".join(
+        p.read_text(encoding="utf-8") for p in sorted((docs / "tutorials").glob("*.md"))
+    )
+    for needle in ("motioncue view", "--monitor", "--profile", "corner4", "motioncue list",
+                   "motioncue send-telemetry"):  # fmt: skip
+        assert needle in tutorials, needle
+    pipeline = (docs / "pipeline.md").read_text(encoding="utf-8")
+    row = next(s for s in pipeline.splitlines() if s.startswith("| telemetry |"))
+    assert all(f"`{g}`" in row for g in GAMES), row
+    researcher = (docs / "tutorials" / "researcher.md").read_text(encoding="utf-8")
+    assert "against `J`" not in researcher and "minimising the mean cue score" in researcher
+
+
+def test_python_snippets_of_the_docs_import_public_names_only() -> None:
+    import re
+
+    for page in sorted((ROOT / "docs").rglob("*.md")):
+        text = page.read_text(encoding="utf-8")
+        for block in re.findall(r"```python\n(.*?)```", text, flags=re.S):
+            private = re.findall(r"motioncue(?:\.\w+)*\._\w+", block)
+            assert not private, (page.name, private)

@@ -53,8 +53,8 @@ class CueingParams:
     name : str
         Preset name (the TOML file's stem) or a user label.
     algorithm : str
-        Name of the cueing algorithm in the registry of :mod:`._algorithm` that runs these
-        parameters (``"classical"``: :class:`~._classical.ClassicalWashout`).
+        Name of the cueing algorithm in the registry (:func:`motioncue.cueing.make_cueing`)
+        that runs these parameters (``"classical"``: :class:`~motioncue.cueing.ClassicalWashout`).
     dofs : tuple of 6 bool
         Which pose components ``[x, y, z, roll, pitch, yaw]`` the machine moves; the others
         are held at zero (a 3-DOF seat: ``z, roll, pitch``).
@@ -218,7 +218,7 @@ def load_cueing(name_or_path: str | Path) -> CueingParams:
         offset_mm = [0.0, 0.0, 0.0]                # rider's head from the platform origin,
                                                    #   platform frame x fwd, y left, z up
         [mpc]                                      # optional: "mpc" and "optimal" settings
-                                                   #   (see motioncue.cueing._mpc_params)
+                                                   #   (as in configs/cueing/mpc-hexapod.toml)
 
     Raises
     ------

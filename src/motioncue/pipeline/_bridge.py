@@ -131,7 +131,7 @@ class BridgeConfig:
         the GIL for at most this long when the loop wakes; restored on stop. None: leave it.
     upsample : str
         How telemetry slower than the frame rate is brought to each frame's time
-        (:data:`motioncue.pipeline._upsample.UPSAMPLERS`): ``"hold"`` (the newest sample,
+        (the names ``motioncue bridge --upsample`` takes): ``"hold"`` (the newest sample,
         a step per sample), ``"interpolate"`` (one telemetry period late, no steps) or
         ``"extrapolate"`` (no steps and no lag for smooth motion; bounded overshoot on a
         step in the telemetry).
@@ -379,11 +379,13 @@ class Bridge:
     q_start : array_like or "auto", optional
         Where the platform is (at rest) at the start: default parked (as after homing);
         ``"auto"`` asks the controller (see :class:`~motioncue.pipeline.OutputStage`).
-    effects : motioncue.pipeline._effects.EffectGains, optional
+    effects : EffectGains, optional
         Effect layer gains (engine, road, shift): small heave/roll/pitch added to the cued
         pose before workspace limiting, faded with the cue. Refused (``ConfigError``) below
         100 Hz. None or all gains 0: no effects.
 
+    Notes
+    -----
     Use ``bridge.start()``, read ``bridge.stats`` at will, ``bridge.stop()`` to park and end
     (``with Bridge(...) as b:`` does both). If a frame fails (an exception anywhere in
     :meth:`step`, a link that keeps failing) the loop parks at once by the same limiter and

@@ -124,7 +124,7 @@ def generate_ride(
 
     Parameters
     ----------
-    recording : motioncue.telemetry._recording.Recording
+    recording : motioncue.telemetry.Recording
         Vehicle specific force and angular velocity (any sample times).
     platform : motioncue.kinematics.Platform
     controller

@@ -153,7 +153,7 @@ def load_generate_input(path: str | Path) -> tuple[str, Any, dict[str, int]]:
     Returns
     -------
     kind : str
-        ``"recording"`` (a :class:`~motioncue.telemetry._recording.Recording`) or
+        ``"recording"`` (a :class:`~motioncue.telemetry.Recording`) or
         ``"keyframes"`` (:class:`Keyframes`).
     data
     counters : dict
@@ -212,7 +212,7 @@ def check_recording(rec: Any, where: str, *, csv_times: bool = True) -> None:
 
     Parameters
     ----------
-    rec : motioncue.telemetry._recording.Recording
+    rec : motioncue.telemetry.Recording
     where : str
         The file, for messages.
     csv_times : bool

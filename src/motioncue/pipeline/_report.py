@@ -52,6 +52,8 @@ def plot_actuators(
     preset : str, optional
         The cueing preset, named in the title.
 
+    Notes
+    -----
     Positions are in pulses (left axis) and, when every actuator has the same pulses per unit,
     in mm (or deg) from home on the right axis. Axes are numbered from 1, as the controllers'
     manuals number them.

@@ -2,7 +2,7 @@
 
 :func:`load_motion` lets every command that takes a recording CSV (``t, fx..wz``) also take a
 file written by ``motioncue record``: the datagrams are decoded with the game's decoder and
-their receive times, and become the same :class:`~motioncue.telemetry._recording.Recording`.
+their receive times, and become the same :class:`~motioncue.telemetry.Recording`.
 """
 
 from __future__ import annotations

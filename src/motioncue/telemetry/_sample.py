@@ -65,7 +65,8 @@ class TelemetrySample:
         Registered name of the game that produced it (``"f1"``, ``"forza"``, ``"beamng"``).
     rpm : float
         Engine speed (rev/min); nan when the game does not report it. Optional channel for
-        the effect layer (:mod:`motioncue.pipeline._effects`), like the three below.
+        the effect layer (a game profile's ``[effects]``: engine, road, shift), like the
+        three below.
     rpm_max : float
         The engine's maximum (rev/min), nan when unknown.
     gear : int or None

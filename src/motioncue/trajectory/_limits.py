@@ -158,7 +158,7 @@ class ActuatorLimits:
         """Effective limits of a platform driven by a controller (at frame rate ``rate_hz``
         where the controller's limits depend on it).
 
-        See :func:`motioncue.trajectory._derive.limits_from_platform` for the rules.
+        The rules are those ``motioncue limits`` prints with each value.
         """
         from ._derive import limits_from_platform
 

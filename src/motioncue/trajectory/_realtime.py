@@ -158,6 +158,8 @@ class RealtimeLimiter:
     dt_s : float
         Frame period (s), in (0, 1].
 
+    Notes
+    -----
     Use ``state = rt.initial_state(q0)`` then ``q = rt.step(state, target)`` per frame.
     """
 

@@ -501,7 +501,8 @@ def _merge(scenes: list[Any]) -> Any:
 
     return Scene(
         np.arange(len(scenes), dtype=float), cat("poses"), cat("q"), cat("base"),
-        cat("joint"), cat("top"), cat("centre"), cat("forward"), cat("use"),
+        cat("joint"), cat("top"), cat("centre"), cat("forward"), cat("use"), cat("rest"),
+        scenes[0].order, cat("seat"), cat("rail"),
     )  # fmt: skip
 
 

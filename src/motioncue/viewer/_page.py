@@ -19,6 +19,10 @@ __all__ = ["DRAW_JS", "frame_json", "plotly_js", "scene_layout"]
 
 #: Stroke use colour scale: green at neutral, amber at 70 %, red at the end of the stroke.
 USE_COLORSCALE = [[0.0, "#1a9850"], [0.5, "#a6d96a"], [0.7, "#fdae61"], [1.0, "#d73027"]]
+#: Legs at their park position (:func:`~motioncue.viewer._scene.at_rest`): neutral grey.
+REST_COLOUR = "#9e9e9e"
+#: A traction-loss seat's arm.
+SEAT_COLOUR = "#7b3294"
 
 
 @lru_cache(maxsize=1)
@@ -42,7 +46,18 @@ def frame_json(scene: Scene, k: int) -> dict[str, Any]:
         "centre": _r(scene.centre[k], 4),
         "forward": _r(scene.forward[k], 4),
         "use": _r(scene.use[k, : scene.top.shape[1]], 3),
+        "rest": _legs_at_rest(scene, k),
+        "order": list(scene.order),
+        "seat": None if scene.seat is None else _r(scene.seat[k], 4),
+        "rail": None if scene.rail is None else _r(scene.rail[k], 4),
     }
+
+
+def _legs_at_rest(scene: Scene, k: int) -> list[bool]:
+    legs = scene.top.shape[1]
+    if scene.rest is None:
+        return [False] * legs
+    return [bool(v) for v in scene.rest[k, :legs]]
 
 
 def scene_layout(scene: Scene) -> dict[str, Any]:
@@ -52,8 +67,9 @@ def scene_layout(scene: Scene) -> dict[str, Any]:
     three axes.
     """
     pts = [scene.base.reshape(-1, 3), scene.top.reshape(-1, 3), scene.forward]
-    if scene.joint is not None:
-        pts.append(scene.joint.reshape(-1, 3))
+    for extra in (scene.joint, scene.seat, scene.rail):
+        if extra is not None:
+            pts.append(extra.reshape(-1, 3))
     allp = np.concatenate(pts)
     lo, hi = allp.min(axis=0) - 0.05, allp.max(axis=0) + 0.05
     lo[2] = min(lo[2], -0.01)
@@ -73,48 +89,80 @@ DRAW_JS = (
 const MC_USE_SCALE = """
     + json.dumps(USE_COLORSCALE)
     + """;
+const MC_REST_COLOUR = '"""
+    + REST_COLOUR
+    + """';
+const MC_SEAT_COLOUR = '"""
+    + SEAT_COLOUR
+    + """';
 function mcTraces(f) {
   const L = f.top.length;
+  const order = (f.order && f.order.length === L) ? f.order : [...Array(L).keys()];
   const bx = [], by = [], bz = [];
-  for (let i = 0; i <= L; i++) {
-    const p = f.base[i % L]; bx.push(p[0]); by.push(p[1]); bz.push(p[2]);
+  for (let i = 0; i <= L; i++) {  // the outline in angular order: never a crossed bow-tie
+    const p = f.base[order[i % L]]; bx.push(p[0]); by.push(p[1]); bz.push(p[2]);
   }
-  const lx = [], ly = [], lz = [], lc = [];
+  // legs by stroke use; legs at their park position grey ("at rest"), not by their use
+  const lx = [], ly = [], lz = [], lc = [], rx = [], ry = [], rz = [];
   for (let i = 0; i < L; i++) {
     const pts = f.joint ? [f.base[i], f.joint[i], f.top[i]] : [f.base[i], f.top[i]];
-    for (const p of pts) { lx.push(p[0]); ly.push(p[1]); lz.push(p[2]); lc.push(f.use[i]); }
-    lx.push(null); ly.push(null); lz.push(null); lc.push(0);
+    const rest = f.rest && f.rest[i];
+    for (const p of pts) {
+      if (rest) { rx.push(p[0]); ry.push(p[1]); rz.push(p[2]); }
+      else { lx.push(p[0]); ly.push(p[1]); lz.push(p[2]); lc.push(f.use[i]); }
+    }
+    if (rest) { rx.push(null); ry.push(null); rz.push(null); }
+    else { lx.push(null); ly.push(null); lz.push(null); lc.push(0); }
   }
   const tx = [], ty = [], tz = [];
   for (let i = 0; i <= L; i++) {
-    const p = f.top[i % L]; tx.push(p[0]); ty.push(p[1]); tz.push(p[2]);
+    const p = f.top[order[i % L]]; tx.push(p[0]); ty.push(p[1]); tz.push(p[2]);
   }
   tx.push(null, f.centre[0], f.forward[0]);
   ty.push(null, f.centre[1], f.forward[1]);
   tz.push(null, f.centre[2], f.forward[2]);
+  const col = (a, j) => (a ? a.map(p => p[j]) : []);
   return [
     {type: 'scatter3d', mode: 'lines+markers', name: 'base', x: bx, y: by, z: bz,
      line: {color: '#555', width: 6}, marker: {size: 3, color: '#555'}, hoverinfo: 'skip'},
     {type: 'scatter3d', mode: 'lines', name: 'legs (stroke use)', x: lx, y: ly, z: lz,
      line: {color: lc, width: 12, colorscale: MC_USE_SCALE, cmin: 0, cmax: 1,
-            showscale: true, colorbar: {title: {text: 'stroke use'}, len: 0.6,
-            tickformat: '.0%'}},
+            showscale: false},
      hoverinfo: 'skip'},
+    // the colour bar on a point of its own (hidden in the centre), so that it stays when
+    // every leg is at rest and the scene does not jump sideways between frames
+    {type: 'scatter3d', mode: 'markers', name: 'stroke use scale', x: [f.centre[0]],
+     y: [f.centre[1]], z: [f.centre[2]], hoverinfo: 'skip',
+     marker: {size: 0.1, opacity: 0, color: [0], colorscale: MC_USE_SCALE, cmin: 0, cmax: 1,
+              showscale: true, colorbar: {title: {text: 'stroke use<br>(grey: parked)'},
+              len: 0.6, x: 0.93, tickformat: '.0%'}}},
+    {type: 'scatter3d', mode: 'lines', name: 'legs at rest', x: rx, y: ry, z: rz,
+     line: {color: MC_REST_COLOUR, width: 12}, hoverinfo: 'skip'},
     {type: 'scatter3d', mode: 'lines+markers', name: 'top', x: tx, y: ty, z: tz,
      line: {color: '#2166ac', width: 8}, marker: {size: 3, color: '#2166ac'},
+     hoverinfo: 'skip'},
+    {type: 'scatter3d', mode: 'lines', name: 'traction-loss slot', x: col(f.rail, 0),
+     y: col(f.rail, 1), z: col(f.rail, 2), line: {color: '#222', width: 14},
+     hoverinfo: 'skip'},
+    {type: 'scatter3d', mode: 'lines+markers', name: 'seat (traction loss)',
+     x: col(f.seat, 0), y: col(f.seat, 1), z: col(f.seat, 2),
+     line: {color: MC_SEAT_COLOUR, width: 10}, marker: {size: 3, color: MC_SEAT_COLOUR},
      hoverinfo: 'skip'},
   ];
 }
 function mcLayout(box, title) {
   return {
     title: {text: title, font: {size: 14}}, showlegend: false, uirevision: 'keep',
-    margin: {l: 0, r: 0, t: 30, b: 0},
+    margin: {l: 10, r: 0, t: 30, b: 0},
     scene: {
+      // the scene left of the colour bar, never under it; the camera far enough back
+      // that the axis titles stay inside the picture
+      domain: {x: [0.0, 0.86], y: [0.0, 1.0]},
       aspectmode: 'manual', aspectratio: box.aspect,
       xaxis: {range: box.x, title: {text: 'x (m, forward)'}},
       yaxis: {range: box.y, title: {text: 'y (m, left)'}},
       zaxis: {range: box.z, title: {text: 'z (m, up)'}},
-      camera: {eye: {x: -1.5, y: -1.3, z: 0.9}},
+      camera: {eye: {x: -1.85, y: -1.65, z: 1.05}},
     },
   };
 }

@@ -18,7 +18,10 @@ from numpy.typing import ArrayLike, NDArray
 
 from .._errors import ConfigError
 
-__all__ = ["Scene", "scene_from_poses", "scene_from_q", "stroke_use"]
+__all__ = ["Scene", "at_rest", "outline_order", "scene_from_poses", "scene_from_q", "stroke_use"]
+
+REST_TOLERANCE = 0.005
+"""An actuator within this fraction of its usable stroke of its park position is at rest."""
 
 
 @dataclass(frozen=True, eq=False)
@@ -44,6 +47,18 @@ class Scene:
         platform's x axis, at 0.6 x the top anchors' radius (m), to show the heading.
     use : (N, n) array
         Stroke use per actuator, 0 at neutral, 1 at either end (:func:`stroke_use`).
+    rest : (N, n) bool array or None
+        Actuators at their park position (:func:`at_rest`): drawn as at rest, not by their
+        stroke use (a parked leg sits near its bottom end by design).
+    order : tuple of int
+        The legs in the order that draws the base and top outlines without crossing
+        (:func:`outline_order`).
+    seat : (N, 3, 3) array or None
+        A traction-loss slider (:attr:`~motioncue.kinematics.Platform.traction_loss_arm_m`):
+        the seat's arm from its pin through the pivot to a point ahead (m), turned by the
+        pose's yaw on the top frame; None without a slider.
+    rail : (N, 2, 3) array or None
+        The ends of the slider's slot (m), on the top frame; None without a slider.
     """
 
     t_s: NDArray[np.float64]
@@ -55,6 +70,10 @@ class Scene:
     centre: NDArray[np.float64]
     forward: NDArray[np.float64]
     use: NDArray[np.float64]
+    rest: NDArray[np.bool_] | None = None
+    order: tuple[int, ...] = ()
+    seat: NDArray[np.float64] | None = None
+    rail: NDArray[np.float64] | None = None
 
 
 def stroke_use(platform: Any, q: ArrayLike) -> NDArray[np.float64]:
@@ -67,6 +86,35 @@ def stroke_use(platform: Any, q: ArrayLike) -> NDArray[np.float64]:
     lo = np.asarray(platform.q_min, dtype=float)
     hi = np.asarray(platform.q_max, dtype=float)
     return np.maximum(qa / hi, qa / lo)
+
+
+def at_rest(platform: Any, q: ArrayLike) -> NDArray[np.bool_]:
+    """Which actuators are at their park position, ``(..., n)`` bool.
+
+    At rest: within :data:`REST_TOLERANCE` of the usable stroke (``q_max - q_min``) of
+    ``platform.q_park``. Stroke use (:func:`stroke_use`) is the distance from mid-stroke, so
+    a parked leg near its bottom end reads 90 % or more; the drawings show such a leg as at
+    rest (grey) instead of by its use.
+    """
+    qa = np.asarray(q, dtype=float)
+    park = np.asarray(platform.q_park, dtype=float)
+    span = np.asarray(platform.q_max, dtype=float) - np.asarray(platform.q_min, dtype=float)
+    out: NDArray[np.bool_] = np.abs(qa - park) <= REST_TOLERANCE * span + 1e-12
+    return out
+
+
+def outline_order(anchors: ArrayLike) -> tuple[int, ...]:
+    """Indices of ``anchors (L, 3)`` by angle about their centre in the x-y plane.
+
+    The legs of a platform are numbered as the controller's axes (a corner rig: front left,
+    front right, rear left, rear right), which is not the order around the frame; joining
+    the anchors in this order draws the outline without crossing itself.
+    """
+    a = np.asarray(anchors, dtype=float)
+    if a.shape[0] < 3:
+        return tuple(range(a.shape[0]))
+    d = a[:, :2] - a[:, :2].mean(axis=0)
+    return tuple(int(i) for i in np.argsort(np.arctan2(d[:, 1], d[:, 0]), kind="stable"))
 
 
 def _rotation(angles: NDArray[np.float64]) -> NDArray[np.float64]:
@@ -152,7 +200,8 @@ def _scene(
         joint = base + tips
     spread = float(np.max(np.linalg.norm(legs.plat[:, :2], axis=1), initial=0.1)) or 0.1
     forward = origin + 0.6 * spread * rot[:, :, 0]
-    if yaw_axis:
+    # a turntable turns the whole machine; a traction-loss slider turns the seat only
+    if yaw_axis and getattr(platform, "traction_loss_arm_m", None) is None:
         turn = _rotation(np.column_stack([np.zeros((len(t), 2)), poses[:, 5]]))
 
         def spin(a: NDArray[np.float64]) -> NDArray[np.float64]:
@@ -164,7 +213,45 @@ def _scene(
     for name, arr in (("top", top), ("use", use)):
         if not np.all(np.isfinite(arr)):
             raise ConfigError(f"the drawing's {name} is not finite (NaN or inf in the input)")
-    return Scene(t, poses, q, base, joint, top, origin, forward, use)
+    seat = rail = None
+    arm = getattr(platform, "traction_loss_arm_m", None)
+    if arm is not None:
+        seat, rail = _slider(platform, float(arm), rot, origin, poses[:, 5])
+    order = outline_order(legs.base)
+    rest = at_rest(platform, q)
+    return Scene(t, poses, q, base, joint, top, origin, forward, use, rest, order, seat, rail)
+
+
+def _slider(
+    platform: Any,
+    arm: float,
+    rot: NDArray[np.float64],
+    origin: NDArray[np.float64],
+    yaw: NDArray[np.float64],
+) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """The traction-loss seat's arm ``(N, 3, 3)`` and slot ``(N, 2, 3)`` in the base frame.
+
+    The seat turns by ``yaw`` about a vertical pivot at the top frame's origin; its pin, at
+    ``arm`` behind the pivot, runs in a sideways slot at ``x = -arm`` (so the pin sits at
+    ``y = -arm tan(yaw)``, the slider's ``q = arm tan(yaw)`` of
+    :class:`~motioncue.kinematics.Platform`). The slot is as long as the slider's usable
+    stroke.
+    """
+    k = platform.legs.n  # the slider is the actuator after the legs
+    half = float(max(abs(platform.q_min[k]), abs(platform.q_max[k])))
+    tan = np.tan(np.clip(yaw, -1.5, 1.5))
+    n = yaw.shape[0]
+    local = np.zeros((n, 3, 3))
+    local[:, 0, 0] = -arm  # the pin
+    local[:, 0, 1] = -arm * tan
+    local[:, 2, 0] = 0.6 * arm * np.cos(yaw)  # a point ahead of the pivot
+    local[:, 2, 1] = 0.6 * arm * np.sin(yaw)
+    slot = np.zeros((n, 2, 3))
+    slot[:, :, 0] = -arm
+    slot[:, 0, 1], slot[:, 1, 1] = -half, half
+    seat = origin[:, None, :] + np.einsum("nij,nkj->nki", rot, local)
+    rail = origin[:, None, :] + np.einsum("nij,nkj->nki", rot, slot)
+    return seat, rail
 
 
 def finite_or_none(x: float) -> float | None:

@@ -48,6 +48,13 @@ MAX_CURVE_POINTS = 30_000
 """Most samples per curve in a page."""
 MAX_VIEW_FRAMES = 15_000
 """Most 3D animation frames in a page."""
+ACTUATOR_COLOURS = ("#1f77b4", "#ff7f0e", "#2ca02c", "#d62728", "#9467bd", "#8c564b", "#e377c2")
+"""Colour of actuator ``i`` (``i`` modulo 7): the same actuator has the same colour in every
+page."""
+AXIS_COLOURS = ("#c0392b", "#1e8449", "#1f4e99")
+"""Colours of the perceived x, y, z channels (fx, fy, fz; roll, pitch, yaw rates): red,
+green, blue as the axes are usually drawn; dark enough to read on white, and fixed, not
+taken from the template's cycle (which depended on how many actuator lines came first)."""
 POSE_LOWPASS_HZ = 10.0
 """Corner of the zero-phase low-pass applied to the poses before the perceived motion."""
 
@@ -209,7 +216,7 @@ def _curves(view: ViewInput) -> dict[str, Any]:
         fig.add_scatter(x=[], y=[], **kw)
         packed.append((len(fig.data) - 1, values, divisor))
 
-    colours = ["#1f77b4", "#ff7f0e", "#2ca02c", "#d62728", "#9467bd", "#8c564b", "#e377c2"]
+    colours = ACTUATOR_COLOURS
     t0, t1 = float(scene.t_s[0]), float(scene.t_s[-1])
     for i, name in enumerate(plat.actuator_names):
         rot = plat.actuator_kinds[i] == "rotary"
@@ -224,11 +231,13 @@ def _curves(view: ViewInput) -> dict[str, Any]:
                 showlegend=False, hoverinfo="skip", row=1, col=1,
             )  # fmt: skip
     for j, axis in enumerate(("fx", "fy", "fz")):
-        series(perceived[:, j], 1e3, name=f"{axis} (m/s²)", line={"width": 1.2},
+        series(perceived[:, j], 1e3, name=f"{axis} (m/s²)",
+               line={"width": 1.6, "color": AXIS_COLOURS[j]},
                legendgroup="f", row=2, col=1)  # fmt: skip
     for j, axis in enumerate(("roll rate", "pitch rate", "yaw rate")):
         series(np.degrees(perceived[:, 3 + j]), 1e2, name=f"{axis} (deg/s)",
-               line={"width": 1.2}, legendgroup="w", row=3, col=1)  # fmt: skip
+               line={"width": 1.6, "color": AXIS_COLOURS[j]},
+               legendgroup="w", row=3, col=1)  # fmt: skip
     units = "mm" if all(k == "linear" for k in plat.actuator_kinds) else "mm or deg"
     fig.update_yaxes(title_text=units, row=1, col=1)
     fig.update_yaxes(title_text="m/s²", row=2, col=1)
@@ -292,6 +301,16 @@ def _packed(scene: Scene, idx: NDArray[np.intp]) -> dict[str, Any]:
         "forward": _mm(scene.forward[idx]),
         "use": np.rint(scene.use[idx][:, : scene.top.shape[1]] * 1e2).astype(np.int64)
         .ravel().tolist(),
+        "rest": (np.zeros((idx.size, scene.top.shape[1]), dtype=np.int64)
+                 if scene.rest is None else scene.rest[idx][:, : scene.top.shape[1]]
+                 .astype(np.int64)).ravel().tolist(),
+        "order": list(scene.order),
+        "seat": None if scene.seat is None else _mm(scene.seat[idx]),
+        "rail": None if scene.rail is None else _mm(scene.rail[idx]),
+        # the pose readout: mm and 0.01 deg
+        "pose": np.column_stack([np.rint(scene.poses[idx, :3] * 1e3),
+                                 np.rint(np.degrees(scene.poses[idx, 3:]) * 1e2)])
+        .astype(np.int64).ravel().tolist(),
     }  # fmt: skip
 
 
@@ -312,6 +331,7 @@ body {{ font-family: sans-serif; margin: 8px; }}
 <div id="bar"><button id="play">play</button>
 <input id="slider" type="range" min="0" value="0" step="1">
 <span id="time">0.00 s</span></div>
+<div id="pose" style="font-family: monospace; margin: 2px 0 6px 0">pose:</div>
 <div id="wrap"><div id="scene"></div><div id="curves"></div></div>
 <script>{draw}</script>
 <script id="mc-data" type="application/json">{data}</script>
@@ -338,7 +358,17 @@ function frameAt(k) {
     centre: pts(D.centre, k, 1)[0],
     forward: pts(D.forward, k, 1)[0],
     use: D.use.slice(k * L, (k + 1) * L).map(u => u / 1e2),
+    rest: D.rest.slice(k * L, (k + 1) * L).map(r => r === 1),
+    order: D.order,
+    seat: D.seat ? pts(D.seat, k, 3) : null,
+    rail: D.rail ? pts(D.rail, k, 2) : null,
   };
+}
+const POSE_NAMES = ['x', 'y', 'z', 'roll', 'pitch', 'yaw'];
+function poseText(k) {  // the pose at frame k: mm and deg
+  const p = D.pose.slice(6 * k, 6 * k + 6);
+  return p.map((v, i) => POSE_NAMES[i] + ' ' + (i < 3 ? v.toFixed(0) + ' mm'
+                                               : (v / 100).toFixed(2) + ' deg')).join('  ');
 }
 const NF = D.t.length;
 const sceneDiv = document.getElementById('scene');
@@ -346,12 +376,14 @@ const curvesDiv = document.getElementById('curves');
 const slider = document.getElementById('slider');
 const label = document.getElementById('time');
 const button = document.getElementById('play');
+const poseEl = document.getElementById('pose');
 slider.max = NF - 1;
 let k = 0, playing = false, wall0 = 0, ride0 = 0;
 function show(i) {
   k = Math.max(0, Math.min(NF - 1, i));
   slider.value = k;
   label.textContent = D.t[k].toFixed(2) + ' s';
+  poseEl.textContent = 'pose: ' + poseText(k);
   mcDraw(sceneDiv, frameAt(k), D.box, 'platform at ' + D.t[k].toFixed(2) + ' s');
   Plotly.relayout(curvesDiv, {'shapes[0].x0': D.t[k], 'shapes[0].x1': D.t[k]});
 }
