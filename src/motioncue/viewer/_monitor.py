@@ -91,15 +91,19 @@ class BridgeSource:
     def snapshot(self) -> Mapping[str, Any]:
         b = self.bridge
         now = time.monotonic()
-        if now - self._stats_at >= 0.5:
+        if now - self._stats_at >= 0.5 or not b.running:  # the final state at once
             self._stats, self._stats_at = b.stats, now
         st = self._stats
         stage = b.stage
+        state = str(st.state)
+        if state in ("stopped", "failed") and bool(getattr(stage, "parked", False)):
+            # the loop has ended with the platform at its park position: say so
+            state = "parked" if state == "stopped" else "failed, parked"
         return {
             "q": stage.q.tolist(),
             "v": stage.v.tolist(),
             "t_s": float(stage.t_s),
-            "state": st.state,
+            "state": state,
             "cue": list(b.cue),
             "telemetry": {
                 "rate_hz": st.rate_in_hz,
@@ -300,6 +304,7 @@ class Monitor:
         self._v_max = None if lim is None else np.asarray(lim.v_max, dtype=float)
         self._a_max = None if lim is None else np.asarray(lim.a_max, dtype=float)
         self._names = list(platform.actuator_names)
+        self._first_spare = n - int(getattr(platform, "spare_axes", 0))
         self._rotary = [k == "rotary" for k in platform.actuator_kinds]
         park = scene_from_q(platform, [0.0], np.asarray(platform.q_park, dtype=float)[None])
         # a box that holds the platform anywhere in its stroke
@@ -354,7 +359,7 @@ class Monitor:
         return out
 
     def _actuators(self, q: np.ndarray, raw: Mapping[str, Any]) -> dict[str, Any]:
-        from ._scene import stroke_use
+        from ._scene import at_rest, stroke_use
 
         plat = self.platform
         fk = plat.forward(q, self._pose_guess)
@@ -364,6 +369,7 @@ class Monitor:
         scene = scene_from_q(plat, [0.0], q[None])
         frame = frame_json(scene, 0)
         frac = np.where(q >= 0.0, q / self._q_hi, -q / self._q_lo)
+        rest = at_rest(plat, q)
         v = np.asarray(raw.get("v", np.zeros_like(q)), dtype=float)
         t = _num(raw.get("t_s"))
         if t is not None and self._prev is not None and t > self._prev[0]:
@@ -374,21 +380,34 @@ class Monitor:
         accel = None if self._a_max is None else self._acc / self._a_max
         acts = []
         for i, name in enumerate(self._names):
-            scale = 180.0 / math.pi if self._rotary[i] else 1e3
+            rot = self._rotary[i]
+            scale = 180.0 / math.pi if rot else 1e3
+            a_scale = 180.0 / math.pi if rot else 1.0  # m/s^2: mm/s^2 reads as thousands
             acts.append(
                 {
                     "name": name,
                     "q": round(float(q[i]) * scale, 2),
-                    "unit": "deg" if self._rotary[i] else "mm",
+                    "unit": "deg" if rot else "mm",
                     "stroke": round(float(frac[i]), 4),
+                    "rest": bool(rest[i]),
+                    "spare": i >= self._first_spare,
                     "speed": None if speed is None else _num(round(float(speed[i]), 4)),
                     "accel": None if accel is None else _num(round(float(accel[i]), 4)),
+                    # the values themselves, in the units the page prints beside the bars
+                    "v": _num(round(float(v[i]) * scale, 1)),
+                    "v_unit": "deg/s" if rot else "mm/s",
+                    "v_max": None if self._v_max is None else _num(float(self._v_max[i]) * scale),
+                    "a": _num(round(float(self._acc[i]) * a_scale, 2)),
+                    "a_unit": "deg/s²" if rot else "m/s²",
+                    "a_max": None if self._a_max is None else _num(float(self._a_max[i]) * a_scale),
                 }
             )
         pose = fk.pose
+        moving = ~rest[: len(q)]
         return {
             "frame": frame,
-            "use": float(np.max(stroke_use(plat, q))),
+            # the largest stroke use of an actuator not at its park position (0: all parked)
+            "use": float(np.max(stroke_use(plat, q)[moving], initial=0.0)),
             "pose": [
                 round(float(pose[i]) * (1e3 if i < 3 else 180.0 / math.pi), 2) for i in range(6)
             ],
@@ -426,9 +445,16 @@ class Monitor:
         return self
 
     def stop(self) -> None:
-        """Stop serving (idempotent)."""
+        """Stop serving (idempotent), after a last snapshot flagged ``"ended": true`` to each
+        page, so that a page shows the job's final state (``parked``) instead of a stale one.
+        """
         loop = self._loop
         if loop is not None and loop.is_running():
+            if self._clients:
+                try:
+                    asyncio.run_coroutine_threadsafe(self._final_push(), loop).result(2.0)
+                except Exception:  # the pages only miss the last word
+                    pass
             loop.call_soon_threadsafe(loop.stop)
         if self._thread is not None:
             self._thread.join(5.0)
@@ -473,6 +499,19 @@ class Monitor:
                 c.close()
             loop.run_until_complete(asyncio.sleep(0))
             loop.close()
+
+    async def _final_push(self) -> None:
+        try:
+            snap = self.snapshot()
+        except Exception as exc:  # a torn read: the pages get the error
+            snap = {"state": "?", "error": f"{type(exc).__name__}: {exc}"}
+        snap["ended"] = True
+        msg = json.dumps(snap, allow_nan=False)
+        for client in list(self._clients):
+            try:
+                await client.write_message(msg)
+            except Exception:  # a page that went away
+                self._clients.discard(client)
 
     def _tick(self) -> None:
         if not self._clients:
@@ -585,8 +624,8 @@ _PAGE = """<!DOCTYPE html>
 <style>
 body {{ font-family: sans-serif; margin: 8px; }}
 #wrap {{ display: flex; gap: 12px; }}
-#scene {{ width: 55%; height: 600px; }}
-#side {{ width: 45%; }}
+#scene {{ flex: 1 1 50%; min-width: 420px; height: 600px; }}
+#side {{ flex: 0 0 auto; max-width: 700px; }}
 #state {{ font-size: 22px; font-weight: bold; padding: 4px 10px; border-radius: 4px;
           display: inline-block; }}
 .running, .live {{ background: #b7e4c7; }} .parked {{ background: #ddd; }}
@@ -596,19 +635,27 @@ body {{ font-family: sans-serif; margin: 8px; }}
 #stop:disabled {{ background: #aaa; }}
 table {{ border-collapse: collapse; margin-top: 8px; font-size: 13px; }}
 td, th {{ padding: 2px 6px; text-align: left; }}
-.bar {{ position: relative; width: 120px; height: 12px; background: #eee; }}
+.bar {{ position: relative; width: 80px; height: 12px; background: #eee; }}
+#acts td {{ white-space: nowrap; }}
 .bar div {{ position: absolute; top: 0; height: 12px; }}
 .bar .mid {{ left: 50%; width: 1px; background: #666; }}
+.bar, .num {{ display: inline-block; vertical-align: middle; }}
+.num {{ width: 84px; text-align: right; font-variant-numeric: tabular-nums;
+        font-size: 12px; }}
+.bar.rest {{ background: #d9d9d9; }}
 </style>
 </head><body>
 <div><b>motioncue monitor</b>: {title}</div>
 <div style="margin:6px 0"><span id="state">connecting</span>
 <button id="stop" disabled>stop (park)</button> <span id="msg"></span></div>
 <div id="wrap"><div id="scene"></div><div id="side">
-<table id="acts"><thead><tr><th>actuator</th><th>position</th><th>stroke</th>
+<table id="acts"><thead><tr><th>actuator</th><th>position</th><th>stroke used</th>
 <th>speed</th><th>acceleration</th></tr></thead><tbody></tbody></table>
-<div style="font-size:11px;color:#555">bars: fraction of each limit the frames are held
-to, centre = 0, edge = the limit (either sign); amber from 70 %, red from 90 %</div>
+<div style="font-size:11px;color:#555">bars: share of each limit the frames are held to
+(centre = 0, edge = the limit, either sign; amber from 70 %, red from 90 %), the value
+beside each bar; stroke used = distance from mid-stroke over the usable half stroke;
+grey "at park": the actuator rests at its park position (near its bottom end by
+design)</div>
 <table id="cue"></table>
 <table id="info"></table>
 </div></div>
@@ -625,7 +672,8 @@ const stateEl = document.getElementById('state');
 const stopBtn = document.getElementById('stop');
 const msgEl = document.getElementById('msg');
 window.mcMonitor = {snapshots: 0, last: null, drawn: null, connected: false};
-function bar(f) {
+function bar(f, rest) {
+  if (rest) return '<div class="bar rest" title="at its park position"></div>';
   if (f === null || f === undefined) return '<div class="bar"></div>';
   const a = Math.min(1, Math.abs(f));
   const colour = a < 0.7 ? '#1a9850' : (a < 0.9 ? '#fdae61' : '#d73027');
@@ -649,22 +697,30 @@ function schedule() {
 function fmt(x, d) { return (x === null || x === undefined) ? 'n/a' : x.toFixed(d); }
 function render(s) {
   const st = s.state || '?';
-  stateEl.textContent = st;
+  stateEl.textContent = s.ended ? st + ' (job ended)' : st;
   stateEl.className = st.split(' ')[0].replace(',', '');
-  stopBtn.disabled = !s.can_stop;
+  stopBtn.disabled = !s.can_stop || !!s.ended;
   if (s.frame) { pending = s.frame; schedule(); }
   if (s.actuators) {
-    const rows = s.actuators.map(a => '<tr><td>' + a.name + '</td><td>' + a.q.toFixed(1) + ' ' +
-      a.unit + '</td><td>' + bar(a.stroke) + '</td><td>' + bar(a.speed) + '</td><td>' +
-      bar(a.accel) + '</td></tr>');
+    const num = (x, d, unit) => '<span class="num">' + fmt(x, d) + ' ' + unit + '</span>';
+    const lim = (x, d, unit) => (x === null || x === undefined) ? '' :
+      ' title="limit ' + x.toFixed(d) + ' ' + unit + '"';
+    const rows = s.actuators.map(a => '<tr><td>' + a.name + '</td><td>' + a.q.toFixed(1) +
+      ' ' + a.unit + '</td><td>' + bar(a.stroke, a.rest) + (a.rest
+        ? '<span class="num">' + (a.spare ? 'spare axis' : 'at park') + '</span>'
+        : '<span class="num">' + (100 * Math.abs(a.stroke)).toFixed(0) + ' %</span>') +
+      '</td><td' + lim(a.v_max, 0, a.v_unit) + '>' + bar(a.speed) + num(a.v, 0, a.v_unit) +
+      '</td><td' + lim(a.a_max, 1, a.a_unit) + '>' + bar(a.accel) + num(a.a, 2, a.a_unit) +
+      '</td></tr>');
     document.querySelector('#acts tbody').innerHTML = rows.join('');
   }
   const names = ['x mm', 'y mm', 'z mm', 'roll deg', 'pitch deg', 'yaw deg'];
   let cue = '';
   if (s.pose) cue += '<tr><th>pose</th>' + s.pose.map((v, i) => '<td>' + names[i] + ' ' +
                      fmt(v, 1) + '</td>').join('') + '</tr>';
-  if (s.cue) cue += '<tr><th>cue</th>' + s.cue.map((v, i) => '<td>' + names[i] + ' ' +
-                    fmt(v, 1) + '</td>').join('') + '</tr>';
+  const parked = st.startsWith('parked') || st.startsWith('failed');
+  if (s.cue && !parked) cue += '<tr><th>cue</th>' + s.cue.map((v, i) => '<td>' + names[i] +
+                               ' ' + fmt(v, 1) + '</td>').join('') + '</tr>';
   document.getElementById('cue').innerHTML = cue;
   let info = '';
   if (s.telemetry) {
@@ -685,11 +741,14 @@ function connect() {
     if (s.stop !== undefined) { msgEl.textContent = 'stop ' + s.stop; return; }
     window.mcMonitor.snapshots += 1;
     window.mcMonitor.last = s;
+    if (s.ended) window.mcMonitor.ended = true;
     render(s);
   };
   ws.onclose = () => {
     window.mcMonitor.connected = false;
-    stateEl.textContent = 'disconnected'; stateEl.className = ''; stopBtn.disabled = true;
+    stopBtn.disabled = true;
+    if (window.mcMonitor.ended) return;  // the job's final state stays on the page
+    stateEl.textContent = 'disconnected'; stateEl.className = '';
     setTimeout(connect, 1000);
   };
 }
