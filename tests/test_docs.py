@@ -67,9 +67,11 @@ def _check_layout_in_chromium(out: Path) -> None:
             page.goto((out / name).as_uri())
             broken = page.evaluate(
                 """() => [...document.querySelectorAll('dl.field-list > dt')]
-                    .filter(e => e.getClientRects().length > 1
-                        || e.getBoundingClientRect().height
-                           > 1.6 * parseFloat(getComputedStyle(e).lineHeight))
+                    .filter(e => {  // the text's own box (the dt stretches to its row)
+                      const r = document.createRange(); r.selectNodeContents(e);
+                      return r.getBoundingClientRect().height
+                             > 1.6 * parseFloat(getComputedStyle(e).lineHeight);
+                    })
                     .map(e => e.textContent.trim())"""
             )
             assert not broken, (name, broken[:5])
