@@ -287,3 +287,40 @@ def test_python_snippets_of_the_docs_import_public_names_only() -> None:
         for block in re.findall(r"```python\n(.*?)```", text, flags=re.S):
             private = re.findall(r"motioncue(?:\.\w+)*\._\w+", block)
             assert not private, (page.name, private)
+
+
+# --- item 15: the view's series colours -------------------------------------------------
+
+
+def _contrast_on_white(hex_colour: str) -> float:
+    """WCAG 2 contrast ratio of a colour against white."""
+    rgb = [int(hex_colour[i : i + 2], 16) / 255.0 for i in (1, 3, 5)]
+    lin = [c / 12.92 if c <= 0.04045 else ((c + 0.055) / 1.055) ** 2.4 for c in rgb]
+    lum = 0.2126 * lin[0] + 0.7152 * lin[1] + 0.0722 * lin[2]
+    return 1.05 / (lum + 0.05)
+
+
+def test_view_series_keep_their_colours_across_platforms_and_read_on_white(
+    tmp_path: Path,
+) -> None:
+    """The perceived-motion series took the template's colours after the actuator lines, so
+    they changed with the number of actuators (fx pale pink on a hexapod)."""
+    from motioncue.viewer import load_view_input
+    from motioncue.viewer._view import _curves
+
+    csv = tmp_path / "p.csv"
+    rows = ["t,x,y,z,roll,pitch,yaw"] + [
+        f"{k / 50:.2f},0,0,{0.005 * (k % 20) / 20:.5f},0,0,0" for k in range(100)
+    ]
+    csv.write_text("\n".join(rows) + "\n")
+    colours = {}
+    for plat in ("seat3", "stewart6-linear"):
+        curves = _curves(load_view_input(csv, plat))
+        colours[plat] = {
+            tr["name"]: tr["line"]["color"]
+            for tr in curves["data"]
+            if tr.get("name", "").split(" ")[0] in ("fx", "fy", "fz", "roll", "pitch", "yaw")
+        }
+    assert len(colours["seat3"]) == 6 and colours["seat3"] == colours["stewart6-linear"]
+    for name, colour in colours["seat3"].items():
+        assert _contrast_on_white(colour) >= 4.5, (name, colour)
