@@ -324,3 +324,81 @@ def test_view_series_keep_their_colours_across_platforms_and_read_on_white(
     assert len(colours["seat3"]) == 6 and colours["seat3"] == colours["stewart6-linear"]
     for name, colour in colours["seat3"].items():
         assert _contrast_on_white(colour) >= 4.5, (name, colour)
+
+
+# --- item 17: a telemetry test sender ----------------------------------------------------
+
+
+def test_every_encodable_game_decodes_back_to_the_motion_it_was_given() -> None:
+    """Round trip through the game's own decoder (float32 fields: 1e-5 relative)."""
+    import numpy as np
+
+    from motioncue.telemetry import decoder_for
+    from motioncue.telemetry._encode import ENCODABLE_GAMES, encode_motion
+
+    rng = np.random.default_rng(23)
+    for game in ENCODABLE_GAMES:
+        dec = decoder_for(game)
+        for k in range(20):
+            f = rng.normal(0.0, 8.0, 3) + np.array([0.0, 0.0, 9.80665])
+            w = rng.normal(0.0, 0.8, 3)
+            got = None
+            for datagram in encode_motion(game, k, k / 60.0, f, w):
+                got = dec.feed(datagram, k / 60.0) or got
+            assert got is not None, (game, dec.stats)
+            np.testing.assert_allclose(got.f, f, rtol=1e-5, atol=1e-5, err_msg=game)
+            np.testing.assert_allclose(got.w, w, rtol=1e-5, atol=1e-6, err_msg=game)
+            assert not got.paused
+        assert dec.stats["sample"] == 20, (game, dec.stats)
+    with pytest.raises(ConfigError, match="cannot be encoded"):
+        encode_motion("dirt", 0, 0.0, [0, 0, 9.8], [0, 0, 0])
+
+
+def test_send_telemetry_plays_a_recording_as_f1_packets(tmp_path: Path) -> None:
+    """A real process to a socket of the test's: the decoded samples are the recording's."""
+    import socket
+
+    import numpy as np
+
+    from motioncue.telemetry import decoder_for
+
+    t = np.arange(0.0, 1.0, 0.02)
+    f = np.column_stack([2.0 * np.sin(3 * t), -1.5 * t, 9.80665 + 0.3 * np.cos(5 * t)])
+    w = np.column_stack([0.1 * t, -0.2 * np.sin(2 * t), 0.05 + 0 * t])
+    rec = tmp_path / "rec.csv"
+    rows = ["t,fx,fy,fz,wx,wy,wz"] + [
+        ",".join(f"{v:.6f}" for v in (t[k], *f[k], *w[k])) for k in range(t.size)
+    ]
+    rec.write_text("\n".join(rows) + "\n")
+    with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as rx:
+        rx.bind(("127.0.0.1", 0))
+        rx.settimeout(0.5)
+        port = rx.getsockname()[1]
+        proc = subprocess.Popen(
+            [sys.executable, "-m", "motioncue", "send-telemetry", "--game", "f1", "--input",
+             str(rec), "--target", f"udp://127.0.0.1:{port}", "--rate", "50", "--json"],
+            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=_env(),
+        )  # fmt: skip
+        dec = decoder_for("f1")
+        samples = []
+        try:
+            while len(samples) < t.size:
+                try:
+                    data = rx.recv(4096)
+                except TimeoutError:
+                    if proc.poll() is not None:
+                        break
+                    continue
+                s = dec.feed(data, 0.0)
+                if s is not None:
+                    samples.append(s)
+        finally:
+            out, err = proc.communicate(timeout=60)
+    assert proc.returncode == 0, err
+    assert len(samples) == t.size, dec.stats
+    np.testing.assert_allclose([s.f for s in samples], f, atol=1e-4)
+    np.testing.assert_allclose([s.w for s in samples], w, atol=1e-5)
+    import json
+
+    summary = json.loads(out)
+    assert summary["samples"] == t.size and summary["datagrams"] == 2 * t.size

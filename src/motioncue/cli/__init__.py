@@ -22,6 +22,7 @@ __all__ = ["build_parser", "console", "main"]
 # Verb modules, in the order of the data flow. Each registers one or more verbs.
 _VERB_MODULES: tuple[str, ...] = (
     "_record",
+    "_send_telemetry",
     "_cue",
     "_omct",
     "_compare",
