@@ -322,6 +322,7 @@ class Monitor:
         self.snapshots = 0
         self.errors = 0
         self.stop_requests = 0
+        self._ended = False
         self._last: dict[str, Any] = {}
         self._thread: threading.Thread | None = None
         self._loop: asyncio.AbstractEventLoop | None = None
@@ -501,6 +502,7 @@ class Monitor:
             loop.close()
 
     async def _final_push(self) -> None:
+        self._ended = True  # no regular snapshot after this one (the page keeps this state)
         try:
             snap = self.snapshot()
         except Exception as exc:  # a torn read: the pages get the error
@@ -514,7 +516,7 @@ class Monitor:
                 self._clients.discard(client)
 
     def _tick(self) -> None:
-        if not self._clients:
+        if not self._clients or self._ended:
             return
         try:
             msg = json.dumps(self.snapshot(), allow_nan=False)
@@ -739,6 +741,7 @@ function connect() {
   ws.onmessage = (ev) => {
     const s = JSON.parse(ev.data);
     if (s.stop !== undefined) { msgEl.textContent = 'stop ' + s.stop; return; }
+    if (window.mcMonitor.ended && !s.ended) return;  // the final state stays
     window.mcMonitor.snapshots += 1;
     window.mcMonitor.last = s;
     if (s.ended) window.mcMonitor.ended = true;
