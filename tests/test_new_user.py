@@ -66,6 +66,8 @@ def test_stray_word_and_unknown_verb(capsys: pytest.CaptureFixture[str]) -> None
     assert code == 2 and "motioncue play: error: unrecognized argument: b.ride" in err
     code, _, err = _cli(["gnerate"], capsys)
     assert code == 2 and err.strip().endswith("did you mean generate?")
+    code, _, err = _cli(["--verison"], capsys)
+    assert code == 2 and err.strip().endswith("--verison; did you mean --version?")
     # nothing close: no suggestion
     code, _, err = _cli(["play", "x.ride", "--zzzzzz"], capsys)
     assert code == 2 and "did you mean" not in err

@@ -103,7 +103,7 @@ def _verb_parsers(parser: argparse.ArgumentParser) -> dict[str, Any]:
     return {}
 
 
-def build_parser() -> argparse.ArgumentParser:
+def build_parser() -> _Parser:
     parser = _Parser(
         prog="motioncue",
         description="Vehicle motion to electric-cylinder motion platforms.",
@@ -128,7 +128,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         verb_parser = _verb_parsers(parser).get(getattr(args, "_verb_name", None) or "")
         if isinstance(verb_parser, _Parser):
             verb_parser.unknown_options(extras)
-        parser.error(f"unrecognized arguments: {' '.join(extras)}")
+        parser.unknown_options(extras)
     run = getattr(args, "run", None)
     if run is None:
         parser.print_help()
