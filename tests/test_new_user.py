@@ -190,7 +190,7 @@ def test_compare_reports_progress_on_stderr(
 ) -> None:
     import numpy as np
 
-    t = np.arange(0.0, 4.0, 0.01)
+    t = np.arange(0.0, 2.0, 0.01)
     rows = ["t,fx,fy,fz,wx,wy,wz"] + [
         f"{x:.2f},{np.sin(x):.4f},{0.5 * np.cos(x):.4f},9.80665,0,0,{0.1 * np.sin(x):.4f}"
         for x in t
