@@ -100,7 +100,8 @@ def check_ride_for(
     if n_axes != len(names):
         raise ConfigError(
             f"controller {controller_name!r} drives {n_axes} axes; the ride and platform "
-            f"{platform_name!r} have {len(names)} actuators"
+            f"{platform_name!r} have "
+            + str(getattr(platform, "axes_text", f"{len(names)} actuators"))
         )
     table = limits.to_pulses_table(platform)
     _check_identity(ride, table, platform_name, controller_name)
