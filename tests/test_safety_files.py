@@ -1,5 +1,10 @@
 """Issue 23 items 3, 4, 10 and 11, each with real processes where the item is about one.
 
+* 10: bad files. A Latin-1 byte in any bundled platform, controller, preset or profile TOML
+  is one ``error:`` line in generate, play and bridge; a flipped byte anywhere in a ride's
+  zip structure is one bounded, printable line; a 2 GiB file (sparse: the test is cheap) is
+  refused before it is read (peak RSS of the process measured); two keyframes at one pose a
+  frame apart do not make NaN times (numpy's divide warning).
 * 11: SIGHUP / SIGQUIT to the process group of a live ``bridge`` (a closing terminal, Ctrl-\\)
   parks and leaves stderr clean (no resource_tracker warning, no ``KeyError`` tracebacks of
   the shared-memory telemetry helper processes).
@@ -15,10 +20,16 @@ import sys
 import time
 from pathlib import Path
 
+import numpy as np
 import pytest
+
+from motioncue._config import bundled_names, config_dir
+from motioncue._errors import ConfigError
 
 SRC = Path(__file__).resolve().parents[1] / "src"
 ENV = {**os.environ, "PYTHONPATH": str(SRC)}
+MAX_LINE = 600
+"""Longest error line accepted (characters): a sentence, not a dump."""
 
 
 def _motioncue(*args: str) -> list[str]:
@@ -72,3 +83,278 @@ def test_group_signal_to_live_bridge_parks_with_clean_stderr(sig: int, tmp_path:
     assert tail.strip() == "", f"output after the final line:\n{tail}"
     for bad in ("Traceback", "KeyError", "resource_tracker", "Warning", "telemetry process ended"):
         assert bad not in err, err
+
+
+# --- item 10: bad files ------------------------------------------------------------------------
+
+
+def _rig_pairs() -> list[tuple[str, str, float]]:
+    """(platform, controller, rate) covering every bundled platform and every bundled
+    controller that drives one of them, at a rate the controller carries."""
+    from motioncue.kinematics import load_platform
+    from motioncue.output import load_controller
+
+    platforms = {p: load_platform(p).n_actuators for p in bundled_names("platforms")}
+    controllers = {c: load_controller(c) for c in bundled_names("controllers")}
+    pairs: dict[tuple[str, str], float] = {}
+
+    def rate_for(ctrl: object) -> float:
+        for rate in (100.0, 50.0, 20.0, 10.0, 5.0):
+            try:
+                ctrl.check_rate(rate)  # type: ignore[attr-defined]
+                return rate
+            except ConfigError:
+                pass
+        raise AssertionError(f"{ctrl} takes none of the test rates")
+
+    for p, n in platforms.items():  # every platform, with its first controller
+        c = next(c for c, ctrl in controllers.items() if ctrl.n_axes == n)
+        pairs[(p, c)] = rate_for(controllers[c])
+    for c, ctrl in controllers.items():  # every controller that drives a bundled platform
+        fits = [p for p, n in platforms.items() if n == ctrl.n_axes]
+        if fits and not any(key[1] == c for key in pairs):
+            pairs[(fits[0], c)] = rate_for(ctrl)
+    return [(p, c, r) for (p, c), r in pairs.items()]
+
+
+RIGS = _rig_pairs()
+
+
+def _assert_one_line_error(err: str, verb: str, *needles: str) -> None:
+    lines = err.strip().splitlines()
+    assert len(lines) == 1, err
+    line = lines[0]
+    assert line.startswith(f"motioncue {verb}: error: "), line
+    assert len(line) <= MAX_LINE and line.isprintable(), line
+    for needle in needles:
+        assert needle in line, line
+
+
+def _latin1_copy(src: Path, dst: Path) -> Path:
+    """``src`` with one Latin-1 byte (e with acute accent, 0xE9) in its first comment or,
+    without one, at the start."""
+    data = src.read_bytes()
+    at = data.find(b"#") + 1
+    dst.write_bytes(data[:at] + b"\xe9" + data[at:])
+    return dst
+
+
+@pytest.fixture(scope="module")
+def tiny_recording(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    path = tmp_path_factory.mktemp("rec") / "still.csv"
+    rows = ["t,fx,fy,fz,wx,wy,wz"] + [f"{k * 0.01:.2f},0,0,9.80665,0,0,0" for k in range(50)]
+    path.write_text("\n".join(rows) + "\n")
+    return path
+
+
+def _ride_file(path: Path, platform_name: str, controller_name: str, rate_hz: float) -> Path:
+    """A small valid ride (the platform at park for a second)."""
+    from motioncue.kinematics import load_platform
+    from motioncue.pipeline import Ride, save_ride
+
+    platform = load_platform(platform_name)
+    q = np.asarray(platform.q_park, dtype=float)
+    n = int(rate_hz)
+    pulses = np.repeat(np.round(q * 1000.0).astype(np.int32)[None, :], n, axis=0)
+    ride = Ride(
+        platform=platform_name, controller=controller_name, rate_hz=rate_hz,
+        actuator_names=tuple(platform.actuator_names), t_s=np.arange(n) / rate_hz,
+        pulses=pulses, dout=np.zeros(n, np.uint16), dacs=np.zeros((n, 2), np.uint16),
+    )  # fmt: skip
+    return save_ride(path, ride)
+
+
+def _run_main(argv: list[str], capsys: pytest.CaptureFixture[str]) -> tuple[int, str]:
+    from motioncue.cli import main
+
+    rc = main(argv)
+    return rc, capsys.readouterr().err
+
+
+_ALL_VERBS = ("generate", "play", "bridge")
+CONFIG_CASES = (
+    [("platforms", p, verb) for p in bundled_names("platforms") for verb in _ALL_VERBS]
+    + [("controllers", c, verb) for c in bundled_names("controllers") for verb in _ALL_VERBS]
+    + [("cueing", c, verb) for c in bundled_names("cueing") for verb in ("generate", "bridge")]
+    + [("profiles", c, "bridge") for c in bundled_names("profiles")]
+)  # fmt: skip
+
+
+@pytest.mark.parametrize(("kind", "name", "verb"), CONFIG_CASES)
+def test_latin1_byte_in_a_config_is_one_error_line(
+    kind: str, name: str, verb: str, tmp_path: Path, tiny_recording: Path,
+    capsys: pytest.CaptureFixture[str],
+) -> None:  # fmt: skip
+    from motioncue.kinematics import load_platform
+
+    bad = _latin1_copy(config_dir(kind) / f"{name}.toml", tmp_path / f"{name}.toml")
+    # a rig the file belongs to: the bad file is read where the good one would be
+    if kind == "platforms":
+        n = load_platform(name).n_actuators
+        platform, controller, rate = next(r for r in RIGS if load_platform(r[0]).n_actuators == n)
+        platform = str(bad)
+    elif kind == "controllers":
+        # read before the axis counts are compared: any platform will do (easysmc-xyzu
+        # drives four axes, which no bundled platform has)
+        platform, controller, rate = "seat3", str(bad), 10.0
+    else:
+        platform, controller, rate = "stewart6-linear", "mbox6", 100.0
+    if verb == "generate":
+        argv = ["generate", "--input", str(tiny_recording), "--platform", platform,
+                "--controller", controller, "--rate", f"{rate:g}", "--out",
+                str(tmp_path / "out.ride"), "--quiet"]  # fmt: skip
+        if kind == "cueing":
+            argv += ["--preset", str(bad)]
+    elif verb == "play":
+        ride = _ride_file(tmp_path / "r.ride", "seat3", "mbox3", 100.0)
+        argv = ["play", str(ride), "--platform", platform, "--controller", controller,
+                "--target", f"file:{tmp_path / 'frames.bin'}"]  # fmt: skip
+    else:
+        argv = ["bridge", "--platform", platform, "--controller", controller,
+                "--target", f"file:{tmp_path / 'frames.bin'}", "--duration", "0.1"]  # fmt: skip
+        if kind == "profiles":
+            argv += ["--profile", str(bad)]
+        else:
+            argv += ["--source", "f1:127.0.0.1:0"]
+        if kind == "cueing":
+            argv += ["--preset", str(bad)]
+    rc, err = _run_main(argv, capsys)
+    assert rc == 2, err
+    _assert_one_line_error(err, verb, "not UTF-8", "0xe9", bad.name)
+    assert not (tmp_path / "out.ride").exists()
+
+
+def test_every_flipped_byte_of_a_ride_header_is_one_bounded_line(tmp_path: Path) -> None:
+    """Each byte of the zip structure (local headers of the first two members and the
+    central directory), XORed with 0xFF: the ride loads (the byte did not matter) or is
+    refused with one printable line of bounded length. The reported case: offset 597."""
+    import zipfile
+
+    from motioncue.pipeline import load_ride
+
+    path = _ride_file(tmp_path / "r.ride", "stewart6-linear", "mbox6", 100.0)
+    data = path.read_bytes()
+    with zipfile.ZipFile(path) as zf:
+        infos = zf.infolist()
+    header_end = [i.header_offset + 30 + len(i.filename) + 20 for i in infos]
+    central = data.find(b"PK\x01\x02")
+    offsets = set(range(0, header_end[0])) | set(range(infos[1].header_offset, header_end[1]))
+    offsets |= set(range(central, len(data))) | {597}
+    refused = set()
+    for k in sorted(o for o in offsets if o < len(data)):
+        bad = bytearray(data)
+        bad[k] ^= 0xFF
+        try:
+            load_ride(bytes(bad), name="r.ride")
+        except ConfigError as exc:
+            refused.add(k)
+            text = str(exc)
+            assert text.startswith("r.ride: "), (k, text)
+            assert len(text) <= MAX_LINE and text.isprintable(), (k, len(text), text[:300])
+    # the signatures and names of the members are refused (the loop did check messages)
+    for info in infos[:2]:
+        name_at = info.header_offset + 30
+        assert set(range(info.header_offset, info.header_offset + 4)) <= refused
+        assert set(range(name_at, name_at + len(info.filename))) <= refused
+
+
+def test_flipped_name_length_of_a_member_through_play(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """The reported byte (offset 597 of a lap ride) is the file-name length in the local
+    header of the ride's second member: zipfile then quotes the following bytes."""
+    import zipfile
+
+    path = _ride_file(tmp_path / "r.ride", "stewart6-linear", "mbox6", 100.0)
+    with zipfile.ZipFile(path) as zf:
+        at = zf.infolist()[1].header_offset + 26
+    data = bytearray(path.read_bytes())
+    data[at] ^= 0xFF
+    path.write_bytes(bytes(data))
+    rc, err = _run_main(["play", str(path), "--target", f"file:{tmp_path / 'f.bin'}"], capsys)
+    assert rc == 2
+    _assert_one_line_error(err, "play", "r.ride", "not a motioncue ride file")
+    assert not (tmp_path / "f.bin").exists()
+
+
+def _sparse(path: Path, head: bytes, size: int = 2 << 30) -> Path:
+    """A ``size``-byte file starting with ``head``, the rest a hole (no disk, no time)."""
+    with open(path, "wb") as fh:
+        fh.write(head)
+        fh.truncate(size)
+    return path
+
+
+def _run_measured(argv: list[str]) -> tuple[int, str, int]:
+    """Run motioncue; return its exit status, stderr and peak RSS (bytes) of that process."""
+    proc = subprocess.Popen(_motioncue(*argv), env=ENV, stdout=subprocess.DEVNULL,
+                            stderr=subprocess.PIPE)  # fmt: skip
+    assert proc.stderr is not None
+    err = proc.stderr.read()
+    _, status, usage = os.wait4(proc.pid, 0)
+    proc.returncode = os.waitstatus_to_exitcode(status)
+    proc.stderr.close()
+    return proc.returncode, err.decode("utf-8", "replace"), usage.ru_maxrss * 1024
+
+
+SPARSE_CASES = {
+    "generate CSV": (b"t,fx,fy,fz,wx,wy,wz\n", "generate"),
+    "generate recording": (b"MCTLMREC", "generate"),
+    "generate zeros": (b"", "generate"),
+    "play zip": (b"PK\x03\x04", "play"),
+    "play zeros": (b"", "play"),
+    "bridge replay": (b"MCTLMREC", "bridge"),
+    "bridge replay zeros": (b"", "bridge"),
+}
+
+
+@pytest.mark.parametrize("case", list(SPARSE_CASES))
+def test_a_2gb_file_is_refused_before_it_is_read(case: str, tmp_path: Path) -> None:
+    head, verb = SPARSE_CASES[case]
+    big = _sparse(tmp_path / "big.bin", head)
+    out = tmp_path / "out.ride"
+    argv = {
+        "generate": ["generate", "--input", str(big), "--platform", "seat3", "--controller",
+                     "mbox3", "--out", str(out), "--quiet"],
+        "play": ["play", str(big), "--target", f"file:{tmp_path / 'f.bin'}"],
+        "bridge": ["bridge", "--source", f"replay:{big}", "--platform", "seat3",
+                   "--controller", "mbox3", "--target", f"file:{tmp_path / 'f.bin'}"],
+    }[verb]  # fmt: skip
+    rc, err, rss = _run_measured(argv)
+    assert rc == 2, err
+    _assert_one_line_error(err, verb, "big.bin")
+    # the interpreter, numpy and scipy take ~100 MB; a file read into memory takes 2 GB
+    assert rss < 300 << 20, f"peak RSS {rss / 2**20:.0f} MiB"
+    assert not out.exists() and not (tmp_path / "f.bin").exists()
+
+
+@pytest.mark.parametrize(("platform_name", "controller_name", "rate"), RIGS)
+def test_keyframes_one_frame_apart_at_one_pose_make_no_nan(
+    platform_name: str, controller_name: str, rate: float
+) -> None:
+    """A hold of one frame between two keyframes at the same pose: the stretch of a
+    zero-frame move divided 0 by 0 (numpy's 'invalid value encountered in divide')."""
+    import warnings
+
+    from motioncue.kinematics import load_platform
+    from motioncue.output import load_controller
+    from motioncue.pipeline import generate_keyframe_ride
+    from motioncue.pipeline._inputs import Keyframes
+
+    platform = load_platform(platform_name)
+    controller = load_controller(controller_name)
+    pose = np.zeros(6)
+    kf = Keyframes(
+        t_s=np.array([0.0, 1.0 / rate]), poses=np.vstack([pose, pose]),
+        dout=np.zeros(2, np.int64), dacs=np.zeros((2, 2), np.int64),
+    )  # fmt: skip
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", RuntimeWarning)
+        ride, info = generate_keyframe_ride(kf, platform, controller, rate_hz=rate)
+    assert np.all(np.isfinite(ride.t_s))
+    # both keyframes reached, one frame apart, and the platform holds the pose between them
+    first, second = (
+        info["keyframe_frames"] if "keyframe_frames" in info else ride.notes["keyframe_frames"]
+    )
+    assert second - first == 1
+    np.testing.assert_array_equal(ride.pulses[first], ride.pulses[second])

@@ -12,7 +12,7 @@ import importlib
 import sys
 from collections.abc import Sequence
 
-from .._errors import MotioncueError
+from .._errors import MotioncueError, one_line
 
 __all__ = ["build_parser", "console", "main"]
 
@@ -60,7 +60,8 @@ def main(argv: Sequence[str] | None = None) -> int:
     try:
         return int(run(args) or 0)
     except MotioncueError as exc:
-        print(f"motioncue {verb}: error: {exc}", file=sys.stderr)
+        # one printable line of bounded length, whatever the message quotes
+        print(one_line(f"motioncue {verb}: error: {exc}"), file=sys.stderr)
         return 2
     except KeyboardInterrupt:
         print(f"motioncue {verb}: interrupted", file=sys.stderr)

@@ -39,7 +39,7 @@ from typing import Any, BinaryIO
 
 import numpy as np
 
-from .._errors import ConfigError, MotioncueError
+from .._errors import ConfigError, MotioncueError, one_line
 
 __all__ = [
     "MAX_RIDE_BYTES",
@@ -64,6 +64,8 @@ MAX_RIDE_DURATION_S = 0xFFFFFFFF / 1000.0
 MAX_RIDE_BYTES = 1 << 30
 """Largest ride file, and largest array in one, that :func:`load_ride` reads (1 GiB)."""
 _MAX_HEADER_BYTES = 16 << 20
+_ZIP_MAGIC = b"PK\x03\x04"
+"""How every ride file (a zip with members) starts."""
 _ARRAY_KINDS = {"header": "u", "t_s": "fiu", "pulses": "iu", "dout": "iu", "dacs": "iu"}
 _ARRAY_NDIM = {"header": 1, "t_s": 1, "pulses": 2, "dout": 1, "dacs": 2}
 
@@ -280,7 +282,20 @@ def _read_source(
         where = name or str(path)
         try:
             with open(path, "rb") as fh:
-                data = fh.read(MAX_RIDE_BYTES + 1)
+                # size and magic before anything is read into memory
+                size = os.fstat(fh.fileno()).st_size
+                if size > MAX_RIDE_BYTES:
+                    raise ConfigError(
+                        f"{where}: {size} bytes is larger than {MAX_RIDE_BYTES}; not a ride "
+                        "file motioncue reads"
+                    )
+                head = fh.read(len(_ZIP_MAGIC))
+                if head != _ZIP_MAGIC:
+                    raise ConfigError(
+                        f"{where}: not a motioncue ride file (not a zip archive: starts with "
+                        f"{_short(head)})"
+                    )
+                data = head + fh.read(MAX_RIDE_BYTES + 1 - len(head))
         except OSError as exc:
             raise ConfigError(f"{where}: cannot read ride file: {exc}") from exc
     if not isinstance(data, bytes):
@@ -350,8 +365,10 @@ def _read_arrays(data: bytes, where: str) -> dict[str, np.ndarray]:
         # NotImplementedError for unknown compression, RuntimeError for encryption,
         # struct.error, OverflowError, EOFError, MemoryError, ...): all mean a damaged file
         what = "not a zip archive" if key == "?" and not arrays else f"damaged array {key!r}"
+        # the message may quote the damaged bytes: one printable line, bounded
+        detail = one_line(str(exc), 160)
         raise ConfigError(
-            f"{where}: not a motioncue ride file ({what}: {type(exc).__name__}: {exc})"
+            f"{where}: not a motioncue ride file ({what}: {type(exc).__name__}: {detail})"
         ) from exc
     return arrays
 
@@ -366,8 +383,7 @@ def _header_value(header: dict[str, Any], key: str, where: str, kind: Any, defau
 
 
 def _short(value: Any) -> str:
-    text = repr(value)
-    return text if len(text) <= 80 else text[:77] + "..."
+    return one_line(repr(value), 80)
 
 
 _REQUIRED = object()
