@@ -1,5 +1,9 @@
 """Issue 23 items 3, 4, 10 and 11, each with real processes where the item is about one.
 
+* 4: interrupted outputs. SIGTERM / SIGHUP / SIGQUIT while ``generate`` writes its ride and
+  pcap (or before it opens them) ends it with one "interrupted" line and no file, temporary
+  or final; a run killed by SIGKILL leaves temporary files, which the next run to the same
+  output removes and names.
 * 10: bad files. A Latin-1 byte in any bundled platform, controller, preset or profile TOML
   is one ``error:`` line in generate, play and bridge; a flipped byte anywhere in a ride's
   zip structure is one bounded, printable line; a 2 GiB file (sparse: the test is cheap) is
@@ -358,3 +362,139 @@ def test_keyframes_one_frame_apart_at_one_pose_make_no_nan(
     )
     assert second - first == 1
     np.testing.assert_array_equal(ride.pulses[first], ride.pulses[second])
+
+
+# --- item 4: interrupted outputs -----------------------------------------------------------
+
+
+@pytest.fixture(scope="module")
+def short_lap(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    """The first 2 s of the bundled lap (a ride of a few seconds, thousands of frames at
+    1000 Hz: the pcap takes long enough to write to be caught)."""
+    lines = (config_dir("recordings") / "lap.csv").read_text().splitlines()
+    path = tmp_path_factory.mktemp("lap") / "lap2.csv"
+    path.write_text("\n".join(lines[:201]) + "\n")
+    return path
+
+
+def _generate_argv(lap: Path, folder: Path) -> list[str]:
+    return ["generate", "--input", str(lap), "--platform", "stewart6-linear", "--controller",
+            "mbox6", "--rate", "1000", "--out", str(folder / "out.ride"), "--pcap",
+            str(folder / "out.pcap"), "--quiet"]  # fmt: skip
+
+
+def _partials(folder: Path) -> list[str]:
+    return sorted(p.name for p in folder.iterdir() if ".partial-" in p.name)
+
+
+def _start_and_catch_a_partial(argv: list[str], folder: Path) -> subprocess.Popen[str]:
+    """Start motioncue; return once one of its temporary output files exists."""
+    proc = subprocess.Popen(_motioncue(*argv), env=ENV, stdout=subprocess.PIPE,
+                            stderr=subprocess.PIPE, text=True)  # fmt: skip
+    end = time.monotonic() + 120
+    while not _partials(folder):
+        if proc.poll() is not None or time.monotonic() > end:
+            proc.kill()
+            out, err = proc.communicate()
+            raise AssertionError(f"no temporary file seen; rc {proc.returncode}\n{out}{err}")
+        time.sleep(0.002)
+    return proc
+
+
+@pytest.mark.parametrize("sig", [signal.SIGTERM, signal.SIGHUP], ids=["SIGTERM", "SIGHUP"])
+def test_stop_signal_while_generate_writes_leaves_no_file(
+    sig: int, short_lap: Path, tmp_path: Path
+) -> None:
+    out_dir = tmp_path / "out"
+    out_dir.mkdir()
+    proc = _start_and_catch_a_partial(_generate_argv(short_lap, out_dir), out_dir)
+    proc.send_signal(sig)
+    _, err = proc.communicate(timeout=60)
+    assert proc.returncode == 130, err
+    assert (
+        err.strip().splitlines()[-1]
+        == f"motioncue generate: interrupted by {signal.Signals(sig).name}"
+    )
+    assert "Traceback" not in err, err
+    assert list(out_dir.iterdir()) == []
+
+
+def test_sigterm_before_generate_opens_an_output_is_handled(
+    short_lap: Path, tmp_path: Path
+) -> None:
+    """The reported case: SIGTERM while generate computes met the default handler (exit
+    -15, no message). The preset line comes before the cueing and any output."""
+    out_dir = tmp_path / "out"
+    out_dir.mkdir()
+    proc = subprocess.Popen(_motioncue(*_generate_argv(short_lap, out_dir)), env=ENV,
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)  # fmt: skip
+    head = _wait_for_line(proc, "cueing: preset", 60.0)
+    proc.send_signal(signal.SIGTERM)
+    _, err = proc.communicate(timeout=60)
+    err = head + err
+    assert proc.returncode == 130, err
+    assert err.strip().splitlines()[-1] == "motioncue generate: interrupted by SIGTERM", err
+    assert list(out_dir.iterdir()) == []
+
+
+def test_sigkill_leftovers_are_removed_and_named_by_the_next_run(
+    short_lap: Path, tmp_path: Path
+) -> None:
+    out_dir = tmp_path / "out"
+    out_dir.mkdir()
+    argv = _generate_argv(short_lap, out_dir)
+    for _ in range(3):  # the kill may come just after a rename: try again
+        proc = _start_and_catch_a_partial(argv, out_dir)
+        proc.kill()
+        proc.communicate()
+        left = _partials(out_dir)
+        if left:
+            break
+        for p in out_dir.iterdir():
+            p.unlink()
+    assert left, "SIGKILL left nothing to clean"
+    assert all(f".partial-{proc.pid}-" in name for name in left), left  # the dead writer's id
+    # a temporary file of a writer that still runs is not touched
+    alive = out_dir / f".out.ride.partial-{os.getpid()}-live"
+    alive.write_bytes(b"x")
+    # the next run to the same outputs (a cheap one: two keyframes at 100 Hz)
+    keyframes = tmp_path / "kf.csv"
+    keyframes.write_text(
+        "t,x_mm,y_mm,z_mm,roll_deg,pitch_deg,yaw_deg\n0,0,0,0,0,0,0\n1,5,0,0,0,0,0\n"
+    )
+    argv = [*argv[:2], str(keyframes), *argv[3:]]
+    argv[argv.index("--rate") + 1] = "100"
+    rerun = subprocess.run(_motioncue(*argv), env=ENV, capture_output=True, text=True,
+                           timeout=120)  # fmt: skip
+    assert rerun.returncode == 0, rerun.stderr
+    for name in left:
+        assert f"removed {str(out_dir / name)!r}" in rerun.stderr, rerun.stderr
+    assert alive.name not in rerun.stderr
+    names = sorted(p.name for p in out_dir.iterdir())
+    assert names == sorted(["out.ride", "out.pcap", alive.name])
+    from motioncue.pipeline import load_ride
+
+    assert load_ride(out_dir / "out.ride").source == "kf.csv"
+
+
+def test_old_style_and_nested_leftovers_are_named_not_removed(tmp_path: Path) -> None:
+    """Temporary names that carry no process id (older versions, the nested pcap name) are
+    named with advice and left: whose they are cannot be known."""
+    import motioncue._atomic as atomic
+
+    old = tmp_path / ".r.ride.partial-1a2b3c4d"
+    nested = tmp_path / "..r.ride.partial-1a2b3c4d.partial-5e6f7a8b"
+    other = tmp_path / ".rr.ride.partial-1-x"  # another output's: not looked at
+    for p in (old, nested, other):
+        p.write_bytes(b"x")
+    notes: list[str] = []
+    saved, atomic.NOTE = atomic.NOTE, notes.append
+    try:
+        atomic.atomic_write_bytes(tmp_path / "r.ride", b"ride")
+    finally:
+        atomic.NOTE = saved
+    assert old.exists() and nested.exists() and other.exists()
+    assert (tmp_path / "r.ride").read_bytes() == b"ride"
+    assert len(notes) == 2, notes
+    assert all("remove it if no other motioncue" in n for n in notes), notes
+    assert {str(old), str(nested)} == {n.split("'")[1] for n in notes}

@@ -116,7 +116,7 @@ class _Bar:
 def _generate(args: argparse.Namespace) -> int:
     """Make the ride in memory, check it as ``play`` would, then publish the ride, the pcap
     and the report together: a refusal at any step leaves none of them."""
-    from .._atomic import Staging
+    from .._atomic import Interrupted, Staging
     from ..output import load_controller
     from ..pipeline import (
         check_ride_for,
@@ -218,8 +218,8 @@ def _generate(args: argparse.Namespace) -> int:
 
             with open_transport(f"pcap:{staged.file(args.pcap)}") as link:
                 rep = play_ride(ride, platform, controller, limits, link, paced=False)
-                if rep.interrupted:  # Ctrl-C: the player parked, but the pcap is not the ride
-                    raise KeyboardInterrupt
+                if rep.interrupted:  # a stop signal: the player parked; the pcap is not the ride
+                    raise Interrupted(rep.signal or "SIGINT")
         if args.report:
             folder = staged.directory(args.report)
             if report is None:
