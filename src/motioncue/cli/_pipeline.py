@@ -76,6 +76,12 @@ def register(sub: Any) -> None:
         help="pacing factor (default 1 = real time; other values for pcap: and file: only)",
     )
     p.add_argument("--quiet", action="store_true", help="no progress line while playing")
+    p.add_argument(
+        "--accept-edited",
+        action="store_true",
+        help="play a ride changed after generate made it (its digest does not match) or one "
+        "without a digest; its frames must still be a rigid platform's",
+    )
     add_limit_options(p)
     add_set_option(p, ("platform",))
     add_json_option(p, "the play summary")
@@ -280,7 +286,7 @@ def _time_at_stroke_end_s(ride: Any) -> float:
 
 def _play(args: argparse.Namespace) -> int:
     from ..output import load_controller, open_transport
-    from ..pipeline import check_ride_for, load_ride, play_ride
+    from ..pipeline import check_ride_for, check_ride_integrity, load_ride, play_ride
     from ..pipeline._signals import SignalGuard
     from ..pipeline._stream import PlayAborted
     from ..trajectory import ActuatorLimits
@@ -303,7 +309,11 @@ def _play(args: argparse.Namespace) -> int:
     limits = ActuatorLimits.from_platform(
         platform, controller, rate_hz=ride.rate_hz, **limit_overrides(args)
     )
-    # nothing is sent unless the ride belongs to this rig and keeps its limits now
+    # nothing is sent unless the ride is the one generate made (or its edit was accepted and
+    # is still a rigid platform's), belongs to this rig and keeps its limits now
+    integrity_notes = check_ride_integrity(
+        ride, platform, accept_edited=args.accept_edited, name=str(args.ride)
+    )
     check_ride_for(
         ride, platform, controller, limits,
         platform_name=platform_name, controller_name=controller_name,
@@ -322,6 +332,8 @@ def _play(args: argparse.Namespace) -> int:
     # from here on SIGINT, SIGTERM, SIGHUP and SIGQUIT only set a flag: the ride stops at the
     # next frame, and nothing cuts the park or the summary short
     with SignalGuard() as guard:
+        for note in integrity_notes:
+            _say(f"motioncue play: note: {note}")
         _say(f"play: {args.ride} -> {target} ({ride.n_frames} frames, {ride.duration_s:.1f} s)")
         error = None
         watch = None if args.monitor is None else PlaySource(ride.duration_s)

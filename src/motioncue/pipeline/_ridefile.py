@@ -16,6 +16,9 @@ A ride file is a NumPy ``.npz`` archive (zip; readable without motioncue) holdin
     second EasySmc unit's outputs are not carried by ride files).
 ``dacs``
     ``(N, 2)`` uint16 analogue outputs (controller units).
+``digest``
+    ASCII ``sha256:<64 hex digits>``: the SHA-256 of the content as written (see
+    :func:`content_digest`), so that a ride changed after it was made is recognised.
 
 Loading trusts nothing in the file: every archive member is parsed by hand (no pickles, only
 plain numeric dtypes, sizes checked against the shapes before anything is allocated), the
@@ -23,11 +26,20 @@ header's keys and types are checked, and :class:`Ride` checks shapes, ranges and
 damage becomes a :class:`~motioncue.ConfigError` naming the file. Whether the frames suit the
 rig about to be driven is :func:`motioncue.pipeline.check_ride_for`'s job.
 
+Integrity: :func:`load_ride` recomputes the digest and records the verdict in
+:attr:`Ride.integrity` (``"intact"``, ``"edited"``: the content differs from what was
+written, or ``"unsigned"``: no digest, an older motioncue's ride or one rewritten by another
+program). What to do about it is the player's decision (``motioncue play`` refuses both unless
+``--accept-edited``; :func:`motioncue.pipeline.check_ride_integrity`). The digest is no
+signature: anyone can compute one; it catches rides changed by accident or by a script, not
+by someone who means to deceive.
+
 Writing is atomic (:mod:`motioncue._atomic`): a refused or interrupted save leaves no file.
 """
 
 from __future__ import annotations
 
+import hashlib
 import io
 import json
 import math
@@ -42,12 +54,14 @@ import numpy as np
 from .._errors import ConfigError, MotioncueError, one_line
 
 __all__ = [
+    "INTEGRITY_STATES",
     "MAX_RIDE_BYTES",
     "MAX_RIDE_RATE_HZ",
     "MIN_RIDE_RATE_HZ",
     "RIDE_FORMAT",
     "RIDE_FORMAT_VERSION",
     "Ride",
+    "content_digest",
     "load_ride",
     "save_ride",
 ]
@@ -66,8 +80,14 @@ MAX_RIDE_BYTES = 1 << 30
 _MAX_HEADER_BYTES = 16 << 20
 _ZIP_MAGIC = b"PK\x03\x04"
 """How every ride file (a zip with members) starts."""
-_ARRAY_KINDS = {"header": "u", "t_s": "fiu", "pulses": "iu", "dout": "iu", "dacs": "iu"}
-_ARRAY_NDIM = {"header": 1, "t_s": 1, "pulses": 2, "dout": 1, "dacs": 2}
+_ARRAY_KINDS = {
+    "header": "u", "t_s": "fiu", "pulses": "iu", "dout": "iu", "dacs": "iu", "digest": "u",
+}  # fmt: skip
+_ARRAY_NDIM = {"header": 1, "t_s": 1, "pulses": 2, "dout": 1, "dacs": 2, "digest": 1}
+_DIGEST_PREFIX = "sha256:"
+INTEGRITY_STATES = ("made", "intact", "edited", "unsigned")
+"""Values of :attr:`Ride.integrity`: made in memory (not read from a file), read with a
+matching digest, read with a digest that does not match, read without a digest."""
 
 
 @dataclass(frozen=True, eq=False)
@@ -99,6 +119,10 @@ class Ride:
         What the ride was made from.
     notes : dict
         Free-form metadata (cue metrics, optimisation report...).
+    integrity : str
+        Not a constructor argument: ``"made"`` for a ride built in memory;
+        :func:`load_ride` sets ``"intact"``, ``"edited"`` or ``"unsigned"`` (see
+        :data:`INTEGRITY_STATES`). ``dataclasses.replace`` gives ``"made"`` again.
 
     Raises
     ------
@@ -194,6 +218,12 @@ class Ride:
         object.__setattr__(self, "effects", tuple(effects))
 
     @property
+    def integrity(self) -> str:
+        """``"made"``, ``"intact"``, ``"edited"`` or ``"unsigned"`` (:data:`INTEGRITY_STATES`).
+        Not a field: no constructor argument, and ``dataclasses.replace`` gives ``"made"``."""
+        return str(self.__dict__.get("_integrity", "made"))
+
+    @property
     def n_frames(self) -> int:
         return int(self.t_s.shape[0])
 
@@ -230,17 +260,39 @@ def _numeric(name: str, value: Any, kinds: str) -> np.ndarray:
     return arr
 
 
+def content_digest(
+    header: bytes, t_s: np.ndarray, pulses: np.ndarray, dout: np.ndarray, dacs: np.ndarray
+) -> str:
+    """``sha256:<hex>`` of a ride's content: the header member's bytes exactly as stored,
+    then each array's shape and values in a fixed layout (little-endian float64 times, int32
+    pulses, uint16 outputs, C order), each part preceded by its length. Independent of the
+    archive's compression and of the arrays' stored dtypes (the values are what counts)."""
+    h = hashlib.sha256(b"motioncue-ride-digest-1\0")
+    parts: list[bytes] = [bytes(header)]
+    for arr, dtype in ((t_s, "<f8"), (pulses, "<i4"), (dout, "<u2"), (dacs, "<u2")):
+        a = np.ascontiguousarray(np.asarray(arr).astype(dtype, copy=False))
+        parts.append(json.dumps(list(a.shape)).encode() + b"\0" + a.tobytes())
+    for part in parts:
+        h.update(len(part).to_bytes(8, "little"))
+        h.update(part)
+    return _DIGEST_PREFIX + h.hexdigest()
+
+
 def ride_bytes(ride: Ride) -> bytes:
-    """The bytes of a ride file for ``ride`` (what :func:`save_ride` writes)."""
+    """The bytes of a ride file for ``ride`` (what :func:`save_ride` writes), its content
+    digest included."""
     header = json.dumps(ride.header(), indent=1, sort_keys=True, default=_json_default)
+    header_bytes = header.encode("utf-8")
+    digest = content_digest(header_bytes, ride.t_s, ride.pulses, ride.dout, ride.dacs)
     buf = io.BytesIO()
     np.savez_compressed(
         buf,
-        header=np.frombuffer(header.encode("utf-8"), dtype=np.uint8),
+        header=np.frombuffer(header_bytes, dtype=np.uint8),
         t_s=ride.t_s,
         pulses=ride.pulses,
         dout=ride.dout,
         dacs=ride.dacs,
+        digest=np.frombuffer(digest.encode("ascii"), dtype=np.uint8),
     )
     return buf.getvalue()
 
@@ -445,7 +497,7 @@ def load_ride(
             f"{arrays['t_s'].shape[0]} frames"
         )
     try:
-        return Ride(
+        ride = Ride(
             platform=_header_value(header, "platform", where, str, _REQUIRED),
             controller=_header_value(header, "controller", where, str, _REQUIRED),
             rate_hz=_header_value(header, "rate_hz", where, int | float, _REQUIRED),
@@ -463,3 +515,18 @@ def load_ride(
         if str(exc).startswith(where):
             raise
         raise ConfigError(f"{where}: {exc}") from exc
+    object.__setattr__(ride, "_integrity", _integrity(arrays, ride))
+    return ride
+
+
+def _integrity(arrays: dict[str, np.ndarray], ride: Ride) -> str:
+    """``"intact"``, ``"edited"`` or ``"unsigned"`` (see :data:`INTEGRITY_STATES`)."""
+    stored = arrays.get("digest")
+    if stored is None:
+        return "unsigned"
+    try:
+        text = stored.tobytes().decode("ascii")
+    except UnicodeDecodeError:
+        return "edited"
+    actual = content_digest(arrays["header"].tobytes(), ride.t_s, ride.pulses, ride.dout, ride.dacs)
+    return "intact" if text == actual else "edited"
