@@ -16,6 +16,7 @@
 
 from __future__ import annotations
 
+import json
 import os
 import select
 import signal
@@ -23,12 +24,13 @@ import subprocess
 import sys
 import time
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import pytest
 
 from motioncue._config import bundled_names, config_dir
-from motioncue._errors import ConfigError
+from motioncue._errors import ConfigError, LimitError
 
 SRC = Path(__file__).resolve().parents[1] / "src"
 ENV = {**os.environ, "PYTHONPATH": str(SRC)}
@@ -498,3 +500,185 @@ def test_old_style_and_nested_leftovers_are_named_not_removed(tmp_path: Path) ->
     assert len(notes) == 2, notes
     assert all("remove it if no other motioncue" in n for n in notes), notes
     assert {str(old), str(nested)} == {n.split("'")[1] for n in notes}
+
+
+# --- item 3: edited rides ----------------------------------------------------------------------
+
+
+def _moving_ride(
+    platform_name: str, controller_name: str, rate_hz: float
+) -> tuple[Any, np.ndarray]:
+    """A ride that moves every degree of freedom the platform has, gently (a raised cosine
+    from park and back in 2 s, at rest at both ends), made by inverse kinematics; returned
+    with the poses it was made from (m, rad)."""
+    from motioncue.kinematics import load_platform
+    from motioncue.output import load_controller
+    from motioncue.pipeline import Ride
+    from motioncue.trajectory import ActuatorLimits
+
+    platform = load_platform(platform_name)
+    controller = load_controller(controller_name)
+    limits = ActuatorLimits.from_platform(platform, controller, rate_hz=rate_hz)
+    n = round(2.0 * rate_hz) + 1
+    t = np.arange(n) / rate_hz
+    shape = 0.5 * (1.0 - np.cos(np.pi * t))
+    # small enough for the slowest link (EasySmc at 19200 baud: about 1.2 mm/s) and upwards
+    # enough that no leg goes below park (at the retracted end of the stroke)
+    amplitude = np.array([0.0002, -0.00015, 0.0005, *np.radians([0.02, -0.015, 0.03])])
+    amplitude = amplitude * np.asarray(platform.dof_mask, dtype=float)
+    poses = np.asarray(platform.pose_park, dtype=float) + np.outer(shape, amplitude)
+    pulses = np.asarray(platform.drives.to_pulses(platform.inverse(poses))).astype(np.int32)
+    ride = Ride(
+        platform=platform_name, controller=controller_name, rate_hz=rate_hz,
+        actuator_names=tuple(platform.actuator_names), t_s=t, pulses=pulses,
+        dout=np.zeros(n, np.uint16), dacs=np.zeros((n, 2), np.uint16),
+        limits={"actuators": limits.to_pulses_table(platform)},
+    )  # fmt: skip
+    return ride, poses
+
+
+def _rig(platform_name: str, controller_name: str, rate_hz: float) -> tuple[Any, Any, Any]:
+    from motioncue.kinematics import load_platform
+    from motioncue.output import load_controller
+    from motioncue.trajectory import ActuatorLimits
+
+    platform = load_platform(platform_name)
+    controller = load_controller(controller_name)
+    return platform, controller, ActuatorLimits.from_platform(platform, controller, rate_hz=rate_hz)
+
+
+def _edit(path: Path, how: str) -> Path:
+    """Edit a ride file as a script would: load every member, change, save every member
+    (the digest too, unchanged) except for ``strip``, which drops the digest."""
+    with np.load(path) as z:
+        members = {k: z[k].copy() for k in z.files}
+    assert "digest" in members
+    pulses = members["pulses"].astype(np.int64)
+    if how == "swap":
+        pulses[:, [0, 1]] = pulses[:, [1, 0]]
+    elif how == "scale":
+        pulses = np.rint(pulses * 1.1).astype(np.int64)
+    elif how == "spike":
+        pulses[len(pulses) // 2, 0] += 200
+    elif how == "slow":
+        header = json.loads(members["header"].tobytes())
+        header["rate_hz"] = header["rate_hz"] * 1.25
+        members["header"] = np.frombuffer(json.dumps(header).encode(), dtype=np.uint8)
+        members["t_s"] = members["t_s"] * 1.25
+    elif how == "strip":
+        del members["digest"]
+    members["pulses"] = pulses.astype(np.int32)
+    out = path.with_name(f"{how}.ride")
+    with open(out, "wb") as fh:
+        np.savez(fh, **members)
+    return out
+
+
+EDITS = ["swap", "scale", "spike", "slow", "strip"]
+
+
+@pytest.mark.parametrize(("platform_name", "controller_name", "rate"), RIGS)
+def test_edited_rides_are_refused_before_anything_is_checked_or_sent(
+    platform_name: str, controller_name: str, rate: float, tmp_path: Path
+) -> None:
+    from motioncue.pipeline import check_ride_for, check_ride_integrity, load_ride, save_ride
+
+    platform, controller, limits = _rig(platform_name, controller_name, rate)
+    ride, _ = _moving_ride(platform_name, controller_name, rate)
+    path = save_ride(tmp_path / "r.ride", ride)
+    intact = load_ride(path)
+    assert intact.integrity == "intact"
+    assert check_ride_integrity(intact, platform) == []
+    names = {"platform_name": platform_name, "controller_name": controller_name}
+    check_ride_for(intact, platform, controller, limits, **names)  # the base ride is valid
+    for how in EDITS:
+        edited = load_ride(_edit(path, how))
+        assert edited.integrity == ("unsigned" if how == "strip" else "edited"), how
+        with pytest.raises(ConfigError, match=r"was not played.*--accept-edited") as err:
+            check_ride_integrity(edited, platform, name=f"{how}.ride")
+        text = str(err.value)
+        assert text.startswith(f"{how}.ride was not played: ")
+        assert ("no digest" in text) == (how == "strip"), text
+
+
+def _platform_rigs() -> list[tuple[str, str, float]]:
+    """Every bundled platform once, with the MBOX of its axis count at 100 Hz."""
+    from motioncue.kinematics import load_platform
+
+    out = []
+    for name in bundled_names("platforms"):
+        n = load_platform(name).n_actuators
+        out.append((name, {3: "mbox3", 6: "mbox6"}[n], 100.0))
+    return out
+
+
+PLATFORM_RIGS = _platform_rigs()
+
+
+@pytest.mark.parametrize(("platform_name", "controller_name", "rate"), PLATFORM_RIGS)
+def test_accepted_edits_must_be_a_rigid_platforms(
+    platform_name: str, controller_name: str, rate: float, tmp_path: Path
+) -> None:
+    """With --accept-edited the frames must still be a rigid platform's. Oracles: the poses
+    the ride was made from (forward kinematics recovers them); a 200-pulse spike on one leg
+    of a corner rig (four legs on a rectangle, three degrees of freedom) is 3/4 absorbed by
+    the least-squares pose (the leverage of each corner in a plane fit), so each leg is 50
+    pulses from it;
+    on a platform with as many actuators as degrees of freedom the spike is a pose, which
+    differs from the made one by the Jacobian's first-order answer."""
+    from motioncue.pipeline import check_ride_integrity, load_ride, save_ride
+    from motioncue.pipeline._ridecheck import rigidity_residuals
+
+    platform, _, _ = _rig(platform_name, controller_name, rate)
+    ride, poses = _moving_ride(platform_name, controller_name, rate)
+    path = save_ride(tmp_path / "r.ride", ride)
+    unsigned = load_ride(_edit(path, "strip"))
+    notes = check_ride_integrity(unsigned, platform, accept_edited=True, name="strip.ride")
+    assert len(notes) == 1 and "accepted as edited" in notes[0] and "no digest" in notes[0]
+    residual, found = rigidity_residuals(unsigned.pulses, platform)
+    np.testing.assert_allclose(found[:, :3], poses[:, :3], atol=5e-5)  # m
+    np.testing.assert_allclose(found[:, 3:], poses[:, 3:], atol=2e-4)  # rad
+    assert np.max(residual) <= 0.5 * np.sqrt(residual.shape[1]) + 1e-3
+    spiked = load_ride(_edit(path, "spike"))
+    k = spiked.n_frames // 2
+    residual, found = rigidity_residuals(spiked.pulses, platform)
+    n_rigid, n_dof = residual.shape[1], int(np.sum(platform.dof_mask))
+    if platform_name.startswith("corner4"):
+        # a plane fit through four corners of a rectangle: (I - H) has 3/4 on its diagonal
+        # and +-1/4 elsewhere, so each leg is 200/4 pulses from the least-squares pose
+        np.testing.assert_allclose(residual[k, :4], 50.0, atol=1.5)
+        with pytest.raises(LimitError, match=rf"at frame {k} .*actuator '\w+': 5\d\.\d pulses"):
+            check_ride_integrity(spiked, platform, accept_edited=True, name="spike.ride")
+    else:
+        assert n_rigid == n_dof  # square: every in-stroke set of positions is some pose
+        dofs = np.flatnonzero(platform.dof_mask)
+        jac = np.asarray(platform.jacobian(poses[k]))[:n_rigid][:, dofs]
+        dq = np.zeros(n_rigid)
+        dq[0] = 200.0 / abs(float(platform.drives.pulses_per_unit[0]))
+        expected = np.linalg.solve(jac, dq)
+        moved = (found[k] - poses[k])[dofs]
+        np.testing.assert_allclose(moved, expected, rtol=0.05, atol=2e-6)
+        notes = check_ride_integrity(spiked, platform, accept_edited=True)
+        assert "poses recovered from its frames reach" in notes[0]
+
+
+def test_play_refuses_an_edited_ride_and_plays_it_when_accepted(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """The reported swap, through the command line: refused (one line, nothing sent), then
+    accepted with --accept-edited, the note naming how far the poses go."""
+    from motioncue.pipeline import save_ride
+
+    ride, _ = _moving_ride("stewart6-linear", "mbox6", 100.0)
+    swapped = _edit(save_ride(tmp_path / "r.ride", ride), "swap")
+    sent = tmp_path / "sent.bin"
+    rc, err = _run_main(["play", str(swapped), "--target", f"file:{sent}", "--quiet"], capsys)
+    assert rc == 2
+    _assert_one_line_error(err, "play", str(swapped), "--accept-edited")
+    assert not sent.exists()
+    argv = ["play", str(swapped), "--target", f"file:{sent}", "--quiet", "--accept-edited"]
+    rc, err = _run_main(argv, capsys)
+    assert rc == 0, err
+    note = next(line for line in err.splitlines() if "accepted as edited" in line)
+    assert note.startswith(f"motioncue play: note: {swapped} was accepted as edited")
+    assert sent.stat().st_size > 0

@@ -302,9 +302,9 @@ def check_ride_integrity(
     names = tuple(platform.actuator_names)
     if tuple(ride.actuator_names) != names:
         return []  # another rig's ride: check_ride_for refuses it, naming both
-    residual, poses = rigidity_residuals(ride.pulses, platform)
     allowed = _rounding_allowance(platform)
-    worst = residual.max(axis=1)
+    residual, poses = rigidity_residuals(ride.pulses, platform, allowance_pulses=allowed)
+    worst = np.where(np.isnan(residual), 0.0, residual).max(axis=1)
     if np.any(worst > allowed):
         k = int(np.argmax(worst > allowed))
         axis = int(np.argmax(residual[k]))
@@ -318,17 +318,18 @@ def check_ride_integrity(
         )
     return [
         f"{name} was accepted as edited (--accept-edited; {what}); its frames are a rigid "
-        f"platform's within the pulse rounding (at most {float(np.max(worst)):.2f} pulses from "
-        f"a rigid pose); {_pose_span(poses)}"
+        f"platform's within the pulse rounding ({allowed:.2f} pulses); {_pose_span(poses)}"
     ]
 
 
-def rigidity_residuals(pulses: np.ndarray, platform: Any) -> tuple[np.ndarray, np.ndarray]:
-    """How far each frame's actuator positions are from the nearest rigid pose, in pulses.
+def rigidity_residuals(
+    pulses: np.ndarray, platform: Any, *, allowance_pulses: float | None = None
+) -> tuple[np.ndarray, np.ndarray]:
+    """How far each frame's actuator positions are from a rigid pose, in pulses.
 
     Forward kinematics (:meth:`~motioncue.kinematics.Platform.forward`, warm-started from the
-    previous frame's pose; repeated frames computed once) finds the pose nearest to each
-    frame's positions, inverse kinematics gives that pose's positions, and the difference is
+    previous frame's pose; repeated frames computed once) finds a pose for each frame's
+    positions, inverse kinematics gives that pose's positions, and the difference is
     converted back to pulses. The platform's spare axes (held at 0, not part of the frame)
     are left out.
 
@@ -337,35 +338,45 @@ def rigidity_residuals(pulses: np.ndarray, platform: Any) -> tuple[np.ndarray, n
     pulses : ndarray, shape (N, n)
         Frames in the platform's actuator order.
     platform : motioncue.kinematics.Platform
+    allowance_pulses : float, optional
+        When given, the iteration stops as soon as every actuator is within this many pulses
+        of the pose found (so a value at or below it means "within the allowance", not the
+        least distance), and the frames after the first one above it are not computed
+        (NaN). Without it, the forward kinematics' own tolerance (least distances).
 
     Returns
     -------
     residual : ndarray, shape (N, n - spare_axes)
-        ``|inverse(forward(q)) - q|`` per actuator (pulses); ``inf`` where no pose reaches
-        the positions.
+        ``|inverse(pose) - q|`` per actuator (pulses); ``inf`` where no pose reaches the
+        positions; NaN for frames not computed.
     poses : ndarray, shape (N, 6)
-        The poses found (m, rad).
+        The poses found (m, rad); NaN for frames not computed.
     """
     p = np.asarray(pulses)
     n_rigid = int(platform.n_actuators) - int(platform.spare_axes)
     q = np.asarray(platform.drives.from_pulses(p.astype(np.int64)), dtype=float)
     ppu = np.abs(np.asarray(platform.drives.pulses_per_unit, dtype=float))[:n_rigid]
+    fk_kw: dict[str, float] = {}
+    if allowance_pulses is not None:
+        fk_kw["tol"] = allowance_pulses / float(np.max(ppu))  # the strictest actuator's
     # first: the first frame of each distinct row; inverse: each frame's distinct row
     unique, first, inverse = np.unique(p, axis=0, return_index=True, return_inverse=True)
     inverse = np.asarray(inverse).reshape(-1)
-    res_u = np.empty((len(unique), n_rigid))
-    pose_u = np.zeros((len(unique), 6))
+    res_u = np.full((len(unique), n_rigid), np.nan)
+    pose_u = np.full((len(unique), 6), np.nan)
     guess = None
     for j in np.argsort(first):  # in time order, so the warm start is the previous frame
         qk = q[first[j]]
-        fk = platform.forward(qk, guess)
+        fk = platform.forward(qk, guess, **fk_kw)
+        pose_u[j] = fk.pose
         if math.isfinite(fk.residual):
             back = np.asarray(platform.inverse(fk.pose), dtype=float)
             res_u[j] = np.abs(back[:n_rigid] - qk[:n_rigid]) * ppu
             guess = fk.pose
         else:
             res_u[j] = np.inf
-        pose_u[j] = fk.pose
+        if allowance_pulses is not None and not np.max(res_u[j]) <= allowance_pulses:
+            break
     return res_u[inverse], pose_u[inverse]
 
 
