@@ -456,6 +456,7 @@ def test_sigkill_leftovers_are_removed_and_named_by_the_next_run(
             p.unlink()
     assert left, "SIGKILL left nothing to clean"
     assert all(f".partial-{proc.pid}-" in name for name in left), left  # the dead writer's id
+    assert not any(name.startswith("..") for name in left), left  # no nested temporary names
     # a temporary file of a writer that still runs is not touched
     alive = out_dir / f".out.ride.partial-{os.getpid()}-live"
     alive.write_bytes(b"x")
