@@ -24,8 +24,13 @@ def one_line(text: str, limit: int = MAX_MESSAGE_CHARS) -> str:
     ``\\uNNNN`` escape; a longer text is cut, ending in ``... (N characters cut)``. For
     messages that quote untrusted input (a damaged file's bytes).
     """
+    text = str(text)
+    if len(text) > limit:  # escaping only lengthens: what is beyond the limit is cut anyway
+        text, dropped = text[:limit], len(text) - limit
+    else:
+        dropped = 0
     out = []
-    for ch in str(text):
+    for ch in text:
         if ch in "\r\n\t":
             out.append(" ")
         elif ch.isprintable():
@@ -33,8 +38,8 @@ def one_line(text: str, limit: int = MAX_MESSAGE_CHARS) -> str:
         else:
             out.append(ch.encode("unicode_escape", "backslashreplace").decode("ascii"))
     line = "".join(out)
-    if len(line) > limit:
-        cut = len(line) - (limit - 40)
+    if len(line) > limit or dropped:
+        cut = len(line) - (limit - 40) + dropped
         line = f"{line[: limit - 40]}... ({cut} characters cut)"
     return line
 
