@@ -332,8 +332,8 @@ def _play(args: argparse.Namespace) -> int:
     # from here on SIGINT, SIGTERM, SIGHUP and SIGQUIT only set a flag: the ride stops at the
     # next frame, and nothing cuts the park or the summary short
     with SignalGuard() as guard:
-        for note in integrity_notes:
-            _say(f"motioncue play: note: {note}")
+        for accepted in integrity_notes:
+            _say(f"motioncue play: note: {accepted}")
         _say(f"play: {args.ride} -> {target} ({ride.n_frames} frames, {ride.duration_s:.1f} s)")
         error = None
         watch = None if args.monitor is None else PlaySource(ride.duration_s)
