@@ -683,3 +683,22 @@ def test_play_refuses_an_edited_ride_and_plays_it_when_accepted(
     note = next(line for line in err.splitlines() if "accepted as edited" in line)
     assert note.startswith(f"motioncue play: note: {swapped} was accepted as edited")
     assert sent.stat().st_size > 0
+
+
+def test_inspect_says_whether_a_ride_is_intact(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    from motioncue.cli import main
+    from motioncue.pipeline import save_ride
+
+    ride, _ = _moving_ride("seat3", "mbox3", 100.0)
+    path = save_ride(tmp_path / "r.ride", ride)
+    cases = ((path, "intact", "intact"), (_edit(path, "scale"), "EDITED", "edited"),
+             (_edit(path, "strip"), "none", "unsigned"))  # fmt: skip
+    for file, word, state in cases:
+        capsys.readouterr()
+        assert main(["inspect", str(file)]) == 0
+        lines = capsys.readouterr().out.splitlines()
+        assert lines[1].startswith(f"  digest: {word}"), lines[:3]
+        assert main(["inspect", str(file), "--json"]) == 0
+        assert json.loads(capsys.readouterr().out)["digest"] == state
