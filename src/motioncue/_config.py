@@ -9,13 +9,14 @@ key and the value.
 from __future__ import annotations
 
 import math
+import os
 import tomllib
 from collections.abc import Mapping, Sequence
 from importlib import resources
 from pathlib import Path
 from typing import Any
 
-from ._errors import ConfigError
+from ._errors import ConfigError, one_line
 
 __all__ = ["ConfigReader", "bundled_names", "config_dir", "find_config", "load_toml"]
 
@@ -59,15 +60,43 @@ def find_config(kind: str, name_or_path: str | Path) -> Path:
     )
 
 
+MAX_CONFIG_BYTES = 1 << 20
+"""Largest configuration file read (1 MiB; the bundled ones are a few kB)."""
+
+
 def load_toml(path: Path) -> dict[str, Any]:
-    """Parse a TOML file, turning syntax errors into :class:`ConfigError`."""
+    """Parse a TOML file, turning every problem into one :class:`ConfigError` line.
+
+    The size is checked before reading (at most :data:`MAX_CONFIG_BYTES`); bytes that are
+    not UTF-8 are refused with their line and byte offset; syntax errors name the place.
+    """
     try:
         with open(path, "rb") as fh:
-            return tomllib.load(fh)
-    except tomllib.TOMLDecodeError as exc:
-        raise ConfigError(f"{path}: not valid TOML: {exc}") from exc
+            size = os.fstat(fh.fileno()).st_size
+            if size > MAX_CONFIG_BYTES:
+                raise ConfigError(
+                    f"{path}: {size} bytes is too large for a configuration file "
+                    f"(at most {MAX_CONFIG_BYTES})"
+                )
+            blob = fh.read(MAX_CONFIG_BYTES + 1)
     except OSError as exc:
         raise ConfigError(f"{path}: cannot read: {exc}") from exc
+    if len(blob) > MAX_CONFIG_BYTES:  # a device or a file that grew
+        raise ConfigError(
+            f"{path}: too large for a configuration file (over {MAX_CONFIG_BYTES} bytes)"
+        )
+    try:
+        text = blob.decode("utf-8")
+    except UnicodeDecodeError as exc:
+        line = blob.count(b"\n", 0, exc.start) + 1
+        raise ConfigError(
+            f"{path}: not UTF-8 text: byte {blob[exc.start]:#04x} at offset {exc.start} "
+            f"(line {line}); save the file as UTF-8"
+        ) from exc
+    try:
+        return tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:
+        raise ConfigError(one_line(f"{path}: not valid TOML: {exc}")) from exc
 
 
 class ConfigReader:

@@ -2,7 +2,46 @@
 
 from __future__ import annotations
 
-__all__ = ["ConfigError", "LimitError", "MotioncueError", "ProtocolError", "TransportError"]
+__all__ = [
+    "MAX_MESSAGE_CHARS",
+    "ConfigError",
+    "LimitError",
+    "MotioncueError",
+    "ProtocolError",
+    "TransportError",
+    "one_line",
+]
+
+MAX_MESSAGE_CHARS = 600
+"""Longest error message :func:`one_line` lets through (characters)."""
+
+
+def one_line(text: str, limit: int = MAX_MESSAGE_CHARS) -> str:
+    """``text`` as one printable line of at most ``limit`` characters.
+
+    Line breaks and tabs become spaces; any other character that is not printable (control
+    bytes, raw binary decoded as Latin-1, lone surrogates) becomes its ``\\xNN`` /
+    ``\\uNNNN`` escape; a longer text is cut, ending in ``... (N characters cut)``. For
+    messages that quote untrusted input (a damaged file's bytes).
+    """
+    text = str(text)
+    if len(text) > limit:  # escaping only lengthens: what is beyond the limit is cut anyway
+        text, dropped = text[:limit], len(text) - limit
+    else:
+        dropped = 0
+    out = []
+    for ch in text:
+        if ch in "\r\n\t":
+            out.append(" ")
+        elif ch.isprintable():
+            out.append(ch)
+        else:
+            out.append(ch.encode("unicode_escape", "backslashreplace").decode("ascii"))
+    line = "".join(out)
+    if len(line) > limit or dropped:
+        cut = len(line) - (limit - 40) + dropped
+        line = f"{line[: limit - 40]}... ({cut} characters cut)"
+    return line
 
 
 class MotioncueError(Exception):

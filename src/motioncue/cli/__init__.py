@@ -15,7 +15,7 @@ import sys
 from collections.abc import Sequence
 from typing import Any, NoReturn
 
-from .._errors import MotioncueError
+from .._errors import MotioncueError, one_line
 
 __all__ = ["build_parser", "console", "main"]
 
@@ -134,13 +134,23 @@ def main(argv: Sequence[str] | None = None) -> int:
         parser.print_help()
         return 2
     verb = args._verb_name
+    from .._atomic import interrupt_on_stop_signals
+
     try:
-        return int(run(args) or 0)
+        # before any output is opened: SIGTERM, SIGHUP and SIGQUIT interrupt like Ctrl-C, so
+        # the outputs being written are discarded (verbs that park install their own)
+        with interrupt_on_stop_signals():
+            return int(run(args) or 0)
     except MotioncueError as exc:
-        print(f"motioncue {verb}: error: {exc}", file=sys.stderr)
+        # one printable line of bounded length, whatever the message quotes
+        print(one_line(f"motioncue {verb}: error: {exc}"), file=sys.stderr)
         return 2
-    except KeyboardInterrupt:
-        print(f"motioncue {verb}: interrupted", file=sys.stderr)
+    except KeyboardInterrupt as exc:
+        by = getattr(exc, "signal_name", None)
+        try:
+            print(f"motioncue {verb}: interrupted{f' by {by}' if by else ''}", file=sys.stderr)
+        except OSError:  # the terminal is gone (SIGHUP)
+            pass
         return 130
     except BrokenPipeError:
         # the reader went away (``motioncue inspect x.pcap | head``): not an error of ours.

@@ -429,6 +429,7 @@ def _inspect_ride(args: argparse.Namespace) -> int:
         "source": ride.source,
         "notes": ride.notes,
         "limits": ride.limits,
+        "digest": ride.integrity,  # intact, edited or unsigned (play refuses the last two)
     }
     pulses = np.asarray(ride.pulses)
     if args.json:
@@ -443,6 +444,12 @@ def _inspect_ride(args: argparse.Namespace) -> int:
         f"{ride.n_frames} frames at {ride.rate_hz:g} Hz ({ride.duration_s:.2f} s), "
         f"source {ride.source or '-'}"
     )
+    digest = {
+        "intact": "intact (the content generate wrote)",
+        "edited": "EDITED (the content does not match it; play needs --accept-edited)",
+        "unsigned": "none (an older or rewritten ride; play needs --accept-edited)",
+    }
+    print(f"  digest: {digest.get(ride.integrity, ride.integrity)}")
     for key, value in sorted(ride.notes.items()):
         print(f"  note {key}: {value}")
     for i, name in enumerate(names):

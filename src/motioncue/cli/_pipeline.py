@@ -76,6 +76,12 @@ def register(sub: Any) -> None:
         help="pacing factor (default 1 = real time; other values for pcap: and file: only)",
     )
     p.add_argument("--quiet", action="store_true", help="no progress line while playing")
+    p.add_argument(
+        "--accept-edited",
+        action="store_true",
+        help="play a ride changed after generate made it (its digest does not match) or one "
+        "without a digest; its frames must still be a rigid platform's",
+    )
     add_limit_options(p)
     add_set_option(p, ("platform",))
     add_json_option(p, "the play summary")
@@ -121,7 +127,7 @@ class _Bar:
 def _generate(args: argparse.Namespace) -> int:
     """Make the ride in memory, check it as ``play`` would, then publish the ride, the pcap
     and the report together: a refusal at any step leaves none of them."""
-    from .._atomic import Staging
+    from .._atomic import Interrupted, Staging
     from ..output import load_controller
     from ..pipeline import (
         check_ride_for,
@@ -223,8 +229,8 @@ def _generate(args: argparse.Namespace) -> int:
 
             with open_transport(f"pcap:{staged.file(args.pcap)}") as link:
                 rep = play_ride(ride, platform, controller, limits, link, paced=False)
-                if rep.interrupted:  # Ctrl-C: the player parked, but the pcap is not the ride
-                    raise KeyboardInterrupt
+                if rep.interrupted:  # a stop signal: the player parked; the pcap is not the ride
+                    raise Interrupted(rep.signal or "SIGINT")
         if args.report:
             folder = staged.directory(args.report)
             if report is None:
@@ -285,7 +291,7 @@ def _time_at_stroke_end_s(ride: Any) -> float:
 
 def _play(args: argparse.Namespace) -> int:
     from ..output import load_controller, open_transport
-    from ..pipeline import check_ride_for, load_ride, play_ride
+    from ..pipeline import check_ride_for, check_ride_integrity, load_ride, play_ride
     from ..pipeline._signals import SignalGuard
     from ..pipeline._stream import PlayAborted
     from ..trajectory import ActuatorLimits
@@ -308,7 +314,11 @@ def _play(args: argparse.Namespace) -> int:
     limits = ActuatorLimits.from_platform(
         platform, controller, rate_hz=ride.rate_hz, **limit_overrides(args)
     )
-    # nothing is sent unless the ride belongs to this rig and keeps its limits now
+    # nothing is sent unless the ride is the one generate made (or its edit was accepted and
+    # is still a rigid platform's), belongs to this rig and keeps its limits now
+    integrity_notes = check_ride_integrity(
+        ride, platform, accept_edited=args.accept_edited, name=str(args.ride)
+    )
     check_ride_for(
         ride, platform, controller, limits,
         platform_name=platform_name, controller_name=controller_name,
@@ -327,6 +337,8 @@ def _play(args: argparse.Namespace) -> int:
     # from here on SIGINT, SIGTERM, SIGHUP and SIGQUIT only set a flag: the ride stops at the
     # next frame, and nothing cuts the park or the summary short
     with SignalGuard() as guard:
+        for accepted in integrity_notes:
+            _say(f"motioncue play: note: {accepted}")
         _say(f"play: {args.ride} -> {target} ({ride.n_frames} frames, {ride.duration_s:.1f} s)")
         error = None
         watch = None if args.monitor is None else PlaySource(ride.duration_s)

@@ -17,7 +17,7 @@ from ._generate import (
 )
 from ._inputs import Keyframes, load_generate_input, read_keyframes_csv
 from ._report import delivered_poses, plot_actuators, write_report
-from ._ridecheck import check_ride_for
+from ._ridecheck import check_ride_for, check_ride_integrity
 from ._ridefile import RIDE_FORMAT, RIDE_FORMAT_VERSION, Ride, load_ride, save_ride
 from ._stream import OutputStage, PlayReport, make_frame_encoder, play_ride, receiver_throttle
 from ._verify import FrameCheck, check_frames
@@ -39,6 +39,7 @@ __all__ = [
     "Ride",
     "check_frames",
     "check_ride_for",
+    "check_ride_integrity",
     "compare_trace",
     "delivered_poses",
     "generate_keyframe_ride",

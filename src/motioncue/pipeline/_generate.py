@@ -244,10 +244,12 @@ def _stretch(q: np.ndarray, factor: float, rate_hz: float, n_out: int) -> np.nda
     frames: speeds scale by ``1/factor`` and accelerations by ``1/factor^2``."""
     from scipy.interpolate import CubicSpline
 
+    if len(q) < 2:
+        # no move (two keyframes at one pose): hold it. Checked before the division: the
+        # caller's factor is then 0 / 1, and 0 / 0 in the times would be NaN
+        return np.repeat(q[:1], n_out, axis=0)
     t_src = np.arange(len(q)) / rate_hz
     t_new = np.minimum(np.arange(n_out) / rate_hz / factor, t_src[-1])
-    if len(q) < 2:
-        return np.repeat(q[:1], n_out, axis=0)
     spline = CubicSpline(t_src, q, axis=0, bc_type="clamped")
     out = spline(t_new)
     out[-1] = q[-1]

@@ -17,7 +17,9 @@ What ``generate`` refuses or warns about (nothing half-understood becomes a ride
 - a recording of which more than ``HELD_WARNING_FRACTION`` of the samples were held by the
   washout (non-finite, spikes): the ride is made, with a loud warning giving the fraction
   (:func:`held_warning`);
-- keyframe times that are negative or not increasing: refused.
+- keyframe times that are negative or not increasing: refused;
+- a CSV larger than ``MAX_CSV_BYTES``: refused by its size, before anything is read (a
+  ``motioncue record`` file has its own limit, checked after its magic).
 """
 
 from __future__ import annotations
@@ -34,6 +36,7 @@ from .._errors import ConfigError
 
 __all__ = [
     "HELD_WARNING_FRACTION",
+    "MAX_CSV_BYTES",
     "MAX_GAP_S",
     "MAX_GENERATE_FRAMES",
     "Keyframes",
@@ -48,6 +51,9 @@ MAX_GAP_S = 60.0
 """Largest time between two samples of a recording CSV (a longer gap is missing data)."""
 MAX_GENERATE_FRAMES = 2_000_000
 """Most frames ``generate`` makes (about 5.5 h at 100 Hz)."""
+MAX_CSV_BYTES = 256 << 20
+"""Largest CSV input ``generate`` reads (256 MiB: over 2 million rows of seven numbers)."""
+_MAX_HEADER_CHARS = 64 << 10
 HELD_WARNING_FRACTION = 0.2
 """Warn when more than this fraction of the input samples were held by the washout."""
 
@@ -166,9 +172,16 @@ def load_generate_input(path: str | Path) -> tuple[str, Any, dict[str, int]]:
 
     if is_datagram_recording(path):
         return "recording", *_telemetry_recording(path)
+    size = path.stat().st_size
+    if size > MAX_CSV_BYTES:
+        raise ConfigError(
+            f"{path}: {size} bytes is larger than the {MAX_CSV_BYTES} bytes of CSV generate "
+            "reads; split the recording"
+        )
     try:
         with open(path, newline="", errors="replace") as fh:
-            first = next(csv.reader(fh), [])
+            # the header row only, however long the first line of a foreign file is
+            first = next(csv.reader([fh.readline(_MAX_HEADER_CHARS)]), [])
     except OSError as exc:
         raise ConfigError(f"{path}: cannot read: {exc}") from exc
     except csv.Error as exc:

@@ -32,10 +32,23 @@ the limits derived from them now), in this order, and refuses with the first pro
 
 Refusals are :class:`~motioncue.ConfigError` (1-4, the ride does not belong to this rig) or
 :class:`~motioncue.LimitError` (5, the rig cannot do it).
+
+Before those, :func:`check_ride_integrity` asks whether the ride is the one ``generate``
+made: a ride whose content no longer matches its digest (``"edited"``), or that carries none
+(``"unsigned"``: made before rides had one, or rewritten by another program), is refused
+unless the user says it was edited on purpose (``play --accept-edited``). An accepted edited
+ride must still be a rigid platform's: the forward kinematics of every frame must find a pose
+whose leg positions are the frame's within the pulse rounding (:func:`rigidity_residuals`).
+That catches leg positions no rigid frame can take (one actuator moved alone on a corner rig,
+positions no pose reaches); on a platform with as many actuators as degrees of freedom (a
+hexapod, the seats) nearly any in-stroke set of positions is some pose (swapped columns of a
+hexapod ride are a pose 80 mm sideways), so there the digest is the check, and the note of an
+accepted ride says how far the recovered poses go.
 """
 
 from __future__ import annotations
 
+import math
 from typing import Any
 
 import numpy as np
@@ -44,7 +57,7 @@ from .._errors import ConfigError, LimitError
 from ._ridefile import Ride
 from ._verify import check_frames, limits_arrays
 
-__all__ = ["check_ride_for", "wire_times_s"]
+__all__ = ["check_ride_for", "check_ride_integrity", "rigidity_residuals", "wire_times_s"]
 
 
 def wire_times_s(t_s: np.ndarray, controller: Any) -> np.ndarray:
@@ -234,3 +247,154 @@ def _worst(
         else "after the last frame (the ride does not end at rest)"
     )
     return f"actuator {names[axis]!r} {what} {use:.3f} x its limit at {where}: {detail}"
+
+
+def check_ride_integrity(
+    ride: Ride, platform: Any, *, accept_edited: bool = False, name: str = "the ride"
+) -> list[str]:
+    """Refuse a ride changed after it was made, unless ``accept_edited``; then check that
+    its frames are a rigid platform's.
+
+    Parameters
+    ----------
+    ride : Ride
+        As returned by :func:`~motioncue.pipeline.load_ride` (``ride.integrity``); a ride
+        made in memory (``"made"``) or read intact passes at once.
+    platform : motioncue.kinematics.Platform
+        The platform about to be driven (for the forward kinematics).
+    accept_edited : bool
+        The user says the ride was edited on purpose (``play --accept-edited``).
+    name : str
+        What to call the ride in messages (its file name).
+
+    Returns
+    -------
+    list of str
+        Notes for the user (one line each): empty for an intact ride; for an accepted edited
+        one, what was accepted and how far the recovered poses go.
+
+    Raises
+    ------
+    ConfigError
+        An edited or unsigned ride without ``accept_edited`` (what to do is said).
+    LimitError
+        An accepted edited ride with a frame no rigid pose gives (frame, time, actuator,
+        distance in pulses against the rounding allowance).
+    """
+    state = ride.integrity
+    if state in ("made", "intact"):
+        return []
+    if state == "edited":
+        what = (
+            "its content does not match the digest generate wrote: it was changed after it "
+            "was made (edited, or damaged)"
+        )
+    else:
+        what = (
+            "it carries no digest: made by a motioncue from before rides had one, or rewritten "
+            "by another program"
+        )
+    if not accept_edited:
+        raise ConfigError(
+            f"{name} was not played: {what}; generate it again, or, if it was edited on "
+            "purpose, play it with --accept-edited (its frames must then still be a rigid "
+            "platform's)"
+        )
+    names = tuple(platform.actuator_names)
+    if tuple(ride.actuator_names) != names:
+        return []  # another rig's ride: check_ride_for refuses it, naming both
+    allowed = _rounding_allowance(platform)
+    residual, poses = rigidity_residuals(ride.pulses, platform, allowance_pulses=allowed)
+    worst = np.where(np.isnan(residual), 0.0, residual).max(axis=1)
+    if np.any(worst > allowed):
+        k = int(np.argmax(worst > allowed))
+        axis = int(np.argmax(residual[k]))
+        far = worst[k]
+        distance = "no pose reaches them" if not math.isfinite(far) else f"{far:.1f} pulses"
+        raise LimitError(
+            f"{name} (edited) is no rigid platform's: at frame {k} (t = {ride.t_s[k]:.3f} s) "
+            f"no pose of {getattr(platform, 'name', 'the platform')} gives its actuator "
+            f"positions (actuator {names[axis]!r}: {distance} from the nearest rigid pose; "
+            f"pulse rounding allows {allowed:.2f}); nothing was sent"
+        )
+    return [
+        f"{name} was accepted as edited (--accept-edited; {what}); its frames are a rigid "
+        f"platform's within the pulse rounding ({allowed:.2f} pulses); {_pose_span(poses)}"
+    ]
+
+
+def rigidity_residuals(
+    pulses: np.ndarray, platform: Any, *, allowance_pulses: float | None = None
+) -> tuple[np.ndarray, np.ndarray]:
+    """How far each frame's actuator positions are from a rigid pose, in pulses.
+
+    Forward kinematics (:meth:`~motioncue.kinematics.Platform.forward`, warm-started from the
+    previous frame's pose; repeated frames computed once) finds a pose for each frame's
+    positions, inverse kinematics gives that pose's positions, and the difference is
+    converted back to pulses. The platform's spare axes (held at 0, not part of the frame)
+    are left out.
+
+    Parameters
+    ----------
+    pulses : ndarray, shape (N, n)
+        Frames in the platform's actuator order.
+    platform : motioncue.kinematics.Platform
+    allowance_pulses : float, optional
+        When given, the iteration stops as soon as every actuator is within this many pulses
+        of the pose found (so a value at or below it means "within the allowance", not the
+        least distance), and the frames after the first one above it are not computed
+        (NaN). Without it, the forward kinematics' own tolerance (least distances).
+
+    Returns
+    -------
+    residual : ndarray, shape (N, n - spare_axes)
+        ``|inverse(pose) - q|`` per actuator (pulses); ``inf`` where no pose reaches the
+        positions; NaN for frames not computed.
+    poses : ndarray, shape (N, 6)
+        The poses found (m, rad); NaN for frames not computed.
+    """
+    p = np.asarray(pulses)
+    n_rigid = int(platform.n_actuators) - int(platform.spare_axes)
+    q = np.asarray(platform.drives.from_pulses(p.astype(np.int64)), dtype=float)
+    ppu = np.abs(np.asarray(platform.drives.pulses_per_unit, dtype=float))[:n_rigid]
+    fk_kw: dict[str, float] = {}
+    if allowance_pulses is not None:
+        fk_kw["tol"] = allowance_pulses / float(np.max(ppu))  # the strictest actuator's
+    # first: the first frame of each distinct row; inverse: each frame's distinct row
+    unique, first, inverse = np.unique(p, axis=0, return_index=True, return_inverse=True)
+    inverse = np.asarray(inverse).reshape(-1)
+    res_u = np.full((len(unique), n_rigid), np.nan)
+    pose_u = np.full((len(unique), 6), np.nan)
+    guess = None
+    for j in np.argsort(first):  # in time order, so the warm start is the previous frame
+        qk = q[first[j]]
+        fk = platform.forward(qk, guess, **fk_kw)
+        pose_u[j] = fk.pose
+        if math.isfinite(fk.residual):
+            back = np.asarray(platform.inverse(fk.pose), dtype=float)
+            res_u[j] = np.abs(back[:n_rigid] - qk[:n_rigid]) * ppu
+            guess = fk.pose
+        else:
+            res_u[j] = np.inf
+        if allowance_pulses is not None and not np.max(res_u[j]) <= allowance_pulses:
+            break
+    return res_u[inverse], pose_u[inverse]
+
+
+def _rounding_allowance(platform: Any) -> float:
+    """Largest distance (pulses) from a rigid pose that pulse rounding alone can make: each
+    position is off by at most half a pulse, and the least-squares projection of those
+    errors moves no actuator by more than their 2-norm, ``0.5 sqrt(n)`` (n actuators of the
+    frame); plus 1e-3 pulse for the iteration's own tolerance."""
+    n_rigid = int(platform.n_actuators) - int(platform.spare_axes)
+    return 0.5 * math.sqrt(n_rigid) + 1e-3
+
+
+def _pose_span(poses: np.ndarray) -> str:
+    """``poses reach x +-12.7 mm, ...``: the largest excursion of each pose component."""
+    peak = np.max(np.abs(poses), axis=0)
+    parts = [f"{n} {peak[i] * 1e3:.1f} mm" for i, n in enumerate("xyz")]
+    parts += [
+        f"{n} {math.degrees(peak[i + 3]):.1f} deg" for i, n in enumerate(("roll", "pitch", "yaw"))
+    ]
+    return "the poses recovered from its frames reach +-(" + ", ".join(parts) + ")"

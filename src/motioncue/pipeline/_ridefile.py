@@ -16,6 +16,9 @@ A ride file is a NumPy ``.npz`` archive (zip; readable without motioncue) holdin
     second EasySmc unit's outputs are not carried by ride files).
 ``dacs``
     ``(N, 2)`` uint16 analogue outputs (controller units).
+``digest``
+    ASCII ``sha256:<64 hex digits>``: the SHA-256 of the content as written (see
+    :func:`content_digest`), so that a ride changed after it was made is recognised.
 
 Loading trusts nothing in the file: every archive member is parsed by hand (no pickles, only
 plain numeric dtypes, sizes checked against the shapes before anything is allocated), the
@@ -23,11 +26,20 @@ header's keys and types are checked, and :class:`Ride` checks shapes, ranges and
 damage becomes a :class:`~motioncue.ConfigError` naming the file. Whether the frames suit the
 rig about to be driven is :func:`motioncue.pipeline.check_ride_for`'s job.
 
+Integrity: :func:`load_ride` recomputes the digest and records the verdict in
+:attr:`Ride.integrity` (``"intact"``, ``"edited"``: the content differs from what was
+written, or ``"unsigned"``: no digest, an older motioncue's ride or one rewritten by another
+program). What to do about it is the player's decision (``motioncue play`` refuses both unless
+``--accept-edited``; :func:`motioncue.pipeline.check_ride_integrity`). The digest is no
+signature: anyone can compute one; it catches rides changed by accident or by a script, not
+by someone who means to deceive.
+
 Writing is atomic (:mod:`motioncue._atomic`): a refused or interrupted save leaves no file.
 """
 
 from __future__ import annotations
 
+import hashlib
 import io
 import json
 import math
@@ -39,15 +51,17 @@ from typing import Any, BinaryIO
 
 import numpy as np
 
-from .._errors import ConfigError, MotioncueError
+from .._errors import ConfigError, MotioncueError, one_line
 
 __all__ = [
+    "INTEGRITY_STATES",
     "MAX_RIDE_BYTES",
     "MAX_RIDE_RATE_HZ",
     "MIN_RIDE_RATE_HZ",
     "RIDE_FORMAT",
     "RIDE_FORMAT_VERSION",
     "Ride",
+    "content_digest",
     "load_ride",
     "save_ride",
 ]
@@ -64,8 +78,16 @@ MAX_RIDE_DURATION_S = 0xFFFFFFFF / 1000.0
 MAX_RIDE_BYTES = 1 << 30
 """Largest ride file, and largest array in one, that :func:`load_ride` reads (1 GiB)."""
 _MAX_HEADER_BYTES = 16 << 20
-_ARRAY_KINDS = {"header": "u", "t_s": "fiu", "pulses": "iu", "dout": "iu", "dacs": "iu"}
-_ARRAY_NDIM = {"header": 1, "t_s": 1, "pulses": 2, "dout": 1, "dacs": 2}
+_ZIP_MAGIC = b"PK\x03\x04"
+"""How every ride file (a zip with members) starts."""
+_ARRAY_KINDS = {
+    "header": "u", "t_s": "fiu", "pulses": "iu", "dout": "iu", "dacs": "iu", "digest": "u",
+}  # fmt: skip
+_ARRAY_NDIM = {"header": 1, "t_s": 1, "pulses": 2, "dout": 1, "dacs": 2, "digest": 1}
+_DIGEST_PREFIX = "sha256:"
+INTEGRITY_STATES = ("made", "intact", "edited", "unsigned")
+"""Values of :attr:`Ride.integrity`: made in memory (not read from a file), read with a
+matching digest, read with a digest that does not match, read without a digest."""
 
 
 @dataclass(frozen=True, eq=False)
@@ -97,6 +119,10 @@ class Ride:
         What the ride was made from.
     notes : dict
         Free-form metadata (cue metrics, optimisation report...).
+    integrity : str
+        Not a constructor argument: ``"made"`` for a ride built in memory;
+        :func:`load_ride` sets ``"intact"``, ``"edited"`` or ``"unsigned"`` (see
+        :data:`INTEGRITY_STATES`). ``dataclasses.replace`` gives ``"made"`` again.
 
     Raises
     ------
@@ -192,6 +218,12 @@ class Ride:
         object.__setattr__(self, "effects", tuple(effects))
 
     @property
+    def integrity(self) -> str:
+        """``"made"``, ``"intact"``, ``"edited"`` or ``"unsigned"`` (:data:`INTEGRITY_STATES`).
+        Not a field: no constructor argument, and ``dataclasses.replace`` gives ``"made"``."""
+        return str(self.__dict__.get("_integrity", "made"))
+
+    @property
     def n_frames(self) -> int:
         return int(self.t_s.shape[0])
 
@@ -228,17 +260,39 @@ def _numeric(name: str, value: Any, kinds: str) -> np.ndarray:
     return arr
 
 
+def content_digest(
+    header: bytes, t_s: np.ndarray, pulses: np.ndarray, dout: np.ndarray, dacs: np.ndarray
+) -> str:
+    """``sha256:<hex>`` of a ride's content: the header member's bytes exactly as stored,
+    then each array's shape and values in a fixed layout (little-endian float64 times, int32
+    pulses, uint16 outputs, C order), each part preceded by its length. Independent of the
+    archive's compression and of the arrays' stored dtypes (the values are what counts)."""
+    h = hashlib.sha256(b"motioncue-ride-digest-1\0")
+    parts: list[bytes] = [bytes(header)]
+    for arr, dtype in ((t_s, "<f8"), (pulses, "<i4"), (dout, "<u2"), (dacs, "<u2")):
+        a = np.ascontiguousarray(np.asarray(arr).astype(dtype, copy=False))
+        parts.append(json.dumps(list(a.shape)).encode() + b"\0" + a.tobytes())
+    for part in parts:
+        h.update(len(part).to_bytes(8, "little"))
+        h.update(part)
+    return _DIGEST_PREFIX + h.hexdigest()
+
+
 def ride_bytes(ride: Ride) -> bytes:
-    """The bytes of a ride file for ``ride`` (what :func:`save_ride` writes)."""
+    """The bytes of a ride file for ``ride`` (what :func:`save_ride` writes), its content
+    digest included."""
     header = json.dumps(ride.header(), indent=1, sort_keys=True, default=_json_default)
+    header_bytes = header.encode("utf-8")
+    digest = content_digest(header_bytes, ride.t_s, ride.pulses, ride.dout, ride.dacs)
     buf = io.BytesIO()
     np.savez_compressed(
         buf,
-        header=np.frombuffer(header.encode("utf-8"), dtype=np.uint8),
+        header=np.frombuffer(header_bytes, dtype=np.uint8),
         t_s=ride.t_s,
         pulses=ride.pulses,
         dout=ride.dout,
         dacs=ride.dacs,
+        digest=np.frombuffer(digest.encode("ascii"), dtype=np.uint8),
     )
     return buf.getvalue()
 
@@ -280,7 +334,20 @@ def _read_source(
         where = name or str(path)
         try:
             with open(path, "rb") as fh:
-                data = fh.read(MAX_RIDE_BYTES + 1)
+                # size and magic before anything is read into memory
+                size = os.fstat(fh.fileno()).st_size
+                if size > MAX_RIDE_BYTES:
+                    raise ConfigError(
+                        f"{where}: {size} bytes is larger than {MAX_RIDE_BYTES}; not a ride "
+                        "file motioncue reads"
+                    )
+                head = fh.read(len(_ZIP_MAGIC))
+                if head != _ZIP_MAGIC:
+                    raise ConfigError(
+                        f"{where}: not a motioncue ride file (not a zip archive: starts with "
+                        f"{_short(head)})"
+                    )
+                data = head + fh.read(MAX_RIDE_BYTES + 1 - len(head))
         except OSError as exc:
             raise ConfigError(f"{where}: cannot read ride file: {exc}") from exc
     if not isinstance(data, bytes):
@@ -350,8 +417,10 @@ def _read_arrays(data: bytes, where: str) -> dict[str, np.ndarray]:
         # NotImplementedError for unknown compression, RuntimeError for encryption,
         # struct.error, OverflowError, EOFError, MemoryError, ...): all mean a damaged file
         what = "not a zip archive" if key == "?" and not arrays else f"damaged array {key!r}"
+        # the message may quote the damaged bytes: one printable line, bounded
+        detail = one_line(str(exc), 160)
         raise ConfigError(
-            f"{where}: not a motioncue ride file ({what}: {type(exc).__name__}: {exc})"
+            f"{where}: not a motioncue ride file ({what}: {type(exc).__name__}: {detail})"
         ) from exc
     return arrays
 
@@ -366,8 +435,7 @@ def _header_value(header: dict[str, Any], key: str, where: str, kind: Any, defau
 
 
 def _short(value: Any) -> str:
-    text = repr(value)
-    return text if len(text) <= 80 else text[:77] + "..."
+    return one_line(repr(value), 80)
 
 
 _REQUIRED = object()
@@ -429,7 +497,7 @@ def load_ride(
             f"{arrays['t_s'].shape[0]} frames"
         )
     try:
-        return Ride(
+        ride = Ride(
             platform=_header_value(header, "platform", where, str, _REQUIRED),
             controller=_header_value(header, "controller", where, str, _REQUIRED),
             rate_hz=_header_value(header, "rate_hz", where, int | float, _REQUIRED),
@@ -447,3 +515,18 @@ def load_ride(
         if str(exc).startswith(where):
             raise
         raise ConfigError(f"{where}: {exc}") from exc
+    object.__setattr__(ride, "_integrity", _integrity(arrays, ride))
+    return ride
+
+
+def _integrity(arrays: dict[str, np.ndarray], ride: Ride) -> str:
+    """``"intact"``, ``"edited"`` or ``"unsigned"`` (see :data:`INTEGRITY_STATES`)."""
+    stored = arrays.get("digest")
+    if stored is None:
+        return "unsigned"
+    try:
+        text = stored.tobytes().decode("ascii")
+    except UnicodeDecodeError:
+        return "edited"
+    actual = content_digest(arrays["header"].tobytes(), ride.t_s, ride.pulses, ride.dout, ride.dacs)
+    return "intact" if text == actual else "edited"

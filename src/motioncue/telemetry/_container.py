@@ -42,6 +42,7 @@ __all__ = [
     "FILE_HEADER",
     "MAGIC",
     "MAX_DATAGRAM",
+    "MAX_RECORDING_BYTES",
     "RECORD_HEADER",
     "VERSION",
     "DatagramRecording",
@@ -61,6 +62,8 @@ RECORD_HEADER = struct.Struct("<dI")
 """receive time (s since start), datagram length."""
 MAX_DATAGRAM = 65507
 _MAX_META = 1 << 20
+MAX_RECORDING_BYTES = 1 << 30
+"""Largest recording file :func:`read_recording_file` reads (1 GiB, checked before reading)."""
 
 
 @dataclass(frozen=True)
@@ -157,12 +160,28 @@ def read_recording_file(path: str | os.PathLike[str]) -> DatagramRecording:
     TransportError
         The file cannot be read.
     """
+    name = os.fspath(path)
     try:
         with open(path, "rb") as fh:
-            blob = fh.read()
+            # the magic and the size before the file is read into memory
+            head = fh.read(len(MAGIC))
+            if len(head) < len(MAGIC):
+                raise ProtocolError(
+                    f"{name}: {len(head)} bytes is too short for a recording header"
+                )
+            if head != MAGIC:
+                raise ProtocolError(f"{name}: not a motioncue recording (magic {head!r})")
+            size = os.fstat(fh.fileno()).st_size
+            if size > MAX_RECORDING_BYTES:
+                raise ProtocolError(
+                    f"{name}: {size} bytes is larger than the {MAX_RECORDING_BYTES} bytes a "
+                    "recording may have; split it (motioncue record --duration)"
+                )
+            blob = head + fh.read(MAX_RECORDING_BYTES + 1 - len(head))
     except OSError as exc:
-        raise TransportError(f"cannot read recording {os.fspath(path)!r}: {exc}") from exc
-    name = os.fspath(path)
+        raise TransportError(f"cannot read recording {name!r}: {exc}") from exc
+    if len(blob) > MAX_RECORDING_BYTES:
+        raise ProtocolError(f"{name}: larger than {MAX_RECORDING_BYTES} bytes")
     if len(blob) < FILE_HEADER.size:
         raise ProtocolError(f"{name}: {len(blob)} bytes is too short for a recording header")
     magic, version, meta_len = FILE_HEADER.unpack_from(blob)

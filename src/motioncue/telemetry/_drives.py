@@ -63,19 +63,11 @@ def sample_drive_manifest(folder: str | Path | None = None) -> list[SampleDrive]
     ConfigError
         Unreadable or malformed manifest (the entry and the field named).
     """
-    import tomllib
-
-    from .._config import config_dir
+    from .._config import config_dir, load_toml
 
     base = Path(folder) if folder is not None else config_dir("recordings")
     manifest = base / _MANIFEST
-    try:
-        with open(manifest, "rb") as fh:
-            doc = tomllib.load(fh)
-    except OSError as exc:
-        raise ConfigError(f"{manifest}: cannot read: {exc}") from exc
-    except tomllib.TOMLDecodeError as exc:
-        raise ConfigError(f"{manifest}: not valid TOML: {exc}") from exc
+    doc = load_toml(manifest)  # size, UTF-8 and syntax checked, one ConfigError line
     entries = doc.get("drive")
     if not isinstance(entries, list) or not entries:
         raise ConfigError(f"{manifest}: needs one or more [[drive]] tables")

@@ -9,6 +9,14 @@ writer makes the counter odd, writes, makes it even; a reader retries while the 
 odd or changed under it), so the loop's :meth:`~SharedMemorySource.latest` never blocks and
 never waits for the child.
 
+Signals: a closing terminal sends SIGHUP (Ctrl-\\ SIGQUIT, Ctrl-C SIGINT; ``kill -TERM -PGID``
+SIGTERM) to the whole process group. The parent parks and then closes the child, so the
+child ignores these four,
+and the :mod:`multiprocessing` resource tracker (a helper process that would otherwise die
+of SIGHUP and, relaunched, print a warning and a ``KeyError`` traceback per shared object)
+is started with them blocked (:func:`_shielded`). :meth:`SharedMemorySource.close` kills a
+child that does not stop by itself (SIGKILL).
+
 Failure handling: the child ends when the parent process ends (it polls its parent every
 50 ms) or on :meth:`~SharedMemorySource.close`; if the child dies, ``latest()`` keeps the
 last sample, whose age grows until the bridge's gate fades out and parks (a lost link), and
@@ -21,13 +29,16 @@ paused, game index, datagrams, samples, receive errors, stats seq, stats length]
 
 from __future__ import annotations
 
+import contextlib
 import json
 import math
 import multiprocessing as mp
 import os
+import signal
 import struct
 import time
-from multiprocessing import shared_memory
+from collections.abc import Iterator
+from multiprocessing import resource_tracker, shared_memory
 from typing import Any
 
 from .._errors import ConfigError, MotioncueError
@@ -41,6 +52,26 @@ _JSON_MAX = 2048
 _SIZE = _JSON_AT + _JSON_MAX
 _SAMPLE = struct.Struct("=q7dqq")  # the sample part: seq .. game
 _FIELDS = struct.Struct("=7dqq")  # the sample after seq: t, f, w, paused, game
+
+
+_GROUP_SIGNALS: tuple[signal.Signals, ...] = tuple(
+    getattr(signal, name)
+    for name in ("SIGINT", "SIGTERM", "SIGHUP", "SIGQUIT")
+    if hasattr(signal, name)
+)
+"""Signals a terminal sends to the whole process group; the helper processes ignore them."""
+
+
+@contextlib.contextmanager
+def _shielded() -> Iterator[None]:
+    """Block :data:`_GROUP_SIGNALS` in this thread while the block runs, so that a process
+    started in it is born with them blocked (the mask survives ``exec``); a signal arriving
+    meanwhile is delivered to this process when the block ends."""
+    old = signal.pthread_sigmask(signal.SIG_BLOCK, _GROUP_SIGNALS)
+    try:
+        yield
+    finally:
+        signal.pthread_sigmask(signal.SIG_SETMASK, old)
 
 
 def _view(shm: shared_memory.SharedMemory) -> memoryview:
@@ -76,12 +107,14 @@ def _read(buf: Any, known_seq: int, games: list[str]) -> tuple[int, TelemetrySam
 
 def _child(spec: str, name: str, port_conn: Any, stop: Any, parent_pid: int) -> None:
     """Receive and decode in this process; publish the newest sample and the counters."""
-    import signal
-
     from . import GAMES, open_source
 
-    # Ctrl-C reaches the whole process group: the parent parks and then closes this child
-    signal.signal(signal.SIGINT, signal.SIG_IGN)
+    # Ctrl-C, a closed terminal (SIGHUP), Ctrl-\\ and a group SIGTERM reach this child: the
+    # parent parks and then closes this child. Born with them blocked (_shielded): ignore,
+    # then unblock (a pending one is dropped).
+    for sig in _GROUP_SIGNALS:
+        signal.signal(sig, signal.SIG_IGN)
+    signal.pthread_sigmask(signal.SIG_UNBLOCK, _GROUP_SIGNALS)
     shm = shared_memory.SharedMemory(name=name)
     buf = _view(shm)
     games = sorted(GAMES)
@@ -160,6 +193,8 @@ class SharedMemorySource:
         from . import GAMES
 
         self._games = sorted(GAMES)
+        with _shielded():  # the tracker keeps the blocked mask: a closed terminal spares it
+            resource_tracker.ensure_running()
         self._shm = shared_memory.SharedMemory(create=True, size=_SIZE)
         self._buf = _view(self._shm)
         self._buf[:_SIZE] = bytes(_SIZE)
@@ -172,7 +207,8 @@ class SharedMemorySource:
             name="motioncue-telemetry",
             daemon=True,
         )
-        self._proc.start()
+        with _shielded():
+            self._proc.start()
         child.close()
         self._last: TelemetrySample | None = None
         self._seq = 0
@@ -255,7 +291,7 @@ class SharedMemorySource:
         self._stop.set()
         self._proc.join(3.0)
         if self._proc.is_alive():
-            self._proc.terminate()
+            self._proc.kill()  # it ignores SIGTERM (a group signal is the parent's to act on)
             self._proc.join(2.0)
         del self._buf
         self._shm.close()
