@@ -291,7 +291,7 @@ def transition_through(
 
     def pose_of_q(q: np.ndarray, guess: np.ndarray) -> np.ndarray:
         fk = platform.forward(q, guess=guess)
-        if not fk.converged:
+        if not fk.ok:
             raise LimitError(f"cannot find the pose of q = {q.tolist()} (FK failed)")
         return np.asarray(fk.pose, dtype=float)
 
@@ -393,7 +393,7 @@ def park_path(
         head = brake_to_rest(limiter, state)
         q_rest = np.asarray(state.q)
         fk = platform.forward(q_rest, guess=None if pose_from is None else pose_from)
-        if not fk.converged:
+        if not fk.ok:
             raise LimitError(f"cannot find the pose of q = {q_rest.tolist()} (FK failed)")
         start = np.asarray(fk.pose, dtype=float)
         q_m1 = q_f - v_f * dt  # the frames sent before q_from (speed, acceleration)

@@ -354,14 +354,15 @@ class Monitor:
         return out
 
     def _actuators(self, q: np.ndarray, raw: Mapping[str, Any]) -> dict[str, Any]:
-        from ._scene import stroke_use
+        from ._scene import _scene, fk_miss, stroke_use
 
         plat = self.platform
         fk = plat.forward(q, self._pose_guess)
-        if not fk.converged:
+        if not fk.ok and self._pose_guess is not None:
             fk = plat.forward(q)
-        self._pose_guess = fk.pose if fk.converged else None
-        scene = scene_from_q(plat, [0.0], q[None])
+        self._pose_guess = fk.pose if fk.ok else None
+        # the nearest rigid pose is drawn whatever happens; the page says when it is not one
+        scene = _scene(plat, np.zeros(1), np.asarray(fk.pose, dtype=float)[None], q[None])
         frame = frame_json(scene, 0)
         frac = np.where(q >= 0.0, q / self._q_hi, -q / self._q_lo)
         v = np.asarray(raw.get("v", np.zeros_like(q)), dtype=float)
@@ -386,7 +387,9 @@ class Monitor:
                 }
             )
         pose = fk.pose
+        extra = {} if fk.ok else {"error": fk_miss(plat, q, fk)}
         return {
+            **extra,
             "frame": frame,
             "use": float(np.max(stroke_use(plat, q))),
             "pose": [
@@ -474,14 +477,19 @@ class Monitor:
             loop.run_until_complete(asyncio.sleep(0))
             loop.close()
 
+    def snapshot_json(self) -> str:
+        """:meth:`snapshot` as JSON; a snapshot that fails is counted and answered with
+        ``{"state": "?", "error": "..."}`` (which the page shows), never an HTTP error."""
+        try:
+            return json.dumps(self.snapshot(), allow_nan=False)
+        except Exception as exc:  # a torn read of a running job: skip this snapshot, count it
+            self.errors += 1
+            return json.dumps({"state": "?", "error": f"{type(exc).__name__}: {exc}"})
+
     def _tick(self) -> None:
         if not self._clients:
             return
-        try:
-            msg = json.dumps(self.snapshot(), allow_nan=False)
-        except Exception as exc:  # a torn read of a running job: skip this snapshot, count it
-            self.errors += 1
-            msg = json.dumps({"state": "?", "error": f"{type(exc).__name__}: {exc}"})
+        msg = self.snapshot_json()
         for client in list(self._clients):
             client.push(msg)
 
@@ -526,7 +534,7 @@ def _handlers(mon: Monitor) -> list[Any]:
     class Snapshot(tornado.web.RequestHandler):
         def get(self) -> None:
             self.set_header("Content-Type", "application/json")
-            self.write(json.dumps(mon.snapshot(), allow_nan=False))
+            self.write(mon.snapshot_json())
 
     class Live(tornado.websocket.WebSocketHandler):
         _busy: Any = None
@@ -603,6 +611,7 @@ td, th {{ padding: 2px 6px; text-align: left; }}
 <div><b>motioncue monitor</b>: {title}</div>
 <div style="margin:6px 0"><span id="state">connecting</span>
 <button id="stop" disabled>stop (park)</button> <span id="msg"></span></div>
+<div id="error" style="color:#b00;font-weight:bold"></div>
 <div id="wrap"><div id="scene"></div><div id="side">
 <table id="acts"><thead><tr><th>actuator</th><th>position</th><th>stroke</th>
 <th>speed</th><th>acceleration</th></tr></thead><tbody></tbody></table>
@@ -651,6 +660,7 @@ function render(s) {
   stateEl.textContent = st;
   stateEl.className = st.split(' ')[0].replace(',', '');
   stopBtn.disabled = !s.can_stop;
+  document.getElementById('error').textContent = s.error ? 'error: ' + s.error : '';
   if (s.frame) { pending = s.frame; schedule(); }
   if (s.actuators) {
     const rows = s.actuators.map(a => '<tr><td>' + a.name + '</td><td>' + a.q.toFixed(1) + ' ' +
