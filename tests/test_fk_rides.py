@@ -70,7 +70,7 @@ def test_the_closure_check_agrees_with_the_inverse_kinematics() -> None:
 
 
 @pytest.mark.parametrize("name", bundled_names("platforms"))
-def test_every_frame_of_a_generated_ride_has_a_pose(name: str) -> None:
+def test_every_frame_of_a_generated_ride_has_a_pose(name: str, tmp_path: Path) -> None:
     """8 s of the bundled lap at 50 Hz (the corner rigs' first rounding twists come at
     6.5 s): every frame gives a pose within the rounding, the view draws them all."""
     p = load_platform(name)
@@ -97,6 +97,13 @@ def test_every_frame_of_a_generated_ride_has_a_pose(name: str) -> None:
         assert statuses.get("rounded", 0) > 0, statuses  # the twist of rounding, accepted
     scene = scene_from_q(p, ride.t_s, q)
     assert scene.poses.shape == (q.shape[0], 6)
+    if name == "corner4":  # what the user ran: generate, then view the ride
+        from motioncue.cli import main
+        from motioncue.pipeline import save_ride
+
+        path = save_ride(tmp_path / "c4.ride", ride)
+        assert main(["view", str(path), "--out", str(tmp_path / "c4.html")]) == 0
+        assert (tmp_path / "c4.html").stat().st_size > 1_000_000
 
 
 def test_a_crank_passing_its_rod_onto_the_other_branch_is_followed() -> None:
