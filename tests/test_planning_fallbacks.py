@@ -201,3 +201,24 @@ def test_the_line_fallback_keeps_the_limits_on_random_moves(jerk: bool) -> None:
         np.testing.assert_allclose(tr.q[-1], knots[-1], rtol=0, atol=1e-12)
         for kq in knots[1:-1]:  # through every knot, at rest there
             assert np.min(np.max(np.abs(tr.q - kq), axis=1)) < 1e-12
+
+
+@pytest.mark.parametrize(("platform", "ctrl"), [("seat3", "imax3"), ("corner4", "mbox6")])
+def test_free_time_keyframes_a_platform_cannot_produce_make_a_ride(
+    platform: str, ctrl: str
+) -> None:
+    """Surge square-wave keyframes without times on a machine without surge: held at zero,
+    they coincide; the move passes there once (was "keyframes must differ from their
+    neighbours", though the file's keyframes do differ)."""
+    p = load_platform(platform)
+    c = load_controller(ctrl)
+    lim = ActuatorLimits.from_platform(p, c, rate_hz=100.0)
+    kf = _square_keyframes(0.02, 0, 6, 0.0)
+    kf = Keyframes(kf.poses, np.full(6, np.nan), kf.dout, kf.dacs)
+    ride, info = generate_keyframe_ride(kf, p, c, rate_hz=100.0, limits=lim)
+    _judge(ride, p, lim)
+    # the move passes neutral (without stopping: free timing) within one frame's travel
+    neutral = p.drives.to_pulses(p.inverse(np.zeros(6)))
+    step = np.array([r["max_speed_pulses_s"] for r in lim.to_pulses_table(p)]) / 100.0
+    assert np.all(np.abs(ride.pulses[info["keyframe_frames"]] - neutral) <= step + 1)
+    assert np.ptp(ride.pulses, axis=0).max() > 10 * step.max()  # it did move there

@@ -420,6 +420,12 @@ def transition_through(
     # components the machine cannot produce are held at zero (as the inverse kinematics
     # does), so that the poses returned are the poses the frames produce
     poses = np.where(np.asarray(platform.dof_mask, dtype=bool), poses, 0.0)
+    # keyframes that differ only in what the machine cannot produce coincide now: one of
+    # each run of equal ones is kept (the move passes there once)
+    keep = np.r_[True, np.any(np.diff(poses, axis=0) != 0.0, axis=1)]
+    poses = poses[keep]
+    if poses.shape[0] == 1:
+        poses = np.vstack([poses, poses])  # nothing to move: one frame
     pose_of_s = _pose_path(poses)
 
     def q_of_s(s: np.ndarray) -> np.ndarray:
