@@ -24,7 +24,8 @@ def test_bundled_profiles_load_and_name_their_game() -> None:
     assert games == {"dirt-rally2": "dirt", "f1-24": "f1", "pcars2-gt3": "pcars2",
                      "xplane-ga": "xplane"}  # fmt: skip
     p = load_profile("dirt-rally2")
-    assert p.preset == "racing" and p.f_gain == (1.0, 0.9, 1.0) and p.w_gain == (1.0, 1.0, 1.0)
+    assert p.preset is None and p.presets == {}  # each platform keeps its tuned preset
+    assert p.f_gain == (1.0, 0.9, 1.0) and p.w_gain == (1.0, 1.0, 1.0)
     assert p.effects == EffectGains(engine=0.3, road=1.2, shift=0.8)
     assert load_profile("pcars2-gt3").f_gain == (0.8, 0.8, 0.8)  # one number for all axes
     assert load_profile("xplane-ga").effects == EffectGains(engine=0.5)
@@ -53,6 +54,11 @@ def _write(tmp_path: Path, text: str, name: str = "mine.toml") -> Path:
         ('source = "dirt"\npreset = "nosuch"\n',
          r"mine.toml: preset: unknown cueing config 'nosuch'"),
         ('preset = "racing"\n', r"mine.toml: missing key 'source'"),
+        ('source = "dirt"\n[preset]\ncorner4 = "nosuch"\n',
+         r"mine.toml: \[preset\] corner4: unknown cueing config 'nosuch'"),
+        ('source = "dirt"\n[preset]\ncorner4 = 3\n',
+         r"mine.toml \[preset\]: corner4 = 3 is invalid; allowed: a string"),
+        ('source = "dirt"\npreset = 3\n', r"mine.toml: preset = 3 is invalid; allowed: a string"),
         ("source = \n", r"mine.toml: not valid TOML"),
     ],
 )  # fmt: skip
@@ -147,3 +153,99 @@ def test_mutated_profiles_give_only_config_errors(tmp_path: Path) -> None:
         except ConfigError:
             outcomes["refused"] += 1
     assert outcomes["loaded"] > 100 and outcomes["refused"] > 200, outcomes
+
+
+# -- issue 23 item 7: a profile keeps each platform's tuned preset -----------------------------
+def test_bundled_profiles_keep_each_platforms_tuned_preset() -> None:
+    """Every bundled profile on every bundled platform runs the platform's own default_preset,
+    except where the profile's [preset] table names one for that very platform."""
+    from motioncue._config import bundled_names
+    from motioncue.cli._preset import choose_preset
+    from motioncue.kinematics import load_platform
+
+    named = {("xplane-ga", "stewart6-linear"): "flight"}
+    for prof_name in bundled_profiles():
+        prof = load_profile(prof_name)
+        assert prof.preset is None, prof_name  # no single preset for every platform
+        for plat_name in bundled_names("platforms"):
+            plat = load_platform(plat_name)
+            cueing, _ = choose_preset(prof.preset_for(plat.name), plat, plat_name)
+            want = named.get((prof_name, plat_name), plat.default_preset)
+            assert cueing.name == load_cueing(want).name, (prof_name, plat_name)
+
+
+def test_a_preset_table_names_presets_per_platform(tmp_path: Path) -> None:
+    (tmp_path / "mine-flight.toml").write_text(
+        (Path(__file__).resolve().parents[1] / "configs/cueing/flight.toml").read_text()
+    )
+    p = load_profile(_write(tmp_path, 'source = "xplane"\n[preset]\nseat3 = "mine-flight.toml"\n'
+                            'corner4 = "racing"\n'))  # fmt: skip
+    assert p.preset_for("seat3") == str((tmp_path / "mine-flight.toml").resolve())
+    assert p.preset_for("corner4") == "racing"
+    assert p.preset_for("stewart6-linear") is None and p.preset_for(None) is None
+    q = load_profile(_write(tmp_path, 'source = "xplane"\npreset = "flight"\n', "old.toml"))
+    assert q.preset_for("corner4") == "flight" and q.preset_for(None) == "flight"  # old form
+
+
+def test_clamp_warning_above_one_percent_of_at_least_100_poses() -> None:
+    from motioncue.pipeline._bridge import BridgeStats
+
+    nan = float("nan")
+    base = BridgeStats("live", 1.0, 0, 0, 0, 0, nan, nan, nan, nan, nan, nan, nan, 0,
+                       pose_clamped=0, pose_invalid=0, washout_bad_samples=0, bad_packets=0,
+                       packet_reasons={}, fade_ins=0, fade_outs=0, park_q_error=0.0,
+                       error=None)  # fmt: skip
+    from dataclasses import replace
+
+    assert replace(base, poses=1000, pose_clamped=10).clamp_warning() is None  # 1 % exactly
+    over = replace(base, poses=1000, pose_clamped=11)
+    warn = over.clamp_warning()
+    assert warn is not None and "11 of 1000 poses (1.1 %" in warn
+    assert "WARNING 1 % of poses clamped" in over.status_line()
+    assert replace(base, poses=99, pose_clamped=50).clamp_warning() is None  # too early to say
+    assert "WARNING" not in replace(base, poses=1000, pose_clamped=10).status_line()
+
+
+def _strong_f1_recording(path: Path) -> None:
+    """2 s of a car cornering at 0.75 g (0.3 x the bridge tests' lap motion) as a recording."""
+    from motioncue.telemetry._container import RecordingWriter
+    from test_bridge import F1Stream, lap_motion
+
+    stream = F1Stream(2024)
+    with RecordingWriter(path, "f1", 20777) as w:
+        for k in range(1, 121):
+            g_lat, g_lon, g_vert, rates = lap_motion(k / 60.0)
+            ex, motion = stream.frame(k, 0.3 * g_lat, 0.3 * g_lon, g_vert,
+                                      tuple(0.3 * r for r in rates))  # fmt: skip
+            w.write(k / 60.0, ex)
+            w.write(k / 60.0 + 0.001, motion)
+
+
+def test_bridge_warns_when_a_profile_preset_clamps_and_not_with_the_platforms_own(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """Issue 23 item 7 on a replayed F1 stream on the hexapod: the generic ``racing`` preset
+    (what the bundled profiles used to name) clamps far more than 1 % of the poses, and the
+    bridge says so, live and at the end; ``f1-24`` now runs the hexapod's own preset, which
+    clamps none of them, and no warning is printed."""
+    from test_bridge import DATA
+
+    if not DATA.is_dir():
+        pytest.skip("real F1 captures not on this machine")
+    rec = tmp_path / "f1.mctr"
+    _strong_f1_recording(rec)
+    old = _write(tmp_path, 'source = "f1"\npreset = "racing"\n', "old-f1.toml")
+    base = ["bridge", "--source", f"replay:{rec}?speed=1", "--platform", "stewart6-linear",
+            "--controller", "mbox6", "--target", "file:/dev/null", "--rate", "100",
+            "--fade", "0.3", "--rt-priority", "0", "--duration", "20"]  # fmt: skip
+    assert main([*base, "--profile", str(old)]) == 0
+    err = capsys.readouterr().err
+    assert ("warning: profile old-f1 replaces platform stewart6-linear's tuned preset "
+            "racing-hexapod by racing") in err  # fmt: skip
+    warnings = [ln for ln in err.splitlines() if "warning: the workspace limit clamped" in ln]
+    assert len(warnings) == 2, err  # once live (at the first status poll past 1 %), once at the end
+    assert "| WARNING" in err  # and on the status line
+    assert main([*base, "--profile", "f1-24"]) == 0
+    err = capsys.readouterr().err
+    assert "preset racing-hexapod (default of platform stewart6-linear), profile f1-24" in err
+    assert "workspace clamped 0 poses" in err and "warning" not in err, err

@@ -154,14 +154,23 @@ def run(args: argparse.Namespace) -> int:
         rate_hz=config.rate_hz,
         **limit_overrides(args),
     )
-    preset = args.preset or (profile.preset if profile is not None else None)
+    profile_preset = profile.preset_for(platform.name) if profile is not None else None
+    preset = args.preset or profile_preset
     cueing, preset_source = choose_preset(preset, platform, args.platform, args.overrides)
     effects = None
+    start_warnings: list[str] = []
     if profile is not None:
         from ..pipeline._effects import make_effects
 
-        if args.preset is None and profile.preset is not None:
+        if args.preset is None and profile_preset is not None:
             preset_source = f"{cueing.name} (profile {profile.name})"
+            own = getattr(platform, "default_preset", None)
+            if platform.name not in profile.presets and own and own != profile_preset:
+                start_warnings.append(
+                    f"profile {profile.name} replaces platform {platform.name}'s tuned preset "
+                    f"{own} by {cueing.name} (a [preset] table in the profile names a preset "
+                    "per platform; --preset overrides it)"
+                )
         else:
             preset_source += f", profile {profile.name}"
         cueing = profile.apply(cueing)
@@ -199,6 +208,8 @@ def run(args: argparse.Namespace) -> int:
                 start_notes = list(bridge.stage.notes)
                 for note in start_notes:
                     _say(f"motioncue bridge: note: {note}")
+                for warning in start_warnings:
+                    _say(f"motioncue bridge: warning: {warning}")
                 _say(
                     f"bridge: {_describe_source(source)} -> {args.target} ({args.controller}, "
                     f"{args.platform}, preset {preset_source}, {config.rate_hz:g} Hz, frames "
@@ -229,6 +240,9 @@ def run(args: argparse.Namespace) -> int:
         for note in final.notes:
             if note not in start_notes:
                 _say(f"motioncue bridge: note: {note}")
+        clamp_warning = final.clamp_warning()
+        if clamp_warning is not None:
+            _say(f"motioncue bridge: warning: {clamp_warning}")
         if not args.rt_priority and final.jitter_p99_ms > 1.0:
             _say(
                 f"motioncue bridge: note: output jitter p99 {final.jitter_p99_ms:.2f} ms; other "
@@ -292,6 +306,7 @@ def _serve(bridge: Any, guard: Any, duration_s: float | None, *, quiet: bool) ->
     except (OSError, ValueError):
         tty = False
     bridge.start()
+    warned = False
     t_end = math.inf if duration_s is None else time.monotonic() + duration_s
     while (
         bridge.running
@@ -300,8 +315,14 @@ def _serve(bridge: Any, guard: Any, duration_s: float | None, *, quiet: bool) ->
         and time.monotonic() < t_end
     ):
         guard.event.wait(min(0.5, max(0.0, t_end - time.monotonic())))
+        stats = bridge.stats
         if not quiet:
-            _status(bridge.stats.status_line(), tty)
+            _status(stats.status_line(), tty)
+        if not warned and stats.clamp_warning() is not None:
+            warned = True  # once, live, even with --quiet; the summary says it again
+            if not quiet and tty:
+                _say("")
+            _say(f"motioncue bridge: warning: {stats.clamp_warning()}")
     if not quiet:
         _status("parking ...", tty)
     final = bridge.stop()

@@ -190,6 +190,7 @@ def _generate(args: argparse.Namespace) -> int:
             "(after the ramp out of park); a keyframe at t is reached at that + t",
             file=sys.stderr,
         )
+        fallbacks = list(info["transition_fallbacks"])
         if info["late_keyframes"]:
             print(
                 f"warning: {info['late_keyframes']} keyframe(s) could not be reached on time "
@@ -203,6 +204,7 @@ def _generate(args: argparse.Namespace) -> int:
             data, platform, controller, cueing, rate_hz=args.rate, limits=limits,
             source=Path(args.input).name, progress=bar, **names,
         )  # fmt: skip
+        fallbacks = list(report.transition_fallbacks)
         warning = held_warning(report.bad_samples, len(report.f_vehicle))
         if warning:
             print(warning, file=sys.stderr)
@@ -220,6 +222,9 @@ def _generate(args: argparse.Namespace) -> int:
                 "preset.scaling.f_scale=[...]",
                 file=sys.stderr,
             )
+    summary["transition_fallbacks"] = len(fallbacks)
+    for line in fallbacks:
+        print(f"note: {line}", file=sys.stderr)
     # the checks play will make: a ride that would be refused there is not published here
     check_ride_for(ride, platform, controller, limits, **names)
     with Staging() as staged:

@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Any
 
 import numpy as np
@@ -52,19 +52,46 @@ class FKResult:
     Attributes
     ----------
     pose
-        ``(6,)`` pose found (m, rad); the last iterate when not converged.
+        ``(6,)`` pose found (m, rad): the rigid pose nearest to ``q`` (least squares) when
+        no pose gives ``q`` exactly.
     converged
-        True when ``residual`` fell below the tolerance.
+        True when ``residual`` fell below the tolerance ``tol``.
     iterations
-        Newton iterations taken.
+        Newton iterations taken (the least-squares fallback's evaluations not counted).
     residual
-        Max abs difference between ``inverse(pose)`` and the requested ``q`` (m or rad).
+        Max abs difference between the positions the pose gives and the requested ``q``
+        (m or rad). A crank leg may pass the point where crank and rod align onto its other
+        assembly branch: its position is compared with the nearer branch's.
+    status
+        ``"exact"`` (``residual <= tol``); ``"rounded"`` (every actuator within its rounding
+        tolerance, by default one pulse of its drive: positions a rigid pose gives, rounded
+        to pulses); ``"inconsistent"`` (the nearest rigid pose leaves an actuator beyond its
+        rounding tolerance: no rigid pose gives these positions).
+    residuals
+        ``(n,)`` signed per-actuator differences ``q - q(pose)`` (m or rad).
+    tolerance
+        ``(n,)`` rounding tolerance the status was judged with (m or rad).
     """
 
     pose: np.ndarray
     converged: bool
     iterations: int
     residual: float
+    status: str = "exact"
+    residuals: np.ndarray | None = None
+    tolerance: np.ndarray | None = None
+
+    @property
+    def ok(self) -> bool:
+        """True when a rigid pose gives ``q`` within the rounding (status exact or rounded)."""
+        return self.status in ("exact", "rounded")
+
+    @property
+    def worst(self) -> int:
+        """Index of the actuator with the largest residual relative to its tolerance."""
+        if self.residuals is None or self.tolerance is None:
+            return 0
+        return int(np.argmax(np.abs(self.residuals) / self.tolerance))
 
 
 @dataclass(frozen=True)
@@ -413,6 +440,7 @@ class Platform:
             },
         )  # fmt: skip
         a(self, "_dof_idx", np.flatnonzero(np.asarray(dof_mask, dtype=bool)))
+        a(self, "_dof_list", [int(k) for k in self._dof_idx])
         a(self, "q_neutral", _readonly(np.zeros(n)))
         a(self, "q_min", _readonly(q_lo))
         a(self, "q_max", _readonly(q_hi))
@@ -481,6 +509,7 @@ class Platform:
     _init_args: dict[str, Any]
     _square: bool
     _dof_idx: np.ndarray
+    _dof_list: list[int]
 
     def __setattr__(self, key: str, value: Any) -> None:
         raise AttributeError(f"{type(self).__name__} is frozen; cannot set {key!r}")
@@ -716,6 +745,17 @@ class Platform:
         return jac
 
     # --- forward kinematics -------------------------------------------------------------
+    @property
+    def q_rounding(self) -> np.ndarray:
+        """``(n,)`` one pulse of each actuator's drive (m or rad): the resolution of the
+        positions a controller is sent, and the default tolerance of :meth:`forward`."""
+        cached = self.__dict__.get("_q_rounding")
+        if cached is None:
+            cached = _readonly(1.0 / np.abs(self.drives.pulses_per_unit))
+            object.__setattr__(self, "_q_rounding", cached)
+        out: np.ndarray = cached
+        return out
+
     def forward(
         self,
         q: Any,
@@ -723,53 +763,207 @@ class Platform:
         *,
         tol: float = 1e-12,
         max_iter: int = 50,
+        rounding: Any = None,
     ) -> FKResult:
-        """Pose for actuator positions, by Newton's method on the closed-form inverse.
+        """Pose for actuator positions, by Newton's method on the closed-form inverse, with a
+        least-squares fallback that converges wherever a ride can go.
 
         With more moving actuators than degrees of freedom (a corner rig's fourth leg) the
         steps are Gauss-Newton (least squares): positions no rigid pose gives (they would twist
         the frame) end with ``converged=False`` and ``residual`` = how far the nearest rigid
-        pose is from them (see :meth:`project`).
+        pose is from them (see :meth:`project`). Positions rounded to pulses twist the frame
+        by up to about a pulse: within ``rounding`` of a rigid pose, the status is
+        ``"rounded"`` (``FKResult.ok``); beyond it ``"inconsistent"``.
 
         A starting guess from which the iteration fails (one where a crank cannot reach its
         rod, or too far away) is abandoned for the neutral pose, which every platform reaches;
-        the result is the better of the two runs, and ``iterations`` counts both.
+        the result is the better of the two runs, and ``iterations`` counts both. When neither
+        ends within the rounding, a damped least-squares solve (``scipy.optimize.
+        least_squares``, Levenberg-Marquardt) of the leg closure equations follows from the
+        guess, from Newton's best pose, from neutral and along a continuation from neutral;
+        it lets a crank leg pass the point where crank and rod align onto its other assembly
+        branch (which a ride through that point does).
 
         Parameters
         ----------
         q
             ``(n,)`` actuator positions (m or rad, from neutral).
         guess
-            ``(6,)`` starting pose; the neutral pose when None.
+            ``(6,)`` starting pose (the previous frame's, in a ride); the neutral pose when
+            None.
         tol
             Convergence threshold on the max abs actuator residual (m or rad).
         max_iter
-            Iteration limit (per start).
+            Iteration limit (per Newton start).
+        rounding
+            Per-actuator tolerance ``(n,)`` or one number (m or rad) within which positions
+            count as a rigid pose's (status ``"rounded"``); default :attr:`q_rounding` (one
+            pulse).
 
         Returns
         -------
         FKResult
         """
         qv = np.asarray(q, dtype=float)
-        if qv.shape != (self.n_actuators,):
-            raise ConfigError(f"q has shape {qv.shape}; expected ({self.n_actuators},)")
+        n = self.n_actuators
+        if qv.shape != (n,):
+            raise ConfigError(f"q has shape {qv.shape}; expected ({n},)")
         if not np.isfinite(qv).all():
             raise _bad_input("q", qv)
-        idx = [int(k) for k in self._dof_idx]
+        if rounding is None:
+            tol_q = self.q_rounding
+        else:
+            tol_q = np.broadcast_to(np.asarray(rounding, dtype=float), (n,)).copy()
+            if not (np.all(np.isfinite(tol_q)) and np.all(tol_q >= 0.0)):
+                raise ConfigError(
+                    f"rounding = {rounding!r} is invalid; allowed: finite numbers >= 0 (m or rad)"
+                )
+        tol_q = np.maximum(tol_q, tol)
+        idx = self._dof_list
         target = qv.tolist()
         if guess is None:
-            return self._newton([0.0] * 6, target, idx, True, tol, max_iter, 0)
-        g = np.asarray(guess, dtype=float)
-        if g.shape != (6,) or not np.isfinite(g).all():
-            raise ConfigError(f"guess = {g!r} is invalid; allowed: 6 finite numbers")
-        pose = [0.0] * 6
-        for k in idx:
-            pose[k] = float(g[k])
-        first = self._newton(pose, target, idx, False, tol, max_iter, 0)
-        if first.converged:
-            return first
-        again = self._newton([0.0] * 6, target, idx, True, tol, max_iter, first.iterations)
-        return again if again.residual <= first.residual else first
+            best = self._newton([0.0] * 6, target, idx, True, tol, max_iter, 0)
+            start = None
+        else:
+            g = np.asarray(guess, dtype=float)
+            if g.shape != (6,) or not np.isfinite(g).all():
+                raise ConfigError(f"guess = {g!r} is invalid; allowed: 6 finite numbers")
+            pose = [0.0] * 6
+            for k in idx:
+                pose[k] = float(g[k])
+            start = pose
+            best = self._newton(pose, target, idx, False, tol, max_iter, 0)
+            if not best.converged and not self._within(best, tol_q):
+                again = self._newton([0.0] * 6, target, idx, True, tol, max_iter, best.iterations)
+                if again.residual <= best.residual:
+                    best = again
+                else:
+                    best = replace(best, iterations=again.iterations)
+        if best.converged:  # the usual case: Newton found the pose
+            return FKResult(
+                best.pose, True, best.iterations, best.residual, "exact", best.residuals, tol_q
+            )
+        r = self._residuals(best.pose, qv)
+        if not np.all(np.abs(r) <= tol_q):
+            starts = [best.pose.tolist()] + ([start] if start is not None else []) + [[0.0] * 6]
+            pose_ls = self._least_squares(qv, idx, starts, tol_q)
+            r_ls = self._residuals(pose_ls, qv)
+            if np.max(np.abs(r_ls) / tol_q) < np.max(np.abs(r) / tol_q):
+                best, r = replace(best, pose=pose_ls), r_ls
+        residual = float(np.max(np.abs(r))) if np.all(np.isfinite(r)) else math.inf
+        if residual <= tol:
+            status = "exact"
+        elif np.all(np.abs(r) <= tol_q):
+            status = "rounded"
+        else:
+            status = "inconsistent"
+        return replace(
+            best,
+            converged=bool(residual <= tol),
+            residual=residual,
+            status=status,
+            residuals=r,
+            tolerance=tol_q,
+        )
+
+    @staticmethod
+    def _within(fk: FKResult, tol_q: np.ndarray) -> bool:
+        r = fk.residuals
+        return r is not None and bool(np.all(np.abs(r) <= tol_q))
+
+    def _residuals(self, pose: np.ndarray, q: np.ndarray) -> np.ndarray:
+        """``q - q(pose)`` ``(n,)``; a crank leg compared with the nearer assembly branch."""
+        pl = [float(v) for v in pose]
+        d, cur, reachable = self._eval_one(pl)
+        r = q - np.asarray(cur, dtype=float)
+        legs = self._legs
+        if isinstance(legs, CrankLegs):
+            nl = legs.n
+            a, b, c = legs._abc(np.asarray(d, dtype=float)[None])
+            rho = np.hypot(a[0], b[0])
+            ratio = np.divide(c[0], rho, out=np.full_like(rho, 2.0), where=rho > 0)
+            other = np.arctan2(b[0], a[0]) - legs.branch * np.arccos(np.clip(ratio, -1.0, 1.0))
+            q_other = (other - legs.theta0 + math.pi) % (2.0 * math.pi) - math.pi
+            r_other = q[:nl] - q_other
+            r_other = (r_other + math.pi) % (2.0 * math.pi) - math.pi
+            r[:nl] = (r[:nl] + math.pi) % (2.0 * math.pi) - math.pi
+            r[:nl] = np.where(np.abs(r_other) < np.abs(r[:nl]), r_other, r[:nl])
+            # an unreachable crank (rod too short or too long for the pose) is no solution
+            r[:nl] = np.where(np.abs(ratio) <= 1.0, r[:nl], np.inf)
+        elif not reachable:
+            r[:] = np.inf
+        return r
+
+    def _closure(self, q: np.ndarray) -> Any:
+        """The leg closure residuals ``f(pose)`` for positions ``q``: zero exactly where a
+        pose gives ``q``, smooth everywhere, whatever the crank's assembly branch: leg length
+        minus the actuator's length (m) for linear legs, distance from crank tip to anchor
+        minus the rod length (m) for crank legs, the yaw axis' position error (m or rad)."""
+        legs = self._legs
+        nl = legs.n
+        mask = self._leg_mask_list
+        if isinstance(legs, LinearLegs):
+            want = legs.length0 + q[:nl]
+            tips = np.zeros((nl, 3))
+        else:
+            assert isinstance(legs, CrankLegs)
+            tips, _ = legs.crank_vectors(q[None, :nl])
+            tips = tips[0]
+            want = legs.rod
+        q_yaw = float(q[nl]) if self._yaw_axis else 0.0
+
+        def f(pose: list[float]) -> np.ndarray:
+            x, y, z, roll, pitch, yaw = (v if m else 0.0 for v, m in zip(pose, mask, strict=True))
+            d = np.asarray(legs.vectors_one(rot_one(roll, pitch, yaw), (x, y, z)), dtype=float)
+            out = np.linalg.norm(d - tips, axis=1) - want
+            if self._yaw_axis:
+                out = np.append(out, self._yaw_q_one(pose[5])[0] - q_yaw)
+            return out
+
+        return f
+
+    def _least_squares(
+        self, q: np.ndarray, idx: list[int], starts: list[list[float]], tol_q: np.ndarray
+    ) -> np.ndarray:
+        """The best pose of damped least-squares solves of the closure equations from each
+        start, then along a continuation from neutral (``t q`` for t = 1/4 .. 1)."""
+        from scipy.optimize import least_squares
+
+        def solve(target: np.ndarray, start: list[float]) -> np.ndarray:
+            f = self._closure(target)
+            x0 = np.array([start[k] for k in idx])
+
+            def g(x: np.ndarray) -> np.ndarray:
+                pose = [0.0] * 6
+                for j, k in enumerate(idx):
+                    pose[k] = float(x[j])
+                return f(pose)
+
+            try:
+                sol = least_squares(
+                    g, x0, method="lm", xtol=1e-15, ftol=1e-15, gtol=1e-15, max_nfev=400
+                )
+                x = sol.x
+            except (ValueError, np.linalg.LinAlgError):
+                x = x0
+            pose = np.zeros(6)
+            pose[idx] = x
+            return pose
+
+        best = np.zeros(6)
+        best_score = math.inf
+        for start in starts:
+            pose = solve(q, start)
+            score = float(np.max(np.abs(self._residuals(pose, q)) / tol_q))
+            if score < best_score:
+                best, best_score = pose, score
+            if best_score <= 1.0:
+                return best
+        pose = np.zeros(6)
+        for t in (0.25, 0.5, 0.75, 1.0):
+            pose = solve(t * q, pose.tolist())
+        score = float(np.max(np.abs(self._residuals(pose, q)) / tol_q))
+        return pose if score < best_score else best
 
     def _newton(
         self,
@@ -821,7 +1015,10 @@ class Platform:
                 alpha *= 0.5
             else:
                 break
+            stalled = not square and sq - sq_new <= 1e-9 * sq  # at the least-squares minimum
             pose, d, cur, r, sq = trial, d_new, cur_new, r_new, sq_new
+            if stalled:
+                break
         residual = max(map(abs, r)) if reachable else math.inf
         if not reachable and iterations == 0:
             iterations = 1  # the unreachable start was evaluated and given up
@@ -830,6 +1027,7 @@ class Platform:
             converged=bool(residual <= tol),
             iterations=done + iterations,
             residual=residual,
+            residuals=-np.array(r) if reachable else np.full(len(r), np.inf),
         )
 
     def project(self, q: Any, *, tol: float = 1e-9) -> tuple[np.ndarray, str | None]:
@@ -857,7 +1055,9 @@ class Platform:
         """
         qv = np.asarray(q, dtype=float)
         fk = self.forward(qv)
-        q_rigid = self.inverse(fk.pose)
+        # the positions of the pose found, a crank on the assembly branch nearer to q
+        r = fk.residuals
+        q_rigid = self.inverse(fk.pose) if r is None or not np.all(np.isfinite(r)) else qv - r
         change = q_rigid - qv
         worst = int(np.argmax(np.abs(change)))
         if abs(change[worst]) <= tol:

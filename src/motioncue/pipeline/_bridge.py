@@ -86,7 +86,20 @@ from ._effects import EffectGains, EffectsState, make_effects
 from ._realtime import CueGate, GateConfig, Ticker
 from ._stream import OutputStage
 
-__all__ = ["Bridge", "BridgeConfig", "BridgeStats", "TelemetryInput"]
+__all__ = [
+    "CLAMP_WARN_FRACTION",
+    "CLAMP_WARN_MIN_POSES",
+    "Bridge",
+    "BridgeConfig",
+    "BridgeStats",
+    "TelemetryInput",
+]
+
+CLAMP_WARN_FRACTION = 0.01
+"""Share of clamped poses above which the bridge warns (live and at the end)."""
+
+CLAMP_WARN_MIN_POSES = 100
+"""Poses before the clamp share is judged (the first few ticks say little)."""
 
 
 class TelemetryInput(Protocol):
@@ -234,6 +247,9 @@ class BridgeStats:
         Frames the actuator limiter changed (beyond a feasible target stream).
     pose_clamped, pose_invalid : int
         Ticks whose pose the workspace limiting scaled back / found non-finite.
+    poses : int
+        Ticks whose pose went through the workspace limiting (the denominator of
+        ``pose_clamped``; see :meth:`clamp_warning`).
     washout_bad_samples : int
         Telemetry samples the washout held since the start (NaN, inf, spikes).
     bad_packets : int
@@ -289,6 +305,28 @@ class BridgeStats:
     frame_age_p50_ms: float = math.nan
     frame_age_p99_ms: float = math.nan
     cueing: dict[str, float] = field(default_factory=dict)
+    poses: int = 0
+
+    @property
+    def pose_clamped_fraction(self) -> float:
+        """``pose_clamped / poses`` (0 before any pose)."""
+        return self.pose_clamped / self.poses if self.poses else 0.0
+
+    def clamp_warning(self) -> str | None:
+        """A warning when more than :data:`CLAMP_WARN_FRACTION` of the poses so far were
+        clamped (after :data:`CLAMP_WARN_MIN_POSES` poses), else None.
+
+        Clamped poses are cues the platform cannot give: the preset asks more than this
+        platform's workspace (a preset tuned for another platform, or gains too high).
+        """
+        if self.poses < CLAMP_WARN_MIN_POSES or self.pose_clamped_fraction <= CLAMP_WARN_FRACTION:
+            return None
+        return (
+            f"the workspace limit clamped {self.pose_clamped} of {self.poses} poses "
+            f"({100 * self.pose_clamped_fraction:.1f} %, more than "
+            f"{100 * CLAMP_WARN_FRACTION:g} %): the cues ask more than this platform can "
+            "move; use the platform's own preset (its default_preset) or lower the gains"
+        )
 
     def status_line(self) -> str:
         """One line for a terminal status display."""
@@ -312,6 +350,8 @@ class BridgeStats:
                        if v and k.startswith("note: ")))
             + (f" | solve p99 {self.cueing['p99_ms']:.2f} ms fallback"
                f" {int(self.cueing['fallbacks'])}" if "p99_ms" in self.cueing else "")
+            + (f" | WARNING {100 * self.pose_clamped_fraction:.0f} % of poses clamped"
+               if self.clamp_warning() is not None else "")
         )  # fmt: skip
 
 
@@ -461,6 +501,7 @@ class Bridge:
         self._error: str | None = None
         self._bad_total = 0  # washout bad samples from states reset since the start
         self._pose_clamped = 0
+        self._poses = 0
         self._pose_invalid = 0
         self._missed = 0
         self._park_err = 0.0
@@ -798,6 +839,7 @@ class Bridge:
             if self.effects is not None:
                 self.effects.add(self.effects_state, held, gain, pose)
             res = self._limit_pose(self.platform, pose, limits=self.limits)
+            self._poses += 1
             if res.status != "ok":
                 if res.status == "invalid":
                     self._pose_invalid += 1
@@ -897,6 +939,7 @@ class Bridge:
             frame_age_p50_ms=_percentile_ms(fage, 50),
             frame_age_p99_ms=_percentile_ms(fage, 99),
             cueing=self._cueing_stats(),
+            poses=self._poses,
         )
 
     def _cueing_stats(self) -> dict[str, float]:

@@ -69,6 +69,9 @@ class GenerateReport:
         Independent finite-difference check of the frames against the limits table.
     stage_s : dict[str, float]
         Wall time per stage.
+    transition_fallbacks : tuple of str
+        One sentence per ramp that could not follow its time-optimal pose path and moved in a
+        straight line in actuator space instead (:mod:`motioncue.trajectory._transition`).
     """
 
     t_s: np.ndarray
@@ -85,6 +88,25 @@ class GenerateReport:
     optimisation: Any
     frame_check: FrameCheck
     stage_s: dict[str, float] = field(default_factory=dict)
+    transition_fallbacks: tuple[str, ...] = ()
+
+
+def _with_park(tight: Any, limits: Any, platform: Any) -> Any:
+    """``tight`` with its stroke widened to hold the park position when the real ``limits``
+    hold it: park is the homed position, pulse 0, which rounding leaves exactly where it is,
+    and a controller stroke that starts at its origin (MBOX Fn0C0) puts it on the stroke end,
+    half a pulse outside the stroke tightened for rounding."""
+    from motioncue.trajectory import ActuatorLimits
+
+    park = np.asarray(platform.q_park, dtype=float)
+    if np.all((park >= tight.q_min) & (park <= tight.q_max)):
+        return tight
+    if not np.all((park >= limits.q_min - 1e-12) & (park <= limits.q_max + 1e-12)):
+        return tight  # outside the real stroke: the planning says so where it meets it
+    return ActuatorLimits(
+        np.minimum(tight.q_min, park), np.maximum(tight.q_max, park), tight.v_max,
+        tight.a_max, tight.j_max, tight.names, tight.kinds, tight.sources,
+    )  # fmt: skip
 
 
 def _finish(
@@ -100,6 +122,18 @@ def _finish(
     opt = limit_ride(q_desired, dt, tight, q0=platform.q_park, v0=np.zeros(platform.n_actuators))
     q = np.asarray(opt.q, dtype=float)
     pulses = platform.drives.to_pulses(q)
+    # a ride ends at rest at park (the desired frames do): the solver's tolerance can leave
+    # the last frames a pulse away when park lies on a stroke end (an interior-point solution
+    # stays inside its bounds); those trailing frames are set to park, and the check below
+    # judges the result like every frame
+    park = platform.drives.to_pulses(np.asarray(platform.q_park, dtype=float))
+    k = len(pulses)
+    while k > 0 and np.max(np.abs(pulses[k - 1] - park)) <= 1:
+        k -= 1
+    if k < len(pulses) and np.all(q_desired[-1] == q_desired[-2]):
+        pulses[k:] = park
+        q = q.copy()
+        q[k:] = platform.drives.from_pulses(pulses[k:])
     t_s = np.arange(len(q)) * dt
     check = check_frames(t_s, pulses, table, start_at_rest=True)
     if not check.ok:
@@ -163,7 +197,7 @@ def generate_ride(
     if limits is None:
         limits = ActuatorLimits.from_platform(platform, controller, rate_hz=rate_hz)
     table = limits.to_pulses_table(platform)
-    tight = pulse_rounding_limits(limits, platform, dt)
+    tight = _with_park(pulse_rounding_limits(limits, platform, dt), limits, platform)
 
     step("resample", 0.0)
     rec = resample(recording, rate_hz)
@@ -179,6 +213,11 @@ def generate_ride(
     gentle = tight.scaled(speed=RAMP_SPEED, accel=RAMP_ACCEL)
     ramp_in = transition(platform, platform.pose_park, poses_cue_ok[0], gentle, rate_hz)
     ramp_out = transition(platform, poses_cue_ok[-1], platform.pose_park, gentle, rate_hz)
+    fallbacks = [
+        f"ramp {name}: {tr.fallback}"
+        for name, tr in (("out of park", ramp_in), ("back to park", ramp_out))
+        if tr.fallback
+    ]
     lap("ramps")
     step("inverse kinematics", 0.45)
     # ... and one more frame at park, so the ride ends at rest there
@@ -191,7 +230,7 @@ def generate_ride(
     # planned one pulse rounding inside ``tight``: rounding the plan to whole pulses then
     # keeps every frame inside ``tight``, which is what the player's live limiter enforces, so
     # a ride at its limits is replayed frame for frame (no frame clamped on the way out)
-    planned = pulse_rounding_limits(tight, platform, dt)
+    planned = _with_park(pulse_rounding_limits(tight, platform, dt), limits, platform)
     opt, q, pulses, t_s, check = _finish(q_desired, platform, planned, table, dt)
     lap("actuator limits, pulses and check")
     n_in = len(ramp_in.poses) - 1
@@ -217,6 +256,7 @@ def generate_ride(
             "max_deviation_si": float(opt.max_deviation),
             "optimisation_status": str(opt.status),
             "frame_check": check.summary(),
+            "transition_fallbacks": fallbacks,
         },
     )
     step("done", 1.0)
@@ -235,6 +275,7 @@ def generate_ride(
         optimisation=opt,
         frame_check=check,
         stage_s=stage_s,
+        transition_fallbacks=tuple(fallbacks),
     )
     return ride, report
 
@@ -290,8 +331,9 @@ def generate_keyframe_ride(
     Returns
     -------
     ride, info
-        ``info`` has ``late_keyframes``, ``max_late_s``, ``keyframe_frames`` and
-        ``content_start_s``.
+        ``info`` has ``late_keyframes``, ``max_late_s``, ``keyframe_frames``,
+        ``content_start_s`` and ``transition_fallbacks`` (one sentence per move that could not
+        follow its time-optimal pose path and went in a straight line in actuator space).
 
     Raises
     ------
@@ -305,7 +347,7 @@ def generate_keyframe_ride(
     if limits is None:
         limits = ActuatorLimits.from_platform(platform, controller, rate_hz=rate_hz)
     table = limits.to_pulses_table(platform)
-    tight = pulse_rounding_limits(limits, platform, dt)
+    tight = _with_park(pulse_rounding_limits(limits, platform, dt), limits, platform)
     poses = np.asarray(keyframes.poses, dtype=float)
     times = np.asarray(keyframes.t_s, dtype=float)
     park = np.asarray(platform.pose_park, dtype=float)
@@ -315,8 +357,18 @@ def generate_keyframe_ride(
     arrive: list[int] = []
     late = 0
     max_late = 0.0
+    fallbacks: list[str] = []
+
+    def note(what: str, tr: Any) -> Any:
+        if tr.fallback:
+            fallbacks.append(f"{what}: {tr.fallback}")
+        return tr
+
     if not np.any(np.isfinite(times)):
-        tr = transition_through(platform, np.vstack([park, poses, park]), tight, rate_hz)
+        tr = note(
+            "the move through the keyframes",
+            transition_through(platform, np.vstack([park, poses, park]), tight, rate_hz),
+        )
         q_all = tr.q
         # frames at which each keyframe is reached: nearest path samples
         q_kf = platform.inverse(poses)
@@ -324,7 +376,7 @@ def generate_keyframe_ride(
             arrive.append(int(np.argmin(np.linalg.norm(q_all - qk, axis=1))))
     else:
         gentle = tight.scaled(speed=RAMP_SPEED, accel=RAMP_ACCEL)
-        first = transition(platform, park, poses[0], gentle, rate_hz)
+        first = note("ramp to keyframe 1", transition(platform, park, poses[0], gentle, rate_hz))
         move = np.vstack([first.q, first.q[-1:]])  # arrive, then one frame at rest
         need = len(move) - 1
         # the content's t = 0 comes after as many frames as the ramp out of park needs
@@ -336,7 +388,10 @@ def generate_keyframe_ride(
         n_frames = len(segments[0])
         arrive.append(n_frames - 1)
         for k in range(1, len(poses)):
-            tr = transition(platform, poses[k - 1], poses[k], tight, rate_hz)
+            tr = note(
+                f"keyframe {k} to {k + 1}",
+                transition(platform, poses[k - 1], poses[k], tight, rate_hz),
+            )
             need = len(tr.q) - 1
             if np.isfinite(times[k]) and np.isfinite(times[k - 1]):
                 slot = round((times[k] - times[k - 1]) * rate_hz)
@@ -353,7 +408,7 @@ def generate_keyframe_ride(
             segments.append(seg[1:])
             n_frames += len(seg) - 1
             arrive.append(n_frames - 1)
-        back = transition(platform, poses[-1], park, gentle, rate_hz)
+        back = note("ramp back to park", transition(platform, poses[-1], park, gentle, rate_hz))
         segments.append(back.q[1:])
         q_all = np.concatenate(segments)
     q_all = np.vstack([q_all, q_all[-1:]])  # one more frame at park: the ride ends at rest
@@ -383,9 +438,11 @@ def generate_keyframe_ride(
             "max_late_s": max_late,
             "optimisation_status": str(opt.status),
             "frame_check": check.summary(),
+            "transition_fallbacks": fallbacks,
         },
     )
     return ride, {
+        "transition_fallbacks": fallbacks,
         "late_keyframes": late,
         "max_late_s": max_late,
         "keyframe_frames": arrive,

@@ -7,8 +7,9 @@ the key named)::
     description = "DiRT Rally 2.0, rally cars on gravel"   # optional
     car = "Renault 5 Turbo"            # optional, for the reader: the car the gains suit
     source = "dirt"                    # GAME[:[HOST:]PORT] or replay:FILE[?speed=X]
-    preset = "racing"                  # cueing preset name or .toml path (relative to this
-                                       # file); default: the platform's default preset
+    [preset]                           # optional: a cueing preset (name or .toml path,
+    stewart6-linear = "flight"         # relative to this file) for a named platform; every
+    corner4 = "my-corner4-flight.toml" # other platform keeps its own default_preset
     [cue]
     f_gain = [1.0, 1.2, 0.8]           # multiplies the preset's f_scale (x, y, z); or one
     w_gain = 1.0                       # number for all three; w_gain multiplies w_scale
@@ -16,6 +17,12 @@ the key named)::
     engine = 0.3
     road = 1.0
     shift = 0.5
+
+The presets are tuned per platform (``default_preset`` in each platform file): a profile
+keeps the platform's tuned preset unless its ``[preset]`` table names one for that platform
+(keyed by the platform's name, the platform file's stem). A single ``preset = "NAME"`` string
+is still read, for every platform, but the bridge says at the start when it replaces a
+platform's own tuned preset.
 
 Gains multiply the preset's scaling: ``f_gain`` 1.2 on y gives 20 % more lateral cue before
 the preset's own smooth limit (``f_limit_m_s2``), which still bounds it; the workspace and
@@ -25,6 +32,7 @@ actuator limits bound everything after.
 from __future__ import annotations
 
 import math
+from collections.abc import Mapping
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
@@ -52,7 +60,10 @@ class Profile:
     source : str
         Telemetry source spec (``motioncue.telemetry.open_source``).
     preset : str or None
-        Cueing preset name or absolute path; None: the platform's default.
+        A cueing preset name or absolute path for every platform (the old single-string
+        form); None: each platform's default unless ``presets`` names one.
+    presets : dict of str to str
+        Cueing preset (name or absolute path) by platform name; wins over ``preset``.
     f_gain, w_gain : tuple of 3 float
         Multipliers of the preset's ``f_scale`` and ``w_scale`` (x, y, z / roll, pitch, yaw).
     effects : EffectGains
@@ -64,11 +75,24 @@ class Profile:
     name: str
     source: str
     preset: str | None = None
+    presets: Mapping[str, str] = field(default_factory=dict)
     f_gain: Vec3 = (1.0, 1.0, 1.0)
     w_gain: Vec3 = (1.0, 1.0, 1.0)
     effects: EffectGains = field(default_factory=EffectGains)
     description: str = ""
     car: str = ""
+
+    def preset_for(self, platform_name: str | None) -> str | None:
+        """The preset this profile names for a platform, or None (the platform's own).
+
+        Parameters
+        ----------
+        platform_name : str or None
+            The platform's name (its file's stem); None: no platform.
+        """
+        if platform_name is not None and platform_name in self.presets:
+            return self.presets[platform_name]
+        return self.preset
 
     def apply(self, cueing: Any) -> Any:
         """The cueing parameters with this profile's gains applied (a new object)."""
@@ -126,7 +150,17 @@ def load_profile(name_or_path: str | Path) -> Profile:
     description = top.string("description", "")
     car = top.string("car", "")
     source = top.string("source")
-    preset = top.string("preset", None) if top.has("preset") else None
+    preset: str | None = None
+    by_platform: dict[str, str] = {}
+    if top.has("preset"):
+        raw = top.raw("preset")
+        if isinstance(raw, Mapping):
+            table = top.table("preset")
+            for key in table.keys():
+                by_platform[key] = table.string(key)
+            table.finish()
+        else:
+            preset = top.string("preset")
     cue = top.table("cue", {})
     f_gain = _gain3(cue, "f_gain")
     w_gain = _gain3(cue, "w_gain")
@@ -146,18 +180,25 @@ def load_profile(name_or_path: str | Path) -> Profile:
             parse_live_spec(source)
         except ConfigError as exc:
             raise ConfigError(f"{where}: {exc}") from None
-    if preset is not None:
-        candidate = Path(preset)
+
+    def resolve(value: str, label: str) -> str:
+        candidate = Path(value)
         if candidate.suffix == ".toml" and not candidate.is_absolute():
-            preset = str((path.parent / candidate).resolve())
+            value = str((path.parent / candidate).resolve())
         try:
-            load_cueing(preset)
+            load_cueing(value)
         except ConfigError as exc:
-            raise ConfigError(f"{where}: preset: {exc}") from None
+            raise ConfigError(f"{where}: {label}: {exc}") from None
+        return value
+
+    if preset is not None:
+        preset = resolve(preset, "preset")
+    presets = {k: resolve(v, f"[preset] {k}") for k, v in by_platform.items()}
     return Profile(
         name=path.stem,
         source=source,
         preset=preset,
+        presets=presets,
         f_gain=f_gain,
         w_gain=w_gain,
         effects=EffectGains(**gains),

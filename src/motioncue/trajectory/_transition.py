@@ -14,8 +14,19 @@ Every transition is then checked with the finite differences of
 (toppra only enforces the limits at its grid points, so a curved path can exceed them
 slightly in between), the transition is recomputed with limits scaled by 0.97, up to 8 times;
 the scale used is reported (``limit_scale``; the first attempt uses ``1 - 1e-5``, room for
-toppra's own solver tolerance). A transition that still fails raises
-:class:`~motioncue.LimitError`; no frame that breaks a limit is returned.
+toppra's own solver tolerance).
+
+*Fallback* (always feasible): when the pose path leaves the actuator stroke or the kinematic
+workspace, toppra finds no time parametrisation (its solver fails on some well-posed paths),
+or the retries still break a limit, the move goes in a straight line in actuator space
+through the same end positions (and keyframes), each piece rest to rest, timed by the
+discrete limiter of :mod:`motioncue.trajectory._realtime` (:class:`JerkLimiter` with a jerk
+limit) on the path parameter: a trapezoidal (S-curve) profile whose frames keep every
+actuator's limits exactly, since each actuator moves the same fraction of its own distance.
+The stroke is a box, so the line stays inside it when its ends are. ``Transition.fallback``
+says why it was taken (empty when the time-optimal path was used); only end positions
+outside the stroke raise :class:`~motioncue.LimitError`, and no frame that breaks a limit is
+returned.
 
 toppra knows no jerk limit. With a jerk limit in ``limits``, the sampled frames are passed
 through the :class:`JerkLimiter` from rest, which then settles on the end position at rest;
@@ -25,6 +36,7 @@ kinematics), ``duration_s`` becomes the time of the last frame, and the check in
 
 from __future__ import annotations
 
+import itertools
 import logging
 import math
 from dataclasses import dataclass
@@ -72,6 +84,9 @@ class Transition:
         Factor the limits were scaled by to pass the discrete check (1.0 = full limits).
     check : LimitCheck
         Finite-difference check of ``q`` with rest before the first and after the last frame.
+    fallback : str
+        Why the straight line in actuator space was used instead of the time-optimal path
+        (one sentence, for reports); empty when it was not.
     """
 
     t_s: np.ndarray
@@ -80,6 +95,7 @@ class Transition:
     duration_s: float
     limit_scale: float
     check: LimitCheck
+    fallback: str = ""
 
     @property
     def n_frames(self) -> int:
@@ -169,35 +185,155 @@ def _run(
     rate_hz: float,
     n_grid: int,
     pose_of_q: Any = None,
+    knots_q: np.ndarray | None = None,
+    knots_pose: np.ndarray | None = None,
 ) -> Transition:
+    """The time-optimal transition along ``q_of_s``, else the straight-line fallback through
+    ``knots_q`` (K, n) (default: the path's two ends), whose poses are ``knots_pose``."""
     if not (isinstance(rate_hz, int | float) and 1.0 <= rate_hz <= 10000.0):
         raise ConfigError(f"rate_hz = {rate_hz!r} is invalid; allowed: [1, 10000] Hz")
     ss = np.linspace(0.0, 1.0, max(4 * n_grid, 64) + 1)
     qs = q_of_s(ss)
+    knots = qs[[0, -1]] if knots_q is None else np.asarray(knots_q, dtype=float)
     if not np.all(np.isfinite(qs)):
-        raise LimitError("the transition path leaves the kinematic workspace")
-    if np.any(qs < limits.q_min - 1e-12) or np.any(qs > limits.q_max + 1e-12):
-        raise LimitError("the transition path leaves the actuator stroke")
-    if np.max(np.abs(qs - qs[0])) == 0.0:  # nothing to move
-        q0 = qs[:1].copy()
-        return Transition(
-            t_s=np.zeros(1), q=q0, poses=pose_of_s(np.zeros(1)), duration_s=0.0,
-            limit_scale=1.0, check=_check(q0, rate_hz, limits),
-        )  # fmt: skip
-    scale = 1.0 - 1e-5  # room for toppra's solver tolerance (about 1e-6 on the speed)
-    for _ in range(_RETRIES + 1):
-        grid, sd = _time_parametrise(ss, qs, limits, scale, n_grid)
-        s, duration = _sample_s(grid, sd, rate_hz)
-        q = q_of_s(s)
-        chk = _check(q, rate_hz, limits)
-        if chk.ok:
-            tr = Transition(
-                t_s=np.arange(s.size) / rate_hz, q=q, poses=pose_of_s(s),
-                duration_s=duration, limit_scale=scale, check=chk,
+        why = "the pose path leaves the kinematic workspace"
+    elif np.any(qs < limits.q_min - 1e-12) or np.any(qs > limits.q_max + 1e-12):
+        why = "the pose path leaves the actuator stroke"
+    else:
+        if np.max(np.abs(qs - qs[0])) == 0.0:  # nothing to move
+            q0 = qs[:1].copy()
+            return Transition(
+                t_s=np.zeros(1), q=q0, poses=pose_of_s(np.zeros(1)), duration_s=0.0,
+                limit_scale=1.0, check=_check(q0, rate_hz, limits),
             )  # fmt: skip
-            return tr if limits.j_max is None else _jerk_smooth(tr, limits, rate_hz, pose_of_q)
-        scale *= _RETRY_SCALE
-    raise LimitError(f"transition still breaks the limits at scale {scale:.3f}: {chk}")
+        scale = 1.0 - 1e-5  # room for toppra's solver tolerance (about 1e-6 on the speed)
+        why = ""
+        for _ in range(_RETRIES + 1):
+            try:
+                grid, sd = _time_parametrise(ss, qs, limits, scale, n_grid)
+            except LimitError:
+                why = "toppra found no time-optimal timing on the pose path"
+                break
+            s, duration = _sample_s(grid, sd, rate_hz)
+            q = q_of_s(s)
+            chk = _check(q, rate_hz, limits)
+            if chk.ok:
+                tr = Transition(
+                    t_s=np.arange(s.size) / rate_hz, q=q, poses=pose_of_s(s),
+                    duration_s=duration, limit_scale=scale, check=chk,
+                )  # fmt: skip
+                if limits.j_max is None:
+                    return tr
+                try:
+                    return _jerk_smooth(tr, limits, rate_hz, pose_of_q)
+                except LimitError as exc:
+                    why = f"the jerk limiter could not follow the time-optimal path ({exc})"
+                    break
+            scale *= _RETRY_SCALE
+        else:
+            why = (
+                "the time-optimal timing still broke the limits between its grid points at "
+                f"{scale / _RETRY_SCALE:.2f} of them"
+            )
+    return _line_fallback(knots, limits, rate_hz, pose_of_q, why, knots_pose)
+
+
+def _s_profile(limits_1d: ActuatorLimits, dt: float) -> np.ndarray:
+    """Frames of a path parameter s from 0 to 1, rest to rest, within ``limits_1d`` (one
+    axis, stroke [0, 1]): the discrete limiter chasing a target held at 1."""
+    limiter: Any
+    if limits_1d.j_max is None:
+        limiter = RealtimeLimiter(limits_1d, dt)
+        state: Any = limiter.initial_state([0.0])
+    else:
+        limiter = JerkLimiter(limits_1d, dt)
+        state = limiter.initial_state([0.0])
+    out = [0.0]
+    for _ in range(_MAX_SETTLE_FRAMES):
+        out.append(limiter.step(state, [1.0])[0])
+        at_rest = not any(state.v) and not any(getattr(state, "a", [0.0]))
+        if state.q[0] == 1.0 and at_rest:
+            return np.asarray(out)
+    raise LimitError("the straight-line fallback did not settle at its end position")
+
+
+def _line_fallback(
+    knots: np.ndarray,
+    limits: ActuatorLimits,
+    rate_hz: float,
+    pose_of_q: Any,
+    why: str,
+    knots_pose: np.ndarray | None = None,
+) -> Transition:
+    """Rest-to-rest straight lines in actuator space through ``knots`` (K, n), each timed by
+    the discrete limiter on its path parameter (see the module docstring); the frames at the
+    knots get the poses ``knots_pose`` (K, 6), the others forward kinematics."""
+    dt = 1.0 / rate_hz
+    if not np.all(np.isfinite(knots)):
+        raise LimitError(f"{why}, and a position it must pass has no finite value")
+    for k, qk in enumerate(knots):
+        out = np.flatnonzero((qk < limits.q_min - 1e-12) | (qk > limits.q_max + 1e-12))
+        if out.size:
+            i = int(out[0])
+            where = "start" if k == 0 else ("end" if k == len(knots) - 1 else f"keyframe {k}")
+            rotary = limits.kinds[i] == "rotary"
+            unit, scale = ("deg", 180.0 / math.pi) if rotary else ("mm", 1e3)
+            raise LimitError(
+                f"{why}, and the move's {where} puts actuator {limits.names[i]} at "
+                f"{qk[i] * scale:.2f} {unit}, outside its usable stroke "
+                f"[{limits.q_min[i] * scale:.2f}, {limits.q_max[i] * scale:.2f}] {unit}"
+            )
+    pieces = [knots[:1]]
+    at_knot = {0: 0}  # frame index -> knot index
+    n_frames = 1
+    for kb, (qa, qb) in enumerate(itertools.pairwise(knots), start=1):
+        d = qb - qa
+        moving = np.abs(d) > 0.0
+        if not np.any(moving):
+            continue
+        dm = np.abs(d[moving])
+        # a hair inside: each actuator moves |d_i| s, so its speed, acceleration and jerk
+        # are |d_i| times those of s
+        shrink = 1.0 - 1e-9
+        v_s = float(np.min(limits.v_max[moving] / dm)) * shrink
+        a_s = float(np.min(limits.a_max[moving] / dm)) * shrink
+        j_s = None if limits.j_max is None else float(np.min(limits.j_max[moving] / dm)) * shrink
+        one = ActuatorLimits(
+            np.array([-1e-12]), np.array([1.0 + 1e-12]), np.array([v_s]), np.array([a_s]),
+            None if j_s is None else np.array([j_s]),
+        )  # fmt: skip
+        s = _s_profile(one, dt)
+        q = qa + s[:, None] * d
+        q[-1] = qb
+        pieces.append(q[1:])
+        n_frames += len(q) - 1
+        at_knot[n_frames - 1] = kb
+    q = np.concatenate(pieces)
+    chk = _check_full(q, rate_hz, limits)
+    if not chk.ok:  # not expected: the profile keeps the limits by construction
+        raise LimitError(f"the straight-line fallback breaks a limit: {chk}")
+    poses = np.full((q.shape[0], 6), np.nan)
+    if pose_of_q is not None:
+        guess = None
+        for k in range(q.shape[0]):
+            if knots_pose is not None and k in at_knot:
+                poses[k] = knots_pose[at_knot[k]]
+            else:
+                poses[k] = pose_of_q(q[k], guess)
+            guess = poses[k]
+    return Transition(
+        t_s=np.arange(q.shape[0]) / rate_hz, q=q, poses=poses,
+        duration_s=(q.shape[0] - 1) / rate_hz, limit_scale=1.0, check=chk,
+        fallback=f"{why}: moved in a straight line in actuator space instead (rest to rest, "
+        f"{(q.shape[0] - 1) / rate_hz:.2f} s)",
+    )  # fmt: skip
+
+
+def _check_full(q: np.ndarray, rate_hz: float, limits: ActuatorLimits) -> LimitCheck:
+    """The finite-difference check with rest before and after, jerk included when limited."""
+    dt = 1.0 / rate_hz
+    padded = np.concatenate([q, q[-1:], q[-1:], q[-1:]])
+    return check_trajectory(padded, dt, limits, history=np.stack([q[0], q[0], q[0]]))
 
 
 def _jerk_smooth(
@@ -284,18 +420,24 @@ def transition_through(
     # components the machine cannot produce are held at zero (as the inverse kinematics
     # does), so that the poses returned are the poses the frames produce
     poses = np.where(np.asarray(platform.dof_mask, dtype=bool), poses, 0.0)
+    # keyframes that differ only in what the machine cannot produce coincide now: one of
+    # each run of equal ones is kept (the move passes there once)
+    keep = np.r_[True, np.any(np.diff(poses, axis=0) != 0.0, axis=1)]
+    poses = poses[keep]
+    if poses.shape[0] == 1:
+        poses = np.vstack([poses, poses])  # nothing to move: one frame
     pose_of_s = _pose_path(poses)
 
     def q_of_s(s: np.ndarray) -> np.ndarray:
         return np.asarray(platform.inverse(pose_of_s(s)), dtype=float)
 
-    def pose_of_q(q: np.ndarray, guess: np.ndarray) -> np.ndarray:
-        fk = platform.forward(q, guess=guess)
-        if not fk.converged:
-            raise LimitError(f"cannot find the pose of q = {q.tolist()} (FK failed)")
-        return np.asarray(fk.pose, dtype=float)
+    def pose_of_q(q: np.ndarray, guess: np.ndarray | None) -> np.ndarray:
+        # the nearest rigid pose; a corner rig's line between two rigid positions twists
+        # its frame by a second-order amount, which this pose does not show
+        return np.asarray(platform.forward(q, guess=guess).pose, dtype=float)
 
-    return _run(q_of_s, pose_of_s, limits, rate_hz, n_grid, pose_of_q)
+    knots_q = np.asarray(platform.inverse(poses), dtype=float)
+    return _run(q_of_s, pose_of_s, limits, rate_hz, n_grid, pose_of_q, knots_q, poses)
 
 
 def transition_q(
@@ -393,7 +535,7 @@ def park_path(
         head = brake_to_rest(limiter, state)
         q_rest = np.asarray(state.q)
         fk = platform.forward(q_rest, guess=None if pose_from is None else pose_from)
-        if not fk.converged:
+        if not fk.ok:
             raise LimitError(f"cannot find the pose of q = {q_rest.tolist()} (FK failed)")
         start = np.asarray(fk.pose, dtype=float)
         q_m1 = q_f - v_f * dt  # the frames sent before q_from (speed, acceleration)

@@ -360,14 +360,15 @@ class Monitor:
         return out
 
     def _actuators(self, q: np.ndarray, raw: Mapping[str, Any]) -> dict[str, Any]:
-        from ._scene import at_rest, stroke_use
+        from ._scene import _scene, at_rest, fk_miss, stroke_use
 
         plat = self.platform
         fk = plat.forward(q, self._pose_guess)
-        if not fk.converged:
+        if not fk.ok and self._pose_guess is not None:
             fk = plat.forward(q)
-        self._pose_guess = fk.pose if fk.converged else None
-        scene = scene_from_q(plat, [0.0], q[None])
+        self._pose_guess = fk.pose if fk.ok else None
+        # the nearest rigid pose is drawn whatever happens; the page says when it is not one
+        scene = _scene(plat, np.zeros(1), np.asarray(fk.pose, dtype=float)[None], q[None])
         frame = frame_json(scene, 0)
         frac = np.where(q >= 0.0, q / self._q_hi, -q / self._q_lo)
         rest = at_rest(plat, q)
@@ -405,7 +406,9 @@ class Monitor:
             )
         pose = fk.pose
         moving = ~rest[: len(q)]
+        extra = {} if fk.ok else {"error": fk_miss(plat, q, fk)}
         return {
+            **extra,
             "frame": frame,
             # the largest stroke use of an actuator not at its park position (0: all parked)
             "use": float(np.max(stroke_use(plat, q)[moving], initial=0.0)),
@@ -503,10 +506,7 @@ class Monitor:
 
     async def _final_push(self) -> None:
         self._ended = True  # no regular snapshot after this one (the page keeps this state)
-        try:
-            snap = self.snapshot()
-        except Exception as exc:  # a torn read: the pages get the error
-            snap = {"state": "?", "error": f"{type(exc).__name__}: {exc}"}
+        snap = self._snapshot_or_error()
         snap["ended"] = True
         msg = json.dumps(snap, allow_nan=False)
         for client in list(self._clients):
@@ -515,14 +515,25 @@ class Monitor:
             except Exception:  # a page that went away
                 self._clients.discard(client)
 
+    def _snapshot_or_error(self) -> dict[str, Any]:
+        """:meth:`snapshot`, or ``{"state": "?", "error": "..."}`` (counted) when it fails."""
+        try:
+            snap = self.snapshot()
+            json.dumps(snap, allow_nan=False)  # a NaN is an error too, not a broken page
+            return snap
+        except Exception as exc:  # a torn read of a running job: skip this snapshot, count it
+            self.errors += 1
+            return {"state": "?", "error": f"{type(exc).__name__}: {exc}"}
+
+    def snapshot_json(self) -> str:
+        """:meth:`snapshot` as JSON; a snapshot that fails is counted and answered with
+        ``{"state": "?", "error": "..."}`` (which the page shows), never an HTTP error."""
+        return json.dumps(self._snapshot_or_error(), allow_nan=False)
+
     def _tick(self) -> None:
         if not self._clients or self._ended:
             return
-        try:
-            msg = json.dumps(self.snapshot(), allow_nan=False)
-        except Exception as exc:  # a torn read of a running job: skip this snapshot, count it
-            self.errors += 1
-            msg = json.dumps({"state": "?", "error": f"{type(exc).__name__}: {exc}"})
+        msg = self.snapshot_json()
         for client in list(self._clients):
             client.push(msg)
 
@@ -568,7 +579,7 @@ def _handlers(mon: Monitor) -> list[Any]:
     class Snapshot(tornado.web.RequestHandler):
         def get(self) -> None:
             self.set_header("Content-Type", "application/json")
-            self.write(json.dumps(mon.snapshot(), allow_nan=False))
+            self.write(mon.snapshot_json())
 
     class Live(tornado.websocket.WebSocketHandler):
         _busy: Any = None
@@ -650,6 +661,7 @@ td, th {{ padding: 2px 6px; text-align: left; }}
 <div><b>motioncue monitor</b>: {title}</div>
 <div style="margin:6px 0"><span id="state">connecting</span>
 <button id="stop" disabled>stop (park)</button> <span id="msg"></span></div>
+<div id="error" style="color:#b00;font-weight:bold"></div>
 <div id="wrap"><div id="scene"></div><div id="side">
 <table id="acts"><thead><tr><th>actuator</th><th>position</th><th>stroke used</th>
 <th>speed</th><th>acceleration</th></tr></thead><tbody></tbody></table>
@@ -702,6 +714,7 @@ function render(s) {
   stateEl.textContent = s.ended ? st + ' (job ended)' : st;
   stateEl.className = st.split(' ')[0].replace(',', '');
   stopBtn.disabled = !s.can_stop || !!s.ended;
+  document.getElementById('error').textContent = s.error ? 'error: ' + s.error : '';
   if (s.frame) { pending = s.frame; schedule(); }
   if (s.actuators) {
     const num = (x, d, unit) => '<span class="num">' + fmt(x, d) + ' ' + unit + '</span>';

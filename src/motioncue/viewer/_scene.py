@@ -154,12 +154,15 @@ def scene_from_poses(platform: Any, t_s: ArrayLike, poses: ArrayLike) -> Scene:
 def scene_from_q(platform: Any, t_s: ArrayLike, q: ArrayLike) -> Scene:
     """The drawing of actuator positions ``q (N, n)``; poses by forward kinematics.
 
-    Each frame's Newton iteration starts from the previous pose (frames of a ride are close).
+    Each frame's forward kinematics starts from the previous pose (frames of a ride are
+    close). Positions rounded to pulses (a corner rig's redundant leg twists the frame by up
+    to about a pulse) are drawn at the nearest rigid pose.
 
     Raises
     ------
     ConfigError
-        Shapes that do not match, non-finite positions, or positions no pose reaches.
+        Shapes that do not match, non-finite positions, or positions no rigid pose gives
+        within the rounding (one pulse of each drive).
     """
     qa = np.asarray(q, dtype=float)
     n = int(platform.n_actuators)
@@ -170,16 +173,35 @@ def scene_from_q(platform: Any, t_s: ArrayLike, q: ArrayLike) -> Scene:
     guess = None
     for k in range(qa.shape[0]):
         fk = platform.forward(qa[k], guess)
-        if not fk.converged:
-            fk = platform.forward(qa[k])
-        if not fk.converged:
+        if not fk.ok:
             raise ConfigError(
-                f"frame {k} (t = {t[k]:.3f} s): no pose puts the actuators at "
-                f"{np.round(qa[k], 6).tolist()} (from neutral); is this the ride's platform?"
+                f"frame {k} (t = {t[k]:.3f} s): {fk_miss(platform, qa[k], fk)}; is this the "
+                "ride's platform?"
             )
         poses[k] = fk.pose
         guess = fk.pose
     return _scene(platform, t, poses, qa)
+
+
+def fk_miss(platform: Any, q: NDArray[np.float64], fk: Any) -> str:
+    """Why positions ``q`` are no rigid pose's: the actuator farthest from the nearest rigid
+    pose, in mm or deg and in pulses (one line, no traceback)."""
+    names = platform.actuator_names
+    i = fk.worst
+    rotary = platform.actuator_kinds[i] == "rotary"
+    unit, scale = ("deg", 180.0 / np.pi) if rotary else ("mm", 1e3)
+    r = fk.residuals
+    if r is None or not np.isfinite(r[i]):
+        return (
+            f"no pose puts the actuators at {np.round(q, 6).tolist()} (from neutral): "
+            "a leg cannot reach"
+        )
+    pulses = abs(float(r[i])) / float(platform.q_rounding[i])
+    return (
+        f"no rigid pose puts the actuators at {np.round(q, 6).tolist()} (from neutral) within "
+        f"the rounding: the nearest leaves actuator {names[i]!r} {float(r[i]) * scale:+.4g} "
+        f"{unit} ({pulses:.3g} pulses) away"
+    )
 
 
 def _scene(
