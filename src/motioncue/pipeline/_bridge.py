@@ -594,12 +594,21 @@ class Bridge:
                 self._loop_arrival()
             else:
                 self._loop()
-            self._state = "stopped"
         except BaseException as exc:  # recorded, reported by stats/stop; then park
             self._error = f"{type(exc).__name__}: {exc}"
             self._state = "failed, parking"
             self._park_after_failure()
             self._state = "failed"
+        else:
+            # "parked" only once the controller confirmed it (where the link can tell)
+            from ._stream import ParkFailed, confirm_park
+
+            try:
+                confirm_park(self.stage)
+                self._state = "stopped"
+            except ParkFailed as exc:
+                self._error = str(exc)
+                self._state = "failed"
         finally:
             gc.unfreeze()
             if self._stop.is_set():  # stop() may have stopped waiting for the park
@@ -607,11 +616,14 @@ class Bridge:
 
     def _park_after_failure(self) -> None:
         """Park from wherever the last frame the link took left the platform, on time."""
-        from ._stream import park_stage
+        from ._stream import confirm_park, park_stage
 
         ticker = Ticker(self.period_s, self.config.spin_s)
         try:
             park_stage(self.stage, wait=lambda slot: ticker.wait())
+            nothing_moved = confirm_park(self.stage)
+            if nothing_moved is not None:
+                self._error = f"{self._error}; {nothing_moved}"
         except BaseException as exc:
             self._error = f"{exc}; the loop had failed with {self._error}"
         self._missed = ticker.missed
