@@ -334,6 +334,43 @@ def test_a_ride_refused_from_the_first_frame_stops_at_once(rides: Any) -> None:
     assert int(m.group(1)) <= 20 < n_frames  # a few frames and the position read
 
 
+# -- item 5: a stopped player does not burst ----------------------------------------------------
+def test_a_stopped_player_resynchronises_instead_of_bursting(rides: Any) -> None:
+    """``play`` is stopped (SIGSTOP) for 2 s mid-ride, then continued. On the wire: no burst
+    of late frames after the resume, the ride's frames whose time passed are skipped (the
+    ride stays on its clock), and every frame keeps the limits on the controller's clock,
+    the jump to the frame due now included (the checker of test_fault_injection, written
+    from the manual)."""
+    from test_fault_injection import check_wire, decode_wire, limits_table
+
+    ride_path, n_frames = rides["mbox6"]
+    fake = FakeController()
+    try:
+        play = _motioncue("play", str(ride_path), "--target", f"udp://127.0.0.1:{fake.port}")
+        end = time.monotonic() + 20
+        while len(fake.frames) < 150 and time.monotonic() < end:
+            time.sleep(0.01)
+        play.send_signal(signal.SIGSTOP)
+        stopped_at = time.monotonic()
+        time.sleep(2.0)
+        play.send_signal(signal.SIGCONT)
+        out, err = play.communicate(timeout=60)
+    finally:
+        fake.close()
+    assert play.returncode == 0, err
+    arrivals = np.array([t for t, _ in fake.frames])
+    after = arrivals[arrivals > stopped_at + 1.0]
+    # the first 50 ms after the resume: a few frames, not the 200 held up
+    assert 0 < np.count_nonzero(after < after[0] + 0.05) <= 15
+    m = re.search(r"held up (\d+) time\(s\): skipped (\d+) late frames", out)
+    assert m, out
+    assert 150 <= int(m.group(2)) <= 230, out  # 2 s at 100 Hz, less what the resume needed
+    assert _ride_frames_sent(out) + int(m.group(2)) == n_frames
+    wire = decode_wire([d for _, d in fake.frames])
+    park = np.zeros(6, dtype=np.int64)
+    check_wire(wire, limits_table(), park, park)
+
+
 # -- item 6: emulate keeps its results on SIGTERM and SIGHUP -----------------------------------
 @pytest.mark.parametrize("sig", [signal.SIGTERM, signal.SIGHUP, signal.SIGINT])
 def test_emulate_writes_its_results_on_a_stop_signal(tmp_path: Path, sig: int) -> None:

@@ -582,6 +582,9 @@ class PlayReport:
         Where the ride started and why, and similar remarks.
     error : str or None
         Why the ride stopped early, when an error stopped it (the platform was parked).
+    skipped_frames, resyncs : int
+        Ride frames skipped to stay on the ride's clock after the player was held up (a
+        stopped process, a stalled machine), and how many times that happened.
     """
 
     frames_sent: int
@@ -597,6 +600,13 @@ class PlayReport:
     send_errors: int = 0
     notes: tuple[str, ...] = ()
     error: str | None = None
+    skipped_frames: int = 0
+    resyncs: int = 0
+
+
+RESYNC_AFTER_S = 0.1
+"""A player on a live link held up longer than this (s) skips to where the ride's clock is
+instead of sending the late frames back to back (:func:`play_ride`)."""
 
 
 def play_ride(
@@ -614,6 +624,7 @@ def play_ride(
     q_start: Any = None,
     handle_signals: bool = True,
     on_start: Any = None,
+    resync_after_s: float | None = RESYNC_AFTER_S,
 ) -> PlayReport:
     """Stream a ride's frames on time, then park; every way out of the ride parks.
 
@@ -655,6 +666,16 @@ def play_ride(
     on_start : callable, optional
         Called once with the :class:`OutputStage` before the first frame, for read-only
         observers (the live monitor reads its ``q``, ``v``, ``t_s``); it must not send.
+    resync_after_s : float or None
+        On a live link (paced, speed 1, no ``throttle``): when the player finds itself more
+        than this late (s; default 0.1: the process was stopped, the machine stalled), it
+        skips the ride frames whose time has passed and goes on with the frame due now, so
+        that the ride stays on the film's clock instead of sending the late frames back to
+        back. The jump to the new frame is made by the same real-time limiter as every
+        frame (speed, acceleration and braking distance within the limits table): a limited
+        transition that ends once the limiter has caught up with the ride (those frames
+        count as clamped). The frames' own time stamps stay consecutive, one period apart.
+        Counted in ``PlayReport.skipped_frames`` and ``resyncs``. None: never skip.
 
     Returns
     -------
@@ -687,7 +708,9 @@ def play_ride(
     guard = SignalGuard()
     q_frames = platform.drives.from_pulses(ride.pulses)
     n = ride.n_frames
-    late = sent = 0
+    late = sent = skipped = resyncs = 0
+    resync = resync_after_s is not None and live and paced and speed == 1.0 and throttle is None
+    ride_t = np.asarray(ride.t_s, dtype=float)
     interrupted = False
     failure: Exception | None = None
     park_error: ParkFailed | None = None
@@ -698,16 +721,27 @@ def play_ride(
             guard.__enter__()
         flagged = guard.event.is_set
         try:
-            for k in range(n):
+            k = -1
+            while k + 1 < n:
+                k += 1
                 if flagged() or (stop is not None and stop()):
                     interrupted = True
                     break
                 if throttle is not None:
                     throttle(stage.frames)
                 if paced:
-                    deadline = t0 + float(ride.t_s[k]) / speed
-                    if wait_until(deadline, spin_s) > 0.5 * stage.dt_s / speed:
+                    deadline = t0 + float(ride_t[k]) / speed
+                    behind = wait_until(deadline, spin_s)
+                    if behind > 0.5 * stage.dt_s / speed:
                         late += 1
+                    if resync and behind > resync_after_s:
+                        # held up: go on with the frame due now, not the ones passed
+                        now_k = int(np.searchsorted(ride_t, time.perf_counter() - t0, "right"))
+                        now_k = min(max(now_k - 1, k), n - 1)
+                        if now_k > k:
+                            skipped += now_k - k
+                            resyncs += 1
+                            k = now_k
                 stage.emit(
                     q_frames[k], int(ride.dout[k]), (int(ride.dacs[k, 0]), int(ride.dacs[k, 1]))
                 )
@@ -748,6 +782,8 @@ def play_ride(
         send_errors=stage.send_errors,
         notes=tuple(stage.notes),
         error=error,
+        skipped_frames=skipped,
+        resyncs=resyncs,
     )
     if park_error is not None:
         if error is not None:
