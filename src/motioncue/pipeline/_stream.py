@@ -709,7 +709,8 @@ def play_ride(
     q_frames = platform.drives.from_pulses(ride.pulses)
     n = ride.n_frames
     late = sent = skipped = resyncs = 0
-    resync = resync_after_s is not None and live and paced and speed == 1.0 and throttle is None
+    resync = live and paced and speed == 1.0 and throttle is None
+    resync_s = math.inf if resync_after_s is None or not resync else float(resync_after_s)
     ride_t = np.asarray(ride.t_s, dtype=float)
     interrupted = False
     failure: Exception | None = None
@@ -734,7 +735,7 @@ def play_ride(
                     behind = wait_until(deadline, spin_s)
                     if behind > 0.5 * stage.dt_s / speed:
                         late += 1
-                    if resync and behind > resync_after_s:
+                    if behind > resync_s:
                         # held up: go on with the frame due now, not the ones passed
                         now_k = int(np.searchsorted(ride_t, time.perf_counter() - t0, "right"))
                         now_k = min(max(now_k - 1, k), n - 1)
