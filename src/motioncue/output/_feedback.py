@@ -409,9 +409,10 @@ class LinkWatch:
         silent = self.silent_s()
         if silent > self.silence_s:
             raise ControllerSilent(self.silence_message(silent))
-        hard = self.hard_refusals()
-        if sum(hard.values()) >= self.refusals_stop:
-            raise FramesRefused(self.refusal_message())
+        if self.replies.refused >= self.refusals_stop:  # cheap test first: rare
+            hard = self.hard_refusals()
+            if sum(hard.values()) >= self.refusals_stop:
+                raise FramesRefused(self.refusal_message())
 
     def silence_message(self, silent_s: float) -> str:
         """``controller silent for N ms ...``: what was sent into the silence, and what
