@@ -352,20 +352,25 @@ class LinkWatch:
         self.t_first: float | None = None
         self._last_probe = -math.inf
         self._heard_at_frame = (0, 0)  # (heard count, frames sent) at the last sign of life
+        self._waiting_since: float | None = None  # first send not answered yet
 
     def sent_frame(self) -> None:
         """Count one frame handed to the link."""
+        now = time.monotonic()
         if self.t_first is None:
-            self.t_first = time.monotonic()
+            self.t_first = now
+        if self._waiting_since is None:
+            self._waiting_since = now
         self.frames += 1
 
     def silent_s(self, now: float | None = None) -> float:
-        """Time since the last sign of life (or since the first frame; 0 before it)."""
-        if self.t_first is None:
+        """How long the controller has left unanswered what it was sent: from the first
+        frame or status request sent after its last sign of life (0 when nothing waits for
+        an answer). A host held up between frames (a stopped process) is not counted as
+        the controller's silence: answers that came meanwhile are read first."""
+        if self._waiting_since is None:
             return 0.0
-        now = time.monotonic() if now is None else now
-        heard = self.replies.last_heard
-        return now - (self.t_first if heard is None else max(heard, self.t_first))
+        return (time.monotonic() if now is None else now) - self._waiting_since
 
     def hard_refusals(self) -> dict[tuple[int, int], int]:
         """Refusals waiting does not cure, by (function, channel)."""
@@ -379,6 +384,7 @@ class LinkWatch:
         replies.poll(wait_s, until_frame)
         if replies.heard != self._heard_at_frame[0]:
             self._heard_at_frame = (replies.heard, self.frames)
+            self._waiting_since = None  # it answered: what was sent counts as answered
         now = time.monotonic()
         if (
             self._probe is not None
@@ -392,6 +398,8 @@ class LinkWatch:
                 self.probes += 1
             except OSError:
                 pass  # the silence, not the send, is what stops the job
+            if self._waiting_since is None:
+                self._waiting_since = now
 
     def check(self) -> None:
         """Poll (never blocks); raise when the controller is silent or refuses frames.
