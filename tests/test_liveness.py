@@ -63,8 +63,8 @@ def _ride(tmp: Path, platform: str, controller: str, seconds: float) -> tuple[Pa
 def rides(tmp_path_factory: pytest.TempPathFactory) -> dict[str, tuple[Path, int]]:
     tmp = tmp_path_factory.mktemp("liveness")
     return {
-        "mbox6": _ride(tmp, "stewart6-linear", "mbox6", 8.0),
-        "imax6": _ride(tmp, "stewart6-linear", "imax6", 8.0),
+        "mbox6": _ride(tmp, "stewart6-linear", "mbox6", 6.0),
+        "imax6": _ride(tmp, "stewart6-linear", "imax6", 6.0),
         "mbox3": _ride(tmp, "seat3", "mbox3", 4.0),
     }
 
@@ -80,6 +80,21 @@ def _emulator(controller: str) -> tuple[subprocess.Popen[str], int]:
     first = proc.stdout.readline()
     assert first.startswith("emulating"), first
     return proc, int(first.rsplit(":", 1)[1])
+
+
+def _wait_for_line(proc: subprocess.Popen[str], start: str, timeout_s: float = 60.0) -> str:
+    """Read ``proc``'s stderr up to the first line starting with ``start``; returns what was
+    read (the caller adds it to the rest)."""
+    assert proc.stderr is not None
+    seen = ""
+    end = time.monotonic() + timeout_s
+    while time.monotonic() < end:
+        line = proc.stderr.readline()
+        assert line, f"the process ended before {start!r}: {seen}"
+        seen += line
+        if line.startswith(start):
+            return seen
+    raise AssertionError(f"no line {start!r} within {timeout_s} s: {seen}")
 
 
 def _free_port() -> int:
@@ -166,7 +181,8 @@ def test_play_stops_when_the_emulator_process_is_killed(rides: Any, controller: 
     try:
         play = _motioncue("play", str(ride_path), "--target",
                           f"udp://127.0.0.1:{port}?silence_ms={SILENCE_MS}")  # fmt: skip
-        time.sleep(2.0)  # the ride is under way (8 s of frames)
+        head = _wait_for_line(play, "play: ")
+        time.sleep(1.5)  # the ride is under way (6 s of frames)
         assert play.poll() is None, play.communicate()
         emu.kill()
         emu.wait()
@@ -175,8 +191,10 @@ def test_play_stops_when_the_emulator_process_is_killed(rides: Any, controller: 
         for p in (emu,):
             if p.poll() is None:
                 p.kill()
+    err = head + err
     assert play.returncode == 2, err
     assert "Traceback" not in err
+    assert "the controller reports motors at" in err  # it was there at the start
     silences = _silences_ms(err)
     assert silences and min(silences) >= SILENCE_MS, err
     assert "PARK NOT CONFIRMED" in err and "parked at rest" not in out + err
@@ -274,6 +292,41 @@ def test_bridge_stops_when_the_controller_goes_silent(then_sigint: bool) -> None
     assert fake.frames_after_silence() <= 30 + 350
 
 
+@pytest.mark.parametrize("controller", ["imax6", "mbox6"])
+def test_bridge_replay_stops_when_the_emulator_process_is_killed(
+    tmp_path: Path, controller: str
+) -> None:
+    """``bridge --source replay:FILE`` (an 8 s recording) to the emulator process, killed
+    1.5 s in: exit 2 with "controller silent", not streamed to the end of the replay."""
+    from test_bridge_replay import write_f1_recording
+
+    rec = tmp_path / "lap.mctr"
+    write_f1_recording(rec, 8.0)
+    emu, port = _emulator(controller)
+    try:
+        proc = _motioncue("bridge", "--source", f"replay:{rec}?speed=1", "--platform",
+                          "stewart6-linear", "--controller", controller, "--rate", "100",
+                          "--fade", "0.3", "--quiet", "--target",
+                          f"udp://127.0.0.1:{port}?silence_ms={SILENCE_MS}")  # fmt: skip
+        head = _wait_for_line(proc, "bridge: ")  # after the controller's position was read
+        time.sleep(1.5)
+        assert proc.poll() is None, proc.communicate()
+        emu.kill()
+        emu.wait()
+        _out, err = proc.communicate(timeout=60)
+        err = head + err
+    finally:
+        if emu.poll() is None:
+            emu.kill()
+    assert proc.returncode == 2, err
+    assert "the controller reports motors at" in err  # it was there at the start
+    assert "controller silent for" in err and "PARK NOT CONFIRMED" in err, err
+    assert "Traceback" not in err and "stopped by" not in err
+    # not to the end of the replay (800 frames): the silence limit's worth and the park
+    m = re.search(r"bridge failed: (\d+) frames sent", err)
+    assert m and int(m.group(1)) < 500, err
+
+
 def test_easysmc_stopped_mid_ride_stops_play(tmp_path: Path) -> None:
     """The EasySmc emulator (a pseudo-terminal, its own process) is stopped (SIGSTOP: the
     port stays open, nothing answers, as with a cut cable): play stops with "controller
@@ -289,10 +342,12 @@ def test_easysmc_stopped_mid_ride_stops_play(tmp_path: Path) -> None:
             if line.startswith("connect with: "):
                 url = line.split(": ", 1)[1].strip()
         play = _motioncue("play", str(ride_path), "--target", url)
-        time.sleep(2.5)
+        head = _wait_for_line(play, "play: ")
+        time.sleep(2.0)
         assert play.poll() is None, play.communicate()
         emu.send_signal(signal.SIGSTOP)
         out, err = play.communicate(timeout=60)
+        err = head + err
     finally:
         emu.kill()
         emu.wait()
