@@ -388,7 +388,12 @@ class Bridge:
     (``with Bridge(...) as b:`` does both). If a frame fails (an exception anywhere in
     :meth:`step`, a link that keeps failing) the loop parks at once by the same limiter and
     ends in state ``"failed"`` with ``stats.error`` set; if even the park cannot be sent,
-    ``stats.error`` starts with ``PARK FAILED``.
+    ``stats.error`` starts with ``PARK FAILED``. Over ``udp://`` a controller silent for
+    longer than the target's ``silence_ms`` (default 500 ms), or refusing frames for a
+    reason waiting does not cure, fails the loop the same way
+    (:class:`~motioncue.output._feedback.LinkWatch`); the park is sent all the same, and the
+    loop ends ``"stopped"`` only once the controller answered the final park frame
+    (otherwise ``stats.error`` starts with ``PARK NOT CONFIRMED``).
     """
 
     def __init__(
