@@ -6,7 +6,8 @@ Line u32, Time u32 ms, 6 x i32 positions, big-endian), and every frame's arrival
 kernel's receive time stamp (``SO_TIMESTAMPNS``, CLOCK_REALTIME ns) on the recording socket.
 
 * :func:`record_frames` (run in its own process): a UDP socket that records each datagram's
-  kernel stamp, line, time field and positions until told to stop;
+  kernel stamp, line, time field and positions until told to stop, and answers each frame
+  0x1302 as the SC-MBOX does;
 * :func:`busy_core` (its own process, normal priority): saturates one core;
 * :func:`send_f1` (its own process): the moving F1 stream at 60 Hz from the real captures
   (``test_bridge.F1Stream``), optionally lateral-g steps, with the send time of each step.
@@ -42,7 +43,7 @@ def record_frames(port_q: Any, stop: Any, out_q: Any) -> None:
     rows: list[tuple[int, ...]] = []
     while not stop.is_set():
         try:
-            data, anc, _flags, _addr = sock.recvmsg(2048, 256)
+            data, anc, _flags, addr = sock.recvmsg(2048, 256)
         except TimeoutError:
             continue
         ts = 0
@@ -53,6 +54,9 @@ def record_frames(port_q: Any, stop: Any, out_q: Any) -> None:
         if len(data) >= _HEAD + _BODY.size and data[:2] == b"\x55\xaa":
             stamps.append(ts)
             rows.append(_BODY.unpack_from(data, _HEAD))
+            # answered as an SC-MBOX answers a frame (0x1302, Who fields 0, the frame's
+            # data): the bridge stops when the controller is silent (issue 23)
+            sock.sendto(data[:4] + b"\x13\x02" + data[6:8] + bytes(4) + data[_HEAD:], addr)
     sock.close()
     out_q.put({"t_ns": stamps, "rows": rows})
 

@@ -107,7 +107,6 @@ def test_play_to_a_file_and_refusals(tmp_path: Path, capsys: pytest.CaptureFixtu
 def test_sigterm_stops_play_and_parks(tmp_path: Path) -> None:
     import os
     import signal
-    import socket
     import subprocess
     import sys
     import time
@@ -117,22 +116,26 @@ def test_sigterm_stops_play_and_parks(tmp_path: Path) -> None:
     args = ["generate", "--input", str(rec), "--platform", "stewart6-linear", "--controller",
             "mbox6", "--out", str(ride_path), "--quiet"]  # fmt: skip
     assert main(args) == 0
-    sink = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
-    sink.bind(("127.0.0.1", 0))
+    from motioncue.output import load_controller
+    from motioncue.output.mbox import MboxEmulator
+
+    # the controller answers the frames: "parked" is said only once it confirmed the park
+    emu = MboxEmulator(load_controller("mbox6")).start()
     env = dict(os.environ, PYTHONPATH=str(Path(__file__).resolve().parents[1] / "src"))
     proc = subprocess.Popen(
         [sys.executable, "-m", "motioncue", "play", str(ride_path), "--target",
-         f"udp://127.0.0.1:{sink.getsockname()[1]}"],
+         f"udp://127.0.0.1:{emu.port}"],
         stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env,
     )  # fmt: skip
     try:
-        sink.settimeout(20.0)
-        sink.recv(2048)  # playing
+        end = time.monotonic() + 20.0
+        while emu.received < 2 and time.monotonic() < end:  # playing
+            time.sleep(0.01)
         time.sleep(0.5)
         proc.send_signal(signal.SIGTERM)
         out, err = proc.communicate(timeout=30)
     finally:
         proc.kill()
-        sink.close()
+        emu.stop()
     assert proc.returncode == 130, err
     assert "interrupted and parked" in out

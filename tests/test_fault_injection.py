@@ -566,7 +566,11 @@ def test_a_platform_still_moving_is_refused(rig: Any) -> None:
 
 # -- the real CLI in a process, stopped by signals --------------------------------------------
 class Sink:
-    """A UDP socket standing for the controller: keeps every datagram and its arrival time."""
+    """A UDP socket standing for the controller: keeps every datagram and its arrival time,
+    and answers each frame 0x1301 with 0x1302 as an SC-MBOX does (manual 4.2.8: the header
+    with the reply's function code and Who fields 0, then the frame's data), so that the
+    player knows the controller is there (issue 23: a silent controller stops the job).
+    Register reads (the position query) go unanswered."""
 
     def __init__(self) -> None:
         self.sock = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
@@ -582,12 +586,18 @@ class Sink:
     def _run(self) -> None:
         while not self._stop.is_set():
             try:
-                data = self.sock.recv(2048)
+                data, peer = self.sock.recvfrom(2048)
             except TimeoutError:
                 continue
             except OSError:
                 return
             self.got.append((time.monotonic(), data))
+            if len(data) > 12 and data[:2] == b"\x55\xaa" and data[4:6] == b"\x13\x01":
+                reply = data[:4] + b"\x13\x02" + data[6:8] + bytes(4) + data[12:]
+                try:
+                    self.sock.sendto(reply, peer)
+                except OSError:
+                    return
 
     def moved(self, park: np.ndarray, pulses: int) -> bool:
         for _, d in self.got[-5:]:

@@ -5,6 +5,8 @@ from __future__ import annotations
 __all__ = [
     "MAX_MESSAGE_CHARS",
     "ConfigError",
+    "ControllerSilent",
+    "FramesRefused",
     "LimitError",
     "MotioncueError",
     "ProtocolError",
@@ -65,3 +67,13 @@ class LimitError(MotioncueError):
 
 class TransportError(MotioncueError, OSError):
     """A link to a controller failed (socket, serial port, file). Raised ``from`` the cause."""
+
+
+class ControllerSilent(TransportError):
+    """The controller stopped answering (power loss, reset, cable, nothing listening): no
+    reply to frames or status requests for longer than the link's silence limit."""
+
+
+class FramesRefused(MotioncueError):
+    """The controller refuses the frames for a reason waiting does not cure (a frame of
+    the other axis mode, an e-stop, a command error)."""

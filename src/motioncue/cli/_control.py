@@ -21,7 +21,9 @@ from __future__ import annotations
 import argparse
 import importlib
 import io
+import signal
 import sys
+import threading
 import time
 from pathlib import Path
 from types import ModuleType
@@ -154,7 +156,49 @@ def register(sub: Any) -> None:
     p.set_defaults(run=_run_inspect)
 
 
+class _StopLikeCtrlC:
+    """While active (main thread): SIGTERM and SIGHUP end ``emulate``'s wait as Ctrl-C does,
+    so its summary, trace and plot are written whatever stopped it (a service manager, a
+    closed terminal); a later stop signal is recorded and ignored, so that nothing cuts the
+    writing short."""
+
+    SIGNALS = tuple(getattr(signal, n) for n in ("SIGTERM", "SIGHUP") if hasattr(signal, n))
+
+    def __init__(self) -> None:
+        self.received: list[int] = []
+        self._previous: dict[int, Any] = {}
+
+    def _on_signal(self, signum: int, frame: Any) -> None:
+        self.received.append(signum)
+        if len(self.received) == 1:
+            raise KeyboardInterrupt
+
+    def __enter__(self) -> _StopLikeCtrlC:
+        if threading.current_thread() is threading.main_thread():
+            for sig in self.SIGNALS:
+                self._previous[sig] = signal.signal(sig, self._on_signal)
+        return self
+
+    def finish(self) -> None:
+        """From here on every stop signal (SIGINT too) is recorded and ignored."""
+        self.received.append(0)
+        if threading.current_thread() is threading.main_thread():
+            for sig in (*self.SIGNALS, signal.SIGINT):
+                previous = signal.signal(sig, self._on_signal)
+                self._previous.setdefault(sig, previous)
+
+    def __exit__(self, *exc: object) -> None:
+        for sig, previous in self._previous.items():
+            signal.signal(sig, previous if previous is not None else signal.SIG_DFL)
+        self._previous.clear()
+
+
 def _run_emulate(args: argparse.Namespace) -> int:
+    with _StopLikeCtrlC() as stops:
+        return _emulate(args, stops)
+
+
+def _emulate(args: argparse.Namespace, stops: _StopLikeCtrlC) -> int:
     from ..output import parse_target
 
     ctrl, kind = _controller(args.controller)
@@ -179,14 +223,14 @@ def _run_emulate(args: argparse.Namespace) -> int:
         raise ConfigError(
             f"--listen {args.listen!r}: the {ctrl.kind} emulator listens on udp://HOST:PORT"
         )
-    print(
-        f"emulating {ctrl.name} ({ctrl.kind}, {ctrl.n_axes} axes) on {where}",
-        flush=True,
-        file=sys.stderr if args.json else sys.stdout,
-    )
     t_end = None if args.duration is None else time.monotonic() + args.duration
     monitor = None
-    try:
+    try:  # a stop signal as soon as the address is printed still ends in the summary
+        print(
+            f"emulating {ctrl.name} ({ctrl.kind}, {ctrl.n_axes} axes) on {where}",
+            flush=True,
+            file=sys.stderr if args.json else sys.stdout,
+        )
         if args.monitor is not None:
             monitor = _emulator_monitor(args, ctrl, emu)
         while t_end is None or time.monotonic() < t_end:
@@ -194,6 +238,7 @@ def _run_emulate(args: argparse.Namespace) -> int:
     except KeyboardInterrupt:
         pass
     finally:
+        stops.finish()
         if monitor is not None:
             monitor.stop()
         emu.stop()

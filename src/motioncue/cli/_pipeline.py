@@ -394,6 +394,11 @@ def _play(args: argparse.Namespace) -> int:
         else:
             outcome = "finished"
         retried = f"; {rep.send_errors} send errors retried" if rep.send_errors else ""
+        if rep.skipped_frames:  # held up (a stopped process, a stalled machine): kept in sync
+            retried += (
+                f"; held up {rep.resyncs} time(s): skipped {rep.skipped_frames} late frames to "
+                "stay on the ride's clock"
+            )
         if args.json:
             try:
                 print_json(
@@ -403,6 +408,7 @@ def _play(args: argparse.Namespace) -> int:
                         "ride_frames_sent": rep.ride_frames_sent,
                         "park_frames": rep.park_frames, "clamped_frames": rep.clamped_frames,
                         "late_frames": rep.late_frames, "send_errors": rep.send_errors,
+                        "skipped_frames": rep.skipped_frames, "resyncs": rep.resyncs,
                         "wall_s": rep.wall_s, "notes": list(rep.notes),
                     }
                 )  # fmt: skip

@@ -11,20 +11,35 @@ refused.
   kinds answer a frame 0x1301 / 0x1401 with 0x1x02 when it was taken and another last digit
   when it was not (MBOX 0x1x03 buffer full, 0x1x04 short frame; IMAX 0x1x03 error, e.g.
   Err21 buffer overflow, 0x1x04 e-stop active, 0x1x05 command error).
+* :class:`LinkWatch` notices a controller that stops answering (power loss, a reset, the
+  cable, nothing listening) or refuses the frames it is sent: every datagram the controller
+  sends (frame replies, register replies, IMAX status reports 0x3101) counts as a sign of
+  life; after ``probe_every_s`` without one the watch asks the controller's status (the
+  register read of :func:`read_position`, which both kinds answer even when they do not
+  answer frames), and after ``silence_s`` without one it raises
+  :class:`~motioncue._errors.ControllerSilent`. Frames refused for a reason that does not go
+  away by waiting (MBOX 0x1x04 frame shorter than required, i.e. a frame of the other axis
+  mode; IMAX 0x1x04 e-stop, 0x1x05 command error, 0x1x03 other than Err21) stop the job at
+  the ``refusals_stop``-th one with :class:`~motioncue._errors.FramesRefused`; a full buffer
+  (MBOX 0x1x03, IMAX 0x1x03 with error 21) is flow control, counted and reported.
 """
 
 from __future__ import annotations
 
+import errno
+import math
 import struct
 import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from typing import Any
 
-from .._errors import MotioncueError, ProtocolError
+from .._errors import ControllerSilent, FramesRefused, MotioncueError, ProtocolError
 
 __all__ = [
+    "DEFAULT_SILENCE_S",
     "FrameReplies",
+    "LinkWatch",
     "PositionQuery",
     "ReportedPosition",
     "read_position",
@@ -36,6 +51,13 @@ _HEAD = struct.Struct(">HHHH")  # confirm, pass, function, channel
 _FRAME_NO = struct.Struct(">I")  # frame number right after the 12-byte header
 _CONFIRM_MAIN = 0x55AA
 _FRAME_BASES = (0x1300, 0x1400, 0x1800, 0x1900)  # timed and vibration frames (and replies)
+# what the host sends (an echo of our own broadcast is no sign of the controller's life):
+# register read / write, servo parameter read / write
+_REQUESTS = frozenset((0x1101, 0x1201, 0x2101, 0x2201))
+
+DEFAULT_SILENCE_S = 0.5
+"""How long a controller may stay silent before the job stops (s); ``udp://...?silence_ms=``
+sets it per target (0: not watched, for a capture or a sniffer that never answers)."""
 
 
 @dataclass(frozen=True)
@@ -162,6 +184,13 @@ class FrameReplies:
         Refusals by reply function code (``0x1303`` MBOX buffer full, IMAX error...).
     last_refused_frame : int or None
         Number of the newest refused frame.
+    refusals : dict[tuple[int, int], int]
+        Refusals by (reply function code, channel field: the IMAX error code).
+    heard : int
+        Datagrams from the controller of any kind (frame and register replies, status
+        reports); ``last_heard`` is the ``time.monotonic()`` of the newest (None: none yet).
+    unreachable : int
+        Receives that reported an ICMP "port unreachable" (nothing listens at the target).
     """
 
     def __init__(self, transport: Any) -> None:
@@ -170,8 +199,19 @@ class FrameReplies:
         self.accepted = 0
         self.refused = 0
         self.refused_codes: dict[int, int] = {}
+        self.refusals: dict[tuple[int, int], int] = {}
         self.last_refused_frame: int | None = None
+        self.last_refusal: tuple[int, int] | None = None
         self.last_accepted_frame: int | None = None
+        self.heard = 0
+        self.last_heard: float | None = None
+        self.unreachable = 0
+
+    @property
+    def last_answered_frame(self) -> int:
+        """Number of the newest frame answered (taken or refused); -1 before any."""
+        a, r = self.last_accepted_frame, self.last_refused_frame
+        return max(-1 if a is None else a, -1 if r is None else r)
 
     @property
     def replies(self) -> int:
@@ -187,10 +227,19 @@ class FrameReplies:
         while True:
             try:
                 data = recv(max(0.0, deadline - time.monotonic()))
-            except (OSError, MotioncueError):
+            except (OSError, MotioncueError) as exc:
+                cause = exc.__cause__ if exc.__cause__ is not None else exc
+                if getattr(cause, "errno", None) == errno.ECONNREFUSED:
+                    self.unreachable += 1
+                    continue  # the pending ICMP error is consumed; read on
                 return
             if data is None:  # nothing more within the wait
                 return
+            if len(data) >= 6 and int.from_bytes(data[4:6], "big") not in _REQUESTS:
+                function = int.from_bytes(data[4:6], "big")
+                if not (function & 0xFFF0 in _FRAME_BASES and function & 0xF == 1):
+                    self.heard += 1
+                    self.last_heard = time.monotonic()
             number = self._count(data)
             if until_frame is not None and number == until_frame:
                 deadline = 0.0  # answered: only read what is already waiting
@@ -211,5 +260,195 @@ class FrameReplies:
         else:
             self.refused += 1
             self.refused_codes[function] = self.refused_codes.get(function, 0) + 1
+            key = (function, _channel)
+            self.refusals[key] = self.refusals.get(key, 0) + 1
+            self.last_refusal = key
             self.last_refused_frame = number
         return number
+
+
+_IMAX_BUFFER_ERROR = 21  # Err21, buffer overflow (IMAX manual chapter 6)
+
+
+def is_flow_control(kind: str, function: int, channel: int) -> bool:
+    """A refusal that waiting cures: the controller's buffer was full (MBOX 0x1x03; IMAX
+    0x1x03 with error 21)."""
+    x = function & 0xF
+    if kind == "mbox":
+        return x == 3
+    if kind == "imax":
+        return x == 3 and channel == _IMAX_BUFFER_ERROR
+    return False
+
+
+def describe_refusal(kind: str, function: int, channel: int) -> str:
+    """What a frame refusal means, by the controller's manual."""
+    x = function & 0xF
+    if kind == "mbox":
+        return {
+            3: "buffer full",
+            4: "frame shorter than required (a frame of the other axis mode: is the box in "
+            "3- or 6-axis mode?)",
+        }.get(x, "refused")
+    if kind == "imax":
+        if x == 3:
+            return f"error {channel}" + (" (buffer overflow)" if channel == 21 else "")
+        return {4: "e-stop active", 5: "command error"}.get(x, "refused")
+    return "refused"
+
+
+class LinkWatch:
+    """Notices a controller that stops answering or refuses its frames (module docstring).
+
+    Parameters
+    ----------
+    transport
+        The link (``send`` and ``recv``).
+    controller
+        Its ``kind`` names the refusal codes; its ``position_query()`` gives the status
+        request sent while the controller is silent.
+    silence_s : float
+        Longest time without any datagram from the controller while frames are sent (s).
+    probe_every_s : float
+        Without a sign of life for this long, ask the controller's status, and again each
+        time this long passes (s).
+    refusals_stop : int
+        Refusals that waiting does not cure after which the job stops.
+
+    Attributes
+    ----------
+    replies : FrameReplies
+    armed : bool
+        Whether :meth:`check` raises (the park disarms it: park frames are sent whatever
+        the controller says, and the park is judged by :meth:`await_answer`).
+    probes : int
+        Status requests sent.
+    """
+
+    def __init__(
+        self,
+        transport: Any,
+        controller: Any,
+        silence_s: float = DEFAULT_SILENCE_S,
+        *,
+        probe_every_s: float = 0.2,
+        refusals_stop: int = 3,
+    ) -> None:
+        if not (math.isfinite(silence_s) and silence_s > 0):
+            raise ValueError(f"silence_s = {silence_s!r}; allowed: > 0 s")
+        self.replies = FrameReplies(transport)
+        self._send = transport.send
+        self.address = getattr(transport, "address", None)
+        self.silence_s = float(silence_s)
+        self.probe_every_s = float(min(probe_every_s, silence_s / 2))
+        self.refusals_stop = int(refusals_stop)
+        self.kind = str(getattr(controller, "kind", ""))
+        query = getattr(controller, "position_query", None)
+        asked = query() if query is not None else None
+        self._probe: bytes | None = None if asked is None else asked[0]
+        self.armed = True
+        self.probes = 0
+        self.frames = 0
+        self.t_first: float | None = None
+        self._last_probe = -math.inf
+        self._heard_at_frame = (0, 0)  # (heard count, frames sent) at the last sign of life
+        self._waiting_since: float | None = None  # first send not answered yet
+
+    def sent_frame(self) -> None:
+        """Count one frame handed to the link."""
+        now = time.monotonic()
+        if self.t_first is None:
+            self.t_first = now
+        if self._waiting_since is None:
+            self._waiting_since = now
+        self.frames += 1
+
+    def silent_s(self, now: float | None = None) -> float:
+        """How long the controller has left unanswered what it was sent: from the first
+        frame or status request sent after its last sign of life (0 when nothing waits for
+        an answer). A host held up between frames (a stopped process) is not counted as
+        the controller's silence: answers that came meanwhile are read first."""
+        if self._waiting_since is None:
+            return 0.0
+        return (time.monotonic() if now is None else now) - self._waiting_since
+
+    def hard_refusals(self) -> dict[tuple[int, int], int]:
+        """Refusals waiting does not cure, by (function, channel)."""
+        return {
+            k: v for k, v in self.replies.refusals.items() if not is_flow_control(self.kind, *k)
+        }
+
+    def poll(self, wait_s: float = 0.0, until_frame: int | None = None) -> None:
+        """Read what the controller sent; ask its status when it has been quiet too long."""
+        replies = self.replies
+        replies.poll(wait_s, until_frame)
+        if replies.heard != self._heard_at_frame[0]:
+            self._heard_at_frame = (replies.heard, self.frames)
+            self._waiting_since = None  # it answered: what was sent counts as answered
+        now = time.monotonic()
+        if (
+            self._probe is not None
+            and self.t_first is not None
+            and self.silent_s(now) >= self.probe_every_s
+            and now - self._last_probe >= self.probe_every_s
+        ):
+            self._last_probe = now
+            try:
+                self._send(self._probe)
+                self.probes += 1
+            except OSError:
+                pass  # the silence, not the send, is what stops the job
+            if self._waiting_since is None:
+                self._waiting_since = now
+
+    def check(self) -> None:
+        """Poll (never blocks); raise when the controller is silent or refuses frames.
+
+        Raises
+        ------
+        ControllerSilent
+            Nothing from the controller for longer than ``silence_s`` (armed only).
+        FramesRefused
+            ``refusals_stop`` frames refused for a reason waiting does not cure (armed only).
+        """
+        self.poll()
+        if not self.armed:
+            return
+        silent = self.silent_s()
+        if silent > self.silence_s:
+            raise ControllerSilent(self.silence_message(silent))
+        if self.replies.refused >= self.refusals_stop:  # cheap test first: rare
+            hard = self.hard_refusals()
+            if sum(hard.values()) >= self.refusals_stop:
+                raise FramesRefused(self.refusal_message())
+
+    def silence_message(self, silent_s: float) -> str:
+        """``controller silent for N ms ...``: what was sent into the silence, and what
+        the link said."""
+        unanswered = self.frames - self._heard_at_frame[1]
+        where = "" if self.address is None else f" at {self.address[0]}:{self.address[1]}"
+        asked = f" and {self.probes} status requests" if self.probes else ""
+        ever = "" if self.replies.heard else "; it never answered"
+        icmp = (
+            f"; the host answered 'port unreachable' {self.replies.unreachable} times: "
+            "nothing listens there"
+            if self.replies.unreachable
+            else ""
+        )
+        return (
+            f"controller silent for {1000 * silent_s:.0f} ms (limit {1000 * self.silence_s:.0f}"
+            f" ms): no answer{where} to the last {unanswered} frames{asked}{ever}{icmp} "
+            "(power, cable, a reset or nothing listening)"
+        )
+
+    def refusal_message(self) -> str:
+        """Which frames were refused and why."""
+        parts = [
+            f"0x{f:04X} x{n}: {describe_refusal(self.kind, f, c)}"
+            for (f, c), n in sorted(self.replies.refusals.items())
+        ]
+        taken = self.replies.accepted
+        return (
+            f"the controller refused {self.replies.refused} frames ({'; '.join(parts)}) and "
+            f"took {taken}"
+        )

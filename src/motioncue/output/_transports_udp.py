@@ -3,7 +3,10 @@
 Frames are sent and forgotten (a late frame is worth nothing); register access and
 commands use :meth:`UdpTransport.request`, which waits for an accepted reply and retries.
 URL options: ``local_port`` (IMAX PA24: the host must send from this port),
-``timeout_ms`` (default 250) and ``retries`` (default 2).
+``timeout_ms`` (default 250), ``retries`` (default 2) and ``silence_ms`` (default 500: a
+job sending frames stops when the controller has been silent this long, see
+:class:`~motioncue.output._feedback.LinkWatch`; 0 = not watched, for a capture or a
+sniffer that never answers).
 """
 
 from __future__ import annotations
@@ -46,6 +49,9 @@ class UdpTransport(Transport):
         Reply timeout of :meth:`request`.
     retries : int
         Extra attempts of :meth:`request` after a timeout.
+    silence_s : float or None
+        Longest silence of the controller a job sending frames accepts (s); None: not
+        watched.
     """
 
     def __init__(
@@ -56,7 +62,11 @@ class UdpTransport(Transport):
         local_port: int = 0,
         timeout_s: float = 0.25,
         retries: int = 2,
+        silence_s: float | None = 0.5,
     ) -> None:
+        if silence_s is not None and not (0.0 < silence_s <= 600.0):
+            raise ConfigError(f"silence_s = {silence_s!r}; allowed: None or (0, 600] s")
+        self.silence_s = silence_s
         self.address = (host, port)
         self.timeout_s = timeout_s
         self.retries = retries
@@ -78,8 +88,14 @@ class UdpTransport(Transport):
             "local_port": _int_option(url, "local_port", 0, 0, 65535),
             "timeout_s": _int_option(url, "timeout_ms", 250, 1, 60000) / 1000.0,
             "retries": _int_option(url, "retries", 2, 0, 100),
+            "silence_s": (_int_option(url, "silence_ms", 500, 0, 600000) / 1000.0) or None,
         }
-        given = {"local_port": "local_port", "timeout_s": "timeout_ms", "retries": "retries"}
+        given = {
+            "local_port": "local_port",
+            "timeout_s": "timeout_ms",
+            "retries": "retries",
+            "silence_s": "silence_ms",
+        }
         for key, value in overrides.items():
             if key not in given:
                 raise ConfigError(f"udp transport: unknown option {key!r}")

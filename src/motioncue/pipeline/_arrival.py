@@ -113,6 +113,7 @@ class ArrivalOutputStage(OutputStage):
         The first frame of a run is preceded by a frame at the start position, at rest,
         stamped 0.
         """
+        self._supervise()  # a silent or refusing controller stops the job (OutputStage)
         m = self.period_ms if ticks is None else int(ticks)
         if m < self.min_interval_ms:
             raise LimitError(

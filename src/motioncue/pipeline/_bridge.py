@@ -430,7 +430,12 @@ class Bridge:
     (``with Bridge(...) as b:`` does both). If a frame fails (an exception anywhere in
     :meth:`step`, a link that keeps failing) the loop parks at once by the same limiter and
     ends in state ``"failed"`` with ``stats.error`` set; if even the park cannot be sent,
-    ``stats.error`` starts with ``PARK FAILED``.
+    ``stats.error`` starts with ``PARK FAILED``. Over ``udp://`` a controller silent for
+    longer than the target's ``silence_ms`` (default 500 ms), or refusing frames for a
+    reason waiting does not cure, fails the loop the same way
+    (:class:`~motioncue.output._feedback.LinkWatch`); the park is sent all the same, and the
+    loop ends ``"stopped"`` only once the controller answered the final park frame
+    (otherwise ``stats.error`` starts with ``PARK NOT CONFIRMED``).
     """
 
     def __init__(
@@ -637,12 +642,21 @@ class Bridge:
                 self._loop_arrival()
             else:
                 self._loop()
-            self._state = "stopped"
         except BaseException as exc:  # recorded, reported by stats/stop; then park
             self._error = f"{type(exc).__name__}: {exc}"
             self._state = "failed, parking"
             self._park_after_failure()
             self._state = "failed"
+        else:
+            # "parked" only once the controller confirmed it (where the link can tell)
+            from ._stream import ParkFailed, confirm_park
+
+            try:
+                confirm_park(self.stage)
+                self._state = "stopped"
+            except ParkFailed as exc:
+                self._error = str(exc)
+                self._state = "failed"
         finally:
             gc.unfreeze()
             if self._stop.is_set():  # stop() may have stopped waiting for the park
@@ -650,11 +664,14 @@ class Bridge:
 
     def _park_after_failure(self) -> None:
         """Park from wherever the last frame the link took left the platform, on time."""
-        from ._stream import park_stage
+        from ._stream import confirm_park, park_stage
 
         ticker = Ticker(self.period_s, self.config.spin_s)
         try:
             park_stage(self.stage, wait=lambda slot: ticker.wait())
+            nothing_moved = confirm_park(self.stage)
+            if nothing_moved is not None:
+                self._error = f"{self._error}; {nothing_moved}"
         except BaseException as exc:
             self._error = f"{exc}; the loop had failed with {self._error}"
         self._missed = ticker.missed

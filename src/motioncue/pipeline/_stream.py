@@ -17,6 +17,17 @@ period and counted; a send that keeps failing raises :class:`~motioncue.Transpor
 :func:`play_ride` parks on every way out of a ride (its end, ``stop()``, SIGINT, SIGTERM,
 SIGHUP, SIGQUIT, any exception); the park itself is not interruptible (signals only set a
 flag while it runs). If the park cannot be sent it raises :class:`ParkFailed`.
+
+On a live UDP link the stage watches the controller
+(:class:`~motioncue.output._feedback.LinkWatch`): a controller silent for longer than the
+target's ``silence_ms`` (default 500 ms) stops the job with
+:class:`~motioncue._errors.ControllerSilent` ("controller silent for N ms"), and frames refused
+for a reason waiting does not cure stop it at the third refusal
+(:class:`~motioncue._errors.FramesRefused`). The park after either is sent all the same, and
+:func:`confirm_park` then asks the controller to confirm it: "parked" is only said when the
+controller answered the final park frame (or, for a controller that does not answer frames,
+answered at all after it). The EasySmc's own link waits for a reply to every command and
+raises :class:`~motioncue._errors.ControllerSilent` when none comes.
 """
 
 from __future__ import annotations
@@ -31,7 +42,13 @@ from typing import Any
 
 import numpy as np
 
-from .._errors import ConfigError, LimitError, MotioncueError, TransportError
+from .._errors import (
+    ConfigError,
+    ControllerSilent,
+    LimitError,
+    MotioncueError,
+    TransportError,
+)
 from ..trajectory._derive import pulse_rounding_limits
 from ._realtime import wait_until
 from ._ridefile import Ride
@@ -42,6 +59,7 @@ __all__ = [
     "ParkFailed",
     "PlayAborted",
     "PlayReport",
+    "confirm_park",
     "make_frame_encoder",
     "park_stage",
     "play_ride",
@@ -122,6 +140,10 @@ class OutputStage:
         refused with :class:`~motioncue.LimitError` before anything is sent.
     send_retries : int
         Attempts after a transient send error, within half a frame period (0..100).
+    silence_s : float, None or "link"
+        Longest silence of the controller accepted while frames are sent (s), on a live
+        UDP link; ``"link"`` (default): the transport's ``silence_s`` (``udp://...?
+        silence_ms=``, default 0.5 s); None: not watched.
 
     Attributes
     ----------
@@ -131,6 +153,8 @@ class OutputStage:
         Transient send errors met (and retried).
     notes : list of str
         Things the user should know (where the stage started and why).
+    watch : motioncue.output._feedback.LinkWatch or None
+        The controller's liveness and refusals (live UDP links), read by players.
     """
 
     platform: Any
@@ -140,6 +164,7 @@ class OutputStage:
     transport: Any
     q_start: Any = None
     send_retries: int = 3
+    silence_s: Any = "link"
     frames: int = 0
     clamped_frames: int = 0
     send_errors: int = 0
@@ -151,6 +176,7 @@ class OutputStage:
     _encoder: Any = None
     _streamer: Any = None
     _saver: Any = None
+    watch: Any = None
 
     def __post_init__(self) -> None:
         from motioncue.trajectory import JerkLimiter, RealtimeLimiter
@@ -171,6 +197,28 @@ class OutputStage:
         # a controller fed through a command stream (the EasySmc on a live serial link:
         # its 63-command buffer kept fed without overflowing) gives its streamer here
         self._streamer = self.controller.command_streamer(self.transport, self.rate_hz)
+        self.watch = self._make_watch()
+
+    def _make_watch(self) -> Any:
+        """A :class:`LinkWatch` on a live UDP link to a controller that answers on it."""
+        from motioncue.output._feedback import LinkWatch
+        from motioncue.output._transports_udp import UdpTransport
+
+        silence = self.silence_s
+        if silence == "link":
+            silence = getattr(self.transport, "silence_s", None)
+        if silence is None or not isinstance(self.transport, UdpTransport):
+            return None
+        if not getattr(self.controller, "replies_to_frames", False) and (
+            getattr(self.controller, "position_query", lambda: None)() is None
+        ):
+            return None  # nothing on this link answers: nothing to watch
+        return LinkWatch(self.transport, self.controller, float(silence))
+
+    def _supervise(self) -> None:
+        """Before a frame: stop when the controller is silent or refuses frames."""
+        if self.watch is not None:
+            self.watch.check()
 
     def _start_position(self) -> np.ndarray:
         park = np.asarray(self.platform.q_park, dtype=float)
@@ -234,7 +282,11 @@ class OutputStage:
             at once for other errors).
         ProtocolError, LimitError
             The encoder refused the frame (output values, stroke of the controller).
+        ControllerSilent, FramesRefused
+            The controller has been silent too long, or refuses frames (:attr:`watch`);
+            nothing was sent.
         """
+        self._supervise()
         state = self._state
         saved = self._saver.save(state)
         clock = getattr(self._encoder, "clock", None)
@@ -301,6 +353,8 @@ class OutputStage:
         while True:
             try:
                 self.transport.send(msg, t_s=self.t_s)
+                if self.watch is not None:
+                    self.watch.sent_frame()
                 return
             except OSError as exc:  # TransportError is an OSError
                 code = _errno_of(exc)
@@ -372,9 +426,12 @@ def park_stage(
     ParkFailed
         The park could not be sent, or did not reach rest at park within the bound.
     """
+    if stage.watch is not None:
+        stage.watch.armed = False  # the park is sent whatever the controller says
     bound = stage.park_frames_bound()
     max_failures = max(5, math.ceil(give_up_s * stage.rate_hz))
     sent = failures = slot = 0
+    failing_since = math.inf
     while not stage.parked:
         if sent >= bound:
             raise ParkFailed(f"PARK FAILED: not at rest at park after {sent} frames")
@@ -385,16 +442,86 @@ def park_stage(
             stage.park_step()
         except Exception as exc:
             failures += 1
-            if failures >= max_failures:
+            now = time.monotonic()
+            failing_since = min(failing_since, now)
+            # a link that blocks on each failure (a serial controller that does not answer)
+            # gives up on the wall clock too
+            if failures >= max_failures or (failures > 1 and now - failing_since >= give_up_s):
+                what = "PARK NOT CONFIRMED" if isinstance(exc, ControllerSilent) else "PARK FAILED"
                 raise ParkFailed(
-                    f"PARK FAILED after {sent} park frames: {failures} frames in a row could "
+                    f"{what} after {sent} park frames: {failures} frames in a row could "
                     f"not be sent ({type(exc).__name__}: {exc}); the platform may be stopped "
                     "away from park or still moving: check it before anyone gets on"
                 ) from exc
             continue
         failures = 0
+        failing_since = math.inf
         sent += 1
     return sent
+
+
+def confirm_park(stage: OutputStage, *, paced: bool = True, tries: int = 50) -> str | None:
+    """Ask the controller to confirm the park just sent (:attr:`OutputStage.watch`).
+
+    Waits (up to the watch's ``silence_s``) for the answer to the final park frame; while
+    it is refused for a full buffer, sends it again (at rest at park) up to ``tries``
+    times. A controller that does not answer frames confirms by answering anything (its
+    status) after the final frame was sent.
+
+    Returns
+    -------
+    str or None
+        None when confirmed (or when the link cannot be watched); otherwise, for a
+        controller that refused every frame it was sent and took none, why: nothing moved.
+
+    Raises
+    ------
+    ParkFailed
+        ``PARK NOT CONFIRMED``: the controller stayed silent, or refused the final park
+        frame for a reason waiting does not cure, or kept it refused.
+    """
+    from motioncue.output._feedback import describe_refusal, is_flow_control
+
+    watch = stage.watch
+    if watch is None or stage.frames == 0:
+        return None
+    replies = watch.replies
+    for _ in range(tries):
+        last = stage.frames - 1
+        heard_before = replies.heard
+        t_sent = time.monotonic()
+        while replies.last_answered_frame < last:
+            watch.poll(0.02, until_frame=last)
+            if replies.heard > heard_before and replies.replies == 0:
+                break  # a controller that does not answer frames answered its status
+            if time.monotonic() - t_sent > watch.silence_s:
+                raise ParkFailed(
+                    "PARK NOT CONFIRMED: "
+                    + watch.silence_message(watch.silent_s())
+                    + "; the park was sent but the platform may be stopped away from park or "
+                    "still moving: check it before anyone gets on"
+                )
+        if replies.last_refused_frame != last:
+            return None
+        code = replies.last_refusal
+        if code is None or not is_flow_control(watch.kind, *code):
+            if replies.accepted == 0 and replies.refused >= stage.frames:
+                return (
+                    f"the controller took none of the {stage.frames} frames sent: "
+                    f"{watch.refusal_message()}; nothing was played, the platform did not move"
+                )
+            why = "?" if code is None else describe_refusal(watch.kind, *code)
+            raise ParkFailed(
+                f"PARK NOT CONFIRMED: the controller refused the final park frame ({why}); "
+                f"{watch.refusal_message()}; check the platform"
+            )
+        if paced:
+            time.sleep(stage.dt_s)
+        stage.park_step()
+    raise ParkFailed(
+        f"PARK NOT CONFIRMED: the controller refused the final park frame {tries} times "
+        f"({replies.refused} frames refused in all); check the platform"
+    )
 
 
 def receiver_throttle(
@@ -455,6 +582,9 @@ class PlayReport:
         Where the ride started and why, and similar remarks.
     error : str or None
         Why the ride stopped early, when an error stopped it (the platform was parked).
+    skipped_frames, resyncs : int
+        Ride frames skipped to stay on the ride's clock after the player was held up (a
+        stopped process, a stalled machine), and how many times that happened.
     """
 
     frames_sent: int
@@ -470,6 +600,13 @@ class PlayReport:
     send_errors: int = 0
     notes: tuple[str, ...] = ()
     error: str | None = None
+    skipped_frames: int = 0
+    resyncs: int = 0
+
+
+RESYNC_AFTER_S = 0.1
+"""A player on a live link held up longer than this (s) skips to where the ride's clock is
+instead of sending the late frames back to back (:func:`play_ride`)."""
 
 
 def play_ride(
@@ -487,6 +624,7 @@ def play_ride(
     q_start: Any = None,
     handle_signals: bool = True,
     on_start: Any = None,
+    resync_after_s: float | None = RESYNC_AFTER_S,
 ) -> PlayReport:
     """Stream a ride's frames on time, then park; every way out of the ride parks.
 
@@ -528,6 +666,16 @@ def play_ride(
     on_start : callable, optional
         Called once with the :class:`OutputStage` before the first frame, for read-only
         observers (the live monitor reads its ``q``, ``v``, ``t_s``); it must not send.
+    resync_after_s : float or None
+        On a live link (paced, speed 1, no ``throttle``): when the player finds itself more
+        than this late (s; default 0.1: the process was stopped, the machine stalled), it
+        skips the ride frames whose time has passed and goes on with the frame due now, so
+        that the ride stays on the film's clock instead of sending the late frames back to
+        back. The jump to the new frame is made by the same real-time limiter as every
+        frame (speed, acceleration and braking distance within the limits table): a limited
+        transition that ends once the limiter has caught up with the ride (those frames
+        count as clamped). The frames' own time stamps stay consecutive, one period apart.
+        Counted in ``PlayReport.skipped_frames`` and ``resyncs``. None: never skip.
 
     Returns
     -------
@@ -556,13 +704,14 @@ def play_ride(
     stage = OutputStage(platform, controller, limits, ride.rate_hz, transport, q_start=q_start)
     if on_start is not None:
         on_start(stage)
-    from motioncue.output._feedback import FrameReplies
-
-    replies = FrameReplies(transport) if live and controller.replies_to_frames else None
+    replies = None if stage.watch is None else stage.watch.replies
     guard = SignalGuard()
     q_frames = platform.drives.from_pulses(ride.pulses)
     n = ride.n_frames
-    late = sent = 0
+    late = sent = skipped = resyncs = 0
+    resync = live and paced and speed == 1.0 and throttle is None
+    resync_s = math.inf if resync_after_s is None or not resync else float(resync_after_s)
+    ride_t = np.asarray(ride.t_s, dtype=float)
     interrupted = False
     failure: Exception | None = None
     park_error: ParkFailed | None = None
@@ -573,22 +722,31 @@ def play_ride(
             guard.__enter__()
         flagged = guard.event.is_set
         try:
-            for k in range(n):
+            k = -1
+            while k + 1 < n:
+                k += 1
                 if flagged() or (stop is not None and stop()):
                     interrupted = True
                     break
                 if throttle is not None:
                     throttle(stage.frames)
                 if paced:
-                    deadline = t0 + float(ride.t_s[k]) / speed
-                    if wait_until(deadline, spin_s) > 0.5 * stage.dt_s / speed:
+                    deadline = t0 + float(ride_t[k]) / speed
+                    behind = wait_until(deadline, spin_s)
+                    if behind > 0.5 * stage.dt_s / speed:
                         late += 1
+                    if behind > resync_s:
+                        # held up: go on with the frame due now, not the ones passed
+                        now_k = int(np.searchsorted(ride_t, time.perf_counter() - t0, "right"))
+                        now_k = min(max(now_k - 1, k), n - 1)
+                        if now_k > k:
+                            skipped += now_k - k
+                            resyncs += 1
+                            k = now_k
                 stage.emit(
                     q_frames[k], int(ride.dout[k]), (int(ride.dacs[k, 0]), int(ride.dacs[k, 1]))
                 )
                 sent += 1
-                if replies is not None:
-                    replies.poll()
         except KeyboardInterrupt:
             interrupted = True
         except Exception as exc:  # whatever stopped the ride, the platform is parked
@@ -600,10 +758,10 @@ def play_ride(
             wait_until(t_park + slot * stage.dt_s / speed, spin_s)
 
         frames_before = stage.frames
+        nothing_moved = None
         try:
             park_stage(stage, wait=wait if paced else None)
-            if replies is not None:
-                _confirm_park(stage, replies, paced)
+            nothing_moved = confirm_park(stage, paced=paced)
         except ParkFailed as exc:
             park_error = exc
         park = stage.frames - frames_before
@@ -625,36 +783,21 @@ def play_ride(
         send_errors=stage.send_errors,
         notes=tuple(stage.notes),
         error=error,
+        skipped_frames=skipped,
+        resyncs=resyncs,
     )
     if park_error is not None:
         if error is not None:
             park_error.args = (f"{park_error} (the ride had stopped at frame {sent}: {error})",)
         park_error.report = report
         raise park_error
+    if nothing_moved is not None:
+        raise PlayAborted(f"ride stopped at frame {sent} of {n}: {nothing_moved}", report)
     if failure is not None:
+        parked = "confirmed by the controller" if stage.watch is not None else "sent"
         raise PlayAborted(
-            f"ride stopped at frame {sent} of {n} ({error}); the platform was parked at rest",
+            f"ride stopped at frame {sent} of {n} ({error}); the platform was parked at rest "
+            f"(park {parked})",
             report,
         ) from failure
     return report
-
-
-def _confirm_park(stage: OutputStage, replies: Any, paced: bool, tries: int = 50) -> None:
-    """Read the replies to the last frames; while the controller answers the final park
-    frame with a refusal (buffer full), send it again (at rest at park) until taken."""
-    if replies.replies == 0:
-        replies.poll(0.05)
-        if replies.replies == 0:
-            return  # this controller does not answer frames: nothing to confirm
-    for _ in range(tries):
-        last = stage.frames - 1
-        replies.poll(0.25, until_frame=last)
-        if replies.last_refused_frame != last:
-            return
-        if paced:
-            time.sleep(stage.dt_s)
-        stage.park_step()
-    raise ParkFailed(
-        f"PARK NOT CONFIRMED: the controller refused the final park frame {tries} times "
-        f"({replies.refused} frames refused in all); check the platform"
-    )

@@ -14,7 +14,7 @@ from collections.abc import Callable, Iterable, Sequence
 from dataclasses import dataclass, field
 from typing import Any, Protocol
 
-from ..._errors import ProtocolError, TransportError
+from ..._errors import ControllerSilent, ProtocolError, TransportError
 from ._protocol import (
     Command,
     ErrorCode,
@@ -88,7 +88,11 @@ class EasySmcLink:
                 return frames[0]
             left = deadline - time.monotonic()
             if left <= 0:
-                raise TransportError(f"no reply from the EasySmc within {self.timeout_s:g} s")
+                # a subclass of TransportError: a cut cable, power loss or reset
+                raise ControllerSilent(
+                    f"controller silent for {1000 * self.timeout_s:.0f} ms: no reply from the "
+                    "EasySmc (power, cable, a reset or the wrong port)"
+                )
             data = self.transport.recv(min(left, 0.05))
             if data:
                 self._rx += data

@@ -453,13 +453,13 @@ def run_emulator(
         controller=ctrl,
         frame_rate_hz=frame_rate_hz,
     ).start()
-    out(
-        f"EasySmc emulator ({ctrl.name}, addresses "
-        f"{', '.join(f'{u.address:02X}' for u in ctrl.units)}) on {emu.path}"
-    )
-    out(f"connect with: serial://{emu.path}?baud={ctrl.baud}")
     t_end = None if duration_s is None else time.monotonic() + duration_s
-    try:
+    try:  # a stop signal as soon as the path is printed still ends in the summary
+        out(
+            f"EasySmc emulator ({ctrl.name}, addresses "
+            f"{', '.join(f'{u.address:02X}' for u in ctrl.units)}) on {emu.path}"
+        )
+        out(f"connect with: serial://{emu.path}?baud={ctrl.baud}")
         if ready is not None:
             ready(emu)
         while t_end is None or time.monotonic() < t_end:
