@@ -4,7 +4,8 @@ The cueing interface (:class:`CueingAlgorithm`; :func:`make_cueing` builds the a
 preset names with ``algorithm = "..."``, :func:`register_cueing` adds one), the classical
 washout of Reid & Nahon (:class:`ClassicalWashout`, registered as ``"classical"``), its
 parameters (:class:`CueingParams`, :func:`load_cueing` for ``configs/cueing/*.toml``) and the
-evaluation of cue quality through vestibular models (:func:`evaluate_cueing`).
+evaluation of cue quality through vestibular models (:func:`evaluate_cueing`; cue strength
+and cue errors: :func:`cue_metrics`).
 
 Example
 -------
@@ -37,6 +38,7 @@ from ._evaluate import (
     evaluate_cueing,
     simulator_motion,
 )
+from ._metrics import CueMasks, CueMetrics, cue_masks, cue_metrics
 from ._params import DOF_NAMES, GRAVITY_M_S2, CueingParams, load_cueing
 from ._plot import plot_cueing
 from ._score import (
@@ -70,6 +72,8 @@ __all__ = [
     "OTOLITH",
     "SEMICIRCULAR_CANAL",
     "ClassicalWashout",
+    "CueMasks",
+    "CueMetrics",
     "CueScore",
     "CueingAlgorithm",
     "CueingEvaluation",
@@ -80,6 +84,8 @@ __all__ = [
     "VestibularModelSet",
     "WashoutResult",
     "WashoutState",
+    "cue_masks",
+    "cue_metrics",
     "cue_score",
     "cueing_algorithms",
     "evaluate_cueing",

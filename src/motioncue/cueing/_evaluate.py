@@ -32,6 +32,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from .._errors import ConfigError
+from ._metrics import _masks, correlation
 from ._params import GRAVITY_M_S2
 from ._vestibular import (
     AXIS_NAMES,
@@ -372,17 +373,16 @@ def evaluate_cueing(
     ftime = np.zeros(6)
     mcount = np.zeros(6, dtype=np.int64)
     mtime = np.zeros(6)
+    masks = _masks(pv, ps, thr)
     for i in range(6):
         a, b = ps[:, i], pv[:, i]
-        if n > 1 and a.std() > 0.0 and b.std() > 0.0:
-            corr[i] = float(np.corrcoef(a, b)[0, 1])
+        corr[i] = correlation(a, b)
+        if math.isfinite(corr[i]):
             delay[i] = _delay(a, b, fs_hz, max_lag)
-        mask = (np.abs(a) > thr[i]) & (a * b < 0.0)
-        count[i] = _episodes(mask)
-        ftime[i] = float(np.count_nonzero(mask)) / fs_hz
-        missed = (np.abs(b) > thr[i]) & (np.abs(a) <= thr[i])
-        mcount[i] = _episodes(missed)
-        mtime[i] = float(np.count_nonzero(missed)) / fs_hz
+        count[i] = _episodes(masks.false[:, i])
+        ftime[i] = float(np.count_nonzero(masks.false[:, i])) / fs_hz
+        mcount[i] = _episodes(masks.missed[:, i])
+        mtime[i] = float(np.count_nonzero(masks.missed[:, i])) / fs_hz
     if workspace is None:
         use = np.full(6, math.nan)
     else:
