@@ -99,6 +99,31 @@ COLUMN_NOTES: dict[str, str] = {
     },
     "missed_cue_s_any": "time (s) with a missed cue on at least one of the six channels",
     "missed_cue_pct_any": "missed_cue_s_any as % of duration_s",
+    **{
+        f"share_{a}": f"rendered share of the {_WHAT[i]}: rms(perceived simulator) / "
+        "rms(perceived vehicle) (1 = full size, 0 = nothing; empty/null when the vehicle's "
+        "is zero)"
+        for i, a in enumerate(COMPARE_AXES)
+    },
+    **{
+        f"gain_{a}": f"gain of the {_WHAT[i]}: least-squares slope of perceived simulator on "
+        "perceived vehicle, sum(sim veh) / sum(veh veh) (the in-phase share)"
+        for i, a in enumerate(COMPARE_AXES)
+    },
+    **{
+        f"reversal_s_{a}": f"time (s) with both |perceived vehicle {a}| and |perceived "
+        "simulator| above the threshold and of opposite signs (a reversal)"
+        for a in COMPARE_AXES
+    },
+    "reversal_s_any": "time (s) with a reversal on at least one of the six channels",
+    "reversal_pct_any": "reversal_s_any as % of duration_s",
+    **{
+        f"spurious_s_{a}": f"time (s) with |perceived simulator {a}| above the threshold "
+        "and |perceived vehicle| at or below it (a cue the vehicle does not give, either sign)"
+        for a in COMPARE_AXES
+    },
+    "spurious_s_any": "time (s) with a spurious cue on at least one of the six channels",
+    "spurious_pct_any": "spurious_s_any as % of duration_s",
     "clamped_pct": "% of the cue poses outside the platform's workspace (incl. the "
     "controller's stroke and pulse rounding), scaled back towards neutral",
     "actuator_limited_pct": "% of frames changed by the actuator speed/acceleration/jerk "
@@ -109,10 +134,6 @@ COLUMN_NOTES: dict[str, str] = {
 """Every column of the metrics table and what it means, with units."""
 
 COLUMNS: tuple[str, ...] = tuple(COLUMN_NOTES)
-
-
-def _any_time(mask: NDArray[np.bool_], fs_hz: float) -> float:
-    return float(np.count_nonzero(mask.any(axis=1))) / fs_hz
 
 
 @dataclass(frozen=True, eq=False)
@@ -150,8 +171,7 @@ class CompareRun:
         fs = ev.fs_hz
         dur = n / fs
         sim, veh, thr = ev.perceived_sim, ev.perceived_vehicle, ev.thresholds
-        false_mask = (np.abs(sim) > thr) & (sim * veh < 0.0)
-        missed_mask = (np.abs(veh) > thr) & (np.abs(sim) <= thr)
+        m = ev.metrics
         row: dict[str, Any] = {
             "recording": self.recording,
             "preset": self.preset,
@@ -165,14 +185,24 @@ class CompareRun:
             row[f"rms_{a}_{_unit_tag(i)}"] = float(ev.rms_error[i]) * _K[i]
         for i, a in enumerate(COMPARE_AXES):
             row[f"false_cue_s_{a}"] = float(ev.false_cue_time_s[i])
-        fa = _any_time(false_mask, fs)
-        row["false_cue_s_any"] = fa
-        row["false_cue_pct_any"] = 100.0 * fa / dur if dur > 0 else 0.0
+        row["false_cue_s_any"] = m.false_any * dur
+        row["false_cue_pct_any"] = 100.0 * m.false_any
         for i, a in enumerate(COMPARE_AXES):
             row[f"missed_cue_s_{a}"] = float(ev.missed_cue_time_s[i])
-        ma = _any_time(missed_mask, fs)
-        row["missed_cue_s_any"] = ma
-        row["missed_cue_pct_any"] = 100.0 * ma / dur if dur > 0 else 0.0
+        row["missed_cue_s_any"] = m.missed_any * dur
+        row["missed_cue_pct_any"] = 100.0 * m.missed_any
+        for i, a in enumerate(COMPARE_AXES):
+            row[f"share_{a}"] = float(m.rendered_share[i])
+        for i, a in enumerate(COMPARE_AXES):
+            row[f"gain_{a}"] = float(m.gain[i])
+        for i, a in enumerate(COMPARE_AXES):
+            row[f"reversal_s_{a}"] = float(m.reversals[i]) * dur
+        row["reversal_s_any"] = m.reversals_any * dur
+        row["reversal_pct_any"] = 100.0 * m.reversals_any
+        for i, a in enumerate(COMPARE_AXES):
+            row[f"spurious_s_{a}"] = float(m.spurious[i]) * dur
+        row["spurious_s_any"] = m.spurious_any * dur
+        row["spurious_pct_any"] = 100.0 * m.spurious_any
         row["clamped_pct"] = 100.0 * self.poses_clamped / n if n else 0.0
         row["actuator_limited_pct"] = 100.0 * self.actuator_limited / n if n else 0.0
         row["bad_samples"] = int(self.bad_samples)
@@ -235,6 +265,7 @@ def run_chain(
             poses[k] = np.asarray(platform.forward(q_out[k], guess=poses[k]).pose, dtype=float)
     else:
         changed = np.zeros(0, dtype=np.int64)
+    clamped = int(np.count_nonzero(np.asarray(lim.status) != "ok"))
     ev = evaluate_cueing(
         f_used,
         w_used,
@@ -243,13 +274,14 @@ def run_chain(
         workspace=params.workspace,
         model=model,
         head_offset_m=getattr(params, "head_offset_m", None),
+        clamped_share=clamped / len(poses) if len(poses) else 0.0,
     )
     return CompareRun(
         recording=recording,
         preset=preset,
         evaluation=ev,
         poses=poses,
-        poses_clamped=int(np.count_nonzero(np.asarray(lim.status) != "ok")),
+        poses_clamped=clamped,
         actuator_limited=int(changed.size),
         bad_samples=int(res.bad_samples),
     )
@@ -327,31 +359,46 @@ class CompareResult:
         return buf.getvalue()
 
     def table(self) -> str:
-        """The compact text table (one row per recording and preset), with a units row."""
+        """The compact text table (one row per recording and preset), with a units row.
+
+        Correlation of the six channels, then the cue strength and cue errors of
+        :func:`motioncue.cueing.cue_metrics` for the horizontal forces (rendered share, gain,
+        missed cues) and over all channels (reversals, all false cues, missed cues), and the
+        clamped poses; the per-channel figures are in the CSV and JSON.
+        """
         rows = self.rows()
         wr = max([len("recording"), *(len(r["recording"]) for r in rows)])
         wp = max([len("preset"), *(len(r["preset"]) for r in rows)])
         corr = " ".join(f"{'c' + a:>6}" for a in COMPARE_AXES)
-        rms = " ".join(f"{'rms ' + a:>7}" for a in COMPARE_AXES)
+        xy = ("fx", "fy")
+        strength = " ".join(
+            f"{k + ' ' + a:>{w}}" for k, w in (("share", 8), ("gain", 7), ("miss", 7)) for a in xy
+        )
         head = (
-            f"{'recording':<{wr}} {'preset':<{wp}} {'J':>6} {'score':>6} {corr} {rms} "
-            f"{'false %':>7} {'missed %':>8} {'clamp %':>7}"
+            f"{'recording':<{wr}} {'preset':<{wp}} {'J':>6} {'score':>6} {corr} {strength} "
+            f"{'rev %':>6} {'false %':>7} {'missed %':>8} {'clamp %':>7}"
         )
         units = (
-            f"{'':<{wr}} {'':<{wp}} {'thr':>6} {'':>6} {'':>6} "
-            + " " * (7 * 5)
-            + " ".join(f"{u:>7}" for u in _UNIT)
-            + f" {'any ax':>7} {'any ax':>8} {'poses':>7}"
+            f"{'':<{wr}} {'':<{wp}} {'thr':>6} {'':>6} "
+            + " ".join(f"{'':>6}" for _ in _UNIT)
+            + f" {'rms/rms':>8} {'rms/rms':>8} {'slope':>7} {'slope':>7} {'% time':>7} "
+            f"{'% time':>7} {'any ax':>6} {'any ax':>7} {'any ax':>8} {'poses':>7}"
         )
         lines = [head, units]
         for r in rows:
             cs = " ".join(f"{_fmt(r[f'corr_{a}'], '6.3f'):>6}" for a in COMPARE_AXES)
-            rs = " ".join(
-                f"{r[f'rms_{a}_{_unit_tag(i)}']:7.3f}" for i, a in enumerate(COMPARE_AXES)
+            dur = r["duration_s"]
+            miss = [100.0 * r[f"missed_cue_s_{a}"] / dur if dur > 0 else 0.0 for a in xy]
+            st = (
+                " ".join(f"{_fmt(r[f'share_{a}'], '8.3f'):>8}" for a in xy)
+                + " "
+                + " ".join(f"{_fmt(r[f'gain_{a}'], '7.3f'):>7}" for a in xy)
+                + " "
+                + " ".join(f"{v:7.1f}" for v in miss)
             )
             lines.append(
                 f"{r['recording']:<{wr}} {r['preset']:<{wp}} {r['objective_J']:6.3f} "
-                f"{r['cue_score']:6.3f} {cs} {rs} "
+                f"{r['cue_score']:6.3f} {cs} {st} {r['reversal_pct_any']:6.2f} "
                 f"{r['false_cue_pct_any']:7.2f} {r['missed_cue_pct_any']:8.2f} "
                 f"{r['clamped_pct']:7.2f}"
             )
@@ -391,8 +438,11 @@ class CompareResult:
         lines += [
             "",
             "Columns (text table: J = objective_J; score = cue_score; c<axis> = corr_<axis>; "
-            "rms <axis> = rms_<axis>_<unit>; false % / missed % = false_cue_pct_any / "
-            "missed_cue_pct_any; clamp % = clamped_pct):",
+            "share <axis> = share_<axis>; gain <axis> "
+            "= gain_<axis>; miss <axis> = missed_cue_s_<axis> as % of duration_s; rev % / "
+            "false % / missed % = reversal_pct_any / false_cue_pct_any / missed_cue_pct_any; "
+            "clamp % = clamped_pct; definitions and sources of share, gain, missed, reversal, "
+            "spurious and false cues: docs/cue-metrics.md, motioncue.cueing.cue_metrics):",
         ]
         lines += [f"  {k:<22} {v}" for k, v in COLUMN_NOTES.items()]
         lines += [
