@@ -28,6 +28,7 @@ from ._algorithm import (
     register_cueing,
     unregister_cueing,
 )
+from ._bound import BOUND_CHANNELS, CueBound, RigReach, cue_bound, rig_reach
 from ._classical import ClassicalWashout, WashoutResult, WashoutState
 from ._evaluate import (
     AXIS_NAMES,
@@ -61,6 +62,7 @@ from ._vestibular import (
 __all__ = [
     "ACTIVE_FRACTION",
     "AXIS_NAMES",
+    "BOUND_CHANNELS",
     "CORRELATION_WEIGHTS",
     "DEFAULT_MODEL_SET",
     "DEFAULT_WEIGHTS",
@@ -72,6 +74,7 @@ __all__ = [
     "OTOLITH",
     "SEMICIRCULAR_CANAL",
     "ClassicalWashout",
+    "CueBound",
     "CueMasks",
     "CueMetrics",
     "CueScore",
@@ -80,10 +83,12 @@ __all__ = [
     "CueingFactory",
     "CueingParams",
     "CueingResult",
+    "RigReach",
     "VestibularModel",
     "VestibularModelSet",
     "WashoutResult",
     "WashoutState",
+    "cue_bound",
     "cue_masks",
     "cue_metrics",
     "cue_score",
@@ -95,6 +100,7 @@ __all__ = [
     "perceived_motion_error",
     "plot_cueing",
     "register_cueing",
+    "rig_reach",
     "simulator_motion",
     "unregister_cueing",
 ]
