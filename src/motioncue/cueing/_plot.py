@@ -30,10 +30,8 @@ def rider_axis(ax: Any, vehicle: ArrayLike, riders: list[ArrayLike], thr: float)
     """
     veh = np.asarray(vehicle, dtype=float)
     v_peak = float(np.max(np.abs(veh), initial=0.0))
-    r_peak = max(
-        [float(np.percentile(np.abs(np.asarray(r, dtype=float)), 99.5)) for r in riders if len(r)]
-        + [2.0 * thr]
-    )
+    arrays = [np.abs(np.asarray(r, dtype=float)) for r in riders]
+    r_peak = max([float(np.percentile(a, 99.5)) for a in arrays if a.size] + [2.0 * thr])
     left = 1.08 * max(v_peak, r_peak)
     right = left if r_peak >= 0.5 * v_peak else 1.08 * r_peak
     ax.set_ylim(-left, left)
