@@ -112,8 +112,8 @@ def plot_cueing(
         veh, sim = evaluation.perceived_vehicle[:, i] * k, evaluation.perceived_sim[:, i] * k
         right = rider_axis(ax, veh, [sim], thr)
         band = right.axhspan(-thr, thr, color="0.85", lw=0, zorder=0)
-        (lv,) = ax.plot(t, veh, color="0.15", lw=1.6)
-        (ls,) = right.plot(t, sim, color="tab:red", lw=1.0, ls="--")
+        (lv,) = ax.plot(t, veh, color="0.15", lw=1.6, label="vehicle")
+        (ls,) = right.plot(t, sim, color="tab:red", lw=1.0, ls="--", label="simulator")
         ax.set_ylabel(f"vehicle, perceived {name} [{_UNITS[i]}]")
         right.set_ylabel(f"simulator [{_UNITS[i]}]", color="tab:red")
         right.tick_params(axis="y", colors="tab:red")
