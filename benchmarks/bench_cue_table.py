@@ -1,8 +1,8 @@
 """Issue 20's table: cue strength and cue errors of every preset on the held-out drives.
 
 Run: ``python benchmarks/bench_cue_table.py [--platform P] [--controller C] [--presets ...]
-[--no-bound]`` (with ``src`` on the path). For each held-out drive (``sample_drives("held-out")``)
-and the bundled lap, every preset runs through the chain of ``motioncue compare`` (cueing,
+[--kind car] [--no-bound]`` (with ``src`` on the path). For each held-out drive
+(``sample_drives("held-out")``, or only those of ``--kind``) and the bundled lap, every preset runs through the chain of ``motioncue compare`` (cueing,
 workspace limiting, actuator limits, delivered poses through the vestibular models) on the
 bundled ``stewart6-linear`` hexapod driven by an ``mbox6`` unless told otherwise. None of
 these drives is a tuning drive.
@@ -47,10 +47,12 @@ def main(argv: list[str]) -> int:
     ap.add_argument("--controller", default="mbox6")
     ap.add_argument("--presets", nargs="+", default=list(DEFAULT_PRESETS))
     ap.add_argument("--no-bound", action="store_true", help="skip the physical bound")
+    ap.add_argument("--kind", default=None, help="only held-out drives of this kind (car, ...)")
     args = ap.parse_args(argv)
     platform = load_platform(args.platform)
     limits = ActuatorLimits.from_platform(platform, load_controller(args.controller), rate_hz=100.0)
-    drives = [*sample_drives("held-out"), ROOT / "configs" / "recordings" / "lap.csv"]
+    held_out = sample_drives("held-out", kind=args.kind) if args.kind else sample_drives("held-out")
+    drives = [*held_out, ROOT / "configs" / "recordings" / "lap.csv"]
     recs = []
     for path in drives:
         kind, data, _ = load_generate_input(str(path))
