@@ -4,8 +4,8 @@ Run: ``python benchmarks/bench_cue_table.py [--platform P] [--controller C] [--p
 [--kind car] [--no-bound]`` (with ``src`` on the path). For each held-out drive
 (``sample_drives("held-out")``, or only those of ``--kind``) and the bundled lap, every
 preset runs through the chain of ``motioncue compare`` (cueing, workspace limiting, actuator
-limits, delivered poses through the vestibular models) on the bundled ``stewart6-linear`` hexapod driven by an ``mbox6`` unless told otherwise. None of
-these drives is a tuning drive.
+limits, delivered poses through the vestibular models) on the bundled ``stewart6-linear``
+hexapod driven by an ``mbox6`` unless told otherwise. None of these drives is a tuning drive.
 
 Printed per drive and preset (definitions: ``docs/cue-metrics.md``,
 :func:`motioncue.cueing.cue_metrics`): correlation fx / fy, rendered share fx / fy, gain
