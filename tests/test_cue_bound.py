@@ -199,6 +199,10 @@ def test_no_preset_beats_the_bound_through_compare(lap: np.ndarray) -> None:
     presets = [(p, load_cueing(p)) for p in ("racing-hexapod", "optimal-hexapod", "racing")]
     res = compare_cueing([("lap", rec)], presets, platform, limits, bound=True)
     assert res.reach is not None and "Physical bound" in res.summary()
+    import json
+
+    js = json.loads(json.dumps(res.to_dict(), allow_nan=False))
+    assert js["bounds"]["lap"]["gain_max"]["fy"] == pytest.approx(res.runs[0].bound.gain_max[1])
     for row, run in zip(res.rows(), res.runs, strict=True):
         assert run.bound is not None
         for i, a in enumerate(("fx", "fy")):

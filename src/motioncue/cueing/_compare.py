@@ -381,6 +381,8 @@ class CompareResult:
             "columns": dict(COLUMN_NOTES),
             "rows": [{k: clean(v) for k, v in row.items()} for row in self.rows()],
             "plots": list(plots),
+            # the physical bound of each recording (compare --bound; motioncue.cueing.cue_bound)
+            "bounds": {r.recording: r.bound.to_dict() for r in self.runs if r.bound is not None},
         }
 
     def csv_text(self) -> str:
