@@ -9,11 +9,12 @@ hexapod driven by an ``mbox6`` unless told otherwise. None of these drives is a 
 
 Printed per drive and preset (definitions: ``docs/cue-metrics.md``,
 :func:`motioncue.cueing.cue_metrics`): correlation fx / fy, rendered share fx / fy, gain
-fx / fy, missed cues fx / fy (% of the time), reversals and all false cues (% of the time,
-any channel), clamped poses (%), and with the bound (:func:`motioncue.cueing.cue_bound`,
-default on) each preset's share as % of the largest gain the rig could give without a
-reversal; then per drive the bound itself. Ends with the wall time of the chains and of the
-bounds (one run; these are figures, not timings to compare).
+fx / fy, missed cues fx / fy (% of the time), reversals fx / fy / any channel and all
+false cues (any channel; % of the time), clamped poses (%), and with the bound
+(:func:`motioncue.cueing.cue_bound`, default on) each preset's share as % of the largest
+gain the rig could give without a reversal; then per drive the bound itself. Ends with the
+wall time of the chains and of the bounds (one run; these are figures, not timings to
+compare).
 """
 
 from __future__ import annotations
@@ -69,17 +70,20 @@ def main(argv: list[str]) -> int:
     wp = max(len(p) for p in args.presets)
     print(
         f"{'drive':<{wr}} {'preset':<{wp}} {'corr fx/fy':>11} {'share fx/fy':>11} "
-        f"{'gain fx/fy':>11} {'missed% fx/fy':>13} {'rev%':>5} {'false%':>6} {'clamp%':>6} "
+        f"{'gain fx/fy':>11} {'missed% fx/fy':>13} {'rev% fx/fy/any':>16} {'false%':>6} "
+        f"{'clamp%':>6} "
         f"{'%bound fx/fy':>12}"
     )
     for r in res.rows():
         dur = r["duration_s"]
         mx, my = (100 * r[f"missed_cue_s_{a}"] / dur for a in ("fx", "fy"))
+        rx, ry = (100 * r[f"reversal_s_{a}"] / dur for a in ("fx", "fy"))
         print(
             f"{r['recording']:<{wr}} {r['preset']:<{wp}} "
             f"{r['corr_fx']:5.2f}/{r['corr_fy']:5.2f} {r['share_fx']:5.3f}/{r['share_fy']:5.3f} "
             f"{r['gain_fx']:5.3f}/{r['gain_fy']:5.3f} {mx:6.1f}/{my:6.1f} "
-            f"{r['reversal_pct_any']:5.2f} {r['false_cue_pct_any']:6.2f} {r['clamped_pct']:6.2f} "
+            f"{rx:4.2f}/{ry:4.2f}/{r['reversal_pct_any']:5.2f} {r['false_cue_pct_any']:6.2f} "
+            f"{r['clamped_pct']:6.2f} "
             f"{_pct(r['share_of_bound_pct_fx'])}/{_pct(r['share_of_bound_pct_fy'])}"
         )
     if res.bound_text():
