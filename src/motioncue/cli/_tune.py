@@ -119,6 +119,18 @@ def _metrics_table(before: Any, after: Any) -> str:
         ("clamped poses (%)", before.clamped_fraction * 100, after.clamped_fraction * 100, ".2f")
     )
     rows.append(("frames breaking a limit", before.violating_frames, after.violating_frames, "d"))
+    if before.cue is not None and after.cue is not None:
+        # cue strength and cue errors, pooled over the recordings (motioncue.cueing.cue_metrics)
+        for i, a in enumerate(_AXES[:2]):
+            rows.append((f"rendered share {a}", before.cue.rendered_share[i],
+                         after.cue.rendered_share[i], ".3f"))  # fmt: skip
+            rows.append((f"gain {a}", before.cue.gain[i], after.cue.gain[i], ".3f"))
+            rows.append((f"missed cues {a} (%)", before.cue.missed[i] * 100,
+                         after.cue.missed[i] * 100, ".2f"))  # fmt: skip
+        for name, label in (("reversals_any", "reversals"), ("spurious_any", "spurious cues"),
+                            ("false_any", "all false cues")):  # fmt: skip
+            rows.append((f"{label}, any axis (%)", getattr(before.cue, name) * 100,
+                         getattr(after.cue, name) * 100, ".2f"))  # fmt: skip
     lines = [f"{'metric':<32} {'before':>10} {'after':>10}"]
     for name, b, a, fmt in rows:
         lines.append(f"{name:<32} {format(b, fmt):>10} {format(a, fmt):>10}")
@@ -278,4 +290,6 @@ def _metrics_dict(m: Any) -> dict[str, Any]:
         "clamped_fraction": num(m.clamped_fraction),
         "violating_frames": int(m.violating_frames),
         "feasible": bool(m.feasible),
+        # definitions: motioncue.cueing.cue_metrics (pooled over the recordings)
+        "cue_metrics": None if m.cue is None else m.cue.to_dict(),
     }

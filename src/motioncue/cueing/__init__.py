@@ -4,7 +4,8 @@ The cueing interface (:class:`CueingAlgorithm`; :func:`make_cueing` builds the a
 preset names with ``algorithm = "..."``, :func:`register_cueing` adds one), the classical
 washout of Reid & Nahon (:class:`ClassicalWashout`, registered as ``"classical"``), its
 parameters (:class:`CueingParams`, :func:`load_cueing` for ``configs/cueing/*.toml``) and the
-evaluation of cue quality through vestibular models (:func:`evaluate_cueing`).
+evaluation of cue quality through vestibular models (:func:`evaluate_cueing`; cue strength
+and cue errors: :func:`cue_metrics`).
 
 Example
 -------
@@ -27,6 +28,7 @@ from ._algorithm import (
     register_cueing,
     unregister_cueing,
 )
+from ._bound import BOUND_CHANNELS, CueBound, RigReach, cue_bound, rig_reach
 from ._classical import ClassicalWashout, WashoutResult, WashoutState
 from ._evaluate import (
     AXIS_NAMES,
@@ -37,6 +39,7 @@ from ._evaluate import (
     evaluate_cueing,
     simulator_motion,
 )
+from ._metrics import CueMasks, CueMetrics, cue_masks, cue_metrics
 from ._params import DOF_NAMES, GRAVITY_M_S2, CueingParams, load_cueing
 from ._plot import plot_cueing
 from ._score import (
@@ -59,6 +62,7 @@ from ._vestibular import (
 __all__ = [
     "ACTIVE_FRACTION",
     "AXIS_NAMES",
+    "BOUND_CHANNELS",
     "CORRELATION_WEIGHTS",
     "DEFAULT_MODEL_SET",
     "DEFAULT_WEIGHTS",
@@ -70,16 +74,23 @@ __all__ = [
     "OTOLITH",
     "SEMICIRCULAR_CANAL",
     "ClassicalWashout",
+    "CueBound",
+    "CueMasks",
+    "CueMetrics",
     "CueScore",
     "CueingAlgorithm",
     "CueingEvaluation",
     "CueingFactory",
     "CueingParams",
     "CueingResult",
+    "RigReach",
     "VestibularModel",
     "VestibularModelSet",
     "WashoutResult",
     "WashoutState",
+    "cue_bound",
+    "cue_masks",
+    "cue_metrics",
     "cue_score",
     "cueing_algorithms",
     "evaluate_cueing",
@@ -89,6 +100,7 @@ __all__ = [
     "perceived_motion_error",
     "plot_cueing",
     "register_cueing",
+    "rig_reach",
     "simulator_motion",
     "unregister_cueing",
 ]

@@ -27,11 +27,13 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
+from functools import cached_property
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from .._errors import ConfigError
+from ._metrics import CueMetrics, _masks, correlation, cue_metrics
 from ._params import GRAVITY_M_S2
 from ._vestibular import (
     AXIS_NAMES,
@@ -173,7 +175,14 @@ _NOTES = """Notes
   K = 0.4 is in afferent firing units), so a sustained force is perceived at its value;
   their lead gives a mid-band gain tau_a/tau_L (2.0 Telban-Cardullo, 2.48 Young-Meiry), so
   brief pulses appear up to that factor larger, for vehicle and simulator alike.
-  workspace use: max |pose| / half range per DOF (100% = at the limit)."""
+  workspace use: max |pose| / half range per DOF (100% = at the limit).
+  share    rendered share rms(sim) / rms(vehicle) of the perceived motion (1 = full size).
+  gain     least-squares slope of perceived sim on perceived vehicle (the in-phase share).
+  missed%  % of the time |vehicle| > thr and |sim| <= thr (as missed s, per sample).
+  revers%  reversals: % of the time both > thr with opposite signs.
+  spur%    spurious cues: % of the time |sim| > thr while |vehicle| <= thr (either sign).
+  false%   all false cues: % of the time |sim| > thr opposite to the vehicle, any size.
+  clamped  % of the frames scaled back into the workspace by the chain (when known)."""
 
 
 @dataclass(frozen=True, eq=False)
@@ -216,6 +225,12 @@ class CueingEvaluation:
         Name of the vestibular model set.
     head_offset_m : (3,) array
         Head position used for the simulator's specific force (m, platform frame).
+    clamped_share : float
+        Fraction of the frames the chain clamped to the workspace, when the caller knew it
+        (NaN otherwise); carried into :attr:`metrics`.
+
+    The cue strength and cue errors (rendered share, gain, missed cues, reversals, spurious
+    and false cues) are :attr:`metrics` (:func:`motioncue.cueing.cue_metrics`).
     """
 
     fs_hz: float
@@ -234,6 +249,18 @@ class CueingEvaluation:
     weights: NDArray[np.float64] = field(default_factory=lambda: np.ones(6))
     model_set: str = DEFAULT_MODEL_SET
     head_offset_m: NDArray[np.float64] = field(default_factory=lambda: np.zeros(3))
+    clamped_share: float = math.nan
+
+    @cached_property
+    def metrics(self) -> CueMetrics:
+        """:func:`motioncue.cueing.cue_metrics` of the perceived motion (computed once)."""
+        c = self.clamped_share
+        return cue_metrics(
+            self.perceived_vehicle,
+            self.perceived_sim,
+            self.thresholds,
+            clamped_share=c if math.isfinite(c) else None,
+        )
 
     def table(self) -> str:
         """The per-axis metrics table with a units row (no notes)."""
@@ -269,6 +296,9 @@ class CueingEvaluation:
             f"perceived-motion error J = {self.perceived_error:.3f} thresholds "
             f"(weights fx fy fz wx wy wz: {w})",
             use,
+            "cue strength and cue errors (share of samples; definitions: "
+            "motioncue.cueing.cue_metrics):",
+            self.metrics.table(),
         ]
         if notes:
             lines.append(_NOTES)
@@ -332,6 +362,7 @@ def evaluate_cueing(
     weights: ArrayLike | None = None,
     head_offset_m: ArrayLike | None = None,
     max_lag_s: float = 1.0,
+    clamped_share: float | None = None,
 ) -> CueingEvaluation:
     """Compare the motion the rider of the platform perceives with the vehicle's.
 
@@ -356,6 +387,9 @@ def evaluate_cueing(
         Rider's head relative to the platform origin (m, platform frame); default zero.
     max_lag_s : float
         Largest delay searched by the cross-correlation.
+    clamped_share : float, optional
+        Fraction (0..1) of the frames the chain clamped to the workspace, for
+        :attr:`CueingEvaluation.metrics` (which cannot see it in the poses).
 
     Returns
     -------
@@ -371,6 +405,8 @@ def evaluate_cueing(
         )
     if not (math.isfinite(fs_hz) and fs_hz > 0.0):
         raise ConfigError(f"sample rate {fs_hz!r} Hz is invalid; allowed: a finite number > 0")
+    if clamped_share is not None and not (0.0 <= float(clamped_share) <= 1.0):
+        raise ConfigError(f"clamped share {clamped_share!r} is invalid; allowed: a fraction 0..1")
     f_v = np.asarray(f_vehicle, dtype=float)
     w_v = np.asarray(w_vehicle, dtype=float)
     p = np.asarray(poses, dtype=float)
@@ -394,17 +430,16 @@ def evaluate_cueing(
     ftime = np.zeros(6)
     mcount = np.zeros(6, dtype=np.int64)
     mtime = np.zeros(6)
+    masks = _masks(pv, ps, thr)
     for i in range(6):
         a, b = ps[:, i], pv[:, i]
-        if n > 1 and a.std() > 0.0 and b.std() > 0.0:
-            corr[i] = float(np.corrcoef(a, b)[0, 1])
+        corr[i] = correlation(a, b)
+        if math.isfinite(corr[i]):
             delay[i] = _delay(a, b, fs_hz, max_lag)
-        mask = (np.abs(a) > thr[i]) & (a * b < 0.0)
-        count[i] = _episodes(mask)
-        ftime[i] = float(np.count_nonzero(mask)) / fs_hz
-        missed = (np.abs(b) > thr[i]) & (np.abs(a) <= thr[i])
-        mcount[i] = _episodes(missed)
-        mtime[i] = float(np.count_nonzero(missed)) / fs_hz
+        count[i] = _episodes(masks.false[:, i])
+        ftime[i] = float(np.count_nonzero(masks.false[:, i])) / fs_hz
+        mcount[i] = _episodes(masks.missed[:, i])
+        mtime[i] = float(np.count_nonzero(masks.missed[:, i])) / fs_hz
     if workspace is None:
         use = np.full(6, math.nan)
     else:
@@ -431,4 +466,5 @@ def evaluate_cueing(
         weights=wts,
         model_set=ms.name,
         head_offset_m=r_head,
+        clamped_share=math.nan if clamped_share is None else float(clamped_share),
     )

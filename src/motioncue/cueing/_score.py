@@ -28,11 +28,12 @@ dimensionless:
     perceives means nothing (the lateral force of a coordinated turn, for example).
 ``false``
     the fraction of the time with a false cue on at least one channel: the rider perceives a
-    motion above threshold in the direction opposite to the vehicle's (the definition of
-    ``motioncue compare``).
+    motion above threshold in the direction opposite to the vehicle's ("false cues (all)"
+    of :mod:`motioncue.cueing._metrics`, the definition of ``motioncue compare``).
 ``missed``
     the mean over the active channels of the fraction of the time when the vehicle's
-    perceived motion is above threshold and the rider's is not.
+    perceived motion is above threshold and the rider's is not ("missed" of
+    :mod:`motioncue.cueing._metrics`).
 
 The weights (:data:`FALSE_CUE_WEIGHT` 2, :data:`MISSED_CUE_WEIGHT` 0.5) make ten per cent of
 false cues cost as much as a correlation 0.2 lower on fx and fy: a cue in the wrong direction
@@ -43,13 +44,13 @@ can weigh them differently.
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from .._errors import ConfigError
+from ._metrics import _masks, correlation
 from ._vestibular import check_weights, normalised_error_rms
 
 __all__ = [
@@ -105,17 +106,6 @@ class CueScore:
     active: NDArray[np.bool_]
 
 
-def _correlation(a: NDArray[np.float64], b: NDArray[np.float64]) -> float:
-    if a.shape[0] < 2:
-        return math.nan
-    da, db = a - a.mean(), b - b.mean()
-    # elementwise sums, not BLAS dot: threaded BLAS on a loaded machine is far slower here
-    sa, sb = float(np.sum(da * da)), float(np.sum(db * db))
-    if sa <= 0.0 or sb <= 0.0:
-        return math.nan
-    return float(np.sum(da * db) / math.sqrt(sa * sb))
-
-
 def cue_score(
     perceived_vehicle: ArrayLike,
     perceived_sim: ArrayLike,
@@ -151,19 +141,18 @@ def cue_score(
     w = check_weights(weights)
     n = pv.shape[0]
     pst, pvt = np.ascontiguousarray(ps.T), np.ascontiguousarray(pv.T)
-    corr = np.array([_correlation(pst[i], pvt[i]) for i in range(6)])
+    corr = np.array([correlation(pst[i], pvt[i]) for i in range(6)])
     if n == 0:
         return CueScore(0.0, 0.0, 0.0, 0.0, 0.0, corr, np.zeros(6, dtype=bool))
-    above_v = np.abs(pv) > thr
-    above_s = np.abs(ps) > thr
-    active = above_v.mean(axis=0) >= ACTIVE_FRACTION
+    masks = _masks(pv, ps, thr)
+    active = (np.abs(pv) > thr).mean(axis=0) >= ACTIVE_FRACTION
     j = normalised_error_rms(ps - pv, thr, w)
     j0 = max(normalised_error_rms(pv, thr, w), 1.0)
     cw = np.where(active, np.asarray(CORRELATION_WEIGHTS), 0.0)
     rho = np.nan_to_num(corr, nan=0.0)
     c_term = float(np.dot(cw, 1.0 - rho) / cw.sum()) if cw.sum() > 0.0 else 0.0
-    false = float(np.mean(np.any(above_s & (ps * pv < 0.0), axis=1)))
-    missed_ch = np.mean(above_v & ~above_s, axis=0)
+    false = float(np.mean(np.any(masks.false, axis=1)))
+    missed_ch = np.mean(masks.missed, axis=0)
     missed = float(missed_ch[active].mean()) if active.any() else 0.0
     rel = j / j0
     score = rel + c_term + FALSE_CUE_WEIGHT * false + MISSED_CUE_WEIGHT * missed

@@ -69,6 +69,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from .._errors import ConfigError, LimitError, TransportError
+from ._metrics import CueMetrics, cue_metrics
 from ._params import GRAVITY_M_S2, CueingParams
 from ._vestibular import DEFAULT_MODEL_SET, get_model_set
 
@@ -287,6 +288,10 @@ class ChainMetrics:
         Fraction of all poses clamped by workspace limiting.
     violating_frames : int
         Frames whose actuator positions break a limit (stroke, speed, acceleration, jerk).
+    cue : CueMetrics or None
+        Rendered share, gain, missed, reversed, spurious and false cues and the clamped
+        share, pooled over the recordings (their samples concatenated;
+        :func:`motioncue.cueing.cue_metrics`); None when the run stopped early.
     """
 
     objective: float
@@ -299,6 +304,7 @@ class ChainMetrics:
     duration_s: float = 0.0
     clamped_fraction: float = 0.0
     violating_frames: int = 0
+    cue: CueMetrics | None = None
 
     @property
     def feasible(self) -> bool:
@@ -416,6 +422,8 @@ class TuneObjective:
         missed = 0.0
         n_all = clamped = violating = 0
         rest = np.array([0.0, 0.0, GRAVITY_M_S2])
+        pvs: list[NDArray[np.float64]] = []
+        pss: list[NDArray[np.float64]] = []
         for i, (d, res) in enumerate(zip(self.drives, runs, strict=True)):
             f_used = np.asarray(getattr(res, "f_used", d.f), dtype=float)
             w_used = np.asarray(getattr(res, "w_used", d.w), dtype=float)
@@ -427,6 +435,8 @@ class TuneObjective:
             pv = self._perceived_vehicle(i, f_used, w_used)
             f_s, w_s = simulator_motion(poses, self.rate_hz, head_offset_m=params.head_offset_m)
             ps = self._models.filter(np.concatenate([f_s - rest, w_s], axis=1), self.rate_hz)
+            pvs.append(pv)
+            pss.append(ps)
             sc = cue_score(pv, ps, thr)
             scores.append(sc.score)
             js.append(normalised_error_rms(ps - pv, thr, ones))
@@ -447,6 +457,9 @@ class TuneObjective:
             duration_s=n_all / self.rate_hz,
             clamped_fraction=clamped / max(n_all, 1),
             violating_frames=violating,
+            cue=cue_metrics(
+                np.concatenate(pvs), np.concatenate(pss), thr, clamped_share=clamped / max(n_all, 1)
+            ),
         )
 
     def score(self, m: ChainMetrics) -> float:
