@@ -78,7 +78,7 @@ __all__ = ["CueMasks", "CueMetrics", "cue_masks", "cue_metrics"]
 
 
 class CueMasks(NamedTuple):
-    """Per-sample events (N, 6) bool, as defined in :mod:`motioncue.cueing._metrics`."""
+    """Per-sample events (N, 6) bool, as defined in :func:`motioncue.cueing.cue_metrics`."""
 
     missed: NDArray[np.bool_]
     reversal: NDArray[np.bool_]
@@ -157,7 +157,7 @@ def _clean(v: float) -> float | None:
 
 @dataclass(frozen=True, eq=False)
 class CueMetrics:
-    """Cue strength and cue errors of one run (definitions: :mod:`motioncue.cueing._metrics`).
+    """Cue strength and cue errors of one run (definitions: :func:`cue_metrics`).
 
     Per-channel arrays are (6,), ordered ``fx fy fz wx wy wz`` (:data:`AXIS_NAMES`);
     fractions are of all samples (0..1).
@@ -259,7 +259,7 @@ def cue_metrics(
 ) -> CueMetrics:
     """Rendered share, gain, correlation, missed/reversed/spurious/false cues of one run.
 
-    Definitions and sources: the docstring of :mod:`motioncue.cueing._metrics` and
+    Definitions and sources: the module docstring and
     ``docs/cue-metrics.md``.
 
     Parameters

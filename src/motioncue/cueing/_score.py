@@ -29,11 +29,11 @@ dimensionless:
 ``false``
     the fraction of the time with a false cue on at least one channel: the rider perceives a
     motion above threshold in the direction opposite to the vehicle's ("false cues (all)"
-    of :mod:`motioncue.cueing._metrics`, the definition of ``motioncue compare``).
+    of :func:`motioncue.cueing.cue_metrics`, the definition of ``motioncue compare``).
 ``missed``
     the mean over the active channels of the fraction of the time when the vehicle's
     perceived motion is above threshold and the rider's is not ("missed" of
-    :mod:`motioncue.cueing._metrics`).
+    :func:`motioncue.cueing.cue_metrics`).
 
 The weights (:data:`FALSE_CUE_WEIGHT` 2, :data:`MISSED_CUE_WEIGHT` 0.5) make ten per cent of
 false cues cost as much as a correlation 0.2 lower on fx and fy: a cue in the wrong direction

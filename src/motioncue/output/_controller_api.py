@@ -215,7 +215,7 @@ class Controller(Protocol):
 
     def position_query(self) -> Any:
         """``(request datagram, reply parser)`` asking where the motors are
-        (:data:`~motioncue.output._feedback.PositionQuery`), or None when it cannot be asked."""
+        (a position query), or None when it cannot be asked."""
         ...
 
     def command_streamer(self, transport: Any, rate_hz: float) -> Any:

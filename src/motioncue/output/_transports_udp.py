@@ -5,7 +5,7 @@ commands use :meth:`UdpTransport.request`, which waits for an accepted reply and
 URL options: ``local_port`` (IMAX PA24: the host must send from this port),
 ``timeout_ms`` (default 250), ``retries`` (default 2) and ``silence_ms`` (default 500: a
 job sending frames stops when the controller has been silent this long, see
-:class:`~motioncue.output._feedback.LinkWatch`; 0 = not watched, for a capture or a
+the link watch; 0 = not watched, for a capture or a
 sniffer that never answers).
 """
 

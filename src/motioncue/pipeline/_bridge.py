@@ -433,7 +433,7 @@ class Bridge:
     ``stats.error`` starts with ``PARK FAILED``. Over ``udp://`` a controller silent for
     longer than the target's ``silence_ms`` (default 500 ms), or refusing frames for a
     reason waiting does not cure, fails the loop the same way
-    (:class:`~motioncue.output._feedback.LinkWatch`); the park is sent all the same, and the
+    (the link watch of the output stage); the park is sent all the same, and the
     loop ends ``"stopped"`` only once the controller answered the final park frame
     (otherwise ``stats.error`` starts with ``PARK NOT CONFIRMED``).
     """

@@ -71,7 +71,7 @@ class GenerateReport:
         Wall time per stage.
     transition_fallbacks : tuple of str
         One sentence per ramp that could not follow its time-optimal pose path and moved in a
-        straight line in actuator space instead (:mod:`motioncue.trajectory._transition`).
+        straight line in actuator space instead.
     """
 
     t_s: np.ndarray

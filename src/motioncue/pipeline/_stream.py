@@ -19,7 +19,7 @@ SIGHUP, SIGQUIT, any exception); the park itself is not interruptible (signals o
 flag while it runs). If the park cannot be sent it raises :class:`ParkFailed`.
 
 On a live UDP link the stage watches the controller
-(:class:`~motioncue.output._feedback.LinkWatch`): a controller silent for longer than the
+(the link watch of the output stage): a controller silent for longer than the
 target's ``silence_ms`` (default 500 ms) stops the job with
 :class:`~motioncue._errors.ControllerSilent` ("controller silent for N ms"), and frames refused
 for a reason waiting does not cure stop it at the third refusal
@@ -153,7 +153,7 @@ class OutputStage:
         Transient send errors met (and retried).
     notes : list of str
         Things the user should know (where the stage started and why).
-    watch : motioncue.output._feedback.LinkWatch or None
+    watch : LinkWatch or None
         The controller's liveness and refusals (live UDP links), read by players.
     """
 
