@@ -19,6 +19,7 @@ from ._common import (
     print_json,
 )
 from ._monitor import add_monitor_argument, start_monitor
+from ._preset import add_intensity_option, apply_intensity
 
 __all__ = ["register"]
 
@@ -65,6 +66,7 @@ def register(sub: Any) -> None:
         default=None,
         help="cueing preset name or .toml path (default: the platform's default_preset)",
     )
+    add_intensity_option(parser)
     parser.add_argument("--rate", type=float, default=100.0, metavar="HZ", help="frame rate")
     add_limit_options(parser)
     parser.add_argument(
@@ -156,6 +158,10 @@ def run(args: argparse.Namespace) -> int:
     )
     preset = args.preset or (profile.preset if profile is not None else None)
     cueing, preset_source = choose_preset(preset, platform, args.platform, args.overrides)
+    intensity = args.intensity
+    if intensity is None and profile is not None:
+        intensity = profile.intensity
+    cueing, preset_source = apply_intensity(cueing, intensity, preset_source)
     effects = None
     if profile is not None:
         from ..pipeline._effects import make_effects

@@ -49,6 +49,7 @@ from ._score import (
     CueScore,
     cue_score,
 )
+from ._tune import at_intensity, tilt_reach
 from ._vestibular import (
     DEFAULT_MODEL_SET,
     DEFAULT_WEIGHTS,
@@ -84,6 +85,7 @@ __all__ = [
     "VestibularModelSet",
     "WashoutResult",
     "WashoutState",
+    "at_intensity",
     "cue_masks",
     "cue_metrics",
     "cue_score",
@@ -96,5 +98,6 @@ __all__ = [
     "plot_cueing",
     "register_cueing",
     "simulator_motion",
+    "tilt_reach",
     "unregister_cueing",
 ]

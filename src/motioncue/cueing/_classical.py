@@ -17,6 +17,9 @@ Signal flow (per sample; frames, signs and units of conventions.md)
    counted.
 1. **Scaling and smooth limiting.** ``f_s = [0, 0, g] + L_f(k_f * (f - [0, 0, g]))``,
    ``w_s = L_w(k_w * w)`` with the limiter ``L`` of :func:`~._filters.soft_limit`.
+   With ``f_shape`` / ``w_shape`` set, the channel is compressed instead
+   (:func:`~._filters.compress`): ``k x / (1 + |k x / L|^p)^(1/p)`` replaces ``L(k x)``,
+   so small cues pass with the gain ``k`` and large ones bend smoothly below the limit.
 2. **Tilt coordination.** ``f_t = f_s`` (x, y) or, when ``tilt_scale = (kt_x, kt_y)`` is set,
    ``f_t = [kt_x f_x, kt_y f_y]`` (its own gain, without the translational force limit:
    the tilt angle has its own limit). ``f_t,x`` and ``f_t,y`` pass the low-pass
@@ -28,6 +31,12 @@ Signal flow (per sample; frames, signs and units of conventions.md)
    Each target is smoothly limited to ``tilt_limit`` and then rate limited:
    ``tilt[n] = tilt[n-1] + clip(target - tilt[n-1], -r/fs, r/fs)`` (the limit bounds the
    tilt; roll and pitch also carry the high-passed rotational cue of step 3).
+   With ``tilt_shape = p`` (the compressive tilt) the force fed to the low-pass is
+   ``f_t = compress(f, kt, L+, L-, p)`` with ``L = g sin(u * reach)`` in the direction the
+   tilt goes (``u = tilt_reach_use``, ``reach`` the platform's own reach in pure tilt,
+   ``tilt_reach_rad``): large sustained forces are compressed into the tilt this platform
+   can give in that direction, and the angle is only clipped to ``u * reach`` (a no-op but
+   for the low-pass's rounding) instead of the soft ``tilt_limit``.
    With ``tilt_accel_limit_rad_s2 = a`` the tilt is also acceleration limited
    (:func:`rate_accel_limit_step`): with the per-sample step ``u[n] = tilt[n] - tilt[n-1]``,
    ``d = a / fs^2`` and ``e = target - tilt[n-1]``, the wanted step is
@@ -99,7 +108,15 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from .._errors import ConfigError
-from ._filters import Section, rate_limit_array, soft_limit, soft_limit_array, tustin_section
+from ._filters import (
+    Section,
+    compress,
+    compress_array,
+    rate_limit_array,
+    soft_limit,
+    soft_limit_array,
+    tustin_section,
+)
 from ._params import GRAVITY_M_S2, CueingParams
 
 __all__ = ["ClassicalWashout", "WashoutResult", "WashoutState", "rate_accel_limit_step"]
@@ -408,6 +425,15 @@ class ClassicalWashout:
         ra_step = rate_accel_limit_step
         own_tilt = p.tilt_scale is not None
         ktx, kty = (1.0, 1.0) if p.tilt_scale is None else p.tilt_scale
+        fshape = p.f_shape is not None
+        pfx, pfy, pfz = (1.0, 1.0, 1.0) if p.f_shape is None else p.f_shape
+        wshape = p.w_shape is not None
+        pwx, pwy, pwz = (1.0, 1.0, 1.0) if p.w_shape is None else p.w_shape
+        cshape = p.tilt_shape is not None
+        pt = 1.0 if p.tilt_shape is None else p.tilt_shape
+        lxp, lxn, lyp, lyn = p.tilt_force_limits_m_s2
+        rmin, rmax, pmin, pmax = p.tilt_limits_rad
+        comp = compress
         hx, hy, hz = p.head_offset_m
         head = hx != 0.0 or hy != 0.0 or hz != 0.0
         mx, my, mz, mr, mp, myaw = (1.0 if d else 0.0 for d in p.dofs)
@@ -454,29 +480,42 @@ class ClassicalWashout:
             else:
                 state.bad_samples += 1
                 fx, fy, fz, wx, wy, wz = h[0], h[1], h[2], h[3], h[4], h[5]
-            # 1. scaling and smooth limiting
-            sx = kfx * fx
-            if sx > afx or sx < -afx:
-                sx = soft(sx, lfx, knee)
-            sy = kfy * fy
-            if sy > afy or sy < -afy:
-                sy = soft(sy, lfy, knee)
-            sz = kfz * (fz - g)
-            if sz > afz or sz < -afz:
-                sz = soft(sz, lfz, knee)
+            # 1. scaling and smooth limiting (or compression)
+            if fshape:
+                sx = comp(fx, kfx, lfx, lfx, pfx)
+                sy = comp(fy, kfy, lfy, lfy, pfy)
+                sz = comp(fz - g, kfz, lfz, lfz, pfz)
+            else:
+                sx = kfx * fx
+                if sx > afx or sx < -afx:
+                    sx = soft(sx, lfx, knee)
+                sy = kfy * fy
+                if sy > afy or sy < -afy:
+                    sy = soft(sy, lfy, knee)
+                sz = kfz * (fz - g)
+                if sz > afz or sz < -afz:
+                    sz = soft(sz, lfz, knee)
             fzs = g + sz
-            qx = kwx * wx
-            if qx > awx or qx < -awx:
-                qx = soft(qx, lwx, knee)
-            qy = kwy * wy
-            if qy > awy or qy < -awy:
-                qy = soft(qy, lwy, knee)
-            qz = kwz * wz
-            if qz > awz or qz < -awz:
-                qz = soft(qz, lwz, knee)
+            if wshape:
+                qx = comp(wx, kwx, lwx, lwx, pwx)
+                qy = comp(wy, kwy, lwy, lwy, pwy)
+                qz = comp(wz, kwz, lwz, lwz, pwz)
+            else:
+                qx = kwx * wx
+                if qx > awx or qx < -awx:
+                    qx = soft(qx, lwx, knee)
+                qy = kwy * wy
+                if qy > awy or qy < -awy:
+                    qy = soft(qy, lwy, knee)
+                qz = kwz * wz
+                if qz > awz or qz < -awz:
+                    qz = soft(qz, lwz, knee)
             z = state.z
             # 2. tilt coordination
-            if own_tilt:
+            if cshape:
+                tix = comp(fx, ktx, lxp, lxn, pt)
+                tiy = comp(fy, kty, lyp, lyn, pt)
+            elif own_tilt:
                 tix = ktx * fx
                 tiy = kty * fy
             else:
@@ -491,13 +530,17 @@ class ClassicalWashout:
             u = ylx / g
             u = 1.0 if u > 1.0 else (-1.0 if u < -1.0 else u)
             tp = -asin(u)
-            if tp > atl or tp < -atl:
-                tp = soft(tp, tl, knee)
             u = yly / g
             u = 1.0 if u > 1.0 else (-1.0 if u < -1.0 else u)
             tr = asin(u)
-            if tr > atl or tr < -atl:
-                tr = soft(tr, tl, knee)
+            if cshape:
+                tp = pmax if tp > pmax else (-pmin if tp < -pmin else tp)
+                tr = rmax if tr > rmax else (-rmin if tr < -rmin else tr)
+            else:
+                if tp > atl or tp < -atl:
+                    tp = soft(tp, tl, knee)
+                if tr > atl or tr < -atl:
+                    tr = soft(tr, tl, knee)
             tilt = state.tilt
             if sa > 0.0:
                 trate = state.tilt_rate
@@ -695,13 +738,25 @@ class ClassicalWashout:
         fx, fy, fz, wx, wy, wz = used
         # 1. scaling and smooth limiting
         knee = p.soft_knee
-        sx = soft_limit_array(p.f_scale[0] * fx, p.f_limit_m_s2[0], knee)
-        sy = soft_limit_array(p.f_scale[1] * fy, p.f_limit_m_s2[1], knee)
-        sz = soft_limit_array(p.f_scale[2] * (fz - g), p.f_limit_m_s2[2], knee)
+        if p.f_shape is None:
+            sx = soft_limit_array(p.f_scale[0] * fx, p.f_limit_m_s2[0], knee)
+            sy = soft_limit_array(p.f_scale[1] * fy, p.f_limit_m_s2[1], knee)
+            sz = soft_limit_array(p.f_scale[2] * (fz - g), p.f_limit_m_s2[2], knee)
+        else:
+            k, lf, pf = p.f_scale, p.f_limit_m_s2, p.f_shape
+            sx = compress_array(fx, k[0], lf[0], lf[0], pf[0])
+            sy = compress_array(fy, k[1], lf[1], lf[1], pf[1])
+            sz = compress_array(fz - g, k[2], lf[2], lf[2], pf[2])
         fzs = g + sz
-        qx = soft_limit_array(p.w_scale[0] * wx, p.w_limit_rad_s[0], knee)
-        qy = soft_limit_array(p.w_scale[1] * wy, p.w_limit_rad_s[1], knee)
-        qz = soft_limit_array(p.w_scale[2] * wz, p.w_limit_rad_s[2], knee)
+        if p.w_shape is None:
+            qx = soft_limit_array(p.w_scale[0] * wx, p.w_limit_rad_s[0], knee)
+            qy = soft_limit_array(p.w_scale[1] * wy, p.w_limit_rad_s[1], knee)
+            qz = soft_limit_array(p.w_scale[2] * wz, p.w_limit_rad_s[2], knee)
+        else:
+            k, lw, pw = p.w_scale, p.w_limit_rad_s, p.w_shape
+            qx = compress_array(wx, k[0], lw[0], lw[0], pw[0])
+            qy = compress_array(wy, k[1], lw[1], lw[1], pw[1])
+            qz = compress_array(wz, k[2], lw[2], lw[2], pw[2])
         z = np.array(state.z).reshape(_N_SECTIONS, 2)
         zf = z.copy()
 
@@ -711,15 +766,26 @@ class ClassicalWashout:
             return np.asarray(y)
 
         # 2. tilt coordination
-        if p.tilt_scale is None:
+        if p.tilt_shape is not None and p.tilt_scale is not None:
+            lxp, lxn, lyp, lyn = p.tilt_force_limits_m_s2
+            tix = compress_array(fx, p.tilt_scale[0], lxp, lxn, p.tilt_shape)
+            tiy = compress_array(fy, p.tilt_scale[1], lyp, lyn, p.tilt_shape)
+        elif p.tilt_scale is None:
             tix, tiy = sx, sy
         else:
             tix = p.tilt_scale[0] * fx
             tiy = p.tilt_scale[1] * fy
         ylx = filt([self.tilt_lp], tix, 0)
         yly = filt([self.tilt_lp], tiy, 1)
-        tp = soft_limit_array(-np.arcsin(np.clip(ylx / g, -1.0, 1.0)), p.tilt_limit_rad, knee)
-        tr = soft_limit_array(np.arcsin(np.clip(yly / g, -1.0, 1.0)), p.tilt_limit_rad, knee)
+        tp = -np.arcsin(np.clip(ylx / g, -1.0, 1.0))
+        tr = np.arcsin(np.clip(yly / g, -1.0, 1.0))
+        if p.tilt_shape is not None:
+            rmin, rmax, pmin, pmax = p.tilt_limits_rad
+            tp = np.clip(tp, -pmin, pmax)
+            tr = np.clip(tr, -rmin, rmax)
+        else:
+            tp = soft_limit_array(tp, p.tilt_limit_rad, knee)
+            tr = soft_limit_array(tr, p.tilt_limit_rad, knee)
         fs = self.fs_hz
         st = p.tilt_rate_limit_rad_s / fs
         if p.tilt_accel_limit_rad_s2 is None:

@@ -9,6 +9,9 @@ the key named)::
     source = "dirt"                    # GAME[:[HOST:]PORT] or replay:FILE[?speed=X]
     preset = "racing"                  # cueing preset name or .toml path (relative to this
                                        # file); default: the platform's default preset
+    intensity = 70                     # % of the preset's tuned intensity range (0 gentle,
+                                       # 100 strong; motioncue.cueing.at_intensity); needs a
+                                       # preset with an [intensity] table
     [cue]
     f_gain = [1.0, 1.2, 0.8]           # multiplies the preset's f_scale (x, y, z); or one
     w_gain = 1.0                       # number for all three; w_gain multiplies w_scale
@@ -57,6 +60,9 @@ class Profile:
         Multipliers of the preset's ``f_scale`` and ``w_scale`` (x, y, z / roll, pitch, yaw).
     effects : EffectGains
         Effect layer gains.
+    intensity : float or None
+        Percent of the preset's tuned intensity range (:func:`motioncue.cueing.at_intensity`),
+        applied before the gains; ``None``: the preset as it is.
     description, car : str
         Free text.
     """
@@ -67,6 +73,7 @@ class Profile:
     f_gain: Vec3 = (1.0, 1.0, 1.0)
     w_gain: Vec3 = (1.0, 1.0, 1.0)
     effects: EffectGains = field(default_factory=EffectGains)
+    intensity: float | None = None
     description: str = ""
     car: str = ""
 
@@ -127,6 +134,7 @@ def load_profile(name_or_path: str | Path) -> Profile:
     car = top.string("car", "")
     source = top.string("source")
     preset = top.string("preset", None) if top.has("preset") else None
+    intensity = top.number("intensity", lo=0.0, hi=100.0) if top.has("intensity") else None
     cue = top.table("cue", {})
     f_gain = _gain3(cue, "f_gain")
     w_gain = _gain3(cue, "w_gain")
@@ -161,6 +169,7 @@ def load_profile(name_or_path: str | Path) -> Profile:
         f_gain=f_gain,
         w_gain=w_gain,
         effects=EffectGains(**gains),
+        intensity=intensity,
         description=description,
         car=car,
     )
