@@ -32,15 +32,17 @@ def register(sub: Any) -> None:
         description=(
             "Optimise the base preset's main parameters (translational scales and high-pass, "
             "tilt scales, filter, rate and acceleration limits, rotational scale and "
-            "high-pass, yaw scale and high-pass; bounded, log space) to minimise the mean cue "
-            "score over the recordings (perceived-motion error J relative to standing still, "
-            "lost correlation, false and missed cues), with the cheap chain of generate "
-            "(cueing, workspace limiting, evaluation of the delivered poses). A candidate that "
-            "breaks an "
-            "actuator limit on any frame or clamps more than 1 %% of its poses is penalised "
-            "above every one that does not; the result must meet both or nothing is "
-            "written. Optimiser: SciPy differential evolution, seeded. Evaluations run in "
-            "local processes (--workers) or on a Dask cluster (--scheduler)."
+            "high-pass, yaw scale and high-pass; with the compressive tilt also the curves' "
+            "limits and exponents and the share of the platform's tilt reach; bounded, log "
+            "space) with the cheap chain of generate (cueing, workspace limiting, evaluation "
+            "of the delivered poses through vestibular models). Objective strength (the "
+            "default): the largest rendered share of fx and fy among candidates meeting the "
+            "cue-quality targets (reversals, false cues, correlation, clamping); score: the "
+            "cue score. A candidate that breaks an actuator limit on any frame or clamps more "
+            "than 1 %% of its poses is penalised above every one that does not; the result "
+            "must meet the limits (and with strength the targets) or nothing is written. "
+            "Optimiser: SciPy differential evolution, seeded. Evaluations run in local "
+            "processes (--workers) or on a Dask cluster (--scheduler)."
         ),
     )
     parser.add_argument(

@@ -168,6 +168,8 @@ STRENGTH_TUNED_PARAMETERS: tuple[_Parameter, ...] = (
     _Parameter("w_scale_yaw", 0.02, 1.0, "-"),
     _Parameter("rot_wn_yaw_rad_s", 0.2, 5.0, "rad/s"),
     _Parameter("trans_wn_z_rad_s", 1.0, 20.0, "rad/s"),
+    _Parameter("lead_x_s", 0.02, 0.6, "s"),
+    _Parameter("lead_y_s", 0.02, 0.6, "s"),
 )
 """The tuned parameters of a classical preset with the compressive tilt (``[tilt] shape``):
 the compressive curves' gains, limit and exponents in place of the plain scales, and the
@@ -334,6 +336,8 @@ def vector_from_params(params: CueingParams) -> NDArray[np.float64]:
                 params.w_scale[2],
                 params.rot_wn_rad_s[2],
                 params.trans_wn_rad_s[2],
+                0.02 if params.lead_s is None else params.lead_s[0],
+                0.02 if params.lead_s is None else params.lead_s[1],
             ),
         )
     values = (
@@ -407,6 +411,7 @@ def params_from_vector(base: CueingParams, x: Sequence[float], name: str = "") -
             tilt_accel_limit_rad_s2=v[13] * _D2R,
             w_scale=(v[14], v[14], v[16]),
             rot_wn_rad_s=(v[15], v[15], v[17]),
+            lead_s=(v[19], v[20]),
         )
     return replace(
         base,
@@ -1054,6 +1059,8 @@ def preset_toml(params: CueingParams, comments: Sequence[str] = ()) -> str:
         lines.append(f"f_shape = {_vec(params.f_shape)}")
     if params.w_shape is not None:
         lines.append(f"w_shape = {_vec(params.w_shape)}")
+    if params.lead_s is not None:
+        lines.append(f"lead_s = {_vec(params.lead_s)}")
     lines += [
         "",
         "[translational]",
