@@ -179,7 +179,7 @@ def test_lead_section_matches_the_continuous_lead_at_its_prewarp_frequency() -> 
     n = 300
     f = np.tile([0.0, 0.0, G], (n, 1))
     f[10:, 1] = 1.0
-    q = replace(p, tilt_shape=None, tilt_reach_rad=None, f_shape=None, tilt_scale=None,
+    q = replace(p, tilt_shape=None, tilt_reach_rad=None, f_shape=None, tilt_scale=(1.0, 1.0),
                 f_scale=(1.0, 1.0, 1.0), f_limit_m_s2=(50.0, 50.0, 50.0), lead_s=(0.1, 0.1),
                 tilt_rate_limit_rad_s=20.0, tilt_accel_limit_rad_s2=None)  # fmt: skip
     plain = replace(q, lead_s=None)

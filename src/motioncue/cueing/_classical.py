@@ -15,9 +15,9 @@ Signal flow (per sample; frames, signs and units of conventions.md)
    deviation ``|f - [0, 0, g]|`` or angular velocity exceeds ``reject_*`` on any axis, is
    replaced by the last good sample (rest, ``f = [0, 0, g], w = 0``, before the first) and
    counted.
-   With ``lead_s = (tau_x, tau_y)`` the held ``f_x, f_y`` then pass the phase lead
-   ``(1 + tau s) / (1 + tau s / LEAD_GAIN)`` (Tustin, prewarped at ``1/tau``); it feeds
-   both the tilt and the translational channel and offsets the tilt's lag.
+   With ``lead_s = (tau_x, tau_y)`` the held ``f_x, f_y`` fed to the tilt (step 2, with
+   its own ``tilt_scale``) pass the phase lead ``(1 + tau s) / (1 + tau s / LEAD_GAIN)``
+   (Tustin, prewarped at ``1/tau``), which offsets the tilt's lag.
 1. **Scaling and smooth limiting.** ``f_s = [0, 0, g] + L_f(k_f * (f - [0, 0, g]))``,
    ``w_s = L_w(k_w * w)`` with the limiter ``L`` of :func:`~._filters.soft_limit`.
    With ``f_shape`` / ``w_shape`` set, the channel is compressed instead
@@ -494,9 +494,11 @@ class ClassicalWashout:
             else:
                 state.bad_samples += 1
                 fx, fy, fz, wx, wy, wz = h[0], h[1], h[2], h[3], h[4], h[5]
-            if has_lead:  # 0b. phase lead on fx, fy
-                fx = bq(ld0, state.z, 26, fx)
-                fy = bq(ld1, state.z, 28, fy)
+            flx = fx
+            fly = fy
+            if has_lead:  # 0b. phase lead on the tilt's fx, fy
+                flx = bq(ld0, state.z, 26, fx)
+                fly = bq(ld1, state.z, 28, fy)
             # 1. scaling and smooth limiting (or compression)
             if fshape:
                 sx = comp(fx, kfx, lfx, lfx, pfx)
@@ -530,11 +532,11 @@ class ClassicalWashout:
             z = state.z
             # 2. tilt coordination
             if cshape:
-                tix = comp(fx, ktx, lxp, lxn, pt)
-                tiy = comp(fy, kty, lyp, lyn, pt)
+                tix = comp(flx, ktx, lxp, lxn, pt)
+                tiy = comp(fly, kty, lyp, lyn, pt)
             elif own_tilt:
-                tix = ktx * fx
-                tiy = kty * fy
+                tix = ktx * flx
+                tiy = kty * fly
             else:
                 tix = sx
                 tiy = sy
@@ -761,9 +763,10 @@ class ClassicalWashout:
             zf[k : k + len(secs)] = zout
             return np.asarray(y)
 
-        if p.lead_s is not None:  # 0b. phase lead on fx, fy
-            fx = filt([self.lead[0]], fx, 13)
-            fy = filt([self.lead[1]], fy, 14)
+        flx, fly = fx, fy
+        if p.lead_s is not None:  # 0b. phase lead on the tilt's fx, fy
+            flx = filt([self.lead[0]], fx, 13)
+            fly = filt([self.lead[1]], fy, 14)
         # 1. scaling and smooth limiting
         knee = p.soft_knee
         if p.f_shape is None:
@@ -789,13 +792,13 @@ class ClassicalWashout:
         # 2. tilt coordination
         if p.tilt_shape is not None and p.tilt_scale is not None:
             lxp, lxn, lyp, lyn = p.tilt_force_limits_m_s2
-            tix = compress_array(fx, p.tilt_scale[0], lxp, lxn, p.tilt_shape)
-            tiy = compress_array(fy, p.tilt_scale[1], lyp, lyn, p.tilt_shape)
+            tix = compress_array(flx, p.tilt_scale[0], lxp, lxn, p.tilt_shape)
+            tiy = compress_array(fly, p.tilt_scale[1], lyp, lyn, p.tilt_shape)
         elif p.tilt_scale is None:
             tix, tiy = sx, sy
         else:
-            tix = p.tilt_scale[0] * fx
-            tiy = p.tilt_scale[1] * fy
+            tix = p.tilt_scale[0] * flx
+            tiy = p.tilt_scale[1] * fly
         ylx = filt([self.tilt_lp], tix, 0)
         yly = filt([self.tilt_lp], tiy, 1)
         tp = -np.arcsin(np.clip(ylx / g, -1.0, 1.0))

@@ -128,8 +128,9 @@ class CueingParams:
         ``None`` (the default): the knee-and-tanh limiter of ``soft_knee``, as before these
         keys existed.
     lead_s : 2-tuple or None
-        Phase lead on the longitudinal and lateral force (x, y) before scaling, feeding both
-        the tilt and the translational channel: ``(1 + tau s) / (1 + tau s / LEAD_GAIN)``
+        Phase lead on the longitudinal and lateral force (x, y) fed to the tilt (with
+        ``tilt_scale``; the translational channel is not led): ``(1 + tau s) / (1 + tau s /
+        LEAD_GAIN)``
         with ``tau = lead_s[i]`` (s) and :data:`LEAD_GAIN` the lead's high-frequency gain.
         It offsets the lag of the tilt (its low-pass and rate limit), so that the cue turns
         with the vehicle instead of after it (fewer reversals in quick direction changes).
