@@ -47,9 +47,9 @@ def _strength_base():  # type: ignore[no-untyped-def]
 
 
 class _Synthetic(TuneObjective):
-    """Strength = min(kt_x, kt_y) (the tilt scales as rendered shares); false cues
+    """Strength = sqrt(kt_x kt_y) (the tilt scales as rendered shares); false cues
     0.1 (kt_x + kt_y): the budget of 15 % allows kt_x + kt_y <= 1.5, so the best is
-    kt_x = kt_y = 0.75 (strength 0.75), whatever the other 17 parameters."""
+    kt_x = kt_y = 0.75 (strength 0.75), whatever the other 19 parameters."""
 
     def __init__(self) -> None:  # no drives, no platform: the chain is the formula
         self.base = _strength_base()
@@ -61,7 +61,7 @@ class _Synthetic(TuneObjective):
         a, b = params.tilt_scale
         cue = _cue(a, b, false=0.1 * (a + b))
         return ChainMetrics(objective=0.0, per_drive_objective=(0.0,), duration_s=1.0,
-                            strength=min(a, b), pooled=cue)  # fmt: skip
+                            strength=math.sqrt(a * b), pooled=cue)  # fmt: skip
 
 
 def test_tuner_finds_the_known_optimum_of_a_synthetic_problem() -> None:

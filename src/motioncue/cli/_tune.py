@@ -100,9 +100,9 @@ def register(sub: Any) -> None:
         "--objective",
         choices=("strength", "score"),
         default="strength",
-        help="strength (default): the largest rendered share of fx and fy (the weaker of "
-        "the two, mean over the recordings) among candidates meeting the cue-quality "
-        "targets below on every recording; score: the cue score (lower is better; the "
+        help="strength (default): the largest rendered share of fx and fy (their geometric "
+        "mean, the recordings pooled) among candidates meeting the cue-quality "
+        "targets below (pooled); score: the cue score (lower is better; the "
         "objective before issue 20, which barely moving can win)",
     )
     parser.add_argument(
@@ -173,7 +173,7 @@ def _metrics_table(before: Any, after: Any) -> str:
         ("clamped poses (%)", before.clamped_fraction * 100, after.clamped_fraction * 100, ".2f")
     )
     rows.append(("frames breaking a limit", before.violating_frames, after.violating_frames, "d"))
-    rows.append(("strength: min share fx, fy", before.strength, after.strength, ".4f"))
+    rows.append(("strength: sqrt(share fx fy)", before.strength, after.strength, ".4f"))
     pb, pa = before.pooled, after.pooled
     if pb is not None and pa is not None:
         for i, a in enumerate(_AXES[:2]):
@@ -375,8 +375,8 @@ def run(args: argparse.Namespace) -> int:
         f"Cue score on the tuning recordings: before {result.before.objective:.4f}, "
         f"after {result.after.objective:.4f}; J before {result.before.perceived_error:.3f}, "
         f"after {result.after.perceived_error:.3f}.",
-        f"Strength (min share fx, fy) before {result.before.strength:.4f}, after "
-        f"{result.after.strength:.4f}.",
+        f"Strength (geometric mean of the shares of fx and fy) before "
+        f"{result.before.strength:.4f}, after {result.after.strength:.4f}.",
     ]
     if pa is not None:
         comments.append(
@@ -454,7 +454,8 @@ def _objective_comment(args: argparse.Namespace, targets: Any) -> str:
             "relative to standing still, lost correlation, false and missed cues) " + chain + "."
         )
     return (
-        "Objective: strength, the mean over the recordings of min(rendered share fx, fy) "
+        "Objective: strength, the geometric mean of the rendered shares of fx and fy (the "
+        "recordings pooled) "
         + chain
         + f"; targets on every recording: reversals <= {targets.max_reversals:.2%}, false "
         f"cues <= {targets.max_false:.2%}, clamped <= {targets.max_clamped:.2%}, corr fx >= "

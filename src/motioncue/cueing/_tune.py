@@ -467,8 +467,9 @@ class ChainMetrics:
     violating_frames : int
         Frames whose actuator positions break a limit (stroke, speed, acceleration, jerk).
     strength : float
-        ``min(rendered share fx, rendered share fy)`` of ``pooled``: the ``"strength"``
-        objective (higher is better; 0 for a platform at rest).
+        ``sqrt(rendered share fx * rendered share fy)`` of ``pooled`` (the geometric mean:
+        both count, neither can be dropped): the ``"strength"`` objective (higher is better;
+        0 for a platform at rest).
     pooled : CueMetrics or None
         :func:`motioncue.cueing.cue_metrics` of all the recordings pooled (their perceived
         motion concatenated, the pooling rule of :mod:`motioncue.cueing._metrics`), with the
@@ -709,7 +710,7 @@ class TuneObjective:
             duration_s=n_all / self.rate_hz,
             clamped_fraction=clamped / max(n_all, 1),
             violating_frames=violating,
-            strength=float(min(share[0], share[1])),
+            strength=float(math.sqrt(max(share[0], 0.0) * max(share[1], 0.0))),
             pooled=pooled,
         )
 
