@@ -174,21 +174,18 @@ def _metrics_table(before: Any, after: Any) -> str:
     )
     rows.append(("frames breaking a limit", before.violating_frames, after.violating_frames, "d"))
     rows.append(("strength: sqrt(share fx fy)", before.strength, after.strength, ".4f"))
-    pb, pa = before.pooled, after.pooled
-    if pb is not None and pa is not None:
+    if before.cue is not None and after.cue is not None:
+        # cue strength and cue errors, pooled over the recordings (motioncue.cueing.cue_metrics)
         for i, a in enumerate(_AXES[:2]):
-            rows.append((f"rendered share {a} (pooled)", pb.rendered_share[i],
-                         pa.rendered_share[i], ".4f"))  # fmt: skip
-        for i, a in enumerate(_AXES[:2]):
-            rows.append((f"missed cues {a} (pooled %)", pb.missed[i] * 100,
-                         pa.missed[i] * 100, ".2f"))  # fmt: skip
-        rows.append(("reversals, any axis (pooled %)", pb.reversals_any * 100,
-                     pa.reversals_any * 100, ".2f"))  # fmt: skip
-        rows.append(("all false cues (pooled %)", pb.false_any * 100, pa.false_any * 100,
-                     ".2f"))  # fmt: skip
-        for i, a in enumerate(_AXES[:2]):
-            rows.append((f"correlation {a} (pooled)", pb.correlation[i], pa.correlation[i],
-                         ".3f"))  # fmt: skip
+            rows.append((f"rendered share {a}", before.cue.rendered_share[i],
+                         after.cue.rendered_share[i], ".3f"))  # fmt: skip
+            rows.append((f"gain {a}", before.cue.gain[i], after.cue.gain[i], ".3f"))
+            rows.append((f"missed cues {a} (%)", before.cue.missed[i] * 100,
+                         after.cue.missed[i] * 100, ".2f"))  # fmt: skip
+        for name, label in (("reversals_any", "reversals"), ("spurious_any", "spurious cues"),
+                            ("false_any", "all false cues")):  # fmt: skip
+            rows.append((f"{label}, any axis (%)", getattr(before.cue, name) * 100,
+                         getattr(after.cue, name) * 100, ".2f"))  # fmt: skip
     lines = [f"{'metric':<32} {'before':>10} {'after':>10}"]
     for name, b, a, fmt in rows:
         lines.append(f"{name:<32} {format(b, fmt):>10} {format(a, fmt):>10}")
@@ -354,7 +351,7 @@ def run(args: argparse.Namespace) -> int:
         progress=progress,
         init_spread=args.init_spread,
     )
-    pa = result.after.pooled
+    pa = result.after.cue
     inputs = ", ".join(Path(p).name for p in args.input)
     if excerpt is not None:
         inputs += f" (each from {excerpt[0]:g} s to {excerpt[1]:g} s)"
@@ -478,6 +475,7 @@ def _metrics_dict(m: Any) -> dict[str, Any]:
         "clamped_fraction": num(m.clamped_fraction),
         "violating_frames": int(m.violating_frames),
         "strength": num(m.strength),
-        "pooled": None if m.pooled is None else m.pooled.to_dict(),
         "feasible": bool(m.feasible),
+        # definitions: motioncue.cueing.cue_metrics (pooled over the recordings)
+        "cue_metrics": None if m.cue is None else m.cue.to_dict(),
     }

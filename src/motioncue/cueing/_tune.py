@@ -69,7 +69,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from .._errors import ConfigError, LimitError, TransportError
-from ._metrics import CueMetrics
+from ._metrics import CueMetrics, cue_metrics
 from ._params import GRAVITY_M_S2, INTENSITY_KEYS, CueingParams
 from ._vestibular import DEFAULT_MODEL_SET, get_model_set
 
@@ -466,14 +466,14 @@ class ChainMetrics:
         Fraction of all poses clamped by workspace limiting.
     violating_frames : int
         Frames whose actuator positions break a limit (stroke, speed, acceleration, jerk).
+    cue : CueMetrics or None
+        Rendered share, gain, missed, reversed, spurious and false cues and the clamped
+        share, pooled over the recordings (their samples concatenated;
+        :func:`motioncue.cueing.cue_metrics`); None when the run stopped early.
     strength : float
-        ``sqrt(rendered share fx * rendered share fy)`` of ``pooled`` (the geometric mean:
+        ``sqrt(rendered share fx * rendered share fy)`` of ``cue`` (the geometric mean:
         both count, neither can be dropped): the ``"strength"`` objective (higher is better;
         0 for a platform at rest).
-    pooled : CueMetrics or None
-        :func:`motioncue.cueing.cue_metrics` of all the recordings pooled (their perceived
-        motion concatenated, the pooling rule of :mod:`motioncue.cueing._metrics`), with the
-        clamped share; ``None`` for a candidate cut short by its clamped poses.
     """
 
     objective: float
@@ -486,8 +486,8 @@ class ChainMetrics:
     duration_s: float = 0.0
     clamped_fraction: float = 0.0
     violating_frames: int = 0
+    cue: CueMetrics | None = None
     strength: float = 0.0
-    pooled: CueMetrics | None = None
 
     @property
     def feasible(self) -> bool:
@@ -500,7 +500,7 @@ class StrengthTargets:
     """The cue-quality constraints of the ``"strength"`` objective (fractions, not %).
 
     A candidate within the actuator limits meets them when, over the recordings pooled
-    (:attr:`ChainMetrics.pooled`, the definitions of :mod:`motioncue.cueing._metrics`),
+    (:attr:`ChainMetrics.cue`, the definitions of :mod:`motioncue.cueing._metrics`),
     reversals on any channel take at most ``max_reversals`` of the time, false cues on any
     channel at most ``max_false``, the fx and fy correlations are at least ``min_corr_fx``
     and ``min_corr_fy``, and at most ``max_clamped`` of all poses are clamped. The defaults
@@ -526,8 +526,8 @@ class StrengthTargets:
 
     def violation(self, m: ChainMetrics) -> float:
         """Sum of the relative excesses over the targets (0: all met; inf without
-        :attr:`ChainMetrics.pooled`)."""
-        c = m.pooled
+        :attr:`ChainMetrics.cue`)."""
+        c = m.cue
         if c is None:
             return math.inf
 
@@ -639,7 +639,6 @@ class TuneObjective:
         from ..trajectory import limit_pose, reachable
         from ._algorithm import make_cueing
         from ._evaluate import simulator_motion
-        from ._metrics import cue_metrics
         from ._score import cue_score
         from ._vestibular import normalised_error_rms
 
@@ -710,8 +709,8 @@ class TuneObjective:
             duration_s=n_all / self.rate_hz,
             clamped_fraction=clamped / max(n_all, 1),
             violating_frames=violating,
+            cue=pooled,
             strength=float(math.sqrt(max(share[0], 0.0) * max(share[1], 0.0))),
-            pooled=pooled,
         )
 
     def score(self, m: ChainMetrics) -> float:
