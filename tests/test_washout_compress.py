@@ -197,7 +197,7 @@ def test_combined_roll_and_pitch_stay_inside_the_quadrant_ellipse() -> None:
     f[100:, 0] = -25.0  # hard braking: nose down, pitch+
     f[100:, 1] = 25.0  # and a hard right-hand force: roll+
     res = ClassicalWashout(p, fs).run(f, np.zeros((n, 3)))
-    rn, rp, pn, pp = p.tilt_limits_rad
+    _rn, rp, _pn, pp = p.tilt_limits_rad
     assert p.tilt_scale is not None and p.tilt_shape is not None
     # each alone: the compressed angle of its direction (as in the test above)
     lx, ly = G * math.sin(pp), G * math.sin(rp)
