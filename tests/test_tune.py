@@ -69,6 +69,7 @@ def _tune_args(drives: dict[str, Path], out: Path) -> list[str]:
         "--generations", str(GENERATIONS),
         "--popsize", str(POPSIZE),
         "--budget-s", "600",
+        "--objective", "score",  # these tests are about the cue score (test_tune_strength)
     ]  # fmt: skip
 
 

@@ -19,6 +19,7 @@ from ._common import (
     print_json,
 )
 from ._monitor import add_monitor_argument, start_monitor
+from ._preset import add_intensity_option, apply_intensity
 
 __all__ = ["register"]
 
@@ -65,6 +66,7 @@ def register(sub: Any) -> None:
         default=None,
         help="cueing preset name or .toml path (default: the platform's default_preset)",
     )
+    add_intensity_option(parser)
     parser.add_argument("--rate", type=float, default=100.0, metavar="HZ", help="frame rate")
     add_limit_options(parser)
     parser.add_argument(
@@ -157,6 +159,10 @@ def run(args: argparse.Namespace) -> int:
     profile_preset = profile.preset_for(platform.name) if profile is not None else None
     preset = args.preset or profile_preset
     cueing, preset_source = choose_preset(preset, platform, args.platform, args.overrides)
+    intensity = args.intensity
+    if intensity is None and profile is not None:
+        intensity = profile.intensity
+    cueing, preset_source = apply_intensity(cueing, intensity, preset_source)
     effects = None
     start_warnings: list[str] = []
     if profile is not None:

@@ -19,6 +19,7 @@ from ._common import (
     print_json,
 )
 from ._monitor import add_monitor_argument, start_monitor
+from ._preset import add_intensity_option, apply_intensity
 
 __all__ = ["register"]
 
@@ -46,6 +47,7 @@ def register(sub: Any) -> None:
         metavar="NAME",
         help="cueing preset name or .toml path (default: the platform's default_preset)",
     )
+    add_intensity_option(g)
     g.add_argument("--rate", type=float, default=100.0, metavar="HZ", help="frame rate")
     g.add_argument("--out", required=True, metavar="RIDE", help="ride file to write")
     g.add_argument("--pcap", metavar="FILE", help="also write the exact datagrams as a pcap")
@@ -199,6 +201,7 @@ def _generate(args: argparse.Namespace) -> int:
             )
     else:
         cueing, preset_source = choose_preset(args.preset, platform, args.platform, args.overrides)
+        cueing, preset_source = apply_intensity(cueing, args.intensity, preset_source)
         print(f"cueing: preset {preset_source}", file=sys.stderr)
         ride, report = generate_ride(
             data, platform, controller, cueing, rate_hz=args.rate, limits=limits,

@@ -7,7 +7,13 @@ from typing import Any
 
 from .._errors import ConfigError
 
-__all__ = ["FALLBACK_PRESET", "add_vestibular_option", "choose_preset"]
+__all__ = [
+    "FALLBACK_PRESET",
+    "add_intensity_option",
+    "add_vestibular_option",
+    "apply_intensity",
+    "choose_preset",
+]
 
 FALLBACK_PRESET = "racing"
 """Used when neither ``--preset`` nor the platform file names a preset."""
@@ -63,6 +69,31 @@ def choose_preset(
         return params, f"{params.name} (default of platform {label})"
     params = load_cueing(FALLBACK_PRESET)
     return params, f"{params.name} (fallback: platform {label} names no default_preset)"
+
+
+def add_intensity_option(parser: Any) -> None:
+    """``--intensity PCT``: a point of the preset's tuned intensity range (one definition for
+    every verb that runs a preset)."""
+    parser.add_argument(
+        "--intensity",
+        type=float,
+        default=None,
+        metavar="PCT",
+        help="0-100: a point of the preset's tuned range from gentle (0) to the strongest "
+        "within its false-cue budget (100, the preset as it is); not a plain gain, every "
+        "frame still within the limits. Needs a preset with an [intensity] table "
+        "(racing-hexapod)",
+    )
+
+
+def apply_intensity(params: Any, percent: float | None, source: str) -> tuple[Any, str]:
+    """The preset at ``percent`` (:func:`motioncue.cueing.at_intensity`) and its source
+    label with the intensity; unchanged when ``percent`` is ``None``."""
+    if percent is None:
+        return params, source
+    from ..cueing import at_intensity
+
+    return at_intensity(params, percent), f"{source} at intensity {percent:g} %"
 
 
 def add_vestibular_option(parser: Any) -> None:

@@ -32,15 +32,17 @@ def register(sub: Any) -> None:
         description=(
             "Optimise the base preset's main parameters (translational scales and high-pass, "
             "tilt scales, filter, rate and acceleration limits, rotational scale and "
-            "high-pass, yaw scale and high-pass; bounded, log space) to minimise the mean cue "
-            "score over the recordings (perceived-motion error J relative to standing still, "
-            "lost correlation, false and missed cues), with the cheap chain of generate "
-            "(cueing, workspace limiting, evaluation of the delivered poses). A candidate that "
-            "breaks an "
-            "actuator limit on any frame or clamps more than 1 % of its poses is penalised "
-            "above every one that does not; the result must meet both or nothing is "
-            "written. Optimiser: SciPy differential evolution, seeded. Evaluations run in "
-            "local processes (--workers) or on a Dask cluster (--scheduler)."
+            "high-pass, yaw scale and high-pass; with the compressive tilt also the curves' "
+            "limits and exponents and the share of the platform's tilt reach; bounded, log "
+            "space) with the cheap chain of generate (cueing, workspace limiting, evaluation "
+            "of the delivered poses through vestibular models). Objective strength (the "
+            "default): the largest rendered share of fx and fy among candidates meeting the "
+            "cue-quality targets (reversals, false cues, correlation, clamping); score: the "
+            "cue score. A candidate that breaks an actuator limit on any frame or clamps more "
+            "than 1 % of its poses is penalised above every one that does not; the result "
+            "must meet the limits (and with strength the targets) or nothing is written. "
+            "Optimiser: SciPy differential evolution, seeded. Evaluations run in local "
+            "processes (--workers) or on a Dask cluster (--scheduler)."
         ),
     )
     parser.add_argument(
@@ -94,6 +96,58 @@ def register(sub: Any) -> None:
     parser.add_argument(
         "--rate", type=float, default=100.0, metavar="HZ", help="frame rate (default 100)"
     )
+    parser.add_argument(
+        "--objective",
+        choices=("strength", "score"),
+        default="strength",
+        help="strength (default): the largest rendered share of fx and fy (their geometric "
+        "mean, the recordings pooled) among candidates meeting the cue-quality "
+        "targets below (pooled); score: the cue score (lower is better; the "
+        "objective before issue 20, which barely moving can win)",
+    )
+    parser.add_argument(
+        "--max-reversals", type=float, default=2.0, metavar="PCT",
+        help="strength target: reversals (both above threshold, opposite signs) at most "
+        "PCT %% of each recording (default 2)",
+    )  # fmt: skip
+    parser.add_argument(
+        "--max-false", type=float, default=15.0, metavar="PCT",
+        help="strength target: false cues (rider against the vehicle, any size) at most "
+        "PCT %% of each recording (default 15)",
+    )  # fmt: skip
+    parser.add_argument(
+        "--max-clamped", type=float, default=1.0, metavar="PCT",
+        help="strength target: clamped poses at most PCT %% (default 1)",
+    )  # fmt: skip
+    parser.add_argument(
+        "--min-corr", type=float, nargs=2, default=(0.95, 0.90), metavar=("FX", "FY"),
+        help="strength target: perceived fx and fy correlation at least FX and FY on each "
+        "recording (default 0.95 0.90)",
+    )  # fmt: skip
+    parser.add_argument(
+        "--excerpt",
+        default=None,
+        metavar="START:END",
+        help="tune on this window of each recording only (seconds from its start; a cheaper "
+        "tune on short excerpts)",
+    )
+    parser.add_argument(
+        "--init-spread",
+        type=float,
+        default=None,
+        metavar="S",
+        help="start from a population about the base preset (log-space normal steps of "
+        "standard deviation S, e.g. 0.3) instead of over the whole search box: a local "
+        "search from a good base",
+    )
+    parser.add_argument(
+        "--gentle-end",
+        action="store_true",
+        help="tune the gentle (0 %%) end of the base preset's intensity range instead: the "
+        "base must have the compressive tilt ([tilt] shape); the search starts from the base "
+        "and the written preset is the base unchanged plus an [intensity] table holding the "
+        "result (give tighter targets than the base's, e.g. --max-false 5)",
+    )
     add_vestibular_option(parser)
     add_limit_options(parser)
     add_set_option(parser)
@@ -119,6 +173,7 @@ def _metrics_table(before: Any, after: Any) -> str:
         ("clamped poses (%)", before.clamped_fraction * 100, after.clamped_fraction * 100, ".2f")
     )
     rows.append(("frames breaking a limit", before.violating_frames, after.violating_frames, "d"))
+    rows.append(("strength: sqrt(share fx fy)", before.strength, after.strength, ".4f"))
     if before.cue is not None and after.cue is not None:
         # cue strength and cue errors, pooled over the recordings (motioncue.cueing.cue_metrics)
         for i, a in enumerate(_AXES[:2]):
@@ -138,8 +193,20 @@ def _metrics_table(before: Any, after: Any) -> str:
 
 
 def run(args: argparse.Namespace) -> int:
+    from dataclasses import replace
+
     from ..cueing import get_model_set, load_cueing
-    from ..cueing._tune import PENALTY_BASE, TuneObjective, preset_toml, tune_cueing, write_preset
+    from ..cueing._tune import (
+        PENALTY_BASE,
+        StrengthTargets,
+        TuneObjective,
+        at_intensity,
+        gentle_values,
+        preset_toml,
+        tilt_reach,
+        tune_cueing,
+        write_preset,
+    )
     from ..output._controllers import load_controller
     from ..pipeline._inputs import load_generate_input
     from ..telemetry._motion import is_datagram_recording
@@ -187,6 +254,19 @@ def run(args: argparse.Namespace) -> int:
         platform, controller, rate_hz=args.rate, **limit_overrides(args)
     )
     tight = pulse_rounding_limits(limits, platform, 1.0 / args.rate)
+    excerpt = None
+    if args.excerpt is not None:
+        try:
+            a_s, b_s = (float(v) for v in args.excerpt.split(":"))
+        except ValueError:
+            raise ConfigError(
+                f"--excerpt {args.excerpt!r} is invalid; allowed: START:END in seconds"
+            ) from None
+        if not (math.isfinite(a_s) and math.isfinite(b_s) and 0.0 <= a_s and b_s - a_s >= 1.0):
+            raise ConfigError(
+                f"--excerpt {args.excerpt!r} is invalid; allowed: 0 <= START, END >= START + 1"
+            )
+        excerpt = (a_s, b_s)
     drives = []
     for path in args.input:
         if is_datagram_recording(Path(path)):  # a 'motioncue record' file
@@ -196,11 +276,56 @@ def run(args: argparse.Namespace) -> int:
         if len(rec) < 2:
             raise ConfigError(f"{path}: too short to tune on ({len(rec)} samples)")
         uni = resample(rec, args.rate)
-        drives.append((Path(path).name, uni.f, uni.w))
-    objective = TuneObjective(base, drives, platform, tight, args.rate, model=args.vestibular)
+        f, w = uni.f, uni.w
+        if excerpt is not None:
+            a, b = round(excerpt[0] * args.rate), round(excerpt[1] * args.rate)
+            if b > len(f):
+                raise ConfigError(
+                    f"{path}: --excerpt {args.excerpt} ends after the recording "
+                    f"({len(f) / args.rate:.1f} s)"
+                )
+            f, w = f[a:b], w[a:b]
+        drives.append((Path(path).name, f, w))
+    for flag, value in (
+        ("--max-reversals", args.max_reversals),
+        ("--max-false", args.max_false),
+        ("--max-clamped", args.max_clamped),
+    ):
+        if not (math.isfinite(value) and 0.0 < value <= 100.0):
+            raise ConfigError(f"{flag} {value!r} is invalid; allowed: (0, 100] %")
+    for v in args.min_corr:
+        if not (math.isfinite(v) and -1.0 <= v < 1.0):
+            raise ConfigError(f"--min-corr {v!r} is invalid; allowed: [-1, 1)")
+    targets = StrengthTargets(
+        max_reversals=args.max_reversals / 100.0,
+        max_false=args.max_false / 100.0,
+        max_clamped=args.max_clamped / 100.0,
+        min_corr_fx=args.min_corr[0],
+        min_corr_fy=args.min_corr[1],
+    )
+    if args.gentle_end and (base.tilt_shape is None or args.objective != "strength"):
+        raise ConfigError(
+            f"--gentle-end needs a base preset with the compressive tilt ([tilt] shape; "
+            f"{base.name!r} has none) and --objective strength"
+        )
+    strong_end = base
+    if base.tilt_shape is not None and not args.gentle_end:  # this platform's own reach
+        base = replace(base, tilt_reach_rad=tilt_reach(platform, tight))
+    objective = TuneObjective(
+        base, drives, platform, tight, args.rate, model=args.vestibular,
+        objective=args.objective, targets=targets,
+    )  # fmt: skip
+    strength = args.objective == "strength"
 
     def progress(gen: int, best: float, rate: float, n_eval: int) -> None:
-        shown = f"score {best:8.4f}" if best < PENALTY_BASE else "none within the limits yet"
+        if best >= PENALTY_BASE:
+            shown = "none within the limits yet"
+        elif strength and best >= 0.0:
+            shown = f"none meets the targets yet (violation {best - 1.0:.3f})"
+        elif strength:
+            shown = f"strength {-best:8.4f}"
+        else:
+            shown = f"score {best:8.4f}"
         print(
             f"motioncue tune: generation {gen:4d}  best {shown}  "
             f"{rate:7.1f} evaluations/s  ({n_eval} evaluations)",
@@ -224,30 +349,69 @@ def run(args: argparse.Namespace) -> int:
         scheduler=args.scheduler,
         name=name,
         progress=progress,
+        init_spread=args.init_spread,
     )
+    pa = result.after.cue
     inputs = ", ".join(Path(p).name for p in args.input)
+    if excerpt is not None:
+        inputs += f" (each from {excerpt[0]:g} s to {excerpt[1]:g} s)"
     comments = [
         f"Written by motioncue tune from base preset {base.name!r}.",
         f"Tuned on: {inputs}",
         f"Platform {args.platform}, controller {args.controller}, {args.rate:g} Hz.",
-        f"Optimiser: scipy differential_evolution, seed {args.seed}, popsize "
+        f"Optimiser: scipy differential_evolution, seed {args.seed}, "
+        + (
+            ""
+            if args.init_spread is None
+            else f"start about the base (spread {args.init_spread:g}), "
+        )
+        + f"popsize "
         f"{args.popsize}, {result.generations} generation(s), {result.evaluations} "
         f"evaluations ({result.stop_reason}).",
-        "Objective: mean cue score (motioncue.cueing.cue_score: perceived-motion error J "
-        "relative to standing still, lost correlation, false and missed cues; vestibular "
-        f"models {args.vestibular}) of the poses after workspace limiting; constraints: zero "
-        "frames breaking an actuator limit, at most 1 % of poses clamped.",
+        _objective_comment(args, targets),
         f"Cue score on the tuning recordings: before {result.before.objective:.4f}, "
         f"after {result.after.objective:.4f}; J before {result.before.perceived_error:.3f}, "
         f"after {result.after.perceived_error:.3f}.",
+        f"Strength (geometric mean of the shares of fx and fy) before "
+        f"{result.before.strength:.4f}, after {result.after.strength:.4f}.",
     ]
-    text = preset_toml(result.params, comments)
+    if pa is not None:
+        comments.append(
+            f"Pooled on the tuning recordings after: share fx/fy {pa.rendered_share[0]:.4f}/"
+            f"{pa.rendered_share[1]:.4f}, missed fx/fy {pa.missed[0]:.1%}/{pa.missed[1]:.1%}, "
+            f"reversals {pa.reversals_any:.2%}, false cues {pa.false_any:.2%}, corr fx/fy "
+            f"{pa.correlation[0]:.3f}/{pa.correlation[1]:.3f}."
+        )
+    if strength and objective.targets.violation(result.after) > 0.0:
+        raise ConfigError(
+            f"no candidate met the targets in {result.generations} generation(s) (the best, "
+            "pooled: "
+            + (
+                ""
+                if pa is None
+                else f"reversals {pa.reversals_any:.2%}, false cues {pa.false_any:.2%}, "
+                f"corr fx/fy {pa.correlation[0]:.3f}/{pa.correlation[1]:.3f}, "
+            )
+            + f"clamped {result.after.clamped_fraction:.2%}); nothing written"
+        )
+    written = result.params
+    if args.gentle_end:
+        written = replace(strong_end, name=name, intensity_gentle=gentle_values(result.params))
+        comments.insert(
+            0,
+            "The tables are the base preset's (the strong end, 100 %); the [intensity] "
+            "table at the end is the tuned gentle end (0 %).",
+        )
+    text = preset_toml(written, comments)
     # check what the file says (its decimal rounding) before it takes the name
     check = out.with_name(f".{out.stem}.partial-check.toml")
     try:
         write_preset(check, text)
-        after = objective.metrics(load_cueing(check), full=True)
-        if not after.feasible:
+        reread = load_cueing(check)
+        after = objective.metrics(
+            at_intensity(reread, 0.0) if args.gentle_end else reread, full=True
+        )
+        if not after.feasible or (strength and objective.targets.violation(after) > 0.0):
             raise ConfigError(f"{out}: the tuned preset breaks the limits after rounding")
         os.replace(check, out)
     except OSError as exc:
@@ -275,6 +439,27 @@ def run(args: argparse.Namespace) -> int:
     return 0
 
 
+def _objective_comment(args: argparse.Namespace, targets: Any) -> str:
+    """The header line saying what was optimised."""
+    chain = (
+        f"of the poses after workspace limiting (vestibular models {args.vestibular}); "
+        "constraints: zero frames breaking an actuator limit, at most 1 % of poses clamped"
+    )
+    if args.objective == "score":
+        return (
+            "Objective: mean cue score (motioncue.cueing.cue_score: perceived-motion error J "
+            "relative to standing still, lost correlation, false and missed cues) " + chain + "."
+        )
+    return (
+        "Objective: strength, the geometric mean of the rendered shares of fx and fy (the "
+        "recordings pooled) "
+        + chain
+        + f"; targets on every recording: reversals <= {targets.max_reversals:.2%}, false "
+        f"cues <= {targets.max_false:.2%}, clamped <= {targets.max_clamped:.2%}, corr fx >= "
+        f"{targets.min_corr_fx:g}, fy >= {targets.min_corr_fy:g}."
+    )
+
+
 def _metrics_dict(m: Any) -> dict[str, Any]:
     """A :class:`~motioncue.cueing._tune.TuneMetrics` for ``--json`` (NaN as None)."""
 
@@ -289,6 +474,7 @@ def _metrics_dict(m: Any) -> dict[str, Any]:
         "duration_s": num(m.duration_s),
         "clamped_fraction": num(m.clamped_fraction),
         "violating_frames": int(m.violating_frames),
+        "strength": num(m.strength),
         "feasible": bool(m.feasible),
         # definitions: motioncue.cueing.cue_metrics (pooled over the recordings)
         "cue_metrics": None if m.cue is None else m.cue.to_dict(),

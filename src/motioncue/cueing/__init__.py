@@ -50,6 +50,7 @@ from ._score import (
     CueScore,
     cue_score,
 )
+from ._tune import at_intensity, tilt_reach
 from ._vestibular import (
     DEFAULT_MODEL_SET,
     DEFAULT_WEIGHTS,
@@ -88,6 +89,7 @@ __all__ = [
     "VestibularModelSet",
     "WashoutResult",
     "WashoutState",
+    "at_intensity",
     "cue_bound",
     "cue_masks",
     "cue_metrics",
@@ -102,5 +104,6 @@ __all__ = [
     "register_cueing",
     "rig_reach",
     "simulator_motion",
+    "tilt_reach",
     "unregister_cueing",
 ]

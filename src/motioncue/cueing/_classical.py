@@ -15,8 +15,14 @@ Signal flow (per sample; frames, signs and units of conventions.md)
    deviation ``|f - [0, 0, g]|`` or angular velocity exceeds ``reject_*`` on any axis, is
    replaced by the last good sample (rest, ``f = [0, 0, g], w = 0``, before the first) and
    counted.
+   With ``lead_s = (tau_x, tau_y)`` the held ``f_x, f_y`` fed to the tilt (step 2, with
+   its own ``tilt_scale``) pass the phase lead ``(1 + tau s) / (1 + tau s / LEAD_GAIN)``
+   (Tustin, prewarped at ``1/tau``), which offsets the tilt's lag.
 1. **Scaling and smooth limiting.** ``f_s = [0, 0, g] + L_f(k_f * (f - [0, 0, g]))``,
    ``w_s = L_w(k_w * w)`` with the limiter ``L`` of :func:`~._filters.soft_limit`.
+   With ``f_shape`` / ``w_shape`` set, the channel is compressed instead
+   (:func:`~._filters.compress`): ``k x / (1 + |k x / L|^p)^(1/p)`` replaces ``L(k x)``,
+   so small cues pass with the gain ``k`` and large ones bend smoothly below the limit.
 2. **Tilt coordination.** ``f_t = f_s`` (x, y) or, when ``tilt_scale = (kt_x, kt_y)`` is set,
    ``f_t = [kt_x f_x, kt_y f_y]`` (its own gain, without the translational force limit:
    the tilt angle has its own limit). ``f_t,x`` and ``f_t,y`` pass the low-pass
@@ -28,6 +34,16 @@ Signal flow (per sample; frames, signs and units of conventions.md)
    Each target is smoothly limited to ``tilt_limit`` and then rate limited:
    ``tilt[n] = tilt[n-1] + clip(target - tilt[n-1], -r/fs, r/fs)`` (the limit bounds the
    tilt; roll and pitch also carry the high-passed rotational cue of step 3).
+   With ``tilt_shape = p`` (the compressive tilt) the force fed to the low-pass is
+   ``f_t = compress(f, kt, L+, L-, p)`` with ``L = g sin(u * reach)`` in the direction the
+   tilt goes (``u = tilt_reach_use``, ``reach`` the platform's own reach in pure tilt,
+   ``tilt_reach_rad``): large sustained forces are compressed into the tilt this platform
+   can give in that direction, and the angle is only clipped to ``u * reach`` (a no-op but
+   for the low-pass's rounding) instead of the soft ``tilt_limit``. Roll and pitch together
+   are kept inside the ellipse of the quadrant they are in,
+   ``(roll / R)^2 + (pitch / P)^2 <= 1`` with ``R, P`` the limits in that direction: a
+   target outside it is scaled back towards level along its own direction (a hexapod
+   reaches about 0.9-1.1 times that ellipse along the diagonals, 12.4 deg of roll alone).
    With ``tilt_accel_limit_rad_s2 = a`` the tilt is also acceleration limited
    (:func:`rate_accel_limit_step`): with the per-sample step ``u[n] = tilt[n] - tilt[n-1]``,
    ``d = a / fs^2`` and ``e = target - tilt[n-1]``, the wanted step is
@@ -99,8 +115,16 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from .._errors import ConfigError
-from ._filters import Section, rate_limit_array, soft_limit, soft_limit_array, tustin_section
-from ._params import GRAVITY_M_S2, CueingParams
+from ._filters import (
+    Section,
+    compress,
+    compress_array,
+    rate_limit_array,
+    soft_limit,
+    soft_limit_array,
+    tustin_section,
+)
+from ._params import GRAVITY_M_S2, LEAD_GAIN, CueingParams
 
 __all__ = ["ClassicalWashout", "WashoutResult", "WashoutState", "rate_accel_limit_step"]
 
@@ -111,7 +135,8 @@ _MIN_COS_PITCH = 1e-3
 # 0, 1: tilt low-pass x, y; 2, 3: rotational prediction roll, pitch (yaw does not enter T);
 # 4-6: rotational high-pass+integrator roll, pitch, yaw; 7-12: translational x1, x2, y1, y2,
 # z1, z2 (the second section of an axis is the identity when its wb is 0).
-_N_SECTIONS = 13
+# 13, 14: phase lead on fx, fy (the identity without lead_s).
+_N_SECTIONS = 15
 
 
 @dataclass(eq=False)
@@ -120,8 +145,8 @@ class WashoutState:
 
     Attributes
     ----------
-    z : list of 26 floats
-        Delay states of the 13 second-order sections.
+    z : list of 30 floats
+        Delay states of the 15 second-order sections.
     tilt : list of 2 floats
         Rate-limited tilt ``[roll, pitch]`` (rad) of the last sample.
     hold : list of 6 floats
@@ -274,6 +299,7 @@ class ClassicalWashout:
     params: CueingParams
     fs_hz: float
     tilt_lp: Section = field(init=False)
+    lead: tuple[Section, Section] = field(init=False)
     rot: tuple[Section, Section, Section] = field(init=False)
     trans: tuple[tuple[Section, Section], ...] = field(init=False)
     _step_impl: _StepFn = field(init=False, repr=False)
@@ -302,6 +328,11 @@ class ClassicalWashout:
                 first = tustin_section([1.0], [1.0, 2.0 * z * w, w * w], fs, w)
                 second = _IDENTITY
             trans.append((first, second))
+        leads: list[Section] = [_IDENTITY, _IDENTITY]
+        if p.lead_s is not None:
+            for i, tau in enumerate(p.lead_s):
+                leads[i] = tustin_section([tau, 1.0], [tau / LEAD_GAIN, 1.0], fs, 1.0 / tau)
+        object.__setattr__(self, "lead", (leads[0], leads[1]))
         object.__setattr__(self, "tilt_lp", tilt_lp)
         object.__setattr__(self, "rot", (rot[0], rot[1], rot[2]))
         object.__setattr__(self, "trans", tuple(trans))
@@ -313,6 +344,8 @@ class ClassicalWashout:
             sos[4 + k] = _sos(sec)  # high-pass + integrator at 4, 5, 6
         for k, secs in enumerate(trans):
             sos[7 + 2 * k] = _sos(*secs)
+        sos[13] = _sos(leads[0])
+        sos[14] = _sos(leads[1])
         object.__setattr__(self, "_sos", sos)
 
     # ------------------------------------------------------------------ continuous designs
@@ -408,6 +441,17 @@ class ClassicalWashout:
         ra_step = rate_accel_limit_step
         own_tilt = p.tilt_scale is not None
         ktx, kty = (1.0, 1.0) if p.tilt_scale is None else p.tilt_scale
+        fshape = p.f_shape is not None
+        pfx, pfy, pfz = (1.0, 1.0, 1.0) if p.f_shape is None else p.f_shape
+        wshape = p.w_shape is not None
+        pwx, pwy, pwz = (1.0, 1.0, 1.0) if p.w_shape is None else p.w_shape
+        cshape = p.tilt_shape is not None
+        pt = 1.0 if p.tilt_shape is None else p.tilt_shape
+        lxp, lxn, lyp, lyn = p.tilt_force_limits_m_s2
+        rmin, rmax, pmin, pmax = p.tilt_limits_rad
+        comp = compress
+        has_lead = p.lead_s is not None
+        ld0, ld1 = self.lead
         hx, hy, hz = p.head_offset_m
         head = hx != 0.0 or hy != 0.0 or hz != 0.0
         mx, my, mz, mr, mp, myaw = (1.0 if d else 0.0 for d in p.dofs)
@@ -416,7 +460,7 @@ class ClassicalWashout:
         t0a, t0b = self.trans[0]
         t1a, t1b = self.trans[1]
         t2a, t2b = self.trans[2]
-        asin, sin, cos = math.asin, math.sin, math.cos
+        asin, sin, cos, sqrt = math.asin, math.sin, math.cos, math.sqrt
         soft = soft_limit
         mincos = _MIN_COS_PITCH
 
@@ -454,31 +498,49 @@ class ClassicalWashout:
             else:
                 state.bad_samples += 1
                 fx, fy, fz, wx, wy, wz = h[0], h[1], h[2], h[3], h[4], h[5]
-            # 1. scaling and smooth limiting
-            sx = kfx * fx
-            if sx > afx or sx < -afx:
-                sx = soft(sx, lfx, knee)
-            sy = kfy * fy
-            if sy > afy or sy < -afy:
-                sy = soft(sy, lfy, knee)
-            sz = kfz * (fz - g)
-            if sz > afz or sz < -afz:
-                sz = soft(sz, lfz, knee)
+            flx = fx
+            fly = fy
+            if has_lead:  # 0b. phase lead on the tilt's fx, fy
+                flx = bq(ld0, state.z, 26, fx)
+                fly = bq(ld1, state.z, 28, fy)
+            # 1. scaling and smooth limiting (or compression)
+            if fshape:
+                sx = comp(fx, kfx, lfx, lfx, pfx)
+                sy = comp(fy, kfy, lfy, lfy, pfy)
+                sz = comp(fz - g, kfz, lfz, lfz, pfz)
+            else:
+                sx = kfx * fx
+                if sx > afx or sx < -afx:
+                    sx = soft(sx, lfx, knee)
+                sy = kfy * fy
+                if sy > afy or sy < -afy:
+                    sy = soft(sy, lfy, knee)
+                sz = kfz * (fz - g)
+                if sz > afz or sz < -afz:
+                    sz = soft(sz, lfz, knee)
             fzs = g + sz
-            qx = kwx * wx
-            if qx > awx or qx < -awx:
-                qx = soft(qx, lwx, knee)
-            qy = kwy * wy
-            if qy > awy or qy < -awy:
-                qy = soft(qy, lwy, knee)
-            qz = kwz * wz
-            if qz > awz or qz < -awz:
-                qz = soft(qz, lwz, knee)
+            if wshape:
+                qx = comp(wx, kwx, lwx, lwx, pwx)
+                qy = comp(wy, kwy, lwy, lwy, pwy)
+                qz = comp(wz, kwz, lwz, lwz, pwz)
+            else:
+                qx = kwx * wx
+                if qx > awx or qx < -awx:
+                    qx = soft(qx, lwx, knee)
+                qy = kwy * wy
+                if qy > awy or qy < -awy:
+                    qy = soft(qy, lwy, knee)
+                qz = kwz * wz
+                if qz > awz or qz < -awz:
+                    qz = soft(qz, lwz, knee)
             z = state.z
             # 2. tilt coordination
-            if own_tilt:
-                tix = ktx * fx
-                tiy = kty * fy
+            if cshape:
+                tix = comp(flx, ktx, lxp, lxn, pt)
+                tiy = comp(fly, kty, lyp, lyn, pt)
+            elif own_tilt:
+                tix = ktx * flx
+                tiy = kty * fly
             else:
                 tix = sx
                 tiy = sy
@@ -491,13 +553,24 @@ class ClassicalWashout:
             u = ylx / g
             u = 1.0 if u > 1.0 else (-1.0 if u < -1.0 else u)
             tp = -asin(u)
-            if tp > atl or tp < -atl:
-                tp = soft(tp, tl, knee)
             u = yly / g
             u = 1.0 if u > 1.0 else (-1.0 if u < -1.0 else u)
             tr = asin(u)
-            if tr > atl or tr < -atl:
-                tr = soft(tr, tl, knee)
+            if cshape:
+                tp = pmax if tp > pmax else (-pmin if tp < -pmin else tp)
+                tr = rmax if tr > rmax else (-rmin if tr < -rmin else tr)
+                er = tr / (rmax if tr > 0.0 else rmin)
+                ep = tp / (pmax if tp > 0.0 else pmin)
+                qq = er * er + ep * ep
+                if qq > 1.0:  # roll and pitch together: inside the quadrant's ellipse
+                    sq = 1.0 / sqrt(qq)
+                    tr = tr * sq
+                    tp = tp * sq
+            else:
+                if tp > atl or tp < -atl:
+                    tp = soft(tp, tl, knee)
+                if tr > atl or tr < -atl:
+                    tr = soft(tr, tl, knee)
             tilt = state.tilt
             if sa > 0.0:
                 trate = state.tilt_rate
@@ -693,15 +766,6 @@ class ClassicalWashout:
             held = np.where((idx >= 0)[:, None], raw[np.maximum(idx, 0)], np.array(state.hold))
             used[:] = held.T
         fx, fy, fz, wx, wy, wz = used
-        # 1. scaling and smooth limiting
-        knee = p.soft_knee
-        sx = soft_limit_array(p.f_scale[0] * fx, p.f_limit_m_s2[0], knee)
-        sy = soft_limit_array(p.f_scale[1] * fy, p.f_limit_m_s2[1], knee)
-        sz = soft_limit_array(p.f_scale[2] * (fz - g), p.f_limit_m_s2[2], knee)
-        fzs = g + sz
-        qx = soft_limit_array(p.w_scale[0] * wx, p.w_limit_rad_s[0], knee)
-        qy = soft_limit_array(p.w_scale[1] * wy, p.w_limit_rad_s[1], knee)
-        qz = soft_limit_array(p.w_scale[2] * wz, p.w_limit_rad_s[2], knee)
         z = np.array(state.z).reshape(_N_SECTIONS, 2)
         zf = z.copy()
 
@@ -710,16 +774,59 @@ class ClassicalWashout:
             zf[k : k + len(secs)] = zout
             return np.asarray(y)
 
+        flx, fly = fx, fy
+        if p.lead_s is not None:  # 0b. phase lead on the tilt's fx, fy
+            flx = filt([self.lead[0]], fx, 13)
+            fly = filt([self.lead[1]], fy, 14)
+        # 1. scaling and smooth limiting
+        knee = p.soft_knee
+        if p.f_shape is None:
+            sx = soft_limit_array(p.f_scale[0] * fx, p.f_limit_m_s2[0], knee)
+            sy = soft_limit_array(p.f_scale[1] * fy, p.f_limit_m_s2[1], knee)
+            sz = soft_limit_array(p.f_scale[2] * (fz - g), p.f_limit_m_s2[2], knee)
+        else:
+            k, lf, pf = p.f_scale, p.f_limit_m_s2, p.f_shape
+            sx = compress_array(fx, k[0], lf[0], lf[0], pf[0])
+            sy = compress_array(fy, k[1], lf[1], lf[1], pf[1])
+            sz = compress_array(fz - g, k[2], lf[2], lf[2], pf[2])
+        fzs = g + sz
+        if p.w_shape is None:
+            qx = soft_limit_array(p.w_scale[0] * wx, p.w_limit_rad_s[0], knee)
+            qy = soft_limit_array(p.w_scale[1] * wy, p.w_limit_rad_s[1], knee)
+            qz = soft_limit_array(p.w_scale[2] * wz, p.w_limit_rad_s[2], knee)
+        else:
+            k, lw, pw = p.w_scale, p.w_limit_rad_s, p.w_shape
+            qx = compress_array(wx, k[0], lw[0], lw[0], pw[0])
+            qy = compress_array(wy, k[1], lw[1], lw[1], pw[1])
+            qz = compress_array(wz, k[2], lw[2], lw[2], pw[2])
+
         # 2. tilt coordination
-        if p.tilt_scale is None:
+        if p.tilt_shape is not None and p.tilt_scale is not None:
+            lxp, lxn, lyp, lyn = p.tilt_force_limits_m_s2
+            tix = compress_array(flx, p.tilt_scale[0], lxp, lxn, p.tilt_shape)
+            tiy = compress_array(fly, p.tilt_scale[1], lyp, lyn, p.tilt_shape)
+        elif p.tilt_scale is None:
             tix, tiy = sx, sy
         else:
-            tix = p.tilt_scale[0] * fx
-            tiy = p.tilt_scale[1] * fy
+            tix = p.tilt_scale[0] * flx
+            tiy = p.tilt_scale[1] * fly
         ylx = filt([self.tilt_lp], tix, 0)
         yly = filt([self.tilt_lp], tiy, 1)
-        tp = soft_limit_array(-np.arcsin(np.clip(ylx / g, -1.0, 1.0)), p.tilt_limit_rad, knee)
-        tr = soft_limit_array(np.arcsin(np.clip(yly / g, -1.0, 1.0)), p.tilt_limit_rad, knee)
+        tp = -np.arcsin(np.clip(ylx / g, -1.0, 1.0))
+        tr = np.arcsin(np.clip(yly / g, -1.0, 1.0))
+        if p.tilt_shape is not None:
+            rmin, rmax, pmin, pmax = p.tilt_limits_rad
+            tp = np.clip(tp, -pmin, pmax)
+            tr = np.clip(tr, -rmin, rmax)
+            er = tr / np.where(tr > 0.0, rmax, rmin)
+            ep = tp / np.where(tp > 0.0, pmax, pmin)
+            qq = er * er + ep * ep
+            sq = np.where(qq > 1.0, 1.0 / np.sqrt(np.maximum(qq, 1.0)), 1.0)
+            tr = np.where(qq > 1.0, tr * sq, tr)
+            tp = np.where(qq > 1.0, tp * sq, tp)
+        else:
+            tp = soft_limit_array(tp, p.tilt_limit_rad, knee)
+            tr = soft_limit_array(tr, p.tilt_limit_rad, knee)
         fs = self.fs_hz
         st = p.tilt_rate_limit_rad_s / fs
         if p.tilt_accel_limit_rad_s2 is None:

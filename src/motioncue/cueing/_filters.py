@@ -5,6 +5,9 @@
   ``(b0, b1, b2, 1, a1, a2)`` in the layout of :func:`scipy.signal.sosfilt`.
 * :func:`soft_limit` / :func:`soft_limit_array`: the smooth limiter (identity up to a knee,
   then a tanh bend towards the limit, continuous in value and slope).
+* :func:`compress` / :func:`compress_array`: the compressive scaling curve
+  ``y = k x / (1 + |k x / L|^p)^(1/p)`` (gain ``k`` near zero, limit ``L``, one limit per
+  sign), smooth, odd when both limits agree, strictly monotone.
 * :func:`rate_limit_array`: the rate limiter ``y[n] = y[n-1] + clip(x[n] - y[n-1], -r, r)``
   over a whole signal, vectorised by segments, giving the same numbers as the sample loop.
 """
@@ -20,6 +23,9 @@ from numpy.typing import NDArray
 from .._errors import ConfigError
 
 __all__ = [
+    "compress",
+    "compress_array",
+    "compress_inverse",
     "rate_limit_array",
     "rate_limit_step",
     "soft_limit",
@@ -105,6 +111,61 @@ def soft_limit_array(x: NDArray[np.float64], limit: float, knee: float) -> NDArr
     else:
         out[big] = np.copysign(a + b * np.tanh((ax[big] - a) / b), xb)
     return out
+
+
+def compress(x: float, k: float, limit_pos: float, limit_neg: float, shape: float) -> float:
+    """The compressive scaling curve on one float.
+
+    ``y = k x / (1 + (|k x| / L)^p)^(1/p)`` with ``L = limit_pos`` for ``x > 0`` and
+    ``limit_neg`` for ``x < 0``: slope ``k`` at zero (small cues pass scaled by ``k``), ``|y| <
+    L`` always, ``y -> +-L`` for large ``|x|``. Strictly increasing for ``k > 0``; its
+    derivative ``k (1 + (|k x|/L)^p)^(-1/p - 1)`` is continuous (and equals ``k`` at zero on
+    both sides, whatever the two limits). ``p`` sets how sharp the bend is: ``p = 1`` the
+    softest (``k x / (1 + |k x| / L)``), large ``p`` close to ``clip(k x, -L, L)``.
+
+    Parameters
+    ----------
+    x : float
+        Input (any unit).
+    k : float
+        Gain at zero, >= 0.
+    limit_pos, limit_neg : float
+        Limit of the output for positive and negative inputs (magnitudes, > 0; the output's
+        unit).
+    shape : float
+        Exponent ``p`` >= 1.
+
+    Returns
+    -------
+    float
+    """
+    y = k * x
+    if y > 0.0:
+        return y / (1.0 + (y / limit_pos) ** shape) ** (1.0 / shape)
+    if y < 0.0:
+        return y / (1.0 + (-y / limit_neg) ** shape) ** (1.0 / shape)
+    return y
+
+
+def compress_array(
+    x: NDArray[np.float64], k: float, limit_pos: float, limit_neg: float, shape: float
+) -> NDArray[np.float64]:
+    """:func:`compress` elementwise (the same operations, so the same numbers to rounding)."""
+    y = k * np.asarray(x, dtype=float)
+    lim = np.where(y > 0.0, limit_pos, limit_neg)
+    return np.asarray(y / (1.0 + (np.abs(y) / lim) ** shape) ** (1.0 / shape))
+
+
+def compress_inverse(y: float, k: float, limit_pos: float, limit_neg: float, shape: float) -> float:
+    """The input ``x`` for which :func:`compress` gives ``y`` (``|y|`` below its limit, k > 0).
+
+    Closed form: ``x = y / (k (1 - (|y|/L)^p)^(1/p))``.
+    """
+    lim = limit_pos if y > 0.0 else limit_neg
+    r = abs(y) / lim
+    if r >= 1.0:
+        raise ValueError(f"|y| = {abs(y)!r} is not below the limit {lim!r}")
+    return y / (k * (1.0 - r**shape) ** (1.0 / shape))
 
 
 _SHORT = 24  # a segment shorter than this switches to the scalar loop

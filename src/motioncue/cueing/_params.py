@@ -15,7 +15,17 @@ from .._config import ConfigReader, find_config, load_toml
 from .._errors import ConfigError
 from ._mpc_params import MpcParams, read_mpc_table
 
-__all__ = ["DOF_NAMES", "GRAVITY_M_S2", "CueingParams", "load_cueing"]
+__all__ = [
+    "DOF_NAMES",
+    "GRAVITY_M_S2",
+    "INTENSITY_KEYS",
+    "LEAD_GAIN",
+    "CueingParams",
+    "load_cueing",
+]
+
+LEAD_GAIN = 5.0
+"""High-frequency gain of the phase lead ``(1 + tau s) / (1 + tau s / LEAD_GAIN)``."""
 
 GRAVITY_M_S2 = 9.80665
 """Standard gravity (the ``g`` of ``f = a - g`` in conventions.md)."""
@@ -23,6 +33,33 @@ GRAVITY_M_S2 = 9.80665
 DOF_NAMES: tuple[str, ...] = ("x", "y", "z", "roll", "pitch", "yaw")
 
 _D2R = math.pi / 180.0
+
+INTENSITY_KEYS: tuple[str, ...] = (
+    "f_scale_x",
+    "f_scale_y",
+    "f_limit_xy_m_s2",
+    "f_shape_xy",
+    "f_scale_z",
+    "trans_wn_xy_rad_s",
+    "trans_wb_xy_rad_s",
+    "tilt_scale_x",
+    "tilt_scale_y",
+    "tilt_shape",
+    "tilt_reach_use",
+    "tilt_wn_rad_s",
+    "tilt_rate_limit_deg_s",
+    "tilt_accel_limit_deg_s2",
+    "w_scale_rp",
+    "rot_wn_rp_rad_s",
+    "w_scale_yaw",
+    "rot_wn_yaw_rad_s",
+    "trans_wn_z_rad_s",
+    "lead_x_s",
+    "lead_y_s",
+)
+"""Keys of a preset's ``[intensity] gentle`` table: the parameters the tuner sets on a preset
+with the compressive tilt (:data:`motioncue.cueing._tune.STRENGTH_TUNED_PARAMETERS`), in
+their units, at the gentle (0 %) end of the preset's intensity range."""
 
 Vec3 = tuple[float, float, float]
 
@@ -83,6 +120,35 @@ class CueingParams:
         ``f_scale`` (and not bounded by ``f_limit_m_s2``: the tilt has its own
         ``tilt_limit_rad``). ``None`` (the default) feeds the tilt the translational channel's
         scaled and limited force, as before this key existed.
+    f_shape, w_shape : 3-tuples or None
+        Compressive scaling (:func:`~._filters.compress`) of the force and angular-velocity
+        channels: with ``p = f_shape[i]`` the scaled force is ``k x / (1 + |k x / L|^p)^(1/p)``
+        (``k = f_scale[i]``, ``L = f_limit_m_s2[i]``): small cues pass with gain ``k``, large
+        ones are compressed smoothly below ``L``, with no linear stretch and no knee.
+        ``None`` (the default): the knee-and-tanh limiter of ``soft_knee``, as before these
+        keys existed.
+    lead_s : 2-tuple or None
+        Phase lead on the longitudinal and lateral force (x, y) fed to the tilt (with
+        ``tilt_scale``; the translational channel is not led): ``(1 + tau s) / (1 + tau s /
+        LEAD_GAIN)``
+        with ``tau = lead_s[i]`` (s) and :data:`LEAD_GAIN` the lead's high-frequency gain.
+        It offsets the lag of the tilt (its low-pass and rate limit), so that the cue turns
+        with the vehicle instead of after it (fewer reversals in quick direction changes).
+        ``None`` (the default): no lead.
+    tilt_shape : float or None
+        Compressive scaling of the tilt channel (needs ``tilt_scale`` and ``tilt_reach_rad``):
+        the force fed to the tilt is ``compress(f, k_t, L+, L-, tilt_shape)`` with the limits
+        ``L = g sin(tilt_reach_use * reach)`` of the platform's reach in that direction, so
+        that the sustained force is compressed into the tilt the platform can give; the tilt
+        angle is then clipped to ``tilt_reach_use * reach`` (instead of the soft
+        ``tilt_limit_rad``, which is not used). ``None`` (the default): the old tilt.
+    tilt_reach_rad : 4-tuple or None
+        The platform's reach in pure tilt about neutral, magnitudes (rad):
+        ``(roll-, roll+, pitch-, pitch+)`` (from the platform's workspace, e.g.
+        :func:`motioncue.cueing.tilt_reach`).
+    tilt_reach_use : float
+        Share of ``tilt_reach_rad`` the tilt may use, in (0, 1] (the rest is left to the
+        translational and rotational cues).
     tilt_accel_limit_rad_s2 : float or None
         Largest tilt angular acceleration (per axis, rad/s^2), on top of
         ``tilt_rate_limit_rad_s``; ``None`` (the default): rate limit only.
@@ -101,6 +167,11 @@ class CueingParams:
     mpc : MpcParams or None
         Settings of the optimisation-based algorithms (``"mpc"``, ``"optimal"``), from the
         optional ``[mpc]`` table; ``None`` when the preset has none.
+    intensity_gentle : tuple of floats or None
+        The gentle (0 %) end of the preset's tuned intensity range: one value per
+        :data:`INTENSITY_KEYS` (their units), from the optional ``[intensity]`` table; the
+        preset's own tables are the strong (100 %) end. ``None``: the preset has no range
+        (see :func:`motioncue.cueing.at_intensity`).
     """
 
     name: str = "default"
@@ -120,6 +191,12 @@ class CueingParams:
     tilt_limit_rad: float = 12.0 * _D2R
     tilt_scale: tuple[float, float] | None = None
     tilt_accel_limit_rad_s2: float | None = None
+    f_shape: Vec3 | None = None
+    w_shape: Vec3 | None = None
+    lead_s: tuple[float, float] | None = None
+    tilt_shape: float | None = None
+    tilt_reach_rad: tuple[float, float, float, float] | None = None
+    tilt_reach_use: float = 1.0
     head_offset_m: Vec3 = (0.0, 0.0, 0.0)
     rot_wn_rad_s: Vec3 = (1.0, 1.0, 0.5)
     rot_zeta: Vec3 = (1.0, 1.0, 1.0)
@@ -134,6 +211,26 @@ class CueingParams:
         20.0 * _D2R,
     )
     mpc: MpcParams | None = None
+    intensity_gentle: tuple[float, ...] | None = None
+
+    @property
+    def tilt_limits_rad(self) -> tuple[float, float, float, float]:
+        """Clip of the compressed tilt, ``(roll-, roll+, pitch-, pitch+)`` magnitudes (rad):
+        ``tilt_reach_use * tilt_reach_rad`` (``tilt_limit_rad`` each without a reach)."""
+        if self.tilt_reach_rad is None:
+            return (self.tilt_limit_rad,) * 4
+        u = self.tilt_reach_use
+        r = self.tilt_reach_rad
+        return (u * r[0], u * r[1], u * r[2], u * r[3])
+
+    @property
+    def tilt_force_limits_m_s2(self) -> tuple[float, float, float, float]:
+        """Limits of the compressed tilt force ``(fx+, fx-, fy+, fy-)`` (m/s^2, magnitudes):
+        ``g sin`` of the tilt limit in the direction that force needs (forward force: nose
+        up, pitch-; rightward force: roll+)."""
+        rn, rp, pn, pp = self.tilt_limits_rad
+        g = GRAVITY_M_S2
+        return (g * math.sin(pn), g * math.sin(pp), g * math.sin(rp), g * math.sin(rn))
 
     def __post_init__(self) -> None:
         if not isinstance(self.algorithm, str) or not self.algorithm:
@@ -148,6 +245,42 @@ class CueingParams:
             _check("tilt_scale", self.tilt_scale, 0.0, False, 100.0)
         if self.tilt_accel_limit_rad_s2 is not None:
             _check("tilt_accel_limit_rad_s2", (self.tilt_accel_limit_rad_s2,), 0.0, True, 1e6)
+        for name in ("f_shape", "w_shape"):
+            shape = getattr(self, name)
+            if shape is not None:
+                if len(shape) != 3:
+                    raise ConfigError(f"CueingParams.{name} = {shape!r} is invalid; 3 numbers")
+                _check(name, shape, 1.0, False, 50.0)
+        _check("tilt_reach_use", (self.tilt_reach_use,), 0.0, True, 1.0)
+        if self.lead_s is not None:
+            if len(self.lead_s) != 2:
+                raise ConfigError(f"CueingParams.lead_s = {self.lead_s!r} is invalid; 2 numbers")
+            _check("lead_s", self.lead_s, 0.0, True, 10.0)
+        if self.tilt_reach_rad is not None:
+            if len(self.tilt_reach_rad) != 4:
+                raise ConfigError(
+                    f"CueingParams.tilt_reach_rad = {self.tilt_reach_rad!r} is invalid; 4 "
+                    "numbers (roll-, roll+, pitch-, pitch+)"
+                )
+            _check("tilt_reach_rad", self.tilt_reach_rad, 0.0, True, math.radians(60.0))
+        if self.tilt_shape is not None:
+            _check("tilt_shape", (self.tilt_shape,), 1.0, False, 50.0)
+            if self.tilt_reach_rad is None or self.tilt_scale is None:
+                raise ConfigError(
+                    f"CueingParams.tilt_shape = {self.tilt_shape!r} needs tilt_scale and "
+                    "tilt_reach_rad (the platform's reach)"
+                )
+        if self.intensity_gentle is not None:
+            if len(self.intensity_gentle) != len(INTENSITY_KEYS):
+                raise ConfigError(
+                    f"CueingParams.intensity_gentle has {len(self.intensity_gentle)} values; "
+                    f"allowed: {len(INTENSITY_KEYS)} ({', '.join(INTENSITY_KEYS)})"
+                )
+            _check("intensity_gentle", self.intensity_gentle, 0.0, True, 1e6)
+            if self.tilt_shape is None:
+                raise ConfigError(
+                    "CueingParams.intensity_gentle needs the compressive tilt (tilt_shape)"
+                )
         if len(self.head_offset_m) != 3:
             raise ConfigError(
                 f"CueingParams.head_offset_m = {self.head_offset_m!r} is invalid; 3 numbers"
@@ -192,6 +325,9 @@ def load_cueing(name_or_path: str | Path) -> CueingParams:
         w_scale = [0.5, 0.5, 0.5]
         w_limit_deg_s = [30.0, 30.0, 30.0]
         soft_knee = 0.7
+        f_shape = [2.0, 2.0, 2.0]                  # optional: compressive curve exponent of
+        w_shape = [2.0, 2.0, 2.0]                  #   each channel (default: the knee)
+        lead_s = [0.1, 0.1]                        # optional: phase lead on fx, fy (s)
         [translational]
         wn_rad_s = [4.0, 4.0, 6.0]
         zeta = [1.0, 1.0, 1.0]
@@ -205,6 +341,10 @@ def load_cueing(name_or_path: str | Path) -> CueingParams:
                                                    #   (default: the [scaling] force)
         accel_limit_deg_s2 = 20.0                  # optional: tilt acceleration limit
                                                    #   (default: none)
+        shape = 2.0                                # optional: compressive tilt (needs scale
+        reach_deg = [14.0, 14.0, 12.0, 13.0]       #   and reach_deg: the platform's reach,
+        reach_use = 0.8                            #   roll-, roll+, pitch-, pitch+; the
+                                                   #   share used, default 1)
         [rotational]
         wn_rad_s = [1.0, 1.0, 0.5]
         zeta = [1.0, 1.0, 1.0]
@@ -219,6 +359,9 @@ def load_cueing(name_or_path: str | Path) -> CueingParams:
                                                    #   platform frame x fwd, y left, z up
         [mpc]                                      # optional: "mpc" and "optimal" settings
                                                    #   (as in configs/cueing/mpc-hexapod.toml)
+        [intensity.gentle]                         # optional (needs [tilt] shape): the 0 %
+        f_scale_x = 0.1                            #   end of the intensity range, one value
+        ...                                        #   per INTENSITY_KEYS
 
     Raises
     ------
@@ -252,6 +395,12 @@ def load_cueing(name_or_path: str | Path) -> CueingParams:
     w_scale = _vec3(sc.vector("w_scale", 3))
     w_limit = _vec3(tuple(v * _D2R for v in sc.vector("w_limit_deg_s", 3)))
     knee = sc.number("soft_knee", lo=0.0, hi=1.0, lo_open=True)
+    f_shape = _vec3(sc.vector("f_shape", 3)) if sc.has("f_shape") else None
+    w_shape = _vec3(sc.vector("w_shape", 3)) if sc.has("w_shape") else None
+    lead = None
+    if sc.has("lead_s"):
+        lv = sc.vector("lead_s", 2)
+        lead = (lv[0], lv[1])
     sc.finish()
 
     tr = top.table("translational")
@@ -272,6 +421,14 @@ def load_cueing(name_or_path: str | Path) -> CueingParams:
     tilt_accel = None
     if ti.has("accel_limit_deg_s2"):
         tilt_accel = ti.number("accel_limit_deg_s2", lo=0.0, lo_open=True) * _D2R
+    tilt_shape = ti.number("shape", lo=1.0, hi=50.0) if ti.has("shape") else None
+    reach = None
+    if ti.has("reach_deg"):
+        rd = ti.vector("reach_deg", 4)
+        reach = (rd[0] * _D2R, rd[1] * _D2R, rd[2] * _D2R, rd[3] * _D2R)
+    reach_use = 1.0
+    if ti.has("reach_use"):
+        reach_use = ti.number("reach_use", lo=0.0, hi=1.0, lo_open=True)
     ti.finish()
 
     ro = top.table("rotational")
@@ -294,6 +451,13 @@ def load_cueing(name_or_path: str | Path) -> CueingParams:
         head = _vec3(tuple(v * 1e-3 for v in hd.vector("offset_mm", 3)))
         hd.finish()
     mpc = read_mpc_table(top.table("mpc")) if top.has("mpc") else None
+    gentle = None
+    if top.has("intensity"):
+        it = top.table("intensity")
+        gt = it.table("gentle")
+        gentle = tuple(gt.number(k, lo=0.0, lo_open=True) for k in INTENSITY_KEYS)
+        gt.finish()
+        it.finish()
     top.finish()
 
     try:
@@ -315,6 +479,12 @@ def load_cueing(name_or_path: str | Path) -> CueingParams:
             tilt_limit_rad=tilt_limit,
             tilt_scale=tilt_scale,
             tilt_accel_limit_rad_s2=tilt_accel,
+            f_shape=f_shape,
+            w_shape=w_shape,
+            lead_s=lead,
+            tilt_shape=tilt_shape,
+            tilt_reach_rad=reach,
+            tilt_reach_use=reach_use,
             head_offset_m=head,
             rot_wn_rad_s=r_wn,
             rot_zeta=r_zeta,
@@ -329,6 +499,7 @@ def load_cueing(name_or_path: str | Path) -> CueingParams:
                 ang[2] * _D2R,
             ),
             mpc=mpc,
+            intensity_gentle=gentle,
         )
     except ConfigError as exc:
         raise ConfigError(f"{path.name}: {exc}") from exc

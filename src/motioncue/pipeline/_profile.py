@@ -7,6 +7,9 @@ the key named)::
     description = "DiRT Rally 2.0, rally cars on gravel"   # optional
     car = "Renault 5 Turbo"            # optional, for the reader: the car the gains suit
     source = "dirt"                    # GAME[:[HOST:]PORT] or replay:FILE[?speed=X]
+    intensity = 70                     # optional: % of the preset's tuned intensity range
+                                       # (0 gentle, 100 strong; motioncue.cueing.at_intensity);
+                                       # needs a preset with an [intensity] table
     [preset]                           # optional: a cueing preset (name or .toml path,
     stewart6-linear = "flight"         # relative to this file) for a named platform; every
     corner4 = "my-corner4-flight.toml" # other platform keeps its own default_preset
@@ -68,6 +71,9 @@ class Profile:
         Multipliers of the preset's ``f_scale`` and ``w_scale`` (x, y, z / roll, pitch, yaw).
     effects : EffectGains
         Effect layer gains.
+    intensity : float or None
+        Percent of the preset's tuned intensity range (:func:`motioncue.cueing.at_intensity`),
+        applied before the gains; ``None``: the preset as it is.
     description, car : str
         Free text.
     """
@@ -79,6 +85,7 @@ class Profile:
     f_gain: Vec3 = (1.0, 1.0, 1.0)
     w_gain: Vec3 = (1.0, 1.0, 1.0)
     effects: EffectGains = field(default_factory=EffectGains)
+    intensity: float | None = None
     description: str = ""
     car: str = ""
 
@@ -161,6 +168,7 @@ def load_profile(name_or_path: str | Path) -> Profile:
             table.finish()
         else:
             preset = top.string("preset")
+    intensity = top.number("intensity", lo=0.0, hi=100.0) if top.has("intensity") else None
     cue = top.table("cue", {})
     f_gain = _gain3(cue, "f_gain")
     w_gain = _gain3(cue, "w_gain")
@@ -202,6 +210,7 @@ def load_profile(name_or_path: str | Path) -> Profile:
         f_gain=f_gain,
         w_gain=w_gain,
         effects=EffectGains(**gains),
+        intensity=intensity,
         description=description,
         car=car,
     )
