@@ -327,15 +327,14 @@ def test_budget_bounds_the_wall_time(
     args = _tune_args(drives, out)
     args[args.index("--generations") + 1] = "1000"
     args[args.index("--budget-s") + 1] = "0.5"
-    t0 = time.monotonic()
     status = main([*args, "--workers", "1"])
-    elapsed = time.monotonic() - t0
     cap = capsys.readouterr()
     assert status == 0, cap.err
     assert "wall-time budget 0.5 s" in cap.err
     gens = [ln for ln in cap.err.splitlines() if "evaluations/s" in ln]
-    assert len(gens) == 1  # the first population is always evaluated, then it stops
-    assert elapsed < 30.0
+    # the first population is always evaluated, then it stops: 1 of the 1000 generations
+    # asked for (counted, not timed, so that a busy machine cannot fail it)
+    assert len(gens) == 1
     assert load_cueing(out).algorithm == "classical"
 
 
