@@ -265,9 +265,7 @@ def run_loopback(
     keep = (t > t_live) & (t < t[0] + int((seconds - 0.1) * 1e9))
     jit = lb.jitter_ms(t[keep], rows[keep, 1])
     steps_live = [s for s in steps if s > t_live]
-    delays, skipped = lb.step_delays_ms(
-        t, rows[:, 1], rows[:, 2:], steps_live, window_ms=window_ms
-    )
+    delays, skipped = lb.step_delays_ms(t, rows[:, 1], rows[:, 2:], steps_live, window_ms=window_ms)
     # in order: consecutive line numbers, time stamps that never go back, kernel stamps too
     in_order = bool(
         len(rows) > 1
