@@ -273,7 +273,9 @@ def test_play_dead_link_says_the_park_failed(rig: Any, ride: Any) -> None:
     t0 = time.monotonic()
     with pytest.raises(ParkFailed, match="PARK FAILED"):
         play_ride(ride, platform, ctrl, lim, tr, paced=False)
-    assert time.monotonic() - t0 < 10.0
+    # gives up instead of retrying for ever; not a timing check (it takes well under a second
+    # on an idle machine): only a park that keeps retrying trips 60 s
+    assert time.monotonic() - t0 < 60.0
     # what did go out is still within the limits (it cannot end parked)
     check_wire(decode_wire(tr.sent), limits_table(), park, park, ends_parked=False)
 
