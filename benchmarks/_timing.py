@@ -20,7 +20,7 @@ import numpy as np
 # seconds per unit, for the figures given as a time
 _TIME_UNITS = {"s": 1.0, "ms": 1e-3, "us": 1e-6}
 # items per second, for the figures given as a rate
-_RATE_UNITS = ("/s", "per s", "eval/s", "poses/s", "frames/s", "dgram/s", "x")
+_RATE_UNITS = ("/s", "per s")
 
 
 def median_time_s(fn: Callable[[], object], repeats: int = 7, number: int = 1) -> float:
@@ -61,8 +61,9 @@ def in_reference_units(value: float, unit: str) -> str:
     """``value`` (in ``unit``) as reference loops per item (times) or items per reference loop
     (rates); empty when the unit is neither."""
     ref = reference_loop_s()
-    if unit in _TIME_UNITS:
-        return f"{value * _TIME_UNITS[unit] / ref:8.3g} ref"
+    per = unit.split("/", 1)[0]  # "us/frame": a time per item
+    if per in _TIME_UNITS:
+        return f"{value * _TIME_UNITS[per] / ref:8.3g} ref"
     if unit.endswith(_RATE_UNITS):
         return f"{value * ref:8.3g} /ref"
     return ""
@@ -86,7 +87,8 @@ def report(
     value, target : float
         The figure (a median) and its target, in ``unit``.
     unit : str
-        ``s``, ``ms``, ``us`` or a rate (``.../s``, ``x``); other units get no reference column.
+        ``s``, ``ms``, ``us`` (or per item, ``us/frame``) or a rate (``.../s``); other units
+        (ratios, ``x``) get no reference column.
     higher_is_better : bool
         True for rates (target is a minimum), False for times (target is a maximum).
     reference : str, optional
