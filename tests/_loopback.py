@@ -206,7 +206,8 @@ def run_loopback(
     second, the bridge (stewart6-linear, mbox6, racing) in this process; returns its figures
     (jitter on kernel stamps against the frames' own stamps, step delays counted within
     ``window_ms`` of the step, missed deadlines, the limits check on the controller's clock,
-    whether the frames came in order)."""
+    whether the frames came in order). The run lasts ``seconds`` from the moment the bridge
+    is live (cues fully in); the figures start 1.5 s after it."""
     lb = sys.modules[__name__]
     from motioncue.cueing import load_cueing
     from motioncue.kinematics import load_platform
@@ -245,7 +246,17 @@ def run_loopback(
     load0 = os.getloadavg()
     sender.start()
     bridge.start()
+    # ``seconds`` count from the first frame with the cues fully in: on a busy machine the
+    # sender process alone may take seconds to start (spawn, imports)
+    live_ns = None
+    give_up = time.monotonic() + 120.0
+    while time.monotonic() < give_up and bridge.running:
+        if bridge.stats.state == "live":
+            live_ns = time.time_ns()
+            break
+        time.sleep(0.01)
     time.sleep(seconds)
+    end_ns = time.time_ns()
     live = bridge.stats
     final = bridge.stop()
     stop.set()
@@ -261,8 +272,9 @@ def run_loopback(
     rows = np.asarray(res["rows"], dtype=np.int64)
     table = lim.to_pulses_table(platform)
     v_use, a_use, in_stroke = lb.check_limits(rows[:, 1], rows[:, 2:], table)
-    t_live = t[0] + int(1.5e9)  # after the fade-in
-    keep = (t > t_live) & (t < t[0] + int((seconds - 0.1) * 1e9))
+    # after the fade-in (and the estimates' start-up), until just before the stop
+    t_live = (t[0] if live_ns is None else live_ns) + int(1.5e9)
+    keep = (t > t_live) & (t < end_ns - int(0.1e9))
     jit = lb.jitter_ms(t[keep], rows[keep, 1])
     steps_live = [s for s in steps if s > t_live]
     delays, skipped = lb.step_delays_ms(t, rows[:, 1], rows[:, 2:], steps_live, window_ms=window_ms)
@@ -289,7 +301,7 @@ def run_loopback(
         "limits_ok": in_stroke and v_use <= 1.0 + 1e-9 and a_use <= 1.0 + 1e-9,
         "limits": f"speed {v_use:.3f}, accel {a_use:.3f} of the limits",
         "state": final.state,
-        "error": final.error,
+        "error": final.error if live_ns is not None else f"never live ({final.error})",
         "load": (load0[0], os.getloadavg()[0]),
     }
 

@@ -22,7 +22,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 import _loopback as lb
 
 RATE_HZ = 250.0
-SECONDS = 6.0  # 1.5 s warm-up, then about 5 steps
+SECONDS = 6.0  # from the bridge going live: 1.5 s warm-up, then about 4 steps
 # A step counts when a frame moves with it within this time. Not a timing promise (that is
 # 1.5 ms p50 / 3 ms max, in the bench): 100x the promise, so that only a step that never
 # reaches the frames (dropped, or waiting for something that does not come) goes uncounted,
