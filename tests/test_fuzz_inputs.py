@@ -565,14 +565,20 @@ def _mutate_config(rng: random.Random, text: str) -> str:
     return "\n".join(lines) + "\n"
 
 
+CONFIG_PARTS = 2  # shared out among the pytest-xdist workers, as the ride cases
+
+
 @pytest.mark.filterwarnings("ignore::RuntimeWarning")  # absurd values overflow before refusal
-def test_mutated_config_files_give_only_motioncue_errors(tmp_path: Path) -> None:
+@pytest.mark.parametrize("part", range(CONFIG_PARTS))
+def test_mutated_config_files_give_only_motioncue_errors(tmp_path: Path, part: int) -> None:
     t0 = time.perf_counter()
     texts = _config_texts()
     ok_platforms = [load_platform(n) for n in ("stewart6-linear", "seat3", "seat2-yaw")]
     outcomes: Counter[str] = Counter()
     failures: list[str] = []
-    for i in range(N_CONFIGS):
+    size = math.ceil(N_CONFIGS / CONFIG_PARTS)
+    cases = range(part * size, min(N_CONFIGS, (part + 1) * size))
+    for i in cases:
         rng = random.Random(SEED * 7919 + i)
         kind, name, text = rng.choice(texts)
         mutated = _mutate_config(rng, text)
@@ -603,6 +609,7 @@ def test_mutated_config_files_give_only_motioncue_errors(tmp_path: Path) -> None
                 failures.append(f"case {i} ({name}): {type(exc).__name__}: {exc!s:.200}\n"
                                 f"{mutated}")  # fmt: skip
     elapsed = time.perf_counter() - t0
-    print(f"\n{N_CONFIGS} mutated configs in {elapsed:.1f} s: {dict(outcomes)}")
+    print(f"\nmutated configs {cases.start}..{cases.stop - 1} in {elapsed:.1f} s: {dict(outcomes)}")
+    assert sum(outcomes.values()) == len(cases)
     assert not failures, "\n".join(failures)
-    assert outcomes["ConfigError"] > N_CONFIGS // 10 and outcomes["loaded"] > 0
+    assert outcomes["ConfigError"] > len(cases) // 10 and outcomes["loaded"] > 0
