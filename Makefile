@@ -25,10 +25,10 @@ $(BIN)/.installed: pyproject.toml
 demo: $(BIN)/.installed
 	$(BIN)/motioncue demo
 
-# On every core (pytest-xdist), each test module on one worker (tests/conftest.py). No
-# wall-clock figure is asserted here; those are in make bench.
+# On every core (pytest-xdist), each test module (or class) on one worker, so that a module's
+# fixtures are built once. No wall-clock figure is asserted here; those are in make bench.
 test: $(BIN)/.installed browser
-	$(BIN)/python -m pytest -n auto --dist loadgroup
+	$(BIN)/python -m pytest -n auto --dist loadscope
 
 lint: $(BIN)/.installed
 	$(BIN)/ruff check src tests benchmarks
