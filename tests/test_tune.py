@@ -216,7 +216,7 @@ def _stop(proc: subprocess.Popen) -> None:
             proc.wait(timeout=5)
 
 
-@pytest.mark.timeout(240)
+@pytest.mark.timeout(600)  # a hang guard: a scheduler, a worker and a tune, on a busy machine
 def test_dask_scheduler_gives_the_local_result(
     tuned_local_short: tuple, drives: dict, tmp_path: Path, capsys: pytest.CaptureFixture
 ) -> None:
