@@ -25,8 +25,10 @@ $(BIN)/.installed: pyproject.toml
 demo: $(BIN)/.installed
 	$(BIN)/motioncue demo
 
+# On every core (pytest-xdist), each test module (or class) on one worker, so that a module's
+# fixtures are built once. No wall-clock figure is asserted here; those are in make bench.
 test: $(BIN)/.installed browser
-	$(BIN)/python -m pytest
+	$(BIN)/python -m pytest -n auto --dist loadscope
 
 lint: $(BIN)/.installed
 	$(BIN)/ruff check src tests benchmarks

@@ -21,9 +21,11 @@ import time
 from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "src"))
+sys.path.insert(0, str(Path(__file__).resolve().parent))
 
 import numpy as np
 
+from _timing import report
 from motioncue.telemetry import sample_drives
 from motioncue.telemetry._recording import Recording, read_recording_csv, write_recording_csv
 
@@ -92,11 +94,12 @@ def main() -> None:
         print(
             f"compare: {len(presets)} presets on a {SPAN_S:g} s recording ({n} samples) on "
             f"{PLATFORM}/{CONTROLLER}, whole command: {med:.2f} s median of {len(times)} "
-            f"(runs {', '.join(f'{t:.2f}' for t in times)}); target {TARGET_S:g} s, ratio "
-            f"{med / TARGET_S:.2f} ({'OK' if med <= TARGET_S else 'MISS'})",
+            f"(runs {', '.join(f'{t:.2f}' for t in times)})",
             flush=True,
         )
+        ok = report(f"compare, {len(presets)} presets, whole command", med, "s", TARGET_S, False)
         _stages(rec, presets, tmp / "report-stages")
+    return 0 if ok else 1
 
 
 def _stages(rec: Path, presets: list[str], out: Path) -> None:
@@ -131,4 +134,4 @@ def _stages(rec: Path, presets: list[str], out: Path) -> None:
 
 
 if __name__ == "__main__":
-    main()
+    raise SystemExit(main())

@@ -43,7 +43,7 @@ def main() -> int:
             ),
             repeats=3,
         )
-        report(f"full evaluation, 10 min at 100 Hz ({name})", t_all * 1e3, "ms", 500.0, False)
+        ok &= report(f"full evaluation, 10 min at 100 Hz ({name})", t_all * 1e3, "ms", 500.0, False)
     return 0 if ok else 1
 
 

@@ -5,6 +5,10 @@ the number of frames lost or reordered, target 0):
 
 * encode: SC-MBOX 6-axis frames per second through ``ctrl.frame_encoder().encode``;
 * decode: SC-MBOX 6-axis frames per second through ``motioncue.output.mbox.decode``;
+* IMAX decode of random frame-shaped datagrams (a frame function code, a channel for 2..12
+  axes, random bytes of random length, at each port-out width; decoded or refused with
+  ``ProtocolError``) per second: the figure ``tests/test_imax_port_out.py`` held as a wall-clock
+  bound (60 000 in 30 s) until issue 21;
 * stream: a 1 kHz UDP stream of 6-axis frames to the in-process MBOX emulator on loopback
   for ``--stream-seconds`` (default 10 s): frames lost, frames reordered, worst send lateness.
 
@@ -14,12 +18,20 @@ Run: ``PYTHONPATH=src python benchmarks/bench_output.py``
 from __future__ import annotations
 
 import argparse
+import os
 import statistics
+import sys
 import time
+from pathlib import Path
 
 import numpy as np
 
-from motioncue.output import load_controller, mbox, open_transport
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "src"))
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+
+from _timing import report
+from motioncue import ProtocolError
+from motioncue.output import imax, load_controller, mbox, open_transport
 
 
 def bench_encode(n: int) -> float:
@@ -38,6 +50,31 @@ def bench_decode(n: int) -> float:
     t = time.perf_counter()
     for k in range(n):
         decode(raws[k % 1000])
+    return n / (time.perf_counter() - t)
+
+
+_IMAX_FRAME_CODES = ("1301", "1302", "1303", "1401", "1402", "1405", "1801", "1802", "1901",
+                     "1904")  # fmt: skip
+
+
+def bench_imax_random_decode(n: int, seed: int = 10) -> float:
+    rng = np.random.default_rng(seed)
+    prefixes = [bytes.fromhex("55AA0000" + c) for c in _IMAX_FRAME_CODES]
+    blob = os.urandom(n * 72)
+    lengths = rng.integers(0, 72, size=n)
+    channels = rng.integers(0, 13, size=n)
+    datagrams = [
+        prefixes[i % len(prefixes)] + int(channels[i]).to_bytes(2, "big")
+        + blob[i * 72 : i * 72 + int(lengths[i])]
+        for i in range(n)
+    ]  # fmt: skip
+    widths = (2, 4, None)
+    t = time.perf_counter()
+    for i, data in enumerate(datagrams):
+        try:
+            imax.decode(data, widths[i % 3])
+        except ProtocolError:
+            pass
     return n / (time.perf_counter() - t)
 
 
@@ -74,7 +111,7 @@ def bench_stream(seconds: float, rate_hz: float = 1000.0) -> dict[str, float]:
     }
 
 
-def main() -> None:
+def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--repeats", type=int, default=5)
     parser.add_argument("--frames", type=int, default=200_000)
@@ -84,27 +121,30 @@ def main() -> None:
 
     enc = [bench_encode(args.frames) for _ in range(args.repeats)]
     dec = [bench_decode(args.frames) for _ in range(args.repeats)]
+    rnd = [bench_imax_random_decode(60_000) for _ in range(args.repeats)]
     runs = [bench_stream(args.stream_seconds) for _ in range(args.stream_repeats)]
-    print(f"{'figure':48s} {'median':>12s} {'target':>10s} {'ratio':>7s}")
+    ok = True
     for name, values, target in (
         ("MBOX 6-axis frames encoded per s", enc, 200_000.0),
         ("MBOX 6-axis frames decoded per s", dec, 200_000.0),
+        ("IMAX random frame-shaped datagrams decoded per s", rnd, 2_000.0),
     ):
-        med = statistics.median(values)
-        print(f"{name:48s} {med:12.0f} {target:10.0f} {med / target:7.2f}")
+        ok &= report(name, statistics.median(values), "frames/s", target, True)
     for key in ("lost", "reordered", "refused"):
         med = statistics.median(r[key] for r in runs)
         print(
             f"{f'1 kHz x {args.stream_seconds:g} s UDP stream: frames {key}':48s} "
             f"{med:12.0f} {0:10d} {'ok' if med == 0 else 'FAIL':>7s}"
         )
+        ok &= med == 0
     sent = runs[0]["sent"]
     print(
         f"(stream: {sent} frames per run, {args.stream_repeats} runs; received "
         f"{[int(r['received']) for r in runs]}; worst send lateness "
         f"{max(r['late_ms'] for r in runs):.2f} ms)"
     )
+    return 0 if ok else 1
 
 
 if __name__ == "__main__":
-    main()
+    raise SystemExit(main())

@@ -42,6 +42,7 @@ def main() -> int:
     platform = load_platform("stewart6-linear")
     controller = load_controller("mbox6")
     limits = ActuatorLimits.from_platform(platform, controller)
+    ok = True
     for preset in ("racing-hexapod", "racing"):
         cueing = load_cueing(preset)
         times = []
@@ -55,8 +56,10 @@ def main() -> int:
             f"{rep.optimisation.n_windows} windows, {rep.optimisation.n_repaired} frames "
             f"repaired, {rep.optimisation.n_solver_failures} solver failures; stages (s): {stages}"
         )
-        report(f"generate 10 min @100 Hz, {preset}", statistics.median(times), "s", 5.0, False)
-    return 0
+        ok &= report(
+            f"generate 10 min @100 Hz, {preset}", statistics.median(times), "s", 5.0, False
+        )
+    return 0 if ok else 1
 
 
 if __name__ == "__main__":

@@ -16,8 +16,10 @@ from pathlib import Path
 import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "src"))
+sys.path.insert(0, str(Path(__file__).resolve().parent))
 
 import motioncue
+from _timing import report as _report
 from motioncue.trajectory import (
     ActuatorLimits,
     JerkLimiter,
@@ -28,12 +30,11 @@ from motioncue.trajectory import (
 )
 
 
-def report(name: str, samples: list[float], target: float, unit: str, scale: float) -> None:
-    med = statistics.median(samples)
-    print(
-        f"{name:<58} median {med * scale:10.2f} {unit:<3} target {target * scale:8.2f} {unit:<3}"
-        f" ratio {target / med:6.2f}  {'OK' if med <= target else 'MISS'}  (n={len(samples)})"
-    )
+def report(name: str, samples: list[float], target: float, unit: str, scale: float) -> bool:
+    """The median of ``samples`` (s) against ``target`` (s), printed in ``unit`` (x ``scale``)
+    by the shared :func:`_timing.report`; whether the target is met."""
+    print(f"  ({len(samples)} samples)")
+    return _report(name, statistics.median(samples) * scale, unit, target * scale, False)
 
 
 def hexapod_limits(p):
@@ -69,6 +70,7 @@ def main() -> int:
     lim = hexapod_limits(p)
     dt = 0.01
 
+    ok = True
     # 1. real-time limiter step, 6 actuators
     rt = RealtimeLimiter(lim, dt)
     rng = np.random.default_rng(1)
@@ -84,7 +86,7 @@ def main() -> int:
             for row in stream:
                 step(state, row)
             samples.append((time.perf_counter() - t0) / len(stream))
-        report(f"limiter step, 6 actuators, {label} stream", samples, 20e-6, "us", 1e6)
+        ok &= report(f"limiter step, 6 actuators, {label} stream", samples, 20e-6, "us", 1e6)
 
     # 1b. the jerk-limited limiter (when a jerk limit is configured), same streams
     jlim = ActuatorLimits.from_platform(p, v_max=0.25, a_max=4.0, j_max=80.0)
@@ -98,7 +100,7 @@ def main() -> int:
             for row in stream:
                 jl.step(state, row)
             samples.append((time.perf_counter() - t0) / len(stream))
-        report(f"jerk-limited limiter step, 6 actuators, {label}", samples, 20e-6, "us", 1e6)
+        ok &= report(f"jerk-limited limiter step, 6 actuators, {label}", samples, 20e-6, "us", 1e6)
 
     # 2. workspace limiting per pose (single calls and batches of 1000)
     poses = rng.normal(0.0, [0.03, 0.03, 0.02, 0.1, 0.1, 0.2], (1000, 6))
@@ -108,15 +110,15 @@ def main() -> int:
         t0 = time.perf_counter()
         limit_pose(p, poses)
         samples.append((time.perf_counter() - t0) / len(poses))
-    report(f"workspace limiting per pose, batch of 1000 ({frac:.0%} clamped)", samples, 100e-6,
-           "us", 1e6)  # fmt: skip
+    ok &= report(f"workspace limiting per pose, batch of 1000 ({frac:.0%} clamped)", samples,
+                 100e-6, "us", 1e6)  # fmt: skip
     samples = []
     for pose in poses[:300]:
         t0 = time.perf_counter()
         limit_pose(p, pose)
         samples.append(time.perf_counter() - t0)
-    report(f"workspace limiting, one pose per call ({frac:.0%} clamped)", samples, 100e-6,
-           "us", 1e6)  # fmt: skip
+    ok &= report(f"workspace limiting, one pose per call ({frac:.0%} clamped)", samples,
+                 100e-6, "us", 1e6)  # fmt: skip
 
     # 3. offline optimisation of a 10-minute, 100 Hz, 6-actuator ride
     seconds = 60.0 if args.quick else 600.0
@@ -135,7 +137,7 @@ def main() -> int:
           f"objective {res.objective:.4g} vs real-time limiter {res.objective_realtime:.4g}, "
           f"check ok {res.check.ok}, repaired frames {res.n_repaired}, "
           f"solver failures {res.n_solver_failures}")  # fmt: skip
-    report(f"offline ride optimisation, {seconds / 60:.0f} min, 100 Hz, 6 actuators", samples,
+    ok &= report(f"offline ride optimisation, {seconds / 60:.0f} min, 100 Hz, 6 actuators", samples,
            20.0, "s", 1.0)  # fmt: skip
 
     # 4. one toppra transition (parked -> neutral and neutral -> a pose, 100 Hz)
@@ -144,8 +146,8 @@ def main() -> int:
         t0 = time.perf_counter()
         unpark_path(p, lim, 100.0)
         samples.append(time.perf_counter() - t0)
-    report("toppra transition, parked -> neutral, 100 Hz", samples, 50e-3, "ms", 1e3)
-    return 0
+    ok &= report("toppra transition, parked -> neutral, 100 Hz", samples, 50e-3, "ms", 1e3)
+    return 0 if ok else 1
 
 
 if __name__ == "__main__":

@@ -14,7 +14,9 @@ from pathlib import Path
 import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "src"))
+sys.path.insert(0, str(Path(__file__).resolve().parent))
 
+from _timing import report
 from motioncue.cueing import ClassicalWashout, load_cueing
 
 G = 9.80665
@@ -74,15 +76,9 @@ def main() -> int:
     design = ClassicalWashout(load_cueing("racing"), fs_hz=100.0)
     step_us = bench_step(design)
     batch = bench_batch(design)
-    rows = [
-        ("washout streaming step (6-DOF, racing, 100 Hz)", step_us, "us", 20.0, 20.0 / step_us),
-        ("washout batch throughput (1e6 samples)", batch / 1e6, "M samples/s", 2.0, batch / 2e6),
-    ]
-    print(f"{'figure':50s} {'median':>10s} {'unit':>12s} {'target':>8s} {'ratio':>7s}")
-    for name, value, unit, target, ratio in rows:
-        print(f"{name:50s} {value:10.3f} {unit:>12s} {target:8.2f} {ratio:7.2f}")
-    print("(ratio > 1 meets the target; step target is <=, batch target is >=)")
-    return 0
+    ok = report("washout streaming step (6-DOF, racing, 100 Hz)", step_us, "us", 20.0, False)
+    ok &= report("washout batch throughput (1e6 samples)", batch / 1e6, "M samples/s", 2.0, True)
+    return 0 if ok else 1
 
 
 if __name__ == "__main__":

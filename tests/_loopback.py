@@ -161,6 +161,7 @@ def step_delays_ms(
     positions: np.ndarray,
     steps_ns: list[int],
     threshold: float = 1.5e6,
+    window_ms: float = 50.0,
 ) -> tuple[np.ndarray, int]:
     """Delay from each step's send to the first frame that moves with it (ms).
 
@@ -170,7 +171,7 @@ def step_delays_ms(
     keep their speed, and the pulse rounding changes an acceleration by at most
     ``4 / h^2`` pulses/s^2 (1e6 at h = 2 ms); a step of 1 g in the specific force changes
     the actuators' acceleration at once. Steps whose 10 frames before were not quiet, or
-    with no such frame within 50 ms, are not counted (their number is returned).
+    with no such frame within ``window_ms``, are not counted (their number is returned).
     """
     t = np.asarray(t_ns, dtype=np.int64)
     a = accelerations(stamp_ms, positions)
@@ -184,7 +185,7 @@ def step_delays_ms(
             skipped += 1
             continue
         moving = np.nonzero(da[k:] > threshold)[0]
-        if moving.size == 0 or t[k + moving[0]] - s > 50_000_000:
+        if moving.size == 0 or t[k + moving[0]] - s > window_ms * 1e6:
             skipped += 1
             continue
         out.append((t[k + moving[0]] - s) * 1e-6)
@@ -203,11 +204,14 @@ def run_loopback(
     upsample: str,
     frame_clock: str = "arrival",
     lead_ms: int | None = None,
+    window_ms: float = 50.0,
 ) -> dict[str, Any]:
     """One loopback run: recorder, optional busy core, 60 Hz F1 lateral-g steps about every
     second, the bridge (stewart6-linear, mbox6, racing) in this process; returns its figures
-    (jitter on kernel stamps against the frames' own stamps, step delays, missed deadlines,
-    the limits check on the controller's clock)."""
+    (jitter on kernel stamps against the frames' own stamps, step delays counted within
+    ``window_ms`` of the step, missed deadlines, the limits check on the controller's clock,
+    whether the frames came in order). The run lasts ``seconds`` from the moment the bridge
+    is live (cues fully in); the figures start 1.5 s after it."""
     lb = sys.modules[__name__]
     from motioncue.cueing import load_cueing
     from motioncue.kinematics import load_platform
@@ -246,7 +250,17 @@ def run_loopback(
     load0 = os.getloadavg()
     sender.start()
     bridge.start()
+    # ``seconds`` count from the first frame with the cues fully in: on a busy machine the
+    # sender process alone may take seconds to start (spawn, imports)
+    live_ns = None
+    give_up = time.monotonic() + 120.0
+    while time.monotonic() < give_up and bridge.running:
+        if bridge.stats.state == "live":
+            live_ns = time.time_ns()
+            break
+        time.sleep(0.01)
     time.sleep(seconds)
+    end_ns = time.time_ns()
     live = bridge.stats
     final = bridge.stop()
     stop.set()
@@ -262,11 +276,19 @@ def run_loopback(
     rows = np.asarray(res["rows"], dtype=np.int64)
     table = lim.to_pulses_table(platform)
     v_use, a_use, in_stroke = lb.check_limits(rows[:, 1], rows[:, 2:], table)
-    t_live = t[0] + int(1.5e9)  # after the fade-in
-    keep = (t > t_live) & (t < t[0] + int((seconds - 0.1) * 1e9))
+    # after the fade-in (and the estimates' start-up), until just before the stop
+    t_live = (t[0] if live_ns is None else live_ns) + int(1.5e9)
+    keep = (t > t_live) & (t < end_ns - int(0.1e9))
     jit = lb.jitter_ms(t[keep], rows[keep, 1])
     steps_live = [s for s in steps if s > t_live]
-    delays, skipped = lb.step_delays_ms(t, rows[:, 1], rows[:, 2:], steps_live)
+    delays, skipped = lb.step_delays_ms(t, rows[:, 1], rows[:, 2:], steps_live, window_ms=window_ms)
+    # in order: consecutive line numbers, time stamps that never go back, kernel stamps too
+    in_order = bool(
+        len(rows) > 1
+        and np.all(np.diff(rows[:, 0]) == 1)
+        and np.all(np.diff(rows[:, 1]) >= 0)
+        and np.all(np.diff(t) >= 0)
+    )
     return {
         "jitter_p99_ms": lb.percentile(jit, 99),
         "jitter_max_ms": float(jit.max()) if jit.size else float("nan"),
@@ -274,13 +296,16 @@ def run_loopback(
         "delay_max_ms": float(delays.max()) if delays.size else float("nan"),
         "steps": len(delays),
         "steps_skipped": skipped,
+        "steps_live": len(steps_live),
+        "frames": len(rows),
+        "in_order": in_order,
         "rate_out_hz": float((keep.sum() - 1) / ((t[keep][-1] - t[keep][0]) * 1e-9)),
         "missed": final.missed_deadlines,
         "age_p50_ms": live.frame_age_p50_ms,
         "limits_ok": in_stroke and v_use <= 1.0 + 1e-9 and a_use <= 1.0 + 1e-9,
         "limits": f"speed {v_use:.3f}, accel {a_use:.3f} of the limits",
         "state": final.state,
-        "error": final.error,
+        "error": final.error if live_ns is not None else f"never live ({final.error})",
         "load": (load0[0], os.getloadavg()[0]),
     }
 

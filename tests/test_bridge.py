@@ -244,10 +244,12 @@ def test_watchdog_parks_when_packets_stop_and_ramps_back_in() -> None:
         assert _wait_for(lambda: bridge.stats.state == "live")
         time.sleep(0.5)
         sender.mode = "silent"
-        t_quiet = time.perf_counter()
-        assert _wait_for(lambda: bridge.stats.state == "parked", 2.0)
-        # timeout + fade, and the limiter may need a few more frames to reach park at rest
-        assert time.perf_counter() - t_quiet < GATE.timeout_s + GATE.fade_out_s + 0.5
+        # timeout + fade (0.55 s), and the limiter may need a few more frames to reach park at
+        # rest. Not a timing check (the gate's timeout and fade are checked to the tick on its
+        # own clock in test_realtime.py): 10x that, so only a bridge that never parks trips it.
+        assert _wait_for(
+            lambda: bridge.stats.state == "parked", 10 * (GATE.timeout_s + GATE.fade_out_s)
+        )
         parked = bridge.stats
         assert parked.park_q_error == 0.0 and parked.gain == 0.0
         time.sleep(0.2)

@@ -80,7 +80,9 @@ def test_replay_bridge_ends_by_itself_parked_and_at_rest(tmp_path: Path) -> None
             )  # fmt: skip
             bound_s = span_s + GATE.fade_out_s + bridge.stage.park_frames_bound() / rate_hz + 0.5
             bridge.start()
-            ended = bridge.wait(bound_s + 2.0)
+            # a bound for a bridge that never ends, not a timing check: bound_s is what the
+            # replay, the fade-out and the park take on an idle machine, + 10 s for a busy one
+            ended = bridge.wait(bound_s + 10.0)
             took_s = time.perf_counter() - t0
             final = bridge.stats  # not stop(): the loop ended on its own
         finally:
@@ -88,9 +90,8 @@ def test_replay_bridge_ends_by_itself_parked_and_at_rest(tmp_path: Path) -> None
                 bridge.stop()
             transport.close()
             source.close()
-        assert ended, "the bridge kept running after the recording"
-        assert took_s <= bound_s, (took_s, bound_s)
-        assert took_s >= span_s  # not before the recording was over
+        assert ended, ("the bridge kept running after the recording", took_s, bound_s)
+        assert took_s >= span_s  # not before the recording was over (load only lengthens it)
         _all_received(emu, bridge)
     assert final.state == "stopped" and final.error is None and final.park_q_error == 0.0
     assert final.fade_ins == 1 and final.fade_outs == 1
@@ -122,8 +123,10 @@ def test_bridge_verb_exits_0_at_the_end_of_a_replay(
     err = capsys.readouterr().err
     assert code == 0, err
     # the recording, the fade-out, the park (a few tenths of a second here) and the 0.5 s
-    # status poll of the CLI; far below the --duration safety net
-    assert span_s < took_s < span_s + 0.3 + 3.0, took_s
+    # status poll of the CLI: span_s + 0.3 + 0.5 s or so on an idle machine. The upper bound
+    # only tells the end of the replay from the --duration safety net (20 s), with room for
+    # a busy machine; the message below says why it ended.
+    assert span_s < took_s < 15.0, took_s
     assert "bridge stopped:" in err and "parked error 0" in err
     assert "end of the replay" in err
     platform = load_platform("seat3")

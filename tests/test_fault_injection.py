@@ -273,7 +273,9 @@ def test_play_dead_link_says_the_park_failed(rig: Any, ride: Any) -> None:
     t0 = time.monotonic()
     with pytest.raises(ParkFailed, match="PARK FAILED"):
         play_ride(ride, platform, ctrl, lim, tr, paced=False)
-    assert time.monotonic() - t0 < 10.0
+    # gives up instead of retrying for ever; not a timing check (it takes well under a second
+    # on an idle machine): only a park that keeps retrying trips 60 s
+    assert time.monotonic() - t0 < 60.0
     # what did go out is still within the limits (it cannot end parked)
     check_wire(decode_wire(tr.sent), limits_table(), park, park, ends_parked=False)
 
@@ -640,7 +642,9 @@ SIGNAL_CASES = {
 
 def _signal_run(args: list[str], signals: list[int], park: np.ndarray) -> tuple[Any, str, Sink]:
     with _cli(args) as (proc, sink):
-        end = time.monotonic() + 15
+        # a bound for a process that never moves the platform, not a timing check: the CLI's
+        # start (imports, the ride, the unpark) takes seconds on a busy machine
+        end = time.monotonic() + 90
         while not sink.moved(park, 20000) and time.monotonic() < end and proc.poll() is None:
             time.sleep(0.01)
         assert sink.moved(park, 20000), "the platform never moved"
@@ -650,7 +654,7 @@ def _signal_run(args: list[str], signals: list[int], park: np.ndarray) -> tuple[
                 time.sleep(0.02)  # the later ones arrive during the park
             proc.send_signal(sig)
             sent_at.append(time.monotonic())
-        out, err = proc.communicate(timeout=20)
+        out, err = proc.communicate(timeout=90)
     assert "Traceback" not in err, err
     assert proc.returncode == 130, err
     # frames still went out after the second signal: it came during the park, and the

@@ -17,9 +17,10 @@ header of six u16, Line u32, Time u32 ms, n x i32 positions, BaseDout, DAC1, DAC
 u16) and checked, on those whole-millisecond times and from park at rest, against the limits
 table, by finite differences written here.
 
-The default run does all 100 000 ride cases (two worker processes; about 30 s on the 2-core
-machine) and the 10 000 configuration cases; ``MOTIONCUE_FUZZ_RIDES`` /
-``MOTIONCUE_FUZZ_CONFIGS`` change the counts and ``MOTIONCUE_FUZZ_SEED`` the seed.
+The default run does all 100 000 ride cases (in four parts, which pytest-xdist shares out among
+its workers; without xdist each part uses two processes) and the 10 000 configuration cases;
+``MOTIONCUE_FUZZ_RIDES`` / ``MOTIONCUE_FUZZ_CONFIGS`` change the counts and
+``MOTIONCUE_FUZZ_SEED`` the seed.
 """
 
 from __future__ import annotations
@@ -478,11 +479,35 @@ def test_check_sent_catches_a_frame_beyond_the_limits() -> None:
         _check_sent(rig, link.sent)
 
 
-def test_mutated_ride_files_give_only_motioncue_errors_and_send_nothing_when_refused() -> None:
+# The ride cases in parts of their own, so that pytest-xdist shares them out among its workers
+# (case i is the same whichever part runs it: its generator is seeded by the seed and i). make
+# test runs ``--dist loadscope``: a module's tests go to one worker, a class's too; hence the
+# two classes, two parts each.
+RIDE_PARTS = 4
+
+
+class TestMutatedRidesFirstHalf:
+    @pytest.mark.parametrize("part", [0, 1])
+    def test_give_only_motioncue_errors_and_send_nothing_when_refused(self, part: int) -> None:
+        _mutated_ride_files_give_only_motioncue_errors_and_send_nothing_when_refused(part)
+
+
+class TestMutatedRidesSecondHalf:
+    @pytest.mark.parametrize("part", [2, 3])
+    def test_give_only_motioncue_errors_and_send_nothing_when_refused(self, part: int) -> None:
+        _mutated_ride_files_give_only_motioncue_errors_and_send_nothing_when_refused(part)
+
+
+def _mutated_ride_files_give_only_motioncue_errors_and_send_nothing_when_refused(
+    part: int,
+) -> None:
     t0 = time.perf_counter()
-    workers = 2 if N_RIDES >= 2000 else 1
-    chunk = math.ceil(N_RIDES / workers)
-    jobs = [(SEED, k * chunk, min(chunk, N_RIDES - k * chunk)) for k in range(workers)]
+    size = math.ceil(N_RIDES / RIDE_PARTS)
+    first, count = part * size, max(0, min(size, N_RIDES - part * size))
+    # in a pytest-xdist worker the other workers already use the other cores
+    workers = 2 if count >= 1000 and "PYTEST_XDIST_WORKER" not in os.environ else 1
+    chunk = math.ceil(count / workers)
+    jobs = [(SEED, first + k * chunk, min(chunk, count - k * chunk)) for k in range(workers)]
     outcomes: Counter[str] = Counter()
     failures: list[str] = []
     if workers == 1:
@@ -497,13 +522,14 @@ def test_mutated_ride_files_give_only_motioncue_errors_and_send_nothing_when_ref
         outcomes.update(counts)
         failures.extend(fails)
     elapsed = time.perf_counter() - t0
-    print(f"\n{N_RIDES} mutated rides in {elapsed:.1f} s: {dict(outcomes)}")
-    assert sum(outcomes.values()) == N_RIDES
+    print(f"\nmutated rides {first}..{first + count - 1} in {elapsed:.1f} s: {dict(outcomes)}")
+    assert sum(outcomes.values()) == count
     assert not failures, "\n".join(failures)
     # the mutations reach every stage: refusals at load and at the rig check, and plays
-    assert outcomes["ConfigError"] > N_RIDES // 10
-    assert outcomes["played"] > 0
-    assert outcomes["LimitError"] > 0
+    if count >= 1000:
+        assert outcomes["ConfigError"] > count // 10
+        assert outcomes["played"] > 0
+        assert outcomes["LimitError"] > 0
 
 
 # --------------------------------------------------------------------------- configurations
@@ -552,14 +578,20 @@ def _mutate_config(rng: random.Random, text: str) -> str:
     return "\n".join(lines) + "\n"
 
 
+CONFIG_PARTS = 2  # shared out among the pytest-xdist workers, as the ride cases
+
+
 @pytest.mark.filterwarnings("ignore::RuntimeWarning")  # absurd values overflow before refusal
-def test_mutated_config_files_give_only_motioncue_errors(tmp_path: Path) -> None:
+@pytest.mark.parametrize("part", range(CONFIG_PARTS))
+def test_mutated_config_files_give_only_motioncue_errors(tmp_path: Path, part: int) -> None:
     t0 = time.perf_counter()
     texts = _config_texts()
     ok_platforms = [load_platform(n) for n in ("stewart6-linear", "seat3", "seat2-yaw")]
     outcomes: Counter[str] = Counter()
     failures: list[str] = []
-    for i in range(N_CONFIGS):
+    size = math.ceil(N_CONFIGS / CONFIG_PARTS)
+    cases = range(part * size, min(N_CONFIGS, (part + 1) * size))
+    for i in cases:
         rng = random.Random(SEED * 7919 + i)
         kind, name, text = rng.choice(texts)
         mutated = _mutate_config(rng, text)
@@ -590,6 +622,7 @@ def test_mutated_config_files_give_only_motioncue_errors(tmp_path: Path) -> None
                 failures.append(f"case {i} ({name}): {type(exc).__name__}: {exc!s:.200}\n"
                                 f"{mutated}")  # fmt: skip
     elapsed = time.perf_counter() - t0
-    print(f"\n{N_CONFIGS} mutated configs in {elapsed:.1f} s: {dict(outcomes)}")
+    print(f"\nmutated configs {cases.start}..{cases.stop - 1} in {elapsed:.1f} s: {dict(outcomes)}")
+    assert sum(outcomes.values()) == len(cases)
     assert not failures, "\n".join(failures)
-    assert outcomes["ConfigError"] > N_CONFIGS // 10 and outcomes["loaded"] > 0
+    assert outcomes["ConfigError"] > len(cases) // 10 and outcomes["loaded"] > 0

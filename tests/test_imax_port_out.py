@@ -263,7 +263,6 @@ def test_random_bytes_into_the_decoders_raise_only_protocol_error():
     lengths = rng.integers(0, 72, size=cases)
     channels = rng.integers(0, 13, size=cases)
     decoded = {2: 0, 4: 0, None: 0}
-    start = time.perf_counter()
     for i in range(cases):
         prefix = _FRAME_PREFIXES[i % len(_FRAME_PREFIXES)] + int(channels[i]).to_bytes(2, "big")
         data = prefix + blob[i * 72 : i * 72 + int(lengths[i])]
@@ -279,4 +278,4 @@ def test_random_bytes_into_the_decoders_raise_only_protocol_error():
         again = msg.encode()
         assert again[:6] == data[:6] and again[12:] == data[12:]
     assert min(decoded.values()) > 100  # the lengths hit real frame sizes at every width
-    assert time.perf_counter() - start < 30
+    # the decode rate (60 000 of these in 30 s at least) is in benchmarks/bench_output.py

@@ -351,5 +351,10 @@ def test_play_over_serial_to_the_easysmc_emulator(tmp_path: Path) -> None:
     got = np.array([e.positions[:3] for e in frames[: ride.n_frames]])
     assert np.max(np.abs(got - ride.pulses)) <= 1
     t = np.array([e.t_s for e in frames[: ride.n_frames]])
-    # paced by each move's own speed: one frame period apart, within one period
-    assert np.all(np.abs(np.diff(t) - 0.05) <= 0.05)
+    # paced by each move's own speed: never less than one frame period apart on the
+    # controller's clock, and one period apart while the buffer holds moves (the median). A
+    # busy machine may send some frames late, which only lengthens those intervals: no
+    # upper bound on each, which would judge the sender's wall clock, not the moves.
+    d = np.diff(t)
+    assert np.all(d >= 0.05 - 1e-9), d.min()
+    assert np.median(d) == pytest.approx(0.05, abs=1e-9), d

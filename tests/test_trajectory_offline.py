@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
-from scipy.optimize import LinearConstraint, minimize
+from scipy.optimize import minimize
 
 from motioncue.trajectory import (
     ActuatorLimits,
@@ -95,10 +95,11 @@ def test_small_problem_matches_an_independent_qp_solver():
     c2[0] = -q0  # x0 - 2 q[-1] + q[-2]
     c2[1] = q0  # x1 - 2 x0 + q[-1]
     vb, ab = 0.5 * DT, 5.0 * DT**2
-    cons = [
-        LinearConstraint(D1, -vb - c1, vb - c1),
-        LinearConstraint(D2, -ab - c2, ab - c2),
-    ]
+    # |D1 x + c1| <= vb and |D2 x + c2| <= ab as A x <= b (SLSQP: 1 s where trust-constr took
+    # 30 s or more, and closer to the optimum)
+    A = np.vstack([D1, -D1, D2, -D2])
+    b = np.concatenate([vb - c1, vb + c1, ab - c2, ab + c2])
+    cons = [{"type": "ineq", "fun": lambda x: b - A @ x, "jac": lambda x: -A}]
     wts = np.concatenate([np.ones(N), np.zeros(M)])
     tgt = np.concatenate([q[:, 0], np.full(M, q[-1, 0])])
 
@@ -110,8 +111,10 @@ def test_small_problem_matches_an_independent_qp_solver():
 
     ora = minimize(
         f, np.clip(tgt, 0, 0.3), jac=g, bounds=[(0, 0.3)] * K, constraints=cons,
-        method="trust-constr", options={"gtol": 1e-12, "xtol": 1e-14, "maxiter": 5000},
+        method="SLSQP", options={"ftol": 1e-12, "maxiter": 500},
     )  # fmt: skip
+    assert ora.success, ora.message
+    assert np.all(A @ ora.x <= b + 1e-12)  # the oracle's answer is feasible
     assert res.objective == pytest.approx(ora.fun, rel=1e-4)
     np.testing.assert_allclose(res.q[:, 0], ora.x[:N], atol=2e-4)
 

@@ -35,6 +35,10 @@ from motioncue.trajectory import ActuatorLimits, limit_pose
 SRC = Path(__file__).resolve().parents[1] / "src"
 PLATFORM, CONTROLLER, RATE = "stewart6-linear", "mbox6", 100.0
 SEED, GENERATIONS, POPSIZE = 3, 8, 4
+# where a distributed run is compared with the in-process one, the same population over fewer
+# generations: each generation's evaluations go out and come back the same way (the second
+# one depends on the first's results), so more of them add time, not power
+SAME_RESULT_GENERATIONS = 2
 
 
 def _excerpt(name: str, start_s: int, dur_s: int, folder: Path) -> Path:
@@ -58,7 +62,7 @@ def drives(tmp_path_factory: pytest.TempPathFactory) -> dict[str, Path]:
     }
 
 
-def _tune_args(drives: dict[str, Path], out: Path) -> list[str]:
+def _tune_args(drives: dict[str, Path], out: Path, generations: int = GENERATIONS) -> list[str]:
     return [
         "tune",
         "--input", str(drives["a"]), str(drives["b"]),
@@ -66,7 +70,7 @@ def _tune_args(drives: dict[str, Path], out: Path) -> list[str]:
         "--controller", CONTROLLER,
         "--out", str(out),
         "--seed", str(SEED),
-        "--generations", str(GENERATIONS),
+        "--generations", str(generations),
         "--popsize", str(POPSIZE),
         "--budget-s", "600",
         "--objective", "score",  # these tests are about the cue score (test_tune_strength)
@@ -82,6 +86,21 @@ def tuned_local(drives: dict[str, Path], tmp_path_factory: pytest.TempPathFactor
     stdout, stderr = io.StringIO(), io.StringIO()
     with contextlib.redirect_stdout(stdout), contextlib.redirect_stderr(stderr):
         status = main([*_tune_args(drives, out), "--workers", "1"])
+    assert status == 0, stderr.getvalue()
+    return out, stdout.getvalue(), stderr.getvalue()
+
+
+@pytest.fixture(scope="module")
+def tuned_local_short(drives: dict[str, Path], tmp_path_factory: pytest.TempPathFactory) -> tuple:
+    """The in-process run that the distributed runs must reproduce exactly."""
+    out = tmp_path_factory.mktemp("tune-local-short") / "tuned.toml"
+    import contextlib
+    import io
+
+    stdout, stderr = io.StringIO(), io.StringIO()
+    args = _tune_args(drives, out, SAME_RESULT_GENERATIONS)
+    with contextlib.redirect_stdout(stdout), contextlib.redirect_stderr(stderr):
+        status = main([*args, "--workers", "1"])
     assert status == 0, stderr.getvalue()
     return out, stdout.getvalue(), stderr.getvalue()
 
@@ -200,9 +219,9 @@ def _stop(proc: subprocess.Popen) -> None:
             proc.wait(timeout=5)
 
 
-@pytest.mark.timeout(240)
+@pytest.mark.timeout(600)  # a hang guard: a scheduler, a worker and a tune, on a busy machine
 def test_dask_scheduler_gives_the_local_result(
-    tuned_local: tuple, drives: dict, tmp_path: Path, capsys: pytest.CaptureFixture
+    tuned_local_short: tuple, drives: dict, tmp_path: Path, capsys: pytest.CaptureFixture
 ) -> None:
     import distributed  # the dev extra installs it (make test); missing = a failure, not a skip
 
@@ -244,14 +263,14 @@ def test_dask_scheduler_gives_the_local_result(
         assert os.getpid() not in worker_pids.values()  # evaluated in the worker process
         out = tmp_path / "tuned-dask.toml"
         capsys.readouterr()
-        status = main([*_tune_args(drives, out), "--scheduler", address])
+        status = main([*_tune_args(drives, out, SAME_RESULT_GENERATIONS), "--scheduler", address])
         cap = capsys.readouterr()
         assert status == 0, cap.err
         assert f"Dask scheduler {address} (1 workers)" in cap.err
     finally:
         for p in reversed(procs):
             _stop(p)
-    local_out, local_stdout, _ = tuned_local
+    local_out, local_stdout, _ = tuned_local_short
     assert load_cueing(out) == load_cueing(local_out).__class__(
         **{**load_cueing(local_out).__dict__, "name": out.stem}
     )
@@ -311,14 +330,14 @@ def test_cli_input_and_output_errors(
 
 
 def test_local_process_pool_gives_the_in_process_result(
-    tuned_local: tuple, drives: dict, tmp_path: Path, capsys: pytest.CaptureFixture
+    tuned_local_short: tuple, drives: dict, tmp_path: Path, capsys: pytest.CaptureFixture
 ) -> None:
     out = tmp_path / "tuned.toml"
-    status = main([*_tune_args(drives, out), "--workers", "2"])
+    status = main([*_tune_args(drives, out, SAME_RESULT_GENERATIONS), "--workers", "2"])
     cap = capsys.readouterr()
     assert status == 0, cap.err
     assert "on 2 local processes" in cap.err
-    local_out, local_stdout, _ = tuned_local
+    local_out, local_stdout, _ = tuned_local_short
     assert load_cueing(out) == load_cueing(local_out)
     assert cap.out.replace(str(out), "X") == local_stdout.replace(str(local_out), "X")
 
@@ -330,15 +349,14 @@ def test_budget_bounds_the_wall_time(
     args = _tune_args(drives, out)
     args[args.index("--generations") + 1] = "1000"
     args[args.index("--budget-s") + 1] = "0.5"
-    t0 = time.monotonic()
     status = main([*args, "--workers", "1"])
-    elapsed = time.monotonic() - t0
     cap = capsys.readouterr()
     assert status == 0, cap.err
     assert "wall-time budget 0.5 s" in cap.err
     gens = [ln for ln in cap.err.splitlines() if "evaluations/s" in ln]
-    assert len(gens) == 1  # the first population is always evaluated, then it stops
-    assert elapsed < 30.0
+    # the first population is always evaluated, then it stops: 1 of the 1000 generations
+    # asked for (counted, not timed, so that a busy machine cannot fail it)
+    assert len(gens) == 1
     assert load_cueing(out).algorithm == "classical"
 
 

@@ -42,7 +42,7 @@ step in the telemetry shows in the frames' acceleration only one frame later). E
 therefore carries the cue for the end of the interval it starts (``BridgeConfig.lead_ms``,
 default one period on arrival): the cueing runs that far ahead of the wall clock on the
 up-sampler's extrapolation, which is corrected smoothly from the last value used when the
-next sample arrives. Measured on loopback (``tests/test_latency_acceptance.py``): a lateral-g
+next sample arrives. Measured on loopback (``benchmarks/bench_latency.py``): a lateral-g
 step reaches the first frame after its packet, 0.8-0.9 ms p50 instead of 4.7-4.9 ms.
 
 On a busy PC the scheduler may hold the loop back by several milliseconds. The loop thread
