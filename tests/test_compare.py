@@ -134,6 +134,16 @@ def _alone(rec_path: Path, preset: str) -> dict:
         "false_any": np.count_nonzero(any_false) / fs,
         "missed_any": np.count_nonzero(any_missed) / fs,
         "clamped_pct": 100.0 * np.count_nonzero(np.asarray(lim.status) != "ok") / n,
+        "share": np.sqrt(np.mean(sim**2, axis=0) / np.mean(veh**2, axis=0)),
+        # least squares through the origin, solved by lstsq (not the module's closed form)
+        "gain": np.array(
+            [np.linalg.lstsq(veh[:, i : i + 1], sim[:, i], rcond=None)[0][0] for i in range(6)]
+        ),
+        "reversal": np.count_nonzero(
+            (np.abs(veh) > thr) & (np.abs(sim) > thr) & (np.sign(sim) != np.sign(veh)), axis=0
+        )
+        / fs,
+        "spurious": np.count_nonzero((np.abs(sim) > thr) & (np.abs(veh) <= thr), axis=0) / fs,
         "duration_s": n / fs,
     }
 
@@ -161,6 +171,11 @@ def test_rows_equal_each_preset_evaluated_alone(report: dict) -> None:
         assert row["false_cue_s_any"] == pytest.approx(ref["false_any"])
         assert row["missed_cue_s_any"] == pytest.approx(ref["missed_any"])
         assert row["clamped_pct"] == pytest.approx(ref["clamped_pct"])
+        for i, a in enumerate(AXES):
+            assert row[f"share_{a}"] == pytest.approx(ref["share"][i], rel=1e-9)
+            assert row[f"gain_{a}"] == pytest.approx(ref["gain"][i], rel=1e-6, abs=1e-12)
+            assert row[f"reversal_s_{a}"] == pytest.approx(ref["reversal"][i])
+            assert row[f"spurious_s_{a}"] == pytest.approx(ref["spurious"][i])
     # the presets really differ (the comparison is not one run copied)
     js = {r["preset"]: r["objective_J"] for r in rows if r["recording"] == "lap-a.csv"}
     assert len({round(v, 9) for v in js.values()}) == len(presets)
@@ -332,5 +347,7 @@ def test_text_table_and_same_named_presets(
     labels = [ln.split()[1] for ln in body]
     assert len(set(labels)) == 2
     assert labels == ["racing", str(copy)]
-    assert "J" in out.splitlines()[1] and "m/s^2" in out and "deg/s" in out
+    head, units = out.splitlines()[1:3]
+    assert "J" in head and "share fx" in head and "rev %" in head
+    assert "thr" in units and "rms/rms" in units and "% time" in units
     assert (tmp_path / "rep" / "perceived-r.png").is_file()

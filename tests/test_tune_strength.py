@@ -47,9 +47,9 @@ def _strength_base():  # type: ignore[no-untyped-def]
 
 
 class _Synthetic(TuneObjective):
-    """Strength = min(kt_x, kt_y) (the tilt scales as rendered shares); false cues
+    """Strength = sqrt(kt_x kt_y) (the tilt scales as rendered shares); false cues
     0.1 (kt_x + kt_y): the budget of 15 % allows kt_x + kt_y <= 1.5, so the best is
-    kt_x = kt_y = 0.75 (strength 0.75), whatever the other 17 parameters."""
+    kt_x = kt_y = 0.75 (strength 0.75), whatever the other 19 parameters."""
 
     def __init__(self) -> None:  # no drives, no platform: the chain is the formula
         self.base = _strength_base()
@@ -61,7 +61,7 @@ class _Synthetic(TuneObjective):
         a, b = params.tilt_scale
         cue = _cue(a, b, false=0.1 * (a + b))
         return ChainMetrics(objective=0.0, per_drive_objective=(0.0,), duration_s=1.0,
-                            strength=min(a, b), pooled=cue)  # fmt: skip
+                            strength=math.sqrt(a * b), cue=cue)  # fmt: skip
 
 
 def test_tuner_finds_the_known_optimum_of_a_synthetic_problem() -> None:
@@ -78,11 +78,11 @@ def test_tuner_finds_the_known_optimum_of_a_synthetic_problem() -> None:
 
 def test_standing_still_cannot_win_and_violations_rank_below_every_feasible() -> None:
     obj = _Synthetic()
-    still = ChainMetrics(0.0, (0.0,), duration_s=1.0, strength=0.0, pooled=_cue(0, 0, 0.0))
+    still = ChainMetrics(0.0, (0.0,), duration_s=1.0, strength=0.0, cue=_cue(0, 0, 0.0))
     faint = ChainMetrics(0.0, (0.0,), duration_s=1.0, strength=0.03,
-                         pooled=_cue(0.03, 0.08, 0.02))  # fmt: skip
+                         cue=_cue(0.03, 0.08, 0.02))  # fmt: skip
     over = ChainMetrics(0.0, (0.0,), duration_s=1.0, strength=0.5,
-                        pooled=_cue(0.5, 0.5, 0.18, rev=0.03, corr=(0.90, 0.95)))  # fmt: skip
+                        cue=_cue(0.5, 0.5, 0.18, rev=0.03, corr=(0.90, 0.95)))  # fmt: skip
     assert obj.score(still) == 0.0
     assert obj.score(faint) == pytest.approx(-0.03)
     # 0.18 vs 0.15: 0.2; 0.03 vs 0.02: 0.5; corr fx 0.90 vs 0.95 over 0.05: 1.0

@@ -80,6 +80,7 @@ def _compressive(base: CueingParams) -> CueingParams:
         tilt_reach_rad=(reach[0], reach[1], reach[2], reach[3]),
         tilt_reach_use=0.8,
         tilt_rate_limit_rad_s=math.radians(20.0),
+        lead_s=(0.15, 0.08),
     )
 
 
@@ -156,3 +157,33 @@ def test_tilt_reach_is_the_last_reachable_pure_tilt() -> None:
         assert not reachable(platform, beyond).any()
     # the hexapod is mirror-symmetric about its x-z plane: roll reach alike both ways
     assert reach[0] == pytest.approx(reach[1], abs=math.radians(0.011))
+
+
+def test_lead_section_matches_the_continuous_lead_at_its_prewarp_frequency() -> None:
+    from scipy.signal import sosfreqz
+
+    from motioncue.cueing._params import LEAD_GAIN
+
+    p = _compressive(load_cueing("racing-hexapod"))
+    fs = 100.0
+    design = ClassicalWashout(p, fs)
+    assert p.lead_s is not None
+    for tau, sec in zip(p.lead_s, design.lead, strict=True):
+        w = 1.0 / tau
+        _, h = sosfreqz(np.array([sec]), worN=[w / (2 * math.pi)], fs=fs)
+        want = (1 + 1j * w * tau) / (1 + 1j * w * tau / LEAD_GAIN)
+        assert abs(h[0] - want) < 1e-12
+        _, h0 = sosfreqz(np.array([sec]), worN=[0.0], fs=fs)
+        assert abs(h0[0] - 1.0) < 1e-12  # no gain on a sustained force
+    # a force step: the output jumps above the step and settles on it (the lead's shape)
+    n = 300
+    f = np.tile([0.0, 0.0, G], (n, 1))
+    f[10:, 1] = 1.0
+    q = replace(p, tilt_shape=None, tilt_reach_rad=None, f_shape=None, tilt_scale=(1.0, 1.0),
+                f_scale=(1.0, 1.0, 1.0), f_limit_m_s2=(50.0, 50.0, 50.0), lead_s=(0.1, 0.1),
+                tilt_rate_limit_rad_s=20.0, tilt_accel_limit_rad_s2=None)  # fmt: skip
+    plain = replace(q, lead_s=None)
+    a = ClassicalWashout(q, fs).run(f, np.zeros((n, 3))).tilt[:, 0]
+    b = ClassicalWashout(plain, fs).run(f, np.zeros((n, 3))).tilt[:, 0]
+    assert np.all(a[10:40] >= b[10:40]) and a[12] > b[12]
+    assert a[-1] == pytest.approx(b[-1], abs=1e-9)

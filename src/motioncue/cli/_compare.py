@@ -52,6 +52,13 @@ def register(sub: Any) -> None:
     parser.add_argument("--platform", required=True, help="bundled platform name or TOML path")
     parser.add_argument("--controller", required=True, help="bundled controller name or TOML path")
     parser.add_argument("--report", required=True, metavar="DIR", help="folder for the report")
+    parser.add_argument(
+        "--bound",
+        action="store_true",
+        help="also compute each recording's physical bound on the platform (the least "
+        "perceived error and the largest gain without a reversal any motion within its "
+        "limits could give) and each preset's share of it; seconds to a minute per recording",
+    )
     parser.add_argument("--json", action="store_true", help="print the metrics as JSON")
     parser.add_argument(
         "--rate",
@@ -117,6 +124,7 @@ def run(args: argparse.Namespace) -> int:
         model=model.name,
         platform_name=args.platform,
         controller_name=args.controller,
+        bound=args.bound,
     )
     paths = write_compare_report(result, args.report)
     if args.json:
@@ -128,6 +136,8 @@ def run(args: argparse.Namespace) -> int:
             f"vestibular models {model.name}"
         )
         print(result.table())
+        if result.bound_text():
+            print(result.bound_text())
         print(
             f"motioncue compare: report in {args.report} ({len(paths)} files; columns "
             "explained in summary.txt)"

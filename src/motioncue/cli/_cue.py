@@ -175,4 +175,7 @@ def _metrics(ev: object) -> dict[str, object]:
         arr = np.asarray(value)
         if arr.dtype.kind in "fiub" and arr.size <= 6:
             out[name] = [None if not np.isfinite(v) else float(v) for v in arr.ravel().tolist()]
+    cue = getattr(ev, "metrics", None)
+    if cue is not None:
+        out["metrics"] = cue.to_dict()  # definitions: motioncue.cueing.cue_metrics
     return out

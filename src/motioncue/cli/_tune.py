@@ -32,15 +32,17 @@ def register(sub: Any) -> None:
         description=(
             "Optimise the base preset's main parameters (translational scales and high-pass, "
             "tilt scales, filter, rate and acceleration limits, rotational scale and "
-            "high-pass, yaw scale and high-pass; bounded, log space) to minimise the mean cue "
-            "score over the recordings (perceived-motion error J relative to standing still, "
-            "lost correlation, false and missed cues), with the cheap chain of generate "
-            "(cueing, workspace limiting, evaluation of the delivered poses). A candidate that "
-            "breaks an "
-            "actuator limit on any frame or clamps more than 1 %% of its poses is penalised "
-            "above every one that does not; the result must meet both or nothing is "
-            "written. Optimiser: SciPy differential evolution, seeded. Evaluations run in "
-            "local processes (--workers) or on a Dask cluster (--scheduler)."
+            "high-pass, yaw scale and high-pass; with the compressive tilt also the curves' "
+            "limits and exponents and the share of the platform's tilt reach; bounded, log "
+            "space) with the cheap chain of generate (cueing, workspace limiting, evaluation "
+            "of the delivered poses through vestibular models). Objective strength (the "
+            "default): the largest rendered share of fx and fy among candidates meeting the "
+            "cue-quality targets (reversals, false cues, correlation, clamping); score: the "
+            "cue score. A candidate that breaks an actuator limit on any frame or clamps more "
+            "than 1 %% of its poses is penalised above every one that does not; the result "
+            "must meet the limits (and with strength the targets) or nothing is written. "
+            "Optimiser: SciPy differential evolution, seeded. Evaluations run in local "
+            "processes (--workers) or on a Dask cluster (--scheduler)."
         ),
     )
     parser.add_argument(
@@ -98,9 +100,9 @@ def register(sub: Any) -> None:
         "--objective",
         choices=("strength", "score"),
         default="strength",
-        help="strength (default): the largest rendered share of fx and fy (the weaker of "
-        "the two, mean over the recordings) among candidates meeting the cue-quality "
-        "targets below on every recording; score: the cue score (lower is better; the "
+        help="strength (default): the largest rendered share of fx and fy (their geometric "
+        "mean, the recordings pooled) among candidates meeting the cue-quality "
+        "targets below (pooled); score: the cue score (lower is better; the "
         "objective before issue 20, which barely moving can win)",
     )
     parser.add_argument(
@@ -171,22 +173,19 @@ def _metrics_table(before: Any, after: Any) -> str:
         ("clamped poses (%)", before.clamped_fraction * 100, after.clamped_fraction * 100, ".2f")
     )
     rows.append(("frames breaking a limit", before.violating_frames, after.violating_frames, "d"))
-    rows.append(("strength: min share fx, fy", before.strength, after.strength, ".4f"))
-    pb, pa = before.pooled, after.pooled
-    if pb is not None and pa is not None:
+    rows.append(("strength: sqrt(share fx fy)", before.strength, after.strength, ".4f"))
+    if before.cue is not None and after.cue is not None:
+        # cue strength and cue errors, pooled over the recordings (motioncue.cueing.cue_metrics)
         for i, a in enumerate(_AXES[:2]):
-            rows.append((f"rendered share {a} (pooled)", pb.rendered_share[i],
-                         pa.rendered_share[i], ".4f"))  # fmt: skip
-        for i, a in enumerate(_AXES[:2]):
-            rows.append((f"missed cues {a} (pooled %)", pb.missed[i] * 100,
-                         pa.missed[i] * 100, ".2f"))  # fmt: skip
-        rows.append(("reversals, any axis (pooled %)", pb.reversals_any * 100,
-                     pa.reversals_any * 100, ".2f"))  # fmt: skip
-        rows.append(("all false cues (pooled %)", pb.false_any * 100, pa.false_any * 100,
-                     ".2f"))  # fmt: skip
-        for i, a in enumerate(_AXES[:2]):
-            rows.append((f"correlation {a} (pooled)", pb.correlation[i], pa.correlation[i],
-                         ".3f"))  # fmt: skip
+            rows.append((f"rendered share {a}", before.cue.rendered_share[i],
+                         after.cue.rendered_share[i], ".3f"))  # fmt: skip
+            rows.append((f"gain {a}", before.cue.gain[i], after.cue.gain[i], ".3f"))
+            rows.append((f"missed cues {a} (%)", before.cue.missed[i] * 100,
+                         after.cue.missed[i] * 100, ".2f"))  # fmt: skip
+        for name, label in (("reversals_any", "reversals"), ("spurious_any", "spurious cues"),
+                            ("false_any", "all false cues")):  # fmt: skip
+            rows.append((f"{label}, any axis (%)", getattr(before.cue, name) * 100,
+                         getattr(after.cue, name) * 100, ".2f"))  # fmt: skip
     lines = [f"{'metric':<32} {'before':>10} {'after':>10}"]
     for name, b, a, fmt in rows:
         lines.append(f"{name:<32} {format(b, fmt):>10} {format(a, fmt):>10}")
@@ -352,7 +351,7 @@ def run(args: argparse.Namespace) -> int:
         progress=progress,
         init_spread=args.init_spread,
     )
-    pa = result.after.pooled
+    pa = result.after.cue
     inputs = ", ".join(Path(p).name for p in args.input)
     if excerpt is not None:
         inputs += f" (each from {excerpt[0]:g} s to {excerpt[1]:g} s)"
@@ -373,8 +372,8 @@ def run(args: argparse.Namespace) -> int:
         f"Cue score on the tuning recordings: before {result.before.objective:.4f}, "
         f"after {result.after.objective:.4f}; J before {result.before.perceived_error:.3f}, "
         f"after {result.after.perceived_error:.3f}.",
-        f"Strength (min share fx, fy) before {result.before.strength:.4f}, after "
-        f"{result.after.strength:.4f}.",
+        f"Strength (geometric mean of the shares of fx and fy) before "
+        f"{result.before.strength:.4f}, after {result.after.strength:.4f}.",
     ]
     if pa is not None:
         comments.append(
@@ -452,7 +451,8 @@ def _objective_comment(args: argparse.Namespace, targets: Any) -> str:
             "relative to standing still, lost correlation, false and missed cues) " + chain + "."
         )
     return (
-        "Objective: strength, the mean over the recordings of min(rendered share fx, fy) "
+        "Objective: strength, the geometric mean of the rendered shares of fx and fy (the "
+        "recordings pooled) "
         + chain
         + f"; targets on every recording: reversals <= {targets.max_reversals:.2%}, false "
         f"cues <= {targets.max_false:.2%}, clamped <= {targets.max_clamped:.2%}, corr fx >= "
@@ -475,6 +475,7 @@ def _metrics_dict(m: Any) -> dict[str, Any]:
         "clamped_fraction": num(m.clamped_fraction),
         "violating_frames": int(m.violating_frames),
         "strength": num(m.strength),
-        "pooled": None if m.pooled is None else m.pooled.to_dict(),
         "feasible": bool(m.feasible),
+        # definitions: motioncue.cueing.cue_metrics (pooled over the recordings)
+        "cue_metrics": None if m.cue is None else m.cue.to_dict(),
     }

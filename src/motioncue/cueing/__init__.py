@@ -28,6 +28,7 @@ from ._algorithm import (
     register_cueing,
     unregister_cueing,
 )
+from ._bound import BOUND_CHANNELS, CueBound, RigReach, cue_bound, rig_reach
 from ._classical import ClassicalWashout, WashoutResult, WashoutState
 from ._evaluate import (
     AXIS_NAMES,
@@ -62,6 +63,7 @@ from ._vestibular import (
 __all__ = [
     "ACTIVE_FRACTION",
     "AXIS_NAMES",
+    "BOUND_CHANNELS",
     "CORRELATION_WEIGHTS",
     "DEFAULT_MODEL_SET",
     "DEFAULT_WEIGHTS",
@@ -73,6 +75,7 @@ __all__ = [
     "OTOLITH",
     "SEMICIRCULAR_CANAL",
     "ClassicalWashout",
+    "CueBound",
     "CueMasks",
     "CueMetrics",
     "CueScore",
@@ -81,11 +84,13 @@ __all__ = [
     "CueingFactory",
     "CueingParams",
     "CueingResult",
+    "RigReach",
     "VestibularModel",
     "VestibularModelSet",
     "WashoutResult",
     "WashoutState",
     "at_intensity",
+    "cue_bound",
     "cue_masks",
     "cue_metrics",
     "cue_score",
@@ -97,6 +102,7 @@ __all__ = [
     "perceived_motion_error",
     "plot_cueing",
     "register_cueing",
+    "rig_reach",
     "simulator_motion",
     "tilt_reach",
     "unregister_cueing",

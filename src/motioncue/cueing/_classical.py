@@ -15,6 +15,9 @@ Signal flow (per sample; frames, signs and units of conventions.md)
    deviation ``|f - [0, 0, g]|`` or angular velocity exceeds ``reject_*`` on any axis, is
    replaced by the last good sample (rest, ``f = [0, 0, g], w = 0``, before the first) and
    counted.
+   With ``lead_s = (tau_x, tau_y)`` the held ``f_x, f_y`` fed to the tilt (step 2, with
+   its own ``tilt_scale``) pass the phase lead ``(1 + tau s) / (1 + tau s / LEAD_GAIN)``
+   (Tustin, prewarped at ``1/tau``), which offsets the tilt's lag.
 1. **Scaling and smooth limiting.** ``f_s = [0, 0, g] + L_f(k_f * (f - [0, 0, g]))``,
    ``w_s = L_w(k_w * w)`` with the limiter ``L`` of :func:`~._filters.soft_limit`.
    With ``f_shape`` / ``w_shape`` set, the channel is compressed instead
@@ -117,7 +120,7 @@ from ._filters import (
     soft_limit_array,
     tustin_section,
 )
-from ._params import GRAVITY_M_S2, CueingParams
+from ._params import GRAVITY_M_S2, LEAD_GAIN, CueingParams
 
 __all__ = ["ClassicalWashout", "WashoutResult", "WashoutState", "rate_accel_limit_step"]
 
@@ -128,7 +131,8 @@ _MIN_COS_PITCH = 1e-3
 # 0, 1: tilt low-pass x, y; 2, 3: rotational prediction roll, pitch (yaw does not enter T);
 # 4-6: rotational high-pass+integrator roll, pitch, yaw; 7-12: translational x1, x2, y1, y2,
 # z1, z2 (the second section of an axis is the identity when its wb is 0).
-_N_SECTIONS = 13
+# 13, 14: phase lead on fx, fy (the identity without lead_s).
+_N_SECTIONS = 15
 
 
 @dataclass(eq=False)
@@ -137,8 +141,8 @@ class WashoutState:
 
     Attributes
     ----------
-    z : list of 26 floats
-        Delay states of the 13 second-order sections.
+    z : list of 30 floats
+        Delay states of the 15 second-order sections.
     tilt : list of 2 floats
         Rate-limited tilt ``[roll, pitch]`` (rad) of the last sample.
     hold : list of 6 floats
@@ -291,6 +295,7 @@ class ClassicalWashout:
     params: CueingParams
     fs_hz: float
     tilt_lp: Section = field(init=False)
+    lead: tuple[Section, Section] = field(init=False)
     rot: tuple[Section, Section, Section] = field(init=False)
     trans: tuple[tuple[Section, Section], ...] = field(init=False)
     _step_impl: _StepFn = field(init=False, repr=False)
@@ -319,6 +324,11 @@ class ClassicalWashout:
                 first = tustin_section([1.0], [1.0, 2.0 * z * w, w * w], fs, w)
                 second = _IDENTITY
             trans.append((first, second))
+        leads: list[Section] = [_IDENTITY, _IDENTITY]
+        if p.lead_s is not None:
+            for i, tau in enumerate(p.lead_s):
+                leads[i] = tustin_section([tau, 1.0], [tau / LEAD_GAIN, 1.0], fs, 1.0 / tau)
+        object.__setattr__(self, "lead", (leads[0], leads[1]))
         object.__setattr__(self, "tilt_lp", tilt_lp)
         object.__setattr__(self, "rot", (rot[0], rot[1], rot[2]))
         object.__setattr__(self, "trans", tuple(trans))
@@ -330,6 +340,8 @@ class ClassicalWashout:
             sos[4 + k] = _sos(sec)  # high-pass + integrator at 4, 5, 6
         for k, secs in enumerate(trans):
             sos[7 + 2 * k] = _sos(*secs)
+        sos[13] = _sos(leads[0])
+        sos[14] = _sos(leads[1])
         object.__setattr__(self, "_sos", sos)
 
     # ------------------------------------------------------------------ continuous designs
@@ -434,6 +446,8 @@ class ClassicalWashout:
         lxp, lxn, lyp, lyn = p.tilt_force_limits_m_s2
         rmin, rmax, pmin, pmax = p.tilt_limits_rad
         comp = compress
+        has_lead = p.lead_s is not None
+        ld0, ld1 = self.lead
         hx, hy, hz = p.head_offset_m
         head = hx != 0.0 or hy != 0.0 or hz != 0.0
         mx, my, mz, mr, mp, myaw = (1.0 if d else 0.0 for d in p.dofs)
@@ -480,6 +494,11 @@ class ClassicalWashout:
             else:
                 state.bad_samples += 1
                 fx, fy, fz, wx, wy, wz = h[0], h[1], h[2], h[3], h[4], h[5]
+            flx = fx
+            fly = fy
+            if has_lead:  # 0b. phase lead on the tilt's fx, fy
+                flx = bq(ld0, state.z, 26, fx)
+                fly = bq(ld1, state.z, 28, fy)
             # 1. scaling and smooth limiting (or compression)
             if fshape:
                 sx = comp(fx, kfx, lfx, lfx, pfx)
@@ -513,11 +532,11 @@ class ClassicalWashout:
             z = state.z
             # 2. tilt coordination
             if cshape:
-                tix = comp(fx, ktx, lxp, lxn, pt)
-                tiy = comp(fy, kty, lyp, lyn, pt)
+                tix = comp(flx, ktx, lxp, lxn, pt)
+                tiy = comp(fly, kty, lyp, lyn, pt)
             elif own_tilt:
-                tix = ktx * fx
-                tiy = kty * fy
+                tix = ktx * flx
+                tiy = kty * fly
             else:
                 tix = sx
                 tiy = sy
@@ -736,6 +755,18 @@ class ClassicalWashout:
             held = np.where((idx >= 0)[:, None], raw[np.maximum(idx, 0)], np.array(state.hold))
             used[:] = held.T
         fx, fy, fz, wx, wy, wz = used
+        z = np.array(state.z).reshape(_N_SECTIONS, 2)
+        zf = z.copy()
+
+        def filt(secs: Sequence[Section], x: NDArray[np.float64], k: int) -> NDArray[np.float64]:
+            y, zout = sosfilt(self._sos[k], x, zi=z[k : k + len(secs)])
+            zf[k : k + len(secs)] = zout
+            return np.asarray(y)
+
+        flx, fly = fx, fy
+        if p.lead_s is not None:  # 0b. phase lead on the tilt's fx, fy
+            flx = filt([self.lead[0]], fx, 13)
+            fly = filt([self.lead[1]], fy, 14)
         # 1. scaling and smooth limiting
         knee = p.soft_knee
         if p.f_shape is None:
@@ -757,24 +788,17 @@ class ClassicalWashout:
             qx = compress_array(wx, k[0], lw[0], lw[0], pw[0])
             qy = compress_array(wy, k[1], lw[1], lw[1], pw[1])
             qz = compress_array(wz, k[2], lw[2], lw[2], pw[2])
-        z = np.array(state.z).reshape(_N_SECTIONS, 2)
-        zf = z.copy()
-
-        def filt(secs: Sequence[Section], x: NDArray[np.float64], k: int) -> NDArray[np.float64]:
-            y, zout = sosfilt(self._sos[k], x, zi=z[k : k + len(secs)])
-            zf[k : k + len(secs)] = zout
-            return np.asarray(y)
 
         # 2. tilt coordination
         if p.tilt_shape is not None and p.tilt_scale is not None:
             lxp, lxn, lyp, lyn = p.tilt_force_limits_m_s2
-            tix = compress_array(fx, p.tilt_scale[0], lxp, lxn, p.tilt_shape)
-            tiy = compress_array(fy, p.tilt_scale[1], lyp, lyn, p.tilt_shape)
+            tix = compress_array(flx, p.tilt_scale[0], lxp, lxn, p.tilt_shape)
+            tiy = compress_array(fly, p.tilt_scale[1], lyp, lyn, p.tilt_shape)
         elif p.tilt_scale is None:
             tix, tiy = sx, sy
         else:
-            tix = p.tilt_scale[0] * fx
-            tiy = p.tilt_scale[1] * fy
+            tix = p.tilt_scale[0] * flx
+            tiy = p.tilt_scale[1] * fly
         ylx = filt([self.tilt_lp], tix, 0)
         yly = filt([self.tilt_lp], tiy, 1)
         tp = -np.arcsin(np.clip(ylx / g, -1.0, 1.0))

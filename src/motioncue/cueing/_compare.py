@@ -24,7 +24,7 @@ import json
 import math
 import re
 from collections.abc import Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
@@ -32,6 +32,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from .._errors import ConfigError
+from ._bound import CueBound, RigReach
 from ._evaluate import CueingEvaluation, evaluate_cueing
 from ._score import cue_score
 
@@ -99,20 +100,60 @@ COLUMN_NOTES: dict[str, str] = {
     },
     "missed_cue_s_any": "time (s) with a missed cue on at least one of the six channels",
     "missed_cue_pct_any": "missed_cue_s_any as % of duration_s",
+    **{
+        f"share_{a}": f"rendered share of the {_WHAT[i]}: rms(perceived simulator) / "
+        "rms(perceived vehicle) (1 = full size, 0 = nothing; empty/null when the vehicle's "
+        "is zero)"
+        for i, a in enumerate(COMPARE_AXES)
+    },
+    **{
+        f"gain_{a}": f"gain of the {_WHAT[i]}: least-squares slope of perceived simulator on "
+        "perceived vehicle, sum(sim veh) / sum(veh veh) (the in-phase share)"
+        for i, a in enumerate(COMPARE_AXES)
+    },
+    **{
+        f"reversal_s_{a}": f"time (s) with both |perceived vehicle {a}| and |perceived "
+        "simulator| above the threshold and of opposite signs (a reversal)"
+        for a in COMPARE_AXES
+    },
+    "reversal_s_any": "time (s) with a reversal on at least one of the six channels",
+    "reversal_pct_any": "reversal_s_any as % of duration_s",
+    **{
+        f"spurious_s_{a}": f"time (s) with |perceived simulator {a}| above the threshold "
+        "and |perceived vehicle| at or below it (a cue the vehicle does not give, either sign)"
+        for a in COMPARE_AXES
+    },
+    "spurious_s_any": "time (s) with a spurious cue on at least one of the six channels",
+    "spurious_pct_any": "spurious_s_any as % of duration_s",
     "clamped_pct": "% of the cue poses outside the platform's workspace (incl. the "
     "controller's stroke and pulse rounding), scaled back towards neutral",
     "actuator_limited_pct": "% of frames changed by the actuator speed/acceleration/jerk "
     "limits after workspace limiting",
     "bad_samples": "input samples (NaN, inf, spikes) the cueing algorithm replaced by the "
     "last good one",
+    **{
+        f"bound_error_{a}_m_s2": f"the physical bound (compare --bound; "
+        "motioncue.cueing.cue_bound): the least RMS perceived error of the "
+        f"{_WHAT[i]} any motion of this platform within its limits could reach on this "
+        "recording (m/s^2; a certified lower bound, the same for every preset; empty/null "
+        "without --bound)"
+        for i, a in enumerate(COMPARE_AXES[:2])
+    },
+    **{
+        f"bound_gain_{a}": "the physical bound: the largest gain (in-phase rendered share) of "
+        f"the {_WHAT[i]} any motion of this platform could give without a reversal "
+        "(an upper bound; empty/null without --bound)"
+        for i, a in enumerate(COMPARE_AXES[:2])
+    },
+    **{
+        f"share_of_bound_pct_{a}": f"share_{a} as % of bound_gain_{a}: how much of what the "
+        "platform could give without a reversal the preset gives (empty/null without --bound)"
+        for a in COMPARE_AXES[:2]
+    },
 }
 """Every column of the metrics table and what it means, with units."""
 
 COLUMNS: tuple[str, ...] = tuple(COLUMN_NOTES)
-
-
-def _any_time(mask: NDArray[np.bool_], fs_hz: float) -> float:
-    return float(np.count_nonzero(mask.any(axis=1))) / fs_hz
 
 
 @dataclass(frozen=True, eq=False)
@@ -133,6 +174,8 @@ class CompareRun:
         Frames changed by the actuator limiter.
     bad_samples : int
         Input samples the cueing algorithm held.
+    bound : CueBound or None
+        The recording's physical bound on this platform (:func:`cue_bound`), when computed.
     """
 
     recording: str
@@ -142,6 +185,7 @@ class CompareRun:
     poses_clamped: int
     actuator_limited: int
     bad_samples: int
+    bound: CueBound | None = None
 
     def row(self) -> dict[str, Any]:
         """The metrics row: :data:`COLUMNS` to numbers (NaN where undefined)."""
@@ -150,8 +194,7 @@ class CompareRun:
         fs = ev.fs_hz
         dur = n / fs
         sim, veh, thr = ev.perceived_sim, ev.perceived_vehicle, ev.thresholds
-        false_mask = (np.abs(sim) > thr) & (sim * veh < 0.0)
-        missed_mask = (np.abs(veh) > thr) & (np.abs(sim) <= thr)
+        m = ev.metrics
         row: dict[str, Any] = {
             "recording": self.recording,
             "preset": self.preset,
@@ -165,14 +208,33 @@ class CompareRun:
             row[f"rms_{a}_{_unit_tag(i)}"] = float(ev.rms_error[i]) * _K[i]
         for i, a in enumerate(COMPARE_AXES):
             row[f"false_cue_s_{a}"] = float(ev.false_cue_time_s[i])
-        fa = _any_time(false_mask, fs)
-        row["false_cue_s_any"] = fa
-        row["false_cue_pct_any"] = 100.0 * fa / dur if dur > 0 else 0.0
+        row["false_cue_s_any"] = m.false_any * dur
+        row["false_cue_pct_any"] = 100.0 * m.false_any
         for i, a in enumerate(COMPARE_AXES):
             row[f"missed_cue_s_{a}"] = float(ev.missed_cue_time_s[i])
-        ma = _any_time(missed_mask, fs)
-        row["missed_cue_s_any"] = ma
-        row["missed_cue_pct_any"] = 100.0 * ma / dur if dur > 0 else 0.0
+        row["missed_cue_s_any"] = m.missed_any * dur
+        row["missed_cue_pct_any"] = 100.0 * m.missed_any
+        for i, a in enumerate(COMPARE_AXES):
+            row[f"share_{a}"] = float(m.rendered_share[i])
+        for i, a in enumerate(COMPARE_AXES):
+            row[f"gain_{a}"] = float(m.gain[i])
+        for i, a in enumerate(COMPARE_AXES):
+            row[f"reversal_s_{a}"] = float(m.reversals[i]) * dur
+        row["reversal_s_any"] = m.reversals_any * dur
+        row["reversal_pct_any"] = 100.0 * m.reversals_any
+        for i, a in enumerate(COMPARE_AXES):
+            row[f"spurious_s_{a}"] = float(m.spurious[i]) * dur
+        row["spurious_s_any"] = m.spurious_any * dur
+        row["spurious_pct_any"] = 100.0 * m.spurious_any
+        b = self.bound
+        for i, a in enumerate(COMPARE_AXES[:2]):
+            row[f"bound_error_{a}_m_s2"] = math.nan if b is None else float(b.error_rms[i])
+        for i, a in enumerate(COMPARE_AXES[:2]):
+            row[f"bound_gain_{a}"] = math.nan if b is None else float(b.gain_max[i])
+        for i, a in enumerate(COMPARE_AXES[:2]):
+            g = math.nan if b is None else float(b.gain_max[i])
+            ok = math.isfinite(g) and g > 0.0
+            row[f"share_of_bound_pct_{a}"] = 100.0 * row[f"share_{a}"] / g if ok else math.nan
         row["clamped_pct"] = 100.0 * self.poses_clamped / n if n else 0.0
         row["actuator_limited_pct"] = 100.0 * self.actuator_limited / n if n else 0.0
         row["bad_samples"] = int(self.bad_samples)
@@ -235,6 +297,7 @@ def run_chain(
             poses[k] = np.asarray(platform.forward(q_out[k], guess=poses[k]).pose, dtype=float)
     else:
         changed = np.zeros(0, dtype=np.int64)
+    clamped = int(np.count_nonzero(np.asarray(lim.status) != "ok"))
     ev = evaluate_cueing(
         f_used,
         w_used,
@@ -243,13 +306,14 @@ def run_chain(
         workspace=params.workspace,
         model=model,
         head_offset_m=getattr(params, "head_offset_m", None),
+        clamped_share=clamped / len(poses) if len(poses) else 0.0,
     )
     return CompareRun(
         recording=recording,
         preset=preset,
         evaluation=ev,
         poses=poses,
-        poses_clamped=int(np.count_nonzero(np.asarray(lim.status) != "ok")),
+        poses_clamped=clamped,
         actuator_limited=int(changed.size),
         bad_samples=int(res.bad_samples),
     )
@@ -291,6 +355,7 @@ class CompareResult:
     rate_hz: float
     model_set: str
     t_s: dict[str, NDArray[np.float64]] = field(default_factory=dict)
+    reach: RigReach | None = None
 
     def rows(self) -> list[dict[str, Any]]:
         """One metrics row per run (:data:`COLUMNS`)."""
@@ -327,34 +392,93 @@ class CompareResult:
         return buf.getvalue()
 
     def table(self) -> str:
-        """The compact text table (one row per recording and preset), with a units row."""
+        """The compact text table (one row per recording and preset), with a units row.
+
+        Correlation of the six channels, then the cue strength and cue errors of
+        :func:`motioncue.cueing.cue_metrics` for the horizontal forces (rendered share, gain,
+        missed cues) and over all channels (reversals, all false cues, missed cues), and the
+        clamped poses; the per-channel figures are in the CSV and JSON.
+        """
         rows = self.rows()
         wr = max([len("recording"), *(len(r["recording"]) for r in rows)])
         wp = max([len("preset"), *(len(r["preset"]) for r in rows)])
         corr = " ".join(f"{'c' + a:>6}" for a in COMPARE_AXES)
-        rms = " ".join(f"{'rms ' + a:>7}" for a in COMPARE_AXES)
+        xy = ("fx", "fy")
+        strength = " ".join(
+            f"{k + ' ' + a:>{w}}" for k, w in (("share", 8), ("gain", 7), ("miss", 7)) for a in xy
+        )
+        with_bound = any(r.bound is not None for r in self.runs)
         head = (
-            f"{'recording':<{wr}} {'preset':<{wp}} {'J':>6} {'score':>6} {corr} {rms} "
-            f"{'false %':>7} {'missed %':>8} {'clamp %':>7}"
+            f"{'recording':<{wr}} {'preset':<{wp}} {'J':>6} {'score':>6} {corr} {strength} "
+            f"{'rev %':>6} {'false %':>7} {'missed %':>8} {'clamp %':>7}"
         )
+        if with_bound:
+            head += f" {'bound fx':>8} {'bound fy':>8}"
         units = (
-            f"{'':<{wr}} {'':<{wp}} {'thr':>6} {'':>6} {'':>6} "
-            + " " * (7 * 5)
-            + " ".join(f"{u:>7}" for u in _UNIT)
-            + f" {'any ax':>7} {'any ax':>8} {'poses':>7}"
+            f"{'':<{wr}} {'':<{wp}} {'thr':>6} {'':>6} "
+            + " ".join(f"{'':>6}" for _ in _UNIT)
+            + f" {'rms/rms':>8} {'rms/rms':>8} {'slope':>7} {'slope':>7} {'% time':>7} "
+            f"{'% time':>7} {'any ax':>6} {'any ax':>7} {'any ax':>8} {'poses':>7}"
         )
+        if with_bound:
+            units += f" {'% share':>8} {'% share':>8}"
         lines = [head, units]
         for r in rows:
             cs = " ".join(f"{_fmt(r[f'corr_{a}'], '6.3f'):>6}" for a in COMPARE_AXES)
-            rs = " ".join(
-                f"{r[f'rms_{a}_{_unit_tag(i)}']:7.3f}" for i, a in enumerate(COMPARE_AXES)
+            dur = r["duration_s"]
+            miss = [100.0 * r[f"missed_cue_s_{a}"] / dur if dur > 0 else 0.0 for a in xy]
+            st = (
+                " ".join(f"{_fmt(r[f'share_{a}'], '8.3f'):>8}" for a in xy)
+                + " "
+                + " ".join(f"{_fmt(r[f'gain_{a}'], '7.3f'):>7}" for a in xy)
+                + " "
+                + " ".join(f"{v:7.1f}" for v in miss)
             )
             lines.append(
                 f"{r['recording']:<{wr}} {r['preset']:<{wp}} {r['objective_J']:6.3f} "
-                f"{r['cue_score']:6.3f} {cs} {rs} "
+                f"{r['cue_score']:6.3f} {cs} {st} {r['reversal_pct_any']:6.2f} "
                 f"{r['false_cue_pct_any']:7.2f} {r['missed_cue_pct_any']:8.2f} "
                 f"{r['clamped_pct']:7.2f}"
             )
+            if with_bound:
+                lines[-1] += " " + " ".join(
+                    f"{_fmt(r[f'share_of_bound_pct_{a}'], '8.1f'):>8}" for a in xy
+                )
+        return "\n".join(lines)
+
+    def bound_text(self) -> str:
+        """The physical bound of each recording (empty without ``bound``): the rig's reach,
+        the least RMS perceived error and the largest gain without a reversal, fx and fy."""
+        bounds = {r.recording: r.bound for r in self.runs if r.bound is not None}
+        if not bounds or self.reach is None:
+            return ""
+        rr = self.reach
+        lines = [
+            "Physical bound (motioncue.cueing.cue_bound; docs/cue-metrics.md): what any motion "
+            "of this platform within its limits could give, per recording.",
+            f"  reach fx/fy: stroke {rr.stroke_m[0] * 1e3:.0f}/{rr.stroke_m[1] * 1e3:.0f} mm, "
+            f"speed {rr.speed_m_s[0]:.2f}/{rr.speed_m_s[1]:.2f} m/s, accel "
+            f"{rr.accel_m_s2[0]:.1f}/{rr.accel_m_s2[1]:.1f} m/s^2, tilt "
+            f"{math.degrees(rr.tilt_rad[0]):.1f}/{math.degrees(rr.tilt_rad[1]):.1f} deg, tilt "
+            f"rate {math.degrees(rr.tilt_rate_rad_s[0]):.0f}/"
+            f"{math.degrees(rr.tilt_rate_rad_s[1]):.0f} deg/s",
+        ]
+        wr = max([len("recording"), *(len(k) for k in bounds)])
+        lines.append(
+            f"  {'recording':<{wr}} {'veh rms fx':>10} {'veh rms fy':>10} {'err >= fx':>10} "
+            f"{'err >= fy':>10} {'gain <= fx':>10} {'gain <= fy':>10}"
+        )
+        for rec, b in bounds.items():
+            lines.append(
+                f"  {rec:<{wr}} {b.vehicle_rms[0]:10.3f} {b.vehicle_rms[1]:10.3f} "
+                f"{b.error_rms[0]:10.3f} {b.error_rms[1]:10.3f} "
+                + " ".join(f"{_fmt(float(g), '10.3f'):>10}" for g in b.gain_max)
+            )
+        lines.append(
+            "  (veh rms: the vehicle's perceived motion, m/s^2; err >=: no motion of the "
+            "platform gets the perceived error below this, m/s^2; gain <=: no motion without "
+            "a reversal gives a larger gain; bound fx/fy in the table = share / gain <=)"
+        )
         return "\n".join(lines)
 
     def summary(self, plots: Sequence[str] = ()) -> str:
@@ -368,6 +492,10 @@ class CompareResult:
             "",
             self.table(),
             "",
+        ]
+        if self.bound_text():
+            lines += [self.bound_text(), ""]
+        lines += [
             "False and missed cue time per channel (s):",
         ]
         rows = self.rows()
@@ -391,8 +519,12 @@ class CompareResult:
         lines += [
             "",
             "Columns (text table: J = objective_J; score = cue_score; c<axis> = corr_<axis>; "
-            "rms <axis> = rms_<axis>_<unit>; false % / missed % = false_cue_pct_any / "
-            "missed_cue_pct_any; clamp % = clamped_pct):",
+            "share <axis> = share_<axis>; gain <axis> "
+            "= gain_<axis>; miss <axis> = missed_cue_s_<axis> as % of duration_s; rev % / "
+            "false % / missed % = reversal_pct_any / false_cue_pct_any / missed_cue_pct_any; "
+            "clamp % = clamped_pct; bound fx / fy = share_of_bound_pct_fx / _fy; definitions "
+            "and sources of share, gain, missed, reversal, spurious and false cues and of the "
+            "bound: docs/cue-metrics.md, motioncue.cueing.cue_metrics, cue_bound):",
         ]
         lines += [f"  {k:<22} {v}" for k, v in COLUMN_NOTES.items()]
         lines += [
@@ -416,6 +548,7 @@ def compare_cueing(
     model: str = "telban-cardullo-2005",
     platform_name: str | None = None,
     controller_name: str = "",
+    bound: bool = False,
 ) -> CompareResult:
     """Run every preset on every recording through the platform's chain.
 
@@ -431,6 +564,10 @@ def compare_cueing(
     rate_hz : float
     model : str
         Vestibular model set name.
+    bound : bool
+        Also compute each recording's physical bound on the platform (:func:`cue_bound`
+        with :func:`rig_reach` of the platform and ``limits``; seconds to a minute per
+        recording), reported in the ``bound_*`` and ``share_of_bound_*`` columns.
 
     Returns
     -------
@@ -451,23 +588,34 @@ def compare_cueing(
             raise ConfigError(f"{what} labels repeat: {labels!r}; each must be unique")
     runs: list[CompareRun] = []
     t_s: dict[str, NDArray[np.float64]] = {}
+    reach = None
+    if bound:
+        from motioncue.trajectory._derive import pulse_rounding_limits
+
+        from ._bound import rig_reach
+
+        reach = rig_reach(platform, pulse_rounding_limits(limits, platform, 1.0 / rate_hz))
     for rec_label, rec in recordings:
         uniform = resample(rec, rate_hz)
         t_s[rec_label] = np.asarray(uniform.t_s, dtype=float)
+        rec_bound = None
+        if reach is not None and len(uniform) >= 4:
+            from ._bound import cue_bound
+
+            rec_bound = cue_bound(np.asarray(uniform.f, dtype=float), rate_hz, reach, model=ms)
         for preset_label, params in presets:
-            runs.append(
-                run_chain(
-                    np.asarray(uniform.f, dtype=float),
-                    np.asarray(uniform.w, dtype=float),
-                    params,
-                    platform,
-                    limits,
-                    rate_hz,
-                    model=ms.name,
-                    recording=rec_label,
-                    preset=preset_label,
-                )
+            run = run_chain(
+                np.asarray(uniform.f, dtype=float),
+                np.asarray(uniform.w, dtype=float),
+                params,
+                platform,
+                limits,
+                rate_hz,
+                model=ms.name,
+                recording=rec_label,
+                preset=preset_label,
             )
+            runs.append(replace(run, bound=rec_bound) if rec_bound is not None else run)
     return CompareResult(
         runs=tuple(runs),
         recordings=tuple(k for k, _ in recordings),
@@ -477,6 +625,7 @@ def compare_cueing(
         rate_hz=float(rate_hz),
         model_set=ms.name,
         t_s=t_s,
+        reach=reach,
     )
 
 

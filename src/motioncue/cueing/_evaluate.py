@@ -27,12 +27,13 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
+from functools import cached_property
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from .._errors import ConfigError
-from ._metrics import _masks, correlation
+from ._metrics import CueMetrics, _masks, correlation, cue_metrics
 from ._params import GRAVITY_M_S2
 from ._vestibular import (
     AXIS_NAMES,
@@ -174,7 +175,14 @@ _NOTES = """Notes
   K = 0.4 is in afferent firing units), so a sustained force is perceived at its value;
   their lead gives a mid-band gain tau_a/tau_L (2.0 Telban-Cardullo, 2.48 Young-Meiry), so
   brief pulses appear up to that factor larger, for vehicle and simulator alike.
-  workspace use: max |pose| / half range per DOF (100% = at the limit)."""
+  workspace use: max |pose| / half range per DOF (100% = at the limit).
+  share    rendered share rms(sim) / rms(vehicle) of the perceived motion (1 = full size).
+  gain     least-squares slope of perceived sim on perceived vehicle (the in-phase share).
+  missed%  % of the time |vehicle| > thr and |sim| <= thr (as missed s, per sample).
+  revers%  reversals: % of the time both > thr with opposite signs.
+  spur%    spurious cues: % of the time |sim| > thr while |vehicle| <= thr (either sign).
+  false%   all false cues: % of the time |sim| > thr opposite to the vehicle, any size.
+  clamped  % of the frames scaled back into the workspace by the chain (when known)."""
 
 
 @dataclass(frozen=True, eq=False)
@@ -217,6 +225,12 @@ class CueingEvaluation:
         Name of the vestibular model set.
     head_offset_m : (3,) array
         Head position used for the simulator's specific force (m, platform frame).
+    clamped_share : float
+        Fraction of the frames the chain clamped to the workspace, when the caller knew it
+        (NaN otherwise); carried into :attr:`metrics`.
+
+    The cue strength and cue errors (rendered share, gain, missed cues, reversals, spurious
+    and false cues) are :attr:`metrics` (:func:`motioncue.cueing.cue_metrics`).
     """
 
     fs_hz: float
@@ -235,6 +249,18 @@ class CueingEvaluation:
     weights: NDArray[np.float64] = field(default_factory=lambda: np.ones(6))
     model_set: str = DEFAULT_MODEL_SET
     head_offset_m: NDArray[np.float64] = field(default_factory=lambda: np.zeros(3))
+    clamped_share: float = math.nan
+
+    @cached_property
+    def metrics(self) -> CueMetrics:
+        """:func:`motioncue.cueing.cue_metrics` of the perceived motion (computed once)."""
+        c = self.clamped_share
+        return cue_metrics(
+            self.perceived_vehicle,
+            self.perceived_sim,
+            self.thresholds,
+            clamped_share=c if math.isfinite(c) else None,
+        )
 
     def table(self) -> str:
         """The per-axis metrics table with a units row (no notes)."""
@@ -271,6 +297,9 @@ class CueingEvaluation:
             f"perceived-motion error J = {self.perceived_error:.3f} thresholds "
             f"(weights fx fy fz wx wy wz: {w})",
             f"workspace use: {use}",
+            "cue strength and cue errors (share of samples; definitions: "
+            "motioncue.cueing.cue_metrics):",
+            self.metrics.table(),
         ]
         if notes:
             lines.append(_NOTES)
@@ -311,6 +340,7 @@ def evaluate_cueing(
     weights: ArrayLike | None = None,
     head_offset_m: ArrayLike | None = None,
     max_lag_s: float = 1.0,
+    clamped_share: float | None = None,
 ) -> CueingEvaluation:
     """Compare the motion the rider of the platform perceives with the vehicle's.
 
@@ -335,6 +365,9 @@ def evaluate_cueing(
         Rider's head relative to the platform origin (m, platform frame); default zero.
     max_lag_s : float
         Largest delay searched by the cross-correlation.
+    clamped_share : float, optional
+        Fraction (0..1) of the frames the chain clamped to the workspace, for
+        :attr:`CueingEvaluation.metrics` (which cannot see it in the poses).
 
     Returns
     -------
@@ -350,6 +383,8 @@ def evaluate_cueing(
         )
     if not (math.isfinite(fs_hz) and fs_hz > 0.0):
         raise ConfigError(f"sample rate {fs_hz!r} Hz is invalid; allowed: a finite number > 0")
+    if clamped_share is not None and not (0.0 <= float(clamped_share) <= 1.0):
+        raise ConfigError(f"clamped share {clamped_share!r} is invalid; allowed: a fraction 0..1")
     f_v = np.asarray(f_vehicle, dtype=float)
     w_v = np.asarray(w_vehicle, dtype=float)
     p = np.asarray(poses, dtype=float)
@@ -409,4 +444,5 @@ def evaluate_cueing(
         weights=wts,
         model_set=ms.name,
         head_offset_m=r_head,
+        clamped_share=math.nan if clamped_share is None else float(clamped_share),
     )

@@ -15,7 +15,17 @@ from .._config import ConfigReader, find_config, load_toml
 from .._errors import ConfigError
 from ._mpc_params import MpcParams, read_mpc_table
 
-__all__ = ["DOF_NAMES", "GRAVITY_M_S2", "INTENSITY_KEYS", "CueingParams", "load_cueing"]
+__all__ = [
+    "DOF_NAMES",
+    "GRAVITY_M_S2",
+    "INTENSITY_KEYS",
+    "LEAD_GAIN",
+    "CueingParams",
+    "load_cueing",
+]
+
+LEAD_GAIN = 5.0
+"""High-frequency gain of the phase lead ``(1 + tau s) / (1 + tau s / LEAD_GAIN)``."""
 
 GRAVITY_M_S2 = 9.80665
 """Standard gravity (the ``g`` of ``f = a - g`` in conventions.md)."""
@@ -44,6 +54,8 @@ INTENSITY_KEYS: tuple[str, ...] = (
     "w_scale_yaw",
     "rot_wn_yaw_rad_s",
     "trans_wn_z_rad_s",
+    "lead_x_s",
+    "lead_y_s",
 )
 """Keys of a preset's ``[intensity] gentle`` table: the parameters the tuner sets on a preset
 with the compressive tilt (:data:`motioncue.cueing._tune.STRENGTH_TUNED_PARAMETERS`), in
@@ -115,6 +127,14 @@ class CueingParams:
         ones are compressed smoothly below ``L``, with no linear stretch and no knee.
         ``None`` (the default): the knee-and-tanh limiter of ``soft_knee``, as before these
         keys existed.
+    lead_s : 2-tuple or None
+        Phase lead on the longitudinal and lateral force (x, y) fed to the tilt (with
+        ``tilt_scale``; the translational channel is not led): ``(1 + tau s) / (1 + tau s /
+        LEAD_GAIN)``
+        with ``tau = lead_s[i]`` (s) and :data:`LEAD_GAIN` the lead's high-frequency gain.
+        It offsets the lag of the tilt (its low-pass and rate limit), so that the cue turns
+        with the vehicle instead of after it (fewer reversals in quick direction changes).
+        ``None`` (the default): no lead.
     tilt_shape : float or None
         Compressive scaling of the tilt channel (needs ``tilt_scale`` and ``tilt_reach_rad``):
         the force fed to the tilt is ``compress(f, k_t, L+, L-, tilt_shape)`` with the limits
@@ -173,6 +193,7 @@ class CueingParams:
     tilt_accel_limit_rad_s2: float | None = None
     f_shape: Vec3 | None = None
     w_shape: Vec3 | None = None
+    lead_s: tuple[float, float] | None = None
     tilt_shape: float | None = None
     tilt_reach_rad: tuple[float, float, float, float] | None = None
     tilt_reach_use: float = 1.0
@@ -231,6 +252,10 @@ class CueingParams:
                     raise ConfigError(f"CueingParams.{name} = {shape!r} is invalid; 3 numbers")
                 _check(name, shape, 1.0, False, 50.0)
         _check("tilt_reach_use", (self.tilt_reach_use,), 0.0, True, 1.0)
+        if self.lead_s is not None:
+            if len(self.lead_s) != 2:
+                raise ConfigError(f"CueingParams.lead_s = {self.lead_s!r} is invalid; 2 numbers")
+            _check("lead_s", self.lead_s, 0.0, True, 10.0)
         if self.tilt_reach_rad is not None:
             if len(self.tilt_reach_rad) != 4:
                 raise ConfigError(
@@ -302,6 +327,7 @@ def load_cueing(name_or_path: str | Path) -> CueingParams:
         soft_knee = 0.7
         f_shape = [2.0, 2.0, 2.0]                  # optional: compressive curve exponent of
         w_shape = [2.0, 2.0, 2.0]                  #   each channel (default: the knee)
+        lead_s = [0.1, 0.1]                        # optional: phase lead on fx, fy (s)
         [translational]
         wn_rad_s = [4.0, 4.0, 6.0]
         zeta = [1.0, 1.0, 1.0]
@@ -371,6 +397,10 @@ def load_cueing(name_or_path: str | Path) -> CueingParams:
     knee = sc.number("soft_knee", lo=0.0, hi=1.0, lo_open=True)
     f_shape = _vec3(sc.vector("f_shape", 3)) if sc.has("f_shape") else None
     w_shape = _vec3(sc.vector("w_shape", 3)) if sc.has("w_shape") else None
+    lead = None
+    if sc.has("lead_s"):
+        lv = sc.vector("lead_s", 2)
+        lead = (lv[0], lv[1])
     sc.finish()
 
     tr = top.table("translational")
@@ -451,6 +481,7 @@ def load_cueing(name_or_path: str | Path) -> CueingParams:
             tilt_accel_limit_rad_s2=tilt_accel,
             f_shape=f_shape,
             w_shape=w_shape,
+            lead_s=lead,
             tilt_shape=tilt_shape,
             tilt_reach_rad=reach,
             tilt_reach_use=reach_use,

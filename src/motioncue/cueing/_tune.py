@@ -71,7 +71,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from .._errors import ConfigError, LimitError, TransportError
-from ._metrics import CueMetrics
+from ._metrics import CueMetrics, cue_metrics
 from ._params import GRAVITY_M_S2, INTENSITY_KEYS, CueingParams
 from ._vestibular import DEFAULT_MODEL_SET, get_model_set
 
@@ -188,6 +188,8 @@ STRENGTH_TUNED_PARAMETERS: tuple[_Parameter, ...] = (
     _Parameter("w_scale_yaw", 0.02, 1.0, "-"),
     _Parameter("rot_wn_yaw_rad_s", 0.2, 5.0, "rad/s"),
     _Parameter("trans_wn_z_rad_s", 1.0, 20.0, "rad/s"),
+    _Parameter("lead_x_s", 0.02, 0.6, "s"),
+    _Parameter("lead_y_s", 0.02, 0.6, "s"),
 )
 """The tuned parameters of a classical preset with the compressive tilt (``[tilt] shape``):
 the compressive curves' gains, limit and exponents in place of the plain scales, and the
@@ -373,6 +375,8 @@ def vector_from_params(params: CueingParams) -> NDArray[np.float64]:
                 params.w_scale[2],
                 params.rot_wn_rad_s[2],
                 params.trans_wn_rad_s[2],
+                0.02 if params.lead_s is None else params.lead_s[0],
+                0.02 if params.lead_s is None else params.lead_s[1],
             ),
         )
     values = (
@@ -463,6 +467,7 @@ def params_from_vector(base: CueingParams, x: Sequence[float], name: str = "") -
             tilt_accel_limit_rad_s2=v[13] * _D2R,
             w_scale=(v[14], v[14], v[16]),
             rot_wn_rad_s=(v[15], v[15], v[17]),
+            lead_s=(v[19], v[20]),
         )
     return replace(
         base,
@@ -517,13 +522,14 @@ class ChainMetrics:
         Fraction of all poses clamped by workspace limiting.
     violating_frames : int
         Frames whose actuator positions break a limit (stroke, speed, acceleration, jerk).
+    cue : CueMetrics or None
+        Rendered share, gain, missed, reversed, spurious and false cues and the clamped
+        share, pooled over the recordings (their samples concatenated;
+        :func:`motioncue.cueing.cue_metrics`); None when the run stopped early.
     strength : float
-        ``min(rendered share fx, rendered share fy)`` of ``pooled``: the ``"strength"``
-        objective (higher is better; 0 for a platform at rest).
-    pooled : CueMetrics or None
-        :func:`motioncue.cueing.cue_metrics` of all the recordings pooled (their perceived
-        motion concatenated, the pooling rule of :mod:`motioncue.cueing._metrics`), with the
-        clamped share; ``None`` for a candidate cut short by its clamped poses.
+        ``sqrt(rendered share fx * rendered share fy)`` of ``cue`` (the geometric mean:
+        both count, neither can be dropped): the ``"strength"`` objective (higher is better;
+        0 for a platform at rest).
     """
 
     objective: float
@@ -536,8 +542,8 @@ class ChainMetrics:
     duration_s: float = 0.0
     clamped_fraction: float = 0.0
     violating_frames: int = 0
+    cue: CueMetrics | None = None
     strength: float = 0.0
-    pooled: CueMetrics | None = None
 
     @property
     def feasible(self) -> bool:
@@ -550,7 +556,7 @@ class StrengthTargets:
     """The cue-quality constraints of the ``"strength"`` objective (fractions, not %).
 
     A candidate within the actuator limits meets them when, over the recordings pooled
-    (:attr:`ChainMetrics.pooled`, the definitions of :mod:`motioncue.cueing._metrics`),
+    (:attr:`ChainMetrics.cue`, the definitions of :mod:`motioncue.cueing._metrics`),
     reversals on any channel take at most ``max_reversals`` of the time, false cues on any
     channel at most ``max_false``, the fx and fy correlations are at least ``min_corr_fx``
     and ``min_corr_fy``, and at most ``max_clamped`` of all poses are clamped. The defaults
@@ -576,8 +582,8 @@ class StrengthTargets:
 
     def violation(self, m: ChainMetrics) -> float:
         """Sum of the relative excesses over the targets (0: all met; inf without
-        :attr:`ChainMetrics.pooled`)."""
-        c = m.pooled
+        :attr:`ChainMetrics.cue`)."""
+        c = m.cue
         if c is None:
             return math.inf
 
@@ -689,7 +695,6 @@ class TuneObjective:
         from ..trajectory import limit_pose, reachable
         from ._algorithm import make_cueing
         from ._evaluate import simulator_motion
-        from ._metrics import cue_metrics
         from ._score import cue_score
         from ._vestibular import normalised_error_rms
 
@@ -760,8 +765,8 @@ class TuneObjective:
             duration_s=n_all / self.rate_hz,
             clamped_fraction=clamped / max(n_all, 1),
             violating_frames=violating,
-            strength=float(min(share[0], share[1])),
-            pooled=pooled,
+            cue=pooled,
+            strength=float(math.sqrt(max(share[0], 0.0) * max(share[1], 0.0))),
         )
 
     def score(self, m: ChainMetrics) -> float:
@@ -1110,6 +1115,8 @@ def preset_toml(params: CueingParams, comments: Sequence[str] = ()) -> str:
         lines.append(f"f_shape = {_vec(params.f_shape)}")
     if params.w_shape is not None:
         lines.append(f"w_shape = {_vec(params.w_shape)}")
+    if params.lead_s is not None:
+        lines.append(f"lead_s = {_vec(params.lead_s)}")
     lines += [
         "",
         "[translational]",

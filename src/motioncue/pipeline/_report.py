@@ -150,6 +150,7 @@ def write_report(
         ride.rate_hz,
         workspace=getattr(cueing, "workspace", None),
         head_offset_m=getattr(cueing, "head_offset_m", None),
+        clamped_share=min(1.0, report.poses_clamped / max(len(poses), 1)),
     )
     plot_cueing(
         ev,
@@ -201,6 +202,8 @@ def write_report(
             "false_cue_time_s": fin(ev.false_cue_time_s),
             "missed_cue_time_s": fin(ev.missed_cue_time_s),
             "workspace_use": fin(ev.workspace_use),
+            # share, gain, missed/reversed/spurious/false cues: motioncue.cueing.cue_metrics
+            "metrics": ev.metrics.to_dict(),
         },
         "stage_s": report.stage_s,
     }

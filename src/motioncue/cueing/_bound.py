@@ -1,0 +1,689 @@
+"""The physical bound: how much of a drive any motion of a given rig could render.
+
+For a drive, a platform and its limits, per horizontal channel (``fx``, ``fy``):
+
+``error_rms``
+    a **lower bound** on the RMS perceived error (perceived platform minus perceived vehicle,
+    m/s^2; :class:`CueingEvaluation` ``rms_error``) that *any* motion of the rig reaches;
+``gain_max``
+    an **upper bound** on the gain (:func:`motioncue.cueing.cue_metrics`, the least-squares
+    slope of felt on vehicle, i.e. the in-phase rendered share) of any motion of the rig that
+    gives **no reversal** on the channel; ``gain_max_any`` the same with reversals allowed.
+
+A preset's ``share / gain_max`` (``compare``'s ``bound_pct``) says how much of what the rig
+could give without a reversal it gives.
+
+The relaxation
+--------------
+The platform's specific force on the channel is modelled, to first order in the angles
+(the rotation of the translational acceleration by the tilt, ``(cos tilt - 1) a`` and
+``sin tilt * a_z``, and by yaw is neglected; the rider's head at the platform origin), as ::
+
+    s[k] = (p[k+1] - 2 p[k] + p[k-1]) fs^2 + g tau[k]
+
+(the central difference of :func:`simulator_motion`, the pose held before the first and after
+the last sample), with the translation ``p`` and the tilt term ``tau = sin(tilt)`` (pitch for
+``fx``, roll for ``fy``) in boxes from the rig's reach (:func:`rig_reach`)::
+
+    |p| <= stroke, |p[k+1] - p[k]| fs <= speed, |second difference| fs^2 <= accel,
+    |tau| <= sin(tilt), |tau[k+1] - tau[k]| fs <= tilt rate.
+
+Every motion of the rig whose translation and tilt stay within those numbers is in this
+convex set ``S``; the coupling between the degrees of freedom (a hexapod cannot reach its
+largest stroke and its largest tilt at once) is dropped, which only enlarges ``S``, so the
+bounds below hold for the rig (to first order in the angles).
+
+The perceived motion is the model set's otolith ``H`` (linear, from rest). Then
+
+* ``error_rms``: ``min_{s in S} ||H s - H d||`` (``d`` the vehicle's specific force on the
+  channel minus rest) is a convex QP. It is solved by OSQP (through CasADi) in the
+  states of ``H``, and then **certified** by weak duality: for any ``z``,
+  ``||H s - v||^2 >= 2 z'(H s - v) - ||z||^2``, so
+  ``min_S ||H s - v||^2 >= -||z||^2 - 2 z'v - 2 sigma_S(-H'z)`` with ``sigma_S`` the support
+  function of ``S`` (two LPs, HiGHS). With ``z`` the solver's residual this equals the
+  optimum when the solver converged and is below it otherwise: the reported figure is a
+  valid lower bound whatever the solver's accuracy (to the LP tolerance, ~1e-7 relative).
+* ``gain_max``: ``max_{s in S} <H s, H d> / <H d, H d>`` subject to no reversal
+  (``H s >= -thr`` wherever ``H d > thr`` and ``H s <= thr`` wherever ``H d < -thr``), an LP
+  (HiGHS). ``gain_max_any`` drops the reversal constraints: ``sigma_S(H'H d) / <Hd, Hd>``.
+  ``share_at_gain_max`` is the rendered share of the motion attaining ``gain_max`` (its
+  gain equals ``gain_max``; the share is at least the gain).
+
+The moving-average bound of ``tests/test_mpc_acceptance.py`` (``|M s| <= 2 v_max / T +
+g sin(tilt_max)``) is one dual certificate of this family; the QP's is the best.
+
+Sources: the perceived-motion error through vestibular models as the measure of cue
+quality, and its minimisation over the platform's reachable motion as the ideal of optimal
+cueing, are those of Telban & Cardullo (NASA/CR-2005-213747, 2005) and Reid & Nahon (UTIAS
+296, 1985); the bound on the rig's motion by a convex relaxation is motioncue's.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from .._errors import ConfigError
+from ._params import GRAVITY_M_S2
+from ._vestibular import DEFAULT_MODEL_SET, VestibularModel, VestibularModelSet, get_model_set
+
+__all__ = ["BOUND_CHANNELS", "CueBound", "RigReach", "cue_bound", "rig_reach"]
+
+BOUND_CHANNELS: tuple[str, ...] = ("fx", "fy")
+"""The channels bounded (longitudinal: surge and pitch; lateral: sway and roll)."""
+
+REACH_MARGIN = 1.05
+""":func:`rig_reach` multiplies what it found by this: the sampled maxima are below the
+true ones by the sampling's resolution, and the bound needs numbers at or above them."""
+
+
+@dataclass(frozen=True)
+class RigReach:
+    """What a rig can do along the two horizontal channels (index 0: fx, 1: fy).
+
+    Attributes
+    ----------
+    stroke_m : (2,) tuple
+        Largest ``|x|``, ``|y|`` of a reachable pose (m).
+    speed_m_s : (2,) tuple
+        Largest surge / sway speed within the actuator speed limits (m/s).
+    accel_m_s2 : (2,) tuple
+        Largest surge / sway acceleration within the actuator acceleration limits (m/s^2).
+    tilt_rad : (2,) tuple
+        Largest ``|pitch|`` (for fx) and ``|roll|`` (for fy) of a reachable pose (rad).
+    tilt_rate_rad_s : (2,) tuple
+        Largest pitch / roll rate within the actuator speed limits (rad/s).
+    """
+
+    stroke_m: tuple[float, float]
+    speed_m_s: tuple[float, float]
+    accel_m_s2: tuple[float, float]
+    tilt_rad: tuple[float, float]
+    tilt_rate_rad_s: tuple[float, float]
+
+    def __post_init__(self) -> None:
+        for name in ("stroke_m", "speed_m_s", "accel_m_s2", "tilt_rad", "tilt_rate_rad_s"):
+            v = tuple(float(x) for x in getattr(self, name))
+            if len(v) != 2 or not all(math.isfinite(x) and x >= 0.0 for x in v):
+                raise ConfigError(
+                    f"rig reach {name} {getattr(self, name)!r} is invalid; allowed: two "
+                    "finite numbers >= 0 (fx, fy)"
+                )
+            if name == "tilt_rad" and any(x >= math.pi / 2 for x in v):
+                raise ConfigError(f"rig reach tilt {v!r} rad is invalid; allowed: < pi/2")
+            object.__setattr__(self, name, v)
+
+
+def _sample_poses(platform: Any, limits: Any, n: int, seed: int) -> NDArray[np.float64]:
+    """Reachable poses: neutral, the single-DOF extremes, and random poses in their box."""
+    from motioncue.kinematics import dof_ranges
+    from motioncue.trajectory import reachable
+
+    rng_box = dof_ranges(platform)
+    lo, hi = np.asarray(rng_box.lower), np.asarray(rng_box.upper)
+    extremes = [np.zeros(6)]
+    for k in range(6):
+        for v in (lo[k], hi[k]):
+            e = np.zeros(6)
+            e[k] = 0.999 * v
+            extremes.append(e)
+    rng = np.random.default_rng(seed)
+    span = np.maximum(np.abs(lo), np.abs(hi))
+    cand = np.concatenate([np.asarray(extremes), rng.uniform(-1, 1, (n, 6)) * span], axis=0)
+    ok = reachable(platform, cand, limits=limits)
+    return np.asarray(cand[ok], dtype=float)
+
+
+def _rate_reach(jac: NDArray[np.float64], limit: NDArray[np.float64], k: int) -> float:
+    """max e_k' pdot subject to |jac pdot| <= limit (elementwise): an LP (HiGHS)."""
+    from scipy.optimize import linprog
+
+    n = jac.shape[1]
+    c = np.zeros(n)
+    c[k] = -1.0
+    res = linprog(
+        c,
+        A_ub=np.concatenate([jac, -jac]),
+        b_ub=np.concatenate([limit, limit]),
+        bounds=[(None, None)] * n,
+        method="highs",
+    )
+    if res.status == 3:  # unbounded: the DOF moves no actuator
+        return math.inf
+    return float(-res.fun) if res.status == 0 else 0.0
+
+
+def rig_reach(
+    platform: Any,
+    limits: Any,
+    *,
+    samples: int = 4000,
+    rate_poses: int = 48,
+    seed: int = 0,
+    margin: float = REACH_MARGIN,
+) -> RigReach:
+    """The reach of a rig along fx (surge, pitch) and fy (sway, roll), from its limits.
+
+    Stroke and tilt: the largest ``|x|, |y|, |pitch|, |roll|`` over the reachable poses
+    among the single-DOF extremes (:func:`motioncue.kinematics.dof_ranges`) and ``samples``
+    random poses in their box (:func:`motioncue.trajectory.reachable` with ``limits``).
+    Speed, acceleration, tilt rate: the largest ``e' pdot`` with ``|J pdot| <= v_max``
+    (``a_max`` for the acceleration, neglecting the velocity-product terms) at neutral and
+    ``rate_poses`` of those poses (an LP each; ``J`` the platform's Jacobian on the DOFs it
+    moves). Every figure is multiplied by ``margin`` (sampling finds maxima from below).
+
+    Parameters
+    ----------
+    platform : motioncue.kinematics.Platform
+    limits : motioncue.trajectory.ActuatorLimits
+    samples, rate_poses, seed : int
+    margin : float
+        >= 1.
+
+    Returns
+    -------
+    RigReach
+    """
+    if not (math.isfinite(margin) and margin >= 1.0):
+        raise ConfigError(f"margin {margin!r} is invalid; allowed: a finite number >= 1")
+    poses = _sample_poses(platform, limits, int(samples), seed)
+    mask = np.asarray(platform.dof_mask, dtype=bool)
+    peak = np.abs(poses).max(axis=0) * mask
+    pick = poses[: 1 + 12] if len(poses) > 13 else poses
+    if len(poses) > 13 and rate_poses > 0:
+        rng = np.random.default_rng(seed + 1)
+        extra = poses[13 + rng.choice(len(poses) - 13, min(rate_poses, len(poses) - 13), False)]
+        pick = np.concatenate([pick, extra])
+    jac_all = np.asarray(platform.jacobian(pick), dtype=float)[..., mask]
+    dof_index = np.cumsum(mask) - 1  # column of each supported DOF in the masked Jacobian
+    v_lim = np.asarray(limits.v_max, dtype=float)
+    a_lim = np.asarray(limits.a_max, dtype=float)
+    n_act = v_lim.shape[0]
+
+    def rate(k: int, lim: NDArray[np.float64]) -> float:
+        if not mask[k]:
+            return 0.0
+        best = 0.0
+        for jac in jac_all:
+            best = max(best, _rate_reach(jac[:n_act], lim, int(dof_index[k])))
+        return best
+
+    m = float(margin)
+    return RigReach(
+        stroke_m=(m * float(peak[0]), m * float(peak[1])),
+        speed_m_s=(m * rate(0, v_lim), m * rate(1, v_lim)),
+        accel_m_s2=(m * rate(0, a_lim), m * rate(1, a_lim)),
+        tilt_rad=(min(m * float(peak[4]), 1.5), min(m * float(peak[3]), 1.5)),
+        tilt_rate_rad_s=(m * rate(4, v_lim), m * rate(3, v_lim)),
+    )
+
+
+@dataclass(frozen=True, eq=False)
+class CueBound:
+    """The physical bound of one drive on one rig (module docstring), per :data:`BOUND_CHANNELS`.
+
+    Attributes
+    ----------
+    error_rms : (2,) array
+        Certified lower bound on the RMS perceived error any motion of the rig reaches (m/s^2).
+    gain_max : (2,) array
+        Upper bound on the gain of any motion without a reversal on the channel.
+    gain_max_any : (2,) array
+        Upper bound on the gain of any motion (reversals allowed).
+    share_at_gain_max : (2,) array
+        Rendered share of the motion attaining ``gain_max`` (of the decimated problem's when
+        the drive is longer than ``primal_samples``).
+    vehicle_rms : (2,) array
+        RMS of the vehicle's perceived motion (m/s^2): ``error_rms`` of a rig at rest.
+    reach : RigReach
+    fs_hz : float
+    model_set : str
+    """
+
+    error_rms: NDArray[np.float64]
+    gain_max: NDArray[np.float64]
+    gain_max_any: NDArray[np.float64]
+    share_at_gain_max: NDArray[np.float64]
+    vehicle_rms: NDArray[np.float64]
+    reach: RigReach
+    fs_hz: float
+    model_set: str = DEFAULT_MODEL_SET
+    solver: dict[str, str] = field(default_factory=dict)
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON-ready: per channel ``{name: {channel: value}}`` and the reach used."""
+
+        def ch(a: NDArray[np.float64]) -> dict[str, float | None]:
+            return {
+                c: (float(v) if math.isfinite(v) else None)
+                for c, v in zip(BOUND_CHANNELS, a, strict=True)
+            }
+
+        r = self.reach
+        return {
+            "error_rms_m_s2": ch(self.error_rms),
+            "gain_max": ch(self.gain_max),
+            "gain_max_any": ch(self.gain_max_any),
+            "share_at_gain_max": ch(self.share_at_gain_max),
+            "vehicle_rms_m_s2": ch(self.vehicle_rms),
+            "reach": {
+                "stroke_m": list(r.stroke_m),
+                "speed_m_s": list(r.speed_m_s),
+                "accel_m_s2": list(r.accel_m_s2),
+                "tilt_rad": list(r.tilt_rad),
+                "tilt_rate_rad_s": list(r.tilt_rate_rad_s),
+            },
+        }
+
+
+# ---------------------------------------------------------------- the convex problems
+
+
+def _ops(n: int, fs: float) -> tuple[Any, Any]:
+    """D1 (N-1, N) forward difference and D2 (N, N) central second difference (edges held)."""
+    import scipy.sparse as sp
+
+    d1 = sp.diags([-np.ones(n - 1), np.ones(n - 1)], [0, 1], shape=(n - 1, n), format="csr")
+    main = -2.0 * np.ones(n)
+    main[0] += 1.0
+    main[-1] += 1.0
+    d2 = sp.diags([np.ones(n - 1), main, np.ones(n - 1)], [-1, 0, 1], shape=(n, n), format="csr")
+    if n == 1:
+        d2 = sp.csr_matrix((1, 1))
+    return d1, d2 * (fs * fs)
+
+
+@dataclass(frozen=True)
+class _Channel:
+    """One channel's relaxation: boxes and the otolith as a state-space system."""
+
+    stroke: float
+    speed: float
+    accel: float
+    tilt: float  # bound on tau = sin(tilt)
+    tilt_rate: float
+    fs: float
+    model: VestibularModel
+
+    @property
+    def sos(self) -> NDArray[np.float64]:
+        return self.model.sos(self.fs)
+
+    def filt(self, x: NDArray[np.float64]) -> NDArray[np.float64]:
+        from scipy.signal import sosfilt
+
+        return np.asarray(sosfilt(self.sos, x))
+
+    def filt_t(self, x: NDArray[np.float64]) -> NDArray[np.float64]:
+        """``H' x``: the transpose of the causal filter is the filter run backwards."""
+        return self.filt(x[::-1])[::-1]
+
+    def ss(self) -> tuple[NDArray[np.float64], ...]:
+        from scipy.signal import sos2zpk, zpk2ss
+
+        a, b, c, d = zpk2ss(*sos2zpk(self.sos))
+        return np.asarray(a), np.asarray(b), np.asarray(c), np.asarray(d)
+
+
+def _linprog_box_chain(
+    c: NDArray[np.float64], bound: float, step: float, second: float | None, d2: Any
+) -> float:
+    """max c'x s.t. |x| <= bound, |x[k+1]-x[k]| <= step, (optionally) |d2 x| <= second."""
+    import scipy.sparse as sp
+    from scipy.optimize import linprog
+
+    n = c.shape[0]
+    if bound <= 0.0 or not np.any(c):
+        return 0.0
+    if n == 1:
+        return float(abs(c[0]) * bound)
+    d1 = sp.diags([-np.ones(n - 1), np.ones(n - 1)], [0, 1], shape=(n - 1, n), format="csr")
+    rows = [d1, -d1]
+    rhs = [np.full(n - 1, step), np.full(n - 1, step)]
+    if second is not None:
+        rows += [d2, -d2]
+        rhs += [np.full(n, second), np.full(n, second)]
+    res = linprog(
+        -c,
+        A_ub=sp.vstack(rows, format="csr"),
+        b_ub=np.concatenate(rhs),
+        bounds=(-bound, bound),
+        method="highs",
+    )
+    if res.status != 0:
+        raise ConfigError(f"the bound's support LP failed: {res.message}")
+    return float(-res.fun)
+
+
+def _support(ch: _Channel, c: NDArray[np.float64], d2: Any) -> float:
+    """sigma_S(c) = max_{s in S} c's (two LPs: translation and tilt)."""
+    trans = _linprog_box_chain(np.asarray(d2.T @ c), ch.stroke, ch.speed / ch.fs, ch.accel, d2)
+    tilt = GRAVITY_M_S2 * _linprog_box_chain(c, ch.tilt, ch.tilt_rate / ch.fs, None, d2)
+    return trans + tilt
+
+
+def _qp_best_motion(ch: _Channel, v: NDArray[np.float64], d2: Any) -> NDArray[np.float64]:
+    """The platform specific force s in S minimising ||H s - v|| (OSQP via CasADi)."""
+    import casadi
+    import scipy.sparse as sp
+
+    n = v.shape[0]
+    a, b, c, d = ch.ss()
+    nx = a.shape[0]
+    eye = sp.identity(n, format="csr")
+    g = GRAVITY_M_S2
+    # variables z = [p (n), tau (n), x (nx n, sample-major), y (n)]; s = d2 p + g tau
+    n_z = n * (3 + nx)
+    ip, it, ix, iy = 0, n, 2 * n, (2 + nx) * n
+    s_op = sp.hstack([d2, g * eye, sp.csr_matrix((n, (nx + 1) * n))], format="csr")
+    # x[k+1] = a x[k] + b s[k] (x[0] = 0); y[k] = c x[k] + d s[k]
+    shift = sp.diags([np.ones(n - 1)], [-1], shape=(n, n), format="csr")
+    x_next = sp.kron(sp.identity(n), sp.identity(nx)) - sp.kron(shift, sp.csr_matrix(a))
+    dyn = sp.hstack(
+        [
+            -sp.kron(shift, sp.csr_matrix(b)) @ s_op[:, : 2 * n],
+            x_next,
+            sp.csr_matrix((nx * n, n)),
+        ],
+        format="csr",
+    )
+    out = sp.hstack(
+        [
+            -float(d[0, 0]) * s_op[:, : 2 * n],
+            -sp.kron(eye, sp.csr_matrix(c)),
+            eye,
+        ],
+        format="csr",
+    )
+    d1 = sp.diags([-np.ones(n - 1), np.ones(n - 1)], [0, 1], shape=(n - 1, n), format="csr")
+    z_p = sp.csr_matrix((n - 1, n))
+    rows = [
+        dyn,
+        out,
+        sp.hstack([sp.identity(n), sp.csr_matrix((n, n * (2 + nx)))]),
+        sp.hstack([sp.csr_matrix((n, n)), sp.identity(n), sp.csr_matrix((n, n * (1 + nx)))]),
+        sp.hstack([d1, z_p, sp.csr_matrix((n - 1, n * (1 + nx)))]),
+        sp.hstack([z_p, d1, sp.csr_matrix((n - 1, n * (1 + nx)))]),
+        sp.hstack([d2, sp.csr_matrix((n, n * (2 + nx)))]),
+    ]
+    lo = [
+        np.zeros(nx * n),
+        np.zeros(n),
+        np.full(n, -ch.stroke),
+        np.full(n, -ch.tilt),
+        np.full(n - 1, -ch.speed / ch.fs),
+        np.full(n - 1, -ch.tilt_rate / ch.fs),
+        np.full(n, -ch.accel),
+    ]
+    m = sp.vstack(rows, format="csc")
+    lba = np.concatenate(lo)
+    uba = -lba
+    uba[: (nx + 1) * n] = 0.0
+    hess = sp.diags(
+        np.concatenate([np.zeros(iy), np.full(n, 2.0)]), 0, shape=(n_z, n_z), format="csc"
+    )
+    q = np.zeros(n_z)
+    q[iy:] = -2.0 * v
+    del ip, it, ix
+    hs = casadi.DM(hess)
+    ms = casadi.DM(m)
+    solver = casadi.conic(
+        "bound",
+        "osqp",
+        {"h": hs.sparsity(), "a": ms.sparsity()},
+        {
+            "osqp": {
+                "eps_abs": 1e-5,
+                "eps_rel": 1e-5,
+                "max_iter": 4000,
+                "polish": True,
+                "verbose": False,
+            },
+            "error_on_fail": False,
+        },
+    )
+    sol = solver(h=hs, g=q, a=ms, lba=lba, uba=uba)
+    zz = np.asarray(sol["x"], dtype=float).ravel()
+    p = np.clip(zz[:n], -ch.stroke, ch.stroke)
+    tau = np.clip(zz[n : 2 * n], -ch.tilt, ch.tilt)
+    return np.asarray(d2 @ p + g * tau)
+
+
+def _gain_lp(
+    ch: _Channel, v: NDArray[np.float64], thr: float, d2: Any
+) -> tuple[float, NDArray[np.float64], NDArray[np.float64]]:
+    """max <H s, v> over s in S with no reversal: the maximum, H s, and the multipliers of
+    the no-reversal rows (>= 0, zero where the vehicle is below threshold)."""
+    import scipy.sparse as sp
+    from scipy.optimize import linprog
+
+    n = v.shape[0]
+    a, b, c, d = ch.ss()
+    nx = a.shape[0]
+    g = GRAVITY_M_S2
+    eye = sp.identity(n, format="csr")
+    s_op = sp.hstack([d2, g * eye], format="csr")  # s from [p, tau]
+    shift = sp.diags([np.ones(n - 1)], [-1], shape=(n, n), format="csr")
+    x_next = sp.identity(nx * n) - sp.kron(shift, sp.csr_matrix(a))
+    # variables [p, tau, x, y]
+    a_eq = sp.vstack(
+        [
+            sp.hstack(
+                [-sp.kron(shift, sp.csr_matrix(b)) @ s_op, x_next, sp.csr_matrix((nx * n, n))]
+            ),
+            sp.hstack([-float(d[0, 0]) * s_op, -sp.kron(eye, sp.csr_matrix(c)), eye]),
+        ],
+        format="csr",
+    )
+    b_eq = np.zeros((nx + 1) * n)
+    d1 = sp.diags([-np.ones(n - 1), np.ones(n - 1)], [0, 1], shape=(n - 1, n), format="csr")
+    zpad = sp.csr_matrix((n - 1, n))
+    rest = sp.csr_matrix((n - 1, n * (1 + nx)))
+    sign = np.where(v > thr, -1.0, np.where(v < -thr, 1.0, 0.0))
+    idx = np.flatnonzero(sign)
+    sel = sp.csr_matrix(
+        (sign[idx], (np.arange(idx.size), idx)), shape=(idx.size, n)
+    )  # -y <= thr where v > thr; y <= thr where v < -thr
+    a_ub = sp.vstack(
+        [
+            sp.hstack([d1, zpad, rest]),
+            sp.hstack([-d1, zpad, rest]),
+            sp.hstack([zpad, d1, rest]),
+            sp.hstack([zpad, -d1, rest]),
+            sp.hstack([d2, sp.csr_matrix((n, n * (2 + nx)))]),
+            sp.hstack([-d2, sp.csr_matrix((n, n * (2 + nx)))]),
+            sp.hstack([sp.csr_matrix((idx.size, n * (2 + nx))), sel]),
+        ],
+        format="csr",
+    )
+    b_ub = np.concatenate(
+        [
+            np.full(2 * (n - 1), ch.speed / ch.fs),
+            np.full(2 * (n - 1), ch.tilt_rate / ch.fs),
+            np.full(2 * n, ch.accel),
+            np.full(idx.size, thr),
+        ]
+    )
+    bounds = (
+        [(-ch.stroke, ch.stroke)] * n
+        + [(-ch.tilt, ch.tilt)] * n
+        + [(None, None)] * (nx * n)
+        + [(None, None)] * n
+    )
+    cost = np.concatenate([np.zeros((2 + nx) * n), -v])
+    res = linprog(cost, A_ub=a_ub, b_ub=b_ub, A_eq=a_eq, b_eq=b_eq, bounds=bounds,
+                  method="highs")  # fmt: skip
+    if res.status != 0:
+        raise ConfigError(f"the bound's gain LP failed: {res.message}")
+    y = np.asarray(res.x[(2 + nx) * n :], dtype=float)
+    lam = np.zeros(n)
+    lam[idx] = -np.asarray(res.ineqlin.marginals, dtype=float)[-idx.size :] if idx.size else 0.0
+    return float(-res.fun), y, np.maximum(lam, 0.0)
+
+
+def _golden(fun: Any, lo: float, hi: float, evals: int, maximise: bool) -> float:
+    """Best value of a unimodal ``fun`` on [lo, hi] found by golden-section search (and the
+    end points); every value tried is valid, so the best one is returned."""
+    sign = 1.0 if maximise else -1.0
+    best = max(sign * fun(lo), sign * fun(hi))
+    r = (math.sqrt(5.0) - 1.0) / 2.0
+    a, b = lo, hi
+    c, d = b - r * (b - a), a + r * (b - a)
+    fc, fd = sign * fun(c), sign * fun(d)
+    for _ in range(max(0, evals - 4)):
+        if fc > fd:
+            b, d, fd = d, c, fc
+            c = b - r * (b - a)
+            fc = sign * fun(c)
+        else:
+            a, c, fc = c, d, fd
+            d = a + r * (b - a)
+            fd = sign * fun(d)
+    return sign * max(best, fc, fd)
+
+
+def _decimated(
+    ch: _Channel, d: NDArray[np.float64], k: int
+) -> tuple[_Channel, NDArray[np.float64], Any]:
+    """The channel at fs / k with the vehicle's force averaged over blocks of k samples."""
+    from dataclasses import replace
+
+    n = d.shape[0]
+    m = n // k
+    dd = d[: m * k].reshape(m, k).mean(axis=1)
+    fs_d = ch.fs / k
+    return replace(ch, fs=fs_d), dd, _ops(m, fs_d)[1]
+
+
+def _channel_bound(
+    ch: _Channel, d: NDArray[np.float64], thr: float, k: int, d2: Any
+) -> tuple[float, float, float, float, float]:
+    """``(error bound, gain bound, gain bound with reversals, share, vehicle rms)`` of one
+    channel (``k`` > 1: certificates from the problem decimated by ``k``; see cue_bound)."""
+    n = d.shape[0]
+    v = ch.filt(d)
+    vv = float(v @ v)
+    vrms = math.sqrt(vv / n)
+    chd, dd, d2d = _decimated(ch, d, k) if k > 1 else (ch, d, d2)
+    vd = chd.filt(dd)
+    zd = chd.filt(_qp_best_motion(chd, vd, d2d)) - vd
+    if k == 1:
+        z = zd
+    else:
+        centres = (np.arange(zd.shape[0]) + 0.5) * k - 0.5
+        z = np.interp(np.arange(n), centres, zd)
+
+    def lower(b: float) -> float:
+        zb = b * z
+        return -float(zb @ zb) - 2.0 * float(zb @ v) - 2.0 * _support(ch, -ch.filt_t(zb), d2)
+
+    lb = lower(1.0) if k == 1 else _golden(lower, 0.0, 1.5, 5, maximise=True)
+    err = math.sqrt(max(lb, 0.0) / n)
+    if vv <= 0.0:
+        return err, math.nan, math.nan, math.nan, vrms
+    gany = _support(ch, ch.filt_t(v), d2) / vv
+    g_lp, yd, lam_d = _gain_lp(chd, vd, thr, d2d)
+    share = math.sqrt(float(yd @ yd) / max(float(vd @ vd), 1e-300))
+    if k == 1:
+        return err, min(g_lp / vv, gany), gany, share, vrms
+    sgn = np.where(v > thr, -1.0, np.where(v < -thr, 1.0, 0.0))
+    lam = np.repeat(lam_d, k)
+    lam = np.concatenate([lam, np.full(n - lam.shape[0], lam_d[-1] if lam_d.size else 0.0)])
+    lam = np.where(sgn != 0.0, lam, 0.0)
+
+    def upper(a: float) -> float:
+        la = a * lam
+        return (_support(ch, ch.filt_t(v - la * sgn), d2) + thr * float(la.sum())) / vv
+
+    return err, min(gany, _golden(upper, 0.0, 2.0, 5, maximise=False)), gany, share, vrms
+
+
+def cue_bound(
+    f_vehicle: ArrayLike,
+    fs_hz: float,
+    reach: RigReach,
+    *,
+    model: str | VestibularModelSet = DEFAULT_MODEL_SET,
+    thresholds: ArrayLike | None = None,
+    primal_samples: int = 1000,
+) -> CueBound:
+    """The physical bound of a drive on a rig (definitions: the module docstring).
+
+    Parameters
+    ----------
+    f_vehicle : (N, 3) array_like
+        The vehicle's specific force (m/s^2, body frame, rest ``[0, 0, g]``) as the cueing
+        algorithm used it (``f_used``), uniform at ``fs_hz``.
+    fs_hz : float
+    reach : RigReach
+        The rig's reach (:func:`rig_reach`).
+    model : str or VestibularModelSet
+        Vestibular model set (its otoliths and thresholds).
+    thresholds : (6,) array_like, optional
+        Perception thresholds (default the set's); fx and fy are used.
+    primal_samples : int
+        Longest problem solved at the full rate. A longer drive's QP and no-reversal LP are
+        solved at ``fs / k`` (``k = ceil(N / primal_samples)``) only to find the certificate
+        (the residual ``z``, the LP's multipliers ``lambda``), which is then evaluated and
+        scaled at the full rate: ``-||b z||^2 - 2 b z'v - 2 sigma_S(-b H'z)``, maximised over
+        the scalar ``b``, is a lower bound for every ``b``, and
+        ``sigma_S(H'(v - a lambda sign)) + thr sum(a lambda)`` an upper bound on the gain for
+        every ``a >= 0`` (Lagrangian weak duality). The figures stay valid bounds; they are
+        only less tight than the full-rate optimum.
+
+    Returns
+    -------
+    CueBound
+
+    Notes
+    -----
+    Cost: per channel one QP (OSQP) and one LP (HiGHS) of at most ``primal_samples``
+    samples, then about a dozen support LPs at the full rate (about 2 s each for 3 minutes at
+    100 Hz).
+    """
+    ms = get_model_set(model)
+    f = np.asarray(f_vehicle, dtype=float)
+    if f.ndim != 2 or f.shape[1] != 3 or f.shape[0] < 4 or not np.isfinite(f).all():
+        raise ConfigError(f"f_vehicle must be a finite (N >= 4, 3) array; got {f.shape}")
+    if not (math.isfinite(fs_hz) and fs_hz > 0.0):
+        raise ConfigError(f"sample rate {fs_hz!r} Hz is invalid; allowed: a finite number > 0")
+    if primal_samples < 4:
+        raise ConfigError(f"primal_samples {primal_samples!r} is invalid; allowed: >= 4")
+    thr = np.asarray(ms.thresholds if thresholds is None else thresholds, dtype=float)
+    if thr.shape != (6,) or not np.all(np.isfinite(thr)) or np.any(thr <= 0.0):
+        raise ConfigError(f"thresholds {thr.tolist()!r} are invalid; allowed: 6 numbers > 0")
+    n = f.shape[0]
+    _, d2 = _ops(n, fs_hz)
+    k = max(1, math.ceil(n / primal_samples))
+    res: dict[str, list[float]] = {key: [] for key in ("err", "gmax", "gany", "share", "vrms")}
+    for i in range(2):
+        ch = _Channel(
+            stroke=reach.stroke_m[i],
+            speed=reach.speed_m_s[i],
+            accel=reach.accel_m_s2[i],
+            tilt=math.sin(reach.tilt_rad[i]),
+            tilt_rate=reach.tilt_rate_rad_s[i],
+            fs=float(fs_hz),
+            model=ms.otolith[i],
+        )
+        for key, val in zip(
+            ("err", "gmax", "gany", "share", "vrms"),
+            _channel_bound(ch, f[:, i], float(thr[i]), k, d2),
+            strict=True,
+        ):
+            res[key].append(val)
+    return CueBound(
+        error_rms=np.array(res["err"]),
+        gain_max=np.array(res["gmax"]),
+        gain_max_any=np.array(res["gany"]),
+        share_at_gain_max=np.array(res["share"]),
+        vehicle_rms=np.array(res["vrms"]),
+        reach=reach,
+        fs_hz=float(fs_hz),
+        model_set=ms.name,
+        solver={"qp": "osqp (casadi)", "lp": "highs (scipy)", "decimation": str(k)},
+    )
