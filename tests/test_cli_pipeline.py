@@ -58,6 +58,15 @@ def test_generate_writes_ride_pcap_and_report(
     for name in ("cueing.png", "actuators.png", "metrics.json", "summary.txt"):
         assert (report / name).stat().st_size > 0
     assert "frames" in capsys.readouterr().out
+    # the cue metrics (motioncue.cueing.cue_metrics) with the clamped share of the ride
+    import json
+
+    js = json.loads((report / "metrics.json").read_text())
+    cue = js["cue"]["metrics"]
+    assert set(cue["rendered_share"]) == {"fx", "fy", "fz", "wx", "wy", "wz"}
+    assert 0.0 < cue["rendered_share"]["fx"] < 1.0
+    assert cue["clamped"] == pytest.approx(js["poses_clamped"] / cue["n_samples"])
+    assert "revers%" in (report / "summary.txt").read_text()
 
 
 def test_generate_from_a_telemetry_recording_with_a_pause(

@@ -248,12 +248,18 @@ def test_legend_and_title_name_everything(tmp_path: Path) -> None:
     title = fig._suptitle.get_text()
     for word in ("r.csv", PLATFORM, CONTROLLER, "reid-nahon-zacharias"):
         assert word in title
-    ylabels = [ax.get_ylabel() for ax in fig.axes]
-    assert sum("[m/s²]" in y for y in ylabels) == 3
-    assert sum("[deg/s]" in y for y in ylabels) == 3
-    # every panel carries one line per preset plus the vehicle
-    for ax in fig.axes:
-        assert len(ax.get_lines()) == len(PRESETS) + 1
+    # six panels, each a vehicle axis (left) and its twin for the presets (right)
+    assert len(fig.axes) == 12
+    left, right = fig.axes[:6], fig.axes[6:]
+    for side in (left, right):
+        ylabels = [ax.get_ylabel() for ax in side]
+        assert sum("[m/s²]" in y for y in ylabels) == 3
+        assert sum("[deg/s]" in y for y in ylabels) == 3
+    # every panel carries the vehicle (left) and one line per preset (right), zero level
+    for a, b in zip(left, right, strict=True):
+        assert len(a.get_lines()) == 1 and len(b.get_lines()) == len(PRESETS)
+        (lo_a, hi_a), (lo_b, hi_b) = a.get_ylim(), b.get_ylim()
+        assert lo_a == pytest.approx(-hi_a) and lo_b == pytest.approx(-hi_b)
 
 
 def _run_cli(args: list[str], capsys: pytest.CaptureFixture[str]) -> tuple[int, str, str]:

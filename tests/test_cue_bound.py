@@ -179,3 +179,37 @@ def test_bad_input_is_refused() -> None:
         cue_bound(np.zeros((10, 3)), 0.0, HEX)
     with pytest.raises(ConfigError, match="rig reach"):
         RigReach((0.1, -1.0), (0.1, 0.1), (1, 1), (0.1, 0.1), (1, 1))
+
+
+def test_no_preset_beats_the_bound_through_compare(lap: np.ndarray) -> None:
+    """The presets' delivered motion (exact kinematics, the chain's limits) against the bound
+    of the relaxation (first order in the angles): never below the error bound, never above
+    the gain bounds."""
+    from motioncue.cueing import load_cueing
+    from motioncue.cueing._compare import compare_cueing
+    from motioncue.kinematics import load_platform
+    from motioncue.output import load_controller
+    from motioncue.telemetry._recording import Recording
+    from motioncue.trajectory import ActuatorLimits
+
+    platform = load_platform("stewart6-linear")
+    limits = ActuatorLimits.from_platform(platform, load_controller("mbox6"), rate_hz=100.0)
+    n = 800
+    rec = Recording(np.arange(n) / 100.0, lap[2000 : 2000 + n], np.zeros((n, 3)))
+    presets = [(p, load_cueing(p)) for p in ("racing-hexapod", "optimal-hexapod", "racing")]
+    res = compare_cueing([("lap", rec)], presets, platform, limits, bound=True)
+    assert res.reach is not None and "Physical bound" in res.summary()
+    import json
+
+    js = json.loads(json.dumps(res.to_dict(), allow_nan=False))
+    assert js["bounds"]["lap"]["gain_max"]["fy"] == pytest.approx(res.runs[0].bound.gain_max[1])
+    for row, run in zip(res.rows(), res.runs, strict=True):
+        assert run.bound is not None
+        for i, a in enumerate(("fx", "fy")):
+            assert row[f"rms_{a}_m_s2"] >= row[f"bound_error_{a}_m_s2"]
+            assert row[f"gain_{a}"] <= run.bound.gain_max_any[i]
+            if row[f"reversal_s_{a}"] == 0.0:
+                assert row[f"gain_{a}"] <= row[f"bound_gain_{a}"]
+            assert row[f"share_of_bound_pct_{a}"] == pytest.approx(
+                100 * row[f"share_{a}"] / row[f"bound_gain_{a}"]
+            )

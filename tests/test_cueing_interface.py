@@ -231,7 +231,7 @@ def test_a_registered_algorithm_runs_in_cue_generate_and_bridge_by_name(
 def test_every_bundled_platform_names_a_loadable_default_preset() -> None:
     expected = {
         "stewart6-linear": "racing-hexapod",
-        "stewart6-rotary": "racing",
+        "stewart6-rotary": "racing-rotary",
         "seat3": "cinema-seat-3dof",
         "seat2-yaw": "cinema-seat-yaw",
         "corner4": "corner4",

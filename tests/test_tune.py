@@ -153,6 +153,8 @@ def test_tune_improves_the_held_out_objective(tuned_local: tuple, drives: dict) 
     assert "perceived-motion error J" in stdout and "false cues, any axis (%)" in stdout
     assert "correlation fy" in stdout and "false-cue time fx" in stdout
     assert "clamped poses (%)" in stdout
+    # cue strength and cue errors (motioncue.cueing.cue_metrics), pooled over the recordings
+    assert "rendered share fy" in stdout and "reversals, any axis (%)" in stdout
     gens = [ln for ln in stderr.splitlines() if "generation" in ln and "evaluations/s" in ln]
     assert len(gens) == GENERATIONS
     assert all("best score" in ln for ln in gens)  # the base preset is feasible on these

@@ -418,12 +418,15 @@ def test_plot_names_preset_platform_models_and_lines_differ(tmp_path: Path, monk
     title = fig.get_suptitle()
     for word in ("lap", "preset racing", "platform hex", "reid-nahon-zacharias"):
         assert word in title
-    ax = fig.axes[0]
-    lines = {ln.get_label(): ln for ln in ax.get_lines()}
-    veh, sim = lines["vehicle"], lines["simulator"]
+    # each channel: the vehicle on its axis (left), the simulator on the twin (right)
+    ax, right = fig.axes[0], fig.axes[1]
+    assert ax.get_shared_x_axes().joined(ax, right)
+    veh = {ln.get_label(): ln for ln in ax.get_lines()}["vehicle"]
+    sim = {ln.get_label(): ln for ln in right.get_lines()}["simulator"]
     assert veh.get_color() != sim.get_color()
     assert veh.get_linestyle() != sim.get_linestyle()
-    assert "[m/s²]" in ax.get_ylabel() and "[deg/s]" in fig.axes[3].get_ylabel()
+    assert "[m/s²]" in ax.get_ylabel() and "[m/s²]" in right.get_ylabel()
+    assert "[deg/s]" in fig.axes[6].get_ylabel() and "[deg/s]" in fig.axes[7].get_ylabel()
 
 
 def test_cue_cli_selects_the_model_set(tmp_path: Path, capsys) -> None:

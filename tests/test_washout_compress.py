@@ -133,7 +133,7 @@ def test_sustained_force_tilts_to_the_compressed_angle_of_its_direction(
 
 
 def test_old_presets_read_the_same_and_bad_keys_are_refused() -> None:
-    p = load_cueing("racing-hexapod")
+    p = load_cueing("racing")
     assert p.f_shape is None and p.w_shape is None and p.tilt_shape is None
     with pytest.raises(ConfigError, match="tilt_shape"):
         replace(p, tilt_shape=2.0, tilt_reach_rad=None)
@@ -187,3 +187,31 @@ def test_lead_section_matches_the_continuous_lead_at_its_prewarp_frequency() -> 
     b = ClassicalWashout(plain, fs).run(f, np.zeros((n, 3))).tilt[:, 0]
     assert np.all(a[10:40] >= b[10:40]) and a[12] > b[12]
     assert a[-1] == pytest.approx(b[-1], abs=1e-9)
+
+
+def test_combined_roll_and_pitch_stay_inside_the_quadrant_ellipse() -> None:
+    p = _compressive(load_cueing("racing-hexapod"))
+    p = replace(p, tilt_accel_limit_rad_s2=None, w_scale=(0.0, 0.0, 0.0), lead_s=None)
+    fs, n = 100.0, 3000
+    f = np.tile([0.0, 0.0, G], (n, 1))
+    f[100:, 0] = -25.0  # hard braking: nose down, pitch+
+    f[100:, 1] = 25.0  # and a hard right-hand force: roll+
+    res = ClassicalWashout(p, fs).run(f, np.zeros((n, 3)))
+    _rn, rp, _pn, pp = p.tilt_limits_rad
+    assert p.tilt_scale is not None and p.tilt_shape is not None
+    # each alone: the compressed angle of its direction (as in the test above)
+    lx, ly = G * math.sin(pp), G * math.sin(rp)
+    pitch_alone = -math.asin(compress(-25.0, p.tilt_scale[0], lx, lx, p.tilt_shape) / G)
+    roll_alone = math.asin(compress(25.0, p.tilt_scale[1], ly, ly, p.tilt_shape) / G)
+    q = (roll_alone / rp) ** 2 + (pitch_alone / pp) ** 2
+    assert q > 1.0  # together they would leave the ellipse
+    roll, pitch = res.tilt[-1]
+    assert roll == pytest.approx(roll_alone / math.sqrt(q), abs=1e-9)
+    assert pitch == pytest.approx(pitch_alone / math.sqrt(q), abs=1e-9)
+    assert (roll / rp) ** 2 + (pitch / pp) ** 2 == pytest.approx(1.0, abs=1e-9)
+    # streaming gives the same
+    design = ClassicalWashout(p, fs)
+    state = design.initial_state()
+    for a, b in zip(f.tolist(), np.zeros((n, 3)).tolist(), strict=True):
+        design.step(state, a, b, None)
+    np.testing.assert_allclose(state.tilt, res.tilt[-1], rtol=0, atol=1e-12)

@@ -28,6 +28,13 @@ def register(sub: Any) -> None:
         metavar="P",
         help="bundled platform name or TOML path (default: the ride's; required for a CSV)",
     )
+    p.add_argument(
+        "--recording",
+        default=None,
+        metavar="CSV|REC",
+        help="the recording the ride was made from: the vehicle's perceived motion is drawn "
+        "beside the rider's (default: the ride's source when it lies next to the ride file)",
+    )
     p.add_argument("--out", required=True, type=Path, metavar="HTML", help="page to write")
     add_json_option(p, "what was written (path, size, samples, duration)")
     p.set_defaults(run=_view)
@@ -36,7 +43,7 @@ def register(sub: Any) -> None:
 def _view(args: argparse.Namespace) -> int:
     from ..viewer import load_view_input, write_view
 
-    view = load_view_input(args.input, args.platform)
+    view = load_view_input(args.input, args.platform, args.recording)
     path = write_view(view, args.out)
     size_mb = path.stat().st_size / 1e6
     if args.json:

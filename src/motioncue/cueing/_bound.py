@@ -242,6 +242,8 @@ class CueBound:
     reach : RigReach
     fs_hz : float
     model_set : str
+    solver : dict
+        The solvers used and the decimation of the certificate problems (``"1"``: none).
     """
 
     error_rms: NDArray[np.float64]
@@ -283,18 +285,17 @@ class CueBound:
 # ---------------------------------------------------------------- the convex problems
 
 
-def _ops(n: int, fs: float) -> tuple[Any, Any]:
-    """D1 (N-1, N) forward difference and D2 (N, N) central second difference (edges held)."""
+def _second_difference(n: int, fs: float) -> Any:
+    """D2 (N, N): the central second difference times fs^2, the pose held at both ends."""
     import scipy.sparse as sp
 
-    d1 = sp.diags([-np.ones(n - 1), np.ones(n - 1)], [0, 1], shape=(n - 1, n), format="csr")
     main = -2.0 * np.ones(n)
     main[0] += 1.0
     main[-1] += 1.0
     d2 = sp.diags([np.ones(n - 1), main, np.ones(n - 1)], [-1, 0, 1], shape=(n, n), format="csr")
     if n == 1:
         d2 = sp.csr_matrix((1, 1))
-    return d1, d2 * (fs * fs)
+    return d2 * (fs * fs)
 
 
 @dataclass(frozen=True)
@@ -378,7 +379,7 @@ def _qp_best_motion(ch: _Channel, v: NDArray[np.float64], d2: Any) -> NDArray[np
     g = GRAVITY_M_S2
     # variables z = [p (n), tau (n), x (nx n, sample-major), y (n)]; s = d2 p + g tau
     n_z = n * (3 + nx)
-    ip, it, ix, iy = 0, n, 2 * n, (2 + nx) * n
+    iy = (2 + nx) * n  # first index of y
     s_op = sp.hstack([d2, g * eye, sp.csr_matrix((n, (nx + 1) * n))], format="csr")
     # x[k+1] = a x[k] + b s[k] (x[0] = 0); y[k] = c x[k] + d s[k]
     shift = sp.diags([np.ones(n - 1)], [-1], shape=(n, n), format="csr")
@@ -428,7 +429,6 @@ def _qp_best_motion(ch: _Channel, v: NDArray[np.float64], d2: Any) -> NDArray[np
     )
     q = np.zeros(n_z)
     q[iy:] = -2.0 * v
-    del ip, it, ix
     hs = casadi.DM(hess)
     ms = casadi.DM(m)
     solver = casadi.conic(
@@ -556,7 +556,7 @@ def _decimated(
     m = n // k
     dd = d[: m * k].reshape(m, k).mean(axis=1)
     fs_d = ch.fs / k
-    return replace(ch, fs=fs_d), dd, _ops(m, fs_d)[1]
+    return replace(ch, fs=fs_d), dd, _second_difference(m, fs_d)
 
 
 def _channel_bound(
@@ -657,7 +657,7 @@ def cue_bound(
     if thr.shape != (6,) or not np.all(np.isfinite(thr)) or np.any(thr <= 0.0):
         raise ConfigError(f"thresholds {thr.tolist()!r} are invalid; allowed: 6 numbers > 0")
     n = f.shape[0]
-    _, d2 = _ops(n, fs_hz)
+    d2 = _second_difference(n, fs_hz)
     k = max(1, math.ceil(n / primal_samples))
     res: dict[str, list[float]] = {key: [] for key in ("err", "gmax", "gany", "share", "vrms")}
     for i in range(2):

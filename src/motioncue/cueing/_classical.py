@@ -39,7 +39,11 @@ Signal flow (per sample; frames, signs and units of conventions.md)
    tilt goes (``u = tilt_reach_use``, ``reach`` the platform's own reach in pure tilt,
    ``tilt_reach_rad``): large sustained forces are compressed into the tilt this platform
    can give in that direction, and the angle is only clipped to ``u * reach`` (a no-op but
-   for the low-pass's rounding) instead of the soft ``tilt_limit``.
+   for the low-pass's rounding) instead of the soft ``tilt_limit``. Roll and pitch together
+   are kept inside the ellipse of the quadrant they are in,
+   ``(roll / R)^2 + (pitch / P)^2 <= 1`` with ``R, P`` the limits in that direction: a
+   target outside it is scaled back towards level along its own direction (a hexapod
+   reaches about 0.9-1.1 times that ellipse along the diagonals, 12.4 deg of roll alone).
    With ``tilt_accel_limit_rad_s2 = a`` the tilt is also acceleration limited
    (:func:`rate_accel_limit_step`): with the per-sample step ``u[n] = tilt[n] - tilt[n-1]``,
    ``d = a / fs^2`` and ``e = target - tilt[n-1]``, the wanted step is
@@ -456,7 +460,7 @@ class ClassicalWashout:
         t0a, t0b = self.trans[0]
         t1a, t1b = self.trans[1]
         t2a, t2b = self.trans[2]
-        asin, sin, cos = math.asin, math.sin, math.cos
+        asin, sin, cos, sqrt = math.asin, math.sin, math.cos, math.sqrt
         soft = soft_limit
         mincos = _MIN_COS_PITCH
 
@@ -555,6 +559,13 @@ class ClassicalWashout:
             if cshape:
                 tp = pmax if tp > pmax else (-pmin if tp < -pmin else tp)
                 tr = rmax if tr > rmax else (-rmin if tr < -rmin else tr)
+                er = tr / (rmax if tr > 0.0 else rmin)
+                ep = tp / (pmax if tp > 0.0 else pmin)
+                qq = er * er + ep * ep
+                if qq > 1.0:  # roll and pitch together: inside the quadrant's ellipse
+                    sq = 1.0 / sqrt(qq)
+                    tr = tr * sq
+                    tp = tp * sq
             else:
                 if tp > atl or tp < -atl:
                     tp = soft(tp, tl, knee)
@@ -807,6 +818,12 @@ class ClassicalWashout:
             rmin, rmax, pmin, pmax = p.tilt_limits_rad
             tp = np.clip(tp, -pmin, pmax)
             tr = np.clip(tr, -rmin, rmax)
+            er = tr / np.where(tr > 0.0, rmax, rmin)
+            ep = tp / np.where(tp > 0.0, pmax, pmin)
+            qq = er * er + ep * ep
+            sq = np.where(qq > 1.0, 1.0 / np.sqrt(np.maximum(qq, 1.0)), 1.0)
+            tr = np.where(qq > 1.0, tr * sq, tr)
+            tp = np.where(qq > 1.0, tp * sq, tp)
         else:
             tp = soft_limit_array(tp, p.tilt_limit_rad, knee)
             tr = soft_limit_array(tr, p.tilt_limit_rad, knee)

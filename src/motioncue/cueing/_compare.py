@@ -34,6 +34,7 @@ from numpy.typing import NDArray
 from .._errors import ConfigError
 from ._bound import CueBound, RigReach
 from ._evaluate import CueingEvaluation, evaluate_cueing
+from ._plot import rider_axis
 from ._score import cue_score
 
 __all__ = [
@@ -380,6 +381,8 @@ class CompareResult:
             "columns": dict(COLUMN_NOTES),
             "rows": [{k: clean(v) for k, v in row.items()} for row in self.rows()],
             "plots": list(plots),
+            # the physical bound of each recording (compare --bound; motioncue.cueing.cue_bound)
+            "bounds": {r.recording: r.bound.to_dict() for r in self.runs if r.bound is not None},
         }
 
     def csv_text(self) -> str:
@@ -632,10 +635,13 @@ def compare_cueing(
 def compare_figure(result: CompareResult, recording: str) -> Any:
     """The overlay figure of one recording: perceived motion per channel, vehicle and presets.
 
-    Six panels (fx, fy, fz in m/s², p, q, r in deg/s), the vehicle as a thick dark line, each
-    preset in its own colour, the perception threshold as a grey band; one legend naming the
-    vehicle and every preset; the title names the recording, platform, controller, frame
-    rate and vestibular model set. Returns the matplotlib figure (Agg; close it after use).
+    Six panels (fx, fy, fz in m/s², p, q, r in deg/s), the vehicle as a thick dark line on
+    the left axis, each preset in its own colour on the right axis, scaled to show the
+    rider's cue (:func:`motioncue.cueing._plot.rider_axis`: zero at the same height; the
+    presets' rendered share in the legend), the perception threshold as a grey band; one
+    legend naming the vehicle and every preset; the title names the recording, platform,
+    controller, frame rate and vestibular model set. Returns the matplotlib figure (Agg;
+    close it after use).
     """
     import matplotlib
 
@@ -658,14 +664,21 @@ def compare_figure(result: CompareResult, recording: str) -> Any:
         ax = axes[i % 3, i // 3]
         k = _K[i]
         thr = float(ev0.thresholds[i]) * k
-        band = ax.axhspan(-thr, thr, color="0.88", lw=0)
+        sims = [run.evaluation.perceived_sim[:, i] * k for run in runs]
+        right = rider_axis(ax, ev0.perceived_vehicle[:, i] * k, list(sims), thr)
+        band = right.axhspan(-thr, thr, color="0.88", lw=0, zorder=0)
         (veh,) = ax.plot(t, ev0.perceived_vehicle[:, i] * k, color="0.1", lw=1.8)
         lines = [
-            ax.plot(t, run.evaluation.perceived_sim[:, i] * k, color=c, lw=0.9, alpha=0.85)[0]
-            for run, c in zip(runs, colours, strict=True)
+            right.plot(t, sim, color=c, lw=0.9, alpha=0.85)[0]
+            for sim, c in zip(sims, colours, strict=True)
         ]
-        ax.set_ylabel(f"perceived {name} [{_PLOT_UNIT[i]}]")
-        ax.set_title(f"{name}: {_WHAT[i]}", fontsize=9, loc="left")
+        ax.set_ylabel(f"vehicle, perceived {name} [{_PLOT_UNIT[i]}]", fontsize=8)
+        right.set_ylabel(f"presets, right axis [{_PLOT_UNIT[i]}]", fontsize=8)
+        shares = " / ".join(
+            f"{v:.0%}" if math.isfinite(v) else "-"
+            for v in (float(r.evaluation.metrics.rendered_share[i]) for r in runs)
+        )
+        ax.set_title(f"{name}: {_WHAT[i]}; share {shares}", fontsize=9, loc="left")
         ax.grid(alpha=0.3)
         if i % 3 == 2:
             ax.set_xlabel("t [s]")
@@ -676,7 +689,15 @@ def compare_figure(result: CompareResult, recording: str) -> Any:
                 *(f"preset {r.preset}" for r in runs),
                 "perception threshold (±)",
             ]
-    fig.legend(handles, labels, loc="outside lower center", ncol=min(len(labels), 4))
+    fig.legend(
+        handles,
+        labels,
+        loc="outside lower center",
+        ncol=min(len(labels), 4),
+        title="vehicle on the left axis; presets and the threshold on the right axis, scaled "
+        "to show the rider's cue; 'share': each preset's rendered share, in legend order",
+        title_fontsize=9,
+    )
     fig.suptitle(
         f"perceived motion, recording {recording}\nplatform {result.platform} | controller "
         f"{result.controller or 'not given'} | {result.rate_hz:g} Hz | vestibular models "

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import math
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike
@@ -11,9 +12,32 @@ from numpy.typing import ArrayLike
 from .._errors import ConfigError
 from ._evaluate import AXIS_NAMES, CueingEvaluation
 
-__all__ = ["plot_cueing", "plot_title"]
+__all__ = ["plot_cueing", "plot_title", "rider_axis"]
 
 _UNITS = ("m/s²", "m/s²", "m/s²", "deg/s", "deg/s", "deg/s")
+
+
+def rider_axis(ax: Any, vehicle: ArrayLike, riders: list[ArrayLike], thr: float) -> Any:
+    """A right-hand axis for the rider's perceived motion, scaled to show it.
+
+    The vehicle's perceived motion stays on ``ax`` (left); the rider's is often a few per
+    cent of it and would be a flat line on that scale. The right axis spans the riders'
+    99.5th percentile of ``|value|`` (at least twice the threshold ``thr``; brief spikes,
+    e.g. of clamping, may leave the panel) symmetrically, and the left axis the vehicle's
+    largest ``|value|``, so that zero is at the same height on both; when the rider's motion
+    is at least half the vehicle's, both share the left axis's limits. Returns the right
+    axis (draw the riders and the threshold band on it).
+    """
+    veh = np.asarray(vehicle, dtype=float)
+    v_peak = float(np.max(np.abs(veh), initial=0.0))
+    arrays = [np.abs(np.asarray(r, dtype=float)) for r in riders]
+    r_peak = max([float(np.percentile(a, 99.5)) for a in arrays if a.size] + [2.0 * thr])
+    left = 1.08 * max(v_peak, r_peak)
+    right = left if r_peak >= 0.5 * v_peak else 1.08 * r_peak
+    ax.set_ylim(-left, left)
+    twin = ax.twinx()
+    twin.set_ylim(-right, right)
+    return twin
 
 
 def plot_title(
@@ -44,8 +68,10 @@ def plot_cueing(
 ) -> Path:
     """Write a PNG: vehicle vs simulator perceived motion per axis, the poses, the metrics.
 
-    Vehicle lines are solid dark grey, simulator lines dashed red, the grey band is the
-    axis's perception threshold; angular channels are shown in deg/s. The metrics table
+    Vehicle lines are solid dark grey on the left axis, simulator lines dashed red on the
+    right axis, scaled to show the rider's cue (:func:`rider_axis`; zero at the same height,
+    the rendered share in the legend), the grey band is the axis's perception threshold (on
+    the right axis); angular channels are shown in deg/s. The metrics table
     with its notes (units, column meanings, the otolith gain convention) is printed under
     the plots.
 
@@ -78,25 +104,29 @@ def plot_cueing(
     t = np.arange(n) / evaluation.fs_hz if t_s is None else np.asarray(t_s, dtype=float)
     fig = plt.figure(figsize=(13, 20), layout="constrained")
     grid = fig.add_gridspec(5, 2, height_ratios=[1, 1, 1, 1, 2.0])
+    share = evaluation.metrics.rendered_share
     for i, name in enumerate(AXIS_NAMES):
         ax = fig.add_subplot(grid[i % 3, i // 3])
         k = 180.0 / math.pi if i >= 3 else 1.0
         thr = float(evaluation.thresholds[i]) * k
-        ax.axhspan(-thr, thr, color="0.85", lw=0, label=f"threshold ±{thr:.2g} {_UNITS[i]}")
-        ax.plot(t, evaluation.perceived_vehicle[:, i] * k, color="0.15", lw=1.6, label="vehicle")
-        ax.plot(
-            t,
-            evaluation.perceived_sim[:, i] * k,
-            color="tab:red",
-            lw=1.0,
-            ls="--",
-            label="simulator",
-        )
-        ax.set_ylabel(f"perceived {name} [{_UNITS[i]}]")
+        veh, sim = evaluation.perceived_vehicle[:, i] * k, evaluation.perceived_sim[:, i] * k
+        right = rider_axis(ax, veh, [sim], thr)
+        band = right.axhspan(-thr, thr, color="0.85", lw=0, zorder=0)
+        (lv,) = ax.plot(t, veh, color="0.15", lw=1.6, label="vehicle")
+        (ls,) = right.plot(t, sim, color="tab:red", lw=1.0, ls="--", label="simulator")
+        ax.set_ylabel(f"vehicle, perceived {name} [{_UNITS[i]}]")
+        right.set_ylabel(f"simulator [{_UNITS[i]}]", color="tab:red")
+        right.tick_params(axis="y", colors="tab:red")
         if i % 3 == 2:
             ax.set_xlabel("t [s]")
         ax.grid(alpha=0.3)
-        ax.legend(loc="upper right", fontsize=8)
+        sh = f"{share[i]:.0%}" if math.isfinite(share[i]) else "-"
+        ax.legend(
+            [lv, ls, band],
+            ["vehicle (left axis)", f"simulator (right axis; rendered share {sh})",
+             f"threshold ±{thr:.2g} {_UNITS[i]} (right axis)"],
+            loc="upper right", fontsize=8,
+        )  # fmt: skip
     ax = fig.add_subplot(grid[3, 0])
     for j, name in enumerate(("x", "y", "z")):
         ax.plot(t, p[:, j] * 1e3, label=name, lw=1.0)

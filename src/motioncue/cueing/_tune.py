@@ -1,4 +1,4 @@
-"""Automatic tuning of a classical-washout preset: minimise the perceived-motion error.
+"""Automatic tuning of a cueing preset: the strongest cue within cue-quality targets.
 
 What is tuned
 -------------
@@ -20,6 +20,11 @@ the copy's gain per axis, the share of the tilt reach, the curve's exponent and 
 pitch sign guard as well); its classical tables (the fallback washout) and every other
 ``[mpc]`` setting are kept. :func:`tuned_parameters` gives the table of a preset.
 
+A classical preset with the compressive tilt (``[tilt] shape``) is tuned on
+:data:`STRENGTH_TUNED_PARAMETERS` instead: the gains, limit and exponent of the compressive
+curves, the share of the platform's tilt reach (:func:`tilt_reach`), the tilt's lead, and
+the filters as above.
+
 The objective and the limits
 ----------------------------
 Each candidate runs the cheap chain of ``generate`` on every recording (resampled once, up
@@ -28,8 +33,14 @@ pulse-rounding-tightened limits of the platform and controller) and the evaluati
 *delivered* poses through the vestibular models: the mean over the recordings of the cue
 score (:func:`motioncue.cueing.cue_score`: the perceived-motion error ``J`` relative to a
 platform that stands still, plus the lost correlation, the false-cue and the missed-cue
-fractions; its module says why ``J`` alone does not work on car drives). ``J`` itself is
-reported before and after. The full casadi ride optimisation is not run.
+fractions; its module says why ``J`` alone does not work on car drives) with
+``objective="score"``; with ``objective="strength"`` (the default of ``motioncue tune``) the
+geometric mean of the rendered shares of fx and fy of the recordings pooled
+(:func:`motioncue.cueing.cue_metrics`), to be maximised subject to :class:`StrengthTargets`
+(reversals, false cues, correlation, clamping): the cue score can be won by barely moving
+(correlation is blind to scale, false cues and clamping fall as the motion shrinks), the
+strength cannot. ``J`` itself is reported before and after. The full casadi ride
+optimisation is not run.
 
 The platform's limits are a **penalty** (Deb's feasibility rule folded into one number): a
 candidate is feasible when its actuator positions after workspace limiting break no limit

@@ -65,15 +65,22 @@ class ViewInput:
     title : str
         What the page says it shows (file, platform, controller).
     platform : Platform
+    vehicle : (N, 6) array or None
+        The vehicle's perceived motion at the scene's times (m/s^2, rad/s; the cueing's
+        input through the same vestibular models), when the ride was made from a recording
+        that was found; zero outside the ride's cue frames.
     """
 
     scene: Scene
     rate_hz: float
     title: str
     platform: Any
+    vehicle: NDArray[np.float64] | None = None
 
 
-def load_view_input(path: str | Path, platform: str | None = None) -> ViewInput:
+def load_view_input(
+    path: str | Path, platform: str | None = None, recording: str | Path | None = None
+) -> ViewInput:
     """Read a ride file (``.ride``) or a poses CSV (``t,x,y,z,roll,pitch,yaw``) for a view.
 
     Parameters
@@ -82,6 +89,10 @@ def load_view_input(path: str | Path, platform: str | None = None) -> ViewInput:
         The ride file or CSV (``_mm`` / ``_deg`` column forms accepted, as ``generate``).
     platform : str, optional
         Platform name or TOML path; default the ride's own, required for a CSV.
+    recording : str or Path, optional
+        The recording a ride was made from: its perceived motion is drawn beside the
+        rider's. Default: the ride's ``source`` when that names a recording next to the ride
+        file (as ``generate`` writes it); none for a CSV.
 
     Raises
     ------
@@ -113,7 +124,10 @@ def load_view_input(path: str | Path, platform: str | None = None) -> ViewInput:
         q = plat.drives.from_pulses(ride.pulses[idx])
         scene = scene_from_q(plat, ride.t_s[idx], q)
         title = f"{p.name}: {name} on {ride.controller}, {ride.rate_hz:g} Hz"
-        return ViewInput(scene, rate, title, plat)
+        vehicle = _vehicle_perceived(ride, p, recording, scene.t_s)
+        return ViewInput(scene, rate, title, plat, vehicle)
+    if recording is not None:
+        raise ConfigError(f"{p}: --recording goes with a ride file, not a poses CSV")
     if platform is None:
         raise ConfigError(f"{p}: a poses CSV needs --platform (the ride file names its own)")
     from ..pipeline import read_keyframes_csv
@@ -132,6 +146,37 @@ def load_view_input(path: str | Path, platform: str | None = None) -> ViewInput:
     t = keys.t_s[idx] - keys.t_s[0]
     scene = scene_from_poses(plat, t, keys.poses[idx])
     return ViewInput(scene, rate, f"{p.name}: poses on {platform}, {rate_in:.4g} Hz", plat)
+
+
+def _vehicle_perceived(
+    ride: Any, ride_path: Path, recording: str | Path | None, t_s: NDArray[np.float64]
+) -> NDArray[np.float64] | None:
+    """The vehicle's perceived motion at ``t_s`` (module docstring of ViewInput), or None.
+
+    The recording is resampled at the ride's rate and its sample ``j`` put on the ride's
+    frame ``cue_frames[0] + j`` (``generate``'s layout: ramp in, the cue, ramp out).
+    """
+    from ..cueing import GRAVITY_M_S2, get_model_set
+    from ..cueing._vestibular import DEFAULT_MODEL_SET
+    from ..pipeline._inputs import load_generate_input
+    from ..telemetry._recording import resample
+
+    if recording is None:
+        guess = ride_path.parent / Path(str(ride.source)).name if ride.source else None
+        if guess is None or not guess.is_file():
+            return None
+        recording = guess
+    kind, data, _ = load_generate_input(str(recording))
+    if kind != "recording":
+        raise ConfigError(f"{recording}: not a recording of vehicle motion")
+    uniform = resample(data, ride.rate_hz)
+    cue = ride.notes.get("cue_frames", [0, ride.n_frames])
+    start = int(cue[0]) if isinstance(cue, list) and cue else 0
+    ms = get_model_set(DEFAULT_MODEL_SET)
+    rest = np.array([0.0, 0.0, GRAVITY_M_S2])
+    pv = ms.filter(np.concatenate([uniform.f - rest, uniform.w], axis=1), ride.rate_hz)
+    t_v = ride.t_s[min(start, ride.n_frames - 1)] + np.arange(pv.shape[0]) / ride.rate_hz
+    return np.column_stack([np.interp(t_s, t_v, pv[:, i], left=0.0, right=0.0) for i in range(6)])
 
 
 def _thin(n: int, rate_hz: float) -> tuple[NDArray[np.intp], float]:
@@ -226,6 +271,12 @@ def _curves(view: ViewInput) -> dict[str, Any]:
     for j, axis in enumerate(("fx", "fy", "fz")):
         series(perceived[:, j], 1e3, name=f"{axis} (m/s²)", line={"width": 1.2},
                legendgroup="f", row=2, col=1)  # fmt: skip
+    if view.vehicle is not None:  # the vehicle beside the rider, same scale: the strength
+        for j, axis in enumerate(("fx", "fy")):
+            v, r = view.vehicle[:, j], perceived[:, j]
+            share = math.sqrt(float(r @ r) / float(v @ v)) if np.any(v) else math.nan
+            series(v, 1e3, name=f"vehicle {axis} (m/s²; rider gets {share:.0%} of it)",
+                   line={"width": 1.0, "dash": "dot"}, legendgroup="veh", row=2, col=1)  # fmt: skip
     for j, axis in enumerate(("roll rate", "pitch rate", "yaw rate")):
         series(np.degrees(perceived[:, 3 + j]), 1e2, name=f"{axis} (deg/s)",
                line={"width": 1.2}, legendgroup="w", row=3, col=1)  # fmt: skip
