@@ -89,7 +89,9 @@ __all__ = [
     "block_ends",
     "build_model",
     "fallback_accel",
+    "plan_tilt_reach",
     "reference",
+    "resolve_reach",
 ]
 
 _FALLBACK_WN = 4.0
@@ -241,7 +243,11 @@ def reference(
     """The motion the plan tracks, sample by sample, and the low-pass state after it.
 
     Without a split (``mp.ref_split_hz = 0``) ``r = L tanh(k d / L)`` per channel
-    (``k = mp.ref_scale``, ``L = mp.ref_limit``; a limit of ``1e9`` or more leaves ``k d``).
+    (``k = mp.ref_scale``, ``L = mp.ref_limit``; a limit of ``1e9`` or more leaves ``k d``),
+    or with ``mp.ref_shape = p > 0`` the compressive curve of the classical washout,
+    ``r = compress(d, k, L+, L-, p) = k d / (1 + |k d / L|^p)^(1/p)``
+    (:func:`~._filters.compress_array`; ``L+ = mp.ref_limit`` for ``d > 0``, ``L- =
+    mp.ref_limit_neg`` for ``d < 0``, the same when that is ``None``).
     With a split, ``d`` is cut by a first-order low-pass ``lo`` at ``ref_split_hz`` (exact
     discretisation, ``lo_n = a lo_(n-1) + (1 - a) d_n``, ``a = exp(-2 pi f / fs)``) into
     ``lo`` and ``d - lo``: ``r = L tanh(k lo / L) + k_hf (d - lo)`` (``k_hf =
@@ -283,9 +289,69 @@ def reference(
         fast = np.zeros_like(da)
         slow = da
     r = slow * k
-    if np.any(soft):
+    if mp.ref_shape > 0.0:
+        from ._filters import compress_array
+
+        neg = lim if mp.ref_limit_neg is None else np.asarray(mp.ref_limit_neg)
+        for i in np.flatnonzero(soft | (neg < 1e9)):
+            r[..., i] = compress_array(slow[..., i], k[i], lim[i], neg[i], mp.ref_shape)
+    elif np.any(soft):
         r[..., soft] = lim[soft] * np.tanh(r[..., soft] / lim[soft])
     return np.asarray(r + fast), state
+
+
+def plan_tilt_reach(limits: RigLimits) -> tuple[float, float, float, float]:
+    """The plan's own reach in pure tilt about neutral: ``(roll-, roll+, pitch-, pitch+)``.
+
+    The largest angle (rad, magnitude, to 0.01 deg, at most 30 deg) such that every pure roll
+    (or pitch) pose from neutral up to it in that direction keeps each leg (exact inverse
+    kinematics) within the stroke the plan may use (``q_mid +- q_half``).
+
+    Parameters
+    ----------
+    limits : RigLimits
+
+    Returns
+    -------
+    tuple of 4 floats
+    """
+    angles = np.radians(np.arange(1, 3001) * 0.01)
+    out = []
+    for axis in (3, 4):
+        for sign in (-1.0, 1.0):
+            poses = np.zeros((angles.size, 6))
+            poses[:, axis] = sign * angles
+            q = np.asarray(limits.platform.inverse(poses), dtype=float)
+            ok = np.all(np.abs(q - limits.q_mid) <= limits.q_half, axis=1)
+            first_bad = int(np.argmin(ok)) if not ok.all() else angles.size
+            out.append(float(angles[first_bad - 1]) if first_bad > 0 else 1e-4)
+    return (out[0], out[1], out[2], out[3])
+
+
+def resolve_reach(mp: MpcParams, limits: RigLimits) -> MpcParams:
+    """``mp`` with its fx and fy reference limits set from the plan's tilt reach.
+
+    With ``mp.ref_reach_use = u > 0``: ``L = g u reach`` in the direction each sign needs
+    (the model's specific force is ``[u_x - g pitch, u_y + g roll]``, so ``fx > 0`` needs
+    pitch down to ``-reach(pitch-)``, ``fx < 0`` pitch up, ``fy > 0`` roll up to
+    ``reach(roll+)``, ``fy < 0`` roll down): ``ref_limit`` holds the positive limits and
+    ``ref_limit_neg`` the negative ones. ``mp`` unchanged when ``u = 0``.
+    """
+    if mp.ref_reach_use <= 0.0:
+        return mp
+    from dataclasses import replace
+
+    rn, rp, pn, pp = plan_tilt_reach(limits)
+    c = GRAVITY_M_S2 * mp.ref_reach_use
+    pos = list(mp.ref_limit)
+    neg = list(mp.ref_limit if mp.ref_limit_neg is None else mp.ref_limit_neg)
+    pos[0], neg[0] = c * pn, c * pp
+    pos[1], neg[1] = c * rp, c * rn
+    return replace(
+        mp,
+        ref_limit=(pos[0], pos[1], pos[2], pos[3], pos[4], pos[5]),
+        ref_limit_neg=(neg[0], neg[1], neg[2], neg[3], neg[4], neg[5]),
+    )
 
 
 def block_ends(n_steps: int, blocks: int) -> NDArray[np.int64]:
@@ -733,6 +799,8 @@ class MpcCueing:
         fs = classical.fs_hz
         object.__setattr__(self, "fs_hz", fs)
         mp = self.params.mpc if self.params.mpc is not None else MpcParams()
+        limits = rig_limits(self.params, mp, fs)
+        mp = resolve_reach(mp, limits)
         object.__setattr__(self, "mpc", mp)
         object.__setattr__(self, "classical", classical)
         model = build_model(self.params.dofs, mp, fs)
@@ -743,7 +811,6 @@ class MpcCueing:
             np.exp(-k / (mp.prediction_tau_s * fs)) if mp.prediction_tau_s > 0 else np.ones(n + 1)
         )
         cond = condense(model, ends, decay, terminal=True)
-        limits = rig_limits(self.params, mp, fs)
         object.__setattr__(self, "model", model)
         object.__setattr__(self, "cond", cond)
         object.__setattr__(self, "limits", limits)

@@ -17,6 +17,10 @@ washout is the MPC's fallback) plus one ``[mpc]`` table, read by :func:`read_mpc
     ref_scale = [1.0, 1.0, 1.0, 1.0, 1.0, 1.0]    # the plan tracks ref_scale * vehicle motion
     ref_limit_m_s2 = [4.0, 4.0, 2.0]   # optional: soft limits of that copy (fx, fy, fz)
     ref_limit_deg_s = [5.0, 5.0, 5.0]  # optional: and of its wx, wy, wz
+    ref_shape = 2.0                    # optional: the compressive curve of the classical
+                                       #   washout instead of tanh (exponent p >= 1)
+    ref_reach_use = 0.8                # optional: fx, fy limits from this share of the
+                                       #   plan's own tilt reach, per direction
     ref_split_hz = 0.5                 # optional: only the part below this is scaled and
     ref_scale_hf = [1.0, 1.0, 0.0, 0.0, 0.0, 0.0]  # limited; the part above times this
     sign_guard = [0.7, 0.7, 0.0, 0.0, 0.0, 0.0]  # wrong-sign perceived motion at most this
@@ -92,6 +96,21 @@ class MpcParams:
     ref_limit : 6 floats
         ``L`` (m/s^2 for ``fx, fy, fz``, rad/s for ``wx, wy, wz``; the TOML keys are
         ``ref_limit_m_s2`` and ``ref_limit_deg_s``), > 0; ``1e9`` (the default) means none.
+    ref_shape : float
+        0 (default): the soft limit ``L tanh(k d / L)``. Otherwise the exponent ``p`` in
+        [1, 50] of the compressive curve the classical washout uses
+        (:func:`~._filters.compress`): ``r = k d / (1 + |k d / L|^p)^(1/p)`` on every channel
+        with a limit, so small cues are tracked nearly whole (slope ``k``) and large ones are
+        compressed into ``L``.
+    ref_reach_use : float
+        0 (default): ``ref_limit`` as given. In (0, 1]: the fx and fy limits are set by the
+        algorithm from the plan's own tilt reach (:func:`~._mpc.plan_tilt_reach`, each
+        direction apart): ``L = g u reach`` (``u = ref_reach_use``; the force of that tilt in
+        the plan's linear model), so the sustained part of the tracked motion asks for at
+        most that share of the tilt this platform reaches in the direction it needs.
+    ref_limit_neg : 6 floats or None
+        Limits for negative values (``None``: ``ref_limit``, symmetric); set by the algorithm
+        from ``ref_reach_use`` (no TOML key).
     ref_split_hz : float
         0 (default): no split. Otherwise the vehicle's motion is split by a first-order
         low-pass at this frequency (Hz), in [0, 50]; ``ref_scale`` and ``ref_limit`` apply to
@@ -138,6 +157,9 @@ class MpcParams:
     ref_limit: Vec6 = (1e9, 1e9, 1e9, 1e9, 1e9, 1e9)
     ref_split_hz: float = 0.0
     ref_scale_hf: Vec6 = (0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
+    ref_shape: float = 0.0
+    ref_reach_use: float = 0.0
+    ref_limit_neg: Vec6 | None = None
     sign_guard: Vec6 = (0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
     sign_guard_weight: float = 1e4
     stroke_use: float = 0.9
@@ -155,6 +177,17 @@ class MpcParams:
         object.__setattr__(self, "ref_scale", _vec6("ref_scale", self.ref_scale, 0.0, 1.0))
         object.__setattr__(self, "ref_limit", _vec6("ref_limit", self.ref_limit, 1e-6, 1e9))
         object.__setattr__(self, "ref_scale_hf", _vec6("ref_scale_hf", self.ref_scale_hf, 0.0, 1.0))
+        if self.ref_limit_neg is not None:
+            object.__setattr__(
+                self, "ref_limit_neg", _vec6("ref_limit_neg", self.ref_limit_neg, 1e-6, 1e9)
+            )
+        rs = self.ref_shape
+        if (
+            isinstance(rs, bool)
+            or not isinstance(rs, int | float)
+            or not (rs == 0.0 or 1.0 <= rs <= 50.0)
+        ):
+            raise ConfigError(f"MpcParams.ref_shape = {rs!r} is invalid; allowed: 0 or [1, 50]")
         object.__setattr__(self, "sign_guard", _vec6("sign_guard", self.sign_guard, 0.0, 10.0))
         if not any(self.w_error):
             raise ConfigError(f"MpcParams.w_error = {self.w_error!r} is invalid; not all zero")
@@ -166,6 +199,7 @@ class MpcParams:
             ("deadline_ms", self.deadline_ms, 0.1, 1e6),
             ("sign_guard_weight", self.sign_guard_weight, 1e-9, 1e9),
             ("ref_split_hz", self.ref_split_hz, 0.0, 50.0),
+            ("ref_reach_use", self.ref_reach_use, 0.0, 1.0),
             ("window_s", self.window_s, 0.2, 600.0),
             ("stride_s", self.stride_s, 0.1, 600.0),
         )
@@ -217,6 +251,8 @@ def read_mpc_table(table: Any) -> MpcParams:
         "deadline_ms",
         "sign_guard_weight",
         "ref_split_hz",
+        "ref_shape",
+        "ref_reach_use",
         "window_s",
         "stride_s",
     ):

@@ -43,6 +43,7 @@ from ._mpc import (
     build_model,
     fallback_accel,
     reference,
+    resolve_reach,
     rig_limits,
     terminal_weight,
 )
@@ -123,8 +124,9 @@ class OptimalCueing:
         bs = mp.block_samples
         n_stride = max(bs, round(mp.stride_s * fs / bs) * bs)
         n_window = max(n_stride + bs, round(mp.window_s * fs / bs) * bs)
-        model = build_model(self.params.dofs, mp, fs)
         limits = rig_limits(self.params, mp, fs)
+        mp = resolve_reach(mp, limits)
+        model = build_model(self.params.dofs, mp, fs)
         object.__setattr__(self, "mpc", mp)
         object.__setattr__(self, "classical", classical)
         object.__setattr__(self, "model", model)

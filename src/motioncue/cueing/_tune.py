@@ -15,8 +15,10 @@ input rejection, workspace, head offset) is kept from the base preset.
 A preset with ``algorithm = "mpc"`` or ``"optimal"`` is tuned on its plan instead
 (:data:`MPC_TUNED_PARAMETERS`: the scale and soft limit of the tracked copy of fx, fy, the
 plan's tilt-rate limit, the canal weight, the x/y pose weight and the tilt acceleration
-weight); its classical tables (the fallback washout) and every other ``[mpc]`` setting are
-kept. :func:`tuned_parameters` gives the table of a preset.
+weight; with the compressive reference, ``ref_shape``, :data:`MPC_STRENGTH_TUNED_PARAMETERS`:
+the copy's gain per axis, the share of the tilt reach, the curve's exponent and the roll and
+pitch sign guard as well); its classical tables (the fallback washout) and every other
+``[mpc]`` setting are kept. :func:`tuned_parameters` gives the table of a preset.
 
 A classical preset with the compressive tilt (``[tilt] shape``) is tuned on
 :data:`STRENGTH_TUNED_PARAMETERS` instead: the gains, limit and exponent of the compressive
@@ -86,6 +88,7 @@ from ._vestibular import DEFAULT_MODEL_SET, get_model_set
 
 __all__ = [
     "MAX_CLAMPED_FRACTION",
+    "MPC_STRENGTH_TUNED_PARAMETERS",
     "MPC_TUNED_PARAMETERS",
     "OBJECTIVES",
     "PENALTY_BASE",
@@ -159,6 +162,23 @@ MPC_TUNED_PARAMETERS: tuple[_Parameter, ...] = (
 """The tuned parameters of an ``mpc`` or ``optimal`` preset (its ``[mpc]`` table): x and y
 share each value; searched in log space like :data:`TUNED_PARAMETERS`."""
 
+MPC_STRENGTH_TUNED_PARAMETERS: tuple[_Parameter, ...] = (
+    _Parameter("ref_scale_x", 0.02, 1.0, "-"),
+    _Parameter("ref_scale_y", 0.02, 1.0, "-"),
+    _Parameter("ref_reach_use", 0.2, 1.0, "-"),
+    _Parameter("ref_shape", 1.0, 8.0, "-"),
+    _Parameter("plan_tilt_rate_limit_deg_s", 1.0, 40.0, "deg/s"),
+    _Parameter("w_error_rp", 0.01, 30.0, "-"),
+    _Parameter("w_pose_xy", 1.0, 300.0, "-"),
+    _Parameter("w_acc_tilt", 0.01, 100.0, "-"),
+    _Parameter("sign_guard_rp", 0.1, 5.0, "-"),
+)
+"""The tuned parameters of an ``mpc`` or ``optimal`` preset with the compressive reference
+(``[mpc] ref_shape``): the gain of the tracked copy per axis, the share of the plan's tilt
+reach its fx/fy limits use, the curve's exponent, the plan's tilt rate, the canal, x/y pose
+and tilt-acceleration weights, and the sign guard of roll and pitch rate (only where the
+base guards them; x and y share the others). Searched in log space."""
+
 STRENGTH_TUNED_PARAMETERS: tuple[_Parameter, ...] = (
     _Parameter("f_scale_x", 0.01, 1.5, "-"),
     _Parameter("f_scale_y", 0.01, 1.5, "-"),
@@ -193,9 +213,12 @@ _PLANS = ("mpc", "optimal")
 
 def tuned_parameters(params: CueingParams) -> tuple[_Parameter, ...]:
     """The table tuned for ``params``: :data:`MPC_TUNED_PARAMETERS` for an ``mpc`` or
-    ``optimal`` preset, :data:`STRENGTH_TUNED_PARAMETERS` for a classical one with the
+    ``optimal`` preset (:data:`MPC_STRENGTH_TUNED_PARAMETERS` with the compressive reference,
+    ``ref_shape``), :data:`STRENGTH_TUNED_PARAMETERS` for a classical one with the
     compressive tilt (``tilt_shape``), :data:`TUNED_PARAMETERS` otherwise."""
     if params.algorithm in _PLANS:
+        if _plan_of(params).ref_shape > 0.0:
+            return MPC_STRENGTH_TUNED_PARAMETERS
         return MPC_TUNED_PARAMETERS
     if params.tilt_shape is not None:
         return STRENGTH_TUNED_PARAMETERS
@@ -308,6 +331,22 @@ def vector_from_params(params: CueingParams) -> NDArray[np.float64]:
     if params.algorithm in _PLANS:
         mp = _plan_of(params)
         tr = mp.tilt_rate_limit_rad_s
+        if mp.ref_shape > 0.0:
+            guard = [g for g in mp.sign_guard[3:5] if g > 0.0]
+            return _clip_log(
+                MPC_STRENGTH_TUNED_PARAMETERS,
+                (
+                    mp.ref_scale[0],
+                    mp.ref_scale[1],
+                    mp.ref_reach_use if mp.ref_reach_use > 0.0 else 1.0,
+                    mp.ref_shape,
+                    (params.tilt_rate_limit_rad_s if tr is None else tr) / _D2R,
+                    math.sqrt(max(mp.w_error[3], 1e-9) * max(mp.w_error[4], 1e-9)),
+                    math.sqrt(max(mp.w_pose[0], 1e-9) * max(mp.w_pose[1], 1e-9)),
+                    math.sqrt(max(mp.w_acc[3], 1e-9) * max(mp.w_acc[4], 1e-9)),
+                    math.sqrt(guard[0] * guard[-1]) if guard else 0.7,
+                ),
+            )
         return _clip_log(
             MPC_TUNED_PARAMETERS,
             (
@@ -393,6 +432,23 @@ def params_from_vector(base: CueingParams, x: Sequence[float], name: str = "") -
         def rp(old: Sequence[float], value: float) -> tuple[float, ...]:
             return (*old[:3], value, value, old[5])
 
+        if mp.ref_shape > 0.0:
+            sg = list(mp.sign_guard)
+            for i in (3, 4):
+                if sg[i] > 0.0:
+                    sg[i] = v[8]
+            plan = replace(
+                mp,
+                ref_scale=(v[0], v[1], *mp.ref_scale[2:]),
+                ref_reach_use=v[2],
+                ref_shape=v[3],
+                tilt_rate_limit_rad_s=v[4] * _D2R,
+                w_error=rp(mp.w_error, v[5]),
+                w_pose=xy(mp.w_pose, v[6]),
+                w_acc=rp(mp.w_acc, v[7]),
+                sign_guard=tuple(sg),
+            )
+            return replace(base, name=name or base.name, mpc=plan)
         plan = replace(
             mp,
             ref_scale=xy(mp.ref_scale, v[0]),
@@ -1142,6 +1198,8 @@ def _mpc_lines(mp: Any) -> list[str]:
     for key in (
         "prediction_tau_s",
         "ref_split_hz",
+        "ref_shape",
+        "ref_reach_use",
         "sign_guard_weight",
         "stroke_use",
         "rate_use",
