@@ -84,6 +84,36 @@ def test_mbox_stroke_from_fn0c0_and_fn0c1(hexapod):
         ActuatorLimits.from_platform(hexapod, _mbox(Fn0C1=1000), a_max=5.0)
 
 
+def test_limits_kept_within_the_controllers_own_stroke(hexapod):
+    """A table made for Fn0C0 = 0 (no controller stroke), driven through a box whose
+    Fn0C0 = 60 mm: narrowed to [0, 120000] pulses, the same as a table made for that box;
+    a table already within it is returned unchanged; a box whose stroke cannot hold park
+    is refused."""
+    from motioncue import LimitError
+    from motioncue.trajectory import within_controller_stroke
+
+    wide = ActuatorLimits.from_platform(hexapod, _mbox(), a_max=5.0)
+    narrow_box = _mbox(Fn0C0=600)
+    got, note = within_controller_stroke(wide, hexapod, narrow_box)
+    assert note is not None and "Fn0C0" in note
+    # independent oracle: the pulse ends straight from Fn0C0 x Fn0C1 = 60 mm x 2000
+    q_home = np.asarray(hexapod.drives.from_pulses(np.zeros(6, dtype=np.int64)))
+    np.testing.assert_allclose(got.q_min, np.maximum(wide.q_min, q_home), atol=1e-12)
+    np.testing.assert_allclose(got.q_max, np.minimum(wide.q_max, q_home + 0.06), atol=1e-12)
+    assert got.to_pulses_table(hexapod)[0]["stroke_pulses"] == [0, 120000]
+    np.testing.assert_array_equal(got.v_max, wide.v_max)
+    np.testing.assert_array_equal(got.a_max, wide.a_max)
+    same, none = within_controller_stroke(got, hexapod, narrow_box)
+    assert same is got and none is None
+    unlimited, none = within_controller_stroke(wide, hexapod, _mbox())
+    assert unlimited is wide and none is None
+    # park outside the box's stroke: pulse origin moved by a negative Fn0C0 is impossible,
+    # so move park instead (a platform whose park lies below the homed origin)
+    low_park = SimpleNamespace(drives=hexapod.drives, q_park=q_home - 0.001)
+    with pytest.raises(LimitError, match="park"):
+        within_controller_stroke(wide, low_park, narrow_box)
+
+
 def test_catch_up_divides_speed_and_acceleration(hexapod):
     # MBOX 5.3.3: Fn012 = 1500 plays frames 1.5x as fast as stamped; the motor must still
     # keep 0.25 m/s and 4 m/s^2, so the host plans with 0.25/1.5 and 4/1.5^2

@@ -49,7 +49,7 @@ from .._errors import (
     MotioncueError,
     TransportError,
 )
-from ..trajectory._derive import pulse_rounding_limits
+from ..trajectory._derive import pulse_rounding_limits, within_controller_stroke
 from ._realtime import wait_until
 from ._ridefile import Ride
 from ._signals import SignalGuard
@@ -184,7 +184,19 @@ class OutputStage:
         if not (isinstance(self.send_retries, int) and 0 <= self.send_retries <= 100):
             raise ConfigError(f"send_retries = {self.send_retries!r}; allowed: 0..100")
         self.dt_s = 1.0 / self.rate_hz
-        tight = pulse_rounding_limits(self.limits, self.platform, self.dt_s)
+        # plan within the controller's own stroke (MBOX Fn0C0...) even when the limits
+        # table was made for wider parameters: a frame beyond it is refused by the encoder,
+        # and a platform moving toward that end could not brake in time, park included
+        self.limits, narrowed = within_controller_stroke(
+            self.limits, self.platform, self.controller, self.rate_hz
+        )
+        if narrowed is not None:
+            self.notes.append(narrowed)
+        from ._generate import _with_park  # park on a stroke end (MBOX pulse 0) stays reachable
+
+        tight = _with_park(
+            pulse_rounding_limits(self.limits, self.platform, self.dt_s), self.limits, self.platform
+        )
         # a configured jerk limit needs the jerk-aware limiter (slower, still well inside a
         # frame); without one the acceleration-limited limiter is exact and cheaper
         limiter_cls = RealtimeLimiter if tight.j_max is None else JerkLimiter

@@ -10,6 +10,7 @@ Contents
 - :class:`ActuatorLimits` (``from_platform(platform, controller, ...)``, ``to_pulses_table``,
   ``to_json``): stroke, speed, acceleration, optional jerk per actuator, in SI;
   :func:`pulse_rounding_limits` tightens them by the rounding to whole pulses.
+  :func:`within_controller_stroke` keeps a table within the controller's own stroke.
 - :class:`RealtimeLimiter` / :class:`LimiterState`: causal, one frame at a time
   (``state = rt.initial_state(q0); q = rt.step(state, target)``; ``rt.run`` for a stream).
 - :func:`limit_ride` -> :class:`OptimisedRide`: offline casadi optimisation of a whole ride
@@ -21,7 +22,7 @@ Contents
   :func:`resume_path`, :func:`brake_to_rest` built on them and on the limiter.
 """
 
-from ._derive import limits_from_platform, pulse_rounding_limits
+from ._derive import limits_from_platform, pulse_rounding_limits, within_controller_stroke
 from ._jerk import JerkLimiter, JerkLimiterState
 from ._limits import ActuatorLimits, LimitCheck, check_trajectory, finite_differences
 from ._offline import OptimisedRide, limit_ride
@@ -66,4 +67,5 @@ __all__ = [
     "transition_q",
     "transition_through",
     "unpark_path",
+    "within_controller_stroke",
 ]

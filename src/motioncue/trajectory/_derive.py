@@ -33,6 +33,7 @@ A quantity with no source raises :class:`~motioncue.ConfigError` naming what to 
 from __future__ import annotations
 
 from collections.abc import Sequence
+from dataclasses import replace
 from typing import Any
 
 import numpy as np
@@ -40,7 +41,7 @@ import numpy as np
 from .._errors import ConfigError, LimitError
 from ._limits import ActuatorLimits
 
-__all__ = ["limits_from_platform", "pulse_rounding_limits"]
+__all__ = ["limits_from_platform", "pulse_rounding_limits", "within_controller_stroke"]
 
 
 def _per_axis(name: str, value: float | Sequence[float] | None, n: int) -> np.ndarray | None:
@@ -102,17 +103,7 @@ def limits_from_platform(
             raise ConfigError(f"{who}: catch_up_factor = {catch_up!r}; allowed: >= 1")
         pl = controller.pulse_limits(rate_hz)
         if pl.has_stroke:
-            pulses = np.stack([pl.stroke_lo, pl.stroke_hi])
-            finite = np.isfinite(pulses)
-            ends = np.asarray(
-                drives.from_pulses(np.where(finite, pulses, 0.0).round().astype(np.int64)),
-                dtype=float,
-            )
-            lo_si, hi_si = np.minimum(ends[0], ends[1]), np.maximum(ends[0], ends[1])
-            # an axis without a controller stroke keeps the platform's
-            has = finite[0] & finite[1]
-            q_min = np.where(has, np.maximum(q_min, lo_si), q_min)
-            q_max = np.where(has, np.minimum(q_max, hi_si), q_max)
+            q_min, q_max = _within_stroke(drives, pl, q_min, q_max)
             sources["stroke"] += f" within {pl.sources.get('stroke', who + ' stroke')}"
         if pl.has_speed:
             v_cands.append((pl.max_speed_pulses_s / ppu, pl.sources.get("v_max", who)))
@@ -197,6 +188,79 @@ def _check_drives(platform: Any, expect: Any, who: str) -> None:
                     f"{who}: lead {expect.lead_m * 1e3:g} mm ({expect.lead_source}) disagrees "
                     f"with platform {pname!r}'s lead {lead[i] * 1e3:g} mm on actuator {i + 1}"
                 )
+
+
+def _within_stroke(
+    drives: Any, pl: Any, q_min: np.ndarray, q_max: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
+    """``[q_min, q_max] (n,)`` (SI) intersected with the controller's stroke ``pl``
+    (:class:`PulseLimits`, pulses); an axis without a controller stroke keeps its own."""
+    pulses = np.stack([pl.stroke_lo, pl.stroke_hi])
+    finite = np.isfinite(pulses)
+    ends = np.asarray(
+        drives.from_pulses(np.where(finite, pulses, 0.0).round().astype(np.int64)),
+        dtype=float,
+    )
+    lo_si, hi_si = np.minimum(ends[0], ends[1]), np.maximum(ends[0], ends[1])
+    has = finite[0] & finite[1]
+    return (
+        np.where(has, np.maximum(q_min, lo_si), q_min),
+        np.where(has, np.minimum(q_max, hi_si), q_max),
+    )
+
+
+def within_controller_stroke(
+    limits: ActuatorLimits, platform: Any, controller: Any, rate_hz: float | None = None
+) -> tuple[ActuatorLimits, str | None]:
+    """``limits`` with their stroke kept within the controller's own (MBOX Fn0C0 x Fn0C1,
+    IMAX stroke_mm / PA40), as :func:`limits_from_platform` builds it.
+
+    A limits table made for other controller parameters (another file, a box whose Fn0C0
+    was changed since) may reach further than the controller accepts: the encoder refuses
+    such a frame, and a platform moving toward that end cannot then brake within the
+    controller's stroke, so even the park frames are refused. Planning within the narrower
+    stroke from the start keeps every frame, the park included, acceptable.
+
+    Returns
+    -------
+    limits : ActuatorLimits
+        ``limits`` itself when nothing changes, else a copy with ``q_min``, ``q_max`` (n,)
+        narrowed.
+    note : str or None
+        What was narrowed, in pulses, for the user; None when nothing was.
+
+    Raises
+    ------
+    LimitError
+        The two strokes do not overlap on some axis, or the park position is outside the
+        controller's stroke (nothing could be driven and parked there).
+    """
+    pulse_limits = getattr(controller, "pulse_limits", None)
+    if pulse_limits is None:
+        return limits, None
+    pl = pulse_limits(rate_hz)
+    if not pl.has_stroke:
+        return limits, None
+    q_min, q_max = _within_stroke(platform.drives, pl, limits.q_min, limits.q_max)
+    if np.array_equal(q_min, limits.q_min) and np.array_equal(q_max, limits.q_max):
+        return limits, None
+    name = getattr(controller, "name", "?")
+    where = pl.sources.get("stroke", f"controller {name} stroke")
+    park = np.asarray(platform.q_park, dtype=float)
+    if np.any(q_min >= q_max) or np.any(park < q_min) or np.any(park > q_max):
+        raise LimitError(
+            f"the controller's own stroke ({where}: [{pl.stroke_lo.tolist()}, "
+            f"{pl.stroke_hi.tolist()}] pulses) leaves no room for the limits table's stroke "
+            "and park; check the controller's parameters"
+        )
+    sources = dict(limits.sources)
+    sources["stroke"] = f"{sources.get('stroke', 'limits table')} within {where}"
+    narrowed = replace(limits, q_min=q_min, q_max=q_max, sources=sources)
+    note = (
+        f"limits: stroke kept within the controller's own ({where}), narrower than the "
+        "limits table's"
+    )
+    return narrowed, note
 
 
 def pulse_rounding_limits(limits: ActuatorLimits, platform: Any, dt_s: float) -> ActuatorLimits:
