@@ -114,6 +114,42 @@ def test_limits_kept_within_the_controllers_own_stroke(hexapod):
         within_controller_stroke(wide, low_park, narrow_box)
 
 
+def test_planning_limits_keep_park_reachable_on_a_stroke_end(hexapod):
+    """The rounding margin puts a park on the stroke end (MBOX pulse 0 with Fn0C0 set) half
+    a pulse outside the tightened stroke: planning_limits widens the stroke back to park, and
+    only to park; a park outside the real stroke stays outside."""
+    from motioncue.trajectory import (
+        planning_limits,
+        pulse_rounding_limits,
+        within_controller_stroke,
+    )
+
+    dt = 0.01
+    wide = ActuatorLimits.from_platform(hexapod, _mbox(), a_max=5.0)
+    on_end, _ = within_controller_stroke(wide, hexapod, _mbox(Fn0C0=600))
+    park = np.asarray(hexapod.q_park, dtype=float)
+    np.testing.assert_allclose(on_end.q_min, park, atol=1e-12)  # park is the stroke's end
+    rounded = pulse_rounding_limits(on_end, hexapod, dt)
+    assert np.all(park < rounded.q_min)  # half a pulse outside: the defect this guards
+    got = planning_limits(on_end, hexapod, dt)
+    np.testing.assert_array_equal(got.q_min, park)  # widened exactly to park
+    np.testing.assert_array_equal(got.q_max, rounded.q_max)
+    np.testing.assert_array_equal(got.v_max, rounded.v_max)
+    np.testing.assert_array_equal(got.a_max, rounded.a_max)
+    # park inside the tightened stroke: nothing to widen
+    inside = planning_limits(wide, hexapod, dt)
+    np.testing.assert_array_equal(inside.q_min, pulse_rounding_limits(wide, hexapod, dt).q_min)
+    # a real stroke that does not hold park: not widened
+    shifted = ActuatorLimits(
+        on_end.q_min + 0.001, on_end.q_max, on_end.v_max, on_end.a_max, on_end.j_max,
+        on_end.names, on_end.kinds, on_end.sources,
+    )  # fmt: skip
+    np.testing.assert_array_equal(
+        planning_limits(shifted, hexapod, dt).q_min,
+        pulse_rounding_limits(shifted, hexapod, dt).q_min,
+    )
+
+
 def test_catch_up_divides_speed_and_acceleration(hexapod):
     # MBOX 5.3.3: Fn012 = 1500 plays frames 1.5x as fast as stamped; the motor must still
     # keep 0.25 m/s and 4 m/s^2, so the host plans with 0.25/1.5 and 4/1.5^2

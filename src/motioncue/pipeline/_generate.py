@@ -16,7 +16,7 @@ from typing import Any
 import numpy as np
 
 from .._errors import LimitError
-from ..trajectory._derive import pulse_rounding_limits
+from ..trajectory._derive import planning_limits, pulse_rounding_limits
 from ._ridefile import Ride
 from ._verify import FrameCheck, check_frames
 
@@ -89,24 +89,6 @@ class GenerateReport:
     frame_check: FrameCheck
     stage_s: dict[str, float] = field(default_factory=dict)
     transition_fallbacks: tuple[str, ...] = ()
-
-
-def _with_park(tight: Any, limits: Any, platform: Any) -> Any:
-    """``tight`` with its stroke widened to hold the park position when the real ``limits``
-    hold it: park is the homed position, pulse 0, which rounding leaves exactly where it is,
-    and a controller stroke that starts at its origin (MBOX Fn0C0) puts it on the stroke end,
-    half a pulse outside the stroke tightened for rounding."""
-    from motioncue.trajectory import ActuatorLimits
-
-    park = np.asarray(platform.q_park, dtype=float)
-    if np.all((park >= tight.q_min) & (park <= tight.q_max)):
-        return tight
-    if not np.all((park >= limits.q_min - 1e-12) & (park <= limits.q_max + 1e-12)):
-        return tight  # outside the real stroke: the planning says so where it meets it
-    return ActuatorLimits(
-        np.minimum(tight.q_min, park), np.maximum(tight.q_max, park), tight.v_max,
-        tight.a_max, tight.j_max, tight.names, tight.kinds, tight.sources,
-    )  # fmt: skip
 
 
 def _finish(
@@ -197,7 +179,7 @@ def generate_ride(
     if limits is None:
         limits = ActuatorLimits.from_platform(platform, controller, rate_hz=rate_hz)
     table = limits.to_pulses_table(platform)
-    tight = _with_park(pulse_rounding_limits(limits, platform, dt), limits, platform)
+    tight = planning_limits(limits, platform, dt)
 
     step("resample", 0.0)
     rec = resample(recording, rate_hz)
@@ -230,7 +212,7 @@ def generate_ride(
     # planned one pulse rounding inside ``tight``: rounding the plan to whole pulses then
     # keeps every frame inside ``tight``, which is what the player's live limiter enforces, so
     # a ride at its limits is replayed frame for frame (no frame clamped on the way out)
-    planned = _with_park(pulse_rounding_limits(tight, platform, dt), limits, platform)
+    planned = planning_limits(tight, platform, dt, real=limits)
     opt, q, pulses, t_s, check = _finish(q_desired, platform, planned, table, dt)
     lap("actuator limits, pulses and check")
     n_in = len(ramp_in.poses) - 1
@@ -347,7 +329,7 @@ def generate_keyframe_ride(
     if limits is None:
         limits = ActuatorLimits.from_platform(platform, controller, rate_hz=rate_hz)
     table = limits.to_pulses_table(platform)
-    tight = _with_park(pulse_rounding_limits(limits, platform, dt), limits, platform)
+    tight = planning_limits(limits, platform, dt)
     poses = np.asarray(keyframes.poses, dtype=float)
     times = np.asarray(keyframes.t_s, dtype=float)
     park = np.asarray(platform.pose_park, dtype=float)

@@ -49,7 +49,7 @@ from .._errors import (
     MotioncueError,
     TransportError,
 )
-from ..trajectory._derive import pulse_rounding_limits, within_controller_stroke
+from ..trajectory._derive import planning_limits, within_controller_stroke
 from ._realtime import wait_until
 from ._ridefile import Ride
 from ._signals import SignalGuard
@@ -192,11 +192,8 @@ class OutputStage:
         )
         if narrowed is not None:
             self.notes.append(narrowed)
-        from ._generate import _with_park  # park on a stroke end (MBOX pulse 0) stays reachable
-
-        tight = _with_park(
-            pulse_rounding_limits(self.limits, self.platform, self.dt_s), self.limits, self.platform
-        )
+        # park on a stroke end (MBOX pulse 0) stays reachable
+        tight = planning_limits(self.limits, self.platform, self.dt_s)
         # a configured jerk limit needs the jerk-aware limiter (slower, still well inside a
         # frame); without one the acceleration-limited limiter is exact and cheaper
         limiter_cls = RealtimeLimiter if tight.j_max is None else JerkLimiter

@@ -22,7 +22,12 @@ Contents
   :func:`resume_path`, :func:`brake_to_rest` built on them and on the limiter.
 """
 
-from ._derive import limits_from_platform, pulse_rounding_limits, within_controller_stroke
+from ._derive import (
+    limits_from_platform,
+    planning_limits,
+    pulse_rounding_limits,
+    within_controller_stroke,
+)
 from ._jerk import JerkLimiter, JerkLimiterState
 from ._limits import ActuatorLimits, LimitCheck, check_trajectory, finite_differences
 from ._offline import OptimisedRide, limit_ride
@@ -59,6 +64,7 @@ __all__ = [
     "limit_ride",
     "limits_from_platform",
     "park_path",
+    "planning_limits",
     "plot_ride",
     "pulse_rounding_limits",
     "reachable",

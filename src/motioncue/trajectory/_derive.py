@@ -294,3 +294,31 @@ def pulse_rounding_limits(limits: ActuatorLimits, platform: Any, dt_s: float) ->
         limits.kinds,
         limits.sources,
     )
+
+
+def planning_limits(
+    limits: ActuatorLimits,
+    platform: Any,
+    dt_s: float,
+    *,
+    real: ActuatorLimits | None = None,
+) -> ActuatorLimits:
+    """:func:`pulse_rounding_limits` of ``limits``, its stroke widened to hold the park position
+    when the ``real`` limits (default ``limits``) hold it.
+
+    Park is the homed position, pulse 0, which rounding leaves exactly where it is; a
+    controller stroke that starts at its origin (MBOX Fn0C0) puts it on the stroke end, half a
+    pulse outside the stroke tightened for rounding. A park outside the real stroke is left
+    outside: the planning says so where it meets it.
+    """
+    real = limits if real is None else real
+    tight = pulse_rounding_limits(limits, platform, dt_s)
+    park = np.asarray(platform.q_park, dtype=float)
+    if np.all((park >= tight.q_min) & (park <= tight.q_max)):
+        return tight
+    if not np.all((park >= real.q_min - 1e-12) & (park <= real.q_max + 1e-12)):
+        return tight
+    return ActuatorLimits(
+        np.minimum(tight.q_min, park), np.maximum(tight.q_max, park), tight.v_max,
+        tight.a_max, tight.j_max, tight.names, tight.kinds, tight.sources,
+    )  # fmt: skip
