@@ -21,6 +21,7 @@ import os
 import socket
 import struct
 import sys
+import threading
 import time
 from typing import Any
 
@@ -360,3 +361,48 @@ def _bare_timer(seconds: float, period_s: float, busy: bool) -> float:
         if hog is not None:
             hog.join(10)
     return float(np.percentile(np.abs(np.diff(stamps) - period_s), 99) * 1e3)
+
+
+class UdpPeer:
+    """A UDP socket on 127.0.0.1 (any free port) read by a daemon thread: the shared body of
+    the tests' stand-in controllers (``test_liveness.FakeController``,
+    ``test_fault_injection.Sink``), which say in :meth:`on_datagram` what they keep and answer.
+
+    Parameters
+    ----------
+    bufsize : int
+        Largest datagram read (bytes); a longer one is truncated.
+    """
+
+    def __init__(self, bufsize: int = 4096) -> None:
+        self.sock = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
+        self.sock.setsockopt(socket.SOL_SOCKET, socket.SO_RCVBUF, 1 << 21)
+        self.sock.bind(("127.0.0.1", 0))
+        self.sock.settimeout(0.05)
+        self.port = int(self.sock.getsockname()[1])
+        self._bufsize = bufsize
+        self._stop = threading.Event()
+        self._thread = threading.Thread(target=self._run, daemon=True)
+        self._thread.start()
+
+    def on_datagram(self, now: float, data: bytes, peer: Any) -> bool:
+        """Handle one datagram received at ``now`` (``time.monotonic``, s) from ``peer``;
+        return False to stop reading."""
+        raise NotImplementedError
+
+    def _run(self) -> None:
+        while not self._stop.is_set():
+            try:
+                data, peer = self.sock.recvfrom(self._bufsize)
+            except TimeoutError:
+                continue
+            except OSError:
+                return
+            if not self.on_datagram(time.monotonic(), data, peer):
+                return
+
+    def close(self) -> None:
+        """Stop the reader (waits up to 1 s for it) and close the socket."""
+        self._stop.set()
+        self._thread.join(1.0)
+        self.sock.close()

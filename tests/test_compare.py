@@ -17,29 +17,15 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from _lapcsv import lap_excerpt as _short_recording
 from motioncue.cli import main
 from motioncue.cueing import load_cueing
 
 ROOT = Path(__file__).resolve().parents[1]
-LAP = ROOT / "configs" / "recordings" / "lap.csv"
 PLATFORM = "stewart6-linear"
 CONTROLLER = "mbox6"
 PRESETS = ("racing-hexapod", "racing", "cinema-seat-3dof")
 AXES = ("fx", "fy", "fz", "p", "q", "r")
-
-
-def _short_recording(path: Path, start: int, n: int) -> Path:
-    """``n`` samples of the bundled lap from sample ``start``, times from zero."""
-    with open(LAP, newline="") as fh:
-        rows = list(csv.reader(fh))
-    head, body = rows[0], rows[1 + start : 1 + start + n]
-    t0 = float(body[0][0])
-    with open(path, "w", newline="") as fh:
-        w = csv.writer(fh)
-        w.writerow(head)
-        for r in body:
-            w.writerow([f"{float(r[0]) - t0:.6f}", *r[1:]])
-    return path
 
 
 @pytest.fixture(scope="module")

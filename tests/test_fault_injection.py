@@ -28,7 +28,6 @@ import socket
 import struct
 import subprocess
 import sys
-import threading
 import time
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
@@ -38,6 +37,7 @@ from typing import Any
 import numpy as np
 import pytest
 
+import _loopback as lb
 from motioncue import LimitError
 from motioncue._config import config_dir
 from motioncue.cli import main
@@ -578,7 +578,7 @@ def test_a_platform_still_moving_is_refused(rig: Any) -> None:
 
 
 # -- the real CLI in a process, stopped by signals --------------------------------------------
-class Sink:
+class Sink(lb.UdpPeer):
     """A UDP socket standing for the controller: keeps every datagram and its arrival time,
     and answers each frame 0x1301 with 0x1302 as an SC-MBOX does (manual 4.2.8: the header
     with the reply's function code and Who fields 0, then the frame's data), so that the
@@ -586,31 +586,18 @@ class Sink:
     Register reads (the position query) go unanswered."""
 
     def __init__(self) -> None:
-        self.sock = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
-        self.sock.setsockopt(socket.SOL_SOCKET, socket.SO_RCVBUF, 1 << 21)
-        self.sock.bind(("127.0.0.1", 0))
-        self.sock.settimeout(0.05)
-        self.port = int(self.sock.getsockname()[1])
         self.got: list[tuple[float, bytes]] = []
-        self._stop = threading.Event()
-        self._thread = threading.Thread(target=self._run, daemon=True)
-        self._thread.start()
+        super().__init__(bufsize=2048)
 
-    def _run(self) -> None:
-        while not self._stop.is_set():
+    def on_datagram(self, now: float, data: bytes, peer: Any) -> bool:
+        self.got.append((now, data))
+        if len(data) > 12 and data[:2] == b"\x55\xaa" and data[4:6] == b"\x13\x01":
+            reply = data[:4] + b"\x13\x02" + data[6:8] + bytes(4) + data[12:]
             try:
-                data, peer = self.sock.recvfrom(2048)
-            except TimeoutError:
-                continue
+                self.sock.sendto(reply, peer)
             except OSError:
-                return
-            self.got.append((time.monotonic(), data))
-            if len(data) > 12 and data[:2] == b"\x55\xaa" and data[4:6] == b"\x13\x01":
-                reply = data[:4] + b"\x13\x02" + data[6:8] + bytes(4) + data[12:]
-                try:
-                    self.sock.sendto(reply, peer)
-                except OSError:
-                    return
+                return False
+        return True
 
     def moved(self, park: np.ndarray, pulses: int) -> bool:
         for _, d in self.got[-5:]:
@@ -619,11 +606,6 @@ class Sink:
                 if np.abs(p - park).max() > pulses:
                     return True
         return False
-
-    def close(self) -> None:
-        self._stop.set()
-        self._thread.join(1.0)
-        self.sock.close()
 
 
 @contextmanager

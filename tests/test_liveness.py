@@ -19,7 +19,6 @@ import socket
 import struct
 import subprocess
 import sys
-import threading
 import time
 from pathlib import Path
 from typing import Any
@@ -27,6 +26,7 @@ from typing import Any
 import numpy as np
 import pytest
 
+import _loopback as lb
 from motioncue._config import config_dir
 from motioncue.cueing import load_cueing
 from motioncue.kinematics import load_platform
@@ -113,62 +113,43 @@ def _silences_ms(err: str) -> list[int]:
     return [int(v) for v in re.findall(r"controller silent for (\d+) ms", err)]
 
 
-class FakeController:
+class FakeController(lb.UdpPeer):
     """A UDP socket answering as an SC-MBOX does (see the module docstring), whose answers
     can be switched: ``"all"`` (frames and register reads), ``"status"`` (register reads
     only) or ``"none"`` (silent; it still records what arrives)."""
 
     def __init__(self, answer: str = "all", silent_after_frames: int | None = None) -> None:
-        self.sock = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
-        self.sock.setsockopt(socket.SOL_SOCKET, socket.SO_RCVBUF, 1 << 21)
-        self.sock.bind(("127.0.0.1", 0))
-        self.sock.settimeout(0.05)
-        self.port = int(self.sock.getsockname()[1])
         self.answer = answer
         self.silent_after_frames = silent_after_frames
         self.silent_since: float | None = None
         self.frames: list[tuple[float, bytes]] = []
         self.reads: list[float] = []
-        self._stop = threading.Event()
-        self._thread = threading.Thread(target=self._run, daemon=True)
-        self._thread.start()
+        super().__init__(bufsize=4096)
 
-    def _run(self) -> None:
-        while not self._stop.is_set():
-            try:
-                data, peer = self.sock.recvfrom(4096)
-            except TimeoutError:
-                continue
-            except OSError:
-                return
-            now = time.monotonic()
-            if len(data) < HEAD.size:
-                continue
-            confirm, _pass, function, channel, _wa, _wr = HEAD.unpack_from(data)
-            if confirm != 0x55AA:
-                continue
-            if function == 0x1301:
-                self.frames.append((now, data))
-                n = self.silent_after_frames
-                if n is not None and len(self.frames) >= n and self.answer != "none":
-                    self.answer, self.silent_since = "none", now
-                if self.answer == "all":
-                    self.sock.sendto(HEAD.pack(0x55AA, 0, 0x1302, channel, 0, 0) + data[12:], peer)
-            elif function == 0x1101:
-                self.reads.append(now)
-                if self.answer in ("all", "status"):
-                    start, count = struct.unpack_from(">HH", data, 12)
-                    body = struct.pack(">HH", start, count) + bytes(2 * count)
-                    self.sock.sendto(HEAD.pack(0x55AA, 0, 0x1102, channel, 0, 0) + body, peer)
+    def on_datagram(self, now: float, data: bytes, peer: Any) -> bool:
+        if len(data) < HEAD.size:
+            return True
+        confirm, _pass, function, channel, _wa, _wr = HEAD.unpack_from(data)
+        if confirm != 0x55AA:
+            return True
+        if function == 0x1301:
+            self.frames.append((now, data))
+            n = self.silent_after_frames
+            if n is not None and len(self.frames) >= n and self.answer != "none":
+                self.answer, self.silent_since = "none", now
+            if self.answer == "all":
+                self.sock.sendto(HEAD.pack(0x55AA, 0, 0x1302, channel, 0, 0) + data[12:], peer)
+        elif function == 0x1101:
+            self.reads.append(now)
+            if self.answer in ("all", "status"):
+                start, count = struct.unpack_from(">HH", data, 12)
+                body = struct.pack(">HH", start, count) + bytes(2 * count)
+                self.sock.sendto(HEAD.pack(0x55AA, 0, 0x1102, channel, 0, 0) + body, peer)
+        return True
 
     def frames_after_silence(self) -> int:
         t = self.silent_since
         return 0 if t is None else sum(1 for at, _ in self.frames if at >= t)
-
-    def close(self) -> None:
-        self._stop.set()
-        self._thread.join(1.0)
-        self.sock.close()
 
 
 # -- item 1: a lost controller ----------------------------------------------------------------

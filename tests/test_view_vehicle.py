@@ -3,7 +3,6 @@ the rider's, on the ride's clock (checked against the recording filtered indepen
 
 from __future__ import annotations
 
-import csv
 import json
 import re
 from pathlib import Path
@@ -11,27 +10,13 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from _lapcsv import lap_excerpt as _excerpt
 from motioncue import ConfigError
 from motioncue.cli import main
 from motioncue.cueing import GRAVITY_M_S2, get_model_set
 from motioncue.pipeline import load_ride
 from motioncue.telemetry._recording import read_recording_csv, resample
 from motioncue.viewer import load_view_input, view_html
-
-LAP = Path(__file__).resolve().parents[1] / "configs" / "recordings" / "lap.csv"
-
-
-def _excerpt(path: Path, start: int, n: int) -> Path:
-    with open(LAP, newline="") as fh:
-        rows = list(csv.reader(fh))
-    head, body = rows[0], rows[1 + start : 1 + start + n]
-    t0 = float(body[0][0])
-    with open(path, "w", newline="") as fh:
-        w = csv.writer(fh)
-        w.writerow(head)
-        for r in body:
-            w.writerow([f"{float(r[0]) - t0:.6f}", *r[1:]])
-    return path
 
 
 def test_view_draws_the_vehicle_beside_the_rider(tmp_path: Path) -> None:

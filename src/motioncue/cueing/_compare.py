@@ -66,6 +66,26 @@ def _unit_tag(i: int) -> str:
     return "m_s2" if i < 3 else "deg_s"
 
 
+def _event_notes(key: str, event: str, per_axis: str) -> dict[str, str]:
+    """Notes of one cue-event family's columns: ``{key}_s_{axis}`` per axis, then
+    ``{key}_s_any`` and ``{key}_pct_any``.
+
+    Parameters
+    ----------
+    key : str
+        Column stem (``"false_cue"``).
+    event : str
+        The event with its article (``"a false cue"``).
+    per_axis : str
+        Note of the per-axis column, ``{a}`` standing for the axis name.
+    """
+    return {
+        **{f"{key}_s_{a}": per_axis.format(a=a) for a in COMPARE_AXES},
+        f"{key}_s_any": f"time (s) with {event} on at least one of the six channels",
+        f"{key}_pct_any": f"{key}_s_any as % of duration_s",
+    }
+
+
 COLUMN_NOTES: dict[str, str] = {
     "recording": "the input recording (file name)",
     "preset": "the cueing preset",
@@ -87,20 +107,18 @@ COLUMN_NOTES: dict[str, str] = {
         f"vehicle {_WHAT[i]} ({_UNIT[i]})"
         for i, a in enumerate(COMPARE_AXES)
     },
-    **{
-        f"false_cue_s_{a}": f"time (s) with |perceived simulator {a}| above its threshold and "
-        "of the opposite sign to the vehicle's (a cue in the wrong direction)"
-        for a in COMPARE_AXES
-    },
-    "false_cue_s_any": "time (s) with a false cue on at least one of the six channels",
-    "false_cue_pct_any": "false_cue_s_any as % of duration_s",
-    **{
-        f"missed_cue_s_{a}": f"time (s) with |perceived vehicle {a}| above its threshold and "
-        "|perceived simulator| at or below it (a cue the rider does not get)"
-        for a in COMPARE_AXES
-    },
-    "missed_cue_s_any": "time (s) with a missed cue on at least one of the six channels",
-    "missed_cue_pct_any": "missed_cue_s_any as % of duration_s",
+    **_event_notes(
+        "false_cue",
+        "a false cue",
+        "time (s) with |perceived simulator {a}| above its threshold and "
+        "of the opposite sign to the vehicle's (a cue in the wrong direction)",
+    ),
+    **_event_notes(
+        "missed_cue",
+        "a missed cue",
+        "time (s) with |perceived vehicle {a}| above its threshold and "
+        "|perceived simulator| at or below it (a cue the rider does not get)",
+    ),
     **{
         f"share_{a}": f"rendered share of the {_WHAT[i]}: rms(perceived simulator) / "
         "rms(perceived vehicle) (1 = full size, 0 = nothing; empty/null when the vehicle's "
@@ -112,20 +130,18 @@ COLUMN_NOTES: dict[str, str] = {
         "perceived vehicle, sum(sim veh) / sum(veh veh) (the in-phase share)"
         for i, a in enumerate(COMPARE_AXES)
     },
-    **{
-        f"reversal_s_{a}": f"time (s) with both |perceived vehicle {a}| and |perceived "
-        "simulator| above the threshold and of opposite signs (a reversal)"
-        for a in COMPARE_AXES
-    },
-    "reversal_s_any": "time (s) with a reversal on at least one of the six channels",
-    "reversal_pct_any": "reversal_s_any as % of duration_s",
-    **{
-        f"spurious_s_{a}": f"time (s) with |perceived simulator {a}| above the threshold "
-        "and |perceived vehicle| at or below it (a cue the vehicle does not give, either sign)"
-        for a in COMPARE_AXES
-    },
-    "spurious_s_any": "time (s) with a spurious cue on at least one of the six channels",
-    "spurious_pct_any": "spurious_s_any as % of duration_s",
+    **_event_notes(
+        "reversal",
+        "a reversal",
+        "time (s) with both |perceived vehicle {a}| and |perceived "
+        "simulator| above the threshold and of opposite signs (a reversal)",
+    ),
+    **_event_notes(
+        "spurious",
+        "a spurious cue",
+        "time (s) with |perceived simulator {a}| above the threshold "
+        "and |perceived vehicle| at or below it (a cue the vehicle does not give, either sign)",
+    ),
     "clamped_pct": "% of the cue poses outside the platform's workspace (incl. the "
     "controller's stroke and pulse rounding), scaled back towards neutral",
     "actuator_limited_pct": "% of frames changed by the actuator speed/acceleration/jerk "
