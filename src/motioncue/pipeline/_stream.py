@@ -38,7 +38,7 @@ import operator
 import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
-from typing import Any
+from typing import Any, Literal
 
 import numpy as np
 
@@ -164,7 +164,7 @@ class OutputStage:
     transport: Any
     q_start: Any = None
     send_retries: int = 3
-    silence_s: Any = "link"
+    silence_s: float | Literal["link"] | None = "link"
     frames: int = 0
     clamped_frames: int = 0
     send_errors: int = 0
@@ -213,10 +213,10 @@ class OutputStage:
         from motioncue.output._feedback import LinkWatch
         from motioncue.output._transports_udp import UdpTransport
 
-        silence = self.silence_s
-        if silence == "link":
-            silence = getattr(self.transport, "silence_s", None)
-        if silence is None or not isinstance(self.transport, UdpTransport):
+        if not isinstance(self.transport, UdpTransport):
+            return None
+        silence = self.transport.silence_s if self.silence_s == "link" else self.silence_s
+        if silence is None:
             return None
         if not getattr(self.controller, "replies_to_frames", False) and (
             getattr(self.controller, "position_query", lambda: None)() is None
