@@ -34,12 +34,16 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import replace
-from typing import Any
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from .._errors import ConfigError, LimitError
 from ._limits import ActuatorLimits
+
+if TYPE_CHECKING:
+    from ..kinematics import Drive, Platform
+    from ..output import Controller, DriveExpectations, PulseLimits
 
 __all__ = ["limits_from_platform", "pulse_rounding_limits", "within_controller_stroke"]
 
@@ -56,8 +60,8 @@ def _per_axis(name: str, value: float | Sequence[float] | None, n: int) -> np.nd
 
 
 def limits_from_platform(
-    platform: Any,
-    controller: Any = None,
+    platform: Platform,
+    controller: Controller | None = None,
     *,
     stroke_margin: float | Sequence[float] | None = None,
     v_max: float | Sequence[float] | None = None,
@@ -165,7 +169,7 @@ def limits_from_platform(
     return ActuatorLimits(q_min, q_max, v, a, j, tuple(platform.actuator_names), kinds, sources)
 
 
-def _check_drives(platform: Any, expect: Any, who: str) -> None:
+def _check_drives(platform: Platform, expect: DriveExpectations, who: str) -> None:
     """Refuse a platform drive that disagrees with what the controller's parameters say."""
     drives = platform.drives
     kinds = tuple(platform.actuator_kinds)
@@ -191,7 +195,7 @@ def _check_drives(platform: Any, expect: Any, who: str) -> None:
 
 
 def _within_stroke(
-    drives: Any, pl: Any, q_min: np.ndarray, q_max: np.ndarray
+    drives: Drive, pl: PulseLimits, q_min: np.ndarray, q_max: np.ndarray
 ) -> tuple[np.ndarray, np.ndarray]:
     """``[q_min, q_max] (n,)`` (SI) intersected with the controller's stroke ``pl``
     (:class:`PulseLimits`, pulses); an axis without a controller stroke keeps its own."""
@@ -210,7 +214,7 @@ def _within_stroke(
 
 
 def within_controller_stroke(
-    limits: ActuatorLimits, platform: Any, controller: Any, rate_hz: float | None = None
+    limits: ActuatorLimits, platform: Platform, controller: Controller, rate_hz: float | None = None
 ) -> tuple[ActuatorLimits, str | None]:
     """``limits`` with their stroke kept within the controller's own (MBOX Fn0C0 x Fn0C1,
     IMAX stroke_mm / PA40), as :func:`limits_from_platform` builds it.
@@ -263,7 +267,9 @@ def within_controller_stroke(
     return narrowed, note
 
 
-def pulse_rounding_limits(limits: ActuatorLimits, platform: Any, dt_s: float) -> ActuatorLimits:
+def pulse_rounding_limits(
+    limits: ActuatorLimits, platform: Platform, dt_s: float
+) -> ActuatorLimits:
     """Limits tightened so that rounding to whole pulses cannot push a frame past them.
 
     Rounding moves each frame by at most half a pulse, so a speed by at most ``1 / dt`` and a
@@ -298,7 +304,7 @@ def pulse_rounding_limits(limits: ActuatorLimits, platform: Any, dt_s: float) ->
 
 def planning_limits(
     limits: ActuatorLimits,
-    platform: Any,
+    platform: Platform,
     dt_s: float,
     *,
     real: ActuatorLimits | None = None,

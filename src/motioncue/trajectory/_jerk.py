@@ -39,7 +39,7 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass, field
-from typing import Any
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -47,6 +47,9 @@ from .._errors import ConfigError, LimitError
 from ._brake import brake_bound, stops_within
 from ._limits import ActuatorLimits
 from ._realtime import _vcap
+
+if TYPE_CHECKING:
+    from numpy.typing import ArrayLike
 
 __all__ = ["JerkLimiter", "JerkLimiterState"]
 
@@ -219,7 +222,9 @@ class JerkLimiter:
         return stops_within(q, v, a, lo, hi, vmax, amax, jdt, half_inv_j, abig, jmax, dt)
 
     # ------------------------------------------------------------------ states
-    def is_admissible(self, q: Any, v: Any = None, a: Any = None) -> bool:
+    def is_admissible(
+        self, q: ArrayLike, v: ArrayLike | None = None, a: ArrayLike | None = None
+    ) -> bool:
         """Whether ``(q, v, a)`` (each (n,)) is admissible (module docstring)."""
         n = self.n_actuators
         qa = np.asarray(q, dtype=float).reshape(-1)
@@ -243,7 +248,9 @@ class JerkLimiter:
                 return False
         return True
 
-    def initial_state(self, q0: Any, v0: Any = None, a0: Any = None) -> JerkLimiterState:
+    def initial_state(
+        self, q0: ArrayLike, v0: ArrayLike | None = None, a0: ArrayLike | None = None
+    ) -> JerkLimiterState:
         """State after a last frame ``q0`` moving at ``v0`` with acceleration ``a0`` (n,).
 
         Raises
@@ -352,7 +359,7 @@ class JerkLimiter:
             state.n_clamped += 1
         return out
 
-    def run(self, state: JerkLimiterState, q_targets: Any) -> np.ndarray:
+    def run(self, state: JerkLimiterState, q_targets: ArrayLike) -> np.ndarray:
         """Step through targets (N, n); returns the frames (N, n) (same as :meth:`step`)."""
         targets = np.asarray(q_targets, dtype=float)
         if targets.ndim != 2 or targets.shape[1] != self.n_actuators:

@@ -16,16 +16,22 @@ from __future__ import annotations
 import json
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from .._errors import ConfigError
 
+if TYPE_CHECKING:
+    from numpy.typing import ArrayLike
+
+    from ..kinematics import Platform
+    from ..output import Controller
+
 __all__ = ["ActuatorLimits", "LimitCheck", "check_trajectory", "finite_differences"]
 
 
-def _vec(name: str, value: Any, n: int | None) -> np.ndarray:
+def _vec(name: str, value: ArrayLike, n: int | None) -> np.ndarray:
     arr = np.array(value, dtype=float).reshape(-1)
     if n is not None and arr.shape != (n,):
         raise ConfigError(f"{name} has {arr.size} values; expected {n} (one per actuator)")
@@ -136,7 +142,7 @@ class ActuatorLimits:
             self.sources,
         )  # fmt: skip
 
-    def contains(self, q: Any) -> np.ndarray:
+    def contains(self, q: ArrayLike) -> np.ndarray:
         """Whether positions ``q`` (..., n) are inside the stroke, per frame (...)."""
         q = np.asarray(q, dtype=float)
         with np.errstate(invalid="ignore"):
@@ -146,8 +152,8 @@ class ActuatorLimits:
     @classmethod
     def from_platform(
         cls,
-        platform: Any,
-        controller: Any = None,
+        platform: Platform,
+        controller: Controller | None = None,
         *,
         stroke_margin: float | Sequence[float] | None = None,
         v_max: float | Sequence[float] | None = None,
@@ -189,7 +195,7 @@ class ActuatorLimits:
         out["sources"] = dict(self.sources)
         return out
 
-    def to_pulses_table(self, platform: Any) -> list[dict[str, Any]]:
+    def to_pulses_table(self, platform: Platform) -> list[dict[str, Any]]:
         """Per actuator (controller order) the limits in drive pulses.
 
         Keys: ``name``, ``pulses_per_unit``, ``stroke_pulses`` ``[min, max]`` (the pulse
@@ -225,7 +231,7 @@ class ActuatorLimits:
             )
         return rows
 
-    def to_json(self, platform: Any = None) -> str:
+    def to_json(self, platform: Platform | None = None) -> str:
         """JSON of :meth:`to_dict`; with a platform each actuator entry also carries the
         pulse keys of :meth:`to_pulses_table` (``stroke_pulses``, ``max_speed_pulses_s``,
         ``max_accel_pulses_s2``, ...)."""
@@ -236,14 +242,14 @@ class ActuatorLimits:
         return json.dumps(data, indent=2)
 
 
-def _pulse_origin(platform: Any, i: int) -> float:
+def _pulse_origin(platform: Platform, i: int) -> float:
     """Actuator position at pulse 0 (the homed position) of actuator i."""
     n = len(np.asarray(platform.drives.pulses_per_unit).reshape(-1))
     zero = np.zeros(n, dtype=np.int64)
     return float(np.asarray(platform.drives.from_pulses(zero), dtype=float).reshape(-1)[i])
 
 
-def _inside(platform: Any, lim: ActuatorLimits, i: int, lo: int, hi: int) -> tuple[int, int]:
+def _inside(platform: Platform, lim: ActuatorLimits, i: int, lo: int, hi: int) -> tuple[int, int]:
     """Step the pulse range inwards until both ends map back inside the SI stroke."""
     n = lim.n_actuators
     for _ in range(4):
@@ -258,7 +264,7 @@ def _inside(platform: Any, lim: ActuatorLimits, i: int, lo: int, hi: int) -> tup
 
 
 def finite_differences(
-    q: Any, dt_s: float, history: Any = None
+    q: ArrayLike, dt_s: float, history: ArrayLike | None = None
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Speed, acceleration and jerk of frames ``q`` (N, n) by the module's definitions.
 
@@ -298,11 +304,11 @@ class LimitCheck:
 
 
 def check_trajectory(
-    q: Any,
+    q: ArrayLike,
     dt_s: float,
     limits: ActuatorLimits,
     *,
-    history: Any = None,
+    history: ArrayLike | None = None,
     tol: float = 1e-9,
     relative: bool = True,
 ) -> LimitCheck:

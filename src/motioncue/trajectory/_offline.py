@@ -44,7 +44,7 @@ from __future__ import annotations
 import math
 import time
 from dataclasses import dataclass
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -53,6 +53,9 @@ from ._jerk import JerkLimiter
 from ._limits import ActuatorLimits, LimitCheck, check_trajectory
 from ._realtime import RealtimeLimiter
 from ._ride_qp import ConicChunkSolver
+
+if TYPE_CHECKING:
+    from numpy.typing import ArrayLike
 
 __all__ = ["OptimisedRide", "limit_ride"]
 
@@ -235,13 +238,13 @@ def _windows(bad: np.ndarray, pad: int, n_frames: int) -> list[tuple[int, int]]:
 
 
 def limit_ride(
-    q_desired: Any,
+    q_desired: ArrayLike,
     dt_s: float,
     limits: ActuatorLimits,
     *,
-    weights: Any = None,
-    q0: Any = None,
-    v0: Any = None,
+    weights: ArrayLike | None = None,
+    q0: ArrayLike | None = None,
+    v0: ArrayLike | None = None,
     pad_s: float = 1.0,
     chunk: int = 1024,
 ) -> OptimisedRide:
@@ -275,13 +278,13 @@ def limit_ride(
 
 
 def _limit_ride(
-    q_desired: Any,
+    q_desired: ArrayLike,
     dt_s: float,
     limits: ActuatorLimits,
     *,
-    weights: Any = None,
-    q0: Any = None,
-    v0: Any = None,
+    weights: ArrayLike | None = None,
+    q0: ArrayLike | None = None,
+    v0: ArrayLike | None = None,
     pad_s: float = 1.0,
     chunk: int = 1024,
     backend: str = "qp",
@@ -315,7 +318,7 @@ def _limit_ride(
     rt = RealtimeLimiter(limits.without_jerk(), dt_s)
     # the real-time baseline: with a jerk limit, the jerk-limited limiter (so it competes
     # on equal terms); the exact repair pass uses the second-order limiter in both cases
-    baseline: Any = rt if limits.j_max is None else JerkLimiter(limits, dt_s)
+    jl = None if limits.j_max is None else JerkLimiter(limits, dt_s)
     if q0 is None:
         first = np.array(
             [qd[np.argmax(finite[:, i]), i] if finite[:, i].any() else np.nan for i in range(n)]
@@ -325,8 +328,13 @@ def _limit_ride(
     q0 = np.asarray(q0, dtype=float).reshape(n)
     v0 = np.zeros(n) if v0 is None else np.asarray(v0, dtype=float).reshape(n)
     hist = np.stack([q0 - 2 * v0 * dt_s, q0 - v0 * dt_s, q0])  # oldest first, 3 frames
-    state = baseline.initial_state(q0, v0)  # raises if the state is not admissible
-    q_rt = baseline.run(state, qd)
+    # the baseline's initial state raises if the state is not admissible
+    if jl is None:
+        rt_state = rt.initial_state(q0, v0)
+        q_rt, n_clamped = rt.run(rt_state, qd), rt_state.n_clamped
+    else:
+        jl_state = jl.initial_state(q0, v0)
+        q_rt, n_clamped = jl.run(jl_state, qd), jl_state.n_clamped
     obj_rt = float(np.sum(w * np.where(finite, q_rt - qd, 0.0) ** 2))
 
     def result(
@@ -353,7 +361,7 @@ def _limit_ride(
         )
 
     bad = _bad_frames(qd, dt_s, limits, hist)
-    if not bad.any() and state.n_clamped == 0:
+    if not bad.any() and n_clamped == 0:
         return result(qd.copy(), "unchanged", 0, 0)
 
     # ------------------------------------------------------------ windows per actuator

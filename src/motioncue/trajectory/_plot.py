@@ -3,23 +3,26 @@
 from __future__ import annotations
 
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from ._limits import ActuatorLimits, finite_differences
 
+if TYPE_CHECKING:
+    from numpy.typing import ArrayLike
+
 __all__ = ["plot_ride"]
 
 
 def plot_ride(
-    q_desired: Any,
-    q_limited: Any,
+    q_desired: ArrayLike,
+    q_limited: ArrayLike,
     dt_s: float,
     limits: ActuatorLimits,
     path: str | Path,
     *,
-    q_realtime: Any = None,
+    q_realtime: ArrayLike | None = None,
     title: str = "",
 ) -> Path:
     """Write a PNG: per actuator, position (desired, limited, optional real-time limiter)

@@ -42,12 +42,15 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass, field
-from typing import Any
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from .._errors import ConfigError, LimitError
 from ._limits import ActuatorLimits
+
+if TYPE_CHECKING:
+    from numpy.typing import ArrayLike
 
 __all__ = ["LimiterState", "RealtimeLimiter", "braking_distance", "braking_speed_cap"]
 
@@ -199,7 +202,7 @@ class RealtimeLimiter:
         return self.limits.n_actuators
 
     # ------------------------------------------------------------------ states
-    def is_admissible(self, q: Any, v: Any = None) -> bool:
+    def is_admissible(self, q: ArrayLike, v: ArrayLike | None = None) -> bool:
         """Whether ``(q, v)`` is a state from which the limits can always be kept.
 
         Rounding slack: 1e-9 (SI) on positions and stopping points (float round-off in
@@ -226,7 +229,7 @@ class RealtimeLimiter:
                 return False
         return True
 
-    def initial_state(self, q0: Any, v0: Any = None) -> LimiterState:
+    def initial_state(self, q0: ArrayLike, v0: ArrayLike | None = None) -> LimiterState:
         """State for a stream whose last sent frame is ``q0`` (n,) moving at ``v0`` (n,).
 
         ``v0`` may be a scalar (same speed on every axis; default 0, at rest).
@@ -325,7 +328,7 @@ class RealtimeLimiter:
             state.n_clamped += 1
         return out
 
-    def run(self, state: LimiterState, q_targets: Any) -> np.ndarray:
+    def run(self, state: LimiterState, q_targets: ArrayLike) -> np.ndarray:
         """Step through a whole stream of targets (N, n); returns the frames (N, n).
 
         Same numbers as calling :meth:`step` frame by frame (it does exactly that).

@@ -22,9 +22,12 @@ a general nonlinear solver.
 
 from __future__ import annotations
 
-from typing import Any
+from typing import TYPE_CHECKING
 
 import numpy as np
+
+if TYPE_CHECKING:
+    from scipy.sparse import csc_matrix
 
 __all__ = ["PIQP_OPTIONS", "PIQP_OPTIONS_LOOSE", "ConicChunkSolver", "difference_rows"]
 
@@ -32,7 +35,7 @@ _COEF = {1: (1.0, -1.0), 2: (1.0, -2.0, 1.0), 3: (1.0, -3.0, 3.0, -1.0)}
 
 # PIQP tolerances (scaled units, where the acceleration bound is 1): far inside the solver's
 # limit tightening (1e-7 relative), so the exact repair pass normally changes nothing
-PIQP_OPTIONS: dict[str, Any] = {
+PIQP_OPTIONS: dict[str, float | bool] = {
     "eps_abs": 1e-10,
     "eps_rel": 1e-12,
     "eps_duality_gap_abs": 1e-10,
@@ -43,7 +46,7 @@ PIQP_OPTIONS: dict[str, Any] = {
 # PIQP's own default tolerances: the second attempt for a window whose numbers are so large
 # (short frame periods make the scaled positions large) that the tight ones are below
 # round-off and the solver stops at its iteration limit
-PIQP_OPTIONS_LOOSE: dict[str, Any] = {
+PIQP_OPTIONS_LOOSE: dict[str, float | bool] = {
     **PIQP_OPTIONS,
     "eps_abs": 1e-8,
     "eps_rel": 1e-9,
@@ -52,7 +55,7 @@ PIQP_OPTIONS_LOOSE: dict[str, Any] = {
 }
 
 
-def difference_rows(length: int, jerk: bool, tail: bool) -> tuple[Any, np.ndarray]:
+def difference_rows(length: int, jerk: bool, tail: bool) -> tuple[csc_matrix, np.ndarray]:
     """Difference rows over the stacked frames ``[hist (h), x (length), tail (h)]``.
 
     Parameters

@@ -39,15 +39,26 @@ from __future__ import annotations
 import itertools
 import logging
 import math
+from collections.abc import Callable
 from dataclasses import dataclass
-from typing import Any
+from typing import TYPE_CHECKING, cast, overload
 
 import numpy as np
 
 from .._errors import ConfigError, LimitError
-from ._jerk import JerkLimiter
+from ._jerk import JerkLimiter, JerkLimiterState
 from ._limits import ActuatorLimits, LimitCheck, check_trajectory
-from ._realtime import RealtimeLimiter
+from ._realtime import LimiterState, RealtimeLimiter
+
+if TYPE_CHECKING:
+    from numpy.typing import ArrayLike
+
+    from ..kinematics import Platform
+
+PathFn = Callable[[np.ndarray], np.ndarray]
+"""A path: parameter values ``s`` (...) in [0, 1] -> positions (..., n) or poses (..., 6)."""
+PoseOfQ = Callable[[np.ndarray, np.ndarray | None], np.ndarray]
+"""Forward kinematics: positions (n,) and a pose guess (6,) or None -> pose (6,)."""
 
 __all__ = [
     "Transition",
@@ -102,7 +113,7 @@ class Transition:
         return int(self.t_s.size)
 
 
-def _pose_path(poses: np.ndarray) -> Any:
+def _pose_path(poses: np.ndarray) -> PathFn:
     """Callable s -> pose (.., 6) through the keyframes, s in [0, 1]."""
     from scipy.interpolate import CubicSpline
 
@@ -179,12 +190,12 @@ def _check(q: np.ndarray, rate_hz: float, limits: ActuatorLimits) -> LimitCheck:
 
 
 def _run(
-    q_of_s: Any,
-    pose_of_s: Any,
+    q_of_s: PathFn,
+    pose_of_s: PathFn,
     limits: ActuatorLimits,
     rate_hz: float,
     n_grid: int,
-    pose_of_q: Any = None,
+    pose_of_q: PoseOfQ | None = None,
     knots_q: np.ndarray | None = None,
     knots_pose: np.ndarray | None = None,
 ) -> Transition:
@@ -241,16 +252,19 @@ def _run(
 def _s_profile(limits_1d: ActuatorLimits, dt: float) -> np.ndarray:
     """Frames of a path parameter s from 0 to 1, rest to rest, within ``limits_1d`` (one
     axis, stroke [0, 1]): the discrete limiter chasing a target held at 1."""
-    limiter: Any
+    state: LimiterState | JerkLimiterState
+    step: Callable[[], list[float]]
     if limits_1d.j_max is None:
-        limiter = RealtimeLimiter(limits_1d, dt)
-        state: Any = limiter.initial_state([0.0])
+        rt = RealtimeLimiter(limits_1d, dt)
+        state = rt_state = rt.initial_state([0.0])
+        step = lambda: rt.step(rt_state, [1.0])  # noqa: E731
     else:
-        limiter = JerkLimiter(limits_1d, dt)
-        state = limiter.initial_state([0.0])
+        jl = JerkLimiter(limits_1d, dt)
+        state = jl_state = jl.initial_state([0.0])
+        step = lambda: jl.step(jl_state, [1.0])  # noqa: E731
     out = [0.0]
     for _ in range(_MAX_SETTLE_FRAMES):
-        out.append(limiter.step(state, [1.0])[0])
+        out.append(step()[0])
         at_rest = not any(state.v) and not any(getattr(state, "a", [0.0]))
         if state.q[0] == 1.0 and at_rest:
             return np.asarray(out)
@@ -261,7 +275,7 @@ def _line_fallback(
     knots: np.ndarray,
     limits: ActuatorLimits,
     rate_hz: float,
-    pose_of_q: Any,
+    pose_of_q: PoseOfQ | None,
     why: str,
     knots_pose: np.ndarray | None = None,
 ) -> Transition:
@@ -337,7 +351,7 @@ def _check_full(q: np.ndarray, rate_hz: float, limits: ActuatorLimits) -> LimitC
 
 
 def _jerk_smooth(
-    tr: Transition, limits: ActuatorLimits, rate_hz: float, pose_of_q: Any
+    tr: Transition, limits: ActuatorLimits, rate_hz: float, pose_of_q: PoseOfQ | None
 ) -> Transition:
     """Pass a toppra transition through the :class:`JerkLimiter` from rest and let it
     settle on the end position at rest (toppra knows no jerk limit)."""
@@ -379,9 +393,9 @@ def _jerk_smooth(
 
 
 def transition(
-    platform: Any,
-    pose_from: Any,
-    pose_to: Any,
+    platform: Platform,
+    pose_from: ArrayLike,
+    pose_to: ArrayLike,
     limits: ActuatorLimits,
     rate_hz: float,
     *,
@@ -400,7 +414,12 @@ def transition(
 
 
 def transition_through(
-    platform: Any, keyframes: Any, limits: ActuatorLimits, rate_hz: float, *, n_grid: int = 100
+    platform: Platform,
+    keyframes: ArrayLike,
+    limits: ActuatorLimits,
+    rate_hz: float,
+    *,
+    n_grid: int = 100,
 ) -> Transition:
     """Fastest move through keyframe poses (K, 6), K >= 2, timing free, rest at both ends.
 
@@ -441,7 +460,7 @@ def transition_through(
 
 
 def transition_q(
-    q_from: Any, q_to: Any, limits: ActuatorLimits, rate_hz: float, *, n_grid: int = 100
+    q_from: ArrayLike, q_to: ArrayLike, limits: ActuatorLimits, rate_hz: float, *, n_grid: int = 100
 ) -> Transition:
     """Fastest straight-line move in actuator space between two positions (n,), at rest."""
     a = np.asarray(q_from, dtype=float).reshape(-1)
@@ -458,7 +477,7 @@ def transition_q(
     return _run(q_of_s, pose_of_s, limits, rate_hz, n_grid)
 
 
-def _pose6(name: str, pose: Any) -> np.ndarray:
+def _pose6(name: str, pose: ArrayLike) -> np.ndarray:
     arr = np.asarray(pose, dtype=float).reshape(-1)
     if arr.shape != (6,) or not np.all(np.isfinite(arr)):
         raise ConfigError(f"{name} = {arr.tolist()} is invalid; allowed: 6 finite numbers")
@@ -466,7 +485,19 @@ def _pose6(name: str, pose: Any) -> np.ndarray:
 
 
 # ------------------------------------------------------------------------ park / unpark
-def brake_to_rest(limiter: Any, state: Any, max_frames: int = 100000) -> np.ndarray:
+@overload
+def brake_to_rest(
+    limiter: RealtimeLimiter, state: LimiterState, max_frames: int = 100000
+) -> np.ndarray: ...
+@overload
+def brake_to_rest(
+    limiter: JerkLimiter, state: JerkLimiterState, max_frames: int = 100000
+) -> np.ndarray: ...
+def brake_to_rest(
+    limiter: RealtimeLimiter | JerkLimiter,
+    state: LimiterState | JerkLimiterState,
+    max_frames: int = 100000,
+) -> np.ndarray:
     """Frames (M, n) that bring a moving limiter state to rest as fast as the limits allow.
 
     :class:`RealtimeLimiter`: each axis heads for its own stopping point ``q + D(v)`` (the
@@ -480,9 +511,11 @@ def brake_to_rest(limiter: Any, state: Any, max_frames: int = 100000) -> np.ndar
     lim = limiter.limits
     frames: list[list[float]] = []
     if isinstance(limiter, JerkLimiter):
-        while (any(state.v) or any(state.a)) and len(frames) < max_frames:
-            frames.append(limiter.step(state, list(state.q)))
+        jstate = cast(JerkLimiterState, state)
+        while (any(jstate.v) or any(jstate.a)) and len(frames) < max_frames:
+            frames.append(limiter.step(jstate, list(jstate.q)))
     else:
+        state = cast(LimiterState, state)
         target = [
             q + math.copysign(braking_distance(v, float(lim.a_max[i]), limiter.dt_s), v)
             for i, (q, v) in enumerate(zip(state.q, state.v, strict=True))
@@ -493,14 +526,14 @@ def brake_to_rest(limiter: Any, state: Any, max_frames: int = 100000) -> np.ndar
 
 
 def park_path(
-    platform: Any,
+    platform: Platform,
     limits: ActuatorLimits,
     rate_hz: float,
     *,
-    pose_from: Any = None,
-    q_from: Any = None,
-    v_from: Any = None,
-    a_from: Any = None,
+    pose_from: ArrayLike | None = None,
+    q_from: ArrayLike | None = None,
+    v_from: ArrayLike | None = None,
+    a_from: ArrayLike | None = None,
 ) -> Transition:
     """Frames from the current state to the parked pose ``platform.pose_park``.
 
@@ -525,14 +558,15 @@ def park_path(
             if a_from is None
             else np.broadcast_to(np.asarray(a_from, float), q_f.shape)
         )
-        limiter: Any
+        state: LimiterState | JerkLimiterState
         if limits.j_max is None:
-            limiter = RealtimeLimiter(limits, dt)
-            state = limiter.initial_state(q_f, v_f)
+            rt = RealtimeLimiter(limits, dt)
+            state = rt_state = rt.initial_state(q_f, v_f)
+            head = brake_to_rest(rt, rt_state)
         else:
-            limiter = JerkLimiter(limits, dt)
-            state = limiter.initial_state(q_f, v_f, a_f)
-        head = brake_to_rest(limiter, state)
+            jl = JerkLimiter(limits, dt)
+            state = jl_state = jl.initial_state(q_f, v_f, a_f)
+            head = brake_to_rest(jl, jl_state)
         q_rest = np.asarray(state.q)
         fk = platform.forward(q_rest, guess=None if pose_from is None else pose_from)
         if not fk.ok:
@@ -559,7 +593,7 @@ def park_path(
 
 
 def unpark_path(
-    platform: Any, limits: ActuatorLimits, rate_hz: float, pose_to: Any = None
+    platform: Platform, limits: ActuatorLimits, rate_hz: float, pose_to: ArrayLike | None = None
 ) -> Transition:
     """Frames from the parked pose to ``pose_to`` (default neutral, zeros), at rest."""
     target = np.zeros(6) if pose_to is None else _pose6("pose_to", pose_to)
@@ -567,7 +601,11 @@ def unpark_path(
 
 
 def resume_path(
-    platform: Any, pose_from: Any, pose_to: Any, limits: ActuatorLimits, rate_hz: float
+    platform: Platform,
+    pose_from: ArrayLike,
+    pose_to: ArrayLike,
+    limits: ActuatorLimits,
+    rate_hz: float,
 ) -> Transition:
     """Frames from a paused pose to the pose the ride resumes at (both at rest)."""
     return transition(platform, pose_from, pose_to, limits, rate_hz)

@@ -29,12 +29,17 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import Any
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from .._errors import ConfigError
 from ._limits import ActuatorLimits
+
+if TYPE_CHECKING:
+    from numpy.typing import ArrayLike
+
+    from ..kinematics import Platform
 
 __all__ = ["PoseLimitResult", "limit_pose"]
 
@@ -67,18 +72,18 @@ class PoseLimitResult:
     """
 
     pose: np.ndarray
-    status: Any
-    scale: Any
+    status: str | np.ndarray
+    scale: float | np.ndarray
     amount: np.ndarray
     dropped: np.ndarray
     q: np.ndarray
 
     @property
-    def clamped(self) -> Any:
+    def clamped(self) -> np.bool_ | np.ndarray:
         return np.asarray(self.status) != "ok"
 
 
-def _feasible(platform: Any, poses: np.ndarray, limits: ActuatorLimits | None) -> np.ndarray:
+def _feasible(platform: Platform, poses: np.ndarray, limits: ActuatorLimits | None) -> np.ndarray:
     chk = platform.check(poses)
     ok = np.asarray(chk.ok, dtype=bool)
     if limits is not None:
@@ -86,7 +91,9 @@ def _feasible(platform: Any, poses: np.ndarray, limits: ActuatorLimits | None) -
     return ok
 
 
-def reachable(platform: Any, poses: Any, *, limits: ActuatorLimits | None = None) -> np.ndarray:
+def reachable(
+    platform: Platform, poses: ArrayLike, *, limits: ActuatorLimits | None = None
+) -> np.ndarray:
     """Which poses :func:`limit_pose` leaves untouched (status ``"ok"``), without limiting.
 
     Parameters
@@ -113,7 +120,7 @@ def reachable(platform: Any, poses: Any, *, limits: ActuatorLimits | None = None
 
 
 def limit_pose(
-    platform: Any, pose: Any, *, limits: ActuatorLimits | None = None
+    platform: Platform, pose: ArrayLike, *, limits: ActuatorLimits | None = None
 ) -> PoseLimitResult:
     """Replace unreachable poses by the farthest reachable pose towards neutral (see module).
 
@@ -177,7 +184,7 @@ def limit_pose(
 
 
 def _limit_one_linear(
-    platform: Any, pose: np.ndarray, limits: ActuatorLimits | None
+    platform: Platform, pose: np.ndarray, limits: ActuatorLimits | None
 ) -> PoseLimitResult:
     """Fast single-pose path for all-linear platforms (see module docstring)."""
     if not np.all(np.isfinite(pose)):
