@@ -26,14 +26,15 @@ held first frame, transient send retries, the park (at the nominal period).
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
-from typing import Any
 
 import numpy as np
 
 from .._errors import ConfigError, LimitError
+from ..trajectory import RealtimeLimiter
 from ..trajectory._derive import pulse_rounding_limits
-from ._stream import OutputStage, _StateSaver
+from ._stream import OutputStage
 
 __all__ = ["ArrivalOutputStage"]
 
@@ -61,8 +62,6 @@ class ArrivalOutputStage(OutputStage):
     frame_intervals_ms: list[int] | None = None
 
     def __post_init__(self) -> None:
-        from motioncue.trajectory import RealtimeLimiter
-
         if getattr(self.controller, "time_resolution_s", None) != TICK_S:
             raise ConfigError(
                 "frames on arrival need a controller that stamps whole-ms frames (SC-MBOX, IMAX)"
@@ -86,9 +85,7 @@ class ArrivalOutputStage(OutputStage):
             raise ConfigError("frames on arrival need time-stamped frames, not a command stream")
         q0 = list(self._state.q)
         tight = pulse_rounding_limits(self.limits, self.platform, m * TICK_S)
-        self._limiter = RealtimeLimiter(tight, TICK_S)
-        self._state = self._limiter.initial_state(q0)
-        self._saver = _StateSaver(self._state)
+        self._start_limiter(RealtimeLimiter(tight, TICK_S), q0)
         self._target = [float(v) for v in q0]
         self._still = True  # the last frame is where the one before it was
         self.frame_intervals_ms = []
@@ -101,7 +98,7 @@ class ArrivalOutputStage(OutputStage):
 
     def emit(
         self,
-        q_target: Any,
+        q_target: Sequence[float] | np.ndarray,
         dout: int = 0,
         dacs: tuple[int, int] = (0, 0),
         *,
@@ -137,11 +134,11 @@ class ArrivalOutputStage(OutputStage):
                 if clock is not None:
                     saved_clock = clock.snapshot()
                 saved_frames, saved_stamp = self.frames, 0
-            step = self._limiter.step
+            step = self._step
             q_out: list[float] = []
             for j in range(1, m + 1):
                 r = j / m
-                q_out = step(state, [a + r * (b - a) for a, b in zip(prev, target, strict=True)])
+                q_out = step([a + r * (b - a) for a, b in zip(prev, target, strict=True)])
             q_arr = np.asarray(q_out, dtype=float)
             if not np.all(np.isfinite(q_arr)):
                 raise LimitError("limiter produced a non-finite position; frame not sent")

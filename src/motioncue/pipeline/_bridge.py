@@ -77,14 +77,25 @@ import threading
 import time
 from collections.abc import Mapping
 from dataclasses import dataclass, field
-from typing import Any, Protocol
+from typing import TYPE_CHECKING, Any, Literal, Protocol
 
 import numpy as np
 
 from .._errors import ConfigError, MotioncueError
+from ..cueing import make_cueing
+from ..trajectory import limit_pose
 from ._effects import EffectGains, EffectsState, make_effects
 from ._realtime import CueGate, GateConfig, Ticker
 from ._stream import OutputStage
+
+if TYPE_CHECKING:
+    from numpy.typing import ArrayLike
+
+    from ..cueing import CueingParams
+    from ..kinematics import Platform
+    from ..output import Controller, Transport
+    from ..telemetry import TelemetrySample
+    from ..trajectory import ActuatorLimits
 
 __all__ = [
     "CLAMP_WARN_FRACTION",
@@ -113,7 +124,7 @@ class TelemetryInput(Protocol):
     out, parks and ends as on :meth:`Bridge.stop`. A source without it never finishes.
     """
 
-    def latest(self) -> Any: ...
+    def latest(self) -> TelemetrySample | None: ...
 
     @property
     def stats(self) -> Mapping[str, int]: ...
@@ -440,19 +451,17 @@ class Bridge:
 
     def __init__(
         self,
-        platform: Any,
-        controller: Any,
-        cueing: Any,
+        platform: Platform,
+        controller: Controller,
+        cueing: CueingParams,
         source: TelemetryInput,
-        transport: Any,
-        limits: Any,
+        transport: Transport,
+        limits: ActuatorLimits,
         config: BridgeConfig | None = None,
         *,
-        q_start: Any = None,
+        q_start: ArrayLike | Literal["auto"] | None = None,
         effects: EffectGains | None = None,
     ) -> None:
-        from motioncue.cueing import make_cueing
-
         self.platform = platform
         self.controller = controller
         self.source = source
@@ -533,8 +542,6 @@ class Bridge:
         self._old_switch: float | None = None
         self._notes: list[str] = list(self.stage.notes)
         # per-frame state of step()
-        from motioncue.trajectory import limit_pose
-
         self._limit_pose = limit_pose
         self._q_park = [float(v) for v in platform.q_park]
         self._cue = [0.0] * 6

@@ -33,6 +33,9 @@ from typing import Any
 import numpy as np
 
 from .._errors import ConfigError
+from ..telemetry import decode_recording, samples_to_arrays
+from ..telemetry._motion import is_datagram_recording
+from ..telemetry._recording import Recording, read_recording_csv
 
 __all__ = [
     "HELD_WARNING_FRACTION",
@@ -168,8 +171,6 @@ def load_generate_input(path: str | Path) -> tuple[str, Any, dict[str, int]]:
     path = Path(path)
     if not path.is_file():
         raise ConfigError(f"input {str(path)!r} does not exist")
-    from motioncue.telemetry._motion import is_datagram_recording
-
     if is_datagram_recording(path):
         return "recording", *_telemetry_recording(path)
     size = path.stat().st_size
@@ -188,8 +189,6 @@ def load_generate_input(path: str | Path) -> tuple[str, Any, dict[str, int]]:
         raise ConfigError(f"{path}: not a readable CSV file: {exc}") from exc
     names = {h.strip() for h in first}
     if {"fx", "fy", "fz", "wx", "wy", "wz"} <= names:
-        from motioncue.telemetry._recording import read_recording_csv
-
         rec = read_recording_csv(path)
         check_recording(rec, str(path), csv_times=True)
         return "recording", rec, {}
@@ -201,13 +200,10 @@ def load_generate_input(path: str | Path) -> tuple[str, Any, dict[str, int]]:
     )
 
 
-def _telemetry_recording(path: Path) -> tuple[Any, dict[str, int]]:
+def _telemetry_recording(path: Path) -> tuple[Recording, dict[str, int]]:
     """Decode a ``motioncue record`` file. Paused stretches become rest (the vehicle is not
     moving while the game is paused), so the cue washes out there instead of interpolating
     across the pause."""
-    from motioncue.telemetry import decode_recording, samples_to_arrays
-    from motioncue.telemetry._recording import Recording
-
     samples, stats = decode_recording(path)
     if not samples:
         raise ConfigError(f"{path}: no usable telemetry samples ({stats})")
@@ -220,7 +216,7 @@ def _telemetry_recording(path: Path) -> tuple[Any, dict[str, int]]:
     return rec, stats
 
 
-def check_recording(rec: Any, where: str, *, csv_times: bool = True) -> None:
+def check_recording(rec: Recording, where: str, *, csv_times: bool = True) -> None:
     """Refuse a recording ``generate`` cannot make a meaningful ride from.
 
     Parameters
@@ -268,7 +264,7 @@ def check_recording(rec: Any, where: str, *, csv_times: bool = True) -> None:
             )
 
 
-def check_generate_size(kind: str, data: Any, rate_hz: float, where: str) -> None:
+def check_generate_size(kind: str, data: Recording | Keyframes, rate_hz: float, where: str) -> None:
     """Refuse an input that would make more than :data:`MAX_GENERATE_FRAMES` frames."""
     if kind == "recording":
         t = np.asarray(data.t_s, dtype=float)

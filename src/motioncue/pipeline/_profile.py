@@ -38,11 +38,16 @@ import math
 from collections.abc import Mapping
 from dataclasses import dataclass, field, replace
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING
 
 from .._config import ConfigReader, bundled_names, find_config, load_toml
 from .._errors import ConfigError
+from ..cueing import load_cueing
+from ..telemetry._source import parse_live_spec
 from ._effects import EFFECT_NAMES, MAX_GAIN, EffectGains
+
+if TYPE_CHECKING:
+    from ..cueing import CueingParams
 
 __all__ = ["MAX_CUE_GAIN", "Profile", "bundled_profiles", "load_profile"]
 
@@ -101,12 +106,13 @@ class Profile:
             return self.presets[platform_name]
         return self.preset
 
-    def apply(self, cueing: Any) -> Any:
+    def apply(self, cueing: CueingParams) -> CueingParams:
         """The cueing parameters with this profile's gains applied (a new object)."""
         if self.f_gain == (1.0, 1.0, 1.0) and self.w_gain == (1.0, 1.0, 1.0):
             return cueing
-        f = tuple(a * b for a, b in zip(cueing.f_scale, self.f_gain, strict=True))
-        w = tuple(a * b for a, b in zip(cueing.w_scale, self.w_gain, strict=True))
+        fs, fg, ws, wg = cueing.f_scale, self.f_gain, cueing.w_scale, self.w_gain
+        f = (fs[0] * fg[0], fs[1] * fg[1], fs[2] * fg[2])
+        w = (ws[0] * wg[0], ws[1] * wg[1], ws[2] * wg[2])
         return replace(cueing, f_scale=f, w_scale=w, name=f"{cueing.name}+{self.name}")
 
 
@@ -148,9 +154,6 @@ def load_profile(name_or_path: str | Path) -> Profile:
         Unknown profile, bad TOML, unknown or missing keys, values out of range, unknown
         game or preset.
     """
-    from motioncue.cueing import load_cueing
-    from motioncue.telemetry._source import parse_live_spec
-
     path = find_config("profiles", name_or_path)
     where = path.name
     top = ConfigReader(load_toml(path), where)

@@ -5,7 +5,7 @@ from __future__ import annotations
 import json
 import math
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -13,10 +13,16 @@ from ._generate import GenerateReport
 from ._ridefile import Ride
 from ._verify import limits_arrays
 
+if TYPE_CHECKING:
+    from numpy.typing import ArrayLike
+
+    from ..cueing import CueingParams
+    from ..kinematics import Platform
+
 __all__ = ["delivered_poses", "plot_actuators", "write_report"]
 
 
-def delivered_poses(platform: Any, report: GenerateReport) -> np.ndarray:
+def delivered_poses(platform: Platform, report: GenerateReport) -> np.ndarray:
     """Poses the platform really makes after the actuator limits, to first order.
 
     ``pose + J^+ (q - q_desired)`` with the Jacobian at the workspace-limited pose: exact to
@@ -133,8 +139,8 @@ def write_report(
     out_dir: str | Path,
     ride: Ride,
     report: GenerateReport,
-    platform: Any,
-    cueing: Any,
+    platform: Platform,
+    cueing: CueingParams,
 ) -> dict[str, Any]:
     """Write ``cueing.png``, ``actuators.png``, ``metrics.json`` and ``summary.txt``.
 
@@ -167,7 +173,7 @@ def write_report(
     opt = report.optimisation
     check = report.frame_check
 
-    def fin(x: Any) -> Any:
+    def fin(x: ArrayLike) -> list[float | None]:
         arr = np.asarray(x, dtype=float)
         return [None if not math.isfinite(v) else float(v) for v in arr.ravel()]
 

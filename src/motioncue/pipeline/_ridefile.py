@@ -47,11 +47,14 @@ import os
 import zipfile
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, BinaryIO
+from typing import TYPE_CHECKING, Any, BinaryIO
 
 import numpy as np
 
 from .._errors import ConfigError, MotioncueError, one_line
+
+if TYPE_CHECKING:
+    from numpy.typing import ArrayLike
 
 __all__ = [
     "INTEGRITY_STATES",
@@ -247,7 +250,7 @@ class Ride:
         }
 
 
-def _numeric(name: str, value: Any, kinds: str) -> np.ndarray:
+def _numeric(name: str, value: ArrayLike, kinds: str) -> np.ndarray:
     """``value`` as an array of a plain numeric dtype of one of ``kinds`` (no bool, object,
     complex or structured data)."""
     try:
@@ -310,7 +313,7 @@ def save_ride(path: str | Path, ride: Ride) -> Path:
     return atomic_write_bytes(Path(path), ride_bytes(ride), "ride file")
 
 
-def _json_default(obj: Any) -> Any:
+def _json_default(obj: object) -> object:
     if isinstance(obj, np.ndarray):
         return obj.tolist()
     if isinstance(obj, np.generic):
@@ -434,7 +437,7 @@ def _header_value(header: dict[str, Any], key: str, where: str, kind: Any, defau
     return value
 
 
-def _short(value: Any) -> str:
+def _short(value: object) -> str:
     return one_line(repr(value), 80)
 
 

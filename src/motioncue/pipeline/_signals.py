@@ -12,8 +12,8 @@ from __future__ import annotations
 
 import signal
 import threading
+from collections.abc import Callable
 from types import FrameType
-from typing import Any
 
 __all__ = ["STOP_SIGNALS", "SignalGuard"]
 
@@ -41,7 +41,7 @@ class SignalGuard:
         self.event = threading.Event()
         self.received: list[int] = []
         self.active = False
-        self._previous: dict[int, Any] = {}
+        self._previous: dict[int, Callable[[int, FrameType | None], object] | int | None] = {}
 
     def _on_signal(self, signum: int, frame: FrameType | None) -> None:
         # nothing that could raise or block: no printing (the terminal may be gone)

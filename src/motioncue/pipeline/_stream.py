@@ -33,12 +33,13 @@ raises :class:`~motioncue._errors.ControllerSilent` when none comes.
 from __future__ import annotations
 
 import errno
+import functools
 import math
 import operator
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Iterable, Sequence
 from dataclasses import dataclass, field
-from typing import Any, Literal
+from typing import TYPE_CHECKING, Literal, Protocol, cast
 
 import numpy as np
 
@@ -49,10 +50,21 @@ from .._errors import (
     MotioncueError,
     TransportError,
 )
+from ..output._feedback import LinkWatch, describe_refusal, is_flow_control, read_position
+from ..output._transport_serial import SerialTransport
+from ..output._transports_udp import UdpTransport
+from ..trajectory import JerkLimiter, JerkLimiterState, LimiterState, RealtimeLimiter
 from ..trajectory._derive import planning_limits, within_controller_stroke
 from ._realtime import wait_until
 from ._ridefile import Ride
 from ._signals import SignalGuard
+
+if TYPE_CHECKING:
+    from numpy.typing import ArrayLike
+
+    from ..kinematics import Platform
+    from ..output import Controller, FrameEncoder, Transport
+    from ..trajectory import ActuatorLimits
 
 __all__ = [
     "OutputStage",
@@ -91,7 +103,32 @@ def _errno_of(exc: BaseException) -> int | None:
     return code if isinstance(code, int) else None
 
 
-def make_frame_encoder(controller: Any, rate_hz: float, start_pulses: Any = None) -> Any:
+class CommandEncoder(Protocol):
+    """The encoder of a controller fed through a command stream (``encode_commands``)."""
+
+    def encode_commands(
+        self, t_s: float, pulses: Sequence[int], dout: int = 0, dacs: tuple[int, int] = (0, 0)
+    ) -> Sequence[object]: ...
+
+
+class CommandStreamer(Protocol):
+    """A flow-controlled command stream (:meth:`Controller.command_streamer`): the commands
+    of :meth:`CommandEncoder.encode_commands` go out through ``send_all``; every
+    ``poll_every_frames`` frames each address of ``sent`` is polled."""
+
+    poll_every_frames: int
+
+    @property
+    def sent(self) -> Iterable[int]: ...
+
+    def send_all(self, cmds: Sequence[object]) -> None: ...
+
+    def poll(self, addr: int) -> object: ...
+
+
+def make_frame_encoder(
+    controller: Controller, rate_hz: float, start_pulses: Iterable[float] | None = None
+) -> FrameEncoder:
     """A fresh frame encoder for one run at ``rate_hz`` (absolute-time frames where they
     exist); the controller refuses a rate its clock cannot carry."""
     return controller.run_encoder(
@@ -105,14 +142,14 @@ class _StateSaver:
 
     __slots__ = ("_get", "_names")
 
-    def __init__(self, state: Any) -> None:
+    def __init__(self, state: LimiterState | JerkLimiterState) -> None:
         self._names = tuple(type(state).__slots__)
         self._get = operator.attrgetter(*self._names)
 
-    def save(self, state: Any) -> tuple[Any, ...]:
+    def save(self, state: LimiterState | JerkLimiterState) -> tuple[object, ...]:
         return tuple([v.copy() if type(v) is list else v for v in self._get(state)])
 
-    def restore(self, state: Any, saved: tuple[Any, ...]) -> None:
+    def restore(self, state: LimiterState | JerkLimiterState, saved: tuple[object, ...]) -> None:
         for name, value in zip(self._names, saved, strict=True):
             setattr(state, name, value)
 
@@ -157,12 +194,12 @@ class OutputStage:
         The controller's liveness and refusals (live UDP links), read by players.
     """
 
-    platform: Any
-    controller: Any
-    limits: Any
+    platform: Platform
+    controller: Controller
+    limits: ActuatorLimits
     rate_hz: float
-    transport: Any
-    q_start: Any = None
+    transport: Transport
+    q_start: ArrayLike | Literal["auto"] | None = None
     send_retries: int = 3
     silence_s: float | Literal["link"] | None = "link"
     frames: int = 0
@@ -171,16 +208,15 @@ class OutputStage:
     t_s: float = 0.0
     last_pulses: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=np.int64))
     notes: list[str] = field(default_factory=list)
-    _limiter: Any = None
-    _state: Any = None
-    _encoder: Any = None
-    _streamer: Any = None
-    _saver: Any = None
-    watch: Any = None
+    _limiter: RealtimeLimiter | JerkLimiter = field(init=False)
+    _state: LimiterState | JerkLimiterState = field(init=False)
+    _encoder: FrameEncoder = field(init=False)
+    _streamer: CommandStreamer | None = field(init=False)
+    _saver: _StateSaver = field(init=False)
+    _step: Callable[[Sequence[float] | np.ndarray], list[float]] = field(init=False)
+    watch: LinkWatch | None = None
 
     def __post_init__(self) -> None:
-        from motioncue.trajectory import JerkLimiter, RealtimeLimiter
-
         if not (isinstance(self.send_retries, int) and 0 <= self.send_retries <= 100):
             raise ConfigError(f"send_retries = {self.send_retries!r}; allowed: 0..100")
         self.dt_s = 1.0 / self.rate_hz
@@ -199,8 +235,7 @@ class OutputStage:
         limiter_cls = RealtimeLimiter if tight.j_max is None else JerkLimiter
         self._limiter = limiter_cls(tight, self.dt_s)
         q0 = self._start_position()
-        self._state = self._limiter.initial_state(q0)
-        self._saver = _StateSaver(self._state)
+        self._start_limiter(self._limiter, q0)
         self.last_pulses = self.platform.drives.to_pulses(np.asarray(q0, dtype=float))
         self._encoder = make_frame_encoder(self.controller, self.rate_hz, self.last_pulses)
         # a controller fed through a command stream (the EasySmc on a live serial link:
@@ -208,11 +243,19 @@ class OutputStage:
         self._streamer = self.controller.command_streamer(self.transport, self.rate_hz)
         self.watch = self._make_watch()
 
-    def _make_watch(self) -> Any:
-        """A :class:`LinkWatch` on a live UDP link to a controller that answers on it."""
-        from motioncue.output._feedback import LinkWatch
-        from motioncue.output._transports_udp import UdpTransport
+    def _start_limiter(self, limiter: RealtimeLimiter | JerkLimiter, q0: ArrayLike) -> None:
+        """Use ``limiter`` from rest at ``q0``: its state, a saver of that state, its step."""
+        if isinstance(limiter, JerkLimiter):
+            jerk_state = limiter.initial_state(q0)
+            self._state, self._step = jerk_state, functools.partial(limiter.step, jerk_state)
+        else:
+            state = limiter.initial_state(q0)
+            self._state, self._step = state, functools.partial(limiter.step, state)
+        self._limiter = limiter
+        self._saver = _StateSaver(self._state)
 
+    def _make_watch(self) -> LinkWatch | None:
+        """A :class:`LinkWatch` on a live UDP link to a controller that answers on it."""
         if not isinstance(self.transport, UdpTransport):
             return None
         silence = self.transport.silence_s if self.silence_s == "link" else self.silence_s
@@ -236,8 +279,6 @@ class OutputStage:
         if isinstance(self.q_start, str):
             if self.q_start != "auto":
                 raise ConfigError(f"q_start = {self.q_start!r}; allowed: None, 'auto', positions")
-            from motioncue.output._feedback import read_position
-
             rep = read_position(self.controller, self.transport)
             if rep is None:
                 self.notes.append(
@@ -278,7 +319,9 @@ class OutputStage:
     def at_rest(self) -> bool:
         return bool(np.all(np.abs(np.asarray(self._state.v, dtype=float)) < 1e-12))
 
-    def emit(self, q_target: Any, dout: int = 0, dacs: tuple[int, int] = (0, 0)) -> np.ndarray:
+    def emit(
+        self, q_target: Sequence[float] | np.ndarray, dout: int = 0, dacs: tuple[int, int] = (0, 0)
+    ) -> np.ndarray:
         """Limit, encode and send one frame toward ``q_target (n,)`` (SI); returns the pulses.
 
         Atomic: on any exception (a refused output value, an encoder or link error) the
@@ -301,14 +344,16 @@ class OutputStage:
         clock = getattr(self._encoder, "clock", None)
         saved_clock = None if clock is None else clock.snapshot()
         try:
-            q_out = np.asarray(self._limiter.step(state, q_target), dtype=float)
+            q_out = np.asarray(self._step(q_target), dtype=float)
             if not np.all(np.isfinite(q_out)):  # the limiter guarantees this; never send NaN
                 raise LimitError("limiter produced a non-finite position; frame not sent")
             pulses = self.platform.drives.to_pulses(q_out)
             frame = [int(p) for p in pulses]
             if self._streamer is not None:
                 # the EasySmc encoder leaves its state unchanged when it refuses a frame
-                cmds = self._encoder.encode_commands(self.t_s, frame, dout, dacs)
+                cmds = cast(CommandEncoder, self._encoder).encode_commands(
+                    self.t_s, frame, dout, dacs
+                )
             else:
                 if self.frames == 0 and not np.array_equal(pulses, self.last_pulses):
                     self._hold_first()  # sent: kept whatever happens to this frame
@@ -348,7 +393,7 @@ class OutputStage:
         self.frames += 1
         self.t_s += self.dt_s
 
-    def _commit(self, q_out: np.ndarray, q_target: Any, pulses: np.ndarray) -> None:
+    def _commit(self, q_out: np.ndarray, q_target: ArrayLike, pulses: np.ndarray) -> None:
         if not np.array_equal(q_out, np.asarray(q_target, dtype=float)):
             self.clamped_frames += 1
         self.last_pulses = pulses
@@ -489,7 +534,6 @@ def confirm_park(stage: OutputStage, *, paced: bool = True, tries: int = 50) -> 
         ``PARK NOT CONFIRMED``: the controller stayed silent, or refused the final park
         frame for a reason waiting does not cure, or kept it refused.
     """
-    from motioncue.output._feedback import describe_refusal, is_flow_control
 
     watch = stage.watch
     if watch is None or stage.frames == 0:
@@ -551,16 +595,12 @@ def receiver_throttle(
     return wait
 
 
-def _is_serial(transport: Any) -> bool:
-    from motioncue.output._transport_serial import SerialTransport
-
+def _is_serial(transport: Transport) -> bool:
     return isinstance(transport, SerialTransport)
 
 
-def _is_live(transport: Any) -> bool:
+def _is_live(transport: Transport) -> bool:
     """A link to a real controller (UDP or serial), as opposed to a file or a capture."""
-    from motioncue.output._transports_udp import UdpTransport
-
     return isinstance(transport, UdpTransport) or _is_serial(transport)
 
 
@@ -620,19 +660,19 @@ instead of sending the late frames back to back (:func:`play_ride`)."""
 
 def play_ride(
     ride: Ride,
-    platform: Any,
-    controller: Any,
-    limits: Any,
-    transport: Any,
+    platform: Platform,
+    controller: Controller,
+    limits: ActuatorLimits,
+    transport: Transport,
     *,
     speed: float = 1.0,
     paced: bool = True,
-    stop: Any = None,
+    stop: Callable[[], object] | None = None,
     spin_s: float = 0.001,
-    throttle: Any = None,
-    q_start: Any = None,
+    throttle: Callable[[int], object] | None = None,
+    q_start: ArrayLike | Literal["auto"] | None = None,
     handle_signals: bool = True,
-    on_start: Any = None,
+    on_start: Callable[[OutputStage], object] | None = None,
     resync_after_s: float | None = RESYNC_AFTER_S,
 ) -> PlayReport:
     """Stream a ride's frames on time, then park; every way out of the ride parks.
