@@ -43,7 +43,7 @@ import threading
 from collections.abc import Callable, Iterator
 from pathlib import Path
 from types import FrameType, TracebackType
-from typing import Any, BinaryIO, Self
+from typing import BinaryIO, Self
 
 from ._errors import TransportError, one_line
 
@@ -209,7 +209,7 @@ def interrupt_on_stop_signals() -> Iterator[None]:
     ``KeyboardInterrupt``) in the main thread, as Ctrl-C does, so that the outputs being
     written are discarded and the command says it was interrupted. The previous handlers
     are restored on exit. Does nothing outside the main thread."""
-    previous: dict[signal.Signals, Any] = {}
+    previous: dict[signal.Signals, Callable[[int, FrameType | None], object] | int | None] = {}
     if threading.current_thread() is threading.main_thread():
         for sig in _STOP_SIGNALS:
             if sig == signal.SIGINT:

@@ -112,7 +112,7 @@ class ConfigReader:
     Call :meth:`finish` after reading: any key not read is an unknown key and is rejected.
     """
 
-    def __init__(self, data: Mapping[str, Any], where: str) -> None:
+    def __init__(self, data: object, where: str) -> None:
         if not isinstance(data, Mapping):
             raise ConfigError(f"{where}: expected a table, got {type(data).__name__}")
         self._data = data
@@ -129,7 +129,7 @@ class ConfigReader:
     def keys(self) -> list[str]:
         return list(self._data)
 
-    def _get(self, key: str, default: Any) -> Any:
+    def _get(self, key: str, default: object) -> object:
         self._used.add(key)
         if key in self._data:
             return self._data[key]
@@ -137,14 +137,14 @@ class ConfigReader:
             raise ConfigError(f"{self._where}: missing key {key!r}")
         return default
 
-    def error(self, key: str, value: Any, allowed: str) -> ConfigError:
+    def error(self, key: str, value: object, allowed: str) -> ConfigError:
         """A :class:`ConfigError` naming this table, the key, the value and what is allowed."""
         return ConfigError(f"{self._where}: {key} = {value!r} is invalid; allowed: {allowed}")
 
     def number(
         self,
         key: str,
-        default: Any = _MISSING,
+        default: object = _MISSING,
         *,
         lo: float = -math.inf,
         hi: float = math.inf,
@@ -165,7 +165,7 @@ class ConfigReader:
         return value
 
     def integer(
-        self, key: str, default: Any = _MISSING, *, lo: int | None = None, hi: int | None = None
+        self, key: str, default: object = _MISSING, *, lo: int | None = None, hi: int | None = None
     ) -> int:
         """An integer in ``[lo, hi]``."""
         value = self._get(key, default)
@@ -176,7 +176,7 @@ class ConfigReader:
         return value
 
     def string(
-        self, key: str, default: Any = _MISSING, *, choices: Sequence[str] | None = None
+        self, key: str, default: object = _MISSING, *, choices: Sequence[str] | None = None
     ) -> str:
         value = self._get(key, default)
         if not isinstance(value, str):
@@ -185,14 +185,14 @@ class ConfigReader:
             raise self.error(key, value, " | ".join(choices))
         return value
 
-    def boolean(self, key: str, default: Any = _MISSING) -> bool:
+    def boolean(self, key: str, default: object = _MISSING) -> bool:
         value = self._get(key, default)
         if not isinstance(value, bool):
             raise self.error(key, value, "true or false")
         return value
 
     def vector(
-        self, key: str, length: int | None = None, default: Any = _MISSING
+        self, key: str, length: int | None = None, default: object = _MISSING
     ) -> tuple[float, ...]:
         """A list of finite numbers, of a given length when ``length`` is set."""
         value = self._get(key, default)
@@ -208,7 +208,7 @@ class ConfigReader:
             raise self.error(key, value, what)
         return tuple(float(v) for v in value)
 
-    def table(self, key: str, default: Any = _MISSING) -> ConfigReader:
+    def table(self, key: str, default: object = _MISSING) -> ConfigReader:
         """A sub-table, read by its own reader."""
         value = self._get(key, {} if default is not _MISSING else default)
         return ConfigReader(value, f"{self._where} [{key}]")
@@ -220,7 +220,7 @@ class ConfigReader:
             raise self.error(key, value, "an array of tables ([[" + key + "]])")
         return [ConfigReader(v, f"{self._where} [[{key}]] #{i}") for i, v in enumerate(value)]
 
-    def raw(self, key: str, default: Any = _MISSING) -> Any:
+    def raw(self, key: str, default: object = _MISSING) -> Any:
         return self._get(key, default)
 
     def finish(self) -> None:
