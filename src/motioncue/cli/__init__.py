@@ -13,7 +13,7 @@ import importlib
 import re
 import sys
 from collections.abc import Sequence
-from typing import Any, NoReturn
+from typing import NoReturn
 
 from .._errors import MotioncueError, one_line
 
@@ -96,7 +96,7 @@ class _Parser(argparse.ArgumentParser):
         super().error(message)
 
 
-def _verb_parsers(parser: argparse.ArgumentParser) -> dict[str, Any]:
+def _verb_parsers(parser: argparse.ArgumentParser) -> dict[str, argparse.ArgumentParser]:
     for action in parser._actions:
         if isinstance(action, argparse._SubParsersAction):
             return dict(action.choices)

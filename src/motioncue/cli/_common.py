@@ -19,14 +19,19 @@ import json
 import sys
 import tempfile
 import tomllib
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any, TypeAlias, TypeVar
 
 from .._errors import ConfigError
 
+if TYPE_CHECKING:
+    from ..cueing import CueingParams
+    from ..kinematics import Platform
+
 __all__ = [
     "SET_TARGETS",
+    "Subparsers",
     "add_deprecated_alias",
     "add_json_option",
     "add_limit_options",
@@ -41,6 +46,14 @@ __all__ = [
 SET_TARGETS = ("platform", "preset")
 """The files ``--set`` can override, named by the first word of its key."""
 
+Subparsers: TypeAlias = "argparse._SubParsersAction[argparse.ArgumentParser]"
+"""What each verb module's ``register(sub)`` is given: the verbs' ``add_parser``."""
+
+TomlValue: TypeAlias = object
+"""A value parsed from TOML text (``--set``): stored, checked by the file's loader."""
+
+_Loaded = TypeVar("_Loaded")
+
 
 class _DeprecatedAlias(argparse.Action):
     """Store like the new option, after a one-line note on stderr naming the new spelling."""
@@ -53,7 +66,7 @@ class _DeprecatedAlias(argparse.Action):
         self,
         parser: argparse.ArgumentParser,
         namespace: argparse.Namespace,
-        values: Any,
+        values: object,
         option_string: str | None = None,
     ) -> None:
         print(
@@ -64,7 +77,7 @@ class _DeprecatedAlias(argparse.Action):
 
 
 def add_deprecated_alias(
-    parser: argparse.ArgumentParser, old: str, new: str, *, type: Any = str
+    parser: argparse.ArgumentParser, old: str, new: str, *, type: Callable[[str], object] = str
 ) -> None:
     """Accept ``old`` as a hidden spelling of the option ``new`` (same destination).
 
@@ -90,7 +103,7 @@ def add_json_option(parser: argparse.ArgumentParser, what: str = "the result") -
     )
 
 
-def print_json(data: Any) -> None:
+def print_json(data: object) -> None:
     """Print ``data`` as JSON (``NaN`` refused: the output is strict JSON)."""
     print(json.dumps(data, indent=1, allow_nan=False, default=str))
 
@@ -106,7 +119,7 @@ def add_limit_options(parser: argparse.ArgumentParser) -> None:
     )
 
 
-def limit_overrides(args: argparse.Namespace) -> dict[str, Any]:
+def limit_overrides(args: argparse.Namespace) -> dict[str, float | None]:
     """The keyword arguments of ``ActuatorLimits.from_platform`` set by
     :func:`add_limit_options`."""
     return {
@@ -134,7 +147,7 @@ def add_set_option(parser: argparse.ArgumentParser, targets: Sequence[str] = SET
     )
 
 
-def parse_set(item: str) -> tuple[str, tuple[str, ...], Any]:
+def parse_set(item: str) -> tuple[str, tuple[str, ...], TomlValue]:
     """Split one ``--set`` item into its target, key path and TOML value.
 
     Returns
@@ -164,13 +177,15 @@ def parse_set(item: str) -> tuple[str, tuple[str, ...], Any]:
             f"--set {item!r}: unknown target {parts[0]!r}; allowed: {', '.join(SET_TARGETS)}"
         )
     try:
-        value = tomllib.loads(f"v = {text.strip()}")["v"]
+        value: TomlValue = tomllib.loads(f"v = {text.strip()}")["v"]
     except tomllib.TOMLDecodeError:
         value = text.strip()
     return parts[0], parts[1:], value
 
 
-def apply_overrides(data: dict[str, Any], items: Sequence[tuple[tuple[str, ...], Any]]) -> None:
+def apply_overrides(
+    data: dict[str, Any], items: Sequence[tuple[tuple[str, ...], TomlValue]]
+) -> None:
     """Set each key path of ``items`` in the nested tables of ``data`` (in place).
 
     A missing table on the way is created, so that an optional table can be given; a key
@@ -191,7 +206,7 @@ def apply_overrides(data: dict[str, Any], items: Sequence[tuple[tuple[str, ...],
 
 def _overrides_for(
     target: str, overrides: Sequence[str] | None
-) -> list[tuple[tuple[str, ...], Any]]:
+) -> list[tuple[tuple[str, ...], TomlValue]]:
     out = []
     for item in overrides or ():
         tgt, path, value = parse_set(item)
@@ -211,7 +226,9 @@ def check_set_targets(overrides: Sequence[str] | None, targets: Sequence[str]) -
             )
 
 
-def _overridden_copy(kind: str, name_or_path: str, items: Sequence[Any], folder: Path) -> Path:
+def _overridden_copy(
+    kind: str, name_or_path: str, items: Sequence[tuple[tuple[str, ...], TomlValue]], folder: Path
+) -> Path:
     """The config file with ``items`` applied, written under ``folder`` with the same name
     (so the loaded object keeps its name)."""
     import tomli_w
@@ -228,8 +245,12 @@ def _overridden_copy(kind: str, name_or_path: str, items: Sequence[Any], folder:
 
 
 def _load_with_overrides(
-    load: Any, kind: str, folder: str, name_or_path: str, overrides: Sequence[str] | None
-) -> Any:
+    load: Callable[[str | Path], _Loaded],
+    kind: str,
+    folder: str,
+    name_or_path: str,
+    overrides: Sequence[str] | None,
+) -> _Loaded:
     """``load(name_or_path)``, or ``load`` of a copy with the ``kind.`` items of ``--set``."""
     items = _overrides_for(kind, overrides)
     if not items:
@@ -242,14 +263,14 @@ def _load_with_overrides(
             raise ConfigError(f"--set: {exc}") from exc
 
 
-def load_platform_arg(name_or_path: str, overrides: Sequence[str] | None = None) -> Any:
+def load_platform_arg(name_or_path: str, overrides: Sequence[str] | None = None) -> Platform:
     """:func:`motioncue.kinematics.load_platform` with the ``platform.`` items of ``--set``."""
     from ..kinematics import load_platform
 
     return _load_with_overrides(load_platform, "platform", "platforms", name_or_path, overrides)
 
 
-def load_preset_arg(name_or_path: str, overrides: Sequence[str] | None = None) -> Any:
+def load_preset_arg(name_or_path: str, overrides: Sequence[str] | None = None) -> CueingParams:
     """:func:`motioncue.cueing.load_cueing` with the ``preset.`` items of ``--set``."""
     from ..cueing import load_cueing
 

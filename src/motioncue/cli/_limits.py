@@ -4,14 +4,24 @@ from __future__ import annotations
 
 import argparse
 import math
-from typing import Any
+from typing import TYPE_CHECKING
 
-from ._common import add_limit_options, add_set_option, limit_overrides, load_platform_arg
+from ._common import (
+    Subparsers,
+    add_limit_options,
+    add_set_option,
+    limit_overrides,
+    load_platform_arg,
+)
+
+if TYPE_CHECKING:
+    from ..kinematics import Platform
+    from ..trajectory import ActuatorLimits
 
 __all__ = ["register"]
 
 
-def register(sub: Any) -> None:
+def register(sub: Subparsers) -> None:
     parser = sub.add_parser(
         "limits",
         help="print the effective actuator limits (stroke, speed, acceleration)",
@@ -61,7 +71,7 @@ def run(args: argparse.Namespace) -> int:
     return 0
 
 
-def _table(lim: Any, platform: Any, args: argparse.Namespace) -> str:
+def _table(lim: ActuatorLimits, platform: Platform, args: argparse.Namespace) -> str:
     pulses = lim.to_pulses_table(platform)
     head = f"limits: platform {args.platform}" + (
         f", controller {args.controller}" if args.controller else ""

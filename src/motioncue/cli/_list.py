@@ -7,7 +7,7 @@ import tomllib
 from typing import Any
 
 from .._errors import ConfigError
-from ._common import add_json_option, print_json
+from ._common import Subparsers, add_json_option, print_json
 
 __all__ = ["bundled", "register"]
 
@@ -19,7 +19,7 @@ _FOLDERS = {"platforms": "platforms", "controllers": "controllers", "presets": "
             "profiles": "profiles"}  # fmt: skip
 
 
-def register(sub: Any) -> None:
+def register(sub: Subparsers) -> None:
     parser = sub.add_parser(
         "list",
         help="list the bundled platforms, controllers, presets, profiles and games",

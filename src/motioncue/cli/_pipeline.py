@@ -5,11 +5,13 @@ from __future__ import annotations
 import argparse
 import sys
 import time
+from collections.abc import Callable
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any, TextIO
 
 from .._errors import ConfigError
 from ._common import (
+    Subparsers,
     add_json_option,
     add_limit_options,
     add_set_option,
@@ -21,10 +23,14 @@ from ._common import (
 from ._monitor import add_monitor_argument, start_monitor
 from ._preset import add_intensity_option, apply_intensity
 
+if TYPE_CHECKING:
+    from ..output import Controller
+    from ..pipeline import Ride
+
 __all__ = ["register"]
 
 
-def register(sub: Any) -> None:
+def register(sub: Subparsers) -> None:
     g = sub.add_parser(
         "generate",
         help="make a ride file from a recording or pose keyframes",
@@ -281,7 +287,7 @@ CLAMP_WARN_PERCENT = 1.0
 """Above this share of clamped poses ``generate`` warns (and never says OK)."""
 
 
-def _time_at_stroke_end_s(ride: Any) -> float:
+def _time_at_stroke_end_s(ride: Ride) -> float:
     """Longest total time (s) one actuator spends within 0.1 % of the half stroke from an end
     of its pulse range (the limits table saved in the ride)."""
     import numpy as np
@@ -435,7 +441,7 @@ class _PlayProgress:
     the ride is: ``play: 12.0 of 59.3 s (20 %)`` on stderr, refreshed each second on a
     terminal, every ten seconds otherwise. Cheap per frame: a counter and a clock read."""
 
-    def __init__(self, n_frames: int, rate_hz: float, stop: Any) -> None:
+    def __init__(self, n_frames: int, rate_hz: float, stop: Callable[[], object]) -> None:
         self.n_frames = n_frames
         self.rate_hz = rate_hz
         self.stop = stop
@@ -479,12 +485,12 @@ class _PlayProgress:
             _say("")
 
 
-def controller_buffer(controller: Any) -> str:
+def controller_buffer(controller: Controller) -> str:
     depth = getattr(controller, "buffer_frames", None)
     return "a few commands" if depth is None else f"{depth} frames"
 
 
-def _say(line: str, stream: Any = None) -> None:
+def _say(line: str, stream: TextIO | None = None) -> None:
     """One line; a terminal that is gone (SIGHUP) does not stop the program."""
     try:
         print(line, file=sys.stderr if stream is None else stream, flush=True)

@@ -2,10 +2,15 @@
 
 from __future__ import annotations
 
+import argparse
 from collections.abc import Sequence
-from typing import Any
+from typing import TYPE_CHECKING
 
 from .._errors import ConfigError
+
+if TYPE_CHECKING:
+    from ..cueing import CueingParams
+    from ..kinematics import Platform
 
 __all__ = [
     "FALLBACK_PRESET",
@@ -21,10 +26,10 @@ FALLBACK_PRESET = "racing"
 
 def choose_preset(
     preset: str | None,
-    platform: Any,
+    platform: Platform | None,
     platform_label: str | None,
     overrides: Sequence[str] | None = None,
-) -> tuple[Any, str]:
+) -> tuple[CueingParams, str]:
     """Load the cueing preset a command runs with, and say where it came from.
 
     Parameters
@@ -52,7 +57,7 @@ def choose_preset(
     """
     from ._common import load_preset_arg
 
-    def load_cueing(name: str) -> Any:
+    def load_cueing(name: str) -> CueingParams:
         return load_preset_arg(name, overrides)
 
     if preset is not None:
@@ -71,7 +76,7 @@ def choose_preset(
     return params, f"{params.name} (fallback: platform {label} names no default_preset)"
 
 
-def add_intensity_option(parser: Any) -> None:
+def add_intensity_option(parser: argparse.ArgumentParser) -> None:
     """``--intensity PCT``: a point of the preset's tuned intensity range (one definition for
     every verb that runs a preset)."""
     parser.add_argument(
@@ -86,7 +91,9 @@ def add_intensity_option(parser: Any) -> None:
     )
 
 
-def apply_intensity(params: Any, percent: float | None, source: str) -> tuple[Any, str]:
+def apply_intensity(
+    params: CueingParams, percent: float | None, source: str
+) -> tuple[CueingParams, str]:
     """The preset at ``percent`` (:func:`motioncue.cueing.at_intensity`) and its source
     label with the intensity; unchanged when ``percent`` is ``None``."""
     if percent is None:
@@ -96,7 +103,7 @@ def apply_intensity(params: Any, percent: float | None, source: str) -> tuple[An
     return at_intensity(params, percent), f"{source} at intensity {percent:g} %"
 
 
-def add_vestibular_option(parser: Any) -> None:
+def add_vestibular_option(parser: argparse.ArgumentParser) -> None:
     """``--vestibular SET``: the vestibular model set of the evaluation (one definition for
     every verb that evaluates cues; the names are those of ``washout._vestibular``'s
     ``MODEL_SETS``, written here so that building the parser imports nothing heavy)."""

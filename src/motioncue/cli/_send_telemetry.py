@@ -5,15 +5,14 @@ from __future__ import annotations
 import argparse
 import math
 import sys
-from typing import Any
 
 from .._errors import ConfigError
-from ._common import add_json_option, print_json
+from ._common import Subparsers, add_json_option, print_json
 
 __all__ = ["register"]
 
 
-def register(sub: Any) -> None:
+def register(sub: Subparsers) -> None:
     from ..telemetry._encode import ENCODABLE_GAMES
 
     p = sub.add_parser(

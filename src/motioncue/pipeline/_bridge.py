@@ -387,7 +387,8 @@ class _Ring:
             return data[:0]
         idx = (np.arange(n - k, n)) % size
         v = data[idx]
-        return v[np.isfinite(v)]
+        finite: np.ndarray = v[np.isfinite(v)]
+        return finite
 
 
 def _telemetry_notes(reasons: Mapping[str, int], finished: bool) -> tuple[str, ...]:

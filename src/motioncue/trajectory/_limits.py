@@ -146,7 +146,8 @@ class ActuatorLimits:
         """Whether positions ``q`` (..., n) are inside the stroke, per frame (...)."""
         q = np.asarray(q, dtype=float)
         with np.errstate(invalid="ignore"):
-            return np.all((q >= self.q_min) & (q <= self.q_max), axis=-1)
+            inside: np.ndarray = np.all((q >= self.q_min) & (q <= self.q_max), axis=-1)
+        return inside
 
     # ------------------------------------------------------------------ construction
     @classmethod

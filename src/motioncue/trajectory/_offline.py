@@ -211,7 +211,8 @@ def _bad_frames(q: np.ndarray, dt: float, lim: ActuatorLimits, hist: np.ndarray)
         dist = dt * (n * np.abs(v) - adt * n * (n + 1) / 2)
         bad |= (v > 0) & (q + dist > lim.q_max)
         bad |= (v < 0) & (q - dist < lim.q_min)
-    return bad
+    out: np.ndarray = bad
+    return out
 
 
 def _windows(bad: np.ndarray, pad: int, n_frames: int) -> list[tuple[int, int]]:

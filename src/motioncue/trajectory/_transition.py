@@ -469,7 +469,8 @@ def transition_q(
         raise ConfigError(f"q_from/q_to need {limits.n_actuators} values each")
 
     def q_of_s(s: np.ndarray) -> np.ndarray:
-        return a + np.asarray(s)[..., None] * (b - a)
+        q: np.ndarray = a + np.asarray(s)[..., None] * (b - a)
+        return q
 
     def pose_of_s(s: np.ndarray) -> np.ndarray:
         return np.full((*np.shape(s), 6), np.nan)

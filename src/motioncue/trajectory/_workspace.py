@@ -80,7 +80,8 @@ class PoseLimitResult:
 
     @property
     def clamped(self) -> np.bool_ | np.ndarray:
-        return np.asarray(self.status) != "ok"
+        out: np.bool_ | np.ndarray = np.asarray(self.status) != "ok"
+        return out
 
 
 def _feasible(platform: Platform, poses: np.ndarray, limits: ActuatorLimits | None) -> np.ndarray:
@@ -116,7 +117,8 @@ def reachable(
     finite = np.all(np.isfinite(arr), axis=1)
     mask = np.asarray(platform.dof_mask, dtype=bool)
     req = np.where(finite[:, None] & mask[None, :], arr, 0.0)
-    return finite & _feasible(platform, req, limits)
+    ok: np.ndarray = finite & _feasible(platform, req, limits)
+    return ok
 
 
 def limit_pose(
