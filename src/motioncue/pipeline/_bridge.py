@@ -77,7 +77,7 @@ import threading
 import time
 from collections.abc import Mapping
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING, Any, Literal, Protocol
+from typing import TYPE_CHECKING, Literal, Protocol
 
 import numpy as np
 
@@ -547,7 +547,8 @@ class Bridge:
         self._q_park = [float(v) for v in platform.q_park]
         self._cue = [0.0] * 6
         self._pose = [0.0] * 6
-        self._held: Any = None  # newest sample seen (a source may forget it; the cue fades)
+        # newest sample seen (a source may forget it; the cue fades)
+        self._held: TelemetrySample | None = None
         self._clean = True  # washout state fresh (reset while parked)
         self._last_sample_t = math.nan
 
@@ -817,6 +818,8 @@ class Bridge:
             else:
                 stage.park_step()
         else:
+            # the gate leaves park only on a sample, and a sample once held stays held
+            assert held is not None
             cue = self._cue
             # on arrival the cueing runs on the 1 ms grid: one step per ms of the interval
             reps = (self._period_ms if ticks is None else ticks) if self._arrival else 1
