@@ -9,6 +9,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from ..cueing import evaluate_cueing, plot_cueing
 from ._generate import GenerateReport
 from ._ridefile import Ride
 from ._verify import limits_arrays
@@ -146,8 +147,6 @@ def write_report(
 
     Returns the metrics dictionary (also written as JSON).
     """
-    from motioncue.cueing import evaluate_cueing, plot_cueing
-
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     poses = delivered_poses(platform, report)[report.cue_slice]

@@ -51,6 +51,7 @@ from typing import TYPE_CHECKING, Any, BinaryIO
 
 import numpy as np
 
+from .._atomic import atomic_write_bytes
 from .._errors import ConfigError, MotioncueError, one_line
 
 if TYPE_CHECKING:
@@ -308,8 +309,6 @@ def save_ride(path: str | Path, ride: Ride) -> Path:
     TransportError
         The file cannot be written (nothing is left under ``path``).
     """
-    from .._atomic import atomic_write_bytes
-
     return atomic_write_bytes(Path(path), ride_bytes(ride), "ride file")
 
 

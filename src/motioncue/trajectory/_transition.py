@@ -48,7 +48,7 @@ import numpy as np
 from .._errors import ConfigError, LimitError
 from ._jerk import JerkLimiter, JerkLimiterState
 from ._limits import ActuatorLimits, LimitCheck, check_trajectory
-from ._realtime import LimiterState, RealtimeLimiter
+from ._realtime import LimiterState, RealtimeLimiter, braking_distance
 
 if TYPE_CHECKING:
     from numpy.typing import ArrayLike
@@ -507,8 +507,6 @@ def brake_to_rest(
     frame asks to stay where the last frame is, which makes it apply its braking policy.
     ``state`` is advanced; M = 0 if already at rest.
     """
-    from ._realtime import braking_distance
-
     lim = limiter.limits
     frames: list[list[float]] = []
     if isinstance(limiter, JerkLimiter):
