@@ -3,6 +3,7 @@
 * :func:`add_deprecated_alias`: an old spelling (``cue --fs``, ``record --seconds``) kept as a
   hidden option that still works and prints a one-line deprecation note.
 * :func:`add_json_option` / :func:`print_json`: ``--json`` on every verb that prints a result.
+* :func:`add_rig_options`: ``--platform`` and ``--controller`` (bundled name or TOML path).
 * :func:`add_limit_options`: ``--max-speed``, ``--max-accel``, ``--max-jerk``,
   ``--stroke-margin`` (the actuator-limit overrides of ``motioncue limits``).
 * :func:`add_set_option`, :func:`load_platform_arg`, :func:`load_preset_arg`:
@@ -35,6 +36,7 @@ __all__ = [
     "add_deprecated_alias",
     "add_json_option",
     "add_limit_options",
+    "add_rig_options",
     "add_set_option",
     "apply_overrides",
     "load_platform_arg",
@@ -106,6 +108,17 @@ def add_json_option(parser: argparse.ArgumentParser, what: str = "the result") -
 def print_json(data: object) -> None:
     """Print ``data`` as JSON (``NaN`` refused: the output is strict JSON)."""
     print(json.dumps(data, indent=1, allow_nan=False, default=str))
+
+
+def add_rig_options(parser: argparse.ArgumentParser, *, controller_required: bool = True) -> None:
+    """``--platform P`` (required) and ``--controller C``: the rig a verb works on, each a
+    bundled name or a TOML path."""
+    parser.add_argument("--platform", required=True, help="bundled platform name or TOML path")
+    parser.add_argument(
+        "--controller",
+        required=controller_required,
+        help="bundled controller name or TOML path",
+    )
 
 
 def add_limit_options(parser: argparse.ArgumentParser) -> None:

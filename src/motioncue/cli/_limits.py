@@ -9,6 +9,7 @@ from typing import TYPE_CHECKING
 from ._common import (
     Subparsers,
     add_limit_options,
+    add_rig_options,
     add_set_option,
     limit_overrides,
     load_platform_arg,
@@ -32,8 +33,7 @@ def register(sub: Subparsers) -> None:
             "Printed in SI and in drive pulses, in controller axis order."
         ),
     )
-    parser.add_argument("--platform", required=True, help="bundled platform name or TOML path")
-    parser.add_argument("--controller", help="bundled controller name or TOML path")
+    add_rig_options(parser, controller_required=False)
     add_limit_options(parser)
     parser.add_argument(
         "--rate",
