@@ -7,9 +7,9 @@ faster than the frames' own time stamps it may play (catch-up), its buffer and i
 :func:`motioncue.trajectory.limits_from_platform` derives the limits from this interface alone,
 without naming a controller kind; the emulators check frames with the same numbers.
 
-Adding a controller kind is one subpackage of :mod:`motioncue.output` whose
-``controller_from_config`` returns an object satisfying :class:`Controller`, plus its name in
-:data:`motioncue.output.CONTROLLER_KINDS`.
+Adding a controller kind is one package whose config reader returns an object satisfying
+:class:`Controller`, plus one :func:`~motioncue.output.register_controller_kind` call
+declaring what the kind can do (:class:`~motioncue.output.ControllerKind`).
 """
 
 from __future__ import annotations
@@ -171,10 +171,17 @@ class Controller(Protocol):
         count refusals.
     """
 
-    kind: Any
-    name: str
-    n_axes: int
-    default_target: str
+    @property
+    def kind(self) -> str: ...
+
+    @property
+    def name(self) -> str: ...
+
+    @property
+    def n_axes(self) -> int: ...
+
+    @property
+    def default_target(self) -> str: ...
 
     @property
     def buffer_frames(self) -> int: ...

@@ -103,8 +103,7 @@ def exchange(
     Prints what was sent and what came back; returns the decoded reply or ``None``.
     """
     print(f"sent {describe(decode(data))} [{data.hex().upper()}]", file=out)
-    request = getattr(transport, "request", None)
-    if not expect_reply or request is None:
+    if not expect_reply or not transport.answers:
         transport.send(data)
         return None
 
@@ -114,7 +113,7 @@ def exchange(
         except ProtocolError:
             return False
 
-    raw = request(data, accept)
+    raw = transport.request(data, accept)
     reply = decode(raw)
     print(f"reply {describe(reply)}", file=out)
     return reply
@@ -164,7 +163,7 @@ def need_args(verb: str, args: Sequence[str], n: int) -> None:
 
 def require_request(transport: Transport) -> None:
     """``send park`` reads the positions first, so it needs a link that answers."""
-    if getattr(transport, "request", None) is None:
+    if not transport.answers:
         raise ConfigError("send park needs a udp:// target: it reads the positions first")
 
 

@@ -33,7 +33,7 @@ import threading
 import time
 from collections.abc import Sequence
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, Self
 
 import numpy as np
 
@@ -460,7 +460,12 @@ class UdpEmulatorBase:
         """The UDP port the emulator listens on (after :meth:`start`)."""
         return self._port
 
-    def start(self) -> UdpEmulatorBase:
+    @property
+    def where(self) -> str:
+        """``udp://HOST:PORT`` it listens on (the port known after :meth:`start`)."""
+        return f"udp://{self._host}:{self._port}"
+
+    def start(self) -> Self:
         """Bind and serve in a daemon thread."""
         try:
             sock = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
@@ -551,7 +556,7 @@ class UdpEmulatorBase:
         self._sock = None
         self._thread = None
 
-    def __enter__(self) -> UdpEmulatorBase:
+    def __enter__(self) -> Self:
         if self._sock is None:
             self.start()
         return self

@@ -23,7 +23,7 @@ import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any, TextIO
+from typing import Any, TextIO, TypeGuard
 
 from ..._errors import ConfigError, ProtocolError
 from ._controller import PARAMETERS, EasySmcController
@@ -43,6 +43,7 @@ from ._protocol import (
     split_serial_frames,
     word_from_signed,
 )
+from ._usb import UsbCommandLink
 
 __all__ = [
     "SEND_USAGE",
@@ -216,7 +217,7 @@ def run_send(
     ``transport`` is a byte transport (serial port) or a command link that already speaks
     requests (:class:`UsbCommandLink`, :class:`EasySmcLink`).
     """
-    link = transport if hasattr(transport, "request") else EasySmcLink(transport, timeout_s)
+    link = transport if _is_command_link(transport) else EasySmcLink(transport, timeout_s)
     word = tokens[0] if tokens else ""
     lines: list[str] = []
     if word == "read":
@@ -284,10 +285,16 @@ def run_send(
 _NEEDS_REPLIES = ("read", "write", "park")
 
 
-def _talks_back(transport: Any) -> bool:
+def _is_command_link(link: object) -> TypeGuard[EasySmcLink | UsbCommandLink]:
+    """A link that already speaks commands and replies (serial framing or the USB DLL)."""
+    return isinstance(link, EasySmcLink | UsbCommandLink)
+
+
+def _talks_back(transport: object) -> bool:
+    """Replies come back: a command link, or a serial port (framed by :class:`EasySmcLink`)."""
     from .._transport_serial import SerialTransport
 
-    return hasattr(transport, "request") or isinstance(transport, SerialTransport)
+    return _is_command_link(transport) or isinstance(transport, SerialTransport)
 
 
 def send_verb(

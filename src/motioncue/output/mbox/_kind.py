@@ -1,0 +1,51 @@
+"""The SC-MBOX kind's registry entry: what ``motioncue.output`` can ask of it."""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING
+
+from .._registry import ControllerKind, Inspection, Refusals
+from .._udp_cli import VERBS
+from ._cli import inspect_decode, send_verb, split_stream, transport_options
+from ._controller import MboxController, controller_from_config
+from ._emulator import MboxEmulator
+
+if TYPE_CHECKING:
+    from .._controller_api import Controller
+    from .._transport import TransportURL
+
+__all__ = ["KIND", "describe_refusal", "is_flow_control"]
+
+
+def is_flow_control(function: int, channel: int) -> bool:
+    """0x1x03: the buffer was full, waiting cures it."""
+    return function & 0xF == 3
+
+
+def describe_refusal(function: int, channel: int) -> str:
+    """0x1x03 buffer full, 0x1x04 frame shorter than required (manual 4.2.7)."""
+    return {
+        3: "buffer full",
+        4: "frame shorter than required (a frame of the other axis mode: is the box in "
+        "3- or 6-axis mode?)",
+    }.get(function & 0xF, "refused")
+
+
+def _emulator(controller: Controller, url: TransportURL, homing_time_s: float) -> MboxEmulator:
+    if not isinstance(controller, MboxController):
+        raise TypeError(f"an MBOX emulator needs an MboxController, not {type(controller)}")
+    return MboxEmulator(controller, url.host, url.port, homing_time_s=homing_time_s)
+
+
+KIND = ControllerKind(
+    "mbox",
+    controller_from_config,
+    title="SC-MBOX",
+    links=("udp", "pcap", "file"),
+    emulator=_emulator,
+    send=send_verb,
+    send_words=VERBS,
+    inspect=Inspection(split_stream, inspect_decode),
+    transport_options=transport_options,
+    refusals=Refusals(is_flow_control, describe_refusal),
+)
