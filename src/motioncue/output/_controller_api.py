@@ -17,13 +17,19 @@ from __future__ import annotations
 import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
-from typing import Any, Protocol, runtime_checkable
+from typing import TYPE_CHECKING, Any, Protocol, runtime_checkable
 
 import numpy as np
+import numpy.typing as npt
 
 from .._errors import ConfigError
 
+if TYPE_CHECKING:
+    from ._feedback import PositionQuery
+    from ._transport import Transport
+
 __all__ = [
+    "CommandStreamer",
     "Controller",
     "DriveExpectations",
     "FrameEncoder",
@@ -34,7 +40,7 @@ __all__ = [
 ]
 
 
-def _axis_array(name: str, value: Any, n: int, fill: float) -> np.ndarray:
+def _axis_array(name: str, value: npt.ArrayLike | None, n: int, fill: float) -> np.ndarray:
     arr = np.full(n, fill) if value is None else np.array(value, dtype=float).reshape(-1)
     if arr.size == 1 and n != 1:
         arr = np.full(n, float(arr[0]))
@@ -135,6 +141,22 @@ class FrameEncoder(Protocol):
     ) -> list[bytes]: ...
 
 
+class CommandStreamer(Protocol):
+    """A flow-controlled command stream a controller's frames are fed through (the EasySmc
+    on a live serial link): ``send_all`` the encoder's ``encode_commands``, and every
+    ``poll_every_frames`` frames ``poll`` each address in ``sent``."""
+
+    poll_every_frames: int
+
+    @property
+    def sent(self) -> Mapping[int, int]: ...
+
+    # the commands are the kind's own type (what its encoder's ``encode_commands`` gives)
+    def send_all(self, cmds: Sequence[Any]) -> None: ...
+
+    def poll(self, addr: int) -> object: ...
+
+
 @runtime_checkable
 class Controller(Protocol):
     """A frozen controller description: everything its parameters imply.
@@ -220,12 +242,12 @@ class Controller(Protocol):
         carry on its own clock, naming the rates it can."""
         ...
 
-    def position_query(self) -> Any:
+    def position_query(self) -> PositionQuery | None:
         """``(request datagram, reply parser)`` asking where the motors are
         (a position query), or None when it cannot be asked."""
         ...
 
-    def command_streamer(self, transport: Any, rate_hz: float) -> Any:
+    def command_streamer(self, transport: Transport, rate_hz: float) -> CommandStreamer | None:
         """A flow-controlled command stream for ``transport`` when frames must be fed
         through one (its ``send_all``, ``poll``, ``sent`` and ``poll_every_frames``, and the
         encoder's ``encode_commands``), else None: frames are sent as encoded."""
@@ -290,11 +312,11 @@ def check_whole_ms_rate(rate_hz: float, cap_hz: float | None, who: str, cap_sour
     )
 
 
-def snap_rate_hz(rate_hz: float, controller: Any) -> float:
+def snap_rate_hz(rate_hz: float, controller: Controller) -> float:
     """A typed rate such as ``333.33`` read as the whole-ms rate it stands for (1000/3 Hz)
     when the controller stamps whole ms and the two differ by less than 0.05 %; any other
     rate is returned unchanged (and checked later by ``controller.check_rate``)."""
-    if getattr(controller, "time_resolution_s", None) != 1e-3:
+    if controller.time_resolution_s != 1e-3:
         return rate_hz
     if not (isinstance(rate_hz, int | float) and math.isfinite(rate_hz) and rate_hz > 0):
         return rate_hz

@@ -32,7 +32,7 @@ import struct
 import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, TypeVar
 
 from .._errors import ControllerSilent, FramesRefused, MotioncueError, ProtocolError
 
@@ -96,14 +96,16 @@ def words_to_positions(values: Sequence[int], addresses: Sequence[int]) -> tuple
     return tuple(_signed32(values[a], values[a + 1]) for a in addresses)
 
 
+MessageT = TypeVar("MessageT")
+
 PositionQuery = tuple[bytes, Callable[[bytes], "ReportedPosition | None"]]
 """A request datagram and the parser of its reply (``None`` for a datagram that is not it)."""
 
 
 def register_position_query(
     request: bytes,
-    decode: Callable[[bytes], Any],
-    registers: Callable[[Any], Sequence[int] | None],
+    decode: Callable[[bytes], MessageT],
+    registers: Callable[[MessageT], Sequence[int] | None],
     positions: Sequence[int],
     status: Callable[[Sequence[int], tuple[int, ...]], tuple[bool, int]],
 ) -> PositionQuery:

@@ -45,7 +45,7 @@ import threading
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import TYPE_CHECKING, Protocol, TextIO
+from typing import TYPE_CHECKING, Concatenate, ParamSpec, Protocol, TextIO, TypeVar
 
 from .._errors import ConfigError
 
@@ -63,6 +63,7 @@ __all__ = [
     "Refusals",
     "controller_kind",
     "controller_kinds",
+    "for_type",
     "register_controller_kind",
 ]
 
@@ -145,6 +146,29 @@ class Refusals:
 
     is_flow_control: Callable[[int, int], bool]
     describe: Callable[[int, int], str]
+
+
+P = ParamSpec("P")
+R = TypeVar("R")
+C = TypeVar("C")
+
+
+def for_type(
+    cls: type[C], hook: Callable[Concatenate[C, P], R]
+) -> Callable[Concatenate[Controller, P], R]:
+    """``hook`` (written for the kind's own description ``cls``) as a registry hook taking
+    any :class:`Controller`; another kind's description is refused with a
+    :class:`ConfigError` instead of failing inside the hook."""
+
+    def checked(controller: Controller, /, *args: P.args, **kwargs: P.kwargs) -> R:
+        if not isinstance(controller, cls):
+            raise ConfigError(
+                f"controller {controller.name} is of kind {controller.kind}, not {cls.__name__}"
+            )
+        return hook(controller, *args, **kwargs)
+
+    checked.__doc__ = hook.__doc__
+    return checked
 
 
 def _no_options(controller: Controller, url: TransportURL) -> dict[str, object]:

@@ -8,11 +8,14 @@ import math
 import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
-from typing import Any, TextIO
+from typing import TYPE_CHECKING, Protocol, TextIO, runtime_checkable
 
 from .._errors import ConfigError, ProtocolError
 from ._transport import Transport, TransportURL
-from ._udp_common import format_who
+from ._udp_common import WireMessage, format_who
+
+if TYPE_CHECKING:
+    from ._controller_api import FrameEncoder, PulseLimits
 
 __all__ = [
     "VERBS",
@@ -33,7 +36,45 @@ VERBS = ("estop", "reset", "home", "park", "outputs", "read", "write")
 """The ``motioncue send`` verbs every UDP controller kind answers."""
 
 
-def transport_options(controller: Any, url: TransportURL, *, fixed_source_port: bool) -> dict:
+@runtime_checkable
+class FunctionCoded(Protocol):
+    """A message with a function code (every IMAX / MBOX message but the IMAX status
+    report, whose function is implied by its confirm code)."""
+
+    @property
+    def function(self) -> int: ...
+
+
+class Request(FunctionCoded, WireMessage, Protocol):
+    """A request a ``send`` word sends: encoded, and answered by function code."""
+
+
+class UdpAddressed(Protocol):
+    """A controller description with the host and controller addresses of its config."""
+
+    @property
+    def controller_address(self) -> tuple[str, int]: ...
+
+    @property
+    def host_address(self) -> tuple[str, int]: ...
+
+
+class Parkable(Protocol):
+    """What ``send park`` needs of a UDP controller description."""
+
+    @property
+    def catch_up_factor(self) -> float: ...
+
+    def pulse_limits(self, rate_hz: float | None = None) -> PulseLimits: ...
+
+    def frame_encoder(
+        self, absolute_time: bool = True, *, t0_s: float | None = None
+    ) -> FrameEncoder: ...
+
+
+def transport_options(
+    controller: UdpAddressed, url: TransportURL, *, fixed_source_port: bool
+) -> dict[str, object]:
     """Options for ``open_transport`` taken from the controller's addresses.
 
     ``pcap:`` packets are written from the host address to the controller address of the
@@ -48,23 +89,35 @@ def transport_options(controller: Any, url: TransportURL, *, fixed_source_port: 
     return {}
 
 
-def _fmt(name: str, value: Any) -> str:
+def _fmt(name: str, value: object) -> str:
     if isinstance(value, enum.Enum):
         return value.name
-    if name.startswith("who_"):
+    if name.startswith("who_") and isinstance(value, int):
         return format_who(value)
     if isinstance(value, tuple):
         return "[" + ",".join(str(v) for v in value) + "]"
-    if name in ("base_dout", "ext_dout", "port_out", "port", "outputs", "inputs", "function"):
+    if isinstance(value, int) and name in (
+        "base_dout",
+        "ext_dout",
+        "port_out",
+        "port",
+        "outputs",
+        "inputs",
+        "function",
+    ):
         return f"0x{value:X}"
     return str(value)
 
 
-def describe(msg: Any) -> str:
-    """One line naming a decoded message and its fields."""
+def describe(msg: object) -> str:
+    """One line naming a decoded message (a dataclass) and its fields."""
     name = type(msg).__name__
     parts = []
-    if hasattr(msg, "function") and not any(f.name == "function" for f in dataclasses.fields(msg)):
+    if not dataclasses.is_dataclass(msg):
+        return f"{name} {msg!r}"
+    if isinstance(msg, FunctionCoded) and not any(
+        f.name == "function" for f in dataclasses.fields(msg)
+    ):
         parts.append(f"function=0x{msg.function:04X}")
     for f in dataclasses.fields(msg):
         value = getattr(msg, f.name)
@@ -93,11 +146,11 @@ def parse_bits(text: str, n_bits: int) -> int:
 def exchange(
     transport: Transport,
     data: bytes,
-    decode: Callable[[bytes], Any],
-    is_reply: Callable[[Any], bool],
+    decode: Callable[[bytes], WireMessage],
+    is_reply: Callable[[WireMessage], bool],
     expect_reply: bool,
     out: TextIO,
-) -> Any | None:
+) -> WireMessage | None:
     """Send a command; if the link and the Who fields ask for one, wait for its reply.
 
     Prints what was sent and what came back; returns the decoded reply or ``None``.
@@ -120,7 +173,7 @@ def exchange(
 
 
 def park(
-    controller: Any,
+    controller: Parkable,
     transport: Transport,
     current: Sequence[int],
     out: TextIO,
@@ -176,13 +229,15 @@ def positions_from_words(words: Sequence[int], addresses: Sequence[int]) -> list
     return out
 
 
-def _is_reply_to(function: int) -> Callable[[Any], bool]:
+def _is_reply_to(function: int) -> Callable[[WireMessage], bool]:
     """A decoded message answering request ``function`` (0x..01 -> 0x..0x, x != 1)."""
     base = function & 0xFFF0
 
-    def is_reply(msg: Any) -> bool:
-        f = getattr(msg, "function", None)
-        return f is not None and f & 0xFFF0 == base and f != function
+    def is_reply(msg: WireMessage) -> bool:
+        if not isinstance(msg, FunctionCoded):
+            return False
+        f = msg.function
+        return f & 0xFFF0 == base and f != function
 
     return is_reply
 
@@ -194,13 +249,13 @@ class RegisterLink:
     to that request, printing both to ``out``."""
 
     transport: Transport
-    decode: Callable[[bytes], Any]
-    read_request: Callable[..., Any]
-    write_request: Callable[..., Any]
+    decode: Callable[[bytes], WireMessage]
+    read_request: Callable[[int, int, int, int, int], Request]
+    write_request: Callable[[int, int, tuple[int, ...], int, int], Request]
     who: tuple[int, int]
     out: TextIO
 
-    def _exchange(self, msg: Any) -> Any | None:
+    def _exchange(self, msg: Request) -> WireMessage | None:
         return exchange(
             self.transport,
             msg.encode(),
@@ -210,10 +265,10 @@ class RegisterLink:
             self.out,
         )
 
-    def read(self, channel: int, start: int, count: int) -> Any | None:
+    def read(self, channel: int, start: int, count: int) -> WireMessage | None:
         return self._exchange(self.read_request(channel, start, count, *self.who))
 
-    def write(self, channel: int, start: int, values: tuple[int, ...]) -> Any | None:
+    def write(self, channel: int, start: int, values: tuple[int, ...]) -> WireMessage | None:
         return self._exchange(self.write_request(channel, start, values, *self.who))
 
 

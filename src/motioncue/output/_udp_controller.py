@@ -17,7 +17,7 @@ from typing import Any, ClassVar, Generic, Self, TypeVar
 from .._config import ConfigReader
 from .._errors import ConfigError, LimitError
 from ._controller_api import check_whole_ms_rate
-from ._transport import parse_target
+from ._transport import Transport, parse_target
 from ._udp_common import CONFIRM_MAIN, PASSCODE, WHO_ALL, FrameClock
 
 __all__ = [
@@ -33,7 +33,7 @@ EncoderT = TypeVar("EncoderT")
 
 
 def validate_parameters(
-    values: Mapping[str, Any],
+    values: Mapping[str, object],
     where: str,
     spec: ParamSpec,
     canonical: Callable[[str], str],
@@ -72,7 +72,7 @@ def config_target(reader: ConfigReader) -> str:
     return target
 
 
-def config_parameters(reader: ConfigReader) -> dict[str, Any]:
+def config_parameters(reader: ConfigReader) -> dict[str, object]:
     """The raw ``[parameters]`` table of a controller TOML (validated by the kind)."""
     params = reader.table("parameters", {})
     values = {k: params.raw(k) for k in params.keys()}
@@ -110,7 +110,7 @@ class UdpController(Generic[EncoderT]):
         """Both kinds answer each frame (0x1x02 taken; another last digit refused)."""
         return True
 
-    def command_streamer(self, transport: Any, rate_hz: float) -> None:
+    def command_streamer(self, transport: Transport, rate_hz: float) -> None:
         """Datagrams are sent as encoded: no command stream to keep fed."""
         return None
 

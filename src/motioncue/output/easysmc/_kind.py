@@ -9,23 +9,21 @@ from __future__ import annotations
 
 from typing import TYPE_CHECKING
 
-from .._registry import ControllerKind, Inspection
+from .._registry import ControllerKind, Inspection, for_type
 from ._controller import EasySmcController, controller_from_config
 from ._tools import inspect_decode, run_emulator, send_verb, split_stream
 
 if TYPE_CHECKING:
     from pathlib import Path
 
-    from .._controller_api import Controller
-
 __all__ = ["KIND", "SEND_WORDS"]
 
 SEND_WORDS = ("estop", "reset", "home", "park", "outputs", "read", "write", "raw")
 
 
-def _session(controller: Controller, duration_s: float | None, trace_csv: Path | None) -> int:
-    if not isinstance(controller, EasySmcController):
-        raise TypeError(f"an EasySmc session needs an EasySmcController, not {type(controller)}")
+def _session(
+    controller: EasySmcController, duration_s: float | None, trace_csv: Path | None
+) -> int:
     return run_emulator(controller, duration_s, trace_csv=trace_csv)
 
 
@@ -36,8 +34,8 @@ KIND = ControllerKind(
     links=("serial", "pcap", "file"),
     emulator=None,
     emulator_schemes=(),
-    emulator_session=_session,
-    send=send_verb,
+    emulator_session=for_type(EasySmcController, _session),
+    send=for_type(EasySmcController, send_verb),
     send_words=SEND_WORDS,
     inspect=Inspection(split_stream, inspect_decode),
 )

@@ -82,7 +82,7 @@ def register(name: str, *, for_write: bool) -> tuple[int, int, str]:
     return CHANNEL_PA, int(pa[2:], 16), pa
 
 
-def transport_options(controller: Any, url: TransportURL) -> dict:
+def transport_options(controller: ImaxController, url: TransportURL) -> dict[str, object]:
     """``open_transport`` options for this controller: pcap addresses from the config;
     the IMAX only accepts commands sent from port PA24 (2.3.1), so a
     non-loopback ``udp://`` target sends from it."""

@@ -220,21 +220,29 @@ class ImaxController(UdpController["ImaxFrameEncoder"]):
     def position_query(self) -> PositionQuery:
         """One register read of DP00..DP49 (2.3.3): axis positions and the receive / use
         pointers of the frame buffer; moving while frames wait in it."""
-        from ._messages import CHANNEL_DP, RegisterRead, RegisterReply, ReplyStatus, decode
+        from ._messages import (
+            CHANNEL_DP,
+            ImaxMessage,
+            RegisterRead,
+            RegisterReply,
+            ReplyStatus,
+            decode,
+        )
 
         count = DP_USE + 1
 
-        def registers(msg: Any) -> Any:
-            ok = (
+        def registers(msg: ImaxMessage) -> tuple[int, ...] | None:
+            if not (
                 isinstance(msg, RegisterReply)
                 and msg.function == 0x1102
                 and msg.status == ReplyStatus.OK
                 and msg.start == 0
                 and len(msg.values) == count
-            )
-            return msg.values if ok else None
+            ):
+                return None
+            return msg.values
 
-        def status(values: Any, pulses: tuple[int, ...]) -> tuple[bool, int]:
+        def status(values: Sequence[int], pulses: tuple[int, ...]) -> tuple[bool, int]:
             depth = (values[DP_RECEIVE] - values[DP_USE]) & 0xFFFF
             return depth > 0, depth
 

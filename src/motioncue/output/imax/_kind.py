@@ -4,14 +4,13 @@ from __future__ import annotations
 
 from typing import TYPE_CHECKING
 
-from .._registry import ControllerKind, Inspection, Refusals
+from .._registry import ControllerKind, Inspection, Refusals, for_type
 from .._udp_cli import VERBS
 from ._cli import inspect_decode, send_verb, split_stream, transport_options
 from ._controller import ImaxController, controller_from_config
 from ._emulator import ImaxEmulator
 
 if TYPE_CHECKING:
-    from .._controller_api import Controller
     from .._transport import TransportURL
 
 __all__ = ["KIND", "describe_refusal", "is_flow_control"]
@@ -32,9 +31,7 @@ def describe_refusal(function: int, channel: int) -> str:
     return {4: "e-stop active", 5: "command error"}.get(x, "refused")
 
 
-def _emulator(controller: Controller, url: TransportURL, homing_time_s: float) -> ImaxEmulator:
-    if not isinstance(controller, ImaxController):
-        raise TypeError(f"an IMAX emulator needs an ImaxController, not {type(controller)}")
+def _emulator(controller: ImaxController, url: TransportURL, homing_time_s: float) -> ImaxEmulator:
     return ImaxEmulator(controller, url.host, url.port, homing_time_s=homing_time_s)
 
 
@@ -43,10 +40,10 @@ KIND = ControllerKind(
     controller_from_config,
     title="IMAX/SMC",
     links=("udp", "pcap", "file"),
-    emulator=_emulator,
-    send=send_verb,
+    emulator=for_type(ImaxController, _emulator),
+    send=for_type(ImaxController, send_verb),
     send_words=VERBS,
     inspect=Inspection(split_stream, inspect_decode),
-    transport_options=transport_options,
+    transport_options=for_type(ImaxController, transport_options),
     refusals=Refusals(is_flow_control, describe_refusal),
 )

@@ -35,6 +35,7 @@ from ._messages import (
     F_STATUS,
     F_WRITE,
     F_WRITE_ERR,
+    RegisterError,
     RegisterRead,
     RegisterReadReply,
     RegisterWrite,
@@ -83,7 +84,7 @@ def register(name: str, *, for_write: bool, save: bool = False) -> tuple[int, in
     return channel, int(fn[2:], 16), fn
 
 
-def transport_options(controller: Any, url: TransportURL) -> dict:
+def transport_options(controller: MboxController, url: TransportURL) -> dict[str, object]:
     """``open_transport`` options for this controller: pcap addresses from the config;
     the MBOX accepts any source port."""
     return _transport_options(controller, url, fixed_source_port=False)
@@ -151,7 +152,7 @@ def send_verb(
         return 0
     else:
         raise ConfigError(f"send {verb!r}: allowed {', '.join(VERBS)}")
-    if reply is not None and reply.function in (F_READ_ERR, F_WRITE_ERR):
+    if isinstance(reply, RegisterError) and reply.function in (F_READ_ERR, F_WRITE_ERR):
         print(f"error reply: code {reply.error_code}", file=out)
         return 1
     return 0

@@ -184,20 +184,21 @@ class MboxController(UdpController["MboxFrameEncoder"]):
     def position_query(self) -> PositionQuery:
         """One register read of Dn00..Dn4B (6.1): actual and commanded positions, and the
         frames waiting in the buffer (Dn4B); moving while any wait or the two differ."""
-        from ._messages import CHANNEL_DX, RegisterRead, RegisterReadReply, decode
+        from ._messages import CHANNEL_DX, MboxMessage, RegisterRead, RegisterReadReply, decode
 
         n, count = self.n_axes, DX_DEPTH + 1
 
-        def registers(msg: Any) -> Any:
-            ok = (
+        def registers(msg: MboxMessage) -> tuple[int, ...] | None:
+            if not (
                 isinstance(msg, RegisterReadReply)
                 and msg.channel == CHANNEL_DX
                 and msg.start == 0
                 and len(msg.values) == count
-            )
-            return msg.values if ok else None
+            ):
+                return None
+            return msg.values
 
-        def status(values: Any, actual: tuple[int, ...]) -> tuple[bool, int]:
+        def status(values: Sequence[int], actual: tuple[int, ...]) -> tuple[bool, int]:
             depth = values[DX_DEPTH]
             return depth > 0 or actual != words_to_positions(values, DX_COMMAND[:n]), depth
 

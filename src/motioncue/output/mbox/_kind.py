@@ -4,14 +4,13 @@ from __future__ import annotations
 
 from typing import TYPE_CHECKING
 
-from .._registry import ControllerKind, Inspection, Refusals
+from .._registry import ControllerKind, Inspection, Refusals, for_type
 from .._udp_cli import VERBS
 from ._cli import inspect_decode, send_verb, split_stream, transport_options
 from ._controller import MboxController, controller_from_config
 from ._emulator import MboxEmulator
 
 if TYPE_CHECKING:
-    from .._controller_api import Controller
     from .._transport import TransportURL
 
 __all__ = ["KIND", "describe_refusal", "is_flow_control"]
@@ -31,9 +30,7 @@ def describe_refusal(function: int, channel: int) -> str:
     }.get(function & 0xF, "refused")
 
 
-def _emulator(controller: Controller, url: TransportURL, homing_time_s: float) -> MboxEmulator:
-    if not isinstance(controller, MboxController):
-        raise TypeError(f"an MBOX emulator needs an MboxController, not {type(controller)}")
+def _emulator(controller: MboxController, url: TransportURL, homing_time_s: float) -> MboxEmulator:
     return MboxEmulator(controller, url.host, url.port, homing_time_s=homing_time_s)
 
 
@@ -42,10 +39,10 @@ KIND = ControllerKind(
     controller_from_config,
     title="SC-MBOX",
     links=("udp", "pcap", "file"),
-    emulator=_emulator,
-    send=send_verb,
+    emulator=for_type(MboxController, _emulator),
+    send=for_type(MboxController, send_verb),
     send_words=VERBS,
     inspect=Inspection(split_stream, inspect_decode),
-    transport_options=transport_options,
+    transport_options=for_type(MboxController, transport_options),
     refusals=Refusals(is_flow_control, describe_refusal),
 )
