@@ -137,7 +137,7 @@ class FrameEncoder(Protocol):
     frame numbers, time origin). One encoder per run."""
 
     def encode(
-        self, t_s: float, pulses: Sequence[Any], dout: int = 0, dacs: tuple[int, int] = (0, 0)
+        self, t_s: float, pulses: Sequence[int], dout: int = 0, dacs: tuple[int, int] = (0, 0)
     ) -> list[bytes]: ...
 
 

@@ -26,7 +26,7 @@ import struct
 from collections.abc import Callable, Iterable, Mapping, Sequence
 from dataclasses import dataclass
 from functools import cache
-from typing import Any, Protocol
+from typing import Protocol
 
 from .._errors import ConfigError, ProtocolError
 
@@ -171,7 +171,7 @@ def u16_tuple(values: Sequence[int], what: str) -> tuple[int, ...]:
     return tuple(out)
 
 
-def check_int32(values: Sequence[Any], n_axes: int, what: str = "positions") -> tuple[int, ...]:
+def check_int32(values: Sequence[object], n_axes: int, what: str = "positions") -> tuple[int, ...]:
     """Validate motor positions: ``n_axes`` finite integers within int32.
 
     Integral floats (``1000.0``) and numpy integers are accepted; NaN, inf, fractions and

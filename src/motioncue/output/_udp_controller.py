@@ -12,7 +12,7 @@ from __future__ import annotations
 import dataclasses
 import struct
 from collections.abc import Callable, Mapping, Sequence
-from typing import Any, ClassVar, Generic, Self, TypeVar
+from typing import ClassVar, Generic, Protocol, Self, TypeVar
 
 from .._config import ConfigReader
 from .._errors import ConfigError, LimitError
@@ -179,6 +179,16 @@ class UdpController(Generic[EncoderT]):
         return self._encoder(FrameClock(absolute_time, t0_s, first_frame), who_accept, who_reply)
 
 
+class _Framed(Protocol):
+    """What the shared frame encoder needs of its controller description."""
+
+    @property
+    def n_axes(self) -> int: ...
+
+    @property
+    def stroke_pulses(self) -> tuple[int, int] | None: ...
+
+
 class UdpFrameEncoder:
     """State both frame encoders keep: the clock, the fixed header fields and the stroke.
 
@@ -202,7 +212,7 @@ class UdpFrameEncoder:
 
     def __init__(
         self,
-        controller: Any,
+        controller: _Framed,
         clock: FrameClock,
         who_accept: int,
         who_reply: int,

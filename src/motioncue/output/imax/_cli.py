@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import functools
 import re
-from typing import Any, TextIO
+from typing import TextIO
 
 from ..._errors import ConfigError, ProtocolError
 from .._transport import Transport, TransportURL
@@ -61,10 +61,17 @@ _DPF = re.compile(r"^dpf[ _]?([0-9a-f])$", re.IGNORECASE)
 
 
 def emulator(
-    controller: ImaxController, host: str = "127.0.0.1", port: int = 0, **options: Any
+    controller: ImaxController,
+    host: str = "127.0.0.1",
+    port: int = 0,
+    *,
+    homing_time_s: float = 1.0,
+    start_homed: bool = True,
 ) -> ImaxEmulator:
     """An (unstarted) emulator of ``controller`` listening on ``host:port``."""
-    return ImaxEmulator(controller, host, port, **options)
+    return ImaxEmulator(
+        controller, host, port, homing_time_s=homing_time_s, start_homed=start_homed
+    )
 
 
 def register(name: str, *, for_write: bool) -> tuple[int, int, str]:

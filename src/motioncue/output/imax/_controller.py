@@ -8,7 +8,7 @@ from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from numbers import Integral
 from types import MappingProxyType
-from typing import Any, ClassVar
+from typing import ClassVar
 
 from ..._config import ConfigReader
 from ..._errors import ConfigError, LimitError, ProtocolError
@@ -42,7 +42,7 @@ IMAX_RAMP_PERIOD_S = 1e-3
 the manual does not state it: 1 ms is an assumption, named in the limits' sources."""
 
 
-def validate_parameters(values: Mapping[str, Any], where: str) -> dict[str, int]:
+def validate_parameters(values: Mapping[str, object], where: str) -> dict[str, int]:
     """Defaults overridden by ``values``; names canonical, values within range."""
     return _validate(values, where, PA_SPEC, pa_name, "is not an IMAX parameter this package knows")
 
@@ -305,7 +305,7 @@ class ImaxFrameEncoder(UdpFrameEncoder):
     def encode(
         self,
         t_s: float,
-        pulses: Sequence[Any],
+        pulses: Sequence[int],
         dout: int = 0,
         dacs: tuple[int, int] = (0, 0),
         vibration: Sequence[tuple[int, int]] | None = None,

@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 import re
-from typing import Any, TextIO
+from typing import TextIO
 
 from ..._errors import ConfigError, ProtocolError
 from .._transport import Transport, TransportURL
@@ -58,10 +58,17 @@ _CX = re.compile(r"^(?:cn|cx)[ _]?([0-7])$", re.IGNORECASE)
 
 
 def emulator(
-    controller: MboxController, host: str = "127.0.0.1", port: int = 0, **options: Any
+    controller: MboxController,
+    host: str = "127.0.0.1",
+    port: int = 0,
+    *,
+    homing_time_s: float = 1.0,
+    start_homed: bool = True,
 ) -> MboxEmulator:
     """An (unstarted) emulator of ``controller`` listening on ``host:port``."""
-    return MboxEmulator(controller, host, port, **options)
+    return MboxEmulator(
+        controller, host, port, homing_time_s=homing_time_s, start_homed=start_homed
+    )
 
 
 def register(name: str, *, for_write: bool, save: bool = False) -> tuple[int, int, str]:

@@ -7,7 +7,7 @@ from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from numbers import Integral
 from types import MappingProxyType
-from typing import Any, ClassVar
+from typing import ClassVar
 
 from ..._config import ConfigReader
 from ..._errors import ConfigError, LimitError, ProtocolError
@@ -32,7 +32,7 @@ def _freeze(params: Mapping[str, int]) -> Mapping[str, int]:
     return MappingProxyType(dict(params))
 
 
-def validate_parameters(values: Mapping[str, Any], where: str) -> dict[str, int]:
+def validate_parameters(values: Mapping[str, object], where: str) -> dict[str, int]:
     """Factory defaults overridden by ``values``; names canonical, values within range."""
     unknown = f"is not an MBOX parameter this package knows (known: {', '.join(FN_SPEC)})"
     return _validate(values, where, FN_SPEC, fn_name, unknown)
@@ -219,7 +219,7 @@ class MboxController(UdpController["MboxFrameEncoder"]):
         return MboxFrameEncoder(self, clock, who_accept, who_reply)
 
 
-def _integer(value: Any, what: str) -> int:
+def _integer(value: object, what: str) -> int:
     if isinstance(value, bool) or not isinstance(value, Integral):
         raise ProtocolError(f"{what} = {value!r} is not an integer")
     return int(value)
@@ -253,7 +253,7 @@ class MboxFrameEncoder(UdpFrameEncoder):
         self._dac_max = (controller.parameters["Fn078"], controller.parameters["Fn079"])
 
     def encode(
-        self, t_s: float, pulses: Sequence[Any], dout: int = 0, dacs: tuple[int, int] = (0, 0)
+        self, t_s: float, pulses: Sequence[int], dout: int = 0, dacs: tuple[int, int] = (0, 0)
     ) -> list[bytes]:
         """One frame datagram for the positions ``pulses`` (len ``n_axes``) at ``t_s``."""
         if len(pulses) != self.n_axes:
