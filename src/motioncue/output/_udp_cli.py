@@ -8,14 +8,17 @@ import math
 import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Protocol, TextIO, runtime_checkable
+from typing import TYPE_CHECKING, Protocol, TextIO, TypeVar, runtime_checkable
 
 from .._errors import ConfigError, ProtocolError
+from ._registry import ControllerKind, Inspection, Refusals, for_type
 from ._transport import Transport, TransportURL
 from ._udp_common import WireMessage, format_who
 
 if TYPE_CHECKING:
-    from ._controller_api import FrameEncoder, PulseLimits
+    from .._config import ConfigReader
+    from ._controller_api import Controller, FrameEncoder, PulseLimits
+    from ._registry import Emulator
 
 __all__ = [
     "VERBS",
@@ -30,6 +33,7 @@ __all__ = [
     "require_request",
     "split_datagrams",
     "transport_options",
+    "udp_controller_kind",
 ]
 
 VERBS = ("estop", "reset", "home", "park", "outputs", "read", "write")
@@ -287,3 +291,48 @@ def split_datagrams(blob: bytes, size_at: Callable[[bytes, int], int]) -> list[b
         out.append(blob[off : off + size])
         off += size
     return out
+
+
+C = TypeVar("C")
+C_contra = TypeVar("C_contra", contravariant=True)
+
+
+class UdpEmulatorClass(Protocol[C_contra]):
+    """An emulator class of a UDP kind: ``cls(controller, host, port, homing_time_s=...)``."""
+
+    def __call__(
+        self, controller: C_contra, host: str, port: int, *, homing_time_s: float
+    ) -> Emulator: ...
+
+
+def udp_controller_kind(
+    name: str,
+    title: str,
+    description: type[C],
+    read_config: Callable[[ConfigReader, str], Controller],
+    emulator: UdpEmulatorClass[C],
+    send: Callable[..., int],
+    inspect: Inspection,
+    options: Callable[[C, TransportURL], dict[str, object]],
+    refusals: Refusals,
+) -> ControllerKind:
+    """The registry entry of an IMAX-like UDP kind: frames on ``udp://`` (or written to
+    ``pcap:`` / ``file:``), an emulator on ``udp://``, the common ``send`` words
+    (:data:`VERBS`), ``inspect``, and frame refusals in the replies. ``description`` is
+    the kind's controller class (its hooks are refused any other kind's description)."""
+
+    def at_url(controller: C, url: TransportURL, homing_time_s: float) -> Emulator:
+        return emulator(controller, url.host, url.port, homing_time_s=homing_time_s)
+
+    return ControllerKind(
+        name,
+        read_config,
+        title=title,
+        links=("udp", "pcap", "file"),
+        emulator=for_type(description, at_url),
+        send=for_type(description, send),
+        send_words=VERBS,
+        inspect=inspect,
+        transport_options=for_type(description, options),
+        refusals=refusals,
+    )

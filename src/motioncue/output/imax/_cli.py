@@ -23,7 +23,6 @@ from .._udp_cli import (
 from .._udp_cli import transport_options as _transport_options
 from .._udp_common import CONFIRM_SERVO, HEADER, WHO_ALL, decode_header
 from ._controller import ImaxController
-from ._emulator import ImaxEmulator
 from ._messages import (
     CHANNEL_DP,
     CHANNEL_DPF,
@@ -49,7 +48,6 @@ from ._params import DP_POS, pa_name
 
 __all__ = [
     "VERBS",
-    "emulator",
     "inspect_decode",
     "send_verb",
     "split_stream",
@@ -58,20 +56,6 @@ __all__ = [
 
 _DP = re.compile(r"^dp[ _]?([0-9a-f]{1,2})$", re.IGNORECASE)
 _DPF = re.compile(r"^dpf[ _]?([0-9a-f])$", re.IGNORECASE)
-
-
-def emulator(
-    controller: ImaxController,
-    host: str = "127.0.0.1",
-    port: int = 0,
-    *,
-    homing_time_s: float = 1.0,
-    start_homed: bool = True,
-) -> ImaxEmulator:
-    """An (unstarted) emulator of ``controller`` listening on ``host:port``."""
-    return ImaxEmulator(
-        controller, host, port, homing_time_s=homing_time_s, start_homed=start_homed
-    )
 
 
 def register(name: str, *, for_write: bool) -> tuple[int, int, str]:

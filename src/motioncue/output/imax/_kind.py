@@ -2,16 +2,11 @@
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING
-
-from .._registry import ControllerKind, Inspection, Refusals, for_type
-from .._udp_cli import VERBS
+from .._registry import Inspection, Refusals
+from .._udp_cli import udp_controller_kind
 from ._cli import inspect_decode, send_verb, split_stream, transport_options
 from ._controller import ImaxController, controller_from_config
 from ._emulator import ImaxEmulator
-
-if TYPE_CHECKING:
-    from .._transport import TransportURL
 
 __all__ = ["KIND", "describe_refusal", "is_flow_control"]
 
@@ -31,19 +26,14 @@ def describe_refusal(function: int, channel: int) -> str:
     return {4: "e-stop active", 5: "command error"}.get(x, "refused")
 
 
-def _emulator(controller: ImaxController, url: TransportURL, homing_time_s: float) -> ImaxEmulator:
-    return ImaxEmulator(controller, url.host, url.port, homing_time_s=homing_time_s)
-
-
-KIND = ControllerKind(
+KIND = udp_controller_kind(
     "imax",
+    "IMAX/SMC",
+    ImaxController,
     controller_from_config,
-    title="IMAX/SMC",
-    links=("udp", "pcap", "file"),
-    emulator=for_type(ImaxController, _emulator),
-    send=for_type(ImaxController, send_verb),
-    send_words=VERBS,
-    inspect=Inspection(split_stream, inspect_decode),
-    transport_options=for_type(ImaxController, transport_options),
-    refusals=Refusals(is_flow_control, describe_refusal),
+    ImaxEmulator,
+    send_verb,
+    Inspection(split_stream, inspect_decode),
+    transport_options,
+    Refusals(is_flow_control, describe_refusal),
 )

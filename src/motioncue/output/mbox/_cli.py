@@ -22,7 +22,6 @@ from .._udp_cli import (
 from .._udp_cli import transport_options as _transport_options
 from .._udp_common import HEADER, WHO_ALL, decode_header
 from ._controller import MboxController
-from ._emulator import MboxEmulator
 from ._messages import (
     CHANNEL_CX,
     CHANNEL_DX,
@@ -46,7 +45,6 @@ from ._params import DX_COMMAND, fn_name
 
 __all__ = [
     "VERBS",
-    "emulator",
     "inspect_decode",
     "send_verb",
     "split_stream",
@@ -55,20 +53,6 @@ __all__ = [
 
 _DX = re.compile(r"^(?:dn|dx)[ _]?([0-9a-f]{1,2})$", re.IGNORECASE)
 _CX = re.compile(r"^(?:cn|cx)[ _]?([0-7])$", re.IGNORECASE)
-
-
-def emulator(
-    controller: MboxController,
-    host: str = "127.0.0.1",
-    port: int = 0,
-    *,
-    homing_time_s: float = 1.0,
-    start_homed: bool = True,
-) -> MboxEmulator:
-    """An (unstarted) emulator of ``controller`` listening on ``host:port``."""
-    return MboxEmulator(
-        controller, host, port, homing_time_s=homing_time_s, start_homed=start_homed
-    )
 
 
 def register(name: str, *, for_write: bool, save: bool = False) -> tuple[int, int, str]:
