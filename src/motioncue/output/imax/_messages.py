@@ -42,7 +42,7 @@ from __future__ import annotations
 
 import enum
 import struct
-from collections.abc import Sequence
+from collections.abc import Callable, Iterable, Sequence
 from dataclasses import dataclass
 from functools import cache
 from itertools import chain
@@ -344,8 +344,79 @@ def _reply_axes(
     raise ProtocolError(f"{what}: length {size} bytes is not {forms} for 2..12 axes")
 
 
+class _TimedFrame:
+    """Encoder, decoder and size of the four IMAX frame messages, derived from one
+    declaration per message: its layout (``_STRUCT``: plain or vibration frame), whether
+    it is a reply (``_REPLY``: axis count from the length, channel field kept, Who 0),
+    the function bases, and how its trailing fields map to the layout's tail
+    (``_tail`` / ``_from_tail``)."""
+
+    __slots__ = ()
+
+    _STRUCT: ClassVar[Callable[[int, bool, int], struct.Struct]]
+    _REPLY: ClassVar[bool]
+    _BASES: ClassVar[tuple[int, int]]  # (absolute, relative) request function codes
+    _PER_AXIS: ClassVar[int]  # reply bytes per axis after PortOut
+    _WHAT: ClassVar[str]
+
+    absolute: bool
+    frame: int
+    time_ms: int
+    positions: tuple[int, ...]
+    port_out_bytes: int
+
+    def _head(self) -> tuple[int, int, int, int]:
+        raise NotImplementedError
+
+    def _tail(self) -> Iterable[int]:
+        raise NotImplementedError
+
+    @classmethod
+    def _from_tail(cls, h: Header, relative: bool, f: tuple[int, ...], n: int, width: int) -> Self:
+        raise NotImplementedError
+
+    def _check(self) -> None:
+        channel_of_axes(len(self.positions))
+        check_port_out_bytes(self.port_out_bytes)
+
+    @property
+    def size(self) -> int:
+        return type(self)._STRUCT(len(self.positions), False, self.port_out_bytes).size
+
+    def encode(self) -> bytes:
+        layout = type(self)._STRUCT(len(self.positions), not self.absolute, self.port_out_bytes)
+        return pack_timed_frame(
+            layout,
+            self._head(),
+            self.frame,
+            self.time_ms,
+            self.positions,
+            self._tail(),
+            f"IMAX {self._WHAT}",
+        )
+
+    @classmethod
+    def decode_parts(cls, h: Header, data: bytes, port_out_bytes: int | None = None) -> Self:
+        """The message in ``data`` (PortOut ``port_out_bytes`` wide; ``None``: either)."""
+        relative = (h.function & 0xFFF0) == (cls._BASES[1] & 0xFFF0)
+        if cls._REPLY:
+            fixed = cls._STRUCT(0, False, 2).size - 2
+            what = f"{cls._WHAT} 0x{h.function:04X}"
+            n, width = _reply_axes(len(data), fixed, cls._PER_AXIS, port_out_bytes, what)
+        else:
+            n = axes_of_channel(h.channel)
+            sizes = {w: cls._STRUCT(n, False, w).size for w in PORT_OUT_BYTES}
+            what = f"{n}-axis {cls._WHAT} 0x{h.function:04X}"
+            width = _width_of(len(data), sizes, port_out_bytes, what)
+        return cls._from_tail(h, relative, cls._STRUCT(n, relative, width).unpack(data), n, width)
+
+
+def _pairs(flat: Sequence[int]) -> tuple[tuple[int, int], ...]:
+    return tuple(zip(flat[0::2], flat[1::2], strict=True))
+
+
 @dataclass(frozen=True, slots=True)
-class MotionFrame:
+class MotionFrame(_TimedFrame):
     """Host -> IMAX timed frame, 0x1301 (absolute ms since the first frame, u32) or 0x1401
     (ms since the previous frame, i32) (2.2.2.5, 2.2.2.7).
 
@@ -354,6 +425,12 @@ class MotionFrame:
     ``extend``: reserved u32. ``port_out_bytes``: PortOut's width on the wire, 2 or 4 (the
     manual prints both; module notes).
     """
+
+    _STRUCT = staticmethod(_frame_struct)
+    _REPLY = False
+    _BASES = (F_ABS, F_REL)
+    _PER_AXIS = 4
+    _WHAT = "frame"
 
     absolute: bool
     frame: int
@@ -366,8 +443,7 @@ class MotionFrame:
     port_out_bytes: int = 2
 
     def __post_init__(self) -> None:
-        channel_of_axes(len(self.positions))
-        check_port_out_bytes(self.port_out_bytes)
+        self._check()
         self.encode()
 
     @property
@@ -378,47 +454,33 @@ class MotionFrame:
     def n_axes(self) -> int:
         return len(self.positions)
 
-    @property
-    def size(self) -> int:
-        return frame_size(len(self.positions), self.port_out_bytes)
+    def _head(self) -> tuple[int, int, int, int]:
+        n = channel_of_axes(len(self.positions))
+        return self.function, n, self.who_accept, self.who_reply
 
-    def encode(self) -> bytes:
-        n = len(self.positions)
-        return pack_timed_frame(
-            _frame_struct(n, not self.absolute, self.port_out_bytes),
-            (self.function, channel_of_axes(n), self.who_accept, self.who_reply),
-            self.frame,
-            self.time_ms,
-            self.positions,
-            (self.port_out, self.extend),
-            "IMAX frame",
-        )
+    def _tail(self) -> Iterable[int]:
+        return (self.port_out, self.extend)
 
     @classmethod
-    def decode_parts(cls, h: Header, data: bytes, port_out_bytes: int | None = None) -> MotionFrame:
-        """The frame in ``data`` (PortOut ``port_out_bytes`` wide; ``None``: either)."""
-        n = axes_of_channel(h.channel)
-        relative = h.function == F_REL
-        sizes = {w: frame_size(n, w) for w in PORT_OUT_BYTES}
-        width = _width_of(len(data), sizes, port_out_bytes, f"{n}-axis frame 0x{h.function:04X}")
-        f = _frame_struct(n, relative, width).unpack(data)
+    def _from_tail(
+        cls, h: Header, relative: bool, f: tuple[int, ...], n: int, width: int
+    ) -> MotionFrame:
         return cls(
-            not relative,
-            f[6],
-            f[7],
-            f[8 : 8 + n],
-            f[8 + n],
-            f[9 + n],
-            h.who_accept,
-            h.who_reply,
-            width,
-        )
+            not relative, f[6], f[7], f[8 : 8 + n], f[8 + n], f[9 + n],
+            h.who_accept, h.who_reply, width,
+        )  # fmt: skip
 
 
 @dataclass(frozen=True, slots=True)
-class MotionFrameReply:
+class MotionFrameReply(_TimedFrame):
     """IMAX -> host 0x130x / 0x140x: the frame echoed, ``port`` = input states,
     ``channel`` = axis channel (x = 2) or error code (x != 2) (2.2.2.6, 2.2.2.8)."""
+
+    _STRUCT = staticmethod(_frame_struct)
+    _REPLY = True
+    _BASES = (F_ABS, F_REL)
+    _PER_AXIS = 4
+    _WHAT = "frame reply"
 
     status: ReplyStatus
     absolute: bool
@@ -431,57 +493,40 @@ class MotionFrameReply:
     port_out_bytes: int = 2
 
     def __post_init__(self) -> None:
-        channel_of_axes(len(self.positions))
-        check_port_out_bytes(self.port_out_bytes)
+        self._check()
         self.encode()
 
     @property
     def function(self) -> int:
         return (F_ABS if self.absolute else F_REL) - 1 + int(self.status)
 
-    @property
-    def size(self) -> int:
-        return frame_size(len(self.positions), self.port_out_bytes)
+    def _head(self) -> tuple[int, int, int, int]:
+        return self.function, self.channel, WHO_NONE, WHO_NONE
 
-    def encode(self) -> bytes:
-        return pack_timed_frame(
-            _frame_struct(len(self.positions), not self.absolute, self.port_out_bytes),
-            (self.function, self.channel, WHO_NONE, WHO_NONE),
-            self.frame,
-            self.time_ms,
-            self.positions,
-            (self.port, self.extend),
-            "IMAX frame reply",
-        )
+    def _tail(self) -> Iterable[int]:
+        return (self.port, self.extend)
 
     @classmethod
-    def decode_parts(
-        cls, h: Header, data: bytes, port_out_bytes: int | None = None
+    def _from_tail(
+        cls, h: Header, relative: bool, f: tuple[int, ...], n: int, width: int
     ) -> MotionFrameReply:
-        """The reply in ``data`` (PortOut ``port_out_bytes`` wide; ``None``: either)."""
-        n, width = _reply_axes(
-            len(data), frame_size(0, 2) - 2, 4, port_out_bytes, f"frame reply 0x{h.function:04X}"
-        )
-        relative = (h.function & 0xFFF0) == 0x1400
-        f = _frame_struct(n, relative, width).unpack(data)
         return cls(
-            ReplyStatus(h.function & 0xF),
-            not relative,
-            h.channel,
-            f[6],
-            f[7],
-            f[8 : 8 + n],
-            f[8 + n],
-            f[9 + n],
-            width,
-        )
+            ReplyStatus(h.function & 0xF), not relative, h.channel, f[6], f[7], f[8 : 8 + n],
+            f[8 + n], f[9 + n], width,
+        )  # fmt: skip
 
 
 @dataclass(frozen=True, slots=True)
-class VibrationFrame:
+class VibrationFrame(_TimedFrame):
     """Host -> IMAX 0x1801 (absolute time) / 0x1901 (relative time) frame with per-axis
     vibration: ``vibration[i] = (period in 0.125 ms, amplitude in pulses)`` (2.2.2.9,
     2.2.2.11)."""
+
+    _STRUCT = staticmethod(_vib_struct)
+    _REPLY = False
+    _BASES = (F_VIB_ABS, F_VIB_REL)
+    _PER_AXIS = 8
+    _WHAT = "vibration frame"
 
     absolute: bool
     frame: int
@@ -494,8 +539,7 @@ class VibrationFrame:
     port_out_bytes: int = 2
 
     def __post_init__(self) -> None:
-        channel_of_axes(len(self.positions))
-        check_port_out_bytes(self.port_out_bytes)
+        self._check()
         if len(self.vibration) != len(self.positions):
             raise ProtocolError(
                 f"{len(self.vibration)} vibration pairs for {len(self.positions)} axes"
@@ -506,50 +550,32 @@ class VibrationFrame:
     def function(self) -> int:
         return F_VIB_ABS if self.absolute else F_VIB_REL
 
-    @property
-    def size(self) -> int:
-        return vibration_frame_size(len(self.positions), self.port_out_bytes)
+    def _head(self) -> tuple[int, int, int, int]:
+        n = channel_of_axes(len(self.positions))
+        return self.function, n, self.who_accept, self.who_reply
 
-    def encode(self) -> bytes:
-        n = len(self.positions)
-        return pack_timed_frame(
-            _vib_struct(n, not self.absolute, self.port_out_bytes),
-            (self.function, channel_of_axes(n), self.who_accept, self.who_reply),
-            self.frame,
-            self.time_ms,
-            self.positions,
-            chain((self.port_out,), (v for pair in self.vibration for v in pair)),
-            "IMAX vibration frame",
-        )
+    def _tail(self) -> Iterable[int]:
+        return chain((self.port_out,), (v for pair in self.vibration for v in pair))
 
     @classmethod
-    def decode_parts(
-        cls, h: Header, data: bytes, port_out_bytes: int | None = None
+    def _from_tail(
+        cls, h: Header, relative: bool, f: tuple[int, ...], n: int, width: int
     ) -> VibrationFrame:
-        """The frame in ``data`` (PortOut ``port_out_bytes`` wide; ``None``: either)."""
-        n = axes_of_channel(h.channel)
-        relative = h.function == F_VIB_REL
-        sizes = {w: vibration_frame_size(n, w) for w in PORT_OUT_BYTES}
-        what = f"{n}-axis vibration frame 0x{h.function:04X}"
-        width = _width_of(len(data), sizes, port_out_bytes, what)
-        f = _vib_struct(n, relative, width).unpack(data)
-        vib = f[9 + n :]
         return cls(
-            not relative,
-            f[6],
-            f[7],
-            f[8 : 8 + n],
-            f[8 + n],
-            tuple(zip(vib[0::2], vib[1::2], strict=True)),
-            h.who_accept,
-            h.who_reply,
-            width,
-        )
+            not relative, f[6], f[7], f[8 : 8 + n], f[8 + n], _pairs(f[9 + n :]),
+            h.who_accept, h.who_reply, width,
+        )  # fmt: skip
 
 
 @dataclass(frozen=True, slots=True)
-class VibrationFrameReply:
+class VibrationFrameReply(_TimedFrame):
     """IMAX -> host 0x180x / 0x190x: the vibration frame echoed (``port`` = inputs)."""
+
+    _STRUCT = staticmethod(_vib_struct)
+    _REPLY = True
+    _BASES = (F_VIB_ABS, F_VIB_REL)
+    _PER_AXIS = 8
+    _WHAT = "vibration reply"
 
     status: ReplyStatus
     absolute: bool
@@ -562,8 +588,7 @@ class VibrationFrameReply:
     port_out_bytes: int = 2
 
     def __post_init__(self) -> None:
-        channel_of_axes(len(self.positions))
-        check_port_out_bytes(self.port_out_bytes)
+        self._check()
         if len(self.vibration) != len(self.positions):
             raise ProtocolError("one vibration pair per axis")
         self.encode()
@@ -572,47 +597,20 @@ class VibrationFrameReply:
     def function(self) -> int:
         return (F_VIB_ABS if self.absolute else F_VIB_REL) - 1 + int(self.status)
 
-    @property
-    def size(self) -> int:
-        return vibration_frame_size(len(self.positions), self.port_out_bytes)
+    def _head(self) -> tuple[int, int, int, int]:
+        return self.function, self.channel, WHO_NONE, WHO_NONE
 
-    def encode(self) -> bytes:
-        return pack_timed_frame(
-            _vib_struct(len(self.positions), not self.absolute, self.port_out_bytes),
-            (self.function, self.channel, WHO_NONE, WHO_NONE),
-            self.frame,
-            self.time_ms,
-            self.positions,
-            chain((self.port,), (v for pair in self.vibration for v in pair)),
-            "IMAX vibration reply",
-        )
+    def _tail(self) -> Iterable[int]:
+        return chain((self.port,), (v for pair in self.vibration for v in pair))
 
     @classmethod
-    def decode_parts(
-        cls, h: Header, data: bytes, port_out_bytes: int | None = None
+    def _from_tail(
+        cls, h: Header, relative: bool, f: tuple[int, ...], n: int, width: int
     ) -> VibrationFrameReply:
-        """The reply in ``data`` (PortOut ``port_out_bytes`` wide; ``None``: either)."""
-        n, width = _reply_axes(
-            len(data),
-            vibration_frame_size(0, 2) - 2,
-            8,
-            port_out_bytes,
-            f"vibration reply 0x{h.function:04X}",
-        )
-        relative = (h.function & 0xFFF0) == 0x1900
-        f = _vib_struct(n, relative, width).unpack(data)
-        vib = f[9 + n :]
         return cls(
-            ReplyStatus(h.function & 0xF),
-            not relative,
-            h.channel,
-            f[6],
-            f[7],
-            f[8 : 8 + n],
-            f[8 + n],
-            tuple(zip(vib[0::2], vib[1::2], strict=True)),
-            width,
-        )
+            ReplyStatus(h.function & 0xF), not relative, h.channel, f[6], f[7], f[8 : 8 + n],
+            f[8 + n], _pairs(f[9 + n :]), width,
+        )  # fmt: skip
 
 
 # -- status report ----------------------------------------------------------------------------
