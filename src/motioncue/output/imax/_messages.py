@@ -356,7 +356,6 @@ class _TimedFrame:
     _STRUCT: ClassVar[Callable[[int, bool, int], struct.Struct]]
     _REPLY: ClassVar[bool]
     _BASES: ClassVar[tuple[int, int]]  # (absolute, relative) request function codes
-    _PER_AXIS: ClassVar[int]  # reply bytes per axis after PortOut
     _WHAT: ClassVar[str]
 
     absolute: bool
@@ -375,9 +374,18 @@ class _TimedFrame:
     def _from_tail(cls, h: Header, relative: bool, f: tuple[int, ...], n: int, width: int) -> Self:
         raise NotImplementedError
 
-    def _check(self) -> None:
-        channel_of_axes(len(self.positions))
+    def _pair_count(self) -> int | None:
+        """Vibration pairs the message carries (None: a plain frame)."""
+        return None
+
+    def __post_init__(self) -> None:
+        n = len(self.positions)
+        channel_of_axes(n)
         check_port_out_bytes(self.port_out_bytes)
+        pairs = self._pair_count()
+        if pairs is not None and pairs != n:
+            raise ProtocolError(f"{pairs} vibration pairs for {n} axes")
+        self.encode()
 
     @property
     def size(self) -> int:
@@ -402,7 +410,8 @@ class _TimedFrame:
         if cls._REPLY:
             fixed = cls._STRUCT(0, False, 2).size - 2
             what = f"{cls._WHAT} 0x{h.function:04X}"
-            n, width = _reply_axes(len(data), fixed, cls._PER_AXIS, port_out_bytes, what)
+            per_axis = cls._STRUCT(1, False, 2).size - cls._STRUCT(0, False, 2).size
+            n, width = _reply_axes(len(data), fixed, per_axis, port_out_bytes, what)
         else:
             n = axes_of_channel(h.channel)
             sizes = {w: cls._STRUCT(n, False, w).size for w in PORT_OUT_BYTES}
@@ -411,12 +420,52 @@ class _TimedFrame:
         return cls._from_tail(h, relative, cls._STRUCT(n, relative, width).unpack(data), n, width)
 
 
+class _TimedRequest(_TimedFrame):
+    """Host -> IMAX frame: function from the time mode, channel from the axis count."""
+
+    __slots__ = ()
+    _REPLY = False
+
+    who_accept: int
+    who_reply: int
+
+    @property
+    def function(self) -> int:
+        return self._BASES[0] if self.absolute else self._BASES[1]
+
+    @property
+    def n_axes(self) -> int:
+        return len(self.positions)
+
+    def _head(self) -> tuple[int, int, int, int]:
+        n = channel_of_axes(len(self.positions))
+        return self.function, n, self.who_accept, self.who_reply
+
+
+class _TimedReply(_TimedFrame):
+    """IMAX -> host frame reply: status in the function's last digit, the channel field
+    kept (axis channel, or the error code), Who 0."""
+
+    __slots__ = ()
+    _REPLY = True
+
+    status: ReplyStatus
+    channel: int
+
+    @property
+    def function(self) -> int:
+        return (self._BASES[0] if self.absolute else self._BASES[1]) - 1 + int(self.status)
+
+    def _head(self) -> tuple[int, int, int, int]:
+        return self.function, self.channel, WHO_NONE, WHO_NONE
+
+
 def _pairs(flat: Sequence[int]) -> tuple[tuple[int, int], ...]:
     return tuple(zip(flat[0::2], flat[1::2], strict=True))
 
 
 @dataclass(frozen=True, slots=True)
-class MotionFrame(_TimedFrame):
+class MotionFrame(_TimedRequest):
     """Host -> IMAX timed frame, 0x1301 (absolute ms since the first frame, u32) or 0x1401
     (ms since the previous frame, i32) (2.2.2.5, 2.2.2.7).
 
@@ -427,9 +476,7 @@ class MotionFrame(_TimedFrame):
     """
 
     _STRUCT = staticmethod(_frame_struct)
-    _REPLY = False
     _BASES = (F_ABS, F_REL)
-    _PER_AXIS = 4
     _WHAT = "frame"
 
     absolute: bool
@@ -441,22 +488,6 @@ class MotionFrame(_TimedFrame):
     who_accept: int = WHO_ALL
     who_reply: int = WHO_ALL
     port_out_bytes: int = 2
-
-    def __post_init__(self) -> None:
-        self._check()
-        self.encode()
-
-    @property
-    def function(self) -> int:
-        return F_ABS if self.absolute else F_REL
-
-    @property
-    def n_axes(self) -> int:
-        return len(self.positions)
-
-    def _head(self) -> tuple[int, int, int, int]:
-        n = channel_of_axes(len(self.positions))
-        return self.function, n, self.who_accept, self.who_reply
 
     def _tail(self) -> Iterable[int]:
         return (self.port_out, self.extend)
@@ -472,14 +503,12 @@ class MotionFrame(_TimedFrame):
 
 
 @dataclass(frozen=True, slots=True)
-class MotionFrameReply(_TimedFrame):
+class MotionFrameReply(_TimedReply):
     """IMAX -> host 0x130x / 0x140x: the frame echoed, ``port`` = input states,
     ``channel`` = axis channel (x = 2) or error code (x != 2) (2.2.2.6, 2.2.2.8)."""
 
     _STRUCT = staticmethod(_frame_struct)
-    _REPLY = True
     _BASES = (F_ABS, F_REL)
-    _PER_AXIS = 4
     _WHAT = "frame reply"
 
     status: ReplyStatus
@@ -491,17 +520,6 @@ class MotionFrameReply(_TimedFrame):
     port: int = 0
     extend: int = 0
     port_out_bytes: int = 2
-
-    def __post_init__(self) -> None:
-        self._check()
-        self.encode()
-
-    @property
-    def function(self) -> int:
-        return (F_ABS if self.absolute else F_REL) - 1 + int(self.status)
-
-    def _head(self) -> tuple[int, int, int, int]:
-        return self.function, self.channel, WHO_NONE, WHO_NONE
 
     def _tail(self) -> Iterable[int]:
         return (self.port, self.extend)
@@ -517,15 +535,13 @@ class MotionFrameReply(_TimedFrame):
 
 
 @dataclass(frozen=True, slots=True)
-class VibrationFrame(_TimedFrame):
+class VibrationFrame(_TimedRequest):
     """Host -> IMAX 0x1801 (absolute time) / 0x1901 (relative time) frame with per-axis
     vibration: ``vibration[i] = (period in 0.125 ms, amplitude in pulses)`` (2.2.2.9,
     2.2.2.11)."""
 
     _STRUCT = staticmethod(_vib_struct)
-    _REPLY = False
     _BASES = (F_VIB_ABS, F_VIB_REL)
-    _PER_AXIS = 8
     _WHAT = "vibration frame"
 
     absolute: bool
@@ -538,21 +554,8 @@ class VibrationFrame(_TimedFrame):
     who_reply: int = WHO_ALL
     port_out_bytes: int = 2
 
-    def __post_init__(self) -> None:
-        self._check()
-        if len(self.vibration) != len(self.positions):
-            raise ProtocolError(
-                f"{len(self.vibration)} vibration pairs for {len(self.positions)} axes"
-            )
-        self.encode()
-
-    @property
-    def function(self) -> int:
-        return F_VIB_ABS if self.absolute else F_VIB_REL
-
-    def _head(self) -> tuple[int, int, int, int]:
-        n = channel_of_axes(len(self.positions))
-        return self.function, n, self.who_accept, self.who_reply
+    def _pair_count(self) -> int | None:
+        return len(self.vibration)
 
     def _tail(self) -> Iterable[int]:
         return chain((self.port_out,), (v for pair in self.vibration for v in pair))
@@ -568,13 +571,11 @@ class VibrationFrame(_TimedFrame):
 
 
 @dataclass(frozen=True, slots=True)
-class VibrationFrameReply(_TimedFrame):
+class VibrationFrameReply(_TimedReply):
     """IMAX -> host 0x180x / 0x190x: the vibration frame echoed (``port`` = inputs)."""
 
     _STRUCT = staticmethod(_vib_struct)
-    _REPLY = True
     _BASES = (F_VIB_ABS, F_VIB_REL)
-    _PER_AXIS = 8
     _WHAT = "vibration reply"
 
     status: ReplyStatus
@@ -587,18 +588,8 @@ class VibrationFrameReply(_TimedFrame):
     vibration: tuple[tuple[int, int], ...]
     port_out_bytes: int = 2
 
-    def __post_init__(self) -> None:
-        self._check()
-        if len(self.vibration) != len(self.positions):
-            raise ProtocolError("one vibration pair per axis")
-        self.encode()
-
-    @property
-    def function(self) -> int:
-        return (F_VIB_ABS if self.absolute else F_VIB_REL) - 1 + int(self.status)
-
-    def _head(self) -> tuple[int, int, int, int]:
-        return self.function, self.channel, WHO_NONE, WHO_NONE
+    def _pair_count(self) -> int | None:
+        return len(self.vibration)
 
     def _tail(self) -> Iterable[int]:
         return chain((self.port,), (v for pair in self.vibration for v in pair))
