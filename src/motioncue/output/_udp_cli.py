@@ -2,18 +2,19 @@
 
 from __future__ import annotations
 
+import abc
 import dataclasses
 import enum
 import math
 import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Protocol, TextIO, TypeVar, runtime_checkable
+from typing import TYPE_CHECKING, ClassVar, Protocol, TextIO, TypeVar, runtime_checkable
 
 from .._errors import ConfigError, ProtocolError
 from ._registry import ControllerKind, Inspection, Refusals, for_type
 from ._transport import Transport, TransportURL
-from ._udp_common import WireMessage, format_who
+from ._udp_common import WHO_ALL, WireMessage, format_who
 
 if TYPE_CHECKING:
     from .._config import ConfigReader
@@ -23,6 +24,7 @@ if TYPE_CHECKING:
 __all__ = [
     "VERBS",
     "RegisterLink",
+    "SendWords",
     "describe",
     "exchange",
     "need_args",
@@ -65,6 +67,9 @@ class UdpAddressed(Protocol):
 
 class Parkable(Protocol):
     """What ``send park`` needs of a UDP controller description."""
+
+    @property
+    def n_axes(self) -> int: ...
 
     @property
     def catch_up_factor(self) -> float: ...
@@ -336,3 +341,125 @@ def udp_controller_kind(
         transport_options=for_type(description, options),
         refusals=refusals,
     )
+
+
+Write = Callable[[int, int, tuple[int, ...]], WireMessage | None]
+
+
+class SendWords(abc.ABC):
+    """The ``motioncue send`` words of a UDP kind: the words, their arguments and the
+    printing here, the registers each word touches in the kind's subclass.
+
+    Parameters
+    ----------
+    decode, read_request, write_request
+        The kind's datagram decoder and register read / write request messages.
+
+    Attributes
+    ----------
+    PARK_READ : tuple of int
+        ``(channel, count)`` of the register read ``park`` starts from.
+    """
+
+    PARK_READ: ClassVar[tuple[int, int]]
+
+    def __init__(
+        self,
+        decode: Callable[[bytes], WireMessage],
+        read_request: Callable[[int, int, int, int, int], Request],
+        write_request: Callable[[int, int, tuple[int, ...], int, int], Request],
+    ) -> None:
+        self._messages = (decode, read_request, write_request)
+
+    def link(self, transport: Transport, who: tuple[int, int], out: TextIO) -> RegisterLink:
+        """A register link speaking the kind's messages."""
+        return RegisterLink(transport, *self._messages, who, out)
+
+    @abc.abstractmethod
+    def estop(self, write: Write, args: Sequence[str]) -> WireMessage | None:
+        """``estop ...`` (checks its own arguments)."""
+
+    @abc.abstractmethod
+    def reset(self, write: Write) -> WireMessage | None: ...
+
+    @abc.abstractmethod
+    def home(self, write: Write) -> WireMessage | None: ...
+
+    @abc.abstractmethod
+    def outputs(self, write: Write, bits: str) -> WireMessage | None: ...
+
+    @abc.abstractmethod
+    def register(self, name: str, *, for_write: bool, save: bool) -> tuple[int, int, str]:
+        """``(channel, address, label)`` of a register name."""
+
+    @abc.abstractmethod
+    def read_name(self, channel: int, address: int) -> str:
+        """How a register read back is printed."""
+
+    @abc.abstractmethod
+    def values(self, reply: WireMessage | None) -> Sequence[int] | None:
+        """The values of a read reply that succeeded, else None."""
+
+    @abc.abstractmethod
+    def error(self, reply: WireMessage | None) -> str | None:
+        """``"error reply: ..."`` text for an error reply, else None."""
+
+    @abc.abstractmethod
+    def park_from(self, values: Sequence[int], n_axes: int) -> list[int]:
+        """Motor positions in the values of the :attr:`PARK_READ` read."""
+
+    def after_write(self, write: Write, channel: int, save: bool) -> None:  # noqa: B027
+        """What follows a ``write`` (the IMAX saves parameters with PA0f = 2)."""
+
+    def run(
+        self,
+        controller: Parkable,
+        transport: Transport,
+        verb: str,
+        args: Sequence[str],
+        *,
+        who: tuple[int, int] = (WHO_ALL, WHO_ALL),
+        save: bool = False,
+        out: TextIO,
+    ) -> int:
+        """Run one word; returns the exit status (0 ok, 1 error reply)."""
+        link = self.link(transport, who, out)
+        write, read = link.write, link.read
+        if verb == "estop":
+            reply = self.estop(write, args)
+        elif verb in ("reset", "home"):
+            need_args(verb, args, 0)
+            reply = self.reset(write) if verb == "reset" else self.home(write)
+        elif verb == "outputs":
+            need_args(verb, args, 1)
+            reply = self.outputs(write, args[0])
+        elif verb == "read":
+            if len(args) not in (1, 2):
+                raise ConfigError("send read REG [COUNT]")
+            channel, start, _label = self.register(args[0], for_write=False, save=save)
+            count = parse_value(args[1], "count") if len(args) == 2 else 1
+            reply = read(channel, start, count)
+            for i, v in enumerate(self.values(reply) or ()):
+                print(f"{self.read_name(channel, start + i)} = {v} (0x{v:04X})", file=out)
+        elif verb == "write":
+            if len(args) < 2:
+                raise ConfigError("send write REG VALUE...")
+            channel, start, _label = self.register(args[0], for_write=True, save=save)
+            reply = write(channel, start, tuple(parse_value(v) & 0xFFFF for v in args[1:]))
+            self.after_write(write, channel, save)
+        elif verb == "park":
+            need_args(verb, args, 0)
+            require_request(transport)
+            park_channel, park_count = self.PARK_READ
+            values = self.values(read(park_channel, 0, park_count))
+            if values is None:
+                return 1
+            park(controller, transport, self.park_from(values, controller.n_axes), out)
+            return 0
+        else:
+            raise ConfigError(f"send {verb!r}: allowed {', '.join(VERBS)}")
+        text = self.error(reply)
+        if text is not None:
+            print(text, file=out)
+            return 1
+        return 0
