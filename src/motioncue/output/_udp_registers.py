@@ -33,6 +33,7 @@ __all__ = [
     "REGISTER_MIN_SIZE",
     "RegisterReadShape",
     "RegisterValuesShape",
+    "RegisterWire",
     "check_u16",
     "pack_registers",
     "register_struct",
@@ -109,8 +110,46 @@ def unpack_values(data: bytes, what: str) -> tuple[int, tuple[int, ...]]:
     return start, values
 
 
+class RegisterWire:
+    """Encoder and size of every register message, derived from :func:`register_struct`:
+    a message gives its confirm code, function (``_function_code``), channel,
+    StartAddress, Who fields, and (``_count_and_words``) its Count field and the words
+    after it."""
+
+    __slots__ = ()
+
+    CONFIRM: ClassVar[int] = CONFIRM_MAIN
+    channel: int
+    start: int
+    who_accept: int
+    who_reply: int
+
+    def _function_code(self) -> int:
+        raise NotImplementedError
+
+    def _count_and_words(self) -> tuple[int, Sequence[int]]:
+        raise NotImplementedError
+
+    @property
+    def size(self) -> int:
+        return register_struct(len(self._count_and_words()[1])).size
+
+    def encode(self) -> bytes:
+        count, words = self._count_and_words()
+        return pack_registers(
+            self.CONFIRM,
+            self._function_code(),
+            self.channel,
+            self.who_accept,
+            self.who_reply,
+            self.start,
+            count,
+            words,
+        )
+
+
 @dataclass(frozen=True, slots=True)
-class RegisterReadShape:
+class RegisterReadShape(RegisterWire):
     """Read request: header, StartAddress u16, Count u16, ``count`` zero words (Extra Data).
 
     A subclass names its function, confirm code, the channels it may read and the most
@@ -118,7 +157,6 @@ class RegisterReadShape:
     """
 
     LAYOUT: ClassVar[struct.Struct] = REG_HEAD
-    CONFIRM: ClassVar[int] = CONFIRM_MAIN
     FUNCTION: ClassVar[int] = 0
     CHANNELS: ClassVar[Sequence[int]] = ()
     MAX_COUNT: ClassVar[int] = 256
@@ -140,21 +178,11 @@ class RegisterReadShape:
     def function(self) -> int:
         return self.FUNCTION
 
-    @property
-    def size(self) -> int:
-        return register_struct(self.count).size
+    def _function_code(self) -> int:
+        return self.FUNCTION
 
-    def encode(self) -> bytes:
-        return pack_registers(
-            self.CONFIRM,
-            self.FUNCTION,
-            self.channel,
-            self.who_accept,
-            self.who_reply,
-            self.start,
-            self.count,
-            (0,) * self.count,
-        )
+    def _count_and_words(self) -> tuple[int, Sequence[int]]:
+        return self.count, (0,) * self.count
 
     @classmethod
     def decode_parts(cls, h: Header, data: bytes) -> Self:
@@ -165,7 +193,7 @@ class RegisterReadShape:
 
 
 @dataclass(frozen=True, slots=True)
-class RegisterValuesShape:
+class RegisterValuesShape(RegisterWire):
     """Header, StartAddress u16, Count u16 (= ``len(values)``), the values u16 each.
 
     The write request and (MBOX) the OK replies and status report. Negative values are
@@ -174,7 +202,6 @@ class RegisterValuesShape:
     """
 
     LAYOUT: ClassVar[struct.Struct] = REG_HEAD
-    CONFIRM: ClassVar[int] = CONFIRM_MAIN
     FUNCTION: ClassVar[int] = 0
     CHANNELS: ClassVar[Sequence[int]] = ()
     MAX_COUNT: ClassVar[int] = 256
@@ -197,21 +224,11 @@ class RegisterValuesShape:
     def function(self) -> int:
         return self.FUNCTION
 
-    @property
-    def size(self) -> int:
-        return register_struct(len(self.values)).size
+    def _function_code(self) -> int:
+        return self.FUNCTION
 
-    def encode(self) -> bytes:
-        return pack_registers(
-            self.CONFIRM,
-            self.FUNCTION,
-            self.channel,
-            self.who_accept,
-            self.who_reply,
-            self.start,
-            len(self.values),
-            self.values,
-        )
+    def _count_and_words(self) -> tuple[int, Sequence[int]]:
+        return len(self.values), self.values
 
     @classmethod
     def decode_parts(cls, h: Header, data: bytes) -> Self:

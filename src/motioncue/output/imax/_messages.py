@@ -66,9 +66,8 @@ from .._udp_common import (
 from .._udp_registers import (
     RegisterReadShape,
     RegisterValuesShape,
+    RegisterWire,
     check_u16,
-    pack_registers,
-    register_struct,
     unpack_values,
 )
 
@@ -202,7 +201,7 @@ class ServoWrite(RegisterWrite):
 
 
 @dataclass(frozen=True, slots=True)
-class RegisterReply:
+class RegisterReply(RegisterWire):
     """IMAX -> host 0x110x (read) / 0x120x (write) reply, x = :class:`ReplyStatus`.
 
     Layout: header (channel, or error code when x != 2), StartAddress u16, Count u16,
@@ -244,21 +243,11 @@ class RegisterReply:
         """The controller's error code (channel field), ``None`` for an OK reply."""
         return None if self.status == ReplyStatus.OK else self.channel
 
-    @property
-    def size(self) -> int:
-        return register_struct(len(self.values)).size
+    def _function_code(self) -> int:
+        return self.function
 
-    def encode(self) -> bytes:
-        return pack_registers(
-            self.CONFIRM,
-            self.function,
-            self.channel,
-            self.who_accept,
-            self.who_reply,
-            self.start,
-            len(self.values),
-            self.values,
-        )
+    def _count_and_words(self) -> tuple[int, Sequence[int]]:
+        return len(self.values), self.values
 
     @classmethod
     def decode_parts(cls, h: Header, data: bytes) -> Self:
