@@ -69,8 +69,9 @@ def _check_address(msg: RegisterReadShape | RegisterValuesShape) -> None:
         raise ProtocolError(
             f"{type(msg).__name__}: channel {msg.channel}, allowed {_allowed(msg.CHANNELS)}"
         )
-    for name in ("start", "who_accept", "who_reply"):
-        check_u16(getattr(msg, name), name)
+    check_u16(msg.start, "start")
+    check_u16(msg.who_accept, "who_accept")
+    check_u16(msg.who_reply, "who_reply")
 
 
 def pack_registers(
@@ -148,18 +149,32 @@ class RegisterWire:
         )
 
 
-@dataclass(frozen=True, slots=True)
-class RegisterReadShape(RegisterWire):
-    """Read request: header, StartAddress u16, Count u16, ``count`` zero words (Extra Data).
+class _FixedFunction(RegisterWire):
+    """A register message whose function code is class data (``FUNCTION``), with the
+    channels it may address and the most registers it may carry."""
 
-    A subclass names its function, confirm code, the channels it may read and the most
-    registers one request may ask for.
-    """
+    __slots__ = ()
 
     LAYOUT: ClassVar[struct.Struct] = REG_HEAD
     FUNCTION: ClassVar[int] = 0
     CHANNELS: ClassVar[Sequence[int]] = ()
     MAX_COUNT: ClassVar[int] = 256
+
+    @property
+    def function(self) -> int:
+        return self.FUNCTION
+
+    def _function_code(self) -> int:
+        return self.FUNCTION
+
+
+@dataclass(frozen=True, slots=True)
+class RegisterReadShape(_FixedFunction):
+    """Read request: header, StartAddress u16, Count u16, ``count`` zero words (Extra Data).
+
+    A subclass names its function, confirm code, the channels it may read and the most
+    registers one request may ask for.
+    """
 
     channel: int
     start: int
@@ -174,13 +189,6 @@ class RegisterReadShape(RegisterWire):
                 f"{type(self).__name__}: count {self.count}, allowed 1..{self.MAX_COUNT}"
             )
 
-    @property
-    def function(self) -> int:
-        return self.FUNCTION
-
-    def _function_code(self) -> int:
-        return self.FUNCTION
-
     def _count_and_words(self) -> tuple[int, Sequence[int]]:
         return self.count, (0,) * self.count
 
@@ -193,18 +201,13 @@ class RegisterReadShape(RegisterWire):
 
 
 @dataclass(frozen=True, slots=True)
-class RegisterValuesShape(RegisterWire):
+class RegisterValuesShape(_FixedFunction):
     """Header, StartAddress u16, Count u16 (= ``len(values)``), the values u16 each.
 
     The write request and (MBOX) the OK replies and status report. Negative values are
     stored as two's complement words. A subclass names its function, confirm code,
     channels and maximum count; requests override the Who defaults with ``WHO_ALL``.
     """
-
-    LAYOUT: ClassVar[struct.Struct] = REG_HEAD
-    FUNCTION: ClassVar[int] = 0
-    CHANNELS: ClassVar[Sequence[int]] = ()
-    MAX_COUNT: ClassVar[int] = 256
 
     channel: int
     start: int
@@ -219,13 +222,6 @@ class RegisterValuesShape(RegisterWire):
             raise ProtocolError(
                 f"{type(self).__name__}: {len(self.values)} values, allowed 1..{self.MAX_COUNT}"
             )
-
-    @property
-    def function(self) -> int:
-        return self.FUNCTION
-
-    def _function_code(self) -> int:
-        return self.FUNCTION
 
     def _count_and_words(self) -> tuple[int, Sequence[int]]:
         return len(self.values), self.values

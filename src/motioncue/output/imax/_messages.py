@@ -228,8 +228,10 @@ class RegisterReply(RegisterWire):
             5,
         ):
             raise ProtocolError(f"{type(self).__name__}: function 0x{self.function:04X}")
-        for name in ("channel", "start", "who_accept", "who_reply"):
-            check_u16(getattr(self, name), name)
+        fields = ("channel", "start", "who_accept", "who_reply")
+        values = (self.channel, self.start, self.who_accept, self.who_reply)
+        for name, value in zip(fields, values, strict=True):
+            check_u16(value, name)
         object.__setattr__(self, "values", u16_tuple(self.values, type(self).__name__))
         if len(self.values) > 256:
             raise ProtocolError(f"{type(self).__name__}: {len(self.values)} values")
