@@ -9,7 +9,6 @@ from collections.abc import Sequence
 from ..._errors import ConfigError, ProtocolError
 from .._transport import TransportURL
 from .._udp_cli import (
-    VERBS,
     SendWords,
     Write,
     describe,
@@ -43,13 +42,7 @@ from ._messages import (
 )
 from ._params import DP_POS, pa_name
 
-__all__ = [
-    "VERBS",
-    "inspect_decode",
-    "send_verb",
-    "split_stream",
-    "transport_options",
-]
+__all__ = ["inspect_decode", "send_verb", "split_stream", "transport_options"]
 
 _DP = re.compile(r"^dp[ _]?([0-9a-f]{1,2})$", re.IGNORECASE)
 _DPF = re.compile(r"^dpf[ _]?([0-9a-f])$", re.IGNORECASE)

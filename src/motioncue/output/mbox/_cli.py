@@ -8,7 +8,6 @@ from collections.abc import Sequence
 from ..._errors import ConfigError, ProtocolError
 from .._transport import TransportURL
 from .._udp_cli import (
-    VERBS,
     SendWords,
     Write,
     describe,
@@ -41,13 +40,7 @@ from ._messages import (
 )
 from ._params import DX_COMMAND, fn_name
 
-__all__ = [
-    "VERBS",
-    "inspect_decode",
-    "send_verb",
-    "split_stream",
-    "transport_options",
-]
+__all__ = ["inspect_decode", "send_verb", "split_stream", "transport_options"]
 
 _DX = re.compile(r"^(?:dn|dx)[ _]?([0-9a-f]{1,2})$", re.IGNORECASE)
 _CX = re.compile(r"^(?:cn|cx)[ _]?([0-7])$", re.IGNORECASE)
