@@ -63,9 +63,9 @@ def test_a_toy_kind_generates_and_plays_to_its_own_emulator(
     ctrl = load_controller(cfg)
     assert isinstance(ctrl, ToyController) and ctrl.kind == "toy"
     ride_path = tmp_path / "toy.ride"
-    rc = main(["generate", "--input", str(_excerpt(tmp_path / "rec.csv", 1.0)),
+    rc = main(["generate", "--input", str(_excerpt(tmp_path / "rec.csv", 0.5)),
                "--platform", "seat3", "--controller", str(cfg), "--out", str(ride_path),
-               "--quiet"])  # fmt: skip
+               "--rate", "50", "--quiet"])  # fmt: skip
     assert rc == 0
     capsys.readouterr()
     ride = load_ride(ride_path)
