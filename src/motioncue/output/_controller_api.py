@@ -20,11 +20,12 @@ from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any, Protocol, runtime_checkable
 
 import numpy as np
-import numpy.typing as npt
 
 from .._errors import ConfigError
 
 if TYPE_CHECKING:
+    import numpy.typing as npt
+
     from ._feedback import PositionQuery
     from ._transport import Transport
 

@@ -10,6 +10,7 @@ from __future__ import annotations
 from pathlib import Path
 
 from .._config import ConfigReader, find_config, load_toml
+from .._errors import ConfigError
 from ._controller_api import Controller
 from ._registry import controller_kind, controller_kinds
 
@@ -26,7 +27,11 @@ def load_controller(name_or_path: str | Path) -> Controller:
     """
     path = find_config("controllers", name_or_path)
     reader = ConfigReader(load_toml(path), path.name)
-    kind = reader.string("kind", choices=controller_kinds())
-    controller = controller_kind(kind).read_config(reader, path.stem)
+    kind = reader.string("kind")
+    try:
+        described = controller_kind(kind)
+    except ConfigError:
+        raise reader.error("kind", kind, " | ".join(controller_kinds())) from None
+    controller = described.read_config(reader, path.stem)
     reader.finish()
     return controller

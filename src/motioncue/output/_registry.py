@@ -363,7 +363,8 @@ def controller_kind(name: str) -> ControllerKind:
     ConfigError
         No kind of that name, with the registered names.
     """
-    _load_plugins()
+    if name not in _kinds:  # plugins (an entry-point scan takes tens of ms) only on a miss
+        _load_plugins()
     with _lock:
         entry = _kinds.get(name)
         if entry is None:
