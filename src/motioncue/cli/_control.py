@@ -1,53 +1,48 @@
 """``motioncue emulate | send | inspect``: talk to a controller, or pretend to be one.
 
-The verbs dispatch on the controller's kind: each kind module (``motioncue.output.imax``,
-``motioncue.output.mbox``, ...) exposes the hooks
-
-* ``emulator(controller, host, port, **options)`` -> an emulator with ``start()``,
-  ``stop()``, ``port``, ``received``, ``trace``, ``violations`` (``options``:
-  ``homing_time_s``); a kind that listens on another link instead provides
-  ``emulator_at(controller, target_url, **options)`` (its emulator may expose ``where``);
-* ``send_verb(controller, transport, verb, args, *, who, save, out)`` -> exit status;
-* ``inspect_decode(datagram) -> str`` and ``split_stream(raw_bytes) -> list[bytes]``;
-* optionally ``transport_options(controller, target_url) -> dict`` for ``open_transport``,
-  and ``run_emulator(controller, duration_s, *, trace_csv)`` -> exit status for a kind
-  that runs its own emulator session (used when ``--listen`` is not given).
-
-A new kind plugs in by providing these functions; nothing here changes.
+The verbs dispatch on the controller's kind through its registry entry
+(:class:`motioncue.output.ControllerKind`): ``emulate`` uses its ``emulator`` (at
+``--listen``) or its ``emulator_session`` (without ``--listen``), ``send`` its ``send`` and
+``transport_options``, ``inspect`` its ``inspect`` (every registered kind that declares one
+is tried when no ``--controller`` is given). A capability the kind does not declare is
+refused with a one-line error. A new kind plugs in by registering; nothing here changes.
 """
 
 from __future__ import annotations
 
 import argparse
-import importlib
 import io
 import signal
 import sys
 import threading
 import time
+from collections.abc import Sequence
 from pathlib import Path
-from types import ModuleType
-from typing import Any
+from typing import TYPE_CHECKING, Any, TextIO
 
 from .._errors import ConfigError, ProtocolError
 from ._common import add_json_option, print_json
 from ._monitor import add_monitor_argument, start_monitor
 
+if TYPE_CHECKING:
+    from ..output import Controller, ControllerKind, Emulator, Trace, Violation
+
 __all__ = ["register"]
 
-# kinds tried in order by ``inspect`` when no --controller is given (add new kinds here)
-_INSPECT_KINDS = ("mbox", "imax", "easysmc")
 
-
-def _kind_module(kind: str) -> ModuleType:
-    return importlib.import_module(f"motioncue.output.{kind}")
-
-
-def _controller(name: str) -> tuple[Any, ModuleType]:
-    from ..output import load_controller
+def _controller(name: str) -> tuple[Controller, ControllerKind]:
+    from ..output import controller_kind, load_controller
 
     ctrl = load_controller(name)
-    return ctrl, _kind_module(ctrl.kind)
+    return ctrl, controller_kind(ctrl.kind)
+
+
+def _inspectable_kinds() -> list[ControllerKind]:
+    """Every registered kind that can read raw bytes, in registration order."""
+    from ..output import controller_kind, controller_kinds
+
+    kinds = [controller_kind(k) for k in controller_kinds()]
+    return [k for k in kinds if k.inspect is not None]
 
 
 def register(sub: Any) -> None:
@@ -162,7 +157,9 @@ class _StopLikeCtrlC:
     closed terminal); a later stop signal is recorded and ignored, so that nothing cuts the
     writing short."""
 
-    SIGNALS = tuple(getattr(signal, n) for n in ("SIGTERM", "SIGHUP") if hasattr(signal, n))
+    SIGNALS = tuple(
+        signal.Signals[n] for n in ("SIGTERM", "SIGHUP") if n in signal.Signals.__members__
+    )
 
     def __init__(self) -> None:
         self.received: list[int] = []
@@ -202,27 +199,21 @@ def _emulate(args: argparse.Namespace, stops: _StopLikeCtrlC) -> int:
     from ..output import parse_target
 
     ctrl, kind = _controller(args.controller)
-    if hasattr(kind, "run_emulator") and args.listen is None:
+    if kind.emulator_session is not None and args.listen is None:
         if args.monitor is not None:
             raise ConfigError(
                 f"--monitor: the {ctrl.kind} emulator session (pseudo-terminal) has no monitor; "
                 "use --monitor on the program that sends it frames (play, bridge)"
             )
         # kinds that run their own emulator session (the EasySmc serves a pseudo-terminal)
-        return int(kind.run_emulator(ctrl, args.duration, trace_csv=args.trace_csv))
+        return int(kind.emulator_session(ctrl, args.duration, args.trace_csv))
     url = parse_target(args.listen or ctrl.default_target)
-    if url.scheme == "udp":
-        emu = kind.emulator(ctrl, url.host, url.port, homing_time_s=args.homing_time)
-        emu.start()
-        where = f"udp://{url.host}:{emu.port}"
-    elif hasattr(kind, "emulator_at"):  # kinds on other links (serial, ...) listen by URL
-        emu = kind.emulator_at(ctrl, url, homing_time_s=args.homing_time)
-        emu.start()
-        where = str(getattr(emu, "where", args.listen))
-    else:
-        raise ConfigError(
-            f"--listen {args.listen!r}: the {ctrl.kind} emulator listens on udp://HOST:PORT"
-        )
+    try:
+        emu = kind.open_emulator(ctrl, url, args.homing_time)
+    except ConfigError as exc:
+        raise ConfigError(f"--listen {args.listen or ctrl.default_target!r}: {exc}") from None
+    emu.start()
+    where = emu.where
     t_end = None if args.duration is None else time.monotonic() + args.duration
     monitor = None
     try:  # a stop signal as soon as the address is printed still ends in the summary
@@ -244,7 +235,7 @@ def _emulate(args: argparse.Namespace, stops: _StopLikeCtrlC) -> int:
         emu.stop()
     trace = emu.trace
     violations = emu.violations
-    errors = list(getattr(emu, "internal_errors", []))
+    errors = list(emu.internal_errors)
     _write_trace(args, ctrl, trace, violations)
     if args.json:
         print_json(
@@ -281,7 +272,9 @@ def _emulate(args: argparse.Namespace, stops: _StopLikeCtrlC) -> int:
     return 1 if violations or errors else 0
 
 
-def _write_trace(args: argparse.Namespace, ctrl: Any, trace: Any, violations: Any) -> None:
+def _write_trace(
+    args: argparse.Namespace, ctrl: Controller, trace: Trace, violations: Sequence[Violation]
+) -> None:
     """The ``--trace-csv`` and ``--plot`` files (axes numbered from 1, as the manuals do)."""
     if args.trace_csv is not None:
         with open(args.trace_csv, "w") as fh:
@@ -300,7 +293,7 @@ def _write_trace(args: argparse.Namespace, ctrl: Any, trace: Any, violations: An
         )
 
 
-def _emulator_monitor(args: argparse.Namespace, ctrl: Any, emu: Any) -> Any:
+def _emulator_monitor(args: argparse.Namespace, ctrl: Controller, emu: Emulator) -> Any:
     """The live page of ``emulate --monitor``: what the emulated controller plays."""
     from ..kinematics import load_platform
     from ..trajectory import ActuatorLimits
@@ -331,8 +324,8 @@ def _run_send(args: argparse.Namespace) -> int:
     if args.no_reply:
         reply = 0
     target = parse_target(args.target or ctrl.default_target)
-    options = kind.transport_options(ctrl, target) if hasattr(kind, "transport_options") else {}
-    out: Any = io.StringIO() if args.json else sys.stdout
+    options = kind.transport_options(ctrl, target)
+    out: io.StringIO | TextIO = io.StringIO() if args.json else sys.stdout
     with open_transport(target, **options) as transport:
         status = int(
             kind.send_verb(
@@ -346,6 +339,7 @@ def _run_send(args: argparse.Namespace) -> int:
             )
         )
     if args.json:
+        assert isinstance(out, io.StringIO)
         print_json(
             {
                 "controller": ctrl.name,
@@ -382,7 +376,7 @@ def _send_options_after_word(args: argparse.Namespace) -> list[str]:
     return rest
 
 
-def _payloads(path: Path, raw: bool, kind: ModuleType | None) -> list[tuple[str, bytes]]:
+def _payloads(path: Path, raw: bool, kinds: Sequence[ControllerKind]) -> list[tuple[str, bytes]]:
     from ..output import read_pcap
 
     if not raw:
@@ -401,13 +395,13 @@ def _payloads(path: Path, raw: bool, kind: ModuleType | None) -> list[tuple[str,
         blob = path.read_bytes()
     except OSError as exc:
         raise ConfigError(f"cannot read {path}: {exc}") from exc
-    kinds = [kind] if kind is not None else [_kind_module(k) for k in _INSPECT_KINDS]
     errors = []
     for k in kinds:
+        assert k.inspect is not None  # only kinds that inspect are passed
         try:
-            return [(f"#{i}", m) for i, m in enumerate(k.split_stream(blob))]
+            return [(f"#{i}", m) for i, m in enumerate(k.inspect.split(blob))]
         except ProtocolError as exc:
-            errors.append(f"{k.__name__.rsplit('.', 1)[-1]}: {exc}")
+            errors.append(f"{k.name}: {exc}")
     raise ProtocolError(f"{path}: cannot split the raw bytes into messages ({'; '.join(errors)})")
 
 
@@ -417,20 +411,26 @@ def _run_inspect(args: argparse.Namespace) -> int:
         return _inspect_ride(args)
     if not args.raw and head.startswith(b"MCTLMREC"):
         return _inspect_recording(args)
-    kind = _controller(args.controller)[1] if args.controller else None
-    kinds = [kind] if kind is not None else [_kind_module(k) for k in _INSPECT_KINDS]
+    if args.controller:
+        kind = _controller(args.controller)[1]
+        if kind.inspect is None:
+            raise ConfigError(f"--controller {args.controller}: {kind.name} declares no inspect")
+        kinds = [kind]
+    else:
+        kinds = _inspectable_kinds()
     bad = 0
     rows = []
-    for where, payload in _payloads(args.file, args.raw, kind):
+    for where, payload in _payloads(args.file, args.raw, kinds):
         line = None
         errors = []
         for k in kinds:
+            assert k.inspect is not None
             try:
-                text = k.inspect_decode(payload)
+                text = k.inspect.describe(payload)
             except ProtocolError as exc:
                 errors.append(str(exc))
                 continue
-            label = "" if len(kinds) == 1 else f"{k.__name__.rsplit('.', 1)[-1]} "
+            label = "" if len(kinds) == 1 else f"{k.name} "
             line = f"{where} {label}{text}"
             break
         if line is None:

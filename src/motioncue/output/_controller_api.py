@@ -7,9 +7,9 @@ faster than the frames' own time stamps it may play (catch-up), its buffer and i
 :func:`motioncue.trajectory.limits_from_platform` derives the limits from this interface alone,
 without naming a controller kind; the emulators check frames with the same numbers.
 
-Adding a controller kind is one subpackage of :mod:`motioncue.output` whose
-``controller_from_config`` returns an object satisfying :class:`Controller`, plus its name in
-:data:`motioncue.output.CONTROLLER_KINDS`.
+Adding a controller kind is one package whose config reader returns an object satisfying
+:class:`Controller`, plus one :func:`~motioncue.output.register_controller_kind` call
+declaring what the kind can do (:class:`~motioncue.output.ControllerKind`).
 """
 
 from __future__ import annotations
@@ -17,13 +17,20 @@ from __future__ import annotations
 import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
-from typing import Any, Protocol, runtime_checkable
+from typing import TYPE_CHECKING, Any, Protocol, runtime_checkable
 
 import numpy as np
 
 from .._errors import ConfigError
 
+if TYPE_CHECKING:
+    import numpy.typing as npt
+
+    from ._feedback import PositionQuery
+    from ._transport import Transport
+
 __all__ = [
+    "CommandStreamer",
     "Controller",
     "DriveExpectations",
     "FrameEncoder",
@@ -34,7 +41,7 @@ __all__ = [
 ]
 
 
-def _axis_array(name: str, value: Any, n: int, fill: float) -> np.ndarray:
+def _axis_array(name: str, value: npt.ArrayLike | None, n: int, fill: float) -> np.ndarray:
     arr = np.full(n, fill) if value is None else np.array(value, dtype=float).reshape(-1)
     if arr.size == 1 and n != 1:
         arr = np.full(n, float(arr[0]))
@@ -131,8 +138,24 @@ class FrameEncoder(Protocol):
     frame numbers, time origin). One encoder per run."""
 
     def encode(
-        self, t_s: float, pulses: Sequence[Any], dout: int = 0, dacs: tuple[int, int] = (0, 0)
+        self, t_s: float, pulses: Sequence[int], dout: int = 0, dacs: tuple[int, int] = (0, 0)
     ) -> list[bytes]: ...
+
+
+class CommandStreamer(Protocol):
+    """A flow-controlled command stream a controller's frames are fed through (the EasySmc
+    on a live serial link): ``send_all`` the encoder's ``encode_commands``, and every
+    ``poll_every_frames`` frames ``poll`` each address in ``sent``."""
+
+    poll_every_frames: int
+
+    @property
+    def sent(self) -> Mapping[int, int]: ...
+
+    # the commands are the kind's own type (what its encoder's ``encode_commands`` gives)
+    def send_all(self, cmds: Sequence[Any]) -> None: ...
+
+    def poll(self, addr: int) -> object: ...
 
 
 @runtime_checkable
@@ -171,10 +194,17 @@ class Controller(Protocol):
         count refusals.
     """
 
-    kind: Any
-    name: str
-    n_axes: int
-    default_target: str
+    @property
+    def kind(self) -> str: ...
+
+    @property
+    def name(self) -> str: ...
+
+    @property
+    def n_axes(self) -> int: ...
+
+    @property
+    def default_target(self) -> str: ...
 
     @property
     def buffer_frames(self) -> int: ...
@@ -213,12 +243,12 @@ class Controller(Protocol):
         carry on its own clock, naming the rates it can."""
         ...
 
-    def position_query(self) -> Any:
+    def position_query(self) -> PositionQuery | None:
         """``(request datagram, reply parser)`` asking where the motors are
         (a position query), or None when it cannot be asked."""
         ...
 
-    def command_streamer(self, transport: Any, rate_hz: float) -> Any:
+    def command_streamer(self, transport: Transport, rate_hz: float) -> CommandStreamer | None:
         """A flow-controlled command stream for ``transport`` when frames must be fed
         through one (its ``send_all``, ``poll``, ``sent`` and ``poll_every_frames``, and the
         encoder's ``encode_commands``), else None: frames are sent as encoded."""
@@ -283,11 +313,11 @@ def check_whole_ms_rate(rate_hz: float, cap_hz: float | None, who: str, cap_sour
     )
 
 
-def snap_rate_hz(rate_hz: float, controller: Any) -> float:
+def snap_rate_hz(rate_hz: float, controller: Controller) -> float:
     """A typed rate such as ``333.33`` read as the whole-ms rate it stands for (1000/3 Hz)
     when the controller stamps whole ms and the two differ by less than 0.05 %; any other
     rate is returned unchanged (and checked later by ``controller.check_rate``)."""
-    if getattr(controller, "time_resolution_s", None) != 1e-3:
+    if controller.time_resolution_s != 1e-3:
         return rate_hz
     if not (isinstance(rate_hz, int | float) and math.isfinite(rate_hz) and rate_hz > 0):
         return rate_hz

@@ -32,9 +32,14 @@ import struct
 import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
-from typing import Any
+from typing import TYPE_CHECKING, TypeVar
 
 from .._errors import ControllerSilent, FramesRefused, MotioncueError, ProtocolError
+
+if TYPE_CHECKING:
+    from ._controller_api import Controller
+    from ._registry import Refusals
+    from ._transport import Transport
 
 __all__ = [
     "DEFAULT_SILENCE_S",
@@ -91,14 +96,16 @@ def words_to_positions(values: Sequence[int], addresses: Sequence[int]) -> tuple
     return tuple(_signed32(values[a], values[a + 1]) for a in addresses)
 
 
+MessageT = TypeVar("MessageT")
+
 PositionQuery = tuple[bytes, Callable[[bytes], "ReportedPosition | None"]]
 """A request datagram and the parser of its reply (``None`` for a datagram that is not it)."""
 
 
 def register_position_query(
     request: bytes,
-    decode: Callable[[bytes], Any],
-    registers: Callable[[Any], Sequence[int] | None],
+    decode: Callable[[bytes], MessageT],
+    registers: Callable[[MessageT], Sequence[int] | None],
     positions: Sequence[int],
     status: Callable[[Sequence[int], tuple[int, ...]], tuple[bool, int]],
 ) -> PositionQuery:
@@ -125,17 +132,20 @@ def register_position_query(
 
 
 def read_position(
-    controller: Any, transport: Any, *, timeout_s: float = 0.2, settle_s: float = 1.0
+    controller: Controller,
+    transport: Transport,
+    *,
+    timeout_s: float = 0.2,
+    settle_s: float = 1.0,
 ) -> ReportedPosition | None:
     """Ask the controller where its motors are; ``None`` if it cannot or does not say.
 
     Parameters
     ----------
     controller
-        A controller description; one whose ``position_query()`` gives None (or that has
-        none) gives ``None``.
+        A controller description; one whose ``position_query()`` gives None gives ``None``.
     transport
-        The link; one without ``request`` (``pcap:``, ``file:``, serial) gives ``None``.
+        The link; one that does not answer (``pcap:``, ``file:``, serial) gives ``None``.
     timeout_s : float
         How long to wait for each reply (s).
     settle_s : float
@@ -146,10 +156,9 @@ def read_position(
     -------
     ReportedPosition or None
     """
-    query = getattr(controller, "position_query", None)
-    if query is None or getattr(transport, "request", None) is None:
+    if not transport.answers:
         return None
-    asked = query()
+    asked = controller.position_query()
     if asked is None:
         return None
     request, parse = asked
@@ -174,7 +183,7 @@ class FrameReplies:
     Parameters
     ----------
     transport
-        Anything with ``recv(timeout_s)``; a link without it counts nothing.
+        The link (its ``recv(timeout_s)``; a send-only link's gives None: nothing counted).
 
     Attributes
     ----------
@@ -193,9 +202,8 @@ class FrameReplies:
         Receives that reported an ICMP "port unreachable" (nothing listens at the target).
     """
 
-    def __init__(self, transport: Any) -> None:
-        recv = getattr(transport, "recv", None)
-        self._recv = recv
+    def __init__(self, transport: Transport) -> None:
+        self._recv = transport.recv
         self.accepted = 0
         self.refused = 0
         self.refused_codes: dict[int, int] = {}
@@ -221,15 +229,13 @@ class FrameReplies:
         """Read every reply already waiting; with ``wait_s``, keep reading for up to that
         long (stopping early once frame ``until_frame`` has been answered)."""
         recv = self._recv
-        if recv is None:
-            return
         deadline = time.monotonic() + wait_s
         while True:
             try:
                 data = recv(max(0.0, deadline - time.monotonic()))
             except (OSError, MotioncueError) as exc:
                 cause = exc.__cause__ if exc.__cause__ is not None else exc
-                if getattr(cause, "errno", None) == errno.ECONNREFUSED:
+                if isinstance(cause, OSError) and cause.errno == errno.ECONNREFUSED:
                     self.unreachable += 1
                     continue  # the pending ICMP error is consumed; read on
                 return
@@ -267,34 +273,23 @@ class FrameReplies:
         return number
 
 
-_IMAX_BUFFER_ERROR = 21  # Err21, buffer overflow (IMAX manual chapter 6)
+def _refusals(kind: str) -> Refusals | None:
+    from ._registry import controller_kind
+
+    return controller_kind(kind).refusals
 
 
 def is_flow_control(kind: str, function: int, channel: int) -> bool:
-    """A refusal that waiting cures: the controller's buffer was full (MBOX 0x1x03; IMAX
-    0x1x03 with error 21)."""
-    x = function & 0xF
-    if kind == "mbox":
-        return x == 3
-    if kind == "imax":
-        return x == 3 and channel == _IMAX_BUFFER_ERROR
-    return False
+    """A refusal that waiting cures (the controller's buffer was full: MBOX 0x1x03, IMAX
+    0x1x03 with error 21), as the kind's registry entry declares."""
+    refusals = _refusals(kind)
+    return refusals is not None and refusals.is_flow_control(function, channel)
 
 
 def describe_refusal(kind: str, function: int, channel: int) -> str:
-    """What a frame refusal means, by the controller's manual."""
-    x = function & 0xF
-    if kind == "mbox":
-        return {
-            3: "buffer full",
-            4: "frame shorter than required (a frame of the other axis mode: is the box in "
-            "3- or 6-axis mode?)",
-        }.get(x, "refused")
-    if kind == "imax":
-        if x == 3:
-            return f"error {channel}" + (" (buffer overflow)" if channel == 21 else "")
-        return {4: "e-stop active", 5: "command error"}.get(x, "refused")
-    return "refused"
+    """What a frame refusal means, by the controller's manual (its kind's registry entry)."""
+    refusals = _refusals(kind)
+    return "refused" if refusals is None else refusals.describe(function, channel)
 
 
 class LinkWatch:
@@ -327,8 +322,8 @@ class LinkWatch:
 
     def __init__(
         self,
-        transport: Any,
-        controller: Any,
+        transport: Transport,
+        controller: Controller,
         silence_s: float = DEFAULT_SILENCE_S,
         *,
         probe_every_s: float = 0.2,
@@ -338,13 +333,12 @@ class LinkWatch:
             raise ValueError(f"silence_s = {silence_s!r}; allowed: > 0 s")
         self.replies = FrameReplies(transport)
         self._send = transport.send
-        self.address = getattr(transport, "address", None)
+        self.address = transport.address
         self.silence_s = float(silence_s)
         self.probe_every_s = float(min(probe_every_s, silence_s / 2))
         self.refusals_stop = int(refusals_stop)
-        self.kind = str(getattr(controller, "kind", ""))
-        query = getattr(controller, "position_query", None)
-        asked = query() if query is not None else None
+        self.kind = str(controller.kind)
+        asked = controller.position_query()
         self._probe: bytes | None = None if asked is None else asked[0]
         self.armed = True
         self.probes = 0

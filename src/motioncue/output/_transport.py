@@ -10,11 +10,13 @@ from __future__ import annotations
 import abc
 import ipaddress
 import re
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from types import TracebackType
+from typing import ClassVar
 from urllib.parse import parse_qs, urlsplit
 
-from .._errors import ConfigError
+from .._errors import ConfigError, TransportError
 
 __all__ = ["Transport", "TransportURL", "parse_target"]
 
@@ -105,7 +107,22 @@ class Transport(abc.ABC):
     """A link that sends and receives whole messages.
 
     Implementations wrap OS errors in :class:`~motioncue.TransportError` (``raise ... from``).
+
+    Attributes
+    ----------
+    answers : bool
+        Whether :meth:`request` can ask the far end and wait for its answer (a live
+        two-way link); send-only links (``file:``, ``pcap:``) say False.
+    silence_s : float or None
+        Longest silence of the controller a job sending frames accepts (s); None: not
+        watched (links that carry no answers).
+    address : tuple of (str, int) or None
+        The far end's address where the link has one.
     """
+
+    answers: ClassVar[bool] = False
+    silence_s: float | None = None
+    address: tuple[str, int] | None = None
 
     @abc.abstractmethod
     def send(self, data: bytes, *, t_s: float | None = None) -> None:
@@ -114,6 +131,18 @@ class Transport(abc.ABC):
     def recv(self, timeout_s: float) -> bytes | None:
         """Receive one message, or ``None`` after ``timeout_s``. Send-only links return None."""
         return None
+
+    def request(
+        self,
+        data: bytes,
+        accept: Callable[[bytes], bool],
+        *,
+        timeout_s: float | None = None,
+        retries: int | None = None,
+    ) -> bytes:
+        """Send ``data`` and return the first answer ``accept`` takes (links whose
+        :attr:`answers` is True); others raise :class:`~motioncue.TransportError`."""
+        raise TransportError(f"{type(self).__name__} cannot ask and wait for an answer")
 
     def close(self) -> None:  # noqa: B027 - optional hook
         """Release the link."""

@@ -54,6 +54,10 @@ class UdpTransport(Transport):
         watched.
     """
 
+    answers = True
+    address: tuple[str, int]
+    silence_s: float | None
+
     def __init__(
         self,
         host: str,

@@ -2,21 +2,29 @@
 
 from __future__ import annotations
 
+import abc
 import dataclasses
 import enum
 import math
 import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
-from typing import Any, TextIO
+from typing import TYPE_CHECKING, ClassVar, Protocol, TextIO, TypeVar, runtime_checkable
 
 from .._errors import ConfigError, ProtocolError
+from ._registry import ControllerKind, Inspection, Refusals, for_type
 from ._transport import Transport, TransportURL
-from ._udp_common import format_who
+from ._udp_common import WHO_ALL, WireMessage, format_who
+
+if TYPE_CHECKING:
+    from .._config import ConfigReader
+    from ._controller_api import Controller, FrameEncoder, PulseLimits
+    from ._registry import Emulator
 
 __all__ = [
     "VERBS",
     "RegisterLink",
+    "SendWords",
     "describe",
     "exchange",
     "need_args",
@@ -27,13 +35,55 @@ __all__ = [
     "require_request",
     "split_datagrams",
     "transport_options",
+    "udp_controller_kind",
 ]
 
 VERBS = ("estop", "reset", "home", "park", "outputs", "read", "write")
 """The ``motioncue send`` verbs every UDP controller kind answers."""
 
 
-def transport_options(controller: Any, url: TransportURL, *, fixed_source_port: bool) -> dict:
+@runtime_checkable
+class FunctionCoded(Protocol):
+    """A message with a function code (every IMAX / MBOX message but the IMAX status
+    report, whose function is implied by its confirm code)."""
+
+    @property
+    def function(self) -> int: ...
+
+
+class Request(FunctionCoded, WireMessage, Protocol):
+    """A request a ``send`` word sends: encoded, and answered by function code."""
+
+
+class UdpAddressed(Protocol):
+    """A controller description with the host and controller addresses of its config."""
+
+    @property
+    def controller_address(self) -> tuple[str, int]: ...
+
+    @property
+    def host_address(self) -> tuple[str, int]: ...
+
+
+class Parkable(Protocol):
+    """What ``send park`` needs of a UDP controller description."""
+
+    @property
+    def n_axes(self) -> int: ...
+
+    @property
+    def catch_up_factor(self) -> float: ...
+
+    def pulse_limits(self, rate_hz: float | None = None) -> PulseLimits: ...
+
+    def frame_encoder(
+        self, absolute_time: bool = True, *, t0_s: float | None = None
+    ) -> FrameEncoder: ...
+
+
+def transport_options(
+    controller: UdpAddressed, url: TransportURL, *, fixed_source_port: bool
+) -> dict[str, object]:
     """Options for ``open_transport`` taken from the controller's addresses.
 
     ``pcap:`` packets are written from the host address to the controller address of the
@@ -48,23 +98,35 @@ def transport_options(controller: Any, url: TransportURL, *, fixed_source_port: 
     return {}
 
 
-def _fmt(name: str, value: Any) -> str:
+def _fmt(name: str, value: object) -> str:
     if isinstance(value, enum.Enum):
         return value.name
-    if name.startswith("who_"):
+    if name.startswith("who_") and isinstance(value, int):
         return format_who(value)
     if isinstance(value, tuple):
         return "[" + ",".join(str(v) for v in value) + "]"
-    if name in ("base_dout", "ext_dout", "port_out", "port", "outputs", "inputs", "function"):
+    if isinstance(value, int) and name in (
+        "base_dout",
+        "ext_dout",
+        "port_out",
+        "port",
+        "outputs",
+        "inputs",
+        "function",
+    ):
         return f"0x{value:X}"
     return str(value)
 
 
-def describe(msg: Any) -> str:
-    """One line naming a decoded message and its fields."""
+def describe(msg: object) -> str:
+    """One line naming a decoded message (a dataclass) and its fields."""
     name = type(msg).__name__
     parts = []
-    if hasattr(msg, "function") and not any(f.name == "function" for f in dataclasses.fields(msg)):
+    if not dataclasses.is_dataclass(msg):
+        return f"{name} {msg!r}"
+    if isinstance(msg, FunctionCoded) and not any(
+        f.name == "function" for f in dataclasses.fields(msg)
+    ):
         parts.append(f"function=0x{msg.function:04X}")
     for f in dataclasses.fields(msg):
         value = getattr(msg, f.name)
@@ -93,18 +155,17 @@ def parse_bits(text: str, n_bits: int) -> int:
 def exchange(
     transport: Transport,
     data: bytes,
-    decode: Callable[[bytes], Any],
-    is_reply: Callable[[Any], bool],
+    decode: Callable[[bytes], WireMessage],
+    is_reply: Callable[[WireMessage], bool],
     expect_reply: bool,
     out: TextIO,
-) -> Any | None:
+) -> WireMessage | None:
     """Send a command; if the link and the Who fields ask for one, wait for its reply.
 
     Prints what was sent and what came back; returns the decoded reply or ``None``.
     """
     print(f"sent {describe(decode(data))} [{data.hex().upper()}]", file=out)
-    request = getattr(transport, "request", None)
-    if not expect_reply or request is None:
+    if not expect_reply or not transport.answers:
         transport.send(data)
         return None
 
@@ -114,14 +175,14 @@ def exchange(
         except ProtocolError:
             return False
 
-    raw = request(data, accept)
+    raw = transport.request(data, accept)
     reply = decode(raw)
     print(f"reply {describe(reply)}", file=out)
     return reply
 
 
 def park(
-    controller: Any,
+    controller: Parkable,
     transport: Transport,
     current: Sequence[int],
     out: TextIO,
@@ -164,7 +225,7 @@ def need_args(verb: str, args: Sequence[str], n: int) -> None:
 
 def require_request(transport: Transport) -> None:
     """``send park`` reads the positions first, so it needs a link that answers."""
-    if getattr(transport, "request", None) is None:
+    if not transport.answers:
         raise ConfigError("send park needs a udp:// target: it reads the positions first")
 
 
@@ -177,13 +238,15 @@ def positions_from_words(words: Sequence[int], addresses: Sequence[int]) -> list
     return out
 
 
-def _is_reply_to(function: int) -> Callable[[Any], bool]:
+def _is_reply_to(function: int) -> Callable[[WireMessage], bool]:
     """A decoded message answering request ``function`` (0x..01 -> 0x..0x, x != 1)."""
     base = function & 0xFFF0
 
-    def is_reply(msg: Any) -> bool:
-        f = getattr(msg, "function", None)
-        return f is not None and f & 0xFFF0 == base and f != function
+    def is_reply(msg: WireMessage) -> bool:
+        if not isinstance(msg, FunctionCoded):
+            return False
+        f = msg.function
+        return f & 0xFFF0 == base and f != function
 
     return is_reply
 
@@ -195,13 +258,13 @@ class RegisterLink:
     to that request, printing both to ``out``."""
 
     transport: Transport
-    decode: Callable[[bytes], Any]
-    read_request: Callable[..., Any]
-    write_request: Callable[..., Any]
+    decode: Callable[[bytes], WireMessage]
+    read_request: Callable[[int, int, int, int, int], Request]
+    write_request: Callable[[int, int, tuple[int, ...], int, int], Request]
     who: tuple[int, int]
     out: TextIO
 
-    def _exchange(self, msg: Any) -> Any | None:
+    def _exchange(self, msg: Request) -> WireMessage | None:
         return exchange(
             self.transport,
             msg.encode(),
@@ -211,10 +274,10 @@ class RegisterLink:
             self.out,
         )
 
-    def read(self, channel: int, start: int, count: int) -> Any | None:
+    def read(self, channel: int, start: int, count: int) -> WireMessage | None:
         return self._exchange(self.read_request(channel, start, count, *self.who))
 
-    def write(self, channel: int, start: int, values: tuple[int, ...]) -> Any | None:
+    def write(self, channel: int, start: int, values: tuple[int, ...]) -> WireMessage | None:
         return self._exchange(self.write_request(channel, start, values, *self.who))
 
 
@@ -233,3 +296,170 @@ def split_datagrams(blob: bytes, size_at: Callable[[bytes, int], int]) -> list[b
         out.append(blob[off : off + size])
         off += size
     return out
+
+
+C = TypeVar("C")
+C_contra = TypeVar("C_contra", contravariant=True)
+
+
+class UdpEmulatorClass(Protocol[C_contra]):
+    """An emulator class of a UDP kind: ``cls(controller, host, port, homing_time_s=...)``."""
+
+    def __call__(
+        self, controller: C_contra, host: str, port: int, *, homing_time_s: float
+    ) -> Emulator: ...
+
+
+def udp_controller_kind(
+    name: str,
+    title: str,
+    description: type[C],
+    read_config: Callable[[ConfigReader, str], Controller],
+    emulator: UdpEmulatorClass[C],
+    send: Callable[..., int],
+    inspect: Inspection,
+    options: Callable[[C, TransportURL], dict[str, object]],
+    refusals: Refusals,
+) -> ControllerKind:
+    """The registry entry of an IMAX-like UDP kind: frames on ``udp://`` (or written to
+    ``pcap:`` / ``file:``), an emulator on ``udp://``, the common ``send`` words
+    (:data:`VERBS`), ``inspect``, and frame refusals in the replies. ``description`` is
+    the kind's controller class (its hooks are refused any other kind's description)."""
+
+    def at_url(controller: C, url: TransportURL, homing_time_s: float) -> Emulator:
+        return emulator(controller, url.host, url.port, homing_time_s=homing_time_s)
+
+    return ControllerKind(
+        name,
+        read_config,
+        title=title,
+        links=("udp", "pcap", "file"),
+        emulator=for_type(description, at_url),
+        send=for_type(description, send),
+        send_words=VERBS,
+        inspect=inspect,
+        transport_options=for_type(description, options),
+        refusals=refusals,
+    )
+
+
+Write = Callable[[int, int, tuple[int, ...]], WireMessage | None]
+
+
+class SendWords(abc.ABC):
+    """The ``motioncue send`` words of a UDP kind: the words, their arguments and the
+    printing here, the registers each word touches in the kind's subclass.
+
+    Parameters
+    ----------
+    decode, read_request, write_request
+        The kind's datagram decoder and register read / write request messages.
+
+    Attributes
+    ----------
+    PARK_READ : tuple of int
+        ``(channel, count)`` of the register read ``park`` starts from.
+    """
+
+    PARK_READ: ClassVar[tuple[int, int]]
+
+    def __init__(
+        self,
+        decode: Callable[[bytes], WireMessage],
+        read_request: Callable[[int, int, int, int, int], Request],
+        write_request: Callable[[int, int, tuple[int, ...], int, int], Request],
+    ) -> None:
+        self._messages = (decode, read_request, write_request)
+
+    def link(self, transport: Transport, who: tuple[int, int], out: TextIO) -> RegisterLink:
+        """A register link speaking the kind's messages."""
+        return RegisterLink(transport, *self._messages, who, out)
+
+    @abc.abstractmethod
+    def estop(self, write: Write, args: Sequence[str]) -> WireMessage | None:
+        """``estop ...`` (checks its own arguments)."""
+
+    @abc.abstractmethod
+    def reset(self, write: Write) -> WireMessage | None: ...
+
+    @abc.abstractmethod
+    def home(self, write: Write) -> WireMessage | None: ...
+
+    @abc.abstractmethod
+    def outputs(self, write: Write, bits: str) -> WireMessage | None: ...
+
+    @abc.abstractmethod
+    def register(self, name: str, *, for_write: bool, save: bool) -> tuple[int, int, str]:
+        """``(channel, address, label)`` of a register name."""
+
+    @abc.abstractmethod
+    def read_name(self, channel: int, address: int) -> str:
+        """How a register read back is printed."""
+
+    @abc.abstractmethod
+    def values(self, reply: WireMessage | None) -> Sequence[int] | None:
+        """The values of a read reply that succeeded, else None."""
+
+    @abc.abstractmethod
+    def error(self, reply: WireMessage | None) -> str | None:
+        """``"error reply: ..."`` text for an error reply, else None."""
+
+    @abc.abstractmethod
+    def park_from(self, values: Sequence[int], n_axes: int) -> list[int]:
+        """Motor positions in the values of the :attr:`PARK_READ` read."""
+
+    def after_write(self, write: Write, channel: int, save: bool) -> None:  # noqa: B027
+        """What follows a ``write`` (the IMAX saves parameters with PA0f = 2)."""
+
+    def run(
+        self,
+        controller: Parkable,
+        transport: Transport,
+        verb: str,
+        args: Sequence[str],
+        *,
+        who: tuple[int, int] = (WHO_ALL, WHO_ALL),
+        save: bool = False,
+        out: TextIO,
+    ) -> int:
+        """Run one word; returns the exit status (0 ok, 1 error reply)."""
+        link = self.link(transport, who, out)
+        write, read = link.write, link.read
+        if verb == "estop":
+            reply = self.estop(write, args)
+        elif verb in ("reset", "home"):
+            need_args(verb, args, 0)
+            reply = self.reset(write) if verb == "reset" else self.home(write)
+        elif verb == "outputs":
+            need_args(verb, args, 1)
+            reply = self.outputs(write, args[0])
+        elif verb == "read":
+            if len(args) not in (1, 2):
+                raise ConfigError("send read REG [COUNT]")
+            channel, start, _label = self.register(args[0], for_write=False, save=save)
+            count = parse_value(args[1], "count") if len(args) == 2 else 1
+            reply = read(channel, start, count)
+            for i, v in enumerate(self.values(reply) or ()):
+                print(f"{self.read_name(channel, start + i)} = {v} (0x{v:04X})", file=out)
+        elif verb == "write":
+            if len(args) < 2:
+                raise ConfigError("send write REG VALUE...")
+            channel, start, _label = self.register(args[0], for_write=True, save=save)
+            reply = write(channel, start, tuple(parse_value(v) & 0xFFFF for v in args[1:]))
+            self.after_write(write, channel, save)
+        elif verb == "park":
+            need_args(verb, args, 0)
+            require_request(transport)
+            park_channel, park_count = self.PARK_READ
+            values = self.values(read(park_channel, 0, park_count))
+            if values is None:
+                return 1
+            park(controller, transport, self.park_from(values, controller.n_axes), out)
+            return 0
+        else:
+            raise ConfigError(f"send {verb!r}: allowed {', '.join(VERBS)}")
+        text = self.error(reply)
+        if text is not None:
+            print(text, file=out)
+            return 1
+        return 0

@@ -26,7 +26,7 @@ import struct
 from collections.abc import Callable, Iterable, Mapping, Sequence
 from dataclasses import dataclass
 from functools import cache
-from typing import Any
+from typing import Protocol
 
 from .._errors import ConfigError, ProtocolError
 
@@ -40,6 +40,7 @@ __all__ = [
     "WHO_NONE",
     "FrameClock",
     "Header",
+    "WireMessage",
     "check_int32",
     "check_length",
     "decode_header",
@@ -91,6 +92,12 @@ def pack_timed_frame(
         return layout.pack(CONFIRM_MAIN, PASSCODE, *head, number, time_ms, *positions, *tail)
     except (struct.error, TypeError) as exc:
         raise ProtocolError(f"{what} field out of range: {exc}") from None
+
+
+class WireMessage(Protocol):
+    """A decoded message of a UDP kind: it encodes back to its datagram."""
+
+    def encode(self) -> bytes: ...
 
 
 @dataclass(frozen=True, slots=True)
@@ -164,7 +171,7 @@ def u16_tuple(values: Sequence[int], what: str) -> tuple[int, ...]:
     return tuple(out)
 
 
-def check_int32(values: Sequence[Any], n_axes: int, what: str = "positions") -> tuple[int, ...]:
+def check_int32(values: Sequence[object], n_axes: int, what: str = "positions") -> tuple[int, ...]:
     """Validate motor positions: ``n_axes`` finite integers within int32.
 
     Integral floats (``1000.0``) and numpy integers are accepted; NaN, inf, fractions and
@@ -275,4 +282,4 @@ def param_lookup(parameters: Mapping[str, int], name: str, default: int | None =
     raise ConfigError(f"controller parameter {name} is not set")
 
 
-Decoder = Callable[[Header, bytes], Any]
+Decoder = Callable[[Header, bytes], WireMessage]

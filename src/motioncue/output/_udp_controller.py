@@ -12,12 +12,12 @@ from __future__ import annotations
 import dataclasses
 import struct
 from collections.abc import Callable, Mapping, Sequence
-from typing import Any, ClassVar, Generic, Self, TypeVar
+from typing import ClassVar, Generic, Protocol, Self, TypeVar
 
 from .._config import ConfigReader
 from .._errors import ConfigError, LimitError
 from ._controller_api import check_whole_ms_rate
-from ._transport import parse_target
+from ._transport import Transport, parse_target
 from ._udp_common import CONFIRM_MAIN, PASSCODE, WHO_ALL, FrameClock
 
 __all__ = [
@@ -33,7 +33,7 @@ EncoderT = TypeVar("EncoderT")
 
 
 def validate_parameters(
-    values: Mapping[str, Any],
+    values: Mapping[str, object],
     where: str,
     spec: ParamSpec,
     canonical: Callable[[str], str],
@@ -72,7 +72,7 @@ def config_target(reader: ConfigReader) -> str:
     return target
 
 
-def config_parameters(reader: ConfigReader) -> dict[str, Any]:
+def config_parameters(reader: ConfigReader) -> dict[str, object]:
     """The raw ``[parameters]`` table of a controller TOML (validated by the kind)."""
     params = reader.table("parameters", {})
     values = {k: params.raw(k) for k in params.keys()}
@@ -110,7 +110,7 @@ class UdpController(Generic[EncoderT]):
         """Both kinds answer each frame (0x1x02 taken; another last digit refused)."""
         return True
 
-    def command_streamer(self, transport: Any, rate_hz: float) -> None:
+    def command_streamer(self, transport: Transport, rate_hz: float) -> None:
         """Datagrams are sent as encoded: no command stream to keep fed."""
         return None
 
@@ -179,6 +179,16 @@ class UdpController(Generic[EncoderT]):
         return self._encoder(FrameClock(absolute_time, t0_s, first_frame), who_accept, who_reply)
 
 
+class _Framed(Protocol):
+    """What the shared frame encoder needs of its controller description."""
+
+    @property
+    def n_axes(self) -> int: ...
+
+    @property
+    def stroke_pulses(self) -> tuple[int, int] | None: ...
+
+
 class UdpFrameEncoder:
     """State both frame encoders keep: the clock, the fixed header fields and the stroke.
 
@@ -202,7 +212,7 @@ class UdpFrameEncoder:
 
     def __init__(
         self,
-        controller: Any,
+        controller: _Framed,
         clock: FrameClock,
         who_accept: int,
         who_reply: int,

@@ -31,9 +31,9 @@ import struct
 import sys
 import threading
 import time
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
-from typing import Any
+from typing import Protocol, Self
 
 import numpy as np
 
@@ -231,7 +231,7 @@ class Playback:
         if limits.n_axes != self.n_axes:
             raise ValueError(f"limits for {limits.n_axes} axes; the controller has {self.n_axes}")
 
-        def per_axis(values: Any) -> tuple[float, ...] | None:
+        def per_axis(values: np.ndarray) -> tuple[float, ...] | None:
             out = tuple(float(v) for v in values)
             return out if any(math.isfinite(v) for v in out) else None
 
@@ -428,6 +428,20 @@ def _num(x: float) -> str:
     return f"{x:.0f}" if math.isfinite(x) else str(x)
 
 
+class EmulatedController(Protocol):
+    """What the shared emulator state needs of a UDP controller description."""
+
+    @property
+    def n_axes(self) -> int: ...
+
+    @property
+    def parameters(self) -> Mapping[str, int]: ...
+
+    def with_parameters(self, **changes: int) -> EmulatedController: ...
+
+    def pulse_limits(self, rate_hz: float | None = None) -> PulseLimits: ...
+
+
 class UdpEmulatorBase:
     """The UDP server loop and thread shared by both emulators.
 
@@ -460,7 +474,12 @@ class UdpEmulatorBase:
         """The UDP port the emulator listens on (after :meth:`start`)."""
         return self._port
 
-    def start(self) -> UdpEmulatorBase:
+    @property
+    def where(self) -> str:
+        """``udp://HOST:PORT`` it listens on (the port known after :meth:`start`)."""
+        return f"udp://{self._host}:{self._port}"
+
+    def start(self) -> Self:
         """Bind and serve in a daemon thread."""
         try:
             sock = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
@@ -527,7 +546,7 @@ class UdpEmulatorBase:
                 except OSError:
                     pass
 
-    def _receive(self, sock: socket.socket) -> tuple[bytes, Any, float]:
+    def _receive(self, sock: socket.socket) -> tuple[bytes, tuple[str, int], float]:
         """One datagram, its sender and its arrival time: the kernel's receive stamp when
         the OS gives one (so a busy emulator thread does not distort the playback model),
         else the time it is read."""
@@ -551,7 +570,7 @@ class UdpEmulatorBase:
         self._sock = None
         self._thread = None
 
-    def __enter__(self) -> UdpEmulatorBase:
+    def __enter__(self) -> Self:
         if self._sock is None:
             self.start()
         return self
@@ -572,7 +591,7 @@ class ControllerEmulator(UdpEmulatorBase):
 
     def __init__(
         self,
-        controller: Any,
+        controller: EmulatedController,
         host: str,
         port: int,
         *,

@@ -33,6 +33,7 @@ __all__ = [
     "REGISTER_MIN_SIZE",
     "RegisterReadShape",
     "RegisterValuesShape",
+    "RegisterWire",
     "check_u16",
     "pack_registers",
     "register_struct",
@@ -68,8 +69,9 @@ def _check_address(msg: RegisterReadShape | RegisterValuesShape) -> None:
         raise ProtocolError(
             f"{type(msg).__name__}: channel {msg.channel}, allowed {_allowed(msg.CHANNELS)}"
         )
-    for name in ("start", "who_accept", "who_reply"):
-        check_u16(getattr(msg, name), name)
+    check_u16(msg.start, "start")
+    check_u16(msg.who_accept, "who_accept")
+    check_u16(msg.who_reply, "who_reply")
 
 
 def pack_registers(
@@ -109,19 +111,70 @@ def unpack_values(data: bytes, what: str) -> tuple[int, tuple[int, ...]]:
     return start, values
 
 
+class RegisterWire:
+    """Encoder and size of every register message, derived from :func:`register_struct`:
+    a message gives its confirm code, function (``_function_code``), channel,
+    StartAddress, Who fields, and (``_count_and_words``) its Count field and the words
+    after it."""
+
+    __slots__ = ()
+
+    CONFIRM: ClassVar[int] = CONFIRM_MAIN
+    channel: int
+    start: int
+    who_accept: int
+    who_reply: int
+
+    def _function_code(self) -> int:
+        raise NotImplementedError
+
+    def _count_and_words(self) -> tuple[int, Sequence[int]]:
+        raise NotImplementedError
+
+    @property
+    def size(self) -> int:
+        return register_struct(len(self._count_and_words()[1])).size
+
+    def encode(self) -> bytes:
+        count, words = self._count_and_words()
+        return pack_registers(
+            self.CONFIRM,
+            self._function_code(),
+            self.channel,
+            self.who_accept,
+            self.who_reply,
+            self.start,
+            count,
+            words,
+        )
+
+
+class _FixedFunction(RegisterWire):
+    """A register message whose function code is class data (``FUNCTION``), with the
+    channels it may address and the most registers it may carry."""
+
+    __slots__ = ()
+
+    LAYOUT: ClassVar[struct.Struct] = REG_HEAD
+    FUNCTION: ClassVar[int] = 0
+    CHANNELS: ClassVar[Sequence[int]] = ()
+    MAX_COUNT: ClassVar[int] = 256
+
+    @property
+    def function(self) -> int:
+        return self.FUNCTION
+
+    def _function_code(self) -> int:
+        return self.FUNCTION
+
+
 @dataclass(frozen=True, slots=True)
-class RegisterReadShape:
+class RegisterReadShape(_FixedFunction):
     """Read request: header, StartAddress u16, Count u16, ``count`` zero words (Extra Data).
 
     A subclass names its function, confirm code, the channels it may read and the most
     registers one request may ask for.
     """
-
-    LAYOUT: ClassVar[struct.Struct] = REG_HEAD
-    CONFIRM: ClassVar[int] = CONFIRM_MAIN
-    FUNCTION: ClassVar[int] = 0
-    CHANNELS: ClassVar[Sequence[int]] = ()
-    MAX_COUNT: ClassVar[int] = 256
 
     channel: int
     start: int
@@ -136,25 +189,8 @@ class RegisterReadShape:
                 f"{type(self).__name__}: count {self.count}, allowed 1..{self.MAX_COUNT}"
             )
 
-    @property
-    def function(self) -> int:
-        return self.FUNCTION
-
-    @property
-    def size(self) -> int:
-        return register_struct(self.count).size
-
-    def encode(self) -> bytes:
-        return pack_registers(
-            self.CONFIRM,
-            self.FUNCTION,
-            self.channel,
-            self.who_accept,
-            self.who_reply,
-            self.start,
-            self.count,
-            (0,) * self.count,
-        )
+    def _count_and_words(self) -> tuple[int, Sequence[int]]:
+        return self.count, (0,) * self.count
 
     @classmethod
     def decode_parts(cls, h: Header, data: bytes) -> Self:
@@ -165,19 +201,13 @@ class RegisterReadShape:
 
 
 @dataclass(frozen=True, slots=True)
-class RegisterValuesShape:
+class RegisterValuesShape(_FixedFunction):
     """Header, StartAddress u16, Count u16 (= ``len(values)``), the values u16 each.
 
     The write request and (MBOX) the OK replies and status report. Negative values are
     stored as two's complement words. A subclass names its function, confirm code,
     channels and maximum count; requests override the Who defaults with ``WHO_ALL``.
     """
-
-    LAYOUT: ClassVar[struct.Struct] = REG_HEAD
-    CONFIRM: ClassVar[int] = CONFIRM_MAIN
-    FUNCTION: ClassVar[int] = 0
-    CHANNELS: ClassVar[Sequence[int]] = ()
-    MAX_COUNT: ClassVar[int] = 256
 
     channel: int
     start: int
@@ -193,25 +223,8 @@ class RegisterValuesShape:
                 f"{type(self).__name__}: {len(self.values)} values, allowed 1..{self.MAX_COUNT}"
             )
 
-    @property
-    def function(self) -> int:
-        return self.FUNCTION
-
-    @property
-    def size(self) -> int:
-        return register_struct(len(self.values)).size
-
-    def encode(self) -> bytes:
-        return pack_registers(
-            self.CONFIRM,
-            self.FUNCTION,
-            self.channel,
-            self.who_accept,
-            self.who_reply,
-            self.start,
-            len(self.values),
-            self.values,
-        )
+    def _count_and_words(self) -> tuple[int, Sequence[int]]:
+        return len(self.values), self.values
 
     @classmethod
     def decode_parts(cls, h: Header, data: bytes) -> Self:

@@ -1,7 +1,8 @@
 """The demo: bundled lap -> MBOX 6-axis ride for the bundled hexapod -> emulator -> compare.
 
-Another bundled platform and MBOX or IMAX controller can be named (``corner4-tl`` on
-``mbox6``); the cueing preset is then the platform's ``default_preset``.
+Another bundled platform and any controller whose kind has an emulator on UDP can be named
+(``corner4-tl`` on ``mbox6``, ``imax6``); the cueing preset is then the platform's
+``default_preset``.
 
 No hardware and no network: the emulator listens on loopback in this process.
 """
@@ -13,7 +14,7 @@ import time
 from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -21,6 +22,9 @@ from .._config import config_dir
 from .._errors import ConfigError
 from ._ridefile import Ride, save_ride
 from ._verify import FrameCheck, check_frames
+
+if TYPE_CHECKING:
+    from motioncue.output import Emulator
 
 __all__ = ["DemoResult", "compare_trace", "run_demo"]
 
@@ -56,7 +60,7 @@ class DemoResult:
     play_s: float
 
 
-def compare_trace(ride: Ride, emulator: Any) -> TraceComparison:
+def compare_trace(ride: Ride, emulator: Emulator) -> TraceComparison:
     """Compare the emulator's per-axis trace with the ride's frames (first ``N`` rows)."""
     trace = emulator.trace
     n = min(ride.n_frames, len(trace.t_s))
@@ -79,15 +83,14 @@ def run_demo(
 ) -> DemoResult:
     """Generate, play to the emulator, compare, and write the report (see module docstring).
 
-    ``platform_name``: a bundled platform or path; ``controller_name``: an MBOX or IMAX
-    controller (name or path), played to its emulator. The cueing preset is
-    ``racing-hexapod`` for the default hexapod, else the platform's ``default_preset``.
+    ``platform_name``: a bundled platform or path; ``controller_name``: a controller (name
+    or path) whose kind declares an emulator on ``udp://``, played to that emulator. The
+    cueing preset is ``racing-hexapod`` for the default hexapod, else the platform's
+    ``default_preset``.
     """
     from motioncue.cueing import load_cueing
     from motioncue.kinematics import load_platform
-    from motioncue.output import load_controller, open_transport
-    from motioncue.output.imax import ImaxController, ImaxEmulator
-    from motioncue.output.mbox import MboxController, MboxEmulator
+    from motioncue.output import controller_kind, load_controller, open_transport, parse_target
     from motioncue.telemetry._recording import read_recording_csv
     from motioncue.trajectory import ActuatorLimits
 
@@ -100,15 +103,11 @@ def run_demo(
     lap = config_dir("recordings") / "lap.csv"
     platform = load_platform(platform_name)
     controller = load_controller(controller_name)
-    emulator: Any
-    if isinstance(controller, MboxController):
-        emulator = MboxEmulator
-    elif isinstance(controller, ImaxController):
-        emulator = ImaxEmulator
-    else:
+    kind = controller_kind(controller.kind)
+    if kind.emulator is None or "udp" not in kind.emulator_schemes:
         raise ConfigError(
-            f"controller {controller_name!r} is a {type(controller).__name__}; the demo plays "
-            "to an MBOX or IMAX emulator"
+            f"controller {controller_name!r} is of kind {kind.name}, which has no emulator on "
+            "udp://; the demo plays to a controller emulator on loopback"
         )
     preset = (
         "racing-hexapod"
@@ -138,19 +137,27 @@ def run_demo(
     log(f"report: {report_dir}/ (cueing.png, actuators.png, metrics.json, summary.txt)")
     # The emulator's buffer holds the whole ride, so the ride can be sent faster than real
     # time: the emulator's timeline follows the absolute frame times, not arrival.
-    emu_ctrl = dataclasses.replace(controller, buffer_frames=ride.n_frames + 1024)
+    # (bundled UDP controllers are frozen dataclasses with a ``buffer_frames`` field)
+    emu_ctrl = dataclasses.replace(
+        controller,  # type: ignore[type-var]
+        buffer_frames=ride.n_frames + 1024,
+    )
     t1 = time.perf_counter()
-    with emulator(emu_ctrl) as emu, open_transport(f"udp://127.0.0.1:{emu.port}") as link:
-        log(f"playing to the {emulator.__name__} on udp://127.0.0.1:{emu.port} at {speed:g}x")
+    emu = kind.open_emulator(emu_ctrl, parse_target("udp://127.0.0.1:0")).start()
+    try:
+        with open_transport(emu.where) as link:
+            log(f"playing to the {kind.name} emulator on {emu.where} at {speed:g}x")
 
-        played = play_ride(
-            ride, platform, controller, limits, link, speed=speed, spin_s=0.0,
-            throttle=receiver_throttle(lambda: emu.received),
-        )  # fmt: skip
-        deadline = time.monotonic() + 5.0
-        while emu.received < played.frames_sent and time.monotonic() < deadline:
-            time.sleep(0.01)
-        comparison = compare_trace(ride, emu)
+            played = play_ride(
+                ride, platform, controller, limits, link, speed=speed, spin_s=0.0,
+                throttle=receiver_throttle(lambda: emu.received),
+            )  # fmt: skip
+            deadline = time.monotonic() + 5.0
+            while emu.received < played.frames_sent and time.monotonic() < deadline:
+                time.sleep(0.01)
+            comparison = compare_trace(ride, emu)
+    finally:
+        emu.stop()
     play_s = time.perf_counter() - t1
     log(
         f"emulator: {comparison.frames_compared} of {ride.n_frames} ride frames traced; "

@@ -17,12 +17,12 @@ import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from types import MappingProxyType
-from typing import Any
+from typing import TYPE_CHECKING
 
 from ..._config import ConfigReader
 from ..._errors import ConfigError, LimitError, ProtocolError
 from .._controller_api import DriveExpectations, PulseLimits
-from .._transport import parse_target
+from .._transport import Transport, parse_target
 from ._profile import feed_for_duration, max_distance, move_duration_s
 from ._protocol import (
     MAX_MAGNITUDE,
@@ -32,6 +32,9 @@ from ._protocol import (
     serial_frame_size,
     word_from_signed,
 )
+
+if TYPE_CHECKING:
+    from ._link import EasySmcStreamer
 
 __all__ = [
     "BAUD_RATES",
@@ -316,7 +319,7 @@ class EasySmcController:
         """The EasySmc is not asked where it is (``play`` expects it homed, at park)."""
         return None
 
-    def command_streamer(self, transport: Any, rate_hz: float) -> Any:
+    def command_streamer(self, transport: Transport, rate_hz: float) -> EasySmcStreamer | None:
         """On a live serial link, the flow-controlled streamer that keeps the 63-command
         buffer fed without overflowing it (after this controller's set-up commands); None
         for files and captures, which take the commands as encoded."""

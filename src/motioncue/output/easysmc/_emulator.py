@@ -28,7 +28,7 @@ import time
 from collections import deque
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
-from typing import Any
+from typing import TYPE_CHECKING
 
 from ..._errors import ConfigError, ProtocolError, TransportError
 from ._profile import move_duration_s, move_progress
@@ -48,6 +48,9 @@ from ._protocol import (
     split_serial_frames,
     word_from_signed,
 )
+
+if TYPE_CHECKING:
+    from ._controller import EasySmcController
 
 __all__ = [
     "BUFFER_DEPTH",
@@ -219,7 +222,9 @@ class FrameLimits:
     period_s: float | None = None
 
 
-def frame_limits(controller: Any, frame_rate_hz: float | None = None) -> dict[int, FrameLimits]:
+def frame_limits(
+    controller: EasySmcController, frame_rate_hz: float | None = None
+) -> dict[int, FrameLimits]:
     """Per unit address, the limits of frame moves as the controller description states
     them: ``controller.pulse_limits(None)`` (feed cap) and ``controller.pulse_limits(rate)``
     (per-frame step), the same numbers the limits of a ride are derived from."""
@@ -901,7 +906,7 @@ class EasySmcEmulator:
         clock: Callable[[], float] = time.monotonic,
         line_baud: int | None = None,
         *,
-        controller: Any = None,
+        controller: EasySmcController | None = None,
         frame_rate_hz: float | None = None,
     ) -> None:
         if not addresses or len(set(addresses)) != len(addresses):

@@ -12,7 +12,7 @@ from __future__ import annotations
 import time
 from collections.abc import Callable, Iterable, Sequence
 from dataclasses import dataclass, field
-from typing import Any, Protocol
+from typing import TYPE_CHECKING, Protocol
 
 from ..._errors import ControllerSilent, ProtocolError, TransportError
 from ._protocol import (
@@ -28,6 +28,10 @@ from ._protocol import (
     encode_command,
     split_serial_frames,
 )
+
+if TYPE_CHECKING:
+    from ._controller import EasySmcController
+    from ._usb import UsbCommandLink
 
 __all__ = ["ByteLink", "EasySmcLink", "EasySmcStreamer", "StreamStats"]
 
@@ -172,7 +176,7 @@ class EasySmcStreamer:
 
     def __init__(
         self,
-        link: EasySmcLink | Any,
+        link: EasySmcLink | UsbCommandLink,
         max_queued: dict[int, int],
         poll_interval_s: float = 0.01,
         sleep: Callable[[float], None] = time.sleep,
@@ -192,18 +196,18 @@ class EasySmcStreamer:
 
     @classmethod
     def for_controller(
-        cls, controller: object, link: EasySmcLink | Any, frame_rate_hz: float
+        cls, controller: EasySmcController, link: EasySmcLink | UsbCommandLink, frame_rate_hz: float
     ) -> EasySmcStreamer:
         """Streamer for an :class:`EasySmcController`.
 
         The hard cap per unit is the 63-command buffer less 3 spare and one frame; the
         pacing of :meth:`stream` keeps only ``lead_frames`` frames queued.
         """
-        units = controller.units  # type: ignore[attr-defined]
+        units = controller.units
         limits = {u.address: 60 - (1 + len(u.move_codes)) for u in units}
         out = cls(link, limits, poll_interval_s=1.0 / frame_rate_hz)
-        out.lead_s = controller.lead_frames / frame_rate_hz  # type: ignore[attr-defined]
-        out.poll_every_frames = controller.poll_every_frames  # type: ignore[attr-defined]
+        out.lead_s = controller.lead_frames / frame_rate_hz
+        out.poll_every_frames = controller.poll_every_frames
         return out
 
     def poll(self, addr: int) -> ExecStatus:

@@ -22,6 +22,7 @@ Decisions where the manual contradicts itself are listed in ``MANUAL_DECISIONS``
 from __future__ import annotations
 
 import enum
+import struct
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 
@@ -694,31 +695,34 @@ def split_serial_frames(buffer: bytes) -> tuple[list[bytes], bytes, int]:
 
 # USB framing (manual 6.2.4) ---------------------------------------------------------------
 
-USB_WRITE_SIZE = 16
-USB_WRITE_REPLY_SIZE = 20
-USB_READ_REPLY_SIZE = 16
+# One layout per USB message; a data word travels as a u32 whose first byte is its top
+# hex digit (0..0x0F) and the next three its low 24 bits, i.e. the word big-endian.
+USB_WRITE = struct.Struct(">BBB3IB")  # 0x01, addr, cmd, DAT1..DAT3, start
+USB_WRITE_REPLY = struct.Struct(">BBBBI3I")  # addr, cmd, error, busy, state|executing, X Y Z
+USB_READ_REPLY = struct.Struct(">BB3IBB")  # addr, cmd, DAT1..DAT3, start, valid DATs
+USB_WRITE_SIZE = USB_WRITE.size  # 16
+USB_WRITE_REPLY_SIZE = USB_WRITE_REPLY.size  # 20
+USB_READ_REPLY_SIZE = USB_READ_REPLY.size  # 16
 
 
-def _usb_word(word: int) -> bytes:
-    return bytes((word >> 24,)) + (word & 0xFFFFFF).to_bytes(3, "big")
+def _usb_digit_word(word: int, what: str) -> int:
+    """A USB data word (its first byte one hex digit), else :class:`ProtocolError`."""
+    if word >> 24 > 0x0F:
+        raise ProtocolError(f"{what}: first byte {word >> 24:#04x} is not one hex digit (0..0x0F)")
+    return word
 
 
-def _word_from_usb(data: bytes, what: str) -> int:
-    if data[0] > 0x0F:
-        raise ProtocolError(f"{what}: first byte {data[0]:#04x} is not one hex digit (0..0x0F)")
-    return (data[0] << 24) | int.from_bytes(data[1:4], "big")
+def _pack(layout: struct.Struct, what: str, *fields: int) -> bytes:
+    try:
+        return layout.pack(*fields)
+    except struct.error as exc:
+        raise ProtocolError(f"{what} field out of range: {exc}") from None
 
 
 def encode_usb_write(cmd: Command) -> bytes:
     """16-byte ``senddata`` buffer: ``01 addr cmd DAT1 DAT2 DAT3 start`` (unused DATs zero)."""
-    out = bytearray(USB_WRITE_SIZE)
-    out[0] = 0x01
-    out[1] = cmd.addr
-    out[2] = cmd.code
-    for i, w in enumerate(cmd.words):
-        out[3 + 4 * i : 7 + 4 * i] = _usb_word(w)
-    out[15] = int(cmd.start)
-    return bytes(out)
+    words = (*cmd.words, 0, 0, 0)[:3]
+    return _pack(USB_WRITE, "USB write", 0x01, cmd.addr, cmd.code, *words, int(cmd.start))
 
 
 def decode_usb_write(data: bytes) -> Command:
@@ -733,12 +737,11 @@ def decode_usb_write(data: bytes) -> Command:
         raise ProtocolError(f"unknown command code {data[2]:02X}")
     if spec.kind == "query":
         raise ProtocolError(f"command {data[2]:02X} is a query; USB reads go through recdata")
-    words = tuple(
-        _word_from_usb(data[3 + 4 * i : 7 + 4 * i], f"DAT{i + 1}") for i in range(spec.n_words)
-    )
-    if data[15] > 8:
-        raise ProtocolError(f"USB start code {data[15]:#04x} not in 0..8")
-    return Command(spec.code, words, Start(data[15]), data[1])
+    _one, addr, _code, *dats, start = USB_WRITE.unpack(data)
+    words = tuple(_usb_digit_word(dats[i], f"DAT{i + 1}") for i in range(spec.n_words))
+    if start > 8:
+        raise ProtocolError(f"USB start code {start:#04x} not in 0..8")
+    return Command(spec.code, words, Start(start), addr)
 
 
 @dataclass(frozen=True)
@@ -779,10 +782,12 @@ def encode_usb_write_reply(r: UsbWriteReply) -> bytes:
         and 0 <= r.code <= 0xFF
     ):
         raise ProtocolError(f"USB write reply field out of range: {r}")
-    out = bytes((r.addr, r.code, r.error, r.busy, r.state)) + r.executing.to_bytes(3, "big")
-    for p in r.positions:
-        out += _usb_word(word_from_signed(p))
-    return out
+    positions = (word_from_signed(p) for p in r.positions)
+    state_executing = r.state << 24 | r.executing
+    return _pack(
+        USB_WRITE_REPLY, "USB write reply", r.addr, r.code, r.error, r.busy, state_executing,
+        *positions,
+    )  # fmt: skip
 
 
 def decode_usb_write_reply(data: bytes) -> UsbWriteReply:
@@ -795,18 +800,13 @@ def decode_usb_write_reply(data: bytes) -> UsbWriteReply:
         raise ProtocolError(f"USB error reply with error code {data[2]} (expected 1..4)")
     if data[3] > 0x0F:
         raise ProtocolError(f"USB busy byte {data[3]:#04x} uses bits above bit 3")
-    pos = []
-    for i, axis in enumerate("XYZ"):
-        w = _word_from_usb(data[8 + 4 * i : 12 + 4 * i], f"{axis} position")
-        pos.append(signed_from_word(w))
+    addr, code, error, busy, state_executing, *words = USB_WRITE_REPLY.unpack(data)
+    x, y, z = (
+        signed_from_word(_usb_digit_word(w, f"{axis} position"))
+        for w, axis in zip(words, "XYZ", strict=True)
+    )
     return UsbWriteReply(
-        data[1],
-        data[2],
-        data[3],
-        data[4],
-        int.from_bytes(data[5:8], "big"),
-        (pos[0], pos[1], pos[2]),
-        data[0],
+        code, error, busy, state_executing >> 24, state_executing & 0xFFFFFF, (x, y, z), addr
     )
 
 
@@ -851,8 +851,7 @@ class UsbReadReply:
 def encode_usb_read_reply(r: UsbReadReply) -> bytes:
     if not 0 <= r.n_valid <= 3 or not 0 <= r.start <= 0xFF or len(r.words) != 3:
         raise ProtocolError(f"USB read reply field out of range: {r}")
-    out = bytes((r.addr, r.code)) + b"".join(_usb_word(w) for w in r.words)
-    return out + bytes((r.start, r.n_valid))
+    return _pack(USB_READ_REPLY, "USB read reply", r.addr, r.code, *r.words, r.start, r.n_valid)
 
 
 def decode_usb_read_reply(data: bytes) -> UsbReadReply:
@@ -861,8 +860,9 @@ def decode_usb_read_reply(data: bytes) -> UsbReadReply:
         raise ProtocolError(f"USB read reply of {len(data)} bytes, expected 16")
     if data[15] > 3:
         raise ProtocolError(f"USB read reply: {data[15]} valid DATs (expected 0..3)")
-    words = tuple(_word_from_usb(data[2 + 4 * i : 6 + 4 * i], f"DAT{i + 1}") for i in range(3))
-    return UsbReadReply(data[1], words, data[14], data[15], data[0])  # type: ignore[arg-type]
+    addr, code, *dats, start, n_valid = USB_READ_REPLY.unpack(data)
+    w1, w2, w3 = (_usb_digit_word(w, f"DAT{i + 1}") for i, w in enumerate(dats))
+    return UsbReadReply(code, (w1, w2, w3), start, n_valid, addr)
 
 
 @dataclass(frozen=True)

@@ -23,7 +23,7 @@ import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any, TextIO
+from typing import TextIO
 
 from ..._errors import ConfigError, ProtocolError
 from ._controller import PARAMETERS, EasySmcController
@@ -35,6 +35,7 @@ from ._protocol import (
     Command,
     ErrorReply,
     ReadReply,
+    Reply,
     Start,
     decode_command,
     decode_reply,
@@ -43,6 +44,7 @@ from ._protocol import (
     split_serial_frames,
     word_from_signed,
 )
+from ._usb import UsbCommandLink
 
 __all__ = [
     "SEND_USAGE",
@@ -190,14 +192,14 @@ def send_commands(ctrl: EasySmcController, tokens: Sequence[str]) -> list[Comman
     raise ConfigError(f"send: unknown word {word!r}; use {SEND_USAGE}")
 
 
-def _query(link: Any, code: int, item: int, addr: int) -> tuple[int, ...]:
+def _query(link: EasySmcLink | UsbCommandLink, code: int, item: int, addr: int) -> tuple[int, ...]:
     reply = link.request(Command(code, (item,), Start.IMMEDIATE, addr))
     if not isinstance(reply, ReadReply):
         raise ProtocolError(f"query {code:02X} {item:07X} answered by {reply}")
     return reply.words
 
 
-def _reply_line(cmd: Command, reply: Any) -> str:
+def _reply_line(cmd: Command, reply: Reply) -> str:
     if isinstance(reply, ErrorReply):
         return f"{cmd.describe()} -> error 99/{int(reply.error)} {reply.error.name}"
     if isinstance(reply, ReadReply):
@@ -208,7 +210,7 @@ def _reply_line(cmd: Command, reply: Any) -> str:
 def run_send(
     ctrl: EasySmcController,
     tokens: Sequence[str],
-    transport: ByteLink | Any,
+    transport: ByteLink | EasySmcLink | UsbCommandLink,
     timeout_s: float = 0.5,
 ) -> list[str]:
     """Carry out one ``send`` request; returns lines for people.
@@ -216,7 +218,11 @@ def run_send(
     ``transport`` is a byte transport (serial port) or a command link that already speaks
     requests (:class:`UsbCommandLink`, :class:`EasySmcLink`).
     """
-    link = transport if hasattr(transport, "request") else EasySmcLink(transport, timeout_s)
+    link = (
+        transport
+        if isinstance(transport, EasySmcLink | UsbCommandLink)
+        else EasySmcLink(transport, timeout_s)
+    )
     word = tokens[0] if tokens else ""
     lines: list[str] = []
     if word == "read":
@@ -284,19 +290,13 @@ def run_send(
 _NEEDS_REPLIES = ("read", "write", "park")
 
 
-def _talks_back(transport: Any) -> bool:
-    from .._transport_serial import SerialTransport
-
-    return hasattr(transport, "request") or isinstance(transport, SerialTransport)
-
-
 def send_verb(
     controller: EasySmcController,
-    transport: Any,
+    transport: ByteLink | EasySmcLink | UsbCommandLink,
     verb: str,
     args: Sequence[str],
     *,
-    who: Any = None,
+    who: tuple[int, int] | None = None,
     save: bool = False,
     out: TextIO = sys.stdout,
 ) -> int:
@@ -311,8 +311,11 @@ def send_verb(
     """
     if who not in (None, (0xFFFF, 0xFFFF)):
         raise ConfigError("send --node: the EasySmc has no node fields; use raw --addr A")
+    from .._transport_serial import SerialTransport
+
     tokens = [verb, *args]
-    if _talks_back(transport):
+    # replies come back on a command link, or on a serial port (framed by EasySmcLink)
+    if isinstance(transport, EasySmcLink | UsbCommandLink | SerialTransport):
         lines = run_send(controller, tokens, transport)
         if save and verb == "write":
             lines += run_send(controller, ["raw", "17", "0000002"], transport)
@@ -406,7 +409,7 @@ def inspect_bytes(data: bytes) -> list[str]:
 
 
 def emulator(
-    ctrl: EasySmcController, host: str | None = None, port: int | None = None, **options: Any
+    ctrl: EasySmcController, host: str | None = None, port: int | None = None, **options: object
 ) -> EasySmcEmulator:
     """The ``emulate`` hook: an (unstarted) emulator of the controller's bus.
 

@@ -38,7 +38,7 @@ Contradictions in the manual and the decisions taken (more in ``_messages``):
 """
 
 from . import _messages
-from ._cli import emulator, inspect_decode, send_verb, split_stream, transport_options
+from ._cli import inspect_decode, send_verb, split_stream, transport_options
 from ._controller import ImaxController, ImaxFrameEncoder, controller_from_config
 from ._emulator import ImaxEmulator
 from ._messages import *  # noqa: F403 - the message API is _messages.__all__
@@ -50,7 +50,6 @@ __all__ = [
     "ImaxEmulator",
     "ImaxFrameEncoder",
     "controller_from_config",
-    "emulator",
     "inspect_decode",
     "pa_address",
     "pa_name",

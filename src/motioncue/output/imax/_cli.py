@@ -4,26 +4,21 @@ from __future__ import annotations
 
 import functools
 import re
-from typing import Any, TextIO
+from collections.abc import Sequence
 
 from ..._errors import ConfigError, ProtocolError
-from .._transport import Transport, TransportURL
+from .._transport import TransportURL
 from .._udp_cli import (
-    VERBS,
-    RegisterLink,
+    SendWords,
+    Write,
     describe,
-    need_args,
-    park,
     parse_bits,
-    parse_value,
     positions_from_words,
-    require_request,
     split_datagrams,
 )
 from .._udp_cli import transport_options as _transport_options
-from .._udp_common import CONFIRM_SERVO, HEADER, WHO_ALL, decode_header
+from .._udp_common import CONFIRM_SERVO, HEADER, WireMessage, decode_header
 from ._controller import ImaxController
-from ._emulator import ImaxEmulator
 from ._messages import (
     CHANNEL_DP,
     CHANNEL_DPF,
@@ -47,24 +42,10 @@ from ._messages import (
 )
 from ._params import DP_POS, pa_name
 
-__all__ = [
-    "VERBS",
-    "emulator",
-    "inspect_decode",
-    "send_verb",
-    "split_stream",
-    "transport_options",
-]
+__all__ = ["inspect_decode", "send_verb", "split_stream", "transport_options"]
 
 _DP = re.compile(r"^dp[ _]?([0-9a-f]{1,2})$", re.IGNORECASE)
 _DPF = re.compile(r"^dpf[ _]?([0-9a-f])$", re.IGNORECASE)
-
-
-def emulator(
-    controller: ImaxController, host: str = "127.0.0.1", port: int = 0, **options: Any
-) -> ImaxEmulator:
-    """An (unstarted) emulator of ``controller`` listening on ``host:port``."""
-    return ImaxEmulator(controller, host, port, **options)
 
 
 def register(name: str, *, for_write: bool) -> tuple[int, int, str]:
@@ -82,76 +63,59 @@ def register(name: str, *, for_write: bool) -> tuple[int, int, str]:
     return CHANNEL_PA, int(pa[2:], 16), pa
 
 
-def transport_options(controller: Any, url: TransportURL) -> dict:
+def transport_options(controller: ImaxController, url: TransportURL) -> dict[str, object]:
     """``open_transport`` options for this controller: pcap addresses from the config;
     the IMAX only accepts commands sent from port PA24 (2.3.1), so a
     non-loopback ``udp://`` target sends from it."""
     return _transport_options(controller, url, fixed_source_port=True)
 
 
-def send_verb(
-    controller: ImaxController,
-    transport: Transport,
-    verb: str,
-    args: list[str],
-    *,
-    who: tuple[int, int] = (WHO_ALL, WHO_ALL),
-    save: bool = False,
-    out: TextIO,
-) -> int:
-    """Run one ``motioncue send`` verb; returns the exit status (0 ok, 1 error reply)."""
-    link = RegisterLink(transport, decode, RegisterRead, RegisterWrite, who, out)
-    write, read = link.write, link.read
+class _Words(SendWords):
+    """The IMAX's registers behind the ``send`` words (manual 2.3, 5)."""
 
-    def nargs(n: int) -> None:
-        need_args(verb, args, n)
+    PARK_READ = (CHANNEL_DP, 0x27)
 
-    if verb == "estop":
+    def estop(self, write: Write, args: Sequence[str]) -> WireMessage | None:
         raise ConfigError(
             "the IMAX has no e-stop command over UDP: its e-stop is wired to inputs "
             "X01..X12 (PA90 bit 0, PA91, PA92; manual 5.6). Stop streaming or send 'park'."
         )
-    if verb == "reset":
-        nargs(0)
-        reply = write(CHANNEL_PA, 0x08, (1,))  # PA08 = 1: manual reset (5.2, 5.13)
-    elif verb == "home":
-        nargs(0)
-        reply = write(CHANNEL_DPF, 0, (0,))  # DPF0 = 0 homes; reads 2 when done (2.3.3)
-    elif verb == "outputs":
-        nargs(1)
-        reply = write(CHANNEL_DPF, 1, (parse_bits(args[0], 12),))  # DPF1 (5.12)
-    elif verb == "read":
-        if len(args) not in (1, 2):
-            raise ConfigError("send read REG [COUNT]")
-        channel, start, _label = register(args[0], for_write=False)
-        count = parse_value(args[1], "count") if len(args) == 2 else 1
-        reply = read(channel, start, count)
+
+    def reset(self, write: Write) -> WireMessage | None:
+        return write(CHANNEL_PA, 0x08, (1,))  # PA08 = 1: manual reset (5.2, 5.13)
+
+    def home(self, write: Write) -> WireMessage | None:
+        return write(CHANNEL_DPF, 0, (0,))  # DPF0 = 0 homes; reads 2 when done (2.3.3)
+
+    def outputs(self, write: Write, bits: str) -> WireMessage | None:
+        return write(CHANNEL_DPF, 1, (parse_bits(bits, 12),))  # DPF1 (5.12)
+
+    def register(self, name: str, *, for_write: bool, save: bool) -> tuple[int, int, str]:
+        return register(name, for_write=for_write)
+
+    def read_name(self, channel: int, address: int) -> str:
+        return f"DP{address:02X}" if channel == CHANNEL_DP else f"PA{address:02x}"
+
+    def values(self, reply: WireMessage | None) -> Sequence[int] | None:
         if isinstance(reply, RegisterReply) and reply.status == ReplyStatus.OK:
-            for i, v in enumerate(reply.values):
-                name = f"DP{start + i:02X}" if channel == CHANNEL_DP else f"PA{start + i:02x}"
-                print(f"{name} = {v} (0x{v:04X})", file=out)
-    elif verb == "write":
-        if len(args) < 2:
-            raise ConfigError("send write REG VALUE...")
-        channel, start, _label = register(args[0], for_write=True)
-        reply = write(channel, start, tuple(parse_value(v) & 0xFFFF for v in args[1:]))
+            return reply.values
+        return None
+
+    def error(self, reply: WireMessage | None) -> str | None:
+        if isinstance(reply, RegisterReply) and reply.status != ReplyStatus.OK:
+            return f"error reply: {reply.status.name}, code {reply.error_code}"
+        return None
+
+    def park_from(self, values: Sequence[int], n_axes: int) -> list[int]:
+        return positions_from_words(values, DP_POS[:n_axes])
+
+    def after_write(self, write: Write, channel: int, save: bool) -> None:
         if save and channel == CHANNEL_PA:
             write(CHANNEL_PA, 0x0F, (2,))  # PA0f = 2: save parameters
-    elif verb == "park":
-        nargs(0)
-        require_request(transport)
-        reply = read(CHANNEL_DP, 0, 0x27)
-        if not isinstance(reply, RegisterReply) or reply.status != ReplyStatus.OK:
-            return 1
-        positions = positions_from_words(reply.values, DP_POS[: controller.n_axes])
-        park(controller, transport, positions, out)
-        return 0
-    else:
-        raise ConfigError(f"send {verb!r}: allowed {', '.join(VERBS)}")
-    if isinstance(reply, RegisterReply) and reply.status != ReplyStatus.OK:
-        print(f"error reply: {reply.status.name}, code {reply.error_code}", file=out)
-        return 1
-    return 0
+
+
+send_verb = _Words(decode, RegisterRead, RegisterWrite).run
+"""Run one ``motioncue send`` verb; returns the exit status (0 ok, 1 error reply)."""
 
 
 def inspect_decode(data: bytes) -> str:

@@ -8,7 +8,7 @@ from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from numbers import Integral
 from types import MappingProxyType
-from typing import Any, ClassVar
+from typing import ClassVar
 
 from ..._config import ConfigReader
 from ..._errors import ConfigError, LimitError, ProtocolError
@@ -42,7 +42,7 @@ IMAX_RAMP_PERIOD_S = 1e-3
 the manual does not state it: 1 ms is an assumption, named in the limits' sources."""
 
 
-def validate_parameters(values: Mapping[str, Any], where: str) -> dict[str, int]:
+def validate_parameters(values: Mapping[str, object], where: str) -> dict[str, int]:
     """Defaults overridden by ``values``; names canonical, values within range."""
     return _validate(values, where, PA_SPEC, pa_name, "is not an IMAX parameter this package knows")
 
@@ -220,21 +220,29 @@ class ImaxController(UdpController["ImaxFrameEncoder"]):
     def position_query(self) -> PositionQuery:
         """One register read of DP00..DP49 (2.3.3): axis positions and the receive / use
         pointers of the frame buffer; moving while frames wait in it."""
-        from ._messages import CHANNEL_DP, RegisterRead, RegisterReply, ReplyStatus, decode
+        from ._messages import (
+            CHANNEL_DP,
+            ImaxMessage,
+            RegisterRead,
+            RegisterReply,
+            ReplyStatus,
+            decode,
+        )
 
         count = DP_USE + 1
 
-        def registers(msg: Any) -> Any:
-            ok = (
+        def registers(msg: ImaxMessage) -> tuple[int, ...] | None:
+            if not (
                 isinstance(msg, RegisterReply)
                 and msg.function == 0x1102
                 and msg.status == ReplyStatus.OK
                 and msg.start == 0
                 and len(msg.values) == count
-            )
-            return msg.values if ok else None
+            ):
+                return None
+            return msg.values
 
-        def status(values: Any, pulses: tuple[int, ...]) -> tuple[bool, int]:
+        def status(values: Sequence[int], pulses: tuple[int, ...]) -> tuple[bool, int]:
             depth = (values[DP_RECEIVE] - values[DP_USE]) & 0xFFFF
             return depth > 0, depth
 
@@ -297,7 +305,7 @@ class ImaxFrameEncoder(UdpFrameEncoder):
     def encode(
         self,
         t_s: float,
-        pulses: Sequence[Any],
+        pulses: Sequence[int],
         dout: int = 0,
         dacs: tuple[int, int] = (0, 0),
         vibration: Sequence[tuple[int, int]] | None = None,

@@ -32,10 +32,8 @@ Modelled (IMAX manual section in brackets):
 
 from __future__ import annotations
 
-from typing import Any
-
 from ..._errors import ProtocolError
-from .._udp_common import decode_header
+from .._udp_common import WireMessage, decode_header
 from .._udp_emulator import (
     STATE_ESTOP,
     STATE_HOMING,
@@ -179,7 +177,7 @@ class ImaxEmulator(ControllerEmulator):
             if reply and h.function in (F_ABS, F_REL, F_VIB_ABS, F_VIB_REL):
                 return [self._command_error(h.function)]
             return []
-        out: Any
+        out: WireMessage | None
         if isinstance(msg, MotionFrame | VibrationFrame):
             out = self._frame(msg)
         elif isinstance(msg, ServoRead | ServoWrite):

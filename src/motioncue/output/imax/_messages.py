@@ -42,7 +42,7 @@ from __future__ import annotations
 
 import enum
 import struct
-from collections.abc import Sequence
+from collections.abc import Callable, Iterable, Sequence
 from dataclasses import dataclass
 from functools import cache
 from itertools import chain
@@ -66,9 +66,8 @@ from .._udp_common import (
 from .._udp_registers import (
     RegisterReadShape,
     RegisterValuesShape,
+    RegisterWire,
     check_u16,
-    pack_registers,
-    register_struct,
     unpack_values,
 )
 
@@ -202,7 +201,7 @@ class ServoWrite(RegisterWrite):
 
 
 @dataclass(frozen=True, slots=True)
-class RegisterReply:
+class RegisterReply(RegisterWire):
     """IMAX -> host 0x110x (read) / 0x120x (write) reply, x = :class:`ReplyStatus`.
 
     Layout: header (channel, or error code when x != 2), StartAddress u16, Count u16,
@@ -229,8 +228,10 @@ class RegisterReply:
             5,
         ):
             raise ProtocolError(f"{type(self).__name__}: function 0x{self.function:04X}")
-        for name in ("channel", "start", "who_accept", "who_reply"):
-            check_u16(getattr(self, name), name)
+        fields = ("channel", "start", "who_accept", "who_reply")
+        values = (self.channel, self.start, self.who_accept, self.who_reply)
+        for name, value in zip(fields, values, strict=True):
+            check_u16(value, name)
         object.__setattr__(self, "values", u16_tuple(self.values, type(self).__name__))
         if len(self.values) > 256:
             raise ProtocolError(f"{type(self).__name__}: {len(self.values)} values")
@@ -244,21 +245,11 @@ class RegisterReply:
         """The controller's error code (channel field), ``None`` for an OK reply."""
         return None if self.status == ReplyStatus.OK else self.channel
 
-    @property
-    def size(self) -> int:
-        return register_struct(len(self.values)).size
+    def _function_code(self) -> int:
+        return self.function
 
-    def encode(self) -> bytes:
-        return pack_registers(
-            self.CONFIRM,
-            self.function,
-            self.channel,
-            self.who_accept,
-            self.who_reply,
-            self.start,
-            len(self.values),
-            self.values,
-        )
+    def _count_and_words(self) -> tuple[int, Sequence[int]]:
+        return len(self.values), self.values
 
     @classmethod
     def decode_parts(cls, h: Header, data: bytes) -> Self:
@@ -344,8 +335,128 @@ def _reply_axes(
     raise ProtocolError(f"{what}: length {size} bytes is not {forms} for 2..12 axes")
 
 
+class _TimedFrame:
+    """Encoder, decoder and size of the four IMAX frame messages, derived from one
+    declaration per message: its layout (``_STRUCT``: plain or vibration frame), whether
+    it is a reply (``_REPLY``: axis count from the length, channel field kept, Who 0),
+    the function bases, and how its trailing fields map to the layout's tail
+    (``_tail`` / ``_from_tail``)."""
+
+    __slots__ = ()
+
+    _STRUCT: ClassVar[Callable[[int, bool, int], struct.Struct]]
+    _REPLY: ClassVar[bool]
+    _BASES: ClassVar[tuple[int, int]]  # (absolute, relative) request function codes
+    _WHAT: ClassVar[str]
+
+    absolute: bool
+    frame: int
+    time_ms: int
+    positions: tuple[int, ...]
+    port_out_bytes: int
+
+    def _head(self) -> tuple[int, int, int, int]:
+        raise NotImplementedError
+
+    def _tail(self) -> Iterable[int]:
+        raise NotImplementedError
+
+    @classmethod
+    def _from_tail(cls, h: Header, relative: bool, f: tuple[int, ...], n: int, width: int) -> Self:
+        raise NotImplementedError
+
+    def _pair_count(self) -> int | None:
+        """Vibration pairs the message carries (None: a plain frame)."""
+        return None
+
+    def __post_init__(self) -> None:
+        n = len(self.positions)
+        channel_of_axes(n)
+        check_port_out_bytes(self.port_out_bytes)
+        pairs = self._pair_count()
+        if pairs is not None and pairs != n:
+            raise ProtocolError(f"{pairs} vibration pairs for {n} axes")
+        self.encode()
+
+    @property
+    def size(self) -> int:
+        return type(self)._STRUCT(len(self.positions), False, self.port_out_bytes).size
+
+    def encode(self) -> bytes:
+        layout = type(self)._STRUCT(len(self.positions), not self.absolute, self.port_out_bytes)
+        return pack_timed_frame(
+            layout,
+            self._head(),
+            self.frame,
+            self.time_ms,
+            self.positions,
+            self._tail(),
+            f"IMAX {self._WHAT}",
+        )
+
+    @classmethod
+    def decode_parts(cls, h: Header, data: bytes, port_out_bytes: int | None = None) -> Self:
+        """The message in ``data`` (PortOut ``port_out_bytes`` wide; ``None``: either)."""
+        relative = (h.function & 0xFFF0) == (cls._BASES[1] & 0xFFF0)
+        if cls._REPLY:
+            fixed = cls._STRUCT(0, False, 2).size - 2
+            what = f"{cls._WHAT} 0x{h.function:04X}"
+            per_axis = cls._STRUCT(1, False, 2).size - cls._STRUCT(0, False, 2).size
+            n, width = _reply_axes(len(data), fixed, per_axis, port_out_bytes, what)
+        else:
+            n = axes_of_channel(h.channel)
+            sizes = {w: cls._STRUCT(n, False, w).size for w in PORT_OUT_BYTES}
+            what = f"{n}-axis {cls._WHAT} 0x{h.function:04X}"
+            width = _width_of(len(data), sizes, port_out_bytes, what)
+        return cls._from_tail(h, relative, cls._STRUCT(n, relative, width).unpack(data), n, width)
+
+
+class _TimedRequest(_TimedFrame):
+    """Host -> IMAX frame: function from the time mode, channel from the axis count."""
+
+    __slots__ = ()
+    _REPLY = False
+
+    who_accept: int
+    who_reply: int
+
+    @property
+    def function(self) -> int:
+        return self._BASES[0] if self.absolute else self._BASES[1]
+
+    @property
+    def n_axes(self) -> int:
+        return len(self.positions)
+
+    def _head(self) -> tuple[int, int, int, int]:
+        n = channel_of_axes(len(self.positions))
+        return self.function, n, self.who_accept, self.who_reply
+
+
+class _TimedReply(_TimedFrame):
+    """IMAX -> host frame reply: status in the function's last digit, the channel field
+    kept (axis channel, or the error code), Who 0."""
+
+    __slots__ = ()
+    _REPLY = True
+
+    status: ReplyStatus
+    channel: int
+
+    @property
+    def function(self) -> int:
+        return (self._BASES[0] if self.absolute else self._BASES[1]) - 1 + int(self.status)
+
+    def _head(self) -> tuple[int, int, int, int]:
+        return self.function, self.channel, WHO_NONE, WHO_NONE
+
+
+def _pairs(flat: Sequence[int]) -> tuple[tuple[int, int], ...]:
+    return tuple(zip(flat[0::2], flat[1::2], strict=True))
+
+
 @dataclass(frozen=True, slots=True)
-class MotionFrame:
+class MotionFrame(_TimedRequest):
     """Host -> IMAX timed frame, 0x1301 (absolute ms since the first frame, u32) or 0x1401
     (ms since the previous frame, i32) (2.2.2.5, 2.2.2.7).
 
@@ -354,6 +465,10 @@ class MotionFrame:
     ``extend``: reserved u32. ``port_out_bytes``: PortOut's width on the wire, 2 or 4 (the
     manual prints both; module notes).
     """
+
+    _STRUCT = staticmethod(_frame_struct)
+    _BASES = (F_ABS, F_REL)
+    _WHAT = "frame"
 
     absolute: bool
     frame: int
@@ -365,60 +480,27 @@ class MotionFrame:
     who_reply: int = WHO_ALL
     port_out_bytes: int = 2
 
-    def __post_init__(self) -> None:
-        channel_of_axes(len(self.positions))
-        check_port_out_bytes(self.port_out_bytes)
-        self.encode()
-
-    @property
-    def function(self) -> int:
-        return F_ABS if self.absolute else F_REL
-
-    @property
-    def n_axes(self) -> int:
-        return len(self.positions)
-
-    @property
-    def size(self) -> int:
-        return frame_size(len(self.positions), self.port_out_bytes)
-
-    def encode(self) -> bytes:
-        n = len(self.positions)
-        return pack_timed_frame(
-            _frame_struct(n, not self.absolute, self.port_out_bytes),
-            (self.function, channel_of_axes(n), self.who_accept, self.who_reply),
-            self.frame,
-            self.time_ms,
-            self.positions,
-            (self.port_out, self.extend),
-            "IMAX frame",
-        )
+    def _tail(self) -> Iterable[int]:
+        return (self.port_out, self.extend)
 
     @classmethod
-    def decode_parts(cls, h: Header, data: bytes, port_out_bytes: int | None = None) -> MotionFrame:
-        """The frame in ``data`` (PortOut ``port_out_bytes`` wide; ``None``: either)."""
-        n = axes_of_channel(h.channel)
-        relative = h.function == F_REL
-        sizes = {w: frame_size(n, w) for w in PORT_OUT_BYTES}
-        width = _width_of(len(data), sizes, port_out_bytes, f"{n}-axis frame 0x{h.function:04X}")
-        f = _frame_struct(n, relative, width).unpack(data)
+    def _from_tail(
+        cls, h: Header, relative: bool, f: tuple[int, ...], n: int, width: int
+    ) -> MotionFrame:
         return cls(
-            not relative,
-            f[6],
-            f[7],
-            f[8 : 8 + n],
-            f[8 + n],
-            f[9 + n],
-            h.who_accept,
-            h.who_reply,
-            width,
-        )
+            not relative, f[6], f[7], f[8 : 8 + n], f[8 + n], f[9 + n],
+            h.who_accept, h.who_reply, width,
+        )  # fmt: skip
 
 
 @dataclass(frozen=True, slots=True)
-class MotionFrameReply:
+class MotionFrameReply(_TimedReply):
     """IMAX -> host 0x130x / 0x140x: the frame echoed, ``port`` = input states,
     ``channel`` = axis channel (x = 2) or error code (x != 2) (2.2.2.6, 2.2.2.8)."""
+
+    _STRUCT = staticmethod(_frame_struct)
+    _BASES = (F_ABS, F_REL)
+    _WHAT = "frame reply"
 
     status: ReplyStatus
     absolute: bool
@@ -430,58 +512,28 @@ class MotionFrameReply:
     extend: int = 0
     port_out_bytes: int = 2
 
-    def __post_init__(self) -> None:
-        channel_of_axes(len(self.positions))
-        check_port_out_bytes(self.port_out_bytes)
-        self.encode()
-
-    @property
-    def function(self) -> int:
-        return (F_ABS if self.absolute else F_REL) - 1 + int(self.status)
-
-    @property
-    def size(self) -> int:
-        return frame_size(len(self.positions), self.port_out_bytes)
-
-    def encode(self) -> bytes:
-        return pack_timed_frame(
-            _frame_struct(len(self.positions), not self.absolute, self.port_out_bytes),
-            (self.function, self.channel, WHO_NONE, WHO_NONE),
-            self.frame,
-            self.time_ms,
-            self.positions,
-            (self.port, self.extend),
-            "IMAX frame reply",
-        )
+    def _tail(self) -> Iterable[int]:
+        return (self.port, self.extend)
 
     @classmethod
-    def decode_parts(
-        cls, h: Header, data: bytes, port_out_bytes: int | None = None
+    def _from_tail(
+        cls, h: Header, relative: bool, f: tuple[int, ...], n: int, width: int
     ) -> MotionFrameReply:
-        """The reply in ``data`` (PortOut ``port_out_bytes`` wide; ``None``: either)."""
-        n, width = _reply_axes(
-            len(data), frame_size(0, 2) - 2, 4, port_out_bytes, f"frame reply 0x{h.function:04X}"
-        )
-        relative = (h.function & 0xFFF0) == 0x1400
-        f = _frame_struct(n, relative, width).unpack(data)
         return cls(
-            ReplyStatus(h.function & 0xF),
-            not relative,
-            h.channel,
-            f[6],
-            f[7],
-            f[8 : 8 + n],
-            f[8 + n],
-            f[9 + n],
-            width,
-        )
+            ReplyStatus(h.function & 0xF), not relative, h.channel, f[6], f[7], f[8 : 8 + n],
+            f[8 + n], f[9 + n], width,
+        )  # fmt: skip
 
 
 @dataclass(frozen=True, slots=True)
-class VibrationFrame:
+class VibrationFrame(_TimedRequest):
     """Host -> IMAX 0x1801 (absolute time) / 0x1901 (relative time) frame with per-axis
     vibration: ``vibration[i] = (period in 0.125 ms, amplitude in pulses)`` (2.2.2.9,
     2.2.2.11)."""
+
+    _STRUCT = staticmethod(_vib_struct)
+    _BASES = (F_VIB_ABS, F_VIB_REL)
+    _WHAT = "vibration frame"
 
     absolute: bool
     frame: int
@@ -493,63 +545,29 @@ class VibrationFrame:
     who_reply: int = WHO_ALL
     port_out_bytes: int = 2
 
-    def __post_init__(self) -> None:
-        channel_of_axes(len(self.positions))
-        check_port_out_bytes(self.port_out_bytes)
-        if len(self.vibration) != len(self.positions):
-            raise ProtocolError(
-                f"{len(self.vibration)} vibration pairs for {len(self.positions)} axes"
-            )
-        self.encode()
+    def _pair_count(self) -> int | None:
+        return len(self.vibration)
 
-    @property
-    def function(self) -> int:
-        return F_VIB_ABS if self.absolute else F_VIB_REL
-
-    @property
-    def size(self) -> int:
-        return vibration_frame_size(len(self.positions), self.port_out_bytes)
-
-    def encode(self) -> bytes:
-        n = len(self.positions)
-        return pack_timed_frame(
-            _vib_struct(n, not self.absolute, self.port_out_bytes),
-            (self.function, channel_of_axes(n), self.who_accept, self.who_reply),
-            self.frame,
-            self.time_ms,
-            self.positions,
-            chain((self.port_out,), (v for pair in self.vibration for v in pair)),
-            "IMAX vibration frame",
-        )
+    def _tail(self) -> Iterable[int]:
+        return chain((self.port_out,), (v for pair in self.vibration for v in pair))
 
     @classmethod
-    def decode_parts(
-        cls, h: Header, data: bytes, port_out_bytes: int | None = None
+    def _from_tail(
+        cls, h: Header, relative: bool, f: tuple[int, ...], n: int, width: int
     ) -> VibrationFrame:
-        """The frame in ``data`` (PortOut ``port_out_bytes`` wide; ``None``: either)."""
-        n = axes_of_channel(h.channel)
-        relative = h.function == F_VIB_REL
-        sizes = {w: vibration_frame_size(n, w) for w in PORT_OUT_BYTES}
-        what = f"{n}-axis vibration frame 0x{h.function:04X}"
-        width = _width_of(len(data), sizes, port_out_bytes, what)
-        f = _vib_struct(n, relative, width).unpack(data)
-        vib = f[9 + n :]
         return cls(
-            not relative,
-            f[6],
-            f[7],
-            f[8 : 8 + n],
-            f[8 + n],
-            tuple(zip(vib[0::2], vib[1::2], strict=True)),
-            h.who_accept,
-            h.who_reply,
-            width,
-        )
+            not relative, f[6], f[7], f[8 : 8 + n], f[8 + n], _pairs(f[9 + n :]),
+            h.who_accept, h.who_reply, width,
+        )  # fmt: skip
 
 
 @dataclass(frozen=True, slots=True)
-class VibrationFrameReply:
+class VibrationFrameReply(_TimedReply):
     """IMAX -> host 0x180x / 0x190x: the vibration frame echoed (``port`` = inputs)."""
+
+    _STRUCT = staticmethod(_vib_struct)
+    _BASES = (F_VIB_ABS, F_VIB_REL)
+    _WHAT = "vibration reply"
 
     status: ReplyStatus
     absolute: bool
@@ -561,58 +579,20 @@ class VibrationFrameReply:
     vibration: tuple[tuple[int, int], ...]
     port_out_bytes: int = 2
 
-    def __post_init__(self) -> None:
-        channel_of_axes(len(self.positions))
-        check_port_out_bytes(self.port_out_bytes)
-        if len(self.vibration) != len(self.positions):
-            raise ProtocolError("one vibration pair per axis")
-        self.encode()
+    def _pair_count(self) -> int | None:
+        return len(self.vibration)
 
-    @property
-    def function(self) -> int:
-        return (F_VIB_ABS if self.absolute else F_VIB_REL) - 1 + int(self.status)
-
-    @property
-    def size(self) -> int:
-        return vibration_frame_size(len(self.positions), self.port_out_bytes)
-
-    def encode(self) -> bytes:
-        return pack_timed_frame(
-            _vib_struct(len(self.positions), not self.absolute, self.port_out_bytes),
-            (self.function, self.channel, WHO_NONE, WHO_NONE),
-            self.frame,
-            self.time_ms,
-            self.positions,
-            chain((self.port,), (v for pair in self.vibration for v in pair)),
-            "IMAX vibration reply",
-        )
+    def _tail(self) -> Iterable[int]:
+        return chain((self.port,), (v for pair in self.vibration for v in pair))
 
     @classmethod
-    def decode_parts(
-        cls, h: Header, data: bytes, port_out_bytes: int | None = None
+    def _from_tail(
+        cls, h: Header, relative: bool, f: tuple[int, ...], n: int, width: int
     ) -> VibrationFrameReply:
-        """The reply in ``data`` (PortOut ``port_out_bytes`` wide; ``None``: either)."""
-        n, width = _reply_axes(
-            len(data),
-            vibration_frame_size(0, 2) - 2,
-            8,
-            port_out_bytes,
-            f"vibration reply 0x{h.function:04X}",
-        )
-        relative = (h.function & 0xFFF0) == 0x1900
-        f = _vib_struct(n, relative, width).unpack(data)
-        vib = f[9 + n :]
         return cls(
-            ReplyStatus(h.function & 0xF),
-            not relative,
-            h.channel,
-            f[6],
-            f[7],
-            f[8 : 8 + n],
-            f[8 + n],
-            tuple(zip(vib[0::2], vib[1::2], strict=True)),
-            width,
-        )
+            ReplyStatus(h.function & 0xF), not relative, h.channel, f[6], f[7], f[8 : 8 + n],
+            f[8 + n], _pairs(f[9 + n :]), width,
+        )  # fmt: skip
 
 
 # -- status report ----------------------------------------------------------------------------

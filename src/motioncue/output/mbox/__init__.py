@@ -35,7 +35,7 @@ Contradictions in the manual and the decisions taken:
 """
 
 from . import _messages
-from ._cli import emulator, inspect_decode, send_verb, split_stream, transport_options
+from ._cli import inspect_decode, send_verb, split_stream, transport_options
 from ._controller import MboxController, MboxFrameEncoder, controller_from_config
 from ._emulator import MboxEmulator
 from ._messages import *  # noqa: F403 - the message API is _messages.__all__
@@ -47,7 +47,6 @@ __all__ = [
     "MboxEmulator",
     "MboxFrameEncoder",
     "controller_from_config",
-    "emulator",
     "fn_address",
     "fn_name",
     "inspect_decode",

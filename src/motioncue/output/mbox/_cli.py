@@ -3,26 +3,22 @@
 from __future__ import annotations
 
 import re
-from typing import Any, TextIO
+from collections.abc import Sequence
 
 from ..._errors import ConfigError, ProtocolError
-from .._transport import Transport, TransportURL
+from .._transport import TransportURL
 from .._udp_cli import (
-    VERBS,
-    RegisterLink,
+    SendWords,
+    Write,
     describe,
     need_args,
-    park,
     parse_bits,
-    parse_value,
     positions_from_words,
-    require_request,
     split_datagrams,
 )
 from .._udp_cli import transport_options as _transport_options
-from .._udp_common import HEADER, WHO_ALL, decode_header
+from .._udp_common import HEADER, WireMessage, decode_header
 from ._controller import MboxController
-from ._emulator import MboxEmulator
 from ._messages import (
     CHANNEL_CX,
     CHANNEL_DX,
@@ -35,6 +31,7 @@ from ._messages import (
     F_STATUS,
     F_WRITE,
     F_WRITE_ERR,
+    RegisterError,
     RegisterRead,
     RegisterReadReply,
     RegisterWrite,
@@ -43,24 +40,10 @@ from ._messages import (
 )
 from ._params import DX_COMMAND, fn_name
 
-__all__ = [
-    "VERBS",
-    "emulator",
-    "inspect_decode",
-    "send_verb",
-    "split_stream",
-    "transport_options",
-]
+__all__ = ["inspect_decode", "send_verb", "split_stream", "transport_options"]
 
 _DX = re.compile(r"^(?:dn|dx)[ _]?([0-9a-f]{1,2})$", re.IGNORECASE)
 _CX = re.compile(r"^(?:cn|cx)[ _]?([0-7])$", re.IGNORECASE)
-
-
-def emulator(
-    controller: MboxController, host: str = "127.0.0.1", port: int = 0, **options: Any
-) -> MboxEmulator:
-    """An (unstarted) emulator of ``controller`` listening on ``host:port``."""
-    return MboxEmulator(controller, host, port, **options)
 
 
 def register(name: str, *, for_write: bool, save: bool = False) -> tuple[int, int, str]:
@@ -83,78 +66,57 @@ def register(name: str, *, for_write: bool, save: bool = False) -> tuple[int, in
     return channel, int(fn[2:], 16), fn
 
 
-def transport_options(controller: Any, url: TransportURL) -> dict:
+def transport_options(controller: MboxController, url: TransportURL) -> dict[str, object]:
     """``open_transport`` options for this controller: pcap addresses from the config;
     the MBOX accepts any source port."""
     return _transport_options(controller, url, fixed_source_port=False)
 
 
-def send_verb(
-    controller: MboxController,
-    transport: Transport,
-    verb: str,
-    args: list[str],
-    *,
-    who: tuple[int, int] = (WHO_ALL, WHO_ALL),
-    save: bool = False,
-    out: TextIO,
-) -> int:
-    """Run one ``motioncue send`` verb; returns the exit status (0 ok, 1 error reply)."""
-    link = RegisterLink(transport, decode, RegisterRead, RegisterWrite, who, out)
-    write, read = link.write, link.read
+class _Words(SendWords):
+    """The SC-MBOX's registers behind the ``send`` words (manual 4.5, 5)."""
 
-    def nargs(n: int) -> None:
-        need_args(verb, args, n)
+    PARK_READ = (CHANNEL_DX, 0x30)
 
-    if verb == "estop":
-        nargs(1)
+    def estop(self, write: Write, args: Sequence[str]) -> WireMessage | None:
+        need_args("estop", args, 1)
         if args[0] not in ("on", "off"):
             raise ConfigError(f"send estop {args[0]!r}: allowed on | off")
         # manual 4.5.2: Fn090 = 1 through FXm (channel 0, not saved)
-        reply = write(CHANNEL_FXM, 0x090, (1 if args[0] == "on" else 0,))
-    elif verb == "reset":
-        nargs(0)
-        reply = write(CHANNEL_CX, 0, (0x0001,))  # RST: leave the fault state; SON = 0 re-homes
-    elif verb == "home":
-        nargs(0)
-        reply = write(CHANNEL_CX, 0, (0x0000,))  # manual 4.5.1: play control word 0 re-homes
-    elif verb == "outputs":
-        nargs(1)
-        bits = parse_bits(args[0], 24)
-        reply = write(CHANNEL_CX, 1, (bits & 0xFFF,))
-        if bits >> 12:
-            reply = write(CHANNEL_CX, 4, (bits >> 12,))
-    elif verb == "read":
-        if len(args) not in (1, 2):
-            raise ConfigError("send read REG [COUNT]")
-        channel, start, _label = register(args[0], for_write=False)
-        count = parse_value(args[1], "count") if len(args) == 2 else 1
-        reply = read(channel, start, count)
-        if isinstance(reply, RegisterReadReply):
-            for i, v in enumerate(reply.values):
-                name = f"Dn{start + i:02X}" if channel == CHANNEL_DX else f"Fn{start + i:03X}"
-                print(f"{name} = {v} (0x{v:04X})", file=out)
-    elif verb == "write":
-        if len(args) < 2:
-            raise ConfigError("send write REG VALUE...")
-        channel, start, _label = register(args[0], for_write=True, save=save)
-        values = tuple(parse_value(v) & 0xFFFF for v in args[1:])
-        reply = write(channel, start, values)
-    elif verb == "park":
-        nargs(0)
-        require_request(transport)
-        reply = read(CHANNEL_DX, 0, 0x30)
-        if not isinstance(reply, RegisterReadReply):
-            return 1
-        positions = positions_from_words(reply.values, DX_COMMAND[: controller.n_axes])
-        park(controller, transport, positions, out)
-        return 0
-    else:
-        raise ConfigError(f"send {verb!r}: allowed {', '.join(VERBS)}")
-    if reply is not None and reply.function in (F_READ_ERR, F_WRITE_ERR):
-        print(f"error reply: code {reply.error_code}", file=out)
-        return 1
-    return 0
+        return write(CHANNEL_FXM, 0x090, (1 if args[0] == "on" else 0,))
+
+    def reset(self, write: Write) -> WireMessage | None:
+        return write(CHANNEL_CX, 0, (0x0001,))  # RST: leave the fault state; SON = 0 re-homes
+
+    def home(self, write: Write) -> WireMessage | None:
+        return write(CHANNEL_CX, 0, (0x0000,))  # manual 4.5.1: play control word 0 re-homes
+
+    def outputs(self, write: Write, bits: str) -> WireMessage | None:
+        value = parse_bits(bits, 24)
+        reply = write(CHANNEL_CX, 1, (value & 0xFFF,))
+        if value >> 12:
+            reply = write(CHANNEL_CX, 4, (value >> 12,))
+        return reply
+
+    def register(self, name: str, *, for_write: bool, save: bool) -> tuple[int, int, str]:
+        return register(name, for_write=for_write, save=save)
+
+    def read_name(self, channel: int, address: int) -> str:
+        return f"Dn{address:02X}" if channel == CHANNEL_DX else f"Fn{address:03X}"
+
+    def values(self, reply: WireMessage | None) -> Sequence[int] | None:
+        return reply.values if isinstance(reply, RegisterReadReply) else None
+
+    def error(self, reply: WireMessage | None) -> str | None:
+        if isinstance(reply, RegisterError) and reply.function in (F_READ_ERR, F_WRITE_ERR):
+            return f"error reply: code {reply.error_code}"
+        return None
+
+    def park_from(self, values: Sequence[int], n_axes: int) -> list[int]:
+        return positions_from_words(values, DX_COMMAND[:n_axes])
+
+
+send_verb = _Words(decode, RegisterRead, RegisterWrite).run
+"""Run one ``motioncue send`` verb; returns the exit status (0 ok, 1 error reply)."""
 
 
 def inspect_decode(data: bytes) -> str:

@@ -7,7 +7,7 @@ from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from numbers import Integral
 from types import MappingProxyType
-from typing import Any, ClassVar
+from typing import ClassVar
 
 from ..._config import ConfigReader
 from ..._errors import ConfigError, LimitError, ProtocolError
@@ -32,7 +32,7 @@ def _freeze(params: Mapping[str, int]) -> Mapping[str, int]:
     return MappingProxyType(dict(params))
 
 
-def validate_parameters(values: Mapping[str, Any], where: str) -> dict[str, int]:
+def validate_parameters(values: Mapping[str, object], where: str) -> dict[str, int]:
     """Factory defaults overridden by ``values``; names canonical, values within range."""
     unknown = f"is not an MBOX parameter this package knows (known: {', '.join(FN_SPEC)})"
     return _validate(values, where, FN_SPEC, fn_name, unknown)
@@ -184,20 +184,21 @@ class MboxController(UdpController["MboxFrameEncoder"]):
     def position_query(self) -> PositionQuery:
         """One register read of Dn00..Dn4B (6.1): actual and commanded positions, and the
         frames waiting in the buffer (Dn4B); moving while any wait or the two differ."""
-        from ._messages import CHANNEL_DX, RegisterRead, RegisterReadReply, decode
+        from ._messages import CHANNEL_DX, MboxMessage, RegisterRead, RegisterReadReply, decode
 
         n, count = self.n_axes, DX_DEPTH + 1
 
-        def registers(msg: Any) -> Any:
-            ok = (
+        def registers(msg: MboxMessage) -> tuple[int, ...] | None:
+            if not (
                 isinstance(msg, RegisterReadReply)
                 and msg.channel == CHANNEL_DX
                 and msg.start == 0
                 and len(msg.values) == count
-            )
-            return msg.values if ok else None
+            ):
+                return None
+            return msg.values
 
-        def status(values: Any, actual: tuple[int, ...]) -> tuple[bool, int]:
+        def status(values: Sequence[int], actual: tuple[int, ...]) -> tuple[bool, int]:
             depth = values[DX_DEPTH]
             return depth > 0 or actual != words_to_positions(values, DX_COMMAND[:n]), depth
 
@@ -218,7 +219,7 @@ class MboxController(UdpController["MboxFrameEncoder"]):
         return MboxFrameEncoder(self, clock, who_accept, who_reply)
 
 
-def _integer(value: Any, what: str) -> int:
+def _integer(value: object, what: str) -> int:
     if isinstance(value, bool) or not isinstance(value, Integral):
         raise ProtocolError(f"{what} = {value!r} is not an integer")
     return int(value)
@@ -252,7 +253,7 @@ class MboxFrameEncoder(UdpFrameEncoder):
         self._dac_max = (controller.parameters["Fn078"], controller.parameters["Fn079"])
 
     def encode(
-        self, t_s: float, pulses: Sequence[Any], dout: int = 0, dacs: tuple[int, int] = (0, 0)
+        self, t_s: float, pulses: Sequence[int], dout: int = 0, dacs: tuple[int, int] = (0, 0)
     ) -> list[bytes]:
         """One frame datagram for the positions ``pulses`` (len ``n_axes``) at ``t_s``."""
         if len(pulses) != self.n_axes:

@@ -29,10 +29,8 @@ reads 0 homing, 1 ready, 2 e-stop, 3 fault.
 
 from __future__ import annotations
 
-from typing import Any
-
 from ..._errors import ProtocolError
-from .._udp_common import WHO_NONE, decode_header
+from .._udp_common import WHO_NONE, WireMessage, decode_header
 from .._udp_emulator import (
     STATE_ESTOP,
     STATE_HOMING,
@@ -147,7 +145,7 @@ class MboxEmulator(ControllerEmulator):
             msg = decode(data)
         except ProtocolError as exc:
             return self._malformed(str(exc))
-        out: Any
+        out: WireMessage | None
         if isinstance(msg, MotionFrame):
             out = self._frame(msg)
         elif isinstance(msg, RegisterRead):

@@ -159,8 +159,12 @@ class RegisterError:
     def __post_init__(self) -> None:
         if self.function not in (F_READ_ERR, F_WRITE_ERR):
             raise ProtocolError(f"error reply function 0x{self.function:04X}: 0x1103 or 0x1203")
-        for name in ("channel", "start", "count", "error_code", "who_accept", "who_reply"):
-            check_u16(getattr(self, name), name)
+        fields = ("channel", "start", "count", "error_code", "who_accept", "who_reply")
+        values = (
+            self.channel, self.start, self.count, self.error_code, self.who_accept, self.who_reply
+        )  # fmt: skip
+        for name, value in zip(fields, values, strict=True):
+            check_u16(value, name)
 
     size: ClassVar[int] = HEADER.size + 6
 
