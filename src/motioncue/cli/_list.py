@@ -39,11 +39,20 @@ def register(sub: Subparsers) -> None:
     parser.set_defaults(run=_run)
 
 
+def _kind_title(kind: str) -> str:
+    """A controller kind's human name from the registry (``?`` for an unknown kind)."""
+    from ..output import controller_kind
+
+    try:
+        return controller_kind(kind).title or kind
+    except ConfigError:
+        return "?"
+
+
 def _describe(kind: str, data: dict[str, Any]) -> str:
     text = str(data.get("description", ""))
     if kind == "controllers" and not text:
-        kind_name = {"mbox": "SC-MBOX", "imax": "IMAX/SMC"}.get(str(data.get("kind")), "?")
-        text = f"{kind_name} controller, {data.get('axes', '?')} axes"
+        text = f"{_kind_title(str(data.get('kind')))} controller, {data.get('axes', '?')} axes"
     extra = []
     if kind == "platforms" and "default_preset" in data:
         extra.append(f"default preset {data['default_preset']}")

@@ -486,8 +486,7 @@ class _PlayProgress:
 
 
 def controller_buffer(controller: Controller) -> str:
-    depth = getattr(controller, "buffer_frames", None)
-    return "a few commands" if depth is None else f"{depth} frames"
+    return f"{controller.buffer_frames} frames"
 
 
 def _say(line: str, stream: TextIO | None = None) -> None:

@@ -261,8 +261,8 @@ class OutputStage:
         silence = self.transport.silence_s if self.silence_s == "link" else self.silence_s
         if silence is None:
             return None
-        if not getattr(self.controller, "replies_to_frames", False) and (
-            getattr(self.controller, "position_query", lambda: None)() is None
+        if not self.controller.replies_to_frames and (
+            self.controller.position_query() is None
         ):
             return None  # nothing on this link answers: nothing to watch
         return LinkWatch(self.transport, self.controller, float(silence))
@@ -747,7 +747,7 @@ def play_ride(
     if live and speed != 1.0 and throttle is None:
         raise ConfigError(
             f"speed {speed:g}: a controller plays frames at their own time stamps, so anything "
-            f"but 1 overflows its buffer ({getattr(controller, 'buffer_frames', '?')} frames); "
+            f"but 1 overflows its buffer ({controller.buffer_frames} frames); "
             "other speeds are for pcap: and file: targets"
         )
     stage = OutputStage(platform, controller, limits, ride.rate_hz, transport, q_start=q_start)
