@@ -12,10 +12,20 @@ Source specs (``open_source``)::
     f1:0.0.0.0:20777   bound on every interface (a console or another PC sends)
     replay:FILE        a recording, replayed with its original timing
     replay:FILE?speed=2    twice as fast; speed=0 replays as fast as possible
+    gt7@192.168.1.20   a game that must be asked for its telemetry (Assetto Corsa ``ac``,
+                       Gran Turismo 7 ``gt7``): requests go to that address (default
+                       127.0.0.1), at the game's own port; with a peer that is not a
+                       loopback address the receiver binds every interface
+
+A game that must be asked has a decoder with ``requests(now_s) -> list[bytes]`` (sent to
+the peer about every 50 ms when not empty), ``farewell() -> list[bytes]`` (sent at close),
+``PEER_PORT`` (the game's port) and ``LISTEN_PORT`` (the local port bound by default);
+see :class:`Requester`.
 """
 
 from __future__ import annotations
 
+import ipaddress
 import math
 import os
 import threading
@@ -23,6 +33,7 @@ import time
 from collections import deque
 from collections.abc import Callable
 from dataclasses import replace
+from typing import Protocol, runtime_checkable
 from urllib.parse import parse_qs
 
 from .._errors import ConfigError
@@ -30,9 +41,66 @@ from ._container import MAX_DATAGRAM, _bind_udp, read_recording_file
 from ._registry import GAMES, decoder_for
 from ._sample import Decoder, TelemetrySample
 
-__all__ = ["ReplaySource", "TelemetrySource", "open_source", "parse_live_spec"]
+__all__ = [
+    "ReplaySource",
+    "Requester",
+    "TelemetrySource",
+    "open_source",
+    "parse_live_spec",
+    "split_peer",
+]
 
 DEFAULT_HOST = "127.0.0.1"
+TALK_PERIOD_S = 0.05
+"""How often a live source asks a talking decoder for requests (s)."""
+
+
+@runtime_checkable
+class Requester(Protocol):
+    """A decoder of a game that sends telemetry only when asked (handshake, heartbeat)."""
+
+    PEER_PORT: int
+    LISTEN_PORT: int
+
+    def requests(self, now_s: float) -> list[bytes]: ...
+
+    def farewell(self) -> list[bytes]: ...
+
+
+def split_peer(spec: str) -> tuple[str, str | None]:
+    """Split ``GAME@PEER[:...]`` into (``GAME[:...]``, PEER); PEER is None when absent.
+
+    Raises
+    ------
+    ConfigError
+        An empty peer, or a game that is not asked for telemetry.
+    """
+    head, sep, rest = spec.partition(":")
+    game, at, peer = head.partition("@")
+    if not at:
+        return spec, None
+    if not peer:
+        raise ConfigError(f"source {spec!r}: '@' needs the game's address, e.g. gt7@192.168.1.20")
+    info = GAMES.get(game)
+    if info is not None and not _talks(info.decoder):
+        raise ConfigError(
+            f"source {spec!r}: {game!r} sends on its own; '@ADDRESS' is for games that must "
+            f"be asked ({', '.join(g for g, i in sorted(GAMES.items()) if _talks(i.decoder))})"
+        )
+    return game + sep + rest, peer
+
+
+def _talks(factory: object) -> bool:
+    return hasattr(factory, "requests") and hasattr(factory, "PEER_PORT")
+
+
+def _is_loopback(host: str) -> bool:
+    if host == "localhost":
+        return True
+    try:
+        return ipaddress.ip_address(host).is_loopback
+    except ValueError:
+        return False
 
 
 def parse_live_spec(spec: str) -> tuple[str, str, int]:
@@ -43,6 +111,7 @@ def parse_live_spec(spec: str) -> tuple[str, str, int]:
     ConfigError
         Unknown game, or a port that is not an integer in 0..65535.
     """
+    spec, peer = split_peer(spec)
     parts = spec.split(":")
     game = parts[0]
     if game not in GAMES:
@@ -51,6 +120,8 @@ def parse_live_spec(spec: str) -> tuple[str, str, int]:
             " (or replay:FILE)"
         )
     host, port_text = DEFAULT_HOST, None
+    if peer is not None and not _is_loopback(peer):
+        host = "0.0.0.0"  # a console or another PC answers: listen beyond loopback
     if len(parts) == 2:
         port_text = parts[1]
     elif len(parts) == 3:
@@ -58,7 +129,9 @@ def parse_live_spec(spec: str) -> tuple[str, str, int]:
     elif len(parts) > 3:
         raise ConfigError(f"source {spec!r}: expected GAME, GAME:PORT or GAME:HOST:PORT")
     if port_text is None:
-        return game, host, GAMES[game].default_port
+        factory = GAMES[game].decoder
+        listen = getattr(factory, "LISTEN_PORT", None) if _talks(factory) else None
+        return game, host, GAMES[game].default_port if listen is None else int(listen)
     try:
         port = int(port_text)
     except ValueError:
@@ -193,6 +266,10 @@ class TelemetrySource(_ThreadedSource):
         Called in the receiver thread with ``(t_s, datagram)`` for every datagram (e.g. to
         record while bridging). It must be quick; an exception from it is counted as a
         receive error.
+    peer : str, optional
+        For a game that must be asked (:class:`Requester`): its address (default 127.0.0.1).
+    peer_port : int, optional
+        Its port (default: the game's own, ``PEER_PORT``; tests use stand-in games).
     """
 
     def __init__(
@@ -203,22 +280,57 @@ class TelemetrySource(_ThreadedSource):
         *,
         history: int = 1024,
         on_datagram: Callable[[float, bytes], None] | None = None,
+        peer: str | None = None,
+        peer_port: int | None = None,
     ) -> None:
         super().__init__(decoder_for(game), history)
         self._on_datagram = on_datagram
+        dec = self.decoder
+        self.peer: tuple[str, int] | None = None
+        """Where requests go, for a game that must be asked (``Requester``), else None."""
+        if isinstance(dec, Requester):
+            self.peer = (
+                peer or DEFAULT_HOST,
+                int(dec.PEER_PORT if peer_port is None else peer_port),
+            )
+            if port is None:
+                port = int(dec.LISTEN_PORT)
+        elif peer is not None or peer_port is not None:
+            raise ConfigError(f"{game!r} sends on its own: it takes no peer address {peer!r}")
         self._sock = _bind_udp(host, GAMES[game].default_port if port is None else port)
-        self._sock.settimeout(0.05)
+        self._sock.settimeout(TALK_PERIOD_S)
         self.host = host
         self.port: int = self._sock.getsockname()[1]
+        self.requests_sent = 0
         self._start(f"motioncue-telemetry-{game}")
+
+    def _talk(self, datagrams: list[bytes]) -> None:
+        """Send requests to the peer; a failure is a counted receive error, never fatal."""
+        assert self.peer is not None
+        for d in datagrams:
+            try:
+                self._sock.sendto(d, self.peer)
+                self.requests_sent += 1
+            except OSError:
+                self._errors += 1
 
     def _run(self) -> None:
         buf = bytearray(MAX_DATAGRAM + 1)
         sock = self._sock
         recv_into = sock.recv_into
         clock = time.perf_counter
+        asker = self.decoder if isinstance(self.decoder, Requester) else None
+        next_talk = -math.inf
         try:
             while not self._stop.is_set():
+                if asker is not None:
+                    now = clock()
+                    if now >= next_talk:
+                        next_talk = now + TALK_PERIOD_S
+                        try:
+                            self._talk(asker.requests(now))
+                        except Exception:
+                            self._errors += 1
                 try:
                     n = recv_into(buf)
                 except TimeoutError:
@@ -241,10 +353,16 @@ class TelemetrySource(_ThreadedSource):
                 except Exception:  # never let the receiver thread die
                     self._errors += 1
         finally:
+            if asker is not None:
+                try:
+                    self._talk(asker.farewell())
+                except Exception:
+                    self._errors += 1
             sock.close()
 
     def __repr__(self) -> str:
-        return f"TelemetrySource({self.game!r}, udp://{self.host}:{self.port})"
+        peer = "" if self.peer is None else f", asking {self.peer[0]}:{self.peer[1]}"
+        return f"TelemetrySource({self.game!r}, udp://{self.host}:{self.port}{peer})"
 
 
 class ReplaySource(_ThreadedSource):
@@ -339,4 +457,4 @@ def open_source(spec: str, *, history: int = 1024) -> TelemetrySource | ReplaySo
                 raise ConfigError(f"source {spec!r}: speed {text!r} is not a number") from None
         return ReplaySource(path, speed, history=history)
     game, host, port = parse_live_spec(spec)
-    return TelemetrySource(game, port, host, history=history)
+    return TelemetrySource(game, port, host, history=history, peer=split_peer(spec)[1])
