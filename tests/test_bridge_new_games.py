@@ -22,6 +22,7 @@ from motioncue.pipeline._realtime import GateConfig
 from motioncue.pipeline._verify import check_frames
 from motioncue.telemetry import TelemetrySource
 from motioncue.telemetry._ac import ACCarInfo, handshake_response
+from motioncue.telemetry._gt7 import GT7Packet, encrypt
 from motioncue.trajectory import ActuatorLimits
 
 GATE = GateConfig(timeout_s=0.25, fade_out_s=0.3, fade_in_s=0.3)
@@ -40,8 +41,24 @@ def _ac_answer(req: bytes) -> tuple[list[bytes], bool]:
     return [], op == 1
 
 
+def _gt7(t: float) -> bytes:
+    s = math.sin(2 * math.pi * 0.7 * t)
+    psi = 0.3 * s  # yawing left and right; the car faces world -z at psi = 0
+    q = (0.0, math.sin(psi / 2), 0.0, math.cos(psi / 2))
+    speed = 30.0 + 4.0 * s
+    v = (-speed * math.sin(psi), 0.0, -speed * math.cos(psi))
+    w = (0.0, 0.3 * 2 * math.pi * 0.7 * math.cos(2 * math.pi * 0.7 * t), 0.0)
+    pid = round(t * 60.0)
+    return encrypt(GT7Packet(pid, (0.0, 0.0, 0.0), v, q, w, speed, 6000.0).pack(), pid * 7919)
+
+
+def _gt7_answer(req: bytes) -> tuple[list[bytes], bool]:
+    return [], req in (b"A", b"B", b"~", b"C")
+
+
 GAMES: dict[str, tuple[Callable[[float], bytes], Answer | None]] = {
     "ac": (_ac, _ac_answer),
+    "gt7": (_gt7, _gt7_answer),
 }
 
 

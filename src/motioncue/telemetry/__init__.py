@@ -11,6 +11,7 @@ body frame, x forward, y left, z up; specific force ``f = a - g`` in m/s^2, ``(0
 * ``dirt``: Codemasters ``extradata="3"`` UDP (DiRT Rally, DiRT Rally 2.0, DiRT 4...), 20777
 * ``pcars2``: Project CARS 2 / 3 and Automobilista 2 UDP (Project CARS 2 protocol), 5606
 * ``ac``: Assetto Corsa remote telemetry (asked at port 9996: ``ac@HOST``)
+* ``gt7``: Gran Turismo 7 (heartbeat to the console's 33739: ``gt7@CONSOLE``), port 33740
 
 Typical use::
 
@@ -108,6 +109,7 @@ def __getattr__(name: str) -> Any:
 # One module per game; each registers itself in GAMES on import.
 _GAME_MODULES: tuple[str, ...] = ("_f1", "_forza", "_beamng", "_xplane", "_dirt", "_pcars2")
 _GAME_MODULES += ("_ac",)  # Assetto Corsa
+_GAME_MODULES += ("_gt7",)  # Gran Turismo 7
 for _name in _GAME_MODULES:
     importlib.import_module(f"{__name__}.{_name}")
 del _name
