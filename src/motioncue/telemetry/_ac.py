@@ -91,7 +91,10 @@ V0_M_S = 3.0
 
 _HEAD = struct.Struct("<c3xi3f6B2x3f4i5fi")  # up to and including gear (80 bytes)
 _COORDS = struct.Struct("<2f3f")  # @308
-assert CAR_INFO.size == CAR_INFO_SIZE and RESPONSE.size == RESPONSE_SIZE
+_MOTION = struct.Struct("<c3xi8xf8x3f28xf4xi")
+"""What the decoder reads: identifier, size, speed_Ms, accG[3], engineRPM, gear (80 bytes)."""
+assert CAR_INFO.size == CAR_INFO_SIZE and RESPONSE.size == RESPONSE_SIZE == 408
+assert _MOTION.size == _HEAD.size == 80
 
 
 def request(operation: int, identifier: int = 1, version: int = 1) -> bytes:
@@ -210,20 +213,18 @@ class ACDecoder(Decoder):
         if n != CAR_INFO_SIZE:
             reason = "skipped: truncated" if n < CAR_INFO_SIZE else "skipped: wrong size"
             return DecodeResult("skipped", reason)
-        v = _HEAD.unpack_from(datagram)
-        if v[0] != b"a" or v[1] != CAR_INFO_SIZE:
+        ident, size, speed, a_lat, a_up, a_lon, rpm, gear = _MOTION.unpack_from(datagram)
+        if ident != b"a" or size != CAR_INFO_SIZE:
             return DecodeResult("skipped", "skipped: foreign")
         self._last_data_s = t_s
         self._answered = True  # data flowing: the subscription stands
-        speed, a_lat, a_up, a_lon = v[4], v[11], v[12], v[13]
         g = G0_M_S2
         f = (g * a_lon, g * a_lat, g + g * a_up)
         yaw_rate = 0.0
         if math.isfinite(speed) and abs(speed) < 1e4:
             yaw_rate = g * a_lat * speed / (speed * speed + V0_M_S * V0_M_S)
-        gear = v[23]
         return self._make(t_s, f, (0.0, 0.0, yaw_rate), False,
-                          {"rpm": v[21], "gear": gear - 1 if gear >= 1 else -1})  # fmt: skip
+                          {"rpm": rpm, "gear": gear - 1 if gear >= 1 else -1})  # fmt: skip
 
 
 INFO = register_game(

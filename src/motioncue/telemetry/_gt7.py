@@ -112,6 +112,7 @@ _EXTENDED = struct.Struct("<5f")  # 0x128 wheel rotation, filler, sway, heave, s
 _NONCE = struct.Struct("<II")
 
 FLAG_ON_TRACK, FLAG_PAUSED, FLAG_LOADING = 1, 2, 4
+_USED = 0x94  # the decoder reads bytes 0x00-0x93
 
 
 def _cipher(key_nonce: bytes) -> Any:
@@ -267,7 +268,8 @@ class GT7Decoder(Decoder):
             reason = "skipped: truncated" if n < 296 else "skipped: wrong size"
             return DecodeResult("skipped", reason)
         iv = _IV.unpack_from(datagram, 0x40)[0]
-        plain = _Salsa20.new(KEY, nonce=_NONCE.pack(iv ^ layout[1], iv)).decrypt(datagram)
+        # a stream cipher: only the bytes read are decrypted (up to the flags, 0x94)
+        plain = _Salsa20.new(KEY, nonce=_NONCE.pack(iv ^ layout[1], iv)).decrypt(datagram[:_USED])
         if plain[:4] != b"0S7G":
             return DecodeResult("skipped", "skipped: foreign")
         self.layouts[layout[0]] = self.layouts.get(layout[0], 0) + 1
