@@ -38,9 +38,21 @@ def _gt7() -> list[bytes]:  # real encrypted packets (each one decrypted on feed
     return _split((FIXTURES / "gt7" / "interlagos.gt7lap").read_bytes(), 296)
 
 
+def _lfs() -> list[bytes]:  # synthetic OutSim2 (OutSim Opts 1ff): no public capture
+    from motioncue.telemetry._lfs import OutSimMain
+
+    return [
+        OutSimMain(
+            (0.01 * k, 0.02, 0.3), 0.001 * k, 0.02, -0.01, (1.0, 2.0, 0.1), (0.0, 30.0, 0.0)
+        ).outsim2(time_ms=k * 10)
+        for k in range(100)
+    ]
+
+
 STREAMS: dict[str, Callable[[], list[bytes]]] = {
     "ac": _ac,
     "gt7": _gt7,
+    "lfs": _lfs,
 }
 
 

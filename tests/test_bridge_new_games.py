@@ -23,6 +23,7 @@ from motioncue.pipeline._verify import check_frames
 from motioncue.telemetry import TelemetrySource
 from motioncue.telemetry._ac import ACCarInfo, handshake_response
 from motioncue.telemetry._gt7 import GT7Packet, encrypt
+from motioncue.telemetry._lfs import OutSimMain
 from motioncue.trajectory import ActuatorLimits
 
 GATE = GateConfig(timeout_s=0.25, fade_out_s=0.3, fade_in_s=0.3)
@@ -56,9 +57,17 @@ def _gt7_answer(req: bytes) -> tuple[list[bytes], bool]:
     return [], req in (b"A", b"B", b"~", b"C")
 
 
+def _lfs(t: float) -> bytes:
+    s = math.sin(2 * math.pi * 0.7 * t)
+    m = OutSimMain((0.0, 0.0, 0.3 * s), 0.2 * s, 0.02 * s, 0.03 * s,
+                   (2.0 * s, 3.0 * s, 0.5 * s), (0.0, 30.0, 0.0))  # fmt: skip
+    return m.outsim2(time_ms=int(t * 1e3))
+
+
 GAMES: dict[str, tuple[Callable[[float], bytes], Answer | None]] = {
     "ac": (_ac, _ac_answer),
     "gt7": (_gt7, _gt7_answer),
+    "lfs": (_lfs, None),
 }
 
 

@@ -12,6 +12,7 @@ body frame, x forward, y left, z up; specific force ``f = a - g`` in m/s^2, ``(0
 * ``pcars2``: Project CARS 2 / 3 and Automobilista 2 UDP (Project CARS 2 protocol), 5606
 * ``ac``: Assetto Corsa remote telemetry (asked at port 9996: ``ac@HOST``)
 * ``gt7``: Gran Turismo 7 (heartbeat to the console's 33739: ``gt7@CONSOLE``), port 33740
+* ``lfs``: Live for Speed OutSim (OutSim Opts 1ff, or the classic OutSimPack), port 4123
 
 Typical use::
 
@@ -110,6 +111,7 @@ def __getattr__(name: str) -> Any:
 _GAME_MODULES: tuple[str, ...] = ("_f1", "_forza", "_beamng", "_xplane", "_dirt", "_pcars2")
 _GAME_MODULES += ("_ac",)  # Assetto Corsa
 _GAME_MODULES += ("_gt7",)  # Gran Turismo 7
+_GAME_MODULES += ("_lfs",)  # Live for Speed
 for _name in _GAME_MODULES:
     importlib.import_module(f"{__name__}.{_name}")
 del _name
