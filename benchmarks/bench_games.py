@@ -49,10 +49,32 @@ def _lfs() -> list[bytes]:  # synthetic OutSim2 (OutSim Opts 1ff): no public cap
     ]
 
 
+def _wrc() -> list[bytes]:  # synthetic, motioncue's structure: no public capture
+    import math
+
+    from motioncue.telemetry._wrc import WRCDecoder
+
+    layout = WRCDecoder().layout
+    out = []
+    for k in range(100):
+        psi = 0.01 * k
+        out.append(layout.pack({
+            "game_total_time": k / 120, "stage_current_time": k / 120,
+            "vehicle_acceleration_x": 1.0, "vehicle_acceleration_z": 2.0,
+            "vehicle_forward_direction_x": math.sin(psi),
+            "vehicle_forward_direction_z": math.cos(psi),
+            "vehicle_left_direction_x": math.cos(psi),
+            "vehicle_left_direction_z": -math.sin(psi),
+            "vehicle_up_direction_y": 1.0, "vehicle_engine_rpm_current": 5000.0,
+        }))  # fmt: skip
+    return out
+
+
 STREAMS: dict[str, Callable[[], list[bytes]]] = {
     "ac": _ac,
     "gt7": _gt7,
     "lfs": _lfs,
+    "wrc": _wrc,
 }
 
 

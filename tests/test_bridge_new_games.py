@@ -24,6 +24,7 @@ from motioncue.telemetry import TelemetrySource
 from motioncue.telemetry._ac import ACCarInfo, handshake_response
 from motioncue.telemetry._gt7 import GT7Packet, encrypt
 from motioncue.telemetry._lfs import OutSimMain
+from motioncue.telemetry._wrc import WRCDecoder
 from motioncue.trajectory import ActuatorLimits
 
 GATE = GateConfig(timeout_s=0.25, fade_out_s=0.3, fade_in_s=0.3)
@@ -64,10 +65,27 @@ def _lfs(t: float) -> bytes:
     return m.outsim2(time_ms=int(t * 1e3))
 
 
+_WRC = WRCDecoder().layout
+
+
+def _wrc(t: float) -> bytes:
+    s = math.sin(2 * math.pi * 0.7 * t)
+    psi = 0.3 * s  # yawing; world y up, the car faces +z, its left is +x at psi = 0
+    ch = {"game_total_time": t, "stage_current_time": t, "vehicle_acceleration_x": 3.0 * s,
+          "vehicle_acceleration_z": 2.0 * s, "vehicle_engine_rpm_current": 6000.0,
+          "vehicle_up_direction_y": 1.0}  # fmt: skip
+    for name, vec in (("forward", (math.sin(psi), 0.0, math.cos(psi))),
+                      ("left", (math.cos(psi), 0.0, -math.sin(psi)))):  # fmt: skip
+        for axis, c in zip("xyz", vec, strict=True):
+            ch[f"vehicle_{name}_direction_{axis}"] = c
+    return _WRC.pack(ch)
+
+
 GAMES: dict[str, tuple[Callable[[float], bytes], Answer | None]] = {
     "ac": (_ac, _ac_answer),
     "gt7": (_gt7, _gt7_answer),
     "lfs": (_lfs, None),
+    "wrc": (_wrc, None),
 }
 
 
