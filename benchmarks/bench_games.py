@@ -70,11 +70,19 @@ def _wrc() -> list[bytes]:  # synthetic, motioncue's structure: no public captur
     return out
 
 
+def _dcs() -> list[bytes]:  # synthetic, as MotioncueExport.lua formats it
+    from motioncue.telemetry._dcs import DCSFrame
+
+    return [DCSFrame(k / 100, (0.1, 1.2, -0.05 * k), (0.01 * k, 0.2, 0.3)).pack()
+            for k in range(100)]  # fmt: skip
+
+
 STREAMS: dict[str, Callable[[], list[bytes]]] = {
     "ac": _ac,
     "gt7": _gt7,
     "lfs": _lfs,
     "wrc": _wrc,
+    "dcs": _dcs,
 }
 
 

@@ -22,6 +22,7 @@ from motioncue.pipeline._realtime import GateConfig
 from motioncue.pipeline._verify import check_frames
 from motioncue.telemetry import TelemetrySource
 from motioncue.telemetry._ac import ACCarInfo, handshake_response
+from motioncue.telemetry._dcs import DCSFrame
 from motioncue.telemetry._gt7 import GT7Packet, encrypt
 from motioncue.telemetry._lfs import OutSimMain
 from motioncue.telemetry._wrc import WRCDecoder
@@ -81,11 +82,20 @@ def _wrc(t: float) -> bytes:
     return _WRC.pack(ch)
 
 
+def _dcs(t: float) -> bytes:
+    """Loops: pitching through 360 deg every 6 s at 150 m/s (through 90 deg of pitch)."""
+    q = 2 * math.pi / 6.0
+    th = q * t
+    return DCSFrame(t, (math.sin(th), (150.0 * q + 9.80665 * math.cos(th)) / 9.80665, 0.0),
+                    (0.0, 0.0, q)).pack()  # fmt: skip
+
+
 GAMES: dict[str, tuple[Callable[[float], bytes], Answer | None]] = {
     "ac": (_ac, _ac_answer),
     "gt7": (_gt7, _gt7_answer),
     "lfs": (_lfs, None),
     "wrc": (_wrc, None),
+    "dcs": (_dcs, None),
 }
 
 
