@@ -77,12 +77,20 @@ def _dcs() -> list[bytes]:  # synthetic, as MotioncueExport.lua formats it
             for k in range(100)]  # fmt: skip
 
 
+def _rbr() -> list[bytes]:  # synthetic NGP TelemetryData: no public capture
+    from motioncue.telemetry._rbr import RBRCar
+
+    return [RBRCar(k, k / 400, 4, 90.0, (1.0, 2.0, 30.0), (25.0, 0.1, 0.0, 1.0, 2.0, 3.0),
+                   (1.0, 2.0, 0.3, 0.0, 0.0, 0.0), 6000.0).pack() for k in range(100)]  # fmt: skip
+
+
 STREAMS: dict[str, Callable[[], list[bytes]]] = {
     "ac": _ac,
     "gt7": _gt7,
     "lfs": _lfs,
     "wrc": _wrc,
     "dcs": _dcs,
+    "rbr": _rbr,
 }
 
 

@@ -25,6 +25,7 @@ from motioncue.telemetry._ac import ACCarInfo, handshake_response
 from motioncue.telemetry._dcs import DCSFrame
 from motioncue.telemetry._gt7 import GT7Packet, encrypt
 from motioncue.telemetry._lfs import OutSimMain
+from motioncue.telemetry._rbr import RBRCar
 from motioncue.telemetry._wrc import WRCDecoder
 from motioncue.trajectory import ActuatorLimits
 
@@ -90,12 +91,20 @@ def _dcs(t: float) -> bytes:
                     (0.0, 0.0, q)).pack()  # fmt: skip
 
 
+def _rbr(t: float) -> bytes:
+    s = math.sin(2 * math.pi * 0.7 * t)
+    return RBRCar(int(t * 400), t, 4, 90.0, (2.0 * s, 1.0 * s, 0.0),
+                  (25.0, 0.0, 0.0, 5.0 * s, 3.0 * s, 15.0 * s),
+                  (3.0 * s, 2.0 * s, 0.5 * s, 0.0, 0.0, 0.0), 6000.0).pack()  # fmt: skip
+
+
 GAMES: dict[str, tuple[Callable[[float], bytes], Answer | None]] = {
     "ac": (_ac, _ac_answer),
     "gt7": (_gt7, _gt7_answer),
     "lfs": (_lfs, None),
     "wrc": (_wrc, None),
     "dcs": (_dcs, None),
+    "rbr": (_rbr, None),
 }
 
 

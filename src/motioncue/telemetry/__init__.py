@@ -15,6 +15,7 @@ body frame, x forward, y left, z up; specific force ``f = a - g`` in m/s^2, ``(0
 * ``lfs``: Live for Speed OutSim (OutSim Opts 1ff, or the classic OutSimPack), port 4123
 * ``wrc``: EA SPORTS WRC (motioncue's packet structure, tools/wrc), port 20790
 * ``dcs``: DCS World (motioncue's export script, tools/dcs), port 20800
+* ``rbr``: Richard Burns Rally (RSF / NGP UDP telemetry; signs unverified), port 6776
 
 Typical use::
 
@@ -116,6 +117,7 @@ _GAME_MODULES += ("_gt7",)  # Gran Turismo 7
 _GAME_MODULES += ("_lfs",)  # Live for Speed
 _GAME_MODULES += ("_wrc",)  # EA SPORTS WRC
 _GAME_MODULES += ("_dcs",)  # DCS World
+_GAME_MODULES += ("_rbr",)  # Richard Burns Rally
 for _name in _GAME_MODULES:
     importlib.import_module(f"{__name__}.{_name}")
 del _name
