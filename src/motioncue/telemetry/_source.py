@@ -12,6 +12,8 @@ Source specs (``open_source``)::
     f1:0.0.0.0:20777   bound on every interface (a console or another PC sends)
     replay:FILE        a recording, replayed with its original timing
     replay:FILE?speed=2    twice as fast; speed=0 replays as fast as possible
+    auto               every known port (of the games that send on their own), locked onto
+                       the first game whose datagrams decode; auto:0.0.0.0 on every interface
     gt7@192.168.1.20   a game that must be asked for its telemetry (Assetto Corsa ``ac``,
                        Gran Turismo 7 ``gt7``): requests go to that address (default
                        127.0.0.1), at the game's own port; with a peer that is not a
@@ -28,20 +30,23 @@ from __future__ import annotations
 import ipaddress
 import math
 import os
+import selectors
+import socket
 import threading
 import time
 from collections import deque
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import replace
 from typing import Protocol, runtime_checkable
 from urllib.parse import parse_qs
 
-from .._errors import ConfigError
+from .._errors import ConfigError, TransportError
 from ._container import MAX_DATAGRAM, _bind_udp, read_recording_file
 from ._registry import GAMES, decoder_for
-from ._sample import Decoder, TelemetrySample
+from ._sample import Decoder, DecodeResult, TelemetrySample
 
 __all__ = [
+    "AutoSource",
     "ReplaySource",
     "Requester",
     "TelemetrySource",
@@ -51,6 +56,7 @@ __all__ = [
 ]
 
 DEFAULT_HOST = "127.0.0.1"
+AUTO = "auto"
 TALK_PERIOD_S = 0.05
 """How often a live source asks a talking decoder for requests (s)."""
 
@@ -114,6 +120,10 @@ def parse_live_spec(spec: str) -> tuple[str, str, int]:
     spec, peer = split_peer(spec)
     parts = spec.split(":")
     game = parts[0]
+    if game == AUTO:
+        if len(parts) > 2:
+            raise ConfigError(f"source {spec!r}: expected auto or auto:HOST")
+        return AUTO, (parts[1] if len(parts) == 2 and parts[1] else DEFAULT_HOST), 0
     if game not in GAMES:
         raise ConfigError(
             f"source {spec!r}: unknown game {game!r}; known: {', '.join(sorted(GAMES))}"
@@ -427,7 +437,168 @@ class ReplaySource(_ThreadedSource):
         return f"ReplaySource({self.path!r}, speed={self.speed})"
 
 
-def open_source(spec: str, *, history: int = 1024) -> TelemetrySource | ReplaySource:
+class _AutoDecoder(Decoder):
+    """Tries the decoders of the games expected on the port a datagram came to
+    (``port``, set by the source before each datagram) until one yields a sample; from then
+    on only that one decodes (its counters become this decoder's)."""
+
+    game = AUTO
+
+    def __init__(self, listen: Sequence[tuple[int, Sequence[str]]]) -> None:
+        super().__init__()
+        self.candidates = {g: decoder_for(g) for _p, gs in listen for g in gs}
+        self.by_port: dict[int, list[Decoder]] = {}
+        self.port = 0
+        self.locked: Decoder | None = None
+
+    def _decode(self, datagram: bytes, t_s: float) -> DecodeResult:  # pragma: no cover
+        raise AssertionError("decode() is overridden")
+
+    def decode(self, datagram: bytes, t_s: float) -> DecodeResult:
+        if self.locked is not None:
+            return self.locked.decode(datagram, t_s)
+        for dec in self.by_port.get(self.port, ()):
+            r = dec.decode(datagram, t_s)
+            if r.status == "sample":
+                self.locked = dec
+                self.game = dec.game
+                return r
+        self._count("auto: no game recognised yet")
+        return DecodeResult("skipped", "auto: no game recognised yet")
+
+    @property
+    def stats(self) -> dict[str, int]:
+        if self.locked is None:
+            return self._own
+        out = dict(self.locked.stats)
+        out[f"auto: locked onto {self.locked.game}"] = 1
+        return out
+
+    @stats.setter
+    def stats(self, value: dict[str, int]) -> None:
+        self._own = value
+
+
+class AutoSource(_ThreadedSource):
+    """Listens on the default port of every game that sends on its own and locks onto the
+    first game whose datagrams decode into a sample (``--source auto``).
+
+    Until then each datagram is offered to the decoders of the games expected on its port
+    (counted as ``auto: no game recognised yet`` when none takes it); once one yields a
+    sample, the other ports are closed and ``game`` names the game (``stats`` gains
+    ``auto: locked onto GAME``). Games that must be asked (Assetto Corsa, Gran Turismo 7)
+    are not candidates: they need their address (``ac@HOST``, ``gt7@CONSOLE``). Several
+    games share a port (F1 and DiRT on 20777; X-Plane 12 and 11 on 49005, where auto reads
+    X-Plane 12's layout).
+
+    Parameters
+    ----------
+    host : str
+        Address to bind (127.0.0.1 by default, 0.0.0.0 for every interface).
+    history : int
+        Samples kept for :meth:`drain`.
+    listen : sequence of (port, games), optional
+        Ports to bind and the games expected on each (default: every passive game's default
+        port; port 0 binds a free one, for tests).
+
+    Raises
+    ------
+    TransportError
+        When no port at all can be bound (the busy ones are listed in ``busy_ports``).
+    """
+
+    def __init__(
+        self,
+        host: str = DEFAULT_HOST,
+        *,
+        history: int = 1024,
+        listen: Sequence[tuple[int, Sequence[str]]] | None = None,
+    ) -> None:
+        if listen is None:
+            by_port: dict[int, list[str]] = {}
+            for g, info in sorted(GAMES.items()):
+                if not _talks(info.decoder):
+                    by_port.setdefault(info.default_port, []).append(g)
+            listen = sorted(by_port.items())
+        auto = _AutoDecoder(listen)
+        super().__init__(auto, history)
+        self.host = host
+        self.port = 0
+        self.ports: dict[int, list[str]] = {}
+        self.busy_ports: list[int] = []
+        self._socks: dict[int, socket.socket] = {}
+        for port, games in listen:
+            try:
+                sock = _bind_udp(host, port)
+            except TransportError:
+                self.busy_ports.append(port)
+                continue
+            sock.setblocking(False)
+            bound = sock.getsockname()[1]
+            self._socks[bound] = sock
+            self.ports[bound] = list(games)
+            auto.by_port[bound] = [auto.candidates[g] for g in games]
+        if not self._socks:
+            raise TransportError(
+                f"auto: no game port could be bound on {host} (busy: {self.busy_ports})"
+            )
+        self._start("motioncue-telemetry-auto")
+
+    @property
+    def game(self) -> str:
+        """``auto`` until a game is recognised, then that game's name."""
+        return self.decoder.game
+
+    @game.setter
+    def game(self, value: str) -> None:
+        pass  # set by the base class; the decoder's name is the truth
+
+    def _run(self) -> None:
+        sel = selectors.DefaultSelector()
+        for port, sock in self._socks.items():
+            sel.register(sock, selectors.EVENT_READ, port)
+        buf = bytearray(MAX_DATAGRAM + 1)
+        clock = time.perf_counter
+        dec = self.decoder
+        assert isinstance(dec, _AutoDecoder)
+        try:
+            while not self._stop.is_set():
+                for key, _ev in sel.select(timeout=TALK_PERIOD_S):
+                    rx = self._socks.get(int(key.data))
+                    if rx is None:  # closed when the source locked, in this same batch
+                        continue
+                    try:
+                        n = rx.recv_into(buf)
+                    except BlockingIOError:
+                        continue
+                    except OSError:
+                        self._errors += 1
+                        continue
+                    t = clock()
+                    dec.port = int(key.data)
+                    was_locked = dec.locked is not None
+                    try:
+                        self._deliver(bytes(buf[:n]), t)
+                    except Exception:  # never let the receiver thread die
+                        self._errors += 1
+                    if not was_locked and dec.locked is not None:
+                        self.port = int(key.data)
+                        for port, other in list(self._socks.items()):
+                            if port != self.port:
+                                sel.unregister(other)
+                                other.close()
+                                del self._socks[port]
+        finally:
+            sel.close()
+            for sock in self._socks.values():
+                sock.close()
+
+    def __repr__(self) -> str:
+        where = f"port {self.port}" if self.port else f"ports {sorted(self.ports)}"
+        return f"AutoSource({self.game!r}, udp://{self.host}, {where})"
+
+
+def open_source(spec: str, *, history: int = 1024) -> TelemetrySource | ReplaySource | AutoSource:
     """Open a live or replay telemetry source from a spec string (see module docstring).
 
     Raises
@@ -457,4 +628,6 @@ def open_source(spec: str, *, history: int = 1024) -> TelemetrySource | ReplaySo
                 raise ConfigError(f"source {spec!r}: speed {text!r} is not a number") from None
         return ReplaySource(path, speed, history=history)
     game, host, port = parse_live_spec(spec)
+    if game == AUTO:
+        return AutoSource(host, history=history)
     return TelemetrySource(game, port, host, history=history, peer=split_peer(spec)[1])
