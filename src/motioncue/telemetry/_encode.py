@@ -119,8 +119,8 @@ def encode_motion(game: str, k: int, t_s: float, f: ArrayLike, w: ArrayLike) -> 
 
         # decoder, level, heading 0: car (right, forward, up) = world; f = (f_y, -f_x, f_z)
         stamp_ms = round(t_s * 1e3) & 0xFFFFFFFF
-        m = OutSimMain((-wy, wx, wz), 0.0, 0.0, 0.0, (-fy, fx, fz - g), (0.0, 0.0, 0.0))
-        return [m.outsim2(time_ms=stamp_ms)]
+        outsim = OutSimMain((-wy, wx, wz), 0.0, 0.0, 0.0, (-fy, fx, fz - g), (0.0, 0.0, 0.0))
+        return [outsim.outsim2(time_ms=stamp_ms)]
     if game == "rbr":
         from ._rbr import RBRCar
 
