@@ -139,19 +139,23 @@ class OutSimMain:
         return struct.pack("<I", time_ms & 0xFFFFFFFF) + self.pack() + tail
 
 
-def _to_car(h: float, p: float, r: float, v: tuple[float, float, float]) -> (
-    tuple[float, float, float]
-):  # fmt: skip
-    """``R^T v`` with ``R = Rz(h) Rx(p) Ry(r)``: a world vector in car axes (x right, y
-    forward, z up)."""
-    ch, sh, cp, sp, cr, sr = math.cos(h), math.sin(h), math.cos(p), math.sin(p), math.cos(r), (
-        math.sin(r))  # fmt: skip
+def _rotation_t(h: float, p: float, r: float) -> tuple[float, ...]:
+    """The 9 entries (row-major) of ``R^T`` with ``R = Rz(h) Rx(p) Ry(r)``: world vectors
+    into car axes (x right, y forward, z up)."""
+    ch, sh, cp, sp = math.cos(h), math.sin(h), math.cos(p), math.sin(p)
+    cr, sr = math.cos(r), math.sin(r)
+    # R^T = Ry(r)^T Rx(p)^T Rz(h)^T, multiplied out
+    return (
+        cr * ch - sr * sp * sh, cr * sh + sr * sp * ch, -sr * cp,
+        -cp * sh, cp * ch, sp,
+        sr * ch + cr * sp * sh, sr * sh - cr * sp * ch, cr * cp,
+    )  # fmt: skip
+
+
+def _to_car(m: tuple[float, ...], v: tuple[float, float, float]) -> tuple[float, float, float]:
     x, y, z = v
-    # undo the heading (about Z), then the pitch (about X), then the roll (about Y)
-    x1, y1 = ch * x + sh * y, -sh * x + ch * y
-    y2, z2 = cp * y1 + sp * z, -sp * y1 + cp * z
-    x3, z3 = cr * x1 - sr * z2, sr * x1 + cr * z2
-    return (x3, y2, z3)
+    return (m[0] * x + m[1] * y + m[2] * z, m[3] * x + m[4] * y + m[5] * z,
+            m[6] * x + m[7] * y + m[8] * z)  # fmt: skip
 
 
 class LFSDecoder(Decoder):
@@ -207,8 +211,9 @@ class LFSDecoder(Decoder):
         lim = 2 * math.pi + 1e-3
         if abs(h) > lim or abs(p) > lim or abs(r) > lim:
             return DecodeResult("skipped", "skipped: foreign")
-        fx, fy, fz = _to_car(h, p, r, (ax, ay, az + G0_M_S2))
-        cx, cy, cz = _to_car(h, p, r, (wx, wy, wz))
+        rt = _rotation_t(h, p, r)
+        fx, fy, fz = _to_car(rt, (ax, ay, az + G0_M_S2))
+        cx, cy, cz = _to_car(rt, (wx, wy, wz))
         extras: dict[str, object] | None = None
         if drive >= 0:
             gear, engine = _DRIVE.unpack_from(datagram, drive)
