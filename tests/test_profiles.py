@@ -49,7 +49,7 @@ def _write(tmp_path: Path, text: str, name: str = "mine.toml") -> Path:
         ('source = "dirt"\n[cue]\nw_gain = -1\n', r"w_gain = -1 is invalid"),
         ('source = "dirt"\n[effects]\nroad = 4.0\n',
          r"road = 4.0 is invalid; allowed: a finite number in \[0.0, 3.0\]"),
-        ('source = "gt7"\n', r"mine.toml: source 'gt7': unknown game 'gt7'"),
+        ('source = "iracing"\n', r"mine.toml: source 'iracing': unknown game 'iracing'"),
         ('source = "dirt:99999"\n', r"port '99999' is not an integer in 0..65535"),
         ('source = "dirt"\npreset = "nosuch"\n',
          r"mine.toml: preset: unknown cueing config 'nosuch'"),

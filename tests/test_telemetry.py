@@ -3,6 +3,7 @@ sources over real loopback UDP, and the ``record`` verb."""
 
 from __future__ import annotations
 
+import functools
 import itertools
 import math
 import os
@@ -12,6 +13,7 @@ import struct
 import threading
 import time
 from pathlib import Path
+from typing import Any
 
 import pytest
 from hypothesis import given
@@ -68,6 +70,12 @@ def test_registry_lists_the_games_with_their_default_ports() -> None:
         "xplane11": 49005,
         "dirt": 20777,
         "pcars2": 5606,
+        "ac": 9996,  # the game's port, asked by the source (it answers to any local port)
+        "gt7": 33740,
+        "lfs": 4123,
+        "wrc": 20790,
+        "dcs": 20800,
+        "rbr": 6776,
     }
     for name, info in GAMES.items():
         dec = decoder_for(name)
@@ -78,9 +86,11 @@ def test_registry_lists_the_games_with_their_default_ports() -> None:
 
 def test_unknown_game_and_bad_game_info_are_named() -> None:
     with pytest.raises(
-        ConfigError, match=r"unknown game 'gt7'.*beamng, dirt, f1, forza, pcars2, xplane, xplane11"
+        ConfigError,
+        match=r"unknown game 'iracing'.*ac, beamng, dcs, dirt, f1, forza, gt7, lfs, pcars2, "
+        r"rbr, wrc, xplane, xplane11",
     ):
-        decoder_for("gt7")
+        decoder_for("iracing")
     with pytest.raises(ConfigError, match="70000"):
         GameInfo("toy", 70000, decoder=lambda: decoder_for("f1"), title="x")
     with pytest.raises(ConfigError, match="reserved"):
@@ -179,7 +189,72 @@ def _structured_random(game: str, rng: random.Random) -> bytes:
         body = bytearray(os.urandom(rng.choice((559, 559, 24, 308))))
         struct.pack_into("<BBBB", body, 8, 1, 1, {559: 0, 24: 4, 308: 1}[len(body)], 2)
         return bytes(body)
+    if game in _NEW_GAMES:
+        return _NEW_GAMES[game](rng)
     return b"BNG1" + os.urandom(84)
+
+
+def _ac_random(rng: random.Random) -> bytes:
+    body = bytearray(os.urandom(328))
+    body[0:4] = b"a\0\0\0"
+    struct.pack_into("<i", body, 4, 328)
+    return bytes(body)
+
+
+def _gt7_random(rng: random.Random) -> bytes:
+    from motioncue.telemetry._gt7 import GT7Packet, encrypt
+
+    q = _random_rotation(rng)[0] + [rng.uniform(-1, 1)]
+    n = math.sqrt(sum(x * x for x in q))
+    vals = struct.unpack("<6f", os.urandom(24))
+    p = GT7Packet(next(_DIRT_CLOCK), vals[:3], vals[3:], (q[0] / n, q[1] / n, q[2] / n, q[3] / n),
+                  tuple(rng.uniform(-5, 5) for _ in range(3)), flags=rng.randrange(16))  # type: ignore[arg-type]  # fmt: skip
+    return encrypt(p.pack(rng.choice((296, 316, 344, 368))), rng.getrandbits(32))
+
+
+def _lfs_random(rng: random.Random) -> bytes:
+    body = bytearray(os.urandom(280))
+    body[0:4] = b"LFST"
+    struct.pack_into("<3f", body, 24, *(rng.uniform(-6, 6) for _ in range(3)))  # attitude
+    return bytes(body)
+
+
+@functools.cache
+def _wrc_layout() -> object:
+    from motioncue.telemetry._wrc import WRCDecoder
+
+    return WRCDecoder().layout
+
+
+def _wrc_random(rng: random.Random) -> bytes:
+    layout: Any = _wrc_layout()
+    rot = _random_rotation(rng)
+    up = [rot[0][1] * rot[1][2] - rot[0][2] * rot[1][1], rot[0][2] * rot[1][0] -
+          rot[0][0] * rot[1][2], rot[0][0] * rot[1][1] - rot[0][1] * rot[1][0]]  # fmt: skip
+    vals = dict(zip(layout.channels, layout.packer.unpack(os.urandom(layout.packer.size)),
+                    strict=True))  # fmt: skip
+    vals["game_total_time"] = next(_DIRT_CLOCK) * 0.01
+    for name, vec in (("forward", rot[0]), ("left", rot[1]), ("up", up)):
+        for axis, c in zip("xyz", vec, strict=True):
+            vals[f"vehicle_{name}_direction_{axis}"] = c
+    return layout.pack(vals)
+
+
+def _dcs_random(rng: random.Random) -> bytes:
+    vals = struct.unpack("<7f", os.urandom(28))
+    return ("MCDCS1 " + " ".join(f"{v:.5f}" for v in vals)).encode()
+
+
+def _rbr_random(rng: random.Random) -> bytes:
+    body = bytearray(os.urandom(664))
+    struct.pack_into("<i", body, 44, rng.randrange(11))  # gear
+    struct.pack_into("<f", body, 60, rng.uniform(0, 300))  # speed
+    struct.pack_into("<2f", body, 76, rng.uniform(-180, 180), rng.uniform(-90, 90))
+    return bytes(body)
+
+
+_NEW_GAMES = {"ac": _ac_random, "gt7": _gt7_random, "lfs": _lfs_random, "wrc": _wrc_random,
+              "dcs": _dcs_random, "rbr": _rbr_random}  # fmt: skip
 
 
 _DIRT_CLOCK = itertools.count(1000)
@@ -362,7 +437,7 @@ def test_binding_a_busy_port_is_a_transport_error() -> None:
 @pytest.mark.parametrize(
     ("spec", "msg"),
     [
-        ("gt7:20777", "unknown game 'gt7'"),
+        ("iracing:20777", "unknown game 'iracing'"),
         ("f1:abc", "port 'abc'"),
         ("f1:70000", "port '70000'"),
         ("f1:a:b:c", "expected GAME"),
@@ -449,8 +524,8 @@ def test_record_verb_writes_a_replayable_file(
     assert "recorded 0 datagrams" in captured.out and "recording beamng:0" in captured.err
     rec = read_recording_file(out)
     assert rec.game == "beamng" and len(rec) == 0 and rec.port > 0
-    assert main(["record", "--source", "gt7", "--out", str(out)]) == 2
-    assert "unknown game 'gt7'" in capsys.readouterr().err
+    assert main(["record", "--source", "iracing", "--out", str(out)]) == 2
+    assert "unknown game 'iracing'" in capsys.readouterr().err
     assert main(["record", "--source", "f1:0", "--out", str(out), "--duration", "-1"]) == 2
 
 

@@ -10,6 +10,12 @@ body frame, x forward, y left, z up; specific force ``f = a - g`` in m/s^2, ``(0
 * ``xplane`` / ``xplane11``: X-Plane 12 / 11 UDP ``DATA`` output (rows 4 and 16), port 49005
 * ``dirt``: Codemasters ``extradata="3"`` UDP (DiRT Rally, DiRT Rally 2.0, DiRT 4...), 20777
 * ``pcars2``: Project CARS 2 / 3 and Automobilista 2 UDP (Project CARS 2 protocol), 5606
+* ``ac``: Assetto Corsa remote telemetry (asked at port 9996: ``ac@HOST``)
+* ``gt7``: Gran Turismo 7 (heartbeat to the console's 33739: ``gt7@CONSOLE``), port 33740
+* ``lfs``: Live for Speed OutSim (OutSim Opts 1ff, or the classic OutSimPack), port 4123
+* ``wrc``: EA SPORTS WRC (motioncue's packet structure, tools/wrc), port 20790
+* ``dcs``: DCS World (motioncue's export script, tools/dcs), port 20800
+* ``rbr``: Richard Burns Rally (RSF / NGP UDP telemetry; signs unverified), port 6776
 
 Typical use::
 
@@ -106,6 +112,12 @@ def __getattr__(name: str) -> Any:
 
 # One module per game; each registers itself in GAMES on import.
 _GAME_MODULES: tuple[str, ...] = ("_f1", "_forza", "_beamng", "_xplane", "_dirt", "_pcars2")
+_GAME_MODULES += ("_ac",)  # Assetto Corsa
+_GAME_MODULES += ("_gt7",)  # Gran Turismo 7
+_GAME_MODULES += ("_lfs",)  # Live for Speed
+_GAME_MODULES += ("_wrc",)  # EA SPORTS WRC
+_GAME_MODULES += ("_dcs",)  # DCS World
+_GAME_MODULES += ("_rbr",)  # Richard Burns Rally
 for _name in _GAME_MODULES:
     importlib.import_module(f"{__name__}.{_name}")
 del _name

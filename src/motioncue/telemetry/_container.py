@@ -277,6 +277,7 @@ def record(
     *,
     should_stop: Callable[[], bool] | None = None,
     on_ready: Callable[[int], None] | None = None,
+    peer_port: int | None = None,
 ) -> RecordSummary:
     """Record raw datagrams of a game's UDP stream to a file.
 
@@ -293,6 +294,10 @@ def record(
         Polled about every 0.1 s; True ends the recording.
     on_ready : callable, optional
         Called with the bound port once the socket listens (port 0 binds a free port).
+    peer_port : int, optional
+        For a game that must be asked (``ac``, ``gt7``: ``GAME@ADDRESS`` specs): its port,
+        default the game's own (tests use stand-in games). The requests are sent from the
+        recording socket, as a live source does; they are not recorded.
 
     Returns
     -------
@@ -301,13 +306,29 @@ def record(
         decoded, to report what the recording holds; the file keeps every datagram).
     """
     from ._registry import decoder_for
-    from ._source import parse_live_spec
+    from ._source import AUTO, TALK_PERIOD_S, Requester, parse_live_spec, split_peer
 
     game, host, port = parse_live_spec(source)
+    if game == AUTO:
+        raise ConfigError(f"source {source!r}: a recording is of one game; name it")
     if seconds is not None and not (math.isfinite(seconds) and seconds > 0):
         raise ConfigError(f"seconds = {seconds!r} must be > 0")
     dec = decoder_for(game)
+    asker = dec if isinstance(dec, Requester) else None
+    dest = None
+    if asker is not None:
+        dest = (split_peer(source)[1] or "127.0.0.1",
+                int(asker.PEER_PORT if peer_port is None else peer_port))  # fmt: skip
     sock = _bind_udp(host, port)
+
+    def talk(datagrams: list[bytes]) -> None:
+        assert dest is not None
+        for d in datagrams:
+            try:
+                sock.sendto(d, dest)
+            except OSError:
+                pass  # the game is not there yet: asked again on the next round
+
     bound_port = sock.getsockname()[1]
     summary = RecordSummary(os.fspath(out), game, host, bound_port)
     buf = bytearray(MAX_DATAGRAM + 1)
@@ -317,12 +338,17 @@ def record(
                 on_ready(bound_port)
             t0 = time.perf_counter()
             deadline = math.inf if seconds is None else t0 + seconds
+            next_talk = t0
             try:
                 while True:
                     now = time.perf_counter()
                     if now >= deadline or (should_stop is not None and should_stop()):
                         break
-                    sock.settimeout(min(0.1, max(deadline - now, 1e-3)))
+                    if asker is not None and now >= next_talk:
+                        next_talk = now + TALK_PERIOD_S
+                        talk(asker.requests(now - t0))
+                    wait = min(0.1 if asker is None else TALK_PERIOD_S, deadline - now)
+                    sock.settimeout(max(wait, 1e-3))
                     try:
                         n = sock.recv_into(buf)
                     except TimeoutError:
@@ -333,6 +359,8 @@ def record(
                     dec.feed(data, t - t0)
             except KeyboardInterrupt:
                 pass
+            if asker is not None:
+                talk(asker.farewell())
             summary.datagrams = writer.count
             summary.nbytes = writer.nbytes
             summary.duration_s = time.perf_counter() - t0

@@ -10,8 +10,11 @@ tested for every game (``tests/test_new_user.py``).
 
 Games: ``f1`` (Motion Ex, then Motion, F1 24 layout), ``forza`` (Sled, 232 bytes),
 ``beamng`` (BNG1), ``xplane`` and ``xplane11`` (DATA rows 4 and 16), ``pcars2`` (type-0
-telemetry). ``dirt`` is not encodable: its decoder derives the angular velocity from the
-orientation of consecutive packets, which a level car does not change.
+telemetry), ``lfs`` (OutSim2, options 1ff), ``rbr`` (NGP TelemetryData). ``dirt`` is not
+encodable: its decoder derives the angular velocity from the orientation of consecutive
+packets, which a level car does not change (nor are ``wrc``, ``ac`` and ``gt7``, whose
+decoders derive rates or forces from consecutive packets too, and ``dcs``, a text format
+with 5 decimals).
 
 :func:`send_recording` paces such datagrams to a UDP address on the recording's clock
 (``motioncue send-telemetry``).
@@ -33,7 +36,7 @@ from ._sample import G0_M_S2
 
 __all__ = ["ENCODABLE_GAMES", "SendSummary", "encode_motion", "send_recording"]
 
-ENCODABLE_GAMES = ("f1", "forza", "beamng", "xplane", "xplane11", "pcars2")
+ENCODABLE_GAMES = ("f1", "forza", "beamng", "xplane", "xplane11", "pcars2", "lfs", "rbr")
 """Games :func:`encode_motion` writes (``dirt``: see the module docstring)."""
 
 _F1_FORMAT = 2024
@@ -111,6 +114,23 @@ def encode_motion(game: str, k: int, t_s: float, f: ArrayLike, w: ArrayLike) -> 
         u = UNUSED
         gload = (0.0, u, 0.0, u, fz / g, fx / g, -fy / g, u)
         return [pack_data({4: gload, 16: rates})]
+    if game == "lfs":
+        from ._lfs import OutSimMain
+
+        # decoder, level, heading 0: car (right, forward, up) = world; f = (f_y, -f_x, f_z)
+        stamp_ms = round(t_s * 1e3) & 0xFFFFFFFF
+        outsim = OutSimMain((-wy, wx, wz), 0.0, 0.0, 0.0, (-fy, fx, fz - g), (0.0, 0.0, 0.0))
+        return [outsim.outsim2(time_ms=stamp_ms)]
+    if game == "rbr":
+        from ._rbr import RBRCar
+
+        # decoder, level: f = (surge, sway, heave + g), w = radians of the (roll, pitch, yaw)
+        # rates in deg/s
+        deg = 180.0 / math.pi
+        car = RBRCar(k & 0xFFFFFFFF, t_s, 2, 0.0, (0.0, 0.0, 0.0),
+                     (0.0, 0.0, 0.0, wx * deg, wy * deg, wz * deg),
+                     (fx, fy, fz - g, 0.0, 0.0, 0.0), 3000.0)  # fmt: skip
+        return [car.pack()]
     from ._pcars2 import PCars2Telemetry
 
     # decoder, level: f = (-az, -ax, ay + g), w = (-wz, -wx, wy)

@@ -1,0 +1,309 @@
+"""Gran Turismo 7 "Simulator Interface" UDP telemetry (PlayStation 4 / 5).
+
+Protocol
+--------
+Polyphony Digital's packets as documented by the community: Nenkai/PDTools
+(``PDTools.SimulatorInterface``: ``SimulatorPacket.cs``, ``SimulatorInterfaceCryptorGT7.cs``)
+and, for the extended packets of update 1.42, PDTools issue #14 and SimHub issue #2254.
+
+* The receiver sends a one-byte *heartbeat* to the console's UDP port 33739 at least every
+  ~1.6 s (the console stops after ~100 packets without one); the console sends 60 packets a
+  second to the heartbeat's source address, port 33740. The heartbeat byte picks the layout:
+  ``A`` 296 bytes, ``B`` 316, ``~`` 344, ``C`` 368; the first heartbeat the console hears
+  wins until the stream lapses.
+* Every packet is Salsa20-encrypted (20 rounds) with the published 32-byte key
+  ``b"Simulator Interface Packet GT7 v"`` (the first 32 bytes of "Simulator Interface Packet
+  GT7 ver 0.0"); the 8-byte nonce is ``(iv ^ X, iv)`` (two little-endian u32) where ``iv``
+  is the u32 at byte 0x40 of the encrypted packet and ``X`` is 0xDEADBEAF for ``A``,
+  0xDEADBEEF for ``B`` and ``C``, 0x55FABB4F for ``~``. The decrypted packet starts with
+  the magic 0x47375330 (``"0S7G"``); anything else is foreign.
+
+Fields read (little-endian, byte offsets)::
+
+    0x04 f32 position[3] (m, world)          0x10 f32 velocity[3] (m/s, world)
+    0x1C f32 orientation quaternion x, y, z  0x28 f32 its w ("relative orientation to north")
+    0x2C f32 angular velocity[3] (rad/s, car frame)
+    0x3C f32 engine rpm   0x4C f32 speed (m/s)   0x70 s32 packet id (+1 per 1/60 s)
+    0x8A u16 rpm of the rev-limit alert          0x8E u16 flags   0x90 u8 gears (low nibble)
+    B and later: 0x128 f32 wheel rotation, filler, sway, heave, surge
+
+Flags: 1 car on track, 2 paused, 4 loading or processing; ``paused`` is set unless the car
+is on track and neither paused nor loading (menus, pause, loading screens).
+
+Axes and signs (pinned on real captures)
+----------------------------------------
+The world frame is right-handed with y up; the quaternion rotates car axes into world axes,
+and the car's axes are x right, y up, z backward. On three public captured laps
+(profittlich/gt7speedboard, ``tests/fixtures/games/gt7``) the velocity expressed in car
+axes is ``(0, 0, -|v|)`` within 1 % of the speed; the course angle of the world velocity
+turns by +1.00 turn at Interlagos (driven anticlockwise) and -1.00 turn on the Nürburgring
+GP circuit (clockwise), which fixes the handedness; the angular velocity's y component
+equals that course rate (slope 0.98-0.99, correlation 0.99), and its x, z components match
+the attitude change taken in car axes better than in world axes, so the angular velocity is
+in car axes. ISO 8855 axes are ``forward = -z``, ``left = -x``, ``up = y``::
+
+    w_iso = (-w_z, -w_x, w_y)
+
+Acceleration: the ``A`` packet carries none; the decoder differences the world velocity of
+consecutive packets over the game's own clock (packet id / 60 s), subtracts gravity
+(``-9.80665`` m/s^2 along world y) and rotates the result into car axes. The first packet,
+and any packet after a gap of more than :attr:`GT7Decoder.max_gap_frames` frames or a jump
+(packet id backwards: a replay seek, a restart), only restarts the difference (``partial``,
+no sample), so a seek never becomes an acceleration spike. The ``sway``, ``heave`` and
+``surge`` floats of the ``B``/``~``/``C`` packets are decoded (:class:`GT7Packet`) but not
+used for motion: their units and signs are not published and no capture of them was
+available to pin them; the differenced velocity gives the same quantity on every layout.
+
+Replays: the console streams replays like live driving (the flags cannot tell them apart),
+so the rig moves with a replay as it would on track; a replay's jumps are handled above.
+"""
+
+from __future__ import annotations
+
+import math
+import struct
+from dataclasses import dataclass, field
+from typing import Any
+
+from .._errors import ConfigError
+from ._registry import GameInfo, register_game
+from ._sample import G0_M_S2, Decoder, DecodeResult
+
+try:  # pycryptodome: a kept Salsa20 implementation (the telemetry is encrypted)
+    from Crypto.Cipher import Salsa20 as _Salsa20
+except ImportError:  # pragma: no cover - a dependency; the decoder says so if it is missing
+    _Salsa20 = None  # type: ignore[assignment]
+
+__all__ = [
+    "HEARTBEAT_PORT",
+    "KEY",
+    "MAGIC",
+    "PACKET",
+    "SIZES",
+    "GT7Decoder",
+    "GT7Packet",
+    "decrypt",
+    "encrypt",
+]
+
+HEARTBEAT_PORT = 33739  # the console's port, where heartbeats go
+DEFAULT_PORT = 33740  # where the console sends, from the heartbeat's source address
+KEY = b"Simulator Interface Packet GT7 ver 0.0"[:32]
+MAGIC = 0x47375330
+FRAME_HZ = 60.0
+
+SIZES: dict[int, tuple[str, int]] = {
+    296: ("A", 0xDEADBEAF),
+    316: ("B", 0xDEADBEEF),
+    344: ("~", 0x55FABB4F),
+    368: ("C", 0xDEADBEEF),
+}
+"""Packet size -> (heartbeat byte, nonce XOR constant)."""
+_XOR = {k: x for k, x in SIZES.values()}
+
+PACKET = struct.Struct("<i3f3f4f3f2f")
+"""magic, position[3], velocity[3], quaternion x, y, z, w, angular velocity[3], body height,
+engine rpm: bytes 0x00-0x3F."""
+_IV = struct.Struct("<I")  # 0x40
+_SPEED = struct.Struct("<f")  # 0x4C
+_PACKET_ID = struct.Struct("<i")  # 0x70
+_STATE = struct.Struct("<HHhHB")  # 0x88 rpm alert min, max, max speed, flags, gears
+_EXTENDED = struct.Struct("<5f")  # 0x128 wheel rotation, filler, sway, heave, surge
+_NONCE = struct.Struct("<II")
+
+FLAG_ON_TRACK, FLAG_PAUSED, FLAG_LOADING = 1, 2, 4
+_USED = 0x94  # the decoder reads bytes 0x00-0x93
+
+
+def _cipher(key_nonce: bytes) -> Any:
+    if _Salsa20 is None:  # pragma: no cover
+        raise ConfigError("Gran Turismo 7 telemetry needs pycryptodome: pip install pycryptodome")
+    return _Salsa20.new(KEY, nonce=key_nonce)
+
+
+def decrypt(datagram: bytes) -> bytes | None:
+    """The plain packet, or None when the size is not a GT7 layout or the magic is wrong."""
+    layout = SIZES.get(len(datagram))
+    if layout is None:
+        return None
+    iv = _IV.unpack_from(datagram, 0x40)[0]
+    plain: bytes = _cipher(_NONCE.pack(iv ^ layout[1], iv)).decrypt(datagram)
+    return plain if plain[:4] == b"0S7G" else None
+
+
+def encrypt(plain: bytes, iv: int) -> bytes:
+    """Encrypt a plain packet as the console does, with the nonce seed ``iv`` (u32) stored in
+    clear at 0x40 (for tests and stand-in consoles)."""
+    layout = SIZES.get(len(plain))
+    if layout is None:
+        raise ConfigError(f"a GT7 packet has {sorted(SIZES)} bytes, not {len(plain)}")
+    iv &= 0xFFFFFFFF
+    out = bytearray(_cipher(_NONCE.pack(iv ^ layout[1], iv)).encrypt(plain))
+    _IV.pack_into(out, 0x40, iv)
+    return bytes(out)
+
+
+@dataclass(frozen=True, slots=True)
+class GT7Packet:
+    """The fields of a (decrypted) GT7 packet this reader uses, in the game's axes and units.
+
+    ``quaternion`` is ``(x, y, z, w)``: car axes to world axes. ``extended`` holds wheel
+    rotation, filler, sway, heave, surge (B and later layouts), else None.
+    """
+
+    packet_id: int
+    position: tuple[float, float, float]
+    velocity: tuple[float, float, float]
+    quaternion: tuple[float, float, float, float]
+    angular_velocity: tuple[float, float, float]
+    speed_m_s: float = 0.0
+    engine_rpm: float = 0.0
+    rpm_alert_max: int = 0
+    flags: int = FLAG_ON_TRACK
+    gear: int = 1
+    extended: tuple[float, float, float, float, float] | None = field(default=None)
+
+    @classmethod
+    def unpack(cls, plain: bytes) -> GT7Packet:
+        v = PACKET.unpack_from(plain)
+        _amin, amax, _vmax, flags, gears = _STATE.unpack_from(plain, 0x88)
+        ext = _EXTENDED.unpack_from(plain, 0x128) if len(plain) >= 316 else None
+        return cls(
+            packet_id=_PACKET_ID.unpack_from(plain, 0x70)[0],
+            position=(v[1], v[2], v[3]), velocity=(v[4], v[5], v[6]),
+            quaternion=(v[7], v[8], v[9], v[10]), angular_velocity=(v[11], v[12], v[13]),
+            speed_m_s=_SPEED.unpack_from(plain, 0x4C)[0], engine_rpm=v[15],
+            rpm_alert_max=amax, flags=flags, gear=gears & 0x0F, extended=ext,
+        )  # fmt: skip
+
+    def pack(self, size: int = 296) -> bytes:
+        """A plain packet of ``size`` bytes (296, 316, 344 or 368) with these fields and
+        zeros elsewhere."""
+        if size not in SIZES:
+            raise ConfigError(f"a GT7 packet has {sorted(SIZES)} bytes, not {size}")
+        out = bytearray(size)
+        PACKET.pack_into(out, 0, MAGIC, *self.position, *self.velocity, *self.quaternion,
+                         *self.angular_velocity, 0.0, self.engine_rpm)  # fmt: skip
+        _SPEED.pack_into(out, 0x4C, self.speed_m_s)
+        _PACKET_ID.pack_into(out, 0x70, self.packet_id)
+        _STATE.pack_into(out, 0x88, 0, self.rpm_alert_max, 0, self.flags, self.gear & 0x0F)
+        if size >= 316:
+            _EXTENDED.pack_into(out, 0x128, *(self.extended or (0.0,) * 5))
+        return bytes(out)
+
+
+def _rotate_to_car(q: tuple[float, float, float, float], v: tuple[float, float, float]) -> (
+    tuple[float, float, float]
+):  # fmt: skip
+    """``R(q)^T v``: a world vector in car axes, for a unit quaternion (x, y, z, w)."""
+    x, y, z, w = q
+    vx, vy, vz = v
+    xx, yy, zz = x * x, y * y, z * z
+    xy, xz, yz, wx, wy, wz = x * y, x * z, y * z, w * x, w * y, w * z
+    return (
+        (1 - 2 * (yy + zz)) * vx + 2 * (xy + wz) * vy + 2 * (xz - wy) * vz,
+        2 * (xy - wz) * vx + (1 - 2 * (xx + zz)) * vy + 2 * (yz + wx) * vz,
+        2 * (xz + wy) * vx + 2 * (yz - wx) * vy + (1 - 2 * (xx + yy)) * vz,
+    )
+
+
+class GT7Decoder(Decoder):
+    """Decoder of Gran Turismo 7 packets, and the heartbeat the console needs.
+
+    Parameters
+    ----------
+    heartbeat : {"A", "B", "~", "C"}
+        The layout to ask for. Every layout is decoded whichever was asked.
+    max_gap_frames : int
+        Largest packet-id step (1/60 s frames) the velocity is differenced over; a longer
+        gap restarts the difference. Default 6 (0.1 s).
+
+    Outcome reasons: ``sample``, ``partial`` (first packet, or after a gap or a jump: the
+    difference restarts), ``ignored: repeated`` (same packet id again), ``skipped:
+    truncated`` / ``skipped: wrong size`` (not 296/316/344/368 bytes), ``skipped: foreign``
+    (wrong magic after decryption, or a quaternion that is not a unit one),
+    ``skipped: non-finite``, ``skipped: out of range``.
+    """
+
+    game = "gt7"
+    PEER_PORT = HEARTBEAT_PORT
+    LISTEN_PORT = DEFAULT_PORT
+    HEARTBEAT_PERIOD_S = 1.0
+
+    def __init__(self, heartbeat: str = "A", max_gap_frames: int = 6) -> None:
+        super().__init__()
+        if heartbeat not in _XOR:
+            raise ConfigError(f"GT7 heartbeat {heartbeat!r} is not one of {sorted(_XOR)}")
+        if not 1 <= max_gap_frames <= 600:
+            raise ConfigError(f"max_gap_frames = {max_gap_frames!r} is outside 1..600")
+        self.heartbeat = heartbeat.encode("ascii")
+        self.max_gap_frames = max_gap_frames
+        self.layouts: dict[str, int] = {}
+        self._next_heartbeat_s = -math.inf
+        self._prev_id: int | None = None
+        self._prev_v = (0.0, 0.0, 0.0)
+        if _Salsa20 is None:  # pragma: no cover
+            raise ConfigError(
+                "Gran Turismo 7 telemetry needs pycryptodome: pip install pycryptodome"
+            )
+
+    def reset(self) -> None:
+        self._prev_id = None
+
+    def requests(self, now_s: float) -> list[bytes]:
+        """The heartbeat, once every :attr:`HEARTBEAT_PERIOD_S`."""
+        if now_s < self._next_heartbeat_s:
+            return []
+        self._next_heartbeat_s = now_s + self.HEARTBEAT_PERIOD_S
+        return [self.heartbeat]
+
+    def farewell(self) -> list[bytes]:
+        """Nothing: the console stops by itself ~1.6 s after the last heartbeat."""
+        return []
+
+    def _decode(self, datagram: bytes, t_s: float) -> DecodeResult:
+        n = len(datagram)
+        layout = SIZES.get(n)
+        if layout is None:
+            reason = "skipped: truncated" if n < 296 else "skipped: wrong size"
+            return DecodeResult("skipped", reason)
+        iv = _IV.unpack_from(datagram, 0x40)[0]
+        # a stream cipher: only the bytes read are decrypted (up to the flags, 0x94)
+        plain = _Salsa20.new(KEY, nonce=_NONCE.pack(iv ^ layout[1], iv)).decrypt(datagram[:_USED])
+        if plain[:4] != b"0S7G":
+            return DecodeResult("skipped", "skipped: foreign")
+        self.layouts[layout[0]] = self.layouts.get(layout[0], 0) + 1
+        (_m, _px, _py, _pz, vx, vy, vz, qx, qy, qz, qw, wx, wy, wz, _h, rpm) = PACKET.unpack_from(
+            plain
+        )
+        norm = qx * qx + qy * qy + qz * qz + qw * qw
+        if not (math.isfinite(norm) and math.isfinite(vx + vy + vz)):
+            return DecodeResult("skipped", "skipped: non-finite")
+        if abs(norm - 1.0) > 1e-3:
+            return DecodeResult("skipped", "skipped: foreign")
+        pid = _PACKET_ID.unpack_from(plain, 0x70)[0]
+        prev, self._prev_id = self._prev_id, pid
+        prev_v, self._prev_v = self._prev_v, (vx, vy, vz)
+        if prev is not None and pid == prev:
+            self._prev_id = prev
+            return DecodeResult("ignored", "ignored: repeated")
+        if prev is None or not 0 < pid - prev <= self.max_gap_frames:
+            return DecodeResult("partial", "partial")
+        k = FRAME_HZ / (pid - prev)
+        # specific force in world axes: a - g, with g = (0, -G0, 0)
+        f_world = ((vx - prev_v[0]) * k, (vy - prev_v[1]) * k + G0_M_S2, (vz - prev_v[2]) * k)
+        cx, cy, cz = _rotate_to_car((qx, qy, qz, qw), f_world)
+        _amin, amax, _vmax, flags, _gears = _STATE.unpack_from(plain, 0x88)
+        paused = (flags & (FLAG_ON_TRACK | FLAG_PAUSED | FLAG_LOADING)) != FLAG_ON_TRACK
+        extras: dict[str, object] = {"rpm": rpm, "rpm_max": float(amax) if amax else math.nan}
+        return self._make(t_s, (-cz, -cx, cy), (-wz, -wx, wy), paused, extras)
+
+
+INFO = register_game(
+    GameInfo(
+        name="gt7",
+        default_port=DEFAULT_PORT,
+        decoder=GT7Decoder,
+        title="Gran Turismo 7 Simulator Interface (encrypted; motioncue sends the heartbeat)",
+    )
+)
