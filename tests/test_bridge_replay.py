@@ -55,7 +55,9 @@ def test_sources_report_finished_only_at_the_end_of_a_replay(tmp_path: Path) -> 
     src = open_source(f"replay:{path}?speed=1")
     assert isinstance(src, ReplaySource)
     try:
-        assert src.finished is False  # 0.3 s of telemetry is still being replayed
+        assert src.finished is False  # 0.3 s of telemetry, not begun before it is asked for
+        assert src.latest() is None  # the consumer's first call starts the file's clock
+        assert src.finished is False
         assert _wait_for(lambda: src.finished, 3.0)
         assert src.stats["samples"] == 18  # every Motion packet was delivered first
     finally:

@@ -493,10 +493,13 @@ def test_record_then_replay_reproduces_the_samples(tmp_path: Path) -> None:
     assert len(samples) == 3 and stats["sample"] == 3 and stats["skipped: truncated"] == 1
     assert [s.t_s for s in samples] == [rec.t_s[2], rec.t_s[4], rec.t_s[5]]
 
-    t0 = time.perf_counter()
     src = open_source(f"replay:{path}?speed=1")
     assert isinstance(src, ReplaySource)
     try:
+        # nothing is played before the consumer asks: a slow start misses no telemetry
+        assert not src.done.wait(0.3) and src.stats["datagrams"] == 0
+        t0 = time.perf_counter()
+        src.begin()
         assert src.done.wait(5)
         took = time.perf_counter() - t0
         assert took >= span * 0.95  # never faster than recorded
@@ -508,6 +511,7 @@ def test_record_then_replay_reproduces_the_samples(tmp_path: Path) -> None:
 
     fast = open_source(f"replay:{path}?speed=0")
     try:
+        assert fast.latest() is None  # the first call starts the replay
         assert fast.done.wait(5)  # type: ignore[union-attr]
         latest = fast.latest()
         assert latest is not None and latest.f == samples[-1].f

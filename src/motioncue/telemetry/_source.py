@@ -379,8 +379,11 @@ class ReplaySource(_ThreadedSource):
     """Replays a recording file through the game's decoder, with its original timing.
 
     Samples are stamped with ``time.perf_counter()`` at replay, like a live source, so a
-    consumer cannot tell the difference. ``speed`` scales time (2 = twice as fast); 0 replays
-    as fast as possible. :attr:`done` is set, and :attr:`finished` becomes True, when the
+    consumer cannot tell the difference. The file's clock starts when the consumer first
+    asks for a sample (:meth:`latest`, :meth:`drain` or :meth:`begin`), not when the source
+    is opened: a consumer that takes seconds to get ready (a loaded machine) still sees the
+    whole recording, as it would see a game started after it. ``speed`` scales time (2 =
+    twice as fast); 0 replays as fast as possible. :attr:`done` is set, and :attr:`finished` becomes True, when the
     file is exhausted (or the replay thread ended for any other reason): a bridge then fades
     out, parks and ends instead of waiting for more telemetry.
 
@@ -404,7 +407,22 @@ class ReplaySource(_ThreadedSource):
         self.path = os.fspath(path)
         self.speed = float(speed)
         self.done = threading.Event()
+        self._go = threading.Event()
         self._start(f"motioncue-replay-{self.game}")
+
+    def begin(self) -> None:
+        """Start the file's clock (once; later calls do nothing)."""
+        self._go.set()
+
+    def latest(self, max_age_s: float | None = None) -> TelemetrySample | None:
+        """As :meth:`TelemetrySource.latest`; the first call starts the replay."""
+        self._go.set()
+        return super().latest(max_age_s)
+
+    def drain(self) -> list[TelemetrySample]:
+        """As :meth:`TelemetrySource.drain`; the first call starts the replay."""
+        self._go.set()
+        return super().drain()
 
     def _run(self) -> None:
         rec = self.recording
@@ -412,6 +430,9 @@ class ReplaySource(_ThreadedSource):
         try:
             if not rec.t_s:
                 return
+            while not self._go.wait(0.05):
+                if self._stop.is_set():
+                    return
             t_first = rec.t_s[0]
             t0 = clock()
             for t_rec, data in zip(rec.t_s, rec.datagrams, strict=True):
