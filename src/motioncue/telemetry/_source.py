@@ -383,9 +383,9 @@ class ReplaySource(_ThreadedSource):
     asks for a sample (:meth:`latest`, :meth:`drain` or :meth:`begin`), not when the source
     is opened: a consumer that takes seconds to get ready (a loaded machine) still sees the
     whole recording, as it would see a game started after it. ``speed`` scales time (2 =
-    twice as fast); 0 replays as fast as possible. :attr:`done` is set, and :attr:`finished` becomes True, when the
-    file is exhausted (or the replay thread ended for any other reason): a bridge then fades
-    out, parks and ends instead of waiting for more telemetry.
+    twice as fast); 0 replays as fast as possible. :attr:`done` is set, and :attr:`finished`
+    becomes True, when the file is exhausted (or the replay thread ended for any other
+    reason): a bridge then fades out, parks and ends instead of waiting for more telemetry.
 
     Parameters
     ----------
