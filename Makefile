@@ -27,8 +27,11 @@ demo: $(BIN)/.installed
 
 # On every core (pytest-xdist), each test module (or class) on one worker, so that a module's
 # fixtures are built once. No wall-clock figure is asserted here; those are in make bench.
+# PYTEST_ARGS adds options, e.g. make test PYTEST_ARGS=--cpu-durations=40 (CPU time per test,
+# tests/conftest.py: the figure to compare on a busy machine).
+PYTEST_ARGS ?=
 test: $(BIN)/.installed browser
-	$(BIN)/python -m pytest -n auto --dist loadscope
+	$(BIN)/python -m pytest -n auto --dist loadscope $(PYTEST_ARGS)
 
 lint: $(BIN)/.installed
 	$(BIN)/ruff check src tests benchmarks

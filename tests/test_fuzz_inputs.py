@@ -25,8 +25,10 @@ its workers; without xdist each part uses two processes) and the 10 000 configur
 
 from __future__ import annotations
 
+import contextlib
 import io
 import json
+import lzma
 import math
 import os
 import random
@@ -35,6 +37,7 @@ import struct
 import time
 import zipfile
 from collections import Counter
+from collections.abc import Iterator
 from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
 from typing import Any
@@ -190,9 +193,56 @@ def _npy_forged(descr: str, shape: str, fortran: bool, payload: bytes, version: 
     return b"\x93NUMPY" + version + struct.pack("<I", len(raw)) + raw + payload
 
 
+class _MemberSizedLZMA:
+    """What :mod:`zipfile` writes for an LZMA member (the same 4-byte zip header, the same
+    LZMA properties naming an 8 MiB dictionary, the same stream), from an encoder whose
+    dictionary is only as large as the member.
+
+    zipfile's own encoder sets up an 8 MiB dictionary for each member, about 1.1 ms of CPU,
+    most of a mutated ride's cost. An encoder never reaches back further than the data it
+    has seen, so the stream it writes is the same; the properties still name 8 MiB, which the
+    reader may allocate. :func:`test_member_sized_lzma_writes_what_zipfile_writes` holds this
+    to zipfile's own output.
+    """
+
+    # lc=3, lp=0, pb=2 in one byte ((pb * 5 + lp) * 9 + lc), then the dictionary size, u32 LE
+    PROPS = bytes([(2 * 5 + 0) * 9 + 3]) + struct.pack("<I", 8 << 20)
+
+    def __init__(self) -> None:
+        self._comp: lzma.LZMACompressor | None = None
+
+    def _init(self, size: int) -> bytes:
+        dict_size = max(4096, 1 << max(0, size - 1).bit_length())
+        lzma1 = {"id": lzma.FILTER_LZMA1, "lc": 3, "lp": 0, "pb": 2, "dict_size": dict_size}
+        self._comp = lzma.LZMACompressor(lzma.FORMAT_RAW, filters=[lzma1])
+        return struct.pack("<BBH", 9, 4, len(self.PROPS)) + self.PROPS
+
+    def compress(self, data: bytes) -> bytes:
+        head = self._init(len(data)) if self._comp is None else b""
+        assert self._comp is not None
+        return head + self._comp.compress(data)
+
+    def flush(self) -> bytes:
+        head = self._init(0) if self._comp is None else b""
+        assert self._comp is not None
+        return head + self._comp.flush()
+
+
+@contextlib.contextmanager
+def _member_sized_lzma() -> Iterator[None]:
+    """zipfile writes its LZMA members through :class:`_MemberSizedLZMA` meanwhile (one
+    member is written in one piece by ``writestr``, so its size is known at the start)."""
+    saved = zipfile.LZMACompressor  # type: ignore[attr-defined]
+    zipfile.LZMACompressor = _MemberSizedLZMA  # type: ignore[attr-defined]
+    try:
+        yield
+    finally:
+        zipfile.LZMACompressor = saved  # type: ignore[attr-defined]
+
+
 def _zip(members: list[tuple[str, bytes]], method: int) -> bytes:
     buf = io.BytesIO()
-    with zipfile.ZipFile(buf, "w", compression=method) as zf:
+    with _member_sized_lzma(), zipfile.ZipFile(buf, "w", compression=method) as zf:
         for name, data in members:
             zf.writestr(name, data)
     return buf.getvalue()
@@ -296,13 +346,30 @@ def _mutate_array(rng: random.Random, arr: np.ndarray, name: str) -> bytes:
     return bytes(data)
 
 
+_UNMUTATED: dict[int, tuple[Ride, dict[str, Any], dict[str, bytes]]] = {}
+
+
+def _unmutated(ride: Ride) -> tuple[dict[str, Any], dict[str, bytes]]:
+    """``ride``'s header and its ``.npy`` members as ``np.savez`` writes them, made once per
+    base ride (the mutations below copy before they change anything)."""
+    held = _UNMUTATED.get(id(ride))
+    if held is None or held[0] is not ride:
+        arrays = {
+            "t_s": ride.t_s, "pulses": ride.pulses, "dout": ride.dout, "dacs": ride.dacs,
+        }  # fmt: skip
+        header = ride.header()
+        members = {k: _npy(v) for k, v in arrays.items()}
+        members["header"] = _npy(np.frombuffer(json.dumps(header).encode(), dtype=np.uint8))
+        held = _UNMUTATED[id(ride)] = (ride, header, members)
+    return held[1], held[2]
+
+
 def _structural(rng: random.Random, ride: Ride) -> bytes:
     arrays = {
         "t_s": ride.t_s, "pulses": ride.pulses, "dout": ride.dout, "dacs": ride.dacs,
     }  # fmt: skip
-    header = ride.header()
-    members: dict[str, bytes] = {k: _npy(v) for k, v in arrays.items()}
-    members["header"] = _npy(np.frombuffer(json.dumps(header).encode(), dtype=np.uint8))
+    header, unmutated = _unmutated(ride)
+    members = dict(unmutated)
     for _ in range(rng.choice([1, 1, 1, 2, 3])):
         op = rng.random()
         if op < 0.35:
@@ -465,6 +532,34 @@ def test_valid_base_rides_play_and_pass_the_frame_check() -> None:
                 _check_sent(rig, link.sent)
 
 
+def test_member_sized_lzma_writes_what_zipfile_writes() -> None:
+    """The fuzz's cheaper LZMA encoder changes no byte of a mutated ride: zip files of the
+    base rides' members (and of a large, repetitive header) written through it equal those
+    zipfile writes itself, and read back."""
+    members: list[tuple[str, bytes]] = []
+    for names in RIGS:
+        for ride in _rig(*names).rides():
+            members.extend(_unmutated(ride)[1].items())
+    members.append(("header.npy", _npy(np.frombuffer(b"[" * 100_000, dtype=np.uint8))))
+    members.append(("noise.npy", np.random.default_rng(1).bytes(50_000)))
+
+    def written(fast: bool) -> bytes:
+        buf = io.BytesIO()
+        with contextlib.ExitStack() as stack:
+            if fast:
+                stack.enter_context(_member_sized_lzma())
+            zf = stack.enter_context(zipfile.ZipFile(buf, "w", compression=zipfile.ZIP_LZMA))
+            for k, (name, data) in enumerate(members):
+                zf.writestr(zipfile.ZipInfo(f"{k}{name}", (2026, 11, 21, 0, 0, 0)), data)
+        return buf.getvalue()
+
+    ours, theirs = written(True), written(False)
+    assert zipfile.LZMACompressor is not _MemberSizedLZMA  # type: ignore[attr-defined]
+    assert len(ours) == len(theirs) and ours == theirs
+    with zipfile.ZipFile(io.BytesIO(ours)) as zf:
+        assert [zf.read(i) for i in zf.infolist()] == [data for _, data in members]
+
+
 def test_check_sent_catches_a_frame_beyond_the_limits() -> None:
     """The frame checker of this file can fail: a frame at the stroke end right after park."""
     rig = _rig("seat3", "mbox3")
@@ -587,6 +682,8 @@ def test_mutated_config_files_give_only_motioncue_errors(tmp_path: Path, part: i
     t0 = time.perf_counter()
     texts = _config_texts()
     ok_platforms = [load_platform(n) for n in ("stewart6-linear", "seat3", "seat2-yaw")]
+    # the bundled controllers a mutated platform is checked against, read once
+    ok_controllers = {n: load_controller(n) for n in ("mbox6", "imax6", "mbox3")}
     outcomes: Counter[str] = Counter()
     failures: list[str] = []
     size = math.ceil(N_CONFIGS / CONFIG_PARTS)
@@ -603,7 +700,7 @@ def test_mutated_config_files_give_only_motioncue_errors(tmp_path: Path, part: i
                 ActuatorLimits.from_platform(platform).to_pulses_table(platform)
                 for cname in ("mbox6", "imax6") if platform.n_actuators == 6 else ("mbox3",):
                     try:
-                        lim = ActuatorLimits.from_platform(platform, load_controller(cname))
+                        lim = ActuatorLimits.from_platform(platform, ok_controllers[cname])
                         lim.to_pulses_table(platform)
                     except MotioncueError:
                         pass
