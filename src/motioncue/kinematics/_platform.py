@@ -25,6 +25,7 @@ __all__ = [
     "CheckResult",
     "Corner4",
     "FKResult",
+    "LinearLegPlatform",
     "Platform",
     "Seat2Yaw",
     "Seat3",
@@ -1169,41 +1170,49 @@ def _length_stroke(legs: LinearLegs, stroke: Any) -> tuple[np.ndarray, np.ndarra
     return arr[:, 0] - legs.length0, arr[:, 1] - legs.length0
 
 
-class _LinearLegPlatform(Platform):
+class LinearLegPlatform(Platform):
     """Platforms whose actuators are all linear legs between base and platform anchors.
 
-    Subclasses fix the leg count, the degrees of freedom the legs produce and the default name.
+    A subclass fixes the leg count :attr:`N_LEGS`, the pose components the legs produce
+    :attr:`DOF_MASK` (``[x, y, z, roll, pitch, yaw]``) and the default name; the config
+    reader of such a kind is :func:`~motioncue.kinematics.linear_legs_reader`.
+
+    Parameters
+    ----------
+    base_anchors, platform_anchors
+        ``(N_LEGS, 3)`` lower and upper joint centres (m), base and platform frames.
+    neutral_height
+        Height of the platform frame above the base frame at the neutral pose (m).
+    stroke
+        ``(min_length_m, max_length_m)`` usable pin-to-pin length, or ``(N_LEGS, 2)``.
+    drives
+        Drives (pulses); default 5 mm lead, 10000 pulses/rev, homed at the usable minimum.
     """
 
-    _N_LEGS: int = 6
-    _DOF_MASK: tuple[bool, ...] = (True,) * 6
-    _DEFAULT_NAME: str = ""
+    N_LEGS: int = 6
+    DOF_MASK: tuple[bool, ...] = (True,) * 6
+    DEFAULT_NAME: str = ""
 
     def __init__(
         self,
-        base_anchors: Any,
-        platform_anchors: Any,
+        base_anchors: npt.ArrayLike,
+        platform_anchors: npt.ArrayLike,
         neutral_height: float,
-        stroke: Any,
+        stroke: npt.ArrayLike,
         *,
         drives: Drive | None = None,
         name: str | None = None,
         actuator_names: Sequence[str] | None = None,
         description: str = "",
     ) -> None:
-        n = self._N_LEGS
-        legs = LinearLegs(
-            _anchors("base_anchors", base_anchors, n),
-            _anchors("platform_anchors", platform_anchors, n),
-            _finite("neutral_height", neutral_height),
-        )
-        q_min, q_max = _length_stroke(legs, stroke)
+        n = self.N_LEGS
+        legs, q_min, q_max = _linear_legs(base_anchors, platform_anchors, neutral_height, stroke, n)
         super().__init__(
-            name=self._DEFAULT_NAME if name is None else name,
+            name=self.DEFAULT_NAME if name is None else name,
             actuator_names=_names(actuator_names, n),
             legs=legs,
-            leg_pose_mask=list(self._DOF_MASK),
-            dof_mask=list(self._DOF_MASK),
+            leg_pose_mask=list(self.DOF_MASK),
+            dof_mask=list(self.DOF_MASK),
             q_min=q_min,
             q_max=q_max,
             drives=drives,
@@ -1211,7 +1220,24 @@ class _LinearLegPlatform(Platform):
         )
 
 
-class Stewart6Linear(_LinearLegPlatform):
+def _linear_legs(
+    base_anchors: npt.ArrayLike,
+    platform_anchors: npt.ArrayLike,
+    neutral_height: float,
+    stroke: npt.ArrayLike,
+    n: int,
+) -> tuple[LinearLegs, np.ndarray, np.ndarray]:
+    """``n`` linear legs from validated anchors (m), and their stroke from neutral (m)."""
+    legs = LinearLegs(
+        _anchors("base_anchors", base_anchors, n),
+        _anchors("platform_anchors", platform_anchors, n),
+        _finite("neutral_height", neutral_height),
+    )
+    q_min, q_max = _length_stroke(legs, stroke)
+    return legs, q_min, q_max
+
+
+class Stewart6Linear(LinearLegPlatform):
     """6-DOF hexapod with six linear actuators (electric cylinders), SI geometry.
 
     Parameters
@@ -1229,24 +1255,24 @@ class Stewart6Linear(_LinearLegPlatform):
         Drives (pulses); default 5 mm lead, 10000 pulses/rev, homed at the usable minimum.
     """
 
-    _N_LEGS = 6
-    _DOF_MASK = (True,) * 6
-    _DEFAULT_NAME = "stewart6-linear"
+    N_LEGS = 6
+    DOF_MASK = (True,) * 6
+    DEFAULT_NAME = "stewart6-linear"
 
 
-class Seat3(_LinearLegPlatform):
+class Seat3(LinearLegPlatform):
     """3-actuator heave/pitch/roll seat: three linear legs, x, y and yaw held by a central
     guide (so the platform frame origin is the centre of rotation).
 
     Parameters are those of :class:`Stewart6Linear` with ``(3, 3)`` anchors.
     """
 
-    _N_LEGS = 3
-    _DOF_MASK = (False, False, True, True, True, False)
-    _DEFAULT_NAME = "seat3"
+    N_LEGS = 3
+    DOF_MASK = (False, False, True, True, True, False)
+    DEFAULT_NAME = "seat3"
 
 
-class Corner4(_LinearLegPlatform):
+class Corner4(LinearLegPlatform):
     """4-actuator corner rig: one linear leg under each corner of a rigid cockpit frame; heave,
     pitch and roll, with x, y and yaw held by the frame (its guide or its own stiffness).
 
@@ -1260,9 +1286,9 @@ class Corner4(_LinearLegPlatform):
     frame origin being the centre the frame pitches and rolls about.
     """
 
-    _N_LEGS = 4
-    _DOF_MASK = (False, False, True, True, True, False)
-    _DEFAULT_NAME = "corner4"
+    N_LEGS = 4
+    DOF_MASK = (False, False, True, True, True, False)
+    DEFAULT_NAME = "corner4"
 
 
 class Seat2Yaw(Platform):
@@ -1297,12 +1323,7 @@ class Seat2Yaw(Platform):
         actuator_names: Sequence[str] | None = None,
         description: str = "",
     ) -> None:
-        legs = LinearLegs(
-            _anchors("base_anchors", base_anchors, 2),
-            _anchors("platform_anchors", platform_anchors, 2),
-            _finite("neutral_height", neutral_height),
-        )
-        q_min, q_max = _length_stroke(legs, stroke)
+        legs, q_min, q_max = _linear_legs(base_anchors, platform_anchors, neutral_height, stroke, 2)
         yr = np.asarray(yaw_range, dtype=float)
         if yr.shape != (2,) or not np.isfinite(yr).all() or not (yr[0] < 0 < yr[1]):
             raise ConfigError(
