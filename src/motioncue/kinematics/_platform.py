@@ -8,9 +8,9 @@ measured from the neutral pose: metres for linear actuators, radians for rotary 
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, replace
-from typing import Any
+from typing import TypedDict
 
 import numpy as np
 import numpy.typing as npt
@@ -40,7 +40,7 @@ _NO_REACH = np.ones((0, 0), dtype=bool)
 _TL_MAX_RAD = math.radians(89.0)  # a traction-loss slider's pin leaves its slot beyond this
 
 
-def _readonly(a: Any, dtype: Any = float) -> np.ndarray:
+def _readonly(a: npt.ArrayLike, dtype: npt.DTypeLike = float) -> np.ndarray:
     arr = np.array(a, dtype=dtype)
     arr.setflags(write=False)
     return arr
@@ -132,13 +132,30 @@ def _bad_input(name: str, arr: np.ndarray) -> ConfigError:
     )
 
 
-def _as_poses(poses: Any) -> np.ndarray:
+def _as_poses(poses: npt.ArrayLike) -> np.ndarray:
     arr = np.asarray(poses, dtype=float)
     if arr.ndim == 0 or arr.shape[-1] != 6:
         raise ConfigError(f"poses has shape {arr.shape}; expected (..., 6) [x,y,z,roll,pitch,yaw]")
     if not np.isfinite(arr).all():
         raise _bad_input("poses", arr)
     return arr
+
+
+class _PlatformArgs(TypedDict):
+    """The keyword arguments a :class:`Platform` was built with (to build a modified copy)."""
+
+    name: str
+    actuator_names: Sequence[str]
+    legs: LegSet
+    leg_pose_mask: Sequence[bool]
+    dof_mask: Sequence[bool]
+    q_min: npt.ArrayLike
+    q_max: npt.ArrayLike
+    drives: Drive | None
+    yaw_axis: bool
+    yaw_arm_m: float | None
+    spare_axes: int
+    description: str
 
 
 class Platform:
@@ -266,24 +283,24 @@ class Platform:
                 f"platform {self.name!r} already has a yaw axis or spare axes; a traction-loss "
                 "slider goes on a platform of legs only (give spare axes after it)"
             )
-        args = dict(self._init_args)
-        mask = list(args["leg_pose_mask"])
+        mask = list(self._init_args["leg_pose_mask"])
         mask[5] = False
-        dof = list(args["dof_mask"])
+        dof = list(self._init_args["dof_mask"])
         dof[5] = True
         if drive is None:
             drive = Drive.linear(0.005, 10000, [0.0])
-        args.update(
-            name=self.name,
-            actuator_names=(*self.actuator_names, name),
-            leg_pose_mask=mask,
-            dof_mask=dof,
-            q_min=[*self.q_min, float(q_min)],
-            q_max=[*self.q_max, float(q_max)],
-            drives=Drive.concat(self.drives, drive),
-            yaw_axis=True,
-            yaw_arm_m=_positive("arm_m", arm_m),
-        )
+        args: _PlatformArgs = {
+            **self._init_args,
+            "name": self.name,
+            "actuator_names": (*self.actuator_names, name),
+            "leg_pose_mask": mask,
+            "dof_mask": dof,
+            "q_min": [*self.q_min, float(q_min)],
+            "q_max": [*self.q_max, float(q_max)],
+            "drives": Drive.concat(self.drives, drive),
+            "yaw_axis": True,
+            "yaw_arm_m": _positive("arm_m", arm_m),
+        }
         return _rebuilt(self, args)
 
     def with_spare_axes(self, names: Sequence[str], drive: Drive | None = None) -> Platform:
@@ -322,15 +339,15 @@ class Platform:
                 f"spare axes drive must be {k} linear drive(s) homed at 0 (pulse 0 = hold)"
             )
         half = 1.75 / np.abs(np.asarray(drive.pulses_per_unit, dtype=float))
-        args = dict(self._init_args)
-        args.update(
-            name=self.name,
-            actuator_names=(*self.actuator_names, *names),
-            q_min=[*self.q_min, *(-half)],
-            q_max=[*self.q_max, *half],
-            drives=Drive.concat(self.drives, drive),
-            spare_axes=k,
-        )
+        args: _PlatformArgs = {
+            **self._init_args,
+            "name": self.name,
+            "actuator_names": (*self.actuator_names, *names),
+            "q_min": [*self.q_min, *(-half)],
+            "q_max": [*self.q_max, *half],
+            "drives": Drive.concat(self.drives, drive),
+            "spare_axes": k,
+        }
         return _rebuilt(self, args)
 
     @property
@@ -507,12 +524,12 @@ class Platform:
     _yaw_arm: float | None
     _n_spare: int
     _tail: list[float]
-    _init_args: dict[str, Any]
+    _init_args: _PlatformArgs
     _square: bool
     _dof_idx: np.ndarray
     _dof_list: list[int]
 
-    def __setattr__(self, key: str, value: Any) -> None:
+    def __setattr__(self, key: str, value: object) -> None:
         raise AttributeError(f"{type(self).__name__} is frozen; cannot set {key!r}")
 
     def __repr__(self) -> str:
@@ -630,7 +647,7 @@ class Platform:
             q.extend(self._tail)
         return d, q, reachable
 
-    def inverse(self, poses: Any) -> np.ndarray:
+    def inverse(self, poses: npt.ArrayLike) -> np.ndarray:
         """Actuator positions for poses, in closed form.
 
         Parameters
@@ -684,7 +701,7 @@ class Platform:
         return q.reshape(*lead, n), reach.reshape(*lead, n)
 
     # --- Jacobian -----------------------------------------------------------------------
-    def jacobian(self, poses: Any) -> np.ndarray:
+    def jacobian(self, poses: npt.ArrayLike) -> np.ndarray:
         """``d q / d pose`` for poses ``(..., 6)``; returns ``(..., n, 6)``.
 
         Columns of pose components the machine does not produce are zero (``inverse`` holds
@@ -759,12 +776,12 @@ class Platform:
 
     def forward(
         self,
-        q: Any,
-        guess: Any = None,
+        q: npt.ArrayLike,
+        guess: npt.ArrayLike | None = None,
         *,
         tol: float = 1e-12,
         max_iter: int = 50,
-        rounding: Any = None,
+        rounding: npt.ArrayLike | None = None,
     ) -> FKResult:
         """Pose for actuator positions, by Newton's method on the closed-form inverse, with a
         least-squares fallback that converges wherever a ride can go.
@@ -895,7 +912,7 @@ class Platform:
             r[:] = np.inf
         return r
 
-    def _closure(self, q: np.ndarray) -> Any:
+    def _closure(self, q: np.ndarray) -> Callable[[list[float]], np.ndarray]:
         """The leg closure residuals ``f(pose)`` for positions ``q``: zero exactly where a
         pose gives ``q``, smooth everywhere, whatever the crank's assembly branch: leg length
         minus the actuator's length (m) for linear legs, distance from crank tip to anchor
@@ -1031,7 +1048,7 @@ class Platform:
             residuals=-np.array(r) if reachable else np.full(len(r), np.inf),
         )
 
-    def project(self, q: Any, *, tol: float = 1e-9) -> tuple[np.ndarray, str | None]:
+    def project(self, q: npt.ArrayLike, *, tol: float = 1e-9) -> tuple[np.ndarray, str | None]:
         """The actuator positions of the rigid pose nearest to ``q`` (least squares).
 
         On a platform with as many moving actuators as degrees of freedom every reachable
@@ -1073,7 +1090,7 @@ class Platform:
         )
 
     # --- checks -------------------------------------------------------------------------
-    def check(self, poses: Any) -> CheckResult:
+    def check(self, poses: npt.ArrayLike) -> CheckResult:
         """Per actuator: in stroke or not and by how much, reachable or not; as data.
 
         Parameters
@@ -1102,7 +1119,7 @@ class Platform:
             ok=ok,
         )
 
-    def absolute(self, q: Any) -> np.ndarray:
+    def absolute(self, q: npt.ArrayLike) -> np.ndarray:
         """Pin-to-pin length (m) or crank angle from its zero direction (rad), ``(..., n)``."""
         return np.asarray(q, dtype=float) + self.neutral_absolute
 
@@ -1117,7 +1134,7 @@ class Platform:
         return self._yaw_axis
 
 
-def _rebuilt(old: Platform, args: dict[str, Any]) -> Platform:
+def _rebuilt(old: Platform, args: _PlatformArgs) -> Platform:
     out = Platform(**args)
     if old.default_preset is not None:
         out = out.with_default_preset(old.default_preset)
@@ -1136,7 +1153,7 @@ def _default_drives(kinds: tuple[str, ...], q_min: np.ndarray) -> Drive:
     return Drive.concat(*parts)
 
 
-def _anchors(name: str, value: Any, n: int) -> np.ndarray:
+def _anchors(name: str, value: npt.ArrayLike, n: int) -> np.ndarray:
     arr = np.asarray(value, dtype=float)
     if arr.shape != (n, 3) or not np.isfinite(arr).all():
         raise ConfigError(f"{name} = {value!r} is invalid; allowed: ({n}, 3) finite numbers (m)")
@@ -1149,14 +1166,14 @@ def _names(value: Sequence[str] | None, n: int, prefix: str = "") -> tuple[str, 
     return tuple(value)
 
 
-def _positive(name: str, value: Any) -> float:
+def _positive(name: str, value: float) -> float:
     v = float(value)
     if not math.isfinite(v) or v <= 0:
         raise ConfigError(f"{name} = {value!r} is invalid; allowed: a finite number > 0")
     return v
 
 
-def _length_stroke(legs: LinearLegs, stroke: Any) -> tuple[np.ndarray, np.ndarray]:
+def _length_stroke(legs: LinearLegs, stroke: npt.ArrayLike) -> tuple[np.ndarray, np.ndarray]:
     arr = np.asarray(stroke, dtype=float)
     if arr.shape == (2,):
         arr = np.broadcast_to(arr, (legs.n, 2))
@@ -1312,11 +1329,11 @@ class Seat2Yaw(Platform):
 
     def __init__(
         self,
-        base_anchors: Any,
-        platform_anchors: Any,
+        base_anchors: npt.ArrayLike,
+        platform_anchors: npt.ArrayLike,
         neutral_height: float,
-        stroke: Any,
-        yaw_range: Any,
+        stroke: npt.ArrayLike,
+        yaw_range: npt.ArrayLike,
         *,
         drives: Drive | None = None,
         name: str = "seat2-yaw",
@@ -1367,14 +1384,14 @@ class Stewart6Rotary(Platform):
 
     def __init__(
         self,
-        base_pivots: Any,
-        crank_axes: Any,
-        crank_zero_dirs: Any,
-        crank_length: Any,
-        rod_length: Any,
-        platform_anchors: Any,
+        base_pivots: npt.ArrayLike,
+        crank_axes: npt.ArrayLike,
+        crank_zero_dirs: npt.ArrayLike,
+        crank_length: npt.ArrayLike,
+        rod_length: npt.ArrayLike,
+        platform_anchors: npt.ArrayLike,
         neutral_height: float,
-        crank_range: Any,
+        crank_range: npt.ArrayLike,
         *,
         drives: Drive | None = None,
         name: str = "stewart6-rotary",
@@ -1429,7 +1446,7 @@ class Stewart6Rotary(Platform):
         )
 
 
-def _finite(name: str, value: Any) -> float:
+def _finite(name: str, value: float) -> float:
     v = float(value)
     if not math.isfinite(v):
         raise ConfigError(f"{name} = {value!r} is invalid; allowed: a finite number")
