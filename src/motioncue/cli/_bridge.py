@@ -25,6 +25,8 @@ __all__ = ["register"]
 
 
 def register(sub: Any) -> None:
+    from ..telemetry import GAMES
+
     parser = sub.add_parser(
         "bridge",
         help="drive a platform live from a game's telemetry",
@@ -43,9 +45,8 @@ def register(sub: Any) -> None:
     parser.add_argument(
         "--source",
         metavar="GAME[:[HOST:]PORT]",
-        help="f1, forza, beamng, xplane, xplane11, dirt or pcars2, optionally with the port "
-        "(and address) to listen on; or replay:FILE[?speed=X] to replay a recording "
-        "(required unless --profile gives one)",
+        help=f"{', '.join(GAMES)}, optionally with the port (and address) to listen on; or "
+        "replay:FILE[?speed=X] to replay a recording (required unless --profile gives one)",
     )
     parser.add_argument(
         "--profile",

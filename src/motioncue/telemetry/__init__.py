@@ -38,7 +38,7 @@ from ._container import (
     record,
 )
 from ._motion import is_datagram_recording, load_motion, samples_to_recording
-from ._registry import GAMES, GameInfo, decoder_for, register_game
+from ._registry import GAMES, GameInfo, decoder_for, encodable_games, register_game
 from ._sample import (
     G0_M_S2,
     Decoder,
@@ -70,6 +70,7 @@ __all__ = [
     "TelemetrySource",
     "decode_recording",
     "decoder_for",
+    "encodable_games",
     "is_datagram_recording",
     "iter_recording_samples",
     "load_motion",
