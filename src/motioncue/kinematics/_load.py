@@ -259,7 +259,15 @@ def platform_from_dict(data: dict, where: str = "<dict>", name: str = "platform"
     keys every kind shares, then hands the rest to the kind's reader.
     """
     cfg = ConfigReader(data, where)
-    kind = platform_kind(cfg.string("kind", choices=tuple(PLATFORM_KINDS)))
+    kind_name = cfg.string("kind")
+    if kind_name not in PLATFORM_KINDS:
+        raise cfg.error(
+            "kind",
+            kind_name,
+            f"{' | '.join(PLATFORM_KINDS)} (the registered platform kinds; a plugin module "
+            "named in MOTIONCUE_PLUGINS registers more)",
+        )
+    kind = platform_kind(kind_name)
     description = cfg.string("description", "")
     default_preset = cfg.string("default_preset", "") or None
     if default_preset is not None:
