@@ -363,7 +363,7 @@ def _summary(st: Any) -> str:
         f"missed; latency p50 {f(st.latency_p50_ms)} ms p99 {f(st.latency_p99_ms)} ms, "
         f"jitter p99 {f(st.jitter_p99_ms)} ms; limiter clamped {st.limiter_clamped_frames} "
         f"frames, workspace clamped {st.pose_clamped} poses ({st.pose_invalid} invalid), "
-        f"washout held {st.washout_bad_samples} bad samples; {st.fade_outs} fade-outs, "
+        f"cueing held {st.cueing_bad_samples} bad samples; {st.fade_outs} fade-outs, "
         f"{st.fade_ins} fade-ins; parked error {st.park_q_error:.3g}\n"
         f"telemetry: {reasons or 'nothing received'}"
     )
@@ -386,7 +386,7 @@ def _stats_dict(st: Any) -> dict[str, Any]:
         "limiter_clamped_frames": int(st.limiter_clamped_frames),
         "pose_clamped": int(st.pose_clamped),
         "pose_invalid": int(st.pose_invalid),
-        "washout_bad_samples": int(st.washout_bad_samples),
+        "cueing_bad_samples": int(st.cueing_bad_samples),
         "fade_outs": int(st.fade_outs),
         "fade_ins": int(st.fade_ins),
         "park_q_error": float(st.park_q_error),

@@ -98,7 +98,7 @@ def apply_intensity(params: Any, percent: float | None, source: str) -> tuple[An
 
 def add_vestibular_option(parser: Any) -> None:
     """``--vestibular SET``: the vestibular model set of the evaluation (one definition for
-    every verb that evaluates cues; the names are those of ``washout._vestibular``'s
+    every verb that evaluates cues; the names are those of ``cueing._vestibular``'s
     ``MODEL_SETS``, written here so that building the parser imports nothing heavy)."""
     parser.add_argument(
         "--vestibular",
