@@ -265,3 +265,27 @@ def test_the_bridge_replays_a_toy_game_recording_onto_the_toy_rig(
     np.testing.assert_array_equal(tr.positions[-1], park)  # ends parked
     assert np.all(tr.positions[:, 2] == 0)  # the spare axis
     assert np.abs(tr.positions[:, :2] - park[:2]).max() > 1000  # the telemetry moved the rig
+
+
+def test_the_bridges_telemetry_process_decodes_a_game_registered_from_outside(
+    toy_game: ModuleType,
+) -> None:
+    """The live bridge decodes in a spawned child process, which starts with the bundled
+    games only: it imports the registered games' modules first."""
+    from motioncue.telemetry._shm import SharedMemorySource
+
+    f, w = (0.5, -1.5, 9.0), (0.125, 0.25, -0.5)  # exact in float32
+    with (
+        SharedMemorySource("toy:127.0.0.1:0") as src,
+        socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as tx,
+    ):
+        deadline = time.monotonic() + 10.0
+        sample = None
+        k = 0
+        while sample is None and time.monotonic() < deadline:
+            tx.sendto(toy_game.encode_toy(k, 0.0, f, w)[0], ("127.0.0.1", src.port))
+            k += 1
+            time.sleep(0.02)
+            sample = src.latest()
+    assert sample is not None, "no sample came through the telemetry process"
+    assert sample.game == "toy" and sample.f == f and sample.w == w
