@@ -26,7 +26,7 @@ recorded (:func:`record`, ``motioncue record``) to a documented container and re
 from __future__ import annotations
 
 import importlib
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING
 
 from ._container import (
     DatagramRecording,
@@ -93,7 +93,7 @@ _LAZY = {"Recording", "read_recording_csv", "resample", "write_recording_csv"}
 _LAZY_DRIVES = {"SampleDrive", "sample_drive_manifest", "sample_drives"}  # the bundled drives
 
 
-def __getattr__(name: str) -> Any:
+def __getattr__(name: str) -> object:
     if name in _LAZY:
         from . import _recording
 
