@@ -43,7 +43,6 @@ from ._kinds import (
     PlatformFile,
     PlatformKind,
     PlatformReader,
-    platform_kind,
     register_platform_kind,
 )
 from ._legs import CrankLegs
@@ -267,7 +266,7 @@ def platform_from_dict(data: dict, where: str = "<dict>", name: str = "platform"
             f"{' | '.join(PLATFORM_KINDS)} (the registered platform kinds; a plugin module "
             "named in MOTIONCUE_PLUGINS registers more)",
         )
-    kind = platform_kind(kind_name)
+    kind = PLATFORM_KINDS[kind_name]
     description = cfg.string("description", "")
     default_preset = cfg.string("default_preset", "") or None
     if default_preset is not None:

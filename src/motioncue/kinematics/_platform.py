@@ -1197,7 +1197,8 @@ class LinearLegPlatform(Platform):
     Parameters
     ----------
     base_anchors, platform_anchors
-        ``(N_LEGS, 3)`` lower and upper joint centres (m), base and platform frames.
+        ``(N_LEGS, 3)`` lower and upper joint centres (m), base and platform frames; leg i
+        joins base anchor i to platform anchor i.
     neutral_height
         Height of the platform frame above the base frame at the neutral pose (m).
     stroke
@@ -1257,19 +1258,7 @@ def _linear_legs(
 class Stewart6Linear(LinearLegPlatform):
     """6-DOF hexapod with six linear actuators (electric cylinders), SI geometry.
 
-    Parameters
-    ----------
-    base_anchors
-        ``(6, 3)`` lower joint centres in the base frame (m).
-    platform_anchors
-        ``(6, 3)`` upper joint centres in the platform frame (m). Leg i joins base anchor i to
-        platform anchor i.
-    neutral_height
-        Height of the platform frame above the base frame at the neutral pose (m).
-    stroke
-        ``(min_length_m, max_length_m)`` usable pin-to-pin length, or ``(6, 2)`` per leg.
-    drives
-        Drives (pulses); default 5 mm lead, 10000 pulses/rev, homed at the usable minimum.
+    Parameters are those of :class:`LinearLegPlatform` with ``(6, 3)`` anchors.
     """
 
     N_LEGS = 6
@@ -1281,7 +1270,7 @@ class Seat3(LinearLegPlatform):
     """3-actuator heave/pitch/roll seat: three linear legs, x, y and yaw held by a central
     guide (so the platform frame origin is the centre of rotation).
 
-    Parameters are those of :class:`Stewart6Linear` with ``(3, 3)`` anchors.
+    Parameters are those of :class:`LinearLegPlatform` with ``(3, 3)`` anchors.
     """
 
     N_LEGS = 3
@@ -1299,7 +1288,7 @@ class Corner4(LinearLegPlatform):
     replaced by the nearest rigid ones by :meth:`project`. Legs may stand vertical (base and
     platform anchors one above the other) or at a measured angle.
 
-    Parameters are those of :class:`Stewart6Linear` with ``(4, 3)`` anchors, the platform
+    Parameters are those of :class:`LinearLegPlatform` with ``(4, 3)`` anchors, the platform
     frame origin being the centre the frame pitches and rolls about.
     """
 

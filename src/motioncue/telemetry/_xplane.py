@@ -186,21 +186,15 @@ def _encoder(version: int) -> Callable[[int, float, Vec3, Vec3], list[bytes]]:
     return encode
 
 
-INFO = register_game(
-    GameInfo(
-        name="xplane",
-        default_port=DEFAULT_PORT,
-        decoder=XPlaneDecoder,
-        encoder=_encoder(12),
-        title="X-Plane 12 UDP DATA output (rows 4 g-load and 16 angular velocities)",
+INFO, INFO_11 = (
+    register_game(
+        GameInfo(
+            name=name,
+            default_port=DEFAULT_PORT,
+            decoder=decoder,
+            encoder=_encoder(version),
+            title=f"X-Plane {version} UDP DATA output (rows 4 g-load and 16 angular velocities)",
+        )
     )
-)
-INFO_11 = register_game(
-    GameInfo(
-        name="xplane11",
-        default_port=DEFAULT_PORT,
-        decoder=_xplane11,
-        encoder=_encoder(11),
-        title="X-Plane 11 UDP DATA output (rows 4 g-load and 16 angular velocities)",
-    )
+    for name, version, decoder in (("xplane", 12, XPlaneDecoder), ("xplane11", 11, _xplane11))
 )
