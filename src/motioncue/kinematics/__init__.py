@@ -9,8 +9,10 @@ Actuator positions ``q`` are measured from the neutral pose: metres (linear), ra
 >>> q = p.inverse([0.0, 0.0, 0.01, 0.0, 0.0, 0.0])
 
 Platform kinds (the ``kind`` of a platform file) are registered in :data:`PLATFORM_KINDS`
-with :func:`register_platform_kind`; a new kind is one module, in or outside this package
-(see :mod:`motioncue.kinematics._kinds`).
+with :func:`register_platform_kind`: a new kind is one module, in or outside this package
+(a plugin named in ``MOTIONCUE_PLUGINS`` for the command line), holding a :class:`Platform`
+subclass and its reader (:class:`PlatformKind`, :class:`PlatformFile`; a kind of linear
+legs only subclasses :class:`LinearLegPlatform` and reads with :func:`linear_legs_reader`).
 """
 
 from ._drive import Drive
