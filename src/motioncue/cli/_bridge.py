@@ -7,7 +7,7 @@ import dataclasses
 import math
 import sys
 import time
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from .._errors import ConfigError
 from ._common import (
@@ -20,6 +20,10 @@ from ._common import (
 )
 from ._monitor import add_monitor_argument, start_monitor
 from ._preset import add_intensity_option, apply_intensity
+
+if TYPE_CHECKING:
+    from ..telemetry import ReplaySource, TelemetrySource
+    from ..telemetry._shm import SharedMemorySource
 
 __all__ = ["register"]
 
@@ -171,7 +175,7 @@ def run(args: argparse.Namespace) -> int:
 
         if args.preset is None and profile_preset is not None:
             preset_source = f"{cueing.name} (profile {profile.name})"
-            own = getattr(platform, "default_preset", None)
+            own = platform.default_preset
             if platform.name not in profile.presets and own and own != profile_preset:
                 start_warnings.append(
                     f"profile {profile.name} replaces platform {platform.name}'s tuned preset "
@@ -199,8 +203,9 @@ def run(args: argparse.Namespace) -> int:
     # from here on SIGINT, SIGTERM, SIGHUP and SIGQUIT only set a flag: the bridge parks and
     # nothing cuts the park or the summary short
     with SignalGuard() as guard:
+        source: TelemetrySource | ReplaySource | SharedMemorySource
         if args.telemetry_in_process or source_spec.startswith("replay:"):
-            source: Any = open_source(source_spec)
+            source = open_source(source_spec)
         else:
             from ..telemetry._shm import SharedMemorySource
 
@@ -265,15 +270,13 @@ def run(args: argparse.Namespace) -> int:
         return 0
 
 
-def _describe_source(source: Any) -> str:
+def _describe_source(source: TelemetrySource | ReplaySource | SharedMemorySource) -> str:
     """What the user set up: ``f1 telemetry on udp://127.0.0.1:20777`` or the replayed file."""
-    path = getattr(source, "path", None)
-    if path is not None:
-        return f"replay of {path} (speed {getattr(source, 'speed', 1.0):g})"
-    game, host, port = (getattr(source, k, None) for k in ("game", "host", "port"))
-    if game is not None and host is not None and port is not None:
-        return f"{game} telemetry on udp://{host}:{port}"
-    return repr(source)
+    from ..telemetry import ReplaySource
+
+    if isinstance(source, ReplaySource):
+        return f"replay of {source.path} (speed {source.speed:g})"
+    return f"{source.game} telemetry on udp://{source.host}:{source.port}"
 
 
 def _legend(frames: str, rate_hz: float) -> str:

@@ -144,7 +144,7 @@ class BridgeSource:
             self._stats_at = now
         stage = b.stage
         state = str(st.state)
-        if state in ("stopped", "failed") and bool(getattr(stage, "parked", False)):
+        if state in ("stopped", "failed") and stage.parked:
             # the loop has ended with the platform at its park position: say so
             state = "parked" if state == "stopped" else "failed, parked"
         return {
@@ -352,7 +352,7 @@ class Monitor:
         self._v_max = None if lim is None else np.asarray(lim.v_max, dtype=float)
         self._a_max = None if lim is None else np.asarray(lim.a_max, dtype=float)
         self._names = list(platform.actuator_names)
-        self._first_spare = n - int(getattr(platform, "spare_axes", 0))
+        self._first_spare = n - platform.spare_axes
         self._rotary = [k == "rotary" for k in platform.actuator_kinds]
         park = scene_from_q(platform, [0.0], np.asarray(platform.q_park, dtype=float)[None])
         # a box that holds the platform anywhere in its stroke
@@ -384,7 +384,7 @@ class Monitor:
         n = len(self._names)
         out: dict[str, Any] = {
             "state": str(raw.get("state", "?")),
-            "can_stop": bool(getattr(self.source, "can_stop", False)),
+            "can_stop": bool(self.source.can_stop),
             "stop_requests": self.stop_requests,
             "info": {str(k): str(v) for k, v in dict(raw.get("info", {})).items()},
         }
