@@ -22,6 +22,8 @@ from ._monitor import add_monitor_argument, start_monitor
 from ._preset import add_intensity_option, apply_intensity
 
 if TYPE_CHECKING:
+    from ..pipeline._bridge import Bridge, BridgeStats
+    from ..pipeline._signals import SignalGuard
     from ..telemetry import ReplaySource, TelemetrySource
     from ..telemetry._shm import SharedMemorySource
 
@@ -304,7 +306,9 @@ def _say(line: str) -> None:
         pass
 
 
-def _serve(bridge: Any, guard: Any, duration_s: float | None, *, quiet: bool) -> Any:
+def _serve(
+    bridge: Bridge, guard: SignalGuard, duration_s: float | None, *, quiet: bool
+) -> BridgeStats:
     """Run the bridge until the duration, a stop signal or a failure; park; final stats.
 
     ``guard`` (an active :class:`~motioncue.pipeline._signals.SignalGuard`) turns SIGINT,
@@ -356,7 +360,7 @@ def _status(line: str, tty: bool) -> None:
         pass
 
 
-def _summary(st: Any) -> str:
+def _summary(st: BridgeStats) -> str:
     def f(x: float) -> str:
         return "-" if math.isnan(x) else f"{x:.2f}"
 
@@ -372,7 +376,7 @@ def _summary(st: Any) -> str:
     )
 
 
-def _stats_dict(st: Any) -> dict[str, Any]:
+def _stats_dict(st: BridgeStats) -> dict[str, Any]:
     """The final bridge statistics for ``--json`` (NaN as None)."""
 
     def num(x: float) -> float | None:
