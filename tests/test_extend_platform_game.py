@@ -289,3 +289,42 @@ def test_the_bridges_telemetry_process_decodes_a_game_registered_from_outside(
             sample = src.latest()
     assert sample is not None, "no sample came through the telemetry process"
     assert sample.game == "toy" and sample.f == f and sample.w == w
+
+
+def test_a_platform_kind_is_checked_when_registered_and_when_its_reader_builds(
+    toy_platform: ModuleType,
+) -> None:
+    from motioncue.kinematics import PlatformKind, Seat2Yaw, linear_legs_reader
+
+    cls = toy_platform.HeavePitch2
+    read = linear_legs_reader(cls)
+    for bad, match in [
+        (dict(name="Toy Rig"), "lower-case"),
+        (dict(platform_class=int), "subclass of motioncue.kinematics.Platform"),
+        (dict(n_legs=3), r"n_legs = 3 but HeavePitch2.N_LEGS = 2"),
+        (dict(n_legs=0), r"n_legs = 0 is invalid; allowed: 1..12"),
+        (dict(reader="read"), "reader is not callable"),
+    ]:
+        args: dict[str, object] = {
+            "name": "toy-x", "platform_class": cls, "reader": read, "n_legs": 2, **bad
+        }  # fmt: skip
+        with pytest.raises(ConfigError, match=match):
+            PlatformKind(**args)  # type: ignore[arg-type]
+    # a reader that builds something else than it declared is named, not used
+    from motioncue.kinematics import register_platform_kind
+
+    register_platform_kind(PlatformKind(toy_platform.KIND_NAME, Seat2Yaw, read, n_legs=2))
+    with pytest.raises(ConfigError, match=r"reader of platform kind 'toy-heave-pitch2' returned"):
+        load_platform(toy_platform.TOML)
+
+
+def test_game_info_keeps_its_old_signature_and_checks_the_new_field(toy_game: ModuleType) -> None:
+    from motioncue.telemetry import GameInfo
+
+    old = GameInfo("toy2", 47998, toy_game.ToyDecoder, "positional, as before the encoder")
+    assert old.encoder is None
+    from motioncue.telemetry import encodable_games
+
+    assert "toy" in encodable_games() and "toy2" not in encodable_games()
+    with pytest.raises(ConfigError, match="encoder is not callable"):
+        GameInfo("toy3", 47997, toy_game.ToyDecoder, "t", encoder="x")  # type: ignore[arg-type]
