@@ -253,7 +253,7 @@ def test_watchdog_parks_when_packets_stop_and_ramps_back_in() -> None:
         parked = bridge.stats
         assert parked.park_q_error == 0.0 and parked.gain == 0.0
         time.sleep(0.2)
-        assert bridge.washout_state.samples == 0  # reset while parked: resume starts clean
+        assert bridge.cueing_state.samples == 0  # reset while parked: resume starts clean
         sender.mode = "drive"
         gains = []
         end = time.monotonic() + 1.0
@@ -384,7 +384,7 @@ def test_spikes_nan_and_inf_in_the_telemetry_never_break_the_limits() -> None:
     final = bridge.stats
     assert during.state == "live"
     assert final.state == "stopped" and final.error is None
-    assert final.washout_bad_samples > 0  # NaN/inf/spikes were held by the washout
+    assert final.cueing_bad_samples > 0  # NaN/inf/spikes were held by the washout
     assert final.limiter_clamped_frames > 0 or final.pose_clamped > 0
     t, p = _decode_frames(tr.sent)
     assert np.all(np.isfinite(p))

@@ -219,12 +219,12 @@ def test_a_registered_algorithm_runs_in_cue_generate_and_bridge_by_name(
 
     gate = GateConfig(timeout_s=10.0, fade_out_s=0.1, fade_in_s=0.1)
     bridge = Bridge(platform, ctrl, params, Source(), Sink(), limits, BridgeConfig(100.0, gate))
-    assert isinstance(bridge.washout, HeaveToy)
-    assert isinstance(bridge.washout_state, _ToyState)
+    assert isinstance(bridge.cueing, HeaveToy)
+    assert isinstance(bridge.cueing_state, _ToyState)
     for k in range(1, 31):
         bridge.step(k / 100.0)
     assert len(CALLS) >= 20 and all(c == ("step", 100.0, 1) for c in CALLS)
-    assert bridge.washout_state.steps == len(CALLS)
+    assert bridge.cueing_state.steps == len(CALLS)
 
 
 # -- the platforms' default presets -------------------------------------------------------------

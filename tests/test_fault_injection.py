@@ -480,7 +480,7 @@ def test_bridge_garbage_telemetry_keeps_the_limits(rig: Any) -> None:
     finally:
         source.close()
     assert not sender.extra and st.error is None and st.state == "stopped"
-    assert st.bad_packets > 0 or st.washout_bad_samples > 0
+    assert st.bad_packets > 0 or st.cueing_bad_samples > 0
     assert check_wire(decode_wire(tr.sent), limits_table(), park, park) > 5000
 
 

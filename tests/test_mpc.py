@@ -253,13 +253,13 @@ def test_the_bridge_runs_mpc_live_within_the_limits_and_reports_its_solves() -> 
             # the loop may miss frames, and the next sample would replace it unseen (a bound
             # for a bridge that never takes it, not a timing)
             end = time.monotonic() + 30.0
-            while k == 50 and bridge.stats.washout_bad_samples < 1 and time.monotonic() < end:
+            while k == 50 and bridge.stats.cueing_bad_samples < 1 and time.monotonic() < end:
                 time.sleep(0.001)
         during = bridge.stats
     final = bridge.stats
     assert during.state == "live" and final.error is None
     assert final.cueing["solves"] > 50 and final.cueing["p99_ms"] > 0.0
-    assert "solve p99" in final.status_line() and final.washout_bad_samples >= 1
+    assert "solve p99" in final.status_line() and final.cueing_bad_samples >= 1
     t, p = _decode_frames(tr.sent)
     chk = check_frames(t, p, lim.to_pulses_table(platform), start_at_rest=True)
     assert chk.ok, chk.summary()

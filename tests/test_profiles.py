@@ -192,7 +192,7 @@ def test_clamp_warning_above_one_percent_of_at_least_100_poses() -> None:
 
     nan = float("nan")
     base = BridgeStats("live", 1.0, 0, 0, 0, 0, nan, nan, nan, nan, nan, nan, nan, 0,
-                       pose_clamped=0, pose_invalid=0, washout_bad_samples=0, bad_packets=0,
+                       pose_clamped=0, pose_invalid=0, cueing_bad_samples=0, bad_packets=0,
                        packet_reasons={}, fade_ins=0, fade_outs=0, park_q_error=0.0,
                        error=None)  # fmt: skip
     from dataclasses import replace

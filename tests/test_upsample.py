@@ -104,8 +104,8 @@ def _bridge_on_sines(
         platform, ctrl, load_cueing("racing"), src, _Sink(), lim,
         BridgeConfig(FS_OUT, gate, upsample=upsample, frame_clock=frame_clock),
     )  # fmt: skip
-    spy = _Spy(bridge.washout)
-    bridge.washout = spy
+    spy = _Spy(bridge.cueing)
+    bridge.cueing = spy
     phase = np.random.default_rng(seed + 1).uniform(0, 1 / FS_OUT)  # frame grid vs packets
     times: list[float] = []
     if frame_clock == "fixed":
@@ -302,8 +302,8 @@ def test_the_cueing_never_gets_a_value_from_before_the_first_sample(frame_clock:
         platform, ctrl, load_cueing("racing"), src, _Sink(), lim,
         BridgeConfig(FS_OUT, gate, upsample="extrapolate", frame_clock=frame_clock),
     )  # fmt: skip
-    spy = _Spy(bridge.washout)
-    bridge.washout = spy
+    spy = _Spy(bridge.cueing)
+    bridge.cueing = spy
     d = 0.0
     rng = np.random.default_rng(4)
     while d < 3.5:

@@ -121,6 +121,13 @@ def build_parser() -> _Parser:
 
 def main(argv: Sequence[str] | None = None) -> int:
     """Run the command line; returns the exit status."""
+    from .._plugins import load_plugins
+
+    try:
+        load_plugins()  # before the parser: what plugins register is in choices and help
+    except MotioncueError as exc:
+        print(one_line(f"motioncue: error: {exc}"), file=sys.stderr)
+        return 2
     parser = build_parser()
     args, extras = parser.parse_known_args(argv)
     if extras:

@@ -7,7 +7,7 @@ import dataclasses
 import math
 import sys
 import time
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from .._errors import ConfigError
 from ._common import (
@@ -21,10 +21,19 @@ from ._common import (
 from ._monitor import add_monitor_argument, start_monitor
 from ._preset import add_intensity_option, apply_intensity
 
+if TYPE_CHECKING:
+    from ..pipeline._bridge import Bridge, BridgeStats
+    from ..pipeline._signals import SignalGuard
+    from ..telemetry import ReplaySource, TelemetrySource
+    from ..telemetry._shm import SharedMemorySource
+    from ..telemetry._source import AutoSource
+
 __all__ = ["register"]
 
 
 def register(sub: Any) -> None:
+    from ..telemetry import GAMES
+
     parser = sub.add_parser(
         "bridge",
         help="drive a platform live from a game's telemetry",
@@ -43,9 +52,8 @@ def register(sub: Any) -> None:
     parser.add_argument(
         "--source",
         metavar="GAME[:[HOST:]PORT]",
-        help="f1, forza, beamng, xplane, xplane11, dirt or pcars2, optionally with the port "
-        "(and address) to listen on; or replay:FILE[?speed=X] to replay a recording "
-        "(required unless --profile gives one)",
+        help=f"{', '.join(GAMES)}, optionally with the port (and address) to listen on; or "
+        "replay:FILE[?speed=X] to replay a recording (required unless --profile gives one)",
     )
     parser.add_argument(
         "--profile",
@@ -170,7 +178,7 @@ def run(args: argparse.Namespace) -> int:
 
         if args.preset is None and profile_preset is not None:
             preset_source = f"{cueing.name} (profile {profile.name})"
-            own = getattr(platform, "default_preset", None)
+            own = platform.default_preset
             if platform.name not in profile.presets and own and own != profile_preset:
                 start_warnings.append(
                     f"profile {profile.name} replaces platform {platform.name}'s tuned preset "
@@ -198,8 +206,9 @@ def run(args: argparse.Namespace) -> int:
     # from here on SIGINT, SIGTERM, SIGHUP and SIGQUIT only set a flag: the bridge parks and
     # nothing cuts the park or the summary short
     with SignalGuard() as guard:
+        source: TelemetrySource | ReplaySource | AutoSource | SharedMemorySource
         if args.telemetry_in_process or source_spec.startswith("replay:"):
-            source: Any = open_source(source_spec)
+            source = open_source(source_spec)
         else:
             from ..telemetry._shm import SharedMemorySource
 
@@ -264,15 +273,15 @@ def run(args: argparse.Namespace) -> int:
         return 0
 
 
-def _describe_source(source: Any) -> str:
+def _describe_source(
+    source: TelemetrySource | ReplaySource | AutoSource | SharedMemorySource,
+) -> str:
     """What the user set up: ``f1 telemetry on udp://127.0.0.1:20777`` or the replayed file."""
-    path = getattr(source, "path", None)
-    if path is not None:
-        return f"replay of {path} (speed {getattr(source, 'speed', 1.0):g})"
-    game, host, port = (getattr(source, k, None) for k in ("game", "host", "port"))
-    if game is not None and host is not None and port is not None:
-        return f"{game} telemetry on udp://{host}:{port}"
-    return repr(source)
+    from ..telemetry import ReplaySource
+
+    if isinstance(source, ReplaySource):
+        return f"replay of {source.path} (speed {source.speed:g})"
+    return f"{source.game} telemetry on udp://{source.host}:{source.port}"
 
 
 def _legend(frames: str, rate_hz: float) -> str:
@@ -300,7 +309,9 @@ def _say(line: str) -> None:
         pass
 
 
-def _serve(bridge: Any, guard: Any, duration_s: float | None, *, quiet: bool) -> Any:
+def _serve(
+    bridge: Bridge, guard: SignalGuard, duration_s: float | None, *, quiet: bool
+) -> BridgeStats:
     """Run the bridge until the duration, a stop signal or a failure; park; final stats.
 
     ``guard`` (an active :class:`~motioncue.pipeline._signals.SignalGuard`) turns SIGINT,
@@ -352,7 +363,7 @@ def _status(line: str, tty: bool) -> None:
         pass
 
 
-def _summary(st: Any) -> str:
+def _summary(st: BridgeStats) -> str:
     def f(x: float) -> str:
         return "-" if math.isnan(x) else f"{x:.2f}"
 
@@ -362,13 +373,13 @@ def _summary(st: Any) -> str:
         f"missed; latency p50 {f(st.latency_p50_ms)} ms p99 {f(st.latency_p99_ms)} ms, "
         f"jitter p99 {f(st.jitter_p99_ms)} ms; limiter clamped {st.limiter_clamped_frames} "
         f"frames, workspace clamped {st.pose_clamped} poses ({st.pose_invalid} invalid), "
-        f"washout held {st.washout_bad_samples} bad samples; {st.fade_outs} fade-outs, "
+        f"cueing held {st.cueing_bad_samples} bad samples; {st.fade_outs} fade-outs, "
         f"{st.fade_ins} fade-ins; parked error {st.park_q_error:.3g}\n"
         f"telemetry: {reasons or 'nothing received'}"
     )
 
 
-def _stats_dict(st: Any) -> dict[str, Any]:
+def _stats_dict(st: BridgeStats) -> dict[str, Any]:
     """The final bridge statistics for ``--json`` (NaN as None)."""
 
     def num(x: float) -> float | None:
@@ -385,7 +396,7 @@ def _stats_dict(st: Any) -> dict[str, Any]:
         "limiter_clamped_frames": int(st.limiter_clamped_frames),
         "pose_clamped": int(st.pose_clamped),
         "pose_invalid": int(st.pose_invalid),
-        "washout_bad_samples": int(st.washout_bad_samples),
+        "cueing_bad_samples": int(st.cueing_bad_samples),
         "fade_outs": int(st.fade_outs),
         "fade_ins": int(st.fade_ins),
         "park_q_error": float(st.park_q_error),

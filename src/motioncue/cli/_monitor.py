@@ -2,16 +2,20 @@
 
 from __future__ import annotations
 
+import argparse
 from collections.abc import Callable
-from typing import Any
+from typing import TYPE_CHECKING
+
+if TYPE_CHECKING:
+    from ..kinematics import Platform
+    from ..trajectory import ActuatorLimits
+    from ..viewer import Monitor, MonitorSource
 
 __all__ = ["add_monitor_argument", "start_monitor"]
 
 
 def _monitor_value(text: str) -> str:
     """Checked when the command line is read, before anything is opened or sent."""
-    import argparse
-
     from .._errors import ConfigError
     from ..viewer._monitor import parse_monitor
 
@@ -22,7 +26,7 @@ def _monitor_value(text: str) -> str:
     return text
 
 
-def add_monitor_argument(parser: Any) -> None:
+def add_monitor_argument(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
         "--monitor",
         nargs="?",
@@ -38,14 +42,15 @@ def add_monitor_argument(parser: Any) -> None:
 
 def start_monitor(
     value: str | None,
-    source: Any,
-    platform: Any,
-    limits: Any,
+    source: MonitorSource | None,
+    platform: Platform,
+    limits: ActuatorLimits | None,
     title: str,
     say: Callable[[str], None],
-) -> Any:
-    """Start a :class:`~motioncue.viewer.Monitor` when ``--monitor`` was given, else None."""
-    if value is None:
+) -> Monitor | None:
+    """Start a :class:`~motioncue.viewer.Monitor` when ``--monitor`` was given, else None
+    (``source`` may be None then)."""
+    if value is None or source is None:
         return None
     from ..viewer._monitor import Monitor, parse_monitor
 

@@ -105,7 +105,7 @@ def apply_intensity(
 
 def add_vestibular_option(parser: argparse.ArgumentParser) -> None:
     """``--vestibular SET``: the vestibular model set of the evaluation (one definition for
-    every verb that evaluates cues; the names are those of ``washout._vestibular``'s
+    every verb that evaluates cues; the names are those of ``cueing._vestibular``'s
     ``MODEL_SETS``, written here so that building the parser imports nothing heavy)."""
     parser.add_argument(
         "--vestibular",

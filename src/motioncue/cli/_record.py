@@ -11,25 +11,23 @@ __all__ = ["register"]
 
 
 def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
-    from ..telemetry import GAMES
+    from ..telemetry._registry import games_text
 
-    games = ", ".join(f"{n} (port {g.default_port})" for n, g in sorted(GAMES.items()))
     p = sub.add_parser(
         "record",
         help="record a game's raw UDP telemetry to a file every command can replay",
         description=(
             "Record the raw datagrams a game sends (undecoded, with receive times) to a "
             "motioncue recording; replay it anywhere a source is taken with "
-            f"replay:FILE[?speed=X]. Games: {games}."
+            f"replay:FILE[?speed=X]. Games: {games_text()}."
         ),
     )
     p.add_argument(
         "--source",
         required=True,
         metavar="GAME[:[HOST:]PORT]",
-        help="game and optional port, e.g. f1, forza:5301, beamng:0.0.0.0:4444, dirt, pcars2, "
-        "xplane "
-        "(default bind address 127.0.0.1)",
+        help="game and optional port, e.g. f1, forza:5301, beamng:0.0.0.0:4444 (default bind "
+        "address 127.0.0.1; the games are listed above)",
     )
     p.add_argument("--out", required=True, metavar="FILE", help="recording file to write")
     p.add_argument(

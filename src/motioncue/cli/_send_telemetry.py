@@ -13,7 +13,10 @@ __all__ = ["register"]
 
 
 def register(sub: Subparsers) -> None:
-    from ..telemetry._encode import ENCODABLE_GAMES
+    from ..telemetry import GAMES
+    from ..telemetry._registry import encodable_games, games_text
+
+    unable = [name for name in GAMES if name not in encodable_games()]
 
     p = sub.add_parser(
         "send-telemetry",
@@ -23,10 +26,11 @@ def register(sub: Subparsers) -> None:
         "bridge's decoders read, and send them on the recording's clock to --target, the "
         "address 'motioncue bridge --source GAME' listens on. The vehicle is kept level; "
         "its specific force and angular velocity come back from the decoder as recorded. "
-        f"Games: {', '.join(ENCODABLE_GAMES)} (not dirt, whose decoder derives the rates from "
-        "the orientation). Ctrl-C stops.",
+        f"Games: {games_text(ports=False, encodable=True)}"
+        + (f" (not {', '.join(unable)}: no encoder)" if unable else "")
+        + ". Ctrl-C stops.",
     )
-    p.add_argument("--game", required=True, choices=ENCODABLE_GAMES, help="the game to imitate")
+    p.add_argument("--game", required=True, choices=encodable_games(), help="the game to imitate")
     p.add_argument("--input", required=True, metavar="REC", help="recording CSV or .mctr file")
     p.add_argument(
         "--target",

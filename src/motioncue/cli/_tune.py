@@ -461,7 +461,7 @@ def _objective_comment(args: argparse.Namespace, targets: Any) -> str:
 
 
 def _metrics_dict(m: Any) -> dict[str, Any]:
-    """A :class:`~motioncue.cueing._tune.TuneMetrics` for ``--json`` (NaN as None)."""
+    """A :class:`~motioncue.cueing._tune.ChainMetrics` for ``--json`` (NaN as None)."""
 
     def num(v: float) -> float | None:
         return float(v) if math.isfinite(v) else None

@@ -84,6 +84,26 @@ class Drive:
 
     # --- constructors -------------------------------------------------------------------
     @classmethod
+    def _axes(
+        cls,
+        kind: str,
+        units_per_rev: npt.ArrayLike,
+        pulses_per_rev: npt.ArrayLike,
+        q_home: npt.ArrayLike,
+        direction: npt.ArrayLike,
+    ) -> Drive:
+        """``len(q_home)`` drives of one kind, each other argument one value or one per axis."""
+        home = np.atleast_1d(np.asarray(q_home, dtype=float))
+        n = len(home)
+        return cls(
+            kinds=(kind,) * n,
+            pulses_per_rev=np.broadcast_to(np.asarray(pulses_per_rev), (n,)).copy(),
+            units_per_rev=np.broadcast_to(np.asarray(units_per_rev, dtype=float), (n,)).copy(),
+            direction=np.broadcast_to(np.asarray(direction), (n,)).copy(),
+            q_home=home,
+        )
+
+    @classmethod
     def linear(
         cls,
         lead_m: npt.ArrayLike,
@@ -92,14 +112,7 @@ class Drive:
         direction: npt.ArrayLike = 1,
     ) -> Drive:
         """Ball-screw drives: ``lead_m`` travel per motor revolution."""
-        n = len(np.atleast_1d(q_home))
-        return cls(
-            kinds=("linear",) * n,
-            pulses_per_rev=np.broadcast_to(np.asarray(pulses_per_rev), (n,)).copy(),
-            units_per_rev=np.broadcast_to(np.asarray(lead_m, dtype=float), (n,)).copy(),
-            direction=np.broadcast_to(np.asarray(direction), (n,)).copy(),
-            q_home=np.atleast_1d(np.asarray(q_home, dtype=float)),
-        )
+        return cls._axes("linear", lead_m, pulses_per_rev, q_home, direction)
 
     @classmethod
     def rotary(
@@ -114,13 +127,7 @@ class Drive:
         ratio = np.broadcast_to(np.asarray(gear_ratio, dtype=float), (n,))
         if not np.all(np.isfinite(ratio)) or np.any(ratio <= 0):
             raise ConfigError(f"gear_ratio = {ratio.tolist()} is invalid; allowed: finite > 0")
-        return cls(
-            kinds=("rotary",) * n,
-            pulses_per_rev=np.broadcast_to(np.asarray(pulses_per_rev), (n,)).copy(),
-            units_per_rev=2.0 * math.pi / ratio,
-            direction=np.broadcast_to(np.asarray(direction), (n,)).copy(),
-            q_home=np.atleast_1d(np.asarray(q_home, dtype=float)),
-        )
+        return cls._axes("rotary", 2.0 * math.pi / ratio, pulses_per_rev, q_home, direction)
 
     @classmethod
     def concat(cls, *drives: Drive) -> Drive:

@@ -14,9 +14,9 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
-from typing import Any
 
 import numpy as np
+import numpy.typing as npt
 
 from .._errors import ConfigError
 from ._platform import Platform
@@ -43,8 +43,8 @@ class Payload:
     """
 
     mass_kg: float
-    com_m: Any = (0.0, 0.0, 0.0)
-    inertia_kgm2: Any = field(default_factory=lambda: np.zeros((3, 3)))
+    com_m: npt.ArrayLike = (0.0, 0.0, 0.0)
+    inertia_kgm2: npt.ArrayLike = field(default_factory=lambda: np.zeros((3, 3)))
 
     def __post_init__(self) -> None:
         m = float(self.mass_kg)
@@ -186,12 +186,12 @@ def pose_wrench(
 
 def actuator_forces(
     platform: Platform,
-    poses: Any,
-    t_s: Any,
+    poses: npt.ArrayLike,
+    t_s: npt.ArrayLike,
     payload: Payload,
     *,
-    velocities: Any = None,
-    accelerations: Any = None,
+    velocities: npt.ArrayLike | None = None,
+    accelerations: npt.ArrayLike | None = None,
     gravity_mps2: float = STANDARD_GRAVITY,
 ) -> ForceResult:
     """Actuator forces needed to move ``payload`` along a pose trajectory.

@@ -100,6 +100,12 @@ class LegSet:
             rows.append([gx, gy, gz, mx * e0x + my * e0y + mz * e0z, -mx * sy + my * cy, mz])
         return rows
 
+    def joints(self, q: np.ndarray) -> np.ndarray | None:
+        """How a drawing shows the legs: the joint between each leg's ends, as an offset
+        ``(N, n, 3)`` from its base end (m), for leg positions ``q (N, n)``; None for a
+        straight leg drawn from base end to platform anchor (the default)."""
+        return None
+
     # Implemented by the subclasses.
     def gradient_one(self, d: list, q: list[float]) -> list[tuple[float, float, float]]:
         raise NotImplementedError
@@ -286,6 +292,11 @@ class CrankLegs(LegSet):
         c = r * (cos * self.e1 + sin * self.e2)
         dc = r * (-sin * self.e1 + cos * self.e2)
         return c, dc
+
+    def joints(self, q: np.ndarray) -> np.ndarray:
+        """The crank tips, ``(N, n, 3)`` offsets from the crank pivots (m): a crank leg is
+        drawn pivot -> crank tip -> platform anchor."""
+        return self.crank_vectors(q)[0]
 
     def gradient(self, d: np.ndarray, q: np.ndarray) -> np.ndarray:
         c, dc = self.crank_vectors(q)

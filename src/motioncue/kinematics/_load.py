@@ -2,7 +2,9 @@
 
 Layout of a platform file::
 
-    kind = "stewart6-linear"          # | stewart6-rotary | seat3 | seat2-yaw | corner4
+    kind = "stewart6-linear"          # a registered platform kind (PLATFORM_KINDS): bundled
+                                      # stewart6-linear | stewart6-rotary | seat3 | seat2-yaw
+                                      # | corner4
     description = "..."
     actuators = ["1", "2", ...]       # controller order: the legs (then the yaw axis)
     spare_axes = ["5", "6"]           # optional: controller axes after the actuators that
@@ -36,14 +38,27 @@ import numpy as np
 from .._config import ConfigReader, find_config, load_toml
 from .._errors import ConfigError
 from ._drive import Drive
+from ._kinds import (
+    PLATFORM_KINDS,
+    PlatformFile,
+    PlatformKind,
+    PlatformReader,
+    register_platform_kind,
+)
 from ._legs import CrankLegs
-from ._platform import Corner4, Platform, Seat2Yaw, Seat3, Stewart6Linear, Stewart6Rotary
+from ._platform import (
+    Corner4,
+    LinearLegPlatform,
+    Platform,
+    Seat2Yaw,
+    Seat3,
+    Stewart6Linear,
+    Stewart6Rotary,
+)
 
-__all__ = ["KINDS", "load_platform", "platform_from_dict"]
+__all__ = ["linear_legs_reader", "load_platform", "platform_from_dict"]
 
-KINDS = ("stewart6-linear", "stewart6-rotary", "seat3", "seat2-yaw", "corner4")
 _MM = 1e-3
-_N_LEGS = {"stewart6-linear": 6, "stewart6-rotary": 6, "seat3": 3, "seat2-yaw": 2, "corner4": 4}
 
 
 def load_platform(name_or_path: str | Path) -> Platform:
@@ -237,9 +252,21 @@ def _check_neutral(
 
 
 def platform_from_dict(data: dict, where: str = "<dict>", name: str = "platform") -> Platform:
-    """Build a platform from a parsed TOML table (see the module docstring for the layout)."""
+    """Build a platform from a parsed TOML table (see the module docstring for the layout).
+
+    The ``kind`` names a registered platform kind (:data:`PLATFORM_KINDS`): this reads the
+    keys every kind shares, then hands the rest to the kind's reader.
+    """
     cfg = ConfigReader(data, where)
-    kind = cfg.string("kind", choices=KINDS)
+    kind_name = cfg.string("kind")
+    if kind_name not in PLATFORM_KINDS:
+        raise cfg.error(
+            "kind",
+            kind_name,
+            f"{' | '.join(PLATFORM_KINDS)} (the registered platform kinds; a plugin module "
+            "named in MOTIONCUE_PLUGINS registers more)",
+        )
+    kind = PLATFORM_KINDS[kind_name]
     description = cfg.string("description", "")
     default_preset = cfg.string("default_preset", "") or None
     if default_preset is not None:
@@ -247,13 +274,13 @@ def platform_from_dict(data: dict, where: str = "<dict>", name: str = "platform"
             find_config("cueing", default_preset)
         except ConfigError as exc:
             raise cfg.error("default_preset", default_preset, f"a cueing preset ({exc})") from exc
-    n_legs = _N_LEGS[kind]
+    n_legs = kind.n_legs
     has_tl = cfg.has("traction_loss")
-    if has_tl and kind == "seat2-yaw":
+    if has_tl and kind.yaw_axis:
         raise cfg.error(
-            "traction_loss", "...", "no [traction_loss] on seat2-yaw (its turntable is its yaw)"
+            "traction_loss", "...", f"no [traction_loss] on {kind.name} (its turntable is its yaw)"
         )
-    n_act = n_legs + (1 if kind == "seat2-yaw" or has_tl else 0)
+    n_act = kind.n_actuators + (1 if has_tl else 0)
     names_raw = cfg.raw("actuators")
     if (
         not isinstance(names_raw, list)
@@ -266,68 +293,107 @@ def platform_from_dict(data: dict, where: str = "<dict>", name: str = "platform"
         )
     names = tuple(names_raw)
     spare = _spare_names(cfg, names)
-    leg_names = names[:n_legs]
     g = cfg.table("geometry")
     base, plat = _anchors(g, n_legs)
     height = g.number("neutral_height_mm", lo=0.0, lo_open=True) * _MM
-    platform: Platform
-    if kind == "stewart6-rotary":
-        platform = _rotary(cfg, g, base, plat, height, leg_names, description, name)
-    else:
-        g.finish()
-        retracted, lo, hi = _linear_stroke(cfg, n_legs)
-        neutral = np.linalg.norm(plat + np.array([0.0, 0.0, height]) - base, axis=1)
-        _check_neutral(g, neutral, lo, hi, leg_names)
-        drive = _linear_drive(cfg, n_legs, retracted, neutral, (lo, hi))
-        stroke = np.stack([lo, hi], axis=1)
-        if kind in ("stewart6-linear", "seat3", "corner4"):
-            cls = {"stewart6-linear": Stewart6Linear, "seat3": Seat3, "corner4": Corner4}[kind]
-            platform = cls(
-                base,
-                plat,
-                height,
-                stroke,
-                drives=drive,
-                name=name,
-                actuator_names=leg_names,
-                description=description,
-            )
-        else:
-            y = cfg.table("yaw")
-            lo_deg = y.number("min_deg", lo=-360.0, hi=0.0, hi_open=True)
-            hi_deg = y.number("max_deg", lo=0.0, hi=360.0, lo_open=True)
-            gear = y.number("gear_ratio", lo=0.0, hi=1e12, lo_open=True)
-            ppr = y.integer("pulses_per_rev", lo=1, hi=_INT32_MAX)
-            direction = y.integer("direction", 1)
-            if direction not in (-1, 1):
-                raise y.error("direction", direction, "+1 or -1")
-            home = y.number("home_deg", 0.0)
-            if not lo_deg <= home <= hi_deg:
-                raise y.error("home_deg", home, f"inside [min_deg, max_deg] = [{lo_deg}, {hi_deg}]")
-            y.finish()
-            yaw_drive = Drive.rotary(gear, ppr, [math.radians(home)], direction)
-            platform = Seat2Yaw(
-                base,
-                plat,
-                height,
-                stroke,
-                (math.radians(lo_deg), math.radians(hi_deg)),
-                drives=Drive.concat(drive, yaw_drive),
-                name=name,
-                actuator_names=names,
-                description=description,
-            )
+    source = PlatformFile(cfg, g, base, plat, height, names[: kind.n_actuators], name, description)
+    platform = kind.reader(source)
+    _check_built(kind, platform, where)
     tl_limits: dict[str, float] = {}
     if has_tl:
         platform, tl_limits = _traction_loss(cfg.table("traction_loss"), platform, names[-1])
     if spare:
         platform = platform.with_spare_axes(spare)
-    platform = _actuator_limits(cfg, platform, kind, tl_limits)
+    platform = _actuator_limits(cfg, platform, tl_limits)
     if default_preset is not None:
         platform = platform.with_default_preset(default_preset)
     cfg.finish()
     _check_pulse_range(platform, where)
     return platform
+
+
+def _check_built(kind: PlatformKind, platform: Platform, where: str) -> None:
+    """A kind's reader must return its class with its legs and actuators (a plugin's bug is
+    named here, not found downstream)."""
+    if (
+        not isinstance(platform, kind.platform_class)
+        or platform.legs.n != kind.n_legs
+        or platform.n_actuators != kind.n_actuators
+        or platform.has_yaw_axis != kind.yaw_axis
+    ):
+        raise ConfigError(
+            f"{where}: the reader of platform kind {kind.name!r} returned {platform!r}; "
+            f"expected a {kind.platform_class.__name__} with {kind.n_legs} legs and "
+            f"{kind.n_actuators} actuators"
+        )
+
+
+def _linear_legs(f: PlatformFile) -> tuple[Drive, np.ndarray]:
+    """The legs' drive and ``(n, 2)`` usable pin-to-pin lengths (m) from ``[stroke]`` and
+    ``[drive]``, after the neutral pose is checked inside the stroke."""
+    n = f.base_anchors_m.shape[0]
+    f.geometry.finish()
+    retracted, lo, hi = _linear_stroke(f.config, n)
+    neutral = np.linalg.norm(
+        f.platform_anchors_m + np.array([0.0, 0.0, f.neutral_height_m]) - f.base_anchors_m,
+        axis=1,
+    )
+    _check_neutral(f.geometry, neutral, lo, hi, f.actuator_names[:n])
+    drive = _linear_drive(f.config, n, retracted, neutral, (lo, hi))
+    return drive, np.stack([lo, hi], axis=1)
+
+
+def linear_legs_reader(cls: type[LinearLegPlatform]) -> PlatformReader:
+    """The reader of a kind made of linear legs only (a :class:`LinearLegPlatform` subclass).
+
+    It reads ``[stroke]`` (``retracted_length_mm``, ``stroke_mm``, ``margin_mm``) and
+    ``[drive]`` (``lead_mm``, ``pulses_per_rev`` or ``pulses_per_mm``, ``direction``,
+    ``home_lift_mm``), as for the bundled ``stewart6-linear``, ``seat3`` and ``corner4``.
+    """
+
+    def read(f: PlatformFile) -> Platform:
+        drive, stroke = _linear_legs(f)
+        return cls(
+            f.base_anchors_m,
+            f.platform_anchors_m,
+            f.neutral_height_m,
+            stroke,
+            drives=drive,
+            name=f.name,
+            actuator_names=f.actuator_names,
+            description=f.description,
+        )
+
+    return read
+
+
+def _seat2_yaw(f: PlatformFile) -> Platform:
+    """Two linear legs on a turntable: ``[stroke]``, ``[drive]`` and ``[yaw]``."""
+    drive, stroke = _linear_legs(f)
+    y = f.config.table("yaw")
+    lo_deg = y.number("min_deg", lo=-360.0, hi=0.0, hi_open=True)
+    hi_deg = y.number("max_deg", lo=0.0, hi=360.0, lo_open=True)
+    gear = y.number("gear_ratio", lo=0.0, hi=1e12, lo_open=True)
+    ppr = y.integer("pulses_per_rev", lo=1, hi=_INT32_MAX)
+    direction = y.integer("direction", 1)
+    if direction not in (-1, 1):
+        raise y.error("direction", direction, "+1 or -1")
+    home = y.number("home_deg", 0.0)
+    if not lo_deg <= home <= hi_deg:
+        raise y.error("home_deg", home, f"inside [min_deg, max_deg] = [{lo_deg}, {hi_deg}]")
+    y.finish()
+    yaw_drive = Drive.rotary(gear, ppr, [math.radians(home)], direction)
+    return Seat2Yaw(
+        f.base_anchors_m,
+        f.platform_anchors_m,
+        f.neutral_height_m,
+        stroke,
+        (math.radians(lo_deg), math.radians(hi_deg)),
+        drives=Drive.concat(drive, yaw_drive),
+        name=f.name,
+        actuator_names=f.actuator_names,
+        description=f.description,
+    )
 
 
 _INT32_MAX = 2**31 - 1
@@ -411,22 +477,24 @@ def _traction_loss(
 
 
 def _actuator_limits(
-    cfg: ConfigReader, platform: Platform, kind: str, tl_limits: dict[str, float]
+    cfg: ConfigReader, platform: Platform, tl_limits: dict[str, float]
 ) -> Platform:
     """The optional ``[limits]`` table: the actuators' own speed/acceleration/jerk limits.
 
     Linear legs: ``max_speed_mm_s``, ``max_accel_mm_s2``, ``max_jerk_mm_s3``; crank legs:
     ``max_speed_deg_s``, ``max_accel_deg_s2``, ``max_jerk_deg_s3`` (each one number or one per
-    leg). The yaw axis of ``seat2-yaw``: ``yaw_max_speed_deg_s``, ``yaw_max_accel_deg_s2``,
-    ``yaw_max_jerk_deg_s3``. A traction-loss slider takes its own from ``[traction_loss]``;
-    spare axes (held at pulse 0) take the legs' smallest. A quantity is used when it is given
-    for every moving actuator.
+    leg). A turntable (the yaw axis of ``seat2-yaw``): ``yaw_max_speed_deg_s``,
+    ``yaw_max_accel_deg_s2``, ``yaw_max_jerk_deg_s3``. A traction-loss slider takes its own
+    from ``[traction_loss]``; spare axes (held at pulse 0) take the legs' smallest. A
+    quantity is used when it is given for every moving actuator.
     """
     if not cfg.has("limits"):
         return platform
     lim = cfg.table("limits")
-    unit, scale = ("deg", math.pi / 180.0) if kind == "stewart6-rotary" else ("mm", _MM)
-    n_legs = _N_LEGS[kind]
+    n_legs = platform.legs.n
+    rotary = platform.actuator_kinds[0] == "rotary"
+    unit, scale = ("deg", math.pi / 180.0) if rotary else ("mm", _MM)
+    turntable = platform.has_yaw_axis and platform.traction_loss_arm_m is None
     values: dict[str, np.ndarray | None] = {}
     for key, what, suffix in (("v_max", "speed", "s"), ("a_max", "accel", "s2"),
                               ("j_max", "jerk", "s3")):  # fmt: skip
@@ -436,7 +504,7 @@ def _actuator_limits(
             if lim.has(name)
             else None
         )
-        if kind == "seat2-yaw":
+        if turntable:
             yaw_name = f"yaw_max_{what}_deg_{suffix}"
             yaw = lim.number(yaw_name, lo=0.0, lo_open=True) if lim.has(yaw_name) else None
             if (legs is None) != (yaw is None):
@@ -459,16 +527,7 @@ def _actuator_limits(
     return platform.with_actuator_limits(**values)
 
 
-def _rotary(
-    cfg: ConfigReader,
-    g: ConfigReader,
-    base: np.ndarray,
-    plat: np.ndarray,
-    height: float,
-    names: tuple[str, ...],
-    description: str,
-    name: str,
-) -> Platform:
+def _rotary(f: PlatformFile) -> Platform:
     """Crank-and-rod hexapod: crank axes radial (horizontal), crank at angle 0 horizontal and
     tangential, pointing away from its pair's centre; positive angle lifts the crank tip.
 
@@ -476,6 +535,7 @@ def _rotary(
     pairs, clockwise one first (as the ring layout orders them, and as explicit anchor lists
     must). Other crank arrangements: build :class:`Stewart6Rotary` in Python.
     """
+    cfg, g, base, height = f.config, f.geometry, f.base_anchors_m, f.neutral_height_m
     g.finish()
     c = cfg.table("crank")
     crank = _per_actuator(c, "crank_mm", 6, None, lo=0.0, lo_open=True) * _MM
@@ -499,7 +559,7 @@ def _rotary(
             "home_deg", d.raw("home_deg"), f"inside [min_deg, max_deg] = [{lo_deg}, {hi_deg}]"
         )
     d.finish()
-    legs = CrankLegs(base, plat, height, axes, zero_dirs, crank, rod)
+    legs = CrankLegs(base, f.platform_anchors_m, height, axes, zero_dirs, crank, rod)
     if not np.all(legs.reachable0):
         raise c.error(
             "rod_mm",
@@ -522,11 +582,34 @@ def _rotary(
         zero_dirs,
         crank,
         rod,
-        plat,
+        f.platform_anchors_m,
         height,
         (math.radians(lo_deg), math.radians(hi_deg)),
         drives=drive,
-        name=name,
-        actuator_names=names,
-        description=description,
+        name=f.name,
+        actuator_names=f.actuator_names,
+        description=f.description,
     )
+
+
+# The bundled kinds; a new kind registers itself the same way from its own module.
+for _cls, _title in (
+    (Stewart6Linear, "6-DOF hexapod, linear legs (electric cylinders)"),
+    (Seat3, "3-actuator heave/pitch/roll seat, linear legs"),
+    (Corner4, "4-actuator corner rig (heave/pitch/roll), linear legs"),
+):
+    register_platform_kind(
+        PlatformKind(_cls.DEFAULT_NAME, _cls, linear_legs_reader(_cls), _cls.N_LEGS, title=_title)
+    )
+register_platform_kind(
+    PlatformKind(
+        "stewart6-rotary", Stewart6Rotary, _rotary, 6, title="6-DOF hexapod, crank-and-rod legs"
+    )
+)
+register_platform_kind(
+    PlatformKind(
+        "seat2-yaw", Seat2Yaw, _seat2_yaw, 2, yaw_axis=True,
+        title="2 linear legs (pitch/roll) on a yaw turntable",
+    )
+)  # fmt: skip
+del _cls, _title

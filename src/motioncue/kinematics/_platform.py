@@ -8,9 +8,9 @@ measured from the neutral pose: metres for linear actuators, radians for rotary 
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, replace
-from typing import Any
+from typing import TypedDict
 
 import numpy as np
 import numpy.typing as npt
@@ -25,6 +25,7 @@ __all__ = [
     "CheckResult",
     "Corner4",
     "FKResult",
+    "LinearLegPlatform",
     "Platform",
     "Seat2Yaw",
     "Seat3",
@@ -39,7 +40,7 @@ _NO_REACH = np.ones((0, 0), dtype=bool)
 _TL_MAX_RAD = math.radians(89.0)  # a traction-loss slider's pin leaves its slot beyond this
 
 
-def _readonly(a: Any, dtype: Any = float) -> np.ndarray:
+def _readonly(a: npt.ArrayLike, dtype: npt.DTypeLike = float) -> np.ndarray:
     arr = np.array(a, dtype=dtype)
     arr.setflags(write=False)
     return arr
@@ -131,13 +132,30 @@ def _bad_input(name: str, arr: np.ndarray) -> ConfigError:
     )
 
 
-def _as_poses(poses: Any) -> np.ndarray:
+def _as_poses(poses: npt.ArrayLike) -> np.ndarray:
     arr = np.asarray(poses, dtype=float)
     if arr.ndim == 0 or arr.shape[-1] != 6:
         raise ConfigError(f"poses has shape {arr.shape}; expected (..., 6) [x,y,z,roll,pitch,yaw]")
     if not np.isfinite(arr).all():
         raise _bad_input("poses", arr)
     return arr
+
+
+class _PlatformArgs(TypedDict):
+    """The keyword arguments a :class:`Platform` was built with (to build a modified copy)."""
+
+    name: str
+    actuator_names: Sequence[str]
+    legs: LegSet
+    leg_pose_mask: Sequence[bool]
+    dof_mask: Sequence[bool]
+    q_min: npt.ArrayLike
+    q_max: npt.ArrayLike
+    drives: Drive | None
+    yaw_axis: bool
+    yaw_arm_m: float | None
+    spare_axes: int
+    description: str
 
 
 class Platform:
@@ -265,24 +283,24 @@ class Platform:
                 f"platform {self.name!r} already has a yaw axis or spare axes; a traction-loss "
                 "slider goes on a platform of legs only (give spare axes after it)"
             )
-        args = dict(self._init_args)
-        mask = list(args["leg_pose_mask"])
+        mask = list(self._init_args["leg_pose_mask"])
         mask[5] = False
-        dof = list(args["dof_mask"])
+        dof = list(self._init_args["dof_mask"])
         dof[5] = True
         if drive is None:
             drive = Drive.linear(0.005, 10000, [0.0])
-        args.update(
-            name=self.name,
-            actuator_names=(*self.actuator_names, name),
-            leg_pose_mask=mask,
-            dof_mask=dof,
-            q_min=[*self.q_min, float(q_min)],
-            q_max=[*self.q_max, float(q_max)],
-            drives=Drive.concat(self.drives, drive),
-            yaw_axis=True,
-            yaw_arm_m=_positive("arm_m", arm_m),
-        )
+        args: _PlatformArgs = {
+            **self._init_args,
+            "name": self.name,
+            "actuator_names": (*self.actuator_names, name),
+            "leg_pose_mask": mask,
+            "dof_mask": dof,
+            "q_min": [*self.q_min, float(q_min)],
+            "q_max": [*self.q_max, float(q_max)],
+            "drives": Drive.concat(self.drives, drive),
+            "yaw_axis": True,
+            "yaw_arm_m": _positive("arm_m", arm_m),
+        }
         return _rebuilt(self, args)
 
     def with_spare_axes(self, names: Sequence[str], drive: Drive | None = None) -> Platform:
@@ -321,15 +339,15 @@ class Platform:
                 f"spare axes drive must be {k} linear drive(s) homed at 0 (pulse 0 = hold)"
             )
         half = 1.75 / np.abs(np.asarray(drive.pulses_per_unit, dtype=float))
-        args = dict(self._init_args)
-        args.update(
-            name=self.name,
-            actuator_names=(*self.actuator_names, *names),
-            q_min=[*self.q_min, *(-half)],
-            q_max=[*self.q_max, *half],
-            drives=Drive.concat(self.drives, drive),
-            spare_axes=k,
-        )
+        args: _PlatformArgs = {
+            **self._init_args,
+            "name": self.name,
+            "actuator_names": (*self.actuator_names, *names),
+            "q_min": [*self.q_min, *(-half)],
+            "q_max": [*self.q_max, *half],
+            "drives": Drive.concat(self.drives, drive),
+            "spare_axes": k,
+        }
         return _rebuilt(self, args)
 
     @property
@@ -506,12 +524,12 @@ class Platform:
     _yaw_arm: float | None
     _n_spare: int
     _tail: list[float]
-    _init_args: dict[str, Any]
+    _init_args: _PlatformArgs
     _square: bool
     _dof_idx: np.ndarray
     _dof_list: list[int]
 
-    def __setattr__(self, key: str, value: Any) -> None:
+    def __setattr__(self, key: str, value: object) -> None:
         raise AttributeError(f"{type(self).__name__} is frozen; cannot set {key!r}")
 
     def __repr__(self) -> str:
@@ -629,7 +647,7 @@ class Platform:
             q.extend(self._tail)
         return d, q, reachable
 
-    def inverse(self, poses: Any) -> np.ndarray:
+    def inverse(self, poses: npt.ArrayLike) -> np.ndarray:
         """Actuator positions for poses, in closed form.
 
         Parameters
@@ -683,7 +701,7 @@ class Platform:
         return q.reshape(*lead, n), reach.reshape(*lead, n)
 
     # --- Jacobian -----------------------------------------------------------------------
-    def jacobian(self, poses: Any) -> np.ndarray:
+    def jacobian(self, poses: npt.ArrayLike) -> np.ndarray:
         """``d q / d pose`` for poses ``(..., 6)``; returns ``(..., n, 6)``.
 
         Columns of pose components the machine does not produce are zero (``inverse`` holds
@@ -758,12 +776,12 @@ class Platform:
 
     def forward(
         self,
-        q: Any,
-        guess: Any = None,
+        q: npt.ArrayLike,
+        guess: npt.ArrayLike | None = None,
         *,
         tol: float = 1e-12,
         max_iter: int = 50,
-        rounding: Any = None,
+        rounding: npt.ArrayLike | None = None,
     ) -> FKResult:
         """Pose for actuator positions, by Newton's method on the closed-form inverse, with a
         least-squares fallback that converges wherever a ride can go.
@@ -894,7 +912,7 @@ class Platform:
             r[:] = np.inf
         return r
 
-    def _closure(self, q: np.ndarray) -> Any:
+    def _closure(self, q: np.ndarray) -> Callable[[list[float]], np.ndarray]:
         """The leg closure residuals ``f(pose)`` for positions ``q``: zero exactly where a
         pose gives ``q``, smooth everywhere, whatever the crank's assembly branch: leg length
         minus the actuator's length (m) for linear legs, distance from crank tip to anchor
@@ -1030,7 +1048,7 @@ class Platform:
             residuals=-np.array(r) if reachable else np.full(len(r), np.inf),
         )
 
-    def project(self, q: Any, *, tol: float = 1e-9) -> tuple[np.ndarray, str | None]:
+    def project(self, q: npt.ArrayLike, *, tol: float = 1e-9) -> tuple[np.ndarray, str | None]:
         """The actuator positions of the rigid pose nearest to ``q`` (least squares).
 
         On a platform with as many moving actuators as degrees of freedom every reachable
@@ -1072,7 +1090,7 @@ class Platform:
         )
 
     # --- checks -------------------------------------------------------------------------
-    def check(self, poses: Any) -> CheckResult:
+    def check(self, poses: npt.ArrayLike) -> CheckResult:
         """Per actuator: in stroke or not and by how much, reachable or not; as data.
 
         Parameters
@@ -1101,7 +1119,7 @@ class Platform:
             ok=ok,
         )
 
-    def absolute(self, q: Any) -> np.ndarray:
+    def absolute(self, q: npt.ArrayLike) -> np.ndarray:
         """Pin-to-pin length (m) or crank angle from its zero direction (rad), ``(..., n)``."""
         return np.asarray(q, dtype=float) + self.neutral_absolute
 
@@ -1116,7 +1134,7 @@ class Platform:
         return self._yaw_axis
 
 
-def _rebuilt(old: Platform, args: dict[str, Any]) -> Platform:
+def _rebuilt(old: Platform, args: _PlatformArgs) -> Platform:
     out = Platform(**args)
     if old.default_preset is not None:
         out = out.with_default_preset(old.default_preset)
@@ -1135,7 +1153,7 @@ def _default_drives(kinds: tuple[str, ...], q_min: np.ndarray) -> Drive:
     return Drive.concat(*parts)
 
 
-def _anchors(name: str, value: Any, n: int) -> np.ndarray:
+def _anchors(name: str, value: npt.ArrayLike, n: int) -> np.ndarray:
     arr = np.asarray(value, dtype=float)
     if arr.shape != (n, 3) or not np.isfinite(arr).all():
         raise ConfigError(f"{name} = {value!r} is invalid; allowed: ({n}, 3) finite numbers (m)")
@@ -1148,14 +1166,14 @@ def _names(value: Sequence[str] | None, n: int, prefix: str = "") -> tuple[str, 
     return tuple(value)
 
 
-def _positive(name: str, value: Any) -> float:
+def _positive(name: str, value: float) -> float:
     v = float(value)
     if not math.isfinite(v) or v <= 0:
         raise ConfigError(f"{name} = {value!r} is invalid; allowed: a finite number > 0")
     return v
 
 
-def _length_stroke(legs: LinearLegs, stroke: Any) -> tuple[np.ndarray, np.ndarray]:
+def _length_stroke(legs: LinearLegs, stroke: npt.ArrayLike) -> tuple[np.ndarray, np.ndarray]:
     arr = np.asarray(stroke, dtype=float)
     if arr.shape == (2,):
         arr = np.broadcast_to(arr, (legs.n, 2))
@@ -1169,41 +1187,50 @@ def _length_stroke(legs: LinearLegs, stroke: Any) -> tuple[np.ndarray, np.ndarra
     return arr[:, 0] - legs.length0, arr[:, 1] - legs.length0
 
 
-class _LinearLegPlatform(Platform):
+class LinearLegPlatform(Platform):
     """Platforms whose actuators are all linear legs between base and platform anchors.
 
-    Subclasses fix the leg count, the degrees of freedom the legs produce and the default name.
+    A subclass fixes the leg count :attr:`N_LEGS`, the pose components the legs produce
+    :attr:`DOF_MASK` (``[x, y, z, roll, pitch, yaw]``) and the default name; the config
+    reader of such a kind is :func:`~motioncue.kinematics.linear_legs_reader`.
+
+    Parameters
+    ----------
+    base_anchors, platform_anchors
+        ``(N_LEGS, 3)`` lower and upper joint centres (m), base and platform frames; leg i
+        joins base anchor i to platform anchor i.
+    neutral_height
+        Height of the platform frame above the base frame at the neutral pose (m).
+    stroke
+        ``(min_length_m, max_length_m)`` usable pin-to-pin length, or ``(N_LEGS, 2)``.
+    drives
+        Drives (pulses); default 5 mm lead, 10000 pulses/rev, homed at the usable minimum.
     """
 
-    _N_LEGS: int = 6
-    _DOF_MASK: tuple[bool, ...] = (True,) * 6
-    _DEFAULT_NAME: str = ""
+    N_LEGS: int = 6
+    DOF_MASK: tuple[bool, ...] = (True,) * 6
+    DEFAULT_NAME: str = ""
 
     def __init__(
         self,
-        base_anchors: Any,
-        platform_anchors: Any,
+        base_anchors: npt.ArrayLike,
+        platform_anchors: npt.ArrayLike,
         neutral_height: float,
-        stroke: Any,
+        stroke: npt.ArrayLike,
         *,
         drives: Drive | None = None,
         name: str | None = None,
         actuator_names: Sequence[str] | None = None,
         description: str = "",
     ) -> None:
-        n = self._N_LEGS
-        legs = LinearLegs(
-            _anchors("base_anchors", base_anchors, n),
-            _anchors("platform_anchors", platform_anchors, n),
-            _finite("neutral_height", neutral_height),
-        )
-        q_min, q_max = _length_stroke(legs, stroke)
+        n = self.N_LEGS
+        legs, q_min, q_max = _linear_legs(base_anchors, platform_anchors, neutral_height, stroke, n)
         super().__init__(
-            name=self._DEFAULT_NAME if name is None else name,
+            name=self.DEFAULT_NAME if name is None else name,
             actuator_names=_names(actuator_names, n),
             legs=legs,
-            leg_pose_mask=list(self._DOF_MASK),
-            dof_mask=list(self._DOF_MASK),
+            leg_pose_mask=list(self.DOF_MASK),
+            dof_mask=list(self.DOF_MASK),
             q_min=q_min,
             q_max=q_max,
             drives=drives,
@@ -1211,42 +1238,47 @@ class _LinearLegPlatform(Platform):
         )
 
 
-class Stewart6Linear(_LinearLegPlatform):
+def _linear_legs(
+    base_anchors: npt.ArrayLike,
+    platform_anchors: npt.ArrayLike,
+    neutral_height: float,
+    stroke: npt.ArrayLike,
+    n: int,
+) -> tuple[LinearLegs, np.ndarray, np.ndarray]:
+    """``n`` linear legs from validated anchors (m), and their stroke from neutral (m)."""
+    legs = LinearLegs(
+        _anchors("base_anchors", base_anchors, n),
+        _anchors("platform_anchors", platform_anchors, n),
+        _finite("neutral_height", neutral_height),
+    )
+    q_min, q_max = _length_stroke(legs, stroke)
+    return legs, q_min, q_max
+
+
+class Stewart6Linear(LinearLegPlatform):
     """6-DOF hexapod with six linear actuators (electric cylinders), SI geometry.
 
-    Parameters
-    ----------
-    base_anchors
-        ``(6, 3)`` lower joint centres in the base frame (m).
-    platform_anchors
-        ``(6, 3)`` upper joint centres in the platform frame (m). Leg i joins base anchor i to
-        platform anchor i.
-    neutral_height
-        Height of the platform frame above the base frame at the neutral pose (m).
-    stroke
-        ``(min_length_m, max_length_m)`` usable pin-to-pin length, or ``(6, 2)`` per leg.
-    drives
-        Drives (pulses); default 5 mm lead, 10000 pulses/rev, homed at the usable minimum.
+    Parameters are those of :class:`LinearLegPlatform` with ``(6, 3)`` anchors.
     """
 
-    _N_LEGS = 6
-    _DOF_MASK = (True,) * 6
-    _DEFAULT_NAME = "stewart6-linear"
+    N_LEGS = 6
+    DOF_MASK = (True,) * 6
+    DEFAULT_NAME = "stewart6-linear"
 
 
-class Seat3(_LinearLegPlatform):
+class Seat3(LinearLegPlatform):
     """3-actuator heave/pitch/roll seat: three linear legs, x, y and yaw held by a central
     guide (so the platform frame origin is the centre of rotation).
 
-    Parameters are those of :class:`Stewart6Linear` with ``(3, 3)`` anchors.
+    Parameters are those of :class:`LinearLegPlatform` with ``(3, 3)`` anchors.
     """
 
-    _N_LEGS = 3
-    _DOF_MASK = (False, False, True, True, True, False)
-    _DEFAULT_NAME = "seat3"
+    N_LEGS = 3
+    DOF_MASK = (False, False, True, True, True, False)
+    DEFAULT_NAME = "seat3"
 
 
-class Corner4(_LinearLegPlatform):
+class Corner4(LinearLegPlatform):
     """4-actuator corner rig: one linear leg under each corner of a rigid cockpit frame; heave,
     pitch and roll, with x, y and yaw held by the frame (its guide or its own stiffness).
 
@@ -1256,13 +1288,13 @@ class Corner4(_LinearLegPlatform):
     replaced by the nearest rigid ones by :meth:`project`. Legs may stand vertical (base and
     platform anchors one above the other) or at a measured angle.
 
-    Parameters are those of :class:`Stewart6Linear` with ``(4, 3)`` anchors, the platform
+    Parameters are those of :class:`LinearLegPlatform` with ``(4, 3)`` anchors, the platform
     frame origin being the centre the frame pitches and rolls about.
     """
 
-    _N_LEGS = 4
-    _DOF_MASK = (False, False, True, True, True, False)
-    _DEFAULT_NAME = "corner4"
+    N_LEGS = 4
+    DOF_MASK = (False, False, True, True, True, False)
+    DEFAULT_NAME = "corner4"
 
 
 class Seat2Yaw(Platform):
@@ -1286,23 +1318,18 @@ class Seat2Yaw(Platform):
 
     def __init__(
         self,
-        base_anchors: Any,
-        platform_anchors: Any,
+        base_anchors: npt.ArrayLike,
+        platform_anchors: npt.ArrayLike,
         neutral_height: float,
-        stroke: Any,
-        yaw_range: Any,
+        stroke: npt.ArrayLike,
+        yaw_range: npt.ArrayLike,
         *,
         drives: Drive | None = None,
         name: str = "seat2-yaw",
         actuator_names: Sequence[str] | None = None,
         description: str = "",
     ) -> None:
-        legs = LinearLegs(
-            _anchors("base_anchors", base_anchors, 2),
-            _anchors("platform_anchors", platform_anchors, 2),
-            _finite("neutral_height", neutral_height),
-        )
-        q_min, q_max = _length_stroke(legs, stroke)
+        legs, q_min, q_max = _linear_legs(base_anchors, platform_anchors, neutral_height, stroke, 2)
         yr = np.asarray(yaw_range, dtype=float)
         if yr.shape != (2,) or not np.isfinite(yr).all() or not (yr[0] < 0 < yr[1]):
             raise ConfigError(
@@ -1346,14 +1373,14 @@ class Stewart6Rotary(Platform):
 
     def __init__(
         self,
-        base_pivots: Any,
-        crank_axes: Any,
-        crank_zero_dirs: Any,
-        crank_length: Any,
-        rod_length: Any,
-        platform_anchors: Any,
+        base_pivots: npt.ArrayLike,
+        crank_axes: npt.ArrayLike,
+        crank_zero_dirs: npt.ArrayLike,
+        crank_length: npt.ArrayLike,
+        rod_length: npt.ArrayLike,
+        platform_anchors: npt.ArrayLike,
         neutral_height: float,
-        crank_range: Any,
+        crank_range: npt.ArrayLike,
         *,
         drives: Drive | None = None,
         name: str = "stewart6-rotary",
@@ -1408,7 +1435,7 @@ class Stewart6Rotary(Platform):
         )
 
 
-def _finite(name: str, value: Any) -> float:
+def _finite(name: str, value: float) -> float:
     v = float(value)
     if not math.isfinite(v):
         raise ConfigError(f"{name} = {value!r} is invalid; allowed: a finite number")

@@ -261,8 +261,8 @@ class BridgeStats:
     poses : int
         Ticks whose pose went through the workspace limiting (the denominator of
         ``pose_clamped``; see :meth:`clamp_warning`).
-    washout_bad_samples : int
-        Telemetry samples the washout held since the start (NaN, inf, spikes).
+    cueing_bad_samples : int
+        Telemetry samples the cueing held since the start (NaN, inf, spikes).
     bad_packets : int
         Datagrams the decoder skipped (truncated, foreign, non-finite...) plus receive errors.
     packet_reasons : dict[str, int]
@@ -303,7 +303,7 @@ class BridgeStats:
     limiter_clamped_frames: int
     pose_clamped: int
     pose_invalid: int
-    washout_bad_samples: int
+    cueing_bad_samples: int
     bad_packets: int
     packet_reasons: dict[str, int]
     fade_ins: int
@@ -484,13 +484,13 @@ class Bridge:
             )
         # on arrival the frame intervals vary: the cueing runs on the 1 ms grid instead,
         # stepped once per ms of each frame interval
-        self.washout = make_cueing(cueing, 1000.0 if self._arrival else cfg.rate_hz)
-        if getattr(self.washout, "offline", False):
+        self.cueing = make_cueing(cueing, 1000.0 if self._arrival else cfg.rate_hz)
+        if getattr(self.cueing, "offline", False):
             raise ConfigError(
                 f"cueing algorithm {cueing.algorithm!r} needs the whole recording; the live "
                 'bridge needs a streaming one (algorithm = "classical" or "mpc")'
             )
-        self.washout_state = self.washout.initial_state()
+        self.cueing_state = self.cueing.initial_state()
         # effect layer (``effects``: an EffectGains; None or all gains 0: none); refused below
         # 100 Hz. It adds to the blended pose before workspace limiting: limits see the sum.
         self.effects = None if effects is None else make_effects(effects, cfg.rate_hz)
@@ -807,9 +807,9 @@ class Bridge:
         stage = self.stage
         if gate.parked:
             if not self._clean:
-                wstate = self.washout_state
+                wstate = self.cueing_state
                 self._bad_total += wstate.bad_samples
-                self.washout.reset(wstate)
+                self.cueing.reset(wstate)
                 if self.effects is not None:
                     self.effects.reset(self.effects_state)
                 self._clean = True
@@ -851,13 +851,13 @@ class Bridge:
             fw6 = self._fw
             for j in range(reps):
                 if raw and j == reps - 1:
-                    self.washout.step(self.washout_state, held.f, held.w, cue)
+                    self.cueing.step(self.cueing_state, held.f, held.w, cue)
                 elif j < len(early):
                     v6 = early[j]
-                    self.washout.step(self.washout_state, v6[:3], v6[3:], cue)
+                    self.cueing.step(self.cueing_state, v6[:3], v6[3:], cue)
                 else:
                     up.value_at(t_cue - (reps - 1 - j) * 1e-3, fw6)
-                    self.washout.step(self.washout_state, fw6[:3], fw6[3:], cue)
+                    self.cueing.step(self.cueing_state, fw6[:3], fw6[3:], cue)
             self._t_cue = t_cue
             self._clean = False
             park = self._pose_park
@@ -954,7 +954,7 @@ class Bridge:
             limiter_clamped_frames=self.stage.clamped_frames,
             pose_clamped=self._pose_clamped,
             pose_invalid=self._pose_invalid,
-            washout_bad_samples=self._bad_total + self.washout_state.bad_samples,
+            cueing_bad_samples=self._bad_total + self.cueing_state.bad_samples,
             bad_packets=bad,
             packet_reasons=src,
             fade_ins=gate.fade_ins,
@@ -972,10 +972,10 @@ class Bridge:
 
     def _cueing_stats(self) -> dict[str, float]:
         """The cueing algorithm's ``stats(state)`` (MPC solve times, fallbacks), if it has it."""
-        fn = getattr(self.washout, "stats", None)
+        fn = getattr(self.cueing, "stats", None)
         if not callable(fn):
             return {}
         try:
-            return {str(k): float(v) for k, v in dict(fn(self.washout_state)).items()}
+            return {str(k): float(v) for k, v in dict(fn(self.cueing_state)).items()}
         except Exception as exc:  # a plug-in's report must not stop the bridge
             return {f"stats unavailable: {type(exc).__name__}": 1.0}

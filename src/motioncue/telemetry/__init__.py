@@ -32,7 +32,7 @@ recorded (:func:`record`, ``motioncue record``) to a documented container and re
 from __future__ import annotations
 
 import importlib
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING
 
 from ._container import (
     DatagramRecording,
@@ -44,7 +44,7 @@ from ._container import (
     record,
 )
 from ._motion import is_datagram_recording, load_motion, samples_to_recording
-from ._registry import GAMES, GameInfo, decoder_for, register_game
+from ._registry import GAMES, GameInfo, decoder_for, encodable_games, register_game
 from ._sample import (
     G0_M_S2,
     Decoder,
@@ -76,6 +76,7 @@ __all__ = [
     "TelemetrySource",
     "decode_recording",
     "decoder_for",
+    "encodable_games",
     "is_datagram_recording",
     "iter_recording_samples",
     "load_motion",
@@ -98,7 +99,7 @@ _LAZY = {"Recording", "read_recording_csv", "resample", "write_recording_csv"}
 _LAZY_DRIVES = {"SampleDrive", "sample_drive_manifest", "sample_drives"}  # the bundled drives
 
 
-def __getattr__(name: str) -> Any:
+def __getattr__(name: str) -> object:
     if name in _LAZY:
         from . import _recording
 

@@ -57,7 +57,7 @@ from dataclasses import dataclass
 
 from .._errors import ProtocolError
 from ._registry import GameInfo, register_game
-from ._sample import G0_M_S2, Decoder, DecodeResult, up_in_body_from_angles
+from ._sample import G0_M_S2, Decoder, DecodeResult, Vec3, up_in_body_from_angles
 
 __all__ = ["BNG1", "MAGIC", "BeamNGDecoder", "BeamNGMotion"]
 
@@ -157,11 +157,27 @@ class BeamNGDecoder(Decoder):
         return self._make(t_s, f, w, False)
 
 
+def encode_beamng(k: int, t_s: float, f: Vec3, w: Vec3) -> list[bytes]:
+    """A BNG1 datagram of a level car with specific force ``f`` (m/s^2) and angular
+    velocity ``w`` (rad/s), ISO 8855 body axes."""
+    # decoder, level: f = (ay, -ax, g - az), w = (roll_rate, -pitch_rate, -yaw_rate)
+    fx, fy, fz = f
+    wx, wy, wz = w
+    b = BeamNGMotion(
+        pos=(0.0, 0.0, 0.0), vel=(0.0, 0.0, 0.0), acc=(-fy, fx, G0_M_S2 - fz),
+        up_vec=(0.0, 0.0, 1.0), roll_pos=0.0, pitch_pos=0.0, yaw_pos=0.0,
+        roll_rate=wx, pitch_rate=-wy, yaw_rate=-wz, roll_acc=0.0, pitch_acc=0.0,
+        yaw_acc=0.0,
+    )  # fmt: skip
+    return [b.pack()]
+
+
 INFO = register_game(
     GameInfo(
         name="beamng",
         default_port=DEFAULT_PORT,
         decoder=BeamNGDecoder,
+        encoder=encode_beamng,
         title="BeamNG.drive / BeamNG.tech MotionSim (BNG1)",
     )
 )

@@ -2,13 +2,14 @@
 
 :func:`encode_motion` turns one sample of vehicle motion (specific force ``f`` in m/s^2 and
 angular velocity ``w`` in rad/s, ISO 8855 body axes, see :mod:`motioncue.telemetry`) into the
-datagrams a game would send, in the layouts the decoders read (the structures and ``pack``
-functions of each game's module). The car or aircraft is kept level (zero attitude) and the
-whole specific force is carried by the game's acceleration or g-force fields, so each
-decoder gives back ``f`` and ``w`` to the precision of its float32 fields; the round trip is
-tested for every game (``tests/test_new_user.py``).
+datagrams a game would send, in the layouts the decoders read: the encoder each game's
+module registers with its decoder (:attr:`~motioncue.telemetry.GameInfo.encoder`). The car
+or aircraft is kept level (zero attitude) and the whole specific force is carried by the
+game's acceleration or g-force fields, so each decoder gives back ``f`` and ``w`` to the
+precision of its float32 fields; the round trip is tested for every game
+(``tests/test_new_user.py``).
 
-Games: ``f1`` (Motion Ex, then Motion, F1 24 layout), ``forza`` (Sled, 232 bytes),
+Bundled encoders: ``f1`` (Motion Ex, then Motion, F1 24 layout), ``forza`` (Sled, 232 bytes),
 ``beamng`` (BNG1), ``xplane`` and ``xplane11`` (DATA rows 4 and 16), ``pcars2`` (type-0
 telemetry), ``lfs`` (OutSim2, options 1ff), ``rbr`` (NGP TelemetryData). ``dirt`` is not
 encodable: its decoder derives the angular velocity from the orientation of consecutive
@@ -25,22 +26,24 @@ from __future__ import annotations
 import math
 import socket
 import time
-from collections.abc import Callable, Sequence
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
 from numpy.typing import ArrayLike
 
 from .._errors import ConfigError, TransportError
-from ._sample import G0_M_S2
+from ._registry import GAMES, encodable_games
 
-__all__ = ["ENCODABLE_GAMES", "SendSummary", "encode_motion", "send_recording"]
+__all__ = ["SendSummary", "encode_motion", "send_recording"]
 
-ENCODABLE_GAMES = ("f1", "forza", "beamng", "xplane", "xplane11", "pcars2", "lfs", "rbr")
-"""Games :func:`encode_motion` writes (``dirt``: see the module docstring)."""
 
-_F1_FORMAT = 2024
-_F1_SESSION_UID = 0x4D6F74696F6E6375  # "Motioncu": any fixed value names one session
+def __getattr__(name: str) -> tuple[str, ...]:
+    # ENCODABLE_GAMES, the games encode_motion writes, follows the registry (a game
+    # registered later, from a plugin, is in it)
+    if name == "ENCODABLE_GAMES":
+        return encodable_games()
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
 
 
 def _vec(x: ArrayLike, name: str) -> tuple[float, float, float]:
@@ -56,7 +59,8 @@ def encode_motion(game: str, k: int, t_s: float, f: ArrayLike, w: ArrayLike) -> 
     Parameters
     ----------
     game : str
-        One of :data:`ENCODABLE_GAMES`.
+        A registered game with an encoder (:func:`~motioncue.telemetry._registry.
+        encodable_games`).
     k : int
         Sample number (packet counters, frame identifiers), >= 0.
     t_s : float
@@ -76,103 +80,14 @@ def encode_motion(game: str, k: int, t_s: float, f: ArrayLike, w: ArrayLike) -> 
     ConfigError
         An unknown game, non-finite values or a negative ``k``.
     """
-    if game not in ENCODABLE_GAMES:
-        raise ConfigError(f"game {game!r} cannot be encoded; allowed: {', '.join(ENCODABLE_GAMES)}")
+    info = GAMES.get(game)
+    if info is None or info.encoder is None:
+        raise ConfigError(
+            f"game {game!r} cannot be encoded; allowed: {', '.join(encodable_games())}"
+        )
     if k < 0 or not math.isfinite(t_s):
         raise ConfigError(f"sample {k}, t = {t_s!r}: allowed k >= 0 and a finite time")
-    fx, fy, fz = _vec(f, "f")
-    wx, wy, wz = _vec(w, "w")
-    g = G0_M_S2
-    if game == "f1":
-        return _f1(k, t_s, (fx, fy, fz), (wx, wy, wz))
-    if game == "forza":
-        from ._forza import SLED_HEAD, ForzaMotion
-
-        # decoder, level: f = (az, -ax, ay + g), w = (-wz, wx, -wy)
-        stamp_ms = round(t_s * 1e3) & 0xFFFFFFFF
-        m = ForzaMotion(1, stamp_ms, 8000.0, 800.0, 3000.0, (-fy, fz - g, fx),
-                        (0.0, 0.0, 0.0), (wy, -wz, -wx), 0.0, 0.0, 0.0)  # fmt: skip
-        return [m.pack() + bytes(232 - SLED_HEAD.size)]
-    if game == "beamng":
-        from ._beamng import BeamNGMotion
-
-        # decoder, level: f = (ay, -ax, g - az), w = (roll_rate, -pitch_rate, -yaw_rate)
-        b = BeamNGMotion(
-            pos=(0.0, 0.0, 0.0), vel=(0.0, 0.0, 0.0), acc=(-fy, fx, g - fz),
-            up_vec=(0.0, 0.0, 1.0), roll_pos=0.0, pitch_pos=0.0, yaw_pos=0.0,
-            roll_rate=wx, pitch_rate=-wy, yaw_rate=-wz, roll_acc=0.0, pitch_acc=0.0,
-            yaw_acc=0.0,
-        )  # fmt: skip
-        return [b.pack()]
-    if game in ("xplane", "xplane11"):
-        from ._xplane import UNUSED, pack_data
-
-        # decoder: f = g (axial, -side, normal), w = (P, -Q, -R); X-Plane 12 row 16 holds
-        # P, Q, R in deg/s, X-Plane 11 holds Q, P, R in rad/s
-        p, q, r = wx, -wy, -wz
-        rates = (q, p, r) if game == "xplane11" else tuple(math.degrees(v) for v in (p, q, r))
-        u = UNUSED
-        gload = (0.0, u, 0.0, u, fz / g, fx / g, -fy / g, u)
-        return [pack_data({4: gload, 16: rates})]
-    if game == "lfs":
-        from ._lfs import OutSimMain
-
-        # decoder, level, heading 0: car (right, forward, up) = world; f = (f_y, -f_x, f_z)
-        stamp_ms = round(t_s * 1e3) & 0xFFFFFFFF
-        outsim = OutSimMain((-wy, wx, wz), 0.0, 0.0, 0.0, (-fy, fx, fz - g), (0.0, 0.0, 0.0))
-        return [outsim.outsim2(time_ms=stamp_ms)]
-    if game == "rbr":
-        from ._rbr import RBRCar
-
-        # decoder, level: f = (surge, sway, heave + g), w = radians of the (roll, pitch, yaw)
-        # rates in deg/s
-        deg = 180.0 / math.pi
-        car = RBRCar(k & 0xFFFFFFFF, t_s, 2, 0.0, (0.0, 0.0, 0.0),
-                     (0.0, 0.0, 0.0, wx * deg, wy * deg, wz * deg),
-                     (fx, fy, fz - g, 0.0, 0.0, 0.0), 3000.0)  # fmt: skip
-        return [car.pack()]
-    from ._pcars2 import PCars2Telemetry
-
-    # decoder, level: f = (-az, -ax, ay + g), w = (-wz, -wx, wy)
-    pc = PCars2Telemetry(k & 0xFF, 0.0, 3000, 8000, 0x63, (0.0, 0.0, 0.0), (0.0, 0.0, 0.0),
-                         (-wy, wz, -wx), (-fy, fz - g, -fx), (0.0, 0.0, 0.0, 0.0))  # fmt: skip
-    return [pc.pack()]
-
-
-def _f1(k: int, t_s: float, f: Sequence[float], w: Sequence[float]) -> list[bytes]:
-    """Motion Ex and Motion of a level car (F1 24 layout, player car 0).
-
-    Decoder: ``f = G0 (gForceLongitudinal + F_y, gForceLateral - R_y, gForceVertical +
-    U_y)`` with ``F = (0, 0, 1)``, ``R = (-1, 0, 0)`` (level, heading 0: ``U_y = 1``), and
-    ``w_iso = (w_z, w_x, w_y)`` of Motion Ex's local (left, up, forward) rates.
-    """
-    from ._f1 import CAR_MOTION, HEADER, MOTION_EX_CORE, MOTION_EX_SIZES, MOTION_SIZE
-
-    g = G0_M_S2
-    frame = k & 0xFFFFFFFF
-
-    def header(packet_id: int) -> bytes:
-        return HEADER.pack(_F1_FORMAT, 24, 1, 0, 1, packet_id, _F1_SESSION_UID, t_s, frame,
-                           frame, 0, 255)  # fmt: skip
-
-    ex = bytearray(MOTION_EX_SIZES[_F1_FORMAT])
-    ex[: HEADER.size] = header(13)
-    core = [0.0] * (MOTION_EX_CORE.size // 4)
-    core[33:36] = [0.0, 0.0, 0.0]  # localVelocity (left, up, forward)
-    core[36:39] = [w[1], w[2], w[0]]  # angularVelocity (left, up, forward)
-    MOTION_EX_CORE.pack_into(ex, HEADER.size, *core)
-    motion = bytearray(MOTION_SIZE)
-    motion[: HEADER.size] = header(0)
-    n = 32767
-    for car in range(22):
-        g_lat, g_lon, g_vert = (f[1] / g, f[0] / g, f[2] / g - 1.0) if car == 0 else (0, 0, 0)
-        CAR_MOTION.pack_into(
-            motion, HEADER.size + car * CAR_MOTION.size,
-            0.0, 0.0, 0.0, 0.0, 0.0, 0.0,  # world position, velocity
-            0, 0, n, -n, 0, 0,  # forward (world Z), right (world -X): level, heading 0
-            g_lat, g_lon, g_vert, 0.0, 0.0, 0.0,  # g-forces; yaw, pitch, roll
-        )  # fmt: skip
-    return [bytes(ex), bytes(motion)]
+    return info.encoder(k, t_s, _vec(f, "f"), _vec(w, "w"))
 
 
 @dataclass(frozen=True)
@@ -216,7 +131,8 @@ def send_recording(
     Parameters
     ----------
     game : str
-        One of :data:`ENCODABLE_GAMES`.
+        A registered game with an encoder (:func:`~motioncue.telemetry._registry.
+        encodable_games`).
     t_s : (N,) array_like
         Sample times (s), strictly increasing.
     f, w : (N, 3) array_like

@@ -415,11 +415,50 @@ class F1Decoder(Decoder):
         return DecodeResult("state", "state: session")
 
 
+_ENCODE_FORMAT = 2024
+_ENCODE_SESSION_UID = 0x4D6F74696F6E6375  # "Motioncu": any fixed value names one session
+
+
+def encode_f1(k: int, t_s: float, f: Vec3, w: Vec3) -> list[bytes]:
+    """Motion Ex and Motion of a level car (F1 24 layout, player car 0).
+
+    Decoder: ``f = G0 (gForceLongitudinal + F_y, gForceLateral - R_y, gForceVertical +
+    U_y)`` with ``F = (0, 0, 1)``, ``R = (-1, 0, 0)`` (level, heading 0: ``U_y = 1``), and
+    ``w_iso = (w_z, w_x, w_y)`` of Motion Ex's local (left, up, forward) rates.
+    """
+    g = G0_M_S2
+    frame = k & 0xFFFFFFFF
+
+    def header(packet_id: int) -> bytes:
+        return HEADER.pack(_ENCODE_FORMAT, 24, 1, 0, 1, packet_id, _ENCODE_SESSION_UID, t_s, frame,
+                           frame, 0, 255)  # fmt: skip
+
+    ex = bytearray(MOTION_EX_SIZES[_ENCODE_FORMAT])
+    ex[: HEADER.size] = header(13)
+    core = [0.0] * (MOTION_EX_CORE.size // 4)
+    core[33:36] = [0.0, 0.0, 0.0]  # localVelocity (left, up, forward)
+    core[36:39] = [w[1], w[2], w[0]]  # angularVelocity (left, up, forward)
+    MOTION_EX_CORE.pack_into(ex, HEADER.size, *core)
+    motion = bytearray(MOTION_SIZE)
+    motion[: HEADER.size] = header(0)
+    n = 32767
+    for car in range(22):
+        g_lat, g_lon, g_vert = (f[1] / g, f[0] / g, f[2] / g - 1.0) if car == 0 else (0, 0, 0)
+        CAR_MOTION.pack_into(
+            motion, HEADER.size + car * CAR_MOTION.size,
+            0.0, 0.0, 0.0, 0.0, 0.0, 0.0,  # world position, velocity
+            0, 0, n, -n, 0, 0,  # forward (world Z), right (world -X): level, heading 0
+            g_lat, g_lon, g_vert, 0.0, 0.0, 0.0,  # g-forces; yaw, pitch, roll
+        )  # fmt: skip
+    return [bytes(ex), bytes(motion)]
+
+
 INFO = register_game(
     GameInfo(
         name="f1",
         default_port=DEFAULT_PORT,
         decoder=F1Decoder,
+        encoder=encode_f1,
         title="EA SPORTS F1 23 / F1 24 / F1 25 (Motion, Motion Ex, Session)",
     )
 )

@@ -53,7 +53,7 @@ import struct
 from dataclasses import dataclass
 
 from ._registry import GameInfo, register_game
-from ._sample import G0_M_S2, Decoder, DecodeResult, up_in_body_from_angles
+from ._sample import G0_M_S2, Decoder, DecodeResult, Vec3, up_in_body_from_angles
 
 __all__ = ["FORZA_LAYOUTS", "SLED_HEAD", "SLED_SIZE", "ForzaDecoder", "ForzaMotion"]
 
@@ -160,11 +160,24 @@ class ForzaDecoder(Decoder):
         return self._make(t_s, f, w, race_on == 0, {"rpm": rpm, "rpm_max": rpm_max})
 
 
+def encode_forza(k: int, t_s: float, f: Vec3, w: Vec3) -> list[bytes]:
+    """A Sled datagram (232 bytes) of a level car with specific force ``f`` (m/s^2) and
+    angular velocity ``w`` (rad/s), ISO 8855 body axes, stamped ``t_s`` (s)."""
+    # decoder, level: f = (az, -ax, ay + g), w = (-wz, wx, -wy)
+    fx, fy, fz = f
+    wx, wy, wz = w
+    stamp_ms = round(t_s * 1e3) & 0xFFFFFFFF
+    m = ForzaMotion(1, stamp_ms, 8000.0, 800.0, 3000.0, (-fy, fz - G0_M_S2, fx),
+                    (0.0, 0.0, 0.0), (wy, -wz, -wx), 0.0, 0.0, 0.0)  # fmt: skip
+    return [m.pack() + bytes(232 - SLED_HEAD.size)]
+
+
 INFO = register_game(
     GameInfo(
         name="forza",
         default_port=DEFAULT_PORT,
         decoder=ForzaDecoder,
+        encoder=encode_forza,
         title="Forza Motorsport 7 / 2023 (Sled, Dash), Forza Horizon 4/5/6 Data Out",
     )
 )

@@ -56,7 +56,7 @@ from dataclasses import dataclass
 
 from .._errors import ConfigError
 from ._registry import GameInfo, register_game
-from ._sample import G0_M_S2, Decoder, DecodeResult
+from ._sample import G0_M_S2, Decoder, DecodeResult, Vec3
 
 __all__ = [
     "MAIN",
@@ -221,9 +221,21 @@ class LFSDecoder(Decoder):
         return self._make(t_s, (fy, -fx, fz), (cy, -cx, cz), False, extras)
 
 
+def encode_lfs(k: int, t_s: float, f: Vec3, w: Vec3) -> list[bytes]:
+    """An OutSim2 datagram (options 1ff) of a level car heading 0 with specific force ``f``
+    (m/s^2) and angular velocity ``w`` (rad/s), ISO 8855 body axes, stamped ``t_s`` (s)."""
+    # decoder, level, heading 0: car (right, forward, up) = world; f = (f_y, -f_x, f_z)
+    fx, fy, fz = f
+    wx, wy, wz = w
+    stamp_ms = round(t_s * 1e3) & 0xFFFFFFFF
+    outsim = OutSimMain((-wy, wx, wz), 0.0, 0.0, 0.0, (-fy, fx, fz - G0_M_S2), (0.0, 0.0, 0.0))
+    return [outsim.outsim2(time_ms=stamp_ms)]
+
+
 INFO = register_game(
     GameInfo(
         name="lfs",
+        encoder=encode_lfs,
         default_port=DEFAULT_PORT,
         decoder=LFSDecoder,
         title="Live for Speed OutSim (OutSim2, OutSim Opts 1ff; or the classic OutSimPack)",

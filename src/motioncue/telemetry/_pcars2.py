@@ -53,7 +53,7 @@ import struct
 from dataclasses import dataclass
 
 from ._registry import GameInfo, register_game
-from ._sample import G0_M_S2, Decoder, DecodeResult, up_in_body_from_angles
+from ._sample import G0_M_S2, Decoder, DecodeResult, Vec3, up_in_body_from_angles
 
 __all__ = [
     "GAME_STATE_SIZE",
@@ -196,11 +196,24 @@ class PCars2Decoder(Decoder):
         return self._make(t_s, f, w, self.paused, extras)
 
 
+def encode_pcars2(k: int, t_s: float, f: Vec3, w: Vec3) -> list[bytes]:
+    """A type-0 telemetry datagram (packet number ``k``) of a level car with specific force
+    ``f`` (m/s^2) and angular velocity ``w`` (rad/s), ISO 8855 body axes."""
+    # decoder, level: f = (-az, -ax, ay + g), w = (-wz, -wx, wy)
+    fx, fy, fz = f
+    wx, wy, wz = w
+    pc = PCars2Telemetry(k & 0xFF, 0.0, 3000, 8000, 0x63, (0.0, 0.0, 0.0), (0.0, 0.0, 0.0),
+                         (-wy, wz, -wx), (-fy, fz - G0_M_S2, -fx),
+                         (0.0, 0.0, 0.0, 0.0))  # fmt: skip
+    return [pc.pack()]
+
+
 INFO = register_game(
     GameInfo(
         name="pcars2",
         default_port=DEFAULT_PORT,
         decoder=PCars2Decoder,
+        encoder=encode_pcars2,
         title="Project CARS 2 / 3 and Automobilista 2 UDP (Project CARS 2 protocol)",
     )
 )

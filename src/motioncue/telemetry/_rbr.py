@@ -43,7 +43,7 @@ import struct
 from dataclasses import dataclass
 
 from ._registry import GameInfo, register_game
-from ._sample import G0_M_S2, Decoder, DecodeResult, up_in_body_from_angles
+from ._sample import G0_M_S2, Decoder, DecodeResult, Vec3, up_in_body_from_angles
 
 __all__ = ["HEAD", "PACKET_SIZE", "RBRCar", "RBRDecoder"]
 
@@ -127,9 +127,24 @@ class RBRDecoder(Decoder):
         return self._make(t_s, f, (wr * _DEG, wp * _DEG, wy * _DEG), paused, extras)
 
 
+def encode_rbr(k: int, t_s: float, f: Vec3, w: Vec3) -> list[bytes]:
+    """An NGP TelemetryData datagram of a level car with specific force ``f`` (m/s^2) and
+    angular velocity ``w`` (rad/s), ISO 8855 body axes, stamped ``t_s`` (s), step ``k``."""
+    # decoder, level: f = (surge, sway, heave + g), w = radians of the (roll, pitch, yaw)
+    # rates in deg/s
+    fx, fy, fz = f
+    wx, wy, wz = w
+    deg = 180.0 / math.pi
+    car = RBRCar(k & 0xFFFFFFFF, t_s, 2, 0.0, (0.0, 0.0, 0.0),
+                 (0.0, 0.0, 0.0, wx * deg, wy * deg, wz * deg),
+                 (fx, fy, fz - G0_M_S2, 0.0, 0.0, 0.0), 3000.0)  # fmt: skip
+    return [car.pack()]
+
+
 INFO = register_game(
     GameInfo(
         name="rbr",
+        encoder=encode_rbr,
         default_port=DEFAULT_PORT,
         decoder=RBRDecoder,
         title="Richard Burns Rally (RSF / NGP UDP telemetry; signs unverified)",

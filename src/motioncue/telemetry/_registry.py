@@ -1,8 +1,11 @@
-"""The game registry: name -> default UDP port and decoder factory.
+"""The game registry: name -> default UDP port, decoder factory and (optionally) encoder.
 
 Adding a game is one small module: a :class:`~motioncue.telemetry._sample.Decoder` subclass
-that converts the game's axes and units, and a call to :func:`register_game` at import time;
-then one name in ``_GAME_MODULES`` of the package ``__init__``.
+that converts the game's axes and units, and a call to :func:`register_game` at import time
+(in the package: one name in ``_GAME_MODULES`` of its ``__init__``; outside it: a plugin
+module named in ``MOTIONCUE_PLUGINS``). The command line builds its game lists from this
+registry (``bridge --source``, ``record --source``, ``send-telemetry --game``, ``list
+games``), so a registered game appears there with nothing else to edit.
 """
 
 from __future__ import annotations
@@ -11,9 +14,23 @@ from collections.abc import Callable
 from dataclasses import dataclass
 
 from .._errors import ConfigError
-from ._sample import Decoder
+from ._sample import Decoder, Vec3
 
-__all__ = ["GAMES", "GameInfo", "decoder_for", "register_game"]
+__all__ = [
+    "GAMES",
+    "Encoder",
+    "GameInfo",
+    "decoder_for",
+    "encodable_games",
+    "games_text",
+    "register_game",
+]
+
+Encoder = Callable[[int, float, Vec3, Vec3], list[bytes]]
+"""``encoder(k, t_s, f, w)``: the datagrams a game sends for sample ``k`` at game time
+``t_s`` (s) of a level vehicle with specific force ``f`` (m/s^2) and angular velocity ``w``
+(rad/s), ISO 8855 body axes, in sending order (see :func:`~motioncue.telemetry._encode.
+encode_motion`)."""
 
 
 @dataclass(frozen=True, slots=True)
@@ -30,12 +47,16 @@ class GameInfo:
         Factory returning a fresh, stateful :class:`Decoder`.
     title : str
         Human-readable list of the games and formats covered.
+    encoder : callable or None
+        :data:`Encoder` writing the game's datagrams from vehicle motion, which its decoder
+        reads back (``send-telemetry``); None when the game cannot be imitated that way.
     """
 
     name: str
     default_port: int
     decoder: Callable[[], Decoder]
     title: str
+    encoder: Encoder | None = None
 
     def __post_init__(self) -> None:
         if not self.name or not self.name.isidentifier() or self.name != self.name.lower():
@@ -46,14 +67,20 @@ class GameInfo:
             )
         if self.name == "replay":
             raise ConfigError("game name 'replay' is reserved for recorded files")
+        if not callable(self.decoder):
+            raise ConfigError(f"game {self.name!r}: decoder is not callable")
+        if self.encoder is not None and not callable(self.encoder):
+            raise ConfigError(f"game {self.name!r}: encoder is not callable")
 
 
 GAMES: dict[str, GameInfo] = {}
-"""Registered games by name (``"f1"``, ``"forza"``, ``"beamng"``)."""
+"""Registered games by name (``"f1"``, ``"forza"``, ``"beamng"``), in registration order."""
 
 
 def register_game(info: GameInfo) -> GameInfo:
     """Add a game to :data:`GAMES`; re-registering the same name replaces it."""
+    if not isinstance(info, GameInfo):
+        raise ConfigError(f"register_game({info!r}): allowed: a GameInfo")
     GAMES[info.name] = info
     return info
 
@@ -70,3 +97,24 @@ def decoder_for(game: str) -> Decoder:
     if info is None:
         raise ConfigError(f"unknown game {game!r}; known games: {', '.join(sorted(GAMES))}")
     return info.decoder()
+
+
+def encodable_games() -> tuple[str, ...]:
+    """The registered games with an encoder, in registration order (``send-telemetry``)."""
+    return tuple(name for name, info in GAMES.items() if info.encoder is not None)
+
+
+def games_text(*, ports: bool = True, encodable: bool = False) -> str:
+    """The registered games for help texts: ``"f1 (port 20777), forza (port 5301), ..."``.
+
+    Parameters
+    ----------
+    ports
+        Give each game's default port.
+    encodable
+        Only the games with an encoder.
+    """
+    names = encodable_games() if encodable else tuple(GAMES)
+    if not ports:
+        return ", ".join(names)
+    return ", ".join(f"{n} (port {GAMES[n].default_port})" for n in names)

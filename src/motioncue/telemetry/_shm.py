@@ -39,7 +39,8 @@ import struct
 import time
 from collections.abc import Iterator
 from multiprocessing import resource_tracker, shared_memory
-from typing import Any
+from multiprocessing.connection import Connection
+from multiprocessing.synchronize import Event
 
 from .._errors import ConfigError, MotioncueError
 from ._sample import TelemetrySample
@@ -81,7 +82,7 @@ def _view(shm: shared_memory.SharedMemory) -> memoryview:
     return buf
 
 
-def _publish(buf: Any, seq: int, s: TelemetrySample, games: list[str]) -> int:
+def _publish(buf: memoryview, seq: int, s: TelemetrySample, games: list[str]) -> int:
     """Write sample ``s`` into the block under the sequence counter; returns the new (even)
     counter. ``seq`` is the current (even) counter; only one writer may call this."""
     struct.pack_into("=q", buf, 0, seq + 1)  # odd: writing
@@ -91,7 +92,7 @@ def _publish(buf: Any, seq: int, s: TelemetrySample, games: list[str]) -> int:
     return seq + 2
 
 
-def _read(buf: Any, known_seq: int, games: list[str]) -> tuple[int, TelemetrySample] | None:
+def _read(buf: memoryview, known_seq: int, games: list[str]) -> tuple[int, TelemetrySample] | None:
     """The sample in the block if its counter is even and differs from ``known_seq``;
     None when nothing new or when written meanwhile (a torn read is never returned)."""
     seq = struct.unpack_from("=q", buf, 0)[0]
@@ -105,9 +106,24 @@ def _read(buf: Any, known_seq: int, games: list[str]) -> tuple[int, TelemetrySam
     return seq, TelemetrySample(v[0], (v[1], v[2], v[3]), (v[4], v[5], v[6]), bool(v[7]), game)
 
 
-def _child(spec: str, name: str, port_conn: Any, stop: Any, parent_pid: int) -> None:
-    """Receive and decode in this process; publish the newest sample and the counters."""
-    from . import GAMES, open_source
+def _child(
+    spec: str,
+    name: str,
+    port_conn: Connection,
+    stop: Event,
+    parent_pid: int,
+    games: list[str],
+    modules: list[str],
+) -> None:
+    """Receive and decode in this process; publish the newest sample and the counters.
+
+    ``games`` is the parent's list of registered games (the block carries a sample's game as
+    an index in it); ``modules`` are the modules that registered them, imported here first,
+    so that a game registered outside the package (a plugin) decodes in this process too.
+    """
+    import importlib
+
+    from . import open_source
 
     # Ctrl-C, a closed terminal (SIGHUP), Ctrl-\\ and a group SIGTERM reach this child: the
     # parent parks and then closes this child. Born with them blocked (_shielded): ignore,
@@ -117,12 +133,16 @@ def _child(spec: str, name: str, port_conn: Any, stop: Any, parent_pid: int) -> 
     signal.pthread_sigmask(signal.SIG_UNBLOCK, _GROUP_SIGNALS)
     shm = shared_memory.SharedMemory(name=name)
     buf = _view(shm)
-    games = sorted(GAMES)
     try:
         try:
+            for module in modules:  # a spawned child starts with the package's games only
+                importlib.import_module(module)
             src = open_source(spec)
         except MotioncueError as exc:
             port_conn.send(("error", (type(exc).__name__, str(exc))))
+            return
+        except ImportError as exc:
+            port_conn.send(("error", ("ConfigError", f"cannot import a game's module: {exc}")))
             return
         port_conn.send(("port", getattr(src, "port", 0)))
         seq = [0]
@@ -193,6 +213,7 @@ class SharedMemorySource:
         from . import GAMES
 
         self._games = sorted(GAMES)
+        modules = sorted({getattr(GAMES[g].decoder, "__module__", "") for g in self._games} - {""})
         with _shielded():  # the tracker keeps the blocked mask: a closed terminal spares it
             resource_tracker.ensure_running()
         self._shm = shared_memory.SharedMemory(create=True, size=_SIZE)
@@ -203,7 +224,7 @@ class SharedMemorySource:
         parent, child = ctx.Pipe(duplex=False)
         self._proc = ctx.Process(
             target=_child,
-            args=(spec, self._shm.name, child, self._stop, os.getpid()),
+            args=(spec, self._shm.name, child, self._stop, os.getpid(), self._games, modules),
             name="motioncue-telemetry",
             daemon=True,
         )

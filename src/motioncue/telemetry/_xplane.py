@@ -44,11 +44,11 @@ from __future__ import annotations
 
 import math
 import struct
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 
 from ._registry import GameInfo, register_game
-from ._sample import G0_M_S2, Decoder, DecodeResult
+from ._sample import G0_M_S2, Decoder, DecodeResult, Vec3
 
 __all__ = [
     "ROW",
@@ -169,19 +169,32 @@ def _xplane11() -> XPlaneDecoder:
     return XPlaneDecoder(11)
 
 
-INFO = register_game(
-    GameInfo(
-        name="xplane",
-        default_port=DEFAULT_PORT,
-        decoder=XPlaneDecoder,
-        title="X-Plane 12 UDP DATA output (rows 4 g-load and 16 angular velocities)",
+def _encoder(version: int) -> Callable[[int, float, Vec3, Vec3], list[bytes]]:
+    """The DATA datagram (rows 4 and 16) of a level aircraft for X-Plane 12 or 11."""
+
+    def encode(k: int, t_s: float, f: Vec3, w: Vec3) -> list[bytes]:
+        # decoder: f = g (axial, -side, normal), w = (P, -Q, -R); X-Plane 12 row 16 holds
+        # P, Q, R in deg/s, X-Plane 11 holds Q, P, R in rad/s
+        fx, fy, fz = f
+        p, q, r = w[0], -w[1], -w[2]
+        rates = (q, p, r) if version == 11 else tuple(math.degrees(v) for v in (p, q, r))
+        u = UNUSED
+        g = G0_M_S2
+        gload = (0.0, u, 0.0, u, fz / g, fx / g, -fy / g, u)
+        return [pack_data({4: gload, 16: rates})]
+
+    return encode
+
+
+INFO, INFO_11 = (
+    register_game(
+        GameInfo(
+            name=name,
+            default_port=DEFAULT_PORT,
+            decoder=decoder,
+            encoder=_encoder(version),
+            title=f"X-Plane {version} UDP DATA output (rows 4 g-load and 16 angular velocities)",
+        )
     )
-)
-INFO_11 = register_game(
-    GameInfo(
-        name="xplane11",
-        default_port=DEFAULT_PORT,
-        decoder=_xplane11,
-        title="X-Plane 11 UDP DATA output (rows 4 g-load and 16 angular velocities)",
-    )
+    for name, version, decoder in (("xplane", 12, XPlaneDecoder), ("xplane11", 11, _xplane11))
 )

@@ -25,14 +25,25 @@ import json
 import math
 import threading
 import time
-from collections.abc import Mapping
-from typing import Any, Protocol
+from collections.abc import Mapping, Sequence
+from typing import TYPE_CHECKING, Any, Protocol, SupportsFloat
 
 import numpy as np
 
 from .._errors import ConfigError, TransportError
 from ._page import DRAW_JS, frame_json, scene_layout
-from ._scene import scene_from_q
+from ._scene import Scene, scene_from_q
+
+if TYPE_CHECKING:
+    import socket
+    from asyncio import Future
+
+    import tornado.web
+
+    from ..kinematics import Platform
+    from ..pipeline._bridge import Bridge, BridgeStats
+    from ..pipeline._stream import OutputStage
+    from ..trajectory import ActuatorLimits
 
 __all__ = [
     "BridgeSource",
@@ -45,6 +56,42 @@ __all__ = [
 
 DEFAULT_MONITOR_PORT = 8765
 """Port of ``--monitor`` without a value (loopback)."""
+
+
+class _Trace(Protocol):
+    """What :class:`EmulatorSource` reads of an emulator's trace."""
+
+    @property
+    def t_s(self) -> np.ndarray: ...
+
+    @property
+    def positions(self) -> np.ndarray: ...
+
+    def __len__(self) -> int: ...
+
+
+class TracedEmulator(Protocol):
+    """An emulator :class:`EmulatorSource` reads: its trace (pulses), datagrams received
+    and violations found (:class:`~motioncue.output.ControllerEmulator`)."""
+
+    @property
+    def trace(self) -> _Trace: ...
+
+    @property
+    def received(self) -> int: ...
+
+    @property
+    def violations(self) -> Sequence[object]: ...
+
+
+class _Client(Protocol):
+    """A page's WebSocket as the monitor uses it."""
+
+    def push(self, msg: str) -> None: ...
+
+    def close(self) -> None: ...
+
+    def write_message(self, message: str) -> Future[None]: ...
 
 
 class MonitorSource(Protocol):
@@ -70,7 +117,10 @@ class MonitorSource(Protocol):
     def request_stop(self) -> None: ...
 
 
-def _num(x: Any) -> float | None:
+def _num(x: SupportsFloat | str | None) -> float | None:
+    """``x`` as a finite float, or None (unknown, not a number, NaN or inf)."""
+    if x is None:
+        return None
     try:
         v = float(x)
     except (TypeError, ValueError):
@@ -83,20 +133,21 @@ class BridgeSource:
 
     can_stop = True
 
-    def __init__(self, bridge: Any) -> None:
+    def __init__(self, bridge: Bridge) -> None:
         self.bridge = bridge
-        self._stats: Any = None
+        self._stats: BridgeStats | None = None
         self._stats_at = -math.inf
 
     def snapshot(self) -> Mapping[str, Any]:
         b = self.bridge
         now = time.monotonic()
-        if now - self._stats_at >= 0.5 or not b.running:  # the final state at once
-            self._stats, self._stats_at = b.stats, now
         st = self._stats
+        if st is None or now - self._stats_at >= 0.5 or not b.running:  # the final at once
+            st = self._stats = b.stats
+            self._stats_at = now
         stage = b.stage
         state = str(st.state)
-        if state in ("stopped", "failed") and bool(getattr(stage, "parked", False)):
+        if state in ("stopped", "failed") and stage.parked:
             # the loop has ended with the platform at its park position: say so
             state = "parked" if state == "stopped" else "failed, parked"
         return {
@@ -135,11 +186,11 @@ class PlaySource:
 
     def __init__(self, duration_s: float) -> None:
         self.duration_s = float(duration_s)
-        self.stage: Any = None
+        self.stage: OutputStage | None = None
         self._stop = threading.Event()
         self.finished = False
 
-    def attach(self, stage: Any) -> None:
+    def attach(self, stage: OutputStage) -> None:
         self.stage = stage
 
     def stopped(self) -> bool:
@@ -181,7 +232,7 @@ class EmulatorSource:
 
     can_stop = False
 
-    def __init__(self, emulator: Any, platform: Any) -> None:
+    def __init__(self, emulator: TracedEmulator, platform: Platform) -> None:
         self.emulator = emulator
         self.platform = platform
         self._last: tuple[float, np.ndarray] | None = None
@@ -282,8 +333,8 @@ class Monitor:
     def __init__(
         self,
         source: MonitorSource,
-        platform: Any,
-        limits: Any = None,
+        platform: Platform,
+        limits: ActuatorLimits | None = None,
         *,
         host: str = "127.0.0.1",
         port: int = DEFAULT_MONITOR_PORT,
@@ -304,7 +355,7 @@ class Monitor:
         self._v_max = None if lim is None else np.asarray(lim.v_max, dtype=float)
         self._a_max = None if lim is None else np.asarray(lim.a_max, dtype=float)
         self._names = list(platform.actuator_names)
-        self._first_spare = n - int(getattr(platform, "spare_axes", 0))
+        self._first_spare = n - platform.spare_axes
         self._rotary = [k == "rotary" for k in platform.actuator_kinds]
         park = scene_from_q(platform, [0.0], np.asarray(platform.q_park, dtype=float)[None])
         # a box that holds the platform anywhere in its stroke
@@ -316,7 +367,7 @@ class Monitor:
             except ConfigError:
                 pass
         self._box = scene_layout(_merge(reach))
-        self._pose_guess: Any = None
+        self._pose_guess: np.ndarray | None = None
         self._prev: tuple[float, np.ndarray] | None = None
         self._acc = np.zeros(n)
         self.snapshots = 0
@@ -326,8 +377,8 @@ class Monitor:
         self._last: dict[str, Any] = {}
         self._thread: threading.Thread | None = None
         self._loop: asyncio.AbstractEventLoop | None = None
-        self._clients: set[Any] = set()
-        self._sockets: list[Any] = []
+        self._clients: set[_Client] = set()
+        self._sockets: list[socket.socket] = []
 
     # ------------------------------------------------------------------ snapshots
     def snapshot(self) -> dict[str, Any]:
@@ -336,7 +387,7 @@ class Monitor:
         n = len(self._names)
         out: dict[str, Any] = {
             "state": str(raw.get("state", "?")),
-            "can_stop": bool(getattr(self.source, "can_stop", False)),
+            "can_stop": bool(self.source.can_stop),
             "stop_requests": self.stop_requests,
             "info": {str(k): str(v) for k, v in dict(raw.get("info", {})).items()},
         }
@@ -538,27 +589,30 @@ class Monitor:
             client.push(msg)
 
 
-def _no_access_log(handler: Any) -> None:
+def _no_access_log(handler: tornado.web.RequestHandler) -> None:
     """Tornado's access log off: the terminal shows the job's own lines only."""
 
 
-def _merge(scenes: list[Any]) -> Any:
-    from ._scene import Scene
+def _merge(scenes: list[Scene]) -> Scene:
+    """One scene of the frames of ``scenes`` (a drawing's bounding box)."""
 
-    def cat(name: str) -> Any:
+    def opt(name: str) -> np.ndarray | None:
         parts = [getattr(s, name) for s in scenes]
         if any(p is None for p in parts):
             return None
         return np.concatenate(parts)
 
+    def cat(name: str) -> np.ndarray:
+        return np.concatenate([getattr(s, name) for s in scenes])
+
     return Scene(
         np.arange(len(scenes), dtype=float), cat("poses"), cat("q"), cat("base"),
-        cat("joint"), cat("top"), cat("centre"), cat("forward"), cat("use"), cat("rest"),
-        scenes[0].order, cat("seat"), cat("rail"),
+        opt("joint"), cat("top"), cat("centre"), cat("forward"), cat("use"), opt("rest"),
+        scenes[0].order, opt("seat"), opt("rail"),
     )  # fmt: skip
 
 
-def _handlers(mon: Monitor) -> list[Any]:
+def _handlers(mon: Monitor) -> list[tuple[str, type[tornado.web.RequestHandler]]]:
     import tornado.web
     import tornado.websocket
 
@@ -582,7 +636,7 @@ def _handlers(mon: Monitor) -> list[Any]:
             self.write(mon.snapshot_json())
 
     class Live(tornado.websocket.WebSocketHandler):
-        _busy: Any = None
+        _busy: Future[None] | None = None
 
         def open(self, *args: str, **kwargs: str) -> None:
             mon._clients.add(self)

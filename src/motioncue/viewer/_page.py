@@ -12,6 +12,7 @@ from functools import lru_cache
 from typing import Any
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from ._scene import Scene
 
@@ -33,7 +34,7 @@ def plotly_js() -> str:
     return str(get_plotlyjs())
 
 
-def _r(a: Any, digits: int) -> Any:
+def _r(a: ArrayLike, digits: int) -> list[Any]:
     return np.round(np.asarray(a, dtype=float), digits).tolist()
 
 

@@ -11,12 +11,15 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import Any
+from typing import TYPE_CHECKING
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from .._errors import ConfigError
+
+if TYPE_CHECKING:
+    from ..kinematics import FKResult, Platform
 
 __all__ = ["Scene", "at_rest", "outline_order", "scene_from_poses", "scene_from_q", "stroke_use"]
 
@@ -76,7 +79,7 @@ class Scene:
     rail: NDArray[np.float64] | None = None
 
 
-def stroke_use(platform: Any, q: ArrayLike) -> NDArray[np.float64]:
+def stroke_use(platform: Platform, q: ArrayLike) -> NDArray[np.float64]:
     """Fraction of the usable stroke in use: ``max(q / q_max, q / q_min)``, ``(..., n)``.
 
     0 at the neutral pose, 1 on the stroke's end at either side (more beyond it); ``q_min``
@@ -88,7 +91,7 @@ def stroke_use(platform: Any, q: ArrayLike) -> NDArray[np.float64]:
     return np.maximum(qa / hi, qa / lo)
 
 
-def at_rest(platform: Any, q: ArrayLike) -> NDArray[np.bool_]:
+def at_rest(platform: Platform, q: ArrayLike) -> NDArray[np.bool_]:
     """Which actuators are at their park position, ``(..., n)`` bool.
 
     At rest: within :data:`REST_TOLERANCE` of the usable stroke (``q_max - q_min``) of
@@ -132,7 +135,7 @@ def _check_times(t_s: ArrayLike, n: int) -> NDArray[np.float64]:
     return t
 
 
-def scene_from_poses(platform: Any, t_s: ArrayLike, poses: ArrayLike) -> Scene:
+def scene_from_poses(platform: Platform, t_s: ArrayLike, poses: ArrayLike) -> Scene:
     """The drawing of ``poses (N, 6)`` at times ``t_s (N,)``; actuators by inverse kinematics.
 
     Raises
@@ -151,7 +154,7 @@ def scene_from_poses(platform: Any, t_s: ArrayLike, poses: ArrayLike) -> Scene:
     return _scene(platform, t, p, q)
 
 
-def scene_from_q(platform: Any, t_s: ArrayLike, q: ArrayLike) -> Scene:
+def scene_from_q(platform: Platform, t_s: ArrayLike, q: ArrayLike) -> Scene:
     """The drawing of actuator positions ``q (N, n)``; poses by forward kinematics.
 
     Each frame's forward kinematics starts from the previous pose (frames of a ride are
@@ -183,7 +186,7 @@ def scene_from_q(platform: Any, t_s: ArrayLike, q: ArrayLike) -> Scene:
     return _scene(platform, t, poses, qa)
 
 
-def fk_miss(platform: Any, q: NDArray[np.float64], fk: Any) -> str:
+def fk_miss(platform: Platform, q: NDArray[np.float64], fk: FKResult) -> str:
     """Why positions ``q`` are no rigid pose's: the actuator farthest from the nearest rigid
     pose, in mm or deg and in pulses (one line, no traceback)."""
     names = platform.actuator_names
@@ -205,7 +208,7 @@ def fk_miss(platform: Any, q: NDArray[np.float64], fk: Any) -> str:
 
 
 def _scene(
-    platform: Any, t: NDArray[np.float64], poses: NDArray[np.float64], q: NDArray[np.float64]
+    platform: Platform, t: NDArray[np.float64], poses: NDArray[np.float64], q: NDArray[np.float64]
 ) -> Scene:
     legs = platform.legs
     yaw_axis = bool(platform.has_yaw_axis)
@@ -216,14 +219,13 @@ def _scene(
     origin = leg_pose[:, :3] + np.array([0.0, 0.0, legs.height])
     top = origin[:, None, :] + np.einsum("nij,lj->nli", rot, legs.plat)
     base = np.broadcast_to(legs.base, top.shape).copy()
-    joint = None
-    if legs.kind == "rotary":
-        tips, _ = legs.crank_vectors(q[:, : legs.n])
-        joint = base + tips
+    tips = legs.joints(q[:, : legs.n])  # the leg set says how its legs are drawn
+    joint = None if tips is None else base + tips
     spread = float(np.max(np.linalg.norm(legs.plat[:, :2], axis=1), initial=0.1)) or 0.1
     forward = origin + 0.6 * spread * rot[:, :, 0]
     # a turntable turns the whole machine; a traction-loss slider turns the seat only
-    if yaw_axis and getattr(platform, "traction_loss_arm_m", None) is None:
+    arm = platform.traction_loss_arm_m
+    if yaw_axis and arm is None:
         turn = _rotation(np.column_stack([np.zeros((len(t), 2)), poses[:, 5]]))
 
         def spin(a: NDArray[np.float64]) -> NDArray[np.float64]:
@@ -236,7 +238,6 @@ def _scene(
         if not np.all(np.isfinite(arr)):
             raise ConfigError(f"the drawing's {name} is not finite (NaN or inf in the input)")
     seat = rail = None
-    arm = getattr(platform, "traction_loss_arm_m", None)
     if arm is not None:
         seat, rail = _slider(platform, float(arm), rot, origin, poses[:, 5])
     order = outline_order(legs.base)
@@ -245,7 +246,7 @@ def _scene(
 
 
 def _slider(
-    platform: Any,
+    platform: Platform,
     arm: float,
     rot: NDArray[np.float64],
     origin: NDArray[np.float64],

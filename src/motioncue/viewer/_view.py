@@ -22,7 +22,7 @@ import json
 import math
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 from numpy.typing import NDArray
@@ -30,6 +30,10 @@ from numpy.typing import NDArray
 from .._errors import ConfigError
 from ._page import DRAW_JS, plotly_js, scene_layout
 from ._scene import Scene, scene_from_poses, scene_from_q
+
+if TYPE_CHECKING:
+    from ..kinematics import Platform
+    from ..pipeline import Ride
 
 __all__ = [
     "CURVE_RATE_HZ",
@@ -81,7 +85,7 @@ class ViewInput:
     scene: Scene
     rate_hz: float
     title: str
-    platform: Any
+    platform: Platform
     vehicle: NDArray[np.float64] | None = None
 
 
@@ -156,7 +160,7 @@ def load_view_input(
 
 
 def _vehicle_perceived(
-    ride: Any, ride_path: Path, recording: str | Path | None, t_s: NDArray[np.float64]
+    ride: Ride, ride_path: Path, recording: str | Path | None, t_s: NDArray[np.float64]
 ) -> NDArray[np.float64] | None:
     """The vehicle's perceived motion at ``t_s`` (module docstring of ViewInput), or None.
 

@@ -86,7 +86,7 @@ def _compressive(base: CueingParams) -> CueingParams:
 
 @pytest.mark.parametrize("fs", [100.0, 1000.0])
 def test_compressive_washout_batch_equals_streaming(fs: float) -> None:
-    from test_washout import random_drive
+    from test_cueing_classical import random_drive
 
     design = ClassicalWashout(_compressive(load_cueing("racing-hexapod")), fs_hz=fs)
     f, w = random_drive(4000, seed=int(fs) + 1)
