@@ -47,6 +47,7 @@ RANKS: dict[str, int] = {
     "_errors": 0,
     "_atomic": 1,
     "_config": 1,
+    "_plugins": 1,
     "telemetry": 2,
     "kinematics": 2,
     "output": 2,

@@ -40,7 +40,6 @@ the module calls :func:`register_controller_kind`), or publish an entry point in
 from __future__ import annotations
 
 import importlib
-import os
 import threading
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
@@ -48,6 +47,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Concatenate, ParamSpec, Protocol, TextIO, TypeVar
 
 from .._errors import ConfigError
+from .._plugins import ENV_VAR, load_plugins
 
 if TYPE_CHECKING:
     from .._config import ConfigReader
@@ -67,7 +67,7 @@ __all__ = [
     "register_controller_kind",
 ]
 
-PLUGINS_ENV = "MOTIONCUE_PLUGINS"
+PLUGINS_ENV = ENV_VAR
 """Environment variable naming modules (comma-separated) that register kinds on import."""
 
 ENTRY_POINT_GROUP = "motioncue.controllers"
@@ -331,12 +331,7 @@ def _load_plugins() -> None:
         if _plugins_loaded:
             return
         _plugins_loaded = True
-        names = [m.strip() for m in os.environ.get(PLUGINS_ENV, "").split(",") if m.strip()]
-        for module_name in names:
-            try:
-                importlib.import_module(module_name)
-            except ImportError as exc:
-                raise ConfigError(f"{PLUGINS_ENV}: cannot import {module_name!r}: {exc}") from exc
+        load_plugins()
         from importlib.metadata import entry_points
 
         for ep in entry_points(group=ENTRY_POINT_GROUP):
