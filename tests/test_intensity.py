@@ -3,8 +3,8 @@
 On an excerpt of the bundled lap (never tuned on), ``racing-hexapod-strong`` (the preset
 with a tuned intensity range) at 0, 50 and 100 % gives monotonically stronger rides (the
 tuner's strength, the geometric mean of the rendered shares of fx and fy, and the shares of
-fx and fy each; definitions of ``motioncue.cueing._metrics``; measured 0.030 / 0.088,
-0.037 / 0.113 and 0.046 / 0.135),
+fx and fy each; definitions of ``motioncue.cueing._metrics``; measured 0.028 / 0.088,
+0.038 / 0.123 and 0.046 / 0.135),
 each a complete washout between the two tuned ends (not a
 plain gain), and ``generate --intensity`` publishes each ride only after the checks ``play``
 makes (every frame within the limits on the controller's clock). Bad intensities and
