@@ -2,8 +2,9 @@
 
 On an excerpt of the bundled lap (never tuned on), ``racing-hexapod-strong`` (the preset
 with a tuned intensity range) at 0, 50 and 100 % gives monotonically stronger rides (the
-tuner's strength, the geometric mean of the rendered shares of fx and fy, and the share of
-fy; definitions of ``motioncue.cueing._metrics``; fx is about level across the range),
+tuner's strength, the geometric mean of the rendered shares of fx and fy, and the shares of
+fx and fy each; definitions of ``motioncue.cueing._metrics``; measured 0.028 / 0.088,
+0.038 / 0.123 and 0.046 / 0.135),
 each a complete washout between the two tuned ends (not a
 plain gain), and ``generate --intensity`` publishes each ride only after the checks ``play``
 makes (every frame within the limits on the controller's clock). Bad intensities and
@@ -96,6 +97,7 @@ def test_intensity_0_50_100_is_monotonically_stronger_within_the_limits(
     print("shares fx, fy at 0/50/100 %:", s.round(4).tolist())
     assert np.all(np.diff(strength) > 0.0), s
     assert np.all(np.diff(s[:, 1]) > 0.0), s  # fy grows 0 -> 50 -> 100
+    assert np.all(np.diff(s[:, 0]) > 0.0), s  # and so does fx
     assert strength[2] >= 1.1 * strength[0], s  # and the range is more than a nudge
 
 

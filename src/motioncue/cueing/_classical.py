@@ -77,6 +77,19 @@ Signal flow (per sample; frames, signs and units of conventions.md)
    acceleration returns the platform to neutral; with ``wb = 0``
    (``P = 1/(s^2 + 2 zeta wn s + wn^2)``) it leaves an offset ``a / wn^2``.
 
+   **Additive tilt** (``tilt_additive``, with ``tilt_scale``). In the design above the
+   scaled force ``f_s`` is the *whole* cue: where the tilt gives more than ``f_s`` (the tilt
+   has its own gain ``tilt_scale``), the translation drives against the tilt's excess for
+   as long as its high-pass lets it (tens of mm in a long corner, and an opposite cue on
+   its way). With the additive tilt the tilt coordination's own gravity in the platform
+   frame, ``g_t = R_t^T [0, 0, g] - [0, 0, g] = [-g sin(pitch_t), g sin(roll_t)
+   cos(pitch_t), g (cos(roll_t) cos(pitch_t) - 1)]`` (``roll_t, pitch_t`` the rate-limited
+   tilt of step 2), joins the target: ``a = R (f_s + g_t) - [0, 0, g]``. The translation
+   then renders ``f_s`` (to first order ``a = f_s``, whatever the tilt) and the tilt adds
+   its own cue: with ``f_s = 0`` and no rotational cue nothing reaches the translational
+   filters (``R = R_t``). The gravity of the rotational channel's angles is still
+   compensated as above.
+
    **Head offset.** With the rider's head at ``h = head_offset_m`` (platform frame, from the
    platform origin), a platform whose origin has specific force ``f_o`` (platform frame) and
    which turns with body angular velocity ``W`` and acceleration ``W'`` gives the head
@@ -454,6 +467,7 @@ class ClassicalWashout:
         ld0, ld1 = self.lead
         hx, hy, hz = p.head_offset_m
         head = hx != 0.0 or hy != 0.0 or hz != 0.0
+        additive = p.tilt_additive
         mx, my, mz, mr, mp, myaw = (1.0 if d else 0.0 for d in p.dofs)
         lb0, lb1, lb2, _, la1, la2 = self.tilt_lp
         r0, r1, r2 = self.rot
@@ -625,6 +639,11 @@ class ClassicalWashout:
             hfx = sx
             hfy = sy
             hfz = fzs
+            if additive:  # 4a. the tilt's own gravity joins the target
+                ctp = cos(tp)
+                hfx = sx - g * sin(tp)
+                hfy = sy + g * sin(tr) * ctp
+                hfz = fzs + g * (cos(tr) * ctp - 1.0)
             if head:
                 # f_o = f_s - W' x h - W x (W x h), W and W' by backward differences
                 att = state.attitude
@@ -860,6 +879,11 @@ class ClassicalWashout:
         sps = np.sin(yaw)
         cps = np.cos(yaw)
         hfx, hfy, hfz = sx, sy, fzs
+        if p.tilt_additive:  # 4a. the tilt's own gravity joins the target (additive tilt)
+            ctp = np.cos(tp)
+            hfx = sx - g * np.sin(tp)
+            hfy = sy + g * np.sin(tr) * ctp
+            hfz = fzs + g * (np.cos(tr) * ctp - 1.0)
         hx, hy, hz = p.head_offset_m
         if (hx != 0.0 or hy != 0.0 or hz != 0.0) and n:
             # the same operations as step, on arrays (backward differences from the state)

@@ -149,6 +149,13 @@ class CueingParams:
     tilt_reach_use : float
         Share of ``tilt_reach_rad`` the tilt may use, in (0, 1] (the rest is left to the
         translational and rotational cues).
+    tilt_additive : bool
+        With ``True`` the tilt coordination's own specific force (gravity in the tilted
+        platform frame) is added to the translational channel's target, so the translation
+        renders its own scaled force on top of the tilt instead of the difference between
+        that force and the tilt's (the classical complementary design, in which the
+        translation drives against a tilt stronger than its target). Needs ``tilt_scale``
+        (the tilt's own gain). ``False`` (the default): the classical design.
     tilt_accel_limit_rad_s2 : float or None
         Largest tilt angular acceleration (per axis, rad/s^2), on top of
         ``tilt_rate_limit_rad_s``; ``None`` (the default): rate limit only.
@@ -197,6 +204,7 @@ class CueingParams:
     tilt_shape: float | None = None
     tilt_reach_rad: tuple[float, float, float, float] | None = None
     tilt_reach_use: float = 1.0
+    tilt_additive: bool = False
     head_offset_m: Vec3 = (0.0, 0.0, 0.0)
     rot_wn_rad_s: Vec3 = (1.0, 1.0, 0.5)
     rot_zeta: Vec3 = (1.0, 1.0, 1.0)
@@ -270,6 +278,10 @@ class CueingParams:
                     f"CueingParams.tilt_shape = {self.tilt_shape!r} needs tilt_scale and "
                     "tilt_reach_rad (the platform's reach)"
                 )
+        if self.tilt_additive and self.tilt_scale is None:
+            raise ConfigError(
+                "CueingParams.tilt_additive = True needs tilt_scale (the tilt's own gain)"
+            )
         if self.intensity_gentle is not None:
             if len(self.intensity_gentle) != len(INTENSITY_KEYS):
                 raise ConfigError(
@@ -345,6 +357,8 @@ def load_cueing(name_or_path: str | Path) -> CueingParams:
         reach_deg = [14.0, 14.0, 12.0, 13.0]       #   and reach_deg: the platform's reach,
         reach_use = 0.8                            #   roll-, roll+, pitch-, pitch+; the
                                                    #   share used, default 1)
+        additive = true                            # optional (needs scale): translation
+                                                   #   adds to the tilt (default false)
         [rotational]
         wn_rad_s = [1.0, 1.0, 0.5]
         zeta = [1.0, 1.0, 1.0]
@@ -429,6 +443,7 @@ def load_cueing(name_or_path: str | Path) -> CueingParams:
     reach_use = 1.0
     if ti.has("reach_use"):
         reach_use = ti.number("reach_use", lo=0.0, hi=1.0, lo_open=True)
+    additive = ti.boolean("additive") if ti.has("additive") else False
     ti.finish()
 
     ro = top.table("rotational")
@@ -485,6 +500,7 @@ def load_cueing(name_or_path: str | Path) -> CueingParams:
             tilt_shape=tilt_shape,
             tilt_reach_rad=reach,
             tilt_reach_use=reach_use,
+            tilt_additive=additive,
             head_offset_m=head,
             rot_wn_rad_s=r_wn,
             rot_zeta=r_zeta,

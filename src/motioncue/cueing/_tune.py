@@ -1150,6 +1150,8 @@ def preset_toml(params: CueingParams, comments: Sequence[str] = ()) -> str:
     if params.tilt_reach_rad is not None:
         lines.append(f"reach_deg = {_vec(params.tilt_reach_rad, r2d)}")
         lines.append(f"reach_use = {_fmt(params.tilt_reach_use)}")
+    if params.tilt_additive:
+        lines.append("additive = true")
     lines += [
         "",
         "[rotational]",

@@ -1,0 +1,110 @@
+"""Issue 20's acceptance figures for ``racing-hexapod-strong`` on the drives never tuned on.
+
+Every held-out car drive (``sample_drives("held-out", kind="car")``) and the bundled lap
+(``"demo"``), ``stewart6-linear`` with ``mbox6``, through the chain of ``motioncue compare``
+(cueing, workspace limiting, the actuator limiter, forward kinematics of the changed frames,
+vestibular models; definitions of :mod:`motioncue.cueing._metrics`, ``docs/cue-metrics.md``).
+One module-scoped fixture runs each drive once. The platform's default (``racing-hexapod``)
+is held to issue 11's figures by ``tests/test_cue_acceptance.py``; this preset is the
+stronger one a rider chooses with ``--preset`` (README "Cue quality"), and every frame of its
+rides is checked on the controller's clock by ``tests/test_intensity.py``.
+
+Asserted at the issue's thresholds on every drive: all false cues <= 15 %, clamped <= 1 %,
+correlation fy >= 0.90, missed fy <= 35 %; and, on every drive but flowing-formula,
+reversals <= 2 %, correlation fx >= 0.95, missed fx <= 35 % and rendered share fy >= 0.12.
+
+Not reached (strict xfails: they turn red when reached, so that the floors get raised):
+
+* rendered share fx >= 0.12 on any drive (0.04-0.05). A 1.5-3 g stop is rendered by at most
+  about 0.22 g of sustained pitch, reached at the actuators' speed (about 20 deg/s): even a
+  lag-free memoryless compression of the vehicle's perceived fx into +-3 m/s^2 renders at
+  most 0.07 of flowing-formula's fx at a correlation >= 0.95 (75 % of its fx is short stops
+  of 3 g, 3 % of the time).
+* on flowing-formula (short 3 g stops and 2.8 g corners): correlation fx >= 0.95 (0.89: the
+  pitch lags a 0.8 s stop), reversals <= 2 % (4 %), missed fx <= 35 % and share fy >= 0.12
+  (0.10). Asserted at floors measured with this preset (:data:`FLOORS`) instead.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+
+from motioncue.cueing import load_cueing
+from motioncue.cueing._compare import run_chain
+from motioncue.cueing._metrics import CueMetrics, cue_metrics
+from motioncue.kinematics import load_platform
+from motioncue.output import load_controller
+from motioncue.telemetry import sample_drives
+from motioncue.telemetry._recording import read_recording_csv, resample
+from motioncue.trajectory import ActuatorLimits
+
+PLATFORM, CONTROLLER, PRESET, RATE = "stewart6-linear", "mbox6", "racing-hexapod-strong", 100.0
+PATHS = [*sample_drives("held-out", kind="car"), *sample_drives("demo")]
+DRIVES = [p.name for p in PATHS]
+HARD = "flowing-formula.csv"
+# floors (ceilings for reversals and missed cues) of what is not reached; measured in comments
+FLOORS = {
+    "share_fx": 0.04,  # 0.041-0.049
+    "share_fy_hard": 0.09,  # 0.100
+    "corr_fx_hard": 0.88,  # 0.894
+    "reversals_hard": 0.05,  # 0.040
+    "missed_fx_hard": 0.70,  # 0.635
+}
+
+
+@pytest.fixture(scope="module")
+def metrics() -> dict[str, CueMetrics]:
+    platform = load_platform(PLATFORM)
+    limits = ActuatorLimits.from_platform(platform, load_controller(CONTROLLER), rate_hz=RATE)
+    preset = load_cueing(PRESET)
+    out: dict[str, CueMetrics] = {}
+    for path in PATHS:
+        rec = resample(read_recording_csv(Path(path)), RATE)
+        run = run_chain(rec.f, rec.w, preset, platform, limits, RATE)
+        ev = run.evaluation
+        out[path.name] = cue_metrics(ev.perceived_vehicle, ev.perceived_sim, ev.thresholds,
+                                     clamped_share=run.poses_clamped / len(run.poses))  # fmt: skip
+    return out
+
+
+def test_the_drives_are_the_held_out_cars_and_the_lap() -> None:
+    assert HARD in DRIVES and "lap.csv" in DRIVES and len(DRIVES) >= 3
+    assert not {p.name for p in sample_drives("tuning")} & set(DRIVES)
+
+
+@pytest.mark.parametrize("name", DRIVES)
+def test_error_targets(metrics: dict[str, CueMetrics], name: str) -> None:
+    m = metrics[name]
+    assert m.false_any <= 0.15, m.false_any
+    assert m.clamped <= 0.01, m.clamped
+    assert m.correlation[1] >= 0.90, m.correlation
+    assert m.missed[1] <= 0.35, m.missed
+    if name != HARD:
+        assert m.reversals_any <= 0.02, m.reversals_any
+        assert m.correlation[0] >= 0.95, m.correlation
+        assert m.missed[0] <= 0.35, m.missed
+    else:
+        assert m.reversals_any <= FLOORS["reversals_hard"], m.reversals_any
+        assert m.correlation[0] >= FLOORS["corr_fx_hard"], m.correlation
+        assert m.missed[0] <= FLOORS["missed_fx_hard"], m.missed
+
+
+@pytest.mark.parametrize("name", DRIVES)
+def test_strength(metrics: dict[str, CueMetrics], name: str) -> None:
+    share = metrics[name].rendered_share
+    assert share[0] >= FLOORS["share_fx"], share
+    assert share[1] >= (0.12 if name != HARD else FLOORS["share_fy_hard"]), share
+
+
+@pytest.mark.xfail(strict=True, reason="issue 20: fx share >= 0.12 not reached (docstring)")
+def test_fx_share_reaches_the_issues_target(metrics: dict[str, CueMetrics]) -> None:
+    assert all(m.rendered_share[0] >= 0.12 for m in metrics.values())
+
+
+@pytest.mark.xfail(strict=True, reason="issue 20: flowing-formula not reached (docstring)")
+def test_every_target_on_flowing_formula(metrics: dict[str, CueMetrics]) -> None:
+    m = metrics[HARD]
+    assert m.correlation[0] >= 0.95 and m.reversals_any <= 0.02
+    assert m.missed[0] <= 0.35 and m.rendered_share[1] >= 0.12
