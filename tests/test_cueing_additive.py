@@ -42,7 +42,7 @@ def _additive(**kw: object) -> CueingParams:
 
 @pytest.mark.parametrize("head_mm", [(0.0, 0.0, 0.0), (80.0, -30.0, 650.0)])
 def test_additive_washout_batch_equals_streaming(head_mm: tuple[float, float, float]) -> None:
-    from test_washout import random_drive
+    from test_cueing_classical import random_drive
 
     p = _additive(head_offset_m=tuple(v * 1e-3 for v in head_mm))
     design = ClassicalWashout(p, fs_hz=100.0)
