@@ -15,7 +15,7 @@ import numpy as np
 import pytest
 
 from motioncue._errors import ConfigError
-from motioncue.cueing import load_cueing
+from motioncue.cueing import CueingParams, load_cueing
 from motioncue.cueing._mpc import MpcCueing, tilt_fz_bound
 from motioncue.cueing._mpc_params import MpcParams
 from motioncue.cueing._optimal import OptimalCueing
@@ -31,7 +31,7 @@ def _braking_in_a_corner(n: int) -> tuple[np.ndarray, np.ndarray]:
     return f, np.zeros((n, 3))
 
 
-def _strong(kind: str, use: float):  # type: ignore[no-untyped-def]
+def _strong(kind: str, use: float) -> CueingParams:
     params = load_cueing(f"{kind}-hexapod")
     assert params.mpc is not None
     mp = dataclasses.replace(
