@@ -37,6 +37,9 @@ blocks whose lengths grow geometrically from one sample to cover the horizon):
 * **actuator speed and acceleration**: ``|J v| <= rate_use v_max``,
   ``|J u| <= rate_use a_max`` (:class:`~motioncue.trajectory.ActuatorLimits` of the platform
   with the controller);
+* **combined tilt** (with ``tilt_fz_use``, :func:`tilt_fz_bound`): ``|roll + pitch|,
+  |roll - pitch| <= b``, so that the vertical force the tilt takes away (``g (1 - cos)``,
+  which the linear model does not see) stays below a share of the fz threshold;
 * **tilt**: ``|roll'|, |pitch'| <=`` the ``[mpc]`` table's ``tilt_rate_limit_deg_s`` (default:
   the ``[tilt]`` table's) and, when the preset sets it, ``|roll''|, |pitch''| <=
   tilt_accel_limit_rad_s2``. These bound the *whole* roll and pitch rate (the MPC does not
@@ -92,6 +95,7 @@ __all__ = [
     "plan_tilt_reach",
     "reference",
     "resolve_reach",
+    "tilt_fz_bound",
 ]
 
 _FALLBACK_WN = 4.0
@@ -352,6 +356,21 @@ def resolve_reach(mp: MpcParams, limits: RigLimits) -> MpcParams:
         ref_limit=(pos[0], pos[1], pos[2], pos[3], pos[4], pos[5]),
         ref_limit_neg=(neg[0], neg[1], neg[2], neg[3], neg[4], neg[5]),
     )
+
+
+def tilt_fz_bound(mp: MpcParams, thr_z_m_s2: float) -> float | None:
+    """Bound ``b`` of the combined-tilt rows ``|roll + pitch|, |roll - pitch| <= b`` (rad).
+
+    ``b = sqrt(2) acos(1 - u thr_z / g)`` (``u = mp.tilt_fz_use``): on the diagonal, where
+    roll and pitch are equal, the combined tilt is then at most ``theta = acos(1 - u thr_z /
+    g)``, whose loss of vertical force ``g (1 - cos theta)`` is ``u`` thresholds ``thr_z``
+    (m/s^2). ``None`` when ``u = 0`` (no such rows).
+    """
+    if mp.tilt_fz_use <= 0.0:
+        return None
+    c = 1.0 - mp.tilt_fz_use * thr_z_m_s2 / GRAVITY_M_S2
+    theta = math.acos(max(-1.0, min(1.0, c)))
+    return math.sqrt(2.0) * theta
 
 
 def block_ends(n_steps: int, blocks: int) -> NDArray[np.int64]:
@@ -829,10 +848,14 @@ class MpcCueing:
     # ------------------------------------------------------------------ sizes
     @property
     def n_rows(self) -> int:
-        """Constraint rows of the QP (stroke, speed, acceleration of each leg per block, and
-        the tilt rate)."""
+        """Constraint rows of the QP (stroke, speed, acceleration of each leg per block, the
+        tilt rate, and the combined tilt with ``tilt_fz_use``)."""
         nl = self.limits.q_mid.shape[0]
-        return len(self.cond.ends) * (3 * nl + len(self._tilt_axes()))
+        return len(self.cond.ends) * (3 * nl + len(self._tilt_axes()) + 2 * self._combined_tilt())
+
+    def _combined_tilt(self) -> bool:
+        """Whether the QP has the combined-tilt rows (``tilt_fz_use`` with roll and pitch)."""
+        return len(self._tilt_axes()) == 2 and self.mpc.tilt_fz_use > 0.0
 
     def _guard_channels(self) -> list[int]:
         return [i for i in range(6) if self.mpc.sign_guard[i] > 0.0]
@@ -933,6 +956,13 @@ class MpcCueing:
             tf = free[:, [6 + i for i in tilt]]
             lo.append(-lim.tilt_rate - tf)
             hi.append(lim.tilt_rate - tf)
+        if self._combined_tilt():
+            bound = tilt_fz_bound(self.mpc, float(m.thresholds[2]))
+            assert bound is not None
+            rows.append(np.stack([gp[:, 3, :] + gp[:, 4, :], gp[:, 3, :] - gp[:, 4, :]], axis=1))
+            cf = np.stack([free[:, 3] + free[:, 4], free[:, 3] - free[:, 4]], axis=1)
+            lo.append(-bound - cf)
+            hi.append(bound - cf)
         a_mat = np.concatenate([r.reshape(-1, nb * nu) if r.ndim == 3 else r for r in rows], axis=0)
         # rows were stacked per kind (block-major inside each kind); flatten the bounds alike
         lba = np.concatenate([np.asarray(v).reshape(-1) for v in lo])

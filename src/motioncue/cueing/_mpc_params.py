@@ -28,6 +28,8 @@ washout is the MPC's fallback) plus one ``[mpc]`` table, read by :func:`read_mpc
     sign_guard_weight = 1e4            # price of one threshold over it (a soft constraint)
     stroke_use = 0.9                   # fraction of each actuator's stroke the plan may use
     rate_use = 0.9                     # fraction of its speed and acceleration limits
+    tilt_fz_use = 1.0                  # optional: roll and pitch together at most the tilt
+                                       #   that costs this many fz thresholds (0: none)
     tilt_rate_limit_deg_s = 8.0        # optional: the plan's roll/pitch rate limit
                                        #   (default: the [tilt] table's, which the fallback
                                        #   washout keeps)
@@ -129,6 +131,15 @@ class MpcParams:
     stroke_use, rate_use : float
         Fraction (0, 1] of the stroke and of the speed/acceleration limits the plan may use
         (the rest absorbs the linearisation of the leg lengths).
+    tilt_fz_use : float
+        0 (default): roll and pitch are limited one by one (stroke, rate). Otherwise ``u`` in
+        (0, 5]: the *combined* tilt is held below ``theta = acos(1 - u thr_z / g)``, the tilt
+        whose loss of vertical force ``g (1 - cos theta)`` is ``u`` perception thresholds of
+        fz (``thr_z`` of the model set). The plan's linear model does not see that loss; a
+        rider does: braking in a corner with roll and pitch both near their reach felt as a
+        drop (fz reversals against the vehicle's downforce). Linear rows at every block end,
+        ``|roll + pitch|, |roll - pitch| <= sqrt(2) theta`` (an octagon with the roll and
+        pitch limits, exact on the diagonals).
     tilt_rate_limit_rad_s : float or None
         Largest roll and pitch rate of the plan (rad/s); ``None``: the preset's
         ``tilt_rate_limit_rad_s`` (the classical fallback always keeps that one).
@@ -165,6 +176,7 @@ class MpcParams:
     stroke_use: float = 0.9
     rate_use: float = 0.9
     tilt_rate_limit_rad_s: float | None = None
+    tilt_fz_use: float = 0.0
     solver: str = "daqp"
     deadline_ms: float = 6.0
     window_s: float = 4.0
@@ -200,6 +212,7 @@ class MpcParams:
             ("sign_guard_weight", self.sign_guard_weight, 1e-9, 1e9),
             ("ref_split_hz", self.ref_split_hz, 0.0, 50.0),
             ("ref_reach_use", self.ref_reach_use, 0.0, 1.0),
+            ("tilt_fz_use", self.tilt_fz_use, 0.0, 5.0),
             ("window_s", self.window_s, 0.2, 600.0),
             ("stride_s", self.stride_s, 0.1, 600.0),
         )
@@ -253,6 +266,7 @@ def read_mpc_table(table: Any) -> MpcParams:
         "ref_split_hz",
         "ref_shape",
         "ref_reach_use",
+        "tilt_fz_use",
         "window_s",
         "stride_s",
     ):

@@ -12,7 +12,7 @@ it, and everywhere when that solve fails or there is no previous plan), then the
 solved again with them linearised about that first plan at every block end (a second
 sequential-QP pass; the first plan is kept when that solve fails). The usable stroke is
 ``stroke_use`` of the real one (the rest absorbs what the linearisation misses); speed,
-acceleration and tilt limits are those of :mod:`._mpc`.
+acceleration, tilt and combined-tilt (``tilt_fz_use``) limits are those of :mod:`._mpc`.
 
 The QP of a window has a constant Hessian (built once per design); its gradient comes from
 the vehicle's motion over the window (one simulation of the model from rest); it is solved by
@@ -46,6 +46,7 @@ from ._mpc import (
     resolve_reach,
     rig_limits,
     terminal_weight,
+    tilt_fz_bound,
 )
 from ._mpc_params import MpcParams
 from ._params import GRAVITY_M_S2, CueingParams
@@ -171,6 +172,8 @@ class OptimalCueing:
         tilt = [i for i in (3, 4) if self.params.dofs[i]]
         if tilt:
             rows.append(ge[:, [6 + i for i in tilt]])
+        if self._combined_tilt_bound() is not None:
+            rows.append(np.stack([ge[:, 3] + ge[:, 4], ge[:, 3] - ge[:, 4]], axis=1))
         a_mat = np.concatenate([r.reshape(-1, n_u) for r in rows], axis=0)
         object.__setattr__(self, "_gam", gam)
         object.__setattr__(self, "_hess", hess)
@@ -198,6 +201,13 @@ class OptimalCueing:
 
     def _guard_channels(self) -> list[int]:
         return [i for i in range(6) if self.mpc.sign_guard[i] > 0.0]
+
+    def _combined_tilt_bound(self) -> float | None:
+        """Bound of the combined-tilt rows (:func:`~._mpc.tilt_fz_bound`; ``None``: none,
+        also when roll or pitch is not moved)."""
+        if not (self.params.dofs[3] and self.params.dofs[4]):
+            return None
+        return tilt_fz_bound(self.mpc, float(self.model.thresholds[2]))
 
     def _guard_bounds(
         self,
@@ -269,6 +279,11 @@ class OptimalCueing:
             tf = fe[:, [6 + i for i in tilt]]
             lo.append(-lim.tilt_rate - tf)
             hi.append(lim.tilt_rate - tf)
+        bound = self._combined_tilt_bound()
+        if bound is not None:
+            cf = np.stack([fe[:, 3] + fe[:, 4], fe[:, 3] - fe[:, 4]], axis=1)
+            lo.append(-bound - cf)
+            hi.append(bound - cf)
         lba = np.concatenate([np.asarray(v).reshape(-1) for v in lo])
         uba = np.concatenate([np.asarray(v).reshape(-1) for v in hi])
         n_u = nb * m.nu

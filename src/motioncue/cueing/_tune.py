@@ -1202,6 +1202,7 @@ def _mpc_lines(mp: Any) -> list[str]:
         "ref_split_hz",
         "ref_shape",
         "ref_reach_use",
+        "tilt_fz_use",
         "sign_guard_weight",
         "stroke_use",
         "rate_use",

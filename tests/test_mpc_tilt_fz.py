@@ -1,0 +1,74 @@
+"""The combined-tilt rows of the MPC and the optimal plan (``[mpc] tilt_fz_use``, issue 20).
+
+Roll and pitch together take ``g (1 - cos roll cos pitch)`` off the vertical force, which the
+plan's linear model does not see: braking in a corner with both near their reach was felt as
+a drop against the vehicle's downforce (fz reversals). With ``tilt_fz_use = u`` the plan keeps
+``|roll + pitch|, |roll - pitch| <= sqrt(2) acos(1 - u thr_z / g)``.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+
+import numpy as np
+import pytest
+
+from motioncue._errors import ConfigError
+from motioncue.cueing import CueingParams, load_cueing
+from motioncue.cueing._mpc import MpcCueing, tilt_fz_bound
+from motioncue.cueing._mpc_params import MpcParams
+from motioncue.cueing._optimal import OptimalCueing
+
+FS = 100.0
+G = 9.80665
+
+
+def _braking_in_a_corner(n: int) -> tuple[np.ndarray, np.ndarray]:
+    """Sustained 1.5 g of braking and 1.5 g of cornering, ramped in over 0.5 s."""
+    ramp = np.clip(np.arange(n) / (0.5 * FS), 0.0, 1.0)
+    f = np.stack([-15.0 * ramp, 15.0 * ramp, np.full(n, G)], axis=1)
+    return f, np.zeros((n, 3))
+
+
+def _strong(kind: str, use: float) -> CueingParams:
+    params = load_cueing(f"{kind}-hexapod")
+    assert params.mpc is not None
+    mp = dataclasses.replace(
+        params.mpc, ref_scale=(0.5, 0.5, 0.0, 0.0, 0.0, 0.0), ref_reach_use=1.0, tilt_fz_use=use
+    )
+    return dataclasses.replace(params, mpc=mp)
+
+
+def test_bound_is_the_tilt_whose_force_loss_is_u_thresholds() -> None:
+    assert tilt_fz_bound(MpcParams(), 0.28) is None
+    for u, thr in ((1.0, 0.28), (0.5, 0.17), (3.0, 0.28)):
+        b = tilt_fz_bound(MpcParams(tilt_fz_use=u), thr)
+        assert b is not None
+        diag = b / 2.0  # roll = pitch on the diagonal of the octagon
+        loss = G * (1.0 - math.cos(diag) * math.cos(diag))  # R^T [0, 0, g], z component
+        # cos r cos p = cos(theta) to second order on the diagonal (theta^2 = r^2 + p^2)
+        assert loss == pytest.approx(u * thr, rel=0.02)
+
+
+@pytest.mark.parametrize("use", [-0.1, 5.5, math.nan])
+def test_bad_use_is_refused(use: float) -> None:
+    with pytest.raises(ConfigError, match="tilt_fz_use"):
+        MpcParams(tilt_fz_use=use)
+
+
+@pytest.mark.parametrize(("kind", "n"), [("optimal", 500), ("mpc", 250)])
+def test_plan_keeps_roll_and_pitch_together_inside_the_octagon(kind: str, n: int) -> None:
+    f, w = _braking_in_a_corner(n)
+    design = OptimalCueing if kind == "optimal" else MpcCueing
+    free = design(_strong(kind, 0.0), FS).run(f, w).poses
+    held = design(_strong(kind, 0.5), FS).run(f, w).poses
+    b = tilt_fz_bound(MpcParams(tilt_fz_use=0.5), 0.28)  # telban-cardullo-2005: thr_z 0.28
+    assert b is not None
+    comb_free = np.abs(free[:, 3]) + np.abs(free[:, 4])
+    comb_held = np.abs(held[:, 3]) + np.abs(held[:, 4])
+    assert comb_free.max() > 1.2 * b  # without the rows the plan tilts further (can fail)
+    assert comb_held.max() <= b * (1.0 + 1e-3) + 1e-4, (comb_held.max(), b)
+    # still a strong, right-way cue: pitch nose-up for braking (fx < 0), roll for fy > 0
+    assert np.median(held[n // 2 :, 4]) > 0.5 * b / 2.0
+    assert np.median(held[n // 2 :, 3]) > 0.5 * b / 2.0
