@@ -15,6 +15,7 @@ import sys
 from collections.abc import Sequence
 from typing import Any, NoReturn
 
+from .. import _plugins
 from .._errors import MotioncueError, one_line
 
 __all__ = ["build_parser", "console", "main"]
@@ -121,6 +122,8 @@ def build_parser() -> _Parser:
 
 def main(argv: Sequence[str] | None = None) -> int:
     """Run the command line; returns the exit status."""
+    if not _plugins.load_plugins():  # MOTIONCUE_PLUGINS: registries extended before parsing
+        return 2
     parser = build_parser()
     args, extras = parser.parse_known_args(argv)
     if extras:

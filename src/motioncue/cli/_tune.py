@@ -195,18 +195,16 @@ def _metrics_table(before: Any, after: Any) -> str:
 def run(args: argparse.Namespace) -> int:
     from dataclasses import replace
 
-    from ..cueing import get_model_set, load_cueing
-    from ..cueing._tune import (
+    from ..analysis import (
         PENALTY_BASE,
         StrengthTargets,
         TuneObjective,
-        at_intensity,
-        gentle_values,
-        preset_toml,
         tilt_reach,
         tune_cueing,
         write_preset,
     )
+    from ..cueing import Rig, cueing_algorithms, cueing_entry, get_model_set, load_cueing
+    from ..cueing._tune import at_intensity, gentle_values, preset_toml
     from ..output._controllers import load_controller
     from ..pipeline._inputs import load_generate_input
     from ..telemetry._motion import is_datagram_recording
@@ -245,10 +243,11 @@ def run(args: argparse.Namespace) -> int:
     controller = load_controller(args.controller)
     controller.check_rate(args.rate)
     base, base_source = choose_preset(args.preset, platform, args.platform, args.overrides)
-    if base.algorithm not in ("classical", "mpc", "optimal"):
+    if cueing_entry(base.algorithm).tune is None:
         raise ConfigError(
-            f"preset {base.name!r} uses the cueing algorithm {base.algorithm!r}; tune "
-            "optimises classical, mpc and optimal presets only"
+            f"preset {base.name!r} uses the cueing algorithm {base.algorithm!r}, which "
+            "declares no tunable parameters; tune optimises "
+            + ", ".join(a for a in cueing_algorithms() if cueing_entry(a).tune is not None)
         )
     limits = ActuatorLimits.from_platform(
         platform, controller, rate_hz=args.rate, **limit_overrides(args)
@@ -313,7 +312,7 @@ def run(args: argparse.Namespace) -> int:
         base = replace(base, tilt_reach_rad=tilt_reach(platform, tight))
     objective = TuneObjective(
         base, drives, platform, tight, args.rate, model=args.vestibular,
-        objective=args.objective, targets=targets,
+        objective=args.objective, targets=targets, rig=Rig(platform, limits, controller.name),
     )  # fmt: skip
     strength = args.objective == "strength"
 
@@ -461,7 +460,7 @@ def _objective_comment(args: argparse.Namespace, targets: Any) -> str:
 
 
 def _metrics_dict(m: Any) -> dict[str, Any]:
-    """A :class:`~motioncue.cueing._tune.TuneMetrics` for ``--json`` (NaN as None)."""
+    """A :class:`~motioncue.analysis.ChainMetrics` for ``--json`` (NaN as None)."""
 
     def num(v: float) -> float | None:
         return float(v) if math.isfinite(v) else None

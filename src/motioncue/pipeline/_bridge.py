@@ -451,7 +451,7 @@ class Bridge:
         q_start: Any = None,
         effects: EffectGains | None = None,
     ) -> None:
-        from motioncue.cueing import make_cueing
+        from motioncue.cueing import Rig, cueing_entry, make_cueing
 
         self.platform = platform
         self.controller = controller
@@ -466,20 +466,21 @@ class Bridge:
                 f"{platform.n_actuators}"
             )
         self._arrival = cfg.frame_clock == "arrival"
-        if self._arrival and cueing.algorithm != "classical":
+        if self._arrival and not cueing_entry(cueing.algorithm).frames_on_arrival:
             raise ConfigError(
                 f"frames on arrival step the cueing every millisecond; algorithm "
                 f"{cueing.algorithm!r} is meant for the frame rate: use fixed frames "
                 "(BridgeConfig frame_clock='fixed', --frames fixed)"
             )
-        # on arrival the frame intervals vary: the cueing runs on the 1 ms grid instead,
-        # stepped once per ms of each frame interval
-        self.washout = make_cueing(cueing, 1000.0 if self._arrival else cfg.rate_hz)
-        if getattr(self.washout, "offline", False):
+        if not cueing_entry(cueing.algorithm).streaming:
             raise ConfigError(
                 f"cueing algorithm {cueing.algorithm!r} needs the whole recording; the live "
                 'bridge needs a streaming one (algorithm = "classical" or "mpc")'
             )
+        # on arrival the frame intervals vary: the cueing runs on the 1 ms grid instead,
+        # stepped once per ms of each frame interval
+        rig = Rig(platform, limits)
+        self.washout = make_cueing(cueing, 1000.0 if self._arrival else cfg.rate_hz, rig)
         self.washout_state = self.washout.initial_state()
         # effect layer (``effects``: an EffectGains; None or all gains 0: none); refused below
         # 100 Hz. It adds to the blended pose before workspace limiting: limits see the sum.

@@ -26,16 +26,29 @@ import re
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field, replace
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 from numpy.typing import NDArray
 
 from .._errors import ConfigError
-from ._bound import CueBound, RigReach
-from ._evaluate import CueingEvaluation, evaluate_cueing
-from ._plot import rider_axis
-from ._score import cue_score
+from ..cueing import CueingParams, Rig, make_cueing
+from ..cueing._bound import CueBound, RigReach, cue_bound
+from ..cueing._evaluate import CueingEvaluation, evaluate_cueing
+from ..cueing._plot import rider_axis
+from ..cueing._score import cue_score
+from ..cueing._vestibular import get_model_set
+from ..telemetry._recording import resample
+from ..trajectory import pulse_rounding_limits
+from ._chain import offline_chain
+from ._reach import rig_reach
+
+if TYPE_CHECKING:
+    from matplotlib.figure import Figure
+
+    from ..kinematics import Platform
+    from ..telemetry import Recording
+    from ..trajectory import ActuatorLimits
 
 __all__ = [
     "COLUMN_NOTES",
@@ -44,7 +57,9 @@ __all__ = [
     "CompareRun",
     "compare_cueing",
     "compare_figure",
+    "plot_file_names",
     "run_chain",
+    "write_compare_report",
 ]
 
 COMPARE_AXES: tuple[str, ...] = ("fx", "fy", "fz", "p", "q", "r")
@@ -261,9 +276,9 @@ class CompareRun:
 def run_chain(
     f_vehicle: NDArray[np.float64],
     w_vehicle: NDArray[np.float64],
-    params: Any,
-    platform: Any,
-    limits: Any,
+    params: CueingParams,
+    platform: Platform,
+    limits: ActuatorLimits,
     rate_hz: float,
     *,
     model: str = "telban-cardullo-2005",
@@ -292,37 +307,20 @@ def run_chain(
     -------
     CompareRun
     """
-    from motioncue.trajectory import JerkLimiter, RealtimeLimiter, limit_pose
-    from motioncue.trajectory._derive import pulse_rounding_limits
-
-    from ._algorithm import make_cueing
-
-    dt = 1.0 / rate_hz
-    tight = pulse_rounding_limits(limits, platform, dt)
-    res = make_cueing(params, rate_hz).run(f_vehicle, w_vehicle)
-    f_used = np.asarray(getattr(res, "f_used", f_vehicle), dtype=float)
-    w_used = np.asarray(getattr(res, "w_used", w_vehicle), dtype=float)
-    lim = limit_pose(platform, np.asarray(res.poses, dtype=float), limits=tight)
-    q_target = np.asarray(lim.q, dtype=float)
-    poses = np.array(lim.pose, dtype=float)
-    if len(poses):
-        limiter: Any = (RealtimeLimiter if tight.j_max is None else JerkLimiter)(tight, dt)
-        state = limiter.initial_state(np.asarray(platform.inverse(np.zeros(6)), dtype=float))
-        q_out = np.asarray(limiter.run(state, q_target), dtype=float)
-        changed = np.flatnonzero(np.any(q_out != q_target, axis=1))
-        for k in changed.tolist():
-            poses[k] = np.asarray(platform.forward(q_out[k], guess=poses[k]).pose, dtype=float)
-    else:
-        changed = np.zeros(0, dtype=np.int64)
-    clamped = int(np.count_nonzero(np.asarray(lim.status) != "ok"))
+    tight = pulse_rounding_limits(limits, platform, 1.0 / rate_hz)
+    design = make_cueing(params, rate_hz, Rig(platform, limits))
+    run = offline_chain(design, f_vehicle, w_vehicle, platform, tight, rate_hz)
+    out = run.delivered
+    poses = out.poses
+    clamped = out.clamped
     ev = evaluate_cueing(
-        f_used,
-        w_used,
+        run.cued.f_used,
+        run.cued.w_used,
         poses,
         rate_hz,
         workspace=params.workspace,
         model=model,
-        head_offset_m=getattr(params, "head_offset_m", None),
+        head_offset_m=params.head_offset_m,
         clamped_share=clamped / len(poses) if len(poses) else 0.0,
     )
     return CompareRun(
@@ -331,8 +329,8 @@ def run_chain(
         evaluation=ev,
         poses=poses,
         poses_clamped=clamped,
-        actuator_limited=int(changed.size),
-        bad_samples=int(res.bad_samples),
+        actuator_limited=out.actuator_limited,
+        bad_samples=run.cued.bad_samples,
     )
 
 
@@ -558,10 +556,10 @@ class CompareResult:
 
 
 def compare_cueing(
-    recordings: Sequence[tuple[str, Any]],
-    presets: Sequence[tuple[str, Any]],
-    platform: Any,
-    limits: Any,
+    recordings: Sequence[tuple[str, Recording]],
+    presets: Sequence[tuple[str, CueingParams]],
+    platform: Platform,
+    limits: ActuatorLimits,
     *,
     rate_hz: float = 100.0,
     model: str = "telban-cardullo-2005",
@@ -598,10 +596,6 @@ def compare_cueing(
     """
     import time
 
-    from motioncue.telemetry._recording import resample
-
-    from ._vestibular import get_model_set
-
     ms = get_model_set(model)
     if not (math.isfinite(rate_hz) and rate_hz > 0.0):
         raise ConfigError(f"rate {rate_hz!r} Hz is invalid; allowed: a finite number > 0")
@@ -617,18 +611,12 @@ def compare_cueing(
     t0 = time.perf_counter()
     reach = None
     if bound:
-        from motioncue.trajectory._derive import pulse_rounding_limits
-
-        from ._bound import rig_reach
-
         reach = rig_reach(platform, pulse_rounding_limits(limits, platform, 1.0 / rate_hz))
     for rec_label, rec in recordings:
         uniform = resample(rec, rate_hz)
         t_s[rec_label] = np.asarray(uniform.t_s, dtype=float)
         rec_bound = None
         if reach is not None and len(uniform) >= 4:
-            from ._bound import cue_bound
-
             rec_bound = cue_bound(np.asarray(uniform.f, dtype=float), rate_hz, reach, model=ms)
         for preset_label, params in presets:
             if progress is not None:
@@ -663,7 +651,7 @@ def compare_cueing(
     )
 
 
-def compare_figure(result: CompareResult, recording: str) -> Any:
+def compare_figure(result: CompareResult, recording: str) -> Figure:
     """The overlay figure of one recording: perceived motion per channel, vehicle and presets.
 
     Six panels (fx, fy, fz in m/s², p, q, r in deg/s), the vehicle as a thick dark line on
@@ -784,7 +772,7 @@ def write_compare_report(result: CompareResult, folder: str | Path) -> dict[str,
     return paths
 
 
-def _write(path: Path, data: bytes, writer: Any) -> None:
+def _write(path: Path, data: bytes, writer: Callable[[Path, bytes], Path]) -> None:
     try:
         writer(path, data)
     except OSError as exc:
