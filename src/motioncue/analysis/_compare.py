@@ -44,6 +44,7 @@ from ._chain import offline_chain
 from ._reach import rig_reach
 
 if TYPE_CHECKING:
+    from matplotlib.artist import Artist
     from matplotlib.figure import Figure
 
     from ..kinematics import Platform
@@ -187,6 +188,10 @@ COLUMN_NOTES: dict[str, str] = {
 
 COLUMNS: tuple[str, ...] = tuple(COLUMN_NOTES)
 
+Row = dict[str, Any]
+"""A metrics row: :data:`COLUMNS` to labels (str) and numbers (float, int for counts; NaN
+where undefined); keyed by column name, so its values are typed by the column."""
+
 
 @dataclass(frozen=True, eq=False)
 class CompareRun:
@@ -219,7 +224,7 @@ class CompareRun:
     bad_samples: int
     bound: CueBound | None = None
 
-    def row(self) -> dict[str, Any]:
+    def row(self) -> Row:
         """The metrics row: :data:`COLUMNS` to numbers (NaN where undefined)."""
         ev = self.evaluation
         n = ev.perceived_sim.shape[0]
@@ -227,7 +232,7 @@ class CompareRun:
         dur = n / fs
         sim, veh, thr = ev.perceived_sim, ev.perceived_vehicle, ev.thresholds
         m = ev.metrics
-        row: dict[str, Any] = {
+        row: Row = {
             "recording": self.recording,
             "preset": self.preset,
             "duration_s": dur,
@@ -334,14 +339,14 @@ def run_chain(
     )
 
 
-def _cell(v: Any) -> str:
+def _cell(v: object) -> str:
     """A CSV cell: floats in full precision, empty where undefined."""
     if isinstance(v, float):
         return repr(v) if math.isfinite(v) else ""
     return str(v)
 
 
-def _fmt(v: Any, spec: str) -> str:
+def _fmt(v: object, spec: str) -> str:
     if isinstance(v, float) and not math.isfinite(v):
         return ""
     return format(v, spec)
@@ -372,17 +377,17 @@ class CompareResult:
     t_s: dict[str, NDArray[np.float64]] = field(default_factory=dict)
     reach: RigReach | None = None
 
-    def rows(self) -> list[dict[str, Any]]:
+    def rows(self) -> list[Row]:
         """One metrics row per run (:data:`COLUMNS`)."""
         return [r.row() for r in self.runs]
 
     def runs_of(self, recording: str) -> list[CompareRun]:
         return [r for r in self.runs if r.recording == recording]
 
-    def to_dict(self, plots: Sequence[str] = ()) -> dict[str, Any]:
+    def to_dict(self, plots: Sequence[str] = ()) -> dict[str, object]:
         """JSON-ready: the setting, the column notes, the rows (NaN as null), the plots."""
 
-        def clean(v: Any) -> Any:
+        def clean(v: object) -> object:
             return None if isinstance(v, float) and not math.isfinite(v) else v
 
         return {
@@ -677,7 +682,7 @@ def compare_figure(result: CompareResult, recording: str) -> Figure:
     fig = Figure(figsize=(14, 9.5), layout="constrained")
     axes = fig.subplots(3, 2, sharex=True)
     colours = [f"C{k % 10}" for k in range(len(runs))]
-    handles: list[Any] = []
+    handles: list[Artist] = []
     labels: list[str] = []
     for i, name in enumerate(COMPARE_AXES):
         ax = axes[i % 3, i // 3]

@@ -111,7 +111,7 @@ import math
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING
 
 import numpy as np
 from numpy.typing import NDArray
@@ -123,6 +123,8 @@ from ..trajectory import pulse_rounding_limits
 from ._chain import offline_chain
 
 if TYPE_CHECKING:
+    from control import TransferFunction
+
     from ..kinematics import Platform
     from ..trajectory import ActuatorLimits
 
@@ -251,7 +253,7 @@ def omct_amplitude(path: str | OmctPath, frequency_rad_s: float) -> float:
 
 
 # ---------------------------------------------------------------------------------- analytic
-def _tf(num: Sequence[float], den: Sequence[float]) -> Any:
+def _tf(num: Sequence[float], den: Sequence[float]) -> TransferFunction:
     import control
 
     return control.tf(list(num), list(den))
@@ -263,7 +265,7 @@ def _head_offset(params: CueingParams) -> tuple[float, float, float]:
     return (float(h[0]), float(h[1]), float(h[2]))
 
 
-def _linear_systems(design: ClassicalWashout) -> dict[str, Any]:
+def _linear_systems(design: ClassicalWashout) -> dict[str, TransferFunction]:
     """The continuous small-signal transfer function of every path (python-control)."""
     import control
 
@@ -285,7 +287,7 @@ def _linear_systems(design: ClassicalWashout) -> dict[str, Any]:
     tilt_x = mp * kt[0] * g_t  # f_x -> -g * pitch (tilt-coordination force)
     tilt_y = mr * kt[1] * g_t  # f_y -> +g * roll
     # linear platform response: body rates W (per input) and specific force at the origin
-    rates: dict[str, list[Any]] = {
+    rates: dict[str, list[TransferFunction]] = {
         "p": [kw[0] * h_r[0], zero, zero],
         "q": [zero, kw[1] * h_r[1], zero],
         "r": [zero, zero, kw[2] * h_r[2]],
@@ -293,7 +295,7 @@ def _linear_systems(design: ClassicalWashout) -> dict[str, Any]:
         "ay": [s * tilt_y / g, zero, zero],
         "az": [zero, zero, zero],
     }
-    force: dict[str, list[Any]] = {
+    force: dict[str, list[TransferFunction]] = {
         "p": [zero, g * kw[0] * (one - ht[1]) * ang[0], zero],
         "q": [-g * kw[1] * (one - ht[0]) * ang[1], zero, zero],
         "r": [zero, zero, zero],
@@ -309,7 +311,7 @@ def _linear_systems(design: ClassicalWashout) -> dict[str, Any]:
             dw = [s * c for c in wv]
             cross = [dw[1] * hz - dw[2] * hy, dw[2] * hx - dw[0] * hz, dw[0] * hy - dw[1] * hx]
             force[key] = [force[key][i] + (one - ht[i]) * cross[i] for i in range(3)]
-    out: dict[str, Any] = {}
+    out: dict[str, TransferFunction] = {}
     for path in OMCT_PATHS:
         src = path.name.split("->")[0]
         table = rates if path.output_kind == "w" else force
@@ -399,7 +401,7 @@ class OmctPoint:
         """``phase - linear_phase`` wrapped to (-180, 180] deg."""
         return _wrap_deg(self.phase_deg - self.linear_phase_deg)
 
-    def to_dict(self) -> dict[str, Any]:
+    def to_dict(self) -> dict[str, object]:
         return {
             "path": self.path,
             "frequency_rad_s": self.frequency_rad_s,
@@ -456,7 +458,7 @@ class OmctResult:
     def for_path(self, path: str) -> tuple[OmctPoint, ...]:
         return tuple(pt for pt in self.points if pt.path == path)
 
-    def to_dict(self) -> dict[str, Any]:
+    def to_dict(self) -> dict[str, object]:
         return {
             "test": "objective motion cueing test (OMCT), motioncue amplitudes",
             **self.labels,
@@ -584,9 +586,7 @@ def platform_motion(
     return f_in, w_in
 
 
-def _first_harmonic(
-    y: NDArray[np.floating[Any]], t: NDArray[np.floating[Any]], w: float
-) -> complex:
+def _first_harmonic(y: NDArray[np.floating], t: NDArray[np.floating], w: float) -> complex:
     """Least-squares ``c + a sin(wt) + b cos(wt)``; returns the phasor ``a + j b``
     (amplitude ``|.|``, phase ``angle(.)`` relative to ``sin(wt)``)."""
     m = np.column_stack([np.ones_like(t), np.sin(w * t), np.cos(w * t)])

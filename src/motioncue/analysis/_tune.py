@@ -62,7 +62,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
-from numpy.typing import NDArray
+from numpy.typing import ArrayLike, NDArray
 
 from .._errors import ConfigError, LimitError, TransportError
 from ..cueing import CueingParams, make_cueing
@@ -76,6 +76,10 @@ from ..trajectory import reachable
 from ._chain import deliver, run_cueing
 
 if TYPE_CHECKING:
+    from concurrent.futures import ProcessPoolExecutor
+
+    from scipy.optimize import OptimizeResult
+
     from ..cueing import Rig
     from ..kinematics import Platform
     from ..trajectory import ActuatorLimits
@@ -478,9 +482,9 @@ class _Evaluator:
         self.evaluations = 0
         self.where = "in-process"
         self._workers = workers
-        self._pool: Any = None
-        self._client: Any = None
-        self._future: Any = None
+        self._pool: ProcessPoolExecutor | None = None
+        self._client: Any = None  # a dask.distributed Client (optional, untyped package)
+        self._future: Any = None  # its scattered copy of the objective
         self._address = ""
         if scheduler is not None:
             self._start_dask(scheduler)
@@ -521,7 +525,9 @@ class _Evaluator:
         self._future = client.scatter(self.objective, broadcast=True, hash=False)
         self.where = f"Dask scheduler {scheduler} ({n} workers)"
 
-    def __call__(self, func: Callable[[Any], float], xs: Iterable[Any]) -> list[float]:
+    def __call__(
+        self, func: Callable[[NDArray[np.float64]], float], xs: Iterable[ArrayLike]
+    ) -> list[float]:
         points = [np.asarray(x, dtype=float) for x in xs]
         self.evaluations += len(points)
         if self._client is not None:
@@ -667,7 +673,7 @@ def tune_cueing(
         raise
     x0 = vector_from_params(objective.base)
     bounds = _log_bounds(objective.base)
-    init: Any = "latinhypercube"
+    init: str | NDArray[np.float64] = "latinhypercube"
     if init_spread is not None:
         lo = np.array([b[0] for b in bounds])
         hi = np.array([b[1] for b in bounds])
@@ -678,7 +684,7 @@ def tune_cueing(
         init[0] = x0
     state = _RunState(last=t0)
 
-    def callback(intermediate_result: Any) -> bool:
+    def callback(intermediate_result: OptimizeResult) -> bool:
         now = time.monotonic()
         state.gen += 1
         state.gen_s = now - state.last

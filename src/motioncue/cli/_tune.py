@@ -7,7 +7,7 @@ import math
 import os
 import sys
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from .._errors import ConfigError
 from ._common import (
@@ -19,6 +19,9 @@ from ._common import (
     print_json,
 )
 from ._preset import add_vestibular_option
+
+if TYPE_CHECKING:
+    from ..analysis import ChainMetrics, StrengthTargets
 
 __all__ = ["register"]
 
@@ -155,7 +158,7 @@ def register(sub: Any) -> None:
     parser.set_defaults(run=run)
 
 
-def _metrics_table(before: Any, after: Any) -> str:
+def _metrics_table(before: ChainMetrics, after: ChainMetrics) -> str:
     rows = [
         ("objective: cue score (mean)", before.objective, after.objective, ".4f"),
         ("perceived-motion error J (mean)", before.perceived_error, after.perceived_error, ".3f"),
@@ -187,8 +190,8 @@ def _metrics_table(before: Any, after: Any) -> str:
             rows.append((f"{label}, any axis (%)", getattr(before.cue, name) * 100,
                          getattr(after.cue, name) * 100, ".2f"))  # fmt: skip
     lines = [f"{'metric':<32} {'before':>10} {'after':>10}"]
-    for name, b, a, fmt in rows:
-        lines.append(f"{name:<32} {format(b, fmt):>10} {format(a, fmt):>10}")
+    for what, b_v, a_v, fmt in rows:
+        lines.append(f"{what:<32} {format(b_v, fmt):>10} {format(a_v, fmt):>10}")
     return "\n".join(lines)
 
 
@@ -438,7 +441,7 @@ def run(args: argparse.Namespace) -> int:
     return 0
 
 
-def _objective_comment(args: argparse.Namespace, targets: Any) -> str:
+def _objective_comment(args: argparse.Namespace, targets: StrengthTargets) -> str:
     """The header line saying what was optimised."""
     chain = (
         f"of the poses after workspace limiting (vestibular models {args.vestibular}); "
@@ -459,7 +462,7 @@ def _objective_comment(args: argparse.Namespace, targets: Any) -> str:
     )
 
 
-def _metrics_dict(m: Any) -> dict[str, Any]:
+def _metrics_dict(m: ChainMetrics) -> dict[str, object]:
     """A :class:`~motioncue.analysis.ChainMetrics` for ``--json`` (NaN as None)."""
 
     def num(v: float) -> float | None:

@@ -53,6 +53,8 @@ if TYPE_CHECKING:
     from .._config import ConfigReader
     from ..kinematics import Platform
     from ..trajectory import ActuatorLimits
+    from ._mpc import MpcCueing
+    from ._optimal import OptimalCueing
 
 __all__ = [
     "CueingAlgorithm",
@@ -392,13 +394,13 @@ def named_rig(platform: str, controller: str, fs_hz: float) -> Rig:
     return Rig(plat, ActuatorLimits.from_platform(plat, ctl, rate_hz=fs_hz), controller)
 
 
-def _mpc(params: CueingParams, fs_hz: float, rig: Rig | None = None) -> CueingAlgorithm[Any]:
+def _mpc(params: CueingParams, fs_hz: float, rig: Rig | None = None) -> MpcCueing:
     from ._mpc import MpcCueing  # numpy/scipy/casadi only when an MPC preset is used
 
     return MpcCueing(params, fs_hz, _plan_rig(params, fs_hz, rig))
 
 
-def _optimal(params: CueingParams, fs_hz: float, rig: Rig | None = None) -> CueingAlgorithm[Any]:
+def _optimal(params: CueingParams, fs_hz: float, rig: Rig | None = None) -> OptimalCueing:
     from ._optimal import OptimalCueing
 
     return OptimalCueing(params, fs_hz, _plan_rig(params, fs_hz, rig))

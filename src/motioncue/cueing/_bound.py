@@ -61,8 +61,9 @@ cueing, are those of Telban & Cardullo (NASA/CR-2005-213747, 2005) and Reid & Na
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass, field
-from typing import Any
+from typing import TYPE_CHECKING
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -70,6 +71,9 @@ from numpy.typing import ArrayLike, NDArray
 from .._errors import ConfigError
 from ._params import GRAVITY_M_S2
 from ._vestibular import DEFAULT_MODEL_SET, VestibularModel, VestibularModelSet, get_model_set
+
+if TYPE_CHECKING:
+    from scipy.sparse import sparray
 
 __all__ = ["BOUND_CHANNELS", "REACH_MARGIN", "CueBound", "RigReach", "cue_bound"]
 
@@ -152,7 +156,7 @@ class CueBound:
     model_set: str = DEFAULT_MODEL_SET
     solver: dict[str, str] = field(default_factory=dict)
 
-    def to_dict(self) -> dict[str, Any]:
+    def to_dict(self) -> dict[str, object]:
         """JSON-ready: per channel ``{name: {channel: value}}`` and the reach used."""
 
         def ch(a: NDArray[np.float64]) -> dict[str, float | None]:
@@ -181,7 +185,7 @@ class CueBound:
 # ---------------------------------------------------------------- the convex problems
 
 
-def _second_difference(n: int, fs: float) -> Any:
+def _second_difference(n: int, fs: float) -> sparray:
     """D2 (N, N): the central second difference times fs^2, the pose held at both ends."""
     import scipy.sparse as sp
 
@@ -227,7 +231,7 @@ class _Channel:
 
 
 def _linprog_box_chain(
-    c: NDArray[np.float64], bound: float, step: float, second: float | None, d2: Any
+    c: NDArray[np.float64], bound: float, step: float, second: float | None, d2: sparray
 ) -> float:
     """max c'x s.t. |x| <= bound, |x[k+1]-x[k]| <= step, (optionally) |d2 x| <= second."""
     import scipy.sparse as sp
@@ -256,14 +260,14 @@ def _linprog_box_chain(
     return float(-res.fun)
 
 
-def _support(ch: _Channel, c: NDArray[np.float64], d2: Any) -> float:
+def _support(ch: _Channel, c: NDArray[np.float64], d2: sparray) -> float:
     """sigma_S(c) = max_{s in S} c's (two LPs: translation and tilt)."""
     trans = _linprog_box_chain(np.asarray(d2.T @ c), ch.stroke, ch.speed / ch.fs, ch.accel, d2)
     tilt = GRAVITY_M_S2 * _linprog_box_chain(c, ch.tilt, ch.tilt_rate / ch.fs, None, d2)
     return trans + tilt
 
 
-def _qp_best_motion(ch: _Channel, v: NDArray[np.float64], d2: Any) -> NDArray[np.float64]:
+def _qp_best_motion(ch: _Channel, v: NDArray[np.float64], d2: sparray) -> NDArray[np.float64]:
     """The platform specific force s in S minimising ||H s - v|| (OSQP via CasADi)."""
     import casadi
     import scipy.sparse as sp
@@ -350,7 +354,7 @@ def _qp_best_motion(ch: _Channel, v: NDArray[np.float64], d2: Any) -> NDArray[np
 
 
 def _gain_lp(
-    ch: _Channel, v: NDArray[np.float64], thr: float, d2: Any
+    ch: _Channel, v: NDArray[np.float64], thr: float, d2: sparray
 ) -> tuple[float, NDArray[np.float64], NDArray[np.float64]]:
     """max <H s, v> over s in S with no reversal: the maximum, H s, and the multipliers of
     the no-reversal rows (>= 0, zero where the vehicle is below threshold)."""
@@ -421,7 +425,9 @@ def _gain_lp(
     return float(-res.fun), y, np.maximum(lam, 0.0)
 
 
-def _golden(fun: Any, lo: float, hi: float, evals: int, maximise: bool) -> float:
+def _golden(
+    fun: Callable[[float], float], lo: float, hi: float, evals: int, maximise: bool
+) -> float:
     """Best value of a unimodal ``fun`` on [lo, hi] found by golden-section search (and the
     end points); every value tried is valid, so the best one is returned."""
     sign = 1.0 if maximise else -1.0
@@ -444,7 +450,7 @@ def _golden(fun: Any, lo: float, hi: float, evals: int, maximise: bool) -> float
 
 def _decimated(
     ch: _Channel, d: NDArray[np.float64], k: int
-) -> tuple[_Channel, NDArray[np.float64], Any]:
+) -> tuple[_Channel, NDArray[np.float64], sparray]:
     """The channel at fs / k with the vehicle's force averaged over blocks of k samples."""
     from dataclasses import replace
 
@@ -456,7 +462,7 @@ def _decimated(
 
 
 def _channel_bound(
-    ch: _Channel, d: NDArray[np.float64], thr: float, k: int, d2: Any
+    ch: _Channel, d: NDArray[np.float64], thr: float, k: int, d2: sparray
 ) -> tuple[float, float, float, float, float]:
     """``(error bound, gain bound, gain bound with reversals, share, vehicle rms)`` of one
     channel (``k`` > 1: certificates from the problem decimated by ``k``; see cue_bound)."""

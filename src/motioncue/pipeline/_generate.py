@@ -28,7 +28,8 @@ if TYPE_CHECKING:
     from ..kinematics import Platform
     from ..output import Controller
     from ..telemetry import Recording
-    from ..trajectory import OptimisedRide
+    from ..trajectory import OptimisedRide, Transition
+    from ._inputs import Keyframes
 
 __all__ = [
     "RAMP_ACCEL",
@@ -293,7 +294,7 @@ def _stretch(q: np.ndarray, factor: float, rate_hz: float, n_out: int) -> np.nda
 
 
 def generate_keyframe_ride(
-    keyframes: Any,
+    keyframes: Keyframes,
     platform: Platform,
     controller: Controller,
     *,
@@ -352,7 +353,7 @@ def generate_keyframe_ride(
     max_late = 0.0
     fallbacks: list[str] = []
 
-    def note(what: str, tr: Any) -> Any:
+    def note(what: str, tr: Transition) -> Transition:
         if tr.fallback:
             fallbacks.append(f"{what}: {tr.fallback}")
         return tr
