@@ -480,6 +480,15 @@ def _vec(values: Iterable[float], k: float = 1.0) -> str:
     return "[" + ", ".join(_fmt(v * k) for v in values) + "]"
 
 
+def _optional(key: str, value: float | Sequence[float] | None, k: float = 1.0) -> list[str]:
+    """``key = value`` (times ``k``) for an optional key; nothing when it is unset."""
+    if value is None:
+        return []
+    if isinstance(value, int | float):
+        return [f"{key} = {_fmt(value * k)}"]
+    return [f"{key} = {_vec(value, k)}"]
+
+
 def preset_toml(params: CueingParams, comments: Sequence[str] = ()) -> str:
     """The TOML text of a preset (the layout :func:`load_cueing` reads): the classical
     tables, and for an ``mpc`` or ``optimal`` preset its ``[mpc]`` table.
@@ -505,12 +514,9 @@ def preset_toml(params: CueingParams, comments: Sequence[str] = ()) -> str:
         f"w_limit_deg_s = {_vec(params.w_limit_rad_s, r2d)}",
         f"soft_knee = {_fmt(params.soft_knee)}",
     ]
-    if params.f_shape is not None:
-        lines.append(f"f_shape = {_vec(params.f_shape)}")
-    if params.w_shape is not None:
-        lines.append(f"w_shape = {_vec(params.w_shape)}")
-    if params.lead_s is not None:
-        lines.append(f"lead_s = {_vec(params.lead_s)}")
+    lines += _optional("f_shape", params.f_shape)
+    lines += _optional("w_shape", params.w_shape)
+    lines += _optional("lead_s", params.lead_s)
     lines += [
         "",
         "[translational]",
@@ -524,12 +530,9 @@ def preset_toml(params: CueingParams, comments: Sequence[str] = ()) -> str:
         f"rate_limit_deg_s = {_fmt(params.tilt_rate_limit_rad_s * r2d)}",
         f"limit_deg = {_fmt(params.tilt_limit_rad * r2d)}",
     ]
-    if params.tilt_scale is not None:
-        lines.append(f"scale = {_vec(params.tilt_scale)}")
-    if params.tilt_accel_limit_rad_s2 is not None:
-        lines.append(f"accel_limit_deg_s2 = {_fmt(params.tilt_accel_limit_rad_s2 * r2d)}")
-    if params.tilt_shape is not None:
-        lines.append(f"shape = {_fmt(params.tilt_shape)}")
+    lines += _optional("scale", params.tilt_scale)
+    lines += _optional("accel_limit_deg_s2", params.tilt_accel_limit_rad_s2, r2d)
+    lines += _optional("shape", params.tilt_shape)
     if params.tilt_reach_rad is not None:
         lines.append(f"reach_deg = {_vec(params.tilt_reach_rad, r2d)}")
         lines.append(f"reach_use = {_fmt(params.tilt_reach_use)}")

@@ -136,6 +136,22 @@ def _finish(
     return opt, q, pulses, t_s, check
 
 
+def _ride_limits(
+    platform: Platform, controller: Controller, rate_hz: float, limits: ActuatorLimits | None
+) -> tuple[ActuatorLimits, list[dict[str, Any]], ActuatorLimits]:
+    """Checked before any work: the rate (the controller's clock must carry it), the limits
+    (default: the platform's with the controller's), their pulse table and the planning
+    limits (tightened for the pulse rounding, park kept inside)."""
+    controller.check_rate(rate_hz)
+    if limits is None:
+        limits = ActuatorLimits.from_platform(platform, controller, rate_hz=rate_hz)
+    return (
+        limits,
+        limits.to_pulses_table(platform),
+        planning_limits(limits, platform, 1.0 / rate_hz),
+    )
+
+
 def generate_ride(
     recording: Recording,
     platform: Platform,
@@ -184,12 +200,8 @@ def generate_ride(
         stage_s[name] = now - clock
         clock = now
 
-    controller.check_rate(rate_hz)  # before any work: a rate the controller's clock can carry
+    limits, table, tight = _ride_limits(platform, controller, rate_hz, limits)
     dt = 1.0 / rate_hz
-    if limits is None:
-        limits = ActuatorLimits.from_platform(platform, controller, rate_hz=rate_hz)
-    table = limits.to_pulses_table(platform)
-    tight = planning_limits(limits, platform, dt)
 
     step("resample", 0.0)
     rec = resample(recording, rate_hz)
@@ -336,12 +348,8 @@ def generate_keyframe_ride(
     LimitError
         A keyframe the platform cannot reach (named with the actuator).
     """
-    controller.check_rate(rate_hz)  # before any work: a rate the controller's clock can carry
+    limits, table, tight = _ride_limits(platform, controller, rate_hz, limits)
     dt = 1.0 / rate_hz
-    if limits is None:
-        limits = ActuatorLimits.from_platform(platform, controller, rate_hz=rate_hz)
-    table = limits.to_pulses_table(platform)
-    tight = planning_limits(limits, platform, dt)
     poses = np.asarray(keyframes.poses, dtype=float)
     times = np.asarray(keyframes.t_s, dtype=float)
     park = np.asarray(platform.pose_park, dtype=float)
