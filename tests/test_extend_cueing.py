@@ -14,6 +14,7 @@ import os
 import subprocess
 import sys
 import tomllib
+from collections.abc import Iterator
 from pathlib import Path
 from types import ModuleType
 
@@ -24,7 +25,7 @@ from motioncue import ConfigError
 from motioncue._config import config_dir, find_config
 from motioncue._plugins import import_plugins, plugin_modules
 from motioncue.analysis import run_chain
-from motioncue.cueing import cueing_entry, load_cueing, make_cueing
+from motioncue.cueing import cueing_entry, load_cueing, make_cueing, unregister_cueing
 from motioncue.cueing._tune import params_from_vector, preset_toml, vector_from_params
 from motioncue.kinematics import Platform, load_platform
 from motioncue.output import load_controller
@@ -39,11 +40,14 @@ GAIN, LIMIT_MM = (0.004, 0.003), 15.0  # fx of the lap reaches the clip (15 mm) 
 
 
 @pytest.fixture(scope="module")
-def toy() -> ModuleType:
+def toy() -> Iterator[ModuleType]:
     import_plugins(PLUGIN)  # the same import the command line does
     from toys import toy_cueing
 
-    return toy_cueing
+    yield toy_cueing
+    # leave the registry as it was for the other tests of this process
+    unregister_cueing(toy_cueing.NAME)
+    sys.modules.pop(PLUGIN, None)
 
 
 def _cli(*args: str) -> subprocess.CompletedProcess[str]:
@@ -192,3 +196,27 @@ def test_a_plugin_that_cannot_be_imported_is_one_line_exit_2(files: dict[str, Pa
     assert res.returncode == 2 and res.stdout == ""
     assert res.stderr.startswith("motioncue: error: MOTIONCUE_PLUGINS: cannot import")
     assert len(res.stderr.strip().splitlines()) == 1
+
+
+def test_the_plan_uses_the_rig_it_is_given_and_refuses_another_platform() -> None:
+    from motioncue.cueing import Rig
+    from motioncue.cueing._mpc import rig_limits
+
+    params = load_cueing("mpc-hexapod")
+    assert params.mpc is not None and params.mpc.platform == PLATFORM
+    platform, limits = _rig()
+    given = rig_limits(params, params.mpc, RATE, Rig(platform, limits))
+    named = rig_limits(params, params.mpc, RATE)  # the preset's [mpc] platform, controller
+    for key in ("q_mid", "q_half", "v_max", "a_max"):
+        np.testing.assert_array_equal(getattr(given, key), getattr(named, key))
+    assert given.platform is platform
+    # tighter limits in the rig (a --max-speed override) reach the plan
+    slow = limits.scaled(speed=0.5, accel=1.0)
+    half = rig_limits(params, params.mpc, RATE, Rig(platform, slow))
+    np.testing.assert_allclose(half.v_max, 0.5 * named.v_max, rtol=1e-12)
+    seat = load_platform("seat3")
+    seat_limits = ActuatorLimits.from_platform(seat, load_controller("mbox3"), rate_hz=RATE)
+    with pytest.raises(ConfigError, match="plans for platform 'stewart6-linear'.*'seat3'"):
+        make_cueing(params, RATE, Rig(seat, seat_limits, "mbox3"))
+    with pytest.raises(ConfigError, match="actuators"):
+        Rig(seat, limits)
