@@ -216,7 +216,7 @@ def test_the_plan_uses_the_rig_it_is_given_and_refuses_another_platform() -> Non
     np.testing.assert_allclose(half.v_max, 0.5 * named.v_max, rtol=1e-12)
     seat = load_platform("seat3")
     seat_limits = ActuatorLimits.from_platform(seat, load_controller("mbox3"), rate_hz=RATE)
-    with pytest.raises(ConfigError, match="plans for platform 'stewart6-linear'.*'seat3'"):
+    with pytest.raises(ConfigError, match=r"plans for platform 'stewart6-linear'.*'seat3'"):
         make_cueing(params, RATE, Rig(seat, seat_limits, "mbox3"))
     with pytest.raises(ConfigError, match="actuators"):
         Rig(seat, limits)
