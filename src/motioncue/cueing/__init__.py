@@ -116,18 +116,18 @@ __all__ = [
     "perceived_motion_error",
     "plot_cueing",
     "register_cueing",
-    "rig_reach",
     "simulator_motion",
-    "tilt_reach",
     "unregister_cueing",
 ]
 
 if TYPE_CHECKING:
-    from ..analysis import rig_reach, tilt_reach
+    from ..analysis import rig_reach as rig_reach
+    from ..analysis import tilt_reach as tilt_reach
 
 _MOVED = {"rig_reach", "tilt_reach"}
 """Names that moved to :mod:`motioncue.analysis` (they need the platform's kinematics),
-still importable from here, resolved on first use: cueing imports no later stage."""
+still importable from here (not in ``__all__``), resolved on first use: cueing imports no
+later stage."""
 
 
 def __getattr__(name: str) -> object:
