@@ -8,7 +8,7 @@ Layers (each imports only the ones below it)::
     stages: telemetry -> cueing -> kinematics / trajectory -> output
 
 Every tool here runs a cueing algorithm through the chain a ride goes through, written once
-in :mod:`motioncue.analysis._chain` (:func:`offline_chain`: cueing -> workspace limiting
+(:func:`offline_chain`: cueing -> workspace limiting
 with the pulse-rounding-tightened limits -> the live actuator limiter -> forward kinematics),
 the chain ``generate`` also uses (its workspace stage). The algorithm is built with the
 rig the tool is given (:class:`motioncue.cueing.Rig`) and never named here: what it can do

@@ -661,7 +661,7 @@ def compare_figure(result: CompareResult, recording: str) -> Figure:
 
     Six panels (fx, fy, fz in m/s², p, q, r in deg/s), the vehicle as a thick dark line on
     the left axis, each preset in its own colour on the right axis, scaled to show the
-    rider's cue (:func:`motioncue.cueing._plot.rider_axis`: zero at the same height; the
+    rider's cue (the scaling of ``motioncue cue``'s plot: zero at the same height; the
     presets' rendered share in the legend), the perception threshold as a grey band; one
     legend naming the vehicle and every preset; the title names the recording, platform,
     controller, frame rate and vestibular model set. Returns the matplotlib figure (Agg;

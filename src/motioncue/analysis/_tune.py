@@ -217,7 +217,7 @@ class StrengthTargets:
     """The cue-quality constraints of the ``"strength"`` objective (fractions, not %).
 
     A candidate within the actuator limits meets them when, over the recordings pooled
-    (:attr:`ChainMetrics.cue`, the definitions of :mod:`motioncue.cueing._metrics`),
+    (:attr:`ChainMetrics.cue`, the definitions of :func:`motioncue.cueing.cue_metrics`),
     reversals on any channel take at most ``max_reversals`` of the time, false cues on any
     channel at most ``max_false``, the fx and fy correlations are at least ``min_corr_fx``
     and ``min_corr_fy``, and at most ``max_clamped`` of all poses are clamped. The defaults
