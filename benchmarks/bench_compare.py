@@ -104,8 +104,8 @@ def main() -> None:
 
 def _stages(rec: Path, presets: list[str], out: Path) -> None:
     """Where the time of one in-process run goes."""
+    from motioncue.analysis._compare import compare_cueing, write_compare_report
     from motioncue.cueing import load_cueing
-    from motioncue.cueing._compare import compare_cueing, write_compare_report
     from motioncue.kinematics import load_platform
     from motioncue.output import load_controller
     from motioncue.trajectory import ActuatorLimits

@@ -35,8 +35,8 @@ def _pct(v: float) -> str:
 
 
 def main(argv: list[str]) -> int:
+    from motioncue.analysis._compare import compare_cueing
     from motioncue.cueing import load_cueing
-    from motioncue.cueing._compare import compare_cueing
     from motioncue.kinematics import load_platform
     from motioncue.output import load_controller
     from motioncue.pipeline._inputs import load_generate_input

@@ -18,8 +18,8 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "src"))
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
 from _timing import report
+from motioncue.analysis._omct import run_omct
 from motioncue.cueing import ClassicalWashout, load_cueing
-from motioncue.cueing._omct import run_omct
 from motioncue.kinematics import load_platform
 from motioncue.output._controllers import load_controller
 from motioncue.trajectory import ActuatorLimits

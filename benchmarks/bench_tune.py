@@ -17,8 +17,9 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 
 from _timing import median_time_s, report
 from bench_washout import drive
+from motioncue.analysis._tune import TuneObjective
 from motioncue.cueing import load_cueing
-from motioncue.cueing._tune import TuneObjective, vector_from_params
+from motioncue.cueing._tune import vector_from_params
 from motioncue.kinematics import load_platform
 from motioncue.output._controllers import load_controller
 from motioncue.trajectory import ActuatorLimits

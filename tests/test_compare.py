@@ -208,7 +208,7 @@ def test_overlay_plot_is_not_blank(report: dict) -> None:
 
 
 def test_legend_and_title_name_everything(tmp_path: Path) -> None:
-    from motioncue.cueing._compare import compare_cueing, compare_figure
+    from motioncue.analysis._compare import compare_cueing, compare_figure
     from motioncue.kinematics import load_platform
     from motioncue.output import load_controller
     from motioncue.telemetry._recording import read_recording_csv

@@ -185,8 +185,8 @@ def test_no_preset_beats_the_bound_through_compare(lap: np.ndarray) -> None:
     """The presets' delivered motion (exact kinematics, the chain's limits) against the bound
     of the relaxation (first order in the angles): never below the error bound, never above
     the gain bounds."""
+    from motioncue.analysis._compare import compare_cueing
     from motioncue.cueing import load_cueing
-    from motioncue.cueing._compare import compare_cueing
     from motioncue.kinematics import load_platform
     from motioncue.output import load_controller
     from motioncue.telemetry._recording import Recording

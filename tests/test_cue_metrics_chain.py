@@ -11,8 +11,8 @@ import numpy as np
 import pytest
 
 from motioncue import ConfigError
+from motioncue.analysis._tune import TuneObjective
 from motioncue.cueing import cue_metrics, evaluate_cueing, load_cueing, make_cueing
-from motioncue.cueing._tune import TuneObjective
 from motioncue.kinematics import load_platform
 from motioncue.output._controllers import load_controller
 from motioncue.telemetry import sample_drives

@@ -15,9 +15,9 @@ import numpy as np
 import pytest
 
 from motioncue._errors import ConfigError
+from motioncue.analysis._tune import tilt_reach
 from motioncue.cueing import ClassicalWashout, CueingParams, load_cueing
 from motioncue.cueing._filters import compress, compress_array, compress_inverse
-from motioncue.cueing._tune import tilt_reach
 from motioncue.kinematics import load_platform
 from motioncue.trajectory import reachable
 

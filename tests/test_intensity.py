@@ -20,9 +20,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from motioncue.analysis._compare import run_chain
 from motioncue.cli import main
 from motioncue.cueing import at_intensity, load_cueing
-from motioncue.cueing._compare import run_chain
 from motioncue.cueing._metrics import cue_metrics
 from motioncue.kinematics import load_platform
 from motioncue.output import load_controller

@@ -37,8 +37,8 @@ from typing import Any
 import numpy as np
 import pytest
 
+from motioncue.analysis._compare import run_chain
 from motioncue.cueing import get_model_set, load_cueing
-from motioncue.cueing._compare import run_chain
 from motioncue.cueing._metrics import CueMetrics, cue_metrics
 from motioncue.kinematics import load_platform
 from motioncue.output import load_controller

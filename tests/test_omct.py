@@ -10,9 +10,7 @@ import math
 import numpy as np
 import pytest
 
-from motioncue.cli import main
-from motioncue.cueing import GRAVITY_M_S2, ClassicalWashout, load_cueing
-from motioncue.cueing._omct import (
+from motioncue.analysis._omct import (
     OMCT_FREQUENCIES_RAD_S,
     OMCT_PATHS,
     _first_harmonic,
@@ -21,6 +19,8 @@ from motioncue.cueing._omct import (
     platform_motion,
     run_omct,
 )
+from motioncue.cli import main
+from motioncue.cueing import GRAVITY_M_S2, ClassicalWashout, load_cueing
 from motioncue.kinematics import load_platform
 from motioncue.output._controllers import load_controller
 from motioncue.trajectory import ActuatorLimits

@@ -24,8 +24,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from motioncue.analysis._compare import run_chain
 from motioncue.cueing import CueingParams, load_cueing
-from motioncue.cueing._compare import run_chain
 from motioncue.cueing._metrics import CueMetrics, cue_metrics
 from motioncue.kinematics import load_platform
 from motioncue.output import load_controller

@@ -14,15 +14,12 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
+from motioncue.analysis._tune import ChainMetrics, StrengthTargets, TuneObjective, tune_cueing
 from motioncue.cueing import load_cueing
 from motioncue.cueing._metrics import CueMetrics
 from motioncue.cueing._tune import (
     STRENGTH_TUNED_PARAMETERS,
-    ChainMetrics,
-    StrengthTargets,
-    TuneObjective,
     params_from_vector,
-    tune_cueing,
     vector_from_params,
 )
 

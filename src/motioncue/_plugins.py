@@ -14,10 +14,17 @@ import os
 
 from ._errors import ConfigError
 
-__all__ = ["ENV_VAR", "load_plugins"]
+__all__ = ["ENV_VAR", "PLUGINS_ENV", "import_plugins", "load_plugins", "plugin_modules"]
 
 ENV_VAR = "MOTIONCUE_PLUGINS"
 """The environment variable naming the plugin modules."""
+PLUGINS_ENV = ENV_VAR
+
+
+def plugin_modules(value: str | None = None) -> tuple[str, ...]:
+    """The module names of ``value`` (default: the environment's ``MOTIONCUE_PLUGINS``)."""
+    text = os.environ.get(ENV_VAR, "") if value is None else value
+    return tuple(name.strip() for name in text.split(",") if name.strip())
 
 
 def load_plugins(spec: str | None = None) -> tuple[str, ...]:
@@ -39,8 +46,7 @@ def load_plugins(spec: str | None = None) -> tuple[str, ...]:
     ConfigError
         A module that cannot be imported, or fails while importing (one line naming it).
     """
-    text = os.environ.get(ENV_VAR, "") if spec is None else spec
-    names = tuple(n.strip() for n in text.split(",") if n.strip())
+    names = plugin_modules(spec)
     for name in names:
         try:
             importlib.import_module(name)
@@ -49,3 +55,7 @@ def load_plugins(spec: str | None = None) -> tuple[str, ...]:
                 f"{ENV_VAR}: cannot import plugin {name!r}: {type(exc).__name__}: {exc}"
             ) from exc
     return names
+
+
+import_plugins = load_plugins
+"""The same import, by the name library code uses."""

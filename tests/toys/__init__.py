@@ -1,0 +1,1 @@
+"""Toy extensions registered from outside the package (registry calls only)."""

@@ -92,8 +92,8 @@ def _progress(line: str) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
+    from ..analysis import compare_cueing, plot_file_names, write_compare_report
     from ..cueing import get_model_set
-    from ..cueing._compare import compare_cueing, plot_file_names, write_compare_report
     from ..output import load_controller
     from ..pipeline._inputs import check_generate_size, load_generate_input
     from ..trajectory import ActuatorLimits

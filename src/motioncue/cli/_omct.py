@@ -69,8 +69,8 @@ def register(sub: Any) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
+    from ..analysis import plot_omct, run_omct
     from ..cueing import ClassicalWashout
-    from ..cueing._omct import plot_omct, run_omct
     from ..output._controllers import load_controller
     from ..trajectory import ActuatorLimits
 

@@ -7,7 +7,7 @@ import math
 import os
 import sys
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from .._errors import ConfigError
 from ._common import (
@@ -19,6 +19,9 @@ from ._common import (
     print_json,
 )
 from ._preset import add_vestibular_option
+
+if TYPE_CHECKING:
+    from ..analysis import ChainMetrics, StrengthTargets
 
 __all__ = ["register"]
 
@@ -155,7 +158,7 @@ def register(sub: Any) -> None:
     parser.set_defaults(run=run)
 
 
-def _metrics_table(before: Any, after: Any) -> str:
+def _metrics_table(before: ChainMetrics, after: ChainMetrics) -> str:
     rows = [
         ("objective: cue score (mean)", before.objective, after.objective, ".4f"),
         ("perceived-motion error J (mean)", before.perceived_error, after.perceived_error, ".3f"),
@@ -187,26 +190,24 @@ def _metrics_table(before: Any, after: Any) -> str:
             rows.append((f"{label}, any axis (%)", getattr(before.cue, name) * 100,
                          getattr(after.cue, name) * 100, ".2f"))  # fmt: skip
     lines = [f"{'metric':<32} {'before':>10} {'after':>10}"]
-    for name, b, a, fmt in rows:
-        lines.append(f"{name:<32} {format(b, fmt):>10} {format(a, fmt):>10}")
+    for what, b_v, a_v, fmt in rows:
+        lines.append(f"{what:<32} {format(b_v, fmt):>10} {format(a_v, fmt):>10}")
     return "\n".join(lines)
 
 
 def run(args: argparse.Namespace) -> int:
     from dataclasses import replace
 
-    from ..cueing import get_model_set, load_cueing
-    from ..cueing._tune import (
+    from ..analysis import (
         PENALTY_BASE,
         StrengthTargets,
         TuneObjective,
-        at_intensity,
-        gentle_values,
-        preset_toml,
         tilt_reach,
         tune_cueing,
         write_preset,
     )
+    from ..cueing import Rig, cueing_algorithms, cueing_entry, get_model_set, load_cueing
+    from ..cueing._tune import at_intensity, gentle_values, preset_toml
     from ..output._controllers import load_controller
     from ..pipeline._inputs import load_generate_input
     from ..telemetry._motion import is_datagram_recording
@@ -245,10 +246,11 @@ def run(args: argparse.Namespace) -> int:
     controller = load_controller(args.controller)
     controller.check_rate(args.rate)
     base, base_source = choose_preset(args.preset, platform, args.platform, args.overrides)
-    if base.algorithm not in ("classical", "mpc", "optimal"):
+    if cueing_entry(base.algorithm).tune is None:
         raise ConfigError(
-            f"preset {base.name!r} uses the cueing algorithm {base.algorithm!r}; tune "
-            "optimises classical, mpc and optimal presets only"
+            f"preset {base.name!r} uses the cueing algorithm {base.algorithm!r}, which "
+            "declares no tunable parameters; tune optimises "
+            + ", ".join(a for a in cueing_algorithms() if cueing_entry(a).tune is not None)
         )
     limits = ActuatorLimits.from_platform(
         platform, controller, rate_hz=args.rate, **limit_overrides(args)
@@ -313,7 +315,7 @@ def run(args: argparse.Namespace) -> int:
         base = replace(base, tilt_reach_rad=tilt_reach(platform, tight))
     objective = TuneObjective(
         base, drives, platform, tight, args.rate, model=args.vestibular,
-        objective=args.objective, targets=targets,
+        objective=args.objective, targets=targets, rig=Rig(platform, limits, controller.name),
     )  # fmt: skip
     strength = args.objective == "strength"
 
@@ -439,7 +441,7 @@ def run(args: argparse.Namespace) -> int:
     return 0
 
 
-def _objective_comment(args: argparse.Namespace, targets: Any) -> str:
+def _objective_comment(args: argparse.Namespace, targets: StrengthTargets) -> str:
     """The header line saying what was optimised."""
     chain = (
         f"of the poses after workspace limiting (vestibular models {args.vestibular}); "
@@ -460,8 +462,8 @@ def _objective_comment(args: argparse.Namespace, targets: Any) -> str:
     )
 
 
-def _metrics_dict(m: Any) -> dict[str, Any]:
-    """A :class:`~motioncue.cueing._tune.ChainMetrics` for ``--json`` (NaN as None)."""
+def _metrics_dict(m: ChainMetrics) -> dict[str, object]:
+    """A :class:`~motioncue.analysis.ChainMetrics` for ``--json`` (NaN as None)."""
 
     def num(v: float) -> float | None:
         return float(v) if math.isfinite(v) else None

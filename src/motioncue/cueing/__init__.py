@@ -19,16 +19,23 @@ Example
 [0.0, 0.0, 0.0, 0.0, 0.0, 0.0]
 """
 
+from typing import TYPE_CHECKING
+
 from ._algorithm import (
     CueingAlgorithm,
+    CueingEntry,
     CueingFactory,
     CueingResult,
+    CueingState,
+    ParameterTable,
+    Rig,
     cueing_algorithms,
+    cueing_entry,
     make_cueing,
     register_cueing,
     unregister_cueing,
 )
-from ._bound import BOUND_CHANNELS, CueBound, RigReach, cue_bound, rig_reach
+from ._bound import BOUND_CHANNELS, CueBound, RigReach, cue_bound
 from ._classical import ClassicalWashout, WashoutResult, WashoutState
 from ._evaluate import (
     AXIS_NAMES,
@@ -50,7 +57,7 @@ from ._score import (
     CueScore,
     cue_score,
 )
-from ._tune import at_intensity, tilt_reach
+from ._tune import TunableParameter, TunePlan, at_intensity
 from ._vestibular import (
     DEFAULT_MODEL_SET,
     DEFAULT_WEIGHTS,
@@ -80,11 +87,17 @@ __all__ = [
     "CueMetrics",
     "CueScore",
     "CueingAlgorithm",
+    "CueingEntry",
     "CueingEvaluation",
     "CueingFactory",
     "CueingParams",
     "CueingResult",
+    "CueingState",
+    "ParameterTable",
+    "Rig",
     "RigReach",
+    "TunableParameter",
+    "TunePlan",
     "VestibularModel",
     "VestibularModelSet",
     "WashoutResult",
@@ -95,6 +108,7 @@ __all__ = [
     "cue_metrics",
     "cue_score",
     "cueing_algorithms",
+    "cueing_entry",
     "evaluate_cueing",
     "get_model_set",
     "load_cueing",
@@ -102,8 +116,23 @@ __all__ = [
     "perceived_motion_error",
     "plot_cueing",
     "register_cueing",
-    "rig_reach",
     "simulator_motion",
-    "tilt_reach",
     "unregister_cueing",
 ]
+
+if TYPE_CHECKING:
+    from ..analysis import rig_reach as rig_reach
+    from ..analysis import tilt_reach as tilt_reach
+
+_MOVED = {"rig_reach", "tilt_reach"}
+"""Names that moved to :mod:`motioncue.analysis` (they need the platform's kinematics),
+still importable from here (not in ``__all__``), resolved on first use: cueing imports no
+later stage."""
+
+
+def __getattr__(name: str) -> object:
+    if name in _MOVED:
+        from .. import analysis
+
+        return getattr(analysis, name)
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

@@ -23,7 +23,7 @@ The platform's specific force on the channel is modelled, to first order in the 
 
 (the central difference of :func:`simulator_motion`, the pose held before the first and after
 the last sample), with the translation ``p`` and the tilt term ``tau = sin(tilt)`` (pitch for
-``fx``, roll for ``fy``) in boxes from the rig's reach (:func:`rig_reach`)::
+``fx``, roll for ``fy``) in boxes from the rig's reach (:func:`motioncue.analysis.rig_reach`)::
 
     |p| <= stroke, |p[k+1] - p[k]| fs <= speed, |second difference| fs^2 <= accel,
     |tau| <= sin(tilt), |tau[k+1] - tau[k]| fs <= tilt rate.
@@ -61,8 +61,9 @@ cueing, are those of Telban & Cardullo (NASA/CR-2005-213747, 2005) and Reid & Na
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass, field
-from typing import Any
+from typing import TYPE_CHECKING
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -71,7 +72,10 @@ from .._errors import ConfigError
 from ._params import GRAVITY_M_S2
 from ._vestibular import DEFAULT_MODEL_SET, VestibularModel, VestibularModelSet, get_model_set
 
-__all__ = ["BOUND_CHANNELS", "CueBound", "RigReach", "cue_bound", "rig_reach"]
+if TYPE_CHECKING:
+    from scipy.sparse import sparray
+
+__all__ = ["BOUND_CHANNELS", "REACH_MARGIN", "CueBound", "RigReach", "cue_bound"]
 
 BOUND_CHANNELS: tuple[str, ...] = ("fx", "fy")
 """The channels bounded (longitudinal: surge and pitch; lateral: sway and roll)."""
@@ -118,110 +122,6 @@ class RigReach:
             object.__setattr__(self, name, v)
 
 
-def _sample_poses(platform: Any, limits: Any, n: int, seed: int) -> NDArray[np.float64]:
-    """Reachable poses: neutral, the single-DOF extremes, and random poses in their box."""
-    from motioncue.kinematics import dof_ranges
-    from motioncue.trajectory import reachable
-
-    rng_box = dof_ranges(platform)
-    lo, hi = np.asarray(rng_box.lower), np.asarray(rng_box.upper)
-    extremes = [np.zeros(6)]
-    for k in range(6):
-        for v in (lo[k], hi[k]):
-            e = np.zeros(6)
-            e[k] = 0.999 * v
-            extremes.append(e)
-    rng = np.random.default_rng(seed)
-    span = np.maximum(np.abs(lo), np.abs(hi))
-    cand = np.concatenate([np.asarray(extremes), rng.uniform(-1, 1, (n, 6)) * span], axis=0)
-    ok = reachable(platform, cand, limits=limits)
-    return np.asarray(cand[ok], dtype=float)
-
-
-def _rate_reach(jac: NDArray[np.float64], limit: NDArray[np.float64], k: int) -> float:
-    """max e_k' pdot subject to |jac pdot| <= limit (elementwise): an LP (HiGHS)."""
-    from scipy.optimize import linprog
-
-    n = jac.shape[1]
-    c = np.zeros(n)
-    c[k] = -1.0
-    res = linprog(
-        c,
-        A_ub=np.concatenate([jac, -jac]),
-        b_ub=np.concatenate([limit, limit]),
-        bounds=[(None, None)] * n,
-        method="highs",
-    )
-    if res.status == 3:  # unbounded: the DOF moves no actuator
-        return math.inf
-    return float(-res.fun) if res.status == 0 else 0.0
-
-
-def rig_reach(
-    platform: Any,
-    limits: Any,
-    *,
-    samples: int = 4000,
-    rate_poses: int = 48,
-    seed: int = 0,
-    margin: float = REACH_MARGIN,
-) -> RigReach:
-    """The reach of a rig along fx (surge, pitch) and fy (sway, roll), from its limits.
-
-    Stroke and tilt: the largest ``|x|, |y|, |pitch|, |roll|`` over the reachable poses
-    among the single-DOF extremes (:func:`motioncue.kinematics.dof_ranges`) and ``samples``
-    random poses in their box (:func:`motioncue.trajectory.reachable` with ``limits``).
-    Speed, acceleration, tilt rate: the largest ``e' pdot`` with ``|J pdot| <= v_max``
-    (``a_max`` for the acceleration, neglecting the velocity-product terms) at neutral and
-    ``rate_poses`` of those poses (an LP each; ``J`` the platform's Jacobian on the DOFs it
-    moves). Every figure is multiplied by ``margin`` (sampling finds maxima from below).
-
-    Parameters
-    ----------
-    platform : motioncue.kinematics.Platform
-    limits : motioncue.trajectory.ActuatorLimits
-    samples, rate_poses, seed : int
-    margin : float
-        >= 1.
-
-    Returns
-    -------
-    RigReach
-    """
-    if not (math.isfinite(margin) and margin >= 1.0):
-        raise ConfigError(f"margin {margin!r} is invalid; allowed: a finite number >= 1")
-    poses = _sample_poses(platform, limits, int(samples), seed)
-    mask = np.asarray(platform.dof_mask, dtype=bool)
-    peak = np.abs(poses).max(axis=0) * mask
-    pick = poses[: 1 + 12] if len(poses) > 13 else poses
-    if len(poses) > 13 and rate_poses > 0:
-        rng = np.random.default_rng(seed + 1)
-        extra = poses[13 + rng.choice(len(poses) - 13, min(rate_poses, len(poses) - 13), False)]
-        pick = np.concatenate([pick, extra])
-    jac_all = np.asarray(platform.jacobian(pick), dtype=float)[..., mask]
-    dof_index = np.cumsum(mask) - 1  # column of each supported DOF in the masked Jacobian
-    v_lim = np.asarray(limits.v_max, dtype=float)
-    a_lim = np.asarray(limits.a_max, dtype=float)
-    n_act = v_lim.shape[0]
-
-    def rate(k: int, lim: NDArray[np.float64]) -> float:
-        if not mask[k]:
-            return 0.0
-        best = 0.0
-        for jac in jac_all:
-            best = max(best, _rate_reach(jac[:n_act], lim, int(dof_index[k])))
-        return best
-
-    m = float(margin)
-    return RigReach(
-        stroke_m=(m * float(peak[0]), m * float(peak[1])),
-        speed_m_s=(m * rate(0, v_lim), m * rate(1, v_lim)),
-        accel_m_s2=(m * rate(0, a_lim), m * rate(1, a_lim)),
-        tilt_rad=(min(m * float(peak[4]), 1.5), min(m * float(peak[3]), 1.5)),
-        tilt_rate_rad_s=(m * rate(4, v_lim), m * rate(3, v_lim)),
-    )
-
-
 @dataclass(frozen=True, eq=False)
 class CueBound:
     """The physical bound of one drive on one rig (module docstring), per :data:`BOUND_CHANNELS`.
@@ -256,7 +156,7 @@ class CueBound:
     model_set: str = DEFAULT_MODEL_SET
     solver: dict[str, str] = field(default_factory=dict)
 
-    def to_dict(self) -> dict[str, Any]:
+    def to_dict(self) -> dict[str, object]:
         """JSON-ready: per channel ``{name: {channel: value}}`` and the reach used."""
 
         def ch(a: NDArray[np.float64]) -> dict[str, float | None]:
@@ -285,7 +185,7 @@ class CueBound:
 # ---------------------------------------------------------------- the convex problems
 
 
-def _second_difference(n: int, fs: float) -> Any:
+def _second_difference(n: int, fs: float) -> sparray:
     """D2 (N, N): the central second difference times fs^2, the pose held at both ends."""
     import scipy.sparse as sp
 
@@ -331,7 +231,7 @@ class _Channel:
 
 
 def _linprog_box_chain(
-    c: NDArray[np.float64], bound: float, step: float, second: float | None, d2: Any
+    c: NDArray[np.float64], bound: float, step: float, second: float | None, d2: sparray
 ) -> float:
     """max c'x s.t. |x| <= bound, |x[k+1]-x[k]| <= step, (optionally) |d2 x| <= second."""
     import scipy.sparse as sp
@@ -360,14 +260,14 @@ def _linprog_box_chain(
     return float(-res.fun)
 
 
-def _support(ch: _Channel, c: NDArray[np.float64], d2: Any) -> float:
+def _support(ch: _Channel, c: NDArray[np.float64], d2: sparray) -> float:
     """sigma_S(c) = max_{s in S} c's (two LPs: translation and tilt)."""
     trans = _linprog_box_chain(np.asarray(d2.T @ c), ch.stroke, ch.speed / ch.fs, ch.accel, d2)
     tilt = GRAVITY_M_S2 * _linprog_box_chain(c, ch.tilt, ch.tilt_rate / ch.fs, None, d2)
     return trans + tilt
 
 
-def _qp_best_motion(ch: _Channel, v: NDArray[np.float64], d2: Any) -> NDArray[np.float64]:
+def _qp_best_motion(ch: _Channel, v: NDArray[np.float64], d2: sparray) -> NDArray[np.float64]:
     """The platform specific force s in S minimising ||H s - v|| (OSQP via CasADi)."""
     import casadi
     import scipy.sparse as sp
@@ -454,7 +354,7 @@ def _qp_best_motion(ch: _Channel, v: NDArray[np.float64], d2: Any) -> NDArray[np
 
 
 def _gain_lp(
-    ch: _Channel, v: NDArray[np.float64], thr: float, d2: Any
+    ch: _Channel, v: NDArray[np.float64], thr: float, d2: sparray
 ) -> tuple[float, NDArray[np.float64], NDArray[np.float64]]:
     """max <H s, v> over s in S with no reversal: the maximum, H s, and the multipliers of
     the no-reversal rows (>= 0, zero where the vehicle is below threshold)."""
@@ -525,7 +425,9 @@ def _gain_lp(
     return float(-res.fun), y, np.maximum(lam, 0.0)
 
 
-def _golden(fun: Any, lo: float, hi: float, evals: int, maximise: bool) -> float:
+def _golden(
+    fun: Callable[[float], float], lo: float, hi: float, evals: int, maximise: bool
+) -> float:
     """Best value of a unimodal ``fun`` on [lo, hi] found by golden-section search (and the
     end points); every value tried is valid, so the best one is returned."""
     sign = 1.0 if maximise else -1.0
@@ -548,7 +450,7 @@ def _golden(fun: Any, lo: float, hi: float, evals: int, maximise: bool) -> float
 
 def _decimated(
     ch: _Channel, d: NDArray[np.float64], k: int
-) -> tuple[_Channel, NDArray[np.float64], Any]:
+) -> tuple[_Channel, NDArray[np.float64], sparray]:
     """The channel at fs / k with the vehicle's force averaged over blocks of k samples."""
     from dataclasses import replace
 
@@ -560,7 +462,7 @@ def _decimated(
 
 
 def _channel_bound(
-    ch: _Channel, d: NDArray[np.float64], thr: float, k: int, d2: Any
+    ch: _Channel, d: NDArray[np.float64], thr: float, k: int, d2: sparray
 ) -> tuple[float, float, float, float, float]:
     """``(error bound, gain bound, gain bound with reversals, share, vehicle rms)`` of one
     channel (``k`` > 1: certificates from the problem decimated by ``k``; see cue_bound)."""
@@ -620,7 +522,7 @@ def cue_bound(
         algorithm used it (``f_used``), uniform at ``fs_hz``.
     fs_hz : float
     reach : RigReach
-        The rig's reach (:func:`rig_reach`).
+        The rig's reach (:func:`motioncue.analysis.rig_reach`).
     model : str or VestibularModelSet
         Vestibular model set (its otoliths and thresholds).
     thresholds : (6,) array_like, optional

@@ -66,7 +66,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import Any, NamedTuple
+from typing import NamedTuple
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -211,10 +211,10 @@ class CueMetrics:
     )
     """The per-channel fields, in :meth:`to_dict`'s order."""
 
-    def to_dict(self) -> dict[str, Any]:
+    def to_dict(self) -> dict[str, object]:
         """JSON-ready: per-channel figures as ``{field: {channel: value}}`` (NaN as None),
         the ``*_any`` figures, ``clamped`` and ``n_samples``."""
-        out: dict[str, Any] = {}
+        out: dict[str, object] = {}
         for name in self.PER_CHANNEL:
             arr = getattr(self, name)
             out[name] = {a: _clean(float(v)) for a, v in zip(AXIS_NAMES, arr, strict=True)}

@@ -73,7 +73,7 @@ import time
 from collections import deque
 from collections.abc import MutableSequence, Sequence
 from dataclasses import dataclass, field
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -83,6 +83,9 @@ from ._classical import ClassicalWashout, WashoutState
 from ._mpc_params import MpcParams
 from ._params import GRAVITY_M_S2, CueingParams
 from ._vestibular import DEFAULT_MODEL_SET, get_model_set
+
+if TYPE_CHECKING:
+    from ._algorithm import Rig
 
 __all__ = [
     "MpcCueing",
@@ -514,14 +517,16 @@ class RigLimits:
     tilt_accel: float
 
 
-def rig_limits(params: CueingParams, mp: MpcParams, fs_hz: float) -> RigLimits:
-    """Load the platform and the controller's limits named by ``mp``."""
-    from motioncue.kinematics import load_platform
-    from motioncue.output._controllers import load_controller
-    from motioncue.trajectory import ActuatorLimits
+def rig_limits(
+    params: CueingParams, mp: MpcParams, fs_hz: float, rig: Rig | None = None
+) -> RigLimits:
+    """The plan's limits on ``rig`` (default: the platform and controller named by ``mp``)."""
+    if rig is None:
+        from ._algorithm import named_rig
 
-    platform = load_platform(mp.platform)
-    lim = ActuatorLimits.from_platform(platform, load_controller(mp.controller), rate_hz=fs_hz)
+        rig = named_rig(mp.platform, mp.controller, fs_hz)
+    platform = rig.platform
+    lim = rig.limits
     q_min = np.asarray(lim.q_min, dtype=float)
     q_max = np.asarray(lim.q_max, dtype=float)
     q0 = np.asarray(platform.inverse(np.zeros(6)), dtype=float)
@@ -805,6 +810,7 @@ class MpcCueing:
 
     params: CueingParams
     fs_hz: float
+    rig: Rig | None = None
     mpc: MpcParams = field(init=False)
     classical: ClassicalWashout = field(init=False)
     model: LinearModel = field(init=False)
@@ -818,7 +824,7 @@ class MpcCueing:
         fs = classical.fs_hz
         object.__setattr__(self, "fs_hz", fs)
         mp = self.params.mpc if self.params.mpc is not None else MpcParams()
-        limits = rig_limits(self.params, mp, fs)
+        limits = rig_limits(self.params, mp, fs, self.rig)
         mp = resolve_reach(mp, limits)
         object.__setattr__(self, "mpc", mp)
         object.__setattr__(self, "classical", classical)

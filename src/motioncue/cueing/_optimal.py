@@ -27,7 +27,7 @@ from __future__ import annotations
 
 from collections.abc import MutableSequence, Sequence
 from dataclasses import dataclass, field
-from typing import ClassVar
+from typing import TYPE_CHECKING, ClassVar
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -50,6 +50,9 @@ from ._mpc import (
 )
 from ._mpc_params import MpcParams
 from ._params import GRAVITY_M_S2, CueingParams
+
+if TYPE_CHECKING:
+    from ._algorithm import Rig
 
 __all__ = ["OptimalCueing", "OptimalResult"]
 
@@ -103,6 +106,7 @@ class OptimalCueing:
 
     params: CueingParams
     fs_hz: float
+    rig: Rig | None = None
     mpc: MpcParams = field(init=False)
     classical: ClassicalWashout = field(init=False)
     model: LinearModel = field(init=False)
@@ -125,7 +129,7 @@ class OptimalCueing:
         bs = mp.block_samples
         n_stride = max(bs, round(mp.stride_s * fs / bs) * bs)
         n_window = max(n_stride + bs, round(mp.window_s * fs / bs) * bs)
-        limits = rig_limits(self.params, mp, fs)
+        limits = rig_limits(self.params, mp, fs, self.rig)
         mp = resolve_reach(mp, limits)
         model = build_model(self.params.dofs, mp, fs)
         object.__setattr__(self, "mpc", mp)

@@ -8,12 +8,13 @@ seconds, m/s^2 and rad/s.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from collections.abc import Mapping
+from dataclasses import dataclass, field
 from pathlib import Path
 
 from .._config import ConfigReader, find_config, load_toml
 from .._errors import ConfigError
-from ._mpc_params import MpcParams, read_mpc_table
+from ._mpc_params import MpcParams
 
 __all__ = [
     "DOF_NAMES",
@@ -174,6 +175,9 @@ class CueingParams:
     mpc : MpcParams or None
         Settings of the optimisation-based algorithms (``"mpc"``, ``"optimal"``), from the
         optional ``[mpc]`` table; ``None`` when the preset has none.
+    tables : mapping of str to object
+        The other algorithms' own tables, by name, as their registered readers return them
+        (:class:`motioncue.cueing.ParameterTable`).
     intensity_gentle : tuple of floats or None
         The gentle (0 %) end of the preset's tuned intensity range: one value per
         :data:`INTENSITY_KEYS` (their units), from the optional ``[intensity]`` table; the
@@ -220,6 +224,7 @@ class CueingParams:
     )
     mpc: MpcParams | None = None
     intensity_gentle: tuple[float, ...] | None = None
+    tables: Mapping[str, object] = field(default_factory=dict, hash=False)
 
     @property
     def tilt_limits_rad(self) -> tuple[float, float, float, float]:
@@ -383,7 +388,7 @@ def load_cueing(name_or_path: str | Path) -> CueingParams:
         Unknown preset, missing or unknown key, or a value out of range (named); an
         ``algorithm`` that is not registered (the message lists the known ones).
     """
-    from ._algorithm import check_algorithm_name
+    from ._algorithm import check_algorithm_name, parameter_tables
 
     path = find_config("cueing", name_or_path)
     top = ConfigReader(load_toml(path), path.name)
@@ -465,7 +470,8 @@ def load_cueing(name_or_path: str | Path) -> CueingParams:
         hd = top.table("head")
         head = _vec3(tuple(v * 1e-3 for v in hd.vector("offset_mm", 3)))
         hd.finish()
-    mpc = read_mpc_table(top.table("mpc")) if top.has("mpc") else None
+    tables = {t.name: t.read(top.table(t.name)) for t in parameter_tables() if top.has(t.name)}
+    mpc = tables.pop("mpc", None)
     gentle = None
     if top.has("intensity"):
         it = top.table("intensity")
@@ -514,8 +520,9 @@ def load_cueing(name_or_path: str | Path) -> CueingParams:
                 ang[1] * _D2R,
                 ang[2] * _D2R,
             ),
-            mpc=mpc,
+            mpc=mpc if isinstance(mpc, MpcParams) else None,
             intensity_gentle=gentle,
+            tables=tables,
         )
     except ConfigError as exc:
         raise ConfigError(f"{path.name}: {exc}") from exc

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import math
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING
 
 import numpy as np
 from numpy.typing import ArrayLike
@@ -12,12 +12,15 @@ from numpy.typing import ArrayLike
 from .._errors import ConfigError
 from ._evaluate import AXIS_NAMES, CueingEvaluation
 
+if TYPE_CHECKING:
+    from matplotlib.axes import Axes
+
 __all__ = ["plot_cueing", "plot_title", "rider_axis"]
 
 _UNITS = ("m/s²", "m/s²", "m/s²", "deg/s", "deg/s", "deg/s")
 
 
-def rider_axis(ax: Any, vehicle: ArrayLike, riders: list[ArrayLike], thr: float) -> Any:
+def rider_axis(ax: Axes, vehicle: ArrayLike, riders: list[ArrayLike], thr: float) -> Axes:
     """A right-hand axis for the rider's perceived motion, scaled to show it.
 
     The vehicle's perceived motion stays on ``ax`` (left); the rider's is often a few per

@@ -82,7 +82,7 @@ from typing import TYPE_CHECKING, Literal, Protocol
 import numpy as np
 
 from .._errors import ConfigError, MotioncueError
-from ..cueing import make_cueing
+from ..cueing import Rig, cueing_algorithms, cueing_entry, make_cueing
 from ..trajectory import limit_pose
 from ._effects import EffectGains, EffectsState, make_effects
 from ._realtime import CueGate, GateConfig, Ticker
@@ -476,20 +476,23 @@ class Bridge:
                 f"{platform.n_actuators}"
             )
         self._arrival = cfg.frame_clock == "arrival"
-        if self._arrival and cueing.algorithm != "classical":
+        if self._arrival and not cueing_entry(cueing.algorithm).frames_on_arrival:
             raise ConfigError(
                 f"frames on arrival step the cueing every millisecond; algorithm "
                 f"{cueing.algorithm!r} is meant for the frame rate: use fixed frames "
                 "(BridgeConfig frame_clock='fixed', --frames fixed)"
             )
-        # on arrival the frame intervals vary: the cueing runs on the 1 ms grid instead,
-        # stepped once per ms of each frame interval
-        self.cueing = make_cueing(cueing, 1000.0 if self._arrival else cfg.rate_hz)
-        if getattr(self.cueing, "offline", False):
+        if not cueing_entry(cueing.algorithm).streaming:
             raise ConfigError(
                 f"cueing algorithm {cueing.algorithm!r} needs the whole recording; the live "
-                'bridge needs a streaming one (algorithm = "classical" or "mpc")'
+                "bridge needs a streaming one (algorithm = "
+                + " or ".join(repr(a) for a in cueing_algorithms() if cueing_entry(a).streaming)
+                + ")"
             )
+        # on arrival the frame intervals vary: the cueing runs on the 1 ms grid instead,
+        # stepped once per ms of each frame interval
+        rig = Rig(platform, limits)
+        self.cueing = make_cueing(cueing, 1000.0 if self._arrival else cfg.rate_hz, rig)
         self.cueing_state = self.cueing.initial_state()
         # effect layer (``effects``: an EffectGains; None or all gains 0: none); refused below
         # 100 Hz. It adds to the blended pose before workspace limiting: limits see the sum.

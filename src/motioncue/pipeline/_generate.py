@@ -11,14 +11,25 @@ from __future__ import annotations
 import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from .._errors import LimitError
+from ..analysis._chain import deliver, run_cueing
+from ..cueing import CueingParams, Rig, make_cueing
+from ..telemetry._recording import resample
+from ..trajectory import ActuatorLimits, limit_ride, transition, transition_through
 from ..trajectory._derive import planning_limits, pulse_rounding_limits
 from ._ridefile import Ride
 from ._verify import FrameCheck, check_frames
+
+if TYPE_CHECKING:
+    from ..kinematics import Platform
+    from ..output import Controller
+    from ..telemetry import Recording
+    from ..trajectory import OptimisedRide, Transition
+    from ._inputs import Keyframes
 
 __all__ = [
     "RAMP_ACCEL",
@@ -63,7 +74,7 @@ class GenerateReport:
         Cue poses outside the workspace, scaled back toward neutral.
     max_pose_scale_loss : float
         Largest fraction of a pose removed by workspace limiting (0 = none).
-    optimisation : Any
+    optimisation : OptimisedRide
         The :class:`motioncue.trajectory.OptimisedRide` of the limits stage.
     frame_check : FrameCheck
         Independent finite-difference check of the frames against the limits table.
@@ -85,22 +96,24 @@ class GenerateReport:
     bad_samples: int
     poses_clamped: int
     max_pose_scale_loss: float
-    optimisation: Any
+    optimisation: OptimisedRide
     frame_check: FrameCheck
     stage_s: dict[str, float] = field(default_factory=dict)
     transition_fallbacks: tuple[str, ...] = ()
 
 
 def _finish(
-    q_desired: np.ndarray, platform: Any, tight: Any, table: list[dict[str, Any]], dt: float
-) -> tuple[Any, np.ndarray, np.ndarray, np.ndarray, FrameCheck]:
+    q_desired: np.ndarray,
+    platform: Platform,
+    tight: ActuatorLimits,
+    table: list[dict[str, Any]],
+    dt: float,
+) -> tuple[OptimisedRide, np.ndarray, np.ndarray, np.ndarray, FrameCheck]:
     """Offline limits (casadi), whole pulses, and the independent check every ride must pass.
 
     The ride starts from the park position at rest. Returns ``(optimisation, q, pulses, t_s,
     check)``; raises :class:`LimitError` rather than return frames that break a limit.
     """
-    from motioncue.trajectory import limit_ride
-
     opt = limit_ride(q_desired, dt, tight, q0=platform.q_park, v0=np.zeros(platform.n_actuators))
     q = np.asarray(opt.q, dtype=float)
     pulses = platform.drives.to_pulses(q)
@@ -123,14 +136,30 @@ def _finish(
     return opt, q, pulses, t_s, check
 
 
+def _ride_limits(
+    platform: Platform, controller: Controller, rate_hz: float, limits: ActuatorLimits | None
+) -> tuple[ActuatorLimits, list[dict[str, Any]], ActuatorLimits]:
+    """Checked before any work: the rate (the controller's clock must carry it), the limits
+    (default: the platform's with the controller's), their pulse table and the planning
+    limits (tightened for the pulse rounding, park kept inside)."""
+    controller.check_rate(rate_hz)
+    if limits is None:
+        limits = ActuatorLimits.from_platform(platform, controller, rate_hz=rate_hz)
+    return (
+        limits,
+        limits.to_pulses_table(platform),
+        planning_limits(limits, platform, 1.0 / rate_hz),
+    )
+
+
 def generate_ride(
-    recording: Any,
-    platform: Any,
-    controller: Any,
-    cueing: Any,
+    recording: Recording,
+    platform: Platform,
+    controller: Controller,
+    cueing: CueingParams,
     *,
     rate_hz: float = 100.0,
-    limits: Any = None,
+    limits: ActuatorLimits | None = None,
     source: str = "",
     platform_name: str | None = None,
     controller_name: str | None = None,
@@ -157,9 +186,6 @@ def generate_ride(
     -------
     ride, report
     """
-    from motioncue.cueing import make_cueing
-    from motioncue.telemetry._recording import resample
-    from motioncue.trajectory import ActuatorLimits, limit_pose, transition
 
     def step(name: str, frac: float) -> None:
         if progress is not None:
@@ -174,22 +200,22 @@ def generate_ride(
         stage_s[name] = now - clock
         clock = now
 
-    controller.check_rate(rate_hz)  # before any work: a rate the controller's clock can carry
+    limits, table, tight = _ride_limits(platform, controller, rate_hz, limits)
     dt = 1.0 / rate_hz
-    if limits is None:
-        limits = ActuatorLimits.from_platform(platform, controller, rate_hz=rate_hz)
-    table = limits.to_pulses_table(platform)
-    tight = planning_limits(limits, platform, dt)
 
     step("resample", 0.0)
     rec = resample(recording, rate_hz)
     lap("resample")
     step("cueing", 0.1)
-    wres = make_cueing(cueing, rate_hz).run(rec.f, rec.w)
+    # the offline chain's cueing and workspace stages (motioncue.analysis._chain); the
+    # casadi ride optimisation below stands for the live actuator limiter
+    design = make_cueing(cueing, rate_hz, Rig(platform, limits, controller.name))
+    wres = run_cueing(design, rec.f, rec.w)
     lap("cueing")
     step("workspace", 0.2)
-    plim = limit_pose(platform, wres.poses, limits=tight)
-    poses_cue_ok = np.asarray(plim.pose, dtype=float)
+    delivered = deliver(platform, wres.poses, tight, rate_hz, actuator_limits=False)
+    plim = delivered.workspace
+    poses_cue_ok = delivered.poses
     lap("workspace")
     step("ramps", 0.35)
     gentle = tight.scaled(speed=RAMP_SPEED, accel=RAMP_ACCEL)
@@ -217,7 +243,7 @@ def generate_ride(
     lap("actuator limits, pulses and check")
     n_in = len(ramp_in.poses) - 1
     cue = slice(n_in, n_in + len(poses_cue_ok))
-    clamped = int(np.count_nonzero(np.asarray(plim.status) != "ok"))
+    clamped = delivered.clamped
     loss = float(np.max(1.0 - np.asarray(plim.scale, dtype=float), initial=0.0))
     n_frames = len(t_s)
     ride = Ride(
@@ -280,12 +306,12 @@ def _stretch(q: np.ndarray, factor: float, rate_hz: float, n_out: int) -> np.nda
 
 
 def generate_keyframe_ride(
-    keyframes: Any,
-    platform: Any,
-    controller: Any,
+    keyframes: Keyframes,
+    platform: Platform,
+    controller: Controller,
     *,
     rate_hz: float = 100.0,
-    limits: Any = None,
+    limits: ActuatorLimits | None = None,
     source: str = "",
     platform_name: str | None = None,
     controller_name: str | None = None,
@@ -322,14 +348,8 @@ def generate_keyframe_ride(
     LimitError
         A keyframe the platform cannot reach (named with the actuator).
     """
-    from motioncue.trajectory import ActuatorLimits, transition, transition_through
-
-    controller.check_rate(rate_hz)  # before any work: a rate the controller's clock can carry
+    limits, table, tight = _ride_limits(platform, controller, rate_hz, limits)
     dt = 1.0 / rate_hz
-    if limits is None:
-        limits = ActuatorLimits.from_platform(platform, controller, rate_hz=rate_hz)
-    table = limits.to_pulses_table(platform)
-    tight = planning_limits(limits, platform, dt)
     poses = np.asarray(keyframes.poses, dtype=float)
     times = np.asarray(keyframes.t_s, dtype=float)
     park = np.asarray(platform.pose_park, dtype=float)
@@ -341,7 +361,7 @@ def generate_keyframe_ride(
     max_late = 0.0
     fallbacks: list[str] = []
 
-    def note(what: str, tr: Any) -> Any:
+    def note(what: str, tr: Transition) -> Transition:
         if tr.fallback:
             fallbacks.append(f"{what}: {tr.fallback}")
         return tr
@@ -432,7 +452,7 @@ def generate_keyframe_ride(
     }
 
 
-def _check_keyframes_reachable(platform: Any, poses: np.ndarray, times: np.ndarray) -> None:
+def _check_keyframes_reachable(platform: Platform, poses: np.ndarray, times: np.ndarray) -> None:
     """Refuse the first keyframe the platform cannot reach, naming it and the actuator."""
     for k, pose in enumerate(poses):
         res = platform.check(pose)

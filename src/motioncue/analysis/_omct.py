@@ -110,13 +110,23 @@ from __future__ import annotations
 import math
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
-from typing import Any
+from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 from numpy.typing import NDArray
 
 from .._errors import ConfigError
-from ._params import GRAVITY_M_S2
+from ..cueing import ClassicalWashout, CueingParams
+from ..cueing._params import GRAVITY_M_S2
+from ..trajectory import pulse_rounding_limits
+from ._chain import offline_chain
+
+if TYPE_CHECKING:
+    from control import TransferFunction
+
+    from ..kinematics import Platform
+    from ..trajectory import ActuatorLimits
 
 __all__ = [
     "MEASURE_PERIODS",
@@ -243,19 +253,19 @@ def omct_amplitude(path: str | OmctPath, frequency_rad_s: float) -> float:
 
 
 # ---------------------------------------------------------------------------------- analytic
-def _tf(num: Sequence[float], den: Sequence[float]) -> Any:
+def _tf(num: Sequence[float], den: Sequence[float]) -> TransferFunction:
     import control
 
     return control.tf(list(num), list(den))
 
 
-def _head_offset(params: Any) -> tuple[float, float, float]:
+def _head_offset(params: CueingParams) -> tuple[float, float, float]:
     """The rider's head offset of the preset (m), zero where the washout has none."""
     h = params.head_offset_m
     return (float(h[0]), float(h[1]), float(h[2]))
 
 
-def _linear_systems(design: Any) -> dict[str, Any]:
+def _linear_systems(design: ClassicalWashout) -> dict[str, TransferFunction]:
     """The continuous small-signal transfer function of every path (python-control)."""
     import control
 
@@ -277,7 +287,7 @@ def _linear_systems(design: Any) -> dict[str, Any]:
     tilt_x = mp * kt[0] * g_t  # f_x -> -g * pitch (tilt-coordination force)
     tilt_y = mr * kt[1] * g_t  # f_y -> +g * roll
     # linear platform response: body rates W (per input) and specific force at the origin
-    rates: dict[str, list[Any]] = {
+    rates: dict[str, list[TransferFunction]] = {
         "p": [kw[0] * h_r[0], zero, zero],
         "q": [zero, kw[1] * h_r[1], zero],
         "r": [zero, zero, kw[2] * h_r[2]],
@@ -285,7 +295,7 @@ def _linear_systems(design: Any) -> dict[str, Any]:
         "ay": [s * tilt_y / g, zero, zero],
         "az": [zero, zero, zero],
     }
-    force: dict[str, list[Any]] = {
+    force: dict[str, list[TransferFunction]] = {
         "p": [zero, g * kw[0] * (one - ht[1]) * ang[0], zero],
         "q": [-g * kw[1] * (one - ht[0]) * ang[1], zero, zero],
         "r": [zero, zero, zero],
@@ -301,7 +311,7 @@ def _linear_systems(design: Any) -> dict[str, Any]:
             dw = [s * c for c in wv]
             cross = [dw[1] * hz - dw[2] * hy, dw[2] * hx - dw[0] * hz, dw[0] * hy - dw[1] * hx]
             force[key] = [force[key][i] + (one - ht[i]) * cross[i] for i in range(3)]
-    out: dict[str, Any] = {}
+    out: dict[str, TransferFunction] = {}
     for path in OMCT_PATHS:
         src = path.name.split("->")[0]
         table = rates if path.output_kind == "w" else force
@@ -310,7 +320,9 @@ def _linear_systems(design: Any) -> dict[str, Any]:
 
 
 def linear_response(
-    design: Any, path: str | OmctPath, frequencies_rad_s: Sequence[float] | NDArray[Any]
+    design: ClassicalWashout,
+    path: str | OmctPath,
+    frequencies_rad_s: Sequence[float] | NDArray[np.float64],
 ) -> NDArray[np.complex128]:
     """Small-signal frequency response of the continuous classical washout on an unlimited
     platform, at ``frequencies_rad_s`` (see the module docstring for the formulas).
@@ -333,7 +345,7 @@ def linear_response(
     return np.asarray(sys(1j * w), dtype=complex).reshape(w.shape)
 
 
-def _slowest_decay_rate(design: Any) -> float:
+def _slowest_decay_rate(design: ClassicalWashout) -> float:
     """Smallest ``-Re(pole)`` over the continuous design's factors (1/s)."""
     cont = design.continuous()
     rates: list[float] = []
@@ -389,7 +401,7 @@ class OmctPoint:
         """``phase - linear_phase`` wrapped to (-180, 180] deg."""
         return _wrap_deg(self.phase_deg - self.linear_phase_deg)
 
-    def to_dict(self) -> dict[str, Any]:
+    def to_dict(self) -> dict[str, object]:
         return {
             "path": self.path,
             "frequency_rad_s": self.frequency_rad_s,
@@ -446,7 +458,7 @@ class OmctResult:
     def for_path(self, path: str) -> tuple[OmctPoint, ...]:
         return tuple(pt for pt in self.points if pt.path == path)
 
-    def to_dict(self) -> dict[str, Any]:
+    def to_dict(self) -> dict[str, object]:
         return {
             "test": "objective motion cueing test (OMCT), motioncue amplitudes",
             **self.labels,
@@ -574,7 +586,7 @@ def platform_motion(
     return f_in, w_in
 
 
-def _first_harmonic(y: NDArray[Any], t: NDArray[Any], w: float) -> complex:
+def _first_harmonic(y: NDArray[np.floating], t: NDArray[np.floating], w: float) -> complex:
     """Least-squares ``c + a sin(wt) + b cos(wt)``; returns the phasor ``a + j b``
     (amplitude ``|.|``, phase ``angle(.)`` relative to ``sin(wt)``)."""
     m = np.column_stack([np.ones_like(t), np.sin(w * t), np.cos(w * t)])
@@ -586,9 +598,9 @@ Progress = Callable[[str, float], None]
 
 
 def run_omct(
-    design: Any,
-    platform: Any,
-    limits: Any,
+    design: ClassicalWashout,
+    platform: Platform,
+    limits: ActuatorLimits,
     *,
     paths: Sequence[str] | None = None,
     frequencies_rad_s: Sequence[float] | None = None,
@@ -627,9 +639,6 @@ def run_omct(
         Unknown path, a frequency out of range, an invalid amplitude scale, or limits that
         do not fit the platform.
     """
-    from motioncue.trajectory import JerkLimiter, RealtimeLimiter, limit_pose
-    from motioncue.trajectory._derive import pulse_rounding_limits
-
     sel = [_path(p) for p in (paths if paths is not None else [p.name for p in OMCT_PATHS])]
     if not sel:
         raise ConfigError("paths is empty; allowed: names from " + ", ".join(_PATHS_BY_NAME))
@@ -651,8 +660,6 @@ def run_omct(
             f"{platform.n_actuators}"
         )
     tight = pulse_rounding_limits(limits, platform, dt)
-    limiter: Any = (RealtimeLimiter if tight.j_max is None else JerkLimiter)(tight, dt)
-    q_neutral = np.asarray(platform.inverse(np.zeros(6)), dtype=float)
     settle_s = 12.0 / _slowest_decay_rate(design)
     head = _head_offset(design.params)
     g = GRAVITY_M_S2
@@ -676,18 +683,8 @@ def run_omct(
             f_in[:, 2] = g
             w_in = np.zeros((n_total, 3))
             (f_in if p.input_kind == "f" else w_in)[:, p.input_axis] += u
-            poses = np.asarray(design.run(f_in, w_in).poses, dtype=float)
-            lim = limit_pose(platform, poses, limits=tight)
-            q_target = np.asarray(lim.q, dtype=float)
-            n_ws = int(np.count_nonzero(np.asarray(lim.status) != "ok"))
-            state = limiter.initial_state(q_neutral)
-            q_out = limiter.run(state, q_target)
-            changed = np.flatnonzero(np.any(q_out != q_target, axis=1))
-            out_poses = np.array(lim.pose, dtype=float)
-            for k in changed.tolist():
-                fk = platform.forward(q_out[k], guess=out_poses[k])
-                out_poses[k] = np.asarray(fk.pose, dtype=float)
-            f_out, w_out = platform_motion(out_poses, dt, head)
+            out = offline_chain(design, f_in, w_in, platform, tight, fs).delivered
+            f_out, w_out = platform_motion(out.poses, dt, head)
             y_all = (f_out if p.output_kind == "f" else w_out)[:, p.output_axis]
             sl = slice(n_total - 4 - n_meas, n_total - 4)  # measured periods, interior
             t_m = t[sl]
@@ -705,8 +702,8 @@ def run_omct(
                     linear_gain=float(abs(lin[j])),
                     linear_phase_deg=_wrap_deg(math.degrees(float(np.angle(lin[j])))),
                     frames=n_total,
-                    workspace_clamped=n_ws,
-                    actuator_limited=int(state.n_clamped),
+                    workspace_clamped=out.clamped,
+                    actuator_limited=out.limiter_clamped,
                 )
             )
     if progress is not None:
@@ -715,7 +712,9 @@ def run_omct(
 
 
 # ---------------------------------------------------------------------------------- plot
-def plot_omct(result: OmctResult, design: Any, path: Any, *, title: str = "") -> Any:
+def plot_omct(
+    result: OmctResult, design: ClassicalWashout, path: str | Path, *, title: str = ""
+) -> Path:
     """Write a PNG in the OMCT's format: per path, the gain (log-log) above the phase (deg,
     log frequency axis), the analytic linear response of ``design`` as a line and the
     measured points as markers.
@@ -740,7 +739,6 @@ def plot_omct(result: OmctResult, design: Any, path: Any, *, title: str = "") ->
         The file cannot be written.
     """
     import io
-    from pathlib import Path
 
     import matplotlib
 

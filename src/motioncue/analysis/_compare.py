@@ -26,16 +26,30 @@ import re
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field, replace
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 from numpy.typing import NDArray
 
 from .._errors import ConfigError
-from ._bound import CueBound, RigReach
-from ._evaluate import CueingEvaluation, evaluate_cueing
-from ._plot import rider_axis
-from ._score import cue_score
+from ..cueing import CueingParams, Rig, make_cueing
+from ..cueing._bound import CueBound, RigReach, cue_bound
+from ..cueing._evaluate import CueingEvaluation, evaluate_cueing
+from ..cueing._plot import rider_axis
+from ..cueing._score import cue_score
+from ..cueing._vestibular import get_model_set
+from ..telemetry._recording import resample
+from ..trajectory import pulse_rounding_limits
+from ._chain import offline_chain
+from ._reach import rig_reach
+
+if TYPE_CHECKING:
+    from matplotlib.artist import Artist
+    from matplotlib.figure import Figure
+
+    from ..kinematics import Platform
+    from ..telemetry import Recording
+    from ..trajectory import ActuatorLimits
 
 __all__ = [
     "COLUMN_NOTES",
@@ -44,7 +58,9 @@ __all__ = [
     "CompareRun",
     "compare_cueing",
     "compare_figure",
+    "plot_file_names",
     "run_chain",
+    "write_compare_report",
 ]
 
 COMPARE_AXES: tuple[str, ...] = ("fx", "fy", "fz", "p", "q", "r")
@@ -172,6 +188,10 @@ COLUMN_NOTES: dict[str, str] = {
 
 COLUMNS: tuple[str, ...] = tuple(COLUMN_NOTES)
 
+Row = dict[str, Any]
+"""A metrics row: :data:`COLUMNS` to labels (str) and numbers (float, int for counts; NaN
+where undefined); keyed by column name, so its values are typed by the column."""
+
 
 @dataclass(frozen=True, eq=False)
 class CompareRun:
@@ -204,7 +224,7 @@ class CompareRun:
     bad_samples: int
     bound: CueBound | None = None
 
-    def row(self) -> dict[str, Any]:
+    def row(self) -> Row:
         """The metrics row: :data:`COLUMNS` to numbers (NaN where undefined)."""
         ev = self.evaluation
         n = ev.perceived_sim.shape[0]
@@ -212,7 +232,7 @@ class CompareRun:
         dur = n / fs
         sim, veh, thr = ev.perceived_sim, ev.perceived_vehicle, ev.thresholds
         m = ev.metrics
-        row: dict[str, Any] = {
+        row: Row = {
             "recording": self.recording,
             "preset": self.preset,
             "duration_s": dur,
@@ -261,9 +281,9 @@ class CompareRun:
 def run_chain(
     f_vehicle: NDArray[np.float64],
     w_vehicle: NDArray[np.float64],
-    params: Any,
-    platform: Any,
-    limits: Any,
+    params: CueingParams,
+    platform: Platform,
+    limits: ActuatorLimits,
     rate_hz: float,
     *,
     model: str = "telban-cardullo-2005",
@@ -292,37 +312,20 @@ def run_chain(
     -------
     CompareRun
     """
-    from motioncue.trajectory import JerkLimiter, RealtimeLimiter, limit_pose
-    from motioncue.trajectory._derive import pulse_rounding_limits
-
-    from ._algorithm import make_cueing
-
-    dt = 1.0 / rate_hz
-    tight = pulse_rounding_limits(limits, platform, dt)
-    res = make_cueing(params, rate_hz).run(f_vehicle, w_vehicle)
-    f_used = np.asarray(getattr(res, "f_used", f_vehicle), dtype=float)
-    w_used = np.asarray(getattr(res, "w_used", w_vehicle), dtype=float)
-    lim = limit_pose(platform, np.asarray(res.poses, dtype=float), limits=tight)
-    q_target = np.asarray(lim.q, dtype=float)
-    poses = np.array(lim.pose, dtype=float)
-    if len(poses):
-        limiter: Any = (RealtimeLimiter if tight.j_max is None else JerkLimiter)(tight, dt)
-        state = limiter.initial_state(np.asarray(platform.inverse(np.zeros(6)), dtype=float))
-        q_out = np.asarray(limiter.run(state, q_target), dtype=float)
-        changed = np.flatnonzero(np.any(q_out != q_target, axis=1))
-        for k in changed.tolist():
-            poses[k] = np.asarray(platform.forward(q_out[k], guess=poses[k]).pose, dtype=float)
-    else:
-        changed = np.zeros(0, dtype=np.int64)
-    clamped = int(np.count_nonzero(np.asarray(lim.status) != "ok"))
+    tight = pulse_rounding_limits(limits, platform, 1.0 / rate_hz)
+    design = make_cueing(params, rate_hz, Rig(platform, limits))
+    run = offline_chain(design, f_vehicle, w_vehicle, platform, tight, rate_hz)
+    out = run.delivered
+    poses = out.poses
+    clamped = out.clamped
     ev = evaluate_cueing(
-        f_used,
-        w_used,
+        run.cued.f_used,
+        run.cued.w_used,
         poses,
         rate_hz,
         workspace=params.workspace,
         model=model,
-        head_offset_m=getattr(params, "head_offset_m", None),
+        head_offset_m=params.head_offset_m,
         clamped_share=clamped / len(poses) if len(poses) else 0.0,
     )
     return CompareRun(
@@ -331,19 +334,19 @@ def run_chain(
         evaluation=ev,
         poses=poses,
         poses_clamped=clamped,
-        actuator_limited=int(changed.size),
-        bad_samples=int(res.bad_samples),
+        actuator_limited=out.actuator_limited,
+        bad_samples=run.cued.bad_samples,
     )
 
 
-def _cell(v: Any) -> str:
+def _cell(v: object) -> str:
     """A CSV cell: floats in full precision, empty where undefined."""
     if isinstance(v, float):
         return repr(v) if math.isfinite(v) else ""
     return str(v)
 
 
-def _fmt(v: Any, spec: str) -> str:
+def _fmt(v: object, spec: str) -> str:
     if isinstance(v, float) and not math.isfinite(v):
         return ""
     return format(v, spec)
@@ -374,17 +377,17 @@ class CompareResult:
     t_s: dict[str, NDArray[np.float64]] = field(default_factory=dict)
     reach: RigReach | None = None
 
-    def rows(self) -> list[dict[str, Any]]:
+    def rows(self) -> list[Row]:
         """One metrics row per run (:data:`COLUMNS`)."""
         return [r.row() for r in self.runs]
 
     def runs_of(self, recording: str) -> list[CompareRun]:
         return [r for r in self.runs if r.recording == recording]
 
-    def to_dict(self, plots: Sequence[str] = ()) -> dict[str, Any]:
+    def to_dict(self, plots: Sequence[str] = ()) -> dict[str, object]:
         """JSON-ready: the setting, the column notes, the rows (NaN as null), the plots."""
 
-        def clean(v: Any) -> Any:
+        def clean(v: object) -> object:
             return None if isinstance(v, float) and not math.isfinite(v) else v
 
         return {
@@ -558,10 +561,10 @@ class CompareResult:
 
 
 def compare_cueing(
-    recordings: Sequence[tuple[str, Any]],
-    presets: Sequence[tuple[str, Any]],
-    platform: Any,
-    limits: Any,
+    recordings: Sequence[tuple[str, Recording]],
+    presets: Sequence[tuple[str, CueingParams]],
+    platform: Platform,
+    limits: ActuatorLimits,
     *,
     rate_hz: float = 100.0,
     model: str = "telban-cardullo-2005",
@@ -598,10 +601,6 @@ def compare_cueing(
     """
     import time
 
-    from motioncue.telemetry._recording import resample
-
-    from ._vestibular import get_model_set
-
     ms = get_model_set(model)
     if not (math.isfinite(rate_hz) and rate_hz > 0.0):
         raise ConfigError(f"rate {rate_hz!r} Hz is invalid; allowed: a finite number > 0")
@@ -617,18 +616,12 @@ def compare_cueing(
     t0 = time.perf_counter()
     reach = None
     if bound:
-        from motioncue.trajectory._derive import pulse_rounding_limits
-
-        from ._bound import rig_reach
-
         reach = rig_reach(platform, pulse_rounding_limits(limits, platform, 1.0 / rate_hz))
     for rec_label, rec in recordings:
         uniform = resample(rec, rate_hz)
         t_s[rec_label] = np.asarray(uniform.t_s, dtype=float)
         rec_bound = None
         if reach is not None and len(uniform) >= 4:
-            from ._bound import cue_bound
-
             rec_bound = cue_bound(np.asarray(uniform.f, dtype=float), rate_hz, reach, model=ms)
         for preset_label, params in presets:
             if progress is not None:
@@ -663,12 +656,12 @@ def compare_cueing(
     )
 
 
-def compare_figure(result: CompareResult, recording: str) -> Any:
+def compare_figure(result: CompareResult, recording: str) -> Figure:
     """The overlay figure of one recording: perceived motion per channel, vehicle and presets.
 
     Six panels (fx, fy, fz in m/s², p, q, r in deg/s), the vehicle as a thick dark line on
     the left axis, each preset in its own colour on the right axis, scaled to show the
-    rider's cue (:func:`motioncue.cueing._plot.rider_axis`: zero at the same height; the
+    rider's cue (the scaling of ``motioncue cue``'s plot: zero at the same height; the
     presets' rendered share in the legend), the perception threshold as a grey band; one
     legend naming the vehicle and every preset; the title names the recording, platform,
     controller, frame rate and vestibular model set. Returns the matplotlib figure (Agg;
@@ -689,7 +682,7 @@ def compare_figure(result: CompareResult, recording: str) -> Any:
     fig = Figure(figsize=(14, 9.5), layout="constrained")
     axes = fig.subplots(3, 2, sharex=True)
     colours = [f"C{k % 10}" for k in range(len(runs))]
-    handles: list[Any] = []
+    handles: list[Artist] = []
     labels: list[str] = []
     for i, name in enumerate(COMPARE_AXES):
         ax = axes[i % 3, i // 3]
@@ -784,7 +777,7 @@ def write_compare_report(result: CompareResult, folder: str | Path) -> dict[str,
     return paths
 
 
-def _write(path: Path, data: bytes, writer: Any) -> None:
+def _write(path: Path, data: bytes, writer: Callable[[Path, bytes], Path]) -> None:
     try:
         writer(path, data)
     except OSError as exc:

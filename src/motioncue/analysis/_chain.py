@@ -1,0 +1,184 @@
+"""The offline chain, written once: cueing -> workspace -> actuator limits -> FK.
+
+Every offline user of a cueing algorithm runs the same stages a ride goes through, on
+arrays at the frame rate:
+
+1. :func:`run_cueing`: the algorithm's whole-recording run, with the input it actually used
+   (bad samples held);
+2. :func:`deliver`: workspace limiting (:func:`motioncue.trajectory.limit_pose`) with the
+   actuator limits already tightened for the controller's pulse rounding (by the caller:
+   :func:`motioncue.trajectory.pulse_rounding_limits`, or ``planning_limits`` where a ride
+   starts and ends at park), then, optionally, the actuator speed/acceleration (and jerk)
+   limits the live bridge applies (:class:`~motioncue.trajectory.RealtimeLimiter`, or
+   :class:`~motioncue.trajectory.JerkLimiter` with a jerk limit), from the neutral pose at
+   rest, mapped back to poses by forward kinematics on the frames they changed.
+
+:func:`offline_chain` is both. Its users: ``generate`` (workspace only: the ride's own
+casadi optimisation replaces the real-time limiter), ``compare`` and ``omct`` (both stages),
+``tune`` (workspace only: the candidates' frames are judged against the limits instead).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import TYPE_CHECKING, Protocol
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from ..cueing import CueingResult
+from ..trajectory import JerkLimiter, RealtimeLimiter, limit_pose
+
+if TYPE_CHECKING:
+    from ..kinematics import Platform
+    from ..trajectory import ActuatorLimits, PoseLimitResult
+
+__all__ = [
+    "ChainRun",
+    "Cued",
+    "Delivered",
+    "RunsRecordings",
+    "deliver",
+    "offline_chain",
+    "run_cueing",
+]
+
+
+class RunsRecordings(Protocol):
+    """What the chain needs of a cueing design: a whole-recording run."""
+
+    def run(self, f: ArrayLike, w: ArrayLike) -> CueingResult:
+        """Poses (N, 6) for ``f``, ``w`` (N, 3) at the design's rate."""
+        ...
+
+
+@dataclass(frozen=True, eq=False)
+class Cued:
+    """The cueing stage's output.
+
+    Attributes
+    ----------
+    result : CueingResult
+        What the algorithm's run returned.
+    poses : (N, 6) array
+        Its poses (m, rad).
+    f_used, w_used : (N, 3) arrays
+        The input as the algorithm used it (bad samples held; the given input when the
+        algorithm does not report it).
+    bad_samples : int
+    """
+
+    result: CueingResult
+    poses: NDArray[np.float64]
+    f_used: NDArray[np.float64]
+    w_used: NDArray[np.float64]
+    bad_samples: int
+
+
+@dataclass(frozen=True, eq=False)
+class Delivered:
+    """What the platform delivers of requested poses.
+
+    Attributes
+    ----------
+    workspace : PoseLimitResult
+        Workspace limiting of the requested poses.
+    clamped : int
+        Poses workspace limiting scaled back (status not ``"ok"``).
+    poses : (N, 6) array
+        Delivered poses (m, rad): the workspace's, with forward kinematics of the limiter's
+        output on the frames it changed.
+    q : (N, n) array
+        Delivered actuator positions (SI).
+    actuator_limited : int
+        Frames the actuator limiter changed (0 without it).
+    limiter_clamped : int
+        Frames the limiter counted as clamped (its state's ``n_clamped``; 0 without it).
+    """
+
+    workspace: PoseLimitResult
+    clamped: int
+    poses: NDArray[np.float64]
+    q: NDArray[np.float64]
+    actuator_limited: int
+    limiter_clamped: int
+
+
+@dataclass(frozen=True, eq=False)
+class ChainRun:
+    """Both stages of :func:`offline_chain`."""
+
+    cued: Cued
+    delivered: Delivered
+
+
+def run_cueing(design: RunsRecordings, f: ArrayLike, w: ArrayLike) -> Cued:
+    """The cueing stage: ``design.run(f, w)`` and the input it used."""
+    res = design.run(f, w)
+    # an algorithm may hold bad input samples; the evaluation compares against what it used
+    f_used = np.asarray(getattr(res, "f_used", f), dtype=float)
+    w_used = np.asarray(getattr(res, "w_used", w), dtype=float)
+    return Cued(res, np.asarray(res.poses, dtype=float), f_used, w_used, int(res.bad_samples))
+
+
+def deliver(
+    platform: Platform,
+    poses: NDArray[np.float64],
+    tight: ActuatorLimits,
+    rate_hz: float,
+    *,
+    actuator_limits: bool = True,
+) -> Delivered:
+    """Workspace limiting and (``actuator_limits``) the live actuator limiter with FK.
+
+    Parameters
+    ----------
+    platform : Platform
+    poses : (N, 6) array
+        Requested poses (m, rad).
+    tight : ActuatorLimits
+        Limits already tightened for the pulse rounding.
+    rate_hz : float
+        Frame rate (Hz).
+    actuator_limits : bool
+        Also run the real-time actuator limiter from the neutral pose at rest.
+    """
+    lim = limit_pose(platform, poses, limits=tight)
+    clamped = int(np.count_nonzero(np.asarray(lim.status) != "ok"))
+    q_target = np.asarray(lim.q, dtype=float)
+    out = np.array(lim.pose, dtype=float)
+    if not actuator_limits or not len(out):
+        return Delivered(lim, clamped, out, q_target, 0, 0)
+    dt = 1.0 / rate_hz
+    q0 = np.asarray(platform.inverse(np.zeros(6)), dtype=float)
+    if tight.j_max is None:
+        limiter = RealtimeLimiter(tight, dt)
+        state = limiter.initial_state(q0)
+        q_out = np.asarray(limiter.run(state, q_target), dtype=np.float64)
+        n_clamped = state.n_clamped
+    else:
+        jerk = JerkLimiter(tight, dt)
+        jstate = jerk.initial_state(q0)
+        q_out = np.asarray(jerk.run(jstate, q_target), dtype=np.float64)
+        n_clamped = jstate.n_clamped
+    changed = np.flatnonzero(np.any(q_out != q_target, axis=1))
+    for k in changed.tolist():
+        out[k] = np.asarray(platform.forward(q_out[k], guess=out[k]).pose, dtype=float)
+    return Delivered(lim, clamped, out, q_out, int(changed.size), int(n_clamped))
+
+
+def offline_chain(
+    design: RunsRecordings,
+    f: ArrayLike,
+    w: ArrayLike,
+    platform: Platform,
+    tight: ActuatorLimits,
+    rate_hz: float,
+    *,
+    actuator_limits: bool = True,
+) -> ChainRun:
+    """:func:`run_cueing` then :func:`deliver` of its poses (see the module docstring)."""
+    cued = run_cueing(design, f, w)
+    return ChainRun(
+        cued, deliver(platform, cued.poses, tight, rate_hz, actuator_limits=actuator_limits)
+    )
