@@ -49,7 +49,8 @@ accepted ride says how far the recovered poses go.
 from __future__ import annotations
 
 import math
-from typing import Any
+from collections.abc import Sequence
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -57,10 +58,15 @@ from .._errors import ConfigError, LimitError
 from ._ridefile import Ride
 from ._verify import check_frames, limits_arrays
 
+if TYPE_CHECKING:  # types only: the checker runs no planner code
+    from ..kinematics import Platform
+    from ..output import Controller
+    from ..trajectory import ActuatorLimits
+
 __all__ = ["check_ride_for", "check_ride_integrity", "rigidity_residuals", "wire_times_s"]
 
 
-def wire_times_s(t_s: np.ndarray, controller: Any) -> np.ndarray:
+def wire_times_s(t_s: np.ndarray, controller: Controller) -> np.ndarray:
     """Frame times as the controller reads them: rounded to its time resolution from the
     first frame (whole ms for MBOX and IMAX, whose frames carry a u32 ms time); the times
     themselves for a controller whose frames carry none."""
@@ -73,9 +79,9 @@ def wire_times_s(t_s: np.ndarray, controller: Any) -> np.ndarray:
 
 def check_ride_for(
     ride: Ride,
-    platform: Any,
-    controller: Any,
-    limits: Any,
+    platform: Platform,
+    controller: Controller,
+    limits: ActuatorLimits,
     *,
     platform_name: str,
     controller_name: str,
@@ -139,7 +145,7 @@ def _check_identity(
             )
 
 
-def _check_timing(ride: Ride, controller: Any, controller_name: str) -> None:
+def _check_timing(ride: Ride, controller: Controller, controller_name: str) -> None:
     # the controller's own rule: its frame-rate cap and, for whole-ms time stamps, a period
     # of whole milliseconds (ConfigError naming the rates it can carry)
     controller.check_rate(ride.rate_hz)
@@ -157,7 +163,7 @@ def _check_timing(ride: Ride, controller: Any, controller_name: str) -> None:
         )
 
 
-def _check_outputs(ride: Ride, controller: Any, controller_name: str) -> None:
+def _check_outputs(ride: Ride, controller: Controller, controller_name: str) -> None:
     dout_max = int(ride.dout.max(initial=0))
     dacs_max = ride.dacs.max(axis=0, initial=0)
     dout_top = int(controller.dout_max)
@@ -179,7 +185,7 @@ def _check_outputs(ride: Ride, controller: Any, controller_name: str) -> None:
 
 
 def _check_limits(
-    ride: Ride, controller: Any, controller_name: str, table: list[dict[str, Any]]
+    ride: Ride, controller: Controller, controller_name: str, table: list[dict[str, Any]]
 ) -> None:
     t = wire_times_s(ride.t_s, controller)
     if ride.n_frames > 1:
@@ -209,7 +215,7 @@ def _check_limits(
 
 
 def _worst(
-    t: np.ndarray, p: np.ndarray, table: list[dict[str, Any]], names: Any, n_frames: int
+    t: np.ndarray, p: np.ndarray, table: list[dict[str, Any]], names: Sequence[str], n_frames: int
 ) -> str:
     """The worst violation: actuator, quantity, value against limit, frame (for messages)."""
     lim = limits_arrays(table)
@@ -250,7 +256,7 @@ def _worst(
 
 
 def check_ride_integrity(
-    ride: Ride, platform: Any, *, accept_edited: bool = False, name: str = "the ride"
+    ride: Ride, platform: Platform, *, accept_edited: bool = False, name: str = "the ride"
 ) -> list[str]:
     """Refuse a ride changed after it was made, unless ``accept_edited``; then check that
     its frames are a rigid platform's.
@@ -324,7 +330,7 @@ def check_ride_integrity(
 
 
 def rigidity_residuals(
-    pulses: np.ndarray, platform: Any, *, allowance_pulses: float | None = None
+    pulses: np.ndarray, platform: Platform, *, allowance_pulses: float | None = None
 ) -> tuple[np.ndarray, np.ndarray]:
     """How far each frame's actuator positions are from a rigid pose, in pulses.
 
@@ -357,9 +363,9 @@ def rigidity_residuals(
     n_rigid = int(platform.n_actuators) - int(platform.spare_axes)
     q = np.asarray(platform.drives.from_pulses(p.astype(np.int64)), dtype=float)
     ppu = np.abs(np.asarray(platform.drives.pulses_per_unit, dtype=float))[:n_rigid]
-    fk_kw: dict[str, float] = {}
+    tol = 1e-12  # Platform.forward's default
     if allowance_pulses is not None:
-        fk_kw["tol"] = allowance_pulses / float(np.max(ppu))  # the strictest actuator's
+        tol = allowance_pulses / float(np.max(ppu))  # the strictest actuator's
     # first: the first frame of each distinct row; inverse: each frame's distinct row
     unique, first, inverse = np.unique(p, axis=0, return_index=True, return_inverse=True)
     inverse = np.asarray(inverse).reshape(-1)
@@ -368,7 +374,7 @@ def rigidity_residuals(
     guess = None
     for j in np.argsort(first):  # in time order, so the warm start is the previous frame
         qk = q[first[j]]
-        fk = platform.forward(qk, guess, **fk_kw)
+        fk = platform.forward(qk, guess, tol=tol)
         pose_u[j] = fk.pose
         if math.isfinite(fk.residual):
             back = np.asarray(platform.inverse(fk.pose), dtype=float)
@@ -381,7 +387,7 @@ def rigidity_residuals(
     return res_u[inverse], pose_u[inverse]
 
 
-def _rounding_allowance(platform: Any) -> float:
+def _rounding_allowance(platform: Platform) -> float:
     """Largest distance (pulses) from a rigid pose that pulse rounding alone can make: each
     position is off by at most half a pulse, and the least-squares projection of those
     errors moves no actuator by more than their 2-norm, ``0.5 sqrt(n)`` (n actuators of the
