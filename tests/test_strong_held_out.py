@@ -31,8 +31,8 @@ from pathlib import Path
 
 import pytest
 
+from motioncue.analysis import run_chain
 from motioncue.cueing import load_cueing
-from motioncue.cueing._compare import run_chain
 from motioncue.cueing._metrics import CueMetrics, cue_metrics
 from motioncue.kinematics import load_platform
 from motioncue.output import load_controller

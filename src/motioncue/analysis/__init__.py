@@ -3,9 +3,9 @@ r"""Analysis tools above the stages: compare presets, the OMCT, automatic tuning
 Layers (each imports only the ones below it)::
 
     cli
-    pipeline (generate, bridge, play, ...)       analysis (compare, omct, tune)
-        \___________________ offline chain (analysis._chain) ____________/
-    stages: telemetry -> cueing -> kinematics / trajectory -> output
+    analysis (compare, omct, tune)
+    pipeline (generate, bridge, play, ...; the offline chain, pipeline._chain)
+    stages: cueing -> trajectory -> telemetry / kinematics / output
 
 Every tool here runs a cueing algorithm through the chain a ride goes through, written once
 (:func:`offline_chain`: cueing -> workspace limiting
@@ -26,7 +26,7 @@ rig the tool is given (:class:`motioncue.cueing.Rig`) and never named here: what
 import importlib
 from typing import TYPE_CHECKING
 
-from ._chain import ChainRun, Cued, Delivered, deliver, offline_chain, run_cueing
+from ..pipeline._chain import ChainRun, Cued, Delivered, deliver, offline_chain, run_cueing
 
 if TYPE_CHECKING:
     from ._compare import (

@@ -38,9 +38,9 @@ from ..cueing._evaluate import CueingEvaluation, evaluate_cueing
 from ..cueing._plot import rider_axis
 from ..cueing._score import cue_score
 from ..cueing._vestibular import get_model_set
+from ..pipeline._chain import offline_chain
 from ..telemetry._recording import resample
 from ..trajectory import pulse_rounding_limits
-from ._chain import offline_chain
 from ._reach import rig_reach
 
 if TYPE_CHECKING:

@@ -119,8 +119,8 @@ from numpy.typing import NDArray
 from .._errors import ConfigError
 from ..cueing import ClassicalWashout, CueingParams
 from ..cueing._params import GRAVITY_M_S2
+from ..pipeline._chain import offline_chain
 from ..trajectory import pulse_rounding_limits
-from ._chain import offline_chain
 
 if TYPE_CHECKING:
     from control import TransferFunction

@@ -9,7 +9,7 @@ preset. :func:`motioncue.cueing._tune.tuned_parameters` gives the table of a pre
 
 The objective and the limits
 ----------------------------
-Each candidate runs the offline chain (:mod:`motioncue.analysis._chain`, its workspace
+Each candidate runs the offline chain (:mod:`motioncue.pipeline._chain`, its workspace
 stage) on every recording (resampled once, up front): the cueing run, workspace limiting
 (:func:`motioncue.trajectory.limit_pose` with the
 pulse-rounding-tightened limits of the platform and controller) and the evaluation of the
@@ -72,8 +72,8 @@ from ..cueing._params import GRAVITY_M_S2
 from ..cueing._score import cue_score
 from ..cueing._tune import params_from_vector, tuned_parameters, vector_from_params
 from ..cueing._vestibular import DEFAULT_MODEL_SET, get_model_set, normalised_error_rms
+from ..pipeline._chain import deliver, run_cueing
 from ..trajectory import reachable
-from ._chain import deliver, run_cueing
 
 if TYPE_CHECKING:
     from concurrent.futures import ProcessPoolExecutor

@@ -19,7 +19,7 @@ Example
 [0.0, 0.0, 0.0, 0.0, 0.0, 0.0]
 """
 
-from typing import TYPE_CHECKING
+
 
 from ._algorithm import (
     CueingAlgorithm,
@@ -119,10 +119,6 @@ __all__ = [
     "simulator_motion",
     "unregister_cueing",
 ]
-
-if TYPE_CHECKING:
-    from ..analysis import rig_reach as rig_reach
-    from ..analysis import tilt_reach as tilt_reach
 
 _MOVED = {"rig_reach", "tilt_reach"}
 """Names that moved to :mod:`motioncue.analysis` (they need the platform's kinematics),

@@ -16,11 +16,11 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from .._errors import LimitError
-from ..analysis._chain import deliver, run_cueing
 from ..cueing import CueingParams, Rig, make_cueing
 from ..telemetry._recording import resample
 from ..trajectory import ActuatorLimits, limit_ride, transition, transition_through
 from ..trajectory._derive import planning_limits, pulse_rounding_limits
+from ._chain import deliver, run_cueing
 from ._ridefile import Ride
 from ._verify import FrameCheck, check_frames
 
@@ -207,7 +207,7 @@ def generate_ride(
     rec = resample(recording, rate_hz)
     lap("resample")
     step("cueing", 0.1)
-    # the offline chain's cueing and workspace stages (motioncue.analysis._chain); the
+    # the offline chain's cueing and workspace stages (motioncue.pipeline._chain); the
     # casadi ride optimisation below stands for the live actuator limiter
     design = make_cueing(cueing, rate_hz, Rig(platform, limits, controller.name))
     wres = run_cueing(design, rec.f, rec.w)
