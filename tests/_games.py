@@ -46,6 +46,11 @@ class StandInGame:
     def __exit__(self, *exc: object) -> None:
         self._stop.set()
         self._thread.join(2.0)
+        while True:  # what arrived after the loop's last look (a farewell sent at close)
+            try:
+                self.requests.append(self.sock.recvfrom(2048)[0])
+            except (BlockingIOError, OSError):
+                break
         self.sock.close()
 
     def _run(self) -> None:
