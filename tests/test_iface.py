@@ -79,7 +79,7 @@ def test_smc3_start_string_and_firmware_commands() -> None:
     assert ctrl.start_bytes == b"[ena]" and ctrl.fmt.bits == 10 and ctrl.baud == 500000
     parser = board_parser("smc3")
     assert parser.feed(b"[ena][sav][A\x01\x00]") == []  # targets complete a frame at C
-    assert parser.commands == {"ena": 1, "sav": 1} and parser.enabled  # type: ignore[attr-defined]
+    assert parser.commands == {"ena": 1, "sav": 1} and parser.enabled
     assert parser.feed(b"[B\x00\x01][C\x00\x02]") == [(256, 1, 2)]
     # a 5th byte that is not ']' drops the command; a value above 10 bits is refused
     assert parser.feed(b"[A\x00\x01X[A\x04\x00][C\x00\x00]") == [(256, 1, 0)]
@@ -227,7 +227,7 @@ def rig() -> tuple[Any, Any, ActuatorLimits, np.ndarray]:
 def ride(rig: Any) -> Any:
     platform, ctrl, lim, _ = rig
     rec = read_recording_csv(config_dir("recordings") / "lap.csv")
-    keep = rec.t_s <= 2.5  # a short excerpt: the ride still ramps in and parks
+    keep = rec.t_s <= 1.0  # a short excerpt: the ride still ramps in and parks
     made, _ = generate_ride(
         Recording(rec.t_s[keep], rec.f[keep], rec.w[keep]), platform, ctrl,
         load_cueing(platform.default_preset), rate_hz=RATE_HZ, limits=lim,
@@ -317,15 +317,19 @@ def test_encoder_exception_parks(rig: Any, ride: Any) -> None:
     platform, ctrl, lim, _ = rig
     sink = Sink()
     with pytest.raises(PlayAborted, match="encoder bug") as info:
-        play_ride(ride, platform, FaultyController(ctrl, 300), lim, sink, paced=False)
+        play_ride(
+            ride, platform, FaultyController(ctrl, ride.n_frames // 2), lim, sink, paced=False
+        )
     rep = info.value.report
-    assert rep is not None and rep.ride_frames_sent == 299 and rep.park_frames > 0
+    assert (
+        rep is not None and rep.ride_frames_sent == ride.n_frames // 2 - 1 and rep.park_frames > 0
+    )
     assert check_board(b"".join(sink.sent), rig) > 50
 
 
 def test_repeated_send_errors_park(rig: Any, ride: Any) -> None:
     platform, ctrl, lim, _ = rig
-    sink = Sink(fail_at=300, times=12)
+    sink = Sink(fail_at=ride.n_frames // 2, times=12)
     with pytest.raises(PlayAborted, match=r"ENOBUFS|No buffer space"):
         play_ride(ride, platform, ctrl, lim, sink, paced=False)
     assert check_board(b"".join(sink.sent), rig) > 50
@@ -333,7 +337,7 @@ def test_repeated_send_errors_park(rig: Any, ride: Any) -> None:
 
 def test_a_dead_link_says_the_park_failed(rig: Any, ride: Any) -> None:
     platform, ctrl, lim, _ = rig
-    sink = Sink(fail_at=300, times=10**9)
+    sink = Sink(fail_at=ride.n_frames // 2, times=10**9)
     with pytest.raises(ParkFailed, match="PARK FAILED"):
         play_ride(ride, platform, ctrl, lim, sink, paced=False)
     check_board(b"".join(sink.sent), rig, ends_parked=False)
@@ -344,7 +348,7 @@ def test_checker_catches_a_jump(rig: Any, ride: Any) -> None:
     sink = Sink()
     play_ride(ride, platform, ctrl, lim, sink, paced=False)
     frames = bytearray(b"".join(sink.sent))
-    i = frames.index(b"[C", 5 + 15 * 200)  # motor C of frame 200
+    i = frames.index(b"[C", 5 + 15 * (ride.n_frames // 2))  # motor C mid-ride
     frames[i + 2] ^= 0x01  # 256 values away
     with pytest.raises(AssertionError, match=r"speed|acceleration"):
         check_board(bytes(frames), rig)
