@@ -189,27 +189,39 @@ class IfaceEncoder:
 
     def __init__(self, controller: IfaceController) -> None:
         self.controller = controller
-        self._fmt = controller.fmt.encoder()
+        self._format = controller.fmt.encoder().format_unchecked
+        self._n = controller.n_axes
+        self._lo = controller.pulses_lo
+        self._hi = controller.pulses_hi
+        self._exact = controller.pulses_hi - controller.pulses_lo == controller.fmt.full_scale
         self._started = False
 
     def encode(
         self, t_s: float, pulses: Sequence[int], dout: int = 0, dacs: tuple[int, int] = (0, 0)
     ) -> list[bytes]:
+        lo = self._lo
+        if len(pulses) != self._n or min(pulses) < lo or max(pulses) > self._hi:
+            self._refuse(pulses)
+        values: Sequence[int]
+        if self._exact:
+            values = tuple(map(int, pulses)) if lo == 0 else tuple([int(p) - lo for p in pulses])
+        else:
+            values = self.controller.counts(pulses)
+        frame = self._format(values)
+        if not self._started:
+            self._started = True
+            if self.controller.start_bytes:
+                return [self.controller.start_bytes + frame]
+        return [frame]
+
+    def _refuse(self, pulses: Sequence[int]) -> None:
         c = self.controller
         if len(pulses) != c.n_axes:
             raise ProtocolError(f"{len(pulses)} positions for the {c.n_axes}-axis {c.name}")
-        for p in pulses:
-            if not c.pulses_lo <= p <= c.pulses_hi:
-                raise ProtocolError(
-                    f"position {p} pulses outside {c.name}'s pulses_range "
-                    f"[{c.pulses_lo}, {c.pulses_hi}]"
-                )
-        frame = self._fmt.format(c.counts(pulses))
-        if not self._started:
-            self._started = True
-            if c.start_bytes:
-                return [c.start_bytes + frame]
-        return [frame]
+        bad = next(p for p in pulses if not c.pulses_lo <= p <= c.pulses_hi)
+        raise ProtocolError(
+            f"position {bad} pulses outside {c.name}'s pulses_range [{c.pulses_lo}, {c.pulses_hi}]"
+        )
 
 
 def controller_from_config(reader: ConfigReader, name: str) -> IfaceController:

@@ -168,30 +168,33 @@ class InterfaceFormat:
 
 class FrameFormatter:
     """Formats frames of one :class:`InterfaceFormat` (precompiled: ``struct`` for binary,
-    ``%`` formatting for text)."""
+    ``%`` formatting for text).
 
-    __slots__ = ("_args", "_fmt", "_full", "_n", "_order", "_pack", "_text")
+    :meth:`format` checks its values; :meth:`format_unchecked` is for callers that have
+    checked them already (the run encoder does, once per frame).
+    """
+
+    __slots__ = ("_full", "_n", "_plan", "_struct_pack", "_text", "_text_order")
 
     def __init__(self, f: InterfaceFormat) -> None:
         index = {a: i for i, a in enumerate(f.axes)}
         self._n = f.n_axes
         self._full = f.full_scale
-        self._order = tuple(index[p] for p in f._parts if isinstance(p, str))
+        order = tuple(index[p] for p in f._parts if isinstance(p, str))
+        self._text_order = None if order == tuple(range(self._n)) else order
+        # (literal, -1) or (None, motor axis): the struct arguments in order
+        self._plan = tuple((p, -1) if isinstance(p, bytes) else (b"", index[p]) for p in f._parts)
         if f.encoding == "binary":
             code = "B" if f.bits <= 8 else "H"
             fmt = ">" + "".join(f"{len(p)}s" if isinstance(p, bytes) else code for p in f._parts)
-            self._pack = struct.Struct(fmt).pack
-            self._args = [p if isinstance(p, bytes) else 0 for p in f._parts]
-            self._text = ""
-            self._fmt = tuple(i for i, p in enumerate(f._parts) if isinstance(p, str))
+            self._struct_pack = struct.Struct(fmt).pack
+            self._text = b""
         else:
             spec = f"%0{math.ceil(f.bits / 4)}X" if f.encoding == "hex" else "%d"
-            self._text = "".join(
-                p.decode("latin-1").replace("%", "%%") if isinstance(p, bytes) else spec
-                for p in f._parts
+            self._text = b"".join(
+                p.replace(b"%", b"%%") if isinstance(p, bytes) else spec.encode() for p in f._parts
             )
-            self._args = []
-            self._fmt = ()
+            self._struct_pack = None  # type: ignore[assignment]
 
     def format(self, values: Sequence[int]) -> bytes:
         """The bytes of one frame carrying ``values`` (one per motor axis, ints in range).
@@ -203,14 +206,18 @@ class FrameFormatter:
         """
         if len(values) != self._n:
             raise ProtocolError(f"{len(values)} values for a {self._n}-axis interface string")
-        full = self._full
-        for v in values:
-            if not 0 <= v <= full:
-                raise ProtocolError(f"axis value {v} outside the bit range [0, {full}]")
-        ordered = [int(values[i]) for i in self._order]
-        if self._text:
-            return (self._text % tuple(ordered)).encode("latin-1")
-        args = list(self._args)
-        for pos, v in zip(self._fmt, ordered, strict=True):
-            args[pos] = v
-        return self._pack(*args)
+        if min(values) < 0 or max(values) > self._full:
+            bad = next(v for v in values if not 0 <= v <= self._full)
+            raise ProtocolError(f"axis value {bad} outside the bit range [0, {self._full}]")
+        return self.format_unchecked([int(v) for v in values])
+
+    def format_unchecked(self, values: Sequence[int]) -> bytes:
+        """:meth:`format` without the checks (``values``: ints, count and range checked)."""
+        pack = self._struct_pack
+        if pack is not None:  # binary
+            return pack(*[v if i < 0 else values[i] for v, i in self._plan])
+        order = self._text_order
+        args = values if order is None else tuple([values[i] for i in order])
+        if type(args) is not tuple:
+            args = tuple(args)
+        return self._text % args
