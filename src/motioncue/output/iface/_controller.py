@@ -1,11 +1,12 @@
 """Interface-string controllers: the description a TOML of kind ``iface`` makes, its encoder.
 
 These boards (SMC3, eh-msc-4dof, ODrive bridges, Arduino rigs) take each target as it
-arrives: no time stamp, no buffer. So the send clock is the controller's clock: frames go
-out at exactly the configured ``frame_rate_hz`` (any other rate is refused), the limits
-hold between successive frames one period apart, and park and ramp-in are positions sent
-like any other. A serial link carries ``baud / (10 * bytes per frame)`` frames per second
-(8N1: 10 bits a byte); a frame rate above that is refused with the maximum named.
+arrives: no time stamp, no buffer. So the send clock is the controller's clock: the send
+rate is the frame rate, the limits hold between successive frames one period apart, and
+park and ramp-in are positions sent like any other. ``frame_rate_hz`` is the send rate the
+emulator judges on (the rate rides for the board are made at). A serial link carries
+``baud / (10 * bytes per frame)`` frames per second (8N1: 10 bits a byte); a frame rate
+above that is refused with the maximum named.
 
 Positions: motioncue's pulses ``pulses_range = [lo, hi]`` map linearly onto the axis
 values ``0 .. 2**bits - 1`` (exact when ``hi - lo`` equals the full scale).
@@ -48,7 +49,7 @@ class IfaceController:
     baud : int or None
         Serial baud rate (None on UDP).
     frame_rate_hz : float
-        The send rate, which is the frame rate (Hz).
+        The send rate (Hz) its emulator judges frames on; it must fit the link.
     pulses_lo, pulses_hi : int
         Pulses mapped onto axis values 0 and ``2**bits - 1``.
     max_speed_counts_s, max_accel_counts_s2 : float
@@ -140,7 +141,7 @@ class IfaceController:
         return DriveExpectations()
 
     def check_rate(self, rate_hz: float) -> None:
-        """Refuse a rate the link cannot carry, or one other than ``frame_rate_hz``."""
+        """Refuse a rate the serial link cannot carry (the maximum named)."""
         if isinstance(rate_hz, bool) or not isinstance(rate_hz, int | float):
             raise ConfigError(f"frame rate {rate_hz!r} is not a number")
         if not (math.isfinite(rate_hz) and rate_hz > 0):
@@ -148,13 +149,6 @@ class IfaceController:
         cap = self.max_frame_rate_hz
         if cap is not None and rate_hz > cap * (1 + 1e-12):
             raise ConfigError(self._over_cap(rate_hz))
-        if abs(rate_hz - self.frame_rate_hz) > 1e-9 * self.frame_rate_hz:
-            raise ConfigError(
-                f"frame rate {rate_hz:g} Hz: {self.name} frames carry no time, the board moves "
-                f"to each target as it arrives, so the send rate is its configured "
-                f"frame_rate_hz = {self.frame_rate_hz:g} Hz; allowed: {self.frame_rate_hz:g} "
-                "(or change frame_rate_hz in its TOML)"
-            )
 
     def position_query(self) -> None:
         return None

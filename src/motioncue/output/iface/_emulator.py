@@ -3,8 +3,8 @@
 Bytes (fed directly, or datagrams arriving on UDP, read as one stream as a serial port
 would deliver them) go through the board's own parser (``_boards``); each complete target
 set is one frame. The board has no clock of its own in the frames: frame ``k`` is taken to
-arrive at ``k / frame_rate_hz`` (the send clock), and every frame is judged with the
-controller's own numbers, in axis values:
+arrive at ``k / rate_hz`` (the send clock; by default the config's ``frame_rate_hz``), and
+every frame is judged with the controller's own numbers, in axis values:
 
 - stroke: ``0 .. 2**bits - 1`` (the parser already drops larger values, counted);
 - speed: ``|c[k] - c[k-1]| * rate`` within ``max_speed_counts_s`` plus one value of
@@ -37,12 +37,22 @@ class IfaceEmulator:
         With a ``firmware`` parser (not ``none``).
     host, port : str, int
         Where :meth:`start` listens on UDP (port 0: any free port).
+    rate_hz : float, optional
+        The send rate (default: the controller's ``frame_rate_hz``).
     """
 
-    def __init__(self, controller: IfaceController, host: str = "127.0.0.1", port: int = 0):
+    def __init__(
+        self,
+        controller: IfaceController,
+        host: str = "127.0.0.1",
+        port: int = 0,
+        rate_hz: float | None = None,
+    ) -> None:
         if controller.firmware == "none":
             raise ConfigError(f"controller {controller.name} names no firmware: no emulator")
         self.controller = controller
+        self.rate_hz = float(controller.frame_rate_hz if rate_hz is None else rate_hz)
+        controller.check_rate(self.rate_hz)
         self.parser = board_parser(controller.firmware)
         if self.parser.n_motors != controller.n_axes:
             raise ConfigError(
@@ -72,7 +82,7 @@ class IfaceEmulator:
 
     def _judge(self, frame: tuple[int, ...]) -> None:
         c = self.controller
-        rate = c.frame_rate_hz
+        rate = self.rate_hz
         k = len(self.frames)
         t = k / rate
         full = self.parser.full_scale
@@ -116,7 +126,7 @@ class IfaceEmulator:
         span = c.pulses_hi - c.pulses_lo
         pulses = c.pulses_lo + np.floor(counts * span / c.fmt.full_scale + 0.5).astype(np.int64)
         n = len(counts)
-        return Trace(np.arange(n) / c.frame_rate_hz, pulses, np.arange(n, dtype=np.int64))
+        return Trace(np.arange(n) / self.rate_hz, pulses, np.arange(n, dtype=np.int64))
 
     @property
     def where(self) -> str:
