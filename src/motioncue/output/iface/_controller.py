@@ -55,6 +55,12 @@ class IfaceController:
     max_speed_counts_s, max_accel_counts_s2 : float
         The rig's limits in axis values per second (squared), judged on the send clock.
     default_target : str
+    pulses_per_rev : int or None
+        Pulses a "turn" of the platform's drive is, when the values are tied to one (a pot
+        spanning the stroke: the full scale over the stroke, written as one turn); a platform
+        whose drive disagrees is refused instead of planned in the wrong units.
+    lead_mm : float or None
+        The stroke that turn spans (mm), for linear drives.
     """
 
     name: str
@@ -70,6 +76,8 @@ class IfaceController:
     max_speed_counts_s: float
     max_accel_counts_s2: float
     default_target: str
+    pulses_per_rev: int | None = None
+    lead_mm: float | None = None
     kind: str = "iface"
     buffer_frames: int = 1
     time_resolution_s: None = None
@@ -138,7 +146,12 @@ class IfaceController:
         )
 
     def drive_expectations(self) -> DriveExpectations:
-        return DriveExpectations()
+        return DriveExpectations(
+            None if self.pulses_per_rev is None else float(self.pulses_per_rev),
+            f"{self.name} pulses_per_rev",
+            None if self.lead_mm is None else self.lead_mm / 1000.0,
+            f"{self.name} lead_mm",
+        )
 
     def check_rate(self, rate_hz: float) -> None:
         """Refuse a rate the serial link cannot carry (the maximum named)."""
@@ -252,4 +265,6 @@ def controller_from_config(reader: ConfigReader, name: str) -> IfaceController:
         reader.number("max_speed_counts_s", lo=0, lo_open=True),
         reader.number("max_accel_counts_s2", lo=0, lo_open=True),
         reader.string("default_target"),
+        reader.integer("pulses_per_rev", lo=1) if reader.has("pulses_per_rev") else None,
+        reader.number("lead_mm", lo=0, lo_open=True) if reader.has("lead_mm") else None,
     )
