@@ -129,6 +129,11 @@ def test_garbage_then_a_good_frame_resynchronises(name: str) -> None:
     )
     assert parser.feed(b"\x00\x01\x02" + good) == [(0,) * ctrl.n_axes]
     assert parser.malformed == 3
+    emu = IfaceEmulator(ctrl)
+    emu.feed(good + b"\x00\x01" + good)
+    assert emu.received == 2 and [(v.kind, v.detail) for v in emu.violations] == [
+        ("malformed", "2 bytes or frames dropped")
+    ]
 
 
 def test_format_syntax_and_encodings() -> None:

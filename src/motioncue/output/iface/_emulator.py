@@ -114,8 +114,14 @@ class IfaceEmulator:
 
     @property
     def violations(self) -> list[Violation]:
+        """Every limit broken, and (one entry) what the parser dropped, counted."""
         with self._lock:
-            return list(self._violations)
+            out = list(self._violations)
+            dropped = self.parser.malformed
+            t = max(len(self.frames) - 1, 0) / self.rate_hz
+        if dropped:
+            out.append(Violation(t, "malformed", None, f"{dropped} bytes or frames dropped"))
+        return out
 
     @property
     def trace(self) -> Trace:
