@@ -360,7 +360,7 @@ def test_checker_catches_a_jump(rig: Any, ride: Any) -> None:
         check_board(bytes(frames), rig)
 
 
-@pytest.mark.parametrize("sig", [signal.SIGINT, signal.SIGTERM])
+@pytest.mark.parametrize("sig", [signal.SIGINT, signal.SIGTERM, signal.SIGHUP])
 def test_play_cli_signal_parks_on_the_emulator(
     sig: int, rig: Any, ride: Any, tmp_path: Path
 ) -> None:
@@ -395,6 +395,52 @@ def test_play_cli_signal_parks_on_the_emulator(
     assert emu.malformed == 0 and not emu.violations, emu.violations[:3]
     frames = np.array(emu.frames)
     assert np.abs(frames - park_v).max() > 50  # it was moving
+    np.testing.assert_array_equal(frames[-1], park_v)
+    np.testing.assert_array_equal(frames[-2], park_v)
+
+
+def _free_port() -> int:
+    with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as s:
+        s.bind(("127.0.0.1", 0))
+        return int(s.getsockname()[1])
+
+
+def test_bridge_sigint_parks_on_the_emulator(rig: Any) -> None:
+    """``motioncue bridge`` (live F1 stream) to the SMC3 emulator, stopped by SIGINT."""
+    from test_bridge import Sender
+
+    _, ctrl, _, park = rig
+    park_v = np.asarray(park) - ctrl.pulses_lo
+    port = _free_port()
+    emu = IfaceEmulator(ctrl).start()
+    env = {**os.environ, "PYTHONPATH": str(SRC)}
+    cmd = [sys.executable, "-m", "motioncue", "bridge", "--source", f"f1:{port}", "--platform",
+           PLATFORM, "--controller", CONTROLLER, "--rate", "100", "--fade", "0.3", "--quiet",
+           "--target", emu.where]  # fmt: skip
+    with Sender(port, 2024):
+        proc = subprocess.Popen(cmd, env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                                text=True)  # fmt: skip
+        try:
+            end = time.monotonic() + 90  # a bound for a process that never moves
+            while time.monotonic() < end and proc.poll() is None:
+                tr = emu.trace
+                if len(tr.positions) and np.abs(tr.positions[-1] - park).max() > 20:
+                    break
+                time.sleep(0.01)
+            proc.send_signal(signal.SIGINT)
+            out, err = proc.communicate(timeout=90)
+        finally:
+            if proc.poll() is None:
+                proc.kill()
+                proc.wait()
+            time.sleep(0.1)
+            emu.stop()
+    assert "Traceback" not in err, err
+    assert proc.returncode == 130, err
+    assert "stopped by SIGINT; parked at rest" in out + err
+    assert not emu.violations, emu.violations[:3]
+    frames = np.array(emu.frames)
+    assert np.abs(frames - park_v).max() > 20  # it was moving
     np.testing.assert_array_equal(frames[-1], park_v)
     np.testing.assert_array_equal(frames[-2], park_v)
 
