@@ -233,6 +233,7 @@ def test_every_bundled_platform_names_a_loadable_default_preset() -> None:
         "stewart6-linear": "racing-hexapod",
         "stewart6-rotary": "racing-rotary",
         "seat3": "cinema-seat-3dof",
+        "seat3-pot": "cinema-seat-3dof",  # seat3 on pot-feedback actuators (SMC3, iface)
         "seat2-yaw": "cinema-seat-yaw",
         "corner4": "corner4",
         "corner4-tl": "corner4-tl",

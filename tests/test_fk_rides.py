@@ -26,7 +26,7 @@ from motioncue.telemetry._recording import Recording, read_recording_csv
 from motioncue.trajectory import ActuatorLimits
 from motioncue.viewer import scene_from_q
 
-CONTROLLERS = {"seat3": "imax3", "seat2-yaw": "imax3"}  # the others: mbox6
+CONTROLLERS = {"seat3": "imax3", "seat2-yaw": "imax3", "seat3-pot": "smc3"}  # the others: mbox6
 
 
 def _closure_pulses(platform, pose: np.ndarray, q: np.ndarray) -> np.ndarray:  # type: ignore[no-untyped-def]

@@ -111,6 +111,7 @@ def _rig_pairs() -> list[tuple[str, str, float]]:
     controller that drives one of them, at a rate the controller carries."""
     from motioncue.kinematics import load_platform
     from motioncue.output import load_controller
+    from motioncue.trajectory import ActuatorLimits
 
     platforms = {p: load_platform(p).n_actuators for p in bundled_names("platforms")}
     controllers = {c: load_controller(c) for c in bundled_names("controllers")}
@@ -125,11 +126,20 @@ def _rig_pairs() -> list[tuple[str, str, float]]:
                 pass
         raise AssertionError(f"{ctrl} takes none of the test rates")
 
-    for p, n in platforms.items():  # every platform, with its first controller
-        c = next(c for c, ctrl in controllers.items() if ctrl.n_axes == n)
+    def drives(p: str, ctrl: Any) -> bool:  # axis count, and drives the controller agrees with
+        if platforms[p] != ctrl.n_axes:
+            return False
+        try:
+            ActuatorLimits.from_platform(load_platform(p), ctrl)
+        except ConfigError:
+            return False
+        return True
+
+    for p in platforms:  # every platform, with its first controller
+        c = next(c for c, ctrl in controllers.items() if drives(p, ctrl))
         pairs[(p, c)] = rate_for(controllers[c])
     for c, ctrl in controllers.items():  # every controller that drives a bundled platform
-        fits = [p for p, n in platforms.items() if n == ctrl.n_axes]
+        fits = [p for p in platforms if drives(p, ctrl)]
         if fits and not any(key[1] == c for key in pairs):
             pairs[(fits[0], c)] = rate_for(ctrl)
     return [(p, c, r) for (p, c), r in pairs.items()]
@@ -615,13 +625,15 @@ def test_edited_rides_are_refused_before_anything_is_checked_or_sent(
 
 
 def _platform_rigs() -> list[tuple[str, str, float]]:
-    """Every bundled platform once, with the MBOX of its axis count at 100 Hz."""
+    """Every bundled platform once, with the MBOX of its axis count at 100 Hz (seat3-pot,
+    whose drive is a pot's 10-bit range, with the SMC3 its values are for)."""
     from motioncue.kinematics import load_platform
 
     out = []
     for name in bundled_names("platforms"):
         n = load_platform(name).n_actuators
-        out.append((name, {3: "mbox3", 6: "mbox6"}[n], 100.0))
+        own = {"seat3-pot": "smc3"}
+        out.append((name, own.get(name, {3: "mbox3", 6: "mbox6"}[n]), 100.0))
     return out
 
 

@@ -273,6 +273,7 @@ _BUNDLED: dict[str, str] = {
     "mbox": "motioncue.output.mbox._kind:KIND",
     "imax": "motioncue.output.imax._kind:KIND",
     "easysmc": "motioncue.output.easysmc._kind:KIND",
+    "iface": "motioncue.output.iface._kind:KIND",
 }
 
 _lock = threading.RLock()
