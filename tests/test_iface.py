@@ -452,3 +452,28 @@ def test_socket_free() -> None:
     emu.stop()
     with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as s:
         s.bind(("127.0.0.1", port))
+
+
+def test_demo_picks_a_bundled_platform_the_controller_can_drive() -> None:
+    """Issue 22: ``motioncue demo --controller smc3`` needs no --platform: the 3-axis SMC3,
+    whose 10-bit values imply the pot drive, gets the platform that drive agrees with; a
+    6-axis controller keeps the default hexapod, and one nothing fits is a clear error."""
+    from motioncue._errors import ConfigError
+    from motioncue.kinematics import load_platform
+    from motioncue.output import load_controller
+    from motioncue.pipeline._demo import _platform_for
+    from motioncue.trajectory import ActuatorLimits
+
+    smc3 = load_controller("smc3")
+    name = _platform_for(smc3, 100.0)
+    platform = load_platform(name)
+    assert platform.n_actuators == smc3.n_axes == 3
+    ActuatorLimits.from_platform(platform, smc3, rate_hz=100.0)  # agrees: no ConfigError
+    with pytest.raises(ConfigError):  # the plain seat3's drive disagrees with the SMC3's values
+        ActuatorLimits.from_platform(load_platform("seat3"), smc3, rate_hz=100.0)
+    assert _platform_for(load_controller("mbox6"), 100.0) == "stewart6-linear"
+    from types import SimpleNamespace
+
+    five = SimpleNamespace(name="five", n_axes=5)  # no bundled platform has 5 actuators
+    with pytest.raises(ConfigError, match="no bundled platform fits controller 'five'"):
+        _platform_for(five, 100.0)  # type: ignore[arg-type]

@@ -109,7 +109,12 @@ def register(sub: Subparsers) -> None:
         "--out", default="out/demo", metavar="DIR", help="folder for the demo's files (out/demo)"
     )
     d.add_argument("--speed", type=float, default=10.0, help="pacing factor for the emulator")
-    d.add_argument("--platform", default="stewart6-linear", help="bundled platform or TOML path")
+    d.add_argument(
+        "--platform",
+        default=None,
+        help="bundled platform or TOML path (default: stewart6-linear, or the first bundled "
+        "platform the controller can drive)",
+    )
     d.add_argument("--controller", default="mbox6", help="an MBOX or IMAX controller")
     d.set_defaults(run=_demo)
 

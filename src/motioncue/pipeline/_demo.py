@@ -1,7 +1,8 @@
 """The demo: bundled lap -> MBOX 6-axis ride for the bundled hexapod -> emulator -> compare.
 
 Another bundled platform and any controller whose kind has an emulator on UDP can be named
-(``corner4-tl`` on ``mbox6``, ``imax6``); the cueing preset is then the platform's
+(``corner4-tl`` on ``mbox6``, ``imax6``; ``smc3`` alone picks ``seat3-pot``, the first bundled
+platform it can drive); the cueing preset is the platform's
 ``default_preset``.
 
 No hardware and no network: the emulator listens on loopback in this process.
@@ -24,7 +25,7 @@ from ._ridefile import Ride, save_ride
 from ._verify import FrameCheck, check_frames
 
 if TYPE_CHECKING:
-    from motioncue.output import Emulator
+    from motioncue.output import Controller, Emulator
 
 __all__ = ["DemoResult", "compare_trace", "run_demo"]
 
@@ -72,21 +73,44 @@ def compare_trace(ride: Ride, emulator: Emulator) -> TraceComparison:
     return TraceComparison(n, ride.n_frames, err, terr, limits, violations)
 
 
+def _platform_for(controller: Controller, rate_hz: float) -> str:
+    """The bundled platform the demo uses for ``controller`` when none is named."""
+    from motioncue.kinematics import load_platform
+    from motioncue.trajectory import ActuatorLimits
+
+    names = sorted(p.stem for p in config_dir("platforms").glob("*.toml"))
+    for name in ["stewart6-linear", *(n for n in names if n != "stewart6-linear")]:
+        platform = load_platform(name)
+        if platform.n_actuators != controller.n_axes:
+            continue
+        try:
+            ActuatorLimits.from_platform(platform, controller, rate_hz=rate_hz)
+        except ConfigError:
+            continue  # its drive disagrees with what the controller's values imply
+        return name
+    raise ConfigError(
+        f"no bundled platform fits controller {controller.name!r} ({controller.n_axes} axes); "
+        "name one with --platform"
+    )
+
+
 def run_demo(
     out_dir: str | Path = "out/demo",
     *,
     rate_hz: float = 100.0,
     speed: float = 10.0,
     log: Callable[[str], None] = print,
-    platform_name: str = "stewart6-linear",
+    platform_name: str | None = None,
     controller_name: str = "mbox6",
 ) -> DemoResult:
     """Generate, play to the emulator, compare, and write the report (see module docstring).
 
-    ``platform_name``: a bundled platform or path; ``controller_name``: a controller (name
-    or path) whose kind declares an emulator on ``udp://``, played to that emulator. The
-    cueing preset is ``racing-hexapod`` for the default hexapod, else the platform's
-    ``default_preset``.
+    ``platform_name``: a bundled platform or path (None: ``stewart6-linear`` if the
+    controller can drive it, else the first bundled platform, by name, that it can: as many
+    actuators as the controller has axes, and a drive its values agree with);
+    ``controller_name``: a controller (name or path) whose kind declares an emulator on
+    ``udp://``, played to that emulator. The
+    cueing preset is the platform's ``default_preset``.
     """
     from motioncue.cueing import load_cueing
     from motioncue.kinematics import load_platform
@@ -101,19 +125,17 @@ def run_demo(
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     lap = config_dir("recordings") / "lap.csv"
-    platform = load_platform(platform_name)
     controller = load_controller(controller_name)
+    if platform_name is None:
+        platform_name = _platform_for(controller, rate_hz)
+    platform = load_platform(platform_name)
     kind = controller_kind(controller.kind)
     if kind.emulator is None or "udp" not in kind.emulator_schemes:
         raise ConfigError(
             f"controller {controller_name!r} is of kind {kind.name}, which has no emulator on "
             "udp://; the demo plays to a controller emulator on loopback"
         )
-    preset = (
-        "racing-hexapod"
-        if platform_name == "stewart6-linear"
-        else (platform.default_preset or "racing")
-    )
+    preset = platform.default_preset or "racing"
     cueing = load_cueing(preset)
     limits = ActuatorLimits.from_platform(platform, controller, rate_hz=rate_hz)
     log(
