@@ -46,7 +46,7 @@ import numpy as np
 from .._errors import ConfigError, LimitError
 from ._brake import brake_bound, stops_within
 from ._limits import ActuatorLimits
-from ._realtime import _vcap
+from ._realtime import _counters_repr, _vcap
 
 if TYPE_CHECKING:
     from numpy.typing import ArrayLike
@@ -130,10 +130,7 @@ class JerkLimiterState:
         self.max_deviation = 0.0
 
     def __repr__(self) -> str:
-        return (
-            f"JerkLimiterState(n_frames={self.n_frames}, n_clamped={self.n_clamped}, "
-            f"n_nonfinite={self.n_nonfinite}, max_deviation={self.max_deviation:.3g})"
-        )
+        return _counters_repr(self)
 
 
 @dataclass(frozen=True, eq=False)

@@ -52,6 +52,8 @@ from ._limits import ActuatorLimits
 if TYPE_CHECKING:
     from numpy.typing import ArrayLike
 
+    from ._jerk import JerkLimiterState
+
 __all__ = ["LimiterState", "RealtimeLimiter", "braking_distance", "braking_speed_cap"]
 
 
@@ -142,10 +144,15 @@ class LimiterState:
         return s
 
     def __repr__(self) -> str:
-        return (
-            f"LimiterState(n_frames={self.n_frames}, n_clamped={self.n_clamped}, "
-            f"n_nonfinite={self.n_nonfinite}, max_deviation={self.max_deviation:.3g})"
-        )
+        return _counters_repr(self)
+
+
+def _counters_repr(state: LimiterState | JerkLimiterState) -> str:
+    """``Name(n_frames=, n_clamped=, n_nonfinite=, max_deviation=)`` of a limiter's state."""
+    return (
+        f"{type(state).__name__}(n_frames={state.n_frames}, n_clamped={state.n_clamped}, "
+        f"n_nonfinite={state.n_nonfinite}, max_deviation={state.max_deviation:.3g})"
+    )
 
 
 @dataclass(frozen=True, eq=False)
