@@ -50,6 +50,7 @@ from ._errors import TransportError, one_line
 __all__ = [
     "PARTIAL_MARK",
     "AtomicFile",
+    "AtomicFileWriter",
     "Interrupted",
     "PublishOnExit",
     "Staging",
@@ -367,6 +368,24 @@ class AtomicFile(PublishOnExit):
 
     def _publish(self) -> None:
         self.commit()
+
+
+class AtomicFileWriter(PublishOnExit):
+    """Mixin: a writer of one :class:`AtomicFile` ``_out`` (set by the subclass), published
+    by :meth:`close` or a normal exit, discarded by :meth:`discard` or an exception."""
+
+    _out: AtomicFile
+
+    def close(self) -> None:
+        """Publish the file under its name (nothing happens after :meth:`discard`)."""
+        self._out.commit()
+
+    def discard(self) -> None:
+        """Remove what was written; no file is left under the name."""
+        self._out.discard()
+
+    def _publish(self) -> None:
+        self.close()
 
 
 def atomic_write_bytes(path: str | os.PathLike[str], data: bytes, what: str = "file") -> Path:
