@@ -49,7 +49,9 @@ from ._errors import TransportError, one_line
 
 __all__ = [
     "PARTIAL_MARK",
+    "STOP_SIGNALS",
     "AtomicFile",
+    "AtomicFileWriter",
     "Interrupted",
     "PublishOnExit",
     "Staging",
@@ -68,9 +70,11 @@ PARTIAL_MARK = ".partial-"
 """Every temporary output file name contains this (``.r.ride.partial-1a2b3c4d``)."""
 
 
-_STOP_SIGNALS: tuple[signal.Signals, ...] = tuple(
+STOP_SIGNALS: tuple[signal.Signals, ...] = tuple(
     getattr(signal, n) for n in ("SIGINT", "SIGTERM", "SIGHUP", "SIGQUIT") if hasattr(signal, n)
 )
+"""The signals that ask a run to stop (Ctrl-C, kill, a closed terminal, Ctrl-\\), those this
+platform has; a terminal sends them to the whole process group."""
 
 
 def partial_name_prefix(path: str | os.PathLike[str]) -> str:
@@ -171,7 +175,7 @@ def _signals_held() -> Iterator[None]:
     """Block the stop signals in this thread while the block runs; one that arrives
     meanwhile is delivered (its handler runs) right after."""
     try:
-        old = signal.pthread_sigmask(signal.SIG_BLOCK, _STOP_SIGNALS)
+        old = signal.pthread_sigmask(signal.SIG_BLOCK, STOP_SIGNALS)
     except (OSError, ValueError):  # pragma: no cover - no signal masks here
         yield
         return
@@ -211,7 +215,7 @@ def interrupt_on_stop_signals() -> Iterator[None]:
     are restored on exit. Does nothing outside the main thread."""
     previous: dict[signal.Signals, Callable[[int, FrameType | None], object] | int | None] = {}
     if threading.current_thread() is threading.main_thread():
-        for sig in _STOP_SIGNALS:
+        for sig in STOP_SIGNALS:
             if sig == signal.SIGINT:
                 continue
             try:
@@ -367,6 +371,24 @@ class AtomicFile(PublishOnExit):
 
     def _publish(self) -> None:
         self.commit()
+
+
+class AtomicFileWriter(PublishOnExit):
+    """Mixin: a writer of one :class:`AtomicFile` ``_out`` (set by the subclass), published
+    by :meth:`close` or a normal exit, discarded by :meth:`discard` or an exception."""
+
+    _out: AtomicFile
+
+    def close(self) -> None:
+        """Publish the file under its name (nothing happens after :meth:`discard`)."""
+        self._out.commit()
+
+    def discard(self) -> None:
+        """Remove what was written; no file is left under the name."""
+        self._out.discard()
+
+    def _publish(self) -> None:
+        self.close()
 
 
 def atomic_write_bytes(path: str | os.PathLike[str], data: bytes, what: str = "file") -> Path:

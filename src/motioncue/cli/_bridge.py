@@ -14,7 +14,7 @@ from ._common import (
     add_json_option,
     add_limit_options,
     add_set_option,
-    limit_overrides,
+    limits_for,
     load_platform_arg,
     print_json,
 )
@@ -133,7 +133,6 @@ def run(args: argparse.Namespace) -> int:
     from ..pipeline._realtime import GateConfig
     from ..pipeline._signals import SignalGuard
     from ..telemetry import open_source
-    from ..trajectory import ActuatorLimits
     from ..viewer._monitor import BridgeSource
     from ._preset import choose_preset
 
@@ -158,12 +157,7 @@ def run(args: argparse.Namespace) -> int:
     )
     platform = load_platform_arg(args.platform, args.overrides)
     controller.check_rate(config.rate_hz)
-    limits = ActuatorLimits.from_platform(
-        platform,
-        controller,
-        rate_hz=config.rate_hz,
-        **limit_overrides(args),
-    )
+    limits = limits_for(args, platform, controller, config.rate_hz)
     profile_preset = profile.preset_for(platform.name) if profile is not None else None
     preset = args.preset or profile_preset
     cueing, preset_source = choose_preset(preset, platform, args.platform, args.overrides)

@@ -5,7 +5,8 @@
 * :func:`add_json_option` / :func:`print_json`: ``--json`` on every verb that prints a result.
 * :func:`add_rig_options`: ``--platform`` and ``--controller`` (bundled name or TOML path).
 * :func:`add_limit_options`: ``--max-speed``, ``--max-accel``, ``--max-jerk``,
-  ``--stroke-margin`` (the actuator-limit overrides of ``motioncue limits``).
+  ``--stroke-margin`` (the actuator-limit overrides of ``motioncue limits``);
+  :func:`limits_for`: the rig's actuator limits with those overrides applied.
 * :func:`add_set_option`, :func:`load_platform_arg`, :func:`load_preset_arg`:
   ``--set platform.SECTION.KEY=VALUE`` and ``--set preset.SECTION.KEY=VALUE`` overrides,
   validated exactly like the file (an unknown key is refused with its name).
@@ -29,6 +30,8 @@ from .._errors import ConfigError
 if TYPE_CHECKING:
     from ..cueing import CueingParams
     from ..kinematics import Platform
+    from ..output import Controller
+    from ..trajectory import ActuatorLimits
 
 __all__ = [
     "SET_TARGETS",
@@ -39,6 +42,7 @@ __all__ = [
     "add_rig_options",
     "add_set_option",
     "apply_overrides",
+    "limits_for",
     "load_platform_arg",
     "load_preset_arg",
     "parse_set",
@@ -141,6 +145,21 @@ def limit_overrides(args: argparse.Namespace) -> dict[str, float | None]:
         "a_max": getattr(args, "max_accel", None),
         "j_max": getattr(args, "max_jerk", None),
     }
+
+
+def limits_for(
+    args: argparse.Namespace,
+    platform: Platform,
+    controller: Controller | None,
+    rate_hz: float | None,
+) -> ActuatorLimits:
+    """The rig's :class:`~motioncue.trajectory.ActuatorLimits` at ``rate_hz`` (Hz), with the
+    overrides of :func:`add_limit_options` (:func:`limit_overrides`) applied."""
+    from ..trajectory import ActuatorLimits
+
+    return ActuatorLimits.from_platform(
+        platform, controller, rate_hz=rate_hz, **limit_overrides(args)
+    )
 
 
 def add_set_option(parser: argparse.ArgumentParser, targets: Sequence[str] = SET_TARGETS) -> None:

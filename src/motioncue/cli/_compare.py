@@ -13,7 +13,7 @@ from .._errors import ConfigError
 from ._common import (
     add_limit_options,
     add_set_option,
-    limit_overrides,
+    limits_for,
     load_platform_arg,
     load_preset_arg,
 )
@@ -96,7 +96,6 @@ def run(args: argparse.Namespace) -> int:
     from ..cueing import get_model_set
     from ..output import load_controller
     from ..pipeline._inputs import check_generate_size, load_generate_input
-    from ..trajectory import ActuatorLimits
 
     rate = args.rate
     if not (math.isfinite(rate) and 0.0 < rate <= 1000.0):
@@ -105,9 +104,7 @@ def run(args: argparse.Namespace) -> int:
     platform = load_platform_arg(args.platform, args.overrides)
     controller = load_controller(args.controller)
     controller.check_rate(rate)
-    limits = ActuatorLimits.from_platform(
-        platform, controller, rate_hz=rate, **limit_overrides(args)
-    )
+    limits = limits_for(args, platform, controller, rate)
     presets = [load_preset_arg(p, args.overrides) for p in args.presets]
     preset_labels = _labels(list(args.presets), [p.name for p in presets], "preset")
     recs = []

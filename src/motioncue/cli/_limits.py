@@ -11,7 +11,7 @@ from ._common import (
     add_limit_options,
     add_rig_options,
     add_set_option,
-    limit_overrides,
+    limits_for,
     load_platform_arg,
 )
 
@@ -48,8 +48,6 @@ def register(sub: Subparsers) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from ..trajectory import ActuatorLimits
-
     platform = load_platform_arg(args.platform, args.overrides)
     controller = None
     if args.controller:
@@ -58,12 +56,7 @@ def run(args: argparse.Namespace) -> int:
         controller = load_controller(args.controller)
         if args.rate is not None:
             controller.check_rate(args.rate)
-    lim = ActuatorLimits.from_platform(
-        platform,
-        controller,
-        rate_hz=args.rate,
-        **limit_overrides(args),
-    )
+    lim = limits_for(args, platform, controller, args.rate)
     if args.json:
         print(lim.to_json(platform))
         return 0

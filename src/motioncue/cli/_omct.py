@@ -13,7 +13,7 @@ from .._errors import ConfigError
 from ._common import (
     add_limit_options,
     add_set_option,
-    limit_overrides,
+    limits_for,
     load_platform_arg,
     load_preset_arg,
 )
@@ -72,7 +72,6 @@ def run(args: argparse.Namespace) -> int:
     from ..analysis import plot_omct, run_omct
     from ..cueing import ClassicalWashout
     from ..output._controllers import load_controller
-    from ..trajectory import ActuatorLimits
 
     rate = args.rate
     if not (math.isfinite(rate) and 0.0 < rate <= 1000.0):
@@ -90,9 +89,7 @@ def run(args: argparse.Namespace) -> int:
     platform = load_platform_arg(args.platform, args.overrides)
     controller = load_controller(args.controller)
     controller.check_rate(rate)
-    limits = ActuatorLimits.from_platform(
-        platform, controller, rate_hz=rate, **limit_overrides(args)
-    )
+    limits = limits_for(args, platform, controller, rate)
     design = ClassicalWashout(params, rate)
     labels = {
         "preset": params.name,

@@ -16,7 +16,7 @@ from ._common import (
     add_limit_options,
     add_set_option,
     check_set_targets,
-    limit_overrides,
+    limits_for,
     load_platform_arg,
     print_json,
 )
@@ -152,7 +152,6 @@ def _generate(args: argparse.Namespace) -> int:
         write_report,
     )
     from ..pipeline._inputs import check_generate_size, held_warning
-    from ..trajectory import ActuatorLimits
     from ._preset import choose_preset
 
     if not (0 < args.rate <= 2000):
@@ -168,9 +167,7 @@ def _generate(args: argparse.Namespace) -> int:
             f"--pcap is for controllers on UDP; {args.controller} talks {controller.link_kind}: "
             "use 'motioncue play RIDE --target file:PATH' (the raw bytes)"
         )
-    limits = ActuatorLimits.from_platform(
-        platform, controller, rate_hz=args.rate, **limit_overrides(args)
-    )
+    limits = limits_for(args, platform, controller, args.rate)
     kind, data, counters = load_generate_input(args.input)
     check_generate_size(kind, data, args.rate, args.input)
     if counters:
@@ -313,7 +310,6 @@ def _play(args: argparse.Namespace) -> int:
     from ..pipeline import check_ride_for, check_ride_integrity, load_ride, play_ride
     from ..pipeline._signals import SignalGuard
     from ..pipeline._stream import PlayAborted
-    from ..trajectory import ActuatorLimits
     from ..viewer._monitor import PlaySource
 
     if not (0 < args.speed <= 1000):
@@ -330,9 +326,7 @@ def _play(args: argparse.Namespace) -> int:
             f"{platform.name} has {platform.axes_text}"
         )
     controller.check_rate(ride.rate_hz)
-    limits = ActuatorLimits.from_platform(
-        platform, controller, rate_hz=ride.rate_hz, **limit_overrides(args)
-    )
+    limits = limits_for(args, platform, controller, ride.rate_hz)
     # nothing is sent unless the ride is the one generate made (or its edit was accepted and
     # is still a rigid platform's), belongs to this rig and keeps its limits now
     integrity_notes = check_ride_integrity(

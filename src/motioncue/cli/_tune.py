@@ -14,7 +14,7 @@ from ._common import (
     add_json_option,
     add_limit_options,
     add_set_option,
-    limit_overrides,
+    limits_for,
     load_platform_arg,
     print_json,
 )
@@ -212,7 +212,6 @@ def run(args: argparse.Namespace) -> int:
     from ..pipeline._inputs import load_generate_input
     from ..telemetry._motion import is_datagram_recording
     from ..telemetry._recording import read_recording_csv, resample
-    from ..trajectory import ActuatorLimits
     from ..trajectory._derive import pulse_rounding_limits
     from ._preset import choose_preset
 
@@ -252,9 +251,7 @@ def run(args: argparse.Namespace) -> int:
             "declares no tunable parameters; tune optimises "
             + ", ".join(a for a in cueing_algorithms() if cueing_entry(a).tune is not None)
         )
-    limits = ActuatorLimits.from_platform(
-        platform, controller, rate_hz=args.rate, **limit_overrides(args)
-    )
+    limits = limits_for(args, platform, controller, args.rate)
     tight = pulse_rounding_limits(limits, platform, 1.0 / args.rate)
     excerpt = None
     if args.excerpt is not None:

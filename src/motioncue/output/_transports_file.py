@@ -23,7 +23,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from .._atomic import AtomicFile, PublishOnExit
+from .._atomic import AtomicFile, AtomicFileWriter
 from .._errors import ConfigError, ProtocolError, TransportError
 from ._transport import Transport, TransportURL
 
@@ -80,22 +80,9 @@ def ethernet_ipv4_udp(
     return ETHERNET.pack(_mac_for(dip), SRC_MAC if sip != dip else _mac_for(sip), 0x0800) + ip + udp
 
 
-class _AtomicFileTransport(PublishOnExit, Transport):
+class _AtomicFileTransport(AtomicFileWriter, Transport):
     """A transport writing one file atomically: published by :meth:`close`, removed by
     :meth:`discard` or by leaving the ``with`` block on an exception."""
-
-    _out: AtomicFile
-
-    def close(self) -> None:
-        """Publish the file under its name (nothing happens after :meth:`discard`)."""
-        self._out.commit()
-
-    def discard(self) -> None:
-        """Remove what was written; no file is left under the name."""
-        self._out.discard()
-
-    def _publish(self) -> None:
-        self.close()
 
 
 class FileTransport(_AtomicFileTransport):

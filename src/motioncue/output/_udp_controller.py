@@ -18,7 +18,7 @@ from .._config import ConfigReader
 from .._errors import ConfigError, LimitError
 from ._controller_api import check_whole_ms_rate
 from ._transport import Transport, parse_target
-from ._udp_common import CONFIRM_MAIN, PASSCODE, WHO_ALL, FrameClock
+from ._udp_common import CONFIRM_MAIN, PASSCODE, WHO_ALL, FrameClock, check_int32
 
 __all__ = [
     "UdpController",
@@ -236,6 +236,18 @@ class UdpFrameEncoder:
             who_reply,
         )
         self._stroke: tuple[int, int] | None = controller.stroke_pulses
+
+    def _pack_frame(
+        self, frame: int, field: int, pulses: Sequence[int], *tail: int
+    ) -> tuple[bytes, Sequence[int]]:
+        """The frame datagram (header, ``frame``, ``field``, ``pulses``, ``tail``) and the
+        positions it carries: integral floats are converted, anything not an int32 raises
+        :class:`~motioncue.ProtocolError` with a clear message (checked only if packing fails)."""
+        try:
+            return self._pack(*self._head, frame, field, *pulses, *tail), pulses
+        except struct.error:
+            pulses = check_int32(pulses, self.n_axes)
+            return self._pack(*self._head, frame, field, *pulses, *tail), pulses
 
     def _check_stroke(self, pulses: Sequence[int]) -> None:
         """Raise :class:`LimitError` when a position leaves the stroke (if one is set)."""

@@ -35,7 +35,7 @@ import numpy as np
 from .._errors import ConfigError
 from ..telemetry import decode_recording, samples_to_arrays
 from ..telemetry._motion import is_datagram_recording
-from ..telemetry._recording import Recording, read_recording_csv
+from ..telemetry._recording import Recording, csv_read_error, read_recording_csv
 
 __all__ = [
     "HELD_WARNING_FRACTION",
@@ -93,12 +93,8 @@ def read_keyframes_csv(path: str | Path) -> Keyframes:
     try:
         with open(path, newline="", encoding="utf-8") as fh:
             rows = list(csv.reader(fh))
-    except OSError as exc:
-        raise ConfigError(f"{path}: cannot read: {exc}") from exc
-    except UnicodeDecodeError as exc:
-        raise ConfigError(f"{path}: not a text (UTF-8) CSV file: {exc}") from exc
-    except csv.Error as exc:
-        raise ConfigError(f"{path}: not a readable CSV file: {exc}") from exc
+    except (OSError, UnicodeDecodeError, csv.Error) as exc:
+        raise csv_read_error(path, exc) from exc
     if not rows:
         raise ConfigError(f"{path}: empty file")
     header = [h.strip() for h in rows[0]]
@@ -183,10 +179,8 @@ def load_generate_input(path: str | Path) -> tuple[str, Any, dict[str, int]]:
         with open(path, newline="", errors="replace") as fh:
             # the header row only, however long the first line of a foreign file is
             first = next(csv.reader([fh.readline(_MAX_HEADER_CHARS)]), [])
-    except OSError as exc:
-        raise ConfigError(f"{path}: cannot read: {exc}") from exc
-    except csv.Error as exc:
-        raise ConfigError(f"{path}: not a readable CSV file: {exc}") from exc
+    except (OSError, csv.Error) as exc:
+        raise csv_read_error(path, exc) from exc
     names = {h.strip() for h in first}
     if {"fx", "fy", "fz", "wx", "wy", "wz"} <= names:
         rec = read_recording_csv(path)

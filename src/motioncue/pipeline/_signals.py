@@ -15,13 +15,9 @@ import threading
 from collections.abc import Callable
 from types import FrameType
 
-__all__ = ["STOP_SIGNALS", "SignalGuard"]
+from .._atomic import STOP_SIGNALS
 
-STOP_SIGNALS: tuple[signal.Signals, ...] = tuple(
-    getattr(signal, name)
-    for name in ("SIGINT", "SIGTERM", "SIGHUP", "SIGQUIT")
-    if hasattr(signal, name)
-)
+__all__ = ["STOP_SIGNALS", "SignalGuard"]
 
 
 class SignalGuard:

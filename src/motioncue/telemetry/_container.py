@@ -33,7 +33,7 @@ import time
 from collections.abc import Callable, Iterator
 from dataclasses import dataclass, field
 
-from .._atomic import AtomicFile, PublishOnExit
+from .._atomic import AtomicFile, AtomicFileWriter
 from .._errors import ConfigError, ProtocolError, TransportError
 from ._registry import GAMES
 from ._sample import TelemetrySample
@@ -97,7 +97,7 @@ class DatagramRecording:
         return len(self.datagrams)
 
 
-class RecordingWriter(PublishOnExit):
+class RecordingWriter(AtomicFileWriter):
     """Write a recording file record by record (context manager; atomic: published by
     :meth:`close` or a normal exit, discarded by :meth:`discard` or an exception).
 
@@ -137,17 +137,6 @@ class RecordingWriter(PublishOnExit):
         self._out.write(RECORD_HEADER.pack(t_s, len(datagram)) + datagram)
         self.count += 1
         self.nbytes += len(datagram)
-
-    def close(self) -> None:
-        """Publish the recording under its name."""
-        self._out.commit()
-
-    def discard(self) -> None:
-        """Remove what was written; no file is left under the name."""
-        self._out.discard()
-
-    def _publish(self) -> None:
-        self.close()
 
 
 def read_recording_file(path: str | os.PathLike[str]) -> DatagramRecording:

@@ -22,6 +22,7 @@ __all__ = [
     "MAX_RESAMPLED_FRAMES",
     "RECORDING_COLUMNS",
     "Recording",
+    "csv_read_error",
     "read_recording_csv",
     "resample",
     "write_recording_csv",
@@ -31,6 +32,23 @@ RECORDING_COLUMNS: tuple[str, ...] = ("t", "fx", "fy", "fz", "wx", "wy", "wz")
 MAX_RESAMPLED_FRAMES = 2_000_000
 """Most samples :func:`resample` makes (about 5.5 h at 100 Hz): a longer grid comes from a
 damaged or absurd recording (a time gap of 1e6 s) and would exhaust memory."""
+
+
+def csv_read_error(path: str | Path, exc: OSError | UnicodeDecodeError | csv.Error) -> ConfigError:
+    """The one-line error for a CSV file that could not be read, by what went wrong.
+
+    Parameters
+    ----------
+    path : str or Path
+        The file, named in the message.
+    exc : OSError, UnicodeDecodeError or csv.Error
+        What reading it raised.
+    """
+    if isinstance(exc, UnicodeDecodeError):  # a ValueError: tested before OSError for clarity
+        return ConfigError(f"{path}: not a text (UTF-8) CSV file: {exc}")
+    if isinstance(exc, OSError):
+        return ConfigError(f"{path}: cannot read: {exc}")
+    return ConfigError(f"{path}: not a readable CSV file: {exc}")
 
 
 @dataclass(frozen=True, eq=False)
@@ -134,12 +152,8 @@ def read_recording_csv(path: str | Path) -> Recording:
                 if not math.isfinite(values[0]):
                     raise ConfigError(f"{where}: time {row[cols[0]]!r} is not a finite number")
                 rows.append(values)
-    except OSError as exc:
-        raise ConfigError(f"{p}: cannot read: {exc}") from exc
-    except UnicodeDecodeError as exc:
-        raise ConfigError(f"{p}: not a text (UTF-8) CSV file: {exc}") from exc
-    except csv.Error as exc:
-        raise ConfigError(f"{p}: not a readable CSV file: {exc}") from exc
+    except (OSError, UnicodeDecodeError, csv.Error) as exc:
+        raise csv_read_error(p, exc) from exc
     data = np.array(rows, dtype=float).reshape(-1, 7)
     return Recording(data[:, 0], data[:, 1:4], data[:, 4:7])
 

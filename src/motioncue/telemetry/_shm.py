@@ -42,6 +42,7 @@ from multiprocessing import resource_tracker, shared_memory
 from multiprocessing.connection import Connection
 from multiprocessing.synchronize import Event
 
+from .._atomic import STOP_SIGNALS
 from .._errors import ConfigError, MotioncueError
 from ._sample import TelemetrySample
 
@@ -55,11 +56,7 @@ _SAMPLE = struct.Struct("=q7dqq")  # the sample part: seq .. game
 _FIELDS = struct.Struct("=7dqq")  # the sample after seq: t, f, w, paused, game
 
 
-_GROUP_SIGNALS: tuple[signal.Signals, ...] = tuple(
-    getattr(signal, name)
-    for name in ("SIGINT", "SIGTERM", "SIGHUP", "SIGQUIT")
-    if hasattr(signal, name)
-)
+_GROUP_SIGNALS: tuple[signal.Signals, ...] = STOP_SIGNALS
 """Signals a terminal sends to the whole process group; the helper processes ignore them."""
 
 

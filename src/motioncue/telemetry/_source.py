@@ -50,6 +50,7 @@ __all__ = [
     "ReplaySource",
     "Requester",
     "TelemetrySource",
+    "is_loopback",
     "open_source",
     "parse_live_spec",
     "split_peer",
@@ -100,7 +101,8 @@ def _talks(factory: object) -> bool:
     return hasattr(factory, "requests") and hasattr(factory, "PEER_PORT")
 
 
-def _is_loopback(host: str) -> bool:
+def is_loopback(host: str) -> bool:
+    """Whether ``host`` (``localhost`` or an IP address text) names this machine's loopback."""
     if host == "localhost":
         return True
     try:
@@ -130,7 +132,7 @@ def parse_live_spec(spec: str) -> tuple[str, str, int]:
             " (or replay:FILE)"
         )
     host, port_text = DEFAULT_HOST, None
-    if peer is not None and not _is_loopback(peer):
+    if peer is not None and not is_loopback(peer):
         host = "0.0.0.0"  # a console or another PC answers: listen beyond loopback
     if len(parts) == 2:
         port_text = parts[1]

@@ -103,7 +103,7 @@ def stops_within(
     for _ in range(_MAX_BRAKE_FRAMES):
         if v == 0.0 and a == 0.0:
             return True
-        # one velocity-level step of P (want 0, previous want 0), as _jerk._vstep
+        # one velocity-level step of P (want 0, previous want 0), as _realtime._level_step
         up = a + jdt
         if up > amax:
             up = amax

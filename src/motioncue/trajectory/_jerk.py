@@ -46,7 +46,7 @@ import numpy as np
 from .._errors import ConfigError, LimitError
 from ._brake import brake_bound, stops_within
 from ._limits import ActuatorLimits
-from ._realtime import _vcap
+from ._realtime import _counters_repr, _level_step
 
 if TYPE_CHECKING:
     from numpy.typing import ArrayLike
@@ -55,51 +55,6 @@ __all__ = ["JerkLimiter", "JerkLimiterState"]
 
 _MAX_BRAKE_FRAMES = 1_000_000
 _BISECT = 10
-
-
-def _vstep(
-    v: float,
-    a: float,
-    want: float,
-    want_prev: float,
-    vmax: float,
-    amax: float,
-    jdt: float,
-    half_inv_j: float,
-    abig: float,
-    dt: float,
-    inv_dt: float,
-) -> tuple[float, float, bool]:
-    """One second-order limiter step at the velocity level; (v', a', landed exactly)."""
-    hi = a + jdt
-    if hi > amax:
-        hi = amax
-    lo = a - jdt
-    if lo < -amax:
-        lo = -amax
-    if hi > 0.0 and v + hi * dt + hi * hi * half_inv_j > vmax:
-        cap = _vcap((vmax - v) * inv_dt, jdt, abig)
-        if hi > cap:
-            hi = cap
-    if lo < 0.0 and v + lo * dt - lo * lo * half_inv_j < -vmax:
-        cap = _vcap((v + vmax) * inv_dt, jdt, abig)
-        if lo < -cap:
-            lo = -cap
-    ad = (want - v) * inv_dt
-    at = (want - want_prev) * inv_dt
-    if lo <= ad <= hi and -jdt <= ad - at <= jdt:
-        return want, ad, True
-    e = want - v
-    if e > 0.0:
-        an = at + _vcap(e * inv_dt, jdt, abig)
-    else:
-        an = at - _vcap(-e * inv_dt, jdt, abig)
-    if an > hi:
-        an = hi
-    if an < lo:
-        an = lo
-    vn = v + an * dt
-    return vn, (vn - v) * inv_dt, False
 
 
 class JerkLimiterState:
@@ -130,10 +85,7 @@ class JerkLimiterState:
         self.max_deviation = 0.0
 
     def __repr__(self) -> str:
-        return (
-            f"JerkLimiterState(n_frames={self.n_frames}, n_clamped={self.n_clamped}, "
-            f"n_nonfinite={self.n_nonfinite}, max_deviation={self.max_deviation:.3g})"
-        )
+        return _counters_repr(self)
 
 
 @dataclass(frozen=True, eq=False)
@@ -190,7 +142,9 @@ class JerkLimiter:
         for _ in range(_MAX_BRAKE_FRAMES):
             if v == 0.0 and a == 0.0:
                 return lo, hi
-            v, a, _ = _vstep(v, a, 0.0, 0.0, vmax, amax, jdt, half_inv_j, abig, dt, inv_dt)
+            v, a, _ = _level_step(
+                v, a, 0.0, 0.0, -vmax, vmax, amax, jdt, half_inv_j, abig, dt, inv_dt
+            )
             d += v * dt
             if d < lo:
                 lo = d
@@ -297,8 +251,8 @@ class JerkLimiter:
                 want = 2.0 * vmax
             elif want < -2.0 * vmax:
                 want = -2.0 * vmax
-            v1, a1, landed = _vstep(
-                v, a, want, state.last_want[i], vmax, amax, jdt, half_inv_j, abig, dt, inv_dt
+            v1, a1, landed = _level_step(
+                v, a, want, state.last_want[i], -vmax, vmax, amax, jdt, half_inv_j, abig, dt, inv_dt
             )
             if landed:
                 q1 = t
@@ -326,7 +280,9 @@ class JerkLimiter:
             seen: dict[float, bool] = {}
             for k in range(_BISECT + 1):
                 w = want if k == 0 else 0.5 * (w_lo + w_hi)
-                vb, ab_, _l = _vstep(v, a, w, w, vmax, amax, jdt, half_inv_j, abig, dt, inv_dt)
+                vb, ab_, _l = _level_step(
+                    v, a, w, w, -vmax, vmax, amax, jdt, half_inv_j, abig, dt, inv_dt
+                )
                 qb = q + vb * dt
                 vb = (qb - q) * inv_dt
                 ab_ = (vb - v) * inv_dt
@@ -341,7 +297,9 @@ class JerkLimiter:
                 else:
                     w_hi = w
             if best is None:  # P's action: admissible by construction
-                vb, ab_, _l = _vstep(v, a, 0.0, 0.0, vmax, amax, jdt, half_inv_j, abig, dt, inv_dt)
+                vb, ab_, _l = _level_step(
+                    v, a, 0.0, 0.0, -vmax, vmax, amax, jdt, half_inv_j, abig, dt, inv_dt
+                )
                 qb = q + vb * dt
                 vb = (qb - q) * inv_dt
                 ab_ = (vb - v) * inv_dt

@@ -52,6 +52,8 @@ from ._limits import ActuatorLimits
 if TYPE_CHECKING:
     from numpy.typing import ArrayLike
 
+    from ._jerk import JerkLimiterState
+
 __all__ = ["LimiterState", "RealtimeLimiter", "braking_distance", "braking_speed_cap"]
 
 
@@ -90,6 +92,61 @@ def _vcap(b: float, adt: float, v_big: float = math.inf) -> float:
     while adt * (n + 1) * (n + 2) * 0.5 <= b:
         n += 1
     return b / (n + 1) + adt * n * 0.5
+
+
+def _level_step(
+    x: float,
+    d: float,
+    want: float,
+    want_prev: float,
+    x_min: float,
+    x_max: float,
+    d_max: float,
+    ddt: float,
+    half_inv: float,
+    d_big: float,
+    dt: float,
+    inv_dt: float,
+) -> tuple[float, float, bool]:
+    """One step of a causal limiter at one derivative level; ``(x', d', landed exactly)``.
+
+    ``x`` is bounded to ``[x_min, x_max]``, its difference ``d = (x[k] - x[k-1]) / dt`` to
+    ``|d| <= d_max``, and ``d`` changes by at most ``ddt`` a step, so that braking at that
+    rate still stops inside the bounds (``half_inv = 1 / (2 ddt / dt)``, ``d_big`` above
+    every limit; see :func:`_vcap`). The step lands on ``want`` when allowed, else approaches
+    it as fast as it may (``want_prev``: the previous wanted value). Positions with speeds
+    (:class:`RealtimeLimiter`: ``x = q``, ``d = v``) and speeds with accelerations
+    (:class:`~motioncue.trajectory._jerk.JerkLimiter`: ``x = v``, ``x_min = -v_max``).
+    """
+    hi = d + ddt
+    if hi > d_max:
+        hi = d_max
+    lo = d - ddt
+    if lo < -d_max:
+        lo = -d_max
+    if hi > 0.0 and x + hi * dt + hi * hi * half_inv > x_max:
+        cap = _vcap((x_max - x) * inv_dt, ddt, d_big)
+        if hi > cap:
+            hi = cap
+    if lo < 0.0 and x + lo * dt - lo * lo * half_inv < x_min:
+        cap = _vcap((x - x_min) * inv_dt, ddt, d_big)
+        if lo < -cap:
+            lo = -cap
+    dd = (want - x) * inv_dt
+    dw = (want - want_prev) * inv_dt
+    if lo <= dd <= hi and -ddt <= dd - dw <= ddt:
+        return want, dd, True
+    e = want - x
+    if e > 0.0:
+        dn = dw + _vcap(e * inv_dt, ddt, d_big)
+    else:
+        dn = dw - _vcap(-e * inv_dt, ddt, d_big)
+    if dn > hi:
+        dn = hi
+    if dn < lo:
+        dn = lo
+    xn = x + dn * dt
+    return xn, (xn - x) * inv_dt, False
 
 
 class LimiterState:
@@ -142,10 +199,15 @@ class LimiterState:
         return s
 
     def __repr__(self) -> str:
-        return (
-            f"LimiterState(n_frames={self.n_frames}, n_clamped={self.n_clamped}, "
-            f"n_nonfinite={self.n_nonfinite}, max_deviation={self.max_deviation:.3g})"
-        )
+        return _counters_repr(self)
+
+
+def _counters_repr(state: LimiterState | JerkLimiterState) -> str:
+    """``Name(n_frames=, n_clamped=, n_nonfinite=, max_deviation=)`` of a limiter's state."""
+    return (
+        f"{type(state).__name__}(n_frames={state.n_frames}, n_clamped={state.n_clamped}, "
+        f"n_nonfinite={state.n_nonfinite}, max_deviation={state.max_deviation:.3g})"
+    )
 
 
 @dataclass(frozen=True, eq=False)
@@ -280,39 +342,10 @@ class RealtimeLimiter:
             else:
                 lts[i] = t
                 finite = True
-            qp = qs[i]
-            vp = vs[i]
-            hi = vp + adt
-            if hi > vmax:
-                hi = vmax
-            lo = vp - adt
-            if lo < -vmax:
-                lo = -vmax
-            if hi > 0.0 and qp + hi * dt + hi * hi * half_inv_a > qmax:
-                cap = _vcap((qmax - qp) * inv_dt, adt, vbig)
-                if hi > cap:
-                    hi = cap
-            if lo < 0.0 and qp + lo * dt - lo * lo * half_inv_a < qmin:
-                cap = _vcap((qp - qmin) * inv_dt, adt, vbig)
-                if lo < -cap:
-                    lo = -cap
-            vd = (t - qp) * inv_dt
-            vt = (t - tp) * inv_dt
-            if lo <= vd <= hi and -adt <= vd - vt <= adt:
-                qn = t
-                vn = vd
-            else:
-                e = t - qp
-                if e > 0.0:
-                    vn = vt + _vcap(e * inv_dt, adt, vbig)
-                else:
-                    vn = vt - _vcap(-e * inv_dt, adt, vbig)
-                if vn > hi:
-                    vn = hi
-                if vn < lo:
-                    vn = lo
-                qn = qp + vn * dt
-                vn = (qn - qp) * inv_dt
+            qn, vn, landed = _level_step(
+                qs[i], vs[i], t, tp, qmin, qmax, vmax, adt, half_inv_a, vbig, dt, inv_dt
+            )
+            if not landed:
                 clamped = True
                 state.clamped_axes[i] += 1
                 if finite:

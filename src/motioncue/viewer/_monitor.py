@@ -20,7 +20,6 @@ one is still in flight.
 from __future__ import annotations
 
 import asyncio
-import ipaddress
 import json
 import math
 import threading
@@ -31,6 +30,7 @@ from typing import TYPE_CHECKING, Any, Protocol, SupportsFloat
 import numpy as np
 
 from .._errors import ConfigError, TransportError
+from ..telemetry._source import is_loopback
 from ._page import DRAW_JS, frame_json, scene_layout
 from ._scene import Scene, scene_from_q
 
@@ -295,15 +295,6 @@ def parse_monitor(value: str | None) -> tuple[str, int]:
     return host, port
 
 
-def _is_loopback(host: str) -> bool:
-    if host == "localhost":
-        return True
-    try:
-        return ipaddress.ip_address(host).is_loopback
-    except ValueError:
-        return False
-
-
 class Monitor:
     """Serve the live page of one job.
 
@@ -529,7 +520,7 @@ class Monitor:
 
     @property
     def local_only(self) -> bool:
-        return _is_loopback(self.host)
+        return is_loopback(self.host)
 
     def _serve(self, ready: threading.Event) -> None:
         import tornado.web

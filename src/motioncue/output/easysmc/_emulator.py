@@ -633,19 +633,8 @@ class ControllerModel:
         if dist:
             frame = self.limits is not None and speed_code == self.limits.speed_code
             self._frame_schedule(number, start, start + duration, frame and not self.small_segment)
-        end = [o + d for o, d in zip(origin, deltas, strict=True)]
-        self.queue.append(
-            _Job(
-                number,
-                cmd,
-                start,
-                start + duration,
-                tuple(deltas),
-                dist,
-                (feed, f0, acc_a, acc_b),
-                tuple(origin),
-                tuple(end),
-            )
+        self._queue_job(
+            number, cmd, start, duration, deltas, dist, (feed, f0, acc_a, acc_b), origin
         )
 
     def _enqueue_arc(self, number: int, cmd: Command, now_s: float) -> None:
@@ -674,6 +663,29 @@ class ControllerModel:
         start = self._start_time(now_s)
         duration = move_duration_s(dist, max(feed, 1), f0, max(acc_a, 1), max(acc_b, 1))
         self._frame_schedule(number, start, start + duration, False)
+        self._queue_job(
+            number,
+            cmd,
+            start,
+            duration,
+            deltas,
+            dist,
+            (max(feed, 1), f0, max(acc_a, 1), max(acc_b, 1)),
+            origin,
+        )
+
+    def _queue_job(
+        self,
+        number: int,
+        cmd: Command,
+        start: float,
+        duration: float,
+        deltas: Sequence[int],
+        dist: int,
+        profile: tuple[float, float, float, float],
+        origin: Sequence[int],
+    ) -> None:
+        """Queue a move by ``deltas`` (pulses) from ``origin``, ``start`` to + ``duration`` (s)."""
         end = [o + d for o, d in zip(origin, deltas, strict=True)]
         self.queue.append(
             _Job(
@@ -683,7 +695,7 @@ class ControllerModel:
                 start + duration,
                 tuple(deltas),
                 dist,
-                (max(feed, 1), f0, max(acc_a, 1), max(acc_b, 1)),
+                profile,
                 tuple(origin),
                 tuple(end),
             )

@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import math
-import struct
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from numbers import Integral
@@ -323,11 +322,7 @@ class ImaxFrameEncoder(UdpFrameEncoder):
         dout = int(dout)
         frame, field, abs_ms = self.clock.stamp(t_s)
         if vibration is None:
-            try:
-                data = self._pack(*self._head, frame, field, *pulses, dout, 0)
-            except struct.error:
-                pulses = check_int32(pulses, self.n_axes)
-                data = self._pack(*self._head, frame, field, *pulses, dout, 0)
+            data, pulses = self._pack_frame(frame, field, pulses, dout, 0)
         else:
             pulses = check_int32(pulses, self.n_axes)
             if len(vibration) != self.n_axes:

@@ -221,19 +221,7 @@ class ImaxEmulator(ControllerEmulator):
         self, msg: MotionFrame | VibrationFrame, status: ReplyStatus, code: int
     ) -> MotionFrameReply | VibrationFrameReply:
         channel = code if status != ReplyStatus.OK else channel_of_axes(len(msg.positions))
-        if isinstance(msg, VibrationFrame):
-            return VibrationFrameReply(
-                status,
-                msg.absolute,
-                channel,
-                msg.frame,
-                msg.time_ms,
-                msg.positions,
-                self.inputs & 0xFFFF,
-                msg.vibration,
-                self.port_out_bytes,
-            )
-        return MotionFrameReply(
+        head = (
             status,
             msg.absolute,
             channel,
@@ -241,9 +229,10 @@ class ImaxEmulator(ControllerEmulator):
             msg.time_ms,
             msg.positions,
             self.inputs & 0xFFFF,
-            msg.extend,
-            self.port_out_bytes,
         )
+        if isinstance(msg, VibrationFrame):
+            return VibrationFrameReply(*head, msg.vibration, self.port_out_bytes)
+        return MotionFrameReply(*head, msg.extend, self.port_out_bytes)
 
     def _frame(self, msg: MotionFrame | VibrationFrame) -> MotionFrameReply | VibrationFrameReply:
         p = self.params

@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import struct
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from numbers import Integral
@@ -14,7 +13,7 @@ from ..._errors import ConfigError, LimitError, ProtocolError
 from .._controller_api import DriveExpectations, PulseLimits
 from .._feedback import PositionQuery, register_position_query, words_to_positions
 from .._transport import parse_target
-from .._udp_common import FrameClock, check_int32
+from .._udp_common import FrameClock
 from .._udp_controller import (
     UdpController,
     UdpFrameEncoder,
@@ -270,13 +269,7 @@ class MboxFrameEncoder(UdpFrameEncoder):
         if not (0 <= d1 <= self._dac_max[0] and 0 <= d2 <= self._dac_max[1]):
             raise ProtocolError(f"dacs = {dacs!r}: allowed 0 .. Fn078/Fn079 = {self._dac_max}")
         frame, field, abs_ms = self.clock.stamp(t_s)
-        try:
-            data = self._pack(*self._head, frame, field, *pulses, dout & 0xFFF, d1, d2, dout >> 12)
-        except struct.error:
-            pulses = check_int32(pulses, self.n_axes)  # raises with a clear message, or
-            data = self._pack(
-                *self._head, frame, field, *pulses, dout & 0xFFF, d1, d2, dout >> 12
-            )  # integral floats
+        data, pulses = self._pack_frame(frame, field, pulses, dout & 0xFFF, d1, d2, dout >> 12)
         if self._stroke is not None:
             self._check_stroke(pulses)
         self.clock.commit(t_s, abs_ms)
