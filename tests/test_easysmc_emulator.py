@@ -4,6 +4,7 @@ against a fake DLL, and the end-to-end stream over a real pseudo-terminal with p
 from __future__ import annotations
 
 import ctypes
+import itertools
 import math
 
 import pytest
@@ -427,12 +428,15 @@ def test_end_to_end_stream_over_a_pty() -> None:
     n_before = len(ctrl.setup_commands()) + len(send_commands(ctrl, ["home"]))
     moves = [e for e in emu.trace if e.number > n_before][: len(frames)]
     assert len(moves) == len(frames)
-    t_first = moves[0].t_s - 1 / rate  # controller time of the frame-0 start
     for (t, target), entry in zip(frames, moves, strict=True):
         assert [abs(p - round(v)) <= 1 for p, v in zip(entry.positions, target, strict=False)] == [
             True
         ] * 3, (t, entry)
-        assert abs((entry.t_s - t_first) - (t + 1 / rate)) <= 1 / rate, (t, entry)
+    # on the controller's clock each move lasts its period (its feed): consecutive moves are
+    # never closer than one period, so no move is played faster than planned whatever the
+    # load; a late sender only opens gaps (the buffer ran dry), which bench_easysmc.py times
+    gaps = [b.t_s - a.t_s for a, b in itertools.pairwise(moves)]
+    assert min(gaps) >= 1 / rate - 1e-6, min(gaps)
     assert moves[-1].positions[:3] == enc.last_pulses
     assert emu.models[0].stats["buffer_full"] == 1 and link.stats.garbled_replies == 0
 
