@@ -15,20 +15,19 @@ every frame is judged with the controller's own numbers, in axis values:
 
 from __future__ import annotations
 
-import socket
 import threading
 
 import numpy as np
 
 from ..._errors import ConfigError
-from .._udp_emulator import Trace, Violation
+from .._udp_emulator import Trace, UdpEmulatorBase, Violation
 from ._boards import board_parser
 from ._controller import IfaceController
 
 __all__ = ["IfaceEmulator"]
 
 
-class IfaceEmulator:
+class IfaceEmulator(UdpEmulatorBase):
     """Parses and judges one board's byte stream (module docstring).
 
     Parameters
@@ -59,15 +58,12 @@ class IfaceEmulator:
                 f"firmware {controller.firmware} drives {self.parser.n_motors} motors, "
                 f"{controller.name} has {controller.n_axes} axes"
             )
-        self._addr = (host, port)
-        self._sock: socket.socket | None = None
-        self._thread: threading.Thread | None = None
-        self._stop = threading.Event()
         self._lock = threading.Lock()
         self.frames: list[tuple[int, ...]] = []
         self._violations: list[Violation] = []
-        self.internal_errors: list[str] = []
         self.bytes_received = 0
+        self.datagrams = 0
+        super().__init__(host, port)  # the UDP server loop: datagrams go to handle()
 
     # --- judging -------------------------------------------------------------------
     def feed(self, data: bytes) -> int:
@@ -109,8 +105,18 @@ class IfaceEmulator:
 
     @property
     def received(self) -> int:
+        """Frames completed (the board reads a stream, not datagrams)."""
         with self._lock:
             return len(self.frames)
+
+    @received.setter
+    def received(self, datagrams: int) -> None:  # the server loop's datagram count
+        self.datagrams = datagrams
+
+    def handle(self, data: bytes, now_s: float) -> list[bytes]:
+        """One datagram into the stream; the board never answers."""
+        self.feed(data)
+        return []
 
     @property
     def violations(self) -> list[Violation]:
@@ -133,40 +139,3 @@ class IfaceEmulator:
         pulses = c.pulses_lo + np.floor(counts * span / c.fmt.full_scale + 0.5).astype(np.int64)
         n = len(counts)
         return Trace(np.arange(n) / self.rate_hz, pulses, np.arange(n, dtype=np.int64))
-
-    @property
-    def where(self) -> str:
-        return f"udp://{self._addr[0]}:{self._addr[1]}"
-
-    def start(self) -> IfaceEmulator:
-        sock = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
-        sock.setsockopt(socket.SOL_SOCKET, socket.SO_RCVBUF, 1 << 21)
-        sock.bind(self._addr)
-        sock.settimeout(0.05)
-        self._sock = sock
-        self._addr = (self._addr[0], int(sock.getsockname()[1]))
-        self._thread = threading.Thread(target=self._serve, daemon=True)
-        self._thread.start()
-        return self
-
-    def stop(self) -> None:
-        self._stop.set()
-        if self._thread is not None:
-            self._thread.join(2.0)
-        if self._sock is not None:
-            self._sock.close()
-
-    def _serve(self) -> None:
-        assert self._sock is not None
-        while not self._stop.is_set():
-            try:
-                data = self._sock.recv(65536)
-            except TimeoutError:
-                continue
-            except OSError as exc:
-                self.internal_errors.append(str(exc))
-                return
-            try:
-                self.feed(data)
-            except Exception as exc:  # the emulator's own failure, reported not raised
-                self.internal_errors.append(repr(exc))
