@@ -124,11 +124,10 @@ def test_bridge_verb_exits_0_at_the_end_of_a_replay(
         assert _wait_for(lambda: len(emu.trace) > 0 and emu.received == len(emu.trace) + 1)
     err = capsys.readouterr().err
     assert code == 0, err
-    # the recording, the fade-out, the park (a few tenths of a second here) and the 0.5 s
-    # status poll of the CLI: span_s + 0.3 + 0.5 s or so on an idle machine. The upper bound
-    # only tells the end of the replay from the --duration safety net (20 s), with room for
-    # a busy machine; the message below says why it ended.
-    assert span_s < took_s < 15.0, took_s
+    # never before the recording was over (load only lengthens it); that it ended at the end
+    # of the replay and not at the --duration safety net is told by the message below, not
+    # by a wall-clock bound a busy machine could break
+    assert took_s > span_s, took_s
     assert "bridge stopped:" in err and "parked error 0" in err
     assert "end of the replay" in err
     platform = load_platform("seat3")
