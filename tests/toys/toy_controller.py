@@ -13,9 +13,7 @@ periods), from rest at the first frame. Importing this module registers kind ``t
 
 from __future__ import annotations
 
-import socket
 import struct
-import threading
 from collections.abc import Sequence
 from dataclasses import dataclass
 from functools import cache
@@ -34,6 +32,7 @@ from motioncue.output import (
     PulseLimits,
     Trace,
     TransportURL,
+    UdpEmulatorBase,
     Violation,
     register_controller_kind,
 )
@@ -160,32 +159,19 @@ def read_config(reader: ConfigReader, name: str) -> ToyController:
     )
 
 
-class ToyEmulator:
-    """Listens on UDP; records and judges every toy frame (module docstring)."""
+class ToyEmulator(UdpEmulatorBase):
+    """Records and judges every toy frame (module docstring); the UDP server loop, its
+    thread and the datagram count (``received``) are motioncue's :class:`UdpEmulatorBase`."""
 
-    def __init__(self, controller: ToyController, host: str, port: int) -> None:
+    def __init__(self, controller: ToyController, host: str = "127.0.0.1", port: int = 0) -> None:
+        super().__init__(host, port)
         self.controller = controller
-        self._addr = (host, port)
-        self._sock: socket.socket | None = None
-        self._thread: threading.Thread | None = None
-        self._stop = threading.Event()
-        self._lock = threading.Lock()
         self.frames: list[ToyFrame] = []
         self._violations: list[Violation] = []
-        self.internal_errors: list[str] = []
-
-    @property
-    def where(self) -> str:
-        return f"udp://{self._addr[0]}:{self._addr[1]}"
-
-    @property
-    def received(self) -> int:
-        with self._lock:
-            return len(self.frames)
 
     @property
     def trace(self) -> Trace:
-        with self._lock:
+        with self.lock:
             frames = list(self.frames)
         n = self.controller.n_axes
         return Trace(
@@ -196,46 +182,19 @@ class ToyEmulator:
 
     @property
     def violations(self) -> list[Violation]:
-        with self._lock:
+        with self.lock:
             return list(self._violations)
 
-    def start(self) -> ToyEmulator:
-        sock = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
-        sock.setsockopt(socket.SOL_SOCKET, socket.SO_RCVBUF, 1 << 21)
-        sock.bind(self._addr)
-        sock.settimeout(0.05)
-        self._sock = sock
-        self._addr = (self._addr[0], int(sock.getsockname()[1]))
-        self._thread = threading.Thread(target=self._serve, daemon=True)
-        self._thread.start()
-        return self
-
-    def stop(self) -> None:
-        self._stop.set()
-        if self._thread is not None:
-            self._thread.join(2.0)
-        if self._sock is not None:
-            self._sock.close()
-
-    def _serve(self) -> None:
-        assert self._sock is not None
-        while not self._stop.is_set():
-            try:
-                data = self._sock.recv(65536)
-            except TimeoutError:
-                continue
-            except OSError as exc:
-                self.internal_errors.append(str(exc))
-                return
-            try:
-                frame = ToyFrame.decode(data)
-            except ProtocolError as exc:
-                with self._lock:
-                    self._violations.append(Violation(0.0, "malformed", None, str(exc)))
-                continue
-            with self._lock:
-                self._judge(frame)
-                self.frames.append(frame)
+    def handle(self, data: bytes, now_s: float) -> list[bytes]:
+        """Judge and keep one datagram (called under ``self.lock``); the toy never replies."""
+        try:
+            frame = ToyFrame.decode(data)
+        except ProtocolError as exc:
+            self._violations.append(Violation(0.0, "malformed", None, str(exc)))
+            return []
+        self._judge(frame)
+        self.frames.append(frame)
+        return []
 
     def _judge(self, frame: ToyFrame) -> None:
         """Stroke, speed and acceleration of ``frame`` after the ones before it."""
@@ -301,15 +260,18 @@ KIND = ControllerKind(
 register_controller_kind("toy", KIND, replace=True)
 
 
-def write_config(path: Path, *, axes: int = 3) -> Path:
-    """A toy controller TOML for a seat3-like rig (100 mm stroke at 2000 pulses/mm,
-    200 mm/s, 10 m/s^2 in pulses, with room above the platform's own limits)."""
+def write_config(
+    path: Path, *, axes: int = 3, stroke_pulses: tuple[int, int] = (-1000, 201000)
+) -> Path:
+    """A toy controller TOML, by default for a seat3-like rig (100 mm stroke at 2000
+    pulses/mm, 200 mm/s, 10 m/s^2 in pulses, with room above the platform's own limits);
+    ``stroke_pulses`` (lo, hi) for another rig's pulse range."""
     path.write_text(
         'kind = "toy"\n'
         f"axes = {axes}\n"
         'default_target = "udp://127.0.0.1:7499"\n'
-        "stroke_lo_pulses = -1000\n"
-        "stroke_hi_pulses = 201000\n"
+        f"stroke_lo_pulses = {stroke_pulses[0]}\n"
+        f"stroke_hi_pulses = {stroke_pulses[1]}\n"
         f"max_speed_pulses_s = {250.0 * 2000:.1f}\n"
         f"max_accel_pulses_s2 = {12000.0 * 2000:.1f}\n"
     )

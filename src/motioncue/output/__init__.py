@@ -24,7 +24,7 @@ from ._transport import Transport, TransportURL, parse_target
 from ._transports_file import FileTransport, PcapPacket, PcapTransport, read_pcap
 from ._transports_open import open_transport
 from ._transports_udp import UdpTransport
-from ._udp_emulator import Trace, Violation
+from ._udp_emulator import Trace, UdpEmulatorBase, Violation
 
 __all__ = [
     "Controller",
@@ -41,6 +41,7 @@ __all__ = [
     "Trace",
     "Transport",
     "TransportURL",
+    "UdpEmulatorBase",
     "UdpTransport",
     "Violation",
     "controller_kind",
