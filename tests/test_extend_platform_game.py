@@ -9,12 +9,13 @@ removes what it registered, so other tests see the bundled registries only.
 Oracles: the rig's leg lengths in closed form (two vertical legs at x = +-0.3 m), its pulses
 from the TOML's lead and pulse count by hand, speeds and accelerations by finite differences
 of the frames against the TOML's [limits]; the toy datagram's fields as packed.
+The bridge from a toy-game recording to the toy rig, with the other two toy extensions, is
+in ``test_extend_all.py``.
 """
 
 from __future__ import annotations
 
 import importlib
-import json
 import math
 import os
 import socket
@@ -217,59 +218,6 @@ def test_the_toy_games_datagrams_round_trip_through_the_registry(toy_game: Modul
         )
         got = [dec.feed(rx.recv(100), 0.0) for _ in range(3)]
     assert summary.datagrams == 3 and all(s is not None for s in got)
-
-
-def test_the_bridge_replays_a_toy_game_recording_onto_the_toy_rig(
-    toy_game: ModuleType,
-    toy_platform: ModuleType,
-    tmp_path: Path,
-    capsys: pytest.CaptureFixture[str],
-) -> None:
-    from motioncue.cli import main
-    from motioncue.output import load_controller, mbox
-    from motioncue.pipeline._verify import check_frames
-    from motioncue.telemetry._container import RecordingWriter
-    from motioncue.trajectory import ActuatorLimits
-
-    rec = tmp_path / "toy.mctr"
-    n = 90  # 1.5 s at 60 Hz: a heave and pitch the cueing passes on
-    with RecordingWriter(rec, "toy", toy_game.PORT) as writer:
-        for k in range(n):
-            t = k / 60.0
-            f = (3.0 * math.sin(2 * math.pi * t), 0.0, 9.80665 + 2.0 * math.sin(4 * t))
-            w = (0.0, 0.2 * math.sin(2 * math.pi * t), 0.0)
-            (datagram,) = toy_game.encode_toy(k, t, f, w)
-            writer.write(t, datagram)
-    ctrl = load_controller("mbox3")
-    with mbox.MboxEmulator(ctrl) as emu:
-        code = main(
-            [
-                "bridge", "--source", f"replay:{rec}?speed=1", "--platform",
-                str(toy_platform.TOML), "--controller", "mbox3", "--preset",
-                "cinema-seat-3dof", "--target", f"udp://127.0.0.1:{emu.port}", "--rate", "100",
-                "--fade", "0.3", "--rt-priority", "0", "--duration", "20", "--quiet", "--json",
-            ]
-        )  # fmt: skip
-        deadline = time.monotonic() + 3.0
-        while not (len(emu.trace) and emu.received == len(emu.trace) + 1):
-            if time.monotonic() > deadline:
-                break
-            time.sleep(0.01)
-        tr = emu.trace
-        violations = list(emu.violations)
-    out = capsys.readouterr()
-    assert code == 0, out.err
-    stats = json.loads(out.out)
-    assert stats["telemetry"].get("sample") == n  # every datagram decoded by the toy decoder
-    platform = load_platform(toy_platform.TOML)
-    lim = ActuatorLimits.from_platform(platform, ctrl)
-    chk = check_frames(tr.t_s, tr.positions, lim.to_pulses_table(platform), start_at_rest=True)
-    assert chk.ok, chk.summary()
-    assert violations == []
-    park = platform.drives.to_pulses(platform.q_park)
-    np.testing.assert_array_equal(tr.positions[-1], park)  # ends parked
-    assert np.all(tr.positions[:, 2] == 0)  # the spare axis
-    assert np.abs(tr.positions[:, :2] - park[:2]).max() > 1000  # the telemetry moved the rig
 
 
 def test_the_bridges_telemetry_process_decodes_a_game_registered_from_outside(

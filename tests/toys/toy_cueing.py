@@ -1,8 +1,10 @@
 """A toy cueing algorithm registered from outside ``src/``: a scaled and clipped copy.
 
-Pose ``x = clip(kx fx, +-L)``, ``y = clip(ky fy, +-L)``, everything else 0 (m, rad), with
-``fx, fy`` the vehicle's specific force (m/s^2) and ``kx, ky`` (m per m/s^2), ``L`` (m) from
-the preset's own ``[toy]`` table. Non-finite input counts as a bad sample and gives 0.
+Pose ``x = clip(kx fx, +-L)``, ``y = clip(ky fy, +-L)``, ``z = clip(kz (fz - g), +-L)``,
+everything else 0 (m, rad), with ``fx, fy, fz`` the vehicle's specific force (m/s^2),
+``g`` = 9.80665 m/s^2, and ``kx, ky`` (m per m/s^2), ``L`` (m) and the optional ``kz``
+(default 0: no heave) from the preset's own ``[toy]`` table. Non-finite input counts as a
+bad sample and gives 0.
 
 Importing this module registers it as ``"toy-copy"`` (``MOTIONCUE_PLUGINS=toys.toy_cueing``)
 with every declaration an algorithm can make: streaming, not for frames on arrival, the rig
@@ -29,6 +31,7 @@ from motioncue.cueing import (
 )
 
 NAME = "toy-copy"
+G_M_S2 = 9.80665
 RIGS_SEEN: list[tuple[str, int]] = []
 """(platform name, actuators) of every rig the factory was given."""
 
@@ -40,13 +43,15 @@ class ToyTable:
     gain_x: float = 0.004
     gain_y: float = 0.004
     limit_m: float = 0.02
+    gain_z: float = 0.0
 
 
 def read_toy(table: ConfigReader) -> ToyTable:
     gain = table.vector("gain_m_per_m_s2", 2)
     limit_mm = table.number("limit_mm", lo=0.0, hi=100.0, lo_open=True)
+    gain_z = table.number("gain_z_m_per_m_s2", 0.0, lo=0.0, hi=1.0)
     table.finish()
-    return ToyTable(gain[0], gain[1], limit_mm * 1e-3)
+    return ToyTable(gain[0], gain[1], limit_mm * 1e-3, gain_z)
 
 
 def write_toy(t: ToyTable) -> list[str]:
@@ -54,6 +59,7 @@ def write_toy(t: ToyTable) -> list[str]:
         "[toy]",
         f"gain_m_per_m_s2 = [{t.gain_x!r}, {t.gain_y!r}]",
         f"limit_mm = {t.limit_m * 1e3!r}",
+        f"gain_z_m_per_m_s2 = {t.gain_z!r}",
         "",
     ]
 
@@ -71,6 +77,8 @@ def closed_form(f: ArrayLike, table: ToyTable) -> NDArray[np.float64]:
     lim = table.limit_m
     poses[:, 0] = np.where(good, np.clip(table.gain_x * np.nan_to_num(fa[:, 0]), -lim, lim), 0.0)
     poses[:, 1] = np.where(good, np.clip(table.gain_y * np.nan_to_num(fa[:, 1]), -lim, lim), 0.0)
+    heave = table.gain_z * (np.nan_to_num(fa[:, 2]) - G_M_S2)
+    poses[:, 2] = np.where(good, np.clip(heave, -lim, lim), 0.0)
     return poses
 
 
