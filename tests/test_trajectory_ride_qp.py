@@ -14,7 +14,7 @@ from motioncue.trajectory import (
     check_trajectory,
     limit_ride,
 )
-from motioncue.trajectory._offline import _ChunkSolver, _limit_ride
+from motioncue.trajectory._offline import _ChunkSolver
 from motioncue.trajectory._ride_qp import ConicChunkSolver, difference_rows
 
 
@@ -113,8 +113,8 @@ def test_qp_rides_match_ipopt_rides(seed, jerk):
     stroke span (seen: <= 2e-6); both feasible, neither repaired, no solver failure.
     """
     q, dt, lim = _random_ride(seed, jerk)
-    qp = _limit_ride(q, dt, lim, backend="qp")
-    ip = _limit_ride(q, dt, lim, backend="ipopt")
+    qp = limit_ride(q, dt, lim, backend="qp")
+    ip = limit_ride(q, dt, lim, backend="ipopt")
     for r in (qp, ip):
         assert r.check.ok, r.check
         assert r.n_repaired == 0
@@ -150,7 +150,7 @@ def test_public_limit_ride_uses_the_qp_path(monkeypatch):
 
 def test_a_window_the_qp_misses_is_retried_with_ipopt(monkeypatch):
     q, dt, lim = _random_ride(5, False)
-    ref = _limit_ride(q, dt, lim, backend="ipopt")
+    ref = limit_ride(q, dt, lim, backend="ipopt")
 
     def fail(self, xd, *a):
         return np.full(self.length, np.nan), False
@@ -164,7 +164,7 @@ def test_a_window_the_qp_misses_is_retried_with_ipopt(monkeypatch):
 
 def test_a_window_the_tight_qp_misses_is_retried_with_default_tolerances(monkeypatch):
     q, dt, lim = _random_ride(11, True)
-    ref = _limit_ride(q, dt, lim, backend="ipopt")
+    ref = limit_ride(q, dt, lim, backend="ipopt")
     calls = {"loose": 0, "ipopt": 0}
     qp_solve, ip_solve = ConicChunkSolver.solve, _ChunkSolver.solve
 
@@ -214,4 +214,4 @@ def test_unknown_backend_is_named():
 
     with pytest.raises(ConfigError, match="backend"):
         lim = ActuatorLimits(np.zeros(1), np.ones(1), np.ones(1), np.ones(1))
-        _offline._limit_ride(np.zeros((10, 1)), 0.01, lim, backend="x")
+        _offline.limit_ride(np.zeros((10, 1)), 0.01, lim, backend="x")

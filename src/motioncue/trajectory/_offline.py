@@ -248,6 +248,7 @@ def limit_ride(
     v0: ArrayLike | None = None,
     pad_s: float = 1.0,
     chunk: int = 1024,
+    backend: str = "qp",
 ) -> OptimisedRide:
     """Closest feasible trajectory to ``q_desired`` on the same time grid (see module doc).
 
@@ -268,34 +269,15 @@ def limit_ride(
         Time added on both sides of each infeasible stretch before solving (s).
     chunk : int
         Longest window solved at once (frames); longer windows use overlapping chunks.
+    backend : {"qp", "ipopt"}
+        Window solver: ``"qp"`` (default) the sparse QP solver
+        (:class:`~motioncue.trajectory._ride_qp.ConicChunkSolver`), retried at PIQP's
+        default tolerances and then with Ipopt for any window it does not solve;
+        ``"ipopt"`` Ipopt only (the reference the tests compare the QP path with).
 
     Returns
     -------
     OptimisedRide
-    """
-    return _limit_ride(
-        q_desired, dt_s, limits, weights=weights, q0=q0, v0=v0, pad_s=pad_s, chunk=chunk
-    )
-
-
-def _limit_ride(
-    q_desired: ArrayLike,
-    dt_s: float,
-    limits: ActuatorLimits,
-    *,
-    weights: ArrayLike | None = None,
-    q0: ArrayLike | None = None,
-    v0: ArrayLike | None = None,
-    pad_s: float = 1.0,
-    chunk: int = 1024,
-    backend: str = "qp",
-) -> OptimisedRide:
-    """:func:`limit_ride` with a choice of window solver.
-
-    ``backend="qp"`` (the default of :func:`limit_ride`): the sparse QP solver
-    (:class:`~motioncue.trajectory._ride_qp.ConicChunkSolver`), retried at PIQP's default
-    tolerances and then with Ipopt for any window it does not solve; ``backend="ipopt"``:
-    Ipopt only (the reference the tests compare the QP path with).
     """
     if backend not in ("qp", "ipopt"):
         raise ConfigError(f"backend = {backend!r} is invalid; allowed: 'qp', 'ipopt'")
