@@ -33,7 +33,7 @@ import threading
 import time
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
-from typing import Protocol, Self
+from typing import Generic, Protocol, Self, TypeVar
 
 import numpy as np
 
@@ -442,6 +442,10 @@ class EmulatedController(Protocol):
     def pulse_limits(self, rate_hz: float | None = None) -> PulseLimits: ...
 
 
+C = TypeVar("C", bound=EmulatedController)
+"""The controller description type of a :class:`ControllerEmulator`."""
+
+
 class UdpEmulatorBase:
     """The UDP server loop and thread shared by both emulators.
 
@@ -579,27 +583,39 @@ class UdpEmulatorBase:
         self.stop()
 
 
-class ControllerEmulator(UdpEmulatorBase):
+class ControllerEmulator(UdpEmulatorBase, Generic[C]):
     """State and views both controller emulators keep on top of the server loop.
 
     The controller description, a mutable copy of its parameters, the homing / ready /
     e-stop state, frame counters, the violations met while decoding, and the
-    :class:`Playback` (built by the subclass, whose buffer rules differ).
+    :class:`Playback` (built by the subclass in :meth:`_init_kind`, whose buffer rules
+    differ).
+
+    Parameters
+    ----------
+    controller : C
+        The description (an ``ImaxController``, ``MboxController``).
+    host, port : str, int
+        Where to listen when started (port 0 = any free port; see :attr:`port`).
+    homing_time_s : float
+        How long initial positioning takes (s).
+    start_homed : bool
+        ``True``: ready at once; ``False``: homing first, as after power-up.
     """
 
     playback: Playback
 
     def __init__(
         self,
-        controller: EmulatedController,
-        host: str,
-        port: int,
+        controller: C,
+        host: str = "127.0.0.1",
+        port: int = 0,
         *,
-        homing_time_s: float,
-        start_homed: bool,
+        homing_time_s: float = 1.0,
+        start_homed: bool = True,
     ) -> None:
         super().__init__(host, port)
-        self.controller = controller
+        self.controller: C = controller
         self.n_axes: int = controller.n_axes
         self.params: dict[str, int] = dict(controller.parameters)
         self.homing_time_s = float(homing_time_s)
@@ -611,6 +627,22 @@ class ControllerEmulator(UdpEmulatorBase):
         self._last_time_ms: int | None = None
         self._next_report: float | None = None
         self._violations: list[Violation] = []
+        self._init_kind()
+        self._set_limits()
+        self._set_rate()
+
+    # -- subclass hooks -----------------------------------------------------------------
+    def _init_kind(self) -> None:  # pragma: no cover - abstract
+        """The kind's own state, :attr:`playback` included."""
+        raise NotImplementedError
+
+    def _set_limits(self) -> None:  # pragma: no cover - abstract
+        """Judge frames with the limits the current parameters give."""
+        raise NotImplementedError
+
+    def _set_rate(self) -> None:  # pragma: no cover - abstract
+        """Playback rate from the current parameters."""
+        raise NotImplementedError
 
     @property
     def trace(self) -> Trace:

@@ -84,31 +84,14 @@ _LIMIT_PARAMS = frozenset(
 )
 
 
-class ImaxEmulator(ControllerEmulator):
+class ImaxEmulator(ControllerEmulator[ImaxController]):
     """Emulated IMAX controller.
 
-    Parameters
-    ----------
-    controller : ImaxController
-    host, port : str, int
-        Where to listen when started (port 0 = any free port).
-    homing_time_s : float
-    start_homed : bool
+    Constructed as a :class:`ControllerEmulator` of an :class:`ImaxController`.
     """
 
-    def __init__(
-        self,
-        controller: ImaxController,
-        host: str = "127.0.0.1",
-        port: int = 0,
-        *,
-        homing_time_s: float = 1.0,
-        start_homed: bool = True,
-    ) -> None:
-        super().__init__(
-            controller, host, port, homing_time_s=homing_time_s, start_homed=start_homed
-        )
-        self.controller: ImaxController = controller
+    def _init_kind(self) -> None:
+        controller = self.controller
         self.dp_extra: dict[int, int] = {}
         self._estop_latched = False
         self.inputs = 0
@@ -121,8 +104,6 @@ class ImaxEmulator(ControllerEmulator):
         self._reported_alarm = 0
         self.port_out_bytes = controller.port_out_bytes
         self.playback = Playback(self.n_axes, controller.buffer_frames, True)
-        self._set_limits()
-        self._set_rate()
 
     def set_inputs(self, bits: int, now_s: float | None = None) -> None:
         """Set the X01..X12 inputs (logical values); may trigger or release the e-stop."""

@@ -75,34 +75,14 @@ def _s16(v: int) -> int:
     return v - 0x10000 if v & 0x8000 else v
 
 
-class MboxEmulator(ControllerEmulator):
+class MboxEmulator(ControllerEmulator[MboxController]):
     """Emulated SC-MBOX.
 
-    Parameters
-    ----------
-    controller : MboxController
-        The description (axis mode, parameters, speed limit, buffer depth).
-    host, port : str, int
-        Where to listen when started (port 0 = any free port; see :attr:`port`).
-    homing_time_s : float
-        How long initial positioning takes.
-    start_homed : bool
-        ``True``: ready at once; ``False``: homing first, as after power-up.
+    Constructed as a :class:`ControllerEmulator` of an :class:`MboxController`.
     """
 
-    def __init__(
-        self,
-        controller: MboxController,
-        host: str = "127.0.0.1",
-        port: int = 0,
-        *,
-        homing_time_s: float = 1.0,
-        start_homed: bool = True,
-    ) -> None:
-        super().__init__(
-            controller, host, port, homing_time_s=homing_time_s, start_homed=start_homed
-        )
-        self.controller: MboxController = controller
+    def _init_kind(self) -> None:
+        controller = self.controller
         self.cx = [0x0002, 0, 0, 0, 0, 0, 0, 0]
         self.fault_code = 0
         self.frame_dout = 0
@@ -111,8 +91,6 @@ class MboxEmulator(ControllerEmulator):
         self.inputs = 0
         self._next_duration_s: float | None = None
         self.playback = Playback(self.n_axes, controller.buffer_frames, bool(self.params["Fn01C"]))
-        self._set_limits()
-        self._set_rate()
 
     def inject_fault(self, code: int) -> None:
         """Put the box in the fault state (e.g. 2520 over-speed); RST in CX0 clears it."""
