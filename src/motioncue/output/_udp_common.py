@@ -22,6 +22,7 @@ from __future__ import annotations
 
 import math
 import numbers
+import re
 import struct
 from collections.abc import Callable, Iterable, Mapping, Sequence
 from dataclasses import dataclass
@@ -45,6 +46,7 @@ __all__ = [
     "check_length",
     "decode_header",
     "format_who",
+    "hex_name",
     "pack_timed_frame",
     "param_lookup",
     "parse_node",
@@ -283,3 +285,13 @@ def param_lookup(parameters: Mapping[str, int], name: str, default: int | None =
 
 
 Decoder = Callable[[Header, bytes], WireMessage]
+
+
+def hex_name(text: str, pattern: re.Pattern[str], fmt: str, what: str) -> str:
+    """The canonical form of a register or parameter name: ``pattern``'s first group read
+    as hexadecimal and put in ``fmt`` (``"PA{:02x}"``); :class:`ConfigError` naming
+    ``what`` (the allowed form) when ``text`` does not match."""
+    m = pattern.match(text.strip())
+    if not m:
+        raise ConfigError(f"{text!r} is not {what}")
+    return fmt.format(int(m.group(1), 16))

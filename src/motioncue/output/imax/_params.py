@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import re
 
-from ..._errors import ConfigError
+from .._udp_common import hex_name
 
 __all__ = ["PA_SPEC", "pa_address", "pa_name"]
 
@@ -115,10 +115,7 @@ _NAME = re.compile(r"^pa[ _]?([0-9a-f]{1,2})$", re.IGNORECASE)
 
 def pa_name(text: str) -> str:
     """Canonical name (``pa 80``, ``PAA0`` -> ``PA80``, ``PAa0``)."""
-    m = _NAME.match(text.strip())
-    if not m:
-        raise ConfigError(f"{text!r} is not an IMAX parameter name (PAxx, hexadecimal)")
-    return f"PA{int(m.group(1), 16):02x}"
+    return hex_name(text, _NAME, "PA{:02x}", "an IMAX parameter name (PAxx, hexadecimal)")
 
 
 def pa_address(name: str) -> int:

@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import re
 
-from ..._errors import ConfigError
+from .._udp_common import hex_name
 
 __all__ = ["FN_SPEC", "fn_address", "fn_name"]
 
@@ -86,10 +86,7 @@ _NAME = re.compile(r"^fn[ _]?0?([0-9a-f]{1,3})$", re.IGNORECASE)
 
 def fn_name(text: str) -> str:
     """Canonical parameter name (``fn0c1``, ``Fn 0C1``, ``Fn_0C1`` -> ``Fn0C1``)."""
-    m = _NAME.match(text.strip())
-    if not m:
-        raise ConfigError(f"{text!r} is not an MBOX parameter name (FnXXX, hexadecimal)")
-    return f"Fn{int(m.group(1), 16):03X}"
+    return hex_name(text, _NAME, "Fn{:03X}", "an MBOX parameter name (FnXXX, hexadecimal)")
 
 
 def fn_address(name: str) -> int:
