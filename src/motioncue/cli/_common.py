@@ -162,6 +162,19 @@ def limits_for(
     )
 
 
+def load_rig(
+    args: argparse.Namespace, rate_hz: float
+) -> tuple[Platform, Controller, ActuatorLimits]:
+    """The rig of ``--platform`` (with the ``--set`` overrides), ``--controller`` (checked
+    to run frames at ``rate_hz``, Hz) and the actuator limits there (:func:`limits_for`)."""
+    from ..output import load_controller
+
+    platform = load_platform_arg(args.platform, args.overrides)
+    controller = load_controller(args.controller)
+    controller.check_rate(rate_hz)
+    return platform, controller, limits_for(args, platform, controller, rate_hz)
+
+
 def add_set_option(parser: argparse.ArgumentParser, targets: Sequence[str] = SET_TARGETS) -> None:
     """``--set TARGET.SECTION.KEY=VALUE`` (repeatable), TARGET one of ``targets``."""
     names = " or ".join(targets)

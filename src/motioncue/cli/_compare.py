@@ -13,9 +13,8 @@ from .._errors import ConfigError
 from ._common import (
     add_limit_options,
     add_set_option,
-    limits_for,
-    load_platform_arg,
     load_preset_arg,
+    load_rig,
 )
 from ._preset import add_vestibular_option
 
@@ -94,17 +93,13 @@ def _progress(line: str) -> None:
 def run(args: argparse.Namespace) -> int:
     from ..analysis import compare_cueing, plot_file_names, write_compare_report
     from ..cueing import get_model_set
-    from ..output import load_controller
     from ..pipeline._inputs import check_generate_size, load_generate_input
 
     rate = args.rate
     if not (math.isfinite(rate) and 0.0 < rate <= 1000.0):
         raise ConfigError(f"--rate {rate!r} is invalid; allowed: (0, 1000] Hz")
     model = get_model_set(args.vestibular)
-    platform = load_platform_arg(args.platform, args.overrides)
-    controller = load_controller(args.controller)
-    controller.check_rate(rate)
-    limits = limits_for(args, platform, controller, rate)
+    platform, _controller, limits = load_rig(args, rate)
     presets = [load_preset_arg(p, args.overrides) for p in args.presets]
     preset_labels = _labels(list(args.presets), [p.name for p in presets], "preset")
     recs = []

@@ -13,9 +13,8 @@ from .._errors import ConfigError
 from ._common import (
     add_limit_options,
     add_set_option,
-    limits_for,
-    load_platform_arg,
     load_preset_arg,
+    load_rig,
 )
 
 __all__ = ["register"]
@@ -71,7 +70,6 @@ def register(sub: Any) -> None:
 def run(args: argparse.Namespace) -> int:
     from ..analysis import plot_omct, run_omct
     from ..cueing import ClassicalWashout
-    from ..output._controllers import load_controller
 
     rate = args.rate
     if not (math.isfinite(rate) and 0.0 < rate <= 1000.0):
@@ -86,10 +84,7 @@ def run(args: argparse.Namespace) -> int:
             f"preset {params.name!r} uses the cueing algorithm {algorithm!r}; the OMCT's "
             "analytic comparison is defined for the classical washout only"
         )
-    platform = load_platform_arg(args.platform, args.overrides)
-    controller = load_controller(args.controller)
-    controller.check_rate(rate)
-    limits = limits_for(args, platform, controller, rate)
+    platform, _controller, limits = load_rig(args, rate)
     design = ClassicalWashout(params, rate)
     labels = {
         "preset": params.name,

@@ -14,8 +14,7 @@ from ._common import (
     add_json_option,
     add_limit_options,
     add_set_option,
-    limits_for,
-    load_platform_arg,
+    load_rig,
     print_json,
 )
 from ._preset import add_vestibular_option
@@ -208,7 +207,6 @@ def run(args: argparse.Namespace) -> int:
     )
     from ..cueing import Rig, cueing_algorithms, cueing_entry, get_model_set, load_cueing
     from ..cueing._tune import at_intensity, gentle_values, preset_toml
-    from ..output._controllers import load_controller
     from ..pipeline._inputs import load_generate_input
     from ..telemetry._motion import is_datagram_recording
     from ..telemetry._recording import read_recording_csv, resample
@@ -241,9 +239,7 @@ def run(args: argparse.Namespace) -> int:
     if not out.parent.is_dir():
         raise ConfigError(f"--out {out}: folder {out.parent} does not exist")
 
-    platform = load_platform_arg(args.platform, args.overrides)
-    controller = load_controller(args.controller)
-    controller.check_rate(args.rate)
+    platform, controller, limits = load_rig(args, args.rate)
     base, base_source = choose_preset(args.preset, platform, args.platform, args.overrides)
     if cueing_entry(base.algorithm).tune is None:
         raise ConfigError(
@@ -251,7 +247,6 @@ def run(args: argparse.Namespace) -> int:
             "declares no tunable parameters; tune optimises "
             + ", ".join(a for a in cueing_algorithms() if cueing_entry(a).tune is not None)
         )
-    limits = limits_for(args, platform, controller, args.rate)
     tight = pulse_rounding_limits(limits, platform, 1.0 / args.rate)
     excerpt = None
     if args.excerpt is not None:
