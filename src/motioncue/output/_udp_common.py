@@ -41,12 +41,12 @@ __all__ = [
     "WHO_NONE",
     "FrameClock",
     "Header",
+    "HexNames",
     "WireMessage",
     "check_int32",
     "check_length",
     "decode_header",
     "format_who",
-    "hex_name",
     "pack_timed_frame",
     "param_lookup",
     "parse_node",
@@ -287,11 +287,31 @@ def param_lookup(parameters: Mapping[str, int], name: str, default: int | None =
 Decoder = Callable[[Header, bytes], WireMessage]
 
 
-def hex_name(text: str, pattern: re.Pattern[str], fmt: str, what: str) -> str:
-    """The canonical form of a register or parameter name: ``pattern``'s first group read
-    as hexadecimal and put in ``fmt`` (``"PA{:02x}"``); :class:`ConfigError` naming
-    ``what`` (the allowed form) when ``text`` does not match."""
-    m = pattern.match(text.strip())
-    if not m:
-        raise ConfigError(f"{text!r} is not {what}")
-    return fmt.format(int(m.group(1), 16))
+@dataclass(frozen=True)
+class HexNames:
+    """The names of one family of registers or parameters: a prefix and hexadecimal digits.
+
+    Attributes
+    ----------
+    pattern : re.Pattern
+        Matches an accepted spelling; its first group holds the hexadecimal digits.
+    fmt : str
+        The canonical form of an address (``"PA{:02x}"``).
+    what : str
+        The allowed form, for the error message (``"an IMAX parameter name (PAxx, ...)"``).
+    """
+
+    pattern: re.Pattern[str]
+    fmt: str
+    what: str
+
+    def name(self, text: str) -> str:
+        """The canonical name of ``text``; :class:`ConfigError` naming the allowed form."""
+        return self.fmt.format(self.address(text))
+
+    def address(self, text: str) -> int:
+        """The register address of the name ``text`` (any accepted spelling)."""
+        m = self.pattern.match(text.strip())
+        if not m:
+            raise ConfigError(f"{text!r} is not {self.what}")
+        return int(m.group(1), 16)

@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import re
 
-from .._udp_common import hex_name
+from .._udp_common import HexNames
 
 __all__ = ["PA_SPEC", "pa_address", "pa_name"]
 
@@ -110,16 +110,15 @@ PA_SPEC: dict[str, tuple[int, int, int, str]] = {
     "PAcf": (0, 65535, 0, "homing method 3 move-out"),
 }
 
-_NAME = re.compile(r"^pa[ _]?([0-9a-f]{1,2})$", re.IGNORECASE)
-
-
-def pa_name(text: str) -> str:
-    """Canonical name (``pa 80``, ``PAA0`` -> ``PA80``, ``PAa0``)."""
-    return hex_name(text, _NAME, "PA{:02x}", "an IMAX parameter name (PAxx, hexadecimal)")
-
-
-def pa_address(name: str) -> int:
-    return int(pa_name(name)[2:], 16)
+_PA = HexNames(
+    re.compile(r"^pa[ _]?([0-9a-f]{1,2})$", re.IGNORECASE),
+    "PA{:02x}",
+    "an IMAX parameter name (PAxx, hexadecimal)",
+)
+pa_name = _PA.name
+"""Canonical name (``pa 80``, ``PAA0`` -> ``PA80``, ``PAa0``)."""
+pa_address = _PA.address
+"""Register address (channel 1) of a parameter name."""
 
 
 DP_POS = (0x06, 0x08, 0x0A, 0x21, 0x23, 0x25)

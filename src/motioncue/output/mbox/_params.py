@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import re
 
-from .._udp_common import hex_name
+from .._udp_common import HexNames
 
 __all__ = ["FN_SPEC", "fn_address", "fn_name"]
 
@@ -81,17 +81,15 @@ FN_SPEC: dict[str, tuple[int, int, int, str]] = {
     "Fn0CF": (0, 30000, 0, "continuous running limit, days (0 = none)"),
 }
 
-_NAME = re.compile(r"^fn[ _]?0?([0-9a-f]{1,3})$", re.IGNORECASE)
-
-
-def fn_name(text: str) -> str:
-    """Canonical parameter name (``fn0c1``, ``Fn 0C1``, ``Fn_0C1`` -> ``Fn0C1``)."""
-    return hex_name(text, _NAME, "Fn{:03X}", "an MBOX parameter name (FnXXX, hexadecimal)")
-
-
-def fn_address(name: str) -> int:
-    """Register address of an Fn parameter."""
-    return int(fn_name(name)[2:], 16)
+_FN = HexNames(
+    re.compile(r"^fn[ _]?0?([0-9a-f]{1,3})$", re.IGNORECASE),
+    "Fn{:03X}",
+    "an MBOX parameter name (FnXXX, hexadecimal)",
+)
+fn_name = _FN.name
+"""Canonical parameter name (``fn0c1``, ``Fn 0C1``, ``Fn_0C1`` -> ``Fn0C1``)."""
+fn_address = _FN.address
+"""Register address of an Fn parameter."""
 
 
 # Dn status registers (6.1.1, 6.1.11): 32-bit positions, low word first, per axis
