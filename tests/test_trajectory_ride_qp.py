@@ -15,7 +15,7 @@ from motioncue.trajectory import (
     limit_ride,
 )
 from motioncue.trajectory._offline import _ChunkSolver
-from motioncue.trajectory._ride_qp import ConicChunkSolver, difference_rows
+from motioncue.trajectory._ride_qp import ConicChunkSolver, Window, difference_rows
 
 
 @pytest.mark.parametrize("jerk", [False, True])
@@ -63,8 +63,8 @@ def test_window_qp_matches_ipopt(jerk, tail, seed):
     """
     L = 128
     xd, w, hist, tail_x, bounds, x0 = _window(seed, L, jerk, tail)
-    x_qp, ok_qp = ConicChunkSolver(L, jerk, tail).solve(xd, w, hist, tail_x, bounds, x0)
-    x_ip, ok_ip = _ChunkSolver(L, jerk).solve(xd, w, hist, tail_x, bounds, x0)
+    x_qp, ok_qp = ConicChunkSolver(L, jerk, tail).solve(Window(xd, w, hist, tail_x, bounds, x0))
+    x_ip, ok_ip = _ChunkSolver(L, jerk).solve(Window(xd, w, hist, tail_x, bounds, x0))
     assert ok_qp and ok_ip
     f = [0.5 * np.sum(w * (x - xd) ** 2) for x in (x_qp, x_ip)]
     assert f[0] == pytest.approx(f[1], rel=1e-8)
@@ -85,9 +85,9 @@ def test_window_qp_matches_ipopt(jerk, tail, seed):
 def test_window_qp_rejects_a_tail_it_was_not_built_for():
     xd, w, hist, tail_x, bounds, x0 = _window(0, 64, False, True)
     with pytest.raises(ValueError, match="tail"):
-        ConicChunkSolver(64, False, False).solve(xd, w, hist, tail_x, bounds, x0)
+        ConicChunkSolver(64, False, False).solve(Window(xd, w, hist, tail_x, bounds, x0))
     with pytest.raises(ValueError, match="tail"):
-        ConicChunkSolver(64, False, True).solve(xd, w, hist, None, bounds, x0)
+        ConicChunkSolver(64, False, True).solve(Window(xd, w, hist, None, bounds, x0))
 
 
 def _random_ride(seed, jerk):
@@ -152,7 +152,7 @@ def test_a_window_the_qp_misses_is_retried_with_ipopt(monkeypatch):
     q, dt, lim = _random_ride(5, False)
     ref = limit_ride(q, dt, lim, backend="ipopt")
 
-    def fail(self, xd, *a):
+    def fail(self, win):
         return np.full(self.length, np.nan), False
 
     monkeypatch.setattr(ConicChunkSolver, "solve", fail)
@@ -168,11 +168,11 @@ def test_a_window_the_tight_qp_misses_is_retried_with_default_tolerances(monkeyp
     calls = {"loose": 0, "ipopt": 0}
     qp_solve, ip_solve = ConicChunkSolver.solve, _ChunkSolver.solve
 
-    def tight_fails(self, xd, *a):
+    def tight_fails(self, win):
         if not self.loose:
-            return np.full(xd.shape, np.nan), False
+            return np.full(win.xd.shape, np.nan), False
         calls["loose"] += 1
-        return qp_solve(self, xd, *a)
+        return qp_solve(self, win)
 
     def count_ip(self, *a):
         calls["ipopt"] += 1
@@ -192,8 +192,8 @@ def test_a_window_the_tight_qp_misses_is_retried_with_default_tolerances(monkeyp
 def test_windows_no_solver_solves_are_counted_and_still_limited(monkeypatch):
     q, dt, lim = _random_ride(7, False)
 
-    def fail(self, xd, *a):
-        return np.full(xd.shape, np.nan), False
+    def fail(self, win):
+        return np.full(win.xd.shape, np.nan), False
 
     monkeypatch.setattr(ConicChunkSolver, "solve", fail)
     monkeypatch.setattr(_ChunkSolver, "solve", fail)

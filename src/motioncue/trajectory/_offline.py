@@ -52,7 +52,7 @@ from .._errors import ConfigError, LimitError
 from ._jerk import JerkLimiter
 from ._limits import ActuatorLimits, LimitCheck, check_trajectory
 from ._realtime import RealtimeLimiter
-from ._ride_qp import ConicChunkSolver
+from ._ride_qp import ConicChunkSolver, Window
 
 if TYPE_CHECKING:
     from numpy.typing import ArrayLike
@@ -172,15 +172,9 @@ class _ChunkSolver:
             "ride_chunk", "ipopt", {"x": x, "p": p, "f": f, "g": ca.vertcat(*g)}, opts
         )
 
-    def solve(
-        self,
-        xd: np.ndarray,
-        w: np.ndarray,
-        hist: np.ndarray,
-        tail: np.ndarray | None,
-        bounds: tuple[float, float, float, float, float],
-        x_init: np.ndarray,
-    ) -> tuple[np.ndarray, bool]:
+    def solve(self, win: Window) -> tuple[np.ndarray, bool]:
+        """Solve one window (as :meth:`ConicChunkSolver.solve`)."""
+        xd, w, hist, tail, bounds, x_init = win
         lo_x, hi_x, vb, ab, jb = bounds
         L, h = self.length, self.h
         tail_vals = np.zeros(h) if tail is None else tail
@@ -359,31 +353,23 @@ def limit_ride(
     ipopt_solvers: dict[int, _ChunkSolver] = {}
     qp_solvers: dict[tuple[int, bool, bool], ConicChunkSolver] = {}
 
-    def solve_chunk(
-        length: int,
-        xd: np.ndarray,
-        ww: np.ndarray,
-        hist_x: np.ndarray,
-        tail: np.ndarray | None,
-        bounds: tuple[float, float, float, float, float],
-        xi: np.ndarray,
-    ) -> tuple[np.ndarray, bool]:
+    def solve_chunk(length: int, win: Window) -> tuple[np.ndarray, bool]:
         # QP with tight tolerances, then with PIQP's default ones (windows with very large
         # scaled numbers, where the tight ones are below round-off), then Ipopt
         for loose in (False, True) if backend == "qp" else ():
-            key = (length, tail is not None, loose)
+            key = (length, win.tail is not None, loose)
             if key not in qp_solvers:
-                qp_solvers[key] = ConicChunkSolver(length, jerk, tail is not None, loose)
-            x, ok = qp_solvers[key].solve(xd, ww, hist_x, tail, bounds, xi)
+                qp_solvers[key] = ConicChunkSolver(length, jerk, win.tail is not None, loose)
+            x, ok = qp_solvers[key].solve(win)
             if ok:
                 return x, ok
         # Ipopt: the reference backend, and the retry for a window the QP solver missed
         if length not in ipopt_solvers:
             ipopt_solvers[length] = _ChunkSolver(length, jerk)
-        x, ok = ipopt_solvers[length].solve(xd, ww, hist_x, tail, bounds, xi)
+        x, ok = ipopt_solvers[length].solve(win)
         if not np.all(np.isfinite(x)):
             # never seen; keeps NaN out of the repair pass (which then limits the start point)
-            x, ok = np.clip(xi, bounds[0], bounds[1]), False
+            x, ok = np.clip(win.x_init, win.bounds[0], win.bounds[1]), False
         return x, ok
 
     # desired values far outside the stroke are pulled to within one stroke length of it
@@ -438,7 +424,7 @@ def limit_ride(
                 if last and not at_end:
                     # join to the fixed (desired, feasible) frames after the solved range
                     tail = x_all[H0 + start + length : H0 + start + length + h]
-                x, ok = solve_chunk(length, xd, ww, hist_x, tail, bounds, xi)
+                x, ok = solve_chunk(length, Window(xd, ww, hist_x, tail, bounds, xi))
                 n_failed += 0 if ok else 1
                 keep = min(m, length) if last else length - overlap
                 x_all[H0 + start : H0 + start + keep] = x[:keep]

@@ -22,7 +22,7 @@ a general nonlinear solver.
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, NamedTuple
 
 import numpy as np
 
@@ -53,6 +53,33 @@ PIQP_OPTIONS_LOOSE: dict[str, float | bool] = {
     "eps_duality_gap_abs": 1e-8,
     "eps_duality_gap_rel": 1e-9,
 }
+
+
+class Window(NamedTuple):
+    """One window of one actuator's ride problem, in scaled units: what a window solver
+    (:class:`ConicChunkSolver`, ``_offline._ChunkSolver``) solves.
+
+    Attributes
+    ----------
+    xd, w : ndarray, (L,)
+        Target frames and weights (``w >= 0``).
+    hist : ndarray, (h,)
+        Fixed frames before the window, oldest first.
+    tail : ndarray, (h,) or None
+        Fixed frames after the window (required iff the solver was built with a tail).
+    bounds : tuple of float
+        ``(lo, hi, vb, ab, jb)``: stroke bounds and the bounds of the 1st/2nd/3rd
+        differences.
+    x_init : ndarray, (L,)
+        Starting point (clipped into the stroke).
+    """
+
+    xd: np.ndarray
+    w: np.ndarray
+    hist: np.ndarray
+    tail: np.ndarray | None
+    bounds: tuple[float, float, float, float, float]
+    x_init: np.ndarray
 
 
 def difference_rows(length: int, jerk: bool, tail: bool) -> tuple[csc_matrix, np.ndarray]:
@@ -139,30 +166,8 @@ class ConicChunkSolver:
             {"piqp": dict(PIQP_OPTIONS_LOOSE if loose else PIQP_OPTIONS), "error_on_fail": False},
         )
 
-    def solve(
-        self,
-        xd: np.ndarray,
-        w: np.ndarray,
-        hist: np.ndarray,
-        tail: np.ndarray | None,
-        bounds: tuple[float, float, float, float, float],
-        x_init: np.ndarray,
-    ) -> tuple[np.ndarray, bool]:
+    def solve(self, win: Window) -> tuple[np.ndarray, bool]:
         """Solve one window.
-
-        Parameters
-        ----------
-        xd, w : ndarray, (L,)
-            Target frames and weights (scaled units; ``w >= 0``).
-        hist : ndarray, (h,)
-            Fixed frames before the window, oldest first.
-        tail : ndarray, (h,) or None
-            Fixed frames after the window (required iff the solver was built with a tail).
-        bounds : tuple of float
-            ``(lo, hi, vb, ab, jb)``: stroke bounds and the bounds of the 1st/2nd/3rd
-            differences (scaled units).
-        x_init : ndarray, (L,)
-            Starting point (clipped into the stroke).
 
         Returns
         -------
@@ -171,6 +176,7 @@ class ConicChunkSolver:
         ok : bool
             The solver reported success and every value is finite.
         """
+        xd, w, hist, tail, bounds, x_init = win
         if (tail is not None) != self.tail:
             raise ValueError("tail given to a solver built without one (or missing)")
         lo_x, hi_x, vb, ab, jb = bounds
