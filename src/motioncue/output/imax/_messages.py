@@ -42,11 +42,11 @@ from __future__ import annotations
 
 import enum
 import struct
-from collections.abc import Callable, Iterable, Sequence
+from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
 from functools import cache
 from itertools import chain
-from typing import ClassVar, Self
+from typing import TYPE_CHECKING, Any, ClassVar, Self
 
 from ..._errors import ProtocolError
 from .._udp_common import (
@@ -337,14 +337,15 @@ def _reply_axes(
 
 class _TimedFrame:
     """Encoder, decoder and size of the four IMAX frame messages, derived from one
-    declaration per message: its layout (``_STRUCT``: plain or vibration frame), whether
-    it is a reply (``_REPLY``: axis count from the length, channel field kept, Who 0),
-    the function bases, and how its trailing fields map to the layout's tail
-    (``_tail`` / ``_from_tail``)."""
+    declaration per message: whether it carries vibration (``_VIBRATION``: the layout's
+    tail after PortOut is n (period, amplitude) pairs instead of Extend u32), whether it
+    is a reply (``_REPLY``: axis count from the length, channel field kept, Who 0), the
+    function bases, and its two trailing fields (``_tail_fields``: PortOut, then Extend or
+    the vibration pairs)."""
 
     __slots__ = ()
 
-    _STRUCT: ClassVar[Callable[[int, bool, int], struct.Struct]]
+    _VIBRATION: ClassVar[bool]
     _REPLY: ClassVar[bool]
     _BASES: ClassVar[tuple[int, int]]  # (absolute, relative) request function codes
     _WHAT: ClassVar[str]
@@ -355,11 +356,32 @@ class _TimedFrame:
     positions: tuple[int, ...]
     port_out_bytes: int
 
+    if TYPE_CHECKING:  # the dataclass subclasses' constructors, in field order
+
+        def __init__(self, *fields: Any) -> None: ...
+
+    @classmethod
+    def _STRUCT(cls, n_axes: int, relative: bool, port_out_bytes: int) -> struct.Struct:
+        layout = _vib_struct if cls._VIBRATION else _frame_struct
+        return layout(n_axes, relative, port_out_bytes)
+
     def _head(self) -> tuple[int, int, int, int]:
         raise NotImplementedError
 
-    def _tail(self) -> Iterable[int]:
+    def _tail_fields(self) -> tuple[int, Any]:
+        """PortOut (the request's outputs, the reply's inputs), then Extend or the pairs."""
         raise NotImplementedError
+
+    def _tail(self) -> Iterable[int]:
+        port, last = self._tail_fields()
+        if self._VIBRATION:
+            return chain((port,), (v for pair in last for v in pair))
+        return (port, last)
+
+    @classmethod
+    def _parse_tail(cls, rest: tuple[int, ...]) -> tuple[int, Any]:
+        """:meth:`_tail_fields` from the layout's values after the positions."""
+        return (rest[0], _pairs(rest[1:])) if cls._VIBRATION else (rest[0], rest[1])
 
     @classmethod
     def _from_tail(cls, h: Header, relative: bool, f: tuple[int, ...], n: int, width: int) -> Self:
@@ -367,7 +389,7 @@ class _TimedFrame:
 
     def _pair_count(self) -> int | None:
         """Vibration pairs the message carries (None: a plain frame)."""
-        return None
+        return len(self._tail_fields()[1]) if self._VIBRATION else None
 
     def __post_init__(self) -> None:
         n = len(self.positions)
@@ -432,6 +454,13 @@ class _TimedRequest(_TimedFrame):
         n = channel_of_axes(len(self.positions))
         return self.function, n, self.who_accept, self.who_reply
 
+    @classmethod
+    def _from_tail(cls, h: Header, relative: bool, f: tuple[int, ...], n: int, width: int) -> Self:
+        return cls(
+            not relative, f[6], f[7], f[8 : 8 + n], *cls._parse_tail(f[8 + n :]),
+            h.who_accept, h.who_reply, width,
+        )  # fmt: skip
+
 
 class _TimedReply(_TimedFrame):
     """IMAX -> host frame reply: status in the function's last digit, the channel field
@@ -450,6 +479,13 @@ class _TimedReply(_TimedFrame):
     def _head(self) -> tuple[int, int, int, int]:
         return self.function, self.channel, WHO_NONE, WHO_NONE
 
+    @classmethod
+    def _from_tail(cls, h: Header, relative: bool, f: tuple[int, ...], n: int, width: int) -> Self:
+        return cls(
+            ReplyStatus(h.function & 0xF), not relative, h.channel, f[6], f[7], f[8 : 8 + n],
+            *cls._parse_tail(f[8 + n :]), width,
+        )  # fmt: skip
+
 
 def _pairs(flat: Sequence[int]) -> tuple[tuple[int, int], ...]:
     return tuple(zip(flat[0::2], flat[1::2], strict=True))
@@ -466,7 +502,7 @@ class MotionFrame(_TimedRequest):
     manual prints both; module notes).
     """
 
-    _STRUCT = staticmethod(_frame_struct)
+    _VIBRATION = False
     _BASES = (F_ABS, F_REL)
     _WHAT = "frame"
 
@@ -480,17 +516,8 @@ class MotionFrame(_TimedRequest):
     who_reply: int = WHO_ALL
     port_out_bytes: int = 2
 
-    def _tail(self) -> Iterable[int]:
+    def _tail_fields(self) -> tuple[int, Any]:
         return (self.port_out, self.extend)
-
-    @classmethod
-    def _from_tail(
-        cls, h: Header, relative: bool, f: tuple[int, ...], n: int, width: int
-    ) -> MotionFrame:
-        return cls(
-            not relative, f[6], f[7], f[8 : 8 + n], f[8 + n], f[9 + n],
-            h.who_accept, h.who_reply, width,
-        )  # fmt: skip
 
 
 @dataclass(frozen=True, slots=True)
@@ -498,7 +525,7 @@ class MotionFrameReply(_TimedReply):
     """IMAX -> host 0x130x / 0x140x: the frame echoed, ``port`` = input states,
     ``channel`` = axis channel (x = 2) or error code (x != 2) (2.2.2.6, 2.2.2.8)."""
 
-    _STRUCT = staticmethod(_frame_struct)
+    _VIBRATION = False
     _BASES = (F_ABS, F_REL)
     _WHAT = "frame reply"
 
@@ -512,17 +539,8 @@ class MotionFrameReply(_TimedReply):
     extend: int = 0
     port_out_bytes: int = 2
 
-    def _tail(self) -> Iterable[int]:
+    def _tail_fields(self) -> tuple[int, Any]:
         return (self.port, self.extend)
-
-    @classmethod
-    def _from_tail(
-        cls, h: Header, relative: bool, f: tuple[int, ...], n: int, width: int
-    ) -> MotionFrameReply:
-        return cls(
-            ReplyStatus(h.function & 0xF), not relative, h.channel, f[6], f[7], f[8 : 8 + n],
-            f[8 + n], f[9 + n], width,
-        )  # fmt: skip
 
 
 @dataclass(frozen=True, slots=True)
@@ -531,7 +549,7 @@ class VibrationFrame(_TimedRequest):
     vibration: ``vibration[i] = (period in 0.125 ms, amplitude in pulses)`` (2.2.2.9,
     2.2.2.11)."""
 
-    _STRUCT = staticmethod(_vib_struct)
+    _VIBRATION = True
     _BASES = (F_VIB_ABS, F_VIB_REL)
     _WHAT = "vibration frame"
 
@@ -545,27 +563,15 @@ class VibrationFrame(_TimedRequest):
     who_reply: int = WHO_ALL
     port_out_bytes: int = 2
 
-    def _pair_count(self) -> int | None:
-        return len(self.vibration)
-
-    def _tail(self) -> Iterable[int]:
-        return chain((self.port_out,), (v for pair in self.vibration for v in pair))
-
-    @classmethod
-    def _from_tail(
-        cls, h: Header, relative: bool, f: tuple[int, ...], n: int, width: int
-    ) -> VibrationFrame:
-        return cls(
-            not relative, f[6], f[7], f[8 : 8 + n], f[8 + n], _pairs(f[9 + n :]),
-            h.who_accept, h.who_reply, width,
-        )  # fmt: skip
+    def _tail_fields(self) -> tuple[int, Any]:
+        return (self.port_out, self.vibration)
 
 
 @dataclass(frozen=True, slots=True)
 class VibrationFrameReply(_TimedReply):
     """IMAX -> host 0x180x / 0x190x: the vibration frame echoed (``port`` = inputs)."""
 
-    _STRUCT = staticmethod(_vib_struct)
+    _VIBRATION = True
     _BASES = (F_VIB_ABS, F_VIB_REL)
     _WHAT = "vibration reply"
 
@@ -579,20 +585,8 @@ class VibrationFrameReply(_TimedReply):
     vibration: tuple[tuple[int, int], ...]
     port_out_bytes: int = 2
 
-    def _pair_count(self) -> int | None:
-        return len(self.vibration)
-
-    def _tail(self) -> Iterable[int]:
-        return chain((self.port,), (v for pair in self.vibration for v in pair))
-
-    @classmethod
-    def _from_tail(
-        cls, h: Header, relative: bool, f: tuple[int, ...], n: int, width: int
-    ) -> VibrationFrameReply:
-        return cls(
-            ReplyStatus(h.function & 0xF), not relative, h.channel, f[6], f[7], f[8 : 8 + n],
-            f[8 + n], _pairs(f[9 + n :]), width,
-        )  # fmt: skip
+    def _tail_fields(self) -> tuple[int, Any]:
+        return (self.port, self.vibration)
 
 
 # -- status report ----------------------------------------------------------------------------
