@@ -46,7 +46,7 @@ import numpy as np
 from .._errors import ConfigError, LimitError
 from ._brake import brake_bound, stops_within
 from ._limits import ActuatorLimits
-from ._realtime import _counters_repr, _level_step
+from ._realtime import _counters_repr, _level_params, _level_step
 
 if TYPE_CHECKING:
     from numpy.typing import ArrayLike
@@ -116,10 +116,7 @@ class JerkLimiter:
                 float(lim.q_min[i]),
                 float(lim.q_max[i]),
                 float(lim.v_max[i]),
-                float(lim.a_max[i]),
-                float(lim.j_max[i]) * dt,
-                0.5 / float(lim.j_max[i]),
-                2.0 * float(lim.a_max[i]),
+                *_level_params(lim.a_max[i], lim.j_max[i], dt),
                 float(lim.j_max[i]),
             )
             for i in range(lim.n_actuators)

@@ -94,6 +94,13 @@ def _vcap(b: float, adt: float, v_big: float = math.inf) -> float:
     return b / (n + 1) + adt * n * 0.5
 
 
+def _level_params(d_max: float, dd_max: float, dt: float) -> tuple[float, float, float, float]:
+    """``(d_max, ddt, half_inv, d_big)`` of :func:`_level_step` for a derivative bounded by
+    ``d_max`` that changes at most ``dd_max`` per second (speed and acceleration for
+    positions; acceleration and jerk for speeds), at frame period ``dt`` (s)."""
+    return float(d_max), float(dd_max) * dt, 0.5 / float(dd_max), 2.0 * float(d_max)
+
+
 def _level_step(
     x: float,
     d: float,
@@ -248,10 +255,7 @@ class RealtimeLimiter:
             (
                 float(lim.q_min[i]),
                 float(lim.q_max[i]),
-                float(lim.v_max[i]),
-                float(lim.a_max[i]) * dt,
-                0.5 / float(lim.a_max[i]),
-                2.0 * float(lim.v_max[i]),
+                *_level_params(lim.v_max[i], lim.a_max[i], dt),
             )
             for i in range(lim.n_actuators)
         )
