@@ -13,6 +13,7 @@ from .._errors import ConfigError
 from ._common import (
     add_json_option,
     add_limit_options,
+    add_rig_options,
     add_set_option,
     limits_for,
     load_platform_arg,
@@ -61,8 +62,7 @@ def register(sub: Any) -> None:
         help="bundled profile name or .toml path binding a source, a preset, cue gains and "
         "effects for a game or car (configs/profiles); --source and --preset override it",
     )
-    parser.add_argument("--platform", required=True, help="bundled platform name or TOML path")
-    parser.add_argument("--controller", required=True, help="bundled controller name or TOML path")
+    add_rig_options(parser)
     parser.add_argument(
         "--target",
         required=True,

@@ -12,6 +12,7 @@ from typing import Any
 from .._errors import ConfigError
 from ._common import (
     add_limit_options,
+    add_rig_options,
     add_set_option,
     load_preset_arg,
     load_rig,
@@ -49,8 +50,7 @@ def register(sub: Any) -> None:
         metavar="PRESET",
         help="cueing preset names or .toml paths",
     )
-    parser.add_argument("--platform", required=True, help="bundled platform name or TOML path")
-    parser.add_argument("--controller", required=True, help="bundled controller name or TOML path")
+    add_rig_options(parser)
     parser.add_argument("--report", required=True, metavar="DIR", help="folder for the report")
     parser.add_argument(
         "--bound",

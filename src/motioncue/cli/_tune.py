@@ -13,6 +13,7 @@ from .._errors import ConfigError
 from ._common import (
     add_json_option,
     add_limit_options,
+    add_rig_options,
     add_set_option,
     load_rig,
     print_json,
@@ -50,8 +51,7 @@ def register(sub: Any) -> None:
     parser.add_argument(
         "--input", required=True, nargs="+", metavar="REC", help="recording CSVs to tune on"
     )
-    parser.add_argument("--platform", required=True, help="bundled platform name or TOML path")
-    parser.add_argument("--controller", required=True, help="bundled controller name or TOML path")
+    add_rig_options(parser)
     parser.add_argument(
         "--preset",
         default=None,
