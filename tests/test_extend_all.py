@@ -255,7 +255,7 @@ def test_generate_play_bridge_and_compare_run_on_four_toys(
     assert emu.received == played["frames_sent"] == n_ride + played["park_frames"]
     k = np.rint((trace.t_s[:n_ride] - trace.t_s[0]) * RATE_HZ).astype(int)
     np.testing.assert_allclose(trace.t_s[:n_ride] - trace.t_s[0], k / RATE_HZ, atol=0.5e-3)
-    assert k[0] == 0 and k[-1] == ride.n_frames - 1 and np.all(np.diff(k) >= 1)
+    assert k[0] == 0 and k[-1] < ride.n_frames and np.all(np.diff(k) >= 1)
     np.testing.assert_array_equal(trace.positions[:n_ride], pulses[k])
     np.testing.assert_array_equal(trace.positions[-1], park)
     _within_toy_limits(trace.t_s, trace.positions, files)
