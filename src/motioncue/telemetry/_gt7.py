@@ -63,16 +63,11 @@ from __future__ import annotations
 import math
 import struct
 from dataclasses import dataclass, field
-from typing import Any
 
 from .._errors import ConfigError
+from ._gt7_cipher import Salsa20Xor, available
 from ._registry import GameInfo, register_game
 from ._sample import G0_M_S2, Decoder, DecodeResult
-
-try:  # pycryptodome: a kept Salsa20 implementation (the telemetry is encrypted)
-    from Crypto.Cipher import Salsa20 as _Salsa20
-except ImportError:  # pragma: no cover - a dependency; the decoder says so if it is missing
-    _Salsa20 = None  # type: ignore[assignment]
 
 __all__ = [
     "HEARTBEAT_PORT",
@@ -110,15 +105,21 @@ _PACKET_ID = struct.Struct("<i")  # 0x70
 _STATE = struct.Struct("<HHhHB")  # 0x88 rpm alert min, max, max speed, flags, gears
 _EXTENDED = struct.Struct("<5f")  # 0x128 wheel rotation, filler, sway, heave, surge
 _NONCE = struct.Struct("<II")
+_READ = struct.Struct("<i12x3f4f3f4xf48xi22xH2xH")
+"""Everything the decoder reads, in one call: magic (0x00), velocity (0x10), quaternion
+(0x1C), angular velocity (0x2C), engine rpm (0x3C), packet id (0x70), rev-limit alert rpm
+(0x8A), flags (0x8E); the rest is skipped (pad bytes)."""
 
 FLAG_ON_TRACK, FLAG_PAUSED, FLAG_LOADING = 1, 2, 4
-_USED = 0x94  # the decoder reads bytes 0x00-0x93
+_USED = 0x94  # the decoder reads bytes 0x00-0x93 (a stream cipher: only those are decrypted)
+_NO_CRYPTO = "Gran Turismo 7 telemetry needs pycryptodome: pip install pycryptodome"
 
 
-def _cipher(key_nonce: bytes) -> Any:
-    if _Salsa20 is None:  # pragma: no cover
-        raise ConfigError("Gran Turismo 7 telemetry needs pycryptodome: pip install pycryptodome")
-    return _Salsa20.new(KEY, nonce=key_nonce)
+def _xor(data: bytes, iv_xor: int, n: int) -> bytes:
+    if not available():  # pragma: no cover
+        raise ConfigError(_NO_CRYPTO)
+    iv = _IV.unpack_from(data, 0x40)[0]
+    return bytes(Salsa20Xor(KEY, n).xor(data, _NONCE.pack(iv ^ iv_xor, iv)))
 
 
 def decrypt(datagram: bytes) -> bytes | None:
@@ -126,8 +127,7 @@ def decrypt(datagram: bytes) -> bytes | None:
     layout = SIZES.get(len(datagram))
     if layout is None:
         return None
-    iv = _IV.unpack_from(datagram, 0x40)[0]
-    plain: bytes = _cipher(_NONCE.pack(iv ^ layout[1], iv)).decrypt(datagram)
+    plain = _xor(datagram, layout[1], len(datagram))
     return plain if plain[:4] == b"0S7G" else None
 
 
@@ -138,7 +138,9 @@ def encrypt(plain: bytes, iv: int) -> bytes:
     if layout is None:
         raise ConfigError(f"a GT7 packet has {sorted(SIZES)} bytes, not {len(plain)}")
     iv &= 0xFFFFFFFF
-    out = bytearray(_cipher(_NONCE.pack(iv ^ layout[1], iv)).encrypt(plain))
+    seeded = bytearray(plain)
+    _IV.pack_into(seeded, 0x40, iv)  # _xor reads the seed there; the byte is overwritten
+    out = bytearray(_xor(bytes(seeded), layout[1], len(plain)))
     _IV.pack_into(out, 0x40, iv)
     return bytes(out)
 
@@ -242,10 +244,9 @@ class GT7Decoder(Decoder):
         self._next_heartbeat_s = -math.inf
         self._prev_id: int | None = None
         self._prev_v = (0.0, 0.0, 0.0)
-        if _Salsa20 is None:  # pragma: no cover
-            raise ConfigError(
-                "Gran Turismo 7 telemetry needs pycryptodome: pip install pycryptodome"
-            )
+        if not available():  # pragma: no cover
+            raise ConfigError(_NO_CRYPTO)
+        self._xor = Salsa20Xor(KEY, _USED).xor
 
     def reset(self) -> None:
         self._prev_id = None
@@ -268,20 +269,19 @@ class GT7Decoder(Decoder):
             reason = "skipped: truncated" if n < 296 else "skipped: wrong size"
             return DecodeResult("skipped", reason)
         iv = _IV.unpack_from(datagram, 0x40)[0]
-        # a stream cipher: only the bytes read are decrypted (up to the flags, 0x94)
-        plain = _Salsa20.new(KEY, nonce=_NONCE.pack(iv ^ layout[1], iv)).decrypt(datagram[:_USED])
-        if plain[:4] != b"0S7G":
-            return DecodeResult("skipped", "skipped: foreign")
-        self.layouts[layout[0]] = self.layouts.get(layout[0], 0) + 1
-        (_m, _px, _py, _pz, vx, vy, vz, qx, qy, qz, qw, wx, wy, wz, _h, rpm) = PACKET.unpack_from(
+        plain = self._xor(datagram, _NONCE.pack(iv ^ layout[1], iv))
+        (magic, vx, vy, vz, qx, qy, qz, qw, wx, wy, wz, rpm, pid, amax, flags) = _READ.unpack_from(
             plain
         )
-        norm = qx * qx + qy * qy + qz * qz + qw * qw
-        if not (math.isfinite(norm) and math.isfinite(vx + vy + vz)):
-            return DecodeResult("skipped", "skipped: non-finite")
-        if abs(norm - 1.0) > 1e-3:
+        if magic != MAGIC:
             return DecodeResult("skipped", "skipped: foreign")
-        pid = _PACKET_ID.unpack_from(plain, 0x70)[0]
+        self.layouts[layout[0]] = self.layouts.get(layout[0], 0) + 1
+        norm = qx * qx + qy * qy + qz * qz + qw * qw
+        # one chained comparison each (False for nan, and for inf): the common case costs two
+        if not (-1e-3 <= norm - 1.0 <= 1e-3 and -math.inf < vx + vy + vz < math.inf):
+            if not (math.isfinite(norm) and math.isfinite(vx + vy + vz)):
+                return DecodeResult("skipped", "skipped: non-finite")
+            return DecodeResult("skipped", "skipped: foreign")
         prev, self._prev_id = self._prev_id, pid
         prev_v, self._prev_v = self._prev_v, (vx, vy, vz)
         if prev is not None and pid == prev:
@@ -291,9 +291,16 @@ class GT7Decoder(Decoder):
             return DecodeResult("partial", "partial")
         k = FRAME_HZ / (pid - prev)
         # specific force in world axes: a - g, with g = (0, -G0, 0)
-        f_world = ((vx - prev_v[0]) * k, (vy - prev_v[1]) * k + G0_M_S2, (vz - prev_v[2]) * k)
-        cx, cy, cz = _rotate_to_car((qx, qy, qz, qw), f_world)
-        _amin, amax, _vmax, flags, _gears = _STATE.unpack_from(plain, 0x88)
+        ax = (vx - prev_v[0]) * k
+        ay = (vy - prev_v[1]) * k + G0_M_S2
+        az = (vz - prev_v[2]) * k
+        # in car axes, R(q)^T (ax, ay, az) (see _rotate_to_car), written out: this runs for
+        # every packet; ISO is (-car z, -car x, car y)
+        xx, yy, zz = qx * qx, qy * qy, qz * qz
+        xy, xz, yz, wqx, wqy, wqz = qx * qy, qx * qz, qy * qz, qw * qx, qw * qy, qw * qz
+        cx = (1 - 2 * (yy + zz)) * ax + 2 * (xy + wqz) * ay + 2 * (xz - wqy) * az
+        cy = 2 * (xy - wqz) * ax + (1 - 2 * (xx + zz)) * ay + 2 * (yz + wqx) * az
+        cz = 2 * (xz + wqy) * ax + 2 * (yz - wqx) * ay + (1 - 2 * (xx + yy)) * az
         paused = (flags & (FLAG_ON_TRACK | FLAG_PAUSED | FLAG_LOADING)) != FLAG_ON_TRACK
         extras: dict[str, object] = {"rpm": rpm, "rpm_max": float(amax) if amax else math.nan}
         return self._make(t_s, (-cz, -cx, cy), (-wz, -wx, wy), paused, extras)
