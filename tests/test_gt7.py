@@ -233,3 +233,28 @@ def test_lap_differenced_force_agrees_with_speed_and_yaw_rate(name: str) -> None
     assert np.corrcoef(centripetal[ok], f[1:, 1][ok])[0, 1] > 0.9
     assert np.polyfit(centripetal[ok], f[1:, 1][ok], 1)[0] == pytest.approx(1.0, abs=0.15)
     assert float(np.nanmedian(f[:, 2])) == pytest.approx(G0_M_S2, abs=1.5)
+
+
+@settings(max_examples=100, deadline=None)
+@given(
+    q=st.tuples(*[st.floats(-1.0, 1.0)] * 4).filter(lambda q: sum(c * c for c in q) > 0.1),
+    v0=st.tuples(*[st.floats(-80.0, 80.0)] * 3),
+    dv=st.tuples(*[st.floats(-2.0, 2.0)] * 3),
+    frames=st.integers(1, 6),
+)
+def test_force_in_car_axes_against_scipy(q, v0, dv, frames) -> None:  # type: ignore[no-untyped-def]
+    """The written-out rotation of the decoder against scipy's: the world specific force
+    (velocity difference over the game's clock, minus gravity) taken into car axes, as ISO."""
+    from scipy.spatial.transform import Rotation
+
+    n = math.sqrt(sum(c * c for c in q))
+    qn = tuple(np.float32(c / n) for c in q)  # what the packet's f32 can carry
+    v1 = tuple(a + b for a, b in zip(v0, dv, strict=True))
+    dec = GT7Decoder()
+    _feed(dec, _plain(100, v0, q=qn))
+    s = _feed(dec, _plain(100 + frames, v1, q=qn)).sample
+    assert s is not None
+    v0_32, v1_32 = np.float32(v0).astype(float), np.float32(v1).astype(float)
+    f_world = (v1_32 - v0_32) * 60.0 / frames + np.array([0.0, G0_M_S2, 0.0])
+    c = Rotation.from_quat(np.array(qn, dtype=float)).inv().apply(f_world)
+    np.testing.assert_allclose(s.f, (-c[2], -c[0], c[1]), rtol=1e-5, atol=1e-4)

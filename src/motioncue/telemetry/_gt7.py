@@ -111,6 +111,8 @@ _READ = struct.Struct("<i12x3f4f3f4xf48xi22xH2xH")
 (0x8A), flags (0x8E); the rest is skipped (pad bytes)."""
 
 FLAG_ON_TRACK, FLAG_PAUSED, FLAG_LOADING = 1, 2, 4
+_STATE_MASK = FLAG_ON_TRACK | FLAG_PAUSED | FLAG_LOADING
+_INF = math.inf
 _USED = 0x94  # the decoder reads bytes 0x00-0x93 (a stream cipher: only those are decrypted)
 _NO_CRYPTO = "Gran Turismo 7 telemetry needs pycryptodome: pip install pycryptodome"
 
@@ -194,21 +196,6 @@ class GT7Packet:
         return bytes(out)
 
 
-def _rotate_to_car(q: tuple[float, float, float, float], v: tuple[float, float, float]) -> (
-    tuple[float, float, float]
-):  # fmt: skip
-    """``R(q)^T v``: a world vector in car axes, for a unit quaternion (x, y, z, w)."""
-    x, y, z, w = q
-    vx, vy, vz = v
-    xx, yy, zz = x * x, y * y, z * z
-    xy, xz, yz, wx, wy, wz = x * y, x * z, y * z, w * x, w * y, w * z
-    return (
-        (1 - 2 * (yy + zz)) * vx + 2 * (xy + wz) * vy + 2 * (xz - wy) * vz,
-        2 * (xy - wz) * vx + (1 - 2 * (xx + zz)) * vy + 2 * (yz + wx) * vz,
-        2 * (xz + wy) * vx + 2 * (yz - wx) * vy + (1 - 2 * (xx + yy)) * vz,
-    )
-
-
 class GT7Decoder(Decoder):
     """Decoder of Gran Turismo 7 packets, and the heartbeat the console needs.
 
@@ -278,7 +265,7 @@ class GT7Decoder(Decoder):
         self.layouts[layout[0]] = self.layouts.get(layout[0], 0) + 1
         norm = qx * qx + qy * qy + qz * qz + qw * qw
         # one chained comparison each (False for nan, and for inf): the common case costs two
-        if not (-1e-3 <= norm - 1.0 <= 1e-3 and -math.inf < vx + vy + vz < math.inf):
+        if not (-1e-3 <= norm - 1.0 <= 1e-3 and -_INF < vx + vy + vz < _INF):
             if not (math.isfinite(norm) and math.isfinite(vx + vy + vz)):
                 return DecodeResult("skipped", "skipped: non-finite")
             return DecodeResult("skipped", "skipped: foreign")
@@ -294,14 +281,16 @@ class GT7Decoder(Decoder):
         ax = (vx - prev_v[0]) * k
         ay = (vy - prev_v[1]) * k + G0_M_S2
         az = (vz - prev_v[2]) * k
-        # in car axes, R(q)^T (ax, ay, az) (see _rotate_to_car), written out: this runs for
-        # every packet; ISO is (-car z, -car x, car y)
-        xx, yy, zz = qx * qx, qy * qy, qz * qz
-        xy, xz, yz, wqx, wqy, wqz = qx * qy, qx * qz, qy * qz, qw * qx, qw * qy, qw * qz
-        cx = (1 - 2 * (yy + zz)) * ax + 2 * (xy + wqz) * ay + 2 * (xz - wqy) * az
-        cy = 2 * (xy - wqz) * ax + (1 - 2 * (xx + zz)) * ay + 2 * (yz + wqx) * az
-        cz = 2 * (xz + wqy) * ax + 2 * (yz - wqx) * ay + (1 - 2 * (xx + yy)) * az
-        paused = (flags & (FLAG_ON_TRACK | FLAG_PAUSED | FLAG_LOADING)) != FLAG_ON_TRACK
+        # in car axes, R(q)^T a: the conjugate quaternion's rotation written out (this runs
+        # for every packet): t = 2 (a x u), c = a + w t + t x u, with u = (qx, qy, qz)
+        tx = 2.0 * (ay * qz - az * qy)
+        ty = 2.0 * (az * qx - ax * qz)
+        tz = 2.0 * (ax * qy - ay * qx)
+        cx = ax + qw * tx + ty * qz - tz * qy
+        cy = ay + qw * ty + tz * qx - tx * qz
+        cz = az + qw * tz + tx * qy - ty * qx
+        # ISO is (-car z, -car x, car y)
+        paused = (flags & _STATE_MASK) != FLAG_ON_TRACK
         extras: dict[str, object] = {"rpm": rpm, "rpm_max": float(amax) if amax else math.nan}
         return self._make(t_s, (-cz, -cx, cy), (-wz, -wx, wy), paused, extras)
 
