@@ -258,3 +258,30 @@ def test_force_in_car_axes_against_scipy(q, v0, dv, frames) -> None:  # type: ig
     f_world = (v1_32 - v0_32) * 60.0 / frames + np.array([0.0, G0_M_S2, 0.0])
     c = Rotation.from_quat(np.array(qn, dtype=float)).inv().apply(f_world)
     np.testing.assert_allclose(s.f, (-c[2], -c[0], c[1]), rtol=1e-5, atol=1e-4)
+
+
+@pytest.mark.parametrize(("size", "layout"), [(316, "B"), (344, "~"), (368, "C")])
+def test_extended_packets_decode_but_sway_heave_surge_do_not_move_the_rig(
+    size: int, layout: str
+) -> None:
+    """The longer layouts: the five floats at 0x128 (written here by hand at the offsets of
+    PDTools' SimulatorPacket.cs) are read, but the motion comes from the differenced velocity
+    alone (their units and signs are unpinned: docs/games/gt7.md), the same as for ``A``."""
+    extended = (0.25, -0.5, 7.0, -3.0, 11.0)  # wheel rotation, filler, sway, heave, surge
+
+    def plain(pid: int, v: tuple[float, float, float], ext: tuple[float, ...]) -> bytes:
+        b = bytearray(_plain(pid, v, w=(0.1, 0.2, 0.3), size=size))
+        struct.pack_into("<5f", b, 0x128, *ext)
+        return bytes(b)
+
+    p = GT7Packet.unpack(decrypt(encrypt(plain(1, (0.0, 0.0, -20.0), extended), 7)) or b"")
+    assert p.extended == extended
+    out = []
+    for ext in (extended, (0.0,) * 5, (1e30, 1e30, 1e30, 1e30, 1e30)):
+        dec = GT7Decoder()
+        _feed(dec, plain(1, (0.0, 0.0, -20.0), ext))
+        s = _feed(dec, plain(2, (0.0, 0.0, -19.5), ext)).sample
+        assert s is not None and dec.layouts == {layout: 2}
+        out.append((s.f, s.w))
+    assert out[0] == out[1] == out[2]
+    assert out[0][0] == pytest.approx((-30.0, 0.0, G0_M_S2), abs=1e-4)

@@ -4,7 +4,8 @@ Protocol
 --------
 Polyphony Digital's packets as documented by the community: Nenkai/PDTools
 (``PDTools.SimulatorInterface``: ``SimulatorPacket.cs``, ``SimulatorInterfaceCryptorGT7.cs``)
-and, for the extended packets of update 1.42, PDTools issue #14 and SimHub issue #2254.
+and, for the extended packets of update 1.42, PDTools issues #14 and #18 and SimHub issue
+#2254. Decryption: :mod:`._gt7_cipher` (libsodium through PyNaCl, else pycryptodome).
 
 * The receiver sends a one-byte *heartbeat* to the console's UDP port 33739 at least every
   ~1.6 s (the console stops after ~100 packets without one); the console sends 60 packets a
@@ -49,10 +50,31 @@ consecutive packets over the game's own clock (packet id / 60 s), subtracts grav
 (``-9.80665`` m/s^2 along world y) and rotates the result into car axes. The first packet,
 and any packet after a gap of more than :attr:`GT7Decoder.max_gap_frames` frames or a jump
 (packet id backwards: a replay seek, a restart), only restarts the difference (``partial``,
-no sample), so a seek never becomes an acceleration spike. The ``sway``, ``heave`` and
-``surge`` floats of the ``B``/``~``/``C`` packets are decoded (:class:`GT7Packet`) but not
-used for motion: their units and signs are not published and no capture of them was
-available to pin them; the differenced velocity gives the same quantity on every layout.
+no sample), so a seek never becomes an acceleration spike.
+
+Sway, heave and surge (``B``, ``~``, ``C``): decoded (:class:`GT7Packet` ``extended``) but
+not used for motion; the differenced velocity is used on every layout. What was found
+(searched 2026-11; ``docs/games/gt7.md`` has the same):
+
+* Layout: five f32 at 0x128 (wheel rotation, "FillerFloatFB", sway, heave, surge), read when
+  the packet has at least 0x13C bytes: PDTools ``SimulatorPacket.cs``; found by SimHub's
+  author (PDTools issue #14, 2025-03-18: "5 additional floats ... clearly an extra bundle of
+  motion related fields"). PDTools issue #14 later (2025-07-04) identifies 0x128 as the
+  steering-wheel angle (rad) and 0x12C as probably the force-feedback signal; nothing on the
+  other three. SimHub issue #2254 (2026-04-24) asks for them to be exposed; no units.
+* Units, axes, signs: published nowhere with evidence. PDTools documents none;
+  gt7-datalogger (jbhoorasingh/gt7-datalogger, ``backend/app/telemetry/packet.py``) decodes
+  them without units and its export contract keeps them as "raw GT7 units"; one community
+  packet table asserts m/s^2 along car x, y, z, with no capture or test behind it.
+* Captures: none public with extended packets found. The 82 ``.gt7track`` recordings in
+  profittlich/gt7speedboard's history (where ``tests/fixtures/games/gt7`` comes from) are
+  all 296-byte ``A`` packets (checked by size; the three whose size would also fit a longer
+  layout, by decryption), and so are the three fixtures here.
+
+Without a capture nothing can pin their units and signs against the velocity's derivative
+(as the ``A`` fields are in ``tests/test_gt7.py``), and a wrong sign is a rig thrown the
+wrong way; so they stay unused until a capture exists (``motioncue record
+gt7@CONSOLE`` records the packets as they come, whichever heartbeat won).
 
 Replays: the console streams replays like live driving (the flags cannot tell them apart),
 so the rig moves with a replay as it would on track; a replay's jumps are handled above.
