@@ -285,3 +285,32 @@ def test_extended_packets_decode_but_sway_heave_surge_do_not_move_the_rig(
         out.append((s.f, s.w))
     assert out[0] == out[1] == out[2]
     assert out[0][0] == pytest.approx((-30.0, 0.0, G0_M_S2), abs=1e-4)
+
+
+@pytest.mark.parametrize(
+    ("dv", "w", "reason"),
+    [
+        (0.5, (0.0, math.nan, 0.0), "skipped: non-finite"),
+        (0.5, (0.0, 0.0, 1e6), "skipped: out of range"),
+        (100.0, (0.0, 0.0, 0.0), "skipped: out of range"),  # 6000 m/s^2 in one frame
+        (100.0, (math.inf, 0.0, 0.0), "skipped: out of range"),  # f is judged before w
+        (0.5, (0.0, 0.0, 0.0), "sample"),
+    ],
+)
+def test_absurd_or_non_finite_motion_is_counted_by_its_first_reason(
+    dv: float, w: tuple[float, float, float], reason: str
+) -> None:
+    dec = GT7Decoder()
+    _feed(dec, _plain(1, (0.0, 0.0, -20.0)))
+    r = _feed(dec, _plain(2, (0.0, 0.0, -20.0 + dv), w=w))
+    assert r.reason == reason and (r.sample is None) == (reason != "sample")
+
+
+def test_absurd_rpm_is_dropped_not_the_sample() -> None:
+    dec = GT7Decoder()
+    b = bytearray(_plain(1, (0.0, 0.0, -20.0)))
+    _feed(dec, bytes(b))
+    b = bytearray(_plain(2, (0.0, 0.0, -20.0)))
+    struct.pack_into("<f", b, 0x3C, 1e9)  # engine rpm
+    s = _feed(dec, bytes(b)).sample
+    assert s is not None and math.isnan(s.rpm) and s.rpm_max == 7200.0
