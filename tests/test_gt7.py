@@ -233,3 +233,84 @@ def test_lap_differenced_force_agrees_with_speed_and_yaw_rate(name: str) -> None
     assert np.corrcoef(centripetal[ok], f[1:, 1][ok])[0, 1] > 0.9
     assert np.polyfit(centripetal[ok], f[1:, 1][ok], 1)[0] == pytest.approx(1.0, abs=0.15)
     assert float(np.nanmedian(f[:, 2])) == pytest.approx(G0_M_S2, abs=1.5)
+
+
+@settings(max_examples=100, deadline=None)
+@given(
+    q=st.tuples(*[st.floats(-1.0, 1.0)] * 4).filter(lambda q: sum(c * c for c in q) > 0.1),
+    v0=st.tuples(*[st.floats(-80.0, 80.0)] * 3),
+    dv=st.tuples(*[st.floats(-2.0, 2.0)] * 3),
+    frames=st.integers(1, 6),
+)
+def test_force_in_car_axes_against_scipy(q, v0, dv, frames) -> None:  # type: ignore[no-untyped-def]
+    """The written-out rotation of the decoder against scipy's: the world specific force
+    (velocity difference over the game's clock, minus gravity) taken into car axes, as ISO."""
+    from scipy.spatial.transform import Rotation
+
+    n = math.sqrt(sum(c * c for c in q))
+    qn = tuple(np.float32(c / n) for c in q)  # what the packet's f32 can carry
+    v1 = tuple(a + b for a, b in zip(v0, dv, strict=True))
+    dec = GT7Decoder()
+    _feed(dec, _plain(100, v0, q=qn))
+    s = _feed(dec, _plain(100 + frames, v1, q=qn)).sample
+    assert s is not None
+    v0_32, v1_32 = np.float32(v0).astype(float), np.float32(v1).astype(float)
+    f_world = (v1_32 - v0_32) * 60.0 / frames + np.array([0.0, G0_M_S2, 0.0])
+    c = Rotation.from_quat(np.array(qn, dtype=float)).inv().apply(f_world)
+    np.testing.assert_allclose(s.f, (-c[2], -c[0], c[1]), rtol=1e-5, atol=1e-4)
+
+
+@pytest.mark.parametrize(("size", "layout"), [(316, "B"), (344, "~"), (368, "C")])
+def test_extended_packets_decode_but_sway_heave_surge_do_not_move_the_rig(
+    size: int, layout: str
+) -> None:
+    """The longer layouts: the five floats at 0x128 (written here by hand at the offsets of
+    PDTools' SimulatorPacket.cs) are read, but the motion comes from the differenced velocity
+    alone (their units and signs are unpinned: docs/games/gt7.md), the same as for ``A``."""
+    extended = (0.25, -0.5, 7.0, -3.0, 11.0)  # wheel rotation, filler, sway, heave, surge
+
+    def plain(pid: int, v: tuple[float, float, float], ext: tuple[float, ...]) -> bytes:
+        b = bytearray(_plain(pid, v, w=(0.1, 0.2, 0.3), size=size))
+        struct.pack_into("<5f", b, 0x128, *ext)
+        return bytes(b)
+
+    p = GT7Packet.unpack(decrypt(encrypt(plain(1, (0.0, 0.0, -20.0), extended), 7)) or b"")
+    assert p.extended == extended
+    out = []
+    for ext in (extended, (0.0,) * 5, (1e30, 1e30, 1e30, 1e30, 1e30)):
+        dec = GT7Decoder()
+        _feed(dec, plain(1, (0.0, 0.0, -20.0), ext))
+        s = _feed(dec, plain(2, (0.0, 0.0, -19.5), ext)).sample
+        assert s is not None and dec.layouts == {layout: 2}
+        out.append((s.f, s.w))
+    assert out[0] == out[1] == out[2]
+    assert out[0][0] == pytest.approx((-30.0, 0.0, G0_M_S2), abs=1e-4)
+
+
+@pytest.mark.parametrize(
+    ("dv", "w", "reason"),
+    [
+        (0.5, (0.0, math.nan, 0.0), "skipped: non-finite"),
+        (0.5, (0.0, 0.0, 1e6), "skipped: out of range"),
+        (100.0, (0.0, 0.0, 0.0), "skipped: out of range"),  # 6000 m/s^2 in one frame
+        (100.0, (math.inf, 0.0, 0.0), "skipped: out of range"),  # f is judged before w
+        (0.5, (0.0, 0.0, 0.0), "sample"),
+    ],
+)
+def test_absurd_or_non_finite_motion_is_counted_by_its_first_reason(
+    dv: float, w: tuple[float, float, float], reason: str
+) -> None:
+    dec = GT7Decoder()
+    _feed(dec, _plain(1, (0.0, 0.0, -20.0)))
+    r = _feed(dec, _plain(2, (0.0, 0.0, -20.0 + dv), w=w))
+    assert r.reason == reason and (r.sample is None) == (reason != "sample")
+
+
+def test_absurd_rpm_is_dropped_not_the_sample() -> None:
+    dec = GT7Decoder()
+    b = bytearray(_plain(1, (0.0, 0.0, -20.0)))
+    _feed(dec, bytes(b))
+    b = bytearray(_plain(2, (0.0, 0.0, -20.0)))
+    struct.pack_into("<f", b, 0x3C, 1e9)  # engine rpm
+    s = _feed(dec, bytes(b)).sample
+    assert s is not None and math.isnan(s.rpm) and s.rpm_max == 7200.0

@@ -4,7 +4,8 @@ Protocol
 --------
 Polyphony Digital's packets as documented by the community: Nenkai/PDTools
 (``PDTools.SimulatorInterface``: ``SimulatorPacket.cs``, ``SimulatorInterfaceCryptorGT7.cs``)
-and, for the extended packets of update 1.42, PDTools issue #14 and SimHub issue #2254.
+and, for the extended packets of update 1.42, PDTools issues #14 and #18 and SimHub issue
+#2254. Decryption: :mod:`._gt7_cipher` (libsodium through PyNaCl, else pycryptodome).
 
 * The receiver sends a one-byte *heartbeat* to the console's UDP port 33739 at least every
   ~1.6 s (the console stops after ~100 packets without one); the console sends 60 packets a
@@ -49,10 +50,31 @@ consecutive packets over the game's own clock (packet id / 60 s), subtracts grav
 (``-9.80665`` m/s^2 along world y) and rotates the result into car axes. The first packet,
 and any packet after a gap of more than :attr:`GT7Decoder.max_gap_frames` frames or a jump
 (packet id backwards: a replay seek, a restart), only restarts the difference (``partial``,
-no sample), so a seek never becomes an acceleration spike. The ``sway``, ``heave`` and
-``surge`` floats of the ``B``/``~``/``C`` packets are decoded (:class:`GT7Packet`) but not
-used for motion: their units and signs are not published and no capture of them was
-available to pin them; the differenced velocity gives the same quantity on every layout.
+no sample), so a seek never becomes an acceleration spike.
+
+Sway, heave and surge (``B``, ``~``, ``C``): decoded (:class:`GT7Packet` ``extended``) but
+not used for motion; the differenced velocity is used on every layout. What was found
+(searched 2026-11; ``docs/games/gt7.md`` has the same):
+
+* Layout: five f32 at 0x128 (wheel rotation, "FillerFloatFB", sway, heave, surge), read when
+  the packet has at least 0x13C bytes: PDTools ``SimulatorPacket.cs``; found by SimHub's
+  author (PDTools issue #14, 2025-03-18: "5 additional floats ... clearly an extra bundle of
+  motion related fields"). PDTools issue #14 later (2025-07-04) identifies 0x128 as the
+  steering-wheel angle (rad) and 0x12C as probably the force-feedback signal; nothing on the
+  other three. SimHub issue #2254 (2026-04-24) asks for them to be exposed; no units.
+* Units, axes, signs: published nowhere with evidence. PDTools documents none;
+  gt7-datalogger (jbhoorasingh/gt7-datalogger, ``backend/app/telemetry/packet.py``) decodes
+  them without units and its export contract keeps them as "raw GT7 units"; one community
+  packet table asserts m/s^2 along car x, y, z, with no capture or test behind it.
+* Captures: none public with extended packets found. The 82 ``.gt7track`` recordings in
+  profittlich/gt7speedboard's history (where ``tests/fixtures/games/gt7`` comes from) are
+  all 296-byte ``A`` packets (checked by size; the three whose size would also fit a longer
+  layout, by decryption), and so are the three fixtures here.
+
+Without a capture nothing can pin their units and signs against the velocity's derivative
+(as the ``A`` fields are in ``tests/test_gt7.py``), and a wrong sign is a rig thrown the
+wrong way; so they stay unused until a capture exists (``motioncue record
+gt7@CONSOLE`` records the packets as they come, whichever heartbeat won).
 
 Replays: the console streams replays like live driving (the flags cannot tell them apart),
 so the rig moves with a replay as it would on track; a replay's jumps are handled above.
@@ -63,16 +85,11 @@ from __future__ import annotations
 import math
 import struct
 from dataclasses import dataclass, field
-from typing import Any
 
 from .._errors import ConfigError
+from ._gt7_cipher import Salsa20Xor, available
 from ._registry import GameInfo, register_game
 from ._sample import G0_M_S2, Decoder, DecodeResult
-
-try:  # pycryptodome: a kept Salsa20 implementation (the telemetry is encrypted)
-    from Crypto.Cipher import Salsa20 as _Salsa20
-except ImportError:  # pragma: no cover - a dependency; the decoder says so if it is missing
-    _Salsa20 = None  # type: ignore[assignment]
 
 __all__ = [
     "HEARTBEAT_PORT",
@@ -110,15 +127,23 @@ _PACKET_ID = struct.Struct("<i")  # 0x70
 _STATE = struct.Struct("<HHhHB")  # 0x88 rpm alert min, max, max speed, flags, gears
 _EXTENDED = struct.Struct("<5f")  # 0x128 wheel rotation, filler, sway, heave, surge
 _NONCE = struct.Struct("<II")
+_READ = struct.Struct("<i12x3f4f3f4xf48xi22xH2xH")
+"""Everything the decoder reads, in one call: magic (0x00), velocity (0x10), quaternion
+(0x1C), angular velocity (0x2C), engine rpm (0x3C), packet id (0x70), rev-limit alert rpm
+(0x8A), flags (0x8E); the rest is skipped (pad bytes)."""
 
 FLAG_ON_TRACK, FLAG_PAUSED, FLAG_LOADING = 1, 2, 4
-_USED = 0x94  # the decoder reads bytes 0x00-0x93
+_STATE_MASK = FLAG_ON_TRACK | FLAG_PAUSED | FLAG_LOADING
+_INF = math.inf
+_USED = 0x94  # the decoder reads bytes 0x00-0x93 (a stream cipher: only those are decrypted)
+_NO_CRYPTO = "Gran Turismo 7 telemetry needs pycryptodome: pip install pycryptodome"
 
 
-def _cipher(key_nonce: bytes) -> Any:
-    if _Salsa20 is None:  # pragma: no cover
-        raise ConfigError("Gran Turismo 7 telemetry needs pycryptodome: pip install pycryptodome")
-    return _Salsa20.new(KEY, nonce=key_nonce)
+def _xor(data: bytes, iv_xor: int, n: int) -> bytes:
+    if not available():  # pragma: no cover
+        raise ConfigError(_NO_CRYPTO)
+    iv = _IV.unpack_from(data, 0x40)[0]
+    return bytes(Salsa20Xor(KEY, n).xor(data, _NONCE.pack(iv ^ iv_xor, iv)))
 
 
 def decrypt(datagram: bytes) -> bytes | None:
@@ -126,8 +151,7 @@ def decrypt(datagram: bytes) -> bytes | None:
     layout = SIZES.get(len(datagram))
     if layout is None:
         return None
-    iv = _IV.unpack_from(datagram, 0x40)[0]
-    plain: bytes = _cipher(_NONCE.pack(iv ^ layout[1], iv)).decrypt(datagram)
+    plain = _xor(datagram, layout[1], len(datagram))
     return plain if plain[:4] == b"0S7G" else None
 
 
@@ -138,7 +162,9 @@ def encrypt(plain: bytes, iv: int) -> bytes:
     if layout is None:
         raise ConfigError(f"a GT7 packet has {sorted(SIZES)} bytes, not {len(plain)}")
     iv &= 0xFFFFFFFF
-    out = bytearray(_cipher(_NONCE.pack(iv ^ layout[1], iv)).encrypt(plain))
+    seeded = bytearray(plain)
+    _IV.pack_into(seeded, 0x40, iv)  # _xor reads the seed there; the byte is overwritten
+    out = bytearray(_xor(bytes(seeded), layout[1], len(plain)))
     _IV.pack_into(out, 0x40, iv)
     return bytes(out)
 
@@ -192,21 +218,6 @@ class GT7Packet:
         return bytes(out)
 
 
-def _rotate_to_car(q: tuple[float, float, float, float], v: tuple[float, float, float]) -> (
-    tuple[float, float, float]
-):  # fmt: skip
-    """``R(q)^T v``: a world vector in car axes, for a unit quaternion (x, y, z, w)."""
-    x, y, z, w = q
-    vx, vy, vz = v
-    xx, yy, zz = x * x, y * y, z * z
-    xy, xz, yz, wx, wy, wz = x * y, x * z, y * z, w * x, w * y, w * z
-    return (
-        (1 - 2 * (yy + zz)) * vx + 2 * (xy + wz) * vy + 2 * (xz - wy) * vz,
-        2 * (xy - wz) * vx + (1 - 2 * (xx + zz)) * vy + 2 * (yz + wx) * vz,
-        2 * (xz + wy) * vx + 2 * (yz - wx) * vy + (1 - 2 * (xx + yy)) * vz,
-    )
-
-
 class GT7Decoder(Decoder):
     """Decoder of Gran Turismo 7 packets, and the heartbeat the console needs.
 
@@ -242,10 +253,9 @@ class GT7Decoder(Decoder):
         self._next_heartbeat_s = -math.inf
         self._prev_id: int | None = None
         self._prev_v = (0.0, 0.0, 0.0)
-        if _Salsa20 is None:  # pragma: no cover
-            raise ConfigError(
-                "Gran Turismo 7 telemetry needs pycryptodome: pip install pycryptodome"
-            )
+        if not available():  # pragma: no cover
+            raise ConfigError(_NO_CRYPTO)
+        self._xor = Salsa20Xor(KEY, _USED).xor
 
     def reset(self) -> None:
         self._prev_id = None
@@ -268,20 +278,19 @@ class GT7Decoder(Decoder):
             reason = "skipped: truncated" if n < 296 else "skipped: wrong size"
             return DecodeResult("skipped", reason)
         iv = _IV.unpack_from(datagram, 0x40)[0]
-        # a stream cipher: only the bytes read are decrypted (up to the flags, 0x94)
-        plain = _Salsa20.new(KEY, nonce=_NONCE.pack(iv ^ layout[1], iv)).decrypt(datagram[:_USED])
-        if plain[:4] != b"0S7G":
-            return DecodeResult("skipped", "skipped: foreign")
-        self.layouts[layout[0]] = self.layouts.get(layout[0], 0) + 1
-        (_m, _px, _py, _pz, vx, vy, vz, qx, qy, qz, qw, wx, wy, wz, _h, rpm) = PACKET.unpack_from(
+        plain = self._xor(datagram, _NONCE.pack(iv ^ layout[1], iv))
+        (magic, vx, vy, vz, qx, qy, qz, qw, wx, wy, wz, rpm, pid, amax, flags) = _READ.unpack_from(
             plain
         )
-        norm = qx * qx + qy * qy + qz * qz + qw * qw
-        if not (math.isfinite(norm) and math.isfinite(vx + vy + vz)):
-            return DecodeResult("skipped", "skipped: non-finite")
-        if abs(norm - 1.0) > 1e-3:
+        if magic != MAGIC:
             return DecodeResult("skipped", "skipped: foreign")
-        pid = _PACKET_ID.unpack_from(plain, 0x70)[0]
+        self.layouts[layout[0]] = self.layouts.get(layout[0], 0) + 1
+        norm = qx * qx + qy * qy + qz * qz + qw * qw
+        # one chained comparison each (False for nan, and for inf): the common case costs two
+        if not (-1e-3 <= norm - 1.0 <= 1e-3 and -_INF < vx + vy + vz < _INF):
+            if not (math.isfinite(norm) and math.isfinite(vx + vy + vz)):
+                return DecodeResult("skipped", "skipped: non-finite")
+            return DecodeResult("skipped", "skipped: foreign")
         prev, self._prev_id = self._prev_id, pid
         prev_v, self._prev_v = self._prev_v, (vx, vy, vz)
         if prev is not None and pid == prev:
@@ -291,10 +300,19 @@ class GT7Decoder(Decoder):
             return DecodeResult("partial", "partial")
         k = FRAME_HZ / (pid - prev)
         # specific force in world axes: a - g, with g = (0, -G0, 0)
-        f_world = ((vx - prev_v[0]) * k, (vy - prev_v[1]) * k + G0_M_S2, (vz - prev_v[2]) * k)
-        cx, cy, cz = _rotate_to_car((qx, qy, qz, qw), f_world)
-        _amin, amax, _vmax, flags, _gears = _STATE.unpack_from(plain, 0x88)
-        paused = (flags & (FLAG_ON_TRACK | FLAG_PAUSED | FLAG_LOADING)) != FLAG_ON_TRACK
+        ax = (vx - prev_v[0]) * k
+        ay = (vy - prev_v[1]) * k + G0_M_S2
+        az = (vz - prev_v[2]) * k
+        # in car axes, R(q)^T a: the conjugate quaternion's rotation written out (this runs
+        # for every packet): t = 2 (a x u), c = a + w t + t x u, with u = (qx, qy, qz)
+        tx = 2.0 * (ay * qz - az * qy)
+        ty = 2.0 * (az * qx - ax * qz)
+        tz = 2.0 * (ax * qy - ay * qx)
+        cx = ax + qw * tx + ty * qz - tz * qy
+        cy = ay + qw * ty + tz * qx - tx * qz
+        cz = az + qw * tz + tx * qy - ty * qx
+        # ISO is (-car z, -car x, car y)
+        paused = (flags & _STATE_MASK) != FLAG_ON_TRACK
         extras: dict[str, object] = {"rpm": rpm, "rpm_max": float(amax) if amax else math.nan}
         return self._make(t_s, (-cz, -cx, cy), (-wz, -wx, wy), paused, extras)
 
