@@ -107,7 +107,7 @@ def test_intensity_0_50_100_is_monotonically_stronger_within_the_limits(
         (["--intensity", "120"], "intensity 120.0 % is invalid"),
         (["--intensity", "nan"], "intensity nan % is invalid"),
         (["--intensity", "50", "--preset", "racing"], "has no tuned intensity range"),
-        (["--intensity", "50"], "has no tuned intensity range"),  # the default: none yet
+        # the platform's default (with or without a range): test_intensity_play.py
     ],
 )
 def test_bad_intensity_is_one_line(

@@ -3,21 +3,27 @@
 from __future__ import annotations
 
 import argparse
-from collections.abc import Sequence
-from typing import TYPE_CHECKING
+import math
+from collections.abc import Mapping, Sequence
+from typing import TYPE_CHECKING, Any
 
 from .._errors import ConfigError
 
 if TYPE_CHECKING:
     from ..cueing import CueingParams
     from ..kinematics import Platform
+    from ..pipeline import Ride
 
 __all__ = [
     "FALLBACK_PRESET",
     "add_intensity_option",
     "add_vestibular_option",
     "apply_intensity",
+    "check_play_intensity",
     "choose_preset",
+    "cueing_note",
+    "describe_cueing",
+    "presets_with_intensity",
 ]
 
 FALLBACK_PRESET = "racing"
@@ -100,7 +106,135 @@ def apply_intensity(
         return params, source
     from ..cueing import at_intensity
 
+    if params.intensity_gentle is None and _valid_percent(percent):
+        # the preset has no range: say which do (the platform's default may be the one)
+        have = presets_with_intensity()
+        raise ConfigError(
+            f"preset {source} has no tuned intensity range (no [intensity] table), so "
+            f"--intensity {percent:g} has nothing to choose from; give --preset NAME with one"
+            f"{' (' + ', '.join(have) + ')' if have else ''}, or leave out the intensity"
+        )
     return at_intensity(params, percent), f"{source} at intensity {percent:g} %"
+
+
+def _valid_percent(percent: float) -> bool:
+    return not isinstance(percent, bool) and math.isfinite(percent) and 0.0 <= percent <= 100.0
+
+
+def presets_with_intensity() -> list[str]:
+    """Names of the bundled cueing presets with a tuned intensity range (an ``[intensity]``
+    table), sorted; presets that do not load are left out."""
+    from .._config import bundled_names
+    from ..cueing import load_cueing
+
+    names = []
+    for name in bundled_names("cueing"):
+        try:
+            if load_cueing(name).intensity_gentle is not None:
+                names.append(name)
+        except ConfigError:
+            continue
+    return names
+
+
+def cueing_note(
+    base: CueingParams, source: str, percent: float | None
+) -> dict[str, str | float | None]:
+    """What a ride records of its cueing (``notes["cueing"]`` of the ride header, covered
+    by its digest): the preset's name and where it came from, and the intensity in percent
+    (``None`` for a preset without a tuned range; ``100`` for one with a range when no
+    intensity was asked for: the preset as tuned is its 100 % point).
+
+    Parameters
+    ----------
+    base : CueingParams
+        The preset before :func:`apply_intensity`.
+    source : str
+        Its label from :func:`choose_preset`.
+    percent : float or None
+        The ``--intensity`` asked for.
+    """
+    if percent is None and base.intensity_gentle is not None:
+        percent = 100.0
+    return {"preset": base.name, "preset_source": source,
+            "intensity_percent": None if percent is None else float(percent)}  # fmt: skip
+
+
+def _ride_cueing(notes: Mapping[str, Any]) -> tuple[str | None, float | None, bool]:
+    """``(preset, intensity_percent, recorded)`` from a ride's notes, trusting nothing: a
+    missing or malformed ``cueing`` note is ``(None, None, False)``."""
+    note = notes.get("cueing") if isinstance(notes, Mapping) else None
+    if not isinstance(note, Mapping):
+        return None, None, False
+    preset = note.get("preset")
+    pct = note.get("intensity_percent")
+    ok_pct = pct is None or (
+        isinstance(pct, int | float) and not isinstance(pct, bool) and _valid_percent(float(pct))
+    )
+    if not isinstance(preset, str) or not ok_pct:
+        return None, None, False
+    return preset, None if pct is None else float(pct), True
+
+
+def describe_cueing(notes: Mapping[str, Any]) -> str:
+    """One line on a ride's cueing from its notes, for ``view`` and the monitor:
+    ``"racing-hexapod-strong at intensity 50 %"``, ``"racing (no intensity range)"`` or
+    ``"not recorded (a keyframe ride, or one made before rides recorded it)"``."""
+    preset, pct, recorded = _ride_cueing(notes)
+    if not recorded:
+        return "not recorded (a keyframe ride, or one made before rides recorded their cueing)"
+    if pct is None:
+        return f"{preset} (no tuned intensity range)"
+    return f"{preset} at intensity {pct:g} %"
+
+
+def check_play_intensity(ride: Ride, percent: float, ride_name: str) -> str:
+    """``play --intensity PCT``: a ride's frames are fixed when ``generate`` makes them, so
+    the intensity can only be checked, not changed (no frame is sent that the ride's digest
+    and ``generate``'s checks did not cover).
+
+    Parameters
+    ----------
+    ride : motioncue.pipeline.Ride
+        The ride about to be played (its ``notes["cueing"]``, its source, rig).
+    percent : float
+        The ``--intensity`` asked for.
+    ride_name : str
+        How the user named the ride file.
+
+    Returns
+    -------
+    str
+        A note for the player when the ride was made at ``percent``.
+
+    Raises
+    ------
+    ConfigError
+        ``percent`` outside 0..100, or a ride made at another intensity or with none
+        recorded; the message gives the ``generate --intensity`` command that makes the ride
+        asked for.
+    """
+    if not _valid_percent(percent):
+        raise ConfigError(f"--intensity {percent!r} % is invalid; allowed: 0 to 100")
+    preset, pct, recorded = _ride_cueing(ride.notes)
+    fix = (
+        f"make one with 'motioncue generate --input {ride.source or 'REC'} --platform "
+        f"{ride.platform} --controller {ride.controller} --preset {preset or 'NAME'} "
+        f"--intensity {percent:g} --out NEW.ride' (a ride's frames are fixed when it is made)"
+    )
+    if not recorded:
+        raise ConfigError(
+            f"{ride_name} records no intensity (a keyframe ride, or one made before rides "
+            f"recorded their cueing); {fix}"
+        )
+    if pct is None:
+        raise ConfigError(
+            f"{ride_name} was made with preset {preset}, which has no tuned intensity range; "
+            f"{fix} with a preset that has one"
+        )
+    if abs(pct - percent) > 1e-9:
+        raise ConfigError(f"{ride_name} was made at intensity {pct:g} %, not {percent:g} %; {fix}")
+    return f"{ride_name} was made at intensity {pct:g} % (preset {preset})"
 
 
 def add_vestibular_option(parser: argparse.ArgumentParser) -> None:
