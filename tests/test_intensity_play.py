@@ -20,10 +20,11 @@ import pytest
 
 from _lapcsv import lap_excerpt
 from motioncue.cli import main
-from motioncue.cli._preset import describe_cueing, presets_with_intensity
+from motioncue.cli._preset import presets_with_intensity
 from motioncue.cueing import load_cueing
 from motioncue.kinematics import load_platform
 from motioncue.pipeline import Ride, load_ride, save_ride
+from motioncue.viewer._cueing import describe_cueing
 
 PLATFORM, CONTROLLER, PRESET = "stewart6-linear", "mbox6", "racing-hexapod-strong"
 
@@ -168,3 +169,40 @@ def test_the_bundled_default_with_intensity_works_or_says_why(
     else:
         assert rc == 2 and "no tuned intensity range" in err and PRESET in err
         assert not out.exists()
+
+
+def test_the_monitor_of_play_shows_the_ride_s_cueing(made: tuple[Path, Path]) -> None:
+    from motioncue.viewer import Monitor, PlaySource
+
+    _, path = made
+    ride = load_ride(path)
+    plat = load_platform(PLATFORM)
+    watch = PlaySource(ride.duration_s, {"cueing": describe_cueing(ride.notes)})
+    snap = Monitor(watch, plat).snapshot()  # before the ride starts: shown already
+    assert snap["info"]["cueing"] == f"{PRESET} at intensity 50 %"
+
+
+def test_the_monitor_of_bridge_shows_the_preset_and_intensity(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """``bridge --intensity`` (here from a replayed recording): the monitor's source carries
+    the preset and the intensity as the page shows them (captured where the CLI starts it)."""
+    import motioncue.cli._bridge as bridge_cli
+    from test_bridge_replay import write_f1_recording
+
+    rec = tmp_path / "lap.mctr"
+    write_f1_recording(rec, 0.3)
+    seen: list[dict[str, str]] = []
+
+    def capture(value: object, source: object, *args: object) -> None:
+        seen.append(dict(source.snapshot().get("info", {})))  # type: ignore[attr-defined]
+        return None
+
+    monkeypatch.setattr(bridge_cli, "start_monitor", capture)
+    rc = main(["bridge", "--source", f"replay:{rec}?speed=1", "--platform", PLATFORM,
+               "--controller", CONTROLLER, "--target", f"file:{tmp_path / 'out.bin'}",
+               "--preset", PRESET, "--intensity", "30", "--monitor", "0", "--duration", "2",
+               "--rt-priority", "0", "--quiet"])  # fmt: skip
+    err = capsys.readouterr().err
+    assert rc == 0, err
+    assert seen and seen[0]["cueing"] == f"{PRESET} at intensity 30 %", seen

@@ -19,7 +19,7 @@ from ._common import (
     print_json,
 )
 from ._monitor import add_monitor_argument, start_monitor
-from ._preset import add_intensity_option, apply_intensity, cueing_note, describe_cueing
+from ._preset import add_intensity_option, apply_intensity, cueing_note
 
 if TYPE_CHECKING:
     from ..pipeline._bridge import Bridge, BridgeStats
@@ -133,6 +133,7 @@ def run(args: argparse.Namespace) -> int:
     from ..pipeline._realtime import GateConfig
     from ..pipeline._signals import SignalGuard
     from ..telemetry import open_source
+    from ..viewer._cueing import describe_cueing
     from ..viewer._monitor import BridgeSource
     from ._preset import choose_preset
 

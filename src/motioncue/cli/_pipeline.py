@@ -324,8 +324,9 @@ def _play(args: argparse.Namespace) -> int:
     from ..pipeline import check_ride_for, check_ride_integrity, load_ride, play_ride
     from ..pipeline._signals import SignalGuard
     from ..pipeline._stream import PlayAborted
+    from ..viewer._cueing import describe_cueing
     from ..viewer._monitor import PlaySource
-    from ._preset import check_play_intensity, describe_cueing
+    from ._preset import check_play_intensity
 
     if not (0 < args.speed <= 1000):
         raise ConfigError(f"--speed {args.speed!r} is invalid; allowed: (0, 1000]")

@@ -4,8 +4,8 @@ from __future__ import annotations
 
 import argparse
 import math
-from collections.abc import Mapping, Sequence
-from typing import TYPE_CHECKING, Any
+from collections.abc import Sequence
+from typing import TYPE_CHECKING
 
 from .._errors import ConfigError
 
@@ -22,7 +22,6 @@ __all__ = [
     "check_play_intensity",
     "choose_preset",
     "cueing_note",
-    "describe_cueing",
     "presets_with_intensity",
 ]
 
@@ -160,34 +159,6 @@ def cueing_note(
             "intensity_percent": None if percent is None else float(percent)}  # fmt: skip
 
 
-def _ride_cueing(notes: Mapping[str, Any]) -> tuple[str | None, float | None, bool]:
-    """``(preset, intensity_percent, recorded)`` from a ride's notes, trusting nothing: a
-    missing or malformed ``cueing`` note is ``(None, None, False)``."""
-    note = notes.get("cueing") if isinstance(notes, Mapping) else None
-    if not isinstance(note, Mapping):
-        return None, None, False
-    preset = note.get("preset")
-    pct = note.get("intensity_percent")
-    ok_pct = pct is None or (
-        isinstance(pct, int | float) and not isinstance(pct, bool) and _valid_percent(float(pct))
-    )
-    if not isinstance(preset, str) or not ok_pct:
-        return None, None, False
-    return preset, None if pct is None else float(pct), True
-
-
-def describe_cueing(notes: Mapping[str, Any]) -> str:
-    """One line on a ride's cueing from its notes, for ``view`` and the monitor:
-    ``"racing-hexapod-strong at intensity 50 %"``, ``"racing (no intensity range)"`` or
-    ``"not recorded (a keyframe ride, or one made before rides recorded it)"``."""
-    preset, pct, recorded = _ride_cueing(notes)
-    if not recorded:
-        return "not recorded (a keyframe ride, or one made before rides recorded their cueing)"
-    if pct is None:
-        return f"{preset} (no tuned intensity range)"
-    return f"{preset} at intensity {pct:g} %"
-
-
 def check_play_intensity(ride: Ride, percent: float, ride_name: str) -> str:
     """``play --intensity PCT``: a ride's frames are fixed when ``generate`` makes them, so
     the intensity can only be checked, not changed (no frame is sent that the ride's digest
@@ -214,9 +185,11 @@ def check_play_intensity(ride: Ride, percent: float, ride_name: str) -> str:
         recorded; the message gives the ``generate --intensity`` command that makes the ride
         asked for.
     """
+    from ..viewer._cueing import ride_cueing
+
     if not _valid_percent(percent):
         raise ConfigError(f"--intensity {percent!r} % is invalid; allowed: 0 to 100")
-    preset, pct, recorded = _ride_cueing(ride.notes)
+    preset, pct, recorded = ride_cueing(ride.notes)
     fix = (
         f"make one with 'motioncue generate --input {ride.source or 'REC'} --platform "
         f"{ride.platform} --controller {ride.controller} --preset {preset or 'NAME'} "

@@ -53,9 +53,12 @@ def _view(args: argparse.Namespace) -> int:
                 "bytes": path.stat().st_size,
                 "samples": int(view.scene.t_s.size),
                 "duration_s": float(view.scene.t_s[-1]),
+                "notes": list(view.notes),
             }
         )
         return 0
+    for line in view.notes:
+        print(f"view: {line}")
     print(
         f"view: {path} ({size_mb:.1f} MB, {view.scene.t_s.size} samples, "
         f"{view.scene.t_s[-1]:.1f} s); open it in a browser (no network needed)"
