@@ -92,7 +92,7 @@ def add_intensity_option(parser: argparse.ArgumentParser) -> None:
         help="0-100: a point of the preset's tuned range from gentle (0) to the strongest "
         "within its false-cue budget (100, the preset as it is); not a plain gain, every "
         "frame still within the limits. Needs a preset with an [intensity] table "
-        "(racing-hexapod)",
+        "(racing-hexapod-strong among the bundled ones; the error lists them)",
     )
 
 
@@ -110,7 +110,7 @@ def apply_intensity(
         have = presets_with_intensity()
         raise ConfigError(
             f"preset {source} has no tuned intensity range (no [intensity] table), so "
-            f"--intensity {percent:g} has nothing to choose from; give --preset NAME with one"
+            f"intensity {percent:g} % has nothing to choose from; give --preset NAME with one"
             f"{' (' + ', '.join(have) + ')' if have else ''}, or leave out the intensity"
         )
     return at_intensity(params, percent), f"{source} at intensity {percent:g} %"
