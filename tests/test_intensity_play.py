@@ -206,3 +206,34 @@ def test_the_monitor_of_bridge_shows_the_preset_and_intensity(
     err = capsys.readouterr().err
     assert rc == 0, err
     assert seen and seen[0]["cueing"] == f"{PRESET} at intensity 30 %", seen
+
+
+@pytest.mark.parametrize(
+    "note",
+    [
+        None,
+        "racing at 50",
+        {"preset": 3, "intensity_percent": 50.0},
+        {"preset": "racing", "intensity_percent": 250.0},
+        {"preset": "racing", "intensity_percent": float("nan")},
+        {"preset": "racing", "intensity_percent": True},
+        {"preset": "racing", "intensity_percent": "50"},
+    ],
+)
+def test_a_malformed_cueing_note_reads_as_not_recorded(note: object) -> None:
+    """The note is the file's word (an accepted edit may hold anything): never trusted."""
+    from motioncue.viewer._cueing import ride_cueing
+
+    notes = {} if note is None else {"cueing": note}
+    assert ride_cueing(notes) == (None, None, False)
+    assert describe_cueing(notes).startswith("not recorded")
+
+
+def test_a_well_formed_note_reads_back() -> None:
+    from motioncue.viewer._cueing import ride_cueing
+
+    assert ride_cueing({"cueing": {"preset": "p", "intensity_percent": 0}}) == ("p", 0.0, True)
+    assert ride_cueing({"cueing": {"preset": "p", "intensity_percent": None}}) == ("p", None, True)
+    assert describe_cueing({"cueing": {"preset": "p", "intensity_percent": None}}) == (
+        "p (no tuned intensity range)"
+    )
