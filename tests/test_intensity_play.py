@@ -50,7 +50,6 @@ def test_the_ride_records_its_preset_and_intensity_under_its_digest(
     assert ride.integrity == "intact"
     note = ride.notes["cueing"]
     assert note["preset"] == PRESET and note["intensity_percent"] == pytest.approx(50.0)
-    assert "(--preset)" in note["preset_source"]
     assert describe_cueing(ride.notes) == f"{PRESET} at intensity 50 %"
     # the note is in the header the digest covers: changing it makes the ride "edited"
     with zipfile.ZipFile(path) as zf:
@@ -237,3 +236,17 @@ def test_a_well_formed_note_reads_back() -> None:
     assert describe_cueing({"cueing": {"preset": "p", "intensity_percent": None}}) == (
         "p (no tuned intensity range)"
     )
+
+
+def test_a_preset_changed_by_set_is_named_with_the_items(
+    made: tuple[Path, Path], tmp_path: Path
+) -> None:
+    rec, _ = made
+    out = tmp_path / "s.ride"
+    item = "preset.scaling.f_scale=[0.2, 0.2, 0.2]"
+    assert main(["generate", "--input", str(rec), "--platform", PLATFORM, "--controller",
+                 CONTROLLER, "--preset", "racing", "--set", item, "--out", str(out),
+                 "--quiet"]) == 0  # fmt: skip
+    notes = load_ride(out).notes
+    assert notes["cueing"] == {"preset": "racing", "intensity_percent": None, "preset_set": [item]}
+    assert describe_cueing(notes) == f"racing (--set {item}) (no tuned intensity range)"

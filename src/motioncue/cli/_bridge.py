@@ -166,7 +166,7 @@ def run(args: argparse.Namespace) -> int:
     if intensity is None and profile is not None:
         intensity = profile.intensity
     cueing, preset_source = apply_intensity(base, intensity, base_source)
-    shown = {"cueing": describe_cueing({"cueing": cueing_note(base, base_source, intensity)})}
+    shown = {"cueing": describe_cueing({"cueing": cueing_note(base, intensity, args.overrides)})}
     effects = None
     start_warnings: list[str] = []
     if profile is not None:

@@ -227,7 +227,7 @@ def _generate(args: argparse.Namespace) -> int:
         )  # fmt: skip
         # the ride says which preset and intensity made it (view, the monitor and play
         # --intensity read it; in the header, so the digest covers it)
-        note = cueing_note(base, base_source, args.intensity)
+        note = cueing_note(base, args.intensity, args.overrides)
         ride = replace(ride, notes={**ride.notes, "cueing": note})
         fallbacks = list(report.transition_fallbacks)
         warning = held_warning(report.bad_samples, len(report.f_vehicle))

@@ -137,26 +137,34 @@ def presets_with_intensity() -> list[str]:
 
 
 def cueing_note(
-    base: CueingParams, source: str, percent: float | None
-) -> dict[str, str | float | None]:
+    base: CueingParams, percent: float | None, overrides: Sequence[str] | None = None
+) -> dict[str, object]:
     """What a ride records of its cueing (``notes["cueing"]`` of the ride header, covered
-    by its digest): the preset's name and where it came from, and the intensity in percent
-    (``None`` for a preset without a tuned range; ``100`` for one with a range when no
-    intensity was asked for: the preset as tuned is its 100 % point).
+    by its digest): the preset's name and the intensity in percent (``None`` for a preset
+    without a tuned range; ``100`` for one with a range when no intensity was asked for: the
+    preset as tuned is its 100 % point). Not how the preset was chosen: the same preset
+    makes the same ride whether named or taken as the platform's default.
 
     Parameters
     ----------
     base : CueingParams
         The preset before :func:`apply_intensity`.
-    source : str
-        Its label from :func:`choose_preset`.
     percent : float or None
         The ``--intensity`` asked for.
+    overrides : sequence of str, optional
+        ``--set`` items; the ``preset.`` ones changed the preset and are recorded as
+        ``preset_set`` (left out when there are none).
     """
     if percent is None and base.intensity_gentle is not None:
         percent = 100.0
-    return {"preset": base.name, "preset_source": source,
-            "intensity_percent": None if percent is None else float(percent)}  # fmt: skip
+    note: dict[str, object] = {
+        "preset": base.name,
+        "intensity_percent": None if percent is None else float(percent),
+    }
+    sets = [str(o) for o in overrides or () if str(o).startswith("preset.")]
+    if sets:
+        note["preset_set"] = sets
+    return note
 
 
 def check_play_intensity(ride: Ride, percent: float, ride_name: str) -> str:

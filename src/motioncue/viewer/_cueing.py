@@ -52,11 +52,15 @@ def ride_cueing(notes: Mapping[str, Any]) -> tuple[str | None, float | None, boo
 
 def describe_cueing(notes: Mapping[str, Any]) -> str:
     """One line on a ride's cueing, for ``view`` and the monitor: ``"racing-hexapod-strong
-    at intensity 50 %"``, ``"racing (no tuned intensity range)"`` or ``"not recorded (...)"``.
+    at intensity 50 %"``, ``"racing (no tuned intensity range)"`` or ``"not recorded (...)"``;
+    a preset changed by ``--set`` items (``preset_set``) is named with them.
     """
     preset, pct, recorded = ride_cueing(notes)
     if not recorded:
         return "not recorded (a keyframe ride, or one made before rides recorded their cueing)"
+    sets = notes["cueing"].get("preset_set")
+    if isinstance(sets, list) and sets and all(isinstance(x, str) for x in sets):
+        preset = f"{preset} (--set {' '.join(sets)})"
     if pct is None:
         return f"{preset} (no tuned intensity range)"
     return f"{preset} at intensity {pct:g} %"
