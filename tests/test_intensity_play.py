@@ -250,3 +250,36 @@ def test_a_preset_changed_by_set_is_named_with_the_items(
     notes = load_ride(out).notes
     assert notes["cueing"] == {"preset": "racing", "intensity_percent": None, "preset_set": [item]}
     assert describe_cueing(notes) == f"racing (--set {item}) (no tuned intensity range)"
+
+
+def test_the_refusal_gives_a_command_that_makes_the_ride_asked_for(
+    made: tuple[Path, Path],
+) -> None:
+    """The generate command in the refusal carries the ride's source, rig, preset and its
+    --set items, quoted for a shell; NAME where the ride's preset has no range."""
+    import dataclasses
+    import shlex
+
+    from motioncue import ConfigError
+    from motioncue.cli._preset import check_play_intensity
+
+    _, path = made
+    ride = load_ride(path)
+    item = "preset.scaling.f_scale=[0.2, 0.2, 0.2]"
+    cueing = {"preset": PRESET, "intensity_percent": 50.0, "preset_set": [item]}
+    edited = dataclasses.replace(ride, notes={**ride.notes, "cueing": cueing})
+    with pytest.raises(ConfigError) as err:
+        check_play_intensity(edited, 20.0, "r.ride")
+    command = str(err.value).split("'", 1)[1].rsplit("' (", 1)[0]
+    words = shlex.split(command)
+    assert words[:2] == ["motioncue", "generate"]
+    assert words[words.index("--input") + 1] == "drive.csv"
+    assert words[words.index("--set") + 1] == item
+    assert words[words.index("--preset") + 1] == PRESET
+    assert words[words.index("--intensity") + 1] == "20"
+    no_range = dataclasses.replace(
+        ride, notes={**ride.notes, "cueing": {"preset": "racing", "intensity_percent": None}}
+    )
+    with pytest.raises(ConfigError, match=r"--preset NAME .*with a preset that has one"):
+        check_play_intensity(no_range, 20.0, "r.ride")
+    assert check_play_intensity(ride, 50.0, "r.ride").endswith(f"(preset {PRESET})")

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 import math
+import shlex
 from collections.abc import Sequence
 from typing import TYPE_CHECKING
 
@@ -198,11 +199,15 @@ def check_play_intensity(ride: Ride, percent: float, ride_name: str) -> str:
     if not _valid_percent(percent):
         raise ConfigError(f"--intensity {percent!r} % is invalid; allowed: 0 to 100")
     preset, pct, recorded = ride_cueing(ride.notes)
-    fix = (
-        f"make one with 'motioncue generate --input {ride.source or 'REC'} --platform "
-        f"{ride.platform} --controller {ride.controller} --preset {preset or 'NAME'} "
-        f"--intensity {percent:g} --out NEW.ride' (a ride's frames are fixed when it is made)"
-    )
+    words = ["motioncue", "generate", "--input", ride.source or "REC", "--platform",
+             ride.platform, "--controller", ride.controller, "--preset",
+             preset if preset is not None and pct is not None else "NAME"]  # fmt: skip
+    sets = ride.notes["cueing"].get("preset_set") if recorded else None
+    if pct is not None and isinstance(sets, list) and all(isinstance(x, str) for x in sets):
+        for item in sets:
+            words += ["--set", item]
+    words += ["--intensity", f"{percent:g}", "--out", "NEW.ride"]
+    fix = f"make one with '{shlex.join(words)}' (a ride's frames are fixed when it is made)"
     if not recorded:
         raise ConfigError(
             f"{ride_name} records no intensity (a keyframe ride, or one made before rides "
