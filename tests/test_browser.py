@@ -212,7 +212,9 @@ def test_stop_button_parks_a_play(tmp_path: Path) -> None:
     ctrl = load_controller("mbox6")
     lim = ActuatorLimits.from_platform(plat, ctrl, rate_hz=100.0)
     _, ride = sine_ride(tmp_path, seconds=30.0)
-    watch = PlaySource(ride.duration_s)
+    # an info line with markup in it (a preset's path may hold any characters): shown as text
+    shown = "racing <b>x</b> & co at intensity 50 %"
+    watch = PlaySource(ride.duration_s, {"cueing": shown})
     result: dict[str, Any] = {}
     with mbox.MboxEmulator(ctrl) as emu, open_transport(f"udp://127.0.0.1:{emu.port}") as link:
 
@@ -230,6 +232,8 @@ def test_stop_button_parks_a_play(tmp_path: Path) -> None:
             tab.wait_for_function("window.mcMonitor.last && window.mcMonitor.last.state === "
                                   "'running'", timeout=30_000)  # fmt: skip
             assert wait_for(lambda: emu.received > 300, 20.0)  # 3 s into the ride
+            assert f"cueing\t{shown}" in tab.inner_text("#info")
+            assert tab.locator("#info b").count() == 0  # no markup made of it
             tab.click("#stop")
             player.join(30.0)
             assert not player.is_alive()
@@ -335,6 +339,8 @@ def test_play_cli_monitor_stop_parks_on_the_emulator(tmp_path: Path) -> None:
                 tab.wait_for_function("window.mcMonitor.last && window.mcMonitor.last.state "
                                       "=== 'running'", timeout=30_000)  # fmt: skip
                 assert wait_for(lambda: emu.received > 200, 20.0)
+                # the ride's cueing (this one was not made by generate: none recorded)
+                assert "cueing\tnot recorded" in tab.inner_text("#info")
                 tab.click("#stop")
                 out, _ = proc.communicate(timeout=60)
         finally:

@@ -1,34 +1,22 @@
 """``--intensity PCT`` (issue 20, Build item 5): a point of the preset's tuned range.
 
-On an excerpt of the bundled lap (never tuned on), ``racing-hexapod-strong`` (the preset
-with a tuned intensity range) at 0, 50 and 100 % gives monotonically stronger rides (the
-tuner's strength, the geometric mean of the rendered shares of fx and fy, and the shares of
-fx and fy each; definitions of ``motioncue.cueing._metrics``; measured 0.028 / 0.088,
-0.038 / 0.123 and 0.046 / 0.135),
-each a complete washout between the two tuned ends (not a
-plain gain), and ``generate --intensity`` publishes each ride only after the checks ``play``
-makes (every frame within the limits on the controller's clock). Bad intensities and
-presets without a range are refused with one line.
+``racing-hexapod-strong`` (the preset with a tuned intensity range) at 0, 50 and 100 % is a
+complete washout between the two tuned ends (not a plain gain); that those points give
+monotonically stronger rides, each within the limits, is tests/test_intensity_rides.py.
+Bad intensities and presets without a range are refused with one line.
 """
 
 from __future__ import annotations
 
-import json
 import math
 from pathlib import Path
 
-import numpy as np
 import pytest
 
-from motioncue.analysis._compare import run_chain
 from motioncue.cli import main
 from motioncue.cueing import at_intensity, load_cueing
-from motioncue.cueing._metrics import cue_metrics
-from motioncue.kinematics import load_platform
-from motioncue.output import load_controller
 from motioncue.telemetry import sample_drives
 from motioncue.telemetry._recording import Recording, read_recording_csv, write_recording_csv
-from motioncue.trajectory import ActuatorLimits
 
 PLATFORM, CONTROLLER, PRESET, RATE = "stewart6-linear", "mbox6", "racing-hexapod-strong", 100.0
 
@@ -61,53 +49,13 @@ def test_intensity_points_are_tuned_designs_between_the_ends() -> None:
     )
 
 
-def test_intensity_0_50_100_is_monotonically_stronger_within_the_limits(
-    lap_excerpt: Path, tmp_path: Path
-) -> None:
-    platform = load_platform(PLATFORM)
-    limits = ActuatorLimits.from_platform(platform, load_controller(CONTROLLER), rate_hz=RATE)
-    rec = read_recording_csv(lap_excerpt)
-    strong = load_cueing(PRESET)
-    shares = []
-    for pct in (0.0, 50.0, 100.0):
-        run = run_chain(rec.f, rec.w, at_intensity(strong, pct), platform, limits, RATE)
-        ev = run.evaluation
-        m = cue_metrics(ev.perceived_vehicle, ev.perceived_sim, ev.thresholds)
-        shares.append(m.rendered_share[:2])
-        assert run.poses_clamped <= 0.01 * len(run.poses)
-        # and the ride generate makes at this intensity passes play's checks
-        out = tmp_path / f"i{pct:g}.ride"
-        import contextlib
-        import io
-
-        buf = io.StringIO()
-        with contextlib.redirect_stdout(buf), contextlib.redirect_stderr(io.StringIO()):
-            rc = main([
-                "generate", "--input", str(lap_excerpt), "--platform", PLATFORM,
-                "--controller", CONTROLLER, "--preset", PRESET, "--intensity", f"{pct:g}",
-                "--out", str(out),
-                "--quiet", "--json",
-            ])  # fmt: skip
-        assert rc == 0
-        summary = json.loads(buf.getvalue())
-        assert "OK" in summary["frame_check"], summary["frame_check"]
-        assert out.exists()
-    s = np.array(shares)
-    strength = np.sqrt(s[:, 0] * s[:, 1])  # the tuner's strength: geometric mean of fx, fy
-    print("shares fx, fy at 0/50/100 %:", s.round(4).tolist())
-    assert np.all(np.diff(strength) > 0.0), s
-    assert np.all(np.diff(s[:, 1]) > 0.0), s  # fy grows 0 -> 50 -> 100
-    assert np.all(np.diff(s[:, 0]) > 0.0), s  # and so does fx
-    assert strength[2] >= 1.1 * strength[0], s  # and the range is more than a nudge
-
-
 @pytest.mark.parametrize(
     ("args", "message"),
     [
         (["--intensity", "120"], "intensity 120.0 % is invalid"),
         (["--intensity", "nan"], "intensity nan % is invalid"),
         (["--intensity", "50", "--preset", "racing"], "has no tuned intensity range"),
-        (["--intensity", "50"], "has no tuned intensity range"),  # the default: none yet
+        # the platform's default (with or without a range): test_intensity_play.py
     ],
 )
 def test_bad_intensity_is_one_line(

@@ -3,6 +3,8 @@ the rider's, on the ride's clock (checked against the recording filtered indepen
 
 from __future__ import annotations
 
+import dataclasses
+import html
 import json
 import re
 from pathlib import Path
@@ -44,9 +46,52 @@ def test_view_draws_the_vehicle_beside_the_rider(tmp_path: Path) -> None:
     names = [tr.get("name", "") for tr in json.loads(blob.group(1))["curves"]["data"]]
     veh = [n for n in names if n.startswith("vehicle f")]
     assert len(veh) == 2 and all("rider gets" in n for n in veh)
-    # the same page without the recording has no vehicle traces
+    assert v.notes[0].startswith("cueing: racing-hexapod")  # the platform's default
+    assert any(n.startswith("strength: the rider perceives") for n in v.notes)
+    # the same page without the recording has no vehicle traces, and says why
     (tmp_path / "drive.csv").rename(tmp_path / "moved.csv")
-    assert load_view_input(ride_path).vehicle is None
+    gone = load_view_input(ride_path)
+    assert gone.vehicle is None
+    why = "vehicle: not drawn: the ride's source 'drive.csv' is not next to the ride file"
+    assert any(n.startswith(why) for n in gone.notes), gone.notes
+    assert html.escape(why, quote=True) in view_html(gone)
     assert load_view_input(ride_path, recording=tmp_path / "moved.csv").vehicle is not None
     with pytest.raises(ConfigError, match="ride file"):
         load_view_input(tmp_path / "moved.csv", "stewart6-linear", recording=rec)
+
+
+def test_a_ride_whose_source_is_missing_or_unreadable_is_still_viewed(tmp_path: Path) -> None:
+    """No source named, a source that is not a recording, a damaged one: the view is made
+    and says why the vehicle is not drawn; an explicit --recording that is bad is an error."""
+    from motioncue.kinematics import load_platform
+    from motioncue.pipeline import Ride, save_ride
+
+    plat = load_platform("stewart6-linear")
+    n = 40
+    pulses = np.repeat(plat.drives.to_pulses(plat.q_park[None, :]), n, axis=0)
+    base = Ride(
+        platform="stewart6-linear", controller="mbox6", rate_hz=100.0,
+        actuator_names=plat.actuator_names, t_s=np.arange(n) / 100.0,
+        pulses=pulses.astype(np.int32), dout=np.zeros(n, np.uint16),
+        dacs=np.zeros((n, 2), np.uint16),
+    )  # fmt: skip
+    (tmp_path / "keys.csv").write_text("t,x,y,z,roll,pitch,yaw\n0,0,0,0,0,0,0\n1,0,0,0.01,0,0,0\n")
+    (tmp_path / "bad.csv").write_text("t,fx,fy\nnot,a,recording\n")
+    cases = {
+        "": "the ride does not name the recording it was made from",
+        "keys.csv": "the ride's source 'keys.csv' is pose keyframes, not a vehicle",
+        "bad.csv": "the ride's source could not be read",
+    }
+    for source, says in cases.items():
+        path = save_ride(
+            tmp_path / f"r{len(source)}.ride", dataclasses.replace(base, source=source)
+        )
+        v = load_view_input(path)
+        assert v.vehicle is None
+        assert "cueing: not recorded" in v.notes[0]  # a ride made without generate
+        assert any(n.startswith(f"vehicle: not drawn: {says}") for n in v.notes), v.notes
+        assert view_html(v)  # the page is still made
+    with pytest.raises(ConfigError):
+        load_view_input(path, recording=tmp_path / "bad.csv")
+    with pytest.raises(ConfigError, match="not a recording of vehicle motion"):
+        load_view_input(path, recording=tmp_path / "keys.csv")

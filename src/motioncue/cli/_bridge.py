@@ -20,7 +20,7 @@ from ._common import (
     print_json,
 )
 from ._monitor import add_monitor_argument, start_monitor
-from ._preset import add_intensity_option, apply_intensity
+from ._preset import add_intensity_option, apply_intensity, cueing_note
 
 if TYPE_CHECKING:
     from ..pipeline._bridge import Bridge, BridgeStats
@@ -133,6 +133,7 @@ def run(args: argparse.Namespace) -> int:
     from ..pipeline._realtime import GateConfig
     from ..pipeline._signals import SignalGuard
     from ..telemetry import open_source
+    from ..viewer._cueing import describe_cueing
     from ..viewer._monitor import BridgeSource
     from ._preset import choose_preset
 
@@ -160,11 +161,12 @@ def run(args: argparse.Namespace) -> int:
     limits = limits_for(args, platform, controller, config.rate_hz)
     profile_preset = profile.preset_for(platform.name) if profile is not None else None
     preset = args.preset or profile_preset
-    cueing, preset_source = choose_preset(preset, platform, args.platform, args.overrides)
+    base, base_source = choose_preset(preset, platform, args.platform, args.overrides)
     intensity = args.intensity
     if intensity is None and profile is not None:
         intensity = profile.intensity
-    cueing, preset_source = apply_intensity(cueing, intensity, preset_source)
+    cueing, preset_source = apply_intensity(base, intensity, base_source)
+    shown = {"cueing": describe_cueing({"cueing": cueing_note(base, intensity, args.overrides)})}
     effects = None
     start_warnings: list[str] = []
     if profile is not None:
@@ -227,7 +229,7 @@ def run(args: argparse.Namespace) -> int:
                 if not args.quiet:
                     _say(_legend(frames, config.rate_hz))
                 monitor = start_monitor(
-                    args.monitor, BridgeSource(bridge), platform, limits,
+                    args.monitor, BridgeSource(bridge, shown), platform, limits,
                     f"bridge {args.source} -> {args.target} ({args.platform}, "
                     f"{args.controller})", _say,
                 )  # fmt: skip

@@ -6,6 +6,7 @@ import argparse
 import sys
 import time
 from collections.abc import Callable
+from dataclasses import replace
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, TextIO
 
@@ -21,7 +22,7 @@ from ._common import (
     print_json,
 )
 from ._monitor import add_monitor_argument, start_monitor
-from ._preset import add_intensity_option, apply_intensity
+from ._preset import add_intensity_option, apply_intensity, cueing_note
 
 if TYPE_CHECKING:
     from ..output import Controller
@@ -84,6 +85,15 @@ def register(sub: Subparsers) -> None:
         help="pacing factor (default 1 = real time; other values for pcap: and file: only)",
     )
     p.add_argument("--quiet", action="store_true", help="no progress line while playing")
+    p.add_argument(
+        "--intensity",
+        type=float,
+        default=None,
+        metavar="PCT",
+        help="the intensity (0-100) the ride must have been made at: a ride's frames are "
+        "fixed when 'generate --intensity' makes them, so play checks the intensity the ride "
+        "records and refuses another (with the generate command that makes it)",
+    )
     p.add_argument(
         "--accept-edited",
         action="store_true",
@@ -208,13 +218,17 @@ def _generate(args: argparse.Namespace) -> int:
                 file=sys.stderr,
             )
     else:
-        cueing, preset_source = choose_preset(args.preset, platform, args.platform, args.overrides)
-        cueing, preset_source = apply_intensity(cueing, args.intensity, preset_source)
+        base, base_source = choose_preset(args.preset, platform, args.platform, args.overrides)
+        cueing, preset_source = apply_intensity(base, args.intensity, base_source)
         print(f"cueing: preset {preset_source}", file=sys.stderr)
         ride, report = generate_ride(
             data, platform, controller, cueing, rate_hz=args.rate, limits=limits,
             source=Path(args.input).name, progress=bar, **names,
         )  # fmt: skip
+        # the ride says which preset and intensity made it (view, the monitor and play
+        # --intensity read it; in the header, so the digest covers it)
+        note = cueing_note(base, args.intensity, args.overrides)
+        ride = replace(ride, notes={**ride.notes, "cueing": note})
         fallbacks = list(report.transition_fallbacks)
         warning = held_warning(report.bad_samples, len(report.f_vehicle))
         if warning:
@@ -310,7 +324,9 @@ def _play(args: argparse.Namespace) -> int:
     from ..pipeline import check_ride_for, check_ride_integrity, load_ride, play_ride
     from ..pipeline._signals import SignalGuard
     from ..pipeline._stream import PlayAborted
+    from ..viewer._cueing import describe_cueing
     from ..viewer._monitor import PlaySource
+    from ._preset import check_play_intensity
 
     if not (0 < args.speed <= 1000):
         raise ConfigError(f"--speed {args.speed!r} is invalid; allowed: (0, 1000]")
@@ -336,6 +352,11 @@ def _play(args: argparse.Namespace) -> int:
         ride, platform, controller, limits,
         platform_name=platform_name, controller_name=controller_name,
     )  # fmt: skip
+    if args.intensity is not None:
+        integrity_notes = [
+            *integrity_notes,
+            check_play_intensity(ride, args.intensity, str(args.ride)),
+        ]
     target = args.target or controller.default_target
     scheme = target.split(":", 1)[0].lower()
     paced = scheme not in ("file", "pcap")
@@ -354,7 +375,9 @@ def _play(args: argparse.Namespace) -> int:
             _say(f"motioncue play: note: {accepted}")
         _say(f"play: {args.ride} -> {target} ({ride.n_frames} frames, {ride.duration_s:.1f} s)")
         error = None
-        watch = None if args.monitor is None else PlaySource(ride.duration_s)
+        watch = None
+        if args.monitor is not None:
+            watch = PlaySource(ride.duration_s, {"cueing": describe_cueing(ride.notes)})
         stop = guard.event.is_set
         if watch is not None:
             stop = lambda: guard.event.is_set() or watch.stopped()  # noqa: E731

@@ -33,7 +33,8 @@ def register(sub: Any) -> None:
         default=None,
         metavar="CSV|REC",
         help="the recording the ride was made from: the vehicle's perceived motion is drawn "
-        "beside the rider's (default: the ride's source when it lies next to the ride file)",
+        "beside the rider's, with the share the rider gets (default: the ride's source when it "
+        "lies next to the ride file; when none is found the page says why)",
     )
     p.add_argument("--out", required=True, type=Path, metavar="HTML", help="page to write")
     add_json_option(p, "what was written (path, size, samples, duration)")
@@ -53,9 +54,12 @@ def _view(args: argparse.Namespace) -> int:
                 "bytes": path.stat().st_size,
                 "samples": int(view.scene.t_s.size),
                 "duration_s": float(view.scene.t_s[-1]),
+                "notes": list(view.notes),
             }
         )
         return 0
+    for line in view.notes:
+        print(f"view: {line}")
     print(
         f"view: {path} ({size_mb:.1f} MB, {view.scene.t_s.size} samples, "
         f"{view.scene.t_s[-1]:.1f} s); open it in a browser (no network needed)"

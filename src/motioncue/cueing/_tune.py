@@ -461,7 +461,7 @@ def at_intensity(params: CueingParams, percent: float) -> CueingParams:
     if params.intensity_gentle is None:
         raise ConfigError(
             f"preset {params.name!r} has no tuned intensity range (no [intensity] table); "
-            "give a preset that has one (e.g. racing-hexapod) or leave out the intensity"
+            "give a preset that has one (e.g. racing-hexapod-strong) or leave out the intensity"
         )
     if percent == 100.0:
         return params

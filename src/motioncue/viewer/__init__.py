@@ -16,7 +16,15 @@ from ._monitor import (
     parse_monitor,
 )
 from ._scene import Scene, scene_from_poses, scene_from_q, stroke_use
-from ._view import CURVE_RATE_HZ, VIEW_RATE_HZ, ViewInput, load_view_input, view_html, write_view
+from ._view import (
+    CURVE_RATE_HZ,
+    VIEW_RATE_HZ,
+    ViewInput,
+    load_view_input,
+    rendered_shares,
+    view_html,
+    write_view,
+)
 
 __all__ = [
     "CURVE_RATE_HZ",
@@ -30,6 +38,7 @@ __all__ = [
     "ViewInput",
     "load_view_input",
     "parse_monitor",
+    "rendered_shares",
     "scene_from_poses",
     "scene_from_q",
     "stroke_use",

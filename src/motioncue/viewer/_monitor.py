@@ -133,8 +133,11 @@ class BridgeSource:
 
     can_stop = True
 
-    def __init__(self, bridge: Bridge) -> None:
+    def __init__(self, bridge: Bridge, info: Mapping[str, str] | None = None) -> None:
+        """``info``: fixed lines shown first in the page's table (e.g. ``{"cueing": "P at
+        intensity 50 %"}``)."""
         self.bridge = bridge
+        self.info = dict(info or {})
         self._stats: BridgeStats | None = None
         self._stats_at = -math.inf
 
@@ -162,6 +165,7 @@ class BridgeSource:
                 "jitter_ms": st.jitter_p99_ms,
             },
             "info": {
+                **self.info,
                 "frames sent": str(st.frames_sent),
                 "gain": f"{st.gain:.2f}",
                 "bad packets": str(st.bad_packets),
@@ -184,8 +188,10 @@ class PlaySource:
 
     can_stop = True
 
-    def __init__(self, duration_s: float) -> None:
+    def __init__(self, duration_s: float, info: Mapping[str, str] | None = None) -> None:
+        """``info``: fixed lines shown first in the page's table (e.g. the ride's cueing)."""
         self.duration_s = float(duration_s)
+        self.info = dict(info or {})
         self.stage: OutputStage | None = None
         self._stop = threading.Event()
         self.finished = False
@@ -202,7 +208,7 @@ class PlaySource:
     def snapshot(self) -> Mapping[str, Any]:
         stage = self.stage
         if stage is None:
-            return {"state": "starting"}
+            return {"state": "starting", "info": dict(self.info)}
         parked = bool(stage.parked)
         if parked and (stage.frames > 0 or self.finished):
             state = "parked"
@@ -216,6 +222,7 @@ class PlaySource:
             "t_s": float(stage.t_s),
             "state": state,
             "info": {
+                **self.info,
                 "frames sent": str(stage.frames),
                 "ride time": f"{min(stage.t_s, self.duration_s):.1f} of {self.duration_s:.1f} s",
                 "limiter changed": f"{stage.clamped_frames} frames",
@@ -753,6 +760,10 @@ function schedule() {
     });
   });
 }
+function esc(x) {
+  return String(x).replace(/[&<>"']/g, c => ({'&': '&amp;', '<': '&lt;', '>': '&gt;',
+                                              '"': '&quot;', "'": '&#39;'})[c]);
+}
 function fmt(x, d) { return (x === null || x === undefined) ? 'n/a' : x.toFixed(d); }
 function render(s) {
   const st = s.state || '?';
@@ -788,8 +799,9 @@ function render(s) {
     info += '<tr><th>delay (p50)</th><td>' + fmt(s.telemetry.delay_ms, 1) + ' ms</td></tr>';
     info += '<tr><th>jitter (p99)</th><td>' + fmt(s.telemetry.jitter_ms, 2) + ' ms</td></tr>';
   }
-  for (const [k, v] of Object.entries(s.info || {})) info += '<tr><th>' + k + '</th><td>' + v +
-                                                             '</td></tr>';
+  // info lines are the job's words (a preset's path among them): shown as text, not markup
+  for (const [k, v] of Object.entries(s.info || {})) info += '<tr><th>' + esc(k) + '</th><td>' +
+                                                             esc(v) + '</td></tr>';
   document.getElementById('info').innerHTML = info;
 }
 function connect() {

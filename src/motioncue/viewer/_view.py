@@ -20,7 +20,7 @@ from __future__ import annotations
 import html
 import json
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -28,6 +28,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from .._errors import ConfigError
+from ._cueing import describe_cueing
 from ._page import DRAW_JS, plotly_js, scene_layout
 from ._scene import Scene, scene_from_poses, scene_from_q
 
@@ -40,6 +41,7 @@ __all__ = [
     "VIEW_RATE_HZ",
     "ViewInput",
     "load_view_input",
+    "rendered_shares",
     "view_html",
     "write_view",
 ]
@@ -80,6 +82,12 @@ class ViewInput:
         The vehicle's perceived motion at the scene's times (m/s^2, rad/s; the cueing's
         input through the same vestibular models), when the ride was made from a recording
         that was found; zero outside the ride's cue frames.
+    notes : tuple of str
+        Lines the page shows under its title: the ride's cueing (preset and intensity,
+        :func:`motioncue.viewer._cueing.describe_cueing`) and, when the vehicle is not
+        drawn, why.
+    vehicle_window_s : (float, float) or None
+        Ride times (s) of the first and last recording sample drawn (the ride's cue).
     """
 
     scene: Scene
@@ -87,6 +95,8 @@ class ViewInput:
     title: str
     platform: Platform
     vehicle: NDArray[np.float64] | None = None
+    notes: tuple[str, ...] = ()
+    vehicle_window_s: tuple[float, float] | None = None
 
 
 def load_view_input(
@@ -135,8 +145,18 @@ def load_view_input(
         q = plat.drives.from_pulses(ride.pulses[idx])
         scene = scene_from_q(plat, ride.t_s[idx], q)
         title = f"{p.name}: {name} on {ride.controller}, {ride.rate_hz:g} Hz"
-        vehicle = _vehicle_perceived(ride, p, recording, scene.t_s)
-        return ViewInput(scene, rate, title, plat, vehicle)
+        vehicle, why, window = _vehicle_perceived(ride, p, recording, scene.t_s)
+        notes = [f"cueing: {describe_cueing(ride.notes)}"]
+        view = ViewInput(scene, rate, title, plat, vehicle, (), window)
+        if why:
+            notes.append(f"vehicle: not drawn: {why}")
+        else:
+            fx, fy = rendered_shares(view)
+            notes.append(
+                f"strength: the rider perceives {fx:.0%} of the vehicle's fx and {fy:.0%} of "
+                "its fy (rms over the cue; dotted: the vehicle, same scale)"
+            )
+        return replace(view, notes=tuple(notes))
     if recording is not None:
         raise ConfigError(f"{p}: --recording goes with a ride file, not a poses CSV")
     if platform is None:
@@ -161,25 +181,45 @@ def load_view_input(
 
 def _vehicle_perceived(
     ride: Ride, ride_path: Path, recording: str | Path | None, t_s: NDArray[np.float64]
-) -> NDArray[np.float64] | None:
-    """The vehicle's perceived motion at ``t_s`` (module docstring of ViewInput), or None.
+) -> tuple[NDArray[np.float64] | None, str, tuple[float, float] | None]:
+    """The vehicle's perceived motion at ``t_s`` (see :class:`ViewInput`), or ``None`` and
+    why it is not drawn (the page says so: a ride whose source is not found is still
+    shown), and the ride times of its first and last sample.
 
     The recording is resampled at the ride's rate and its sample ``j`` put on the ride's
-    frame ``cue_frames[0] + j`` (``generate``'s layout: ramp in, the cue, ramp out).
+    frame ``cue_frames[0] + j`` (``generate``'s layout: ramp in, the cue, ramp out). An
+    explicit ``recording`` that cannot be read is an error; the ride's own source, guessed
+    next to the ride file, is only a note.
     """
     from ..cueing import GRAVITY_M_S2, get_model_set
     from ..cueing._vestibular import DEFAULT_MODEL_SET
     from ..pipeline._inputs import load_generate_input
     from ..telemetry._recording import resample
 
+    given = recording is not None
     if recording is None:
-        guess = ride_path.parent / Path(str(ride.source)).name if ride.source else None
-        if guess is None or not guess.is_file():
-            return None
+        if not ride.source:
+            why = "the ride does not name the recording it was made from (give --recording)"
+            return None, why, None
+        guess = ride_path.parent / Path(str(ride.source)).name
+        if not guess.is_file():
+            why = (
+                f"the ride's source {Path(ride.source).name!r} is not next to the ride file "
+                "(give --recording PATH)"
+            )
+            return None, why, None
         recording = guess
-    kind, data, _ = load_generate_input(str(recording))
+    try:
+        kind, data, _ = load_generate_input(str(recording))
+    except ConfigError as exc:
+        if given:
+            raise
+        return None, f"the ride's source could not be read ({exc})", None
     if kind != "recording":
-        raise ConfigError(f"{recording}: not a recording of vehicle motion")
+        if given:
+            raise ConfigError(f"{recording}: not a recording of vehicle motion")
+        why = f"the ride's source {Path(recording).name!r} is pose keyframes, not a vehicle"
+        return None, why, None
     uniform = resample(data, ride.rate_hz)
     cue = ride.notes.get("cue_frames", [0, ride.n_frames])
     start = int(cue[0]) if isinstance(cue, list) and cue else 0
@@ -187,7 +227,8 @@ def _vehicle_perceived(
     rest = np.array([0.0, 0.0, GRAVITY_M_S2])
     pv = ms.filter(np.concatenate([uniform.f - rest, uniform.w], axis=1), ride.rate_hz)
     t_v = ride.t_s[min(start, ride.n_frames - 1)] + np.arange(pv.shape[0]) / ride.rate_hz
-    return np.column_stack([np.interp(t_s, t_v, pv[:, i], left=0.0, right=0.0) for i in range(6)])
+    out = np.column_stack([np.interp(t_s, t_v, pv[:, i], left=0.0, right=0.0) for i in range(6)])
+    return out, "", (float(t_v[0]), float(t_v[-1]))
 
 
 def _thin(n: int, rate_hz: float) -> tuple[NDArray[np.intp], float]:
@@ -201,6 +242,33 @@ def _thin(n: int, rate_hz: float) -> tuple[NDArray[np.intp], float]:
 
 def _step(rate_hz: float, cap_hz: float) -> int:
     return max(1, math.ceil(rate_hz / cap_hz - 1e-9))
+
+
+def rendered_shares(
+    view: ViewInput, perceived: NDArray[np.float64] | None = None
+) -> tuple[float, float]:
+    """Rendered share of fx and fy the page shows: rms of the rider's perceived specific force
+    over rms of the vehicle's, on the samples where the vehicle is drawn (the ride's cue; the
+    definition of ``motioncue.cueing._metrics``); NaN without a vehicle or where it is still.
+
+    Parameters
+    ----------
+    view : ViewInput
+    perceived : (N, 6) array, optional
+        The rider's perceived motion at the scene's samples (computed when not given).
+    """
+    if view.vehicle is None:
+        return math.nan, math.nan
+    if perceived is None:
+        perceived, _ = _perceived(view.scene, view.rate_hz)
+    t = view.scene.t_s
+    lo, hi = view.vehicle_window_s or (float(t[0]), float(t[-1]))
+    inside = (t >= lo) & (t <= hi)
+    out = []
+    for j in range(2):
+        v, r = view.vehicle[inside, j], perceived[inside, j]
+        out.append(math.sqrt(float(r @ r) / float(v @ v)) if np.any(v) else math.nan)
+    return out[0], out[1]
 
 
 def _perceived(scene: Scene, rate_hz: float) -> tuple[NDArray[np.float64], str]:
@@ -284,11 +352,12 @@ def _curves(view: ViewInput) -> dict[str, Any]:
                line={"width": 1.6, "color": AXIS_COLOURS[j]},
                legendgroup="f", row=2, col=1)  # fmt: skip
     if view.vehicle is not None:  # the vehicle beside the rider, same scale: the strength
+        shares = rendered_shares(view, perceived)
         for j, axis in enumerate(("fx", "fy")):
-            v, r = view.vehicle[:, j], perceived[:, j]
-            share = math.sqrt(float(r @ r) / float(v @ v)) if np.any(v) else math.nan
-            series(v, 1e3, name=f"vehicle {axis} (m/s²; rider gets {share:.0%} of it)",
-                   line={"width": 1.0, "dash": "dot"}, legendgroup="veh", row=2, col=1)  # fmt: skip
+            series(view.vehicle[:, j], 1e3,
+                   name=f"vehicle {axis} (m/s²; rider gets {shares[j]:.0%} of it)",
+                   line={"width": 1.2, "dash": "dot", "color": AXIS_COLOURS[j]},
+                   legendgroup="veh", row=2, col=1)  # fmt: skip
     for j, axis in enumerate(("roll rate", "pitch rate", "yaw rate")):
         series(np.degrees(perceived[:, 3 + j]), 1e2, name=f"{axis} (deg/s)",
                line={"width": 1.6, "color": AXIS_COLOURS[j]},
@@ -325,6 +394,7 @@ def view_html(view: ViewInput) -> str:
         idx = np.append(idx, n - 1)
     data = {
         "title": view.title,
+        "notes": list(view.notes),
         "t": np.round(scene.t_s[idx], 3).tolist(),
         "legs": int(scene.top.shape[1]),
         **_packed(scene, idx),
@@ -333,8 +403,9 @@ def view_html(view: ViewInput) -> str:
     }
     blob = json.dumps(data, separators=(",", ":"), allow_nan=False).replace("</", "<\\/")
     title = html.escape(view.title)
+    notes = "".join(f'<div class="note">{html.escape(line)}</div>' for line in view.notes)
     return _TEMPLATE.format(
-        title=title, plotly=plotly_js(), draw=DRAW_JS, data=blob, script=_SCRIPT
+        title=title, notes=notes, plotly=plotly_js(), draw=DRAW_JS, data=blob, script=_SCRIPT
     )
 
 
@@ -379,10 +450,12 @@ body {{ font-family: sans-serif; margin: 8px; }}
 #curves {{ width: 52%; height: 640px; }}
 #bar {{ display: flex; align-items: center; gap: 10px; margin: 6px 0; }}
 #slider {{ flex: 1; }}
+.note {{ font-size: 13px; color: #333; margin: 2px 0; }}
 </style>
 <script>{plotly}</script>
 </head><body>
 <div><b>motioncue view</b>: {title}</div>
+<div id="notes">{notes}</div>
 <div id="bar"><button id="play">play</button>
 <input id="slider" type="range" min="0" value="0" step="1">
 <span id="time">0.00 s</span></div>
