@@ -36,24 +36,25 @@ a car driving forward reports a negative ``sLocalVelocity[2]``; the left wheels'
 (``sRideHeight[0]``, ``[2]``: FL, FR, RL, RR) rises when ``sLocalAcceleration[0]`` is
 positive (the car rolls outward, away from +x: +x is the inside of the turn, the left in a
 left turn). ``sAngularVelocity`` holds the components of the physical (right-hand rule)
-angular velocity in that frame: in the captures the local acceleration equals
-``d(v)/dt - w x v`` (the cross product's component formula changes sign in a left-handed
-frame), correlations 0.93 (x) and 0.96 (z). The ISO 8855 axes are ``forward = -z``,
-``left = x``, ``up = y`` (a reflection, determinant -1, which the pseudovector ``w`` follows
-like a vector because the game's components already are the physical ones)::
+angular velocity in that frame: the local acceleration equals ``d(v)/dt - w x v`` (the
+cross product's component formula changes sign in a left-handed frame), correlations 0.93
+(x) and 0.96 (z) on the whole Automobilista 2 capture. The ISO 8855 axes are
+``forward = -z``, ``left = x``, ``up = y`` (a reflection, determinant -1, which the
+pseudovector ``w`` follows like a vector because the game's components already are the
+physical ones)::
 
     a_iso = (-a_z, a_x, a_y)        w_iso = (-w_z, w_x, w_y)
 
-The local acceleration is kinematic (gravity excluded; the captures' mean of
+The local acceleration is kinematic (gravity excluded; the Automobilista 2 capture's mean of
 ``sLocalAcceleration[1]`` is 0.1 m/s^2); gravity is added back from the attitude.
 ``sOrientation = (theta, psi, phi)`` rotates local vectors into the world (y up) as the
 component matrices ``Ry(psi) Rx(theta) Rz(phi)``: ``sWorldVelocity`` equals that rotation of
-``sLocalVelocity`` to 0.05 % of the speed in the captures. World up in the local frame is
+``sLocalVelocity`` to 0.05 % of the speed (median) in the captures. World up in the local frame is
 therefore ``(sin(phi) cos(theta), cos(phi) cos(theta), -sin(theta))``, in ISO axes
 ``(sin(theta), sin(phi) cos(theta), cos(phi) cos(theta))``: ISO pitch (nose down +) is
 ``-theta`` and ISO roll (right side down +) is ``phi``. On the captures f_x follows the
 derivative of the speed, the yaw rate the heading's rate and f_y the speed times the yaw
-rate, with the slopes and correlations the tests pin (``tests/test_pcars2.py``).
+rate, with the slopes and correlations the tests pin (``tests/test_pcars2_capture.py``).
 """
 
 from __future__ import annotations
