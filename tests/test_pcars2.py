@@ -45,9 +45,10 @@ def test_golden_packet_decodes_by_hand() -> None:
     assert len(data) == TELEMETRY_SIZE == 559
     s = decoder_for("pcars2").feed(data, 5.0)
     assert s is not None and s.game == "pcars2" and s.t_s == 5.0 and not s.paused
-    # a_iso = (-a_z, -a_x, a_y) plus gravity (level: +G0 up); w_iso = (-w_z, -w_x, w_y)
-    assert s.f == pytest.approx((-2.0, -0.5, -0.25 + G0_M_S2), abs=1e-12)
-    assert s.w == pytest.approx((-0.25, -0.125, -0.5), abs=1e-12)
+    # local x left, y up, z back: a_iso = (-a_z, a_x, a_y) plus gravity (level: +G0 up);
+    # w_iso = (-w_z, w_x, w_y)
+    assert s.f == pytest.approx((-2.0, 0.5, -0.25 + G0_M_S2), abs=1e-12)
+    assert s.w == pytest.approx((-0.25, 0.125, -0.5), abs=1e-12)
     assert s.rpm == 6500.0 and s.rpm_max == 8200.0 and s.gear == 3
     assert s.suspension_velocity_m_s == pytest.approx((0.1, -0.2, 0.3, -0.4))
 
@@ -62,11 +63,12 @@ def test_golden_packet_is_packed_back_bit_for_bit() -> None:
 @pytest.mark.parametrize(
     ("orientation", "expected"),
     [
-        # rotation about +x (right) by +0.2 lifts the nose (forward = -z turns towards +y):
+        # rotation about +x (left) by +0.2 lifts the nose (forward = -z turns towards +y):
         # world up leans towards the body's forward axis, so f leans forward
         ((0.2, 0.0, 0.0), (math.sin(0.2), 0.0, math.cos(0.2))),
-        # rotation about +z (backward) by +0.3 lifts the right side: f leans to the right
-        ((0.0, 0.0, 0.3), (0.0, -math.sin(0.3), math.cos(0.3))),
+        # rotation about +z (backward) by +0.3 turns +x (the left side) towards +y: the left
+        # side rises (ISO roll +0.3, right side down), world up leans left, so does f
+        ((0.0, 0.0, 0.3), (0.0, math.sin(0.3), math.cos(0.3))),
     ],
 )
 def test_attitude_adds_gravity(
@@ -157,7 +159,7 @@ def test_gravity_only_rotates_and_rates_keep_their_norm(
 ) -> None:
     s = PCars2Decoder().feed(_golden(acc=acc, ang=ang, orientation=(pitch, 0.0, roll)), 0.0)
     assert s is not None
-    a_iso = (-acc[2], -acc[0], acc[1])
+    a_iso = (-acc[2], acc[0], acc[1])
     g = [fi - ai for fi, ai in zip(s.f, a_iso, strict=True)]
     assert math.sqrt(sum(x * x for x in g)) == pytest.approx(G0_M_S2, rel=1e-6)
     assert math.hypot(*s.w) == pytest.approx(math.hypot(*ang), rel=1e-6, abs=1e-9)

@@ -9,7 +9,9 @@ without naming a controller kind; the emulators check frames with the same numbe
 
 Adding a controller kind is one package whose config reader returns an object satisfying
 :class:`Controller`, plus one :func:`~motioncue.output.register_controller_kind` call
-declaring what the kind can do (:class:`~motioncue.output.ControllerKind`).
+declaring what the kind can do (:class:`~motioncue.output.ControllerKind`), including what
+ends a session on its link once the park is confirmed (``end_of_run``: an interface
+string's stop string; other kinds end with the park frames).
 """
 
 from __future__ import annotations

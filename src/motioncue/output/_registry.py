@@ -20,6 +20,9 @@ inspect             ``inspect`` (split a raw capture, one line per message)
 transport_options   ``send`` (extra ``open_transport`` options, e.g. a source port)
 refusals            frame-reply codes for the link watch (which refusals are flow
                     control, what each means)
+end_of_run          ``play``, ``bridge``: bytes sent once the park is confirmed, on
+                    every way out where the link still works (an interface
+                    string's stop string; :func:`end_of_run_messages`)
 ==================  ==============================================================
 
 What depends on one controller's parameters (its axes, rates, limits, encoder, the
@@ -63,6 +66,7 @@ __all__ = [
     "Refusals",
     "controller_kind",
     "controller_kinds",
+    "end_of_run_messages",
     "for_type",
     "register_controller_kind",
 ]
@@ -113,6 +117,9 @@ SendVerb = Callable[..., int]
 """``(controller, transport, word, args, *, who, save, out)`` -> exit status."""
 
 TransportOptions = Callable[["Controller", "TransportURL"], "dict[str, object]"]
+
+EndOfRun = Callable[["Controller"], "Sequence[bytes]"]
+"""``(controller) -> messages`` sent after the park (none: an empty sequence)."""
 
 
 @dataclass(frozen=True)
@@ -206,6 +213,11 @@ class ControllerKind:
         ``(controller, url) -> dict`` of extra ``open_transport`` options.
     refusals : Refusals or None
         Meaning of refused-frame replies (None: the kind refuses no frames on the link).
+    end_of_run : callable or None
+        ``(controller) -> messages``: what ends a session on the link, sent by the player
+        and the bridge once the park is confirmed (after the last park frame), also after
+        an error or a signal, but not when the park itself could not be sent (None: the
+        kind ends with the park frames).
     """
 
     name: str
@@ -220,6 +232,7 @@ class ControllerKind:
     inspect: Inspection | None = None
     transport_options: TransportOptions = field(default=_no_options)
     refusals: Refusals | None = None
+    end_of_run: EndOfRun | None = None
 
     def __post_init__(self) -> None:
         if not (self.name and self.name.isidentifier() and self.name.islower()):
@@ -368,3 +381,15 @@ def controller_kind(name: str) -> ControllerKind:
         kind = _resolve_lazy(name, entry)
         _kinds[name] = kind
         return kind
+
+
+def end_of_run_messages(controller: Controller) -> list[bytes]:
+    """What ``controller``'s kind sends once the park is confirmed (its ``end_of_run``);
+    none for a kind without one, or for a controller of no registered kind (a stand-in)."""
+    try:
+        kind = controller_kind(controller.kind)
+    except ConfigError:
+        return []
+    if kind.end_of_run is None:
+        return []
+    return [bytes(m) for m in kind.end_of_run(controller) if m]

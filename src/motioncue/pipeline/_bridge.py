@@ -665,6 +665,7 @@ class Bridge:
 
             try:
                 confirm_park(self.stage)
+                self._end_run()
                 self._state = "stopped"
             except ParkFailed as exc:
                 self._error = str(exc)
@@ -682,12 +683,22 @@ class Bridge:
         try:
             park_stage(self.stage, wait=lambda slot: ticker.wait())
             nothing_moved = confirm_park(self.stage)
+            self._end_run()
             if nothing_moved is not None:
                 self._error = f"{self._error}; {nothing_moved}"
         except BaseException as exc:
             self._error = f"{exc}; the loop had failed with {self._error}"
         self._missed = ticker.missed
         self._park_err = float(np.max(np.abs(self.stage.q - np.asarray(self._q_park))))
+
+    def _end_run(self) -> None:
+        """After the confirmed park: the controller kind's end-of-run messages (the stop
+        string of an interface-string board); a failure to send them is noted."""
+        from ._stream import end_run
+
+        before = len(self.stage.notes)
+        end_run(self.stage)
+        self._notes.extend(self.stage.notes[before:])
 
     def _parked_after_stop(self, stop_ticks: int) -> bool:
         """Both loops after a stop: True once the gate and the stage are parked; an error

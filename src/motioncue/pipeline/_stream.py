@@ -51,6 +51,7 @@ from .._errors import (
     TransportError,
 )
 from ..output._feedback import LinkWatch, describe_refusal, is_flow_control, read_position
+from ..output._registry import end_of_run_messages
 from ..output._transport_serial import SerialTransport
 from ..output._transports_udp import UdpTransport
 from ..trajectory import JerkLimiter, JerkLimiterState, LimiterState, RealtimeLimiter
@@ -577,6 +578,32 @@ def confirm_park(stage: OutputStage, *, paced: bool = True, tries: int = 50) -> 
     )
 
 
+def end_run(stage: OutputStage) -> bool:
+    """End the session on the link once the park is confirmed: send the controller kind's
+    end-of-run messages (an interface string's stop string; none for most kinds).
+
+    Called by the player and the bridge after :func:`park_stage` and :func:`confirm_park`
+    succeeded, on every way out (end, stop, signal, error) where the link still works; never
+    before the park, never after a failed one. A message the link refuses is noted in
+    ``stage.notes`` (the platform is parked all the same).
+
+    Returns
+    -------
+    bool
+        True when every message was sent (or there was none).
+    """
+    try:
+        for msg in end_of_run_messages(stage.controller):
+            stage.transport.send(msg, t_s=stage.t_s)
+    except Exception as exc:  # the platform is parked: nothing here may turn that into a crash
+        stage.notes.append(
+            f"end of run: the stop string could not be sent ({type(exc).__name__}: {exc}); "
+            "the platform is parked"
+        )
+        return False
+    return True
+
+
 def receiver_throttle(
     received: Callable[[], int], ahead: int = 200, timeout_s: float = 5.0
 ) -> Callable[[int], None]:
@@ -811,6 +838,7 @@ def play_ride(
         try:
             park_stage(stage, wait=wait if paced else None)
             nothing_moved = confirm_park(stage, paced=paced)
+            end_run(stage)  # the park is confirmed: the stop string, if the kind has one
         except ParkFailed as exc:
             park_error = exc
         park = stage.frames - frames_before

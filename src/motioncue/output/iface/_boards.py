@@ -53,6 +53,9 @@ class Smc3Parser(BoardParser):
         self._in = False
         self._targets = [512, 512, 512]
         self.enabled = False
+        self.frames_done = 0
+        self.command_log: list[tuple[str, int]] = []
+        """Each command word other than a target, with the frames completed before it."""
 
     def feed(self, data: bytes) -> list[tuple[int, ...]]:
         out: list[tuple[int, ...]] = []
@@ -80,11 +83,13 @@ class Smc3Parser(BoardParser):
                 self._targets[cmd - 0x41] = value
                 if cmd == 0x43:
                     out.append(tuple(self._targets))
+                    self.frames_done += 1
             else:
                 word = bytes(self._buf).decode("latin-1")
                 if word == "ena":
                     self.enabled = True
                 self.commands[word] += 1
+                self.command_log.append((word, self.frames_done))
         return out
 
 

@@ -43,7 +43,9 @@ class IfaceController:
         Which board parser its emulator uses (``smc3``, ``ehmsc4``, ``odrive6``,
         ``decimal6``; ``none``: no emulator).
     start_bytes, stop_bytes : bytes
-        Sent before the first frame / by :meth:`stop_frame` (e.g. SMC3 ``[ena]``).
+        Sent before the first frame (e.g. SMC3 ``[ena]``) / once after the park, by the
+        kind's end-of-run step (``ControllerKind.end_of_run``: ``play`` and ``bridge`` on
+        every way out where the park was sent).
     link_kind : str
         ``serial`` or ``udp``.
     baud : int or None
@@ -183,7 +185,7 @@ class IfaceController:
         return IfaceEncoder(self)
 
     def stop_frame(self) -> bytes:
-        """The stop string (sent after the park by a sender that ends the session)."""
+        """The stop string (what the kind's end-of-run step sends after the park)."""
         return self.stop_bytes
 
 

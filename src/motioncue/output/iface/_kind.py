@@ -26,6 +26,12 @@ def _emulator(controller: Controller, url: TransportURL, homing_time_s: float) -
     return IfaceEmulator(controller, url.host, url.port)
 
 
+def _end_of_run(controller: Controller) -> list[bytes]:
+    """The stop string (``stop`` in the TOML), sent after the park; none when empty."""
+    stop = getattr(controller, "stop_bytes", b"")
+    return [stop] if stop else []
+
+
 KIND = ControllerKind(
     "iface",
     controller_from_config,
@@ -33,4 +39,5 @@ KIND = ControllerKind(
     links=("serial", "udp", "file"),
     emulator=_emulator,
     emulator_schemes=("udp",),
+    end_of_run=_end_of_run,
 )
