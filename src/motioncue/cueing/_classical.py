@@ -96,6 +96,16 @@ Signal flow (per sample; frames, signs and units of conventions.md)
    filters (``R = R_t``). The gravity of the rotational channel's angles is still
    compensated as above.
 
+   **Lag fill** (``tilt_lag_fill = k``, with the additive tilt). The rate (and
+   acceleration) limit delays the tilt behind its target ``(roll*, pitch*)`` (step 2 before
+   those limits). The translation's target then also carries ``k`` times the difference of
+   the two tilts' gravity, ``a = R (f_s + g_t + k (g_t* - g_t)) - [0, 0, g]``, so that (to
+   first order, within the translational high-pass) the rider feels ``f_s + g_t + k (g_t* -
+   g_t)``: the tilt's force sooner at an onset, its late return countered. With ``f_s =
+   0`` (``f_scale`` z too), no rotational cue and pure pitch it is exactly
+   ``a_x = g (cos(pitch) (-(1-k) sin(pitch) - k sin(pitch*)) + sin(pitch) ((1-k) cos(pitch)
+   + k cos(pitch*))) = -k g sin(pitch* - pitch)``.
+
    **Head offset.** With the rider's head at ``h = head_offset_m`` (platform frame, from the
    platform origin), a platform whose origin has specific force ``f_o`` (platform frame) and
    which turns with body angular velocity ``W`` and acceleration ``W'`` gives the head
@@ -588,6 +598,7 @@ class ClassicalWashout:
         hx, hy, hz = p.head_offset_m
         head = hx != 0.0 or hy != 0.0 or hz != 0.0
         additive = p.tilt_additive
+        lagk = p.tilt_lag_fill
         mx, my, mz, mr, mp, myaw = (1.0 if d else 0.0 for d in p.dofs)
         lb0, lb1, lb2, _, la1, la2 = self.tilt_lp
         r0, r1, r2 = self.rot
@@ -705,6 +716,8 @@ class ClassicalWashout:
                     tp = soft(tp, tl, knee)
                 if tr > atl or tr < -atl:
                     tr = soft(tr, tl, knee)
+            ttr = tr * mr  # the tilt's target (for the lag the translation fills)
+            ttp = tp * mp
             tilt = state.tilt
             if mix is not None:
                 trate = state.tilt_rate
@@ -774,6 +787,11 @@ class ClassicalWashout:
                 hfx = sx - g * sin(tp)
                 hfy = sy + g * sin(tr) * ctp
                 hfz = fzs + g * (cos(tr) * ctp - 1.0)
+                if lagk > 0.0:  # 4b. and a share of its lag behind its target
+                    ctt = cos(ttp)
+                    hfx = hfx - lagk * g * (sin(ttp) - sin(tp))
+                    hfy = hfy + lagk * g * (sin(ttr) * ctt - sin(tr) * ctp)
+                    hfz = hfz + lagk * g * (cos(ttr) * ctt - cos(tr) * ctp)
             if head:
                 # f_o = f_s - W' x h - W x (W x h), W and W' by backward differences
                 att = state.attitude
@@ -978,6 +996,7 @@ class ClassicalWashout:
             tr = soft_limit_array(tr, p.tilt_limit_rad, knee)
         fs = self.fs_hz
         st = p.tilt_rate_limit_rad_s / fs
+        ttr, ttp = tr, tp  # the tilt's target (for the lag the translation fills)
         if p.tilt_rate_mix is not None:
             sa = 0.0 if p.tilt_accel_limit_rad_s2 is None else p.tilt_accel_limit_rad_s2 / fs**2
             tr, tp = _rate_mix_array(
@@ -1019,6 +1038,14 @@ class ClassicalWashout:
             hfx = sx - g * np.sin(tp)
             hfy = sy + g * np.sin(tr) * ctp
             hfz = fzs + g * (np.cos(tr) * ctp - 1.0)
+            lagk = p.tilt_lag_fill
+            if lagk > 0.0:  # 4b. and a share of its lag behind its target
+                ttr = ttr * mr
+                ttp = ttp * mp
+                ctt = np.cos(ttp)
+                hfx = hfx - lagk * g * (np.sin(ttp) - np.sin(tp))
+                hfy = hfy + lagk * g * (np.sin(ttr) * ctt - np.sin(tr) * ctp)
+                hfz = hfz + lagk * g * (np.cos(ttr) * ctt - np.cos(tr) * ctp)
         hx, hy, hz = p.head_offset_m
         if (hx != 0.0 or hy != 0.0 or hz != 0.0) and n:
             # the same operations as step, on arrays (backward differences from the state)

@@ -1,11 +1,13 @@
-"""The joint rate limit of roll and pitch (``[tilt] rate_mix``, issue 20).
+"""The tilt's lag (issue 20): the joint rate limit of roll and pitch (``[tilt] rate_mix``)
+and the share of the tilt's lag the translation renders (``[tilt] lag_fill``).
 
 A hexapod's legs feel roll and pitch rates together: in some legs they add. One box limit
 per axis is either slow for a pure tilt or too fast for both at once (the actuators' speed:
 the limiter then changes frames). With rows ``(a_k, b_k)`` the tilt is kept to
 ``max_k(a_k |roll'| + b_k |pitch'|) <= rate_limit``. Oracles: the closed-form ramp of a
 step (slope ``r / max_k a_k`` for roll alone, ``r / max_k(a_k + b_k)`` for a diagonal step),
-the invariant on random targets, batch against streaming, the TOML round trip.
+the invariant on random targets, batch against streaming, the TOML round trip. Lag fill: the
+translational filter's input against its closed form ``-k g sin(pitch* - pitch)``.
 """
 
 from __future__ import annotations
@@ -136,3 +138,73 @@ def test_toml_round_trip_and_bad_rows(tmp_path: Path) -> None:
     path.write_text(bad)
     with pytest.raises(ConfigError, match="rate_mix"):
         load_cueing(path)
+
+
+# -- the lag fill ([tilt] lag_fill): the translation renders a share of the tilt's lag --------
+def _braking(n: int = 600) -> tuple[np.ndarray, np.ndarray]:
+    f = np.tile([0.0, 0.0, G], (n, 1))
+    f[50:150, 0] = -20.0  # a 1 s stop of 2 g
+    return f, np.zeros((n, 3))
+
+
+def _fill(k: float, **kw: object) -> CueingParams:
+    return _params(
+        tilt_additive=True,
+        tilt_lag_fill=k,
+        f_scale=(0.0, 0.0, 0.0),
+        w_scale=(0.0, 0.0, 0.0),
+        tilt_scale=(0.12, 0.12),
+        trans_wb_rad_s=(0.0, 0.0, 1.0),
+        **kw,
+    )
+
+
+@pytest.mark.parametrize("k", [0.4, 1.0])
+def test_lag_fill_feeds_the_translation_minus_k_g_sin_of_the_lag(k: float) -> None:
+    """Closed form (pure pitch, no translational force): the translational filter's input is
+    ``a_x = -k g sin(pitch* - pitch)``; ``pitch*`` is the tilt without its rate limit (a
+    second run with a limit it never reaches), ``pitch`` the delivered tilt."""
+    from scipy.signal import sosfilt
+
+    f, w = _braking()
+    design = ClassicalWashout(_fill(k), FS)
+    res = design.run(f, w)
+    free = ClassicalWashout(_fill(k, tilt_rate_limit_rad_s=1e3, tilt_rate_mix=None), FS)
+    target = free.run(f, w).tilt[:, 1]
+    lag = target - res.tilt[:, 1]
+    assert np.abs(lag).max() > math.radians(3.0)  # the rate limit does delay the tilt
+    a_x = -k * G * np.sin(lag)
+    x = sosfilt(np.array(design.trans[0]), a_x)
+    np.testing.assert_allclose(res.poses[:, 0], x, rtol=0, atol=1e-9)
+    # and nothing else moves: no lateral or vertical translation from a pure pitch
+    assert np.abs(res.poses[:, 1]).max() < 1e-12
+    # without the fill the additive translation stays at neutral (its own force is 0)
+    still = ClassicalWashout(_fill(0.0), FS).run(f, w)
+    assert np.abs(still.poses[:, :3]).max() < 1e-12
+    # the fill's cue has the vehicle's sign at the onset: forward surge (-x is back) while
+    # the nose comes up late: the braking force (fx < 0) is rendered by a = x'' < 0
+    onset = slice(50, 60)
+    assert (a_x[onset] <= 0.0).all() and a_x[onset].min() < -0.1
+
+
+def test_lag_fill_batch_equals_streaming() -> None:
+    from test_cueing_classical import random_drive
+
+    p = replace(_fill(0.6), f_scale=(0.05, 0.1, 0.1), w_scale=(0.3, 0.3, 0.1), lead_s=(0.05, 0.02))
+    design = ClassicalWashout(p, FS)
+    f, w = random_drive(2500, seed=5)
+    res = design.run(f, w)
+    state = design.initial_state()
+    stream = np.array([design.step(state, a, b, None) for a, b in zip(f.tolist(), w.tolist(),
+                                                                      strict=True)])  # fmt: skip
+    np.testing.assert_allclose(stream, res.poses, rtol=0, atol=1e-12)
+
+
+def test_lag_fill_needs_the_additive_tilt_and_round_trips(tmp_path: Path) -> None:
+    with pytest.raises(ConfigError, match="tilt_lag_fill"):
+        _params(tilt_lag_fill=0.5)
+    with pytest.raises(ConfigError, match="tilt_lag_fill"):
+        _fill(1.5)
+    path = tmp_path / "fill.toml"
+    path.write_text(preset_toml(_fill(0.35)))
+    assert load_cueing(path).tilt_lag_fill == pytest.approx(0.35, rel=1e-15)
