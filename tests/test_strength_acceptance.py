@@ -16,8 +16,8 @@ until issue 20, tuned for the cue score; the default is now ``racing-hexapod-fir
   fewer missed cues.
 
 The held-out drives (README "Cue quality", tests/test_strong_held_out.py) are why it is not
-the default (``racing-hexapod-firm`` is): on flowing-formula its fx correlation is 0.89 (the default's 0.95) and its
-reversals 4 %.
+the default (``racing-hexapod-firm`` is): on flowing-formula its fx correlation is 0.89 (the
+old default's 0.95) and its reversals 4 %.
 """
 
 from __future__ import annotations
