@@ -4,8 +4,9 @@ On the bundled lap (the demo's; never tuned on), ``stewart6-linear`` with ``mbox
 the chain of ``motioncue compare`` (cueing, workspace limiting, the actuator limiter, forward
 kinematics of changed frames, vestibular models), with the definitions of
 :mod:`motioncue.cueing._metrics`, ``racing-hexapod-strong`` (the compressive washout tuned
-with ``motioncue tune --objective strength``) against ``racing-hexapod`` (the default,
-tuned for the cue score before issue 20):
+with ``motioncue tune --objective strength``) against ``racing-hexapod`` (the default
+until issue 20, tuned for the cue score; the default is now ``racing-hexapod-firm``,
+``tests/test_default_held_out.py``):
 
 * what the issue asks and the strong preset meets on the lap: reversals <= 2 %, all false
   cues <= 15 %, correlation fx >= 0.95 and fy >= 0.90, clamped <= 1 %, missed <= 35 %;
@@ -15,8 +16,8 @@ tuned for the cue score before issue 20):
   fewer missed cues.
 
 The held-out drives (README "Cue quality", tests/test_strong_held_out.py) are why it is not
-the default: on flowing-formula its fx correlation is 0.89 (the default's 0.95) and its
-reversals 4 %.
+the default (``racing-hexapod-firm`` is): on flowing-formula its fx correlation is 0.89 (the
+old default's 0.95) and its reversals 4 %.
 """
 
 from __future__ import annotations

@@ -4,10 +4,12 @@ Every held-out car drive (``sample_drives("held-out", kind="car")``) and the bun
 (``"demo"``), ``stewart6-linear`` with ``mbox6``, through the chain of ``motioncue compare``
 (cueing, workspace limiting, the actuator limiter, forward kinematics of the changed frames,
 vestibular models; definitions of :mod:`motioncue.cueing._metrics`, ``docs/cue-metrics.md``).
-One module-scoped fixture runs each drive once. The platform's default (``racing-hexapod``)
-is held to issue 11's figures by ``tests/test_cue_acceptance.py``; this preset is the
-stronger one a rider chooses with ``--preset`` (README "Cue quality"), and every frame of its
-rides is checked on the controller's clock by ``tests/test_intensity.py``.
+One module-scoped fixture runs each drive once. The platform's default
+(``racing-hexapod-firm`` since issue 20) is held to issue 11's figures by
+``tests/test_cue_acceptance.py`` and to its held-out figures by
+``tests/test_default_held_out.py``; this preset is the stronger one a rider chooses with
+``--preset`` (README "Cue quality"), and every frame of its rides is checked on the
+controller's clock by ``tests/test_intensity.py``.
 
 Asserted at the issue's thresholds on every drive: all false cues <= 15 %, clamped <= 1 %,
 correlation fy >= 0.90, missed fy <= 35 %; and, on every drive but flowing-formula,

@@ -54,6 +54,12 @@ Signal flow (per sample; frames, signs and units of conventions.md)
    (backward difference) at most ``a``; a step in the target gives the time-optimal
    trapezoid (or triangle) under both limits, to within one sample (an overshoot below
    ``a/fs^2`` where braking would have to start between two samples).
+   With ``tilt_rate_mix`` (rows ``(a_k, b_k)``) roll and pitch are also rate limited
+   together (:func:`rate_mix_step`): the per-axis steps ``(u_r, u_p)`` above are scaled by
+   one factor ``c = min(1, (r/fs) / max_k(a_k |u_r| + b_k |u_p|))``, which keeps the
+   ratio of the two steps, and then (with the acceleration limit) clipped again to
+   ``u[n-1] +- d`` per axis. So ``max_k(a_k |roll'| + b_k |pitch'|) <= r`` up to that clip (at most
+   ``max_k(a_k + b_k) a / fs`` more, only while braking from a faster joint rate).
 3. **Rotational channel.** Body rates are turned into Euler-angle rates
    ``e = T(beta) w_s`` (ZYX: ``roll' = p + tan(pitch)(q sin(roll) + r cos(roll))``,
    ``pitch' = q cos(roll) - r sin(roll)``, ``yaw' = (q sin(roll) + r cos(roll))/cos(pitch)``),
@@ -89,6 +95,16 @@ Signal flow (per sample; frames, signs and units of conventions.md)
    its own cue: with ``f_s = 0`` and no rotational cue nothing reaches the translational
    filters (``R = R_t``). The gravity of the rotational channel's angles is still
    compensated as above.
+
+   **Lag fill** (``tilt_lag_fill = k``, with the additive tilt). The rate (and
+   acceleration) limit delays the tilt behind its target ``(roll*, pitch*)`` (step 2 before
+   those limits). The translation's target then also carries ``k`` times the difference of
+   the two tilts' gravity, ``a = R (f_s + g_t + k (g_t* - g_t)) - [0, 0, g]``, so that (to
+   first order, within the translational high-pass) the rider feels ``f_s + g_t + k (g_t* -
+   g_t)``: the tilt's force sooner at an onset, its late return countered. With ``f_s =
+   0`` (``f_scale`` z too), no rotational cue and pure pitch it is exactly
+   ``a_x = g (cos(pitch) (-(1-k) sin(pitch) - k sin(pitch*)) + sin(pitch) ((1-k) cos(pitch)
+   + k cos(pitch*))) = -k g sin(pitch* - pitch)``.
 
    **Head offset.** With the rider's head at ``h = head_offset_m`` (platform frame, from the
    platform origin), a platform whose origin has specific force ``f_o`` (platform frame) and
@@ -139,7 +155,13 @@ from ._filters import (
 )
 from ._params import GRAVITY_M_S2, LEAD_GAIN, CueingParams
 
-__all__ = ["ClassicalWashout", "WashoutResult", "WashoutState", "rate_accel_limit_step"]
+__all__ = [
+    "ClassicalWashout",
+    "WashoutResult",
+    "WashoutState",
+    "rate_accel_limit_step",
+    "rate_mix_step",
+]
 
 _IDENTITY: Section = (1.0, 0.0, 0.0, 1.0, 0.0, 0.0)
 _MIN_COS_PITCH = 1e-3
@@ -166,7 +188,7 @@ class WashoutState:
         Last good input ``[fx, fy, fz, wx, wy, wz]`` (used for bad samples).
     tilt_rate : list of 2 floats
         Tilt rate ``[roll, pitch]`` (rad/s) of the last sample (kept when the tilt is
-        acceleration limited).
+        acceleration limited or has the joint rate limit ``tilt_rate_mix``).
     attitude : list of 3 floats
         Output ``[roll, pitch, yaw]`` (rad) of the last sample (kept with a head offset).
     omega : list of 3 floats
@@ -286,6 +308,111 @@ def rate_accel_limit_step(
     elif u > hi:
         u = hi
     return u
+
+
+def rate_mix_step(
+    u_roll: float,
+    u_pitch: float,
+    prev_roll: float,
+    prev_pitch: float,
+    rows: Sequence[tuple[float, float]],
+    step_max: float,
+    accel_step: float,
+) -> tuple[float, float]:
+    """The joint rate limit of roll and pitch (``tilt_rate_mix``, step 2 above).
+
+    Parameters
+    ----------
+    u_roll, u_pitch : float
+        This sample's steps of each axis alone (rad), from its own rate (and acceleration)
+        limit.
+    prev_roll, prev_pitch : float
+        The previous sample's steps (rad).
+    rows : sequence of (a, b)
+        Weights of ``|u_roll|`` and ``|u_pitch|``, each >= 0.
+    step_max : float
+        ``rate_limit / fs`` (rad), > 0.
+    accel_step : float
+        ``accel_limit / fs^2`` (rad); 0 without an acceleration limit.
+
+    Returns
+    -------
+    (float, float)
+        The steps ``c * (u_roll, u_pitch)`` with ``c = min(1, step_max / max_k(a_k |u_roll|
+        + b_k |u_pitch|))``, then (``accel_step > 0``) each clipped to its previous step
+        ``+- accel_step``.
+    """
+    ar = -u_roll if u_roll < 0.0 else u_roll
+    ap = -u_pitch if u_pitch < 0.0 else u_pitch
+    worst = 0.0
+    for a, b in rows:
+        v = a * ar + b * ap
+        if v > worst:
+            worst = v
+    if worst <= step_max:
+        return u_roll, u_pitch
+    c = step_max / worst
+    u_roll *= c
+    u_pitch *= c
+    if accel_step > 0.0:
+        lo, hi = prev_roll - accel_step, prev_roll + accel_step
+        u_roll = lo if u_roll < lo else (hi if u_roll > hi else u_roll)
+        lo, hi = prev_pitch - accel_step, prev_pitch + accel_step
+        u_pitch = lo if u_pitch < lo else (hi if u_pitch > hi else u_pitch)
+    return u_roll, u_pitch
+
+
+def _rate_mix_array(
+    target_roll: NDArray[np.float64],
+    target_pitch: NDArray[np.float64],
+    rows: Sequence[tuple[float, float]],
+    step_max: float,
+    accel_step: float,
+    tilt: list[float],
+    tilt_rate: list[float],
+    fs: float,
+) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """The rate (and acceleration) limit of each axis and :func:`rate_mix_step` over a
+    signal (a loop on floats with the streaming numbers), continuing from and updating
+    ``tilt`` (rad) and ``tilt_rate`` (rad/s)."""
+    pr, pp = tilt[0], tilt[1]
+    ur0, up0 = tilt_rate[0] / fs, tilt_rate[1] / fs
+    out_r: list[float] = []
+    out_p: list[float] = []
+    for xr, xp in zip(target_roll.tolist(), target_pitch.tolist(), strict=True):
+        ur, up = _axis_steps(xr, xp, pr, pp, ur0, up0, step_max, accel_step)
+        ur, up = rate_mix_step(ur, up, ur0, up0, rows, step_max, accel_step)
+        pr += ur
+        pp += up
+        ur0, up0 = ur, up
+        out_r.append(pr)
+        out_p.append(pp)
+    tilt_rate[0], tilt_rate[1] = ur0 * fs, up0 * fs
+    return np.array(out_r, dtype=np.float64), np.array(out_p, dtype=np.float64)
+
+
+def _axis_steps(
+    xr: float,
+    xp: float,
+    pr: float,
+    pp: float,
+    ur0: float,
+    up0: float,
+    step_max: float,
+    accel_step: float,
+) -> tuple[float, float]:
+    """Each axis's own step towards its target (rate, and with ``accel_step > 0``
+    acceleration, limited), before the joint limit."""
+    if accel_step > 0.0:
+        return (
+            rate_accel_limit_step(xr, pr, ur0, step_max, accel_step),
+            rate_accel_limit_step(xp, pp, up0, step_max, accel_step),
+        )
+    dr = xr - pr
+    dp = xp - pp
+    dr = step_max if dr > step_max else (-step_max if dr < -step_max else dr)
+    dp = step_max if dp > step_max else (-step_max if dp < -step_max else dp)
+    return dr, dp
 
 
 def _sos(*sections: Section) -> NDArray[np.float64]:
@@ -452,6 +579,9 @@ class ClassicalWashout:
         accel = p.tilt_accel_limit_rad_s2
         sa = 0.0 if accel is None else accel / (fs * fs)
         ra_step = rate_accel_limit_step
+        mix = p.tilt_rate_mix
+        mix_step = rate_mix_step
+        axis_steps = _axis_steps
         own_tilt = p.tilt_scale is not None
         ktx, kty = (1.0, 1.0) if p.tilt_scale is None else p.tilt_scale
         fshape = p.f_shape is not None
@@ -468,6 +598,7 @@ class ClassicalWashout:
         hx, hy, hz = p.head_offset_m
         head = hx != 0.0 or hy != 0.0 or hz != 0.0
         additive = p.tilt_additive
+        lagk = p.tilt_lag_fill
         mx, my, mz, mr, mp, myaw = (1.0 if d else 0.0 for d in p.dofs)
         lb0, lb1, lb2, _, la1, la2 = self.tilt_lp
         r0, r1, r2 = self.rot
@@ -585,8 +716,20 @@ class ClassicalWashout:
                     tp = soft(tp, tl, knee)
                 if tr > atl or tr < -atl:
                     tr = soft(tr, tl, knee)
+            ttr = tr * mr  # the tilt's target (for the lag the translation fills)
+            ttp = tp * mp
             tilt = state.tilt
-            if sa > 0.0:
+            if mix is not None:
+                trate = state.tilt_rate
+                ur0 = trate[0] / fs
+                up0 = trate[1] / fs
+                ur, up = axis_steps(tr, tp, tilt[0], tilt[1], ur0, up0, st, sa)
+                ur, up = mix_step(ur, up, ur0, up0, mix, st, sa)
+                tr = tilt[0] + ur
+                tp = tilt[1] + up
+                trate[0] = ur * fs
+                trate[1] = up * fs
+            elif sa > 0.0:
                 trate = state.tilt_rate
                 prev = tilt[0]
                 u = ra_step(tr, prev, trate[0] / fs, st, sa)
@@ -644,6 +787,11 @@ class ClassicalWashout:
                 hfx = sx - g * sin(tp)
                 hfy = sy + g * sin(tr) * ctp
                 hfz = fzs + g * (cos(tr) * ctp - 1.0)
+                if lagk > 0.0:  # 4b. and a share of its lag behind its target
+                    ctt = cos(ttp)
+                    hfx = hfx - lagk * g * (sin(ttp) - sin(tp))
+                    hfy = hfy + lagk * g * (sin(ttr) * ctt - sin(tr) * ctp)
+                    hfz = hfz + lagk * g * (cos(ttr) * ctt - cos(tr) * ctp)
             if head:
                 # f_o = f_s - W' x h - W x (W x h), W and W' by backward differences
                 att = state.attitude
@@ -848,7 +996,13 @@ class ClassicalWashout:
             tr = soft_limit_array(tr, p.tilt_limit_rad, knee)
         fs = self.fs_hz
         st = p.tilt_rate_limit_rad_s / fs
-        if p.tilt_accel_limit_rad_s2 is None:
+        ttr, ttp = tr, tp  # the tilt's target (for the lag the translation fills)
+        if p.tilt_rate_mix is not None:
+            sa = 0.0 if p.tilt_accel_limit_rad_s2 is None else p.tilt_accel_limit_rad_s2 / fs**2
+            tr, tp = _rate_mix_array(
+                tr, tp, p.tilt_rate_mix, st, sa, state.tilt, state.tilt_rate, fs
+            )
+        elif p.tilt_accel_limit_rad_s2 is None:
             tr = rate_limit_array(tr, st, state.tilt[0])
             tp = rate_limit_array(tp, st, state.tilt[1])
         else:
@@ -884,6 +1038,14 @@ class ClassicalWashout:
             hfx = sx - g * np.sin(tp)
             hfy = sy + g * np.sin(tr) * ctp
             hfz = fzs + g * (np.cos(tr) * ctp - 1.0)
+            lagk = p.tilt_lag_fill
+            if lagk > 0.0:  # 4b. and a share of its lag behind its target
+                ttr = ttr * mr
+                ttp = ttp * mp
+                ctt = np.cos(ttp)
+                hfx = hfx - lagk * g * (np.sin(ttp) - np.sin(tp))
+                hfy = hfy + lagk * g * (np.sin(ttr) * ctt - np.sin(tr) * ctp)
+                hfz = hfz + lagk * g * (np.cos(ttr) * ctt - np.cos(tr) * ctp)
         hx, hy, hz = p.head_offset_m
         if (hx != 0.0 or hy != 0.0 or hz != 0.0) and n:
             # the same operations as step, on arrays (backward differences from the state)

@@ -160,6 +160,23 @@ class CueingParams:
     tilt_accel_limit_rad_s2 : float or None
         Largest tilt angular acceleration (per axis, rad/s^2), on top of
         ``tilt_rate_limit_rad_s``; ``None`` (the default): rate limit only.
+    tilt_lag_fill : float
+        With the additive tilt: the share ``k`` in [0, 1] of the tilt's lag that the
+        translational channel renders. The tilt's rate (and acceleration) limit delays it
+        behind its target (the low-passed, clipped tilt before those limits); the
+        translation's target gains ``k`` times the difference between the gravity of that
+        target tilt and of the delivered one, so that the rider feels the tilt's force
+        sooner (a surge onset while the tilt catches up; and the tilt's late return is
+        countered). 0 (the default): the translation renders only its own force.
+    tilt_rate_mix : tuple of (a, b) pairs or None
+        Joint rate limit of the tilt (roll and pitch together): for every row,
+        ``a |roll rate| + b |pitch rate| <= tilt_rate_limit_rad_s`` (on top of each axis
+        alone). For a hexapod the rows are the legs' speeds per unit roll and pitch rate
+        (one row per leg pair, scaled so that the largest value is 1): pure roll or pure
+        pitch may then turn at about the rate limit while both together, which add up in
+        some legs, turn slower, instead of one box limit for both that is either too slow
+        alone or too fast together. 1 to 12 rows of two numbers in [0, 10], not both 0.
+        ``None`` (the default): each axis alone.
     head_offset_m : 3-tuple
         The rider's head (the vestibular system) relative to the platform origin, platform
         frame ``[x fwd, y left, z up]`` (m). The translational channel removes the specific
@@ -209,6 +226,8 @@ class CueingParams:
     tilt_reach_rad: tuple[float, float, float, float] | None = None
     tilt_reach_use: float = 1.0
     tilt_additive: bool = False
+    tilt_rate_mix: tuple[tuple[float, float], ...] | None = None
+    tilt_lag_fill: float = 0.0
     head_offset_m: Vec3 = (0.0, 0.0, 0.0)
     rot_wn_rad_s: Vec3 = (1.0, 1.0, 0.5)
     rot_zeta: Vec3 = (1.0, 1.0, 1.0)
@@ -283,6 +302,25 @@ class CueingParams:
                     f"CueingParams.tilt_shape = {self.tilt_shape!r} needs tilt_scale and "
                     "tilt_reach_rad (the platform's reach)"
                 )
+        if self.tilt_rate_mix is not None:
+            rows = self.tilt_rate_mix
+            if not 1 <= len(rows) <= 12 or any(len(r) != 2 for r in rows):
+                raise ConfigError(
+                    f"CueingParams.tilt_rate_mix = {rows!r} is invalid; allowed: 1 to 12 "
+                    "rows of two numbers (roll, pitch weights)"
+                )
+            for row in rows:
+                _check("tilt_rate_mix", row, 0.0, False, 10.0)
+                if row[0] + row[1] <= 0.0:
+                    raise ConfigError(
+                        f"CueingParams.tilt_rate_mix row {row!r} is invalid; allowed: not both 0"
+                    )
+        _check("tilt_lag_fill", (self.tilt_lag_fill,), 0.0, False, 1.0)
+        if self.tilt_lag_fill > 0.0 and not self.tilt_additive:
+            raise ConfigError(
+                f"CueingParams.tilt_lag_fill = {self.tilt_lag_fill!r} needs tilt_additive "
+                "(the translation renders the tilt's lag on top of its own force)"
+            )
         if self.tilt_additive and self.tilt_scale is None:
             raise ConfigError(
                 "CueingParams.tilt_additive = True needs tilt_scale (the tilt's own gain)"
@@ -364,6 +402,10 @@ def load_cueing(name_or_path: str | Path) -> CueingParams:
                                                    #   share used, default 1)
         additive = true                            # optional (needs scale): translation
                                                    #   adds to the tilt (default false)
+        rate_mix = [[0.76, 0.68], [0.97, 0.32]]    # optional: joint rate limit, every row
+                                                   #   a |roll'| + b |pitch'| <= rate_limit
+        lag_fill = 0.5                             # optional (needs additive): share of the
+                                                   #   tilt's lag the translation renders
         [rotational]
         wn_rad_s = [1.0, 1.0, 0.5]
         zeta = [1.0, 1.0, 1.0]
@@ -449,6 +491,22 @@ def load_cueing(name_or_path: str | Path) -> CueingParams:
     if ti.has("reach_use"):
         reach_use = ti.number("reach_use", lo=0.0, hi=1.0, lo_open=True)
     additive = ti.boolean("additive") if ti.has("additive") else False
+    rate_mix = None
+    if ti.has("rate_mix"):
+        raw = ti.raw("rate_mix")
+        if (
+            not isinstance(raw, list)
+            or not raw
+            or any(
+                not isinstance(r, list)
+                or len(r) != 2
+                or any(isinstance(v, bool) or not isinstance(v, int | float) for v in r)
+                for r in raw
+            )
+        ):
+            raise ti.error("rate_mix", raw, "a list of [roll, pitch] pairs of numbers")
+        rate_mix = tuple((float(r[0]), float(r[1])) for r in raw)
+    lag_fill = ti.number("lag_fill", lo=0.0, hi=1.0) if ti.has("lag_fill") else 0.0
     ti.finish()
 
     ro = top.table("rotational")
@@ -507,6 +565,8 @@ def load_cueing(name_or_path: str | Path) -> CueingParams:
             tilt_reach_rad=reach,
             tilt_reach_use=reach_use,
             tilt_additive=additive,
+            tilt_rate_mix=rate_mix,
+            tilt_lag_fill=lag_fill,
             head_offset_m=head,
             rot_wn_rad_s=r_wn,
             rot_zeta=r_zeta,

@@ -538,6 +538,11 @@ def preset_toml(params: CueingParams, comments: Sequence[str] = ()) -> str:
         lines.append(f"reach_use = {_fmt(params.tilt_reach_use)}")
     if params.tilt_additive:
         lines.append("additive = true")
+    if params.tilt_lag_fill > 0.0:
+        lines.append(f"lag_fill = {_fmt(params.tilt_lag_fill)}")
+    if params.tilt_rate_mix is not None:
+        rows = ", ".join(_vec(r) for r in params.tilt_rate_mix)
+        lines.append(f"rate_mix = [{rows}]")
     lines += [
         "",
         "[rotational]",
