@@ -72,3 +72,23 @@ def test_plan_keeps_roll_and_pitch_together_inside_the_octagon(kind: str, n: int
     # still a strong, right-way cue: pitch nose-up for braking (fx < 0), roll for fy > 0
     assert np.median(held[n // 2 :, 4]) > 0.5 * b / 2.0
     assert np.median(held[n // 2 :, 3]) > 0.5 * b / 2.0
+
+
+@pytest.mark.parametrize(("kind", "n"), [("optimal", 500), ("mpc", 250)])
+def test_one_axis_alone_is_held_to_the_same_force_loss(kind: str, n: int) -> None:
+    # straight braking: pitch alone; the diagonal rows alone would let it reach b (twice the
+    # loss of vertical force of the diagonal), the axis rows hold it to b / sqrt(2)
+    f, w = _braking_in_a_corner(n)
+    f[:, 1] = 0.0
+    design = OptimalCueing if kind == "optimal" else MpcCueing
+    free = design(_strong(kind, 0.0), FS).run(f, w).poses
+    held = design(_strong(kind, 0.5), FS).run(f, w).poses
+    b = tilt_fz_bound(MpcParams(tilt_fz_use=0.5), 0.28)
+    assert b is not None
+    theta = b / math.sqrt(2.0)
+    assert np.abs(free[:, 4]).max() > 1.1 * theta  # without the rows it pitches further
+    # (rows at the block ends: between them the plan may pass them by a little)
+    assert np.abs(held[:, 4]).max() <= theta * 1.005
+    assert np.median(held[n // 2 :, 4]) > 0.8 * theta  # nose up for braking, near the bound
+    loss = G * (1.0 - np.cos(held[:, 3]) * np.cos(held[:, 4]))
+    assert loss.max() <= 0.5 * 0.28 * 1.011  # u thresholds of fz, as on the diagonal

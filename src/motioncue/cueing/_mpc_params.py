@@ -13,6 +13,9 @@ washout is the MPC's fallback) plus one ``[mpc]`` table, read by :func:`read_mpc
     w_pose = [30.0, 30.0, 30.0, 10.0, 10.0, 10.0]  # pose washout, per (m or rad)^2
     w_vel = [1.0, 1.0, 1.0, 1.0, 1.0, 1.0]         # per (m/s or rad/s)^2
     w_acc = [0.01, 0.01, 0.01, 0.1, 0.1, 0.1]      # per (m/s^2 or rad/s^2)^2
+    w_vehicle = [0.5, 0.5, 0.0, 0.0, 0.0, 0.0]     # optional: perceived error to the
+                                       #   vehicle's whole motion (not the reference), per
+                                       #   threshold^2 (strength: standing still costs it all)
     prediction_tau_s = 0.0             # vehicle prediction: 0 = held, > 0 = decays with tau
     ref_scale = [1.0, 1.0, 1.0, 1.0, 1.0, 1.0]    # the plan tracks ref_scale * vehicle motion
     ref_limit_m_s2 = [4.0, 4.0, 2.0]   # optional: soft limits of that copy (fx, fy, fz)
@@ -86,6 +89,15 @@ class MpcParams:
         Weight of the perceived error ``fx, fy, fz, wx, wy, wz`` (per threshold^2).
     w_pose, w_vel, w_acc : 6 floats
         Weights of the platform pose (per m^2, rad^2), its rate and its acceleration.
+    w_vehicle : 6 floats
+        Weight of the perceived error to the vehicle's *whole* motion ``H (s - d)`` (per
+        threshold^2; default 0: none), beside ``w_error``'s error to the tracked reference
+        ``H (s - r)``. Its target is what the vehicle gives, not a shrunk copy, so standing
+        still costs the vehicle's whole perceived motion: the term pursues strength. Per
+        channel the two terms are one error to a blend (exactly, the models being linear and
+        one per channel): ``we |H (s - r)|^2 + wv |H (s - d)|^2 = (we + wv) |H (s - r')|^2 +
+        const`` with ``r' = r + wv / (we + wv) (d - r)``; :func:`~._mpc.reference` returns
+        ``r'`` and :func:`~._mpc.build_model` weighs it by ``we + wv``.
     prediction_tau_s : float
         Vehicle motion over the horizon: 0 holds the last sample, ``tau > 0`` lets it decay
         as ``exp(-t / tau)`` (s).
@@ -163,6 +175,7 @@ class MpcParams:
     w_pose: Vec6 = (30.0, 30.0, 30.0, 10.0, 10.0, 10.0)
     w_vel: Vec6 = (1.0, 1.0, 1.0, 1.0, 1.0, 1.0)
     w_acc: Vec6 = (0.01, 0.01, 0.01, 0.1, 0.1, 0.1)
+    w_vehicle: Vec6 = (0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
     prediction_tau_s: float = 0.0
     ref_scale: Vec6 = (1.0, 1.0, 1.0, 1.0, 1.0, 1.0)
     ref_limit: Vec6 = (1e9, 1e9, 1e9, 1e9, 1e9, 1e9)
@@ -184,7 +197,7 @@ class MpcParams:
     block_samples: int = 5
 
     def __post_init__(self) -> None:
-        for name in ("w_error", "w_pose", "w_vel", "w_acc"):
+        for name in ("w_error", "w_pose", "w_vel", "w_acc", "w_vehicle"):
             object.__setattr__(self, name, _vec6(name, getattr(self, name), 0.0, 1e9))
         object.__setattr__(self, "ref_scale", _vec6("ref_scale", self.ref_scale, 0.0, 1.0))
         object.__setattr__(self, "ref_limit", _vec6("ref_limit", self.ref_limit, 1e-6, 1e9))
@@ -254,7 +267,7 @@ def read_mpc_table(table: Any) -> MpcParams:
     for name in ("platform", "controller"):
         vals[name] = table.string(name, getattr(d, name))
     vals["solver"] = table.string("solver", d.solver, choices=MPC_SOLVERS)
-    for name in ("w_error", "w_pose", "w_vel", "w_acc"):
+    for name in ("w_error", "w_pose", "w_vel", "w_acc", "w_vehicle"):
         vals[name] = table.vector(name, 6, list(getattr(d, name)))
     for name in (
         "horizon_s",

@@ -177,7 +177,9 @@ class OptimalCueing:
         if tilt:
             rows.append(ge[:, [6 + i for i in tilt]])
         if self._combined_tilt_bound() is not None:
-            rows.append(np.stack([ge[:, 3] + ge[:, 4], ge[:, 3] - ge[:, 4]], axis=1))
+            rows.append(
+                np.stack([ge[:, 3] + ge[:, 4], ge[:, 3] - ge[:, 4], ge[:, 3], ge[:, 4]], axis=1)
+            )
         a_mat = np.concatenate([r.reshape(-1, n_u) for r in rows], axis=0)
         object.__setattr__(self, "_gam", gam)
         object.__setattr__(self, "_hess", hess)
@@ -285,9 +287,10 @@ class OptimalCueing:
             hi.append(lim.tilt_rate - tf)
         bound = self._combined_tilt_bound()
         if bound is not None:
-            cf = np.stack([fe[:, 3] + fe[:, 4], fe[:, 3] - fe[:, 4]], axis=1)
-            lo.append(-bound - cf)
-            hi.append(bound - cf)
+            cf = np.stack([fe[:, 3] + fe[:, 4], fe[:, 3] - fe[:, 4], fe[:, 3], fe[:, 4]], axis=1)
+            bv = np.array([bound, bound, bound / np.sqrt(2.0), bound / np.sqrt(2.0)])
+            lo.append(-bv - cf)
+            hi.append(bv - cf)
         lba = np.concatenate([np.asarray(v).reshape(-1) for v in lo])
         uba = np.concatenate([np.asarray(v).reshape(-1) for v in hi])
         n_u = nb * m.nu

@@ -576,7 +576,16 @@ def mpc_table_lines(mp: MpcParams) -> list[str]:
         f"horizon_s = {_fmt(mp.horizon_s)}",
         f"blocks = {mp.blocks}",
     ]
-    for key in ("w_error", "w_pose", "w_vel", "w_acc", "ref_scale", "ref_scale_hf", "sign_guard"):
+    for key in (
+        "w_error",
+        "w_pose",
+        "w_vel",
+        "w_acc",
+        "w_vehicle",
+        "ref_scale",
+        "ref_scale_hf",
+        "sign_guard",
+    ):
         lines.append(f"{key} = {_vec(getattr(mp, key))}")
     lines += [
         f"ref_limit_m_s2 = {_vec(mp.ref_limit[:3])}",
