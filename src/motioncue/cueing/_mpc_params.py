@@ -33,6 +33,8 @@ washout is the MPC's fallback) plus one ``[mpc]`` table, read by :func:`read_mpc
     rate_use = 0.9                     # fraction of its speed and acceleration limits
     tilt_fz_use = 1.0                  # optional: roll and pitch together at most the tilt
                                        #   that costs this many fz thresholds (0: none)
+    tilt_fz_use_against = 0.4          # optional, optimal only: the same where the vehicle's
+                                       #   perceived fz is above its threshold (0: none)
     tilt_rate_limit_deg_s = 8.0        # optional: the plan's roll/pitch rate limit
                                        #   (default: the [tilt] table's, which the fallback
                                        #   washout keeps)
@@ -152,6 +154,13 @@ class MpcParams:
         drop (fz reversals against the vehicle's downforce). Linear rows at every block end,
         ``|roll + pitch|, |roll - pitch| <= sqrt(2) theta`` (an octagon with the roll and
         pitch limits, exact on the diagonals).
+    tilt_fz_use_against : float
+        ``optimal`` only. 0 (default): ``tilt_fz_use`` everywhere. Otherwise ``u'`` in
+        (0, 5]: at the block ends where the vehicle's perceived fz (known from the recording)
+        is above its threshold, the combined tilt is held to the ``tilt_fz_use = u'`` octagon
+        (where it is tighter): there a tilt's loss of vertical force would be felt against
+        the vehicle (an fz reversal, as with downforce in a fast corner), elsewhere it agrees
+        with the vehicle or is below a threshold.
     tilt_rate_limit_rad_s : float or None
         Largest roll and pitch rate of the plan (rad/s); ``None``: the preset's
         ``tilt_rate_limit_rad_s`` (the classical fallback always keeps that one).
@@ -190,6 +199,7 @@ class MpcParams:
     rate_use: float = 0.9
     tilt_rate_limit_rad_s: float | None = None
     tilt_fz_use: float = 0.0
+    tilt_fz_use_against: float = 0.0
     solver: str = "daqp"
     deadline_ms: float = 6.0
     window_s: float = 4.0
@@ -226,6 +236,7 @@ class MpcParams:
             ("ref_split_hz", self.ref_split_hz, 0.0, 50.0),
             ("ref_reach_use", self.ref_reach_use, 0.0, 1.0),
             ("tilt_fz_use", self.tilt_fz_use, 0.0, 5.0),
+            ("tilt_fz_use_against", self.tilt_fz_use_against, 0.0, 5.0),
             ("window_s", self.window_s, 0.2, 600.0),
             ("stride_s", self.stride_s, 0.1, 600.0),
         )
@@ -280,6 +291,7 @@ def read_mpc_table(table: Any) -> MpcParams:
         "ref_shape",
         "ref_reach_use",
         "tilt_fz_use",
+        "tilt_fz_use_against",
         "window_s",
         "stride_s",
     ):

@@ -597,6 +597,7 @@ def mpc_table_lines(mp: MpcParams) -> list[str]:
         "ref_shape",
         "ref_reach_use",
         "tilt_fz_use",
+        "tilt_fz_use_against",
         "sign_guard_weight",
         "stroke_use",
         "rate_use",
