@@ -134,7 +134,7 @@ class MpcParams:
         :func:`~._mpc.reference`).
     ref_scale_hf : 6 floats
     sign_guard : 6 floats
-        ``optimal`` only (it knows the vehicle's future): where ``g_i > 0``, the plan's
+        Where ``g_i > 0``, the plan's
         perceived motion on channel ``i`` may oppose the vehicle's perceived motion by at most
         ``g_i`` perception thresholds (a false cue is one that exceeds a threshold with the
         wrong sign), checked at every block end against the vehicle's motion as the plan
