@@ -35,7 +35,11 @@ def _strong(kind: str, use: float) -> CueingParams:
     params = load_cueing(f"{kind}-hexapod")
     assert params.mpc is not None
     mp = dataclasses.replace(
-        params.mpc, ref_scale=(0.5, 0.5, 0.0, 0.0, 0.0, 0.0), ref_reach_use=1.0, tilt_fz_use=use
+        params.mpc,
+        ref_scale=(0.5, 0.5, 0.0, 0.0, 0.0, 0.0),
+        ref_reach_use=1.0,
+        tilt_fz_use=use,
+        tilt_fz_use_against=0.0,  # (the preset's own, if any, is not what these tests vary)
     )
     return dataclasses.replace(params, mpc=mp)
 
