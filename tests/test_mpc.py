@@ -154,7 +154,8 @@ def test_failed_solves_fall_back_smoothly_and_are_counted(
     hexapod: MpcCueing, monkeypatch: pytest.MonkeyPatch
 ) -> None:
     f, w = _drive(300, 400)
-    qp = hexapod._qp
+    # the solver the plan uses (with a sign guard, the one inside its soft-guard QP)
+    qp = hexapod._qp if hexapod._qp_guard is None else hexapod._qp_guard._qp
     real = qp.solve
     calls = {"n": 0}
 

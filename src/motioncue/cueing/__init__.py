@@ -19,8 +19,6 @@ Example
 [0.0, 0.0, 0.0, 0.0, 0.0, 0.0]
 """
 
-
-
 from ._algorithm import (
     CueingAlgorithm,
     CueingEntry,

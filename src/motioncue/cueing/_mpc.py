@@ -38,8 +38,11 @@ blocks whose lengths grow geometrically from one sample to cover the horizon):
   ``|J u| <= rate_use a_max`` (:class:`~motioncue.trajectory.ActuatorLimits` of the platform
   with the controller);
 * **combined tilt** (with ``tilt_fz_use``, :func:`tilt_fz_bound`): ``|roll + pitch|,
-  |roll - pitch| <= b``, so that the vertical force the tilt takes away (``g (1 - cos)``,
-  which the linear model does not see) stays below a share of the fz threshold;
+  |roll - pitch| <= b`` and ``|roll|, |pitch| <= b / sqrt(2)`` (a regular octagon about the
+  circle of radius ``b / sqrt(2)``, at most 8 % outside it), so that the vertical force the
+  tilt takes away (``g (1 - cos)``, which the linear model does not see) stays below a share
+  of the fz threshold in every direction (the diagonal rows alone let one axis reach
+  ``b``: twice the loss);
 * **tilt**: ``|roll'|, |pitch'| <=`` the ``[mpc]`` table's ``tilt_rate_limit_deg_s`` (default:
   the ``[tilt]`` table's) and, when the preset sets it, ``|roll''|, |pitch''| <=
   tilt_accel_limit_rad_s2``. These bound the *whole* roll and pitch rate (the MPC does not
@@ -216,7 +219,9 @@ def build_model(
     big[:nx, nx : nx + nu] = bu
     big[:nx, nx + nu :] = bd
     e = expm(big * dt)
-    we = np.sqrt(np.asarray(mp.w_error)) / np.asarray(ms.thresholds)
+    # the error to the reference and to the vehicle's whole motion, as one error to the blend
+    # that reference() returns (MpcParams.w_vehicle)
+    we = np.sqrt(np.asarray(mp.w_error) + np.asarray(mp.w_vehicle)) / np.asarray(ms.thresholds)
     zx = np.zeros((18, nx))
     zd = np.zeros((18, 6))
     zx[0:6] = we[:, None] * ce
@@ -261,6 +266,10 @@ def reference(
     mp.ref_scale_hf``): the slow part as a limited copy (tilt), the fast part as it comes
     (translation).
 
+    With ``mp.w_vehicle`` (``wv``; ``we = mp.w_error``) the result is the blend
+    ``r' = r + wv / (we + wv) (d - r)`` per channel: the one target whose error, weighed by
+    ``we + wv``, is the cost of both terms (:class:`~._mpc_params.MpcParams`).
+
     Parameters
     ----------
     d : (6,) or (N, 6) array
@@ -304,7 +313,12 @@ def reference(
             r[..., i] = compress_array(slow[..., i], k[i], lim[i], neg[i], mp.ref_shape)
     elif np.any(soft):
         r[..., soft] = lim[soft] * np.tanh(r[..., soft] / lim[soft])
-    return np.asarray(r + fast), state
+    r = r + fast
+    wv = np.asarray(mp.w_vehicle)
+    if np.any(wv > 0.0):
+        beta = wv / np.maximum(np.asarray(mp.w_error) + wv, 1e-300)
+        r = r + beta * (da - r)
+    return np.asarray(r), state
 
 
 def plan_tilt_reach(limits: RigLimits) -> tuple[float, float, float, float]:
@@ -367,7 +381,8 @@ def tilt_fz_bound(mp: MpcParams, thr_z_m_s2: float) -> float | None:
     ``b = sqrt(2) acos(1 - u thr_z / g)`` (``u = mp.tilt_fz_use``): on the diagonal, where
     roll and pitch are equal, the combined tilt is then at most ``theta = acos(1 - u thr_z /
     g)``, whose loss of vertical force ``g (1 - cos theta)`` is ``u`` thresholds ``thr_z``
-    (m/s^2). ``None`` when ``u = 0`` (no such rows).
+    (m/s^2); the plans also keep ``|roll|, |pitch| <= theta = b / sqrt(2)`` (the same loss
+    on the axes). ``None`` when ``u = 0`` (no such rows).
     """
     if mp.tilt_fz_use <= 0.0:
         return None
@@ -857,7 +872,7 @@ class MpcCueing:
         """Constraint rows of the QP (stroke, speed, acceleration of each leg per block, the
         tilt rate, and the combined tilt with ``tilt_fz_use``)."""
         nl = self.limits.q_mid.shape[0]
-        return len(self.cond.ends) * (3 * nl + len(self._tilt_axes()) + 2 * self._combined_tilt())
+        return len(self.cond.ends) * (3 * nl + len(self._tilt_axes()) + 4 * self._combined_tilt())
 
     def _combined_tilt(self) -> bool:
         """Whether the QP has the combined-tilt rows (``tilt_fz_use`` with roll and pitch)."""
@@ -965,10 +980,23 @@ class MpcCueing:
         if self._combined_tilt():
             bound = tilt_fz_bound(self.mpc, float(m.thresholds[2]))
             assert bound is not None
-            rows.append(np.stack([gp[:, 3, :] + gp[:, 4, :], gp[:, 3, :] - gp[:, 4, :]], axis=1))
-            cf = np.stack([free[:, 3] + free[:, 4], free[:, 3] - free[:, 4]], axis=1)
-            lo.append(-bound - cf)
-            hi.append(bound - cf)
+            rows.append(
+                np.stack(
+                    [
+                        gp[:, 3, :] + gp[:, 4, :],
+                        gp[:, 3, :] - gp[:, 4, :],
+                        gp[:, 3, :],
+                        gp[:, 4, :],
+                    ],
+                    axis=1,
+                )
+            )
+            cf = np.stack(
+                [free[:, 3] + free[:, 4], free[:, 3] - free[:, 4], free[:, 3], free[:, 4]], axis=1
+            )
+            bv = np.array([bound, bound, bound / math.sqrt(2.0), bound / math.sqrt(2.0)])
+            lo.append(-bv - cf)
+            hi.append(bv - cf)
         a_mat = np.concatenate([r.reshape(-1, nb * nu) if r.ndim == 3 else r for r in rows], axis=0)
         # rows were stacked per kind (block-major inside each kind); flatten the bounds alike
         lba = np.concatenate([np.asarray(v).reshape(-1) for v in lo])

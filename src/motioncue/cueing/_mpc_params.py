@@ -13,6 +13,9 @@ washout is the MPC's fallback) plus one ``[mpc]`` table, read by :func:`read_mpc
     w_pose = [30.0, 30.0, 30.0, 10.0, 10.0, 10.0]  # pose washout, per (m or rad)^2
     w_vel = [1.0, 1.0, 1.0, 1.0, 1.0, 1.0]         # per (m/s or rad/s)^2
     w_acc = [0.01, 0.01, 0.01, 0.1, 0.1, 0.1]      # per (m/s^2 or rad/s^2)^2
+    w_vehicle = [0.5, 0.5, 0.0, 0.0, 0.0, 0.0]     # optional: perceived error to the
+                                       #   vehicle's whole motion (not the reference), per
+                                       #   threshold^2 (strength: standing still costs it all)
     prediction_tau_s = 0.0             # vehicle prediction: 0 = held, > 0 = decays with tau
     ref_scale = [1.0, 1.0, 1.0, 1.0, 1.0, 1.0]    # the plan tracks ref_scale * vehicle motion
     ref_limit_m_s2 = [4.0, 4.0, 2.0]   # optional: soft limits of that copy (fx, fy, fz)
@@ -30,6 +33,8 @@ washout is the MPC's fallback) plus one ``[mpc]`` table, read by :func:`read_mpc
     rate_use = 0.9                     # fraction of its speed and acceleration limits
     tilt_fz_use = 1.0                  # optional: roll and pitch together at most the tilt
                                        #   that costs this many fz thresholds (0: none)
+    tilt_fz_use_against = 0.4          # optional, optimal only: the same where the vehicle's
+                                       #   perceived fz is above its threshold (0: none)
     tilt_rate_limit_deg_s = 8.0        # optional: the plan's roll/pitch rate limit
                                        #   (default: the [tilt] table's, which the fallback
                                        #   washout keeps)
@@ -86,6 +91,15 @@ class MpcParams:
         Weight of the perceived error ``fx, fy, fz, wx, wy, wz`` (per threshold^2).
     w_pose, w_vel, w_acc : 6 floats
         Weights of the platform pose (per m^2, rad^2), its rate and its acceleration.
+    w_vehicle : 6 floats
+        Weight of the perceived error to the vehicle's *whole* motion ``H (s - d)`` (per
+        threshold^2; default 0: none), beside ``w_error``'s error to the tracked reference
+        ``H (s - r)``. Its target is what the vehicle gives, not a shrunk copy, so standing
+        still costs the vehicle's whole perceived motion: the term pursues strength. Per
+        channel the two terms are one error to a blend (exactly, the models being linear and
+        one per channel): ``we |H (s - r)|^2 + wv |H (s - d)|^2 = (we + wv) |H (s - r')|^2 +
+        const`` with ``r' = r + wv / (we + wv) (d - r)``; :func:`~._mpc.reference` returns
+        ``r'`` and :func:`~._mpc.build_model` weighs it by ``we + wv``.
     prediction_tau_s : float
         Vehicle motion over the horizon: 0 holds the last sample, ``tau > 0`` lets it decay
         as ``exp(-t / tau)`` (s).
@@ -120,7 +134,7 @@ class MpcParams:
         :func:`~._mpc.reference`).
     ref_scale_hf : 6 floats
     sign_guard : 6 floats
-        ``optimal`` only (it knows the vehicle's future): where ``g_i > 0``, the plan's
+        Where ``g_i > 0``, the plan's
         perceived motion on channel ``i`` may oppose the vehicle's perceived motion by at most
         ``g_i`` perception thresholds (a false cue is one that exceeds a threshold with the
         wrong sign), checked at every block end against the vehicle's motion as the plan
@@ -140,6 +154,13 @@ class MpcParams:
         drop (fz reversals against the vehicle's downforce). Linear rows at every block end,
         ``|roll + pitch|, |roll - pitch| <= sqrt(2) theta`` (an octagon with the roll and
         pitch limits, exact on the diagonals).
+    tilt_fz_use_against : float
+        ``optimal`` only. 0 (default): ``tilt_fz_use`` everywhere. Otherwise ``u'`` in
+        (0, 5]: at the block ends where the vehicle's perceived fz (known from the recording)
+        is above its threshold, the combined tilt is held to the ``tilt_fz_use = u'`` octagon
+        (where it is tighter): there a tilt's loss of vertical force would be felt against
+        the vehicle (an fz reversal, as with downforce in a fast corner), elsewhere it agrees
+        with the vehicle or is below a threshold.
     tilt_rate_limit_rad_s : float or None
         Largest roll and pitch rate of the plan (rad/s); ``None``: the preset's
         ``tilt_rate_limit_rad_s`` (the classical fallback always keeps that one).
@@ -163,6 +184,7 @@ class MpcParams:
     w_pose: Vec6 = (30.0, 30.0, 30.0, 10.0, 10.0, 10.0)
     w_vel: Vec6 = (1.0, 1.0, 1.0, 1.0, 1.0, 1.0)
     w_acc: Vec6 = (0.01, 0.01, 0.01, 0.1, 0.1, 0.1)
+    w_vehicle: Vec6 = (0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
     prediction_tau_s: float = 0.0
     ref_scale: Vec6 = (1.0, 1.0, 1.0, 1.0, 1.0, 1.0)
     ref_limit: Vec6 = (1e9, 1e9, 1e9, 1e9, 1e9, 1e9)
@@ -177,6 +199,7 @@ class MpcParams:
     rate_use: float = 0.9
     tilt_rate_limit_rad_s: float | None = None
     tilt_fz_use: float = 0.0
+    tilt_fz_use_against: float = 0.0
     solver: str = "daqp"
     deadline_ms: float = 6.0
     window_s: float = 4.0
@@ -184,7 +207,7 @@ class MpcParams:
     block_samples: int = 5
 
     def __post_init__(self) -> None:
-        for name in ("w_error", "w_pose", "w_vel", "w_acc"):
+        for name in ("w_error", "w_pose", "w_vel", "w_acc", "w_vehicle"):
             object.__setattr__(self, name, _vec6(name, getattr(self, name), 0.0, 1e9))
         object.__setattr__(self, "ref_scale", _vec6("ref_scale", self.ref_scale, 0.0, 1.0))
         object.__setattr__(self, "ref_limit", _vec6("ref_limit", self.ref_limit, 1e-6, 1e9))
@@ -213,6 +236,7 @@ class MpcParams:
             ("ref_split_hz", self.ref_split_hz, 0.0, 50.0),
             ("ref_reach_use", self.ref_reach_use, 0.0, 1.0),
             ("tilt_fz_use", self.tilt_fz_use, 0.0, 5.0),
+            ("tilt_fz_use_against", self.tilt_fz_use_against, 0.0, 5.0),
             ("window_s", self.window_s, 0.2, 600.0),
             ("stride_s", self.stride_s, 0.1, 600.0),
         )
@@ -254,7 +278,7 @@ def read_mpc_table(table: Any) -> MpcParams:
     for name in ("platform", "controller"):
         vals[name] = table.string(name, getattr(d, name))
     vals["solver"] = table.string("solver", d.solver, choices=MPC_SOLVERS)
-    for name in ("w_error", "w_pose", "w_vel", "w_acc"):
+    for name in ("w_error", "w_pose", "w_vel", "w_acc", "w_vehicle"):
         vals[name] = table.vector(name, 6, list(getattr(d, name)))
     for name in (
         "horizon_s",
@@ -267,6 +291,7 @@ def read_mpc_table(table: Any) -> MpcParams:
         "ref_shape",
         "ref_reach_use",
         "tilt_fz_use",
+        "tilt_fz_use_against",
         "window_s",
         "stride_s",
     ):

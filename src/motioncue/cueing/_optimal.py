@@ -13,6 +13,10 @@ solved again with them linearised about that first plan at every block end (a se
 sequential-QP pass; the first plan is kept when that solve fails). The usable stroke is
 ``stroke_use`` of the real one (the rest absorbs what the linearisation misses); speed,
 acceleration, tilt and combined-tilt (``tilt_fz_use``) limits are those of :mod:`._mpc`.
+Knowing the ride, the plan can also hold the combined tilt tighter exactly where the loss of
+vertical force a tilt brings would oppose the vehicle (``tilt_fz_use_against``: at the block
+ends where the vehicle's perceived fz is above its threshold, e.g. downforce in a fast
+corner), and use more tilt everywhere else.
 
 The QP of a window has a constant Hessian (built once per design); its gradient comes from
 the vehicle's motion over the window (one simulation of the model from rest); it is solved by
@@ -25,8 +29,9 @@ future to optimise over (use ``algorithm = "mpc"``).
 
 from __future__ import annotations
 
+import math
 from collections.abc import MutableSequence, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import TYPE_CHECKING, ClassVar
 
 import numpy as np
@@ -177,7 +182,9 @@ class OptimalCueing:
         if tilt:
             rows.append(ge[:, [6 + i for i in tilt]])
         if self._combined_tilt_bound() is not None:
-            rows.append(np.stack([ge[:, 3] + ge[:, 4], ge[:, 3] - ge[:, 4]], axis=1))
+            rows.append(
+                np.stack([ge[:, 3] + ge[:, 4], ge[:, 3] - ge[:, 4], ge[:, 3], ge[:, 4]], axis=1)
+            )
         a_mat = np.concatenate([r.reshape(-1, n_u) for r in rows], axis=0)
         object.__setattr__(self, "_gam", gam)
         object.__setattr__(self, "_hess", hess)
@@ -208,10 +215,26 @@ class OptimalCueing:
 
     def _combined_tilt_bound(self) -> float | None:
         """Bound of the combined-tilt rows (:func:`~._mpc.tilt_fz_bound`; ``None``: none,
-        also when roll or pitch is not moved)."""
+        also when roll or pitch is not moved; ``pi`` when only ``tilt_fz_use_against`` asks
+        for the rows)."""
         if not (self.params.dofs[3] and self.params.dofs[4]):
             return None
-        return tilt_fz_bound(self.mpc, float(self.model.thresholds[2]))
+        b = tilt_fz_bound(self.mpc, float(self.model.thresholds[2]))
+        if b is None and self._against_bound() is not None:
+            return math.pi
+        return b
+
+    def _against_bound(self) -> float | None:
+        """Bound of the combined-tilt rows where the vehicle's perceived fz is above its
+        threshold (``tilt_fz_use_against``; ``None``: the same bound everywhere)."""
+        if not (self.params.dofs[3] and self.params.dofs[4]):
+            return None
+        if self.mpc.tilt_fz_use_against <= 0.0:
+            return None
+        return tilt_fz_bound(
+            replace(self.mpc, tilt_fz_use=self.mpc.tilt_fz_use_against),
+            float(self.model.thresholds[2]),
+        )
 
     def _guard_bounds(
         self,
@@ -236,10 +259,13 @@ class OptimalCueing:
         x0: NDArray[np.float64],
         d: NDArray[np.float64],
         about: NDArray[np.float64] | None = None,
+        against: NDArray[np.bool_] | None = None,
     ) -> tuple[NDArray[np.float64], ...]:
         """Gradient, constraint matrix and bounds of one window from state ``x0`` with vehicle
         motion ``d`` ``(n_window + 1, 6)``; the legs linearised about neutral or, with
-        ``about`` ``(blocks, 6)``, about those poses at the block ends."""
+        ``about`` ``(blocks, 6)``, about those poses at the block ends; ``against``
+        ``(blocks,)``: the block ends whose combined tilt takes the tighter bound of
+        ``tilt_fz_use_against``."""
         m = self.model
         n = self.n_window
         bs = self.mpc.block_samples
@@ -285,9 +311,16 @@ class OptimalCueing:
             hi.append(lim.tilt_rate - tf)
         bound = self._combined_tilt_bound()
         if bound is not None:
-            cf = np.stack([fe[:, 3] + fe[:, 4], fe[:, 3] - fe[:, 4]], axis=1)
-            lo.append(-bound - cf)
-            hi.append(bound - cf)
+            cf = np.stack([fe[:, 3] + fe[:, 4], fe[:, 3] - fe[:, 4], fe[:, 3], fe[:, 4]], axis=1)
+            bv = np.broadcast_to(
+                np.array([bound, bound, bound / np.sqrt(2.0), bound / np.sqrt(2.0)]), cf.shape
+            )
+            tight = self._against_bound()
+            if tight is not None and against is not None and np.any(against):
+                bt = np.array([tight, tight, tight / np.sqrt(2.0), tight / np.sqrt(2.0)])
+                bv = np.where(against[:, None], np.minimum(bv, bt), bv)
+            lo.append(-bv - cf)
+            hi.append(bv - cf)
         lba = np.concatenate([np.asarray(v).reshape(-1) for v in lo])
         uba = np.concatenate([np.asarray(v).reshape(-1) for v in hi])
         n_u = nb * m.nu
@@ -378,6 +411,12 @@ class OptimalCueing:
         d_all[:, 2] -= GRAVITY_M_S2
         m = self.model
         guard = self._guard_channels()
+        up_all = np.zeros(n, dtype=bool)
+        if self._against_bound() is not None:  # the vehicle's perceived fz above threshold
+            xz = np.zeros(m.nx)
+            for k in range(n):
+                xz = m.a @ xz + m.bd @ d_all[k]
+                up_all[k] = -(m.ce[2] @ xz + m.de[2] @ d_all[k]) > m.thresholds[2]
         if guard:  # the vehicle's perceived motion (its sign) and the reference-only states
             xt = np.zeros(m.nx)
             xv_all = np.zeros((n, m.nx))
@@ -408,24 +447,36 @@ class OptimalCueing:
             u = np.zeros(0)
             p_free = g_end = np.zeros(0)
             sg = xv_e = np.zeros(0)
+            ab = start + np.arange(1, nb + 1) * bs - 1  # samples at the block ends
+            up = up_all[np.minimum(ab, n - 1)] & (ab < n)
             if guard:
                 ab = start + np.arange(1, nb + 1) * bs - 1  # samples at the block ends
                 abc = np.minimum(ab, n - 1)
                 sg = sign_all[abc] * (ab < n)[:, None]
                 xv_e = xv_all[abc]
             firsts = (prev, None) if prev is not None else (None,)
-            tries = [(gd, fi) for gd in ((True, False) if guard else (False,)) for fi in firsts]
-            # (the guard is soft, so without it is only a last resort of a failed solve)
+            ups = (up, None) if up.any() else (None,)
+            tries = [
+                (gd, fi, ua)
+                for ua in ups
+                for gd in ((True, False) if guard else (False,))
+                for fi in firsts
+            ]
+            # (the guard is soft, so without it is only a last resort of a failed solve; so is
+            # the same tilt bound everywhere)
             use_guard = False
-            for use_guard, first in tries:
-                qp = self._window_qp(st.x, d, first)
+            use_up: NDArray[np.bool_] | None = None
+            for use_guard, first, use_up in tries:
+                qp = self._window_qp(st.x, d, first, use_up)
                 p_free, g_end = qp[6], qp[7]
                 ok, u = self._solve_window(qp, xv_e, sg, use_guard)
                 if ok:
                     break
             if ok:  # again with the legs linearised about this plan (sequential QP)
                 about = p_free + g_end @ u
-                ok2, u2 = self._solve_window(self._window_qp(st.x, d, about), xv_e, sg, use_guard)
+                ok2, u2 = self._solve_window(
+                    self._window_qp(st.x, d, about, use_up), xv_e, sg, use_guard
+                )
                 if ok2:  # else keep the first plan
                     u = u2
                 plan = p_free + g_end @ u

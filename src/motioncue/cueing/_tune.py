@@ -581,7 +581,16 @@ def mpc_table_lines(mp: MpcParams) -> list[str]:
         f"horizon_s = {_fmt(mp.horizon_s)}",
         f"blocks = {mp.blocks}",
     ]
-    for key in ("w_error", "w_pose", "w_vel", "w_acc", "ref_scale", "ref_scale_hf", "sign_guard"):
+    for key in (
+        "w_error",
+        "w_pose",
+        "w_vel",
+        "w_acc",
+        "w_vehicle",
+        "ref_scale",
+        "ref_scale_hf",
+        "sign_guard",
+    ):
         lines.append(f"{key} = {_vec(getattr(mp, key))}")
     lines += [
         f"ref_limit_m_s2 = {_vec(mp.ref_limit[:3])}",
@@ -593,6 +602,7 @@ def mpc_table_lines(mp: MpcParams) -> list[str]:
         "ref_shape",
         "ref_reach_use",
         "tilt_fz_use",
+        "tilt_fz_use_against",
         "sign_guard_weight",
         "stroke_use",
         "rate_use",
