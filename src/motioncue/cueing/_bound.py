@@ -81,6 +81,10 @@ __all__ = ["BOUND_CHANNELS", "CORR_MIN", "REACH_MARGIN", "CueBound", "RigReach",
 BOUND_CHANNELS: tuple[str, ...] = ("fx", "fy")
 """The channels bounded (longitudinal: surge and pitch; lateral: sway and roll)."""
 
+import os
+
+_DEBUG = bool(os.environ.get("MC_BOUND_DEBUG"))
+
 CORR_MIN: tuple[float, float] = (0.95, 0.90)
 """The correlations (fx, fy) :func:`cue_bound`'s ``share_max_at_corr`` is for by default: those
 of issue 20's acceptance."""
@@ -545,8 +549,32 @@ def _cone_split(y: NDArray[np.float64], u: NDArray[np.float64]) -> tuple[float, 
     return a, float(np.sqrt(np.sum(w * w))), float(y.mean() * math.sqrt(y.shape[0]))
 
 
+def _zoh_ss(ch: _Channel) -> tuple[NDArray[np.float64], ...]:
+    """The otolith as a state-space system at ``ch.fs`` by zero-order hold: unlike the
+    bilinear one it is not blind near the Nyquist frequency, which matters at ``fs / k``."""
+    from scipy.signal import cont2discrete, tf2ss
+
+    num, den = ch.model.transfer_function()
+    a, b, c, d = tf2ss(num, den)
+    ad, bd, cd, dd, _ = cont2discrete((a, b, c, d), 1.0 / ch.fs, method="zoh")
+    return np.asarray(ad), np.asarray(bd), np.asarray(cd), np.asarray(dd)
+
+
+def _ss_filter(ss: tuple[NDArray[np.float64], ...], x: NDArray[np.float64]) -> NDArray[np.float64]:
+    """Run the state-space system ``ss`` on ``x`` from rest."""
+    from scipy.signal import dlsim
+
+    a, b, c, d = ss
+    return np.asarray(dlsim((a, b, c, d, 1.0), x)[1], dtype=float).ravel()
+
+
 def _socp_primal(
-    ch: _Channel, u: NDArray[np.float64], phi: float, tan_t: float, d2: sparray
+    ch: _Channel,
+    u: NDArray[np.float64],
+    phi: float,
+    tan_t: float,
+    d2: sparray,
+    ss: tuple[NDArray[np.float64], ...] | None = None,
 ) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64], float]:
     """A motion of ``S`` maximising ``cos(phi) <u, y> + sin(phi) sqrt(N) mean(y)`` (``y = H s``)
     subject to ``||y~ - <u, y> u|| <= tan_t <u, y>`` (the correlation with ``u`` at least
@@ -561,7 +589,7 @@ def _socp_primal(
     import scipy.sparse as sp
 
     n = u.shape[0]
-    a_m, b_m, c_m, d_m = ch.ss()
+    a_m, b_m, c_m, d_m = ch.ss() if ss is None else ss
     nx = a_m.shape[0]
     g = GRAVITY_M_S2
     eye = sp.identity(n, format="csr")
@@ -615,6 +643,16 @@ def _socp_primal(
         lbg.append(np.array([-np.inf]))
         ubg.append(np.array([0.0]))
     obj = -(math.cos(phi) * a + math.sin(phi) * math.sqrt(n) * ybar)
+    # A small penalty (<= 0.1 % of the objective's scale) on the translation's acceleration
+    # and the tilt rate: at fs / k the Tustin otolith is blind near the Nyquist frequency, so
+    # without it the solver leaves motion there that the full-rate rider would feel.
+    scale = 1e-3 * math.sqrt(n) * (GRAVITY_M_S2 * ch.tilt + ch.accel)
+    if ch.accel > 0.0:
+        acc = casadi.mtimes(casadi.DM(d2), zs[:n]) / ch.accel
+        obj = obj + scale * casadi.dot(acc, acc) / n
+    if ch.tilt_rate > 0.0:
+        rate = (zs[n + 1 : 2 * n] - zs[n : 2 * n - 1]) * (ch.fs / ch.tilt_rate)
+        obj = obj + scale * casadi.dot(rate, rate) / n
     lbx = np.full(nz, -np.inf)
     ubx = np.full(nz, np.inf)
     lbx[:n], ubx[:n] = -ch.stroke, ch.stroke
@@ -720,10 +758,15 @@ def _share_at_corr(
         return math.nan, math.nan, math.nan
     tan_t = math.sqrt(max(1.0 - corr * corr, 0.0)) / corr
     chd, dd, d2d = _decimated(ch, d, k) if k > 1 else (ch, d, d2)
-    ud = _centred_unit(chd.filt(dd))
+    ss_d = _zoh_ss(chd) if k > 1 else None
+    ud = _centred_unit(chd.filt(dd) if ss_d is None else _ss_filter(ss_d, dd))
     nd = ud.shape[0]
     e1 = np.full(n, 1.0 / math.sqrt(n))
     centres = (np.arange(nd) + 0.5) * k - 0.5
+    # the part of u that fs / k cannot represent (centred, orthogonal to u's own LF part)
+    u_lf = np.interp(np.arange(n), centres, u[: nd * k].reshape(nd, k).mean(axis=1))
+    u_hf = u - u_lf
+    u_hf = u_hf - u_hf.mean() - float(np.sum(u * (u_hf - u_hf.mean()))) * u
 
     def certificate(g: NDArray[np.float64], z: NDArray[np.float64], mu: float) -> float:
         return _support(ch, ch.filt_t(g + mu * tan_t * u - mu * z), d2)
@@ -737,10 +780,10 @@ def _share_at_corr(
         # full-rate correlation differs): if the full-rate motion is outside, once more
         # further inside
         tan_p = tan_t * (1.0 - 1e-5 if k == 1 else 0.97)
-        p_d, tau_d, z_d, mu0 = _socp_primal(chd, ud, phi, tan_p, d2d)
+        p_d, tau_d, z_d, mu0 = _socp_primal(chd, ud, phi, tan_p, d2d, ss_d)
         for attempt in range(3):
             if attempt > 0:
-                p_d, tau_d, _, _ = _socp_primal(chd, ud, phi, tan_p, d2d)
+                p_d, tau_d, _, _ = _socp_primal(chd, ud, phi, tan_p, d2d, ss_d)
             p, tau = _upsample_motion(ch, p_d, tau_d, k, n) if k > 1 else (p_d, tau_d)
             y = ch.filt(np.asarray(d2 @ p) + GRAVITY_M_S2 * tau)
             a, w, _ = _cone_split(y, u)
@@ -755,11 +798,28 @@ def _share_at_corr(
             z = z - z.mean() - float(np.sum(u * (z - z.mean()))) * u
             nz = float(np.sqrt(np.sum(z * z)))
             z = z / nz if nz > 0.0 else z
+            if mu0 > 0.0 and np.any(z):
+                # what fs / k cannot see: at the full-rate optimum the direction's part there
+                # vanishes where no box binds, i.e. z_hf = (1 + mu tan) / mu u_hf
+                z_hf = ((1.0 + mu0 * tan_t) / mu0) * u_hf
+                n_hf = float(np.sqrt(np.sum(z_hf * z_hf)))
+                if n_hf < 1.0:
+                    z = z_hf + math.sqrt(1.0 - n_hf * n_hf) * z
+                else:
+                    z = z_hf / n_hf
         else:
             z = z_d
         g = math.cos(phi) * u + math.sin(phi) * e1
         # mu: the decimated problem's multiplier (its dual optimum); any mu >= 0 is valid
-        return certificate(g, z, mu0 if np.any(z) else 0.0)
+        hh = certificate(g, z, mu0 if np.any(z) else 0.0)
+        if _DEBUG:
+            a_, w_, b_ = _cone_split(y, u)
+            print(
+                f"  dbg phi={phi:.3f} primal={math.cos(phi) * a_ + math.sin(phi) * b_:.4g} "
+                f"a={a_:.4g} b={b_:.4g} w/a={w_ / max(a_, 1e-9):.4g} tan={tan_t:.4g} cert={hh:.4g}"
+                f" mu0={mu0:.3g}"
+            )
+        return hh
 
     planes = [(0.0, direction(0.0)), (math.pi / 2, b_max), (-math.pi / 2, b_max)]
     for _ in range(max(cuts, 0)):
@@ -769,6 +829,19 @@ def _share_at_corr(
             break
         planes.append((phi, direction(phi)))
     bound = math.sqrt(_polygon_max(planes, corr)[0] / vv)
+    if _DEBUG:
+        print(
+            "  dbg planes",
+            planes,
+            "vertex",
+            _polygon_max(planes, corr),
+            "bmax",
+            b_max,
+            "||v||",
+            math.sqrt(vv),
+            "found",
+            found,
+        )
     share, c_found = max(found) if found else (math.nan, math.nan)
     return bound, share, c_found
 
