@@ -81,10 +81,6 @@ __all__ = ["BOUND_CHANNELS", "CORR_MIN", "REACH_MARGIN", "CueBound", "RigReach",
 BOUND_CHANNELS: tuple[str, ...] = ("fx", "fy")
 """The channels bounded (longitudinal: surge and pitch; lateral: sway and roll)."""
 
-import os
-
-_DEBUG = bool(os.environ.get("MC_BOUND_DEBUG"))
-
 CORR_MIN: tuple[float, float] = (0.95, 0.90)
 """The correlations (fx, fy) :func:`cue_bound`'s ``share_max_at_corr`` is for by default: those
 of issue 20's acceptance."""
@@ -613,16 +609,20 @@ def _socp_primal(
         sp.hstack(
             [sp.csr_matrix((1, iy)), sp.csr_matrix(u[None, :]), sp.csr_matrix([[0.0, -1.0]])]
         ),
-        sp.hstack([d1, zpad, rest]),
-        sp.hstack([zpad, d1, rest]),
-        sp.hstack([d2, sp.csr_matrix((n, n * (2 + nx) + 2))]),
     ]
-    lo = [
-        np.zeros((nx + 1) * n + 2),
-        np.full(n - 1, -ch.speed / ch.fs),
-        np.full(n - 1, -ch.tilt_rate / ch.fs),
-        np.full(n, -ch.accel),
-    ]
+    lo = [np.zeros((nx + 1) * n + 2)]
+    # the translation moves only if none of its boxes is zero (else it is held at 0, and
+    # its rows dropped: the solver refuses more equalities than free variables)
+    moves = ch.stroke > 0.0 and ch.speed > 0.0 and ch.accel > 0.0
+    if moves:
+        blocks += [
+            sp.hstack([d1, zpad, rest]),
+            sp.hstack([d2, sp.csr_matrix((n, n * (2 + nx) + 2))]),
+        ]
+        lo += [np.full(n - 1, -ch.speed / ch.fs), np.full(n, -ch.accel)]
+    if ch.tilt > 0.0:
+        blocks.append(sp.hstack([zpad, d1, rest]))
+        lo.append(np.full(n - 1, -ch.tilt_rate / ch.fs))
     if tan_t == 0.0:  # y = a u + ybar: linear
         blocks.append(sp.hstack([sp.csr_matrix((n, iy)), eye, -sp.csr_matrix(np.ones((n, 1))),
                                  -sp.csr_matrix(u[:, None])]))  # fmt: skip
@@ -655,7 +655,7 @@ def _socp_primal(
         obj = obj + scale * casadi.dot(rate, rate) / n
     lbx = np.full(nz, -np.inf)
     ubx = np.full(nz, np.inf)
-    lbx[:n], ubx[:n] = -ch.stroke, ch.stroke
+    lbx[:n], ubx[:n] = (-ch.stroke, ch.stroke) if moves else (0.0, 0.0)
     lbx[n : 2 * n], ubx[n : 2 * n] = -ch.tilt, ch.tilt
     lbx[-1] = 0.0
     solver = casadi.nlpsol(
@@ -676,6 +676,9 @@ def _socp_primal(
     sol = solver(x0=x0, lbx=lbx, ubx=ubx, lbg=np.concatenate(lbg), ubg=np.concatenate(ubg))
     zz = np.asarray(sol["x"], dtype=float).ravel()
     lam = np.asarray(sol["lam_g"], dtype=float).ravel()
+    if not solver.stats()["success"] or not (np.isfinite(zz).all() and np.isfinite(lam).all()):
+        zero = np.zeros(n)  # no motion, no dual direction: the certificates stay valid
+        return zero, zero.copy(), zero.copy(), 0.0
     p = np.clip(zz[:n], -ch.stroke, ch.stroke)
     tau = np.clip(zz[n : 2 * n], -ch.tilt, ch.tilt)
     if tan_t > 0.0:
@@ -756,6 +759,8 @@ def _share_at_corr(
     u = _centred_unit(v)
     if vv <= 0.0 or not np.any(u):
         return math.nan, math.nan, math.nan
+    if ch.tilt <= 0.0 and not (ch.stroke > 0.0 and ch.speed > 0.0 and ch.accel > 0.0):
+        return 0.0, 0.0, math.nan  # a rig at rest: S = {0}
     tan_t = math.sqrt(max(1.0 - corr * corr, 0.0)) / corr
     chd, dd, d2d = _decimated(ch, d, k) if k > 1 else (ch, d, d2)
     ss_d = _zoh_ss(chd) if k > 1 else None
@@ -787,7 +792,9 @@ def _share_at_corr(
             p, tau = _upsample_motion(ch, p_d, tau_d, k, n) if k > 1 else (p_d, tau_d)
             y = ch.filt(np.asarray(d2 @ p) + GRAVITY_M_S2 * tau)
             a, w, _ = _cone_split(y, u)
-            if a >= 0.0 and w <= tan_t * a + 1e-9 * a:
+            # (at correlation 1: up to the solver's tolerance)
+            tol = 1e-9 * a if tan_t > 0.0 else 1e-7 * float(np.sqrt(np.sum(y * y)))
+            if a >= 0.0 and w <= tan_t * a + tol:
                 found.append((math.sqrt(float(np.sum(y * y)) / vv), correlation(y, v)))
                 break
             if a <= 0.0 or tan_t == 0.0:
@@ -811,37 +818,19 @@ def _share_at_corr(
             z = z_d
         g = math.cos(phi) * u + math.sin(phi) * e1
         # mu: the decimated problem's multiplier (its dual optimum); any mu >= 0 is valid
-        hh = certificate(g, z, mu0 if np.any(z) else 0.0)
-        if _DEBUG:
-            a_, w_, b_ = _cone_split(y, u)
-            print(
-                f"  dbg phi={phi:.3f} primal={math.cos(phi) * a_ + math.sin(phi) * b_:.4g} "
-                f"a={a_:.4g} b={b_:.4g} w/a={w_ / max(a_, 1e-9):.4g} tan={tan_t:.4g} cert={hh:.4g}"
-                f" mu0={mu0:.3g}"
-            )
-        return hh
+        return certificate(g, z, mu0 if np.any(z) else 0.0)
 
     planes = [(0.0, direction(0.0)), (math.pi / 2, b_max), (-math.pi / 2, b_max)]
     for _ in range(max(cuts, 0)):
-        _, a, b = _polygon_max(planes, corr)
+        # a cut through the polygon's best vertex, normal to the share's level set there
+        val, a, b = _polygon_max(planes, corr)
+        if found and math.sqrt(val / vv) <= max(found)[0] * (1.0 + 1e-5):
+            break  # the bound is attained
         phi = math.atan2(b, a / (corr * corr))
-        if any(abs(phi - f) < 1e-3 for f, _ in planes):
+        if any(abs(phi - f) < 1e-4 for f, _ in planes):
             break
         planes.append((phi, direction(phi)))
     bound = math.sqrt(_polygon_max(planes, corr)[0] / vv)
-    if _DEBUG:
-        print(
-            "  dbg planes",
-            planes,
-            "vertex",
-            _polygon_max(planes, corr),
-            "bmax",
-            b_max,
-            "||v||",
-            math.sqrt(vv),
-            "found",
-            found,
-        )
     share, c_found = max(found) if found else (math.nan, math.nan)
     return bound, share, c_found
 
@@ -855,6 +844,7 @@ def cue_bound(
     thresholds: ArrayLike | None = None,
     primal_samples: int = 1000,
     corr_min: ArrayLike | None = CORR_MIN,
+    corr_cuts: int = 2,
 ) -> CueBound:
     """The physical bound of a drive on a rig (definitions: the module docstring).
 
@@ -883,6 +873,10 @@ def cue_bound(
     corr_min : (2,) array_like or None
         The correlation (fx, fy; each in (0, 1]) of ``share_max_at_corr``; None: not computed
         (NaN), which saves about half of the time.
+    corr_cuts : int
+        Cuts added to the first three (module docstring) while the bound is above the best
+        motion found: each costs one SOCP at ``fs / k`` and one support function at the full
+        rate, and tightens the bound.
 
     Returns
     -------
@@ -935,7 +929,7 @@ def cue_bound(
         ):
             res[key].append(val)
         if corr_min is not None:
-            at_corr.append(_share_at_corr(ch, f[:, i], float(cmin[i]), k, d2))
+            at_corr.append(_share_at_corr(ch, f[:, i], float(cmin[i]), k, d2, corr_cuts))
         else:
             at_corr.append((math.nan, math.nan, math.nan))
     return CueBound(
