@@ -164,8 +164,7 @@ def test_scaled_copy_closed_form() -> None:
     y = a u + m with |a u_k + m| <= L; the largest share is the best vertex of that polygon."""
     f = _drive()
     L = 0.1
-    reach = RigReach((0.0, 0.0), (0.0, 0.0), (0.0, 0.0), (math.asin(L), math.asin(L)),
-                     (100.0, 100.0))  # fmt: skip
+    reach = RigReach((0.0, 0.0), (0.0, 0.0), (0.0, 0.0), (math.asin(L),) * 2, (100.0, 100.0))
     b = cue_bound(f, FS, reach, model=_identity_set(), corr_min=(1.0, 1.0), corr_cuts=12)
     for i in range(2):
         d = f[:, i]
@@ -191,10 +190,13 @@ def test_rig_at_rest_and_scaling() -> None:
     b0 = cue_bound(f, FS, rest)
     assert np.all(b0.share_max_at_corr == 0.0)
     # every box times 2: S times 2, the bound times 2 (the correlation is blind to scale)
-    twice = RigReach(*(tuple(2 * x for x in getattr(REACH, k)) for k in
-                       ("stroke_m", "speed_m_s", "accel_m_s2")),  # fmt: skip
-                     tilt_rad=tuple(math.asin(2 * math.sin(t)) for t in REACH.tilt_rad),
-                     tilt_rate_rad_s=tuple(2 * x for x in REACH.tilt_rate_rad_s))  # fmt: skip
+    twice = RigReach(
+        stroke_m=(0.1, 0.1),
+        speed_m_s=(0.4, 0.4),
+        accel_m_s2=(4.0, 4.0),
+        tilt_rad=(math.asin(0.2), math.asin(0.2)),
+        tilt_rate_rad_s=(0.3, 0.3),
+    )
     b1, b2 = cue_bound(f, FS, REACH), cue_bound(f, FS, twice)
     np.testing.assert_allclose(b2.share_max_at_corr, 2 * b1.share_max_at_corr, rtol=1e-3)
     # a lower correlation allows at least as much
