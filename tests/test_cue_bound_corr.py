@@ -207,3 +207,81 @@ def test_rig_at_rest_and_scaling() -> None:
     with pytest.raises(ConfigError, match="corr_min"):
         cue_bound(f, FS, REACH, corr_min=(0.0, 0.9))
     assert np.all(np.isnan(cue_bound(f, FS, REACH, corr_min=None).share_max_at_corr))
+
+
+def _random_motion(rng: np.random.Generator, d: np.ndarray, fs: float, reach: RigReach, i: int):
+    """An admissible (p, d2 p, tau): the tilt follows the vehicle at a random scale, clipped
+    and slew-rate limited into its boxes; the translation a random sum of sines, scaled into
+    a random fraction of its boxes."""
+    n = d.shape[0]
+    t = np.arange(n) / fs
+    lim, step = math.sin(reach.tilt_rad[i]), reach.tilt_rate_rad_s[i] / fs
+    target = d / G * rng.uniform(0.02, 0.4)
+    tau = np.zeros(n)
+    for k in range(n):
+        prev = tau[k - 1] if k else 0.0
+        tau[k] = np.clip(prev + np.clip(target[k] - prev, -step, step), -lim, lim)
+    p = sum(rng.normal() * np.sin(2 * np.pi * rng.uniform(0.05, 2.0) * t + rng.uniform(0, 6))
+            for _ in range(3))  # fmt: skip
+    pad = np.concatenate([p[:1], p, p[-1:]])
+    d2p = (pad[2:] - 2 * pad[1:-1] + pad[:-2]) * fs * fs
+    kp = rng.uniform(0.0, 0.05) * min(
+        reach.stroke_m[i] / np.abs(p).max(),
+        reach.speed_m_s[i] / fs / np.abs(np.diff(p)).max(),
+        reach.accel_m_s2[i] / np.abs(d2p).max(),
+    )
+    return kp * p, kp * d2p, tau
+
+
+def test_drive_excerpt_presets_and_random_motions_never_beat_the_bound() -> None:
+    """Ten seconds of a bundled rally drive on the bundled hexapod: every bundled preset that
+    runs on it and random admissible motions, those with the correlation, render no more than
+    the bound (the presets through the exact chain; the bound is of the relaxation, first order
+    in the angles); the bound's certificates come from the problem at fs / 4."""
+    from pathlib import Path
+
+    from motioncue.analysis import rig_reach
+    from motioncue.analysis._compare import pulse_rounding_limits, run_chain
+    from motioncue.cueing import load_cueing
+    from motioncue.kinematics import load_platform
+    from motioncue.output import load_controller
+    from motioncue.telemetry._recording import read_recording_csv, resample
+    from motioncue.trajectory import ActuatorLimits
+
+    fs = 100.0
+    path = Path(__file__).resolve().parents[1] / "configs" / "recordings" / "forest-rally.csv"
+    rec = resample(read_recording_csv(path), fs)
+    sl = slice(6000, 6800)
+    f, w = np.asarray(rec.f, dtype=float)[sl], np.asarray(rec.w, dtype=float)[sl]
+    platform = load_platform("stewart6-linear")
+    limits = ActuatorLimits.from_platform(platform, load_controller("mbox6"), rate_hz=fs)
+    reach = rig_reach(platform, pulse_rounding_limits(limits, platform, 1.0 / fs))
+    b = cue_bound(f, fs, reach, primal_samples=200)
+    assert b.solver["decimation"] == "4"
+    cmin = np.asarray(b.corr_min)
+    assert np.all(b.share_at_corr_primal <= b.share_max_at_corr)
+    assert np.all(b.corr_at_primal >= cmin)
+    checked = 0
+    for name in ("racing-hexapod", "racing-hexapod-strong", "mpc-hexapod", "optimal-hexapod",
+                 "racing", "racing-rotary", "cinema-seat-3dof", "flight"):  # fmt: skip
+        m = run_chain(f, w, load_cueing(name), platform, limits, fs).evaluation.metrics
+        for i in range(2):
+            if m.correlation[i] >= cmin[i]:
+                checked += 1
+                assert m.rendered_share[i] <= b.share_max_at_corr[i]
+    assert checked >= 6
+    rng = np.random.default_rng(11)
+    for i in range(2):
+        v = MS.otolith[i].apply(f[:, i], fs)
+        n_ok, best = 0, 0.0
+        for _ in range(40):
+            _, s_p, tau = _random_motion(rng, f[:, i], fs, reach, i)
+            y = MS.otolith[i].apply(s_p + G * tau, fs)
+            share, corr = _share_corr(y, v)
+            if corr >= cmin[i]:
+                n_ok += 1
+                best = max(best, share)
+                assert share <= b.share_max_at_corr[i]
+        assert n_ok >= 5
+        # the random motions are weaker than the bound's own motion
+        assert best <= b.share_at_corr_primal[i]
