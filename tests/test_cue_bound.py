@@ -213,3 +213,14 @@ def test_no_preset_beats_the_bound_through_compare(lap: np.ndarray) -> None:
             assert row[f"share_of_bound_pct_{a}"] == pytest.approx(
                 100 * row[f"share_{a}"] / row[f"bound_gain_{a}"]
             )
+            # the share bound at the correlation (test_cue_bound_corr.py checks its value)
+            assert row[f"bound_share_corr_{a}"] == run.bound.share_max_at_corr[i]
+            assert row[f"share_of_corr_bound_pct_{a}"] == pytest.approx(
+                100 * row[f"share_{a}"] / row[f"bound_share_corr_{a}"]
+            )
+            if row[f"corr_{a}"] >= run.bound.corr_min[i]:
+                assert row[f"share_{a}"] <= row[f"bound_share_corr_{a}"]
+    assert js["bounds"]["lap"]["share_max_at_corr"]["fx"] == pytest.approx(
+        res.runs[0].bound.share_max_at_corr[0]
+    )
+    assert "share <= fx" in res.summary() and "@corr fx" in res.table()

@@ -10,8 +10,16 @@ For a drive, a platform and its limits, per horizontal channel (``fx``, ``fy``):
     slope of felt on vehicle, i.e. the in-phase rendered share) of any motion of the rig that
     gives **no reversal** on the channel; ``gain_max_any`` the same with reversals allowed.
 
+``share_max_at_corr``
+    an **upper bound** on the rendered share (``rms(H s) / rms(H d)``, uncentred, as
+    :func:`motioncue.cueing.cue_metrics`) of any motion of the rig whose perceived
+    correlation with the vehicle is at least ``corr_min`` (0.95 fx, 0.90 fy by default: issue
+    20's acceptance); ``share_at_corr_primal`` the share of a motion of ``S`` with that
+    correlation (non-causal), which it found: the true optimum lies between the two.
+
 A preset's ``share / gain_max`` (``compare``'s ``bound_pct``) says how much of what the rig
-could give without a reversal it gives.
+could give without a reversal it gives; ``share / share_max_at_corr`` how much of what it
+could give at the acceptance's correlation.
 
 The relaxation
 --------------
@@ -48,6 +56,30 @@ The perceived motion is the model set's otolith ``H`` (linear, from rest). Then
   (HiGHS). ``gain_max_any`` drops the reversal constraints: ``sigma_S(H'H d) / <Hd, Hd>``.
   ``share_at_gain_max`` is the rendered share of the motion attaining ``gain_max`` (its
   gain equals ``gain_max``; the share is at least the gain).
+
+* ``share_max_at_corr``: with ``y = H s``, ``v = H d``, ``~`` the mean removed,
+  ``u = v~ / ||v~||`` and ``tan t = sqrt(1 - c^2) / c``, ``corr(y, v) >= c`` exactly when
+  ``||y~ - <u, y> u|| <= tan t <u, y>`` (a second-order cone), and then
+  ``||y~|| <= <u, y> / c``. With ``a = <u, y>`` and ``b = sqrt(N) mean(y)`` (``u`` and
+  ``1 / sqrt(N)`` are orthonormal), ``share^2 ||v||^2 = ||y~||^2 + b^2 <= a^2 / c^2 + b^2``.
+  The set ``K`` of ``(a, b)`` of the motions of ``S`` with the correlation is convex, so it
+  lies in the polygon of the cuts ``cos(phi) a + sin(phi) b <= h(phi)`` and ``a >= 0``, and
+  the bound is the largest ``a^2 / c^2 + b^2`` over the polygon's vertices. Each ``h(phi)``
+  is certified by Lagrangian weak duality: for any ``mu >= 0`` and ``z`` with ``||z|| <= 1``,
+  centred and orthogonal to ``u``, ``||w|| >= <z, w>`` for ``w = y~ - a u``, so
+  ``max_K cos(phi) a + sin(phi) b <= sigma_S(H'(g + mu tan t u - mu z))`` with
+  ``g = cos(phi) u + sin(phi) / sqrt(N)`` (``phi = +-pi/2`` without the cone:
+  ``sigma_S(H' 1 / sqrt(N))``, ``S`` being symmetric). ``mu`` and ``z`` are the multiplier
+  and the normal of the cone at the optimum of the cone programme in direction ``phi``,
+  solved by IPOPT through CasADi (the cone written ``c^2 ||y~||^2 <= a^2``, ``a >= 0``), which
+  also gives the motion behind ``share_at_corr_primal``; ``phi = 0`` first, then cuts
+  through the polygon's best vertex (normal to the level set of ``a^2 / c^2 + b^2`` there)
+  until the bound is attained or ``corr_cuts`` more were made. Whatever the solver returns,
+  the figure is a valid bound (to the LP tolerance). Long drives: the cone programme at
+  ``fs / k`` with a zero-order-hold otolith (the bilinear one is blind near the decimated
+  Nyquist frequency), its motion interpolated to the full rate (checked in the boxes there),
+  ``z`` interpolated plus the part of ``u`` the decimated problem cannot see, the
+  certificates at the full rate.
 
 The moving-average bound of ``tests/test_mpc_acceptance.py`` (``|M s| <= 2 v_max / T +
 g sin(tilt_max)``) is one dual certificate of this family; the QP's is the best.
