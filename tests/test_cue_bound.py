@@ -154,7 +154,7 @@ def _d2_apply(p: np.ndarray, fs: float) -> np.ndarray:
 def test_random_motions_never_beat_the_bound(lap: np.ndarray, n: int) -> None:
     fs = 100.0
     f = lap[1000 : 1000 + n]
-    b = cue_bound(f, fs, HEX)
+    b = cue_bound(f, fs, HEX, corr_min=None)  # the share bound: test_cue_bound_corr.py
     assert b.solver["decimation"] == ("1" if n <= 1000 else "2")
     rng = np.random.default_rng(7)
     for i in range(2):
