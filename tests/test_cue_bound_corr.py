@@ -142,6 +142,23 @@ def test_tiny_problem_nothing_beats_the_bound(tiny, i: int) -> None:
     assert best > 0.5 * bound
     assert primal >= 0.97 * best
     assert bound <= 1.1 * best
+    # motions with zero perceived mean against the zero-mean bound
+    zm = b.share_max_at_corr_zero_mean[i]
+    assert zm <= bound
+    mean_eq = {"type": "eq", "fun": lambda x: y_of(x).mean(), "jac": lambda x: m.mean(axis=0)}
+    n_zm = 0
+    for _ in range(6):
+        tau0 = np.clip(f[:, i] / G * rng.uniform(0.2, 2.0), -0.1, 0.1)
+        x0 = np.r_[rng.uniform(-0.02, 0.02, N), tau0 + rng.normal(0, 0.01, N)]
+        res = minimize(lambda x: -float(y_of(x) @ y_of(x)), x0, method="SLSQP",
+                       jac=lambda x: -2.0 * m.T @ y_of(x), constraints=[*cons, mean_eq],
+                       options={"maxiter": 300, "ftol": 1e-12})  # fmt: skip
+        y = y_of(res.x)
+        share, corr = _share_corr(y, v)
+        if np.all(_admissible(res.x, i) >= -1e-6) and corr >= c - 1e-6 and abs(y.mean()) < 1e-6:
+            n_zm += 1
+            assert share <= zm * (1 + 1e-5)
+    assert n_zm >= 1
     # random admissible vertices of the tilt box with translation, those with the correlation
     for sgn in itertools.islice(itertools.product((-1.0, 1.0), repeat=N), 0, None, 3):
         tau = math.sin(REACH.tilt_rad[i]) * np.asarray(sgn)

@@ -187,6 +187,10 @@ class CueBound:
         Its correlation (``>= corr_min``).
     corr_min : (2,) array
         The correlation each channel's ``share_max_at_corr`` is for (default 0.95 fx, 0.90 fy).
+    share_max_at_corr_zero_mean : (2,) array
+        The same bound for the motions whose perceived mean is zero: the share is uncentred,
+        so a steady tilt adds to it without changing the correlation; this says how much of
+        ``share_max_at_corr`` that can be.
     fs_hz : float
     model_set : str
     solver : dict
@@ -206,6 +210,9 @@ class CueBound:
     share_at_corr_primal: NDArray[np.float64] = field(default_factory=lambda: np.full(2, np.nan))
     corr_at_primal: NDArray[np.float64] = field(default_factory=lambda: np.full(2, np.nan))
     corr_min: NDArray[np.float64] = field(default_factory=lambda: np.full(2, np.nan))
+    share_max_at_corr_zero_mean: NDArray[np.float64] = field(
+        default_factory=lambda: np.full(2, np.nan)
+    )
 
     def to_dict(self) -> dict[str, object]:
         """JSON-ready: per channel ``{name: {channel: value}}`` and the reach used."""
@@ -227,6 +234,7 @@ class CueBound:
             "share_at_corr_primal": ch(self.share_at_corr_primal),
             "corr_at_primal": ch(self.corr_at_primal),
             "corr_min": ch(self.corr_min),
+            "share_max_at_corr_zero_mean": ch(self.share_max_at_corr_zero_mean),
             "reach": {
                 "stroke_m": list(r.stroke_m),
                 "speed_m_s": list(r.speed_m_s),
@@ -781,8 +789,9 @@ def _polygon_max(cuts: list[tuple[float, float]], c: float) -> tuple[float, floa
 
 def _share_at_corr(
     ch: _Channel, d: NDArray[np.float64], corr: float, k: int, d2: sparray, cuts: int = 2
-) -> tuple[float, float, float]:
-    """``(share bound, share of the best motion found, its correlation)`` of one channel at
+) -> tuple[float, float, float, float]:
+    """``(share bound, share of the best motion found, its correlation, share bound at zero
+    perceived mean)`` of one channel at
     correlation ``>= corr`` (module docstring; ``k`` > 1: primals and dual directions from the
     problem decimated by ``k``, certificates at the full rate)."""
     n = d.shape[0]
@@ -790,9 +799,9 @@ def _share_at_corr(
     vv = float(np.sum(v * v))
     u = _centred_unit(v)
     if vv <= 0.0 or not np.any(u):
-        return math.nan, math.nan, math.nan
+        return math.nan, math.nan, math.nan, math.nan
     if ch.tilt <= 0.0 and not (ch.stroke > 0.0 and ch.speed > 0.0 and ch.accel > 0.0):
-        return 0.0, 0.0, math.nan  # a rig at rest: S = {0}
+        return 0.0, 0.0, math.nan, 0.0  # a rig at rest: S = {0}
     tan_t = math.sqrt(max(1.0 - corr * corr, 0.0)) / corr
     chd, dd, d2d = _decimated(ch, d, k) if k > 1 else (ch, d, d2)
     ss_d = _zoh_ss(chd) if k > 1 else None
@@ -864,7 +873,9 @@ def _share_at_corr(
         planes.append((phi, direction(phi)))
     bound = math.sqrt(_polygon_max(planes, corr)[0] / vv)
     share, c_found = max(found) if found else (math.nan, math.nan)
-    return bound, share, c_found
+    # motions whose perceived mean is zero: b = 0, a <= h(0)
+    zero_mean = planes[0][1] / corr / math.sqrt(vv)
+    return bound, share, c_found, min(zero_mean, bound)
 
 
 def cue_bound(
@@ -941,7 +952,7 @@ def cue_bound(
             )
     n = f.shape[0]
     d2 = _second_difference(n, fs_hz)
-    at_corr: list[tuple[float, float, float]] = []
+    at_corr: list[tuple[float, float, float, float]] = []
     k = max(1, math.ceil(n / primal_samples))
     res: dict[str, list[float]] = {key: [] for key in ("err", "gmax", "gany", "share", "vrms")}
     for i in range(2):
@@ -963,7 +974,7 @@ def cue_bound(
         if corr_min is not None:
             at_corr.append(_share_at_corr(ch, f[:, i], float(cmin[i]), k, d2, corr_cuts))
         else:
-            at_corr.append((math.nan, math.nan, math.nan))
+            at_corr.append((math.nan, math.nan, math.nan, math.nan))
     return CueBound(
         error_rms=np.array(res["err"]),
         gain_max=np.array(res["gmax"]),
@@ -974,6 +985,7 @@ def cue_bound(
         share_max_at_corr=np.array([x[0] for x in at_corr]),
         share_at_corr_primal=np.array([x[1] for x in at_corr]),
         corr_at_primal=np.array([x[2] for x in at_corr]),
+        share_max_at_corr_zero_mean=np.array([x[3] for x in at_corr]),
         corr_min=cmin,
         fs_hz=float(fs_hz),
         model_set=ms.name,
