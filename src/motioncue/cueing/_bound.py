@@ -841,25 +841,23 @@ def _share_at_corr(
             if a <= 0.0 or tan_t == 0.0:
                 break
             tan_p *= 0.98 * tan_t * a / w
-        if k > 1:
-            z = np.interp(np.arange(n), centres, z_d)
-            z = z - z.mean() - float(np.sum(u * (z - z.mean()))) * u
-            nz = float(np.sqrt(np.sum(z * z)))
-            z = z / nz if nz > 0.0 else z
-            if mu0 > 0.0 and np.any(z):
-                # what fs / k cannot see: at the full-rate optimum the direction's part there
-                # vanishes where no box binds, i.e. z_hf = (1 + mu tan) / mu u_hf
-                z_hf = ((1.0 + mu0 * tan_t) / mu0) * u_hf
-                n_hf = float(np.sqrt(np.sum(z_hf * z_hf)))
-                if n_hf < 1.0:
-                    z = z_hf + math.sqrt(1.0 - n_hf * n_hf) * z
-                else:
-                    z = z_hf / n_hf
-        else:
-            z = z_d
         g = math.cos(phi) * u + math.sin(phi) * e1
-        # mu: the decimated problem's multiplier (its dual optimum); any mu >= 0 is valid
-        return certificate(g, z, mu0 if np.any(z) else 0.0)
+        if k == 1 or mu0 <= 0.0 or not np.any(z_d):
+            # mu: the decimated problem's multiplier (its dual optimum); any mu >= 0 is valid
+            return certificate(g, z_d if k == 1 else np.zeros(n), mu0 if np.any(z_d) else 0.0)
+        z = np.interp(np.arange(n), centres, z_d)
+        z = z - z.mean() - float(np.sum(u * (z - z.mean()))) * u
+        nz = float(np.sqrt(np.sum(z * z)))
+        if nz <= 0.0:
+            return certificate(g, z, 0.0)
+        z = z / nz
+        # What fs / k cannot see: at the full-rate optimum the direction's part there vanishes
+        # where no box binds, i.e. z_hf = (1 + mu tan) / mu u_hf. Where boxes bind it does
+        # not, so both z are tried (each gives a valid bound).
+        z_hf = ((1.0 + mu0 * tan_t) / mu0) * u_hf
+        n_hf = float(np.sqrt(np.sum(z_hf * z_hf)))
+        z_aug = z_hf + math.sqrt(1.0 - n_hf * n_hf) * z if n_hf < 1.0 else z_hf / n_hf
+        return min(certificate(g, z, mu0), certificate(g, z_aug, mu0))
 
     planes = [(0.0, direction(0.0)), (math.pi / 2, b_max), (-math.pi / 2, b_max)]
     for _ in range(max(cuts, 0)):
