@@ -856,8 +856,12 @@ def _share_at_corr(
         # not, so both z are tried (each gives a valid bound).
         z_hf = ((1.0 + mu0 * tan_t) / mu0) * u_hf
         n_hf = float(np.sqrt(np.sum(z_hf * z_hf)))
-        z_aug = z_hf + math.sqrt(1.0 - n_hf * n_hf) * z if n_hf < 1.0 else z_hf / n_hf
-        return min(certificate(g, z, mu0), certificate(g, z_aug, mu0))
+        z_aug = z_hf + math.sqrt(1.0 - n_hf * n_hf) * z if n_hf < 1.0 else z_hf
+        n_aug = float(np.sqrt(np.sum(z_aug * z_aug)))
+        if n_aug <= 0.0:
+            return certificate(g, z, mu0)
+        # ||z|| <= 1 is what makes it a bound (z_hf and z need not be orthogonal)
+        return min(certificate(g, z, mu0), certificate(g, z_aug / n_aug, mu0))
 
     planes = [(0.0, direction(0.0)), (math.pi / 2, b_max), (-math.pi / 2, b_max)]
     for _ in range(max(cuts, 0)):
