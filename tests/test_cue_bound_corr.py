@@ -302,3 +302,24 @@ def test_drive_excerpt_presets_and_random_motions_never_beat_the_bound() -> None
         assert n_ok >= 5
         # the random motions are weaker than the bound's own motion
         assert best <= b.share_at_corr_primal[i]
+
+
+def test_decimated_certificates_stay_above_a_full_rate_motion() -> None:
+    """Three seconds of the bundled lap: the bound whose dual directions come from fs / 4 is
+    still above the share of the motion the full-rate problem finds (a motion of S with the
+    correlation, so any valid bound is above it), and not far above."""
+    from pathlib import Path
+
+    from motioncue.telemetry._recording import read_recording_csv, resample
+
+    path = Path(__file__).resolve().parents[1] / "configs" / "recordings" / "lap.csv"
+    f = np.asarray(resample(read_recording_csv(path), 100.0).f, dtype=float)[2000:2300]
+    hex_reach = RigReach((0.13, 0.115), (0.54, 0.55), (21.4, 22.0), (0.24, 0.23), (0.99, 0.90))
+    full = cue_bound(f, 100.0, hex_reach, corr_cuts=4)
+    dec = cue_bound(f, 100.0, hex_reach, primal_samples=75, corr_cuts=4)
+    assert full.solver["decimation"] == "1" and dec.solver["decimation"] == "4"
+    assert np.all(full.corr_at_primal >= full.corr_min)
+    assert np.all(full.share_at_corr_primal <= full.share_max_at_corr)
+    assert np.all(full.share_max_at_corr <= 1.1 * full.share_at_corr_primal)
+    assert np.all(dec.share_max_at_corr >= full.share_at_corr_primal)
+    assert np.all(dec.share_max_at_corr <= 1.5 * full.share_at_corr_primal)
