@@ -12,7 +12,8 @@ Printed per drive and preset (definitions: ``docs/cue-metrics.md``,
 fx / fy, missed cues fx / fy (% of the time), reversals fx / fy / any channel and all
 false cues (any channel; % of the time), clamped poses (%), and with the bound
 (:func:`motioncue.cueing.cue_bound`, default on) each preset's share as % of the largest
-gain the rig could give without a reversal; then per drive the bound itself. Ends with the
+gain the rig could give without a reversal and of the largest share it could give at the
+acceptance's correlation (0.95 fx, 0.90 fy); then per drive the bound itself. Ends with the
 wall time of the chains and of the bounds (one run; these are figures, not timings to
 compare).
 """
@@ -37,6 +38,7 @@ def _pct(v: float) -> str:
 def main(argv: list[str]) -> int:
     from motioncue.analysis._compare import compare_cueing
     from motioncue.cueing import load_cueing
+    from motioncue.cueing._bound import CORR_MIN
     from motioncue.kinematics import load_platform
     from motioncue.output import load_controller
     from motioncue.pipeline._inputs import load_generate_input
@@ -72,7 +74,7 @@ def main(argv: list[str]) -> int:
         f"{'drive':<{wr}} {'preset':<{wp}} {'corr fx/fy':>11} {'share fx/fy':>11} "
         f"{'gain fx/fy':>11} {'missed% fx/fy':>13} {'rev% fx/fy/any':>16} {'false%':>6} "
         f"{'clamp%':>6} "
-        f"{'%bound fx/fy':>12}"
+        f"{'%bound fx/fy':>12} {'%@corr fx/fy':>12}"
     )
     for r in res.rows():
         dur = r["duration_s"]
@@ -84,7 +86,8 @@ def main(argv: list[str]) -> int:
             f"{r['gain_fx']:5.3f}/{r['gain_fy']:5.3f} {mx:6.1f}/{my:6.1f} "
             f"{rx:4.2f}/{ry:4.2f}/{r['reversal_pct_any']:5.2f} {r['false_cue_pct_any']:6.2f} "
             f"{r['clamped_pct']:6.2f} "
-            f"{_pct(r['share_of_bound_pct_fx'])}/{_pct(r['share_of_bound_pct_fy'])}"
+            f"{_pct(r['share_of_bound_pct_fx'])}/{_pct(r['share_of_bound_pct_fy'])} "
+            f"{_pct(r['share_of_corr_bound_pct_fx'])}/{_pct(r['share_of_corr_bound_pct_fy'])}"
         )
     if res.bound_text():
         print()
@@ -96,6 +99,13 @@ def main(argv: list[str]) -> int:
             if r[f"rms_{a}_m_s2"] < r[f"bound_error_{a}_m_s2"]
         ]
         print(f"presets below the error bound: {beaten or 'none'}")
+        above = [
+            (r["recording"], r["preset"], a)
+            for r in res.rows()
+            for i, a in enumerate(("fx", "fy"))
+            if r[f"corr_{a}"] >= CORR_MIN[i] and r[f"share_{a}"] > r[f"bound_share_corr_{a}"]
+        ]
+        print(f"presets above the share bound at their correlation: {above or 'none'}")
     print(f"wall time (chains{' and bounds' if not args.no_bound else ''}): {wall:.0f} s")
     return 0
 

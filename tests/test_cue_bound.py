@@ -154,7 +154,7 @@ def _d2_apply(p: np.ndarray, fs: float) -> np.ndarray:
 def test_random_motions_never_beat_the_bound(lap: np.ndarray, n: int) -> None:
     fs = 100.0
     f = lap[1000 : 1000 + n]
-    b = cue_bound(f, fs, HEX)
+    b = cue_bound(f, fs, HEX, corr_min=None)  # the share bound: test_cue_bound_corr.py
     assert b.solver["decimation"] == ("1" if n <= 1000 else "2")
     rng = np.random.default_rng(7)
     for i in range(2):
@@ -213,3 +213,14 @@ def test_no_preset_beats_the_bound_through_compare(lap: np.ndarray) -> None:
             assert row[f"share_of_bound_pct_{a}"] == pytest.approx(
                 100 * row[f"share_{a}"] / row[f"bound_gain_{a}"]
             )
+            # the share bound at the correlation (test_cue_bound_corr.py checks its value)
+            assert row[f"bound_share_corr_{a}"] == run.bound.share_max_at_corr[i]
+            assert row[f"share_of_corr_bound_pct_{a}"] == pytest.approx(
+                100 * row[f"share_{a}"] / row[f"bound_share_corr_{a}"]
+            )
+            if row[f"corr_{a}"] >= run.bound.corr_min[i]:
+                assert row[f"share_{a}"] <= row[f"bound_share_corr_{a}"]
+    assert js["bounds"]["lap"]["share_max_at_corr"]["fx"] == pytest.approx(
+        res.runs[0].bound.share_max_at_corr[0]
+    )
+    assert "share <= fx" in res.summary() and "@corr fx" in res.table()

@@ -33,7 +33,7 @@ from numpy.typing import NDArray
 
 from .._errors import ConfigError
 from ..cueing import CueingParams, Rig, make_cueing
-from ..cueing._bound import CueBound, RigReach, cue_bound
+from ..cueing._bound import CORR_MIN, CueBound, RigReach, cue_bound
 from ..cueing._evaluate import CueingEvaluation, evaluate_cueing
 from ..cueing._plot import rider_axis
 from ..cueing._score import cue_score
@@ -183,6 +183,18 @@ COLUMN_NOTES: dict[str, str] = {
         "platform could give without a reversal the preset gives (empty/null without --bound)"
         for a in COMPARE_AXES[:2]
     },
+    **{
+        f"bound_share_corr_{a}": "the physical bound: the largest rendered share of the "
+        f"{_WHAT[i]} any motion of this platform could give with a perceived correlation of at "
+        f"least {c:g} (bounds' corr_min; an upper bound; empty/null without --bound)"
+        for i, (a, c) in enumerate(zip(COMPARE_AXES[:2], CORR_MIN, strict=True))
+    },
+    **{
+        f"share_of_corr_bound_pct_{a}": f"share_{a} as % of bound_share_corr_{a}: how much of "
+        "what the platform could give at that correlation the preset gives (empty/null "
+        "without --bound)"
+        for a in COMPARE_AXES[:2]
+    },
 }
 """Every column of the metrics table and what it means, with units."""
 
@@ -272,6 +284,11 @@ class CompareRun:
             g = math.nan if b is None else float(b.gain_max[i])
             ok = math.isfinite(g) and g > 0.0
             row[f"share_of_bound_pct_{a}"] = 100.0 * row[f"share_{a}"] / g if ok else math.nan
+        for i, a in enumerate(COMPARE_AXES[:2]):
+            sc = math.nan if b is None else float(b.share_max_at_corr[i])
+            ok = math.isfinite(sc) and sc > 0.0
+            row[f"bound_share_corr_{a}"] = sc
+            row[f"share_of_corr_bound_pct_{a}"] = 100.0 * row[f"share_{a}"] / sc if ok else math.nan
         row["clamped_pct"] = 100.0 * self.poses_clamped / n if n else 0.0
         row["actuator_limited_pct"] = 100.0 * self.actuator_limited / n if n else 0.0
         row["bad_samples"] = int(self.bad_samples)
@@ -435,7 +452,7 @@ class CompareResult:
             f"{'rev %':>6} {'false %':>7} {'missed %':>8} {'clamp %':>7}"
         )
         if with_bound:
-            head += f" {'bound fx':>8} {'bound fy':>8}"
+            head += f" {'bound fx':>8} {'bound fy':>8} {'@corr fx':>8} {'@corr fy':>8}"
         units = (
             f"{'':<{wr}} {'':<{wp}} {'thr':>6} {'':>6} "
             + " ".join(f"{'':>6}" for _ in _UNIT)
@@ -443,7 +460,7 @@ class CompareResult:
             f"{'% time':>7} {'any ax':>6} {'any ax':>7} {'any ax':>8} {'poses':>7}"
         )
         if with_bound:
-            units += f" {'% share':>8} {'% share':>8}"
+            units += f" {'% share':>8} {'% share':>8} {'% share':>8} {'% share':>8}"
         lines = [head, units]
         for r in rows:
             cs = " ".join(f"{_fmt(r[f'corr_{a}'], '6.3f'):>6}" for a in COMPARE_AXES)
@@ -464,7 +481,9 @@ class CompareResult:
             )
             if with_bound:
                 lines[-1] += " " + " ".join(
-                    f"{_fmt(r[f'share_of_bound_pct_{a}'], '8.1f'):>8}" for a in xy
+                    f"{_fmt(r[f'{col}_{a}'], '8.1f'):>8}"
+                    for col in ("share_of_bound_pct", "share_of_corr_bound_pct")
+                    for a in xy
                 )
         return "\n".join(lines)
 
@@ -488,18 +507,30 @@ class CompareResult:
         wr = max([len("recording"), *(len(k) for k in bounds)])
         lines.append(
             f"  {'recording':<{wr}} {'veh rms fx':>10} {'veh rms fy':>10} {'err >= fx':>10} "
-            f"{'err >= fy':>10} {'gain <= fx':>10} {'gain <= fy':>10}"
+            f"{'err >= fy':>10} {'gain <= fx':>10} {'gain <= fy':>10} {'share <= fx':>11} "
+            f"{'share <= fy':>11} {'found fx':>8} {'found fy':>8}"
         )
         for rec, b in bounds.items():
             lines.append(
                 f"  {rec:<{wr}} {b.vehicle_rms[0]:10.3f} {b.vehicle_rms[1]:10.3f} "
                 f"{b.error_rms[0]:10.3f} {b.error_rms[1]:10.3f} "
                 + " ".join(f"{_fmt(float(g), '10.3f'):>10}" for g in b.gain_max)
+                + " "
+                + " ".join(f"{_fmt(float(s), '11.3f'):>11}" for s in b.share_max_at_corr)
+                + " "
+                + " ".join(f"{_fmt(float(s), '8.3f'):>8}" for s in b.share_at_corr_primal)
             )
+        cm = next(iter(bounds.values())).corr_min
         lines.append(
             "  (veh rms: the vehicle's perceived motion, m/s^2; err >=: no motion of the "
             "platform gets the perceived error below this, m/s^2; gain <=: no motion without "
-            "a reversal gives a larger gain; bound fx/fy in the table = share / gain <=)"
+            "a reversal gives a larger gain; bound fx/fy in the table = share / gain <=;"
+        )
+        lines.append(
+            f"   share <=: no motion with a perceived correlation >= {_fmt(float(cm[0]), '.2f')} "
+            f"(fx) / {_fmt(float(cm[1]), '.2f')} (fy) renders a larger share; found: the share "
+            "of the best such motion found (non-causal), the bound's tightness; @corr fx/fy in "
+            "the table = share / share <=)"
         )
         return "\n".join(lines)
 
@@ -544,7 +575,8 @@ class CompareResult:
             "share <axis> = share_<axis>; gain <axis> "
             "= gain_<axis>; miss <axis> = missed_cue_s_<axis> as % of duration_s; rev % / "
             "false % / missed % = reversal_pct_any / false_cue_pct_any / missed_cue_pct_any; "
-            "clamp % = clamped_pct; bound fx / fy = share_of_bound_pct_fx / _fy; definitions "
+            "clamp % = clamped_pct; bound fx / fy = share_of_bound_pct_fx / _fy; @corr fx / fy = "
+            "share_of_corr_bound_pct_fx / _fy; definitions "
             "and sources of share, gain, missed, reversal, spurious and false cues and of the "
             "bound: docs/cue-metrics.md, motioncue.cueing.cue_metrics, cue_bound):",
         ]

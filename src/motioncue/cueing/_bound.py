@@ -10,8 +10,16 @@ For a drive, a platform and its limits, per horizontal channel (``fx``, ``fy``):
     slope of felt on vehicle, i.e. the in-phase rendered share) of any motion of the rig that
     gives **no reversal** on the channel; ``gain_max_any`` the same with reversals allowed.
 
+``share_max_at_corr``
+    an **upper bound** on the rendered share (``rms(H s) / rms(H d)``, uncentred, as
+    :func:`motioncue.cueing.cue_metrics`) of any motion of the rig whose perceived
+    correlation with the vehicle is at least ``corr_min`` (0.95 fx, 0.90 fy by default: issue
+    20's acceptance); ``share_at_corr_primal`` the share of a motion of ``S`` with that
+    correlation (non-causal), which it found: the true optimum lies between the two.
+
 A preset's ``share / gain_max`` (``compare``'s ``bound_pct``) says how much of what the rig
-could give without a reversal it gives.
+could give without a reversal it gives; ``share / share_max_at_corr`` how much of what it
+could give at the acceptance's correlation.
 
 The relaxation
 --------------
@@ -49,6 +57,30 @@ The perceived motion is the model set's otolith ``H`` (linear, from rest). Then
   ``share_at_gain_max`` is the rendered share of the motion attaining ``gain_max`` (its
   gain equals ``gain_max``; the share is at least the gain).
 
+* ``share_max_at_corr``: with ``y = H s``, ``v = H d``, ``~`` the mean removed,
+  ``u = v~ / ||v~||`` and ``tan t = sqrt(1 - c^2) / c``, ``corr(y, v) >= c`` exactly when
+  ``||y~ - <u, y> u|| <= tan t <u, y>`` (a second-order cone), and then
+  ``||y~|| <= <u, y> / c``. With ``a = <u, y>`` and ``b = sqrt(N) mean(y)`` (``u`` and
+  ``1 / sqrt(N)`` are orthonormal), ``share^2 ||v||^2 = ||y~||^2 + b^2 <= a^2 / c^2 + b^2``.
+  The set ``K`` of ``(a, b)`` of the motions of ``S`` with the correlation is convex, so it
+  lies in the polygon of the cuts ``cos(phi) a + sin(phi) b <= h(phi)`` and ``a >= 0``, and
+  the bound is the largest ``a^2 / c^2 + b^2`` over the polygon's vertices. Each ``h(phi)``
+  is certified by Lagrangian weak duality: for any ``mu >= 0`` and ``z`` with ``||z|| <= 1``,
+  centred and orthogonal to ``u``, ``||w|| >= <z, w>`` for ``w = y~ - a u``, so
+  ``max_K cos(phi) a + sin(phi) b <= sigma_S(H'(g + mu tan t u - mu z))`` with
+  ``g = cos(phi) u + sin(phi) / sqrt(N)`` (``phi = +-pi/2`` without the cone:
+  ``sigma_S(H' 1 / sqrt(N))``, ``S`` being symmetric). ``mu`` and ``z`` are the multiplier
+  and the normal of the cone at the optimum of the cone programme in direction ``phi``,
+  solved by IPOPT through CasADi (the cone written ``c^2 ||y~||^2 <= a^2``, ``a >= 0``), which
+  also gives the motion behind ``share_at_corr_primal``; ``phi = 0`` first, then cuts
+  through the polygon's best vertex (normal to the level set of ``a^2 / c^2 + b^2`` there)
+  until the bound is attained or ``corr_cuts`` more were made. Whatever the solver returns,
+  the figure is a valid bound (to the LP tolerance). Long drives: the cone programme at
+  ``fs / k`` with a zero-order-hold otolith (the bilinear one is blind near the decimated
+  Nyquist frequency), its motion interpolated to the full rate (checked in the boxes there),
+  ``z`` interpolated plus the part of ``u`` the decimated problem cannot see, the
+  certificates at the full rate.
+
 The moving-average bound of ``tests/test_mpc_acceptance.py`` (``|M s| <= 2 v_max / T +
 g sin(tilt_max)``) is one dual certificate of this family; the QP's is the best.
 
@@ -69,16 +101,21 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from .._errors import ConfigError
+from ._metrics import correlation
 from ._params import GRAVITY_M_S2
 from ._vestibular import DEFAULT_MODEL_SET, VestibularModel, VestibularModelSet, get_model_set
 
 if TYPE_CHECKING:
     from scipy.sparse import sparray
 
-__all__ = ["BOUND_CHANNELS", "REACH_MARGIN", "CueBound", "RigReach", "cue_bound"]
+__all__ = ["BOUND_CHANNELS", "CORR_MIN", "REACH_MARGIN", "CueBound", "RigReach", "cue_bound"]
 
 BOUND_CHANNELS: tuple[str, ...] = ("fx", "fy")
 """The channels bounded (longitudinal: surge and pitch; lateral: sway and roll)."""
+
+CORR_MIN: tuple[float, float] = (0.95, 0.90)
+"""The correlations (fx, fy) :func:`cue_bound`'s ``share_max_at_corr`` is for by default: those
+of issue 20's acceptance."""
 
 REACH_MARGIN = 1.05
 """:func:`rig_reach` multiplies what it found by this: the sampled maxima are below the
@@ -140,6 +177,20 @@ class CueBound:
     vehicle_rms : (2,) array
         RMS of the vehicle's perceived motion (m/s^2): ``error_rms`` of a rig at rest.
     reach : RigReach
+    share_max_at_corr : (2,) array
+        Certified upper bound on the rendered share of any motion of the rig whose perceived
+        correlation with the vehicle is at least ``corr_min`` (NaN if not computed).
+    share_at_corr_primal : (2,) array
+        Rendered share of the best motion of the relaxation found with that correlation
+        (non-causal, at the full rate): how tight ``share_max_at_corr`` is.
+    corr_at_primal : (2,) array
+        Its correlation (``>= corr_min``).
+    corr_min : (2,) array
+        The correlation each channel's ``share_max_at_corr`` is for (default 0.95 fx, 0.90 fy).
+    share_max_at_corr_zero_mean : (2,) array
+        The same bound for the motions whose perceived mean is zero: the share is uncentred,
+        so a steady tilt adds to it without changing the correlation; this says how much of
+        ``share_max_at_corr`` that can be.
     fs_hz : float
     model_set : str
     solver : dict
@@ -155,6 +206,13 @@ class CueBound:
     fs_hz: float
     model_set: str = DEFAULT_MODEL_SET
     solver: dict[str, str] = field(default_factory=dict)
+    share_max_at_corr: NDArray[np.float64] = field(default_factory=lambda: np.full(2, np.nan))
+    share_at_corr_primal: NDArray[np.float64] = field(default_factory=lambda: np.full(2, np.nan))
+    corr_at_primal: NDArray[np.float64] = field(default_factory=lambda: np.full(2, np.nan))
+    corr_min: NDArray[np.float64] = field(default_factory=lambda: np.full(2, np.nan))
+    share_max_at_corr_zero_mean: NDArray[np.float64] = field(
+        default_factory=lambda: np.full(2, np.nan)
+    )
 
     def to_dict(self) -> dict[str, object]:
         """JSON-ready: per channel ``{name: {channel: value}}`` and the reach used."""
@@ -172,6 +230,11 @@ class CueBound:
             "gain_max_any": ch(self.gain_max_any),
             "share_at_gain_max": ch(self.share_at_gain_max),
             "vehicle_rms_m_s2": ch(self.vehicle_rms),
+            "share_max_at_corr": ch(self.share_max_at_corr),
+            "share_at_corr_primal": ch(self.share_at_corr_primal),
+            "corr_at_primal": ch(self.corr_at_primal),
+            "corr_min": ch(self.corr_min),
+            "share_max_at_corr_zero_mean": ch(self.share_max_at_corr_zero_mean),
             "reach": {
                 "stroke_m": list(r.stroke_m),
                 "speed_m_s": list(r.speed_m_s),
@@ -504,6 +567,319 @@ def _channel_bound(
     return err, min(gany, _golden(upper, 0.0, 2.0, 5, maximise=False)), gany, share, vrms
 
 
+# ------------------------------------------------- the share at a given correlation
+
+
+def _centred_unit(x: NDArray[np.float64]) -> NDArray[np.float64]:
+    """``(x - mean x) / ||x - mean x||`` (zeros if ``x`` is constant)."""
+    xc = x - x.mean()
+    nrm = float(np.sqrt(np.sum(xc * xc)))
+    return xc / nrm if nrm > 0.0 else np.zeros_like(x)
+
+
+def _cone_split(y: NDArray[np.float64], u: NDArray[np.float64]) -> tuple[float, float, float]:
+    """``(a, ||w||, b)`` of ``y``: ``a = <u, y>``, ``w = y~ - a u``, ``b = sqrt(N) mean(y)``."""
+    yc = y - y.mean()
+    a = float(np.sum(u * yc))
+    w = yc - a * u
+    return a, float(np.sqrt(np.sum(w * w))), float(y.mean() * math.sqrt(y.shape[0]))
+
+
+def _zoh_ss(ch: _Channel) -> tuple[NDArray[np.float64], ...]:
+    """The otolith as a state-space system at ``ch.fs`` by zero-order hold: unlike the
+    bilinear one it is not blind near the Nyquist frequency, which matters at ``fs / k``."""
+    from scipy.signal import cont2discrete, tf2ss
+
+    num, den = ch.model.transfer_function()
+    a, b, c, d = tf2ss(num, den)
+    ad, bd, cd, dd, _ = cont2discrete((a, b, c, d), 1.0 / ch.fs, method="zoh")
+    return np.asarray(ad), np.asarray(bd), np.asarray(cd), np.asarray(dd)
+
+
+def _ss_filter(ss: tuple[NDArray[np.float64], ...], x: NDArray[np.float64]) -> NDArray[np.float64]:
+    """Run the state-space system ``ss`` on ``x`` from rest."""
+    from scipy.signal import dlsim
+
+    a, b, c, d = ss
+    return np.asarray(dlsim((a, b, c, d, 1.0), x)[1], dtype=float).ravel()
+
+
+def _socp_primal(
+    ch: _Channel,
+    u: NDArray[np.float64],
+    phi: float,
+    tan_t: float,
+    d2: sparray,
+    ss: tuple[NDArray[np.float64], ...] | None = None,
+) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64], float]:
+    """A motion of ``S`` maximising ``cos(phi) <u, y> + sin(phi) sqrt(N) mean(y)`` (``y = H s``)
+    subject to ``||y~ - <u, y> u|| <= tan_t <u, y>`` (the correlation with ``u`` at least
+    ``cos(atan(tan_t))``), by IPOPT through CasADi, the cone written as
+    ``c^2 (||y||^2 - N ybar^2) <= a^2``, ``a >= 0`` (``tan_t = 0``: ``y = a u + ybar``).
+
+    Returns ``(p, tau, z, mu)``: the translation and tilt term, and the dual direction of the
+    cone (unit, centred, orthogonal to ``u``; zeros if the cone is inactive) with its
+    multiplier, from which :func:`_share_at_corr` builds its certificate.
+    """
+    import casadi
+    import scipy.sparse as sp
+
+    n = u.shape[0]
+    a_m, b_m, c_m, d_m = ch.ss() if ss is None else ss
+    nx = a_m.shape[0]
+    g = GRAVITY_M_S2
+    eye = sp.identity(n, format="csr")
+    s_op = sp.hstack([d2, g * eye], format="csr")
+    shift = sp.diags([np.ones(n - 1)], [-1], shape=(n, n), format="csr")
+    x_next = sp.identity(nx * n) - sp.kron(shift, sp.csr_matrix(a_m))
+    # variables [p (n), tau (n), x (nx n), y (n), ybar, a]
+    nz = (3 + nx) * n + 2
+    iy = (2 + nx) * n
+    col = sp.csr_matrix((n, 1))
+    row1 = sp.csr_matrix(np.ones((1, n)))
+    d1 = sp.diags([-np.ones(n - 1), np.ones(n - 1)], [0, 1], shape=(n - 1, n), format="csr")
+    zpad = sp.csr_matrix((n - 1, n))
+    rest = sp.csr_matrix((n - 1, n * (1 + nx) + 2))
+    blocks = [
+        sp.hstack(
+            [-sp.kron(shift, sp.csr_matrix(b_m)) @ s_op, x_next, sp.csr_matrix((nx * n, n + 2))]
+        ),
+        sp.hstack([-float(d_m[0, 0]) * s_op, -sp.kron(eye, sp.csr_matrix(c_m)), eye, col, col]),
+        sp.hstack([sp.csr_matrix((1, iy)), row1, sp.csr_matrix([[-float(n), 0.0]])]),
+        sp.hstack(
+            [sp.csr_matrix((1, iy)), sp.csr_matrix(u[None, :]), sp.csr_matrix([[0.0, -1.0]])]
+        ),
+    ]
+    lo = [np.zeros((nx + 1) * n + 2)]
+    # the translation moves only if none of its boxes is zero (else it is held at 0, and
+    # its rows dropped: the solver refuses more equalities than free variables)
+    moves = ch.stroke > 0.0 and ch.speed > 0.0 and ch.accel > 0.0
+    if moves:
+        blocks += [
+            sp.hstack([d1, zpad, rest]),
+            sp.hstack([d2, sp.csr_matrix((n, n * (2 + nx) + 2))]),
+        ]
+        lo += [np.full(n - 1, -ch.speed / ch.fs), np.full(n, -ch.accel)]
+    if ch.tilt > 0.0:
+        blocks.append(sp.hstack([zpad, d1, rest]))
+        lo.append(np.full(n - 1, -ch.tilt_rate / ch.fs))
+    if tan_t == 0.0:  # y = a u + ybar: linear
+        blocks.append(sp.hstack([sp.csr_matrix((n, iy)), eye, -sp.csr_matrix(np.ones((n, 1))),
+                                 -sp.csr_matrix(u[:, None])]))  # fmt: skip
+        lo.append(np.zeros(n))
+    lin = sp.vstack(blocks, format="csc")
+    lba = np.concatenate(lo)
+    uba = -lba
+    uba[: (nx + 1) * n + 2] = 0.0
+    if tan_t == 0.0:
+        uba[-n:] = 0.0
+    zs = casadi.MX.sym("z", nz)
+    y, ybar, a = zs[iy : iy + n], zs[nz - 2], zs[nz - 1]
+    c2 = 1.0 / (1.0 + tan_t * tan_t)
+    cons = [casadi.mtimes(casadi.DM(lin), zs)]
+    lbg, ubg = [lba], [uba]
+    if tan_t > 0.0:
+        cons.append(c2 * (casadi.dot(y, y) - n * ybar * ybar) - a * a)
+        lbg.append(np.array([-np.inf]))
+        ubg.append(np.array([0.0]))
+    obj = -(math.cos(phi) * a + math.sin(phi) * math.sqrt(n) * ybar)
+    # A small penalty (<= 0.1 % of the objective's scale) on the translation's acceleration
+    # and the tilt rate: at fs / k the Tustin otolith is blind near the Nyquist frequency, so
+    # without it the solver leaves motion there that the full-rate rider would feel.
+    scale = 1e-3 * math.sqrt(n) * (GRAVITY_M_S2 * ch.tilt + ch.accel)
+    if ch.accel > 0.0:
+        acc = casadi.mtimes(casadi.DM(d2), zs[:n]) / ch.accel
+        obj = obj + scale * casadi.dot(acc, acc) / n
+    if ch.tilt_rate > 0.0:
+        rate = (zs[n + 1 : 2 * n] - zs[n : 2 * n - 1]) * (ch.fs / ch.tilt_rate)
+        obj = obj + scale * casadi.dot(rate, rate) / n
+    lbx = np.full(nz, -np.inf)
+    ubx = np.full(nz, np.inf)
+    lbx[:n], ubx[:n] = (-ch.stroke, ch.stroke) if moves else (0.0, 0.0)
+    lbx[n : 2 * n], ubx[n : 2 * n] = -ch.tilt, ch.tilt
+    lbx[-1] = 0.0
+    solver = casadi.nlpsol(
+        "corr_bound",
+        "ipopt",
+        {"x": zs, "f": obj, "g": casadi.vertcat(*cons)},
+        {
+            "ipopt.print_level": 0,
+            "ipopt.sb": "yes",
+            "print_time": False,
+            "ipopt.tol": 1e-9,
+            "ipopt.max_iter": 500,
+            "error_on_fail": False,
+        },
+    )
+    x0 = np.zeros(nz)
+    x0[-1] = 1e-3
+    sol = solver(x0=x0, lbx=lbx, ubx=ubx, lbg=np.concatenate(lbg), ubg=np.concatenate(ubg))
+    zz = np.asarray(sol["x"], dtype=float).ravel()
+    lam = np.asarray(sol["lam_g"], dtype=float).ravel()
+    if not solver.stats()["success"] or not (np.isfinite(zz).all() and np.isfinite(lam).all()):
+        zero = np.zeros(n)  # no motion, no dual direction: the certificates stay valid
+        return zero, zero.copy(), zero.copy(), 0.0
+    p = np.clip(zz[:n], -ch.stroke, ch.stroke)
+    tau = np.clip(zz[n : 2 * n], -ch.tilt, ch.tilt)
+    if tan_t > 0.0:
+        # grad of the squared cone = 2 a c^2 tan_t (z - tan_t u) on the cone's boundary
+        yv = zz[iy : iy + n]
+        w = yv - yv.mean() - float(np.sum(u * (yv - yv.mean()))) * u
+        nw = float(np.sqrt(np.sum(w * w)))
+        mu = 2.0 * float(lam[-1]) * max(float(zz[-1]), 0.0) * c2 * tan_t
+        z = w / nw if nw > 0.0 and mu > 0.0 else np.zeros(n)
+    else:
+        nu = lam[-n:]
+        w = nu - nu.mean() - float(np.sum(u * (nu - nu.mean()))) * u
+        mu = float(np.sqrt(np.sum(w * w)))
+        z = w / mu if mu > 0.0 else np.zeros(n)
+    return p, tau, z, abs(mu)
+
+
+def _upsample_motion(
+    ch: _Channel, p_d: NDArray[np.float64], tau_d: NDArray[np.float64], k: int, n: int
+) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """A full-rate motion of ``S`` from one at ``fs / k``: the tilt interpolated linearly, the
+    translation interpolated and averaged over ``k`` samples (which spreads each velocity step
+    over one decimated period, so its acceleration stays that of the decimated motion), then
+    each scaled down until it is within every box at the full rate (checked, not assumed)."""
+    centres = (np.arange(p_d.shape[0]) + 0.5) * k - 0.5
+    t = np.arange(n, dtype=float)
+    tau = np.interp(t, centres, tau_d)
+    p = np.interp(t, centres, p_d)
+    if k > 1:
+        pad = np.concatenate([np.full(k, p[0]), p, np.full(k, p[-1])])
+        p = np.convolve(pad, np.ones(k) / k, mode="same")[k:-k]
+    d2p = np.concatenate([[p[1] - p[0]], p[2:] - 2 * p[1:-1] + p[:-2], [p[-2] - p[-1]]])
+    fs = ch.fs
+
+    def fit(x: NDArray[np.float64], *pairs: tuple[float, float]) -> NDArray[np.float64]:
+        ratio = max([1.0, *(m / lim if lim > 0.0 else (math.inf if m > 0.0 else 1.0)
+                            for m, lim in pairs)])  # fmt: skip
+        return x / ratio if math.isfinite(ratio) else np.zeros_like(x)
+
+    p = fit(p, (float(np.abs(p).max()), ch.stroke),
+            (float(np.abs(np.diff(p)).max()) * fs, ch.speed),
+            (float(np.abs(d2p).max()) * fs * fs, ch.accel))  # fmt: skip
+    tau = fit(tau, (float(np.abs(tau).max()), ch.tilt),
+              (float(np.abs(np.diff(tau)).max()) * fs, ch.tilt_rate))  # fmt: skip
+    return p, tau
+
+
+def _polygon_max(cuts: list[tuple[float, float]], c: float) -> tuple[float, float, float]:
+    """``max a^2 / c^2 + b^2`` over ``{(a, b): a >= 0, cos(phi) a + sin(phi) b <= h}`` for the
+    cuts ``(phi, h)`` (which must bound it): ``(value, a, b)`` at the best vertex."""
+    lines = [(-1.0, 0.0, 0.0)] + [(math.cos(f), math.sin(f), h) for f, h in cuts]
+    best = (0.0, 0.0, 0.0)
+    for i in range(len(lines)):
+        for j in range(i + 1, len(lines)):
+            (a1, b1, h1), (a2, b2, h2) = lines[i], lines[j]
+            det = a1 * b2 - a2 * b1
+            if abs(det) < 1e-12:
+                continue
+            a = (h1 * b2 - h2 * b1) / det
+            b = (a1 * h2 - a2 * h1) / det
+            tol = 1e-9 * (1.0 + abs(a) + abs(b))
+            if all(la * a + lb * b <= lh + tol for la, lb, lh in lines):
+                val = a * a / (c * c) + b * b
+                if val > best[0]:
+                    best = (val, a, b)
+    return best
+
+
+def _share_at_corr(
+    ch: _Channel, d: NDArray[np.float64], corr: float, k: int, d2: sparray, cuts: int = 2
+) -> tuple[float, float, float, float]:
+    """``(share bound, share of the best motion found, its correlation, share bound at zero
+    perceived mean)`` of one channel at
+    correlation ``>= corr`` (module docstring; ``k`` > 1: primals and dual directions from the
+    problem decimated by ``k``, certificates at the full rate)."""
+    n = d.shape[0]
+    v = ch.filt(d)
+    vv = float(np.sum(v * v))
+    u = _centred_unit(v)
+    if vv <= 0.0 or not np.any(u):
+        return math.nan, math.nan, math.nan, math.nan
+    if ch.tilt <= 0.0 and not (ch.stroke > 0.0 and ch.speed > 0.0 and ch.accel > 0.0):
+        return 0.0, 0.0, math.nan, 0.0  # a rig at rest: S = {0}
+    tan_t = math.sqrt(max(1.0 - corr * corr, 0.0)) / corr
+    chd, dd, d2d = _decimated(ch, d, k) if k > 1 else (ch, d, d2)
+    ss_d = _zoh_ss(chd) if k > 1 else None
+    ud = _centred_unit(chd.filt(dd) if ss_d is None else _ss_filter(ss_d, dd))
+    nd = ud.shape[0]
+    e1 = np.full(n, 1.0 / math.sqrt(n))
+    centres = (np.arange(nd) + 0.5) * k - 0.5
+    # the part of u that fs / k cannot represent (centred, orthogonal to u's own LF part)
+    u_lf = np.interp(np.arange(n), centres, u[: nd * k].reshape(nd, k).mean(axis=1))
+    u_hf = u - u_lf
+    u_hf = u_hf - u_hf.mean() - float(np.sum(u * (u_hf - u_hf.mean()))) * u
+
+    def certificate(g: NDArray[np.float64], z: NDArray[np.float64], mu: float) -> float:
+        return _support(ch, ch.filt_t(g + mu * tan_t * u - mu * z), d2)
+
+    # b = sqrt(N) mean(y) over all of S (S is symmetric): the cuts phi = +-pi/2
+    b_max = _support(ch, ch.filt_t(e1), d2)
+    found: list[tuple[float, float]] = []  # (share, corr) of the full-rate primals
+
+    def direction(phi: float) -> float:
+        # the primal is solved a little inside the cone (the solver's tolerance; at fs / k the
+        # full-rate correlation differs): if the full-rate motion is outside, once more
+        # further inside
+        tan_p = tan_t * (1.0 - 1e-5 if k == 1 else 0.97)
+        p_d, tau_d, z_d, mu0 = _socp_primal(chd, ud, phi, tan_p, d2d, ss_d)
+        for attempt in range(3):
+            if attempt > 0:
+                p_d, tau_d, _, _ = _socp_primal(chd, ud, phi, tan_p, d2d, ss_d)
+            p, tau = _upsample_motion(ch, p_d, tau_d, k, n) if k > 1 else (p_d, tau_d)
+            y = ch.filt(np.asarray(d2 @ p) + GRAVITY_M_S2 * tau)
+            a, w, _ = _cone_split(y, u)
+            # (at correlation 1: up to the solver's tolerance)
+            tol = 1e-9 * a if tan_t > 0.0 else 1e-7 * float(np.sqrt(np.sum(y * y)))
+            if a >= 0.0 and w <= tan_t * a + tol:
+                found.append((math.sqrt(float(np.sum(y * y)) / vv), correlation(y, v)))
+                break
+            if a <= 0.0 or tan_t == 0.0:
+                break
+            tan_p *= 0.98 * tan_t * a / w
+        g = math.cos(phi) * u + math.sin(phi) * e1
+        if k == 1 or mu0 <= 0.0 or not np.any(z_d):
+            # mu: the decimated problem's multiplier (its dual optimum); any mu >= 0 is valid
+            return certificate(g, z_d if k == 1 else np.zeros(n), mu0 if np.any(z_d) else 0.0)
+        z = np.interp(np.arange(n), centres, z_d)
+        z = z - z.mean() - float(np.sum(u * (z - z.mean()))) * u
+        nz = float(np.sqrt(np.sum(z * z)))
+        if nz <= 0.0:
+            return certificate(g, z, 0.0)
+        z = z / nz
+        # What fs / k cannot see: at the full-rate optimum the direction's part there vanishes
+        # where no box binds, i.e. z_hf = (1 + mu tan) / mu u_hf. Where boxes bind it does
+        # not, so both z are tried (each gives a valid bound).
+        z_hf = ((1.0 + mu0 * tan_t) / mu0) * u_hf
+        n_hf = float(np.sqrt(np.sum(z_hf * z_hf)))
+        z_aug = z_hf + math.sqrt(1.0 - n_hf * n_hf) * z if n_hf < 1.0 else z_hf
+        n_aug = float(np.sqrt(np.sum(z_aug * z_aug)))
+        if n_aug <= 0.0:
+            return certificate(g, z, mu0)
+        # ||z|| <= 1 is what makes it a bound (z_hf and z need not be orthogonal)
+        return min(certificate(g, z, mu0), certificate(g, z_aug / n_aug, mu0))
+
+    planes = [(0.0, direction(0.0)), (math.pi / 2, b_max), (-math.pi / 2, b_max)]
+    for _ in range(max(cuts, 0)):
+        # a cut through the polygon's best vertex, normal to the share's level set there
+        val, a, b = _polygon_max(planes, corr)
+        if found and math.sqrt(val / vv) <= max(found)[0] * (1.0 + 1e-5):
+            break  # the bound is attained
+        phi = math.atan2(b, a / (corr * corr))
+        if any(abs(phi - f) < 1e-4 for f, _ in planes):
+            break
+        planes.append((phi, direction(phi)))
+    bound = math.sqrt(_polygon_max(planes, corr)[0] / vv)
+    share, c_found = max(found) if found else (math.nan, math.nan)
+    # motions whose perceived mean is zero: b = 0, a <= h(0)
+    zero_mean = planes[0][1] / corr / math.sqrt(vv)
+    return bound, share, c_found, min(zero_mean, bound)
+
+
 def cue_bound(
     f_vehicle: ArrayLike,
     fs_hz: float,
@@ -512,6 +888,8 @@ def cue_bound(
     model: str | VestibularModelSet = DEFAULT_MODEL_SET,
     thresholds: ArrayLike | None = None,
     primal_samples: int = 1000,
+    corr_min: ArrayLike | None = CORR_MIN,
+    corr_cuts: int = 2,
 ) -> CueBound:
     """The physical bound of a drive on a rig (definitions: the module docstring).
 
@@ -535,7 +913,15 @@ def cue_bound(
         the scalar ``b``, is a lower bound for every ``b``, and
         ``sigma_S(H'(v - a lambda sign)) + thr sum(a lambda)`` an upper bound on the gain for
         every ``a >= 0`` (Lagrangian weak duality). The figures stay valid bounds; they are
-        only less tight than the full-rate optimum.
+        only less tight than the full-rate optimum. The same holds for ``share_max_at_corr``
+        (its primals, cone multipliers and dual directions at ``fs / k``).
+    corr_min : (2,) array_like or None
+        The correlation (fx, fy; each in (0, 1]) of ``share_max_at_corr``; None: not computed
+        (NaN), which saves about half of the time.
+    corr_cuts : int
+        Cuts added to the first three (module docstring) while the bound is above the best
+        motion found: each costs one SOCP at ``fs / k`` and one support function at the full
+        rate, and tightens the bound.
 
     Returns
     -------
@@ -558,8 +944,17 @@ def cue_bound(
     thr = np.asarray(ms.thresholds if thresholds is None else thresholds, dtype=float)
     if thr.shape != (6,) or not np.all(np.isfinite(thr)) or np.any(thr <= 0.0):
         raise ConfigError(f"thresholds {thr.tolist()!r} are invalid; allowed: 6 numbers > 0")
+    cmin = np.full(2, np.nan)
+    if corr_min is not None:
+        cmin = np.asarray(corr_min, dtype=float).reshape(-1)
+        if cmin.shape != (2,) or not np.all((cmin > 0.0) & (cmin <= 1.0)):
+            raise ConfigError(
+                f"corr_min {np.asarray(corr_min).tolist()!r} is invalid; allowed: two "
+                "correlations in (0, 1] (fx, fy)"
+            )
     n = f.shape[0]
     d2 = _second_difference(n, fs_hz)
+    at_corr: list[tuple[float, float, float, float]] = []
     k = max(1, math.ceil(n / primal_samples))
     res: dict[str, list[float]] = {key: [] for key in ("err", "gmax", "gany", "share", "vrms")}
     for i in range(2):
@@ -578,6 +973,10 @@ def cue_bound(
             strict=True,
         ):
             res[key].append(val)
+        if corr_min is not None:
+            at_corr.append(_share_at_corr(ch, f[:, i], float(cmin[i]), k, d2, corr_cuts))
+        else:
+            at_corr.append((math.nan, math.nan, math.nan, math.nan))
     return CueBound(
         error_rms=np.array(res["err"]),
         gain_max=np.array(res["gmax"]),
@@ -585,7 +984,17 @@ def cue_bound(
         share_at_gain_max=np.array(res["share"]),
         vehicle_rms=np.array(res["vrms"]),
         reach=reach,
+        share_max_at_corr=np.array([x[0] for x in at_corr]),
+        share_at_corr_primal=np.array([x[1] for x in at_corr]),
+        corr_at_primal=np.array([x[2] for x in at_corr]),
+        share_max_at_corr_zero_mean=np.array([x[3] for x in at_corr]),
+        corr_min=cmin,
         fs_hz=float(fs_hz),
         model_set=ms.name,
-        solver={"qp": "osqp (casadi)", "lp": "highs (scipy)", "decimation": str(k)},
+        solver={
+            "qp": "osqp (casadi)",
+            "lp": "highs (scipy)",
+            "socp": "ipopt (casadi)",
+            "decimation": str(k),
+        },
     )
