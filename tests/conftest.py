@@ -202,6 +202,18 @@ def pytest_collection_modifyitems(config: pytest.Config, items: list[pytest.Item
 
 
 @pytest.hookimpl(optionalhook=True)
+def pytest_xdist_auto_num_workers(config: pytest.Config) -> int:
+    """``-n auto``: two workers per core (at most 16). About a third of the suite's time is
+    waiting (sleeps, emulators, playback at real time, other processes starting), which a
+    second worker on the core fills with another test."""
+    try:
+        cores = len(os.sched_getaffinity(0))
+    except AttributeError:  # not on Linux
+        cores = os.cpu_count() or 1
+    return min(2 * cores, 16)
+
+
+@pytest.hookimpl(optionalhook=True)
 def pytest_xdist_make_scheduler(config: pytest.Config, log: object) -> object:
     """``--dist loadscope``: :class:`_LongestFirst`; any other mode: xdist's own."""
     if config.getoption("dist", None) != "loadscope":
