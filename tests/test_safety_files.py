@@ -313,16 +313,26 @@ def _sparse(path: Path, head: bytes, size: int = 2 << 30) -> Path:
     return path
 
 
+# Starts the command given, waits for it and prints its peak RSS (KiB); exits with its status.
+_MEASURE_RSS = """import os, subprocess, sys
+proc = subprocess.Popen(sys.argv[1:], stdout=subprocess.DEVNULL)
+_, status, usage = os.wait4(proc.pid, 0)
+print(usage.ru_maxrss)
+sys.exit(os.waitstatus_to_exitcode(status))
+"""
+
+
 def _run_measured(argv: list[str]) -> tuple[int, str, int]:
-    """Run motioncue; return its exit status, stderr and peak RSS (bytes) of that process."""
-    proc = subprocess.Popen(_motioncue(*argv), env=ENV, stdout=subprocess.DEVNULL,
-                            stderr=subprocess.PIPE)  # fmt: skip
-    assert proc.stderr is not None
-    err = proc.stderr.read()
-    _, status, usage = os.wait4(proc.pid, 0)
-    proc.returncode = os.waitstatus_to_exitcode(status)
-    proc.stderr.close()
-    return proc.returncode, err.decode("utf-8", "replace"), usage.ru_maxrss * 1024
+    """Run motioncue; return its exit status, stderr and peak RSS (bytes) of that process.
+
+    Started by a small launcher process: on Linux a child's peak RSS begins at its parent's
+    RSS when forked, so started from this pytest process it would count whatever earlier
+    tests left this process holding (300+ MiB after the MPC and fuzz tests).
+    """
+    launcher = [sys.executable, "-c", _MEASURE_RSS]
+    proc = subprocess.run([*launcher, *_motioncue(*argv)], env=ENV, capture_output=True)
+    rss_kib = int(proc.stdout.split()[-1])
+    return proc.returncode, proc.stderr.decode("utf-8", "replace"), rss_kib * 1024
 
 
 SPARSE_CASES = {
