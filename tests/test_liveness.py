@@ -225,8 +225,10 @@ def test_a_controller_answering_only_its_status_keeps_the_ride_going(rides: Any)
     try:
         # a longer limit than the other tests: this one is about the status requests
         # keeping a quiet controller's ride going, not about a loaded machine's stalls
+        # (and every frame is sent, late or not: the MBOX buffers and plays on its clock)
         play = _motioncue("play", str(ride_path), "--target",
-                          f"udp://127.0.0.1:{fake.port}?silence_ms=1000")  # fmt: skip
+                          f"udp://127.0.0.1:{fake.port}?silence_ms=1000",
+                          "--resync-after-ms", "0")  # fmt: skip
         out, err = play.communicate(timeout=60)
     finally:
         fake.close()
@@ -464,3 +466,26 @@ def test_fake_controller_is_not_blind() -> None:
         fake.close()
     assert fake.frames_after_silence() == 2
     assert np.isfinite(fake.silent_since or np.nan)
+
+
+@pytest.mark.parametrize(
+    ("controller", "value", "message"),
+    [
+        ("smc3", "0", "has no buffer to play them on its own clock"),
+        ("mbox3", "-5", "--resync-after-ms -5 is invalid"),
+        ("mbox3", "nan", "--resync-after-ms nan is invalid"),
+    ],
+)
+def test_play_refuses_a_resync_setting_the_controller_cannot_take(
+    rides: Any, controller: str, value: str, message: str, tmp_path: Path
+) -> None:
+    """Never skipping sends late frames back to back: only a buffered controller plays them
+    on its own clock. An unbuffered board (SMC3) would move as fast as they arrive."""
+    ride_path, _ = rides["mbox3"]
+    out = tmp_path / "f.bin"
+    play = _motioncue("play", str(ride_path), "--controller", controller, "--target",
+                      f"file:{out}", "--resync-after-ms", value)  # fmt: skip
+    _, err = play.communicate(timeout=60)
+    assert play.returncode == 2, err
+    assert message in err and "Traceback" not in err, err
+    assert not out.exists()

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import math
 import sys
 import time
 from collections.abc import Callable
@@ -85,6 +86,16 @@ def register(sub: Subparsers) -> None:
         help="pacing factor (default 1 = real time; other values for pcap: and file: only)",
     )
     p.add_argument("--quiet", action="store_true", help="no progress line while playing")
+    p.add_argument(
+        "--resync-after-ms",
+        type=float,
+        default=100.0,
+        metavar="MS",
+        help="when the player finds itself more than MS late (the process was stopped, the "
+        "machine stalled), skip the ride frames whose time has passed and go on with the one "
+        "due now, through the limiter (default 100); 0: never skip, send every frame (only "
+        "for a controller that buffers frames and plays them on its own clock)",
+    )
     p.add_argument(
         "--intensity",
         type=float,
@@ -341,6 +352,17 @@ def _play(args: argparse.Namespace) -> int:
             f"controller {controller.name} drives {controller.n_axes} axes; platform "
             f"{platform.name} has {platform.axes_text}"
         )
+    if not (math.isfinite(args.resync_after_ms) and args.resync_after_ms >= 0.0):
+        raise ConfigError(
+            f"--resync-after-ms {args.resync_after_ms:g} is invalid; allowed: a number >= 0"
+        )
+    if args.resync_after_ms == 0.0 and controller.buffer_frames <= 1:
+        raise ConfigError(
+            f"--resync-after-ms 0 sends late frames back to back, and controller "
+            f"{controller.name} has no buffer to play them on its own clock (it moves as the "
+            "frames arrive): give a number > 0"
+        )
+    resync_after_s = None if args.resync_after_ms == 0.0 else args.resync_after_ms / 1000.0
     controller.check_rate(ride.rate_hz)
     limits = limits_for(args, platform, controller, ride.rate_hz)
     # nothing is sent unless the ride is the one generate made (or its edit was accepted and
@@ -398,6 +420,7 @@ def _play(args: argparse.Namespace) -> int:
                     rep = play_ride(
                         ride, platform, controller, limits, link, speed=args.speed,
                         paced=paced, q_start=q_start, stop=progress, handle_signals=False,
+                        resync_after_s=resync_after_s,
                         on_start=None if watch is None else watch.attach,
                     )  # fmt: skip
                 except PlayAborted as exc:
