@@ -255,9 +255,14 @@ def test_bridge_stops_when_the_controller_goes_silent(then_sigint: bool) -> None
 
     port = _free_port()
     fake = FakeController(silent_after_frames=200)
+    # a longer limit than SILENCE_MS: the fake answers from a thread of this test process,
+    # which a busy machine held up for over 300 ms before the fake ever went silent (the
+    # bridge then stopped on a false silence after 98 frames); this test is about what
+    # follows a real silence
+    silence_ms = 1000
     try:
         with Sender(port, 2024):
-            proc = _bridge(port, f"udp://127.0.0.1:{fake.port}?silence_ms={SILENCE_MS}",
+            proc = _bridge(port, f"udp://127.0.0.1:{fake.port}?silence_ms={silence_ms}",
                            "--duration", "30")  # fmt: skip
             if then_sigint:
                 end = time.monotonic() + 20
@@ -272,7 +277,8 @@ def test_bridge_stops_when_the_controller_goes_silent(then_sigint: bool) -> None
     assert "Traceback" not in err
     assert "controller silent for" in err and "PARK NOT CONFIRMED" in err, err
     assert "parked at rest" not in err
-    assert fake.frames_after_silence() <= 30 + 350
+    assert fake.silent_since is not None, err  # the silence the bridge saw was the fake's
+    assert fake.frames_after_silence() <= silence_ms // 10 + 350
 
 
 @pytest.mark.parametrize("controller", ["imax6", "mbox6"])
@@ -426,7 +432,9 @@ def test_emulate_writes_its_results_on_a_stop_signal(tmp_path: Path, sig: int) -
                      ("127.0.0.1", port))  # fmt: skip
     time.sleep(0.5)
     proc.send_signal(sig)
-    out, err = proc.communicate(timeout=30)
+    # the plot imports matplotlib and draws after the signal: seconds on a busy machine (a
+    # fresh clone's CI run took over 30 s here); the promise is the files, not their speed
+    out, err = proc.communicate(timeout=180)
     assert proc.returncode == 0, (proc.returncode, err)
     assert "received 3 datagrams, played 3 trace points, 0 violation(s)" in out
     assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
