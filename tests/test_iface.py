@@ -368,35 +368,13 @@ def test_play_cli_signal_parks_on_the_emulator(
     _, ctrl, _, park = rig
     path = save_ride(tmp_path / "lap.ride", ride)
     emu = IfaceEmulator(ctrl).start()
-    env = {**os.environ, "PYTHONPATH": str(SRC)}
-    cmd = [sys.executable, "-m", "motioncue", "play", str(path), "--target", emu.where]
-    proc = subprocess.Popen(cmd, env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
-                            text=True)  # fmt: skip
-    try:
-        # a bound for a process that never moves, not a timing check
-        end = time.monotonic() + 90
-        park_v = np.asarray(park) - ctrl.pulses_lo
-        while time.monotonic() < end and proc.poll() is None:
-            tr = emu.trace
-            if len(tr.positions) and np.abs(tr.positions[-1] - park).max() > 50:
-                break
-            time.sleep(0.01)
-        proc.send_signal(sig)
-        out, err = proc.communicate(timeout=90)
-    finally:
-        if proc.poll() is None:
-            proc.kill()
-            proc.wait()
-        time.sleep(0.1)
-        emu.stop()
+    rc, out, err = signal_when_moving(["play", str(path), "--target", emu.where], emu, park,
+                                      50, sig)  # fmt: skip
     assert "Traceback" not in err, err
-    assert proc.returncode == 130, err
+    assert rc == 130, err
     assert f"interrupted and parked ({signal.Signals(sig).name})" in out + err
-    assert emu.malformed == 0 and not emu.violations, emu.violations[:3]
-    frames = np.array(emu.frames)
-    assert np.abs(frames - park_v).max() > 50  # it was moving
-    np.testing.assert_array_equal(frames[-1], park_v)
-    np.testing.assert_array_equal(frames[-2], park_v)
+    assert emu.malformed == 0
+    assert_moved_then_parked(emu, np.asarray(park) - ctrl.pulses_lo, 50)
 
 
 def _free_port() -> int:
@@ -410,39 +388,17 @@ def test_bridge_sigint_parks_on_the_emulator(rig: Any) -> None:
     from test_bridge import Sender
 
     _, ctrl, _, park = rig
-    park_v = np.asarray(park) - ctrl.pulses_lo
     port = _free_port()
     emu = IfaceEmulator(ctrl).start()
-    env = {**os.environ, "PYTHONPATH": str(SRC)}
-    cmd = [sys.executable, "-m", "motioncue", "bridge", "--source", f"f1:{port}", "--platform",
-           PLATFORM, "--controller", CONTROLLER, "--rate", "100", "--fade", "0.3", "--quiet",
+    cmd = ["bridge", "--source", f"f1:{port}", "--platform", PLATFORM, "--controller",
+           CONTROLLER, "--rate", "100", "--fade", "0.3", "--quiet",
            "--target", emu.where]  # fmt: skip
     with Sender(port, 2024):
-        proc = subprocess.Popen(cmd, env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
-                                text=True)  # fmt: skip
-        try:
-            end = time.monotonic() + 90  # a bound for a process that never moves
-            while time.monotonic() < end and proc.poll() is None:
-                tr = emu.trace
-                if len(tr.positions) and np.abs(tr.positions[-1] - park).max() > 20:
-                    break
-                time.sleep(0.01)
-            proc.send_signal(signal.SIGINT)
-            out, err = proc.communicate(timeout=90)
-        finally:
-            if proc.poll() is None:
-                proc.kill()
-                proc.wait()
-            time.sleep(0.1)
-            emu.stop()
+        rc, out, err = signal_when_moving(cmd, emu, park, 20, signal.SIGINT)
     assert "Traceback" not in err, err
-    assert proc.returncode == 130, err
+    assert rc == 130, err
     assert "stopped by SIGINT; parked at rest" in out + err
-    assert not emu.violations, emu.violations[:3]
-    frames = np.array(emu.frames)
-    assert np.abs(frames - park_v).max() > 20  # it was moving
-    np.testing.assert_array_equal(frames[-1], park_v)
-    np.testing.assert_array_equal(frames[-2], park_v)
+    assert_moved_then_parked(emu, np.asarray(park) - ctrl.pulses_lo, 20)
 
 
 def test_socket_free() -> None:
@@ -477,3 +433,39 @@ def test_demo_picks_a_bundled_platform_the_controller_can_drive() -> None:
     five = SimpleNamespace(name="five", n_axes=5)  # no bundled platform has 5 actuators
     with pytest.raises(ConfigError, match="no bundled platform fits controller 'five'"):
         _platform_for(five, 100.0)  # type: ignore[arg-type]
+
+
+def signal_when_moving(
+    cmd: list[str], emu: Any, park: Any, away: int, sig: int
+) -> tuple[int, str, str]:
+    """Run ``motioncue`` ``cmd`` against the started ``emu``; once the board is ``away``
+    pulses from ``park``, send ``sig``; returns (exit status, stdout, stderr). Stops the
+    emulator."""
+    env = {**os.environ, "PYTHONPATH": str(SRC)}
+    proc = subprocess.Popen([sys.executable, "-m", "motioncue", *cmd], env=env,
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)  # fmt: skip
+    try:
+        end = time.monotonic() + 90  # a bound for a process that never moves, not a timing check
+        while time.monotonic() < end and proc.poll() is None:
+            tr = emu.trace
+            if len(tr.positions) and np.abs(tr.positions[-1] - park).max() > away:
+                break
+            time.sleep(0.01)
+        proc.send_signal(sig)
+        out, err = proc.communicate(timeout=90)
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+            proc.wait()
+        time.sleep(0.1)
+        emu.stop()
+    return proc.returncode, out, err
+
+
+def assert_moved_then_parked(emu: Any, park_v: Any, away: int) -> None:
+    """The board's frames left park by more than ``away`` pulses and end on two park frames."""
+    assert not emu.violations, emu.violations[:3]
+    frames = np.array(emu.frames)
+    assert np.abs(frames - park_v).max() > away  # it was moving when stopped
+    np.testing.assert_array_equal(frames[-1], park_v)
+    np.testing.assert_array_equal(frames[-2], park_v)

@@ -8,10 +8,7 @@ many frames had arrived when each command word came)."""
 from __future__ import annotations
 
 import dataclasses
-import os
 import signal
-import subprocess
-import sys
 import time
 from pathlib import Path
 from typing import Any
@@ -29,7 +26,16 @@ from motioncue.pipeline import generate_ride, play_ride, save_ride
 from motioncue.pipeline._stream import ParkFailed, PlayAborted
 from motioncue.telemetry._recording import Recording, read_recording_csv
 from motioncue.trajectory import ActuatorLimits
-from test_iface import CONTROLLER, PLATFORM, RATE_HZ, SRC, FaultyController, Sink, check_board
+from test_iface import (
+    CONTROLLER,
+    PLATFORM,
+    RATE_HZ,
+    FaultyController,
+    Sink,
+    assert_moved_then_parked,
+    check_board,
+    signal_when_moving,
+)
 
 STOP = b"[end]"  # a test word: the SMC3 parser logs any 3-letter command
 
@@ -144,36 +150,14 @@ def test_play_cli_sigint_parks_then_sends_the_stop_string(
     assert isinstance(stop_ctrl, IfaceController) and stop_ctrl.stop_bytes == STOP
     path = save_ride(tmp_path / "lap.ride", ride)
     emu = IfaceEmulator(stop_ctrl).start()
-    env = {**os.environ, "PYTHONPATH": str(SRC)}
-    cmd = [sys.executable, "-m", "motioncue", "play", str(path), "--controller", str(toml),
-           "--target", emu.where]  # fmt: skip
-    proc = subprocess.Popen(cmd, env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
-                            text=True)  # fmt: skip
-    try:
-        end = time.monotonic() + 90  # a bound for a process that never moves
-        while time.monotonic() < end and proc.poll() is None:
-            tr = emu.trace
-            if len(tr.positions) and np.abs(tr.positions[-1] - park).max() > 50:
-                break
-            time.sleep(0.01)
-        proc.send_signal(signal.SIGINT)
-        out, err = proc.communicate(timeout=90)
-    finally:
-        if proc.poll() is None:
-            proc.kill()
-            proc.wait()
-        time.sleep(0.1)
-        emu.stop()
+    rc, out, err = signal_when_moving(["play", str(path), "--controller", str(toml), "--target",
+                                       emu.where], emu, park, 50, signal.SIGINT)  # fmt: skip
     assert "Traceback" not in err, err
-    assert proc.returncode == 130, err
+    assert rc == 130, err
     assert "interrupted and parked (SIGINT)" in out + err
-    assert emu.malformed == 0 and not emu.violations, emu.violations[:3]
-    frames = np.array(emu.frames)
-    park_v = np.asarray(park) - ctrl.pulses_lo
-    assert np.abs(frames - park_v).max() > 50  # it was moving when stopped
-    np.testing.assert_array_equal(frames[-1], park_v)
-    np.testing.assert_array_equal(frames[-2], park_v)
-    assert emu.parser.command_log == [("ena", 0), ("end", len(frames))]
+    assert emu.malformed == 0
+    assert_moved_then_parked(emu, np.asarray(park) - ctrl.pulses_lo, 50)
+    assert emu.parser.command_log == [("ena", 0), ("end", len(emu.frames))]
 
 
 def test_the_bridge_parks_then_sends_the_stop_string(rig: Any) -> None:
@@ -214,4 +198,4 @@ def test_the_bridge_parks_then_sends_the_stop_string(rig: Any) -> None:
     park_v = np.asarray(park) - ctrl.pulses_lo
     assert np.abs(frames - park_v).max() > 20 and not emu.violations, emu.violations[:3]
     np.testing.assert_array_equal(frames[-1], park_v)
-    assert emu.parser.command_log == [("ena", 0), ("end", len(frames))]
+    assert emu.parser.command_log == [("ena", 0), ("end", len(emu.frames))]
