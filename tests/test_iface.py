@@ -469,3 +469,23 @@ def assert_moved_then_parked(emu: Any, park_v: Any, away: int) -> None:
     assert np.abs(frames - park_v).max() > away  # it was moving when stopped
     np.testing.assert_array_equal(frames[-1], park_v)
     np.testing.assert_array_equal(frames[-2], park_v)
+
+
+def test_never_skipping_late_frames_is_refused_for_a_board_without_a_buffer(
+    rig: Any, ride: Any
+) -> None:
+    """resync_after_s=None sends late frames back to back: a buffered controller plays them
+    on its own clock, the SMC3 would move as fast as they arrive. Refused before a send."""
+    from motioncue.output import open_transport
+
+    platform, ctrl, lim, _ = rig
+    assert ctrl.buffer_frames <= 1
+    with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as listener:
+        listener.bind(("127.0.0.1", 0))
+        listener.settimeout(0.2)
+        port = listener.getsockname()[1]
+        with open_transport(f"udp://127.0.0.1:{port}") as tr:
+            with pytest.raises(ConfigError, match="has no buffer to play them on its own clock"):
+                play_ride(ride, platform, ctrl, lim, tr, resync_after_s=None)
+        with pytest.raises(TimeoutError):
+            listener.recv(1024)  # nothing was sent

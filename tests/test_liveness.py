@@ -479,7 +479,6 @@ def test_fake_controller_is_not_blind() -> None:
 @pytest.mark.parametrize(
     ("controller", "value", "message"),
     [
-        ("smc3", "0", "has no buffer to play them on its own clock"),
         ("mbox3", "-5", "--resync-after-ms -5 is invalid"),
         ("mbox3", "nan", "--resync-after-ms nan is invalid"),
     ],
@@ -487,8 +486,8 @@ def test_fake_controller_is_not_blind() -> None:
 def test_play_refuses_a_resync_setting_the_controller_cannot_take(
     rides: Any, controller: str, value: str, message: str, tmp_path: Path
 ) -> None:
-    """Never skipping sends late frames back to back: only a buffered controller plays them
-    on its own clock. An unbuffered board (SMC3) would move as fast as they arrive."""
+    """A resync setting that is not a number >= 0 is refused before anything is sent (the
+    refusal of 0 for a board without a buffer: tests/test_iface.py)."""
     ride_path, _ = rides["mbox3"]
     out = tmp_path / "f.bin"
     play = _motioncue("play", str(ride_path), "--controller", controller, "--target",

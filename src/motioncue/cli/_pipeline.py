@@ -356,12 +356,6 @@ def _play(args: argparse.Namespace) -> int:
         raise ConfigError(
             f"--resync-after-ms {args.resync_after_ms:g} is invalid; allowed: a number >= 0"
         )
-    if args.resync_after_ms == 0.0 and controller.buffer_frames <= 1:
-        raise ConfigError(
-            f"--resync-after-ms 0 sends late frames back to back, and controller "
-            f"{controller.name} has no buffer to play them on its own clock (it moves as the "
-            "frames arrive): give a number > 0"
-        )
     resync_after_s = None if args.resync_after_ms == 0.0 else args.resync_after_ms / 1000.0
     controller.check_rate(ride.rate_hz)
     limits = limits_for(args, platform, controller, ride.rate_hz)

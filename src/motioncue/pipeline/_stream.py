@@ -751,7 +751,8 @@ def play_ride(
         frame (speed, acceleration and braking distance within the limits table): a limited
         transition that ends once the limiter has caught up with the ride (those frames
         count as clamped). The frames' own time stamps stay consecutive, one period apart.
-        Counted in ``PlayReport.skipped_frames`` and ``resyncs``. None: never skip.
+        Counted in ``PlayReport.skipped_frames`` and ``resyncs``. None: never skip (refused
+        on a live link to a controller without a buffer, ``buffer_frames <= 1``).
 
     Returns
     -------
@@ -771,6 +772,12 @@ def play_ride(
     live = _is_live(transport)
     if live and not paced:
         raise ConfigError("paced=False sends as fast as possible: only for pcap: and file: targets")
+    if live and paced and resync_after_s is None and controller.buffer_frames <= 1:
+        raise ConfigError(
+            "never skipping late frames (--resync-after-ms 0, resync_after_s=None) sends them "
+            f"back to back, and controller {controller.name} has no buffer to play them on its "
+            "own clock (it moves as the frames arrive): give a number > 0"
+        )
     if live and speed != 1.0 and throttle is None:
         raise ConfigError(
             f"speed {speed:g}: a controller plays frames at their own time stamps, so anything "
