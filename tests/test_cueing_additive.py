@@ -42,19 +42,12 @@ def _additive(**kw: object) -> CueingParams:
 
 @pytest.mark.parametrize("head_mm", [(0.0, 0.0, 0.0), (80.0, -30.0, 650.0)])
 def test_additive_washout_batch_equals_streaming(head_mm: tuple[float, float, float]) -> None:
-    from test_cueing_classical import random_drive
+    from test_cueing_classical import assert_batch_equals_streaming, random_drive
 
     p = _additive(head_offset_m=tuple(v * 1e-3 for v in head_mm))
     design = ClassicalWashout(p, fs_hz=100.0)
     f, w = random_drive(3000, seed=7)
-    res = design.run(f, w)
-    state = design.initial_state()
-    stream = np.array([design.step(state, a, b, None) for a, b in zip(f.tolist(), w.tolist(),
-                                                                      strict=True)])  # fmt: skip
-    np.testing.assert_allclose(stream, res.poses, rtol=0, atol=1e-12)
-    chunked = design.initial_state()
-    parts = [design.run(f[a : a + 701], w[a : a + 701], chunked).poses for a in range(0, 3000, 701)]
-    np.testing.assert_allclose(np.concatenate(parts), res.poses, rtol=0, atol=1e-12)
+    assert_batch_equals_streaming(design, f, w, 701)
 
 
 def _cornering(n: int = 1500) -> tuple[np.ndarray, np.ndarray]:

@@ -5,6 +5,7 @@ from __future__ import annotations
 import dataclasses
 import math
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import pytest
@@ -158,6 +159,24 @@ def test_cinema_seat_moves_only_heave_pitch_roll() -> None:
     poses = design.run(f, w).poses
     assert np.abs(poses[:, [0, 1, 5]]).max() == 0.0
     assert (np.abs(poses[:, [2, 3, 4]]).max(axis=0) > 1e-4).all()
+
+
+def assert_batch_equals_streaming(
+    design: Any, f: np.ndarray, w: np.ndarray, chunk: int | None = None
+) -> None:
+    """``design.run`` over the whole drive equals ``step`` sample by sample (to 1e-12), and,
+    given ``chunk``, ``run`` over consecutive chunks carrying its state."""
+    res = design.run(f, w)
+    state = design.initial_state()
+    stream = np.array([design.step(state, a, b, None) for a, b in zip(f.tolist(), w.tolist(),
+                                                                      strict=True)])  # fmt: skip
+    np.testing.assert_allclose(stream, res.poses, rtol=0, atol=1e-12)
+    if chunk is not None:
+        carried = design.initial_state()
+        n = f.shape[0]
+        parts = [design.run(f[a : a + chunk], w[a : a + chunk], carried).poses
+                 for a in range(0, n, chunk)]  # fmt: skip
+        np.testing.assert_allclose(np.concatenate(parts), res.poses, rtol=0, atol=1e-12)
 
 
 def random_drive(n: int, seed: int) -> tuple[np.ndarray, np.ndarray]:

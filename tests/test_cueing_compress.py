@@ -86,18 +86,11 @@ def _compressive(base: CueingParams) -> CueingParams:
 
 @pytest.mark.parametrize("fs", [100.0, 1000.0])
 def test_compressive_washout_batch_equals_streaming(fs: float) -> None:
-    from test_cueing_classical import random_drive
+    from test_cueing_classical import assert_batch_equals_streaming, random_drive
 
     design = ClassicalWashout(_compressive(load_cueing("racing-hexapod")), fs_hz=fs)
     f, w = random_drive(4000, seed=int(fs) + 1)
-    res = design.run(f, w)
-    state = design.initial_state()
-    stream = np.array([design.step(state, a, b, None) for a, b in zip(f.tolist(), w.tolist(),
-                                                                      strict=True)])  # fmt: skip
-    np.testing.assert_allclose(stream, res.poses, rtol=0, atol=1e-12)
-    chunked = design.initial_state()
-    parts = [design.run(f[a : a + 777], w[a : a + 777], chunked).poses for a in range(0, 4000, 777)]
-    np.testing.assert_allclose(np.concatenate(parts), res.poses, rtol=0, atol=1e-12)
+    assert_batch_equals_streaming(design, f, w, 777)
 
 
 @pytest.mark.parametrize(("axis", "sign"), [(0, 1.0), (0, -1.0), (1, 1.0), (1, -1.0)])

@@ -109,18 +109,11 @@ def test_rate_mix_step_scales_only_above_the_limit() -> None:
 
 @pytest.mark.parametrize("accel", [None, 2.0])
 def test_batch_equals_streaming(accel: float | None) -> None:
-    from test_cueing_classical import random_drive
+    from test_cueing_classical import assert_batch_equals_streaming, random_drive
 
     design = ClassicalWashout(_params(tilt_accel_limit_rad_s2=accel, lead_s=(0.05, 0.02)), FS)
     f, w = random_drive(2500, seed=11)
-    res = design.run(f, w)
-    state = design.initial_state()
-    stream = np.array([design.step(state, a, b, None) for a, b in zip(f.tolist(), w.tolist(),
-                                                                      strict=True)])  # fmt: skip
-    np.testing.assert_allclose(stream, res.poses, rtol=0, atol=1e-12)
-    chunked = design.initial_state()
-    parts = [design.run(f[a : a + 613], w[a : a + 613], chunked).poses for a in range(0, 2500, 613)]
-    np.testing.assert_allclose(np.concatenate(parts), res.poses, rtol=0, atol=1e-12)
+    assert_batch_equals_streaming(design, f, w, 613)
 
 
 def test_toml_round_trip_and_bad_rows(tmp_path: Path) -> None:
@@ -188,16 +181,12 @@ def test_lag_fill_feeds_the_translation_minus_k_g_sin_of_the_lag(k: float) -> No
 
 
 def test_lag_fill_batch_equals_streaming() -> None:
-    from test_cueing_classical import random_drive
+    from test_cueing_classical import assert_batch_equals_streaming, random_drive
 
     p = replace(_fill(0.6), f_scale=(0.05, 0.1, 0.1), w_scale=(0.3, 0.3, 0.1), lead_s=(0.05, 0.02))
     design = ClassicalWashout(p, FS)
     f, w = random_drive(2500, seed=5)
-    res = design.run(f, w)
-    state = design.initial_state()
-    stream = np.array([design.step(state, a, b, None) for a, b in zip(f.tolist(), w.tolist(),
-                                                                      strict=True)])  # fmt: skip
-    np.testing.assert_allclose(stream, res.poses, rtol=0, atol=1e-12)
+    assert_batch_equals_streaming(design, f, w)
 
 
 def test_lag_fill_needs_the_additive_tilt_and_round_trips(tmp_path: Path) -> None:
