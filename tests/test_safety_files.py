@@ -747,3 +747,48 @@ def test_inspect_says_whether_a_ride_is_intact(
         assert lines[1].startswith(f"  digest: {word}"), lines[:3]
         assert main(["inspect", str(file), "--json"]) == 0
         assert json.loads(capsys.readouterr().out)["digest"] == state
+
+
+def test_a_stop_signal_while_a_ride_is_encoded_is_handled_after_it() -> None:
+    """A SIGHUP arriving while numpy writes the ride's zip member (with an open handle) used
+    to raise inside zipfile, and numpy's close then raised ValueError over it: a traceback
+    instead of "interrupted" (seen in a fresh clone's run). It is now handled right after."""
+    import zipfile
+
+    from motioncue.cueing import load_cueing
+    from motioncue.kinematics import load_platform
+    from motioncue.output import load_controller
+    from motioncue.pipeline import generate_ride
+    from motioncue.pipeline._ridefile import ride_bytes
+    from motioncue.telemetry._recording import Recording, read_recording_csv
+
+    platform = load_platform("seat3")
+    controller = load_controller("mbox3")
+    rec = read_recording_csv(config_dir("recordings") / "lap.csv")
+    keep = rec.t_s <= 1.0
+    ride, _ = generate_ride(
+        Recording(rec.t_s[keep], rec.f[keep], rec.w[keep]), platform, controller,
+        load_cueing("cinema-seat-3dof"), rate_hz=100.0,
+    )  # fmt: skip
+    original_open = zipfile.ZipFile.open
+    sent: list[bool] = []
+
+    def open_then_signal(self: zipfile.ZipFile, *args: Any, **kw: Any) -> Any:
+        handle = original_open(self, *args, **kw)
+        if not sent:
+            sent.append(True)
+            os.kill(os.getpid(), signal.SIGHUP)  # delivered now, unless held
+        return handle
+
+    def stop(signum: int, frame: Any) -> None:
+        raise KeyboardInterrupt
+
+    previous = signal.signal(signal.SIGHUP, stop)
+    try:
+        zipfile.ZipFile.open = open_then_signal  # type: ignore[method-assign]
+        with pytest.raises(KeyboardInterrupt):
+            ride_bytes(ride)
+    finally:
+        zipfile.ZipFile.open = original_open  # type: ignore[method-assign]
+        signal.signal(signal.SIGHUP, previous)
+    assert sent
