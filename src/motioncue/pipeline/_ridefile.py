@@ -51,7 +51,7 @@ from typing import TYPE_CHECKING, Any, BinaryIO
 
 import numpy as np
 
-from .._atomic import _signals_held, atomic_write_bytes
+from .._atomic import atomic_write_bytes
 from .._errors import ConfigError, MotioncueError, one_line
 
 if TYPE_CHECKING:
@@ -289,19 +289,15 @@ def ride_bytes(ride: Ride) -> bytes:
     header_bytes = header.encode("utf-8")
     digest = content_digest(header_bytes, ride.t_s, ride.pulses, ride.dout, ride.dacs)
     buf = io.BytesIO()
-    # a stop signal's handler raising inside zipfile's member write left the archive with an
-    # open handle, and numpy's close then raised ValueError over it (a traceback instead of
-    # "interrupted"): the signal waits for the in-memory archive and is handled right after
-    with _signals_held():
-        np.savez_compressed(
-            buf,
-            header=np.frombuffer(header_bytes, dtype=np.uint8),
-            t_s=ride.t_s,
-            pulses=ride.pulses,
-            dout=ride.dout,
-            dacs=ride.dacs,
-            digest=np.frombuffer(digest.encode("ascii"), dtype=np.uint8),
-        )
+    np.savez_compressed(
+        buf,
+        header=np.frombuffer(header_bytes, dtype=np.uint8),
+        t_s=ride.t_s,
+        pulses=ride.pulses,
+        dout=ride.dout,
+        dacs=ride.dacs,
+        digest=np.frombuffer(digest.encode("ascii"), dtype=np.uint8),
+    )
     return buf.getvalue()
 
 
