@@ -152,13 +152,22 @@ def register(sub: Any) -> None:
 
 
 class _StopLikeCtrlC:
-    """While active (main thread): SIGTERM and SIGHUP end ``emulate``'s wait as Ctrl-C does,
-    so its summary, trace and plot are written whatever stopped it (a service manager, a
+    """While active (main thread): SIGINT, SIGTERM and SIGHUP end ``emulate``'s wait, so its
+    summary, trace and plot are written whatever stopped it (Ctrl-C, a service manager, a
     closed terminal); a later stop signal is recorded and ignored, so that nothing cuts the
-    writing short."""
+    writing short.
+
+    SIGINT gets this handler too rather than Python's default one: Python installs its
+    Ctrl-C handler only when the process starts with SIGINT at its default, so an
+    ``emulate`` started by a parent that ignores SIGINT (a shell's background job, a test
+    runner's worker) would otherwise never stop on Ctrl-C (``play`` and ``bridge`` install
+    theirs the same way, ``pipeline._signals.SignalGuard``).
+    """
 
     SIGNALS = tuple(
-        signal.Signals[n] for n in ("SIGTERM", "SIGHUP") if n in signal.Signals.__members__
+        signal.Signals[n]
+        for n in ("SIGINT", "SIGTERM", "SIGHUP")
+        if n in signal.Signals.__members__
     )
 
     def __init__(self) -> None:
@@ -177,10 +186,10 @@ class _StopLikeCtrlC:
         return self
 
     def finish(self) -> None:
-        """From here on every stop signal (SIGINT too) is recorded and ignored."""
+        """From here on every stop signal is recorded and ignored."""
         self.received.append(0)
         if threading.current_thread() is threading.main_thread():
-            for sig in (*self.SIGNALS, signal.SIGINT):
+            for sig in self.SIGNALS:
                 previous = signal.signal(sig, self._on_signal)
                 self._previous.setdefault(sig, previous)
 
