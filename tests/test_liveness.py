@@ -265,9 +265,12 @@ def test_bridge_stops_when_the_controller_goes_silent(then_sigint: bool) -> None
             proc = _bridge(port, f"udp://127.0.0.1:{fake.port}?silence_ms={silence_ms}",
                            "--duration", "30")  # fmt: skip
             if then_sigint:
-                end = time.monotonic() + 20
+                # the Ctrl-C must come after the silence began: a loaded machine has taken
+                # over 20 s to bring the bridge up to the fake's 200th frame
+                end = time.monotonic() + 90
                 while fake.silent_since is None and time.monotonic() < end:
                     time.sleep(0.01)
+                assert fake.silent_since is not None, "the bridge never reached the silence"
                 time.sleep(0.1)
                 proc.send_signal(signal.SIGINT)
             _out, err = proc.communicate(timeout=60)
