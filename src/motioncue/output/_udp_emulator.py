@@ -33,12 +33,13 @@ import threading
 import time
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
-from typing import Generic, Protocol, Self, TypeVar
+from typing import ClassVar, Generic, Protocol, Self, TypeVar
 
 import numpy as np
 
-from .._errors import MotioncueError, TransportError
+from .._errors import MotioncueError, ProtocolError, TransportError
 from ._controller_api import PulseLimits
+from ._udp_common import Header, WireMessage, decode_header
 
 __all__ = [
     "STATE_ESTOP",
@@ -437,6 +438,9 @@ class EmulatedController(Protocol):
     @property
     def parameters(self) -> Mapping[str, int]: ...
 
+    @property
+    def node(self) -> int: ...
+
     def with_parameters(self, **changes: int) -> EmulatedController: ...
 
     def pulse_limits(self, rate_hz: float | None = None) -> PulseLimits: ...
@@ -604,6 +608,8 @@ class ControllerEmulator(UdpEmulatorBase, Generic[C]):
     """
 
     playback: Playback
+    LABEL: ClassVar[str]
+    """The controller's name in messages (``"IMAX"``, ``"MBOX"``)."""
 
     def __init__(
         self,
@@ -643,6 +649,55 @@ class ControllerEmulator(UdpEmulatorBase, Generic[C]):
     def _set_rate(self) -> None:  # pragma: no cover - abstract
         """Playback rate from the current parameters."""
         raise NotImplementedError
+
+    def _tick(self, now_s: float) -> None:  # pragma: no cover - abstract
+        """Advance playback, homing and timers to wall time ``now_s``."""
+        raise NotImplementedError
+
+    def _header(self, data: bytes) -> Header:
+        """The header of a datagram sent to the controller (:class:`ProtocolError` if none)."""
+        return decode_header(data)
+
+    def _replies_enabled(self) -> bool:
+        """Whether the controller answers at all (a parameter may turn replies off)."""
+        return True
+
+    def _decode(self, data: bytes, h: Header, reply: bool) -> WireMessage | list[bytes]:
+        """The message in ``data`` (header ``h``), or, when it cannot be decoded, what the
+        controller sends back instead (the malformed datagram recorded)."""
+        raise NotImplementedError  # pragma: no cover - abstract
+
+    def _answer(self, msg: WireMessage, now_s: float) -> WireMessage | None:
+        """Act on a decoded message; the reply to send (if replies are asked for)."""
+        raise NotImplementedError  # pragma: no cover - abstract
+
+    # -- datagrams ----------------------------------------------------------------------
+    def handle(self, data: bytes, now_s: float) -> list[bytes]:
+        """Process one datagram at wall time ``now_s``; return the reply datagrams.
+
+        A datagram whose header does not decode is recorded as malformed; one whose Who
+        accept field does not select this controller's node is ignored; the others are
+        decoded (:meth:`_decode`) and acted on (:meth:`_answer`), and the reply is sent
+        when the Who reply field selects the node and :meth:`_replies_enabled`.
+        """
+        self._tick(now_s)
+        try:
+            h = self._header(data)
+        except ProtocolError as exc:
+            return self._malformed(str(exc))
+        node = self.controller.node
+        if not who_matches(h.who_accept, node):
+            return []
+        reply = who_matches(h.who_reply, node) and self._replies_enabled()
+        msg = self._decode(data, h, reply)
+        if isinstance(msg, list):
+            return msg
+        out = self._answer(msg, now_s)
+        return [out.encode()] if reply and out is not None else []
+
+    def _not_to_it(self, msg: WireMessage) -> None:
+        """Record a message the controller sends but never receives; no reply."""
+        self._malformed(f"{type(msg).__name__} is sent by an {self.LABEL}, not to it")
 
     @property
     def trace(self) -> Trace:

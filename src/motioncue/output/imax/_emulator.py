@@ -33,7 +33,7 @@ Modelled (IMAX manual section in brackets):
 from __future__ import annotations
 
 from ..._errors import ProtocolError
-from .._udp_common import WireMessage, decode_header
+from .._udp_common import Header, WireMessage, decode_header
 from .._udp_emulator import (
     STATE_ESTOP,
     STATE_HOMING,
@@ -42,7 +42,6 @@ from .._udp_emulator import (
     Playback,
     Violation,
     wall_clock,
-    who_matches,
 )
 from ._controller import ImaxController
 from ._messages import (
@@ -89,6 +88,8 @@ class ImaxEmulator(ControllerEmulator[ImaxController]):
 
     Constructed as a :class:`ControllerEmulator` of an :class:`ImaxController`.
     """
+
+    LABEL = "IMAX"
 
     def _init_kind(self) -> None:
         controller = self.controller
@@ -139,37 +140,34 @@ class ImaxEmulator(ControllerEmulator[ImaxController]):
         self.alarm = code
 
     # -- datagrams ----------------------------------------------------------------------
-    def handle(self, data: bytes, now_s: float) -> list[bytes]:
-        self._tick(now_s)
+    def _header(self, data: bytes) -> Header:
+        if data[:2] == b"\x33\xcc" and data[4:6] == b"\x31\x01":
+            raise ProtocolError("status report 0x3101 is sent by the controller, not to it")
+        return decode_header(data)
+
+    def _replies_enabled(self) -> bool:
+        return self.params["PA15"] == 1  # PA15 = 0: UDP replies off
+
+    def _decode(self, data: bytes, h: Header, reply: bool) -> WireMessage | list[bytes]:
         try:
-            if data[:2] == b"\x33\xcc" and data[4:6] == b"\x31\x01":
-                raise ProtocolError("status report 0x3101 is sent by the controller, not to it")
-            h = decode_header(data)
-        except ProtocolError as exc:
-            return self._malformed(str(exc))
-        node = self.controller.node
-        if not who_matches(h.who_accept, node):
-            return []
-        reply = who_matches(h.who_reply, node) and self.params["PA15"] == 1
-        try:
-            msg = decode(data, self.port_out_bytes)
+            return decode(data, self.port_out_bytes)
         except ProtocolError as exc:
             self._malformed(str(exc))
             if reply and h.function in (F_ABS, F_REL, F_VIB_ABS, F_VIB_REL):
                 return [self._command_error(h.function)]
             return []
-        out: WireMessage | None
+
+    def _answer(self, msg: WireMessage, now_s: float) -> WireMessage | None:
         if isinstance(msg, MotionFrame | VibrationFrame):
-            out = self._frame(msg)
-        elif isinstance(msg, ServoRead | ServoWrite):
-            out = self._servo(msg)
-        elif isinstance(msg, RegisterRead):
-            out = self._read(msg)
-        elif isinstance(msg, RegisterWrite):
-            out = self._write(msg, now_s)
-        else:
-            return self._malformed(f"{type(msg).__name__} is sent by an IMAX, not to it")
-        return [out.encode()] if reply and out is not None else []
+            return self._frame(msg)
+        if isinstance(msg, ServoRead | ServoWrite):
+            return self._servo(msg)
+        if isinstance(msg, RegisterRead):
+            return self._read(msg)
+        if isinstance(msg, RegisterWrite):
+            return self._write(msg, now_s)
+        self._not_to_it(msg)
+        return None
 
     def _command_error(self, function: int) -> bytes:
         """x = 5 reply to a frame the controller cannot use (error code 5, zero frame)."""

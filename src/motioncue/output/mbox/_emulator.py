@@ -30,7 +30,7 @@ reads 0 homing, 1 ready, 2 e-stop, 3 fault.
 from __future__ import annotations
 
 from ..._errors import ProtocolError
-from .._udp_common import WHO_NONE, WireMessage, decode_header
+from .._udp_common import WHO_NONE, Header, WireMessage
 from .._udp_emulator import (
     STATE_ESTOP,
     STATE_HOMING,
@@ -38,7 +38,6 @@ from .._udp_emulator import (
     ControllerEmulator,
     Playback,
     Violation,
-    who_matches,
 )
 from ._controller import MboxController
 from ._messages import (
@@ -81,6 +80,8 @@ class MboxEmulator(ControllerEmulator[MboxController]):
     Constructed as a :class:`ControllerEmulator` of an :class:`MboxController`.
     """
 
+    LABEL = "MBOX"
+
     def _init_kind(self) -> None:
         controller = self.controller
         self.cx = [0x0002, 0, 0, 0, 0, 0, 0, 0]
@@ -99,17 +100,7 @@ class MboxEmulator(ControllerEmulator[MboxController]):
             self.state = STATE_FAULT
 
     # -- datagrams ----------------------------------------------------------------------
-    def handle(self, data: bytes, now_s: float) -> list[bytes]:
-        """Process one datagram at wall time ``now_s``; return the reply datagrams."""
-        self._tick(now_s)
-        try:
-            h = decode_header(data)
-        except ProtocolError as exc:
-            return self._malformed(str(exc))
-        node = self.controller.node
-        if not who_matches(h.who_accept, node):
-            return []
-        reply = who_matches(h.who_reply, node)
+    def _decode(self, data: bytes, h: Header, reply: bool) -> WireMessage | list[bytes]:
         if h.function in (F_ABS, F_REL) and h.channel == (0 if self.n_axes == 3 else 1):
             need = frame_size(self.n_axes)
             if len(data) < need:
@@ -120,19 +111,19 @@ class MboxEmulator(ControllerEmulator[MboxController]):
                 frame = MotionFrame.decode_parts(h, padded)
                 return [MotionFrameReply(FrameStatus.SHORT_FRAME, frame).encode()]
         try:
-            msg = decode(data)
+            return decode(data)
         except ProtocolError as exc:
             return self._malformed(str(exc))
-        out: WireMessage | None
+
+    def _answer(self, msg: WireMessage, now_s: float) -> WireMessage | None:
         if isinstance(msg, MotionFrame):
-            out = self._frame(msg)
-        elif isinstance(msg, RegisterRead):
-            out = self._read(msg)
-        elif isinstance(msg, RegisterWrite):
-            out = self._write(msg, now_s)
-        else:
-            return self._malformed(f"{type(msg).__name__} is sent by an MBOX, not to it")
-        return [out.encode()] if reply and out is not None else []
+            return self._frame(msg)
+        if isinstance(msg, RegisterRead):
+            return self._read(msg)
+        if isinstance(msg, RegisterWrite):
+            return self._write(msg, now_s)
+        self._not_to_it(msg)
+        return None
 
     def _frame(self, msg: MotionFrame) -> MotionFrameReply:
         if msg.n_axes != self.n_axes:
