@@ -424,6 +424,36 @@ class Playback:
         )
 
 
+ERR_ADDRESS = 1
+"""Error code of a register access to an address the controller does not have (both kinds:
+the manuals define none, a decision)."""
+ERR_VALUE = 2
+"""Error code of a register write of a value outside the parameter's range."""
+
+
+def parameter_changes(
+    start: int,
+    words: Sequence[int],
+    by_address: Mapping[int, str],
+    spec: Mapping[str, tuple[int, int, int, str]],
+) -> tuple[dict[str, int], int | None]:
+    """The parameter values a register write of ``words`` from address ``start`` sets, and
+    ``None``; or ``({}, code)`` for the first word the controller refuses (:data:`ERR_ADDRESS`
+    no parameter there, :data:`ERR_VALUE` out of its ``spec`` range). A parameter whose range
+    goes below 0 reads its word as signed 16-bit."""
+    changes = {}
+    for i, word in enumerate(words):
+        name = by_address.get(start + i)
+        if name is None:
+            return {}, ERR_ADDRESS
+        lo, hi, _, _ = spec[name]
+        value = word - 0x10000 if lo < 0 and word & 0x8000 else word
+        if not lo <= value <= hi:
+            return {}, ERR_VALUE
+        changes[name] = value
+    return changes, None
+
+
 def _num(x: float) -> str:
     """A limit for a message: whole pulses, or +-inf."""
     return f"{x:.0f}" if math.isfinite(x) else str(x)

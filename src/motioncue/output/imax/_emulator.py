@@ -35,12 +35,14 @@ from __future__ import annotations
 from ..._errors import ProtocolError
 from .._udp_common import Header, WireMessage, decode_header
 from .._udp_emulator import (
+    ERR_ADDRESS,
     STATE_ESTOP,
     STATE_HOMING,
     STATE_READY,
     ControllerEmulator,
     Playback,
     Violation,
+    parameter_changes,
     wall_clock,
 )
 from ._controller import ImaxController
@@ -71,8 +73,6 @@ from ._params import DP_POS, PA_SPEC
 
 __all__ = ["ImaxEmulator"]
 
-ERR_ADDRESS = 1
-ERR_VALUE = 2
 ERR_BUFFER = 21  # Err21: UDP data buffer overflow (chapter 6)
 _PA_BY_ADDRESS = {int(name[2:], 16): name for name in PA_SPEC}
 _DP_POS = DP_POS  # low word, high word follows (2.3.3)
@@ -362,15 +362,9 @@ class ImaxEmulator(ControllerEmulator[ImaxController]):
                     self.dp_extra[a] = v
             return RegisterReply(0x1202, msg.channel, msg.start, msg.values)
         assert msg.channel == CHANNEL_PA
-        changes = {}
-        for i, v in enumerate(msg.values):
-            name = _PA_BY_ADDRESS.get(msg.start + i)
-            if name is None:
-                return err(ERR_ADDRESS)
-            lo, hi, _, _ = PA_SPEC[name]
-            if not lo <= v <= hi:
-                return err(ERR_VALUE)
-            changes[name] = v
+        changes, refused = parameter_changes(msg.start, msg.values, _PA_BY_ADDRESS, PA_SPEC)
+        if refused is not None:
+            return err(refused)
         for name, v in changes.items():
             self.params[name] = v
             if name == "PA08" and v == 1:

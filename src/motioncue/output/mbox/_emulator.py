@@ -32,12 +32,14 @@ from __future__ import annotations
 from ..._errors import ProtocolError
 from .._udp_common import WHO_NONE, Header, WireMessage
 from .._udp_emulator import (
+    ERR_ADDRESS,
     STATE_ESTOP,
     STATE_HOMING,
     STATE_READY,
     ControllerEmulator,
     Playback,
     Violation,
+    parameter_changes,
 )
 from ._controller import MboxController
 from ._messages import (
@@ -61,17 +63,11 @@ from ._params import DX_ACTUAL, DX_COMMAND, DX_UDP, FN_SPEC
 
 __all__ = ["MboxEmulator"]
 
-ERR_ADDRESS = 1
-ERR_VALUE = 2
 
 STATE_FAULT = 3  # after STATE_HOMING, STATE_READY, STATE_ESTOP = 0, 1, 2
 _FN_BY_ADDRESS = {int(name[2:], 16): name for name in FN_SPEC}
 # DX addresses of actual / commanded / UDP positions, low word first (6.1.1, 6.1.11)
 _DX_ACTUAL, _DX_COMMAND, _DX_UDP = DX_ACTUAL, DX_COMMAND, DX_UDP
-
-
-def _s16(v: int) -> int:
-    return v - 0x10000 if v & 0x8000 else v
 
 
 class MboxEmulator(ControllerEmulator[MboxController]):
@@ -202,16 +198,9 @@ class MboxEmulator(ControllerEmulator[MboxController]):
             for i, v in enumerate(msg.values):
                 self._write_cx(msg.start + i, v, now_s)
             return RegisterWriteReply(msg.channel, msg.start, msg.values)
-        changes = {}
-        for i, v in enumerate(msg.values):
-            name = _FN_BY_ADDRESS.get(msg.start + i)
-            if name is None:
-                return err(ERR_ADDRESS)
-            lo, hi, _, _ = FN_SPEC[name]
-            value = _s16(v) if lo < 0 else v
-            if not lo <= value <= hi:
-                return err(ERR_VALUE)
-            changes[name] = value
+        changes, refused = parameter_changes(msg.start, msg.values, _FN_BY_ADDRESS, FN_SPEC)
+        if refused is not None:
+            return err(refused)
         for name, value in changes.items():
             old = self.params[name]
             self.params[name] = value
