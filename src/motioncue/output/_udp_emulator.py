@@ -38,7 +38,7 @@ from typing import ClassVar, Generic, Protocol, Self, TypeVar
 import numpy as np
 
 from .._errors import MotioncueError, ProtocolError, TransportError
-from ._controller_api import PulseLimits
+from ._controller_api import Controller, PulseLimits
 from ._udp_common import Header, WireMessage, decode_header
 
 __all__ = [
@@ -459,11 +459,10 @@ def _num(x: float) -> str:
     return f"{x:.0f}" if math.isfinite(x) else str(x)
 
 
-class EmulatedController(Protocol):
-    """What the shared emulator state needs of a UDP controller description."""
-
-    @property
-    def n_axes(self) -> int: ...
+class EmulatedController(Controller, Protocol):
+    """What the shared emulator state needs of a UDP controller description: a
+    :class:`~._controller_api.Controller` with parameters by name, a Who node and copies
+    with changed parameters."""
 
     @property
     def parameters(self) -> Mapping[str, int]: ...
@@ -472,8 +471,6 @@ class EmulatedController(Protocol):
     def node(self) -> int: ...
 
     def with_parameters(self, **changes: int) -> EmulatedController: ...
-
-    def pulse_limits(self, rate_hz: float | None = None) -> PulseLimits: ...
 
 
 C = TypeVar("C", bound=EmulatedController)
