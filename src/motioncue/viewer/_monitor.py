@@ -41,7 +41,7 @@ if TYPE_CHECKING:
     import tornado.web
 
     from ..kinematics import Platform
-    from ..output._registry import EmulatorReadout
+    from ..output import EmulatorReadout
     from ..pipeline._bridge import Bridge, BridgeStats
     from ..pipeline._stream import OutputStage
     from ..trajectory import ActuatorLimits
