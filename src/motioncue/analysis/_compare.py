@@ -439,8 +439,7 @@ class CompareResult:
         clamped poses; the per-channel figures are in the CSV and JSON.
         """
         rows = self.rows()
-        wr = max([len("recording"), *(len(r["recording"]) for r in rows)])
-        wp = max([len("preset"), *(len(r["preset"]) for r in rows)])
+        wr, wp = _key_widths(rows)
         corr = " ".join(f"{'c' + a:>6}" for a in COMPARE_AXES)
         xy = ("fx", "fy")
         strength = " ".join(
@@ -552,22 +551,19 @@ class CompareResult:
             "False and missed cue time per channel (s):",
         ]
         rows = self.rows()
-        wr = max([len("recording"), *(len(r["recording"]) for r in rows)])
-        wp = max([len("preset"), *(len(r["preset"]) for r in rows)])
+        wr, wp = _key_widths(rows)
+        cols = [
+            *((f"false {a}", f"false_cue_s_{a}", 8) for a in COMPARE_AXES),
+            *((f"missed {a}", f"missed_cue_s_{a}", 9) for a in COMPARE_AXES),
+            ("dur s", "duration_s", 8),
+        ]
         lines.append(
-            f"{'recording':<{wr}} {'preset':<{wp}} "
-            + " ".join(f"{'false ' + a:>8}" for a in COMPARE_AXES)
-            + " "
-            + " ".join(f"{'missed ' + a:>9}" for a in COMPARE_AXES)
-            + f" {'dur s':>8}"
+            f"{'recording':<{wr}} {'preset':<{wp}} " + " ".join(f"{h:>{w}}" for h, _, w in cols)
         )
         for r in rows:
             lines.append(
                 f"{r['recording']:<{wr}} {r['preset']:<{wp}} "
-                + " ".join(f"{r[f'false_cue_s_{a}']:8.2f}" for a in COMPARE_AXES)
-                + " "
-                + " ".join(f"{r[f'missed_cue_s_{a}']:9.2f}" for a in COMPARE_AXES)
-                + f" {r['duration_s']:8.2f}"
+                + " ".join(f"{r[k]:{w}.2f}" for _, k, w in cols)
             )
         lines += [
             "",
@@ -590,6 +586,13 @@ class CompareResult:
             lines += ["", "Plots (perceived motion per channel, vehicle and each preset):"]
             lines += [f"  {p}" for p in plots]
         return "\n".join(lines) + "\n"
+
+
+def _key_widths(rows: Sequence[Row]) -> tuple[int, int]:
+    """Widths of the recording and preset columns of the text tables (characters)."""
+    wr = max([len("recording"), *(len(r["recording"]) for r in rows)])
+    wp = max([len("preset"), *(len(r["preset"]) for r in rows)])
+    return wr, wp
 
 
 def compare_cueing(

@@ -36,6 +36,7 @@ import numpy as np
 
 from .._config import ConfigReader
 from .._errors import ConfigError
+from .._registry import register_entry, registered_entry
 from ._platform import LinearLegPlatform, Platform
 
 __all__ = [
@@ -157,10 +158,7 @@ def register_platform_kind(kind: PlatformKind) -> PlatformKind:
 
     Returns ``kind``, so a module may keep it: ``KIND = register_platform_kind(...)``.
     """
-    if not isinstance(kind, PlatformKind):
-        raise ConfigError(f"register_platform_kind({kind!r}): allowed: a PlatformKind")
-    PLATFORM_KINDS[kind.name] = kind
-    return kind
+    return register_entry(PLATFORM_KINDS, kind, PlatformKind, "register_platform_kind")
 
 
 def platform_kind(name: str) -> PlatformKind:
@@ -171,9 +169,4 @@ def platform_kind(name: str) -> PlatformKind:
     ConfigError
         ``name`` is not registered (the message lists the registered kinds).
     """
-    kind = PLATFORM_KINDS.get(name)
-    if kind is None:
-        raise ConfigError(
-            f"unknown platform kind {name!r}; known kinds: {', '.join(sorted(PLATFORM_KINDS))}"
-        )
-    return kind
+    return registered_entry(PLATFORM_KINDS, name, "platform kind", "kinds")

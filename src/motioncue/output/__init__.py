@@ -14,6 +14,7 @@ from ._controllers import load_controller
 from ._registry import (
     ControllerKind,
     Emulator,
+    EmulatorReadout,
     Inspection,
     Refusals,
     controller_kind,
@@ -31,6 +32,7 @@ __all__ = [
     "ControllerKind",
     "DriveExpectations",
     "Emulator",
+    "EmulatorReadout",
     "FileTransport",
     "FrameEncoder",
     "Inspection",

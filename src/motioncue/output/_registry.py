@@ -62,6 +62,7 @@ __all__ = [
     "PLUGINS_ENV",
     "ControllerKind",
     "Emulator",
+    "EmulatorReadout",
     "Inspection",
     "Refusals",
     "controller_kind",
@@ -77,12 +78,12 @@ PLUGINS_ENV = ENV_VAR
 ENTRY_POINT_GROUP = "motioncue.controllers"
 
 
-class Emulator(Protocol):
-    """What ``emulate`` and ``demo`` use of a running emulator.
+class EmulatorReadout(Protocol):
+    """What an emulator has played, read while it runs (the live monitor reads only this).
 
-    ``trace`` is what it played (times, frame numbers and positions in pulses, on the
-    controller's clock), ``violations`` every limit or protocol rule the frames broke,
-    ``internal_errors`` the emulator's own failures while serving (none expected).
+    ``received`` counts the datagrams that reached it, ``trace`` is what it played (times,
+    frame numbers and positions in pulses, on the controller's clock), ``violations``
+    every limit or protocol rule the frames broke.
     """
 
     @property
@@ -93,6 +94,13 @@ class Emulator(Protocol):
 
     @property
     def violations(self) -> Sequence[Violation]: ...
+
+
+class Emulator(EmulatorReadout, Protocol):
+    """What ``emulate`` and ``demo`` use of a running emulator: its
+    :class:`EmulatorReadout`, ``internal_errors`` (the emulator's own failures while
+    serving; none expected), where it listens, start and stop.
+    """
 
     @property
     def internal_errors(self) -> Sequence[str]: ...

@@ -33,12 +33,13 @@ import threading
 import time
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
-from typing import Generic, Protocol, Self, TypeVar
+from typing import ClassVar, Generic, Protocol, Self, TypeVar
 
 import numpy as np
 
-from .._errors import MotioncueError, TransportError
-from ._controller_api import PulseLimits
+from .._errors import MotioncueError, ProtocolError, TransportError
+from ._controller_api import Controller, PulseLimits
+from ._udp_common import Header, WireMessage, decode_header
 
 __all__ = [
     "STATE_ESTOP",
@@ -423,23 +424,53 @@ class Playback:
         )
 
 
+ERR_ADDRESS = 1
+"""Error code of a register access to an address the controller does not have (both kinds:
+the manuals define none, a decision)."""
+ERR_VALUE = 2
+"""Error code of a register write of a value outside the parameter's range."""
+
+
+def parameter_changes(
+    start: int,
+    words: Sequence[int],
+    by_address: Mapping[int, str],
+    spec: Mapping[str, tuple[int, int, int, str]],
+) -> tuple[dict[str, int], int | None]:
+    """The parameter values a register write of ``words`` from address ``start`` sets, and
+    ``None``; or ``({}, code)`` for the first word the controller refuses (:data:`ERR_ADDRESS`
+    no parameter there, :data:`ERR_VALUE` out of its ``spec`` range). A parameter whose range
+    goes below 0 reads its word as signed 16-bit."""
+    changes = {}
+    for i, word in enumerate(words):
+        name = by_address.get(start + i)
+        if name is None:
+            return {}, ERR_ADDRESS
+        lo, hi, _, _ = spec[name]
+        value = word - 0x10000 if lo < 0 and word & 0x8000 else word
+        if not lo <= value <= hi:
+            return {}, ERR_VALUE
+        changes[name] = value
+    return changes, None
+
+
 def _num(x: float) -> str:
     """A limit for a message: whole pulses, or +-inf."""
     return f"{x:.0f}" if math.isfinite(x) else str(x)
 
 
-class EmulatedController(Protocol):
-    """What the shared emulator state needs of a UDP controller description."""
-
-    @property
-    def n_axes(self) -> int: ...
+class EmulatedController(Controller, Protocol):
+    """What the shared emulator state needs of a UDP controller description: a
+    :class:`~._controller_api.Controller` with parameters by name, a Who node and copies
+    with changed parameters."""
 
     @property
     def parameters(self) -> Mapping[str, int]: ...
 
-    def with_parameters(self, **changes: int) -> EmulatedController: ...
+    @property
+    def node(self) -> int: ...
 
-    def pulse_limits(self, rate_hz: float | None = None) -> PulseLimits: ...
+    def with_parameters(self, **changes: int) -> EmulatedController: ...
 
 
 C = TypeVar("C", bound=EmulatedController)
@@ -604,6 +635,8 @@ class ControllerEmulator(UdpEmulatorBase, Generic[C]):
     """
 
     playback: Playback
+    LABEL: ClassVar[str]
+    """The controller's name in messages (``"IMAX"``, ``"MBOX"``)."""
 
     def __init__(
         self,
@@ -643,6 +676,55 @@ class ControllerEmulator(UdpEmulatorBase, Generic[C]):
     def _set_rate(self) -> None:  # pragma: no cover - abstract
         """Playback rate from the current parameters."""
         raise NotImplementedError
+
+    def _tick(self, now_s: float) -> None:  # pragma: no cover - abstract
+        """Advance playback, homing and timers to wall time ``now_s``."""
+        raise NotImplementedError
+
+    def _header(self, data: bytes) -> Header:
+        """The header of a datagram sent to the controller (:class:`ProtocolError` if none)."""
+        return decode_header(data)
+
+    def _replies_enabled(self) -> bool:
+        """Whether the controller answers at all (a parameter may turn replies off)."""
+        return True
+
+    def _decode(self, data: bytes, h: Header, reply: bool) -> WireMessage | list[bytes]:
+        """The message in ``data`` (header ``h``), or, when it cannot be decoded, what the
+        controller sends back instead (the malformed datagram recorded)."""
+        raise NotImplementedError  # pragma: no cover - abstract
+
+    def _answer(self, msg: WireMessage, now_s: float) -> WireMessage | None:
+        """Act on a decoded message; the reply to send (if replies are asked for)."""
+        raise NotImplementedError  # pragma: no cover - abstract
+
+    # -- datagrams ----------------------------------------------------------------------
+    def handle(self, data: bytes, now_s: float) -> list[bytes]:
+        """Process one datagram at wall time ``now_s``; return the reply datagrams.
+
+        A datagram whose header does not decode is recorded as malformed; one whose Who
+        accept field does not select this controller's node is ignored; the others are
+        decoded (:meth:`_decode`) and acted on (:meth:`_answer`), and the reply is sent
+        when the Who reply field selects the node and :meth:`_replies_enabled`.
+        """
+        self._tick(now_s)
+        try:
+            h = self._header(data)
+        except ProtocolError as exc:
+            return self._malformed(str(exc))
+        node = self.controller.node
+        if not who_matches(h.who_accept, node):
+            return []
+        reply = who_matches(h.who_reply, node) and self._replies_enabled()
+        msg = self._decode(data, h, reply)
+        if isinstance(msg, list):
+            return msg
+        out = self._answer(msg, now_s)
+        return [out.encode()] if reply and out is not None else []
+
+    def _not_to_it(self, msg: WireMessage) -> None:
+        """Record a message the controller sends but never receives; no reply."""
+        self._malformed(f"{type(msg).__name__} is sent by an {self.LABEL}, not to it")
 
     @property
     def trace(self) -> Trace:

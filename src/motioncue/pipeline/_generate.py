@@ -28,7 +28,7 @@ if TYPE_CHECKING:
     from ..kinematics import Platform
     from ..output import Controller
     from ..telemetry import Recording
-    from ..trajectory import OptimisedRide, Transition
+    from ..trajectory import OptimisedRide, PulsesRow, Transition
     from ._inputs import Keyframes
 
 __all__ = [
@@ -106,7 +106,7 @@ def _finish(
     q_desired: np.ndarray,
     platform: Platform,
     tight: ActuatorLimits,
-    table: list[dict[str, Any]],
+    table: list[PulsesRow],
     dt: float,
 ) -> tuple[OptimisedRide, np.ndarray, np.ndarray, np.ndarray, FrameCheck]:
     """Offline limits (casadi), whole pulses, and the independent check every ride must pass.
@@ -138,7 +138,7 @@ def _finish(
 
 def _ride_limits(
     platform: Platform, controller: Controller, rate_hz: float, limits: ActuatorLimits | None
-) -> tuple[ActuatorLimits, list[dict[str, Any]], ActuatorLimits]:
+) -> tuple[ActuatorLimits, list[PulsesRow], ActuatorLimits]:
     """Checked before any work: the rate (the controller's clock must carry it), the limits
     (default: the platform's with the controller's), their pulse table and the planning
     limits (tightened for the pulse rounding, park kept inside)."""

@@ -50,7 +50,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -61,7 +61,7 @@ from ._verify import check_frames, limits_arrays
 if TYPE_CHECKING:  # types only: the checker runs no planner code
     from ..kinematics import Platform
     from ..output import Controller
-    from ..trajectory import ActuatorLimits
+    from ..trajectory import ActuatorLimits, PulsesRow
 
 __all__ = ["check_ride_for", "check_ride_integrity", "rigidity_residuals", "wire_times_s"]
 
@@ -130,7 +130,7 @@ def check_ride_for(
 
 
 def _check_identity(
-    ride: Ride, table: list[dict[str, Any]], platform_name: str, controller_name: str
+    ride: Ride, table: list[PulsesRow], platform_name: str, controller_name: str
 ) -> None:
     same_table = ride.limits.get("actuators") == table
     for what, made_for, now in (
@@ -185,7 +185,7 @@ def _check_outputs(ride: Ride, controller: Controller, controller_name: str) -> 
 
 
 def _check_limits(
-    ride: Ride, controller: Controller, controller_name: str, table: list[dict[str, Any]]
+    ride: Ride, controller: Controller, controller_name: str, table: list[PulsesRow]
 ) -> None:
     t = wire_times_s(ride.t_s, controller)
     if ride.n_frames > 1:
@@ -215,7 +215,7 @@ def _check_limits(
 
 
 def _worst(
-    t: np.ndarray, p: np.ndarray, table: list[dict[str, Any]], names: Sequence[str], n_frames: int
+    t: np.ndarray, p: np.ndarray, table: list[PulsesRow], names: Sequence[str], n_frames: int
 ) -> str:
     """The worst violation: actuator, quantity, value against limit, frame (for messages)."""
     lim = limits_arrays(table)

@@ -262,9 +262,7 @@ class OutputStage:
         silence = self.transport.silence_s if self.silence_s == "link" else self.silence_s
         if silence is None:
             return None
-        if not self.controller.replies_to_frames and (
-            self.controller.position_query() is None
-        ):
+        if not self.controller.replies_to_frames and (self.controller.position_query() is None):
             return None  # nothing on this link answers: nothing to watch
         return LinkWatch(self.transport, self.controller, float(silence))
 

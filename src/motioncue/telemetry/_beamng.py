@@ -56,6 +56,7 @@ import struct
 from dataclasses import dataclass
 
 from .._errors import ProtocolError
+from ._packed import flat_values, from_flat
 from ._registry import GameInfo, register_game
 from ._sample import G0_M_S2, Decoder, DecodeResult, Vec3, up_in_body_from_angles
 
@@ -91,39 +92,10 @@ class BeamNGMotion:
         v = BNG1.unpack(data)
         if v[0] != MAGIC:
             raise ProtocolError(f"BeamNG MotionSim magic is {v[0]!r}, expected {MAGIC!r}")
-        return cls(
-            pos=(v[1], v[2], v[3]),
-            vel=(v[4], v[5], v[6]),
-            acc=(v[7], v[8], v[9]),
-            up_vec=(v[10], v[11], v[12]),
-            roll_pos=v[13],
-            pitch_pos=v[14],
-            yaw_pos=v[15],
-            roll_rate=v[16],
-            pitch_rate=v[17],
-            yaw_rate=v[18],
-            roll_acc=v[19],
-            pitch_acc=v[20],
-            yaw_acc=v[21],
-        )
+        return from_flat(cls, v[1:])
 
     def pack(self) -> bytes:
-        return BNG1.pack(
-            MAGIC,
-            *self.pos,
-            *self.vel,
-            *self.acc,
-            *self.up_vec,
-            self.roll_pos,
-            self.pitch_pos,
-            self.yaw_pos,
-            self.roll_rate,
-            self.pitch_rate,
-            self.yaw_rate,
-            self.roll_acc,
-            self.pitch_acc,
-            self.yaw_acc,
-        )
+        return BNG1.pack(MAGIC, *flat_values(self))
 
 
 class BeamNGDecoder(Decoder):

@@ -35,7 +35,7 @@ from dataclasses import dataclass, field
 
 from .._atomic import AtomicFile, AtomicFileWriter
 from .._errors import ConfigError, ProtocolError, TransportError
-from ._registry import GAMES
+from ._registry import game_info
 from ._sample import TelemetrySample
 
 __all__ = [
@@ -112,8 +112,7 @@ class RecordingWriter(AtomicFileWriter):
     """
 
     def __init__(self, path: str | os.PathLike[str], game: str, port: int) -> None:
-        if game not in GAMES:
-            raise ConfigError(f"unknown game {game!r}; known games: {', '.join(sorted(GAMES))}")
+        game_info(game)  # a registered game, else ConfigError naming the registered ones
         from .. import __version__
 
         meta = {

@@ -123,6 +123,7 @@ import struct
 from dataclasses import dataclass
 
 from .._errors import ConfigError
+from ._packed import flat_values
 from ._registry import GameInfo, register_game
 from ._sample import G0_M_S2, Decoder, DecodeResult, Vec3
 
@@ -211,20 +212,7 @@ class F1Header:
         return cls(*HEADER.unpack_from(data))
 
     def pack(self) -> bytes:
-        return HEADER.pack(
-            self.packet_format,
-            self.game_year,
-            self.game_major_version,
-            self.game_minor_version,
-            self.packet_version,
-            self.packet_id,
-            self.session_uid,
-            self.session_time,
-            self.frame_identifier,
-            self.overall_frame_identifier,
-            self.player_car_index,
-            self.secondary_player_car_index,
-        )
+        return HEADER.pack(*flat_values(self))
 
 
 class F1Decoder(Decoder):

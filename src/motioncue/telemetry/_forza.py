@@ -52,6 +52,7 @@ import math
 import struct
 from dataclasses import dataclass
 
+from ._packed import flat_values, from_flat
 from ._registry import GameInfo, register_game
 from ._sample import G0_M_S2, Decoder, DecodeResult, Vec3, up_in_body_from_angles
 
@@ -94,35 +95,10 @@ class ForzaMotion:
 
     @classmethod
     def unpack(cls, data: bytes) -> ForzaMotion:
-        v = SLED_HEAD.unpack_from(data)
-        return cls(
-            is_race_on=v[0],
-            timestamp_ms=v[1],
-            engine_max_rpm=v[2],
-            engine_idle_rpm=v[3],
-            current_engine_rpm=v[4],
-            acceleration=(v[5], v[6], v[7]),
-            velocity=(v[8], v[9], v[10]),
-            angular_velocity=(v[11], v[12], v[13]),
-            yaw=v[14],
-            pitch=v[15],
-            roll=v[16],
-        )
+        return from_flat(cls, SLED_HEAD.unpack_from(data))
 
     def pack(self) -> bytes:
-        return SLED_HEAD.pack(
-            self.is_race_on,
-            self.timestamp_ms,
-            self.engine_max_rpm,
-            self.engine_idle_rpm,
-            self.current_engine_rpm,
-            *self.acceleration,
-            *self.velocity,
-            *self.angular_velocity,
-            self.yaw,
-            self.pitch,
-            self.roll,
-        )
+        return SLED_HEAD.pack(*flat_values(self))
 
 
 class ForzaDecoder(Decoder):

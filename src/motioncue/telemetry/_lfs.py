@@ -55,6 +55,7 @@ import struct
 from dataclasses import dataclass
 
 from .._errors import ConfigError
+from ._packed import flat_values, from_flat
 from ._registry import GameInfo, register_game
 from ._sample import G0_M_S2, Decoder, DecodeResult, Vec3
 
@@ -109,13 +110,10 @@ class OutSimMain:
 
     @classmethod
     def unpack(cls, data: bytes, offset: int = 0) -> OutSimMain:
-        v = MAIN.unpack_from(data, offset)
-        return cls((v[0], v[1], v[2]), v[3], v[4], v[5], (v[6], v[7], v[8]),
-                   (v[9], v[10], v[11]), (v[12], v[13], v[14]))  # fmt: skip
+        return from_flat(cls, MAIN.unpack_from(data, offset))
 
     def pack(self) -> bytes:
-        return MAIN.pack(*self.ang_vel, self.heading, self.pitch, self.roll, *self.accel,
-                         *self.vel, *self.pos)  # fmt: skip
+        return MAIN.pack(*flat_values(self))
 
     def outsim2(self, options: int = OSO_ALL, time_ms: int = 0, gear: int = 3,
                 engine_rad_s: float = 500.0) -> bytes:  # fmt: skip
@@ -127,8 +125,7 @@ class OutSimMain:
             out[0:4] = b"LFST"
         if options & OSO_TIME:
             struct.pack_into("<I", out, _offset(options, OSO_TIME), time_ms & 0xFFFFFFFF)
-        MAIN.pack_into(out, _offset(options, OSO_MAIN), *self.ang_vel, self.heading,
-                       self.pitch, self.roll, *self.accel, *self.vel, *self.pos)  # fmt: skip
+        MAIN.pack_into(out, _offset(options, OSO_MAIN), *flat_values(self))
         if options & OSO_DRIVE:
             _DRIVE.pack_into(out, _offset(options, OSO_DRIVE), gear, engine_rad_s)
         return bytes(out)

@@ -14,6 +14,7 @@ from collections.abc import Callable
 from dataclasses import dataclass
 
 from .._errors import ConfigError
+from .._registry import register_entry, registered_entry
 from ._sample import Decoder, Vec3
 
 __all__ = [
@@ -22,6 +23,7 @@ __all__ = [
     "GameInfo",
     "decoder_for",
     "encodable_games",
+    "game_info",
     "games_text",
     "register_game",
 ]
@@ -79,10 +81,7 @@ GAMES: dict[str, GameInfo] = {}
 
 def register_game(info: GameInfo) -> GameInfo:
     """Add a game to :data:`GAMES`; re-registering the same name replaces it."""
-    if not isinstance(info, GameInfo):
-        raise ConfigError(f"register_game({info!r}): allowed: a GameInfo")
-    GAMES[info.name] = info
-    return info
+    return register_entry(GAMES, info, GameInfo, "register_game")
 
 
 def decoder_for(game: str) -> Decoder:
@@ -93,10 +92,18 @@ def decoder_for(game: str) -> Decoder:
     ConfigError
         If ``game`` is not registered (the message lists the registered names).
     """
-    info = GAMES.get(game)
-    if info is None:
-        raise ConfigError(f"unknown game {game!r}; known games: {', '.join(sorted(GAMES))}")
-    return info.decoder()
+    return game_info(game).decoder()
+
+
+def game_info(game: str) -> GameInfo:
+    """The registered game ``game``.
+
+    Raises
+    ------
+    ConfigError
+        If ``game`` is not registered (the message lists the registered names).
+    """
+    return registered_entry(GAMES, game, "game", "games")
 
 
 def encodable_games() -> tuple[str, ...]:

@@ -29,7 +29,7 @@ from ._derive import (
     within_controller_stroke,
 )
 from ._jerk import JerkLimiter, JerkLimiterState
-from ._limits import ActuatorLimits, LimitCheck, check_trajectory, finite_differences
+from ._limits import ActuatorLimits, LimitCheck, PulsesRow, check_trajectory, finite_differences
 from ._offline import OptimisedRide, limit_ride
 from ._plot import plot_ride
 from ._realtime import LimiterState, RealtimeLimiter, braking_distance, braking_speed_cap
@@ -53,6 +53,7 @@ __all__ = [
     "LimiterState",
     "OptimisedRide",
     "PoseLimitResult",
+    "PulsesRow",
     "RealtimeLimiter",
     "Transition",
     "brake_to_rest",

@@ -16,7 +16,7 @@ from __future__ import annotations
 import json
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, TypedDict
 
 import numpy as np
 
@@ -28,7 +28,27 @@ if TYPE_CHECKING:
     from ..kinematics import Platform
     from ..output import Controller
 
-__all__ = ["ActuatorLimits", "LimitCheck", "check_trajectory", "finite_differences"]
+__all__ = [
+    "ActuatorLimits",
+    "LimitCheck",
+    "PulsesRow",
+    "check_trajectory",
+    "finite_differences",
+]
+
+
+class PulsesRow(TypedDict):
+    """One actuator's limits in drive pulses (a row of :meth:`ActuatorLimits.to_pulses_table`,
+    as a ride file and ``motioncue limits --json`` carry it)."""
+
+    name: str
+    kind: str
+    pulses_per_unit: float
+    stroke_pulses: list[int]
+    """``[min, max]``: the pulse counts of the stroke ends, ordered."""
+    max_speed_pulses_s: float
+    max_accel_pulses_s2: float
+    max_jerk_pulses_s3: float | None
 
 
 def _vec(name: str, value: ArrayLike, n: int | None) -> np.ndarray:
@@ -196,7 +216,7 @@ class ActuatorLimits:
         out["sources"] = dict(self.sources)
         return out
 
-    def to_pulses_table(self, platform: Platform) -> list[dict[str, Any]]:
+    def to_pulses_table(self, platform: Platform) -> list[PulsesRow]:
         """Per actuator (controller order) the limits in drive pulses.
 
         Keys: ``name``, ``pulses_per_unit``, ``stroke_pulses`` ``[min, max]`` (the pulse
@@ -209,7 +229,7 @@ class ActuatorLimits:
             raise ConfigError(
                 f"platform has {ppu.size} drives; these limits have {self.n_actuators} actuators"
             )
-        rows = []
+        rows: list[PulsesRow] = []
         for i in range(self.n_actuators):
             q_home = _pulse_origin(platform, i)  # q at pulse 0
             a = (float(self.q_min[i]) - q_home) * ppu[i]

@@ -24,14 +24,14 @@ import json
 import math
 import threading
 import time
-from collections.abc import Mapping, Sequence
+from collections.abc import Mapping
 from typing import TYPE_CHECKING, Any, Protocol, SupportsFloat
 
 import numpy as np
 
 from .._errors import ConfigError, TransportError
 from ..telemetry._source import is_loopback
-from ._page import DRAW_JS, frame_json, scene_layout
+from ._page import frame_json, html_page, scene_layout
 from ._scene import Scene, scene_from_q
 
 if TYPE_CHECKING:
@@ -41,6 +41,7 @@ if TYPE_CHECKING:
     import tornado.web
 
     from ..kinematics import Platform
+    from ..output import EmulatorReadout
     from ..pipeline._bridge import Bridge, BridgeStats
     from ..pipeline._stream import OutputStage
     from ..trajectory import ActuatorLimits
@@ -56,32 +57,6 @@ __all__ = [
 
 DEFAULT_MONITOR_PORT = 8765
 """Port of ``--monitor`` without a value (loopback)."""
-
-
-class _Trace(Protocol):
-    """What :class:`EmulatorSource` reads of an emulator's trace."""
-
-    @property
-    def t_s(self) -> np.ndarray: ...
-
-    @property
-    def positions(self) -> np.ndarray: ...
-
-    def __len__(self) -> int: ...
-
-
-class TracedEmulator(Protocol):
-    """An emulator :class:`EmulatorSource` reads: its trace (pulses), datagrams received
-    and violations found (:class:`~motioncue.output.ControllerEmulator`)."""
-
-    @property
-    def trace(self) -> _Trace: ...
-
-    @property
-    def received(self) -> int: ...
-
-    @property
-    def violations(self) -> Sequence[object]: ...
 
 
 class _Client(Protocol):
@@ -239,7 +214,7 @@ class EmulatorSource:
 
     can_stop = False
 
-    def __init__(self, emulator: TracedEmulator, platform: Platform) -> None:
+    def __init__(self, emulator: EmulatorReadout, platform: Platform) -> None:
         self.emulator = emulator
         self.platform = platform
         self._last: tuple[float, np.ndarray] | None = None
@@ -678,40 +653,36 @@ def _page(mon: Monitor) -> str:
 
     data = json.dumps(
         {"box": mon._box, "title": mon.title, "names": mon._names, "rate_hz": mon.rate_hz}
-    ).replace("</", "<\\/")
-    return _PAGE.format(title=html.escape(mon.title), draw=DRAW_JS, data=data, script=_SCRIPT)
+    )
+    return html_page("monitor", html.escape(mon.title), _HEAD, _BODY, data, _SCRIPT)
 
 
-_PAGE = """<!DOCTYPE html>
-<html lang="en"><head><meta charset="utf-8">
-<title>motioncue monitor: {title}</title>
-<script src="/plotly.js"></script>
+_HEAD = """<script src="/plotly.js"></script>
 <style>
-body {{ font-family: sans-serif; margin: 8px; }}
-#wrap {{ display: flex; gap: 12px; }}
-#scene {{ flex: 1 1 50%; min-width: 420px; height: 600px; }}
-#side {{ flex: 0 0 auto; max-width: 700px; }}
-#state {{ font-size: 22px; font-weight: bold; padding: 4px 10px; border-radius: 4px;
-          display: inline-block; }}
-.running, .live {{ background: #b7e4c7; }} .parked {{ background: #ddd; }}
-.fading, .parking, .stopping {{ background: #ffe08a; }} .failed {{ background: #f4a3a3; }}
-#stop {{ font-size: 20px; padding: 6px 24px; background: #d73027; color: #fff;
-         border: none; border-radius: 4px; margin-left: 16px; }}
-#stop:disabled {{ background: #aaa; }}
-table {{ border-collapse: collapse; margin-top: 8px; font-size: 13px; }}
-td, th {{ padding: 2px 6px; text-align: left; }}
-.bar {{ position: relative; width: 80px; height: 12px; background: #eee; }}
-#acts td {{ white-space: nowrap; }}
-.bar div {{ position: absolute; top: 0; height: 12px; }}
-.bar .mid {{ left: 50%; width: 1px; background: #666; }}
-.bar, .num {{ display: inline-block; vertical-align: middle; }}
-.num {{ width: 84px; text-align: right; font-variant-numeric: tabular-nums;
-        font-size: 12px; }}
-.bar.rest {{ background: #d9d9d9; }}
-</style>
-</head><body>
-<div><b>motioncue monitor</b>: {title}</div>
-<div style="margin:6px 0"><span id="state">connecting</span>
+body { font-family: sans-serif; margin: 8px; }
+#wrap { display: flex; gap: 12px; }
+#scene { flex: 1 1 50%; min-width: 420px; height: 600px; }
+#side { flex: 0 0 auto; max-width: 700px; }
+#state { font-size: 22px; font-weight: bold; padding: 4px 10px; border-radius: 4px;
+          display: inline-block; }
+.running, .live { background: #b7e4c7; } .parked { background: #ddd; }
+.fading, .parking, .stopping { background: #ffe08a; } .failed { background: #f4a3a3; }
+#stop { font-size: 20px; padding: 6px 24px; background: #d73027; color: #fff;
+         border: none; border-radius: 4px; margin-left: 16px; }
+#stop:disabled { background: #aaa; }
+table { border-collapse: collapse; margin-top: 8px; font-size: 13px; }
+td, th { padding: 2px 6px; text-align: left; }
+.bar { position: relative; width: 80px; height: 12px; background: #eee; }
+#acts td { white-space: nowrap; }
+.bar div { position: absolute; top: 0; height: 12px; }
+.bar .mid { left: 50%; width: 1px; background: #666; }
+.bar, .num { display: inline-block; vertical-align: middle; }
+.num { width: 84px; text-align: right; font-variant-numeric: tabular-nums;
+        font-size: 12px; }
+.bar.rest { background: #d9d9d9; }
+</style>"""
+
+_BODY = """<div style="margin:6px 0"><span id="state">connecting</span>
 <button id="stop" disabled>stop (park)</button> <span id="msg"></span></div>
 <div id="error" style="color:#b00;font-weight:bold"></div>
 <div id="wrap"><div id="scene"></div><div id="side">
@@ -724,12 +695,7 @@ grey "at park": the actuator rests at its park position (near its bottom end by
 design)</div>
 <table id="cue"></table>
 <table id="info"></table>
-</div></div>
-<script>{draw}</script>
-<script id="mc-data" type="application/json">{data}</script>
-<script>{script}</script>
-</body></html>
-"""
+</div></div>"""
 
 _SCRIPT = """
 const M = JSON.parse(document.getElementById('mc-data').textContent);

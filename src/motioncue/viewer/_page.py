@@ -16,7 +16,7 @@ from numpy.typing import ArrayLike
 
 from ._scene import Scene
 
-__all__ = ["DRAW_JS", "frame_json", "plotly_js", "scene_layout"]
+__all__ = ["DRAW_JS", "frame_json", "html_page", "plotly_js", "scene_layout"]
 
 #: Stroke use colour scale: green at neutral, amber at 70 %, red at the end of the stroke.
 USE_COLORSCALE = [[0.0, "#1a9850"], [0.5, "#a6d96a"], [0.7, "#fdae61"], [1.0, "#d73027"]]
@@ -173,3 +173,36 @@ function mcDraw(div, f, box, title) {
 }
 """
 )
+
+
+def html_page(what: str, title: str, head: str, body: str, data_json: str, script: str) -> str:
+    """A motioncue page: ``head`` (styles, plotly) and ``body`` between the shared frame of
+    both pages, then :data:`DRAW_JS`, the data and the page's own ``script``.
+
+    Parameters
+    ----------
+    what : str
+        ``"view"`` or ``"monitor"``: the page's name in its title and heading.
+    title : str
+        The page's subject, already HTML-escaped.
+    head, body : str
+        HTML inside ``<head>`` after the title, and inside ``<body>`` after the heading.
+    data_json : str
+        The page's data as JSON, read by ``script`` from the ``mc-data`` element (``</``
+        is escaped here so that no string in it can end the element).
+    script : str
+        The page's JavaScript.
+    """
+    data = data_json.replace("</", "<\\/")
+    return f"""<!DOCTYPE html>
+<html lang="en"><head><meta charset="utf-8">
+<title>motioncue {what}: {title}</title>
+{head}
+</head><body>
+<div><b>motioncue {what}</b>: {title}</div>
+{body}
+<script>{DRAW_JS}</script>
+<script id="mc-data" type="application/json">{data}</script>
+<script>{script}</script>
+</body></html>
+"""

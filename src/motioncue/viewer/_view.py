@@ -29,7 +29,7 @@ from numpy.typing import NDArray
 
 from .._errors import ConfigError
 from ._cueing import describe_cueing
-from ._page import DRAW_JS, plotly_js, scene_layout
+from ._page import html_page, plotly_js, scene_layout
 from ._scene import Scene, scene_from_poses, scene_from_q
 
 if TYPE_CHECKING:
@@ -401,12 +401,11 @@ def view_html(view: ViewInput) -> str:
         "box": scene_layout(scene),
         "curves": _curves(view),
     }
-    blob = json.dumps(data, separators=(",", ":"), allow_nan=False).replace("</", "<\\/")
-    title = html.escape(view.title)
+    blob = json.dumps(data, separators=(",", ":"), allow_nan=False)
     notes = "".join(f'<div class="note">{html.escape(line)}</div>' for line in view.notes)
-    return _TEMPLATE.format(
-        title=title, notes=notes, plotly=plotly_js(), draw=DRAW_JS, data=blob, script=_SCRIPT
-    )
+    head = f"{_STYLE}\n<script>{plotly_js()}</script>"
+    body = f'<div id="notes">{notes}</div>\n{_CONTROLS}'
+    return html_page("view", html.escape(view.title), head, body, blob, _SCRIPT)
 
 
 def _mm(a: NDArray[np.float64]) -> list[int]:
@@ -440,32 +439,21 @@ def _packed(scene: Scene, idx: NDArray[np.intp]) -> dict[str, Any]:
     }  # fmt: skip
 
 
-_TEMPLATE = """<!DOCTYPE html>
-<html lang="en"><head><meta charset="utf-8">
-<title>motioncue view: {title}</title>
-<style>
-body {{ font-family: sans-serif; margin: 8px; }}
-#wrap {{ display: flex; gap: 8px; }}
-#scene {{ width: 48%; height: 640px; }}
-#curves {{ width: 52%; height: 640px; }}
-#bar {{ display: flex; align-items: center; gap: 10px; margin: 6px 0; }}
-#slider {{ flex: 1; }}
-.note {{ font-size: 13px; color: #333; margin: 2px 0; }}
-</style>
-<script>{plotly}</script>
-</head><body>
-<div><b>motioncue view</b>: {title}</div>
-<div id="notes">{notes}</div>
-<div id="bar"><button id="play">play</button>
+_STYLE = """<style>
+body { font-family: sans-serif; margin: 8px; }
+#wrap { display: flex; gap: 8px; }
+#scene { width: 48%; height: 640px; }
+#curves { width: 52%; height: 640px; }
+#bar { display: flex; align-items: center; gap: 10px; margin: 6px 0; }
+#slider { flex: 1; }
+.note { font-size: 13px; color: #333; margin: 2px 0; }
+</style>"""
+
+_CONTROLS = """<div id="bar"><button id="play">play</button>
 <input id="slider" type="range" min="0" value="0" step="1">
 <span id="time">0.00 s</span></div>
 <div id="pose" style="font-family: monospace; margin: 2px 0 6px 0">pose:</div>
-<div id="wrap"><div id="scene"></div><div id="curves"></div></div>
-<script>{draw}</script>
-<script id="mc-data" type="application/json">{data}</script>
-<script>{script}</script>
-</body></html>
-"""
+<div id="wrap"><div id="scene"></div><div id="curves"></div></div>"""
 
 _SCRIPT = """
 const D = JSON.parse(document.getElementById('mc-data').textContent);

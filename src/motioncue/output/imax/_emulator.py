@@ -33,16 +33,17 @@ Modelled (IMAX manual section in brackets):
 from __future__ import annotations
 
 from ..._errors import ProtocolError
-from .._udp_common import WireMessage, decode_header
+from .._udp_common import Header, WireMessage, decode_header
 from .._udp_emulator import (
+    ERR_ADDRESS,
     STATE_ESTOP,
     STATE_HOMING,
     STATE_READY,
     ControllerEmulator,
     Playback,
     Violation,
+    parameter_changes,
     wall_clock,
-    who_matches,
 )
 from ._controller import ImaxController
 from ._messages import (
@@ -72,8 +73,6 @@ from ._params import DP_POS, PA_SPEC
 
 __all__ = ["ImaxEmulator"]
 
-ERR_ADDRESS = 1
-ERR_VALUE = 2
 ERR_BUFFER = 21  # Err21: UDP data buffer overflow (chapter 6)
 _PA_BY_ADDRESS = {int(name[2:], 16): name for name in PA_SPEC}
 _DP_POS = DP_POS  # low word, high word follows (2.3.3)
@@ -89,6 +88,8 @@ class ImaxEmulator(ControllerEmulator[ImaxController]):
 
     Constructed as a :class:`ControllerEmulator` of an :class:`ImaxController`.
     """
+
+    LABEL = "IMAX"
 
     def _init_kind(self) -> None:
         controller = self.controller
@@ -139,37 +140,34 @@ class ImaxEmulator(ControllerEmulator[ImaxController]):
         self.alarm = code
 
     # -- datagrams ----------------------------------------------------------------------
-    def handle(self, data: bytes, now_s: float) -> list[bytes]:
-        self._tick(now_s)
+    def _header(self, data: bytes) -> Header:
+        if data[:2] == b"\x33\xcc" and data[4:6] == b"\x31\x01":
+            raise ProtocolError("status report 0x3101 is sent by the controller, not to it")
+        return decode_header(data)
+
+    def _replies_enabled(self) -> bool:
+        return self.params["PA15"] == 1  # PA15 = 0: UDP replies off
+
+    def _decode(self, data: bytes, h: Header, reply: bool) -> WireMessage | list[bytes]:
         try:
-            if data[:2] == b"\x33\xcc" and data[4:6] == b"\x31\x01":
-                raise ProtocolError("status report 0x3101 is sent by the controller, not to it")
-            h = decode_header(data)
-        except ProtocolError as exc:
-            return self._malformed(str(exc))
-        node = self.controller.node
-        if not who_matches(h.who_accept, node):
-            return []
-        reply = who_matches(h.who_reply, node) and self.params["PA15"] == 1
-        try:
-            msg = decode(data, self.port_out_bytes)
+            return decode(data, self.port_out_bytes)
         except ProtocolError as exc:
             self._malformed(str(exc))
             if reply and h.function in (F_ABS, F_REL, F_VIB_ABS, F_VIB_REL):
                 return [self._command_error(h.function)]
             return []
-        out: WireMessage | None
+
+    def _answer(self, msg: WireMessage, now_s: float) -> WireMessage | None:
         if isinstance(msg, MotionFrame | VibrationFrame):
-            out = self._frame(msg)
-        elif isinstance(msg, ServoRead | ServoWrite):
-            out = self._servo(msg)
-        elif isinstance(msg, RegisterRead):
-            out = self._read(msg)
-        elif isinstance(msg, RegisterWrite):
-            out = self._write(msg, now_s)
-        else:
-            return self._malformed(f"{type(msg).__name__} is sent by an IMAX, not to it")
-        return [out.encode()] if reply and out is not None else []
+            return self._frame(msg)
+        if isinstance(msg, ServoRead | ServoWrite):
+            return self._servo(msg)
+        if isinstance(msg, RegisterRead):
+            return self._read(msg)
+        if isinstance(msg, RegisterWrite):
+            return self._write(msg, now_s)
+        self._not_to_it(msg)
+        return None
 
     def _command_error(self, function: int) -> bytes:
         """x = 5 reply to a frame the controller cannot use (error code 5, zero frame)."""
@@ -364,15 +362,9 @@ class ImaxEmulator(ControllerEmulator[ImaxController]):
                     self.dp_extra[a] = v
             return RegisterReply(0x1202, msg.channel, msg.start, msg.values)
         assert msg.channel == CHANNEL_PA
-        changes = {}
-        for i, v in enumerate(msg.values):
-            name = _PA_BY_ADDRESS.get(msg.start + i)
-            if name is None:
-                return err(ERR_ADDRESS)
-            lo, hi, _, _ = PA_SPEC[name]
-            if not lo <= v <= hi:
-                return err(ERR_VALUE)
-            changes[name] = v
+        changes, refused = parameter_changes(msg.start, msg.values, _PA_BY_ADDRESS, PA_SPEC)
+        if refused is not None:
+            return err(refused)
         for name, v in changes.items():
             self.params[name] = v
             if name == "PA08" and v == 1:

@@ -46,7 +46,7 @@ from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
 from functools import cache
 from itertools import chain
-from typing import TYPE_CHECKING, Any, ClassVar, Self
+from typing import TYPE_CHECKING, ClassVar, Self, cast
 
 from ..._errors import ProtocolError
 from .._udp_common import (
@@ -335,6 +335,12 @@ def _reply_axes(
     raise ProtocolError(f"{what}: length {size} bytes is not {forms} for 2..12 axes")
 
 
+_Pairs = tuple[tuple[int, int], ...]
+_Tail = tuple[int, int | _Pairs]
+"""A frame's fields after the positions: PortOut, then Extend (plain frames) or the
+vibration (period, amplitude) pairs."""
+
+
 class _TimedFrame:
     """Encoder, decoder and size of the four IMAX frame messages, derived from one
     declaration per message: whether it carries vibration (``_VIBRATION``: the layout's
@@ -358,7 +364,7 @@ class _TimedFrame:
 
     if TYPE_CHECKING:  # the dataclass subclasses' constructors, in field order
 
-        def __init__(self, *fields: Any) -> None: ...
+        def __init__(self, *fields: object) -> None: ...
 
     @classmethod
     def _STRUCT(cls, n_axes: int, relative: bool, port_out_bytes: int) -> struct.Struct:
@@ -368,18 +374,19 @@ class _TimedFrame:
     def _head(self) -> tuple[int, int, int, int]:
         raise NotImplementedError
 
-    def _tail_fields(self) -> tuple[int, Any]:
+    def _tail_fields(self) -> _Tail:
         """PortOut (the request's outputs, the reply's inputs), then Extend or the pairs."""
         raise NotImplementedError
 
     def _tail(self) -> Iterable[int]:
         port, last = self._tail_fields()
         if self._VIBRATION:
-            return chain((port,), (v for pair in last for v in pair))
-        return (port, last)
+            pairs = cast(_Pairs, last)
+            return chain((port,), (v for pair in pairs for v in pair))
+        return (port, cast(int, last))
 
     @classmethod
-    def _parse_tail(cls, rest: tuple[int, ...]) -> tuple[int, Any]:
+    def _parse_tail(cls, rest: tuple[int, ...]) -> _Tail:
         """:meth:`_tail_fields` from the layout's values after the positions."""
         return (rest[0], _pairs(rest[1:])) if cls._VIBRATION else (rest[0], rest[1])
 
@@ -389,7 +396,7 @@ class _TimedFrame:
 
     def _pair_count(self) -> int | None:
         """Vibration pairs the message carries (None: a plain frame)."""
-        return len(self._tail_fields()[1]) if self._VIBRATION else None
+        return len(cast(_Pairs, self._tail_fields()[1])) if self._VIBRATION else None
 
     def __post_init__(self) -> None:
         n = len(self.positions)
@@ -516,7 +523,7 @@ class MotionFrame(_TimedRequest):
     who_reply: int = WHO_ALL
     port_out_bytes: int = 2
 
-    def _tail_fields(self) -> tuple[int, Any]:
+    def _tail_fields(self) -> _Tail:
         return (self.port_out, self.extend)
 
 
@@ -539,7 +546,7 @@ class MotionFrameReply(_TimedReply):
     extend: int = 0
     port_out_bytes: int = 2
 
-    def _tail_fields(self) -> tuple[int, Any]:
+    def _tail_fields(self) -> _Tail:
         return (self.port, self.extend)
 
 
@@ -563,7 +570,7 @@ class VibrationFrame(_TimedRequest):
     who_reply: int = WHO_ALL
     port_out_bytes: int = 2
 
-    def _tail_fields(self) -> tuple[int, Any]:
+    def _tail_fields(self) -> _Tail:
         return (self.port_out, self.vibration)
 
 
@@ -585,7 +592,7 @@ class VibrationFrameReply(_TimedReply):
     vibration: tuple[tuple[int, int], ...]
     port_out_bytes: int = 2
 
-    def _tail_fields(self) -> tuple[int, Any]:
+    def _tail_fields(self) -> _Tail:
         return (self.port, self.vibration)
 
 

@@ -30,15 +30,16 @@ reads 0 homing, 1 ready, 2 e-stop, 3 fault.
 from __future__ import annotations
 
 from ..._errors import ProtocolError
-from .._udp_common import WHO_NONE, WireMessage, decode_header
+from .._udp_common import WHO_NONE, Header, WireMessage
 from .._udp_emulator import (
+    ERR_ADDRESS,
     STATE_ESTOP,
     STATE_HOMING,
     STATE_READY,
     ControllerEmulator,
     Playback,
     Violation,
-    who_matches,
+    parameter_changes,
 )
 from ._controller import MboxController
 from ._messages import (
@@ -62,8 +63,6 @@ from ._params import DX_ACTUAL, DX_COMMAND, DX_UDP, FN_SPEC
 
 __all__ = ["MboxEmulator"]
 
-ERR_ADDRESS = 1
-ERR_VALUE = 2
 
 STATE_FAULT = 3  # after STATE_HOMING, STATE_READY, STATE_ESTOP = 0, 1, 2
 _FN_BY_ADDRESS = {int(name[2:], 16): name for name in FN_SPEC}
@@ -71,15 +70,13 @@ _FN_BY_ADDRESS = {int(name[2:], 16): name for name in FN_SPEC}
 _DX_ACTUAL, _DX_COMMAND, _DX_UDP = DX_ACTUAL, DX_COMMAND, DX_UDP
 
 
-def _s16(v: int) -> int:
-    return v - 0x10000 if v & 0x8000 else v
-
-
 class MboxEmulator(ControllerEmulator[MboxController]):
     """Emulated SC-MBOX.
 
     Constructed as a :class:`ControllerEmulator` of an :class:`MboxController`.
     """
+
+    LABEL = "MBOX"
 
     def _init_kind(self) -> None:
         controller = self.controller
@@ -99,17 +96,7 @@ class MboxEmulator(ControllerEmulator[MboxController]):
             self.state = STATE_FAULT
 
     # -- datagrams ----------------------------------------------------------------------
-    def handle(self, data: bytes, now_s: float) -> list[bytes]:
-        """Process one datagram at wall time ``now_s``; return the reply datagrams."""
-        self._tick(now_s)
-        try:
-            h = decode_header(data)
-        except ProtocolError as exc:
-            return self._malformed(str(exc))
-        node = self.controller.node
-        if not who_matches(h.who_accept, node):
-            return []
-        reply = who_matches(h.who_reply, node)
+    def _decode(self, data: bytes, h: Header, reply: bool) -> WireMessage | list[bytes]:
         if h.function in (F_ABS, F_REL) and h.channel == (0 if self.n_axes == 3 else 1):
             need = frame_size(self.n_axes)
             if len(data) < need:
@@ -120,19 +107,19 @@ class MboxEmulator(ControllerEmulator[MboxController]):
                 frame = MotionFrame.decode_parts(h, padded)
                 return [MotionFrameReply(FrameStatus.SHORT_FRAME, frame).encode()]
         try:
-            msg = decode(data)
+            return decode(data)
         except ProtocolError as exc:
             return self._malformed(str(exc))
-        out: WireMessage | None
+
+    def _answer(self, msg: WireMessage, now_s: float) -> WireMessage | None:
         if isinstance(msg, MotionFrame):
-            out = self._frame(msg)
-        elif isinstance(msg, RegisterRead):
-            out = self._read(msg)
-        elif isinstance(msg, RegisterWrite):
-            out = self._write(msg, now_s)
-        else:
-            return self._malformed(f"{type(msg).__name__} is sent by an MBOX, not to it")
-        return [out.encode()] if reply and out is not None else []
+            return self._frame(msg)
+        if isinstance(msg, RegisterRead):
+            return self._read(msg)
+        if isinstance(msg, RegisterWrite):
+            return self._write(msg, now_s)
+        self._not_to_it(msg)
+        return None
 
     def _frame(self, msg: MotionFrame) -> MotionFrameReply:
         if msg.n_axes != self.n_axes:
@@ -211,16 +198,9 @@ class MboxEmulator(ControllerEmulator[MboxController]):
             for i, v in enumerate(msg.values):
                 self._write_cx(msg.start + i, v, now_s)
             return RegisterWriteReply(msg.channel, msg.start, msg.values)
-        changes = {}
-        for i, v in enumerate(msg.values):
-            name = _FN_BY_ADDRESS.get(msg.start + i)
-            if name is None:
-                return err(ERR_ADDRESS)
-            lo, hi, _, _ = FN_SPEC[name]
-            value = _s16(v) if lo < 0 else v
-            if not lo <= value <= hi:
-                return err(ERR_VALUE)
-            changes[name] = value
+        changes, refused = parameter_changes(msg.start, msg.values, _FN_BY_ADDRESS, FN_SPEC)
+        if refused is not None:
+            return err(refused)
         for name, value in changes.items():
             old = self.params[name]
             self.params[name] = value
