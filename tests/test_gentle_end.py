@@ -11,11 +11,16 @@ known optimum of a synthetic problem whose cap binds in one channel.
 from __future__ import annotations
 
 import math
+from pathlib import Path
 
 import pytest
 
 from motioncue._errors import ConfigError
 from motioncue.analysis._tune import ChainMetrics, StrengthTargets, tune_cueing
+from motioncue.cli import main
+from motioncue.cueing._tune import STRENGTH_TUNED_PARAMETERS
+from motioncue.telemetry import sample_drives
+from motioncue.telemetry._recording import Recording, read_recording_csv, write_recording_csv
 from test_tune_strength import _cue, _Synthetic
 
 
@@ -59,3 +64,39 @@ def test_the_tuner_finds_the_optimum_where_the_cap_binds_in_one_channel() -> Non
     assert ky == pytest.approx(1.2, rel=0.03)
     assert res.after.strength == pytest.approx(0.6, rel=0.03)
     assert obj.targets.violation(res.after) == 0.0
+
+
+@pytest.mark.parametrize(
+    ("extra", "says"),
+    [
+        (["--gentle-end", "--gentle-share", "1.5"], "--gentle-share 1.5 is invalid"),
+        (["--gentle-end", "--gentle-share", "nan"], "--gentle-share nan is invalid"),
+        (["--gentle-end", "--gentle-keep", "tilt_wn", "lead_x_s"], "--gentle-keep 'tilt_wn'"),
+        (["--gentle-keep", "lead_x_s"], "--gentle-keep needs --gentle-end"),
+    ],
+)
+def test_bad_gentle_options_are_one_line_errors(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], extra: list[str], says: str
+) -> None:
+    lap = read_recording_csv(sample_drives("demo")[0])
+    rec = tmp_path / "short.csv"
+    write_recording_csv(rec, Recording(lap.t_s[:300] - lap.t_s[0], lap.f[:300], lap.w[:300]))
+    out = tmp_path / "g.toml"
+    rc = main(["tune", "--input", str(rec), "--platform", "stewart6-linear", "--controller",
+               "mbox6", "--preset", "racing-hexapod-firm", "--out", str(out), *extra])  # fmt: skip
+    err = capsys.readouterr().err.strip().splitlines()
+    assert rc == 2 and err[-1].startswith("motioncue tune: error:") and says in err[-1], err
+    assert not out.exists()
+
+
+def test_a_held_parameter_stays_at_the_base_and_the_rest_find_their_optimum() -> None:
+    """``hold`` (``--gentle-keep``): ky held at the base's 0.2, the budget kx + ky <= 1.5
+    leaves kx = 1.3 (strength sqrt(0.26)); a bad index is refused."""
+    obj = _Synthetic()
+    i_ky = [p.name for p in STRENGTH_TUNED_PARAMETERS].index("tilt_scale_y")
+    res = tune_cueing(obj, seed=3, generations=100, popsize=3, budget_s=600.0, hold=[i_ky])
+    kx, ky = res.params.tilt_scale  # type: ignore[misc]
+    assert ky == pytest.approx(0.2, rel=1e-9)
+    assert kx == pytest.approx(1.3, rel=0.03)
+    with pytest.raises(ConfigError, match="hold index 21"):
+        tune_cueing(obj, generations=1, hold=[21])

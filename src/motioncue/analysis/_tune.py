@@ -688,6 +688,11 @@ def tune_cueing(
     if init_spread is not None and not (math.isfinite(init_spread) and 0.0 < init_spread <= 5.0):
         raise ConfigError(f"init spread {init_spread!r} is invalid; allowed: (0, 5]")
 
+    n_tuned = len(tuned_parameters(objective.base))
+    for i in hold:
+        if isinstance(i, bool) or not (isinstance(i, int) and 0 <= i < n_tuned):
+            raise ConfigError(f"hold index {i!r} is invalid; allowed: 0 to {n_tuned - 1}")
+
     t0 = time.monotonic()  # the budget counts everything, connecting included
     evaluator = _Evaluator(objective, workers, scheduler)  # an unreachable cluster: first
     try:
@@ -698,8 +703,6 @@ def tune_cueing(
     x0 = vector_from_params(objective.base)
     bounds = _log_bounds(objective.base)
     for i in hold:
-        if not (isinstance(i, int) and 0 <= i < len(bounds)):
-            raise ConfigError(f"hold index {i!r} is invalid; allowed: 0 to {len(bounds) - 1}")
         bounds[i] = (float(x0[i]) - 1e-12, float(x0[i]) + 1e-12)
     init: str | NDArray[np.float64] = "latinhypercube"
     if init_spread is not None:
