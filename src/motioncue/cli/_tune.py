@@ -325,8 +325,9 @@ def run(args: argparse.Namespace) -> int:
                 raise ConfigError(f"--gentle-keep {k!r} is invalid; allowed: {', '.join(names)}")
             hold.append(names.index(k))
     strong_end = base
-    if base.tilt_shape is not None and not args.gentle_end:  # this platform's own reach
-        base = replace(base, tilt_reach_rad=tilt_reach(platform, tight))
+    if base.tilt_shape is not None and not args.gentle_end and base.tilt_offset_m is None:
+        base = replace(base, tilt_reach_rad=tilt_reach(platform, tight))  # the platform's own
+        # (a preset with a reach offset keeps its reach: the reach with that offset)
     objective = TuneObjective(
         base, drives, platform, tight, args.rate, model=args.vestibular,
         objective=args.objective, targets=targets, rig=Rig(platform, limits, controller.name),
