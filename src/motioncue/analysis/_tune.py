@@ -223,6 +223,12 @@ class StrengthTargets:
     and ``min_corr_fy``, and at most ``max_clamped`` of all poses are clamped. The defaults
     are issue 20's acceptance figures; a tune meant to hold on other drives should ask for a
     margin.
+
+    ``max_share = (s_x, s_y)`` (optional) also caps the pooled rendered share of fx and of fy
+    (each channel on its own): the gentle end of an intensity range (``motioncue tune
+    --gentle-end``) must be gentler than the strong end in every channel, not only overall,
+    or the rides between the two would not grow stronger channel by channel. Its excess
+    counts relative to the cap, like the others.
     """
 
     max_reversals: float = 0.02
@@ -230,6 +236,7 @@ class StrengthTargets:
     max_clamped: float = 0.01
     min_corr_fx: float = 0.95
     min_corr_fy: float = 0.90
+    max_share: tuple[float, float] | None = None
 
     def __post_init__(self) -> None:
         for name in ("max_reversals", "max_false", "max_clamped"):
@@ -240,6 +247,14 @@ class StrengthTargets:
             v = getattr(self, name)
             if not (math.isfinite(v) and -1.0 <= v < 1.0):
                 raise ConfigError(f"{name} = {v!r} is invalid; allowed: [-1, 1)")
+        if self.max_share is not None and (
+            len(self.max_share) != 2
+            or not all(math.isfinite(v) and 0.0 < v <= 10.0 for v in self.max_share)
+        ):
+            raise ConfigError(
+                f"max_share = {self.max_share!r} is invalid; allowed: two shares (fx, fy) "
+                "in (0, 10]"
+            )
 
     def violation(self, m: ChainMetrics) -> float:
         """Sum of the relative excesses over the targets (0: all met; inf without
@@ -254,13 +269,17 @@ class StrengthTargets:
             return max(0.0, value - bound) / scale
 
         corr = np.nan_to_num(c.correlation, nan=0.0)
-        return (
+        total = (
             over(c.reversals_any, self.max_reversals, self.max_reversals)
             + over(c.false_any, self.max_false, self.max_false)
             + over(m.clamped_fraction, self.max_clamped, self.max_clamped)
             + over(self.min_corr_fx, float(corr[0]), 1.0 - self.min_corr_fx)
             + over(self.min_corr_fy, float(corr[1]), 1.0 - self.min_corr_fy)
         )
+        if self.max_share is not None:
+            for i, cap in enumerate(self.max_share):
+                total += over(float(c.rendered_share[i]), cap, cap)
+        return total
 
 
 def _violating_frames(q: NDArray[np.float64], dt_s: float, limits: ActuatorLimits) -> int:
@@ -611,6 +630,7 @@ def tune_cueing(
     name: str = "tuned",
     progress: Progress | None = None,
     init_spread: float | None = None,
+    hold: Sequence[int] = (),
 ) -> TuneResult:
     """Minimise the penalised perceived-motion error with differential evolution.
 
@@ -639,6 +659,10 @@ def tune_cueing(
         Start from a population about the base preset instead of a Latin hypercube over the
         whole box: the base plus seeded normal steps of this standard deviation in the log
         space (0.3: about +-35 %), clipped to the bounds. A local search from a good base.
+    hold : sequence of int
+        Indices of tuned parameters (:func:`motioncue.cueing._tune.tuned_parameters` order)
+        kept at the base's value: their bounds shrink to it (a gentle end that changes only
+        how strongly the preset cues, not its filters).
 
     Raises
     ------
@@ -664,6 +688,11 @@ def tune_cueing(
     if init_spread is not None and not (math.isfinite(init_spread) and 0.0 < init_spread <= 5.0):
         raise ConfigError(f"init spread {init_spread!r} is invalid; allowed: (0, 5]")
 
+    n_tuned = len(tuned_parameters(objective.base))
+    for i in hold:
+        if isinstance(i, bool) or not (isinstance(i, int) and 0 <= i < n_tuned):
+            raise ConfigError(f"hold index {i!r} is invalid; allowed: 0 to {n_tuned - 1}")
+
     t0 = time.monotonic()  # the budget counts everything, connecting included
     evaluator = _Evaluator(objective, workers, scheduler)  # an unreachable cluster: first
     try:
@@ -673,6 +702,8 @@ def tune_cueing(
         raise
     x0 = vector_from_params(objective.base)
     bounds = _log_bounds(objective.base)
+    for i in hold:
+        bounds[i] = (float(x0[i]) - 1e-12, float(x0[i]) + 1e-12)
     init: str | NDArray[np.float64] = "latinhypercube"
     if init_spread is not None:
         lo = np.array([b[0] for b in bounds])

@@ -150,6 +150,17 @@ def register(sub: Any) -> None:
         "and the written preset is the base unchanged plus an [intensity] table holding the "
         "result (give tighter targets than the base's, e.g. --max-false 5)",
     )
+    parser.add_argument(
+        "--gentle-keep", nargs="+", default=(), metavar="NAME",
+        help="with --gentle-end: tuned parameters kept at the base's value (names of the "
+        "[intensity.gentle] table, e.g. the filters: trans_wn_xy_rad_s tilt_wn_rad_s ...)",
+    )  # fmt: skip
+    parser.add_argument(
+        "--gentle-share", type=float, default=0.6, metavar="FRAC",
+        help="with --gentle-end: the gentle end's rendered share of fx and of fy, each at "
+        "most FRAC times the base's (the strong end's) on the same recordings (default "
+        "0.6), so that every channel grows from 0 to 100 %%",
+    )  # fmt: skip
     add_vestibular_option(parser)
     add_limit_options(parser)
     add_set_option(parser)
@@ -206,7 +217,7 @@ def run(args: argparse.Namespace) -> int:
         write_preset,
     )
     from ..cueing import Rig, cueing_algorithms, cueing_entry, get_model_set, load_cueing
-    from ..cueing._tune import at_intensity, gentle_values, preset_toml
+    from ..cueing._tune import at_intensity, gentle_values, preset_toml, tuned_parameters
     from ..pipeline._inputs import load_generate_input
     from ..telemetry._motion import is_datagram_recording
     from ..telemetry._recording import read_recording_csv, resample
@@ -302,13 +313,38 @@ def run(args: argparse.Namespace) -> int:
             f"--gentle-end needs a base preset with the compressive tilt ([tilt] shape; "
             f"{base.name!r} has none) and --objective strength"
         )
+    if not (math.isfinite(args.gentle_share) and 0.0 < args.gentle_share < 1.0):
+        raise ConfigError(f"--gentle-share {args.gentle_share!r} is invalid; allowed: (0, 1)")
+    hold: list[int] = []
+    if args.gentle_keep:
+        names = [p.name for p in tuned_parameters(base)]
+        if not args.gentle_end:
+            raise ConfigError("--gentle-keep needs --gentle-end")
+        for k in args.gentle_keep:
+            if k not in names:
+                raise ConfigError(f"--gentle-keep {k!r} is invalid; allowed: {', '.join(names)}")
+            hold.append(names.index(k))
     strong_end = base
-    if base.tilt_shape is not None and not args.gentle_end:  # this platform's own reach
-        base = replace(base, tilt_reach_rad=tilt_reach(platform, tight))
+    if base.tilt_shape is not None and not args.gentle_end and base.tilt_offset_m is None:
+        base = replace(base, tilt_reach_rad=tilt_reach(platform, tight))  # the platform's own
+        # (a preset with a reach offset keeps its reach: the reach with that offset)
     objective = TuneObjective(
         base, drives, platform, tight, args.rate, model=args.vestibular,
         objective=args.objective, targets=targets, rig=Rig(platform, limits, controller.name),
     )  # fmt: skip
+    if args.gentle_end:  # gentler than the strong end in each channel, not only overall
+        strong = objective.metrics(strong_end, full=True).cue
+        shares = (math.nan, math.nan) if strong is None else strong.rendered_share[:2]
+        if not all(math.isfinite(v) and v > 0.0 for v in shares):
+            raise ConfigError(
+                f"--gentle-end: the base preset {base.name!r} renders no fx or fy share on "
+                "these recordings (nothing to be gentler than)"
+            )
+        targets = replace(
+            targets,
+            max_share=(args.gentle_share * float(shares[0]), args.gentle_share * float(shares[1])),
+        )
+        objective.targets = targets
     strength = args.objective == "strength"
 
     def progress(gen: int, best: float, rate: float, n_eval: int) -> None:
@@ -344,6 +380,7 @@ def run(args: argparse.Namespace) -> int:
         name=name,
         progress=progress,
         init_spread=args.init_spread,
+        hold=hold,
     )
     pa = result.after.cue
     inputs = ", ".join(Path(p).name for p in args.input)
@@ -359,6 +396,7 @@ def run(args: argparse.Namespace) -> int:
             if args.init_spread is None
             else f"start about the base (spread {args.init_spread:g}), "
         )
+        + (f"kept at the base: {', '.join(args.gentle_keep)}, " if args.gentle_keep else "")
         + f"popsize "
         f"{args.popsize}, {result.generations} generation(s), {result.evaluations} "
         f"evaluations ({result.stop_reason}).",
@@ -384,7 +422,8 @@ def run(args: argparse.Namespace) -> int:
                 ""
                 if pa is None
                 else f"reversals {pa.reversals_any:.2%}, false cues {pa.false_any:.2%}, "
-                f"corr fx/fy {pa.correlation[0]:.3f}/{pa.correlation[1]:.3f}, "
+                f"corr fx/fy {pa.correlation[0]:.3f}/{pa.correlation[1]:.3f}, share fx/fy "
+                f"{pa.rendered_share[0]:.4f}/{pa.rendered_share[1]:.4f}, "
             )
             + f"clamped {result.after.clamped_fraction:.2%}); nothing written"
         )
@@ -444,13 +483,19 @@ def _objective_comment(args: argparse.Namespace, targets: StrengthTargets) -> st
             "Objective: mean cue score (motioncue.cueing.cue_score: perceived-motion error J "
             "relative to standing still, lost correlation, false and missed cues) " + chain + "."
         )
+    cap = ""
+    if targets.max_share is not None:
+        cap = (
+            f", share fx <= {targets.max_share[0]:.4f} and fy <= {targets.max_share[1]:.4f} "
+            f"({args.gentle_share:g} x the base's)"
+        )
     return (
         "Objective: strength, the geometric mean of the rendered shares of fx and fy (the "
         "recordings pooled) "
         + chain
         + f"; targets on every recording: reversals <= {targets.max_reversals:.2%}, false "
         f"cues <= {targets.max_false:.2%}, clamped <= {targets.max_clamped:.2%}, corr fx >= "
-        f"{targets.min_corr_fx:g}, fy >= {targets.min_corr_fy:g}."
+        f"{targets.min_corr_fx:g}, fy >= {targets.min_corr_fy:g}{cap}."
     )
 
 

@@ -44,6 +44,9 @@ Signal flow (per sample; frames, signs and units of conventions.md)
    ``(roll / R)^2 + (pitch / P)^2 <= 1`` with ``R, P`` the limits in that direction: a
    target outside it is scaled back towards level along its own direction (a hexapod
    reaches about 0.9-1.1 times that ellipse along the diagonals, 12.4 deg of roll alone).
+   With ``tilt_reach_exponent = q`` the region is the superellipse ``|roll / R|^q +
+   |pitch / P|^q <= 1`` instead (``q = 2`` the ellipse; a smaller ``q`` is tighter along the
+   diagonals, where a reach extended by the reach offset of step 4 is shortest).
    With ``tilt_accel_limit_rad_s2 = a`` the tilt is also acceleration limited
    (:func:`rate_accel_limit_step`): with the per-sample step ``u[n] = tilt[n] - tilt[n-1]``,
    ``d = a / fs^2`` and ``e = target - tilt[n-1]``, the wanted step is
@@ -120,6 +123,13 @@ Signal flow (per sample; frames, signs and units of conventions.md)
    positive) swing the head forward by ``h_z theta``: the term is ``W' x h = [h_z theta'',
    0, 0]``, so the platform origin is moved back by the high-passed ``h_z theta``,
    ``x = -h_z H_T(s) theta`` to first order. ``h = 0`` is the formula without these terms.
+   **Reach offset** (``tilt_offset_m = C``). The origin also moves with the delivered tilt
+   ``(roll_t, pitch_t)``: ``[x, y, z] += C [roll_t, pitch_t, roll_t^2, pitch_t^2, roll_t
+   pitch_t]``, a static function of the tilt (so batch = streaming), added after the
+   translational filters. It keeps the legs nearer the middle of their stroke as the platform
+   tilts, which lets it tilt further than about its neutral position (``tilt_reach_rad`` is
+   then the reach with the offset). Its own acceleration is felt (``C`` times the tilt's
+   acceleration, to first order).
 5. Components the machine cannot move (``dofs``) are zero, and are zero in ``R`` and ``T``.
 
 Discretisation
@@ -592,6 +602,7 @@ class ClassicalWashout:
         pt = 1.0 if p.tilt_shape is None else p.tilt_shape
         lxp, lxn, lyp, lyn = p.tilt_force_limits_m_s2
         rmin, rmax, pmin, pmax = p.tilt_limits_rad
+        qe = p.tilt_reach_exponent
         comp = compress
         has_lead = p.lead_s is not None
         ld0, ld1 = self.lead
@@ -599,6 +610,7 @@ class ClassicalWashout:
         head = hx != 0.0 or hy != 0.0 or hz != 0.0
         additive = p.tilt_additive
         lagk = p.tilt_lag_fill
+        off = p.tilt_offset_m
         mx, my, mz, mr, mp, myaw = (1.0 if d else 0.0 for d in p.dofs)
         lb0, lb1, lb2, _, la1, la2 = self.tilt_lp
         r0, r1, r2 = self.rot
@@ -706,9 +718,12 @@ class ClassicalWashout:
                 tr = rmax if tr > rmax else (-rmin if tr < -rmin else tr)
                 er = tr / (rmax if tr > 0.0 else rmin)
                 ep = tp / (pmax if tp > 0.0 else pmin)
-                qq = er * er + ep * ep
+                if qe == 2.0:
+                    qq = er * er + ep * ep
+                else:  # the superellipse |er|^q + |ep|^q <= 1
+                    qq = abs(er) ** qe + abs(ep) ** qe
                 if qq > 1.0:  # roll and pitch together: inside the quadrant's ellipse
-                    sq = 1.0 / sqrt(qq)
+                    sq = 1.0 / sqrt(qq) if qe == 2.0 else qq ** (-1.0 / qe)
                     tr = tr * sq
                     tp = tp * sq
             else:
@@ -828,6 +843,12 @@ class ClassicalWashout:
             x = mx * bq(t0b, z, 16, bq(t0a, z, 14, ax))
             y = my * bq(t1b, z, 20, bq(t1a, z, 18, ay))
             zz = mz * bq(t2b, z, 24, bq(t2a, z, 22, az))
+            if off is not None:  # 4c. the reach offset follows the delivered tilt
+                b2, b3, b4 = tr * tr, tp * tp, tr * tp
+                cx_, cy_, cz_ = off
+                x += mx * (cx_[0] * tr + cx_[1] * tp + cx_[2] * b2 + cx_[3] * b3 + cx_[4] * b4)
+                y += my * (cy_[0] * tr + cy_[1] * tp + cy_[2] * b2 + cy_[3] * b3 + cy_[4] * b4)
+                zz += mz * (cz_[0] * tr + cz_[1] * tp + cz_[2] * b2 + cz_[3] * b3 + cz_[4] * b4)
             if out is None:
                 return [x, y, zz, roll, pitch, yaw]
             out[0] = x
@@ -987,8 +1008,13 @@ class ClassicalWashout:
             tr = np.clip(tr, -rmin, rmax)
             er = tr / np.where(tr > 0.0, rmax, rmin)
             ep = tp / np.where(tp > 0.0, pmax, pmin)
-            qq = er * er + ep * ep
-            sq = np.where(qq > 1.0, 1.0 / np.sqrt(np.maximum(qq, 1.0)), 1.0)
+            qe = p.tilt_reach_exponent
+            if qe == 2.0:
+                qq = er * er + ep * ep
+                sq = np.where(qq > 1.0, 1.0 / np.sqrt(np.maximum(qq, 1.0)), 1.0)
+            else:  # the superellipse |er|^q + |ep|^q <= 1
+                qq = np.abs(er) ** qe + np.abs(ep) ** qe
+                sq = np.where(qq > 1.0, np.maximum(qq, 1.0) ** (-1.0 / qe), 1.0)
             tr = np.where(qq > 1.0, tr * sq, tr)
             tp = np.where(qq > 1.0, tp * sq, tp)
         else:
@@ -1078,6 +1104,10 @@ class ClassicalWashout:
         poses[0] = mx * filt(self.trans[0], ax, 7)
         poses[1] = my * filt(self.trans[1], ay, 9)
         poses[2] = mz * filt(self.trans[2], az, 11)
+        if p.tilt_offset_m is not None:  # 4c. the reach offset follows the delivered tilt
+            basis = np.stack([tr, tp, tr * tr, tp * tp, tr * tp])
+            for i, m in enumerate((mx, my, mz)):
+                poses[i] += m * (np.asarray(p.tilt_offset_m[i]) @ basis)
         poses[3] = roll
         poses[4] = pitch
         poses[5] = yaw

@@ -177,6 +177,17 @@ class CueingParams:
         some legs, turn slower, instead of one box limit for both that is either too slow
         alone or too fast together. 1 to 12 rows of two numbers in [0, 10], not both 0.
         ``None`` (the default): each axis alone.
+    tilt_offset_m : 3 tuples of 5 floats, or None
+        The reach offset: the platform's origin moves with the delivered tilt
+        ``(roll, pitch)`` (rad) by ``x, y, z = C @ [roll, pitch, roll^2, pitch^2, roll
+        pitch]`` (m per rad, m per rad^2; rows x, y, z) on top of the translational cue, so
+        that the legs stay centred in their stroke as the platform tilts and it can tilt
+        further than about its neutral position (``tilt_reach_rad`` is then the reach with
+        this offset). Every value in [-10, 10]. ``None`` (the default): no offset.
+    tilt_reach_exponent : float
+        Shape of the compressive tilt's region of roll and pitch together: the superellipse
+        ``|roll / R|^q + |pitch / P|^q <= 1`` (``R, P`` the limits in that quadrant) with
+        ``q`` in [1, 8]; 2 (the default) is the ellipse.
     head_offset_m : 3-tuple
         The rider's head (the vestibular system) relative to the platform origin, platform
         frame ``[x fwd, y left, z up]`` (m). The translational channel removes the specific
@@ -228,6 +239,8 @@ class CueingParams:
     tilt_additive: bool = False
     tilt_rate_mix: tuple[tuple[float, float], ...] | None = None
     tilt_lag_fill: float = 0.0
+    tilt_offset_m: tuple[tuple[float, ...], ...] | None = None
+    tilt_reach_exponent: float = 2.0
     head_offset_m: Vec3 = (0.0, 0.0, 0.0)
     rot_wn_rad_s: Vec3 = (1.0, 1.0, 0.5)
     rot_zeta: Vec3 = (1.0, 1.0, 1.0)
@@ -321,6 +334,15 @@ class CueingParams:
                 f"CueingParams.tilt_lag_fill = {self.tilt_lag_fill!r} needs tilt_additive "
                 "(the translation renders the tilt's lag on top of its own force)"
             )
+        _check("tilt_reach_exponent", (self.tilt_reach_exponent,), 1.0, False, 8.0)
+        if self.tilt_offset_m is not None:
+            off = self.tilt_offset_m
+            if len(off) != 3 or any(len(r) != 5 for r in off):
+                raise ConfigError(
+                    f"CueingParams.tilt_offset_m = {off!r} is invalid; allowed: 3 rows (x, y, "
+                    "z) of 5 numbers (roll, pitch, roll^2, pitch^2, roll pitch)"
+                )
+            _check("tilt_offset_m", tuple(abs(v) for r in off for v in r), 0.0, False, 10.0)
         if self.tilt_additive and self.tilt_scale is None:
             raise ConfigError(
                 "CueingParams.tilt_additive = True needs tilt_scale (the tilt's own gain)"
@@ -406,6 +428,11 @@ def load_cueing(name_or_path: str | Path) -> CueingParams:
                                                    #   a |roll'| + b |pitch'| <= rate_limit
         lag_fill = 0.5                             # optional (needs additive): share of the
                                                    #   tilt's lag the translation renders
+        reach_exponent = 2.0                       # optional: roll and pitch together in
+                                                   #   |r/R|^q + |p/P|^q <= 1 (default 2)
+        offset_mm = [[0, 0, 0, 0, 0],              # optional: x, y, z of the origin with the
+                     [120, 0, 0, 0, 0],            #   tilt (mm per rad of roll, pitch; per
+                     [0, -60, -40, -80, 0]]        #   rad^2 of roll^2, pitch^2, roll pitch)
         [rotational]
         wn_rad_s = [1.0, 1.0, 0.5]
         zeta = [1.0, 1.0, 1.0]
@@ -507,6 +534,22 @@ def load_cueing(name_or_path: str | Path) -> CueingParams:
             raise ti.error("rate_mix", raw, "a list of [roll, pitch] pairs of numbers")
         rate_mix = tuple((float(r[0]), float(r[1])) for r in raw)
     lag_fill = ti.number("lag_fill", lo=0.0, hi=1.0) if ti.has("lag_fill") else 0.0
+    reach_q = ti.number("reach_exponent", lo=1.0, hi=8.0) if ti.has("reach_exponent") else 2.0
+    offset = None
+    if ti.has("offset_mm"):
+        raw = ti.raw("offset_mm")
+        if (
+            not isinstance(raw, list)
+            or len(raw) != 3
+            or any(
+                not isinstance(r, list)
+                or len(r) != 5
+                or any(isinstance(v, bool) or not isinstance(v, int | float) for v in r)
+                for r in raw
+            )
+        ):
+            raise ti.error("offset_mm", raw, "3 rows (x, y, z) of 5 numbers")
+        offset = tuple(tuple(float(v) * 1e-3 for v in r) for r in raw)
     ti.finish()
 
     ro = top.table("rotational")
@@ -567,6 +610,8 @@ def load_cueing(name_or_path: str | Path) -> CueingParams:
             tilt_additive=additive,
             tilt_rate_mix=rate_mix,
             tilt_lag_fill=lag_fill,
+            tilt_offset_m=offset,
+            tilt_reach_exponent=reach_q,
             head_offset_m=head,
             rot_wn_rad_s=r_wn,
             rot_zeta=r_zeta,
