@@ -51,7 +51,7 @@ from typing import TYPE_CHECKING, Any, BinaryIO
 
 import numpy as np
 
-from .._atomic import atomic_write_bytes
+from .._atomic import atomic_write_bytes, stop_signals_deferred
 from .._errors import ConfigError, MotioncueError, one_line
 
 if TYPE_CHECKING:
@@ -284,20 +284,24 @@ def content_digest(
 
 def ride_bytes(ride: Ride) -> bytes:
     """The bytes of a ride file for ``ride`` (what :func:`save_ride` writes), its content
-    digest included."""
+    digest included. A stop signal during the encoding is handled right after it
+    (:func:`motioncue._atomic.stop_signals_deferred`)."""
     header = json.dumps(ride.header(), indent=1, sort_keys=True, default=_json_default)
     header_bytes = header.encode("utf-8")
     digest = content_digest(header_bytes, ride.t_s, ride.pulses, ride.dout, ride.dacs)
     buf = io.BytesIO()
-    np.savez_compressed(
-        buf,
-        header=np.frombuffer(header_bytes, dtype=np.uint8),
-        t_s=ride.t_s,
-        pulses=ride.pulses,
-        dout=ride.dout,
-        dacs=ride.dacs,
-        digest=np.frombuffer(digest.encode("ascii"), dtype=np.uint8),
-    )
+    # a stop signal's handler raising inside zipfile (a member open) left an archive numpy's
+    # close raised ValueError over: a traceback, not "interrupted". It runs right after.
+    with stop_signals_deferred():
+        np.savez_compressed(
+            buf,
+            header=np.frombuffer(header_bytes, dtype=np.uint8),
+            t_s=ride.t_s,
+            pulses=ride.pulses,
+            dout=ride.dout,
+            dacs=ride.dacs,
+            digest=np.frombuffer(digest.encode("ascii"), dtype=np.uint8),
+        )
     return buf.getvalue()
 
 
