@@ -213,6 +213,34 @@ def test_a_deferred_signal_is_raised_again_in_the_order_received() -> None:
             signal.signal(s, h)
 
 
+@pytest.mark.parametrize("when", ["entering", "leaving"])
+def test_a_handler_raising_while_handlers_are_swapped_leaves_the_previous_ones(
+    when: str, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """``signal.signal`` first runs the handlers of pending signals, before it swaps: one that
+    raises there (stood in for here) must not leave a recorder installed for good, which
+    would swallow every later Ctrl-C."""
+    real_signal = signal.signal
+    armed = [when == "entering"]
+    swaps: list[int] = []
+
+    def pending_handler_raises(sig: int, handler: Any) -> Any:
+        swaps.append(sig)
+        if armed[0] and (when == "leaving" or len(swaps) == 2):
+            armed[0] = False
+            raise Interrupted("SIGTERM")  # as the pending signal's handler would, unswapped
+        return real_signal(sig, handler)
+
+    before = {s: signal.getsignal(s) for s in atomic.STOP_SIGNALS}
+    monkeypatch.setattr(signal, "signal", pending_handler_raises)
+    with pytest.raises(Interrupted):
+        with atomic.stop_signals_deferred():
+            armed[0] = True
+    monkeypatch.undo()
+    assert not armed[0]
+    assert {s: signal.getsignal(s) for s in atomic.STOP_SIGNALS} == before
+
+
 # --- record: a record and its count go together ----------------------------------------------
 
 

@@ -278,7 +278,9 @@ def record(
     out : str or os.PathLike
         Recording file to create.
     seconds : float, optional
-        Stop after this long; None records until ``should_stop()`` or Ctrl-C.
+        Stop after this long; None records until ``should_stop()`` or a stop signal (Ctrl-C,
+        SIGTERM, SIGHUP, SIGQUIT: in the main thread they only end the loop, and the
+        recording is published).
     should_stop : callable, optional
         Polled about every 0.1 s; True ends the recording.
     on_ready : callable, optional
