@@ -292,15 +292,21 @@ def _small_ride() -> Any:
 
 
 def _signal_when_a_member_opens(
-    monkeypatch: pytest.MonkeyPatch, send: Callable[[], None], events: list[str]
+    monkeypatch: pytest.MonkeyPatch,
+    send: Callable[[], None],
+    events: list[str],
+    opened: list[str] | None = None,
 ) -> None:
     """The first zip member opened for writing sends the signal (its handle open: the
-    handler raising there left the archive unclosable, numpy's close raised ValueError)."""
+    handler raising there left the archive unclosable, numpy's close raised ValueError).
+    The names of the members opened for writing go to ``opened``."""
     real_open = zipfile.ZipFile.open
     real_close = zipfile.ZipFile.close
 
-    def open_then_signal(self: zipfile.ZipFile, *args: Any, **kw: Any) -> Any:
-        handle = real_open(self, *args, **kw)
+    def open_then_signal(self: zipfile.ZipFile, name: Any, *args: Any, **kw: Any) -> Any:
+        handle = real_open(self, name, *args, **kw)
+        if opened is not None and (args[:1] == ("w",) or kw.get("mode") == "w"):
+            opened.append(str(name))
         if "signal sent" not in events:
             events.append("signal sent")
             send()
@@ -329,7 +335,8 @@ def test_a_stop_signal_while_a_ride_is_encoded_is_handled_after_it(
         events.append("handler")
         raise KeyboardInterrupt
 
-    _signal_when_a_member_opens(monkeypatch, lambda: sender.send(signal.SIGHUP), events)
+    opened: list[str] = []
+    _signal_when_a_member_opens(monkeypatch, lambda: sender.send(signal.SIGHUP), events, opened)
     previous = signal.signal(signal.SIGHUP, stop)
     try:
         with pytest.raises(KeyboardInterrupt) as caught:
@@ -337,9 +344,60 @@ def test_a_stop_signal_while_a_ride_is_encoded_is_handled_after_it(
     finally:
         signal.signal(signal.SIGHUP, previous)
     assert caught.type is KeyboardInterrupt  # not a ValueError over it
+    assert opened == ["header.npy"]  # abandoned at the next chunk, not encoded to the end
     # the archive closed (numpy's close; ZipFile.__del__ closes again), then the handler, once
     assert events[:2] == ["signal sent", "zip closed"], events
     assert events[-1] == "handler" and events.count("handler") == 1, events
+
+
+def test_a_signal_a_park_only_records_lets_the_ride_be_encoded_whole(
+    sender: SignalSender, monkeypatch: pytest.MonkeyPatch, tmp_path: Path
+) -> None:
+    """Under flag-only handlers (a park in progress) the abandoned encoding is done again,
+    to the end: the ride file is whole and the guard has the signal."""
+    from motioncue.pipeline import load_ride
+    from motioncue.pipeline._ridefile import ride_bytes
+    from motioncue.pipeline._signals import SignalGuard
+
+    ride = _small_ride()
+    events: list[str] = []
+    opened: list[str] = []
+    _signal_when_a_member_opens(monkeypatch, lambda: sender.send(signal.SIGHUP), events, opened)
+    with SignalGuard() as guard:
+        data = ride_bytes(ride)
+    monkeypatch.undo()
+    assert guard.received == [signal.SIGHUP]
+    members = ["header", "t_s", "pulses", "dout", "dacs", "digest"]
+    assert opened == ["header.npy"] + [m + ".npy" for m in members]
+    path = tmp_path / "r.ride"
+    path.write_bytes(data)
+    back = load_ride(path)
+    assert back.integrity == "intact"
+    np.testing.assert_array_equal(back.pulses, ride.pulses)
+    np.testing.assert_array_equal(back.t_s, ride.t_s)
+
+
+def test_the_ride_archive_holds_what_numpy_savez_compressed_writes() -> None:
+    """The archive is written member by member (to stop between chunks); its members are
+    byte for byte those of ``np.savez_compressed`` of the same arrays (the oracle), also for
+    an array of more than one 16 MiB chunk."""
+    import io
+
+    from motioncue.pipeline._ridefile import _npz_bytes
+
+    members = {
+        "small": np.arange(5, dtype=np.uint8),
+        # 17.6 MB, two chunks; repetitive, so that deflate is quick
+        "big": (np.arange(2_200_000, dtype=np.int64) % 7).reshape(1_100_000, 2),
+        "empty": np.zeros((0, 3), np.int32),
+    }
+    ours = zipfile.ZipFile(io.BytesIO(_npz_bytes(members, lambda: False)))
+    buf = io.BytesIO()
+    np.savez_compressed(buf, **members)
+    theirs = zipfile.ZipFile(io.BytesIO(buf.getvalue()))
+    assert ours.namelist() == theirs.namelist() == [k + ".npy" for k in members]
+    for name in theirs.namelist():
+        assert ours.read(name) == theirs.read(name), name
 
 
 def test_generate_says_interrupted_when_the_signal_comes_while_its_ride_is_encoded(
