@@ -20,13 +20,20 @@ Interruptions:
   is gone (a run killed by SIGKILL) and names them in a note on stderr
   (:func:`remove_stale_partials`); a temporary file of a live process is left to it, and one
   of unknown origin (another naming) is named, not removed.
-* Creating a temporary file and recording it for removal, publishing and discarding run with
-  the stop signals blocked (:func:`_signals_held`), so that a signal cannot fall between the
-  two and leak a file: it is delivered right after.
 * :func:`interrupt_on_stop_signals` (installed by the command line before any verb runs)
   makes SIGTERM, SIGHUP and SIGQUIT raise :class:`Interrupted`, a ``KeyboardInterrupt``, as
   Ctrl-C does: the ``with`` blocks of the outputs discard them. A verb that must finish a
-  park first replaces these handlers with its own (``pipeline._signals.SignalGuard``).
+  park first replaces these handlers with flag-only ones (:class:`StopSignalRecorder`, which
+  ``pipeline._signals.SignalGuard`` is).
+* A handler that raises at any bytecode can cut a write where nothing cleans up after it (a
+  temporary file created but not yet armed for removal, a zip member open inside numpy's
+  ``savez``: its close then raises ``ValueError`` over the interruption). Such writes run
+  under :func:`stop_signals_deferred`: the stop signals are only recorded while they run and
+  raised again right after, so their handlers run then. Creating a temporary file with its
+  record, writing it whole (:func:`atomic_write_bytes`), publishing and discarding are such
+  writes. (Blocking the signals in this thread instead is no guarantee: in a process with
+  more threads the kernel hands a process-directed signal to one that does not block it, and
+  Python runs the handler in the main thread all the same.)
 """
 
 from __future__ import annotations
@@ -40,7 +47,7 @@ import stat
 import sys
 import tempfile
 import threading
-from collections.abc import Callable, Iterator
+from collections.abc import Callable
 from pathlib import Path
 from types import FrameType, TracebackType
 from typing import BinaryIO, Self
@@ -55,10 +62,12 @@ __all__ = [
     "Interrupted",
     "PublishOnExit",
     "Staging",
+    "StopSignalRecorder",
     "atomic_write_bytes",
     "interrupt_on_stop_signals",
     "partial_name_prefix",
     "remove_stale_partials",
+    "stop_signals_deferred",
 ]
 
 _UMASK = os.umask(0o022)
@@ -170,19 +179,128 @@ def remove_stale_partials(path: str | os.PathLike[str]) -> list[Path]:
     return removed
 
 
-@contextlib.contextmanager
-def _signals_held() -> Iterator[None]:
-    """Block the stop signals in this thread while the block runs; one that arrives
-    meanwhile is delivered (its handler runs) right after."""
-    try:
-        old = signal.pthread_sigmask(signal.SIG_BLOCK, STOP_SIGNALS)
-    except (OSError, ValueError):  # pragma: no cover - no signal masks here
-        yield
-        return
-    try:
-        yield
-    finally:
-        signal.pthread_sigmask(signal.SIG_SETMASK, old)
+_Handler = Callable[[int, FrameType | None], object] | int | None
+
+
+class _StopSignalHandlers:
+    """Context manager: ``handler`` for the stop signals while active (main thread; elsewhere
+    it does nothing, Python runs signal handlers in the main thread only), the previous
+    handlers restored on exit.
+
+    ``signal.signal`` first runs the handlers of signals already pending: one of them may
+    raise while the handlers are being swapped. Then those already swapped are put back
+    before the exception goes on (on entry), or the restoring goes on and the exception is
+    raised once every handler is back (on exit).
+    """
+
+    def __init__(
+        self,
+        handler: Callable[[int, FrameType | None], object],
+        signals: tuple[signal.Signals, ...] = STOP_SIGNALS,
+        *,
+        keep_ignored: bool = False,
+    ) -> None:
+        self._handler = handler
+        self._signals = signals
+        self._keep_ignored = keep_ignored
+        self._previous: dict[int, _Handler] = {}
+        self.active = False
+
+    def __enter__(self) -> Self:
+        if threading.current_thread() is not threading.main_thread():
+            return self
+        try:
+            for sig in self._signals:
+                try:
+                    if self._keep_ignored and signal.getsignal(sig) == signal.SIG_IGN:
+                        continue  # ignored (``nohup``): stays ignored
+                    self._previous[sig] = signal.signal(sig, self._handler)
+                except (OSError, ValueError):  # pragma: no cover - platform without it
+                    pass
+        except BaseException:
+            self._restore()
+            raise
+        self.active = True
+        return self
+
+    def _restore(self) -> None:
+        raised: BaseException | None = None
+        while self._previous:
+            sig, previous = next(iter(self._previous.items()))
+            try:
+                signal.signal(sig, previous if previous is not None else signal.SIG_DFL)
+            except BaseException as exc:  # a pending signal's handler raised: not swapped yet
+                raised = raised or exc
+                continue
+            del self._previous[sig]
+        self.active = False
+        if raised is not None:
+            raise raised
+
+    def __exit__(self, *exc: object) -> None:
+        self._restore()
+
+
+class StopSignalRecorder(_StopSignalHandlers):
+    """Context manager: flag-only handlers for :data:`STOP_SIGNALS` (main thread), the
+    previous handlers restored on exit. A signal is recorded and sets :attr:`event`; nothing
+    is raised, nothing printed (the terminal may be gone).
+
+    Attributes
+    ----------
+    event : threading.Event
+        Set at the first signal (a loop polls ``event.is_set``).
+    received : list of int
+        Every signal received while active, in order.
+    active : bool
+        The handlers are installed (False outside the main thread).
+    """
+
+    def __init__(self, *, keep_ignored: bool = False) -> None:
+        super().__init__(self._on_signal, keep_ignored=keep_ignored)
+        self.event = threading.Event()
+        self.received: list[int] = []
+
+    def _on_signal(self, signum: int, frame: FrameType | None) -> None:
+        # nothing that could raise or block
+        self.received.append(signum)
+        self.event.set()
+
+
+class _Deferral(StopSignalRecorder):
+    """See :func:`stop_signals_deferred`."""
+
+    def __init__(self) -> None:
+        super().__init__(keep_ignored=True)
+
+    def __exit__(self, *exc: object) -> None:
+        late: BaseException | None = None
+        try:
+            self._restore()
+        except BaseException as exc:  # arrived as the handlers came back, and raised
+            late = exc
+        for sig in dict.fromkeys(self.received):
+            # to this thread: its handler (the previous one, now back) runs here and now
+            signal.raise_signal(sig)
+        if late is not None:
+            raise late
+
+
+def stop_signals_deferred() -> StopSignalRecorder:
+    """Context manager for a write that must not be cut: while the block runs (in the main
+    thread) the stop signals are only recorded; on exit the previous handlers come back and
+    each signal received is raised again (``signal.raise_signal``, in order, once each), so
+    that its handler runs right after the block: an :class:`Interrupted` is raised there, a
+    flag-only handler records it, the default action ends the process. Ignored signals stay
+    ignored. Nests (an inner block hands its signals to the outer one). Outside the main
+    thread it does nothing: a handler cannot interrupt that thread.
+
+    Returns
+    -------
+    StopSignalRecorder
+        Its ``received`` lists the signals deferred.
+    """
+    return _Deferral()
 
 
 class Interrupted(KeyboardInterrupt):
@@ -207,26 +325,14 @@ def _raise_interrupted(signum: int, frame: FrameType | None) -> None:
     raise Interrupted(name)
 
 
-@contextlib.contextmanager
-def interrupt_on_stop_signals() -> Iterator[None]:
+def interrupt_on_stop_signals() -> contextlib.AbstractContextManager[object]:
     """While active, SIGTERM, SIGHUP and SIGQUIT raise :class:`Interrupted` (a
     ``KeyboardInterrupt``) in the main thread, as Ctrl-C does, so that the outputs being
     written are discarded and the command says it was interrupted. The previous handlers
     are restored on exit. Does nothing outside the main thread."""
-    previous: dict[signal.Signals, Callable[[int, FrameType | None], object] | int | None] = {}
-    if threading.current_thread() is threading.main_thread():
-        for sig in STOP_SIGNALS:
-            if sig == signal.SIGINT:
-                continue
-            try:
-                previous[sig] = signal.signal(sig, _raise_interrupted)
-            except (OSError, ValueError):  # pragma: no cover
-                pass
-    try:
-        yield
-    finally:
-        for old_sig, handler in previous.items():
-            signal.signal(old_sig, handler if handler is not None else signal.SIG_DFL)
+    return _StopSignalHandlers(
+        _raise_interrupted, tuple(s for s in STOP_SIGNALS if s != signal.SIGINT)
+    )
 
 
 def _is_special(path: Path) -> bool:
@@ -295,18 +401,26 @@ class AtomicFile(PublishOnExit):
                 self._fh: BinaryIO = open(self.path, "wb")
             else:
                 remove_stale_partials(self.path)
-                with _signals_held():  # created and recorded, or neither
-                    fd, tmp = tempfile.mkstemp(
-                        prefix=_own_prefix(self.path), suffix="", dir=_folder(self.path)
-                    )
-                    self.tmp_path = Path(tmp)
-                    try:
-                        os.fchmod(fd, _FILE_MODE)
-                        self._fh = os.fdopen(fd, "wb")
-                    except OSError:
-                        os.close(fd)
-                        os.unlink(tmp)
-                        raise
+                made = False
+                try:
+                    with stop_signals_deferred():  # created and recorded, or neither
+                        fd, tmp = tempfile.mkstemp(
+                            prefix=_own_prefix(self.path), suffix="", dir=_folder(self.path)
+                        )
+                        self.tmp_path = Path(tmp)
+                        try:
+                            os.fchmod(fd, _FILE_MODE)
+                            self._fh = os.fdopen(fd, "wb")
+                        except OSError:
+                            os.close(fd)
+                            os.unlink(tmp)
+                            raise
+                        made = True
+                except BaseException:
+                    if made:  # a stop signal came meanwhile and raised right after: no file
+                        self._done = True
+                        self._remove_tmp()
+                    raise
         except OSError as exc:
             raise TransportError(f"cannot write {what} {str(self.path)!r}: {exc}") from exc
 
@@ -325,7 +439,7 @@ class AtomicFile(PublishOnExit):
         """Flush, fsync and rename the temporary file to its final name."""
         if self._done:
             return self.path
-        with _signals_held():
+        with stop_signals_deferred():
             return self._commit()
 
     def _commit(self) -> Path:
@@ -348,7 +462,7 @@ class AtomicFile(PublishOnExit):
         """Close and remove the temporary file; the final name is left untouched."""
         if self._done:
             return
-        with _signals_held():
+        with stop_signals_deferred():
             self._done = True
             self._remove_tmp()
 
@@ -392,9 +506,22 @@ class AtomicFileWriter(PublishOnExit):
 
 
 def atomic_write_bytes(path: str | os.PathLike[str], data: bytes, what: str = "file") -> Path:
-    """Write ``data`` to ``path`` atomically (see the module docstring)."""
-    with AtomicFile(path, what) as out:
-        out.write(data)
+    """Write ``data`` to ``path`` atomically (see the module docstring).
+
+    The temporary file is created and written whole with the stop signals deferred
+    (:func:`stop_signals_deferred`); one received meanwhile is handled before the file is
+    published: if its handler raises, the file is discarded and nothing is left.
+    """
+    out: AtomicFile | None = None
+    try:
+        with stop_signals_deferred():
+            out = AtomicFile(path, what)
+            out.write(data)
+        out.commit()
+    except BaseException:
+        if out is not None:
+            out.discard()
+        raise
     return Path(path)
 
 
@@ -418,7 +545,7 @@ class Staging(PublishOnExit):
             self._files.append((final, final))
             return final
         remove_stale_partials(final)
-        with _signals_held():  # created and recorded, or neither
+        with stop_signals_deferred():  # created and recorded, or neither
             try:
                 fd, tmp = tempfile.mkstemp(prefix=_own_prefix(final), dir=_folder(final))
             except OSError as exc:
@@ -438,7 +565,7 @@ class Staging(PublishOnExit):
         except OSError as exc:
             raise TransportError(f"cannot write {str(final)!r}: {exc}") from exc
         remove_stale_partials(final)
-        with _signals_held():  # created and recorded, or neither
+        with stop_signals_deferred():  # created and recorded, or neither
             try:
                 tmp = tempfile.mkdtemp(prefix=_own_prefix(final), dir=_folder(final))
             except OSError as exc:
@@ -447,7 +574,7 @@ class Staging(PublishOnExit):
         return Path(tmp)
 
     def publish(self) -> None:
-        with _signals_held():
+        with stop_signals_deferred():
             self._publish_all()
 
     def _publish_all(self) -> None:
@@ -466,7 +593,7 @@ class Staging(PublishOnExit):
         self._files, self._dirs = [], []
 
     def discard(self) -> None:
-        with _signals_held():
+        with stop_signals_deferred():
             self._discard_all()
 
     def _discard_all(self) -> None:

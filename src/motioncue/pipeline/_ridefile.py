@@ -45,13 +45,14 @@ import json
 import math
 import os
 import zipfile
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import TYPE_CHECKING, Any, BinaryIO
+from typing import IO, TYPE_CHECKING, Any, BinaryIO
 
 import numpy as np
 
-from .._atomic import atomic_write_bytes
+from .._atomic import atomic_write_bytes, stop_signals_deferred
 from .._errors import ConfigError, MotioncueError, one_line
 
 if TYPE_CHECKING:
@@ -284,20 +285,66 @@ def content_digest(
 
 def ride_bytes(ride: Ride) -> bytes:
     """The bytes of a ride file for ``ride`` (what :func:`save_ride` writes), its content
-    digest included."""
+    digest included.
+
+    A stop signal during the encoding does not cut it where zipfile cannot recover (a handler
+    raising with a member open made numpy's close raise ``ValueError`` over the
+    interruption: a traceback, not "interrupted"). It is recorded
+    (:func:`motioncue._atomic.stop_signals_deferred`), the encoding is abandoned before its
+    next chunk of at most 16 MiB with the member and the archive closed normally, and the
+    signal's handler runs then. One that only records (a park in progress) does not raise:
+    the encoding is then done again, to the end.
+    """
     header = json.dumps(ride.header(), indent=1, sort_keys=True, default=_json_default)
     header_bytes = header.encode("utf-8")
     digest = content_digest(header_bytes, ride.t_s, ride.pulses, ride.dout, ride.dacs)
+    members = {
+        "header": np.frombuffer(header_bytes, dtype=np.uint8),
+        "t_s": ride.t_s,
+        "pulses": ride.pulses,
+        "dout": ride.dout,
+        "dacs": ride.dacs,
+        "digest": np.frombuffer(digest.encode("ascii"), dtype=np.uint8),
+    }
+    with stop_signals_deferred() as stops:
+        try:
+            return _npz_bytes(members, stops.event.is_set)
+        except _Abandoned:
+            pass  # the handler of the signal runs as the block ends
+    with stop_signals_deferred():  # it did not raise: the whole archive, unchecked
+        return _npz_bytes(members, lambda: False)
+
+
+class _Abandoned(Exception):
+    """A stop signal came while a ride was encoded: left between two chunks."""
+
+
+class _StopCheckedMember:
+    """A zip member open for writing, given to numpy's ``write_array`` (which writes a header,
+    then chunks of at most 16 MiB): once ``should_stop()`` is true the next write raises
+    :class:`_Abandoned`, an ordinary exception that leaves through ``with`` blocks closing
+    the member and the archive."""
+
+    def __init__(self, fid: IO[bytes], should_stop: Callable[[], bool]) -> None:
+        self._fid = fid
+        self._should_stop = should_stop
+
+    def write(self, data: bytes) -> int:
+        if self._should_stop():
+            raise _Abandoned
+        return self._fid.write(data)
+
+
+def _npz_bytes(members: dict[str, np.ndarray], should_stop: Callable[[], bool]) -> bytes:
+    """A compressed ``.npz`` of ``members``: what ``np.savez_compressed`` writes (the same
+    zipfile calls and ``write_array``), with :class:`_StopCheckedMember` between them."""
     buf = io.BytesIO()
-    np.savez_compressed(
-        buf,
-        header=np.frombuffer(header_bytes, dtype=np.uint8),
-        t_s=ride.t_s,
-        pulses=ride.pulses,
-        dout=ride.dout,
-        dacs=ride.dacs,
-        digest=np.frombuffer(digest.encode("ascii"), dtype=np.uint8),
-    )
+    with zipfile.ZipFile(buf, mode="w", compression=zipfile.ZIP_DEFLATED, allowZip64=True) as zf:
+        for key, value in members.items():
+            with zf.open(key + ".npy", "w", force_zip64=True) as fid:
+                np.lib.format.write_array(
+                    _StopCheckedMember(fid, should_stop), np.asanyarray(value), allow_pickle=False
+                )
     return buf.getvalue()
 
 

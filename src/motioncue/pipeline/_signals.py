@@ -6,21 +6,21 @@ records the signal and sets an event: no ``KeyboardInterrupt`` is raised into th
 loop, and a second or third Ctrl-C during the park is recorded and otherwise ignored. Only
 SIGKILL (and power loss) can stop the process during a park. In another thread the guard
 does nothing (Python delivers signals to the main thread only).
+
+The guard is the atomic writer's flag-only handlers (:class:`motioncue._atomic.StopSignalRecorder`,
+also what a write that must not be cut defers the signals with): one mechanism for both.
 """
 
 from __future__ import annotations
 
 import signal
-import threading
-from collections.abc import Callable
-from types import FrameType
 
-from .._atomic import STOP_SIGNALS
+from .._atomic import STOP_SIGNALS, StopSignalRecorder
 
 __all__ = ["STOP_SIGNALS", "SignalGuard"]
 
 
-class SignalGuard:
+class SignalGuard(StopSignalRecorder):
     """Context manager: flag-only handlers for :data:`STOP_SIGNALS`, restored on exit.
 
     Attributes
@@ -33,17 +33,6 @@ class SignalGuard:
         The handlers are installed (False outside the main thread).
     """
 
-    def __init__(self) -> None:
-        self.event = threading.Event()
-        self.received: list[int] = []
-        self.active = False
-        self._previous: dict[int, Callable[[int, FrameType | None], object] | int | None] = {}
-
-    def _on_signal(self, signum: int, frame: FrameType | None) -> None:
-        # nothing that could raise or block: no printing (the terminal may be gone)
-        self.received.append(signum)
-        self.event.set()
-
     @property
     def first(self) -> str | None:
         """Name of the first signal received (``"SIGTERM"``), or None."""
@@ -53,19 +42,3 @@ class SignalGuard:
             return signal.Signals(self.received[0]).name
         except ValueError:
             return f"signal {self.received[0]}"
-
-    def __enter__(self) -> SignalGuard:
-        if threading.current_thread() is threading.main_thread():
-            for sig in STOP_SIGNALS:
-                try:
-                    self._previous[sig] = signal.signal(sig, self._on_signal)
-                except (OSError, ValueError):  # pragma: no cover - platform without it
-                    pass
-            self.active = True
-        return self
-
-    def __exit__(self, *exc: object) -> None:
-        for sig, previous in self._previous.items():
-            signal.signal(sig, previous if previous is not None else signal.SIG_DFL)
-        self._previous.clear()
-        self.active = False

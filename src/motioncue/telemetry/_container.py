@@ -33,7 +33,7 @@ import time
 from collections.abc import Callable, Iterator
 from dataclasses import dataclass, field
 
-from .._atomic import AtomicFile, AtomicFileWriter
+from .._atomic import AtomicFile, AtomicFileWriter, StopSignalRecorder
 from .._errors import ConfigError, ProtocolError, TransportError
 from ._registry import game_info
 from ._sample import TelemetrySample
@@ -277,7 +277,9 @@ def record(
     out : str or os.PathLike
         Recording file to create.
     seconds : float, optional
-        Stop after this long; None records until ``should_stop()`` or Ctrl-C.
+        Stop after this long; None records until ``should_stop()`` or a stop signal (Ctrl-C,
+        SIGTERM, SIGHUP, SIGQUIT: in the main thread they only end the loop, and the
+        recording is published).
     should_stop : callable, optional
         Polled about every 0.1 s; True ends the recording.
     on_ready : callable, optional
@@ -321,14 +323,17 @@ def record(
     summary = RecordSummary(os.fspath(out), game, host, bound_port)
     buf = bytearray(MAX_DATAGRAM + 1)
     try:
-        with RecordingWriter(out, game, bound_port) as writer:
+        # a stop signal (Ctrl-C, SIGTERM, a closed terminal) only sets a flag and the loop
+        # ends at its top: a handler raising between a record's write and its count
+        # published a file with a record more than the summary said
+        with StopSignalRecorder() as stops, RecordingWriter(out, game, bound_port) as writer:
             if on_ready is not None:
                 on_ready(bound_port)
             t0 = time.perf_counter()
             deadline = math.inf if seconds is None else t0 + seconds
             next_talk = t0
             try:
-                while True:
+                while not stops.event.is_set():
                     now = time.perf_counter()
                     if now >= deadline or (should_stop is not None and should_stop()):
                         break
