@@ -91,6 +91,7 @@ if TYPE_CHECKING:
     from ._algorithm import Rig
 
 __all__ = [
+    "DaqpQp",
     "MpcCueing",
     "MpcResult",
     "MpcState",
@@ -744,6 +745,76 @@ class QpSolver:
         return ok, u, la, lx
 
 
+class DaqpQp:
+    """The problem of :class:`QpSolver` through DAQP's own interface (:func:`daqp.solve`),
+    the ``mpc`` route for ``solver = "daqp"``.
+
+    The same dual active-set solver as casadi's ``daqp`` plugin without casadi's per-call
+    work (argument conversion and densifying: 0.9-2.0 ms of CPU a solve of ``mpc-hexapod``
+    through casadi, against 0.03-0.3 ms here; ``benchmarks/bench_mpc.py``). Warm start: the
+    previous solution's active set (``warm``'s multipliers; positive at an upper bound,
+    negative at a lower one, casadi's convention) is the solver's starting working set, so a
+    plan that keeps its active constraints converges in about one iteration. Each solve has
+    a fresh workspace (a reused :class:`daqp.Model` carries rounding from one solve to the
+    next), so the result depends only on the arguments and streaming, batch and reset runs
+    give the same numbers.
+    """
+
+    def __init__(self, hess: NDArray[np.float64], n_rows: int) -> None:
+        self.h = np.ascontiguousarray(hess, dtype=float)
+        self.n = int(hess.shape[0])
+        self.n_rows = n_rows
+
+    def solve(
+        self,
+        g: NDArray[np.float64],
+        a: NDArray[np.float64],
+        lba: NDArray[np.float64],
+        uba: NDArray[np.float64],
+        lbx: NDArray[np.float64],
+        ubx: NDArray[np.float64],
+        warm: tuple[Any, Any, Any] | None = None,
+    ) -> tuple[bool, NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
+        """``(ok, u, lam_a, lam_x)`` as :meth:`QpSolver.solve`; ``warm`` is ``(u, lam_a,
+        lam_x)`` of a previous solve of the same sizes (only its multipliers are used)."""
+        import daqp
+
+        n = self.n
+        bu = np.concatenate([ubx, uba])
+        bl = np.concatenate([lbx, lba])
+        sense = np.zeros(n + self.n_rows, dtype=np.int32)
+        if warm is not None and warm[1] is not None and warm[2] is not None:
+            lam = np.concatenate([warm[2], warm[1]])
+            if lam.shape == sense.shape:
+                sense[lam > 0.0] = 1  # active at its upper bound
+                sense[lam < 0.0] = 3  # active at its lower bound
+        fail = (False, np.zeros(n), np.zeros(self.n_rows), np.zeros(n))
+        try:
+            x, _, flag, info = daqp.solve(
+                self.h,
+                np.ascontiguousarray(g, dtype=float),
+                np.ascontiguousarray(a, dtype=float),
+                bu,
+                bl,
+                sense,
+            )
+        except (RuntimeError, ValueError):
+            return fail
+        z = np.array(x, dtype=float).reshape(-1)
+        lam_all = np.array(info["lam"], dtype=float).reshape(-1)
+        if int(flag) != 1 or z.shape != (n,) or not np.all(np.isfinite(z)):
+            return fail
+        return True, z, lam_all[n:], lam_all[:n]
+
+
+def qp_solver(plugin: str, hess: NDArray[np.float64], n_rows: int) -> QpSolver | DaqpQp:
+    """The ``mpc`` route to ``plugin``: :class:`DaqpQp` for ``"daqp"``, otherwise casadi's
+    plugin (:class:`QpSolver`)."""
+    if plugin == "daqp":
+        return DaqpQp(hess, n_rows)
+    return QpSolver(plugin, hess, n_rows)
+
+
 class SoftGuardQp:
     """:class:`QpSolver` plus soft one-sided rows (the sign guard), each with a slack
     ``s >= 0`` priced ``weight (s + s^2 / 2)``::
@@ -758,7 +829,13 @@ class SoftGuardQp:
     """
 
     def __init__(
-        self, plugin: str, hess: NDArray[np.float64], n_rows: int, n_guard: int, weight: float
+        self,
+        plugin: str,
+        hess: NDArray[np.float64],
+        n_rows: int,
+        n_guard: int,
+        weight: float,
+        direct: bool = False,
     ) -> None:
         n = hess.shape[0]
         h = np.zeros((n + n_guard, n + n_guard))
@@ -768,7 +845,11 @@ class SoftGuardQp:
         self.n_rows = n_rows
         self.n_guard = n_guard
         self.weight = weight
-        self._qp = QpSolver(plugin, h, n_rows + n_guard)
+        self._qp: QpSolver | DaqpQp = (
+            qp_solver(plugin, h, n_rows + n_guard)
+            if direct
+            else QpSolver(plugin, h, n_rows + n_guard)
+        )
 
     def solve(
         self,
@@ -783,21 +864,41 @@ class SoftGuardQp:
         hi_guard: NDArray[np.float64],
     ) -> tuple[bool, NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
         """``(ok, u, lam_a, lam_x)`` of the inputs ``u`` (slacks dropped)."""
+        ok, x, la, lx = self.solve_full(g, a, lba, uba, lbx, ubx, a_guard, lo_guard, hi_guard)
+        return ok, x[: self.n], la[: self.n_rows], lx[: self.n]
+
+    def solve_full(
+        self,
+        g: NDArray[np.float64],
+        a: NDArray[np.float64],
+        lba: NDArray[np.float64],
+        uba: NDArray[np.float64],
+        lbx: NDArray[np.float64],
+        ubx: NDArray[np.float64],
+        a_guard: NDArray[np.float64],
+        lo_guard: NDArray[np.float64],
+        hi_guard: NDArray[np.float64],
+        warm: tuple[Any, Any, Any] | None = None,
+    ) -> tuple[bool, NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
+        """``(ok, z, lam_a, lam_x)`` of the whole problem: ``z = [u, s]`` (inputs, slacks),
+        ``lam_a`` of ``[A; guard rows]``, ``lam_x`` of ``z``'s bounds; ``warm`` is such a
+        triple of a previous solve (a warm start through the guard: the slacks' and the guard
+        rows' multipliers are part of the active set it passes on)."""
         ng = self.n_guard
         sigma = np.where(np.isfinite(lo_guard), 1.0, -1.0)
         a_aug = np.zeros((self.n_rows + ng, self.n + ng))
         a_aug[: self.n_rows, : self.n] = a
         a_aug[self.n_rows :, : self.n] = a_guard
         a_aug[self.n_rows :, self.n :] = np.diag(sigma)
-        ok, x, la, lx = self._qp.solve(
+        return self._qp.solve(
             np.concatenate([g, np.full(ng, self.weight)]),
             a_aug,
             np.concatenate([lba, lo_guard]),
             np.concatenate([uba, hi_guard]),
             np.concatenate([lbx, np.zeros(ng)]),
             np.concatenate([ubx, np.full(ng, np.inf)]),
+            warm,
         )
-        return ok, x[: self.n], la[: self.n_rows], lx[: self.n]
 
 
 def _lin_at(
@@ -831,7 +932,7 @@ class MpcCueing:
     model: LinearModel = field(init=False)
     cond: Condensed = field(init=False)
     limits: RigLimits = field(init=False)
-    _qp: QpSolver = field(init=False, repr=False)
+    _qp: QpSolver | DaqpQp = field(init=False, repr=False)
     _qp_guard: SoftGuardQp | None = field(init=False, repr=False)
 
     def __post_init__(self) -> None:
@@ -854,13 +955,18 @@ class MpcCueing:
         object.__setattr__(self, "model", model)
         object.__setattr__(self, "cond", cond)
         object.__setattr__(self, "limits", limits)
-        object.__setattr__(self, "_qp", QpSolver(mp.solver, cond.hess, self.n_rows))
+        object.__setattr__(self, "_qp", qp_solver(mp.solver, cond.hess, self.n_rows))
         guard = self._guard_channels()
         object.__setattr__(
             self,
             "_qp_guard",
             SoftGuardQp(
-                mp.solver, cond.hess, self.n_rows, len(ends) * len(guard), mp.sign_guard_weight
+                mp.solver,
+                cond.hess,
+                self.n_rows,
+                len(ends) * len(guard),
+                mp.sign_guard_weight,
+                direct=True,
             )
             if guard
             else None,
@@ -1022,7 +1128,9 @@ class MpcCueing:
         warm = (state.warm_u, state.warm_lam_a, state.warm_lam_x)
         if self._qp_guard is not None and d_vehicle is not None:
             ga, glo, ghi = self.guard_rows(state, d_vehicle)
-            ok, u, la, lx = self._qp_guard.solve(g, a_mat, lba, uba, lbx, ubx, ga, glo, ghi)
+            ok, u, la, lx = self._qp_guard.solve_full(
+                g, a_mat, lba, uba, lbx, ubx, ga, glo, ghi, warm
+            )
         else:
             ok, u, la, lx = self._qp.solve(g, a_mat, lba, uba, lbx, ubx, warm)
         elapsed = time.perf_counter() - t0
