@@ -754,10 +754,11 @@ class DaqpQp:
     through casadi, against 0.03-0.3 ms here; ``benchmarks/bench_mpc.py``). Warm start: the
     previous solution's active set (``warm``'s multipliers; positive at an upper bound,
     negative at a lower one, casadi's convention) is the solver's starting working set, so a
-    plan that keeps its active constraints converges in about one iteration. Each solve has
-    a fresh workspace (a reused :class:`daqp.Model` carries rounding from one solve to the
-    next), so the result depends only on the arguments and streaming, batch and reset runs
-    give the same numbers.
+    plan that keeps its active constraints converges in about one iteration; a warm start that
+    does not fit (e.g. rows no longer independent: DAQP refuses it) is retried cold. Each
+    solve has a fresh workspace (a reused :class:`daqp.Model` carries rounding from one solve
+    to the next), so the result depends only on the arguments and streaming, batch and reset
+    runs give the same numbers.
     """
 
     def __init__(self, hess: NDArray[np.float64], n_rows: int) -> None:
@@ -789,22 +790,20 @@ class DaqpQp:
                 sense[lam > 0.0] = 1  # active at its upper bound
                 sense[lam < 0.0] = 3  # active at its lower bound
         fail = (False, np.zeros(n), np.zeros(self.n_rows), np.zeros(n))
-        try:
-            x, _, flag, info = daqp.solve(
-                self.h,
-                np.ascontiguousarray(g, dtype=float),
-                np.ascontiguousarray(a, dtype=float),
-                bu,
-                bl,
-                sense,
-            )
-        except (RuntimeError, ValueError):
-            return fail
-        z = np.array(x, dtype=float).reshape(-1)
-        lam_all = np.array(info["lam"], dtype=float).reshape(-1)
-        if int(flag) != 1 or z.shape != (n,) or not np.all(np.isfinite(z)):
-            return fail
-        return True, z, lam_all[n:], lam_all[:n]
+        gv = np.ascontiguousarray(g, dtype=float)
+        am = np.ascontiguousarray(a, dtype=float)
+        for start in (sense, None) if np.any(sense) else (sense,):
+            if start is None:  # a warm start that does not fit this problem: once cold
+                start = np.zeros_like(sense)
+            try:
+                x, _, flag, info = daqp.solve(self.h, gv, am, bu, bl, start)
+            except (RuntimeError, ValueError):
+                continue
+            z = np.array(x, dtype=float).reshape(-1)
+            if int(flag) == 1 and z.shape == (n,) and np.all(np.isfinite(z)):
+                lam_all = np.array(info["lam"], dtype=float).reshape(-1)
+                return True, z, lam_all[n:], lam_all[:n]
+        return fail
 
 
 def qp_solver(plugin: str, hess: NDArray[np.float64], n_rows: int) -> QpSolver | DaqpQp:
