@@ -1150,7 +1150,11 @@ class MpcCueing:
         free = pre.free_xd @ xd  # (nb, 12)
         a_pos = np.matmul(jac, pre.gp).reshape(-1, pre.g_xd.shape[0])  # (nb nl, nU)
         a_vel = np.matmul(jac, pre.gv).reshape(-1, pre.g_xd.shape[0])
-        a_acc = np.kron(pre.eye_nb, jac[:, list(m.active)])
+        ja = jac[:, list(m.active)]  # (nl, nu): the acceleration rows, block-diagonal
+        nl, nu = ja.shape
+        a_acc = np.zeros((pre.eye_nb.shape[0] * nl, pre.g_xd.shape[0]))
+        for b in range(pre.eye_nb.shape[0]):
+            a_acc[b * nl : (b + 1) * nl, b * nu : (b + 1) * nu] = ja
         base = q0 - jac @ pose0 - lim.q_mid  # leg offset from centre at p = 0
         pos_free = (free[:, 0:6] @ jac.T + base).reshape(-1)  # (nb nl,)
         vel_free = (free[:, 6:12] @ jac.T).reshape(-1)
