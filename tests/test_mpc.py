@@ -13,7 +13,7 @@ from scipy.linalg import solve_discrete_are
 
 from motioncue._errors import ConfigError
 from motioncue.cueing import load_cueing, make_cueing
-from motioncue.cueing._mpc import MpcCueing, block_ends, condense
+from motioncue.cueing._mpc import DaqpQp, MpcCueing, QpSolver, block_ends, condense
 from motioncue.cueing._mpc_params import MpcParams
 from motioncue.cueing._optimal import OptimalCueing
 from motioncue.kinematics import load_platform
@@ -105,6 +105,71 @@ def test_kkt_residuals_and_feasibility_on_random_active_problems(hexapod: MpcCue
         assert np.all(at_hi[big & (la > 0)]) and np.all(at_lo[big & (la < 0)])
         active_seen += int(big.sum())
     assert active_seen > 0  # the random problems did reach the limits
+
+
+def test_daqp_route_matches_casadis_solver_and_any_warm_start_gives_the_optimum(
+    hexapod: MpcCueing,
+) -> None:
+    """The plan's own DAQP route (:class:`DaqpQp`) against casadi's qpOASES plugin (a second,
+    primal active-set method) on random active problems; warm starts from the true active
+    set, from the previous problem's, from the true one at the wrong bounds and from every
+    row at once (more rows than unknowns: DAQP refuses it, the solve is retried cold) change
+    the work, not the answer."""
+    rng = np.random.default_rng(4)
+    h = hexapod.cond.hess
+    direct = DaqpQp(h, hexapod.n_rows)
+    oracle = QpSolver("qpoases", h, hexapod.n_rows)
+    prev = None
+    active_seen = 0
+    for _ in range(12):
+        x0 = np.zeros(hexapod.model.nx)
+        x0[:6] = rng.uniform(-1, 1, 6) * np.array([0.02, 0.02, 0.0, 0.03, 0.03, 0.0])
+        x0[6:12] = rng.uniform(-1, 1, 6) * 0.02
+        d = rng.normal(scale=[8, 8, 3, 0.5, 0.5, 0.5])
+        qp = hexapod.qp_matrices(x0, d)
+        ok_o, u_o, _, _ = oracle.solve(*qp)
+        ok, u, la, lx = direct.solve(*qp)
+        assert ok and ok_o
+        scale = 1.0 + np.abs(u_o).max()
+        np.testing.assert_allclose(u, u_o, rtol=0, atol=1e-6 * scale)
+        active_seen += int(np.count_nonzero(la))
+        flipped = (u, -la, -lx)  # the true active set, each row at its other bound
+        every = (u, -np.where(la == 0, 1.0, la), -np.where(lx == 0, 1.0, lx))  # refused: cold
+        for warm in ((u, la, lx), prev, flipped, every):
+            ok_w, u_w, _, _ = direct.solve(*qp, warm=warm)
+            assert ok_w
+            np.testing.assert_allclose(u_w, u_o, rtol=0, atol=1e-6 * scale)
+        prev = (u, la, lx)
+    assert active_seen > 0  # the problems did reach the limits
+
+
+def test_the_guarded_plan_warm_starts_through_its_sign_guard() -> None:
+    """With a sign guard the solve's warm start is the whole problem's (inputs and slacks):
+    a warm-started run gives the cold run's plan."""
+    params = _with(load_cueing("mpc-hexapod"), sign_guard=(0.7, 0.7, 0.0, 0.0, 0.0, 0.0))
+    design = MpcCueing(_with(params, deadline_ms=1e6), FS)
+    assert design._qp_guard is not None
+    inner = design._qp_guard._qp
+    real = inner.solve
+    seen: list[int] = []
+
+    def spy(g, a, lba, uba, lbx, ubx, warm=None):  # type: ignore[no-untyped-def]
+        seen.append(0 if warm is None or warm[1] is None else len(warm[1]))
+        return real(g, a, lba, uba, lbx, ubx, warm)
+
+    inner.solve = spy  # type: ignore[method-assign]
+    f, w = _drive(600, 120)
+    warm_poses = design.run(f, w).poses
+    n_rows = design.n_rows + design._qp_guard.n_guard
+    assert seen[0] == 0 and all(k == n_rows for k in seen[1:])  # guard rows' multipliers too
+
+    def cold(g, a, lba, uba, lbx, ubx, warm=None):  # type: ignore[no-untyped-def]
+        return real(g, a, lba, uba, lbx, ubx)
+
+    inner.solve = cold  # type: ignore[method-assign]
+    cold_poses = design.run(f, w).poses
+    np.testing.assert_allclose(warm_poses, cold_poses, rtol=0, atol=1e-6)
+    assert np.abs(cold_poses).max() > 1e-3
 
 
 def test_every_frame_is_within_the_actuator_limits(hexapod: MpcCueing) -> None:

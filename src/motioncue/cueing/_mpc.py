@@ -91,6 +91,7 @@ if TYPE_CHECKING:
     from ._algorithm import Rig
 
 __all__ = [
+    "DaqpQp",
     "MpcCueing",
     "MpcResult",
     "MpcState",
@@ -744,6 +745,75 @@ class QpSolver:
         return ok, u, la, lx
 
 
+class DaqpQp:
+    """The problem of :class:`QpSolver` through DAQP's own interface (:func:`daqp.solve`),
+    the ``mpc`` route for ``solver = "daqp"``.
+
+    The same dual active-set solver as casadi's ``daqp`` plugin without casadi's per-call
+    work (argument conversion and densifying: 0.9-2.0 ms of CPU a solve of ``mpc-hexapod``
+    through casadi, against 0.03-0.3 ms here; ``benchmarks/bench_mpc.py``). Warm start: the
+    previous solution's active set (``warm``'s multipliers; positive at an upper bound,
+    negative at a lower one, casadi's convention) is the solver's starting working set, so a
+    plan that keeps its active constraints converges in about one iteration; a warm start that
+    does not fit (e.g. rows no longer independent: DAQP refuses it) is retried cold. Each
+    solve has a fresh workspace (a reused :class:`daqp.Model` carries rounding from one solve
+    to the next), so the result depends only on the arguments and streaming, batch and reset
+    runs give the same numbers.
+    """
+
+    def __init__(self, hess: NDArray[np.float64], n_rows: int) -> None:
+        self.h = np.ascontiguousarray(hess, dtype=float)
+        self.n = int(hess.shape[0])
+        self.n_rows = n_rows
+
+    def solve(
+        self,
+        g: NDArray[np.float64],
+        a: NDArray[np.float64],
+        lba: NDArray[np.float64],
+        uba: NDArray[np.float64],
+        lbx: NDArray[np.float64],
+        ubx: NDArray[np.float64],
+        warm: tuple[Any, Any, Any] | None = None,
+    ) -> tuple[bool, NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
+        """``(ok, u, lam_a, lam_x)`` as :meth:`QpSolver.solve`; ``warm`` is ``(u, lam_a,
+        lam_x)`` of a previous solve of the same sizes (only its multipliers are used)."""
+        import daqp
+
+        n = self.n
+        bu = np.concatenate([ubx, uba])
+        bl = np.concatenate([lbx, lba])
+        sense = np.zeros(n + self.n_rows, dtype=np.int32)
+        if warm is not None and warm[1] is not None and warm[2] is not None:
+            lam = np.concatenate([warm[2], warm[1]])
+            if lam.shape == sense.shape:
+                sense[lam > 0.0] = 1  # active at its upper bound
+                sense[lam < 0.0] = 3  # active at its lower bound
+        fail = (False, np.zeros(n), np.zeros(self.n_rows), np.zeros(n))
+        gv = np.ascontiguousarray(g, dtype=float)
+        am = np.ascontiguousarray(a, dtype=float)
+        for start in (sense, None) if np.any(sense) else (sense,):
+            if start is None:  # a warm start that does not fit this problem: once cold
+                start = np.zeros_like(sense)
+            try:
+                x, _, flag, info = daqp.solve(self.h, gv, am, bu, bl, start)
+            except (RuntimeError, ValueError):
+                continue
+            z = np.array(x, dtype=float).reshape(-1)
+            if int(flag) == 1 and z.shape == (n,) and np.all(np.isfinite(z)):
+                lam_all = np.array(info["lam"], dtype=float).reshape(-1)
+                return True, z, lam_all[n:], lam_all[:n]
+        return fail
+
+
+def qp_solver(plugin: str, hess: NDArray[np.float64], n_rows: int) -> QpSolver | DaqpQp:
+    """The ``mpc`` route to ``plugin``: :class:`DaqpQp` for ``"daqp"``, otherwise casadi's
+    plugin (:class:`QpSolver`)."""
+    if plugin == "daqp":
+        return DaqpQp(hess, n_rows)
+    return QpSolver(plugin, hess, n_rows)
+
+
 class SoftGuardQp:
     """:class:`QpSolver` plus soft one-sided rows (the sign guard), each with a slack
     ``s >= 0`` priced ``weight (s + s^2 / 2)``::
@@ -758,7 +828,13 @@ class SoftGuardQp:
     """
 
     def __init__(
-        self, plugin: str, hess: NDArray[np.float64], n_rows: int, n_guard: int, weight: float
+        self,
+        plugin: str,
+        hess: NDArray[np.float64],
+        n_rows: int,
+        n_guard: int,
+        weight: float,
+        direct: bool = False,
     ) -> None:
         n = hess.shape[0]
         h = np.zeros((n + n_guard, n + n_guard))
@@ -768,7 +844,11 @@ class SoftGuardQp:
         self.n_rows = n_rows
         self.n_guard = n_guard
         self.weight = weight
-        self._qp = QpSolver(plugin, h, n_rows + n_guard)
+        self._qp: QpSolver | DaqpQp = (
+            qp_solver(plugin, h, n_rows + n_guard)
+            if direct
+            else QpSolver(plugin, h, n_rows + n_guard)
+        )
 
     def solve(
         self,
@@ -783,21 +863,41 @@ class SoftGuardQp:
         hi_guard: NDArray[np.float64],
     ) -> tuple[bool, NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
         """``(ok, u, lam_a, lam_x)`` of the inputs ``u`` (slacks dropped)."""
+        ok, x, la, lx = self.solve_full(g, a, lba, uba, lbx, ubx, a_guard, lo_guard, hi_guard)
+        return ok, x[: self.n], la[: self.n_rows], lx[: self.n]
+
+    def solve_full(
+        self,
+        g: NDArray[np.float64],
+        a: NDArray[np.float64],
+        lba: NDArray[np.float64],
+        uba: NDArray[np.float64],
+        lbx: NDArray[np.float64],
+        ubx: NDArray[np.float64],
+        a_guard: NDArray[np.float64],
+        lo_guard: NDArray[np.float64],
+        hi_guard: NDArray[np.float64],
+        warm: tuple[Any, Any, Any] | None = None,
+    ) -> tuple[bool, NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
+        """``(ok, z, lam_a, lam_x)`` of the whole problem: ``z = [u, s]`` (inputs, slacks),
+        ``lam_a`` of ``[A; guard rows]``, ``lam_x`` of ``z``'s bounds; ``warm`` is such a
+        triple of a previous solve (a warm start through the guard: the slacks' and the guard
+        rows' multipliers are part of the active set it passes on)."""
         ng = self.n_guard
         sigma = np.where(np.isfinite(lo_guard), 1.0, -1.0)
         a_aug = np.zeros((self.n_rows + ng, self.n + ng))
         a_aug[: self.n_rows, : self.n] = a
         a_aug[self.n_rows :, : self.n] = a_guard
         a_aug[self.n_rows :, self.n :] = np.diag(sigma)
-        ok, x, la, lx = self._qp.solve(
+        return self._qp.solve(
             np.concatenate([g, np.full(ng, self.weight)]),
             a_aug,
             np.concatenate([lba, lo_guard]),
             np.concatenate([uba, hi_guard]),
             np.concatenate([lbx, np.zeros(ng)]),
             np.concatenate([ubx, np.full(ng, np.inf)]),
+            warm,
         )
-        return ok, x[: self.n], la[: self.n_rows], lx[: self.n]
 
 
 def _lin_at(
@@ -808,6 +908,29 @@ def _lin_at(
     q = np.asarray(plat.inverse(pose), dtype=float)
     jac = np.asarray(plat.jacobian(pose), dtype=float)
     return q, jac
+
+
+@dataclass(frozen=True, eq=False)
+class _QpParts:
+    """Constant pieces of :meth:`MpcCueing.qp_matrices` and :meth:`MpcCueing.guard_rows`
+    (``nb`` block ends, ``nU`` inputs, ``nx`` states, ``ng`` guarded channels)."""
+
+    g_xd: NDArray[np.float64]  # (nU, nx + 6): gradient from [x0, d]
+    free_xd: NDArray[np.float64]  # (nb, 12, nx + 6): free pose and rate at block ends
+    gp: NDArray[np.float64]  # (nb, 6, nU): pose at block ends from the inputs
+    gv: NDArray[np.float64]  # (nb, 6, nU): rate at block ends from the inputs
+    fixed_rows: NDArray[np.float64]  # (r, nU): tilt-rate and octagon rows (constant)
+    fixed_sel: tuple[NDArray[np.float64], ...]  # (w, 12) per kind: their free part
+    leg_bound: tuple[NDArray[np.float64], NDArray[np.float64]]  # (nb nl,) stroke, speed
+    fixed_bound: NDArray[np.float64]  # (r,): their symmetric bound
+    acc_bound: NDArray[np.float64]  # (nb nl,): leg acceleration bound
+    eye_nb: NDArray[np.float64]
+    lbx: NDArray[np.float64]
+    ubx: NDArray[np.float64]
+    n_legs: int
+    guard_a: NDArray[np.float64]  # (nb ng, nU): guard rows, in thresholds
+    guard_phi: NDArray[np.float64]  # (nb, ng, nx)
+    guard_psi: NDArray[np.float64]  # (nb, ng, 6)
 
 
 @dataclass(frozen=True, eq=False)
@@ -831,7 +954,7 @@ class MpcCueing:
     model: LinearModel = field(init=False)
     cond: Condensed = field(init=False)
     limits: RigLimits = field(init=False)
-    _qp: QpSolver = field(init=False, repr=False)
+    _qp: QpSolver | DaqpQp = field(init=False, repr=False)
     _qp_guard: SoftGuardQp | None = field(init=False, repr=False)
 
     def __post_init__(self) -> None:
@@ -854,13 +977,18 @@ class MpcCueing:
         object.__setattr__(self, "model", model)
         object.__setattr__(self, "cond", cond)
         object.__setattr__(self, "limits", limits)
-        object.__setattr__(self, "_qp", QpSolver(mp.solver, cond.hess, self.n_rows))
+        object.__setattr__(self, "_qp", qp_solver(mp.solver, cond.hess, self.n_rows))
         guard = self._guard_channels()
         object.__setattr__(
             self,
             "_qp_guard",
             SoftGuardQp(
-                mp.solver, cond.hess, self.n_rows, len(ends) * len(guard), mp.sign_guard_weight
+                mp.solver,
+                cond.hess,
+                self.n_rows,
+                len(ends) * len(guard),
+                mp.sign_guard_weight,
+                direct=True,
             )
             if guard
             else None,
@@ -888,20 +1016,19 @@ class MpcCueing:
         perceived motion on a guarded channel must not oppose the vehicle's perceived motion
         (both predicted over the horizon, the vehicle's held or decaying from ``d_vehicle``)
         by more than ``sign_guard`` thresholds; rows and bounds in thresholds)."""
-        c = self.cond
+        pre = self._parts()
         m = self.model
         guard = self._guard_channels()
         xv = state.xv if state.xv is not None else np.zeros(m.nx)
         xt = state.xt if state.xt is not None else np.zeros(m.nx)
         # perceived simulator motion = ce (x - xv) (the reference's part cancels)
-        free = np.einsum("bgx,x->bg", c.ce_phi[:, guard], state.x - xv)
-        pv = -(np.einsum("bgx,x->bg", c.ce_phi[:, guard], xt) + c.ce_psi[:, guard] @ d_vehicle)
+        free = pre.guard_phi @ (state.x - xv)  # (nb, ng)
+        pv = -(pre.guard_phi @ xt + pre.guard_psi @ d_vehicle)
         thr = m.thresholds[guard]
         g = np.asarray(self.mpc.sign_guard)[guard]
         lo = np.where(pv > 0, -g - free / thr, -np.inf)
         hi = np.where(pv < 0, g - free / thr, np.inf)
-        a = (c.ce_gam[:, guard] / thr[None, :, None]).reshape(-1, c.ce_gam.shape[2])
-        return a, lo.reshape(-1), hi.reshape(-1)
+        return pre.guard_a, lo.reshape(-1), hi.reshape(-1)
 
     def _tilt_axes(self) -> list[int]:
         return [i for i in (3, 4) if self.params.dofs[i]]
@@ -943,72 +1070,115 @@ class MpcCueing:
         return out
 
     # ------------------------------------------------------------------ the QP
-    def qp_matrices(
-        self, x0: NDArray[np.float64], d: NDArray[np.float64]
-    ) -> tuple[NDArray[np.float64], ...]:
-        """``(g, A, lba, uba, lbx, ubx)`` of this sample's QP (the Hessian is ``cond.hess``)."""
+    def _parts(self) -> _QpParts:
+        """The constant pieces of every sample's QP (built once, on first use)."""
+        pre: _QpParts | None = self.__dict__.get("_pre")
+        if pre is not None:
+            return pre
         c = self.cond
-        lim = self.limits
         m = self.model
-        g = c.gx @ x0 + c.gd @ d
-        pose0 = x0[:6]
-        q0, jac = _lin_at(lim, pose0)
-        free = c.phi_end @ x0 + c.psi_end @ d  # (nb, 12)
-        gp = c.gam_end[:, 0:6, :]
-        gv = c.gam_end[:, 6:12, :]
-        a_pos = np.einsum("lj,bju->blu", jac, gp)
-        a_vel = np.einsum("lj,bju->blu", jac, gv)
+        lim = self.limits
         nb = len(c.ends)
         nu = m.nu
-        nl = jac.shape[0]
-        ja = jac[:, list(m.active)]  # (nl, nu)
-        a_acc = np.zeros((nb, nl, nb * nu))
-        for b in range(nb):
-            a_acc[b, :, b * nu : (b + 1) * nu] = ja
-        base = q0 - jac @ pose0 - lim.q_mid  # leg offset from centre at p = 0
-        pos_free = free[:, 0:6] @ jac.T + base  # (nb, nl)
-        vel_free = free[:, 6:12] @ jac.T
-        rows = [a_pos, a_vel, a_acc]
-        lo = [-lim.q_half - pos_free, -lim.v_max - vel_free, np.broadcast_to(-lim.a_max, (nb, nl))]
-        hi = [lim.q_half - pos_free, lim.v_max - vel_free, np.broadcast_to(lim.a_max, (nb, nl))]
+        n_u = nb * nu
+        gp = c.gam_end[:, 0:6, :]
+        gv = c.gam_end[:, 6:12, :]
+        fixed_rows: list[NDArray[np.float64]] = []
+        fixed_sel: list[NDArray[np.float64]] = []  # each kind's part of the free pose, rate
+        fixed_bound: list[NDArray[np.float64]] = []
         tilt = self._tilt_axes()
+        eye12 = np.eye(12)
         if tilt:
-            rows.append(gv[:, [i - 0 for i in tilt], :])
-            tf = free[:, [6 + i for i in tilt]]
-            lo.append(-lim.tilt_rate - tf)
-            hi.append(lim.tilt_rate - tf)
+            fixed_rows.append(gv[:, tilt, :].reshape(-1, n_u))
+            fixed_sel.append(eye12[[6 + i for i in tilt]])
+            fixed_bound.append(np.full(nb * len(tilt), lim.tilt_rate))
         if self._combined_tilt():
             bound = tilt_fz_bound(self.mpc, float(m.thresholds[2]))
             assert bound is not None
-            rows.append(
-                np.stack(
-                    [
-                        gp[:, 3, :] + gp[:, 4, :],
-                        gp[:, 3, :] - gp[:, 4, :],
-                        gp[:, 3, :],
-                        gp[:, 4, :],
-                    ],
-                    axis=1,
-                )
-            )
-            cf = np.stack(
-                [free[:, 3] + free[:, 4], free[:, 3] - free[:, 4], free[:, 3], free[:, 4]], axis=1
-            )
+            comb = np.array([[1.0, 1.0], [1.0, -1.0], [1.0, 0.0], [0.0, 1.0]])
+            fixed_rows.append(np.einsum("ck,bku->bcu", comb, gp[:, 3:5, :]).reshape(-1, n_u))
+            sel = np.zeros((4, 12))
+            sel[:, 3:5] = comb
+            fixed_sel.append(sel)
             bv = np.array([bound, bound, bound / math.sqrt(2.0), bound / math.sqrt(2.0)])
-            lo.append(-bv - cf)
-            hi.append(bv - cf)
-        a_mat = np.concatenate([r.reshape(-1, nb * nu) if r.ndim == 3 else r for r in rows], axis=0)
-        # rows were stacked per kind (block-major inside each kind); flatten the bounds alike
-        lba = np.concatenate([np.asarray(v).reshape(-1) for v in lo])
-        uba = np.concatenate([np.asarray(v).reshape(-1) for v in hi])
-        lbx = np.full(nb * nu, -np.inf)
-        ubx = np.full(nb * nu, np.inf)
+            fixed_bound.append(np.tile(bv, nb))
+        lbx = np.full(n_u, -np.inf)
+        ubx = np.full(n_u, np.inf)
         if math.isfinite(lim.tilt_accel):
             for j, i in enumerate(m.active):
                 if i in (3, 4):
                     lbx[j::nu] = -lim.tilt_accel
                     ubx[j::nu] = lim.tilt_accel
-        return g, a_mat, lba, uba, lbx, ubx
+        nl = lim.q_mid.shape[0]
+        guard = self._guard_channels()
+        thr = m.thresholds[guard]
+        pre = _QpParts(
+            g_xd=np.hstack([c.gx, c.gd]),
+            free_xd=np.concatenate([c.phi_end, c.psi_end], axis=2),
+            gp=np.ascontiguousarray(gp),
+            gv=np.ascontiguousarray(gv),
+            fixed_rows=(np.concatenate(fixed_rows, axis=0) if fixed_rows else np.zeros((0, n_u))),
+            fixed_sel=tuple(fixed_sel),
+            leg_bound=(np.tile(lim.q_half, nb), np.tile(lim.v_max, nb)),
+            fixed_bound=(np.concatenate(fixed_bound) if fixed_bound else np.zeros(0)),
+            acc_bound=np.tile(lim.a_max, nb),
+            eye_nb=np.eye(nb),
+            lbx=lbx,
+            ubx=ubx,
+            n_legs=nl,
+            guard_a=(c.ce_gam[:, guard] / thr[None, :, None]).reshape(-1, n_u),
+            guard_phi=np.ascontiguousarray(c.ce_phi[:, guard]),
+            guard_psi=np.ascontiguousarray(c.ce_psi[:, guard]),
+        )
+        self.__dict__["_pre"] = pre
+        return pre
+
+    def qp_matrices(
+        self, x0: NDArray[np.float64], d: NDArray[np.float64]
+    ) -> tuple[NDArray[np.float64], ...]:
+        """``(g, A, lba, uba, lbx, ubx)`` of this sample's QP (the Hessian is ``cond.hess``).
+
+        Rows, each kind block-major (block end ``b`` outer): leg strokes, leg speeds, leg
+        accelerations, the roll/pitch rates, the combined-tilt octagon."""
+        pre = self._parts()
+        lim = self.limits
+        m = self.model
+        xd = np.concatenate([x0, d])
+        g = pre.g_xd @ xd
+        pose0 = x0[:6]
+        q0, jac = _lin_at(lim, pose0)
+        free = pre.free_xd @ xd  # (nb, 12)
+        a_pos = np.matmul(jac, pre.gp).reshape(-1, pre.g_xd.shape[0])  # (nb nl, nU)
+        a_vel = np.matmul(jac, pre.gv).reshape(-1, pre.g_xd.shape[0])
+        ja = jac[:, list(m.active)]  # (nl, nu): the acceleration rows, block-diagonal
+        nl, nu = ja.shape
+        a_acc = np.zeros((pre.eye_nb.shape[0] * nl, pre.g_xd.shape[0]))
+        for b in range(pre.eye_nb.shape[0]):
+            a_acc[b * nl : (b + 1) * nl, b * nu : (b + 1) * nu] = ja
+        base = q0 - jac @ pose0 - lim.q_mid  # leg offset from centre at p = 0
+        pos_free = (free[:, 0:6] @ jac.T + base).reshape(-1)  # (nb nl,)
+        vel_free = (free[:, 6:12] @ jac.T).reshape(-1)
+        # the tilt-rate and octagon rows' free part, block-major like their rows
+        ff = [(free @ sel.T).reshape(-1) for sel in pre.fixed_sel]
+        a_mat = np.concatenate([a_pos, a_vel, a_acc, pre.fixed_rows], axis=0)
+        q_half, v_max = pre.leg_bound
+        lba = np.concatenate(
+            [
+                -q_half - pos_free,
+                -v_max - vel_free,
+                -pre.acc_bound,
+                -pre.fixed_bound - np.concatenate([np.zeros(0), *ff]),
+            ]
+        )
+        uba = np.concatenate(
+            [
+                q_half - pos_free,
+                v_max - vel_free,
+                pre.acc_bound,
+                pre.fixed_bound - np.concatenate([np.zeros(0), *ff]),
+            ]
+        )
+        return g, a_mat, lba, uba, pre.lbx.copy(), pre.ubx.copy()
 
     def _solve(
         self,
@@ -1022,7 +1192,9 @@ class MpcCueing:
         warm = (state.warm_u, state.warm_lam_a, state.warm_lam_x)
         if self._qp_guard is not None and d_vehicle is not None:
             ga, glo, ghi = self.guard_rows(state, d_vehicle)
-            ok, u, la, lx = self._qp_guard.solve(g, a_mat, lba, uba, lbx, ubx, ga, glo, ghi)
+            ok, u, la, lx = self._qp_guard.solve_full(
+                g, a_mat, lba, uba, lbx, ubx, ga, glo, ghi, warm
+            )
         else:
             ok, u, la, lx = self._qp.solve(g, a_mat, lba, uba, lbx, ubx, warm)
         elapsed = time.perf_counter() - t0
