@@ -167,6 +167,7 @@ _LONG_UNITS: tuple[str, ...] = (
     "tests/test_mpc_acceptance.py",
     "tests/test_browser_drawing.py",
     "tests/test_omct.py",
+    "tests/test_cue_bound_corr.py",  # new in session 21's merge: 20 s CPU (this session's run)
     "tests/test_fuzz_inputs.py::TestMutatedRides",
     "tests/test_browser.py::test_view_of_the_demo_ride",
     "tests/test_browser.py",
