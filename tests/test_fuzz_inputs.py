@@ -26,6 +26,7 @@ its workers; without xdist each part uses two processes) and the 10 000 configur
 from __future__ import annotations
 
 import contextlib
+import functools
 import io
 import json
 import lzma
@@ -34,6 +35,7 @@ import os
 import random
 import re
 import struct
+import sys
 import time
 import zipfile
 from collections import Counter
@@ -240,12 +242,53 @@ def _member_sized_lzma() -> Iterator[None]:
         zipfile.LZMACompressor = saved  # type: ignore[attr-defined]
 
 
-def _zip(members: list[tuple[str, bytes]], method: int) -> bytes:
+# The date and time every mutated ride's members carry (zipfile would stamp the time of
+# writing, so a case was not the same bytes twice).
+ZIP_DATE = (2026, 11, 21, 0, 0, 0)
+_END_RECORD = struct.Struct("<4s4H2LH")  # zip end of central directory, no comment
+_CENTRAL_OFFSET = slice(42, 46)  # a central directory header's offset of its local header
+
+
+def _zip_member(name: str, method: int) -> zipfile.ZipInfo:
+    """The :class:`zipfile.ZipInfo` that ``writestr(name, ...)`` makes, at :data:`ZIP_DATE`."""
+    info = zipfile.ZipInfo(name, ZIP_DATE)
+    info.compress_type = method
+    info.external_attr = 0o600 << 16
+    return info
+
+
+@functools.lru_cache(maxsize=1024)
+def _zip_record(name: str, data: bytes, method: int) -> tuple[bytes, bytes]:
+    """What zipfile writes for one member: (its local header and data, its central directory
+    header with the local header at offset 0). Kept for the members met again (a structural
+    mutation changes one to three members of a base ride and leaves the others as they were:
+    compressing those again was a third of a mutated ride's cost)."""
     buf = io.BytesIO()
     with _member_sized_lzma(), zipfile.ZipFile(buf, "w", compression=method) as zf:
-        for name, data in members:
-            zf.writestr(name, data)
-    return buf.getvalue()
+        zf.writestr(_zip_member(name, method), data)
+    whole = buf.getvalue()
+    _, _, _, _, _, size, offset, _ = _END_RECORD.unpack(whole[-_END_RECORD.size :])
+    return whole[:offset], whole[offset : offset + size]
+
+
+def _zip(members: list[tuple[str, bytes]], method: int) -> bytes:
+    """The zip file zipfile writes for ``members`` in order (duplicates included), each
+    member at :data:`ZIP_DATE`: the members' records one after another, their central
+    directory headers given their records' offsets, and the end record.
+    :func:`test_zip_of_records_is_what_zipfile_writes` holds this to zipfile's own output."""
+    local: list[bytes] = []
+    central: list[bytes] = []
+    offset = 0
+    for name, data in members:
+        record, head = _zip_record(name, data, method)
+        local.append(record)
+        central.append(head[: _CENTRAL_OFFSET.start] + struct.pack("<I", offset)
+                       + head[_CENTRAL_OFFSET.stop :])  # fmt: skip
+        offset += len(record)
+    directory = b"".join(central)
+    n = len(members)
+    end = _END_RECORD.pack(b"PK\x05\x06", 0, 0, n, n, len(directory), offset, 0)
+    return b"".join(local) + directory + end
 
 
 _WEIRD: list[Any] = [
@@ -558,6 +601,51 @@ def test_member_sized_lzma_writes_what_zipfile_writes() -> None:
     assert len(ours) == len(theirs) and ours == theirs
     with zipfile.ZipFile(io.BytesIO(ours)) as zf:
         assert [zf.read(i) for i in zf.infolist()] == [data for _, data in members]
+
+
+@pytest.mark.filterwarnings("ignore:Duplicate name")
+def test_zip_of_records_is_what_zipfile_writes(monkeypatch: pytest.MonkeyPatch) -> None:
+    """The fuzz's zip files, put together from cached member records, are byte for byte what
+    zipfile itself writes with ``writestr(name, data)`` at the same date (its LZMA encoder
+    unpatched), on the member lists of 300 structural mutations (every compression method,
+    renamed, missing, duplicated and forged members among them) and on the base rides."""
+    lists: list[tuple[list[tuple[str, bytes]], int]] = []
+    module = sys.modules[__name__]
+    zip_ = _zip
+
+    def record(members: list[tuple[str, bytes]], method: int) -> bytes:
+        lists.append((list(members), method))
+        return zip_(members, method)
+
+    bases = [ride for names in RIGS for ride in _rig(*names).rides()]
+    with monkeypatch.context() as mp:
+        mp.setattr(module, "_zip", record)
+        for i in range(300):
+            _structural(random.Random(i), bases[i % len(bases)])
+    for ride in bases:
+        members = [(k + ".npy", v) for k, v in _unmutated(ride)[1].items()]
+        for method in (zipfile.ZIP_STORED, zipfile.ZIP_DEFLATED, zipfile.ZIP_BZIP2,
+                       zipfile.ZIP_LZMA):  # fmt: skip
+            lists.append((members + members[:1], method))
+    assert {method for _, method in lists} == {0, 8, 12, 14}
+    assert any(len({n for n, _ in m}) < len(m) for m, _ in lists)  # duplicates met
+
+    def by_zipfile(members: list[tuple[str, bytes]], method: int) -> bytes:
+        buf = io.BytesIO()
+        with monkeypatch.context() as mp:
+            mp.setattr(time, "localtime", lambda *_: (*ZIP_DATE, 0, 0, -1))
+            with zipfile.ZipFile(buf, "w", compression=method) as zf:
+                for name, data in members:
+                    zf.writestr(name, data)
+        return buf.getvalue()
+
+    for members, method in lists:
+        ours, theirs = _zip(members, method), by_zipfile(members, method)
+        assert ours == theirs, (method, [n for n, _ in members])
+    # and the test can fail: a member's bytes changed
+    members, method = lists[0]
+    changed = [(members[0][0], members[0][1] + b"x"), *members[1:]]
+    assert _zip(changed, method) != by_zipfile(members, method)
 
 
 def test_check_sent_catches_a_frame_beyond_the_limits() -> None:

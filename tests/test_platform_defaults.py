@@ -13,7 +13,10 @@ held-out drives:
 
 The metrics themselves are checked against closed forms in tests/test_cue_metrics.py; this
 module only pins what the bundled presets do. One ``compare`` per platform on the held-out
-drives, in a module-scoped fixture (about a second each: classical washouts).
+drives, in a module-scoped fixture (about a second each: classical washouts). Its report's
+plots, which these checks do not read, are not drawn here (``write_compare_report`` is
+replaced meanwhile): drawing them was two thirds of this module's CPU time, and the report
+files are checked in tests/test_compare.py.
 """
 
 from __future__ import annotations
@@ -25,6 +28,7 @@ import tomllib
 
 import pytest
 
+import motioncue.analysis
 from motioncue._config import find_config
 from motioncue.cli import main
 from motioncue.telemetry import sample_drives
@@ -52,9 +56,11 @@ def rows(tmp_path_factory: pytest.TempPathFactory) -> dict[str, list[dict]]:
     tuned_on = {p.name for p in sample_drives("tuning")}
     assert not tuned_on & {p.name for p in HELD_OUT}
     out: dict[str, list[dict]] = {}
+    drawn: list[object] = []
     for platform, controller in PLATFORMS.items():
         buf = io.StringIO()
-        with contextlib.redirect_stdout(buf):
+        with contextlib.redirect_stdout(buf), pytest.MonkeyPatch.context() as mp:
+            mp.setattr(motioncue.analysis, "write_compare_report", lambda r, _d: drawn.append(r))
             rc = main([
                 "compare", "--input", *map(str, HELD_OUT),
                 "--presets", _default_preset(platform), "--platform", platform,
@@ -63,6 +69,7 @@ def rows(tmp_path_factory: pytest.TempPathFactory) -> dict[str, list[dict]]:
             ])  # fmt: skip
         assert rc == 0, platform
         out[platform] = json.loads(buf.getvalue())["rows"]
+    assert len(drawn) == len(PLATFORMS)  # the report writer was the one replaced
     return out
 
 
