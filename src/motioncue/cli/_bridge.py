@@ -19,7 +19,8 @@ from ._common import (
     RIG,
     TARGET,
     json_option,
-    load_snapped_rig,
+    limits_for,
+    load_platform_arg,
     print_json,
     say,
     set_option,
@@ -49,7 +50,8 @@ def _source_help() -> str:
 
 
 def run(args: argparse.Namespace) -> int:
-    from ..output import open_transport
+    from ..output import load_controller, open_transport
+    from ..output._controller_api import snap_rate_hz
     from ..pipeline._bridge import Bridge, BridgeConfig
     from ..pipeline._realtime import GateConfig
     from ..pipeline._signals import SignalGuard
@@ -66,13 +68,17 @@ def run(args: argparse.Namespace) -> int:
     source_spec = args.source or (profile.source if profile is not None else None)
     if source_spec is None:
         raise ConfigError("give --source GAME[:[HOST:]PORT] or --profile NAME")
-    platform, controller, rate_hz, limits = load_snapped_rig(args)
+    controller = load_controller(args.controller)
+    # the bridge's own checks of the rate (and the rest of its config) come first
     config = BridgeConfig(
-        rate_hz=rate_hz,
+        rate_hz=snap_rate_hz(args.rate, controller),
         gate=GateConfig(timeout_s=args.timeout, fade_out_s=args.fade, fade_in_s=args.fade),
         rt_priority=args.rt_priority or None,
         upsample=args.upsample,
     )
+    platform = load_platform_arg(args.platform, args.overrides)
+    controller.check_rate(config.rate_hz)
+    limits = limits_for(args, platform, controller, config.rate_hz)
     profile_preset = profile.preset_for(platform.name) if profile is not None else None
     preset = args.preset or profile_preset
     base, base_source = choose_preset(preset, platform, args.platform, args.overrides)
