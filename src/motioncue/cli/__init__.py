@@ -1,8 +1,11 @@
 """The ``motioncue`` command line: one verb per job users do.
 
-Each verb lives in its own private module exposing ``register(subparsers)``; the module adds
-its parser and sets ``run=<function(args) -> int>`` as default. Errors motioncue raises on
-purpose (:class:`~motioncue.MotioncueError`) print one clear line and exit with status 2.
+Each verb lives in its own private module exposing ``register(subparsers)``, which adds its
+parser and sets ``run=<function(args) -> int>`` as default. The verbs are declared as data
+(:class:`~motioncue.cli._verb.Verb`: name, help, options in help order, run function; the
+module's ``register`` is ``registrar(*verbs)``), from the options several verbs share
+(:mod:`motioncue.cli._common`). Errors motioncue raises on purpose
+(:class:`~motioncue.MotioncueError`) print one clear line and exit with status 2.
 """
 
 from __future__ import annotations

@@ -11,16 +11,24 @@ from typing import TYPE_CHECKING, Any
 
 from .._errors import ConfigError
 from ._common import (
-    add_json_option,
-    add_limit_options,
-    add_rig_options,
-    add_set_option,
+    DURATION,
+    LIMITS,
+    PRESET,
+    QUIET,
+    RATE,
+    RIG,
+    TARGET,
+    json_option,
     limits_for,
     load_platform_arg,
     print_json,
+    say,
+    set_option,
+    status_line,
 )
-from ._monitor import add_monitor_argument, start_monitor
+from ._monitor import MONITOR, start_monitor
 from ._preset import add_intensity_option, apply_intensity, cueing_note
+from ._verb import Allowed, Lazy, Option, Verb, registrar
 
 if TYPE_CHECKING:
     from ..pipeline._bridge import Bridge, BridgeStats
@@ -32,103 +40,18 @@ if TYPE_CHECKING:
 __all__ = ["register"]
 
 
-def register(sub: Any) -> None:
+def _source_help() -> str:
     from ..telemetry import GAMES
 
-    parser = sub.add_parser(
-        "bridge",
-        help="drive a platform live from a game's telemetry",
-        description=(
-            "Receive a game's UDP telemetry and stream controller frames in real time: washout "
-            "cueing, workspace limiting, inverse kinematics, actuator limits (the table "
-            "'motioncue limits' prints), frames to --target. Starts parked and ramps in; when "
-            "packets stop or the game pauses the platform fades to park and ramps back in on "
-            "resume. Ctrl-C, SIGTERM, SIGHUP or SIGQUIT park smoothly (a second Ctrl-C does "
-            "not cut the park short), then exit with status 130; a failure parks too, then "
-            "exits with 2; the end of a replayed recording parks, then exits with 0. Over "
-            "udp:// the controller's reported position is the start. A status line is "
-            "refreshed on stderr about twice a second."
-        ),
+    return (
+        f"{', '.join(GAMES)}, optionally with the port (and address) to listen on; or "
+        "replay:FILE[?speed=X] to replay a recording (required unless --profile gives one)"
     )
-    parser.add_argument(
-        "--source",
-        metavar="GAME[:[HOST:]PORT]",
-        help=f"{', '.join(GAMES)}, optionally with the port (and address) to listen on; or "
-        "replay:FILE[?speed=X] to replay a recording (required unless --profile gives one)",
-    )
-    parser.add_argument(
-        "--profile",
-        metavar="NAME",
-        help="bundled profile name or .toml path binding a source, a preset, cue gains and "
-        "effects for a game or car (configs/profiles); --source and --preset override it",
-    )
-    add_rig_options(parser)
-    parser.add_argument(
-        "--target",
-        required=True,
-        metavar="URL",
-        help="udp://HOST:PORT, serial:///dev/ttyUSB0?baud=19200, pcap:PATH or file:PATH",
-    )
-    parser.add_argument(
-        "--preset",
-        default=None,
-        help="cueing preset name or .toml path (default: the platform's default_preset)",
-    )
-    add_intensity_option(parser)
-    parser.add_argument("--rate", type=float, default=100.0, metavar="HZ", help="frame rate")
-    add_limit_options(parser)
-    parser.add_argument(
-        "--timeout",
-        type=float,
-        default=0.25,
-        metavar="S",
-        help="telemetry older than this counts as lost (default 0.25 s)",
-    )
-    parser.add_argument(
-        "--fade", type=float, default=2.0, metavar="S", help="fade in/out time (default 2 s)"
-    )
-    parser.add_argument(
-        "--duration", type=float, metavar="S", help="stop (and park) after this long"
-    )
-    parser.add_argument(
-        "--rt-priority",
-        type=int,
-        default=10,
-        metavar="N",
-        help="run the frame loop under SCHED_FIFO at priority N (1..99; Linux, root or "
-        "CAP_SYS_NICE; refused quietly with a note elsewhere): keeps other programs from "
-        "delaying frames on a busy PC (default 10; 0 = normal scheduling)",
-    )
-    parser.add_argument(
-        "--upsample",
-        choices=("extrapolate", "interpolate", "hold"),
-        default="extrapolate",
-        help="telemetry slower than the frame rate, per frame: extrapolated and corrected "
-        "on the next sample (default), interpolated one sample late, or held",
-    )
-    parser.add_argument(
-        "--frames",
-        choices=("auto", "arrival", "fixed"),
-        default="auto",
-        help="arrival: a frame as soon as a telemetry sample arrives (SC-MBOX, IMAX: whole-ms "
-        "time stamps), else every period; fixed: every period; auto (default): arrival where "
-        "the controller and the limits allow it",
-    )
-    parser.add_argument(
-        "--telemetry-in-process",
-        action="store_true",
-        help="receive and decode live telemetry in the frame loop's process (default: in a "
-        "child process, through shared memory, so decoding never delays a frame)",
-    )
-    parser.add_argument("--quiet", action="store_true", help="no status line")
-    add_json_option(parser, "the final statistics (after the park)")
-    add_set_option(parser)
-    add_monitor_argument(parser)
-    parser.set_defaults(run=run)
 
 
 def run(args: argparse.Namespace) -> int:
     from ..output import load_controller, open_transport
+    from ..output._controller_api import snap_rate_hz
     from ..pipeline._bridge import Bridge, BridgeConfig
     from ..pipeline._realtime import GateConfig
     from ..pipeline._signals import SignalGuard
@@ -136,10 +59,6 @@ def run(args: argparse.Namespace) -> int:
     from ..viewer._cueing import describe_cueing
     from ..viewer._monitor import BridgeSource
     from ._preset import choose_preset
-
-    if args.duration is not None and not (math.isfinite(args.duration) and args.duration > 0):
-        raise ConfigError(f"--duration {args.duration!r} is invalid; allowed: a number > 0")
-    from ..output._controller_api import snap_rate_hz
 
     profile = None
     if args.profile is not None:
@@ -150,6 +69,7 @@ def run(args: argparse.Namespace) -> int:
     if source_spec is None:
         raise ConfigError("give --source GAME[:[HOST:]PORT] or --profile NAME")
     controller = load_controller(args.controller)
+    # the bridge's own checks of the rate (and the rest of its config) come first
     config = BridgeConfig(
         rate_hz=snap_rate_hz(args.rate, controller),
         gate=GateConfig(timeout_s=args.timeout, fade_out_s=args.fade, fade_in_s=args.fade),
@@ -218,20 +138,20 @@ def run(args: argparse.Namespace) -> int:
                 )  # fmt: skip
                 start_notes = list(bridge.stage.notes)
                 for note in start_notes:
-                    _say(f"motioncue bridge: note: {note}")
+                    say(f"motioncue bridge: note: {note}")
                 for warning in start_warnings:
-                    _say(f"motioncue bridge: warning: {warning}")
-                _say(
+                    say(f"motioncue bridge: warning: {warning}")
+                say(
                     f"bridge: {_describe_source(source)} -> {args.target} ({args.controller}, "
                     f"{args.platform}, preset {preset_source}, {config.rate_hz:g} Hz, frames "
                     f"{frames}); Ctrl-C parks and exits"
                 )
                 if not args.quiet:
-                    _say(_legend(frames, config.rate_hz))
+                    say(_legend(frames, config.rate_hz))
                 monitor = start_monitor(
                     args.monitor, BridgeSource(bridge, shown), platform, limits,
                     f"bridge {args.source} -> {args.target} ({args.platform}, "
-                    f"{args.controller})", _say,
+                    f"{args.controller})", say,
                 )  # fmt: skip
                 try:
                     final = _serve(bridge, guard, args.duration, quiet=args.quiet)
@@ -242,29 +162,26 @@ def run(args: argparse.Namespace) -> int:
                 transport.close()
         finally:
             source.close()
-        _say(_summary(final))
+        say(_summary(final))
         if args.json:
-            try:
-                print_json(_stats_dict(final))
-            except (OSError, ValueError):
-                pass
+            print_json(_stats_dict(final), best_effort=True)
         for note in final.notes:
             if note not in start_notes:
-                _say(f"motioncue bridge: note: {note}")
+                say(f"motioncue bridge: note: {note}")
         clamp_warning = final.clamp_warning()
         if clamp_warning is not None:
-            _say(f"motioncue bridge: warning: {clamp_warning}")
+            say(f"motioncue bridge: warning: {clamp_warning}")
         if not args.rt_priority and final.jitter_p99_ms > 1.0:
-            _say(
+            say(
                 f"motioncue bridge: note: output jitter p99 {final.jitter_p99_ms:.2f} ms; other "
                 "programs delayed the frame loop: --rt-priority 10 (root or CAP_SYS_NICE) "
                 "prevents that"
             )
         if final.error is not None:
-            _say(f"motioncue bridge: error: {final.error}")
+            say(f"motioncue bridge: error: {final.error}")
             return 2
         if guard.first is not None:
-            _say(f"motioncue bridge: stopped by {guard.first}; parked at rest")
+            say(f"motioncue bridge: stopped by {guard.first}; parked at rest")
             return 130
         return 0
 
@@ -297,14 +214,6 @@ def _legend(frames: str, rate_hz: float) -> str:
     )
 
 
-def _say(line: str) -> None:
-    """One line on stderr; a terminal that is gone (SIGHUP) does not stop the program."""
-    try:
-        print(line, file=sys.stderr, flush=True)
-    except (OSError, ValueError):
-        pass
-
-
 def _serve(
     bridge: Bridge, guard: SignalGuard, duration_s: float | None, *, quiet: bool
 ) -> BridgeStats:
@@ -330,33 +239,22 @@ def _serve(
         guard.event.wait(min(0.5, max(0.0, t_end - time.monotonic())))
         stats = bridge.stats
         if not quiet:
-            _status(stats.status_line(), tty)
+            status_line(stats.status_line(), tty)
         if not warned and stats.clamp_warning() is not None:
             warned = True  # once, live, even with --quiet; the summary says it again
             if not quiet and tty:
-                _say("")
-            _say(f"motioncue bridge: warning: {stats.clamp_warning()}")
+                say("")
+            say(f"motioncue bridge: warning: {stats.clamp_warning()}")
     if not quiet:
-        _status("parking ...", tty)
+        status_line("parking ...", tty)
     final = bridge.stop()
     while not bridge.wait(1.0):  # the park takes as long as it takes; only SIGKILL ends it
         final = bridge.stats
     if bridge.stats.error != final.error or bridge.stats.state != final.state:
         final = bridge.stats
     if not quiet and tty:
-        _say("")
+        say("")
     return final
-
-
-def _status(line: str, tty: bool) -> None:
-    try:
-        if tty:
-            sys.stderr.write("\r" + line + "\x1b[K")
-        else:
-            sys.stderr.write(line + "\n")
-        sys.stderr.flush()
-    except (OSError, ValueError):
-        pass
 
 
 def _summary(st: BridgeStats) -> str:
@@ -399,3 +297,84 @@ def _stats_dict(st: BridgeStats) -> dict[str, Any]:
         "telemetry": {str(k): int(v) for k, v in st.packet_reasons.items()},
         "notes": [str(n) for n in st.notes],
     }
+
+
+_BRIDGE = Verb(
+    "bridge",
+    run,
+    help="drive a platform live from a game's telemetry",
+    description=(
+        "Receive a game's UDP telemetry and stream controller frames in real time: washout "
+        "cueing, workspace limiting, inverse kinematics, actuator limits (the table "
+        "'motioncue limits' prints), frames to --target. Starts parked and ramps in; when "
+        "packets stop or the game pauses the platform fades to park and ramps back in on "
+        "resume. Ctrl-C, SIGTERM, SIGHUP or SIGQUIT park smoothly (a second Ctrl-C does "
+        "not cut the park short), then exit with status 130; a failure parks too, then "
+        "exits with 2; the end of a replayed recording parks, then exits with 0. Over "
+        "udp:// the controller's reported position is the start. A status line is "
+        "refreshed on stderr about twice a second."
+    ),
+    options=(
+        Option.of("--source", metavar="GAME[:[HOST:]PORT]", help=Lazy(_source_help)),
+        Option.of(
+            "--profile",
+            metavar="NAME",
+            help="bundled profile name or .toml path binding a source, a preset, cue gains and "
+            "effects for a game or car (configs/profiles); --source and --preset override it",
+        ),
+        RIG,
+        TARGET.but(
+            required=True,
+            help="udp://HOST:PORT, serial:///dev/ttyUSB0?baud=19200, pcap:PATH or file:PATH",
+        ),
+        PRESET,
+        add_intensity_option,
+        RATE,
+        LIMITS,
+        Option.of(
+            "--timeout",
+            type=float,
+            default=0.25,
+            metavar="S",
+            help="telemetry older than this counts as lost (default 0.25 s)",
+        ),
+        Option.of(
+            "--fade", type=float, default=2.0, metavar="S", help="fade in/out time (default 2 s)"
+        ),
+        DURATION.but(help="stop (and park) after this long", allowed=Allowed(0.0, None)),
+        Option.of(
+            "--rt-priority",
+            type=int,
+            default=10,
+            metavar="N",
+            help="run the frame loop under SCHED_FIFO at priority N (1..99; Linux, root or "
+            "CAP_SYS_NICE; refused quietly with a note elsewhere): keeps other programs from "
+            "delaying frames on a busy PC (default 10; 0 = normal scheduling)",
+        ),
+        Option.choice(
+            "--upsample",
+            ("extrapolate", "interpolate", "hold"),
+            help="telemetry slower than the frame rate, per frame: extrapolated and corrected "
+            "on the next sample (default), interpolated one sample late, or held",
+        ),
+        Option.choice(
+            "--frames",
+            ("auto", "arrival", "fixed"),
+            help="arrival: a frame as soon as a telemetry sample arrives (SC-MBOX, IMAX: "
+            "whole-ms time stamps), else every period; fixed: every period; auto (default): "
+            "arrival where the controller and the limits allow it",
+        ),
+        Option.of(
+            "--telemetry-in-process",
+            action="store_true",
+            help="receive and decode live telemetry in the frame loop's process (default: in a "
+            "child process, through shared memory, so decoding never delays a frame)",
+        ),
+        QUIET.but(help="no status line"),
+        json_option("the final statistics (after the park)"),
+        set_option(),
+        MONITOR,
+    ),
+)
+
+register = registrar(_BRIDGE)

@@ -1,15 +1,24 @@
 """Options several verbs share, defined once so that one concept has one name everywhere.
 
+* The shared options as data (:class:`~motioncue.cli._verb.Option`), which a verb lists in
+  its :class:`~motioncue.cli._verb.Verb` (or derives its variant of with ``.but``):
+  :data:`PLATFORM`, :data:`CONTROLLER` (:data:`RIG`: both), :data:`LIMITS`, :data:`RATE`
+  (:data:`CHECKED_RATE`), :data:`RECORDING`, :data:`PRESET`, :data:`OUT`, :data:`TARGET`,
+  :data:`DURATION`, :data:`PLOT`, :data:`REPORT`, :data:`QUIET`, :data:`SPEED`;
+  :func:`json_option`, :func:`set_option`.
 * :func:`add_deprecated_alias`: an old spelling (``cue --fs``, ``record --seconds``) kept as a
   hidden option that still works and prints a one-line deprecation note.
 * :func:`add_json_option` / :func:`print_json`: ``--json`` on every verb that prints a result.
 * :func:`add_rig_options`: ``--platform`` and ``--controller`` (bundled name or TOML path).
 * :func:`add_limit_options`: ``--max-speed``, ``--max-accel``, ``--max-jerk``,
   ``--stroke-margin`` (the actuator-limit overrides of ``motioncue limits``);
-  :func:`limits_for`: the rig's actuator limits with those overrides applied.
+  :func:`limits_for`: the rig's actuator limits with those overrides applied;
+  :func:`load_rig`: the rig a verb drives (platform, controller, limits).
 * :func:`add_set_option`, :func:`load_platform_arg`, :func:`load_preset_arg`:
   ``--set platform.SECTION.KEY=VALUE`` and ``--set preset.SECTION.KEY=VALUE`` overrides,
   validated exactly like the file (an unknown key is refused with its name).
+* :func:`say`, :func:`status_line`: a line on stderr that a closed terminal does not turn
+  into a failure.
 
 Building a parser imports nothing heavy: the loaders are imported when a verb runs.
 """
@@ -23,9 +32,10 @@ import tempfile
 import tomllib
 from collections.abc import Callable, Sequence
 from pathlib import Path
-from typing import TYPE_CHECKING, Any, TypeAlias, TypeVar
+from typing import TYPE_CHECKING, Any, TextIO, TypeAlias, TypeVar
 
 from .._errors import ConfigError
+from ._verb import Allowed, Option
 
 if TYPE_CHECKING:
     from ..cueing import CueingParams
@@ -34,7 +44,22 @@ if TYPE_CHECKING:
     from ..trajectory import ActuatorLimits
 
 __all__ = [
+    "CHECKED_RATE",
+    "CONTROLLER",
+    "DURATION",
+    "LIMITS",
+    "OUT",
+    "PLATFORM",
+    "PLOT",
+    "PRESET",
+    "QUIET",
+    "RATE",
+    "RECORDING",
+    "REPORT",
+    "RIG",
     "SET_TARGETS",
+    "SPEED",
+    "TARGET",
     "Subparsers",
     "add_deprecated_alias",
     "add_json_option",
@@ -42,11 +67,17 @@ __all__ = [
     "add_rig_options",
     "add_set_option",
     "apply_overrides",
+    "json_option",
     "limits_for",
     "load_platform_arg",
     "load_preset_arg",
+    "load_rig",
+    "load_snapped_rig",
     "parse_set",
     "print_json",
+    "say",
+    "set_option",
+    "status_line",
 ]
 
 SET_TARGETS = ("platform", "preset")
@@ -102,38 +133,142 @@ def add_deprecated_alias(
     )
 
 
-def add_json_option(parser: argparse.ArgumentParser, what: str = "the result") -> None:
+def json_option(what: str = "the result") -> Option:
     """``--json``: print ``what`` as one JSON document on stdout instead of text."""
-    parser.add_argument(
+    return Option.of(
         "--json", action="store_true", help=f"print {what} as JSON on stdout instead of text"
     )
 
 
-def print_json(data: object) -> None:
-    """Print ``data`` as JSON (``NaN`` refused: the output is strict JSON)."""
-    print(json.dumps(data, indent=1, allow_nan=False, default=str))
+def add_json_option(parser: argparse.ArgumentParser, what: str = "the result") -> None:
+    """Add :func:`json_option` to ``parser``."""
+    json_option(what).add_to(parser)
+
+
+def print_json(data: object, *, best_effort: bool = False) -> None:
+    """Print ``data`` as JSON (``NaN`` refused: the output is strict JSON).
+
+    ``best_effort=True``: a failure to print (a stdout gone with the terminal, a value JSON
+    cannot hold) is ignored, for the summary printed once the platform is parked, which must
+    not turn a parked exit into a traceback.
+    """
+    try:
+        print(json.dumps(data, indent=1, allow_nan=False, default=str))
+    except (OSError, ValueError):
+        if not best_effort:
+            raise
+
+
+def say(line: str, stream: TextIO | None = None) -> None:
+    """One line on ``stream`` (default stderr), flushed; a terminal that is gone (SIGHUP)
+    does not stop the program."""
+    try:
+        print(line, file=sys.stderr if stream is None else stream, flush=True)
+    except (OSError, ValueError):
+        pass
+
+
+def status_line(line: str, tty: bool) -> None:
+    """A status line on stderr: rewritten in place on a terminal (``tty``), one line each
+    otherwise (a log); a terminal that is gone does not stop the program."""
+    try:
+        if tty:
+            sys.stderr.write("\r" + line + "\x1b[K")
+        else:
+            sys.stderr.write(line + "\n")
+        sys.stderr.flush()
+    except (OSError, ValueError):
+        pass
+
+
+PLATFORM = Option.of("--platform", required=True, help="bundled platform name or TOML path")
+"""``--platform``: the platform a verb works on (verbs where it is optional derive theirs)."""
+
+CONTROLLER = Option.of("--controller", required=True, help="bundled controller name or TOML path")
+"""``--controller``: the controller that drives the platform."""
+
+RIG = (PLATFORM, CONTROLLER)
+"""``--platform`` and ``--controller``, both required: the rig a verb works on."""
+
+LIMITS = (
+    Option.of("--max-speed", type=float, help="speed limit, m/s (rad/s for cranks)"),
+    Option.of("--max-accel", type=float, help="acceleration limit, m/s^2 (rad/s^2)"),
+    Option.of("--max-jerk", type=float, help="jerk limit, m/s^3 (rad/s^3)"),
+    Option.of("--stroke-margin", type=float, help="extra margin at each stroke end, m (rad)"),
+)
+"""The actuator-limit overrides; the smallest of these, the platform's and the controller's
+value wins (see ``motioncue limits`` and :func:`limit_overrides`)."""
+
+RATE = Option.of("--rate", type=float, default=100.0, metavar="HZ", help="frame rate")
+"""``--rate HZ``: the frame rate (default 100 Hz)."""
+
+CHECKED_RATE = RATE.but(
+    help="frame rate, checked against the controller (default 100)",
+    allowed=Allowed(0.0, 1000.0, unit="Hz"),
+)
+"""``--rate HZ`` of the analysis verbs (compare, omct), in (0, 1000] Hz."""
+
+RECORDING = Option.of(
+    "--input",
+    required=True,
+    metavar="REC",
+    help="recording CSV (t,fx,fy,fz,wx,wy,wz) or a 'motioncue record' .mctr file",
+)
+"""``--input REC``: a recording of vehicle motion."""
+
+PRESET = Option.of(
+    "--preset",
+    default=None,
+    metavar="NAME",
+    help="cueing preset name or .toml path (default: the platform's default_preset)",
+)
+"""``--preset NAME``: the cueing preset (default: the platform's)."""
+
+OUT = Option.of("--out", required=True)
+"""``--out``: the file a verb writes (each verb names it with its metavar and help)."""
+
+TARGET = Option.of(
+    "--target",
+    default=None,
+    metavar="URL",
+    help="udp://HOST:PORT, serial://..., pcap:PATH or file:PATH (default: the controller's "
+    "default target)",
+)
+"""``--target URL``: where a controller's bytes go."""
+
+DURATION = Option.of(
+    "--duration",
+    type=float,
+    default=None,
+    metavar="S",
+    help="stop after S seconds (default: until Ctrl-C)",
+)
+"""``--duration S``: how long a verb that runs until stopped runs."""
+
+PLOT = Option.of("--plot", metavar="FILE.png")
+"""``--plot FILE.png``: a plot of the result (each verb says which)."""
+
+REPORT = Option.of("--report", metavar="DIR")
+"""``--report DIR``: a folder of plots and metrics."""
+
+QUIET = Option.of("--quiet", action="store_true", help="no progress lines")
+"""``--quiet``: no progress or status lines on stderr."""
+
+SPEED = Option.of("--speed", type=float, help="pacing factor")
+"""``--speed X``: pacing factor against real time."""
 
 
 def add_rig_options(parser: argparse.ArgumentParser, *, controller_required: bool = True) -> None:
     """``--platform P`` (required) and ``--controller C``: the rig a verb works on, each a
     bundled name or a TOML path."""
-    parser.add_argument("--platform", required=True, help="bundled platform name or TOML path")
-    parser.add_argument(
-        "--controller",
-        required=controller_required,
-        help="bundled controller name or TOML path",
-    )
+    PLATFORM.add_to(parser)
+    CONTROLLER.but(required=controller_required).add_to(parser)
 
 
 def add_limit_options(parser: argparse.ArgumentParser) -> None:
-    """The actuator-limit overrides; the smallest of these, the platform's and the
-    controller's value wins (see ``motioncue limits``)."""
-    parser.add_argument("--max-speed", type=float, help="speed limit, m/s (rad/s for cranks)")
-    parser.add_argument("--max-accel", type=float, help="acceleration limit, m/s^2 (rad/s^2)")
-    parser.add_argument("--max-jerk", type=float, help="jerk limit, m/s^3 (rad/s^3)")
-    parser.add_argument(
-        "--stroke-margin", type=float, help="extra margin at each stroke end, m (rad)"
-    )
+    """The actuator-limit overrides (:data:`LIMITS`)."""
+    for option in LIMITS:
+        option.add_to(parser)
 
 
 def limit_overrides(args: argparse.Namespace) -> dict[str, float | None]:
@@ -167,21 +302,39 @@ def load_rig(
 ) -> tuple[Platform, Controller, ActuatorLimits]:
     """The rig of ``--platform`` (with the ``--set`` overrides), ``--controller`` (checked
     to run frames at ``rate_hz``, Hz) and the actuator limits there (:func:`limits_for`)."""
+    platform, controller, _rate_hz, limits = _load_rig(args, rate_hz, snap=False)
+    return platform, controller, limits
+
+
+def load_snapped_rig(
+    args: argparse.Namespace,
+) -> tuple[Platform, Controller, float, ActuatorLimits]:
+    """:func:`load_rig` at ``--rate`` snapped to the controller's clock (the nearest rate it
+    runs frames at): platform, controller, that rate (Hz), limits."""
+    return _load_rig(args, args.rate, snap=True)
+
+
+def _load_rig(
+    args: argparse.Namespace, rate_hz: float, *, snap: bool
+) -> tuple[Platform, Controller, float, ActuatorLimits]:
     from ..output import load_controller
+    from ..output._controller_api import snap_rate_hz
 
     platform = load_platform_arg(args.platform, args.overrides)
     controller = load_controller(args.controller)
+    if snap:
+        rate_hz = snap_rate_hz(rate_hz, controller)
     controller.check_rate(rate_hz)
-    return platform, controller, limits_for(args, platform, controller, rate_hz)
+    return platform, controller, rate_hz, limits_for(args, platform, controller, rate_hz)
 
 
-def add_set_option(parser: argparse.ArgumentParser, targets: Sequence[str] = SET_TARGETS) -> None:
+def set_option(targets: Sequence[str] = SET_TARGETS) -> Option:
     """``--set TARGET.SECTION.KEY=VALUE`` (repeatable), TARGET one of ``targets``."""
     names = " or ".join(targets)
     example = (
         "platform.stroke.margin_mm=5" if "platform" in targets else "preset.scaling.soft_knee=0.5"
     )
-    parser.add_argument(
+    return Option.of(
         "--set",
         action="append",
         default=[],
@@ -190,6 +343,11 @@ def add_set_option(parser: argparse.ArgumentParser, targets: Sequence[str] = SET
         help=f"override one key of the {names} file (TARGET: {', '.join(targets)}; VALUE in "
         f"TOML syntax, e.g. {example}); checked like the file; repeatable",
     )
+
+
+def add_set_option(parser: argparse.ArgumentParser, targets: Sequence[str] = SET_TARGETS) -> None:
+    """Add :func:`set_option` to ``parser``."""
+    set_option(targets).add_to(parser)
 
 
 def parse_set(item: str) -> tuple[str, tuple[str, ...], TomlValue]:

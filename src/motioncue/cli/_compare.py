@@ -4,73 +4,25 @@ from __future__ import annotations
 
 import argparse
 import json
-import math
 import sys
 from pathlib import Path
-from typing import Any
 
 from .._errors import ConfigError
 from ._common import (
-    add_limit_options,
-    add_rig_options,
-    add_set_option,
+    CHECKED_RATE,
+    LIMITS,
+    RECORDING,
+    REPORT,
+    RIG,
+    json_option,
     load_preset_arg,
     load_rig,
+    set_option,
 )
 from ._preset import add_vestibular_option
+from ._verb import Option, Verb, registrar
 
 __all__ = ["register"]
-
-
-def register(sub: Any) -> None:
-    parser = sub.add_parser(
-        "compare",
-        help="compare cueing presets on recordings: overlay plots and a metrics table",
-        description=(
-            "Run each preset on each recording through the chain a rider gets (resample, "
-            "cueing, workspace limiting with the platform's and the controller's limits, "
-            "actuator speed/acceleration limits), evaluate the delivered motion through the "
-            "vestibular models, and write to --report DIR: one overlay plot of perceived "
-            "motion per recording (perceived-NAME.png), metrics.csv, metrics.json and "
-            "summary.txt (the table with its columns explained). Prints the table (or, with "
-            "--json, the JSON)."
-        ),
-    )
-    parser.add_argument(
-        "--input",
-        required=True,
-        nargs="+",
-        metavar="REC",
-        help="recording CSVs (t,fx,fy,fz,wx,wy,wz) or motioncue record files",
-    )
-    parser.add_argument(
-        "--presets",
-        required=True,
-        nargs="+",
-        metavar="PRESET",
-        help="cueing preset names or .toml paths",
-    )
-    add_rig_options(parser)
-    parser.add_argument("--report", required=True, metavar="DIR", help="folder for the report")
-    parser.add_argument(
-        "--bound",
-        action="store_true",
-        help="also compute each recording's physical bound on the platform (the least "
-        "perceived error and the largest gain without a reversal any motion within its "
-        "limits could give) and each preset's share of it; seconds to a minute per recording",
-    )
-    parser.add_argument("--json", action="store_true", help="print the metrics as JSON")
-    parser.add_argument(
-        "--rate",
-        type=float,
-        default=100.0,
-        metavar="HZ",
-        help="frame rate, checked against the controller (default 100)",
-    )
-    add_vestibular_option(parser)
-    add_limit_options(parser)
-    add_set_option(parser)
-    parser.set_defaults(run=run)
 
 
 def _labels(names: list[str], short: list[str], what: str) -> list[str]:
@@ -96,8 +48,6 @@ def run(args: argparse.Namespace) -> int:
     from ..pipeline._inputs import check_generate_size, load_generate_input
 
     rate = args.rate
-    if not (math.isfinite(rate) and 0.0 < rate <= 1000.0):
-        raise ConfigError(f"--rate {rate!r} is invalid; allowed: (0, 1000] Hz")
     model = get_model_set(args.vestibular)
     platform, _controller, limits = load_rig(args, rate)
     presets = [load_preset_arg(p, args.overrides) for p in args.presets]
@@ -142,3 +92,48 @@ def run(args: argparse.Namespace) -> int:
             "explained in summary.txt)"
         )
     return 0
+
+
+_COMPARE = Verb(
+    "compare",
+    run,
+    help="compare cueing presets on recordings: overlay plots and a metrics table",
+    description=(
+        "Run each preset on each recording through the chain a rider gets (resample, "
+        "cueing, workspace limiting with the platform's and the controller's limits, "
+        "actuator speed/acceleration limits), evaluate the delivered motion through the "
+        "vestibular models, and write to --report DIR: one overlay plot of perceived "
+        "motion per recording (perceived-NAME.png), metrics.csv, metrics.json and "
+        "summary.txt (the table with its columns explained). Prints the table (or, with "
+        "--json, the JSON)."
+    ),
+    options=(
+        RECORDING.but(
+            nargs="+", help="recording CSVs (t,fx,fy,fz,wx,wy,wz) or motioncue record files"
+        ),
+        Option.of(
+            "--presets",
+            required=True,
+            nargs="+",
+            metavar="PRESET",
+            help="cueing preset names or .toml paths",
+        ),
+        RIG,
+        REPORT.but(required=True, help="folder for the report"),
+        Option.of(
+            "--bound",
+            action="store_true",
+            help="also compute each recording's physical bound on the platform (the least "
+            "perceived error and the largest gain without a reversal any motion within its "
+            "limits could give) and each preset's share of it; seconds to a minute per "
+            "recording",
+        ),
+        json_option("the metrics"),
+        CHECKED_RATE,
+        add_vestibular_option,
+        LIMITS,
+        set_option(),
+    ),
+)
+
+register = registrar(_COMPARE)

@@ -21,8 +21,17 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any, TextIO
 
 from .._errors import ConfigError, ProtocolError
-from ._common import add_json_option, print_json
-from ._monitor import add_monitor_argument, start_monitor
+from ._common import (
+    CONTROLLER,
+    DURATION,
+    PLATFORM,
+    PLOT,
+    TARGET,
+    json_option,
+    print_json,
+)
+from ._monitor import MONITOR, start_monitor
+from ._verb import Option, Verb, registrar
 
 if TYPE_CHECKING:
     from ..output import Controller, ControllerKind, Emulator, Trace, Violation
@@ -43,112 +52,6 @@ def _inspectable_kinds() -> list[ControllerKind]:
 
     kinds = [controller_kind(k) for k in controller_kinds()]
     return [k for k in kinds if k.inspect is not None]
-
-
-def register(sub: Any) -> None:
-    p = sub.add_parser(
-        "emulate",
-        help="run a controller emulator (UDP on loopback)",
-        description="Emulate a controller: decode and check every datagram, "
-        "reply as the manual says, report the trace and violations.",
-    )
-    p.add_argument("--controller", required=True, help="bundled name (mbox6) or TOML path")
-    p.add_argument(
-        "--listen",
-        default=None,
-        help="udp://HOST:PORT to listen on (default: the controller's "
-        "default target; port 0 = any free port)",
-    )
-    p.add_argument(
-        "--duration",
-        type=float,
-        default=None,
-        metavar="S",
-        help="stop after S seconds (default: until Ctrl-C)",
-    )
-    p.add_argument(
-        "--homing-time",
-        type=float,
-        default=1.0,
-        metavar="S",
-        help="how long the emulated homing takes (default 1 s)",
-    )
-    p.add_argument(
-        "--trace-csv",
-        type=Path,
-        default=None,
-        help="write the trace (t_s, frame, axis1..axisN positions in pulses) here on exit",
-    )
-    p.add_argument(
-        "--plot",
-        type=Path,
-        default=None,
-        help="write a PNG of the trace (positions per axis, violations in red)",
-    )
-    add_json_option(p, "the trace summary and the violations")
-    p.add_argument(
-        "--platform",
-        default=None,
-        metavar="P",
-        help="platform the frames drive (bundled name or TOML path), for --monitor's drawing",
-    )
-    add_monitor_argument(p)
-    p.set_defaults(run=_run_emulate)
-
-    p = sub.add_parser(
-        "send",
-        help="send one command to a controller",
-        description="Send one command. Words: estop on|off, reset, home, park, outputs BITS, "
-        "read REG [COUNT], write REG VALUE...; EasySmc also: raw CMD DATA... [--start C] "
-        "[--addr A] (hex). The send options come before the word; everything after the word "
-        "belongs to it.",
-    )
-    p.add_argument("--controller", required=True, help="bundled name (mbox6) or TOML path")
-    p.add_argument(
-        "--target",
-        default=None,
-        help="udp://HOST:PORT, pcap:PATH, file:PATH or serial://... "
-        "(default: the controller's default target)",
-    )
-    p.add_argument(
-        "--node", default="all", help="Who fields: 'all' (0xFFFF/0xFFFF, default) or XX.YY (hex)"
-    )
-    p.add_argument("--no-reply", action="store_true", help="ask for no reply (WhoReply 0)")
-    p.add_argument(
-        "--save",
-        action="store_true",
-        help="write parameters so they survive power-off (MBOX FX, IMAX PA0f=2)",
-    )
-    add_json_option(p, "what was sent and the reply")
-    p.add_argument(
-        "word",
-        metavar="WORD",
-        help="estop | reset | home | park | outputs | read | write | raw (EasySmc)",
-    )
-    p.add_argument(
-        "args",
-        nargs=argparse.REMAINDER,
-        metavar="ARG",
-        help="the word's arguments (hex or decimal as the word says; raw takes --start/--addr)",
-    )
-    p.set_defaults(run=_run_send)
-
-    p = sub.add_parser(
-        "inspect",
-        help="decode a capture, a ride file or a recording, one line per message or frame",
-        description="Decode a pcap (UDP payloads), a raw file: capture, a ride file (header, "
-        "then one line per frame: time and pulses per axis) or a 'motioncue record' .mctr "
-        "recording (metadata, then one line per datagram with the decoder's verdict).",
-    )
-    p.add_argument("file", type=Path, help="pcap, raw capture, .ride or .mctr file")
-    p.add_argument(
-        "--controller",
-        default=None,
-        help="decode as this controller's kind (default: try each kind)",
-    )
-    p.add_argument("--raw", action="store_true", help="the file holds raw bytes (file: target)")
-    add_json_option(p, "the decoded messages")
-    p.set_defaults(run=_run_inspect)
 
 
 class _StopLikeCtrlC:
@@ -547,3 +450,105 @@ def _inspect_recording(args: argparse.Namespace) -> int:
     for r in rows:
         print(f"{r['t_s']:10.4f} {r['bytes']:5d} B {r['decoded']}")
     return 0
+
+
+_VERBS = (
+    Verb(
+        "emulate",
+        _run_emulate,
+        help="run a controller emulator (UDP on loopback)",
+        description="Emulate a controller: decode and check every datagram, "
+        "reply as the manual says, report the trace and violations.",
+        options=(
+            CONTROLLER,
+            Option.of(
+                "--listen",
+                default=None,
+                help="udp://HOST:PORT to listen on (default: the controller's "
+                "default target; port 0 = any free port)",
+            ),
+            DURATION,
+            Option.of(
+                "--homing-time",
+                type=float,
+                default=1.0,
+                metavar="S",
+                help="how long the emulated homing takes (default 1 s)",
+            ),
+            Option.of(
+                "--trace-csv",
+                type=Path,
+                default=None,
+                help="write the trace (t_s, frame, axis1..axisN positions in pulses) here on exit",
+            ),
+            PLOT.but(
+                type=Path,
+                default=None,
+                help="write a PNG of the trace (positions per axis, violations in red)",
+            ),
+            json_option("the trace summary and the violations"),
+            PLATFORM.but(
+                required=False,
+                metavar="P",
+                help="platform the frames drive (bundled name or TOML path), for --monitor's "
+                "drawing",
+            ),
+            MONITOR,
+        ),
+    ),
+    Verb(
+        "send",
+        _run_send,
+        help="send one command to a controller",
+        description="Send one command. Words: estop on|off, reset, home, park, outputs BITS, "
+        "read REG [COUNT], write REG VALUE...; EasySmc also: raw CMD DATA... [--start C] "
+        "[--addr A] (hex). The send options come before the word; everything after the word "
+        "belongs to it.",
+        options=(
+            CONTROLLER,
+            TARGET,
+            Option.of(
+                "--node",
+                default="all",
+                help="Who fields: 'all' (0xFFFF/0xFFFF, default) or XX.YY (hex)",
+            ),
+            Option.of("--no-reply", action="store_true", help="ask for no reply (WhoReply 0)"),
+            Option.of(
+                "--save",
+                action="store_true",
+                help="write parameters so they survive power-off (MBOX FX, IMAX PA0f=2)",
+            ),
+            json_option("what was sent and the reply"),
+            Option.of(
+                "word",
+                metavar="WORD",
+                help="estop | reset | home | park | outputs | read | write | raw (EasySmc)",
+            ),
+            Option.of(
+                "args",
+                nargs=argparse.REMAINDER,
+                metavar="ARG",
+                help="the word's arguments (hex or decimal as the word says; raw takes "
+                "--start/--addr)",
+            ),
+        ),
+    ),
+    Verb(
+        "inspect",
+        _run_inspect,
+        help="decode a capture, a ride file or a recording, one line per message or frame",
+        description="Decode a pcap (UDP payloads), a raw file: capture, a ride file (header, "
+        "then one line per frame: time and pulses per axis) or a 'motioncue record' .mctr "
+        "recording (metadata, then one line per datagram with the decoder's verdict).",
+        options=(
+            Option.of("file", type=Path, help="pcap, raw capture, .ride or .mctr file"),
+            CONTROLLER.but(
+                required=False, help="decode as this controller's kind (default: try each kind)"
+            ),
+            Option.of("--raw", action="store_true", help="the file holds raw bytes (file: target)"),
+            json_option("the decoded messages"),
+        ),
+    ),
+)
+
+register = registrar(*_VERBS)

@@ -3,66 +3,27 @@
 from __future__ import annotations
 
 import argparse
-import math
 import sys
 from pathlib import Path
 
 from .._errors import ConfigError
 from ._common import (
+    OUT,
+    PLATFORM,
+    PLOT,
+    PRESET,
+    RATE,
+    RECORDING,
     add_deprecated_alias,
-    add_json_option,
-    add_set_option,
+    json_option,
     load_platform_arg,
     print_json,
+    set_option,
 )
 from ._preset import add_vestibular_option
+from ._verb import Allowed, Verb, registrar
 
 __all__ = ["register"]
-
-
-def register(sub: argparse._SubParsersAction) -> None:
-    parser = sub.add_parser(
-        "cue",
-        help="washout cueing of a recording to platform poses",
-        description=(
-            "Run the preset's cueing algorithm over a recording (a CSV with the header "
-            "t,fx,fy,fz,wx,wy,wz in s, m/s^2, rad/s, body frame, extra columns ignored; or a "
-            "'motioncue record' .mctr file), resampled to --rate, and "
-            "write the poses CSV t,x,y,z,roll,pitch,yaw (m, rad)."
-        ),
-    )
-    parser.add_argument(
-        "--input",
-        required=True,
-        metavar="REC",
-        help="recording CSV (t,fx,fy,fz,wx,wy,wz) or a 'motioncue record' .mctr file",
-    )
-    parser.add_argument(
-        "--preset",
-        default=None,
-        metavar="NAME",
-        help="cueing preset name or .toml path (default: the --platform's default_preset)",
-    )
-    parser.add_argument(
-        "--platform",
-        default=None,
-        metavar="P",
-        help="platform whose default_preset is used when --preset is not given",
-    )
-    parser.add_argument(
-        "--rate",
-        type=float,
-        default=100.0,
-        metavar="HZ",
-        help="rate the recording is resampled to and the cueing runs at (default 100)",
-    )
-    parser.add_argument("--out", required=True, metavar="POSES.csv", help="poses CSV to write")
-    parser.add_argument("--plot", metavar="FILE.png", help="also write a cue-quality plot")
-    add_vestibular_option(parser)
-    add_set_option(parser)
-    add_json_option(parser, "the summary and the cue metrics")
-    add_deprecated_alias(parser, "--fs", "--rate", type=float)
-    parser.set_defaults(run=run)
 
 
 def run(args: argparse.Namespace) -> int:
@@ -75,8 +36,6 @@ def run(args: argparse.Namespace) -> int:
     from ._preset import choose_preset
 
     rate_hz = args.rate
-    if not (math.isfinite(rate_hz) and 0 < rate_hz <= 2000):
-        raise ConfigError(f"--rate {rate_hz!r} is invalid; allowed: (0, 2000] Hz")
     get_model_set(args.vestibular)  # an unknown set is refused before any file is written
     platform = None
     if args.platform is not None:
@@ -179,3 +138,39 @@ def _metrics(ev: object) -> dict[str, object]:
     if cue is not None:
         out["metrics"] = cue.to_dict()  # definitions: motioncue.cueing.cue_metrics
     return out
+
+
+_CUE = Verb(
+    "cue",
+    run,
+    help="washout cueing of a recording to platform poses",
+    description=(
+        "Run the preset's cueing algorithm over a recording (a CSV with the header "
+        "t,fx,fy,fz,wx,wy,wz in s, m/s^2, rad/s, body frame, extra columns ignored; or a "
+        "'motioncue record' .mctr file), resampled to --rate, and "
+        "write the poses CSV t,x,y,z,roll,pitch,yaw (m, rad)."
+    ),
+    options=(
+        RECORDING,
+        PRESET.but(
+            help="cueing preset name or .toml path (default: the --platform's default_preset)"
+        ),
+        PLATFORM.but(
+            required=False,
+            metavar="P",
+            help="platform whose default_preset is used when --preset is not given",
+        ),
+        RATE.but(
+            help="rate the recording is resampled to and the cueing runs at (default 100)",
+            allowed=Allowed(0.0, 2000.0, unit="Hz"),
+        ),
+        OUT.but(metavar="POSES.csv", help="poses CSV to write"),
+        PLOT.but(help="also write a cue-quality plot"),
+        add_vestibular_option,
+        set_option(),
+        json_option("the summary and the cue metrics"),
+        lambda parser: add_deprecated_alias(parser, "--fs", "--rate", type=float),
+    ),
+)
+
+register = registrar(_CUE)

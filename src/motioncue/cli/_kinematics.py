@@ -5,50 +5,13 @@ from __future__ import annotations
 import argparse
 import json
 import math
-from typing import Any
 
 import numpy as np
 
-from ._common import add_set_option, load_platform_arg
+from ._common import PLATFORM, PLOT, json_option, load_platform_arg, set_option
+from ._verb import Option, Verb, registrar
 
 __all__ = ["register"]
-
-
-def register(sub: Any) -> None:
-    ik = sub.add_parser(
-        "ik",
-        help="actuator lengths, strokes and pulses for one pose",
-        description=(
-            "Inverse kinematics of one pose: actuator positions (from neutral and absolute), "
-            "usable stroke, controller pulses, and whether the pose is reachable. Exit status "
-            "1 when an actuator is out of stroke or unreachable or the pose asks for a "
-            "component the machine cannot produce."
-        ),
-    )
-    ik.add_argument("--platform", required=True, help="bundled name or path to a .toml file")
-    ik.add_argument(
-        "--pose",
-        nargs=6,
-        type=float,
-        required=True,
-        metavar=("X", "Y", "Z", "ROLL", "PITCH", "YAW"),
-        help="pose from neutral: metres and radians (mm and degrees with --mm-deg)",
-    )
-    ik.add_argument("--mm-deg", action="store_true", help="pose given in mm and degrees")
-    ik.add_argument("--json", action="store_true", help="print JSON instead of a table")
-    add_set_option(ik, ("platform",))
-    ik.set_defaults(run=_run_ik)
-
-    ws = sub.add_parser(
-        "workspace",
-        help="reachable range of each degree of freedom alone",
-        description="Range of each pose component alone (others at neutral), by bisection.",
-    )
-    ws.add_argument("--platform", required=True, help="bundled name or path to a .toml file")
-    ws.add_argument("--plot", metavar="FILE.png", help="also save a plot of the workspace")
-    ws.add_argument("--json", action="store_true", help="print JSON instead of a table")
-    add_set_option(ws, ("platform",))
-    ws.set_defaults(run=_run_workspace)
 
 
 def _pose_si(values: list[float], mm_deg: bool) -> np.ndarray:
@@ -161,3 +124,47 @@ def _run_workspace(args: argparse.Namespace) -> int:
     if plot_path:
         print(f"plot saved to {plot_path}")
     return 0
+
+
+_TABLE_AND_SET = (json_option("the table"), set_option(("platform",)))
+"""The last options of both verbs: ``--json`` and ``--set platform...``."""
+
+_VERBS = (
+    Verb(
+        "ik",
+        _run_ik,
+        help="actuator lengths, strokes and pulses for one pose",
+        description=(
+            "Inverse kinematics of one pose: actuator positions (from neutral and absolute), "
+            "usable stroke, controller pulses, and whether the pose is reachable. Exit status "
+            "1 when an actuator is out of stroke or unreachable or the pose asks for a "
+            "component the machine cannot produce."
+        ),
+        options=(
+            PLATFORM,
+            Option.of(
+                "--pose",
+                nargs=6,
+                type=float,
+                required=True,
+                metavar=("X", "Y", "Z", "ROLL", "PITCH", "YAW"),
+                help="pose from neutral: metres and radians (mm and degrees with --mm-deg)",
+            ),
+            Option.of("--mm-deg", action="store_true", help="pose given in mm and degrees"),
+            _TABLE_AND_SET,
+        ),
+    ),
+    Verb(
+        "workspace",
+        _run_workspace,
+        help="reachable range of each degree of freedom alone",
+        description="Range of each pose component alone (others at neutral), by bisection.",
+        options=(
+            PLATFORM,
+            PLOT.but(help="also save a plot of the workspace"),
+            _TABLE_AND_SET,
+        ),
+    ),
+)
+
+register = registrar(*_VERBS)

@@ -7,44 +7,22 @@ import math
 from typing import TYPE_CHECKING
 
 from ._common import (
-    Subparsers,
-    add_limit_options,
-    add_rig_options,
-    add_set_option,
+    CONTROLLER,
+    LIMITS,
+    PLATFORM,
+    RATE,
+    json_option,
     limits_for,
     load_platform_arg,
+    set_option,
 )
+from ._verb import Verb, registrar
 
 if TYPE_CHECKING:
     from ..kinematics import Platform
     from ..trajectory import ActuatorLimits
 
 __all__ = ["register"]
-
-
-def register(sub: Subparsers) -> None:
-    parser = sub.add_parser(
-        "limits",
-        help="print the effective actuator limits (stroke, speed, acceleration)",
-        description=(
-            "Effective per-actuator limits of a platform driven by a controller: the "
-            "platform's usable stroke, IMAX PA07/PA8x/PAax*PAbx speed and PAbx ramp, MBOX "
-            "Fn0C0/Fn0C1 stroke, and the overrides given here (the smallest value wins). "
-            "Printed in SI and in drive pulses, in controller axis order."
-        ),
-    )
-    add_rig_options(parser, controller_required=False)
-    add_limit_options(parser)
-    parser.add_argument(
-        "--rate",
-        type=float,
-        metavar="HZ",
-        help="frame rate, for controllers whose limits depend on it (EasySmc; checked against "
-        "the controller's clock)",
-    )
-    parser.add_argument("--json", action="store_true", help="print JSON instead of a table")
-    add_set_option(parser, ("platform",))
-    parser.set_defaults(run=run)
 
 
 def run(args: argparse.Namespace) -> int:
@@ -91,3 +69,30 @@ def _table(lim: ActuatorLimits, platform: Platform, args: argparse.Namespace) ->
     for key, text in lim.sources.items():
         lines.append(f"{key}: {text}")
     return "\n".join(lines)
+
+
+_LIMITS = Verb(
+    "limits",
+    run,
+    help="print the effective actuator limits (stroke, speed, acceleration)",
+    description=(
+        "Effective per-actuator limits of a platform driven by a controller: the "
+        "platform's usable stroke, IMAX PA07/PA8x/PAax*PAbx speed and PAbx ramp, MBOX "
+        "Fn0C0/Fn0C1 stroke, and the overrides given here (the smallest value wins). "
+        "Printed in SI and in drive pulses, in controller axis order."
+    ),
+    options=(
+        PLATFORM,
+        CONTROLLER.but(required=False),
+        LIMITS,
+        RATE.but(
+            default=None,
+            help="frame rate, for controllers whose limits depend on it (EasySmc; checked "
+            "against the controller's clock)",
+        ),
+        json_option("the table"),
+        set_option(("platform",)),
+    ),
+)
+
+register = registrar(_LIMITS)

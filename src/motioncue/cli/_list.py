@@ -7,7 +7,8 @@ import tomllib
 from typing import Any
 
 from .._errors import ConfigError
-from ._common import Subparsers, add_json_option, print_json
+from ._common import json_option, print_json
+from ._verb import Option, Verb, registrar
 
 __all__ = ["bundled", "register"]
 
@@ -17,26 +18,6 @@ KINDS = ("platforms", "controllers", "presets", "profiles", "games")
 # the configs/ folder of each kind (presets are the cueing files)
 _FOLDERS = {"platforms": "platforms", "controllers": "controllers", "presets": "cueing",
             "profiles": "profiles"}  # fmt: skip
-
-
-def register(sub: Subparsers) -> None:
-    parser = sub.add_parser(
-        "list",
-        help="list the bundled platforms, controllers, presets, profiles and games",
-        description="List what can be named without a path: the bundled platforms "
-        "(--platform), controllers (--controller), cueing presets (--preset), game profiles "
-        "(--profile) and the games whose telemetry the bridge reads (--source), one per line "
-        "with its description.",
-    )
-    parser.add_argument(
-        "kind",
-        nargs="?",
-        choices=KINDS,
-        metavar="KIND",
-        help=f"one of {', '.join(KINDS)} (default: all)",
-    )
-    add_json_option(parser, "the names and descriptions")
-    parser.set_defaults(run=_run)
 
 
 def _kind_title(kind: str) -> str:
@@ -108,3 +89,26 @@ def _run(args: argparse.Namespace) -> int:
         for name, text in items:
             print(f"  {name:<{width}}  {text}".rstrip())
     return 0
+
+
+_LIST = Verb(
+    "list",
+    _run,
+    help="list the bundled platforms, controllers, presets, profiles and games",
+    description="List what can be named without a path: the bundled platforms "
+    "(--platform), controllers (--controller), cueing presets (--preset), game profiles "
+    "(--profile) and the games whose telemetry the bridge reads (--source), one per line "
+    "with its description.",
+    options=(
+        Option.of(
+            "kind",
+            nargs="?",
+            choices=KINDS,
+            metavar="KIND",
+            help=f"one of {', '.join(KINDS)} (default: all)",
+        ),
+        json_option("the names and descriptions"),
+    ),
+)
+
+register = registrar(_LIST)

@@ -6,12 +6,14 @@ import argparse
 from collections.abc import Callable
 from typing import TYPE_CHECKING
 
+from ._verb import Option
+
 if TYPE_CHECKING:
     from ..kinematics import Platform
     from ..trajectory import ActuatorLimits
     from ..viewer import Monitor, MonitorSource
 
-__all__ = ["add_monitor_argument", "start_monitor"]
+__all__ = ["MONITOR", "start_monitor"]
 
 
 def _monitor_value(text: str) -> str:
@@ -26,18 +28,18 @@ def _monitor_value(text: str) -> str:
     return text
 
 
-def add_monitor_argument(parser: argparse.ArgumentParser) -> None:
-    parser.add_argument(
-        "--monitor",
-        nargs="?",
-        const="",
-        default=None,
-        type=_monitor_value,
-        metavar="[HOST:]PORT",
-        help="serve a live page (3D pose, actuator bars, cue, telemetry timing, state, a stop "
-        "button that parks) at http://HOST:PORT/ (default 127.0.0.1:8765; port 0 = any free "
-        "port; loopback unless a HOST is named)",
-    )
+MONITOR = Option.of(
+    "--monitor",
+    nargs="?",
+    const="",
+    default=None,
+    type=_monitor_value,
+    metavar="[HOST:]PORT",
+    help="serve a live page (3D pose, actuator bars, cue, telemetry timing, state, a stop "
+    "button that parks) at http://HOST:PORT/ (default 127.0.0.1:8765; port 0 = any free "
+    "port; loopback unless a HOST is named)",
+)
+"""``--monitor [[HOST:]PORT]``: the live page (checked when the command line is read)."""
 
 
 def start_monitor(

@@ -4,67 +4,24 @@ from __future__ import annotations
 
 import argparse
 import json
-import math
 import sys
 import time
-from typing import Any
 
 from .._errors import ConfigError
 from ._common import (
-    add_limit_options,
-    add_rig_options,
-    add_set_option,
+    CHECKED_RATE,
+    LIMITS,
+    PLOT,
+    PRESET,
+    RIG,
+    json_option,
     load_preset_arg,
     load_rig,
+    set_option,
 )
+from ._verb import Allowed, Option, Verb, registrar
 
 __all__ = ["register"]
-
-
-def register(sub: Any) -> None:
-    parser = sub.add_parser(
-        "omct",
-        help="objective motion cueing test: frequency response of cueing plus platform",
-        description=(
-            "Objective Motion Cueing Test (OMCT, ICAO 9625; Hosman & Advani): sinusoidal "
-            "runs at the twelve test frequencies 0.1 to 15.849 rad/s on ten signal paths "
-            "(p->p, q->q, r->r, ax->ax, ay->ay, az->az, ax->q, ay->p, q->ax, p->ay) through "
-            "the whole chain (cueing, workspace limiting, actuator limits of the platform "
-            "driven by the controller); prints the gain and phase of the platform's motion "
-            "against the input, next to the analytic response of the linear washout. The "
-            "input amplitudes are motioncue's (rates up to 5 deg / 100 deg/s^2, 1 m/s^2), not "
-            "ICAO 9625's table."
-        ),
-    )
-    parser.add_argument(
-        "--preset", required=True, metavar="NAME", help="cueing preset name or .toml path"
-    )
-    add_rig_options(parser)
-    parser.add_argument(
-        "--rate",
-        type=float,
-        default=100.0,
-        metavar="HZ",
-        help="frame rate, checked against the controller (default 100)",
-    )
-    parser.add_argument(
-        "--amplitude-scale",
-        type=float,
-        default=1.0,
-        metavar="X",
-        help="multiply every input amplitude by X, in (0, 100] (default 1)",
-    )
-    parser.add_argument(
-        "--paths",
-        nargs="+",
-        metavar="PATH",
-        help="only these paths, as in-out (ax-q) or quoted in->out ('ax->q'); default: all ten",
-    )
-    parser.add_argument("--json", action="store_true", help="print the table as JSON")
-    parser.add_argument("--plot", metavar="FILE.png", help="write the plot in the OMCT format")
-    add_limit_options(parser)
-    add_set_option(parser)
-    parser.set_defaults(run=run)
 
 
 def run(args: argparse.Namespace) -> int:
@@ -72,11 +29,7 @@ def run(args: argparse.Namespace) -> int:
     from ..cueing import ClassicalWashout
 
     rate = args.rate
-    if not (math.isfinite(rate) and 0.0 < rate <= 1000.0):
-        raise ConfigError(f"--rate {rate!r} is invalid; allowed: (0, 1000] Hz")
     scale = args.amplitude_scale
-    if not (math.isfinite(scale) and 0.0 < scale <= 100.0):
-        raise ConfigError(f"--amplitude-scale {scale!r} is invalid; allowed: (0, 100]")
     params = load_preset_arg(args.preset, args.overrides)
     algorithm = getattr(params, "algorithm", "classical")
     if algorithm != "classical":
@@ -138,3 +91,45 @@ def run(args: argparse.Namespace) -> int:
             f"motioncue omct: plot written to {out}", file=sys.stderr if args.json else sys.stdout
         )
     return 0
+
+
+_OMCT = Verb(
+    "omct",
+    run,
+    help="objective motion cueing test: frequency response of cueing plus platform",
+    description=(
+        "Objective Motion Cueing Test (OMCT, ICAO 9625; Hosman & Advani): sinusoidal "
+        "runs at the twelve test frequencies 0.1 to 15.849 rad/s on ten signal paths "
+        "(p->p, q->q, r->r, ax->ax, ay->ay, az->az, ax->q, ay->p, q->ax, p->ay) through "
+        "the whole chain (cueing, workspace limiting, actuator limits of the platform "
+        "driven by the controller); prints the gain and phase of the platform's motion "
+        "against the input, next to the analytic response of the linear washout. The "
+        "input amplitudes are motioncue's (rates up to 5 deg / 100 deg/s^2, 1 m/s^2), not "
+        "ICAO 9625's table."
+    ),
+    options=(
+        PRESET.but(required=True, help="cueing preset name or .toml path"),
+        RIG,
+        CHECKED_RATE,
+        Option.of(
+            "--amplitude-scale",
+            type=float,
+            default=1.0,
+            metavar="X",
+            help="multiply every input amplitude by X, in (0, 100] (default 1)",
+            allowed=Allowed(0.0, 100.0),
+        ),
+        Option.of(
+            "--paths",
+            nargs="+",
+            metavar="PATH",
+            help="only these paths, as in-out (ax-q) or quoted in->out ('ax->q'); default: all ten",
+        ),
+        json_option("the table"),
+        PLOT.but(help="write the plot in the OMCT format"),
+        LIMITS,
+        set_option(),
+    ),
+)
+
+register = registrar(_OMCT)

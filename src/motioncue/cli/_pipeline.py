@@ -3,141 +3,45 @@
 from __future__ import annotations
 
 import argparse
-import math
 import sys
 import time
 from collections.abc import Callable
 from dataclasses import replace
 from pathlib import Path
-from typing import TYPE_CHECKING, Any, TextIO
+from typing import TYPE_CHECKING, Any
 
 from .._errors import ConfigError
 from ._common import (
-    Subparsers,
-    add_json_option,
-    add_limit_options,
-    add_set_option,
+    CONTROLLER,
+    LIMITS,
+    OUT,
+    PLATFORM,
+    PRESET,
+    QUIET,
+    RATE,
+    RECORDING,
+    REPORT,
+    SPEED,
+    TARGET,
     check_set_targets,
+    json_option,
     limits_for,
     load_platform_arg,
+    load_snapped_rig,
     print_json,
+    say,
+    set_option,
+    status_line,
 )
-from ._monitor import add_monitor_argument, start_monitor
+from ._monitor import MONITOR, start_monitor
 from ._preset import add_intensity_option, apply_intensity, cueing_note
+from ._verb import Allowed, Option, Verb, registrar
 
 if TYPE_CHECKING:
     from ..output import Controller
     from ..pipeline import Ride
 
 __all__ = ["register"]
-
-
-def register(sub: Subparsers) -> None:
-    g = sub.add_parser(
-        "generate",
-        help="make a ride file from a recording or pose keyframes",
-        description="Recording (CSV t,fx,fy,fz,wx,wy,wz; or a 'motioncue record' file) -> "
-        "cueing -> workspace limiting -> IK -> drives -> casadi ride optimisation -> frames. "
-        "A pose-keyframe CSV (t,x,y,z,roll,pitch,yaw[,dout,dac1,dac2]) skips cueing and "
-        "uses time-optimal transitions.",
-    )
-    g.add_argument(
-        "--input",
-        required=True,
-        metavar="REC",
-        help="recording CSV, 'motioncue record' .mctr file, or pose-keyframe CSV",
-    )
-    g.add_argument("--platform", required=True, metavar="P", help="bundled name or TOML path")
-    g.add_argument("--controller", required=True, metavar="C", help="bundled name or TOML path")
-    g.add_argument(
-        "--preset",
-        default=None,
-        metavar="NAME",
-        help="cueing preset name or .toml path (default: the platform's default_preset)",
-    )
-    add_intensity_option(g)
-    g.add_argument("--rate", type=float, default=100.0, metavar="HZ", help="frame rate")
-    g.add_argument("--out", required=True, metavar="RIDE", help="ride file to write")
-    g.add_argument("--pcap", metavar="FILE", help="also write the exact datagrams as a pcap")
-    g.add_argument("--report", metavar="DIR", help="write plots and cue metrics here")
-    g.add_argument("--quiet", action="store_true", help="no progress bar")
-    add_limit_options(g)
-    add_set_option(g)
-    add_json_option(g, "the ride's summary")
-    g.set_defaults(run=_generate)
-
-    p = sub.add_parser(
-        "play",
-        help="stream a ride file to a controller on time (ramps in from park, parks at the end)",
-    )
-    p.add_argument("ride", metavar="RIDE", help="ride file made by 'motioncue generate'")
-    p.add_argument(
-        "--target",
-        default=None,
-        metavar="URL",
-        help="udp://HOST:PORT, serial://..., pcap:PATH or file:PATH (default: the controller's)",
-    )
-    p.add_argument("--controller", default=None, metavar="C", help="default: the ride's controller")
-    p.add_argument("--platform", default=None, metavar="P", help="default: the ride's platform")
-    p.add_argument(
-        "--speed",
-        type=float,
-        default=1.0,
-        help="pacing factor (default 1 = real time; other values for pcap: and file: only)",
-    )
-    p.add_argument("--quiet", action="store_true", help="no progress line while playing")
-    p.add_argument(
-        "--resync-after-ms",
-        type=float,
-        default=100.0,
-        metavar="MS",
-        help="when the player finds itself more than MS late (the process was stopped, the "
-        "machine stalled), skip the ride frames whose time has passed and go on with the one "
-        "due now, through the limiter (default 100); 0: never skip, send every frame (only "
-        "for a controller that buffers frames and plays them on its own clock)",
-    )
-    p.add_argument(
-        "--intensity",
-        type=float,
-        default=None,
-        metavar="PCT",
-        help="the intensity (0-100) the ride must have been made at: a ride's frames are "
-        "fixed when 'generate --intensity' makes them, so play checks the intensity the ride "
-        "records and refuses another (with the generate command that makes it)",
-    )
-    p.add_argument(
-        "--accept-edited",
-        action="store_true",
-        help="play a ride changed after generate made it (its digest does not match) or one "
-        "without a digest; its frames must still be a rigid platform's",
-    )
-    add_limit_options(p)
-    add_set_option(p, ("platform",))
-    add_json_option(p, "the play summary")
-    add_monitor_argument(p)
-    p.set_defaults(run=_play)
-
-    d = sub.add_parser(
-        "demo",
-        help="generate a ride from the bundled lap, play it to the MBOX/IMAX emulator, compare",
-        description="The whole chain without hardware or network: the bundled lap "
-        "(configs/recordings/lap.csv) becomes a ride for --platform and --controller "
-        "(generate), the ride is played on loopback to the built-in emulator of that "
-        "controller (play, emulate), the emulator's trace is compared with the ride, and a "
-        "report (cueing and actuator plots, metrics, summary) is written under --out.",
-    )
-    d.add_argument(
-        "--out", default="out/demo", metavar="DIR", help="folder for the demo's files (out/demo)"
-    )
-    d.add_argument("--speed", type=float, default=10.0, help="pacing factor for the emulator")
-    d.add_argument(
-        "--platform",
-        default=None,
-        help="bundled platform or TOML path (default: stewart6-linear, or the first bundled "
-        "platform the controller can drive)",
-    )
-    d.add_argument("--controller", default="mbox6", help="an MBOX or IMAX controller")
-    d.set_defaults(run=_demo)
 
 
 class _Bar:
@@ -162,7 +66,6 @@ def _generate(args: argparse.Namespace) -> int:
     """Make the ride in memory, check it as ``play`` would, then publish the ride, the pcap
     and the report together: a refusal at any step leaves none of them."""
     from .._atomic import Interrupted, Staging
-    from ..output import load_controller
     from ..pipeline import (
         check_ride_for,
         generate_keyframe_ride,
@@ -175,20 +78,12 @@ def _generate(args: argparse.Namespace) -> int:
     from ..pipeline._inputs import check_generate_size, held_warning
     from ._preset import choose_preset
 
-    if not (0 < args.rate <= 2000):
-        raise ConfigError(f"--rate {args.rate!r} is invalid; allowed: (0, 2000] Hz")
-    platform = load_platform_arg(args.platform, args.overrides)
-    controller = load_controller(args.controller)
-    from ..output._controller_api import snap_rate_hz
-
-    args.rate = snap_rate_hz(args.rate, controller)
-    controller.check_rate(args.rate)
+    platform, controller, args.rate, limits = load_snapped_rig(args)
     if args.pcap and controller.link_kind != "udp":
         raise ConfigError(
             f"--pcap is for controllers on UDP; {args.controller} talks {controller.link_kind}: "
             "use 'motioncue play RIDE --target file:PATH' (the raw bytes)"
         )
-    limits = limits_for(args, platform, controller, args.rate)
     kind, data, counters = load_generate_input(args.input)
     check_generate_size(kind, data, args.rate, args.input)
     if counters:
@@ -339,8 +234,6 @@ def _play(args: argparse.Namespace) -> int:
     from ..viewer._monitor import PlaySource
     from ._preset import check_play_intensity
 
-    if not (0 < args.speed <= 1000):
-        raise ConfigError(f"--speed {args.speed!r} is invalid; allowed: (0, 1000]")
     check_set_targets(args.overrides, ("platform",))
     ride = load_ride(args.ride)
     platform_name = args.platform or ride.platform
@@ -351,10 +244,6 @@ def _play(args: argparse.Namespace) -> int:
         raise ConfigError(
             f"controller {controller.name} drives {controller.n_axes} axes; platform "
             f"{platform.name} has {platform.axes_text}"
-        )
-    if not (math.isfinite(args.resync_after_ms) and args.resync_after_ms >= 0.0):
-        raise ConfigError(
-            f"--resync-after-ms {args.resync_after_ms:g} is invalid; allowed: a number >= 0"
         )
     resync_after_s = None if args.resync_after_ms == 0.0 else args.resync_after_ms / 1000.0
     controller.check_rate(ride.rate_hz)
@@ -388,8 +277,8 @@ def _play(args: argparse.Namespace) -> int:
     # next frame, and nothing cuts the park or the summary short
     with SignalGuard() as guard:
         for accepted in integrity_notes:
-            _say(f"motioncue play: note: {accepted}")
-        _say(f"play: {args.ride} -> {target} ({ride.n_frames} frames, {ride.duration_s:.1f} s)")
+            say(f"motioncue play: note: {accepted}")
+        say(f"play: {args.ride} -> {target} ({ride.n_frames} frames, {ride.duration_s:.1f} s)")
         error = None
         watch = None
         if args.monitor is not None:
@@ -400,14 +289,14 @@ def _play(args: argparse.Namespace) -> int:
         progress = _PlayProgress(ride.n_frames, ride.rate_hz, stop)
         progress.enabled = paced and not args.quiet and not args.json
         monitor = start_monitor(
-            args.monitor, watch, platform, limits, f"play {args.ride} -> {target}", _say
+            args.monitor, watch, platform, limits, f"play {args.ride} -> {target}", say
         )
         if paced:  # frames on time beside a busy core (pipeline._realtime, Short slice)
             from motioncue.pipeline._realtime import request_short_slice
 
             note = request_short_slice(1e-4)
             if note is not None:
-                _say(f"play: {note}")
+                say(f"play: {note}")
         try:
             with open_transport(target) as link:
                 try:
@@ -429,7 +318,7 @@ def _play(args: argparse.Namespace) -> int:
             if monitor is not None:
                 monitor.stop()
         for note in rep.notes:
-            _say(f"motioncue play: note: {note}")
+            say(f"motioncue play: note: {note}")
         if error is None and rep.refused_frames:
             error = (
                 f"the controller refused {rep.refused_frames} of {rep.frame_replies} frames "
@@ -448,29 +337,27 @@ def _play(args: argparse.Namespace) -> int:
                 "stay on the ride's clock"
             )
         if args.json:
-            try:
-                print_json(
-                    {
-                        "ride": str(args.ride), "target": target, "outcome": outcome,
-                        "error": error, "frames_sent": rep.frames_sent,
-                        "ride_frames_sent": rep.ride_frames_sent,
-                        "park_frames": rep.park_frames, "clamped_frames": rep.clamped_frames,
-                        "late_frames": rep.late_frames, "send_errors": rep.send_errors,
-                        "skipped_frames": rep.skipped_frames, "resyncs": rep.resyncs,
-                        "wall_s": rep.wall_s, "notes": list(rep.notes),
-                    }
-                )  # fmt: skip
-            except (OSError, ValueError):
-                pass
+            print_json(
+                {
+                    "ride": str(args.ride), "target": target, "outcome": outcome,
+                    "error": error, "frames_sent": rep.frames_sent,
+                    "ride_frames_sent": rep.ride_frames_sent,
+                    "park_frames": rep.park_frames, "clamped_frames": rep.clamped_frames,
+                    "late_frames": rep.late_frames, "send_errors": rep.send_errors,
+                    "skipped_frames": rep.skipped_frames, "resyncs": rep.resyncs,
+                    "wall_s": rep.wall_s, "notes": list(rep.notes),
+                },
+                best_effort=True,
+            )  # fmt: skip
             return 2 if error is not None else (130 if rep.interrupted else 0)
-        _say(
+        say(
             f"sent {rep.frames_sent} frames ({rep.ride_frames_sent} of the ride, {rep.park_frames} "
             f"parking); limiter changed {rep.clamped_frames}; late {rep.late_frames}{retried}; "
             f"{outcome} in {rep.wall_s:.1f} s",
             sys.stdout,
         )
         if error is not None:
-            _say(f"motioncue play: error: {error}")
+            say(f"motioncue play: error: {error}")
             return 2
         return 130 if rep.interrupted else 0
 
@@ -510,30 +397,15 @@ class _PlayProgress:
 
     def show(self) -> None:
         self.shown = True
-        try:
-            if self.tty:
-                sys.stderr.write("\r" + self.line() + "\x1b[K")
-            else:
-                sys.stderr.write(self.line() + "\n")
-            sys.stderr.flush()
-        except (OSError, ValueError):
-            pass
+        status_line(self.line(), self.tty)
 
     def done(self) -> None:
         if self.shown and self.tty:
-            _say("")
+            say("")
 
 
 def controller_buffer(controller: Controller) -> str:
     return f"{controller.buffer_frames} frames"
-
-
-def _say(line: str, stream: TextIO | None = None) -> None:
-    """One line; a terminal that is gone (SIGHUP) does not stop the program."""
-    try:
-        print(line, file=sys.stderr if stream is None else stream, flush=True)
-    except (OSError, ValueError):
-        pass
 
 
 def _demo(args: argparse.Namespace) -> int:
@@ -543,3 +415,109 @@ def _demo(args: argparse.Namespace) -> int:
         args.out, speed=args.speed, platform_name=args.platform, controller_name=args.controller
     )
     return 0 if res.comparison.ok else 1
+
+
+_VERBS = (
+    Verb(
+        "generate",
+        _generate,
+        help="make a ride file from a recording or pose keyframes",
+        description="Recording (CSV t,fx,fy,fz,wx,wy,wz; or a 'motioncue record' file) -> "
+        "cueing -> workspace limiting -> IK -> drives -> casadi ride optimisation -> frames. "
+        "A pose-keyframe CSV (t,x,y,z,roll,pitch,yaw[,dout,dac1,dac2]) skips cueing and "
+        "uses time-optimal transitions.",
+        options=(
+            RECORDING.but(
+                help="recording CSV, 'motioncue record' .mctr file, or pose-keyframe CSV"
+            ),
+            PLATFORM.but(metavar="P"),
+            CONTROLLER.but(metavar="C"),
+            PRESET,
+            add_intensity_option,
+            RATE.but(allowed=Allowed(0.0, 2000.0, unit="Hz")),
+            OUT.but(metavar="RIDE", help="ride file to write"),
+            Option.of("--pcap", metavar="FILE", help="also write the exact datagrams as a pcap"),
+            REPORT.but(help="write plots and cue metrics here"),
+            QUIET.but(help="no progress bar"),
+            LIMITS,
+            set_option(),
+            json_option("the ride's summary"),
+        ),
+    ),
+    Verb(
+        "play",
+        _play,
+        help="stream a ride file to a controller on time (ramps in from park, parks at the end)",
+        options=(
+            Option.of("ride", metavar="RIDE", help="ride file made by 'motioncue generate'"),
+            TARGET,
+            CONTROLLER.but(required=False, metavar="C", help="default: the ride's controller"),
+            PLATFORM.but(required=False, metavar="P", help="default: the ride's platform"),
+            SPEED.but(
+                default=1.0,
+                help="pacing factor (default 1 = real time; other values for pcap: and file: only)",
+                allowed=Allowed(0.0, 1000.0),
+            ),
+            QUIET.but(help="no progress line while playing"),
+            Option.of(
+                "--resync-after-ms",
+                type=float,
+                default=100.0,
+                metavar="MS",
+                help="when the player finds itself more than MS late (the process was stopped, "
+                "the machine stalled), skip the ride frames whose time has passed and go on "
+                "with the one due now, through the limiter (default 100); 0: never skip, send "
+                "every frame (only for a controller that buffers frames and plays them on its "
+                "own clock)",
+                allowed=Allowed(0.0, None, lo_closed=True, show="g"),
+            ),
+            Option.of(
+                "--intensity",
+                type=float,
+                default=None,
+                metavar="PCT",
+                help="the intensity (0-100) the ride must have been made at: a ride's frames "
+                "are fixed when 'generate --intensity' makes them, so play checks the intensity "
+                "the ride records and refuses another (with the generate command that makes "
+                "it)",
+            ),
+            Option.of(
+                "--accept-edited",
+                action="store_true",
+                help="play a ride changed after generate made it (its digest does not match) "
+                "or one without a digest; its frames must still be a rigid platform's",
+            ),
+            LIMITS,
+            set_option(("platform",)),
+            json_option("the play summary"),
+            MONITOR,
+        ),
+    ),
+    Verb(
+        "demo",
+        _demo,
+        help="generate a ride from the bundled lap, play it to the MBOX/IMAX emulator, compare",
+        description="The whole chain without hardware or network: the bundled lap "
+        "(configs/recordings/lap.csv) becomes a ride for --platform and --controller "
+        "(generate), the ride is played on loopback to the built-in emulator of that "
+        "controller (play, emulate), the emulator's trace is compared with the ride, and a "
+        "report (cueing and actuator plots, metrics, summary) is written under --out.",
+        options=(
+            OUT.but(
+                required=False,
+                default="out/demo",
+                metavar="DIR",
+                help="folder for the demo's files (out/demo)",
+            ),
+            SPEED.but(default=10.0, help="pacing factor for the emulator"),
+            PLATFORM.but(
+                required=False,
+                help="bundled platform or TOML path (default: stewart6-linear, or the first "
+                "bundled platform the controller can drive)",
+            ),
+            CONTROLLER.but(required=False, default="mbox6", help="an MBOX or IMAX controller"),
+        ),
+    ),
+)
+
+register = registrar(*_VERBS)

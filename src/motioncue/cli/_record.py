@@ -5,38 +5,20 @@ from __future__ import annotations
 import argparse
 import sys
 
-from ._common import add_deprecated_alias, add_json_option, print_json
+from ._common import DURATION, OUT, add_deprecated_alias, json_option, print_json
+from ._verb import Lazy, Option, Verb, registrar
 
 __all__ = ["register"]
 
 
-def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
+def _description() -> str:
     from ..telemetry._registry import games_text
 
-    p = sub.add_parser(
-        "record",
-        help="record a game's raw UDP telemetry to a file every command can replay",
-        description=(
-            "Record the raw datagrams a game sends (undecoded, with receive times) to a "
-            "motioncue recording; replay it anywhere a source is taken with "
-            f"replay:FILE[?speed=X]. Games: {games_text()}."
-        ),
+    return (
+        "Record the raw datagrams a game sends (undecoded, with receive times) to a "
+        "motioncue recording; replay it anywhere a source is taken with "
+        f"replay:FILE[?speed=X]. Games: {games_text()}."
     )
-    p.add_argument(
-        "--source",
-        required=True,
-        metavar="GAME[:[HOST:]PORT]",
-        help="game and optional port, e.g. f1, forza:5301, beamng:0.0.0.0:4444 (default bind "
-        "address 127.0.0.1; the games are listed above)",
-    )
-    p.add_argument("--out", required=True, metavar="FILE", help="recording file to write")
-    p.add_argument(
-        "--duration", type=float, default=None, metavar="S", help="stop after S seconds "
-        "(default: until Ctrl-C)"
-    )  # fmt: skip
-    add_json_option(p, "the summary")
-    add_deprecated_alias(p, "--seconds", "--duration", type=float)
-    p.set_defaults(run=run)
 
 
 def run(args: argparse.Namespace) -> int:
@@ -66,3 +48,26 @@ def run(args: argparse.Namespace) -> int:
     for reason, count in sorted(summary.stats.items()):
         print(f"  {reason}: {count}")
     return 0
+
+
+_RECORD = Verb(
+    "record",
+    run,
+    help="record a game's raw UDP telemetry to a file every command can replay",
+    description=Lazy(_description),
+    options=(
+        Option.of(
+            "--source",
+            required=True,
+            metavar="GAME[:[HOST:]PORT]",
+            help="game and optional port, e.g. f1, forza:5301, beamng:0.0.0.0:4444 (default "
+            "bind address 127.0.0.1; the games are listed above)",
+        ),
+        OUT.but(metavar="FILE", help="recording file to write"),
+        DURATION,
+        json_option("the summary"),
+        lambda parser: add_deprecated_alias(parser, "--seconds", "--duration", type=float),
+    ),
+)
+
+register = registrar(_RECORD)

@@ -3,51 +3,36 @@
 from __future__ import annotations
 
 import argparse
-import math
 import sys
 
 from .._errors import ConfigError
-from ._common import Subparsers, add_json_option, print_json
+from ._common import QUIET, RATE, RECORDING, TARGET, json_option, print_json
+from ._verb import Allowed, Lazy, Option, Verb, registrar
 
 __all__ = ["register"]
 
 
-def register(sub: Subparsers) -> None:
+def _description() -> str:
     from ..telemetry import GAMES
     from ..telemetry._registry import encodable_games, games_text
 
     unable = [name for name in GAMES if name not in encodable_games()]
-
-    p = sub.add_parser(
-        "send-telemetry",
-        help="send a recording as a game's UDP telemetry (try the bridge without the game)",
-        description="Encode a recording of vehicle motion (t,fx,fy,fz,wx,wy,wz CSV or a "
+    return (
+        "Encode a recording of vehicle motion (t,fx,fy,fz,wx,wy,wz CSV or a "
         "'motioncue record' file) into the packets the game sends, in the layouts the "
         "bridge's decoders read, and send them on the recording's clock to --target, the "
         "address 'motioncue bridge --source GAME' listens on. The vehicle is kept level; "
         "its specific force and angular velocity come back from the decoder as recorded. "
         f"Games: {games_text(ports=False, encodable=True)}"
         + (f" (not {', '.join(unable)}: no encoder)" if unable else "")
-        + ". Ctrl-C stops.",
+        + ". Ctrl-C stops."
     )
-    p.add_argument("--game", required=True, choices=encodable_games(), help="the game to imitate")
-    p.add_argument("--input", required=True, metavar="REC", help="recording CSV or .mctr file")
-    p.add_argument(
-        "--target",
-        metavar="URL",
-        default=None,
-        help="udp://HOST:PORT to send to (default: udp://127.0.0.1: and the game's port)",
-    )
-    p.add_argument(
-        "--rate",
-        type=float,
-        default=60.0,
-        metavar="HZ",
-        help="packets per second (the recording is resampled to it; default 60, as F1)",
-    )
-    p.add_argument("--quiet", action="store_true", help="no progress lines")
-    add_json_option(p, "the summary")
-    p.set_defaults(run=_run)
+
+
+def _encodable_games() -> tuple[str, ...]:
+    from ..telemetry._registry import encodable_games
+
+    return encodable_games()
 
 
 def _run(args: argparse.Namespace) -> int:
@@ -56,8 +41,6 @@ def _run(args: argparse.Namespace) -> int:
     from ..telemetry import GAMES, resample
     from ..telemetry._encode import send_recording
 
-    if not (math.isfinite(args.rate) and 1.0 <= args.rate <= 1000.0):
-        raise ConfigError(f"--rate {args.rate!r} is invalid; allowed: 1 .. 1000 Hz")
     target = args.target or f"udp://127.0.0.1:{GAMES[args.game].default_port}"
     url = parse_target(target)
     if url.scheme != "udp":
@@ -100,3 +83,29 @@ def _run(args: argparse.Namespace) -> int:
             f"{summary.duration_s:.1f} s) to {target}; late {summary.late}"
         )
     return 0
+
+
+_SEND_TELEMETRY = Verb(
+    "send-telemetry",
+    _run,
+    help="send a recording as a game's UDP telemetry (try the bridge without the game)",
+    description=Lazy(_description),
+    options=(
+        Option.of(
+            "--game", required=True, choices=Lazy(_encodable_games), help="the game to imitate"
+        ),
+        RECORDING,
+        TARGET.but(
+            help="udp://HOST:PORT to send to (default: udp://127.0.0.1: and the game's port)"
+        ),
+        RATE.but(
+            default=60.0,
+            help="packets per second (the recording is resampled to it; default 60, as F1)",
+            allowed=Allowed(1.0, 1000.0, lo_closed=True, unit="Hz"),
+        ),
+        QUIET,
+        json_option("the summary"),
+    ),
+)
+
+register = registrar(_SEND_TELEMETRY)
