@@ -7,7 +7,8 @@ first:
 rank  stages                                      why there
 ====  ==========================================  =========================================
 0     ``_errors``                                 the exception tree everyone raises
-1     ``_atomic``, ``_config``                    files written whole; bundled configs
+1     ``_atomic``, ``_config``, ``_registry``     files written whole; bundled configs; what
+                                                  the named registries share
 2     ``telemetry``, ``kinematics``, ``output``   independent leaves: game packets; platform
                                                   geometry; controller descriptions, wire
                                                   formats and transports
@@ -48,6 +49,7 @@ RANKS: dict[str, int] = {
     "_atomic": 1,
     "_config": 1,
     "_plugins": 1,
+    "_registry": 1,
     "telemetry": 2,
     "kinematics": 2,
     "output": 2,
