@@ -38,7 +38,7 @@ def test_the_change_of_vertical_force_is_that_of_the_rotated_specific_force() ->
         u = rng.uniform(-5.0, 5.0, 4)
         a = np.array([u[0], u[1], 0.0])
         rot = Rotation.from_euler("ZYX", [0.0, x[4], x[3]])  # yaw, pitch, roll
-        f_head = rot.inv().apply(a + [0.0, 0.0, G])
+        f_head = rot.inv().apply(a + np.array([0.0, 0.0, G]))
         assert _fz_change(x, u, active) == pytest.approx(f_head[2] - G, abs=1e-12)
 
 
@@ -75,8 +75,9 @@ def test_the_fz_rows_are_the_perceived_fz_at_the_plan_and_its_tangent() -> None:
     nb = n // bs
     rng = np.random.default_rng(7)
     u0 = np.zeros(nb * m.nu)
+    shape = np.array([1.5, -2.0, 4.0, -3.0])  # x, y, roll, pitch accelerations
     for j in range(nb):  # a smooth roll and pitch to ~10 deg, with x/y accelerations
-        u0[j * m.nu : (j + 1) * m.nu] = np.array([1.5, -2.0, 4.0, -3.0]) * np.cos(2 * np.pi * j / nb)
+        u0[j * m.nu : (j + 1) * m.nu] = shape * np.cos(2 * np.pi * j / nb)
     xf = np.zeros((n + 1, m.nx))
     thr = float(m.thresholds[2])
     oracle = _perceived_fz(design, u0)
