@@ -139,7 +139,11 @@ class MpcParams:
         ``g_i`` perception thresholds (a false cue is one that exceeds a threshold with the
         wrong sign), checked at every block end against the vehicle's motion as the plan
         knows it (``optimal``: the recording; ``mpc``: its prediction). A soft constraint
-        (:class:`~._mpc.SoftGuardQp`). Each in [0, 10]; 0 = no such constraint.
+        (:class:`~._mpc.SoftGuardQp`). Each in [0, 10]; 0 = no such constraint. ``optimal``
+        with roll and pitch moved guards fz with the change of vertical force that tilt and
+        translation bring (second order, not in the linear model), linearised about its first
+        plan, at the sample of each block where the rider's fz is lowest while the vehicle's
+        is positive (:mod:`._optimal`).
     sign_guard_weight : float
         Price of violating the sign guard by one threshold, in (0, 1e9].
     stroke_use, rate_use : float

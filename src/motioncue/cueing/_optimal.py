@@ -18,6 +18,14 @@ vertical force a tilt brings would oppose the vehicle (``tilt_fz_use_against``: 
 ends where the vehicle's perceived fz is above its threshold, e.g. downforce in a fast
 corner), and use more tilt everywhere else.
 
+The linear model does not see the vertical force a tilt takes away, ``g (cos roll cos pitch -
+1)``. With a sign guard on fz (``sign_guard[2] > 0``) and roll and pitch both moved, the
+sequential-QP pass prices it where a rider feels it: that loss, linearised about the first
+plan sample by sample, drives the otolith's fz model (the loss of the samples already kept,
+exact, carried from window to window), and the rider's perceived fz so found may oppose the
+vehicle's by at most ``sign_guard[2]`` thresholds at every block end (an fz reversal or a
+wrong-sign fz cue: a drop felt while the car is pressed down).
+
 The QP of a window has a constant Hessian (built once per design); its gradient comes from
 the vehicle's motion over the window (one simulation of the model from rest); it is solved by
 the same casadi conic plugin as the MPC. A window whose solve fails is driven by the
@@ -60,6 +68,17 @@ if TYPE_CHECKING:
     from ._algorithm import Rig
 
 __all__ = ["OptimalCueing", "OptimalResult"]
+
+
+def _fz_change(x: NDArray[np.float64], u: NDArray[np.float64], active: tuple[int, ...]) -> float:
+    """The change of the rider's vertical specific force (m/s^2) at pose and rate ``x`` with
+    input ``u``, without heave: ``g (cos roll cos pitch - 1) - sin roll a_y + cos roll sin pitch
+    a_x`` (``R^T (a + g e_z)`` of roll, then pitch)."""
+    ax = float(u[active.index(0)]) if 0 in active else 0.0
+    ay = float(u[active.index(1)]) if 1 in active else 0.0
+    cr, sr = math.cos(x[3]), math.sin(x[3])
+    cp, sp = math.cos(x[4]), math.sin(x[4])
+    return GRAVITY_M_S2 * (cr * cp - 1.0) - sr * ay + cr * sp * ax
 
 
 @dataclass(frozen=True, eq=False)
@@ -125,6 +144,8 @@ class OptimalCueing:
     _qp: QpSolver = field(init=False, repr=False)
     _a_guard: NDArray[np.float64] = field(init=False, repr=False)
     _qp_guard: SoftGuardQp | None = field(init=False, repr=False)
+    _fz_h: NDArray[np.float64] | None = field(init=False, repr=False)
+    _fz_free: NDArray[np.float64] | None = field(init=False, repr=False)
 
     def __post_init__(self) -> None:
         classical = ClassicalWashout(self.params, self.fs_hz)
@@ -209,6 +230,99 @@ class OptimalCueing:
             if guard
             else None,
         )
+        self._condense_fz()
+
+    def _fz_guarded(self) -> bool:
+        """Whether the plan's perceived fz includes the tilt's loss of vertical force (a
+        sign guard on fz, roll and pitch both moved)."""
+        return self.mpc.sign_guard[2] > 0.0 and bool(self.params.dofs[3] and self.params.dofs[4])
+
+    def _condense_fz(self) -> None:
+        """The otolith fz model's response to a change of the rider's vertical force:
+        impulse response ``h`` ``(n_window + 1,)`` (perceived fz at sample ``k`` of a unit
+        change held over sample 0) and the free response ``(n_window + 1, nx)`` of a state."""
+        if not self._fz_guarded():
+            object.__setattr__(self, "_fz_h", None)
+            object.__setattr__(self, "_fz_free", None)
+            return
+        m = self.model
+        n = self.n_window
+        b = -m.bd[:, 2]  # the otolith fz input of the rider's own specific force
+        h = np.empty(n + 1)
+        h[0] = -m.de[2, 2]  # its feed-through
+        free = np.empty((n + 1, m.nx))
+        free[0] = m.ce[2]
+        z = b.copy()
+        for k in range(1, n + 1):
+            h[k] = m.ce[2] @ z
+            z = m.a @ z
+            free[k] = free[k - 1] @ m.a
+        object.__setattr__(self, "_fz_h", h)
+        object.__setattr__(self, "_fz_free", free)
+
+    def _fz_rows(
+        self,
+        xf: NDArray[np.float64],
+        u_plan: NDArray[np.float64],
+        z0: NDArray[np.float64],
+        vz: NDArray[np.float64],
+    ) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
+        """Rows of the fz guard: the rider's perceived fz (thresholds) as ``A u + c``, in each
+        block at the sample where the plan ``u_plan`` gives the lowest one while the vehicle's
+        perceived fz ``vz`` ``(n_window + 1,)`` is positive (a drop felt then is a wrong-sign
+        cue), with the sign to guard (1 there, 0 in a block without such a sample).
+
+        The change of vertical force (roll, pitch and the x, y accelerations,
+        :func:`_fz_change`) is linearised about ``u_plan`` sample by sample and drives the
+        otolith fz model from its state ``z0`` (that of the motion already kept); ``xf``
+        ``(n_window + 1, nx)`` is the window's free response. Returns ``(A (blocks, n_u),
+        c (blocks,), sign (blocks,))``."""
+        assert self._fz_h is not None and self._fz_free is not None
+        m = self.model
+        g = GRAVITY_M_S2
+        n = self.n_window
+        bs = self.mpc.block_samples
+        nb = n // bs
+        gam = self._gam
+        roll0 = xf[:, 3] + gam[:, 3] @ u_plan
+        pitch0 = xf[:, 4] + gam[:, 4] @ u_plan
+        n_u = u_plan.shape[0]
+        sel = np.zeros((2, n + 1, n_u))  # the x, y acceleration of each sample
+        blk = np.minimum(np.arange(n + 1) // bs, nb - 1) * m.nu
+        for row, axis in enumerate((0, 1)):
+            if axis in m.active:
+                sel[row, np.arange(n + 1), blk + m.active.index(axis)] = 1.0
+        ax0, ay0 = sel[0] @ u_plan, sel[1] @ u_plan
+        cr, sr, cp, sp = np.cos(roll0), np.sin(roll0), np.cos(pitch0), np.sin(pitch0)
+        fz0 = g * (cr * cp - 1.0) - sr * ay0 + cr * sp * ax0
+        d_roll = -g * sr * cp - cr * ay0 - sr * sp * ax0
+        d_pitch = -g * cr * sp + cr * cp * ax0
+        d_ax, d_ay = cr * sp, -sr
+        const = fz0 + d_roll * (xf[:, 3] - roll0) + d_pitch * (xf[:, 4] - pitch0)
+        const = const - d_ax * ax0 - d_ay * ay0
+        lin = (
+            d_roll[:, None] * gam[:, 3]
+            + d_pitch[:, None] * gam[:, 4]
+            + d_ax[:, None] * sel[0]
+            + d_ay[:, None] * sel[1]
+        )  # (n + 1, n_u)
+        # the plan's perceived fz at every sample, then the sample guarded in each block
+        zfree = self._fz_free @ z0
+        per = np.convolve(self._fz_h, fz0)[: n + 1] + zfree
+        k_of = np.arange(1, nb + 1) * bs  # default: the block end
+        sign = np.zeros(nb)
+        for j in range(nb):
+            ks = np.arange(j * bs + 1, (j + 1) * bs + 1)
+            pos = ks[vz[ks] > 0.0]
+            if pos.size:
+                k_of[j] = pos[np.argmin(per[pos])]
+                sign[j] = 1.0
+        h = self._fz_h
+        toe = np.zeros((nb, n + 1))
+        for j, k in enumerate(k_of):
+            toe[j, : k + 1] = h[k::-1]
+        thr = float(m.thresholds[2])
+        return (toe @ lin) / thr, (toe @ const + zfree[k_of]) / thr, sign
 
     def _guard_channels(self) -> list[int]:
         return [i for i in range(6) if self.mpc.sign_guard[i] > 0.0]
@@ -331,7 +445,7 @@ class OptimalCueing:
                 if i in (3, 4):
                     lbx[j :: m.nu] = -lim.tilt_accel
                     ubx[j :: m.nu] = lim.tilt_accel
-        return g, a_mat, lba, uba, lbx, ubx, xf[ends, 0:6], self._gam[ends, 0:6], xf[ends]
+        return g, a_mat, lba, uba, lbx, ubx, xf[ends, 0:6], self._gam[ends, 0:6], xf[ends], xf
 
     def _solve_window(
         self,
@@ -339,15 +453,25 @@ class OptimalCueing:
         xv_ends: NDArray[np.float64],
         sign_ends: NDArray[np.float64],
         use_guard: bool,
+        fz: tuple[NDArray[np.float64], ...] | None = None,
     ) -> tuple[bool, NDArray[np.float64]]:
         """Solve one window's QP ``qp`` (from :meth:`_window_qp`), with the sign-guard rows
-        when ``use_guard``."""
+        when ``use_guard``; ``fz`` (from :meth:`_fz_rows`): the fz guard rows with the tilt's
+        loss of vertical force."""
         g, a_mat, lba, uba, lbx, ubx = qp[:6]
         if use_guard and self._qp_guard is not None:
             glo, ghi = self._guard_bounds(qp[8], xv_ends, sign_ends)
-            ok, u, _, _ = self._qp_guard.solve(
-                g, a_mat, lba, uba, lbx, ubx, self._a_guard, glo, ghi
-            )
+            a_guard = self._a_guard
+            if fz is not None:
+                guard = self._guard_channels()
+                ng = len(guard)
+                iz = guard.index(2)
+                a_guard = a_guard.copy()
+                a_guard[iz::ng] = fz[0]
+                gz = self.mpc.sign_guard[2]
+                glo[iz::ng] = np.where(fz[2] > 0.0, -gz - fz[1], -np.inf)
+                ghi[iz::ng] = np.inf
+            ok, u, _, _ = self._qp_guard.solve(g, a_mat, lba, uba, lbx, ubx, a_guard, glo, ghi)
         else:
             ok, u, _, _ = self._qp.solve(g, a_mat, lba, uba, lbx, ubx)
         return ok, u
@@ -412,6 +536,7 @@ class OptimalCueing:
         m = self.model
         guard = self._guard_channels()
         up_all = np.zeros(n, dtype=bool)
+        vz_all = np.zeros(n)  # the vehicle's perceived fz (with a guard)
         if self._against_bound() is not None:  # the vehicle's perceived fz above threshold
             xz = np.zeros(m.nx)
             for k in range(n):
@@ -427,7 +552,9 @@ class OptimalCueing:
                 xt = m.a @ xt + m.bd @ d_all[k]
                 xv = m.a @ xv + m.bd @ r_all[k]
                 xv_all[k] = xv
-                sign_all[k] = -np.sign(m.ce @ xt + m.de @ d_all[k])
+                e_k = m.ce @ xt + m.de @ d_all[k]
+                sign_all[k] = -np.sign(e_k)
+                vz_all[k] = -e_k[2]
         d_all, _ = reference(d_all, self.mpc, self.fs_hz)
         nw, ns, bs = self.n_window, self.n_stride, self.mpc.block_samples
         poses = np.zeros((n, 6))
@@ -437,8 +564,12 @@ class OptimalCueing:
         nb = nw // bs
         shift = ns // bs
         prev: NDArray[np.float64] | None = None  # the last plan's poses at the block ends
+        fz_on = self._fz_guarded()
+        z_fz = np.zeros(m.nx)  # the otolith fz state of the tilt's loss of vertical force
+        b_fz = -m.bd[:, 2]
         while start < n:
-            idx = np.minimum(np.arange(start, start + nw + 1), n - 1)
+            idx_raw = np.arange(start, start + nw + 1)
+            idx = np.minimum(idx_raw, n - 1)
             d = d_all[idx]
             if start + nw + 1 > n:  # past the end: the vehicle at rest
                 d[n - start :] = 0.0
@@ -472,11 +603,15 @@ class OptimalCueing:
                 ok, u = self._solve_window(qp, xv_e, sg, use_guard)
                 if ok:
                     break
-            if ok:  # again with the legs linearised about this plan (sequential QP)
+            if ok:  # again with the legs (and the tilt's fz) linearised about this plan
                 about = p_free + g_end @ u
-                ok2, u2 = self._solve_window(
-                    self._window_qp(st.x, d, about, use_up), xv_e, sg, use_guard
+                qp2 = self._window_qp(st.x, d, about, use_up)
+                fz = (
+                    self._fz_rows(qp2[9], u, z_fz, vz_all[idx] * (idx_raw < n))
+                    if fz_on and use_guard
+                    else None
                 )
+                ok2, u2 = self._solve_window(qp2, xv_e, sg, use_guard, fz)
                 if ok2:  # else keep the first plan
                     u = u2
                 plan = p_free + g_end @ u
@@ -496,6 +631,8 @@ class OptimalCueing:
                     uk = u[j * m.nu : (j + 1) * m.nu]
                 else:
                     uk = fallback_accel(m, self.limits, st.x, pose_c[start + k])
+                if fz_on:  # the change of vertical force of the motion kept, exact
+                    z_fz = m.a @ z_fz + b_fz * _fz_change(st.x, uk, m.active)
                 st.x = m.a @ st.x + m.bu @ uk + m.bd @ d_all[start + k]
                 poses[start + k] = st.x[:6]
             start += keep
