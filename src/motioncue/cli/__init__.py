@@ -184,15 +184,18 @@ def console() -> None:
     """Entry point of the ``motioncue`` command and ``python -m motioncue``: :func:`main`,
     then exit with its status.
 
-    Past :func:`main` the platform is parked: the stop signals are blocked so that a late
+    Past :func:`main` the platform is parked: the stop signals are ignored so that a late
     Ctrl-C or SIGTERM cannot turn a clean exit into a death by signal (or a traceback) while
-    the interpreter shuts down. (Not done inside :func:`main`, which tests call in-process.)
+    the interpreter shuts down. Ignored, not blocked: a blocked mask is per thread, and the
+    kernel hands a process-directed signal to any thread that does not block it (a library's
+    thread still finishing), whose default action would end the process. (Not done inside
+    :func:`main`, which tests call in-process.)
     """
     import signal
 
+    from .._atomic import STOP_SIGNALS
+
     status = main()
-    names = ("SIGINT", "SIGTERM", "SIGHUP", "SIGQUIT")
-    signal.pthread_sigmask(
-        signal.SIG_BLOCK, [getattr(signal, n) for n in names if hasattr(signal, n)]
-    )
+    for sig in STOP_SIGNALS:
+        signal.signal(sig, signal.SIG_IGN)
     raise SystemExit(status)
