@@ -395,7 +395,11 @@ def test_a_stopped_player_resynchronises_instead_of_bursting(rides: Any) -> None
     ride_path, n_frames = rides["mbox6"]
     fake = FakeController()
     try:
-        play = _motioncue("play", str(ride_path), "--target", f"udp://127.0.0.1:{fake.port}")
+        # resynchronise only after 0.5 s held up: the 2 s stop is then the one hold-up, where
+        # the default 0.1 s also counted (and skipped for) the machine's own hiccups, which
+        # the suite's other workers give a player now and then
+        play = _motioncue("play", str(ride_path), "--target", f"udp://127.0.0.1:{fake.port}",
+                          "--resync-after-ms", "500")  # fmt: skip
         end = time.monotonic() + 20
         while len(fake.frames) < 150 and time.monotonic() < end:
             time.sleep(0.01)
@@ -412,7 +416,7 @@ def test_a_stopped_player_resynchronises_instead_of_bursting(rides: Any) -> None
     # the first 50 ms after the resume: a few frames, not the 200 held up
     assert 0 < np.count_nonzero(after < after[0] + 0.05) <= 15
     m = re.search(r"held up (\d+) time\(s\): skipped (\d+) late frames", out)
-    assert m, out
+    assert m and m.group(1) == "1", out
     assert 150 <= int(m.group(2)) <= 230, out  # 2 s at 100 Hz, less what the resume needed
     assert _ride_frames_sent(out) + int(m.group(2)) == n_frames
     wire = decode_wire([d for _, d in fake.frames])
