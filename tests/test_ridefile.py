@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import io
 import json
+import warnings
 import zipfile
 from pathlib import Path
 
@@ -91,6 +92,29 @@ def test_truncated_file_is_refused(tmp_path: Path) -> None:
     path.write_bytes(data[: len(data) // 2])
     with pytest.raises(ConfigError):
         load_ride(path)
+
+
+def test_a_damaged_npy_header_is_refused_without_a_warning(tmp_path: Path) -> None:
+    """A member whose header text holds a stray backslash escape: refused with a clear
+    error, and Python's literal parser (numpy reads the header with it) prints no
+    "invalid escape sequence" warning on the user's terminal first."""
+    path = save_ride(tmp_path / "x.ride", _ride())
+    with zipfile.ZipFile(path) as zf:
+        members = {i.filename: zf.read(i) for i in zf.infolist()}
+    raw = members["pulses.npy"]
+    head_len = int.from_bytes(raw[8:10], "little")
+    head = raw[10 : 10 + head_len].decode("latin1").replace("'<i", "'<i\\s", 1)
+    head = head[:head_len].ljust(head_len)[:-1] + "\n"
+    assert "\\s" in head and len(head) == head_len
+    members["pulses.npy"] = raw[:10] + head.encode("latin1") + raw[10 + head_len :]
+    with zipfile.ZipFile(path, "w") as zf:
+        for name, data in members.items():
+            zf.writestr(name, data)
+    with warnings.catch_warnings(record=True) as seen:
+        warnings.simplefilter("always")
+        with pytest.raises(ConfigError, match="damaged array 'pulses'"):
+            load_ride(path)
+    assert [str(w.message) for w in seen] == []
 
 
 def test_zip_without_arrays_is_refused(tmp_path: Path) -> None:

@@ -44,6 +44,7 @@ import io
 import json
 import math
 import os
+import warnings
 import zipfile
 from collections.abc import Callable
 from dataclasses import dataclass, field
@@ -415,14 +416,20 @@ def _read_member(zf: zipfile.ZipFile, info: zipfile.ZipInfo, key: str, where: st
         raise ConfigError(f"{where}: array {key!r} claims {info.file_size} bytes; too large")
     with zf.open(info) as fp:
         version = np.lib.format.read_magic(fp)
-        if version == (1, 0):
-            shape, fortran, dtype = np.lib.format.read_array_header_1_0(fp)
-        elif version == (2, 0):
-            shape, fortran, dtype = np.lib.format.read_array_header_2_0(fp)
-        else:
+        if version not in ((1, 0), (2, 0)):
             raise ConfigError(
                 f"{where}: array {key!r} has .npy version {version}; allowed 1.0, 2.0"
             )
+        # numpy parses the header text with Python's literal parser, which warns on a
+        # damaged header's stray backslash escapes ("invalid escape sequence"): a line on
+        # the user's terminal before the refusal says why, so the warning is dropped
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", DeprecationWarning)
+            warnings.simplefilter("ignore", SyntaxWarning)
+            if version == (1, 0):
+                shape, fortran, dtype = np.lib.format.read_array_header_1_0(fp)
+            else:
+                shape, fortran, dtype = np.lib.format.read_array_header_2_0(fp)
         if (
             dtype.hasobject
             or dtype.fields is not None
