@@ -254,6 +254,17 @@ def test_watchdog_parks_when_packets_stop_and_ramps_back_in() -> None:
         assert parked.park_q_error == 0.0 and parked.gain == 0.0
         time.sleep(0.2)
         assert bridge.cueing_state.samples == 0  # reset while parked: resume starts clean
+        # the gain of every frame, recorded on the bridge's own thread (sampling it from
+        # this thread saw one value inside the 0.3 s fade when four workers shared 2 cores)
+        frame_gains: list[float] = []
+        update = bridge.gate.update
+
+        def recorded(now_s: float, last_packet_s: float | None, paused: bool) -> float:
+            gain = update(now_s, last_packet_s, paused)
+            frame_gains.append(gain)
+            return gain
+
+        bridge.gate.update = recorded  # type: ignore[method-assign]
         sender.mode = "drive"
         gains = []
         end = time.monotonic() + 1.0
@@ -261,8 +272,9 @@ def test_watchdog_parks_when_packets_stop_and_ramps_back_in() -> None:
             gains.append(bridge.stats.gain)
             time.sleep(0.01)
         assert gains[-1] == 1.0
-        ramp = [g for g in gains if 0.0 < g < 1.0]
-        assert len(ramp) >= 5  # fades in over 0.3 s, not a step
+        ramp = [g for g in frame_gains if 0.0 < g < 1.0]
+        assert len(ramp) >= 5, frame_gains  # fades in over 0.3 s (30 frames), not a step
+        assert all(b >= a for a, b in itertools.pairwise(frame_gains))
         assert all(b >= a for a, b in itertools.pairwise(gains))
         resumed = bridge.stats
         assert resumed.fade_ins == 2 and resumed.fade_outs == 1
