@@ -12,14 +12,14 @@ from __future__ import annotations
 
 import argparse
 import io
-import signal
 import sys
-import threading
 import time
 from collections.abc import Sequence
 from pathlib import Path
+from types import FrameType
 from typing import TYPE_CHECKING, Any, TextIO
 
+from .._atomic import StopSignalRecorder
 from .._errors import ConfigError, ProtocolError
 from ._common import (
     CONTROLLER,
@@ -54,11 +54,11 @@ def _inspectable_kinds() -> list[ControllerKind]:
     return [k for k in kinds if k.inspect is not None]
 
 
-class _StopLikeCtrlC:
-    """While active (main thread): SIGINT, SIGTERM and SIGHUP end ``emulate``'s wait, so its
-    summary, trace and plot are written whatever stopped it (Ctrl-C, a service manager, a
-    closed terminal); a later stop signal is recorded and ignored, so that nothing cuts the
-    writing short.
+class _StopLikeCtrlC(StopSignalRecorder):
+    """While active (main thread): the first stop signal (Ctrl-C, SIGTERM, SIGHUP, Ctrl-\\)
+    ends ``emulate``'s wait as Ctrl-C does, so its summary, trace and plot are written
+    whatever stopped it (a terminal, a service manager, a closed terminal); a later stop
+    signal is recorded and ignored, so that nothing cuts the writing short.
 
     SIGINT gets this handler too rather than Python's default one: Python installs its
     Ctrl-C handler only when the process starts with SIGINT at its default, so an
@@ -67,39 +67,14 @@ class _StopLikeCtrlC:
     theirs the same way, ``pipeline._signals.SignalGuard``).
     """
 
-    SIGNALS = tuple(
-        signal.Signals[n]
-        for n in ("SIGINT", "SIGTERM", "SIGHUP")
-        if n in signal.Signals.__members__
-    )
-
-    def __init__(self) -> None:
-        self.received: list[int] = []
-        self._previous: dict[int, Any] = {}
-
-    def _on_signal(self, signum: int, frame: Any) -> None:
-        self.received.append(signum)
+    def _on_signal(self, signum: int, frame: FrameType | None) -> None:
+        super()._on_signal(signum, frame)
         if len(self.received) == 1:
             raise KeyboardInterrupt
-
-    def __enter__(self) -> _StopLikeCtrlC:
-        if threading.current_thread() is threading.main_thread():
-            for sig in self.SIGNALS:
-                self._previous[sig] = signal.signal(sig, self._on_signal)
-        return self
 
     def finish(self) -> None:
         """From here on every stop signal is recorded and ignored."""
         self.received.append(0)
-        if threading.current_thread() is threading.main_thread():
-            for sig in self.SIGNALS:
-                previous = signal.signal(sig, self._on_signal)
-                self._previous.setdefault(sig, previous)
-
-    def __exit__(self, *exc: object) -> None:
-        for sig, previous in self._previous.items():
-            signal.signal(sig, previous if previous is not None else signal.SIG_DFL)
-        self._previous.clear()
 
 
 def _run_emulate(args: argparse.Namespace) -> int:
