@@ -672,6 +672,22 @@ class MpcResult:
     fs_hz: float
 
 
+def recording_arrays(f: ArrayLike, w: ArrayLike) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """``f`` (m/s^2) and ``w`` (rad/s) of a whole recording as float arrays of shape (N, 3),
+    as :meth:`MpcCueing.run` and ``OptimalCueing.run`` take them.
+
+    Raises
+    ------
+    ConfigError
+        If they are not both of shape (N, 3).
+    """
+    fa = np.asarray(f, dtype=float)
+    wa = np.asarray(w, dtype=float)
+    if fa.ndim != 2 or fa.shape[1] != 3 or wa.shape != fa.shape:
+        raise ConfigError(f"need f and w of shape (N, 3); got {fa.shape} and {wa.shape}")
+    return fa, wa
+
+
 class QpSolver:
     """A dense QP ``min 0.5 u' H u + g' u  s.t.  lba <= A u <= uba, lbx <= u <= ubx`` through a
     casadi conic plugin, built once for fixed sizes."""
@@ -1268,10 +1284,7 @@ class MpcCueing:
     def run(self, f: ArrayLike, w: ArrayLike, state: MpcState | None = None) -> MpcResult:
         """A whole recording ``f``, ``w`` (N, 3) at ``fs_hz`` (no deadline; otherwise the
         numbers of :meth:`step`)."""
-        fa = np.asarray(f, dtype=float)
-        wa = np.asarray(w, dtype=float)
-        if fa.ndim != 2 or fa.shape[1] != 3 or wa.shape != fa.shape:
-            raise ConfigError(f"need f and w of shape (N, 3); got {fa.shape} and {wa.shape}")
+        fa, wa = recording_arrays(f, w)
         st = self.initial_state() if state is None else state
         n = fa.shape[0]
         poses = np.zeros((n, 6))

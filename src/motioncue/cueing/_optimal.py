@@ -49,12 +49,14 @@ from .._errors import ConfigError
 from ._classical import ClassicalWashout
 from ._mpc import (
     LinearModel,
+    MpcResult,
     MpcState,
     QpSolver,
     RigLimits,
     SoftGuardQp,
     build_model,
     fallback_accel,
+    recording_arrays,
     reference,
     resolve_reach,
     rig_limits,
@@ -82,35 +84,21 @@ def _fz_change(x: NDArray[np.float64], u: NDArray[np.float64], active: tuple[int
 
 
 @dataclass(frozen=True, eq=False)
-class OptimalResult:
-    """Outcome of :meth:`OptimalCueing.run`.
+class OptimalResult(MpcResult):
+    """Outcome of :meth:`OptimalCueing.run`: the fields of :class:`MpcResult` (poses,
+    bad samples, the input used, ``fs_hz``), counted by window where the MPC counts samples.
 
     Attributes
     ----------
-    poses : (N, 6) array
-        Platform poses (m, rad).
-    bad_samples : int
-    bad_mask : (N,) bool array
-    f_used, w_used : (N, 3) arrays
-        The input after bad samples were held.
     fallbacks : int
         Windows whose solve failed (the classical fallback tracker ran there).
     windows : int
         Windows solved.
     solve_ms : (windows,) array
         Wall time of each window's solve (ms).
-    fs_hz : float
     """
 
-    poses: NDArray[np.float64]
-    bad_samples: int
-    bad_mask: NDArray[np.bool_]
-    f_used: NDArray[np.float64]
-    w_used: NDArray[np.float64]
-    fallbacks: int
     windows: int
-    solve_ms: NDArray[np.float64]
-    fs_hz: float
 
 
 @dataclass(frozen=True, eq=False)
@@ -515,10 +503,7 @@ class OptimalCueing:
         """
         import time
 
-        fa = np.asarray(f, dtype=float)
-        wa = np.asarray(w, dtype=float)
-        if fa.ndim != 2 or fa.shape[1] != 3 or wa.shape != fa.shape:
-            raise ConfigError(f"need f and w of shape (N, 3); got {fa.shape} and {wa.shape}")
+        fa, wa = recording_arrays(f, w)
         st = self.initial_state() if state is None else state
         n = fa.shape[0]
         # bad samples and the fallback poses: the classical washout of the same preset
