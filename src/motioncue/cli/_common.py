@@ -8,13 +8,11 @@
   :func:`json_option`, :func:`set_option`.
 * :func:`add_deprecated_alias`: an old spelling (``cue --fs``, ``record --seconds``) kept as a
   hidden option that still works and prints a one-line deprecation note.
-* :func:`add_json_option` / :func:`print_json`: ``--json`` on every verb that prints a result.
-* :func:`add_rig_options`: ``--platform`` and ``--controller`` (bundled name or TOML path).
-* :func:`add_limit_options`: ``--max-speed``, ``--max-accel``, ``--max-jerk``,
-  ``--stroke-margin`` (the actuator-limit overrides of ``motioncue limits``);
-  :func:`limits_for`: the rig's actuator limits with those overrides applied;
+* :func:`print_json`: the result of a verb's ``--json`` (:func:`json_option`).
+* :func:`limits_for`: the rig's actuator limits with the overrides of :data:`LIMITS`
+  (``--max-speed``, ``--max-accel``, ``--max-jerk``, ``--stroke-margin``) applied;
   :func:`load_rig`: the rig a verb drives (platform, controller, limits).
-* :func:`add_set_option`, :func:`load_platform_arg`, :func:`load_preset_arg`:
+* :func:`set_option`, :func:`load_platform_arg`, :func:`load_preset_arg`:
   ``--set platform.SECTION.KEY=VALUE`` and ``--set preset.SECTION.KEY=VALUE`` overrides,
   validated exactly like the file (an unknown key is refused with its name).
 * :func:`say`, :func:`status_line`: a line on stderr that a closed terminal does not turn
@@ -62,10 +60,6 @@ __all__ = [
     "TARGET",
     "Subparsers",
     "add_deprecated_alias",
-    "add_json_option",
-    "add_limit_options",
-    "add_rig_options",
-    "add_set_option",
     "apply_overrides",
     "json_option",
     "limits_for",
@@ -138,11 +132,6 @@ def json_option(what: str = "the result") -> Option:
     return Option.of(
         "--json", action="store_true", help=f"print {what} as JSON on stdout instead of text"
     )
-
-
-def add_json_option(parser: argparse.ArgumentParser, what: str = "the result") -> None:
-    """Add :func:`json_option` to ``parser``."""
-    json_option(what).add_to(parser)
 
 
 def print_json(data: object, *, best_effort: bool = False) -> None:
@@ -258,22 +247,9 @@ SPEED = Option.of("--speed", type=float, help="pacing factor")
 """``--speed X``: pacing factor against real time."""
 
 
-def add_rig_options(parser: argparse.ArgumentParser, *, controller_required: bool = True) -> None:
-    """``--platform P`` (required) and ``--controller C``: the rig a verb works on, each a
-    bundled name or a TOML path."""
-    PLATFORM.add_to(parser)
-    CONTROLLER.but(required=controller_required).add_to(parser)
-
-
-def add_limit_options(parser: argparse.ArgumentParser) -> None:
-    """The actuator-limit overrides (:data:`LIMITS`)."""
-    for option in LIMITS:
-        option.add_to(parser)
-
-
 def limit_overrides(args: argparse.Namespace) -> dict[str, float | None]:
     """The keyword arguments of ``ActuatorLimits.from_platform`` set by
-    :func:`add_limit_options`."""
+    :data:`LIMITS`."""
     return {
         "stroke_margin": getattr(args, "stroke_margin", None),
         "v_max": getattr(args, "max_speed", None),
@@ -289,7 +265,7 @@ def limits_for(
     rate_hz: float | None,
 ) -> ActuatorLimits:
     """The rig's :class:`~motioncue.trajectory.ActuatorLimits` at ``rate_hz`` (Hz), with the
-    overrides of :func:`add_limit_options` (:func:`limit_overrides`) applied."""
+    overrides of :data:`LIMITS` (:func:`limit_overrides`) applied."""
     from ..trajectory import ActuatorLimits
 
     return ActuatorLimits.from_platform(
@@ -343,11 +319,6 @@ def set_option(targets: Sequence[str] = SET_TARGETS) -> Option:
         help=f"override one key of the {names} file (TARGET: {', '.join(targets)}; VALUE in "
         f"TOML syntax, e.g. {example}); checked like the file; repeatable",
     )
-
-
-def add_set_option(parser: argparse.ArgumentParser, targets: Sequence[str] = SET_TARGETS) -> None:
-    """Add :func:`set_option` to ``parser``."""
-    set_option(targets).add_to(parser)
 
 
 def parse_set(item: str) -> tuple[str, tuple[str, ...], TomlValue]:

@@ -7,18 +7,23 @@ import math
 import os
 import sys
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING
 
 from .._errors import ConfigError
 from ._common import (
-    add_json_option,
-    add_limit_options,
-    add_rig_options,
-    add_set_option,
+    LIMITS,
+    OUT,
+    PRESET,
+    RATE,
+    RECORDING,
+    RIG,
+    json_option,
     load_rig,
     print_json,
+    set_option,
 )
 from ._preset import add_vestibular_option
+from ._verb import Allowed, Option, Verb, registrar
 
 if TYPE_CHECKING:
     from ..analysis import ChainMetrics, StrengthTargets
@@ -26,146 +31,6 @@ if TYPE_CHECKING:
 __all__ = ["register"]
 
 _AXES = ("fx", "fy", "fz", "wx", "wy", "wz")
-
-
-def register(sub: Any) -> None:
-    parser = sub.add_parser(
-        "tune",
-        help="tune a cueing preset's main parameters on recordings (local or Dask)",
-        description=(
-            "Optimise the base preset's main parameters (translational scales and high-pass, "
-            "tilt scales, filter, rate and acceleration limits, rotational scale and "
-            "high-pass, yaw scale and high-pass; with the compressive tilt also the curves' "
-            "limits and exponents and the share of the platform's tilt reach; bounded, log "
-            "space) with the cheap chain of generate (cueing, workspace limiting, evaluation "
-            "of the delivered poses through vestibular models). Objective strength (the "
-            "default): the largest rendered share of fx and fy among candidates meeting the "
-            "cue-quality targets (reversals, false cues, correlation, clamping); score: the "
-            "cue score. A candidate that breaks an actuator limit on any frame or clamps more "
-            "than 1 % of its poses is penalised above every one that does not; the result "
-            "must meet the limits (and with strength the targets) or nothing is written. "
-            "Optimiser: SciPy differential evolution, seeded. Evaluations run in local "
-            "processes (--workers) or on a Dask cluster (--scheduler)."
-        ),
-    )
-    parser.add_argument(
-        "--input", required=True, nargs="+", metavar="REC", help="recording CSVs to tune on"
-    )
-    add_rig_options(parser)
-    parser.add_argument(
-        "--preset",
-        default=None,
-        metavar="BASE",
-        help="base preset (name or .toml; default: the platform's default_preset)",
-    )
-    parser.add_argument("--out", required=True, metavar="TUNED.toml", help="preset to write")
-    parser.add_argument(
-        "--budget-s",
-        type=float,
-        default=300.0,
-        metavar="S",
-        help="wall-time budget in seconds (default 300)",
-    )
-    parser.add_argument("--seed", type=int, default=0, metavar="N", help="optimiser seed (0)")
-    parser.add_argument(
-        "--generations",
-        type=int,
-        default=100,
-        metavar="N",
-        help="most generations (default 100); the same seed and N give the same result",
-    )
-    parser.add_argument(
-        "--popsize",
-        type=int,
-        default=6,
-        metavar="K",
-        help="population per tuned parameter (default 6: 96 candidates per generation)",
-    )
-    parser.add_argument(
-        "--workers",
-        type=int,
-        default=None,
-        metavar="N",
-        help="local processes (default: the number of cores)",
-    )
-    parser.add_argument(
-        "--scheduler",
-        default=None,
-        metavar="tcp://HOST:PORT",
-        help="evaluate on this Dask distributed scheduler instead of local processes (its "
-        "workers need motioncue installed; pip install 'motioncue[dask]')",
-    )
-    parser.add_argument(
-        "--rate", type=float, default=100.0, metavar="HZ", help="frame rate (default 100)"
-    )
-    parser.add_argument(
-        "--objective",
-        choices=("strength", "score"),
-        default="strength",
-        help="strength (default): the largest rendered share of fx and fy (their geometric "
-        "mean, the recordings pooled) among candidates meeting the cue-quality "
-        "targets below (pooled); score: the cue score (lower is better; the "
-        "objective before issue 20, which barely moving can win)",
-    )
-    parser.add_argument(
-        "--max-reversals", type=float, default=2.0, metavar="PCT",
-        help="strength target: reversals (both above threshold, opposite signs) at most "
-        "PCT %% of each recording (default 2)",
-    )  # fmt: skip
-    parser.add_argument(
-        "--max-false", type=float, default=15.0, metavar="PCT",
-        help="strength target: false cues (rider against the vehicle, any size) at most "
-        "PCT %% of each recording (default 15)",
-    )  # fmt: skip
-    parser.add_argument(
-        "--max-clamped", type=float, default=1.0, metavar="PCT",
-        help="strength target: clamped poses at most PCT %% (default 1)",
-    )  # fmt: skip
-    parser.add_argument(
-        "--min-corr", type=float, nargs=2, default=(0.95, 0.90), metavar=("FX", "FY"),
-        help="strength target: perceived fx and fy correlation at least FX and FY on each "
-        "recording (default 0.95 0.90)",
-    )  # fmt: skip
-    parser.add_argument(
-        "--excerpt",
-        default=None,
-        metavar="START:END",
-        help="tune on this window of each recording only (seconds from its start; a cheaper "
-        "tune on short excerpts)",
-    )
-    parser.add_argument(
-        "--init-spread",
-        type=float,
-        default=None,
-        metavar="S",
-        help="start from a population about the base preset (log-space normal steps of "
-        "standard deviation S, e.g. 0.3) instead of over the whole search box: a local "
-        "search from a good base",
-    )
-    parser.add_argument(
-        "--gentle-end",
-        action="store_true",
-        help="tune the gentle (0 %%) end of the base preset's intensity range instead: the "
-        "base must have the compressive tilt ([tilt] shape); the search starts from the base "
-        "and the written preset is the base unchanged plus an [intensity] table holding the "
-        "result (give tighter targets than the base's, e.g. --max-false 5)",
-    )
-    parser.add_argument(
-        "--gentle-keep", nargs="+", default=(), metavar="NAME",
-        help="with --gentle-end: tuned parameters kept at the base's value (names of the "
-        "[intensity.gentle] table, e.g. the filters: trans_wn_xy_rad_s tilt_wn_rad_s ...)",
-    )  # fmt: skip
-    parser.add_argument(
-        "--gentle-share", type=float, default=0.6, metavar="FRAC",
-        help="with --gentle-end: the gentle end's rendered share of fx and of fy, each at "
-        "most FRAC times the base's (the strong end's) on the same recordings (default "
-        "0.6), so that every channel grows from 0 to 100 %%",
-    )  # fmt: skip
-    add_vestibular_option(parser)
-    add_limit_options(parser)
-    add_set_option(parser)
-    add_json_option(parser, "the before/after metrics")
-    parser.set_defaults(run=run)
 
 
 def _metrics_table(before: ChainMetrics, after: ChainMetrics) -> str:
@@ -224,8 +89,6 @@ def run(args: argparse.Namespace) -> int:
     from ..trajectory._derive import pulse_rounding_limits
     from ._preset import choose_preset
 
-    if not (math.isfinite(args.budget_s) and args.budget_s > 0.0):
-        raise ConfigError(f"--budget-s {args.budget_s!r} is invalid; allowed: a number > 0")
     if not 0 <= args.seed < 2**32:
         raise ConfigError(f"--seed {args.seed} is invalid; allowed: 0 to 2^32 - 1")
     if args.workers is not None and args.scheduler is not None:
@@ -518,3 +381,159 @@ def _metrics_dict(m: ChainMetrics) -> dict[str, object]:
         # definitions: motioncue.cueing.cue_metrics (pooled over the recordings)
         "cue_metrics": None if m.cue is None else m.cue.to_dict(),
     }
+
+
+_TUNE = Verb(
+    "tune",
+    run,
+    help="tune a cueing preset's main parameters on recordings (local or Dask)",
+    description=(
+        "Optimise the base preset's main parameters (translational scales and high-pass, "
+        "tilt scales, filter, rate and acceleration limits, rotational scale and "
+        "high-pass, yaw scale and high-pass; with the compressive tilt also the curves' "
+        "limits and exponents and the share of the platform's tilt reach; bounded, log "
+        "space) with the cheap chain of generate (cueing, workspace limiting, evaluation "
+        "of the delivered poses through vestibular models). Objective strength (the "
+        "default): the largest rendered share of fx and fy among candidates meeting the "
+        "cue-quality targets (reversals, false cues, correlation, clamping); score: the "
+        "cue score. A candidate that breaks an actuator limit on any frame or clamps more "
+        "than 1 % of its poses is penalised above every one that does not; the result "
+        "must meet the limits (and with strength the targets) or nothing is written. "
+        "Optimiser: SciPy differential evolution, seeded. Evaluations run in local "
+        "processes (--workers) or on a Dask cluster (--scheduler)."
+    ),
+    options=(
+        RECORDING.but(nargs="+", help="recording CSVs to tune on"),
+        RIG,
+        PRESET.but(
+            metavar="BASE",
+            help="base preset (name or .toml; default: the platform's default_preset)",
+        ),
+        OUT.but(metavar="TUNED.toml", help="preset to write"),
+        Option.of(
+            "--budget-s",
+            type=float,
+            default=300.0,
+            metavar="S",
+            help="wall-time budget in seconds (default 300)",
+            allowed=Allowed(0.0),
+        ),
+        Option.of("--seed", type=int, default=0, metavar="N", help="optimiser seed (0)"),
+        Option.of(
+            "--generations",
+            type=int,
+            default=100,
+            metavar="N",
+            help="most generations (default 100); the same seed and N give the same result",
+        ),
+        Option.of(
+            "--popsize",
+            type=int,
+            default=6,
+            metavar="K",
+            help="population per tuned parameter (default 6: 96 candidates per generation)",
+        ),
+        Option.of(
+            "--workers",
+            type=int,
+            default=None,
+            metavar="N",
+            help="local processes (default: the number of cores)",
+        ),
+        Option.of(
+            "--scheduler",
+            default=None,
+            metavar="tcp://HOST:PORT",
+            help="evaluate on this Dask distributed scheduler instead of local processes (its "
+            "workers need motioncue installed; pip install 'motioncue[dask]')",
+        ),
+        RATE.but(help="frame rate (default 100)"),
+        Option.choice(
+            "--objective",
+            ("strength", "score"),
+            help="strength (default): the largest rendered share of fx and fy (their geometric "
+            "mean, the recordings pooled) among candidates meeting the cue-quality "
+            "targets below (pooled); score: the cue score (lower is better; the "
+            "objective before issue 20, which barely moving can win)",
+        ),
+        Option.of(
+            "--max-reversals",
+            type=float,
+            default=2.0,
+            metavar="PCT",
+            help="strength target: reversals (both above threshold, opposite signs) at most "
+            "PCT %% of each recording (default 2)",
+        ),
+        Option.of(
+            "--max-false",
+            type=float,
+            default=15.0,
+            metavar="PCT",
+            help="strength target: false cues (rider against the vehicle, any size) at most "
+            "PCT %% of each recording (default 15)",
+        ),
+        Option.of(
+            "--max-clamped",
+            type=float,
+            default=1.0,
+            metavar="PCT",
+            help="strength target: clamped poses at most PCT %% (default 1)",
+        ),
+        Option.of(
+            "--min-corr",
+            type=float,
+            nargs=2,
+            default=(0.95, 0.90),
+            metavar=("FX", "FY"),
+            help="strength target: perceived fx and fy correlation at least FX and FY on each "
+            "recording (default 0.95 0.90)",
+        ),
+        Option.of(
+            "--excerpt",
+            default=None,
+            metavar="START:END",
+            help="tune on this window of each recording only (seconds from its start; a "
+            "cheaper tune on short excerpts)",
+        ),
+        Option.of(
+            "--init-spread",
+            type=float,
+            default=None,
+            metavar="S",
+            help="start from a population about the base preset (log-space normal steps of "
+            "standard deviation S, e.g. 0.3) instead of over the whole search box: a local "
+            "search from a good base",
+        ),
+        Option.of(
+            "--gentle-end",
+            action="store_true",
+            help="tune the gentle (0 %%) end of the base preset's intensity range instead: "
+            "the base must have the compressive tilt ([tilt] shape); the search starts from "
+            "the base and the written preset is the base unchanged plus an [intensity] table "
+            "holding the result (give tighter targets than the base's, e.g. --max-false 5)",
+        ),
+        Option.of(
+            "--gentle-keep",
+            nargs="+",
+            default=(),
+            metavar="NAME",
+            help="with --gentle-end: tuned parameters kept at the base's value (names of the "
+            "[intensity.gentle] table, e.g. the filters: trans_wn_xy_rad_s tilt_wn_rad_s ...)",
+        ),
+        Option.of(
+            "--gentle-share",
+            type=float,
+            default=0.6,
+            metavar="FRAC",
+            help="with --gentle-end: the gentle end's rendered share of fx and of fy, each at "
+            "most FRAC times the base's (the strong end's) on the same recordings (default "
+            "0.6), so that every channel grows from 0 to 100 %%",
+        ),
+        add_vestibular_option,
+        LIMITS,
+        set_option(),
+        json_option("the before/after metrics"),
+    ),
+)
+
+register = registrar(_TUNE)
