@@ -388,6 +388,32 @@ class CueingParams:
         _check("workspace", self.workspace, 0.0, False, 1e6)
 
 
+def _number_rows(
+    table: ConfigReader, key: str, n_rows: int | None, row_len: int, allowed: str
+) -> list[list[float]]:
+    """The rows of numbers ``key`` of ``table`` (a TOML list of ``n_rows`` lists, each of
+    ``row_len`` numbers; ``n_rows`` None: one or more), as floats.
+
+    Raises
+    ------
+    ConfigError
+        ``table.error(key, value, allowed)`` for anything else (a boolean is not a number).
+    """
+    raw = table.raw(key)
+    if (
+        not isinstance(raw, list)
+        or (not raw if n_rows is None else len(raw) != n_rows)
+        or any(
+            not isinstance(r, list)
+            or len(r) != row_len
+            or any(isinstance(v, bool) or not isinstance(v, int | float) for v in r)
+            for r in raw
+        )
+    ):
+        raise table.error(key, raw, allowed)
+    return [[float(v) for v in r] for r in raw]
+
+
 def load_cueing(name_or_path: str | Path) -> CueingParams:
     """Load a cueing preset by bundled name (``racing``) or from a TOML path.
 
@@ -520,36 +546,14 @@ def load_cueing(name_or_path: str | Path) -> CueingParams:
     additive = ti.boolean("additive") if ti.has("additive") else False
     rate_mix = None
     if ti.has("rate_mix"):
-        raw = ti.raw("rate_mix")
-        if (
-            not isinstance(raw, list)
-            or not raw
-            or any(
-                not isinstance(r, list)
-                or len(r) != 2
-                or any(isinstance(v, bool) or not isinstance(v, int | float) for v in r)
-                for r in raw
-            )
-        ):
-            raise ti.error("rate_mix", raw, "a list of [roll, pitch] pairs of numbers")
-        rate_mix = tuple((float(r[0]), float(r[1])) for r in raw)
+        rows = _number_rows(ti, "rate_mix", None, 2, "a list of [roll, pitch] pairs of numbers")
+        rate_mix = tuple((r[0], r[1]) for r in rows)
     lag_fill = ti.number("lag_fill", lo=0.0, hi=1.0) if ti.has("lag_fill") else 0.0
     reach_q = ti.number("reach_exponent", lo=1.0, hi=8.0) if ti.has("reach_exponent") else 2.0
     offset = None
     if ti.has("offset_mm"):
-        raw = ti.raw("offset_mm")
-        if (
-            not isinstance(raw, list)
-            or len(raw) != 3
-            or any(
-                not isinstance(r, list)
-                or len(r) != 5
-                or any(isinstance(v, bool) or not isinstance(v, int | float) for v in r)
-                for r in raw
-            )
-        ):
-            raise ti.error("offset_mm", raw, "3 rows (x, y, z) of 5 numbers")
-        offset = tuple(tuple(float(v) * 1e-3 for v in r) for r in raw)
+        rows = _number_rows(ti, "offset_mm", 3, 5, "3 rows (x, y, z) of 5 numbers")
+        offset = tuple(tuple(v * 1e-3 for v in r) for r in rows)
     ti.finish()
 
     ro = top.table("rotational")
