@@ -59,7 +59,7 @@ import struct
 from dataclasses import dataclass
 
 from ._registry import GameInfo, register_game
-from ._sample import G0_M_S2, Decoder, DecodeResult
+from ._sample import G0_M_S2, Decoder, DecodeResult, wrong_size
 
 __all__ = [
     "CAR_INFO",
@@ -211,8 +211,7 @@ class ACDecoder(Decoder):
         if n == LAP_SIZE:
             return DecodeResult("ignored", "ignored")
         if n != CAR_INFO_SIZE:
-            reason = "skipped: truncated" if n < CAR_INFO_SIZE else "skipped: wrong size"
-            return DecodeResult("skipped", reason)
+            return wrong_size(n, CAR_INFO_SIZE)
         ident, size, speed, a_lat, a_up, a_lon, rpm, gear = _MOTION.unpack_from(datagram)
         if ident != b"a" or size != CAR_INFO_SIZE:
             return DecodeResult("skipped", "skipped: foreign")

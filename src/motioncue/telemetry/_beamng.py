@@ -58,7 +58,7 @@ from dataclasses import dataclass
 from .._errors import ProtocolError
 from ._packed import flat_values, from_flat
 from ._registry import GameInfo, register_game
-from ._sample import G0_M_S2, Decoder, DecodeResult, Vec3, up_in_body_from_angles
+from ._sample import G0_M_S2, Decoder, DecodeResult, Vec3, up_in_body_from_angles, wrong_size
 
 __all__ = ["BNG1", "MAGIC", "BeamNGDecoder", "BeamNGMotion"]
 
@@ -114,9 +114,7 @@ class BeamNGDecoder(Decoder):
             return DecodeResult("skipped", "skipped: foreign")
         n = len(datagram)
         if n != BNG1.size:
-            return DecodeResult(
-                "skipped", "skipped: truncated" if n < BNG1.size else "skipped: wrong size"
-            )
+            return wrong_size(n, BNG1.size)
         v = BNG1.unpack(datagram)
         ax, ay, az = v[7:10]
         roll, pitch = v[13], v[14]

@@ -54,7 +54,7 @@ import math
 import struct
 
 from ._registry import GameInfo, register_game
-from ._sample import G0_M_S2, Decoder, DecodeResult
+from ._sample import G0_M_S2, Decoder, DecodeResult, wrong_size
 
 __all__ = ["EXTRADATA3", "MAX_GAP_S", "DirtDecoder", "pack_extradata"]
 
@@ -126,8 +126,7 @@ class DirtDecoder(Decoder):
     def _decode(self, datagram: bytes, t_s: float) -> DecodeResult:
         n = len(datagram)
         if n != EXTRADATA3.size:
-            reason = "skipped: truncated" if n < EXTRADATA3.size else "skipped: wrong size"
-            return DecodeResult("skipped", reason)
+            return wrong_size(n, EXTRADATA3.size)
         v = EXTRADATA3.unpack(datagram)
         # one finiteness test for the 16 fields used: a float64 sum of f32 values cannot
         # overflow, and a nan or inf anywhere makes it non-finite

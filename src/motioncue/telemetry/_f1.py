@@ -125,7 +125,7 @@ from dataclasses import dataclass
 from .._errors import ConfigError
 from ._packed import flat_values
 from ._registry import GameInfo, register_game
-from ._sample import G0_M_S2, Decoder, DecodeResult, Vec3
+from ._sample import G0_M_S2, Decoder, DecodeResult, Vec3, wrong_size
 
 __all__ = [
     "CAR_MOTION",
@@ -296,9 +296,7 @@ class F1Decoder(Decoder):
         self, data: bytes, n: int, uid: int, stime: float, player: int, t_s: float
     ) -> DecodeResult:
         if n != MOTION_SIZE:
-            return DecodeResult(
-                "skipped", "skipped: truncated" if n < MOTION_SIZE else "skipped: wrong size"
-            )
+            return wrong_size(n, MOTION_SIZE)
         if player >= NUM_CARS:
             return DecodeResult("skipped", "skipped: bad player index")
         (_px, _py, _pz, _vx, _vy, _vz, fx, fy, fz, rx, ry, rz, g_lat, g_lon, g_vert, yaw, pitch,
@@ -378,9 +376,7 @@ class F1Decoder(Decoder):
     def _motion_ex(self, data: bytes, n: int, fmt: int, uid: int, stime: float) -> DecodeResult:
         size = MOTION_EX_SIZES[fmt]
         if n != size:
-            return DecodeResult(
-                "skipped", "skipped: truncated" if n < size else "skipped: wrong size"
-            )
+            return wrong_size(n, size)
         wx, wy, wz = _VEC3.unpack_from(data, HEADER.size + 4 * _EX_ANGULAR_VELOCITY)
         w = (wz, wx, wy)
         for v in w:  # reject here so a bad Motion Ex never pairs with later Motion packets

@@ -54,7 +54,7 @@ from dataclasses import dataclass
 
 from ._packed import flat_values, from_flat
 from ._registry import GameInfo, register_game
-from ._sample import G0_M_S2, Decoder, DecodeResult, Vec3, up_in_body_from_angles
+from ._sample import G0_M_S2, Decoder, DecodeResult, Vec3, up_in_body_from_angles, wrong_size
 
 __all__ = ["FORZA_LAYOUTS", "SLED_HEAD", "SLED_SIZE", "ForzaDecoder", "ForzaMotion"]
 
@@ -120,9 +120,7 @@ class ForzaDecoder(Decoder):
         n = len(datagram)
         layout = FORZA_LAYOUTS.get(n)
         if layout is None:
-            return DecodeResult(
-                "skipped", "skipped: truncated" if n < SLED_SIZE else "skipped: wrong size"
-            )
+            return wrong_size(n, SLED_SIZE)
         (race_on, _ts, rpm_max, _idle, rpm, ax, ay, az, _vx, _vy, _vz, wx, wy, wz, _yaw, pitch,
          roll) = SLED_HEAD.unpack_from(datagram)  # fmt: skip
         if race_on not in (0, 1):

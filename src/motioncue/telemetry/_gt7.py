@@ -89,7 +89,7 @@ from dataclasses import dataclass, field
 from .._errors import ConfigError
 from ._gt7_cipher import Salsa20Xor, available
 from ._registry import GameInfo, register_game
-from ._sample import G0_M_S2, Decoder, DecodeResult
+from ._sample import G0_M_S2, Decoder, DecodeResult, wrong_size
 
 __all__ = [
     "HEARTBEAT_PORT",
@@ -275,8 +275,7 @@ class GT7Decoder(Decoder):
         n = len(datagram)
         layout = SIZES.get(n)
         if layout is None:
-            reason = "skipped: truncated" if n < 296 else "skipped: wrong size"
-            return DecodeResult("skipped", reason)
+            return wrong_size(n, 296)
         iv = _IV.unpack_from(datagram, 0x40)[0]
         plain = self._xor(datagram, _NONCE.pack(iv ^ layout[1], iv))
         (magic, vx, vy, vz, qx, qy, qz, qw, wx, wy, wz, rpm, pid, amax, flags) = _READ.unpack_from(

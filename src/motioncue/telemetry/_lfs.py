@@ -57,7 +57,7 @@ from dataclasses import dataclass
 from .._errors import ConfigError
 from ._packed import flat_values, from_flat
 from ._registry import GameInfo, register_game
-from ._sample import G0_M_S2, Decoder, DecodeResult, Vec3
+from ._sample import G0_M_S2, Decoder, DecodeResult, Vec3, wrong_size
 
 __all__ = [
     "MAIN",
@@ -198,8 +198,7 @@ class LFSDecoder(Decoder):
         elif n == self.size:
             return DecodeResult("skipped", "skipped: foreign")
         else:
-            reason = "skipped: truncated" if n < self.size else "skipped: wrong size"
-            return DecodeResult("skipped", reason)
+            return wrong_size(n, self.size)
         (wx, wy, wz, h, p, r, ax, ay, az, _vx, _vy, _vz, _px, _py, _pz) = MAIN.unpack_from(
             datagram, main
         )

@@ -64,7 +64,7 @@ import struct
 from dataclasses import dataclass
 
 from ._registry import GameInfo, register_game
-from ._sample import G0_M_S2, Decoder, DecodeResult, Vec3, up_in_body_from_angles
+from ._sample import G0_M_S2, Decoder, DecodeResult, Vec3, up_in_body_from_angles, wrong_size
 
 __all__ = [
     "GAME_STATE_SIZE",
@@ -177,8 +177,7 @@ class PCars2Decoder(Decoder):
             return DecodeResult("skipped", "skipped: foreign")
         if ptype == TYPE_GAME_STATE:
             if n != GAME_STATE_SIZE:
-                reason = "skipped: truncated" if n < GAME_STATE_SIZE else "skipped: wrong size"
-                return DecodeResult("skipped", reason)
+                return wrong_size(n, GAME_STATE_SIZE)
             self.paused = (datagram[14] & 0x07) != GAME_PLAYING
             return DecodeResult("state", "state")
         if ptype != TYPE_TELEMETRY:
@@ -186,8 +185,7 @@ class PCars2Decoder(Decoder):
                 return DecodeResult("ignored", "ignored")
             return DecodeResult("skipped", "skipped: wrong size")
         if n != TELEMETRY_SIZE:
-            reason = "skipped: truncated" if n < TELEMETRY_SIZE else "skipped: wrong size"
-            return DecodeResult("skipped", reason)
+            return wrong_size(n, TELEMETRY_SIZE)
         (pitch_x, _yaw, roll_z, _lvx, _lvy, _lvz, _wvx, _wvy, _wvz, wx, wy, wz, ax, ay, az) = (
             _KINEMATICS.unpack_from(datagram, 52)
         )

@@ -43,7 +43,7 @@ import struct
 from dataclasses import dataclass
 
 from ._registry import GameInfo, register_game
-from ._sample import G0_M_S2, Decoder, DecodeResult, Vec3, up_in_body_from_angles
+from ._sample import G0_M_S2, Decoder, DecodeResult, Vec3, up_in_body_from_angles, wrong_size
 
 __all__ = ["HEAD", "PACKET_SIZE", "RBRCar", "RBRDecoder"]
 
@@ -109,8 +109,7 @@ class RBRDecoder(Decoder):
     def _decode(self, datagram: bytes, t_s: float) -> DecodeResult:
         n = len(datagram)
         if n != PACKET_SIZE:
-            reason = "skipped: truncated" if n < PACKET_SIZE else "skipped: wrong size"
-            return DecodeResult("skipped", reason)
+            return wrong_size(n, PACKET_SIZE)
         v = HEAD.unpack_from(datagram)
         steps, gear, speed, roll, pitch = v[0], v[11], v[15], v[19], v[20]
         if not (math.isfinite(roll) and math.isfinite(pitch) and math.isfinite(speed)):

@@ -27,6 +27,7 @@ __all__ = [
     "TelemetrySample",
     "samples_to_arrays",
     "up_in_body_from_angles",
+    "wrong_size",
 ]
 
 G0_M_S2 = 9.80665
@@ -110,6 +111,13 @@ class DecodeResult:
     status: DecodeStatus
     reason: str
     sample: TelemetrySample | None = None
+
+
+def wrong_size(n: int, size: int) -> DecodeResult:
+    """The outcome of a datagram of ``n`` bytes where a format has ``size``: ``skipped:
+    truncated`` when it is shorter, ``skipped: wrong size`` when longer (every decoder's two
+    reasons for a length it does not know)."""
+    return DecodeResult("skipped", "skipped: truncated" if n < size else "skipped: wrong size")
 
 
 class Decoder(ABC):

@@ -50,7 +50,7 @@ from pathlib import Path
 
 from .._errors import ConfigError
 from ._registry import GameInfo, register_game
-from ._sample import G0_M_S2, Decoder, DecodeResult
+from ._sample import G0_M_S2, Decoder, DecodeResult, wrong_size
 
 __all__ = [
     "CHANNEL_TYPES",
@@ -184,8 +184,7 @@ class WRCDecoder(Decoder):
         size = self.layout.packer.size
         n = len(datagram)
         if n != size:
-            reason = "skipped: truncated" if n < size else "skipped: wrong size"
-            return DecodeResult("skipped", reason)
+            return wrong_size(n, size)
         v = self.layout.packer.unpack(datagram)
         ia, il, iff, iu = self._vec
         ax, ay, az = v[ia], v[ia + 1] + G0_M_S2, v[ia + 2]  # world up is +y
