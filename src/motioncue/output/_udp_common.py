@@ -34,6 +34,8 @@ from typing import Protocol
 from .._errors import ConfigError, ProtocolError
 
 __all__ = [
+    "AXES_OF_CHANNEL",
+    "CHANNEL_OF_AXES",
     "CONFIRM_MAIN",
     "CONFIRM_SERVO",
     "HEADER",
@@ -62,6 +64,9 @@ CONFIRM_SERVO = 0x33CC
 PASSCODE = 0x0000
 WHO_ALL = 0xFFFF
 WHO_NONE = 0x0000
+AXES_OF_CHANNEL = {0: 3, 1: 6}
+"""A frame's ObjectChannel in both manuals: 0 = 3 axes, 1 = 6 axes (IMAX also n = n)."""
+CHANNEL_OF_AXES = {n: channel for channel, n in AXES_OF_CHANNEL.items()}
 
 HEADER = struct.Struct(">6H")
 REG_HEAD = struct.Struct(">HH")

@@ -26,6 +26,8 @@ from typing import ClassVar
 
 from ..._errors import ProtocolError
 from .._udp_common import (
+    AXES_OF_CHANNEL,
+    CHANNEL_OF_AXES,
     CONFIRM_MAIN,
     HEADER,
     PASSCODE,
@@ -37,7 +39,12 @@ from .._udp_common import (
     pack_timed_frame,
     timed_frame_struct,
 )
-from .._udp_registers import RegisterReadShape, RegisterValuesShape, check_u16
+from .._udp_registers import (
+    RegisterReadShape,
+    RegisterValuesShape,
+    RegisterWriteShape,
+    check_u16,
+)
 
 __all__ = [  # what the package exports from here
     "CHANNEL_CX",
@@ -87,9 +94,7 @@ FUNCTION_NAMES = {
     F_REL + 3: "frame reply short-frame",
 }
 
-_AXES_OF_CHANNEL = {0: 3, 1: 6}
 _HEAD4 = struct.Struct(">4H")
-_CHANNEL_OF_AXES = {3: 0, 6: 1}
 
 
 @dataclass(frozen=True, slots=True)
@@ -112,14 +117,11 @@ class RegisterReadReply(RegisterValuesShape):
 
 
 @dataclass(frozen=True, slots=True)
-class RegisterWrite(RegisterValuesShape):
+class RegisterWrite(RegisterWriteShape):
     """Host -> MBOX 0x1201: write ``values`` to channel 0 FXm (not saved), 1 FX, 2 CX."""
 
     FUNCTION: ClassVar[int] = F_WRITE
     CHANNELS: ClassVar[Sequence[int]] = (CHANNEL_FXM, CHANNEL_FX, CHANNEL_CX)
-
-    who_accept: int = WHO_ALL
-    who_reply: int = WHO_ALL
 
 
 @dataclass(frozen=True, slots=True)
@@ -238,7 +240,7 @@ class MotionFrame:
     FUNCTIONS: ClassVar[tuple[int, int]] = (F_ABS, F_REL)
 
     def __post_init__(self) -> None:
-        if len(self.positions) not in _CHANNEL_OF_AXES:
+        if len(self.positions) not in CHANNEL_OF_AXES:
             raise ProtocolError(f"an MBOX frame has 3 or 6 positions, not {len(self.positions)}")
         try:
             self.encode()
@@ -261,7 +263,7 @@ class MotionFrame:
         n = len(self.positions)
         return pack_timed_frame(
             _frame_struct(n, not self.absolute),
-            (self.function, _CHANNEL_OF_AXES[n], self.who_accept, self.who_reply),
+            (self.function, CHANNEL_OF_AXES[n], self.who_accept, self.who_reply),
             self.line,
             self.time_ms,
             self.positions,
@@ -275,7 +277,7 @@ class MotionFrame:
 
     @classmethod
     def _from_wire(cls, data: bytes, function: int, channel: int) -> MotionFrame:
-        n = _AXES_OF_CHANNEL.get(channel)
+        n = AXES_OF_CHANNEL.get(channel)
         if n is None:
             raise ProtocolError(f"frame channel {channel}: allowed 0 (3 axes), 1 (6 axes)")
         relative = function == F_REL
