@@ -38,6 +38,8 @@ __all__ = [
     "CHANNEL_OF_AXES",
     "CONFIRM_MAIN",
     "CONFIRM_SERVO",
+    "F_ABS",
+    "F_REL",
     "HEADER",
     "PASSCODE",
     "REG_HEAD",
@@ -64,6 +66,8 @@ CONFIRM_SERVO = 0x33CC
 PASSCODE = 0x0000
 WHO_ALL = 0xFFFF
 WHO_NONE = 0x0000
+F_ABS, F_REL = 0x1301, 0x1401
+"""Timed frame, absolute / relative time: the same function codes in both manuals."""
 AXES_OF_CHANNEL = {0: 3, 1: 6}
 """A frame's ObjectChannel in both manuals: 0 = 3 axes, 1 = 6 axes (IMAX also n = n)."""
 CHANNEL_OF_AXES = {n: channel for channel, n in AXES_OF_CHANNEL.items()}

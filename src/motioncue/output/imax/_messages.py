@@ -54,6 +54,8 @@ from .._udp_common import (
     CHANNEL_OF_AXES,
     CONFIRM_MAIN,
     CONFIRM_SERVO,
+    F_ABS,
+    F_REL,
     PASSCODE,
     REG_HEAD,
     WHO_ALL,
@@ -96,7 +98,7 @@ __all__ = [  # what the package exports from here
     "frame_size",
 ]
 
-F_READ, F_WRITE, F_ABS, F_REL = 0x1101, 0x1201, 0x1301, 0x1401
+F_READ, F_WRITE = 0x1101, 0x1201
 F_VIB_ABS, F_VIB_REL = 0x1801, 0x1901
 F_SERVO_READ, F_SERVO_WRITE = 0x2101, 0x2201
 F_STATUS = 0x3101

@@ -29,6 +29,8 @@ from .._udp_common import (
     AXES_OF_CHANNEL,
     CHANNEL_OF_AXES,
     CONFIRM_MAIN,
+    F_ABS,
+    F_REL,
     HEADER,
     PASSCODE,
     WHO_ALL,
@@ -68,7 +70,6 @@ __all__ = [  # what the package exports from here
 F_STATUS = 0x1001
 F_READ, F_READ_OK, F_READ_ERR = 0x1101, 0x1102, 0x1103
 F_WRITE, F_WRITE_OK, F_WRITE_ERR = 0x1201, 0x1202, 0x1203
-F_ABS, F_REL = 0x1301, 0x1401
 
 # Object channels.
 CHANNEL_DX = 0  # read: status registers Dn
