@@ -12,7 +12,7 @@ from __future__ import annotations
 import dataclasses
 import struct
 from collections.abc import Callable, Mapping, Sequence
-from typing import ClassVar, Generic, Protocol, Self, TypeVar
+from typing import ClassVar, Generic, Protocol, Self, TypedDict, TypeVar
 
 from .._config import ConfigReader
 from .._errors import ConfigError, LimitError
@@ -90,6 +90,15 @@ def config_parameters(reader: ConfigReader) -> dict[str, object]:
     return values
 
 
+class ControllerFields(TypedDict):
+    """The fields every UDP controller description starts with (:class:`UdpController`)."""
+
+    name: str
+    n_axes: int
+    default_target: str
+    parameters: Mapping[str, int]
+
+
 @dataclasses.dataclass(frozen=True)
 class UdpController(Generic[EncoderT]):
     """Base of the frozen controller dataclasses: the fields both kinds start with,
@@ -130,6 +139,17 @@ class UdpController(Generic[EncoderT]):
         range (:func:`validate_parameters`)."""
         spec = cls.PARAMS.spec
         return validate_parameters(values, where, spec, cls.canonical_name, cls.UNKNOWN_PARAM)
+
+    @classmethod
+    def config_fields(
+        cls, reader: ConfigReader, name: str, axes: int, target: str, values: Mapping[str, object]
+    ) -> ControllerFields:
+        """The shared fields of a controller TOML: ``values``, its raw ``[parameters]``
+        table, validated (errors name the table)."""
+        parameters = cls.validate_parameters(values, f"{reader.where} [parameters]")
+        return ControllerFields(
+            name=name, n_axes=axes, default_target=target, parameters=parameters
+        )
 
     @classmethod
     def canonical_name(cls, text: str) -> str:

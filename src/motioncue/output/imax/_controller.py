@@ -325,10 +325,7 @@ def controller_from_config(reader: ConfigReader, name: str) -> ImaxController:
     values = config_parameters(reader)
     values.setdefault("PA02", axes)
     return ImaxController(
-        name=name,
-        n_axes=axes,
-        default_target=target,
-        parameters=ImaxController.validate_parameters(values, f"{reader.where} [parameters]"),
+        **ImaxController.config_fields(reader, name, axes, target, values),
         stroke_mm=stroke,
         buffer_frames=buffer_frames,
         counts_per_rev=counts or None,

@@ -260,10 +260,7 @@ def controller_from_config(reader: ConfigReader, name: str) -> MboxController:
     values = config_parameters(reader)
     buffer_frames = reader.integer("buffer_frames", 256, lo=1, hi=65535)
     return MboxController(
-        name=name,
-        n_axes=axes,
-        default_target=target,
-        parameters=MboxController.validate_parameters(values, f"{reader.where} [parameters]"),
+        **MboxController.config_fields(reader, name, axes, target, values),
         max_motor_speed_rpm=rpm,
         buffer_frames=buffer_frames,
     )
