@@ -24,16 +24,22 @@ import math
 import numbers
 import re
 import struct
+import tomllib
 from collections.abc import Callable, Iterable, Mapping, Sequence
 from dataclasses import dataclass
 from functools import cache
+from importlib import resources
 from typing import Protocol
 
 from .._errors import ConfigError, ProtocolError
 
 __all__ = [
+    "AXES_OF_CHANNEL",
+    "CHANNEL_OF_AXES",
     "CONFIRM_MAIN",
     "CONFIRM_SERVO",
+    "F_ABS",
+    "F_REL",
     "HEADER",
     "PASSCODE",
     "REG_HEAD",
@@ -42,6 +48,7 @@ __all__ = [
     "FrameClock",
     "Header",
     "HexNames",
+    "ParameterTable",
     "WireMessage",
     "check_int32",
     "check_length",
@@ -59,6 +66,11 @@ CONFIRM_SERVO = 0x33CC
 PASSCODE = 0x0000
 WHO_ALL = 0xFFFF
 WHO_NONE = 0x0000
+F_ABS, F_REL = 0x1301, 0x1401
+"""Timed frame, absolute / relative time: the same function codes in both manuals."""
+AXES_OF_CHANNEL = {0: 3, 1: 6}
+"""A frame's ObjectChannel in both manuals: 0 = 3 axes, 1 = 6 axes (IMAX also n = n)."""
+CHANNEL_OF_AXES = {n: channel for channel, n in AXES_OF_CHANNEL.items()}
 
 HEADER = struct.Struct(">6H")
 REG_HEAD = struct.Struct(">HH")
@@ -315,3 +327,57 @@ class HexNames:
         if not m:
             raise ConfigError(f"{text!r} is not {self.what}")
         return int(m.group(1), 16)
+
+
+ParamSpec = tuple[int, int, int, str]
+"""A parameter's ``(lo, hi, default, meaning)``."""
+
+
+@dataclass(frozen=True)
+class ParameterTable:
+    """A controller's parameter table, declared as data: one TOML file in the kind's
+    package, its names' spelling in ``[names]`` and, in ``[parameters]``, a line
+    ``NAME = [lo, hi, default, "meaning"]`` per parameter in address order.
+
+    Attributes
+    ----------
+    names : HexNames
+        The parameters' names (every name in the file is canonical).
+    spec : dict[str, tuple[int, int, int, str]]
+        ``name: (lo, hi, default, meaning)`` in the file's order.
+    by_address : dict[int, str]
+        Register address -> name.
+    """
+
+    names: HexNames
+    spec: dict[str, ParamSpec]
+    by_address: dict[int, str]
+
+    @classmethod
+    def load(cls, package: str, resource: str = "params.toml") -> ParameterTable:
+        """Read ``resource`` of ``package``: a table ``[names]`` (``pattern`` of the accepted
+        spellings, case-insensitive, its first group the hexadecimal digits; ``canonical``,
+        the format of a name; ``what``, the form an error message names) and a table
+        ``[parameters]``. :class:`ConfigError` naming a malformed row."""
+        text = resources.files(package).joinpath(resource).read_text(encoding="utf-8")
+        data = tomllib.loads(text)
+        form = data["names"]
+        names = HexNames(
+            re.compile(form["pattern"], re.IGNORECASE), form["canonical"], form["what"]
+        )
+        spec: dict[str, ParamSpec] = {}
+        for name, row in data["parameters"].items():
+            ints = row[:3] if isinstance(row, list) and len(row) == 4 else ()
+            if (
+                len(ints) != 3
+                or not all(type(v) is int for v in ints)
+                or not isinstance(row[3], str)
+                or not ints[0] <= ints[2] <= ints[1]
+                or names.name(name) != name
+            ):
+                raise ConfigError(
+                    f"{package}/{resource}: {name} = {row!r}: expected a canonical name = "
+                    "[lo, hi, default, meaning] with lo <= default <= hi"
+                )
+            spec[name] = (row[0], row[1], row[2], row[3])
+        return cls(names, spec, {names.address(name): name for name in spec})

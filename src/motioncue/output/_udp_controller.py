@@ -12,13 +12,23 @@ from __future__ import annotations
 import dataclasses
 import struct
 from collections.abc import Callable, Mapping, Sequence
-from typing import ClassVar, Generic, Protocol, Self, TypeVar
+from typing import ClassVar, Generic, Protocol, Self, TypedDict, TypeVar
 
 from .._config import ConfigReader
 from .._errors import ConfigError, LimitError
 from ._controller_api import check_whole_ms_rate
 from ._transport import Transport, parse_target
-from ._udp_common import CONFIRM_MAIN, PASSCODE, WHO_ALL, FrameClock, check_int32
+from ._udp_common import (
+    CHANNEL_OF_AXES,
+    CONFIRM_MAIN,
+    F_ABS,
+    F_REL,
+    PASSCODE,
+    WHO_ALL,
+    FrameClock,
+    ParameterTable,
+    check_int32,
+)
 
 __all__ = [
     "UdpController",
@@ -80,21 +90,71 @@ def config_parameters(reader: ConfigReader) -> dict[str, object]:
     return values
 
 
-class UdpController(Generic[EncoderT]):
-    """Mixin of the frozen controller dataclasses: addresses, node, parameter changes and
-    the frame-encoder factory.
+class ControllerFields(TypedDict):
+    """The fields every UDP controller description starts with (:class:`UdpController`)."""
 
-    A subclass names, as class data, the parameters holding the controller's IP bytes
-    and port (``CONTROLLER_PARAMS``) and the host's (``HOST_PARAMS``), the parameter-name
-    normaliser (``canonical_name``), and builds its encoder in :meth:`_encoder`.
+    name: str
+    n_axes: int
+    default_target: str
+    parameters: Mapping[str, int]
+
+
+@dataclasses.dataclass(frozen=True)
+class UdpController(Generic[EncoderT]):
+    """Base of the frozen controller dataclasses: the fields both kinds start with,
+    addresses, node, parameters and the frame-encoder factory.
+
+    A subclass names, as class data, its parameter table (``PARAMS``) and how an unknown
+    parameter is refused (``UNKNOWN_PARAM``), the parameters holding the controller's IP
+    bytes and port (``CONTROLLER_PARAMS``) and the host's (``HOST_PARAMS``), and builds its
+    encoder in :meth:`_encoder`.
+
+    Attributes
+    ----------
+    name : str
+        Config name (``imax6``, ``mbox6``).
+    n_axes : int
+        Axes the controller drives.
+    default_target : str
+        Where :mod:`motioncue` sends when the user names no target (loopback).
+    parameters : Mapping[str, int]
+        Every parameter by manual name: the table's defaults overridden by the config.
     """
 
+    PARAMS: ClassVar[ParameterTable]
+    UNKNOWN_PARAM: ClassVar[str]
     CONTROLLER_PARAMS: ClassVar[tuple[str, str, str, str, str]]
     HOST_PARAMS: ClassVar[tuple[str, str, str, str, str]]
     LABEL: ClassVar[str] = "controller"
     RATE_CAP_SOURCE: ClassVar[str] = "1 ms time stamps"
-    parameters: Mapping[str, int]
+
     name: str
+    n_axes: int
+    default_target: str
+    parameters: Mapping[str, int]
+
+    @classmethod
+    def validate_parameters(cls, values: Mapping[str, object], where: str) -> dict[str, int]:
+        """The table's defaults overridden by ``values``; names canonical, values within
+        range (:func:`validate_parameters`)."""
+        spec = cls.PARAMS.spec
+        return validate_parameters(values, where, spec, cls.canonical_name, cls.UNKNOWN_PARAM)
+
+    @classmethod
+    def config_fields(
+        cls, reader: ConfigReader, name: str, axes: int, target: str, values: Mapping[str, object]
+    ) -> ControllerFields:
+        """The shared fields of a controller TOML: ``values``, its raw ``[parameters]``
+        table, validated (errors name the table)."""
+        parameters = cls.validate_parameters(values, f"{reader.where} [parameters]")
+        return ControllerFields(
+            name=name, n_axes=axes, default_target=target, parameters=parameters
+        )
+
+    @classmethod
+    def canonical_name(cls, text: str) -> str:
+        """The canonical spelling of a parameter name (:class:`ConfigError` if none)."""
+        return cls.PARAMS.names.name(text)
 
     @property
     def max_frame_rate_hz(self) -> float | None:  # pragma: no cover - overridden
@@ -133,10 +193,6 @@ class UdpController(Generic[EncoderT]):
         self.check_rate(rate_hz)
         return self.frame_encoder(absolute_time=True)
 
-    @staticmethod
-    def canonical_name(text: str) -> str:  # pragma: no cover - overridden
-        raise NotImplementedError
-
     def _address(self, names: tuple[str, str, str, str, str]) -> tuple[str, int]:
         p = self.parameters
         return (".".join(str(p[n]) for n in names[:4]), p[names[4]])
@@ -161,7 +217,7 @@ class UdpController(Generic[EncoderT]):
         """A copy with some parameters changed (``ctrl.with_parameters(PA59=2)``)."""
         merged = dict(self.parameters)
         merged.update({self.canonical_name(k): v for k, v in changes.items()})
-        return dataclasses.replace(self, parameters=merged)  # type: ignore[type-var]
+        return dataclasses.replace(self, parameters=merged)
 
     def _encoder(self, clock: FrameClock, who_accept: int, who_reply: int) -> EncoderT:
         raise NotImplementedError  # pragma: no cover - overridden
@@ -192,9 +248,10 @@ class _Framed(Protocol):
 class UdpFrameEncoder:
     """State both frame encoders keep: the clock, the fixed header fields and the stroke.
 
-    ``layout`` is the kind's frame layout, ``functions`` its (absolute, relative) function
-    codes, ``channel`` the header channel for this axis count. ``STROKE_SOURCE`` names the
-    settings a stroke violation comes from.
+    The header carries 0x1301 / 0x1401 by the clock's time mode and the channel of the
+    controller's axis count (0 = 3 axes, 1 = 6 axes, else n); the kind gives its frame
+    layout (:meth:`_layout`) and any state of its own (:meth:`_init_kind`).
+    ``STROKE_SOURCE`` names the settings a stroke violation comes from.
     """
 
     __slots__ = (
@@ -211,31 +268,32 @@ class UdpFrameEncoder:
     STROKE_SOURCE: ClassVar[str] = "stroke"
 
     def __init__(
-        self,
-        controller: _Framed,
-        clock: FrameClock,
-        who_accept: int,
-        who_reply: int,
-        *,
-        layout: struct.Struct,
-        functions: tuple[int, int],
-        channel: int,
+        self, controller: _Framed, clock: FrameClock, who_accept: int, who_reply: int
     ) -> None:
         self.controller = controller
         self.clock = clock
-        self.n_axes: int = controller.n_axes
+        n = self.n_axes = controller.n_axes
         self.who_accept = who_accept
         self.who_reply = who_reply
-        self._pack = layout.pack
+        self._pack = self._layout(not clock.absolute_time).pack
+        function = F_ABS if clock.absolute_time else F_REL
         self._head = (
             CONFIRM_MAIN,
             PASSCODE,
-            functions[0] if clock.absolute_time else functions[1],
-            channel,
+            function,
+            CHANNEL_OF_AXES.get(n, n),
             who_accept,
             who_reply,
         )
         self._stroke: tuple[int, int] | None = controller.stroke_pulses
+        self._init_kind()
+
+    def _layout(self, relative: bool) -> struct.Struct:  # pragma: no cover - abstract
+        """The kind's frame layout for this controller and time mode."""
+        raise NotImplementedError
+
+    def _init_kind(self) -> None:
+        """The kind's own state (none by default)."""
 
     def _pack_frame(
         self, frame: int, field: int, pulses: Sequence[int], *tail: int

@@ -34,6 +34,7 @@ __all__ = [
     "RegisterReadShape",
     "RegisterValuesShape",
     "RegisterWire",
+    "RegisterWriteShape",
     "check_u16",
     "pack_registers",
     "register_struct",
@@ -230,3 +231,12 @@ class RegisterValuesShape(_FixedFunction):
     def decode_parts(cls, h: Header, data: bytes) -> Self:
         start, values = unpack_values(data, cls.__name__)
         return cls(h.channel, start, values, h.who_accept, h.who_reply)
+
+
+@dataclass(frozen=True, slots=True)
+class RegisterWriteShape(RegisterValuesShape):
+    """The write request (IMAX 0x1201 / 0x2201, MBOX 0x1201): the values layout, sent to
+    every node and asking every node to reply (Who fields ``WHO_ALL``) unless told."""
+
+    who_accept: int = WHO_ALL
+    who_reply: int = WHO_ALL

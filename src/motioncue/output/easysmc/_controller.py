@@ -14,8 +14,10 @@ so that every frame the limiter produces is accepted and ends on time.
 from __future__ import annotations
 
 import math
+import tomllib
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
+from importlib import resources
 from types import MappingProxyType
 from typing import TYPE_CHECKING
 
@@ -65,45 +67,18 @@ class _Param:
     hi: int
 
 
-_F = (1, 2_000_000)  # pulse rates: manual ch. 2, "up to 2 MHz"
-_ACC = (1, 0x0FFFFFFF)
-_LIM = (-MAX_MAGNITUDE, MAX_MAGNITUDE)
-
-PARAMETERS: Mapping[str, _Param] = MappingProxyType(
-    {
-        "02_x_linear_start_hz": _Param(
-            "02 DAT2", "X linear-interpolation start frequency", 2000, *_F
-        ),
-        "09_y_linear_start_hz": _Param(
-            "09 DAT2", "Y linear-interpolation start frequency", 2000, *_F
-        ),
-        "14_z_linear_start_hz": _Param(
-            "14 DAT2", "Z linear-interpolation start frequency", 2000, *_F
-        ),
-        "A3_acc_a_hz_s": _Param("A3 DAT1", "XYZ linear interpolation acceleration A", 20000, *_ACC),
-        "A3_feed_hz": _Param(
-            "A3 DAT2", "XYZ linear interpolation feed (the cap for frames)", 20000, *_F
-        ),
-        "A3_acc_b_hz_s": _Param("A3 DAT3", "XYZ linear interpolation deceleration B", 20000, *_ACC),
-        "A6_acc_a_hz_s": _Param(
-            "A6 DAT1", "XYZU linear interpolation acceleration A", 20000, *_ACC
-        ),
-        "A6_feed_hz": _Param(
-            "A6 DAT2", "XYZU linear interpolation feed (the cap for frames)", 20000, *_F
-        ),
-        "A6_acc_b_hz_s": _Param(
-            "A6 DAT3", "XYZU linear interpolation deceleration B", 20000, *_ACC
-        ),
-        "21_XZMAX": _Param("21", "X positive soft limit (pulses)", MAX_MAGNITUDE, *_LIM),
-        "27_XFMAX": _Param("27", "X negative soft limit (pulses)", -MAX_MAGNITUDE, *_LIM),
-        "22_YZMAX": _Param("22", "Y positive soft limit (pulses)", MAX_MAGNITUDE, *_LIM),
-        "28_YFMAX": _Param("28", "Y negative soft limit (pulses)", -MAX_MAGNITUDE, *_LIM),
-        "23_ZZMAX": _Param("23", "Z positive soft limit (pulses)", MAX_MAGNITUDE, *_LIM),
-        "29_ZFMAX": _Param("29", "Z negative soft limit (pulses)", -MAX_MAGNITUDE, *_LIM),
-        "AF_UZMAX": _Param("AF DAT1", "U positive soft limit (pulses)", MAX_MAGNITUDE, *_LIM),
-        "AF_UFMAX": _Param("AF DAT2", "U negative soft limit (pulses)", -MAX_MAGNITUDE, *_LIM),
+def _parameters() -> dict[str, _Param]:
+    """The table declared as data in ``params.toml`` beside this module."""
+    text = resources.files(__package__).joinpath("params.toml").read_text(encoding="utf-8")
+    data = tomllib.loads(text)
+    ranges: dict[str, list[int]] = data["ranges"]
+    return {
+        name: _Param(row["code"], row["meaning"], row["default"], *ranges[row["range"]])
+        for name, row in data["parameters"].items()
     }
-)
+
+
+PARAMETERS: Mapping[str, _Param] = MappingProxyType(_parameters())
 """Parameters a config may set, named after the manual's command codes, with the factory
 defaults of the manual's appendix and the allowed range."""
 

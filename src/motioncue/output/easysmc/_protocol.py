@@ -23,8 +23,11 @@ from __future__ import annotations
 
 import enum
 import struct
+import tomllib
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
+from importlib import resources
+from typing import Any
 
 from ..._errors import ProtocolError
 
@@ -137,132 +140,21 @@ class CommandSpec:
         return len(self.words)
 
 
-_U, _S, _C, _A = WordKind.UNSIGNED, WordKind.SIGNED, WordKind.CODE, WordKind.ANGLE
-_SPEED = (("acc_a_hz_s", _U), ("feed_hz", _U), ("acc_b_hz_s", _U))
-_STARTF = (("single_start_hz", _U), ("linear_start_hz", _U), ("arc_start_hz", _U))
-
-
 def _table() -> dict[int, CommandSpec]:
-    rows: list[CommandSpec] = []
+    """The command table, declared as data in ``commands.toml`` beside this module."""
+    text = resources.files(__package__).joinpath("commands.toml").read_text(encoding="utf-8")
+    data = tomllib.loads(text)
+    layouts: dict[str, list[str]] = data["words"]
 
-    def add(
-        code: int, name: str, words: Sequence[tuple[str, WordKind]], sec: str, kind: str = "write"
-    ) -> None:
-        rows.append(CommandSpec(code, name, tuple(words), kind, sec))
+    def words(row: dict[str, Any]) -> tuple[tuple[str, WordKind], ...]:
+        named = row["words"]
+        listed = layouts[named] if isinstance(named, str) else named
+        return tuple((name, WordKind(kind)) for name, kind in map(str.split, listed))
 
-    add(0x01, "x_home_speed", [("home_hz", _U)], "5.1.1.1")
-    add(0x02, "x_start_freq", _STARTF, "5.1.1.2")
-    add(0x03, "x_speed", _SPEED, "5.1.1.3")
-    add(0x04, "xy_linear_speed", _SPEED, "5.1.1.4")
-    add(0x05, "xz_linear_speed", _SPEED, "5.1.1.5")
-    add(0x06, "xy_arc_speed", _SPEED, "5.1.1.6")
-    add(0x07, "xz_arc_speed", _SPEED, "5.1.1.7")
-    add(0xA1, "xu_linear_speed", _SPEED, "5.1.1.8")
-    add(0xA2, "xu_arc_speed", _SPEED, "5.1.1.9")
-    add(0xA3, "xyz_linear_speed", _SPEED, "5.1.1.10")
-    add(0xA4, "xyu_linear_speed", _SPEED, "5.1.1.11")
-    add(0xA5, "xzu_linear_speed", _SPEED, "5.1.1.12")
-    add(0xA6, "xyzu_linear_speed", _SPEED, "5.1.1.13")
-    add(0x08, "y_home_speed", [("home_hz", _U)], "5.1.2.1")
-    add(0x09, "y_start_freq", _STARTF, "5.1.2.2")
-    add(0x10, "y_speed", _SPEED, "5.1.2.3")
-    add(0x11, "yz_linear_speed", _SPEED, "5.1.2.4")
-    add(0x12, "yz_arc_speed", _SPEED, "5.1.2.5")
-    add(0xA7, "yu_linear_speed", _SPEED, "5.1.2.6")
-    add(0xA8, "yu_arc_speed", _SPEED, "5.1.2.7")
-    add(0xA9, "yzu_linear_speed", _SPEED, "5.1.2.8")
-    add(0x13, "z_home_speed", [("home_hz", _U)], "5.1.3.1")
-    add(0x14, "z_start_freq", _STARTF, "5.1.3.2")
-    add(0x15, "z_speed", _SPEED, "5.1.3.3")
-    add(0xAA, "zu_linear_speed", _SPEED, "5.1.3.4")
-    add(0xAB, "zu_arc_speed", _SPEED, "5.1.3.5")
-    add(0xAC, "u_home_start", [("home_hz", _U), ("single_start_hz", _U), ("equiv", _U)], "5.1.4.1")
-    add(0xAD, "u_speed", _SPEED, "5.1.4.2")
-    add(0x16, "manual_param", [("selector_value", _C)], "5.1.5")
-    add(
-        0xAE,
-        "u_manual_param",
-        [("level_hz", _U), ("jog_pulses", _U), ("home_backoff_pulses", _U)],
-        "5.1.5.10",
+    rows = (
+        CommandSpec(row["code"], name, words(row), row.get("kind", "write"), row["section"])
+        for name, row in data["commands"].items()
     )
-    add(0x17, "defaults", [("action", _C)], "5.1.6")
-    add(0x18, "brake", [("brake_code", _C)], "5.1.7")
-    add(0x19, "control", [("control", _C)], "5.1.8")
-    for code, name in (
-        (0x21, "x_soft_limit_pos"),
-        (0x22, "y_soft_limit_pos"),
-        (0x23, "z_soft_limit_pos"),
-        (0x24, "x_set_position"),
-        (0x25, "y_set_position"),
-        (0x26, "z_set_position"),
-        (0x27, "x_soft_limit_neg"),
-        (0x28, "y_soft_limit_neg"),
-        (0x29, "z_soft_limit_neg"),
-    ):
-        add(code, name, [("pulses", _S)], f"5.2.{code - 0x20}")
-    for code, axis in ((0x2A, "x"), (0x2B, "y"), (0x2C, "z"), (0x2D, "u")):
-        add(code, f"{axis}_clear_encoder", [("zero", _C)], f"5.2.{code - 0x20}")
-    add(
-        0xAF,
-        "u_soft_limits_position",
-        [("soft_limit_pos", _S), ("soft_limit_neg", _S), ("position", _S)],
-        "5.2.14",
-    )
-    add(
-        0xFC,
-        "small_segment_1",
-        [("start_hz", _U), ("corner_acc_hz_s", _U), ("chord_error", _U)],
-        "5.2.15",
-    )
-    add(0xFD, "small_segment_2", [("acc_hz_s", _U), ("feed_hz", _U), ("dec_hz_s", _U)], "5.2.16")
-    add(0xFE, "xyz_work_mode", [("x_mode", _U), ("y_mode", _U), ("z_mode", _U)], "5.2.17")
-    add(0xFF, "uvw_work_mode", [("u_mode", _U), ("v_mode", _U), ("w_mode", _U)], "5.2.18")
-    for code, axis in ((0x31, "x"), (0x32, "y"), (0x33, "z")):
-        add(code, f"query_{axis}_status", [("item", _C)], f"5.3.{code - 0x30}", "query")
-    for code, axis in ((0x34, "x"), (0x35, "y"), (0x36, "z")):
-        add(code, f"query_{axis}_params", [("item", _C)], f"5.3.{code - 0x30}", "query")
-    add(0x37, "query_manual", [("item", _C)], "5.3.7", "query")
-    add(0x38, "query_execution", [("item", _C)], "5.3.8", "query")
-    for code, axis in ((0x41, "x"), (0x42, "y"), (0x43, "z"), (0x47, "u")):
-        add(code, f"{axis}_home", [("mode", _C)], "5.4")
-    for code, axis in ((0x44, "x"), (0x45, "y"), (0x46, "z"), (0x4A, "u")):
-        add(code, f"{axis}_move", [(f"{axis}_pulses", _S)], "5.4")
-    for code, axes in (
-        (0x51, "xy"),
-        (0x52, "xz"),
-        (0x53, "yz"),
-        (0x54, "xu"),
-        (0x55, "yu"),
-        (0x56, "zu"),
-        (0x57, "xyz"),
-        (0x58, "xyu"),
-        (0x59, "xzu"),
-        (0x5A, "yzu"),
-    ):
-        add(code, f"{axes}_linear", [(f"{a}_pulses", _S) for a in axes], f"5.5.{code - 0x50:X}")
-    add(0x5B, "xyzu_linear_1", [("x_pulses", _S), ("y_pulses", _S)], "5.5.B")
-    add(0x5C, "xyzu_linear_2", [("z_pulses", _S), ("u_pulses", _S)], "5.5.C")
-    for code, axes in ((0x61, "xy"), (0x62, "xz"), (0x63, "yz")):
-        add(
-            code,
-            f"{axes}_arc",
-            [
-                (f"{axes[0]}_center_pulses", _S),
-                (f"{axes[1]}_center_pulses", _S),
-                ("angle_cdeg", _A),
-            ],
-            f"5.6.{code - 0x60}",
-        )
-    add(0x70, "spline_params", [("start_hz", _U), ("acc_hz_s", _U), ("max_hz", _U)], "5.7")
-    for code in (0x75, 0x76):
-        add(
-            code,
-            f"spline_knot_{code - 0x74}",
-            [("knot", _U), ("x_pulses", _S), ("y_pulses", _S)],
-            "5.7",
-        )
-    add(0x77, "spline_corner", [("corner_acc_hz_s", _U), ("x_pulses", _S), ("y_pulses", _S)], "5.7")
-    add(0x78, "spline_chord", [("chord_error", _U), ("x_pulses", _S), ("y_pulses", _S)], "5.7")
     return {r.code: r for r in rows}
 
 

@@ -3,7 +3,8 @@
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping, Sequence
+import struct
+from collections.abc import Sequence
 from dataclasses import dataclass
 from numbers import Integral
 from types import MappingProxyType
@@ -21,29 +22,20 @@ from .._udp_controller import (
     config_parameters,
     config_target,
 )
-from .._udp_controller import validate_parameters as _validate
 from ._messages import (
-    F_ABS,
-    F_REL,
     F_VIB_ABS,
     F_VIB_REL,
     PORT_OUT_BYTES,
     _frame_struct,
     _vib_struct,
-    channel_of_axes,
 )
-from ._params import DP_POS, DP_RECEIVE, DP_USE, PA_SPEC, pa_name
+from ._params import DP_POS, DP_RECEIVE, DP_USE, PA
 
 __all__ = ["IMAX_RAMP_PERIOD_S", "ImaxController", "ImaxFrameEncoder", "controller_from_config"]
 
 IMAX_RAMP_PERIOD_S = 1e-3
 """Control period of the IMAX speed ramp (5.10: the speed rises in PAax steps of PAbx rpm);
 the manual does not state it: 1 ms is an assumption, named in the limits' sources."""
-
-
-def validate_parameters(values: Mapping[str, object], where: str) -> dict[str, int]:
-    """Defaults overridden by ``values``; names canonical, values within range."""
-    return _validate(values, where, PA_SPEC, pa_name, "is not an IMAX parameter this package knows")
 
 
 @dataclass(frozen=True)
@@ -78,20 +70,11 @@ class ImaxController(UdpController["ImaxFrameEncoder"]):
     """
 
     kind: ClassVar[str] = "imax"
-    CONTROLLER_PARAMS: ClassVar[tuple[str, str, str, str, str]] = (
-        "PA10",
-        "PA11",
-        "PA12",
-        "PA13",
-        "PA14",
-    )
-    HOST_PARAMS: ClassVar[tuple[str, str, str, str, str]] = ("PA20", "PA21", "PA22", "PA23", "PA24")
-    canonical_name = staticmethod(pa_name)
+    PARAMS = PA
+    UNKNOWN_PARAM = "is not an IMAX parameter this package knows"
+    CONTROLLER_PARAMS = ("PA10", "PA11", "PA12", "PA13", "PA14")
+    HOST_PARAMS = ("PA20", "PA21", "PA22", "PA23", "PA24")
 
-    name: str
-    n_axes: int
-    default_target: str
-    parameters: Mapping[str, int]
     stroke_mm: float = 0.0
     buffer_frames: int = 256
     counts_per_rev: int | None = None
@@ -103,7 +86,7 @@ class ImaxController(UdpController["ImaxFrameEncoder"]):
         if not 2 <= self.n_axes <= 12:
             raise ConfigError(f"IMAX {self.name}: axes = {self.n_axes}; allowed: 2..12")
         parse_target(self.default_target)
-        params = validate_parameters(self.parameters, f"IMAX {self.name}")
+        params = self.validate_parameters(self.parameters, f"IMAX {self.name}")
         if params["PA02"] != self.n_axes:
             raise ConfigError(
                 f"IMAX {self.name}: PA02 = {params['PA02']} but axes = "
@@ -280,26 +263,12 @@ class ImaxFrameEncoder(UdpFrameEncoder):
     ``port_out_bytes``. The IMAX has no DACs: ``dacs`` must be ``(0, 0)``.
     """
 
-    __slots__ = ("_vib_layout",)
+    __slots__ = ()
     STROKE_SOURCE: ClassVar[str] = "stroke_mm, PA40 lift"
+    controller: ImaxController
 
-    def __init__(
-        self, controller: ImaxController, clock: FrameClock, who_accept: int, who_reply: int
-    ) -> None:
-        super().__init__(
-            controller,
-            clock,
-            who_accept,
-            who_reply,
-            layout=_frame_struct(
-                controller.n_axes, not clock.absolute_time, controller.port_out_bytes
-            ),
-            functions=(F_ABS, F_REL),
-            channel=channel_of_axes(controller.n_axes),
-        )
-        self._vib_layout = _vib_struct(
-            controller.n_axes, not clock.absolute_time, controller.port_out_bytes
-        )
+    def _layout(self, relative: bool) -> struct.Struct:
+        return _frame_struct(self.n_axes, relative, self.controller.port_out_bytes)
 
     def encode(
         self,
@@ -335,7 +304,9 @@ class ImaxFrameEncoder(UdpFrameEncoder):
                 F_VIB_ABS if self.clock.absolute_time else F_VIB_REL,
                 *self._head[3:],
             )
-            data = self._vib_layout.pack(*head, frame, field, *pulses, dout, *flat)
+            relative = not self.clock.absolute_time
+            layout = _vib_struct(self.n_axes, relative, self.controller.port_out_bytes)
+            data = layout.pack(*head, frame, field, *pulses, dout, *flat)
         self._check_stroke(pulses)
         self.clock.commit(t_s, abs_ms)
         return [data]
@@ -354,10 +325,7 @@ def controller_from_config(reader: ConfigReader, name: str) -> ImaxController:
     values = config_parameters(reader)
     values.setdefault("PA02", axes)
     return ImaxController(
-        name=name,
-        n_axes=axes,
-        default_target=target,
-        parameters=validate_parameters(values, f"{reader.where} [parameters]"),
+        **ImaxController.config_fields(reader, name, axes, target, values),
         stroke_mm=stroke,
         buffer_frames=buffer_frames,
         counts_per_rev=counts or None,

@@ -69,12 +69,12 @@ from ._messages import (
     channel_of_axes,
     decode,
 )
-from ._params import DP_POS, PA_SPEC
+from ._params import DP_POS, PA, PA_SPEC
 
 __all__ = ["ImaxEmulator"]
 
 ERR_BUFFER = 21  # Err21: UDP data buffer overflow (chapter 6)
-_PA_BY_ADDRESS = {int(name[2:], 16): name for name in PA_SPEC}
+_PA_BY_ADDRESS = PA.by_address
 _DP_POS = DP_POS  # low word, high word follows (2.3.3)
 # parameters the limits come from: PA07 speed, PA40 lift, PA41 lead, PA54 encoder lines,
 # PA8x speed, PAax / PAbx ramp (ImaxController.pulse_limits)

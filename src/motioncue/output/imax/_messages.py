@@ -50,8 +50,12 @@ from typing import TYPE_CHECKING, ClassVar, Self, cast
 
 from ..._errors import ProtocolError
 from .._udp_common import (
+    AXES_OF_CHANNEL,
+    CHANNEL_OF_AXES,
     CONFIRM_MAIN,
     CONFIRM_SERVO,
+    F_ABS,
+    F_REL,
     PASSCODE,
     REG_HEAD,
     WHO_ALL,
@@ -65,8 +69,8 @@ from .._udp_common import (
 )
 from .._udp_registers import (
     RegisterReadShape,
-    RegisterValuesShape,
     RegisterWire,
+    RegisterWriteShape,
     check_u16,
     unpack_values,
 )
@@ -94,7 +98,7 @@ __all__ = [  # what the package exports from here
     "frame_size",
 ]
 
-F_READ, F_WRITE, F_ABS, F_REL = 0x1101, 0x1201, 0x1301, 0x1401
+F_READ, F_WRITE = 0x1101, 0x1201
 F_VIB_ABS, F_VIB_REL = 0x1801, 0x1901
 F_SERVO_READ, F_SERVO_WRITE = 0x2101, 0x2201
 F_STATUS = 0x3101
@@ -133,22 +137,15 @@ FUNCTION_NAMES = {
 
 def axes_of_channel(channel: int) -> int:
     """Axis count of a frame channel: 0 -> 3, 1 -> 6, n -> n (2..12)."""
-    if channel == 0:
-        return 3
-    if channel == 1:
-        return 6
-    if 2 <= channel <= MAX_AXES:
-        return channel
+    if 0 <= channel <= MAX_AXES:
+        return AXES_OF_CHANNEL.get(channel, channel)
     raise ProtocolError(f"frame channel {channel}: allowed 0 (3 axes), 1 (6 axes), 2..12 (n)")
 
 
 def channel_of_axes(n_axes: int) -> int:
-    if n_axes == 3:
-        return 0
-    if n_axes == 6:
-        return 1
+    """Frame channel of an axis count: 3 -> 0, 6 -> 1, n -> n (2..12)."""
     if 2 <= n_axes <= MAX_AXES:
-        return n_axes
+        return CHANNEL_OF_AXES.get(n_axes, n_axes)
     raise ProtocolError(f"{n_axes} axes: an IMAX frame carries 2..12 axes")
 
 
@@ -164,40 +161,38 @@ class RegisterRead(RegisterReadShape):
     CHANNELS: ClassVar[Sequence[int]] = (CHANNEL_DP, CHANNEL_PA)
 
 
-@dataclass(frozen=True, slots=True)
-class ServoRead(RegisterRead):
-    """Host -> IMAX 0x2101 (ConfirmCode 0x33CC): read at most 6 parameters of the servo
-    drive ``channel`` (servo id); PA508 is address 0x01FC (2.2.2.13)."""
+class _Servo:
+    """What the servo-parameter messages 0x2101 / 0x2201 change in the register layout:
+    ConfirmCode 0x33CC, the channel field is the servo id, at most 6 parameters."""
+
+    __slots__ = ()
 
     CONFIRM: ClassVar[int] = CONFIRM_SERVO
-    FUNCTION: ClassVar[int] = F_SERVO_READ
     CHANNELS: ClassVar[Sequence[int]] = range(0x10000)
     MAX_COUNT: ClassVar[int] = MAX_SERVO_REGS
 
 
 @dataclass(frozen=True, slots=True)
-class RegisterWrite(RegisterValuesShape):
-    """Host -> IMAX 0x1201: write ``values`` to channel 0 (DP), 1 (PA) or 2 (DPF0..DPFF).
+class ServoRead(_Servo, RegisterRead):
+    """Host -> IMAX 0x2101: read parameters of the servo drive ``channel``; PA508 is
+    address 0x01FC (2.2.2.13)."""
 
-    Layout: header, StartAddress u16, Count u16, values u16.
-    """
+    FUNCTION: ClassVar[int] = F_SERVO_READ
+
+
+@dataclass(frozen=True, slots=True)
+class RegisterWrite(RegisterWriteShape):
+    """Host -> IMAX 0x1201: write ``values`` to channel 0 (DP), 1 (PA) or 2 (DPF0..DPFF)."""
 
     FUNCTION: ClassVar[int] = F_WRITE
     CHANNELS: ClassVar[Sequence[int]] = (CHANNEL_DP, CHANNEL_PA, CHANNEL_DPF)
 
-    who_accept: int = WHO_ALL
-    who_reply: int = WHO_ALL
-
 
 @dataclass(frozen=True, slots=True)
-class ServoWrite(RegisterWrite):
-    """Host -> IMAX 0x2201 (ConfirmCode 0x33CC): write at most 6 parameters of servo
-    ``channel`` (servo id) (2.2.2.14)."""
+class ServoWrite(_Servo, RegisterWrite):
+    """Host -> IMAX 0x2201: write parameters of servo ``channel`` (2.2.2.14)."""
 
-    CONFIRM: ClassVar[int] = CONFIRM_SERVO
     FUNCTION: ClassVar[int] = F_SERVO_WRITE
-    CHANNELS: ClassVar[Sequence[int]] = range(0x10000)
-    MAX_COUNT: ClassVar[int] = MAX_SERVO_REGS
 
 
 @dataclass(frozen=True, slots=True)
@@ -341,20 +336,37 @@ _Tail = tuple[int, int | _Pairs]
 vibration (period, amplitude) pairs."""
 
 
+@dataclass(frozen=True)
+class _FrameKind:
+    """What tells the four IMAX frame messages apart, beyond their head fields.
+
+    Attributes
+    ----------
+    vibration : bool
+        The layout's tail after PortOut is n (period, amplitude) u16 pairs, not Extend u32.
+    bases : tuple[int, int]
+        The (absolute, relative) request function codes.
+    what : str
+        The message's name in errors.
+    tail : tuple[str, str]
+        The names of its two trailing fields: PortOut (the request's outputs, the reply's
+        inputs), then Extend or the vibration pairs.
+    """
+
+    vibration: bool
+    bases: tuple[int, int]
+    what: str
+    tail: tuple[str, str]
+
+
 class _TimedFrame:
     """Encoder, decoder and size of the four IMAX frame messages, derived from one
-    declaration per message: whether it carries vibration (``_VIBRATION``: the layout's
-    tail after PortOut is n (period, amplitude) pairs instead of Extend u32), whether it
-    is a reply (``_REPLY``: axis count from the length, channel field kept, Who 0), the
-    function bases, and its two trailing fields (``_tail_fields``: PortOut, then Extend or
-    the vibration pairs)."""
+    declaration per message: its :class:`_FrameKind` (``KIND``), whether it is a request
+    or a reply (:class:`_TimedRequest`, :class:`_TimedReply`) and its fields."""
 
     __slots__ = ()
 
-    _VIBRATION: ClassVar[bool]
-    _REPLY: ClassVar[bool]
-    _BASES: ClassVar[tuple[int, int]]  # (absolute, relative) request function codes
-    _WHAT: ClassVar[str]
+    KIND: ClassVar[_FrameKind]
 
     absolute: bool
     frame: int
@@ -368,19 +380,20 @@ class _TimedFrame:
 
     @classmethod
     def _STRUCT(cls, n_axes: int, relative: bool, port_out_bytes: int) -> struct.Struct:
-        layout = _vib_struct if cls._VIBRATION else _frame_struct
+        layout = _vib_struct if cls.KIND.vibration else _frame_struct
         return layout(n_axes, relative, port_out_bytes)
 
     def _head(self) -> tuple[int, int, int, int]:
         raise NotImplementedError
 
     def _tail_fields(self) -> _Tail:
-        """PortOut (the request's outputs, the reply's inputs), then Extend or the pairs."""
-        raise NotImplementedError
+        """PortOut, then Extend or the pairs (the fields ``KIND.tail`` names)."""
+        port, last = self.KIND.tail
+        return (getattr(self, port), getattr(self, last))
 
     def _tail(self) -> Iterable[int]:
         port, last = self._tail_fields()
-        if self._VIBRATION:
+        if self.KIND.vibration:
             pairs = cast(_Pairs, last)
             return chain((port,), (v for pair in pairs for v in pair))
         return (port, cast(int, last))
@@ -388,15 +401,20 @@ class _TimedFrame:
     @classmethod
     def _parse_tail(cls, rest: tuple[int, ...]) -> _Tail:
         """:meth:`_tail_fields` from the layout's values after the positions."""
-        return (rest[0], _pairs(rest[1:])) if cls._VIBRATION else (rest[0], rest[1])
+        return (rest[0], _pairs(rest[1:])) if cls.KIND.vibration else (rest[0], rest[1])
 
     @classmethod
     def _from_tail(cls, h: Header, relative: bool, f: tuple[int, ...], n: int, width: int) -> Self:
         raise NotImplementedError
 
+    @classmethod
+    def _axes_and_width(cls, h: Header, size: int, port_out_bytes: int | None) -> tuple[int, int]:
+        """Axis count and PortOut width of a ``size``-byte message with header ``h``."""
+        raise NotImplementedError
+
     def _pair_count(self) -> int | None:
         """Vibration pairs the message carries (None: a plain frame)."""
-        return len(cast(_Pairs, self._tail_fields()[1])) if self._VIBRATION else None
+        return len(cast(_Pairs, self._tail_fields()[1])) if self.KIND.vibration else None
 
     def __post_init__(self) -> None:
         n = len(self.positions)
@@ -420,38 +438,29 @@ class _TimedFrame:
             self.time_ms,
             self.positions,
             self._tail(),
-            f"IMAX {self._WHAT}",
+            f"IMAX {self.KIND.what}",
         )
 
     @classmethod
     def decode_parts(cls, h: Header, data: bytes, port_out_bytes: int | None = None) -> Self:
         """The message in ``data`` (PortOut ``port_out_bytes`` wide; ``None``: either)."""
-        relative = (h.function & 0xFFF0) == (cls._BASES[1] & 0xFFF0)
-        if cls._REPLY:
-            fixed = cls._STRUCT(0, False, 2).size - 2
-            what = f"{cls._WHAT} 0x{h.function:04X}"
-            per_axis = cls._STRUCT(1, False, 2).size - cls._STRUCT(0, False, 2).size
-            n, width = _reply_axes(len(data), fixed, per_axis, port_out_bytes, what)
-        else:
-            n = axes_of_channel(h.channel)
-            sizes = {w: cls._STRUCT(n, False, w).size for w in PORT_OUT_BYTES}
-            what = f"{n}-axis {cls._WHAT} 0x{h.function:04X}"
-            width = _width_of(len(data), sizes, port_out_bytes, what)
+        relative = (h.function & 0xFFF0) == (cls.KIND.bases[1] & 0xFFF0)
+        n, width = cls._axes_and_width(h, len(data), port_out_bytes)
         return cls._from_tail(h, relative, cls._STRUCT(n, relative, width).unpack(data), n, width)
 
 
 class _TimedRequest(_TimedFrame):
-    """Host -> IMAX frame: function from the time mode, channel from the axis count."""
+    """Host -> IMAX frame: function from the time mode, channel from the axis count,
+    axis count from the channel."""
 
     __slots__ = ()
-    _REPLY = False
 
     who_accept: int
     who_reply: int
 
     @property
     def function(self) -> int:
-        return self._BASES[0] if self.absolute else self._BASES[1]
+        return self.KIND.bases[0] if self.absolute else self.KIND.bases[1]
 
     @property
     def n_axes(self) -> int:
@@ -468,20 +477,38 @@ class _TimedRequest(_TimedFrame):
             h.who_accept, h.who_reply, width,
         )  # fmt: skip
 
+    @classmethod
+    def _axes_and_width(cls, h: Header, size: int, port_out_bytes: int | None) -> tuple[int, int]:
+        n = axes_of_channel(h.channel)
+        sizes = {w: cls._STRUCT(n, False, w).size for w in PORT_OUT_BYTES}
+        what = f"{n}-axis {cls.KIND.what} 0x{h.function:04X}"
+        return n, _width_of(size, sizes, port_out_bytes, what)
+
+
+@dataclass(frozen=True, slots=True)
+class _RequestHead(_TimedRequest):
+    """The fields every frame request starts with; a request adds its tail, Who fields
+    and ``port_out_bytes``."""
+
+    absolute: bool
+    frame: int
+    time_ms: int
+    positions: tuple[int, ...]
+
 
 class _TimedReply(_TimedFrame):
     """IMAX -> host frame reply: status in the function's last digit, the channel field
-    kept (axis channel, or the error code), Who 0."""
+    kept (axis channel, or the error code), Who 0, axis count from the length."""
 
     __slots__ = ()
-    _REPLY = True
 
     status: ReplyStatus
     channel: int
 
     @property
     def function(self) -> int:
-        return (self._BASES[0] if self.absolute else self._BASES[1]) - 1 + int(self.status)
+        bases = self.KIND.bases
+        return (bases[0] if self.absolute else bases[1]) - 1 + int(self.status)
 
     def _head(self) -> tuple[int, int, int, int]:
         return self.function, self.channel, WHO_NONE, WHO_NONE
@@ -493,13 +520,37 @@ class _TimedReply(_TimedFrame):
             *cls._parse_tail(f[8 + n :]), width,
         )  # fmt: skip
 
+    @classmethod
+    def _axes_and_width(cls, h: Header, size: int, port_out_bytes: int | None) -> tuple[int, int]:
+        fixed = cls._STRUCT(0, False, 2).size - 2
+        per_axis = cls._STRUCT(1, False, 2).size - cls._STRUCT(0, False, 2).size
+        what = f"{cls.KIND.what} 0x{h.function:04X}"
+        return _reply_axes(size, fixed, per_axis, port_out_bytes, what)
+
+
+@dataclass(frozen=True, slots=True)
+class _ReplyHead(_TimedReply):
+    """The fields every frame reply starts with; a reply adds its tail and
+    ``port_out_bytes``."""
+
+    status: ReplyStatus
+    absolute: bool
+    channel: int
+    frame: int
+    time_ms: int
+    positions: tuple[int, ...]
+
 
 def _pairs(flat: Sequence[int]) -> tuple[tuple[int, int], ...]:
     return tuple(zip(flat[0::2], flat[1::2], strict=True))
 
 
+_FRAME = (False, (F_ABS, F_REL))
+_VIB_FRAME = (True, (F_VIB_ABS, F_VIB_REL))
+
+
 @dataclass(frozen=True, slots=True)
-class MotionFrame(_TimedRequest):
+class MotionFrame(_RequestHead):
     """Host -> IMAX timed frame, 0x1301 (absolute ms since the first frame, u32) or 0x1401
     (ms since the previous frame, i32) (2.2.2.5, 2.2.2.7).
 
@@ -509,91 +560,51 @@ class MotionFrame(_TimedRequest):
     manual prints both; module notes).
     """
 
-    _VIBRATION = False
-    _BASES = (F_ABS, F_REL)
-    _WHAT = "frame"
+    KIND = _FrameKind(*_FRAME, "frame", ("port_out", "extend"))
 
-    absolute: bool
-    frame: int
-    time_ms: int
-    positions: tuple[int, ...]
     port_out: int = 0
     extend: int = 0
     who_accept: int = WHO_ALL
     who_reply: int = WHO_ALL
     port_out_bytes: int = 2
 
-    def _tail_fields(self) -> _Tail:
-        return (self.port_out, self.extend)
-
 
 @dataclass(frozen=True, slots=True)
-class MotionFrameReply(_TimedReply):
+class MotionFrameReply(_ReplyHead):
     """IMAX -> host 0x130x / 0x140x: the frame echoed, ``port`` = input states,
     ``channel`` = axis channel (x = 2) or error code (x != 2) (2.2.2.6, 2.2.2.8)."""
 
-    _VIBRATION = False
-    _BASES = (F_ABS, F_REL)
-    _WHAT = "frame reply"
+    KIND = _FrameKind(*_FRAME, "frame reply", ("port", "extend"))
 
-    status: ReplyStatus
-    absolute: bool
-    channel: int
-    frame: int
-    time_ms: int
-    positions: tuple[int, ...]
     port: int = 0
     extend: int = 0
     port_out_bytes: int = 2
 
-    def _tail_fields(self) -> _Tail:
-        return (self.port, self.extend)
-
 
 @dataclass(frozen=True, slots=True)
-class VibrationFrame(_TimedRequest):
+class VibrationFrame(_RequestHead):
     """Host -> IMAX 0x1801 (absolute time) / 0x1901 (relative time) frame with per-axis
     vibration: ``vibration[i] = (period in 0.125 ms, amplitude in pulses)`` (2.2.2.9,
     2.2.2.11)."""
 
-    _VIBRATION = True
-    _BASES = (F_VIB_ABS, F_VIB_REL)
-    _WHAT = "vibration frame"
+    KIND = _FrameKind(*_VIB_FRAME, "vibration frame", ("port_out", "vibration"))
 
-    absolute: bool
-    frame: int
-    time_ms: int
-    positions: tuple[int, ...]
     port_out: int
     vibration: tuple[tuple[int, int], ...]
     who_accept: int = WHO_ALL
     who_reply: int = WHO_ALL
     port_out_bytes: int = 2
 
-    def _tail_fields(self) -> _Tail:
-        return (self.port_out, self.vibration)
-
 
 @dataclass(frozen=True, slots=True)
-class VibrationFrameReply(_TimedReply):
+class VibrationFrameReply(_ReplyHead):
     """IMAX -> host 0x180x / 0x190x: the vibration frame echoed (``port`` = inputs)."""
 
-    _VIBRATION = True
-    _BASES = (F_VIB_ABS, F_VIB_REL)
-    _WHAT = "vibration reply"
+    KIND = _FrameKind(*_VIB_FRAME, "vibration reply", ("port", "vibration"))
 
-    status: ReplyStatus
-    absolute: bool
-    channel: int
-    frame: int
-    time_ms: int
-    positions: tuple[int, ...]
     port: int
     vibration: tuple[tuple[int, int], ...]
     port_out_bytes: int = 2
-
-    def _tail_fields(self) -> _Tail:
-        return (self.port, self.vibration)
 
 
 # -- status report ----------------------------------------------------------------------------

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import struct
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from numbers import Integral
@@ -20,21 +21,14 @@ from .._udp_controller import (
     config_parameters,
     config_target,
 )
-from .._udp_controller import validate_parameters as _validate
-from ._messages import F_ABS, F_REL, _frame_struct
-from ._params import DX_ACTUAL, DX_COMMAND, DX_DEPTH, FN_SPEC, fn_name
+from ._messages import _frame_struct
+from ._params import DX_ACTUAL, DX_COMMAND, DX_DEPTH, FN
 
 __all__ = ["MboxController", "MboxFrameEncoder", "controller_from_config"]
 
 
 def _freeze(params: Mapping[str, int]) -> Mapping[str, int]:
     return MappingProxyType(dict(params))
-
-
-def validate_parameters(values: Mapping[str, object], where: str) -> dict[str, int]:
-    """Factory defaults overridden by ``values``; names canonical, values within range."""
-    unknown = f"is not an MBOX parameter this package knows (known: {', '.join(FN_SPEC)})"
-    return _validate(values, where, FN_SPEC, fn_name, unknown)
 
 
 @dataclass(frozen=True)
@@ -60,27 +54,12 @@ class MboxController(UdpController["MboxFrameEncoder"]):
 
     kind: ClassVar[str] = "mbox"
     LABEL: ClassVar[str] = "MBOX"
+    PARAMS = FN
+    UNKNOWN_PARAM = f"is not an MBOX parameter this package knows (known: {', '.join(FN.spec)})"
     # IP bytes and port of the box (receive port Fn025) and of the host (Fn034)
-    CONTROLLER_PARAMS: ClassVar[tuple[str, str, str, str, str]] = (
-        "Fn020",
-        "Fn021",
-        "Fn022",
-        "Fn023",
-        "Fn025",
-    )
-    HOST_PARAMS: ClassVar[tuple[str, str, str, str, str]] = (
-        "Fn030",
-        "Fn031",
-        "Fn032",
-        "Fn033",
-        "Fn034",
-    )
-    canonical_name = staticmethod(fn_name)
+    CONTROLLER_PARAMS = ("Fn020", "Fn021", "Fn022", "Fn023", "Fn025")
+    HOST_PARAMS = ("Fn030", "Fn031", "Fn032", "Fn033", "Fn034")
 
-    name: str
-    n_axes: int
-    default_target: str
-    parameters: Mapping[str, int]
     max_motor_speed_rpm: float = 3000.0
     buffer_frames: int = 256
 
@@ -89,7 +68,9 @@ class MboxController(UdpController["MboxFrameEncoder"]):
             raise ConfigError(f"MBOX {self.name}: axes = {self.n_axes}; allowed: 3, 6")
         parse_target(self.default_target)
         object.__setattr__(
-            self, "parameters", _freeze(validate_parameters(self.parameters, f"MBOX {self.name}"))
+            self,
+            "parameters",
+            _freeze(self.validate_parameters(self.parameters, f"MBOX {self.name}")),
         )
         if not self.max_motor_speed_rpm > 0:
             raise ConfigError(
@@ -236,20 +217,13 @@ class MboxFrameEncoder(UdpFrameEncoder):
 
     __slots__ = ("_dac_max",)
     STROKE_SOURCE: ClassVar[str] = "Fn0C0 x Fn0C1"
+    controller: MboxController
 
-    def __init__(
-        self, controller: MboxController, clock: FrameClock, who_accept: int, who_reply: int
-    ) -> None:
-        super().__init__(
-            controller,
-            clock,
-            who_accept,
-            who_reply,
-            layout=_frame_struct(controller.n_axes, not clock.absolute_time),
-            functions=(F_ABS, F_REL),
-            channel=0 if controller.n_axes == 3 else 1,
-        )
-        self._dac_max = (controller.parameters["Fn078"], controller.parameters["Fn079"])
+    def _layout(self, relative: bool) -> struct.Struct:
+        return _frame_struct(self.n_axes, relative)
+
+    def _init_kind(self) -> None:
+        self._dac_max = self.controller.dac_max
 
     def encode(
         self, t_s: float, pulses: Sequence[int], dout: int = 0, dacs: tuple[int, int] = (0, 0)
@@ -286,10 +260,7 @@ def controller_from_config(reader: ConfigReader, name: str) -> MboxController:
     values = config_parameters(reader)
     buffer_frames = reader.integer("buffer_frames", 256, lo=1, hi=65535)
     return MboxController(
-        name=name,
-        n_axes=axes,
-        default_target=target,
-        parameters=validate_parameters(values, f"{reader.where} [parameters]"),
+        **MboxController.config_fields(reader, name, axes, target, values),
         max_motor_speed_rpm=rpm,
         buffer_frames=buffer_frames,
     )

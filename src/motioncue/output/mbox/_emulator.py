@@ -59,13 +59,13 @@ from ._messages import (
     decode,
     frame_size,
 )
-from ._params import DX_ACTUAL, DX_COMMAND, DX_UDP, FN_SPEC
+from ._params import DX_ACTUAL, DX_COMMAND, DX_UDP, FN, FN_SPEC
 
 __all__ = ["MboxEmulator"]
 
 
 STATE_FAULT = 3  # after STATE_HOMING, STATE_READY, STATE_ESTOP = 0, 1, 2
-_FN_BY_ADDRESS = {int(name[2:], 16): name for name in FN_SPEC}
+_FN_BY_ADDRESS = FN.by_address
 # DX addresses of actual / commanded / UDP positions, low word first (6.1.1, 6.1.11)
 _DX_ACTUAL, _DX_COMMAND, _DX_UDP = DX_ACTUAL, DX_COMMAND, DX_UDP
 

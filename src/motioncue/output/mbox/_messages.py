@@ -26,7 +26,11 @@ from typing import ClassVar
 
 from ..._errors import ProtocolError
 from .._udp_common import (
+    AXES_OF_CHANNEL,
+    CHANNEL_OF_AXES,
     CONFIRM_MAIN,
+    F_ABS,
+    F_REL,
     HEADER,
     PASSCODE,
     WHO_ALL,
@@ -37,7 +41,12 @@ from .._udp_common import (
     pack_timed_frame,
     timed_frame_struct,
 )
-from .._udp_registers import RegisterReadShape, RegisterValuesShape, check_u16
+from .._udp_registers import (
+    RegisterReadShape,
+    RegisterValuesShape,
+    RegisterWriteShape,
+    check_u16,
+)
 
 __all__ = [  # what the package exports from here
     "CHANNEL_CX",
@@ -61,7 +70,6 @@ __all__ = [  # what the package exports from here
 F_STATUS = 0x1001
 F_READ, F_READ_OK, F_READ_ERR = 0x1101, 0x1102, 0x1103
 F_WRITE, F_WRITE_OK, F_WRITE_ERR = 0x1201, 0x1202, 0x1203
-F_ABS, F_REL = 0x1301, 0x1401
 
 # Object channels.
 CHANNEL_DX = 0  # read: status registers Dn
@@ -87,9 +95,7 @@ FUNCTION_NAMES = {
     F_REL + 3: "frame reply short-frame",
 }
 
-_AXES_OF_CHANNEL = {0: 3, 1: 6}
 _HEAD4 = struct.Struct(">4H")
-_CHANNEL_OF_AXES = {3: 0, 6: 1}
 
 
 @dataclass(frozen=True, slots=True)
@@ -112,14 +118,11 @@ class RegisterReadReply(RegisterValuesShape):
 
 
 @dataclass(frozen=True, slots=True)
-class RegisterWrite(RegisterValuesShape):
+class RegisterWrite(RegisterWriteShape):
     """Host -> MBOX 0x1201: write ``values`` to channel 0 FXm (not saved), 1 FX, 2 CX."""
 
     FUNCTION: ClassVar[int] = F_WRITE
     CHANNELS: ClassVar[Sequence[int]] = (CHANNEL_FXM, CHANNEL_FX, CHANNEL_CX)
-
-    who_accept: int = WHO_ALL
-    who_reply: int = WHO_ALL
 
 
 @dataclass(frozen=True, slots=True)
@@ -238,7 +241,7 @@ class MotionFrame:
     FUNCTIONS: ClassVar[tuple[int, int]] = (F_ABS, F_REL)
 
     def __post_init__(self) -> None:
-        if len(self.positions) not in _CHANNEL_OF_AXES:
+        if len(self.positions) not in CHANNEL_OF_AXES:
             raise ProtocolError(f"an MBOX frame has 3 or 6 positions, not {len(self.positions)}")
         try:
             self.encode()
@@ -261,7 +264,7 @@ class MotionFrame:
         n = len(self.positions)
         return pack_timed_frame(
             _frame_struct(n, not self.absolute),
-            (self.function, _CHANNEL_OF_AXES[n], self.who_accept, self.who_reply),
+            (self.function, CHANNEL_OF_AXES[n], self.who_accept, self.who_reply),
             self.line,
             self.time_ms,
             self.positions,
@@ -275,7 +278,7 @@ class MotionFrame:
 
     @classmethod
     def _from_wire(cls, data: bytes, function: int, channel: int) -> MotionFrame:
-        n = _AXES_OF_CHANNEL.get(channel)
+        n = AXES_OF_CHANNEL.get(channel)
         if n is None:
             raise ProtocolError(f"frame channel {channel}: allowed 0 (3 axes), 1 (6 axes)")
         relative = function == F_REL
