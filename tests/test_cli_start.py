@@ -86,3 +86,13 @@ def test_one_start_imports_the_verb_s_module_only() -> None:
     status, modules = _modules_after("--help")
     assert status == 0
     assert {f"motioncue.cli.{m}" for m in cli._VERB_MODULES} <= modules
+
+
+def test_the_games_load_without_the_gt7_cipher_until_a_gt7_packet_is_decoded() -> None:
+    """``bridge --help`` names the games (every game module is imported); the GT7 cipher's
+    libraries (pycryptodome through cffi and pycparser, PyNaCl) load only when decoding."""
+    status, modules = _modules_after("bridge", "--help")
+    assert status == 0
+    assert "motioncue.telemetry._gt7" in modules
+    assert not {m for m in modules if m.split(".")[0] in ("Crypto", "cffi", "nacl")}
+    assert "motioncue.telemetry._gt7_cipher" not in modules
