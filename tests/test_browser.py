@@ -37,7 +37,14 @@ from motioncue.viewer import load_view_input, scene_from_q, write_view
 from motioncue.viewer._monitor import BridgeSource, Monitor, PlaySource
 
 SRC = Path(__file__).resolve().parents[1] / "src"
-pytestmark = pytest.mark.timeout(240)
+TEST_TIMEOUT_S = 240
+pytestmark = pytest.mark.timeout(TEST_TIMEOUT_S)
+# The stop-button tests press stop on a ride that must still be playing then. A ride longer
+# than the test's own timeout cannot end by itself first, whatever the machine's load: at load
+# 20 a 30 s ride ended before Chromium had started, loaded the page and shown "running"
+# (26 s from the monitor's URL to "running" on the page), and the page then saw only
+# "parked (job ended)".
+OUTLASTS_THE_TEST_S = TEST_TIMEOUT_S + 60.0
 
 
 def wait_for(cond: Callable[[], bool], timeout_s: float = 10.0) -> bool:
@@ -211,7 +218,7 @@ def test_stop_button_parks_a_play(tmp_path: Path) -> None:
     plat = load_platform("stewart6-linear")
     ctrl = load_controller("mbox6")
     lim = ActuatorLimits.from_platform(plat, ctrl, rate_hz=100.0)
-    _, ride = sine_ride(tmp_path, seconds=30.0)
+    _, ride = sine_ride(tmp_path, seconds=OUTLASTS_THE_TEST_S)
     # an info line with markup in it (a preset's path may hold any characters): shown as text
     shown = "racing <b>x</b> & co at intensity 50 %"
     watch = PlaySource(ride.duration_s, {"cueing": shown})
@@ -311,11 +318,13 @@ def test_stop_button_parks_the_bridge(tmp_path: Path) -> None:
 
 def test_play_cli_monitor_stop_parks_on_the_emulator(tmp_path: Path) -> None:
     """``motioncue play --monitor`` in a subprocess; the page's stop ends it parked."""
-    path, _ = sine_ride(tmp_path, seconds=30.0)
+    path, _ = sine_ride(tmp_path, seconds=OUTLASTS_THE_TEST_S)
     plat = load_platform("stewart6-linear")
     ctrl = load_controller("mbox6")
     lim = ActuatorLimits.from_platform(plat, ctrl, rate_hz=100.0)
-    with mbox.MboxEmulator(ctrl) as emu:
+    # Chromium starts before the player: its start (over 10 s at load 20, in this process,
+    # beside the emulator's thread) is then neither part of the ride nor of its first frames
+    with mbox.MboxEmulator(ctrl) as emu, browser() as ctx:
         proc = subprocess.Popen(
             [sys.executable, "-m", "motioncue", "play", str(path), "--target",
              f"udp://127.0.0.1:{emu.port}", "--monitor", "127.0.0.1:0"],
@@ -333,16 +342,23 @@ def test_play_cli_monitor_stop_parks_on_the_emulator(tmp_path: Path) -> None:
                     url = m.group(1)
                     break
             assert url is not None, lines
-            with browser() as ctx:
-                tab = ctx.new_page()
-                tab.goto(url)
+            tab = ctx.new_page()
+            tab.goto(url)
+            try:
                 tab.wait_for_function("window.mcMonitor.last && window.mcMonitor.last.state "
                                       "=== 'running'", timeout=30_000)  # fmt: skip
-                assert wait_for(lambda: emu.received > 200, 20.0)
-                # the ride's cueing (this one was not made by generate: none recorded)
-                assert "cueing\tnot recorded" in tab.inner_text("#info")
-                tab.click("#stop")
-                out, _ = proc.communicate(timeout=60)
+            except Exception as exc:  # say what the page and the player saw
+                shown = tab.inner_text("#state")
+                proc.kill()
+                rest, _ = proc.communicate(timeout=30)
+                raise AssertionError(
+                    f"the page shows {shown!r}, never 'running'; play wrote: {''.join(lines)}{rest}"
+                ) from exc
+            assert wait_for(lambda: emu.received > 200, 20.0)
+            # the ride's cueing (this one was not made by generate: none recorded)
+            assert "cueing\tnot recorded" in tab.inner_text("#info")
+            tab.click("#stop")
+            out, _ = proc.communicate(timeout=60)
         finally:
             if proc.poll() is None:
                 proc.kill()

@@ -10,8 +10,6 @@ the Jacobian; a hand-built statics system for the forces; scipy's brentq for the
 from __future__ import annotations
 
 import math
-import subprocess
-import sys
 from pathlib import Path
 
 import numpy as np
@@ -28,7 +26,6 @@ from motioncue.kinematics import (
     platform_from_dict,
 )
 
-SRC = Path(__file__).resolve().parents[1] / "src"
 CONFIGS = Path(__file__).resolve().parents[1] / "configs" / "platforms"
 H = 0.360  # corner4 neutral height (m), vertical legs
 CORNERS = np.array([[0.5, 0.3], [0.5, -0.3], [-0.5, 0.3], [-0.5, -0.3]])  # x, y (m)
@@ -159,15 +156,17 @@ def test_positions_that_twist_the_frame_are_refused_and_projected(c4) -> None:
     assert np.all(res.q == 0.0)
 
 
-def test_ik_cli_says_yaw_is_held(tmp_path: Path) -> None:
-    out = subprocess.run(
-        [sys.executable, "-m", "motioncue", "ik", "--platform", "corner4", "--mm-deg",
-         "--pose", "0", "0", "10", "0", "0", "5"],
-        capture_output=True, text=True, env={"PYTHONPATH": str(SRC)}, timeout=120,
-    )  # fmt: skip
-    assert out.returncode == 1, out.stderr
-    assert "cannot produce yaw" in out.stdout
-    assert "front_left" in out.stdout and "spare6" in out.stdout
+def test_ik_cli_says_yaw_is_held(capsys: pytest.CaptureFixture[str]) -> None:
+    # in-process through the command's main (what it prints and its status are the subject;
+    # the process boundary is tested in test_cli_start.py and test_console_exit.py)
+    from motioncue.cli import main
+
+    status = main(["ik", "--platform", "corner4", "--mm-deg", "--pose", "0", "0", "10", "0",
+                   "0", "5"])  # fmt: skip
+    out = capsys.readouterr()
+    assert status == 1, out.err
+    assert "cannot produce yaw" in out.out
+    assert "front_left" in out.out and "spare6" in out.out
 
 
 # --- workspace and forces -----------------------------------------------------------------
@@ -415,7 +414,9 @@ def test_bridge_live_on_corner4_tl_mbox6_parks_and_keeps_limits(
     assert np.abs(tr.positions[:, :5] - tr.positions[0, :5]).max() > 1000  # the cue arrived
 
 
-def test_workspace_and_ik_cli_on_a_measured_file_in_metres(tmp_path: Path) -> None:
+def test_workspace_and_ik_cli_on_a_measured_file_in_metres(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
     text = (CONFIGS / "corner4.toml").read_text()
     text = text.replace("base_anchors_mm = [[500.0, 300.0, 0.0], [500.0, -300.0, 0.0],",
                         "base_anchors_m = [[0.5, 0.3, 0.0], [0.5, -0.3, 0.0],")  # fmt: skip
@@ -424,22 +425,19 @@ def test_workspace_and_ik_cli_on_a_measured_file_in_metres(tmp_path: Path) -> No
     assert "base_anchors_m =" in text
     path = tmp_path / "my-rig.toml"
     path.write_text(text)
-    env = {"PYTHONPATH": str(SRC)}
-    ws = subprocess.run(
-        [sys.executable, "-m", "motioncue", "workspace", "--platform", str(path), "--json"],
-        capture_output=True, text=True, env=env, timeout=120,
-    )  # fmt: skip
-    assert ws.returncode == 0, ws.stderr
     import json
 
-    table = json.loads(ws.stdout)
+    from motioncue.cli import main  # in-process: the printed tables are the subject
+
+    status = main(["workspace", "--platform", str(path), "--json"])
+    ws = capsys.readouterr()
+    assert status == 0, ws.err
+    table = json.loads(ws.out)
     ranges = table["ranges"]
     assert ranges["z"]["max"] == pytest.approx(47.0, abs=1e-3)
-    ik = subprocess.run(
-        [sys.executable, "-m", "motioncue", "ik", "--platform", str(path), "--mm-deg",
-         "--pose", "0", "0", "10", "0", "0", "0", "--json"],
-        capture_output=True, text=True, env=env, timeout=120,
-    )  # fmt: skip
-    assert ik.returncode == 0, ik.stderr
-    rows = json.loads(ik.stdout)["actuators"]
+    status = main(["ik", "--platform", str(path), "--mm-deg", "--pose", "0", "0", "10", "0",
+                   "0", "0", "--json"])  # fmt: skip
+    ik = capsys.readouterr()
+    assert status == 0, ik.err
+    rows = json.loads(ik.out)["actuators"]
     assert [r["position"] for r in rows[:4]] == pytest.approx([10.0] * 4, abs=1e-9)

@@ -39,6 +39,30 @@ _VERB_MODULES: tuple[str, ...] = (
     "_list",
 )
 
+# Which module registers each verb: ``motioncue VERB ...`` imports that module alone (a
+# start costs the verb's imports, not every verb's; tests/test_cli_start.py checks this
+# table against what the modules register).
+_VERB_MODULE: dict[str, str] = {
+    "record": "_record",
+    "send-telemetry": "_send_telemetry",
+    "cue": "_cue",
+    "omct": "_omct",
+    "compare": "_compare",
+    "tune": "_tune",
+    "ik": "_kinematics",
+    "workspace": "_kinematics",
+    "limits": "_limits",
+    "generate": "_pipeline",
+    "play": "_pipeline",
+    "demo": "_pipeline",
+    "view": "_view",
+    "bridge": "_bridge",
+    "emulate": "_control",
+    "send": "_control",
+    "inspect": "_control",
+    "list": "_list",
+}
+
 
 def _did_you_mean(word: str, candidates: Sequence[str]) -> str:
     """``"; did you mean X?"`` for the closest of ``candidates`` (difflib), or ``""``."""
@@ -106,7 +130,16 @@ def _verb_parsers(parser: argparse.ArgumentParser) -> dict[str, argparse.Argumen
     return {}
 
 
-def build_parser() -> _Parser:
+def build_parser(verb: str | None = None) -> _Parser:
+    """The command line's parser: every verb's, or (``verb`` given) only that verb's.
+
+    Parameters
+    ----------
+    verb : str or None
+        A verb name (a key of the verb table): only its module is imported and only its
+        verbs are added, which is all that ``motioncue VERB ...`` parses. None, or a name
+        that is not a verb: every verb (the top-level help and its errors list them all).
+    """
     parser = _Parser(
         prog="motioncue",
         description="Vehicle motion to electric-cylinder motion platforms.",
@@ -116,7 +149,8 @@ def build_parser() -> _Parser:
     parser.add_argument("--version", action="version", version=f"motioncue {__version__}")
     # the verb's name under its own key: a verb's positional arguments cannot overwrite it
     sub = parser.add_subparsers(dest="_verb_name", metavar="VERB")
-    for name in _VERB_MODULES:
+    only = _VERB_MODULE.get(verb or "")
+    for name in _VERB_MODULES if only is None else (only,):
         module = importlib.import_module(f"{__name__}.{name}")
         module.register(sub)
     return parser
@@ -131,8 +165,10 @@ def main(argv: Sequence[str] | None = None) -> int:
     except MotioncueError as exc:
         print(one_line(f"motioncue: error: {exc}"), file=sys.stderr)
         return 2
-    parser = build_parser()
-    args, extras = parser.parse_known_args(argv)
+    words = sys.argv[1:] if argv is None else list(argv)
+    # a verb first (the top-level options -h and --version exit): only its module is loaded
+    parser = build_parser(words[0] if words else None)
+    args, extras = parser.parse_known_args(words)
     if extras:
         # words no parser took: refused by the verb's parser, in the verb's error form
         verb_parser = _verb_parsers(parser).get(getattr(args, "_verb_name", None) or "")

@@ -87,7 +87,6 @@ import struct
 from dataclasses import dataclass, field
 
 from .._errors import ConfigError
-from ._gt7_cipher import Salsa20Xor, available
 from ._registry import GameInfo, register_game
 from ._sample import G0_M_S2, Decoder, DecodeResult, wrong_size
 
@@ -140,6 +139,10 @@ _NO_CRYPTO = "Gran Turismo 7 telemetry needs pycryptodome: pip install pycryptod
 
 
 def _xor(data: bytes, iv_xor: int, n: int) -> bytes:
+    # the cipher (pycryptodome through cffi, libsodium's checks) loads on first use: every
+    # start that imports the games would pay for it otherwise
+    from ._gt7_cipher import Salsa20Xor, available
+
     if not available():  # pragma: no cover
         raise ConfigError(_NO_CRYPTO)
     iv = _IV.unpack_from(data, 0x40)[0]
@@ -253,6 +256,8 @@ class GT7Decoder(Decoder):
         self._next_heartbeat_s = -math.inf
         self._prev_id: int | None = None
         self._prev_v = (0.0, 0.0, 0.0)
+        from ._gt7_cipher import Salsa20Xor, available  # on first use (see _xor)
+
         if not available():  # pragma: no cover
             raise ConfigError(_NO_CRYPTO)
         self._xor = Salsa20Xor(KEY, _USED).xor
