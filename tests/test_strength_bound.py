@@ -22,10 +22,14 @@ builds, on each whole drive, a motion of the bound's relaxation (checked inside 
 with the acceptance's correlation and a share >= 0.12, which no certified bound can be below.
 
 The bound itself costs ~4 s CPU per 4 s of drive (the full-rate support LPs and the cone
-programme), so :func:`test_no_preset_beats_the_bound` checks "no algorithm beats it" on a
-3-second excerpt of each drive (its own bound, the chain run on the same excerpt from rest),
-for the classical presets of this platform (the MPC and optimal runs are too dear here;
-``tests/test_cue_bound_corr.py`` holds them to the bound on a drive).
+programme; ~2.3 s for the 3 s excerpts here without extra cuts), so
+:func:`test_no_preset_beats_the_bound` checks "no algorithm beats it" on a 3-second excerpt of
+each drive (its own bound, the chain run on the same excerpt from rest), for the classical
+presets of this platform (the MPC and optimal runs are too dear here;
+``tests/test_cue_bound_corr.py`` holds them to the bound on ten seconds of a rally drive).
+The excerpts avoid windows where the bound's gain LP stops with HiGHS's "numerical
+difficulties" (status 4), e.g. flowing-formula 50-52 s or lap 40-44 s: a solver failure
+:func:`cue_bound` reports as an error, not a figure.
 
 :func:`test_the_default_reaches_the_target` is the acceptance: where the default does not
 reach it (measured, racing-hexapod-firm: fx .042/.034/.039, fy .102 on flowing-formula; 8-12 %
@@ -102,7 +106,10 @@ def recordings() -> dict[str, Recording]:
 
 
 def _metrics(
-    f: NDArray[np.float64], w: NDArray[np.float64], preset: str, rig: tuple[object, ActuatorLimits, RigReach]
+    f: NDArray[np.float64],
+    w: NDArray[np.float64],
+    preset: str,
+    rig: tuple[object, ActuatorLimits, RigReach],
 ) -> tuple[CueMetrics, NDArray[np.float64], NDArray[np.float64]]:
     platform, limits, _ = rig
     run = run_chain(f, w, load_cueing(preset), platform, limits, RATE)
@@ -129,9 +136,7 @@ def _second_difference(p: NDArray[np.float64]) -> NDArray[np.float64]:
     return (q[2:] - 2.0 * q[1:-1] + q[:-2]) * RATE**2
 
 
-def _witness(
-    d: NDArray[np.float64], i: int, reach: RigReach
-) -> list[tuple[float, float, float]]:
+def _witness(d: NDArray[np.float64], i: int, reach: RigReach) -> list[tuple[float, float, float]]:
     """``(share, corr, gain)`` of a family of motions of the bound's relaxation on channel
     ``i`` (non-causal; asserted inside its boxes).
 
@@ -195,7 +200,9 @@ def test_the_target_is_within_the_bound(
 @pytest.mark.parametrize(
     ("name", "channel"),
     [
-        pytest.param(n, c, marks=pytest.mark.xfail(strict=True, reason=f"not reached: {SHORT[n, c]}"))
+        pytest.param(
+            n, c, marks=pytest.mark.xfail(strict=True, reason=f"not reached: {SHORT[n, c]}")
+        )
         if (n, c) in SHORT
         else (n, c)
         for n in DRIVES
@@ -233,11 +240,13 @@ def test_no_preset_beats_the_bound(
     ``share_max_at_corr``; its RMS error >= ``error_rms``. The default's correlation on these
     excerpts is at least the acceptance's (asserted), so the share check is not vacuous.
     """
-    a, b = (int(round(x * RATE)) for x in EXCERPT_S[name])
+    a, b = (round(x * RATE) for x in EXCERPT_S[name])
     rec = recordings[name]
     f = np.asarray(rec.f, dtype=float)[a:b]
     w = np.asarray(rec.w, dtype=float)[a:b]
-    bound = cue_bound(f, RATE, rig[2], model=MODEL)
+    # corr_cuts=0: the first three cuts only (a valid bound, looser: ~2.3 s CPU instead of ~3.5 s
+    # per excerpt, measured; with 2 cuts flowing-formula's .207/.212, without .254/.265)
+    bound = cue_bound(f, RATE, rig[2], model=MODEL, corr_cuts=0)
     default = _default_preset()
     for preset in (default, *CLASSICAL):
         m, v, p = _metrics(f, w, preset, rig)
@@ -255,9 +264,13 @@ def test_no_preset_beats_the_bound(
             assert err >= bound.error_rms[i] - 1e-6, (tag, err, bound.error_rms)
     for i in range(2):
         for share, corr, gain in _witness(f[:, i], i, rig[2]):
-            assert gain <= bound.gain_max_any[i] + 1e-6, (name, CHANNELS[i], gain, bound.gain_max_any)
+            wtag = (name, CHANNELS[i])
+            assert gain <= bound.gain_max_any[i] + 1e-6, (wtag, gain, bound.gain_max_any)
             if corr >= CORR_MIN[i]:
                 assert share <= bound.share_max_at_corr[i] + 1e-6, (
-                    name, CHANNELS[i], share, bound.share_max_at_corr)  # fmt: skip
+                    tag,
+                    share,
+                    bound.share_max_at_corr,
+                )
         # the bound is tight within its own relaxation: the motion it found is near it
         assert bound.share_at_corr_primal[i] <= bound.share_max_at_corr[i] + 1e-9
