@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import itertools
 import math
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -224,3 +225,41 @@ def test_no_preset_beats_the_bound_through_compare(lap: np.ndarray) -> None:
         res.runs[0].bound.share_max_at_corr[0]
     )
     assert "share <= fx" in res.summary() and "@corr fx" in res.table()
+
+
+def test_an_lp_stopped_on_numerical_difficulties_is_solved_by_the_next_method() -> None:
+    """HiGHS's default choice stopped with status 4 ("HiGHS Status 0: Not Set") on the gain LP
+    of flowing-formula's samples 5000-5200 (the hexapod's reach, 100 Hz) and ``cue_bound``
+    raised; the LP has a solution (status 0 with HiGHS's interior-point method), so the bound
+    is computed, and each value is the one of a solve that never failed."""
+    fs = 100.0
+    path = Path(__file__).resolve().parents[1] / "configs" / "recordings" / "flowing-formula.csv"
+    f = resample(read_recording_csv(path), fs).f[5000:5200]
+    b = cue_bound(f, fs, HEX, corr_min=None)  # raised ConfigError before
+    assert np.all(np.isfinite(b.gain_max)) and np.all(b.gain_max <= b.gain_max_any)
+    assert np.all(b.error_rms < b.vehicle_rms)
+
+
+def test_each_lp_method_is_tried_while_one_stops_on_numerical_difficulties(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """The retry itself, on the tiny problem: the first method made to report status 4 on
+    every call, the bound equals the one of an untouched solve (to the LP's tolerance)."""
+    import scipy.optimize
+
+    f, *_, fs = _tiny_problem()
+    ref = cue_bound(f, fs, TINY, corr_min=None)
+    real, calls = scipy.optimize.linprog, []
+
+    def first_method_fails(*args: object, **kw: object) -> object:
+        calls.append(kw["method"])
+        res = real(*args, **kw)
+        if kw["method"] == "highs":
+            res.status, res.message = 4, "(HiGHS Status 0: Not Set)"
+        return res
+
+    monkeypatch.setattr(scipy.optimize, "linprog", first_method_fails)
+    got = cue_bound(f, fs, TINY, corr_min=None)
+    assert "highs-ipm" in calls and "highs-ds" not in calls
+    np.testing.assert_allclose(got.gain_max, ref.gain_max, rtol=1e-6, atol=1e-9)
+    np.testing.assert_allclose(got.error_rms, ref.error_rms, rtol=1e-6, atol=1e-9)

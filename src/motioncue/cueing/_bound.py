@@ -106,6 +106,7 @@ from ._params import GRAVITY_M_S2
 from ._vestibular import DEFAULT_MODEL_SET, VestibularModel, VestibularModelSet, get_model_set
 
 if TYPE_CHECKING:
+    from scipy.optimize import OptimizeResult
     from scipy.sparse import sparray
 
 __all__ = ["BOUND_CHANNELS", "CORR_MIN", "REACH_MARGIN", "CueBound", "RigReach", "cue_bound"]
@@ -293,12 +294,32 @@ class _Channel:
         return np.asarray(a), np.asarray(b), np.asarray(c), np.asarray(d)
 
 
+LP_METHODS = ("highs", "highs-ipm", "highs-ds")
+"""HiGHS's methods, tried in turn: its default choice sometimes stops with "numerical
+difficulties" (status 4, "HiGHS Status 0: Not Set") on an LP that has a solution (the gain LP on
+flowing-formula's samples 5000-5200 at 100 Hz); its interior-point method with crossover then
+solves it. The bound is the LP's optimum, whichever method finds it."""
+
+
+def _linprog(c: NDArray[np.float64], **kw: object) -> OptimizeResult:
+    """``scipy.optimize.linprog`` with HiGHS, retried with the next method of
+    :data:`LP_METHODS` while one stops on numerical difficulties (status 4); the last result
+    is returned (its ``status`` is checked by the caller)."""
+    from scipy.optimize import linprog
+
+    res = None
+    for method in LP_METHODS:
+        res = linprog(c, method=method, **kw)
+        if res.status != 4:
+            break
+    return res
+
+
 def _linprog_box_chain(
     c: NDArray[np.float64], bound: float, step: float, second: float | None, d2: sparray
 ) -> float:
     """max c'x s.t. |x| <= bound, |x[k+1]-x[k]| <= step, (optionally) |d2 x| <= second."""
     import scipy.sparse as sp
-    from scipy.optimize import linprog
 
     n = c.shape[0]
     if bound <= 0.0 or not np.any(c):
@@ -311,12 +332,8 @@ def _linprog_box_chain(
     if second is not None:
         rows += [d2, -d2]
         rhs += [np.full(n, second), np.full(n, second)]
-    res = linprog(
-        -c,
-        A_ub=sp.vstack(rows, format="csr"),
-        b_ub=np.concatenate(rhs),
-        bounds=(-bound, bound),
-        method="highs",
+    res = _linprog(
+        -c, A_ub=sp.vstack(rows, format="csr"), b_ub=np.concatenate(rhs), bounds=(-bound, bound)
     )
     if res.status != 0:
         raise ConfigError(f"the bound's support LP failed: {res.message}")
@@ -422,7 +439,6 @@ def _gain_lp(
     """max <H s, v> over s in S with no reversal: the maximum, H s, and the multipliers of
     the no-reversal rows (>= 0, zero where the vehicle is below threshold)."""
     import scipy.sparse as sp
-    from scipy.optimize import linprog
 
     n = v.shape[0]
     a, b, c, d = ch.ss()
@@ -478,8 +494,7 @@ def _gain_lp(
         + [(None, None)] * n
     )
     cost = np.concatenate([np.zeros((2 + nx) * n), -v])
-    res = linprog(cost, A_ub=a_ub, b_ub=b_ub, A_eq=a_eq, b_eq=b_eq, bounds=bounds,
-                  method="highs")  # fmt: skip
+    res = _linprog(cost, A_ub=a_ub, b_ub=b_ub, A_eq=a_eq, b_eq=b_eq, bounds=bounds)
     if res.status != 0:
         raise ConfigError(f"the bound's gain LP failed: {res.message}")
     y = np.asarray(res.x[(2 + nx) * n :], dtype=float)
