@@ -152,39 +152,48 @@ def pytest_terminal_summary(terminalreporter: pytest.TerminalReporter) -> None:
 # module, a class or a single test, by node id prefix. Only the order of hand-out depends on
 # this list; a unit missing from it goes after those listed, in pytest-xdist's own order (most
 # tests first). Ranked by wall time less the time spent waiting for a core (runq), from the
-# last whole-suite --cpu-durations run (session 21, 1755 tests; per module, summed over its
-# tests where it is one unit), with the CPU cuts of session 22 applied (platform defaults
-# 31 -> 7 s, tune 82 -> 50 s, each fuzz part 18 -> 14 s, cue acceptance 13 -> 8 s): the units
-# that mostly wait (liveness, fault injection, browser, docs) come first, since their time
-# does not shrink with the CPU.
+# last whole-suite --cpu-durations run (session 23, 1953 tests, per unit summed over its
+# tests), with that session's CPU cuts applied (omct 22 -> 9 s, each fuzz ride part 15 -> 12
+# s): the units that mostly wait (liveness, safety files, docs, fault injection, browser,
+# the extension tests' subprocesses) come first, since their time does not shrink with the CPU.
 _LONG_UNITS: tuple[str, ...] = (
     "tests/test_liveness.py",
-    "tests/test_fault_injection.py",
-    "tests/test_mpc_reference.py::test_tune_drives_an_optimal_preset",
+    "tests/test_safety_files.py",
     "tests/test_docs.py::test_docs_build",
     "tests/test_tune.py",
-    "tests/test_safety_files.py",
-    "tests/test_mpc_acceptance.py",
+    "tests/test_fault_injection.py",
+    "tests/test_extend_cueing.py",
     "tests/test_browser_drawing.py",
-    "tests/test_omct.py",
-    "tests/test_cue_bound_corr.py",  # new in session 21's merge: 20 s CPU (this session's run)
-    "tests/test_fuzz_inputs.py::TestMutatedRides",
+    "tests/test_extend_all.py",
     "tests/test_browser.py::test_view_of_the_demo_ride",
     "tests/test_browser.py",
-    "tests/test_bridge.py",
-    "tests/test_telemetry.py",
-    "tests/test_wire_clock.py",
     "tests/test_easysmc_emulator.py",
+    "tests/test_mpc_acceptance.py",
+    "tests/test_extend_platform_game.py",
+    "tests/test_mpc_reference.py::test_tune_drives_an_optimal_preset",
+    "tests/test_cue_bound_corr.py",
+    "tests/test_iface.py",
+    "tests/test_new_user.py",
+    "tests/test_telemetry.py",
+    "tests/test_fk_rides.py",
+    "tests/test_wire_clock.py",
+    "tests/test_bridge.py",
+    "tests/test_cue_bound.py",
+    "tests/test_fuzz_inputs.py::TestMutatedRides",
+    "tests/test_cli_defects.py",
     "tests/test_pipeline.py",
+    "tests/test_bridge_new_games.py",
+    "tests/test_corner4.py",
+    "tests/test_easysmc_pipeline.py",
+    "tests/test_viewer.py",
+    "tests/test_latency_acceptance.py",
+    "tests/test_omct.py",
     "tests/test_cue_acceptance.py",
     "tests/test_limiter_jerk.py",
-    "tests/test_cue_bound.py",
     "tests/test_fuzz_inputs.py::test_mutated_config_files",
     "tests/test_platform_defaults.py",
-    "tests/test_easysmc_pipeline.py",
     "tests/test_mpc.py",
     "tests/test_compare.py",
-    "tests/test_extend_cueing.py",
     "tests/test_cueing_filters.py",
 )
 # Modules handed out one test at a time: long tests that share no module or class fixture.

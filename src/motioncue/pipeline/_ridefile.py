@@ -44,6 +44,8 @@ import io
 import json
 import math
 import os
+import re
+import struct
 import warnings
 import zipfile
 from collections.abc import Callable
@@ -409,6 +411,62 @@ def _read_source(
     return data, where
 
 
+_NPY_HEADER_LENGTH = {(1, 0): struct.Struct("<H"), (2, 0): struct.Struct("<I")}
+_CANONICAL_NPY_HEADER = re.compile(
+    rb"\{'descr': '[<>|=]?[a-zA-Z][0-9]{0,2}', 'fortran_order': (?:True|False), "
+    rb"'shape': \((?:[0-9]{1,19}, ?)*[0-9]{0,19}\), \} *\n"
+)
+"""A ``.npy`` header as numpy writes it for a plain array (no escapes, nothing to filter):
+the only kind whose parse :func:`_read_npy_header` keeps."""
+_NPY_HEADERS: dict[bytes, tuple[tuple[int, ...], bool, np.dtype[Any]]] = {}
+_NPY_HEADERS_MAX = 256
+
+
+def _read_up_to(fp: IO[bytes], size: int) -> bytes:
+    """Up to ``size`` bytes of ``fp``, read as numpy's ``.npy`` reader reads them (again until
+    ``size`` bytes or an empty read), without its error on a short read."""
+    data = b""
+    while True:
+        chunk = fp.read(size - len(data))
+        data += chunk
+        if not chunk or len(data) == size:
+            return data
+
+
+def _read_npy_header(
+    fp: IO[bytes], version: tuple[int, int]
+) -> tuple[tuple[int, ...], bool, np.dtype[Any]]:
+    """``(shape, fortran_order, dtype)`` of the ``.npy`` header at ``fp`` (after the magic):
+    numpy's own parser and its errors (``read_array_header_1_0`` / ``_2_0``), given the same
+    bytes as it would read from ``fp``. A canonical header's parse is kept (at most
+    :data:`_NPY_HEADERS_MAX`, then forgotten), so that the same header is not parsed twice:
+    numpy parses it with Python's compiler (``ast.literal_eval``), most of a small ride's
+    reading time.
+    """
+    length = _NPY_HEADER_LENGTH[version]
+    raw = _read_up_to(fp, length.size)
+    if len(raw) == length.size:
+        raw += _read_up_to(fp, length.unpack(raw)[0])
+    held = _NPY_HEADERS.get(raw)
+    if held is not None:
+        return held
+    # numpy parses the header text with Python's literal parser, which warns on a
+    # damaged header's stray backslash escapes ("invalid escape sequence"): a line on
+    # the user's terminal before the refusal says why, so the warning is dropped
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", DeprecationWarning)
+        warnings.simplefilter("ignore", SyntaxWarning)
+        if version == (1, 0):
+            parsed = np.lib.format.read_array_header_1_0(io.BytesIO(raw))
+        else:
+            parsed = np.lib.format.read_array_header_2_0(io.BytesIO(raw))
+    if len(raw) <= 512 and _CANONICAL_NPY_HEADER.fullmatch(raw, length.size):
+        if len(_NPY_HEADERS) >= _NPY_HEADERS_MAX:
+            _NPY_HEADERS.clear()
+        _NPY_HEADERS[raw] = parsed
+    return parsed
+
+
 def _read_member(zf: zipfile.ZipFile, info: zipfile.ZipInfo, key: str, where: str) -> np.ndarray:
     """One ``.npy`` member, parsed by hand: version 1/2 header, plain dtype of the allowed
     kinds, sizes checked before reading."""
@@ -420,16 +478,7 @@ def _read_member(zf: zipfile.ZipFile, info: zipfile.ZipInfo, key: str, where: st
             raise ConfigError(
                 f"{where}: array {key!r} has .npy version {version}; allowed 1.0, 2.0"
             )
-        # numpy parses the header text with Python's literal parser, which warns on a
-        # damaged header's stray backslash escapes ("invalid escape sequence"): a line on
-        # the user's terminal before the refusal says why, so the warning is dropped
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore", DeprecationWarning)
-            warnings.simplefilter("ignore", SyntaxWarning)
-            if version == (1, 0):
-                shape, fortran, dtype = np.lib.format.read_array_header_1_0(fp)
-            else:
-                shape, fortran, dtype = np.lib.format.read_array_header_2_0(fp)
+        shape, fortran, dtype = _read_npy_header(fp, version)
         if (
             dtype.hasobject
             or dtype.fields is not None

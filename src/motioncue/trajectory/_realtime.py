@@ -56,6 +56,13 @@ if TYPE_CHECKING:
 
 __all__ = ["LimiterState", "RealtimeLimiter", "braking_distance", "braking_speed_cap"]
 
+# RealtimeLimiter.run: frames checked at once where the stream lands on its targets (a
+# window that doubles up to _MAX_WINDOW while every frame lands), and how many frames in a
+# row step() must land on every axis before run() tries that again after a frame it changed
+_FIRST_WINDOW = 64
+_MAX_WINDOW = 4096
+_CALM_FRAMES = 8
+
 
 def braking_distance(v: float, a_max: float, dt_s: float) -> float:
     """Distance still travelled after a frame at speed ``|v|`` when braking at ``a_max``.
@@ -240,6 +247,7 @@ class RealtimeLimiter:
     _params: tuple[tuple[float, ...], ...] = field(init=False, repr=False)
     _dt: float = field(init=False, repr=False)
     _inv_dt: float = field(init=False, repr=False)
+    _arrays: tuple[np.ndarray, ...] = field(init=False, repr=False)
 
     def __post_init__(self) -> None:
         if not (isinstance(self.dt_s, int | float) and 0.0 < self.dt_s <= 1.0):
@@ -262,6 +270,9 @@ class RealtimeLimiter:
         object.__setattr__(self, "_params", params)
         object.__setattr__(self, "_dt", dt)
         object.__setattr__(self, "_inv_dt", 1.0 / dt)
+        # the same numbers per axis as arrays (q_min, q_max, d_max, ddt, half_inv): run()
+        columns = np.array([p[:5] for p in params], dtype=np.float64).T
+        object.__setattr__(self, "_arrays", tuple(columns[j].copy() for j in range(5)))
 
     @property
     def n_actuators(self) -> int:
@@ -368,7 +379,10 @@ class RealtimeLimiter:
     def run(self, state: LimiterState, q_targets: ArrayLike) -> np.ndarray:
         """Step through a whole stream of targets (N, n); returns the frames (N, n).
 
-        Same numbers as calling :meth:`step` frame by frame (it does exactly that).
+        Same numbers and the same final ``state`` as calling :meth:`step` frame by frame.
+        Where the stream lands on its targets (the usual case: no limit reached), whole
+        stretches of frames are checked at once (:meth:`_landed_prefix`: the same float
+        operations as :func:`_level_step`, on arrays); every other frame is :meth:`step`.
         """
         targets = np.asarray(q_targets, dtype=float)
         if targets.ndim != 2 or targets.shape[1] != self.n_actuators:
@@ -376,7 +390,65 @@ class RealtimeLimiter:
                 f"targets have shape {targets.shape}; expected (N, {self.n_actuators})"
             )
         out = np.empty_like(targets)
+        n_total = targets.shape[0]
         step = self.step
-        for k, row in enumerate(targets.tolist()):
-            out[k] = step(state, row)
+        k = 0
+        calm = _CALM_FRAMES  # frames in a row that step() landed on every axis
+        window = _FIRST_WINDOW
+        while k < n_total:
+            if calm >= _CALM_FRAMES:
+                block = targets[k : k + window]
+                m = self._landed_prefix(state, block)
+                out[k : k + m] = block[:m]
+                k += m
+                if m == block.shape[0]:
+                    window = min(2 * window, _MAX_WINDOW)
+                    continue
+                window, calm = _FIRST_WINDOW, 0
+            clamped, nonfinite = state.n_clamped, state.n_nonfinite
+            out[k] = step(state, targets[k].tolist())
+            landed = state.n_clamped == clamped and state.n_nonfinite == nonfinite
+            calm = calm + 1 if landed else 0
+            k += 1
         return out
+
+    def _landed_prefix(self, state: LimiterState, block: np.ndarray) -> int:
+        """How many leading frames of ``block`` (m, n) :meth:`step` would send exactly as
+        targeted on every axis (finite targets, no stroke-end budget to apply, the landing
+        test of :func:`_level_step` passed); advances ``state`` over those frames.
+
+        Each frame's inputs (last frame, last speed, last target) are those the previous
+        frames leave when they land, and the checks are :func:`_level_step`'s float
+        operations in its order on float64 arrays (IEEE, as on Python floats), so a frame
+        counted here is one :meth:`step` sends unchanged; a frame whose stroke-end test
+        is true (where :func:`_vcap` may lower a bound) ends the prefix, and :meth:`step`
+        decides it.
+        """
+        if block.shape[0] == 0:
+            return 0
+        q_min, q_max, d_max, ddt, half_inv = self._arrays
+        dt, inv_dt = self._dt, self._inv_dt
+        with np.errstate(invalid="ignore", over="ignore"):
+            x = np.concatenate([np.asarray([state.q]), block[:-1]])
+            want_prev = np.concatenate([np.asarray([state.last_target]), block[:-1]])
+            dd = (block - x) * inv_dt
+            d = np.concatenate([np.asarray([state.v]), dd[:-1]])
+            dw = (block - want_prev) * inv_dt
+            hi = d + ddt
+            hi = np.where(hi > d_max, d_max, hi)
+            lo = d - ddt
+            lo = np.where(lo < -d_max, -d_max, lo)
+            ok = np.isfinite(block)
+            ok &= ~((hi > 0.0) & (x + hi * dt + hi * hi * half_inv > q_max))
+            ok &= ~((lo < 0.0) & (x + lo * dt - lo * lo * half_inv < q_min))
+            ok &= (lo <= dd) & (dd <= hi)
+            e = dd - dw
+            ok &= (-ddt <= e) & (e <= ddt)
+        rows = ok.all(axis=1)
+        m = block.shape[0] if rows.all() else int(np.argmin(rows))
+        if m:
+            state.q[:] = block[m - 1].tolist()
+            state.v[:] = dd[m - 1].tolist()
+            state.last_target[:] = block[m - 1].tolist()
+            state.n_frames += m
+        return m
