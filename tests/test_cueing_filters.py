@@ -157,3 +157,32 @@ def test_rate_limit_choppy_then_calm() -> None:
     x = np.where(t < 8000, 1e-3 * t + rng.normal(0, 2e-3, t.size), np.sin(t * 1e-3))
     for step in (1e-3, 5e-4):
         np.testing.assert_allclose(rate_limit_array(x, step, 0.3), loop(x, step, 0.3), atol=1e-12)
+
+
+@pytest.mark.parametrize("seed", range(5))
+def test_tustin_section_equals_scipy_bilinear_with_the_prewarped_rate(seed: int) -> None:
+    """The substitution is written out (importing scipy.signal costs ~0.9 s at every start):
+    the section equals scipy.signal.bilinear's at fs' = K / 2, for random proper transfer
+    functions of order 1 and 2 (numerators of every degree up to the order)."""
+    from scipy.signal import bilinear
+
+    rng = np.random.default_rng(seed)
+    fs = float(rng.uniform(20.0, 1000.0))
+    for order in (1, 2):
+        for n_num in range(1, order + 2):
+            den = (1.0, *rng.uniform(0.1, 20.0, order))
+            num = tuple(rng.normal(size=n_num))
+            w0 = float(rng.uniform(0.01, 0.9) * np.pi * fs)
+            got = tustin_section(num, den, fs, w0)
+            k = w0 / np.tan(w0 / (2.0 * fs))
+            b, a = bilinear(np.trim_zeros(np.asarray(num), "f"), den, fs=k / 2.0)
+            b = np.concatenate([b, np.zeros(3 - len(b))]) / a[0]
+            a = np.concatenate([a, np.zeros(3 - len(a))]) / a[0]
+            want = (b[0], b[1], b[2], 1.0, a[1], a[2])
+            np.testing.assert_allclose(got, want, rtol=1e-11, atol=1e-12 * max(abs(b).max(), 1))
+            got_2fs = tustin_section(num, den, fs, None)  # no prewarp: K = 2 fs
+            b, a = bilinear(np.trim_zeros(np.asarray(num), "f"), den, fs=fs)
+            b = np.concatenate([b, np.zeros(3 - len(b))]) / a[0]
+            a = np.concatenate([a, np.zeros(3 - len(a))]) / a[0]
+            np.testing.assert_allclose(got_2fs, (b[0], b[1], b[2], 1.0, a[1], a[2]),
+                                       rtol=1e-11, atol=1e-12 * max(abs(b).max(), 1))  # fmt: skip

@@ -60,8 +60,6 @@ def tustin_section(
     tuple of 6 floats
         ``(b0, b1, b2, 1.0, a1, a2)``, normalised so that ``a0 = 1``.
     """
-    from scipy.signal import bilinear
-
     den_a = np.trim_zeros(np.asarray(den, dtype=float), "f")
     num_a = np.trim_zeros(np.asarray(num, dtype=float), "f")
     order = len(den_a) - 1
@@ -77,11 +75,26 @@ def tustin_section(
                 f"({nyquist:g} rad/s at fs = {fs_hz:g} Hz); raise the sample rate"
             )
         k = warp_rad_s / math.tan(warp_rad_s / (2.0 * fs_hz))
-    # scipy's bilinear substitutes s = 2 fs' (z - 1)/(z + 1): fs' = K / 2 gives the prewarp
-    b, a = bilinear(num_a, den_a, fs=k / 2.0)
+    b, a = _bilinear(num_a, order, k), _bilinear(den_a, order, k)
     b = np.concatenate([b, np.zeros(3 - len(b))]) / a[0]
     a = np.concatenate([a, np.zeros(3 - len(a))]) / a[0]
     return (float(b[0]), float(b[1]), float(b[2]), 1.0, float(a[1]), float(a[2]))
+
+
+def _bilinear(poly: NDArray[np.float64], order: int, k: float) -> NDArray[np.float64]:
+    """``p(K (z - 1) / (z + 1)) (z + 1)^order`` for ``p`` of degree <= ``order`` (coefficients
+    highest power first, in ``s`` and in ``z``): the substitution of
+    :func:`scipy.signal.bilinear` (with ``fs = K / 2``), written out because importing
+    :mod:`scipy.signal` costs about 0.9 s of CPU (it imports :mod:`scipy.stats`), paid at every
+    start of ``bridge`` and ``play`` that builds a washout. tests/test_cueing_filters.py checks it
+    against scipy's."""
+    out = np.zeros(order + 1)
+    for power, coef in enumerate(poly[::-1]):  # coef of s**power
+        term = np.polynomial.polynomial.polypow([-1.0, 1.0], power)  # (z - 1)**power, low first
+        term = np.polynomial.polynomial.polymul(term, np.polynomial.polynomial.polypow(
+            [1.0, 1.0], order - power))  # fmt: skip
+        out += coef * k**power * term
+    return out[::-1]
 
 
 def soft_limit(x: float, limit: float, knee: float) -> float:
