@@ -4,6 +4,7 @@ integrator of the platform, and the plan's poses within it."""
 from __future__ import annotations
 
 import dataclasses
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -14,13 +15,14 @@ from motioncue.cueing._mpc import MpcCueing
 from motioncue.cueing._mpc_params import MpcParams
 
 FS = 100.0
+ROOT = Path(__file__).resolve().parents[1]
 BOX_M = 0.03
 
 
 def _design(**kw: object) -> MpcCueing:
     p = load_cueing("mpc-hexapod")
     assert p.mpc is not None
-    return MpcCueing(dataclasses.replace(p, mpc=dataclasses.replace(p.mpc, **kw)), FS)  # type: ignore[arg-type]
+    return MpcCueing(dataclasses.replace(p, mpc=dataclasses.replace(p.mpc, **kw)), FS)
 
 
 @pytest.fixture(scope="module")
@@ -91,4 +93,15 @@ def test_the_plan_stays_in_the_box_that_it_would_leave_without_it(boxed: MpcCuei
 @pytest.mark.parametrize("bad", [(0.0, 0.1, 1e9), (0.1, float("nan"), 1e9), (0.1, 0.1)])
 def test_trans_limit_is_validated_with_the_value_and_the_range(bad: tuple[float, ...]) -> None:
     with pytest.raises(ConfigError, match=r"trans_limit_m = .* allowed: 3 numbers in \(0, 1e9\]"):
-        MpcParams(trans_limit_m=bad)  # type: ignore[arg-type]
+        MpcParams(trans_limit_m=bad)
+
+
+def test_the_preset_table_reads_trans_limit_m_and_refuses_a_bad_one(tmp_path: Path) -> None:
+    src = (ROOT / "configs" / "cueing" / "mpc-hexapod.toml").read_text()
+    path = tmp_path / "boxed.toml"
+    path.write_text(src.replace("\n[mpc]\n", "\n[mpc]\ntrans_limit_m = [0.05, 0.04, 1e9]\n"))
+    mp = load_cueing(path).mpc
+    assert mp is not None and mp.trans_limit_m == (0.05, 0.04, 1e9)
+    path.write_text(src.replace("\n[mpc]\n", "\n[mpc]\ntrans_limit_m = [0.05, -0.04, 1e9]\n"))
+    with pytest.raises(ConfigError, match="trans_limit_m"):
+        load_cueing(path)
