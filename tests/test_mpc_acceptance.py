@@ -18,12 +18,13 @@ figures are in the constants' comments), each channel apart and the geometric me
 fy (the tuner's strength). Both plans pursue strength (issue 20 item 7: ``[mpc] w_vehicle``
 prices the error to the vehicle's whole motion). Not met, on the flowing-formula excerpt only
 (the exceptions ``CORR_FLOOR``, ``REVERSAL_CEIL``, ``FALSE_CEIL`` with their figures):
-``optimal``'s reversals 3.57 % (the classical default's 5.37 %; the whole drive 1.91 %) and
-fy correlation 0.894, its fy share 1.21x the default's (below 1.3x); ``mpc``'s fx
-correlation 0.917 and false cues 15.9 % (the pitch and roll rates of its tilt). Against
-``racing-hexapod-firm`` (stewart6-linear's default now) ``mpc``'s fy share is 0.88 / 1.20 /
-0.90x on the excerpts (fx 1.35 / 1.89 / 1.77x), below the 1.15x on flowing-formula and the
-lap: see the presets' headers.
+``optimal``'s reversals 3.57 % (the whole drive 1.91 %) and fy correlation 0.894;
+``mpc``'s fx correlation 0.917 and false cues 15.9 % (the pitch and roll rates of its tilt).
+Against ``racing-hexapod-firm`` (``CLASSICAL``, stewart6-linear's default since issue 20; it
+reverses 3.43 % of the flowing-formula excerpt) the fy share of ``mpc`` is 0.88 / 1.20 / 0.90x
+on the excerpts (fx 1.34 / 1.89 / 1.77x) and of ``optimal`` 0.86 / 1.36 / 1.00x (fx 2.27 /
+3.48 / 2.91x): below the issue's 1.15x (mpc) and 1.3x (optimal) in fy on flowing-formula and
+the lap, so ``RATIO_*`` hold the measured floors there: see the presets' headers.
 
 The physical bound of issue 12's note is kept: for any motion of this hexapod (tilt at most
 15 deg, translation at most 0.5 m/s; it reaches about 12.8 deg and 0.36 m/s) a T-second moving
@@ -31,7 +32,10 @@ average ``M`` of its specific force ``s`` has ``|M s| <= 2 v_max / T + g sin(til
 translational part averages to a speed difference over T, the tilt part is bounded), so
 ``|M H s| <= |h|_1 (2 v_max / T + g sin tilt_max)`` for the otolith ``H`` (impulse response
 ``h``); as ``|M|_1 = 1``, the RMS perceived error is at least the RMS of ``max(|M H d| - C, 0)``
-for the vehicle's ``d``: 13.0 m/s^2 on flowing-formula fy, which no preset can beat.
+for the vehicle's ``d``: 13.0 m/s^2 on the whole of flowing-formula's fy, 13.76 m/s^2 on its
+``EXCERPT_S`` window (the models starting at rest there, as in the chain's runs of the
+excerpt), which no preset's run of that excerpt beats (checked on the runs the other tests
+use, so the check costs no run of its own).
 """
 
 from __future__ import annotations
@@ -60,28 +64,32 @@ LAP = ROOT / "configs" / "recordings" / "lap.csv"
 EXCERPT_S = (30.0, 60.0)
 """The window of each drive (s from its start)."""
 
-CLASSICAL = "racing-hexapod"
+CLASSICAL = "racing-hexapod-firm"
 """The classical default of stewart6-linear (issue 20 compares with it)."""
 
 DRIVES = ("flowing-formula", "forest-rally", "lap")
 
 # Floors of the rendered-share ratio to the classical default, (fx, fy, geometric mean), per
-# excerpt in DRIVES order and pooled; measured (excerpts): optimal fx 2.94 / 4.86 / 3.98,
-# fy 1.21 / 2.41 / 1.67, geometric mean 1.89 / 3.42 / 2.58, pooled 3.97 / 1.53 / 2.46;
+# excerpt in DRIVES order and pooled; measured (excerpts), against racing-hexapod-firm (re-measured
+# by the mpc helper in session 23 when CLASSICAL changed, the optimal preset unchanged): optimal
+# fx 2.27 / 3.48 / 2.91, fy 0.86 / 1.36 / 1.00, geometric mean 1.40 / 2.17 / 1.71, pooled
+# 2.93 / 1.00 / 1.71;
 # mpc (the w_vehicle/sign-guard plan, taken in session 22 once its solves were fast: DAQP's own
-# interface, warm-started through the guard) fx 1.74 / 2.64 / 2.42, fy 1.25 / 2.14 / 1.51,
-# geometric mean 1.47 / 2.38 / 1.91, pooled 2.30 / 1.45 / 1.83.
+# interface, warm-started through the guard), against racing-hexapod-firm (session 23):
+# fx 1.34 / 1.89 / 1.77, fy 0.88 / 1.20 / 0.90, geometric mean 1.09 / 1.51 / 1.26, pooled
+# 1.70 / 0.95 / 1.27 (fy below the issue's 1.15x on flowing-formula and the lap: module
+# docstring).
 RATIO_OPTIMAL = {
-    "flowing-formula": (2.8, 1.15, 1.8),
-    "forest-rally": (4.5, 2.25, 3.2),
-    "lap": (3.7, 1.55, 2.4),
-    "pooled": (3.7, 1.45, 2.3),
+    "flowing-formula": (2.2, 0.8, 1.35),
+    "forest-rally": (3.4, 1.3, 2.1),
+    "lap": (2.85, 0.95, 1.65),
+    "pooled": (2.85, 0.95, 1.65),
 }
 RATIO_MPC = {
-    "flowing-formula": (1.6, 1.15, 1.35),
-    "forest-rally": (2.4, 1.95, 2.2),
-    "lap": (2.2, 1.4, 1.75),
-    "pooled": (2.1, 1.35, 1.7),
+    "flowing-formula": (1.3, 0.85, 1.05),
+    "forest-rally": (1.85, 1.15, 1.45),
+    "lap": (1.7, 0.85, 1.2),
+    "pooled": (1.65, 0.9, 1.2),
 }
 # correlation floors (fx, fy) where the issue's 0.95 / 0.90 is not met: optimal on the
 # flowing-formula excerpt gives 0.948 / 0.894 (the whole drive 0.943 / 0.920);
@@ -97,6 +105,11 @@ REVERSAL_CEIL = {("optimal-hexapod", "flowing-formula"): 0.04}
 # false-cue ceilings where the issue's 15 % is not met on an excerpt: mpc on the
 # flowing-formula excerpt 15.93 % (pitch and roll rates of its tilt; the whole drive 10.39 %)
 FALSE_CEIL: dict[tuple[str, str], float] = {("mpc-hexapod", "flowing-formula"): 0.17}
+
+
+BOUND_FLOOR_FY = 13.5
+"""Floor of the physical bound of the flowing-formula excerpt's fy (m/s^2; measured 13.76, the
+whole drive 13.0): the least RMS perceived fy error any motion of the hexapod can reach there."""
 
 
 def _drives() -> list[tuple[str, np.ndarray, np.ndarray]]:
@@ -119,12 +132,24 @@ def rig() -> tuple[Any, Any]:
 
 
 @pytest.fixture(scope="module")
-def pooled(rig: tuple[Any, Any]) -> dict[str, tuple[CueMetrics, int, list[CueMetrics]]]:
+def excerpts() -> list[tuple[str, np.ndarray, np.ndarray]]:
+    """The ``EXCERPT_S`` window of each drive of ``DRIVES``: ``(label, f, w)``."""
+    return _drives()
+
+
+RMS_ERROR_FY: dict[tuple[str, str], float] = {}
+"""RMS perceived fy error (m/s^2) of each preset on each excerpt, filled by :func:`pooled`."""
+
+
+@pytest.fixture(scope="module")
+def pooled(
+    rig: tuple[Any, Any], excerpts: list[tuple[str, np.ndarray, np.ndarray]]
+) -> dict[str, tuple[CueMetrics, int, list[CueMetrics]]]:
     """Per preset: the pooled metrics of the excerpts, the frames the actuator limiter changed
-    and each excerpt's own metrics."""
+    and each excerpt's own metrics (and each run's RMS fy error in ``RMS_ERROR_FY``)."""
     plat, lim = rig
     thr = get_model_set("telban-cardullo-2005").thresholds
-    drives = _drives()
+    drives = excerpts
     assert tuple(label for label, _, _ in drives) == DRIVES
     out = {}
     for name in (CLASSICAL, "mpc-hexapod", "optimal-hexapod"):
@@ -134,6 +159,7 @@ def pooled(rig: tuple[Any, Any]) -> dict[str, tuple[CueMetrics, int, list[CueMet
         for label, f, w in drives:
             run = run_chain(f, w, params, plat, lim, RATE, recording=label, preset=name)
             ev = run.evaluation
+            RMS_ERROR_FY[(name, label)] = float(ev.rms_error[1])
             pv.append(ev.perceived_vehicle)
             ps.append(ev.perceived_sim)
             share = run.poses_clamped / f.shape[0]
@@ -217,7 +243,11 @@ def _otolith_bound(f_y: np.ndarray, tilt_rad: float, v_m_s: float) -> float:
     return best
 
 
-def test_no_preset_beats_the_physical_bound_on_flowing_formula_fy(rig: tuple[Any, Any]) -> None:
+def test_no_preset_beats_the_physical_bound_on_flowing_formula_fy(
+    rig: tuple[Any, Any],
+    excerpts: list[tuple[str, np.ndarray, np.ndarray]],
+    pooled: dict[str, tuple[CueMetrics, int, list[CueMetrics]]],
+) -> None:
     plat, lim = rig
     # what the hexapod reaches: tilt and translational speed (legs within their limits)
     rng = np.random.default_rng(0)
@@ -228,12 +258,11 @@ def test_no_preset_beats_the_physical_bound_on_flowing_formula_fy(rig: tuple[Any
     jac = np.abs(np.asarray(plat.jacobian(np.zeros(6))))
     v_reached = float(np.min(lim.v_max / np.maximum(jac[:, 1], 1e-12)))
     assert tilt_reached < math.radians(15.0) and v_reached < 0.5
-    (path,) = [p for p in sample_drives("held-out", kind="car") if p.stem == "flowing-formula"]
-    _, data, _ = load_generate_input(str(path))
-    r = resample(data, RATE)
-    f, w = np.asarray(r.f, dtype=float), np.asarray(r.w, dtype=float)
+    # the bound of the flowing-formula excerpt (the vehicle's and the platform's models start
+    # at rest on it, as in the chain's runs), against every preset's run on that excerpt
+    (f,) = [f for label, f, _ in excerpts if label == "flowing-formula"]
     bound = _otolith_bound(f[:, 1], math.radians(15.0), 0.5)
-    assert bound > 12.5  # 13.0 m/s^2: the 35 % of issue 12 (12.5) was out of reach here
-    for name in (CLASSICAL, "optimal-hexapod"):
-        ev = run_chain(f, w, load_cueing(name), plat, lim, RATE).evaluation
-        assert ev.rms_error[1] >= bound, name  # the bound holds for every preset
+    assert bound > BOUND_FLOOR_FY  # the bound is not vacuous
+    assert set(pooled) == {CLASSICAL, "mpc-hexapod", "optimal-hexapod"}
+    for name in pooled:
+        assert RMS_ERROR_FY[(name, "flowing-formula")] >= bound, name

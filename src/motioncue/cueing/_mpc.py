@@ -1016,11 +1016,16 @@ class MpcCueing:
         """Constraint rows of the QP (stroke, speed, acceleration of each leg per block, the
         tilt rate, and the combined tilt with ``tilt_fz_use``)."""
         nl = self.limits.q_mid.shape[0]
-        return len(self.cond.ends) * (3 * nl + len(self._tilt_axes()) + 4 * self._combined_tilt())
+        per_block = 3 * nl + len(self._tilt_axes()) + 4 * self._combined_tilt()
+        return len(self.cond.ends) * (per_block + len(self._trans_boxed()))
 
     def _combined_tilt(self) -> bool:
         """Whether the QP has the combined-tilt rows (``tilt_fz_use`` with roll and pitch)."""
         return len(self._tilt_axes()) == 2 and self.mpc.tilt_fz_use > 0.0
+
+    def _trans_boxed(self) -> list[int]:
+        """Moved translations with a ``trans_limit_m`` below ``1e9`` (their pose rows)."""
+        return [i for i in (0, 1, 2) if self.params.dofs[i] and self.mpc.trans_limit_m[i] < 1e9]
 
     def _guard_channels(self) -> list[int]:
         return [i for i in range(6) if self.mpc.sign_guard[i] > 0.0]
@@ -1118,6 +1123,11 @@ class MpcCueing:
             fixed_sel.append(sel)
             bv = np.array([bound, bound, bound / math.sqrt(2.0), bound / math.sqrt(2.0)])
             fixed_bound.append(np.tile(bv, nb))
+        boxed = self._trans_boxed()
+        if boxed:
+            fixed_rows.append(gp[:, boxed, :].reshape(-1, n_u))
+            fixed_sel.append(eye12[boxed])
+            fixed_bound.append(np.tile(np.asarray(self.mpc.trans_limit_m)[boxed], nb))
         lbx = np.full(n_u, -np.inf)
         ubx = np.full(n_u, np.inf)
         if math.isfinite(lim.tilt_accel):
@@ -1155,7 +1165,8 @@ class MpcCueing:
         """``(g, A, lba, uba, lbx, ubx)`` of this sample's QP (the Hessian is ``cond.hess``).
 
         Rows, each kind block-major (block end ``b`` outer): leg strokes, leg speeds, leg
-        accelerations, the roll/pitch rates, the combined-tilt octagon."""
+        accelerations, the roll/pitch rates, the combined-tilt octagon, the translation box
+        (``trans_limit_m``)."""
         pre = self._parts()
         lim = self.limits
         m = self.model

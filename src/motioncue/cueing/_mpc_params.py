@@ -35,6 +35,9 @@ washout is the MPC's fallback) plus one ``[mpc]`` table, read by :func:`read_mpc
                                        #   that costs this many fz thresholds (0: none)
     tilt_fz_use_against = 0.4          # optional, optimal only: the same where the vehicle's
                                        #   perceived fz is above its threshold (0: none)
+    trans_limit_m = [0.06, 0.06, 1e9]  # optional, mpc only: |x|, |y|, |z| of the plan at most
+                                       #   this (m; 1e9 = none), so that the legs keep stroke
+                                       #   for the tilt
     tilt_rate_limit_deg_s = 8.0        # optional: the plan's roll/pitch rate limit
                                        #   (default: the [tilt] table's, which the fallback
                                        #   washout keeps)
@@ -165,6 +168,14 @@ class MpcParams:
         (where it is tighter): there a tilt's loss of vertical force would be felt against
         the vehicle (an fz reversal, as with downforce in a fast corner), elsewhere it agrees
         with the vehicle or is below a threshold.
+    trans_limit_m : 3 floats
+        ``mpc`` only: the plan's ``|x|, |y|, |z|`` at every block end at most these (m; hard
+        rows of the QP, exact: the platform model is linear in the pose), each in (0, 1e9];
+        ``1e9`` (the default) means none. A plan that renders corner entries by translation
+        carries the platform to the legs' stroke, where the tilt it then needs for the
+        sustained part has no stroke left (the legs at their limit, the linearised stroke
+        rows force a jump of the other translation: spikes of fx); a box keeps a share of
+        each leg's stroke for the tilt.
     tilt_rate_limit_rad_s : float or None
         Largest roll and pitch rate of the plan (rad/s); ``None``: the preset's
         ``tilt_rate_limit_rad_s`` (the classical fallback always keeps that one).
@@ -204,6 +215,7 @@ class MpcParams:
     tilt_rate_limit_rad_s: float | None = None
     tilt_fz_use: float = 0.0
     tilt_fz_use_against: float = 0.0
+    trans_limit_m: tuple[float, float, float] = (1e9, 1e9, 1e9)
     solver: str = "daqp"
     deadline_ms: float = 6.0
     window_s: float = 4.0
@@ -227,6 +239,13 @@ class MpcParams:
             or not (rs == 0.0 or 1.0 <= rs <= 50.0)
         ):
             raise ConfigError(f"MpcParams.ref_shape = {rs!r} is invalid; allowed: 0 or [1, 50]")
+        tl = tuple(float(x) for x in self.trans_limit_m)
+        if len(tl) != 3 or not all(math.isfinite(x) and 0.0 < x <= 1e9 for x in tl):
+            raise ConfigError(
+                f"MpcParams.trans_limit_m = {self.trans_limit_m!r} is invalid; allowed: 3 "
+                "numbers in (0, 1e9]"
+            )
+        object.__setattr__(self, "trans_limit_m", (tl[0], tl[1], tl[2]))
         object.__setattr__(self, "sign_guard", _vec6("sign_guard", self.sign_guard, 0.0, 10.0))
         if not any(self.w_error):
             raise ConfigError(f"MpcParams.w_error = {self.w_error!r} is invalid; not all zero")
@@ -313,6 +332,7 @@ def read_mpc_table(table: Any) -> MpcParams:
     vals["ref_scale"] = table.vector("ref_scale", 6, list(d.ref_scale))
     vals["ref_scale_hf"] = table.vector("ref_scale_hf", 6, list(d.ref_scale_hf))
     vals["sign_guard"] = table.vector("sign_guard", 6, list(d.sign_guard))
+    vals["trans_limit_m"] = tuple(table.vector("trans_limit_m", 3, list(d.trans_limit_m)))
     if table.has("tilt_rate_limit_deg_s"):
         deg = table.number("tilt_rate_limit_deg_s", lo=0.0, hi=5000.0, lo_open=True)
         vals["tilt_rate_limit_rad_s"] = math.radians(deg)
