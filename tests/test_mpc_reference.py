@@ -217,6 +217,7 @@ def test_the_optimal_sign_guard_cuts_wrong_sign_cues_on_a_drive() -> None:
         w_acc=(0.01, 0.01, 0.01, 10.0, 10.0, 10.0),
         ref_shape=0.0,
         ref_reach_use=0.0,
+        w_vehicle=(0.0,) * 6,  # (the tuned preset's pull to the whole vehicle is not hand-set)
     )
     guarded = _with(base, sign_guard=(0.7, 0.7, 0.0, 0.0, 0.0, 0.0))
     times = []

@@ -48,6 +48,7 @@ from numpy.typing import ArrayLike, NDArray
 from .._errors import ConfigError
 from ._classical import ClassicalWashout
 from ._mpc import (
+    DaqpQp,
     LinearModel,
     MpcResult,
     MpcState,
@@ -56,6 +57,7 @@ from ._mpc import (
     SoftGuardQp,
     build_model,
     fallback_accel,
+    qp_solver,
     recording_arrays,
     reference,
     resolve_reach,
@@ -129,7 +131,7 @@ class OptimalCueing:
     _hess: NDArray[np.float64] = field(init=False, repr=False)
     _tw: NDArray[np.float64] = field(init=False, repr=False)
     _a_mat: NDArray[np.float64] = field(init=False, repr=False)
-    _qp: QpSolver = field(init=False, repr=False)
+    _qp: QpSolver | DaqpQp = field(init=False, repr=False)
     _a_guard: NDArray[np.float64] = field(init=False, repr=False)
     _qp_guard: SoftGuardQp | None = field(init=False, repr=False)
     _fz_h: NDArray[np.float64] | None = field(init=False, repr=False)
@@ -199,7 +201,9 @@ class OptimalCueing:
         object.__setattr__(self, "_hess", hess)
         object.__setattr__(self, "_tw", tw)
         object.__setattr__(self, "_a_mat", a_mat)
-        object.__setattr__(self, "_qp", QpSolver(self.mpc.solver, hess, a_mat.shape[0]))
+        # the mpc route to the solver (DAQP's own interface for "daqp": casadi's argument
+        # conversion of the dense window matrices took most of a solve's time)
+        object.__setattr__(self, "_qp", qp_solver(self.mpc.solver, hess, a_mat.shape[0]))
         # sign guard: the perceived simulator motion ce_i (x - x_vehicle) at block ends
         guard = self._guard_channels()
         ce_thr = m.ce[guard] / m.thresholds[guard][:, None]  # rows in thresholds
@@ -214,6 +218,7 @@ class OptimalCueing:
                 a_mat.shape[0],
                 a_guard.shape[0],
                 self.mpc.sign_guard_weight,
+                direct=True,
             )
             if guard
             else None,
