@@ -427,7 +427,12 @@ def test_bridge_within_the_controllers_own_stroke_parks(rig: Any, live_s: float)
     _, ctrl, _, park = rig
     narrow = ctrl.with_parameters(Fn0C0=600)
     tr = FlakyTransport()
-    st = _run_bridge(rig, narrow, tr, until=lambda b: False, live_s=live_s)
+    # stopped after live_s of frames on the bridge's own clock, not of the test's wall clock:
+    # a fresh clone's quiet run (four workers on two cores) stopped it after 0.4 s of wall
+    # time with the platform at 57384 of its 120000 pulses, short of the stroke end
+    n_live = round(live_s * RATE_HZ)
+    st = _run_bridge(rig, narrow, tr, until=lambda b: b.stats.frames_sent >= n_live,
+                     live_s=120.0)  # fmt: skip
     assert st.state == "stopped" and st.error is None, st.error
     assert any("Fn0C0" in n for n in st.notes), st.notes
     # judged against the controller's own stroke, read from its parameters, not the planner
