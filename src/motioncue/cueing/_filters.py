@@ -85,14 +85,13 @@ def _bilinear(poly: NDArray[np.float64], order: int, k: float) -> NDArray[np.flo
     """``p(K (z - 1) / (z + 1)) (z + 1)^order`` for ``p`` of degree <= ``order`` (coefficients
     highest power first, in ``s`` and in ``z``): the substitution of
     :func:`scipy.signal.bilinear` (with ``fs = K / 2``), written out because importing
-    :mod:`scipy.signal` costs about 0.9 s of CPU (it imports :mod:`scipy.stats`), paid at every
-    start of ``bridge`` and ``play`` that builds a washout. tests/test_cueing_filters.py checks it
-    against scipy's."""
+    :mod:`scipy.signal` costs about 0.9 s of CPU (it imports :mod:`scipy.stats`), which every
+    ``bridge`` start paid to build its washout. tests/test_cueing_filters.py checks it against
+    scipy's."""
+    P = np.polynomial.polynomial  # coefficients lowest power first
     out = np.zeros(order + 1)
     for power, coef in enumerate(poly[::-1]):  # coef of s**power
-        term = np.polynomial.polynomial.polypow([-1.0, 1.0], power)  # (z - 1)**power, low first
-        term = np.polynomial.polynomial.polymul(term, np.polynomial.polynomial.polypow(
-            [1.0, 1.0], order - power))  # fmt: skip
+        term = P.polymul(P.polypow([-1.0, 1.0], power), P.polypow([1.0, 1.0], order - power))
         out += coef * k**power * term
     return out[::-1]
 
