@@ -262,11 +262,18 @@ class _Job:
     cmd: Command
     start_s: float
     end_s: float
-    deltas: tuple[int, ...] = (0, 0, 0, 0)
-    dist: int = 0
-    profile: tuple[float, float, float, float] = (1.0, 1.0, 1.0, 1.0)  # feed, f0, a, b
-    origin: tuple[int, ...] = (0, 0, 0, 0)
-    end: tuple[int, ...] = (0, 0, 0, 0)  # logical positions once done
+    deltas: tuple[int, ...]
+    dist: int
+    profile: tuple[float, float, float, float]  # feed, f0, a, b
+    origin: tuple[int, ...]
+    end: tuple[int, ...]  # logical positions once done
+
+    def rest_from(self, t_s: float, origin: tuple[int, ...], deltas: tuple[int, ...]) -> _Job:
+        """What is left of this move: ``deltas`` (pulses) from ``origin``, started at ``t_s``
+        (s) at the job's own profile, ending where the job ends."""
+        dist = max(abs(d) for d in deltas)
+        t_end = t_s + move_duration_s(dist, *self.profile)
+        return _Job(self.number, self.cmd, t_s, t_end, deltas, dist, self.profile, origin, self.end)
 
 
 @dataclass
@@ -529,16 +536,7 @@ class ControllerModel:
             end[code - 0x24] = signed_from_word(cmd.words[0])
         elif code == 0xAF:
             end[3] = signed_from_word(cmd.words[2])
-        self.queue.append(
-            _Job(
-                number,
-                cmd,
-                start,
-                start + duration,
-                origin=origin,
-                end=tuple(end),
-            )
-        )
+        self._queue_job(number, cmd, start, duration, origin, end)
 
     def _frame_schedule(self, number: int, start_s: float, end_s: float, frame: bool) -> None:
         """Check that a frame job ends within its period (``limits.period_s``).
@@ -634,8 +632,9 @@ class ControllerModel:
             frame = self.limits is not None and speed_code == self.limits.speed_code
             self._frame_schedule(number, start, start + duration, frame and not self.small_segment)
         self._queue_job(
-            number, cmd, start, duration, deltas, dist, (feed, f0, acc_a, acc_b), origin
-        )
+            number, cmd, start, duration, origin, deltas=deltas, dist=dist,
+            profile=(feed, f0, acc_a, acc_b),
+        )  # fmt: skip
 
     def _enqueue_arc(self, number: int, cmd: Command, now_s: float) -> None:
         import math
@@ -664,15 +663,9 @@ class ControllerModel:
         duration = move_duration_s(dist, max(feed, 1), f0, max(acc_a, 1), max(acc_b, 1))
         self._frame_schedule(number, start, start + duration, False)
         self._queue_job(
-            number,
-            cmd,
-            start,
-            duration,
-            deltas,
-            dist,
-            (max(feed, 1), f0, max(acc_a, 1), max(acc_b, 1)),
-            origin,
-        )
+            number, cmd, start, duration, origin, deltas=deltas, dist=dist,
+            profile=(max(feed, 1), f0, max(acc_a, 1), max(acc_b, 1)),
+        )  # fmt: skip
 
     def _queue_job(
         self,
@@ -680,26 +673,26 @@ class ControllerModel:
         cmd: Command,
         start: float,
         duration: float,
-        deltas: Sequence[int],
-        dist: int,
-        profile: tuple[float, float, float, float],
         origin: Sequence[int],
+        end: Sequence[int] | None = None,
+        *,
+        deltas: Sequence[int] = (0, 0, 0, 0),
+        dist: int = 0,
+        profile: tuple[float, float, float, float] = (1.0, 1.0, 1.0, 1.0),
     ) -> None:
-        """Queue a move by ``deltas`` (pulses) from ``origin``, ``start`` to + ``duration`` (s)."""
-        end = [o + d for o, d in zip(origin, deltas, strict=True)]
+        """Queue ``cmd`` from ``start`` to + ``duration`` (s), taking the logical positions
+        (pulses) from ``origin`` to ``end`` (default ``origin`` + ``deltas``).
+
+        A move gives its ``deltas`` (pulses), step count ``dist`` and rate profile (feed Hz,
+        start frequency Hz, acceleration and deceleration Hz/s); a job that moves no axis (a
+        timed wait, a position set) gives none.
+        """
+        if end is None:
+            end = [o + d for o, d in zip(origin, deltas, strict=True)]
         self.queue.append(
-            _Job(
-                number,
-                cmd,
-                start,
-                start + duration,
-                tuple(deltas),
-                dist,
-                profile,
-                tuple(origin),
-                tuple(end),
-            )
-        )
+            _Job(number, cmd, start, start + duration, tuple(deltas), dist, profile,
+                 tuple(origin), tuple(end))
+        )  # fmt: skip
 
     def _stop_now(self, t_s: float) -> None:
         """Cut the executing move at ``t_s`` (position truncated) and keep the rest queued."""
@@ -707,20 +700,7 @@ class ControllerModel:
             job = self.queue[0]
             pos = self.position_at(t_s)
             rest = tuple(o + d - p for o, d, p in zip(job.origin, job.deltas, pos, strict=True))
-            remaining = max(abs(r) for r in rest)
-            feed, f0, a, b = job.profile
-            new = _Job(
-                job.number,
-                job.cmd,
-                t_s,
-                t_s + move_duration_s(remaining, feed, f0, a, b),
-                rest,
-                remaining,
-                job.profile,
-                pos,
-                job.end,
-            )
-            self.queue[0] = new
+            self.queue[0] = job.rest_from(t_s, pos, rest)
             self.trace.append(TraceEntry(t_s, self.address, pos, job.number))
 
     def _smooth_split(self, now_s: float) -> float:
@@ -735,7 +715,7 @@ class ControllerModel:
         _, rate = move_progress(job.dist, *job.profile, now_s - job.start_s)
         self._stop_now(now_s)
         rest = self.queue[0]
-        feed, f0, a, b = job.profile
+        _, f0, _, b = job.profile
         if rate <= f0 or not rest.dist:
             return now_s
         d_dec = min(rest.dist, (rate * rate - f0 * f0) / (2.0 * b))
@@ -746,18 +726,8 @@ class ControllerModel:
         t_end = now_s + move_duration_s(seg_dist, *profile)
         mid = tuple(o + d for o, d in zip(rest.origin, seg, strict=True))
         first = _Job(job.number, job.cmd, now_s, t_end, seg, seg_dist, profile, rest.origin, mid)
-        left = tuple(d - s for d, s in zip(rest.deltas, seg, strict=True))
-        left_dist = max(abs(d) for d in left)
-        second = _Job(
-            job.number,
-            job.cmd,
-            t_end,
-            t_end + move_duration_s(left_dist, feed, f0, a, b),
-            left,
-            left_dist,
-            job.profile,
-            mid,
-            rest.end,
+        second = rest.rest_from(
+            t_end, mid, tuple(d - s for d, s in zip(rest.deltas, seg, strict=True))
         )
         self.queue.popleft()
         self.queue.appendleft(second)
