@@ -162,6 +162,8 @@ class ACDecoder(Decoder):
     """
 
     game = "ac"
+    default_port = DEFAULT_PORT
+    title = "Assetto Corsa UDP remote telemetry (RTCarInfo; motioncue sends the handshake)"
     PEER_PORT = DEFAULT_PORT
     """The game's port, where requests go."""
     LISTEN_PORT = 0
@@ -226,11 +228,4 @@ class ACDecoder(Decoder):
                           {"rpm": rpm, "gear": gear - 1 if gear >= 1 else -1})  # fmt: skip
 
 
-INFO = register_game(
-    GameInfo(
-        name="ac",
-        default_port=DEFAULT_PORT,
-        decoder=ACDecoder,
-        title="Assetto Corsa UDP remote telemetry (RTCarInfo; motioncue sends the handshake)",
-    )
-)
+INFO = register_game(GameInfo.of(ACDecoder))

@@ -108,6 +108,8 @@ class BeamNGDecoder(Decoder):
     """
 
     game = "beamng"
+    default_port = DEFAULT_PORT
+    title = "BeamNG.drive / BeamNG.tech MotionSim (BNG1)"
 
     def _decode(self, datagram: bytes, t_s: float) -> DecodeResult:
         if datagram[:4] != MAGIC:
@@ -142,12 +144,4 @@ def encode_beamng(k: int, t_s: float, f: Vec3, w: Vec3) -> list[bytes]:
     return [b.pack()]
 
 
-INFO = register_game(
-    GameInfo(
-        name="beamng",
-        default_port=DEFAULT_PORT,
-        decoder=BeamNGDecoder,
-        encoder=encode_beamng,
-        title="BeamNG.drive / BeamNG.tech MotionSim (BNG1)",
-    )
-)
+INFO = register_game(GameInfo.of(BeamNGDecoder, encode_beamng))

@@ -94,6 +94,8 @@ class DCSDecoder(Decoder):
     """
 
     game = "dcs"
+    default_port = DEFAULT_PORT
+    title = "DCS World (motioncue's export script, tools/dcs/MotioncueExport.lua)"
 
     def __init__(self) -> None:
         super().__init__()
@@ -117,11 +119,4 @@ class DCSDecoder(Decoder):
         return self._make(t_s, (g * ax, -g * az, g * ay), (wx, -wz, wy), paused)
 
 
-INFO = register_game(
-    GameInfo(
-        name="dcs",
-        default_port=DEFAULT_PORT,
-        decoder=DCSDecoder,
-        title="DCS World (motioncue's export script, tools/dcs/MotioncueExport.lua)",
-    )
-)
+INFO = register_game(GameInfo.of(DCSDecoder))

@@ -115,6 +115,8 @@ class DirtDecoder(Decoder):
     """
 
     game = "dirt"
+    default_port = DEFAULT_PORT
+    title = 'Codemasters extradata="3" UDP: DiRT Rally, DiRT Rally 2.0, DiRT 4 and relatives'
 
     def __init__(self) -> None:
         super().__init__()
@@ -172,11 +174,4 @@ class DirtDecoder(Decoder):
         return self._make(t_s, f, w, False, extras)
 
 
-INFO = register_game(
-    GameInfo(
-        name="dirt",
-        default_port=DEFAULT_PORT,
-        decoder=DirtDecoder,
-        title='Codemasters extradata="3" UDP: DiRT Rally, DiRT Rally 2.0, DiRT 4 and relatives',
-    )
-)
+INFO = register_game(GameInfo.of(DirtDecoder))

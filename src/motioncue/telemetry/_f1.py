@@ -237,6 +237,8 @@ class F1Decoder(Decoder):
     """
 
     game = "f1"
+    default_port = DEFAULT_PORT
+    title = "EA SPORTS F1 23 / F1 24 / F1 25 (Motion, Motion Ex, Session)"
 
     def __init__(self, max_ex_age_s: float = 0.1, max_orientation_dt_s: float = 0.25) -> None:
         super().__init__()
@@ -437,12 +439,4 @@ def encode_f1(k: int, t_s: float, f: Vec3, w: Vec3) -> list[bytes]:
     return [bytes(ex), bytes(motion)]
 
 
-INFO = register_game(
-    GameInfo(
-        name="f1",
-        default_port=DEFAULT_PORT,
-        decoder=F1Decoder,
-        encoder=encode_f1,
-        title="EA SPORTS F1 23 / F1 24 / F1 25 (Motion, Motion Ex, Session)",
-    )
-)
+INFO = register_game(GameInfo.of(F1Decoder, encode_f1))

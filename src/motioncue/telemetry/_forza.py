@@ -111,6 +111,8 @@ class ForzaDecoder(Decoder):
     """
 
     game = "forza"
+    default_port = DEFAULT_PORT
+    title = "Forza Motorsport 7 / 2023 (Sled, Dash), Forza Horizon 4/5/6 Data Out"
 
     def __init__(self) -> None:
         super().__init__()
@@ -146,12 +148,4 @@ def encode_forza(k: int, t_s: float, f: Vec3, w: Vec3) -> list[bytes]:
     return [m.pack() + bytes(232 - SLED_HEAD.size)]
 
 
-INFO = register_game(
-    GameInfo(
-        name="forza",
-        default_port=DEFAULT_PORT,
-        decoder=ForzaDecoder,
-        encoder=encode_forza,
-        title="Forza Motorsport 7 / 2023 (Sled, Dash), Forza Horizon 4/5/6 Data Out",
-    )
-)
+INFO = register_game(GameInfo.of(ForzaDecoder, encode_forza))

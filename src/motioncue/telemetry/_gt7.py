@@ -240,6 +240,8 @@ class GT7Decoder(Decoder):
     """
 
     game = "gt7"
+    default_port = DEFAULT_PORT
+    title = "Gran Turismo 7 Simulator Interface (encrypted; motioncue sends the heartbeat)"
     PEER_PORT = HEARTBEAT_PORT
     LISTEN_PORT = DEFAULT_PORT
     HEARTBEAT_PERIOD_S = 1.0
@@ -321,11 +323,4 @@ class GT7Decoder(Decoder):
         return self._make(t_s, (-cz, -cx, cy), (-wz, -wx, wy), paused, extras)
 
 
-INFO = register_game(
-    GameInfo(
-        name="gt7",
-        default_port=DEFAULT_PORT,
-        decoder=GT7Decoder,
-        title="Gran Turismo 7 Simulator Interface (encrypted; motioncue sends the heartbeat)",
-    )
-)
+INFO = register_game(GameInfo.of(GT7Decoder))

@@ -172,6 +172,8 @@ class LFSDecoder(Decoder):
     """
 
     game = "lfs"
+    default_port = DEFAULT_PORT
+    title = "Live for Speed OutSim (OutSim2, OutSim Opts 1ff; or the classic OutSimPack)"
 
     def __init__(self, options: int = OSO_ALL) -> None:
         super().__init__()
@@ -228,12 +230,4 @@ def encode_lfs(k: int, t_s: float, f: Vec3, w: Vec3) -> list[bytes]:
     return [outsim.outsim2(time_ms=stamp_ms)]
 
 
-INFO = register_game(
-    GameInfo(
-        name="lfs",
-        encoder=encode_lfs,
-        default_port=DEFAULT_PORT,
-        decoder=LFSDecoder,
-        title="Live for Speed OutSim (OutSim2, OutSim Opts 1ff; or the classic OutSimPack)",
-    )
-)
+INFO = register_game(GameInfo.of(LFSDecoder, encode_lfs))

@@ -160,6 +160,8 @@ class PCars2Decoder(Decoder):
     """
 
     game = "pcars2"
+    default_port = DEFAULT_PORT
+    title = "Project CARS 2 / 3 and Automobilista 2 UDP (Project CARS 2 protocol)"
 
     def __init__(self) -> None:
         super().__init__()
@@ -218,12 +220,4 @@ def encode_pcars2(k: int, t_s: float, f: Vec3, w: Vec3) -> list[bytes]:
     return [pc.pack()]
 
 
-INFO = register_game(
-    GameInfo(
-        name="pcars2",
-        default_port=DEFAULT_PORT,
-        decoder=PCars2Decoder,
-        encoder=encode_pcars2,
-        title="Project CARS 2 / 3 and Automobilista 2 UDP (Project CARS 2 protocol)",
-    )
-)
+INFO = register_game(GameInfo.of(PCars2Decoder, encode_pcars2))

@@ -98,6 +98,8 @@ class RBRDecoder(Decoder):
     """
 
     game = "rbr"
+    default_port = DEFAULT_PORT
+    title = "Richard Burns Rally (RSF / NGP UDP telemetry; signs unverified)"
 
     def __init__(self) -> None:
         super().__init__()
@@ -140,12 +142,4 @@ def encode_rbr(k: int, t_s: float, f: Vec3, w: Vec3) -> list[bytes]:
     return [car.pack()]
 
 
-INFO = register_game(
-    GameInfo(
-        name="rbr",
-        encoder=encode_rbr,
-        default_port=DEFAULT_PORT,
-        decoder=RBRDecoder,
-        title="Richard Burns Rally (RSF / NGP UDP telemetry; signs unverified)",
-    )
-)
+INFO = register_game(GameInfo.of(RBRDecoder, encode_rbr))

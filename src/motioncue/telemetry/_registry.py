@@ -1,7 +1,8 @@
 """The game registry: name -> default UDP port, decoder factory and (optionally) encoder.
 
 Adding a game is one small module: a :class:`~motioncue.telemetry._sample.Decoder` subclass
-that converts the game's axes and units, and a call to :func:`register_game` at import time
+that converts the game's axes and units and names the game, its default port and title
+(class attributes), and ``register_game(GameInfo.of(TheDecoder, encoder))`` at import time
 (in the package: one name in ``_GAME_MODULES`` of its ``__init__``; outside it: a plugin
 module named in ``MOTIONCUE_PLUGINS``). The command line builds its game lists from this
 registry (``bridge --source``, ``record --source``, ``send-telemetry --game``, ``list
@@ -59,6 +60,12 @@ class GameInfo:
     decoder: Callable[[], Decoder]
     title: str
     encoder: Encoder | None = None
+
+    @classmethod
+    def of(cls, decoder: type[Decoder], encoder: Encoder | None = None) -> GameInfo:
+        """The game a decoder class declares: its ``game`` (the name), ``default_port`` and
+        ``title`` class attributes, the class as the decoder factory, and ``encoder``."""
+        return cls(decoder.game, decoder.default_port, decoder, decoder.title, encoder)
 
     def __post_init__(self) -> None:
         if not self.name or not self.name.isidentifier() or self.name != self.name.lower():

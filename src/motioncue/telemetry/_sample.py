@@ -11,7 +11,7 @@ import math
 from abc import ABC, abstractmethod
 from collections.abc import Sequence
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Literal, TypedDict
+from typing import TYPE_CHECKING, ClassVar, Literal, TypedDict
 
 if TYPE_CHECKING:
     import numpy as np
@@ -132,11 +132,18 @@ class Decoder(ABC):
     ----------
     game : str
         Registered name of the game.
+    default_port : int
+        UDP port the game sends to by default (class attribute; with :attr:`game` and
+        :attr:`title`, what ``GameInfo.of`` registers).
+    title : str
+        Human-readable list of the games and formats covered (class attribute).
     stats : dict of str to int
         Count of outcomes by reason, e.g. ``{"sample": 812, "skipped: truncated": 3}``.
     """
 
     game: str = ""
+    default_port: ClassVar[int] = 0
+    title: ClassVar[str] = ""
 
     def __init__(self) -> None:
         self.stats: dict[str, int] = {}

@@ -149,6 +149,8 @@ class WRCDecoder(Decoder):
     """
 
     game = "wrc"
+    default_port = DEFAULT_PORT
+    title = "EA SPORTS WRC UDP (motioncue's session_update structure, tools/wrc)"
 
     def __init__(self, channels: Sequence[tuple[str, str]] = MOTIONCUE_STRUCTURE) -> None:
         super().__init__()
@@ -221,11 +223,4 @@ class WRCDecoder(Decoder):
         return self._make(t_s, f, (wx, wy, wz), stage == prev[1], extras)
 
 
-INFO = register_game(
-    GameInfo(
-        name="wrc",
-        default_port=DEFAULT_PORT,
-        decoder=WRCDecoder,
-        title="EA SPORTS WRC UDP (motioncue's session_update structure, tools/wrc)",
-    )
-)
+INFO = register_game(GameInfo.of(WRCDecoder))
