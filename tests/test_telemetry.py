@@ -38,7 +38,7 @@ from motioncue.telemetry import (
     register_game,
 )
 from motioncue.telemetry._container import FILE_HEADER, MAGIC, RECORD_HEADER
-from motioncue.telemetry._sample import MAX_ABS_F_M_S2, MAX_ABS_W_RAD_S
+from motioncue.telemetry._sample import MAX_ABS_F_M_S2, MAX_ABS_W_RAD_S, Vec3
 from motioncue.telemetry._xplane import pack_data
 
 F1_DIR = Path("/work/shared/data/f1")
@@ -110,6 +110,20 @@ class _ToyDecoder(Decoder):
             return DecodeResult("skipped", "skipped: foreign")
         _, *v = self.LAYOUT.unpack(datagram)
         return self._make(t_s, (v[0], v[1], v[2]), (v[3], v[4], v[5]), False)
+
+
+def test_game_info_of_reads_the_game_a_decoder_class_declares() -> None:
+    class Declared(_ToyDecoder):
+        default_port = 39998
+        title = "toy game, declared on its decoder"
+
+    def encode(k: int, t_s: float, f: Vec3, w: Vec3) -> list[bytes]:
+        return [Declared.LAYOUT.pack(b"TOY1", *f, *w)]
+
+    assert GameInfo.of(Declared) == GameInfo("toy", 39998, Declared, Declared.title)
+    assert GameInfo.of(Declared, encode).encoder is encode
+    with pytest.raises(ConfigError, match=r"outside 1\.\.65535"):
+        GameInfo.of(_ToyDecoder)  # declares no default port
 
 
 def test_adding_a_game_is_one_decoder_and_one_registration() -> None:
