@@ -18,7 +18,13 @@ figures but the shares (corr fx >= 0.95, fy >= 0.90, reversals <= 2 %, all false
 <= 15 %, clamped <= 1 %), no frame changed by the actuator limiter, and share fy at least
 the firm default's there - 0.005 (Deb's rule: a candidate is better when it violates the
 constraints less, or meets them all with a larger strength). The wall-clock budget decides
-where it stops; the seed gives the sequence of candidates.
+where it stops; the seed gives the sequence of candidates. Stage 2 starts from stage 1's
+result with the tilt rate limit allowed up to 40 deg/s (a pure pitch at 45 deg/s takes the
+legs to their 250 mm/s at neutral; the constraint on the actuator limiter keeps the legs'
+speeds, whatever the other channels add)::
+
+    nice -n 10 python tools/classical_forward_ratio_search.py --budget-s 1200 --seed 2 \
+        --formula chicane-formula-106.csv --base fwd.toml --rate-max 40 --out fwd2.toml
 """
 
 from __future__ import annotations
@@ -58,18 +64,24 @@ def main() -> None:
     ap.add_argument("--seed", type=int, required=True)
     ap.add_argument("--formula", required=True, help="the generated formula drive (CSV)")
     ap.add_argument("--out", required=True)
+    ap.add_argument("--base", help="start from this preset (default: the firm default with "
+                    "the tilt's x gain 0.08 and forward_ratio 0.5)")  # fmt: skip
+    ap.add_argument("--rate-max", type=float, default=30.0, help="tilt rate limit bound (deg/s)")
     args = ap.parse_args()
     platform = load_platform("stewart6-linear")
     limits = ActuatorLimits.from_platform(platform, load_controller("mbox6"), rate_hz=RATE)
     drives = [*BUNDLED, args.formula]
     recs = [resample(read_recording_csv(Path(d)), RATE) for d in drives]
-    p0 = load_cueing("racing-hexapod-firm")
+    p0 = load_cueing(args.base or "racing-hexapod-firm")
     assert p0.tilt_scale is not None and p0.lead_s is not None and p0.tilt_shape is not None
-    x0 = np.log([0.08, p0.tilt_scale[1], 0.5, p0.tilt_shape, p0.tilt_reach_use, p0.lead_s[0],
+    kx, fwd = (0.08, 0.5) if args.base is None else (p0.tilt_scale[0], p0.tilt_forward_ratio)
+    rate0 = p0.tilt_rate_limit_rad_s / D2R
+    x0 = np.log([kx, p0.tilt_scale[1], fwd, p0.tilt_shape, p0.tilt_reach_use, p0.lead_s[0],
                  p0.tilt_lag_fill, p0.f_scale[0], p0.f_limit_m_s2[0], p0.trans_wn_rad_s[0],
-                 p0.trans_wb_rad_s[0], p0.tilt_wn_rad_s, 30.0])  # fmt: skip
+                 p0.trans_wb_rad_s[0], p0.tilt_wn_rad_s, rate0])  # fmt: skip
     lo = np.log([0.03, 0.08, 0.1, 1.5, 0.5, 0.01, 0.05, 0.005, 0.1, 2.0, 0.3, 5.0, 15.0])
-    hi = np.log([0.3, 0.3, 1.5, 20, 1.0, 0.4, 1.0, 0.3, 3.0, 10.0, 3.0, 40.0, 30.0])
+    hi = np.log([0.3, 0.3, 1.5, 20, 1.0, 0.4, 1.0, 0.3, 3.0, 10.0, 3.0, 40.0, args.rate_max])
+    x0 = np.minimum(x0, hi)
 
     def params(x: np.ndarray) -> CueingParams:
         v = np.exp(x)
