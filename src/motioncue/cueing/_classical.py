@@ -34,6 +34,10 @@ Signal flow (per sample; frames, signs and units of conventions.md)
    Each target is smoothly limited to ``tilt_limit`` and then rate limited:
    ``tilt[n] = tilt[n-1] + clip(target - tilt[n-1], -r/fs, r/fs)`` (the limit bounds the
    tilt; roll and pitch also carry the high-passed rotational cue of step 3).
+   With ``tilt_forward_ratio = r`` (with ``tilt_scale``) the gain on a forward force
+   (``f_x > 0``, throttle, nose up) is ``r kt_x`` and on a rearward one (braking, nose down)
+   ``kt_x``, here and in the compressive tilt below: a smaller forward tilt leaves less to
+   unwind when a stop follows the throttle.
    With ``tilt_shape = p`` (the compressive tilt) the force fed to the low-pass is
    ``f_t = compress(f, kt, L+, L-, p)`` with ``L = g sin(u * reach)`` in the direction the
    tilt goes (``u = tilt_reach_use``, ``reach`` the platform's own reach in pure tilt,
@@ -594,6 +598,7 @@ class ClassicalWashout:
         axis_steps = _axis_steps
         own_tilt = p.tilt_scale is not None
         ktx, kty = (1.0, 1.0) if p.tilt_scale is None else p.tilt_scale
+        ktxf = ktx * p.tilt_forward_ratio  # the tilt's gain on a forward force
         fshape = p.f_shape is not None
         pfx, pfy, pfz = (1.0, 1.0, 1.0) if p.f_shape is None else p.f_shape
         wshape = p.w_shape is not None
@@ -693,10 +698,10 @@ class ClassicalWashout:
             z = state.z
             # 2. tilt coordination
             if cshape:
-                tix = comp(flx, ktx, lxp, lxn, pt)
+                tix = comp(flx, ktxf if flx > 0.0 else ktx, lxp, lxn, pt)
                 tiy = comp(fly, kty, lyp, lyn, pt)
             elif own_tilt:
-                tix = ktx * flx
+                tix = (ktxf if flx > 0.0 else ktx) * flx
                 tiy = kty * fly
             else:
                 tix = sx
@@ -989,14 +994,20 @@ class ClassicalWashout:
             qz = compress_array(wz, k[2], lw[2], lw[2], pw[2])
 
         # 2. tilt coordination
+        fwd = p.tilt_forward_ratio
         if p.tilt_shape is not None and p.tilt_scale is not None:
             lxp, lxn, lyp, lyn = p.tilt_force_limits_m_s2
-            tix = compress_array(flx, p.tilt_scale[0], lxp, lxn, p.tilt_shape)
+            ktx = p.tilt_scale[0]
+            tix = compress_array(flx, ktx, lxp, lxn, p.tilt_shape)
+            if fwd != 1.0:  # the forward force's own gain (the same operations as step)
+                ahead = compress_array(flx, ktx * fwd, lxp, lxn, p.tilt_shape)
+                tix = np.where(flx > 0.0, ahead, tix)
             tiy = compress_array(fly, p.tilt_scale[1], lyp, lyn, p.tilt_shape)
         elif p.tilt_scale is None:
             tix, tiy = sx, sy
         else:
-            tix = p.tilt_scale[0] * flx
+            ktx = p.tilt_scale[0]
+            tix = np.where(flx > 0.0, (ktx * fwd) * flx, ktx * flx) if fwd != 1.0 else ktx * flx
             tiy = p.tilt_scale[1] * fly
         ylx = filt([self.tilt_lp], tix, 0)
         yly = filt([self.tilt_lp], tiy, 1)

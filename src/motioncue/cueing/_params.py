@@ -168,6 +168,18 @@ class CueingParams:
         target tilt and of the delivered one, so that the rider feels the tilt's force
         sooner (a surge onset while the tilt catches up; and the tilt's late return is
         countered). 0 (the default): the translation renders only its own force.
+    tilt_forward_ratio : float
+        The tilt's gain on forward specific force (``f_x > 0``: throttle, nose up) as a share
+        of its gain on rearward force (``tilt_scale[0]``, braking, nose down), in (0, 4]
+        (needs ``tilt_scale``). A race car's stops are several times its throttle; with a
+        smaller forward gain the throttle's nose-up tilt is smaller, so the tilt has less
+        to unwind when a stop starts (at the tilt's rate limit, while it still tilts the
+        wrong way the rider feels the throttle during the braking: a reversal). Measured
+        (``tools/fx_phase_costs.py``, the firm default with the tilt's x gain 0.1 on
+        chicane-gt): fx reversals in a stop's first 0.5 s 1.49 -> 0.14 % of the time and
+        in the 0.8 s after it 1.05 -> 0.03 % with ``r = 0.5``. With
+        ``tilt_shape`` the forward force is ``compress(f_x, r k, L+, L-, p)``, without it
+        ``r k f_x``. 1 (the default): the same gain both ways, as before this key existed.
     tilt_rate_mix : tuple of (a, b) pairs or None
         Joint rate limit of the tilt (roll and pitch together): for every row,
         ``a |roll rate| + b |pitch rate| <= tilt_rate_limit_rad_s`` (on top of each axis
@@ -239,6 +251,7 @@ class CueingParams:
     tilt_additive: bool = False
     tilt_rate_mix: tuple[tuple[float, float], ...] | None = None
     tilt_lag_fill: float = 0.0
+    tilt_forward_ratio: float = 1.0
     tilt_offset_m: tuple[tuple[float, ...], ...] | None = None
     tilt_reach_exponent: float = 2.0
     head_offset_m: Vec3 = (0.0, 0.0, 0.0)
@@ -333,6 +346,12 @@ class CueingParams:
             raise ConfigError(
                 f"CueingParams.tilt_lag_fill = {self.tilt_lag_fill!r} needs tilt_additive "
                 "(the translation renders the tilt's lag on top of its own force)"
+            )
+        _check("tilt_forward_ratio", (self.tilt_forward_ratio,), 0.0, True, 4.0)
+        if self.tilt_forward_ratio != 1.0 and self.tilt_scale is None:
+            raise ConfigError(
+                f"CueingParams.tilt_forward_ratio = {self.tilt_forward_ratio!r} needs "
+                "tilt_scale (the tilt's own gain, of which it is a share)"
             )
         _check("tilt_reach_exponent", (self.tilt_reach_exponent,), 1.0, False, 8.0)
         if self.tilt_offset_m is not None:
@@ -454,6 +473,8 @@ def load_cueing(name_or_path: str | Path) -> CueingParams:
                                                    #   a |roll'| + b |pitch'| <= rate_limit
         lag_fill = 0.5                             # optional (needs additive): share of the
                                                    #   tilt's lag the translation renders
+        forward_ratio = 0.5                        # optional (needs scale): tilt gain on
+                                                   #   forward force / on rearward (default 1)
         reach_exponent = 2.0                       # optional: roll and pitch together in
                                                    #   |r/R|^q + |p/P|^q <= 1 (default 2)
         offset_mm = [[0, 0, 0, 0, 0],              # optional: x, y, z of the origin with the
@@ -549,6 +570,9 @@ def load_cueing(name_or_path: str | Path) -> CueingParams:
         rows = _number_rows(ti, "rate_mix", None, 2, "a list of [roll, pitch] pairs of numbers")
         rate_mix = tuple((r[0], r[1]) for r in rows)
     lag_fill = ti.number("lag_fill", lo=0.0, hi=1.0) if ti.has("lag_fill") else 0.0
+    fwd = 1.0
+    if ti.has("forward_ratio"):
+        fwd = ti.number("forward_ratio", lo=0.0, hi=4.0, lo_open=True)
     reach_q = ti.number("reach_exponent", lo=1.0, hi=8.0) if ti.has("reach_exponent") else 2.0
     offset = None
     if ti.has("offset_mm"):
@@ -614,6 +638,7 @@ def load_cueing(name_or_path: str | Path) -> CueingParams:
             tilt_additive=additive,
             tilt_rate_mix=rate_mix,
             tilt_lag_fill=lag_fill,
+            tilt_forward_ratio=fwd,
             tilt_offset_m=offset,
             tilt_reach_exponent=reach_q,
             head_offset_m=head,

@@ -540,6 +540,8 @@ def preset_toml(params: CueingParams, comments: Sequence[str] = ()) -> str:
         lines.append("additive = true")
     if params.tilt_lag_fill > 0.0:
         lines.append(f"lag_fill = {_fmt(params.tilt_lag_fill)}")
+    if params.tilt_forward_ratio != 1.0:
+        lines.append(f"forward_ratio = {_fmt(params.tilt_forward_ratio)}")
     if params.tilt_rate_mix is not None:
         rows = ", ".join(_vec(r) for r in params.tilt_rate_mix)
         lines.append(f"rate_mix = [{rows}]")
