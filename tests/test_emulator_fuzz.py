@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import functools
 import os
 
 from hypothesis import given, settings
@@ -10,8 +11,17 @@ from hypothesis import strategies as st
 from motioncue.output import imax, load_controller, mbox
 
 
-def _valid(kind: str, axes: int) -> list[bytes]:
-    ctrl = load_controller(f"{kind}{axes}")
+@functools.cache
+def _controller(kind: str, axes: int):
+    """The bundled controller, read once (frozen; each emulator copies its parameters)."""
+    return load_controller(f"{kind}{axes}")
+
+
+@functools.cache
+def _valid(kind: str, axes: int) -> tuple[bytes, ...]:
+    """Valid datagrams of each kind, made once (reading the controller and encoding them
+    for each of the 150 examples was a third of the test's time)."""
+    ctrl = _controller(kind, axes)
     enc = ctrl.frame_encoder()
     enc_rel = ctrl.frame_encoder(absolute_time=False)
     out = [enc.encode(0.01 * k, [k] * axes)[0] for k in range(3)]
@@ -37,14 +47,14 @@ def _valid(kind: str, axes: int) -> list[bytes]:
             imax.VibrationFrame(True, 3, 30, (0,) * axes, 1, ((8, 8),) * axes).encode(),
             imax.StatusReport(1, (0,), (0,), (0,)).encode(),
         ]
-    return out
+    return tuple(out)
 
 
 CASES = [(kind, axes) for kind in ("mbox", "imax") for axes in (3, 6)]
 
 
 def _emulator(kind: str, axes: int):
-    ctrl = load_controller(f"{kind}{axes}")
+    ctrl = _controller(kind, axes)
     cls = mbox.MboxEmulator if kind == "mbox" else imax.ImaxEmulator
     return cls(ctrl, homing_time_s=0.01)
 
