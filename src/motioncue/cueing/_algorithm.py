@@ -147,8 +147,24 @@ class CueingAlgorithm(Protocol[S]):
         w: Sequence[float],
         out: MutableSequence[float] | None = None,
     ) -> MutableSequence[float]:
-        """One sample: ``f`` (3, m/s^2), ``w`` (3, rad/s) -> pose (6, m and rad), finite;
-        written into ``out`` when given (and ``out`` returned)."""
+        """Advance one sample.
+
+        Parameters
+        ----------
+        state : S
+            This design's state (from :meth:`initial_state`), updated in place.
+        f : 3 floats
+            Specific force (m/s^2, body frame).
+        w : 3 floats
+            Angular velocity (rad/s, body frame).
+        out : mutable sequence of 6 floats, optional
+            Written in place and returned; a new list otherwise.
+
+        Returns
+        -------
+        MutableSequence[float]
+            The pose ``[x, y, z, roll, pitch, yaw]`` (m, rad); always finite.
+        """
         ...
 
     def run(self, f: ArrayLike, w: ArrayLike, state: S | None = None) -> CueingResult:

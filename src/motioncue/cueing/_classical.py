@@ -556,23 +556,8 @@ class ClassicalWashout:
         w: Sequence[float],
         out: MutableSequence[float] | None = None,
     ) -> MutableSequence[float]:
-        """Advance one sample.
-
-        Parameters
-        ----------
-        state : WashoutState
-            Updated in place.
-        f : 3 floats
-            Specific force (m/s^2, body frame).
-        w : 3 floats
-            Angular velocity (rad/s, body frame).
-        out : mutable sequence of 6 floats, optional
-            Written in place and returned (no allocation); a new list otherwise.
-
-        Returns
-        -------
-        The pose ``[x, y, z, roll, pitch, yaw]`` (m, rad); always finite.
-        """
+        """Advance one sample: see :meth:`CueingAlgorithm.step` (``out`` written without
+        allocation)."""
         return self._step_impl(state, f, w, out)
 
     def _make_step(self) -> _StepFn:

@@ -1268,23 +1268,8 @@ class MpcCueing:
         w: Sequence[float],
         out: MutableSequence[float] | None = None,
     ) -> MutableSequence[float]:
-        """Advance one sample (a solve; see the module docstring for the deadline).
-
-        Parameters
-        ----------
-        state : MpcState
-            Updated in place.
-        f : 3 floats
-            Specific force (m/s^2, body frame).
-        w : 3 floats
-            Angular velocity (rad/s, body frame).
-        out : mutable sequence of 6 floats, optional
-            Written in place and returned.
-
-        Returns
-        -------
-        The pose ``[x, y, z, roll, pitch, yaw]`` (m, rad); always finite.
-        """
+        """Advance one sample: see :meth:`CueingAlgorithm.step` (one solve; see the module
+        docstring for the deadline)."""
         pose = self._advance(state, f, w, self.mpc.deadline_ms * 1e-3)
         vals = [float(v) for v in pose]
         if out is None:

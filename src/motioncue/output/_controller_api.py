@@ -4,8 +4,8 @@ A controller description (:func:`motioncue.output.load_controller`) is the singl
 truth for everything its parameters imply: its axes, the frame rates its clock can carry, how
 many pulses a motor turn is, the stroke, speed and acceleration its settings allow, how much
 faster than the frames' own time stamps it may play (catch-up), its buffer and its encoder.
-:func:`motioncue.trajectory.limits_from_platform` derives the limits from this interface alone,
-without naming a controller kind; the emulators check frames with the same numbers.
+:meth:`motioncue.trajectory.ActuatorLimits.from_platform` derives the limits from this interface
+alone, without naming a controller kind; the emulators check frames with the same numbers.
 
 Adding a controller kind is one package whose config reader returns an object satisfying
 :class:`Controller`, plus one :func:`~motioncue.output.register_controller_kind` call
@@ -115,8 +115,8 @@ class DriveExpectations:
     """What a controller's parameters say about the drives it commands.
 
     A platform's drive must agree, or the positions sent would mean other lengths than
-    planned; :func:`motioncue.trajectory.limits_from_platform` refuses a disagreement with
-    both values named.
+    planned; :meth:`motioncue.trajectory.ActuatorLimits.from_platform` refuses a disagreement
+    with both values named.
 
     Attributes
     ----------

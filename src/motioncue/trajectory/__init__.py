@@ -22,12 +22,7 @@ Contents
   :func:`resume_path`, :func:`brake_to_rest` built on them and on the limiter.
 """
 
-from ._derive import (
-    limits_from_platform,
-    planning_limits,
-    pulse_rounding_limits,
-    within_controller_stroke,
-)
+from ._derive import planning_limits, pulse_rounding_limits, within_controller_stroke
 from ._jerk import JerkLimiter, JerkLimiterState
 from ._limits import ActuatorLimits, LimitCheck, PulsesRow, check_trajectory, finite_differences
 from ._offline import OptimisedRide, limit_ride
@@ -63,7 +58,6 @@ __all__ = [
     "finite_differences",
     "limit_pose",
     "limit_ride",
-    "limits_from_platform",
     "park_path",
     "planning_limits",
     "plot_ride",
