@@ -67,9 +67,10 @@ class EmulatorProcess:
 
     Attributes read from the running emulator: ``received`` (every datagram),
     ``frames_received`` (frame datagrams), ``trace``, ``violations``, ``internal_errors``;
-    ``port`` and ``pid`` once started. :meth:`pause` / :meth:`resume` stop and continue the
-    process (SIGSTOP / SIGCONT): datagrams wait in its socket, stamped by the kernel on
-    arrival, as for a controller that stops answering for a while.
+    ``port`` and ``pid`` once started. After the block they keep what the emulator held
+    when it was stopped, as an emulator object does. :meth:`pause` / :meth:`resume` stop
+    and continue the process (SIGSTOP / SIGCONT): datagrams wait in its socket, stamped by
+    the kernel on arrival, as for a controller that stops answering for a while.
     """
 
     def __init__(self, controller: str, start_timeout_s: float = 120.0) -> None:
@@ -80,6 +81,7 @@ class EmulatorProcess:
         self._conn: Any = None
         self._proc: Any = None
         self._lock = threading.Lock()
+        self._final: dict[str, Any] | None = None  # what it held when stopped
 
     def __enter__(self) -> Self:
         ctx = mp.get_context("spawn")
@@ -93,16 +95,24 @@ class EmulatorProcess:
             raise AssertionError(
                 f"the {self.controller} emulator process did not start in {self.start_timeout_s} s"
             )
-        self.port = int(parent.recv())
+        try:
+            self.port = int(parent.recv())
+        except EOFError:
+            self._proc.join(10.0)
+            raise AssertionError(
+                f"the {self.controller} emulator process ended before it listened "
+                f"(exit code {self._proc.exitcode})"
+            ) from None
         self.pid = int(self._proc.pid)
         return self
 
     def __exit__(self, *exc: object) -> None:
         self.resume()
         try:
+            self._final = self.state()
             with self._lock:
                 self._conn.send("stop")
-        except OSError:
+        except (OSError, EOFError):
             pass
         self._proc.join(10.0)
         if self._proc.is_alive():
@@ -114,6 +124,12 @@ class EmulatorProcess:
         self._proc.join(10.0)
 
     def _ask(self, request: str) -> Any:
+        if self._final is not None:  # stopped: what it held then
+            return (
+                self._final
+                if request == "state"
+                else (self._final["received"], self._final["frames_received"])
+            )
         with self._lock:
             self._conn.send(request)
             answer = self._conn.recv()

@@ -779,8 +779,8 @@ def play_ride(
         transition that ends once the limiter has caught up with the ride (those frames
         count as clamped). The frames' own time stamps stay consecutive, one period apart.
         Counted in ``PlayReport.skipped_frames`` and ``resyncs``, each one described in
-        ``PlayReport.holdups``. None: never skip (refused
-        on a live link to a controller without a buffer, ``buffer_frames <= 1``).
+        ``PlayReport.holdups``. None: never skip (refused on a live link to a controller
+        without a buffer, ``buffer_frames <= 1``).
 
     Returns
     -------
