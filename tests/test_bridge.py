@@ -22,10 +22,11 @@ from typing import Any, Self
 import numpy as np
 import pytest
 
+from _emulator_process import EmulatorProcess
 from motioncue import ConfigError, MotioncueError, TransportError
 from motioncue.cueing import load_cueing
 from motioncue.kinematics import load_platform
-from motioncue.output import imax, load_controller, mbox, open_transport
+from motioncue.output import load_controller, open_transport
 from motioncue.output.mbox._messages import MotionFrame, decode
 from motioncue.pipeline._bridge import Bridge, BridgeConfig
 from motioncue.pipeline._realtime import GateConfig
@@ -158,15 +159,20 @@ def _imax_setup() -> tuple[Any, Any, ActuatorLimits]:
 
 @contextmanager
 def live_rig(
-    kind: str, rate_hz: float = 250.0, year: int = 2024, **config: Any
+    kind: str, rate_hz: float = 250.0, year: int = 2024, query: str = "", **config: Any
 ) -> Iterator[tuple[Bridge, Sender, Any, Any, ActuatorLimits]]:
-    """Emulator on loopback, F1 receiver, bridge and sender, all started."""
+    """Emulator on loopback, F1 receiver, bridge and sender, all started (``query``: the
+    target URL's ``?...`` options, e.g. ``"?silence_ms=3000"``).
+
+    The emulator runs in a process of its own (:mod:`_emulator_process`): a thread of this
+    process was held up past the link watch's 0.2 s probe interval under load (a status
+    request then joins the frames on the wire), and past the 0.5 s silence limit at load
+    15-25 in other tests (the bridge then stops, "controller silent")."""
     platform, ctrl, lim = _mbox_setup() if kind == "mbox" else _imax_setup()
-    emu_cls = mbox.MboxEmulator if kind == "mbox" else imax.ImaxEmulator
-    with emu_cls(ctrl) as emu:
+    with EmulatorProcess(ctrl.name) as emu:
         source = open_source("f1:127.0.0.1:0")
         assert isinstance(source, TelemetrySource)
-        transport = open_transport(f"udp://127.0.0.1:{emu.port}")
+        transport = open_transport(f"udp://127.0.0.1:{emu.port}{query}")
         try:
             bridge = Bridge(
                 platform,
@@ -198,8 +204,14 @@ def _wait_for(cond: Callable[[], bool], timeout_s: float = 3.0) -> bool:
 
 
 def _all_received(emu: Any, bridge: Bridge) -> None:
-    assert _wait_for(lambda: emu.received >= bridge.stats.frames_sent)
-    assert emu.received == bridge.stats.frames_sent
+    """Every frame the bridge counted reached the emulator, once, and nothing else did but
+    the status requests its link watch counted (sent when the emulator, a thread of this
+    process, was held up past the probe interval: 532 datagrams for 531 frames once)."""
+    final = bridge.stats
+    datagrams = final.frames_sent + final.status_requests
+    assert _wait_for(lambda: emu.received >= datagrams)
+    assert emu.frames_received == final.frames_sent
+    assert emu.received == datagrams
 
 
 def _check_trace(emu: Any, platform: Any, lim: ActuatorLimits) -> Any:
@@ -237,6 +249,33 @@ def test_real_f1_packets_drive_the_emulator_within_the_limits(kind: str, year: i
     assert np.all(moved / ppu > 0.005)  # every actuator moved at least 5 mm (cues arrived)
     # frames are paced by the bridge: the emulator's timeline follows the frame period
     np.testing.assert_allclose(np.diff(tr.t_s[1:]), 1.0 / 250.0, atol=1e-9)
+
+
+def test_a_held_up_emulator_is_probed_and_the_probes_are_no_frames() -> None:
+    # the path that sent a datagram besides the counted frames, forced: the emulator's
+    # process stopped for longer than the watch's 0.2 s probe interval, far less than the
+    # link's silence limit (3 s here, so a busy machine cannot fail the job)
+    with live_rig("imax", year=2023, query="?silence_ms=3000") as (
+        bridge,
+        _sender,
+        emu,
+        platform,
+        lim,
+    ):
+        assert _wait_for(lambda: bridge.stats.state == "live")
+        emu.pause()
+        try:
+            assert _wait_for(lambda: bridge.stats.status_requests >= 1, 2.5)
+        finally:
+            emu.resume()
+        held = bridge.stats  # the emulator catches up with what waited in its socket
+        assert _wait_for(lambda: emu.received >= held.frames_sent + held.status_requests)
+        final = bridge.stop()
+    assert final.state == "stopped" and final.error is None and final.status_requests >= 1
+    _all_received(emu, bridge)
+    assert emu.received > emu.frames_received  # the probes reached it: not frames
+    tr = _check_trace(emu, platform, lim)
+    assert list(tr.frames) == list(range(final.frames_sent))
 
 
 def test_watchdog_parks_when_packets_stop_and_ramps_back_in() -> None:

@@ -6,7 +6,7 @@ import argparse
 import sys
 import time
 from collections.abc import Callable
-from dataclasses import replace
+from dataclasses import asdict, replace
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -345,6 +345,7 @@ def _play(args: argparse.Namespace) -> int:
                     "park_frames": rep.park_frames, "clamped_frames": rep.clamped_frames,
                     "late_frames": rep.late_frames, "send_errors": rep.send_errors,
                     "skipped_frames": rep.skipped_frames, "resyncs": rep.resyncs,
+                    "holdups": [asdict(h) for h in rep.holdups],
                     "wall_s": rep.wall_s, "notes": list(rep.notes),
                 },
                 best_effort=True,

@@ -39,7 +39,7 @@ import numpy as np
 
 from .._errors import MotioncueError, ProtocolError, TransportError
 from ._controller_api import Controller, PulseLimits
-from ._udp_common import Header, WireMessage, decode_header
+from ._udp_common import CONFIRM_MAIN, F_ABS, F_REL, Header, WireMessage, decode_header
 
 __all__ = [
     "STATE_ESTOP",
@@ -482,6 +482,13 @@ class UdpEmulatorBase:
 
     Subclasses implement :meth:`handle` (one datagram -> reply datagrams) and
     :meth:`periodic` (status reports due at wall time ``now_s``).
+
+    Attributes
+    ----------
+    received : int
+        Every datagram the server read, whatever it is: frames, and the status requests a
+        host's link watch sends while the controller seems silent, parameter reads and
+        writes. Not a frame count (a controller emulator's ``frames_received`` is).
     """
 
     def __init__(self, host: str = "127.0.0.1", port: int = 0) -> None:
@@ -632,11 +639,22 @@ class ControllerEmulator(UdpEmulatorBase, Generic[C]):
         How long initial positioning takes (s).
     start_homed : bool
         ``True``: ready at once; ``False``: homing first, as after power-up.
+
+    Attributes
+    ----------
+    frames_received : int
+        Frame datagrams (header function in :attr:`FRAME_FUNCTIONS`) addressed to this
+        controller's node, counted by :meth:`handle` whether they are played, refused or
+        malformed: what a host's frame counter must equal. Other datagrams (status
+        requests, parameter reads and writes) are in ``received`` only.
     """
 
     playback: Playback
     LABEL: ClassVar[str]
     """The controller's name in messages (``"IMAX"``, ``"MBOX"``)."""
+    FRAME_FUNCTIONS: ClassVar[frozenset[int]] = frozenset({F_ABS, F_REL})
+    """Header functions of the frames the host sends (0x1301 absolute, 0x1401 relative
+    time); a kind with more frame messages (IMAX vibration frames) adds them."""
 
     def __init__(
         self,
@@ -657,6 +675,7 @@ class ControllerEmulator(UdpEmulatorBase, Generic[C]):
         self._homing_until: float | None = None if start_homed else -1.0
         self.ignored_frames = 0
         self.refused_frames = 0
+        self.frames_received = 0
         self._last_time_ms: int | None = None
         self._next_report: float | None = None
         self._violations: list[Violation] = []
@@ -715,6 +734,8 @@ class ControllerEmulator(UdpEmulatorBase, Generic[C]):
         node = self.controller.node
         if not who_matches(h.who_accept, node):
             return []
+        if h.confirm == CONFIRM_MAIN and h.function in self.FRAME_FUNCTIONS:
+            self.frames_received += 1
         reply = who_matches(h.who_reply, node) and self._replies_enabled()
         msg = self._decode(data, h, reply)
         if isinstance(msg, list):

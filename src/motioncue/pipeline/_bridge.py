@@ -278,6 +278,12 @@ class BridgeStats:
         priority, where the platform started).
     send_errors : int
         Transient send errors met and retried within their frame.
+    status_requests : int
+        Status requests (register reads) the link watch sent while the controller was
+        silent for its probe interval (0.2 s by default; a busy controller or machine).
+        Datagrams on the link besides the frames, never counted in ``frames_sent`` (the
+        others: the start-position query of ``q_start="auto"``, a kind's end-of-run
+        messages).
     frame_age_ms, frame_age_p50_ms, frame_age_p99_ms : float
         Age of the newest sample a frame used, at the return of its send: the last
         frame's, and percentiles over the window (nan before there is data).
@@ -312,6 +318,7 @@ class BridgeStats:
     error: str | None
     notes: tuple[str, ...] = ()
     send_errors: int = 0
+    status_requests: int = 0
     frame_age_ms: float = math.nan
     frame_age_p50_ms: float = math.nan
     frame_age_p99_ms: float = math.nan
@@ -977,6 +984,7 @@ class Bridge:
             error=self._error,
             notes=tuple(self._notes) + _telemetry_notes(src, self.source_finished),
             send_errors=self.stage.send_errors,
+            status_requests=0 if self.stage.watch is None else self.stage.watch.probes,
             frame_age_ms=float(fage[-1] * 1e3) if fage.size else math.nan,
             frame_age_p50_ms=_percentile_ms(fage, 50),
             frame_age_p99_ms=_percentile_ms(fage, 99),

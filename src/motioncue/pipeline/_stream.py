@@ -68,6 +68,7 @@ if TYPE_CHECKING:
     from ..trajectory import ActuatorLimits
 
 __all__ = [
+    "HoldUp",
     "OutputStage",
     "ParkFailed",
     "PlayAborted",
@@ -630,6 +631,30 @@ def _is_live(transport: Transport) -> bool:
 
 
 @dataclass(frozen=True)
+class HoldUp:
+    """One time the player found itself held up past ``resync_after_s`` and skipped ahead.
+
+    Attributes
+    ----------
+    frame : int
+        Index of the frame sent right after it among all frames of the run (0 = the first;
+        the frame number SC-MBOX and IMAX frames carry on the wire).
+    ride_s : float
+        Ride time of that frame, the one due when the player went on (s).
+    behind_s : float
+        How late the player was for the frame it was waiting for (s): about how long it
+        was held up.
+    skipped : int
+        Ride frames skipped (their time had passed).
+    """
+
+    frame: int
+    ride_s: float
+    behind_s: float
+    skipped: int
+
+
+@dataclass(frozen=True)
 class PlayReport:
     """What ``play`` did: frames sent, clamped by the limiter, parking, timing, the link.
 
@@ -659,6 +684,9 @@ class PlayReport:
     skipped_frames, resyncs : int
         Ride frames skipped to stay on the ride's clock after the player was held up (a
         stopped process, a stalled machine), and how many times that happened.
+    holdups : tuple of HoldUp
+        Each of those times after which a frame was sent: where, how long, how many frames
+        skipped (all of them unless an error stopped the ride at the frame after one).
     """
 
     frames_sent: int
@@ -676,6 +704,7 @@ class PlayReport:
     error: str | None = None
     skipped_frames: int = 0
     resyncs: int = 0
+    holdups: tuple[HoldUp, ...] = ()
 
 
 RESYNC_AFTER_S = 0.1
@@ -749,8 +778,9 @@ def play_ride(
         frame (speed, acceleration and braking distance within the limits table): a limited
         transition that ends once the limiter has caught up with the ride (those frames
         count as clamped). The frames' own time stamps stay consecutive, one period apart.
-        Counted in ``PlayReport.skipped_frames`` and ``resyncs``. None: never skip (refused
-        on a live link to a controller without a buffer, ``buffer_frames <= 1``).
+        Counted in ``PlayReport.skipped_frames`` and ``resyncs``, each one described in
+        ``PlayReport.holdups``. None: never skip (refused on a live link to a controller
+        without a buffer, ``buffer_frames <= 1``).
 
     Returns
     -------
@@ -790,6 +820,7 @@ def play_ride(
     q_frames = platform.drives.from_pulses(ride.pulses)
     n = ride.n_frames
     late = sent = skipped = resyncs = 0
+    holdups: list[HoldUp] = []
     resync = live and paced and speed == 1.0 and throttle is None
     resync_s = math.inf if resync_after_s is None or not resync else float(resync_after_s)
     ride_t = np.asarray(ride.t_s, dtype=float)
@@ -811,6 +842,7 @@ def play_ride(
                     break
                 if throttle is not None:
                     throttle(stage.frames)
+                held: tuple[float, int] | None = None
                 if paced:
                     deadline = t0 + float(ride_t[k]) / speed
                     behind = wait_until(deadline, spin_s)
@@ -821,6 +853,7 @@ def play_ride(
                         now_k = int(np.searchsorted(ride_t, time.perf_counter() - t0, "right"))
                         now_k = min(max(now_k - 1, k), n - 1)
                         if now_k > k:
+                            held = (behind, now_k - k)
                             skipped += now_k - k
                             resyncs += 1
                             k = now_k
@@ -828,6 +861,8 @@ def play_ride(
                     q_frames[k], int(ride.dout[k]), (int(ride.dacs[k, 0]), int(ride.dacs[k, 1]))
                 )
                 sent += 1
+                if held is not None:
+                    holdups.append(HoldUp(stage.frames - 1, float(ride_t[k]), *held))
         except KeyboardInterrupt:
             interrupted = True
         except Exception as exc:  # whatever stopped the ride, the platform is parked
@@ -867,6 +902,7 @@ def play_ride(
         error=error,
         skipped_frames=skipped,
         resyncs=resyncs,
+        holdups=tuple(holdups),
     )
     if park_error is not None:
         if error is not None:

@@ -90,6 +90,7 @@ class ImaxEmulator(ControllerEmulator[ImaxController]):
     """
 
     LABEL = "IMAX"
+    FRAME_FUNCTIONS = frozenset({F_ABS, F_REL, F_VIB_ABS, F_VIB_REL})
 
     def _init_kind(self) -> None:
         controller = self.controller
