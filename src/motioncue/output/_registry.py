@@ -81,13 +81,18 @@ ENTRY_POINT_GROUP = "motioncue.controllers"
 class EmulatorReadout(Protocol):
     """What an emulator has played, read while it runs (the live monitor reads only this).
 
-    ``received`` counts the datagrams that reached it, ``trace`` is what it played (times,
+    ``received`` counts the datagrams that reached it, ``frames_received`` the frames among
+    them (what a host's frame counter must equal: status requests and parameter reads are
+    datagrams, not frames), ``trace`` is what it played (times,
     frame numbers and positions in pulses, on the controller's clock), ``violations``
     every limit or protocol rule the frames broke.
     """
 
     @property
     def received(self) -> int: ...
+
+    @property
+    def frames_received(self) -> int: ...
 
     @property
     def trace(self) -> Trace: ...

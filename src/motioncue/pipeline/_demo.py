@@ -172,10 +172,10 @@ def run_demo(
 
             played = play_ride(
                 ride, platform, controller, limits, link, speed=speed, spin_s=0.0,
-                throttle=receiver_throttle(lambda: emu.received),
+                throttle=receiver_throttle(lambda: emu.frames_received),
             )  # fmt: skip
             deadline = time.monotonic() + 5.0
-            while emu.received < played.frames_sent and time.monotonic() < deadline:
+            while emu.frames_received < played.frames_sent and time.monotonic() < deadline:
                 time.sleep(0.01)
             comparison = compare_trace(ride, emu)
     finally:

@@ -978,6 +978,11 @@ class EasySmcEmulator:
         """Valid frames received (any address on the bus)."""
         return self.stats["frames"]
 
+    @property
+    def frames_received(self) -> int:
+        """The same as :attr:`received`: every frame on the bus is a frame."""
+        return self.received
+
     def set_manual(self, manual: bool) -> None:
         """Close / open the A/M jumper (manual mode answers writes with error 2)."""
         with self._lock:

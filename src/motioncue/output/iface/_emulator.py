@@ -113,6 +113,11 @@ class IfaceEmulator(UdpEmulatorBase):
     def received(self, datagrams: int) -> None:  # the server loop's datagram count
         self.datagrams = datagrams
 
+    @property
+    def frames_received(self) -> int:
+        """The same as :attr:`received`: the board reads frames only."""
+        return self.received
+
     def handle(self, data: bytes, now_s: float) -> list[bytes]:
         """One datagram into the stream; the board never answers."""
         self.feed(data)
