@@ -330,8 +330,8 @@ def test_tune_drives_an_optimal_preset_and_never_returns_a_worse_one(tmp_path: P
 
     src = next(p for p in sample_drives("tuning", kind="car") if p.stem == "flowing-road")
     rec = read_recording_csv(src)
-    a, b = 1700, 2300  # 6 s: the braking into a long corner (cues on fx and fy)
-    part = tmp_path / "flowing-road-6s.csv"
+    a, b = 1700, 2100  # 4 s: the braking into a long corner (cues on fx and fy)
+    part = tmp_path / "flowing-road-4s.csv"
     write_recording_csv(part, Recording(rec.t_s[a:b] - rec.t_s[a], rec.f[a:b], rec.w[a:b]))
     out = tmp_path / "tuned-optimal.toml"
     args = [
