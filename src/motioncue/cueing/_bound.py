@@ -106,6 +106,7 @@ from ._params import GRAVITY_M_S2
 from ._vestibular import DEFAULT_MODEL_SET, VestibularModel, VestibularModelSet, get_model_set
 
 if TYPE_CHECKING:
+    import casadi
     from scipy.optimize import OptimizeResult
     from scipy.sparse import sparray
 
@@ -347,7 +348,7 @@ def _support(ch: _Channel, c: NDArray[np.float64], d2: sparray) -> float:
     return trans + tilt
 
 
-def _dm(m: sparray) -> object:
+def _dm(m: sparray) -> casadi.DM:
     """``casadi.DM(m)`` of a SciPy sparse matrix, built from its compressed columns as lists.
 
     The same matrix as casadi's own conversion (which also takes ``m.tocsc()``, keeping every
