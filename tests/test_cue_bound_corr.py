@@ -315,8 +315,10 @@ def test_decimated_certificates_stay_above_a_full_rate_motion() -> None:
     path = Path(__file__).resolve().parents[1] / "configs" / "recordings" / "lap.csv"
     f = np.asarray(resample(read_recording_csv(path), 100.0).f, dtype=float)[2000:2300]
     hex_reach = RigReach((0.13, 0.115), (0.54, 0.55), (21.4, 22.0), (0.24, 0.23), (0.99, 0.90))
-    full = cue_bound(f, 100.0, hex_reach, corr_cuts=4)
-    dec = cue_bound(f, 100.0, hex_reach, primal_samples=75, corr_cuts=4)
+    # the default cuts (two after the first three; four took twice the CPU): the full-rate
+    # bound is then 1.4 % above its motion on fx, 1.3 % on fy (measured), within the 10 % below
+    full = cue_bound(f, 100.0, hex_reach)
+    dec = cue_bound(f, 100.0, hex_reach, primal_samples=75)
     assert full.solver["decimation"] == "1" and dec.solver["decimation"] == "4"
     assert np.all(full.corr_at_primal >= full.corr_min)
     assert np.all(full.share_at_corr_primal <= full.share_max_at_corr)

@@ -330,14 +330,17 @@ def test_tune_drives_an_optimal_preset_and_never_returns_a_worse_one(tmp_path: P
 
     src = next(p for p in sample_drives("tuning", kind="car") if p.stem == "flowing-road")
     rec = read_recording_csv(src)
-    a, b = 1700, 2300  # 6 s: the braking into a long corner (cues on fx and fy)
-    part = tmp_path / "flowing-road-6s.csv"
+    a, b = 1700, 2100  # 4 s: the braking into a long corner (cues on fx and fy)
+    part = tmp_path / "flowing-road-4s.csv"
     write_recording_csv(part, Recording(rec.t_s[a:b] - rec.t_s[a], rec.f[a:b], rec.w[a:b]))
     out = tmp_path / "tuned-optimal.toml"
+    # one population about the base (the base itself its first member, as in every tune run):
+    # 18 candidates of the plan's nine parameters, no generation after it
     args = [
         "tune", "--input", str(part), "--platform", "stewart6-linear", "--controller", "mbox6",
-        "--preset", "optimal-hexapod", "--out", str(out), "--seed", "1", "--generations", "1",
-        "--popsize", "2", "--workers", "1", "--json", "--objective", "strength",
+        "--preset", "optimal-hexapod", "--out", str(out), "--seed", "1", "--generations", "0",
+        "--init-spread", "0.3", "--popsize", "2", "--workers", "1", "--json",
+        "--objective", "strength",
     ]  # fmt: skip
     stdout, stderr = io.StringIO(), io.StringIO()
     with contextlib.redirect_stdout(stdout), contextlib.redirect_stderr(stderr):

@@ -1,0 +1,45 @@
+"""What ``motioncue generate`` imports: toppra without matplotlib.pyplot until pyplot is used.
+
+toppra imports ``matplotlib.pyplot`` when it is imported (plotting helpers generate never
+calls); :func:`motioncue.pipeline._generate._defer_pyplot` puts a placeholder in its place,
+which imports the real module at the first use of one of its attributes. In a fresh process
+(this one may have imported pyplot already).
+"""
+
+from __future__ import annotations
+
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+SRC = Path(__file__).resolve().parents[1] / "src"
+
+_PROBE = """
+import sys, types
+from motioncue.pipeline._generate import _defer_pyplot
+_defer_pyplot()
+import toppra, toppra.algorithm
+import matplotlib
+import matplotlib.pyplot as plt
+held = toppra.algorithm.algorithm.plt
+assert plt is held and matplotlib.pyplot is plt, "one placeholder, also matplotlib's attribute"
+assert "matplotlib.figure" not in sys.modules, "pyplot's own imports were made"
+assert not hasattr(plt, "__file__") and "matplotlib.figure" not in sys.modules, "dunder imported"
+fig = plt.figure()  # the first use: the real pyplot
+assert "matplotlib.figure" in sys.modules
+import matplotlib.pyplot as real
+assert real is not held and type(real) is types.ModuleType
+assert real.figure is held.figure and fig.number in real.get_fignums()
+assert sys.modules["matplotlib.pyplot"] is real and matplotlib.pyplot is real
+print("ok")
+"""
+
+
+def test_toppra_comes_without_pyplot_and_pyplot_loads_at_its_first_use() -> None:
+    env = {**os.environ, "PYTHONPATH": str(SRC), "MPLBACKEND": "Agg"}
+    res = subprocess.run(
+        [sys.executable, "-c", _PROBE], env=env, capture_output=True, text=True, timeout=120
+    )
+    assert res.returncode == 0, res.stderr
+    assert res.stdout.strip() == "ok"
