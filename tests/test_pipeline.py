@@ -355,9 +355,12 @@ def test_play_over_serial_to_the_easysmc_emulator(tmp_path: Path) -> None:
     assert np.max(np.abs(got - ride.pulses)) <= 1
     t = np.array([e.t_s for e in frames[: ride.n_frames]])
     # paced by each move's own speed: never less than one frame period apart on the
-    # controller's clock, and one period apart while the buffer holds moves (the median). A
-    # busy machine may send some frames late, which only lengthens those intervals: no
-    # upper bound on each, which would judge the sender's wall clock, not the moves.
+    # controller's clock, and exactly one period apart while the buffer holds moves. A busy
+    # machine may send some frames late: the drive's buffer then runs empty and the next move
+    # starts when it arrives, which only lengthens that interval, and the drive counts it as an
+    # underflow. So every longer interval must be one the drive counted; how many there are
+    # judges the sender's wall clock, not the moves (a median of one period failed at load 6-10).
     d = np.diff(t)
     assert np.all(d >= 0.05 - 1e-9), d.min()
-    assert np.median(d) == pytest.approx(0.05, abs=1e-9), d
+    longer = int(np.sum(d > 0.05 + 1e-9))
+    assert longer <= model.stats["underflows"], (longer, model.stats, d)
