@@ -645,8 +645,8 @@ class ControllerEmulator(UdpEmulatorBase, Generic[C]):
 
     The controller description, a mutable copy of its parameters, the homing / ready /
     e-stop state, frame counters, the violations met while decoding, and the
-    :class:`Playback` (built by the subclass in :meth:`_init_kind`, whose buffer rules
-    differ).
+    :class:`Playback` of ``controller.buffer_frames`` frames (FIFO or latest-frame as
+    :meth:`_fifo` says).
 
     Parameters
     ----------
@@ -706,14 +706,19 @@ class ControllerEmulator(UdpEmulatorBase, Generic[C]):
         self._last_time_ms: int | None = None
         self._next_report: float | None = None
         self._violations: list[Violation] = []
+        self.playback = Playback(self.n_axes, controller.buffer_frames, self._fifo())
         self._init_kind()
         self._set_limits()
         self._set_rate()
 
     # -- subclass hooks -----------------------------------------------------------------
     def _init_kind(self) -> None:  # pragma: no cover - abstract
-        """The kind's own state, :attr:`playback` included."""
+        """The kind's own state."""
         raise NotImplementedError
+
+    def _fifo(self) -> bool:
+        """Whether the buffer plays every frame in order (``False``: only the latest)."""
+        return True
 
     def _set_rate(self) -> None:  # pragma: no cover - abstract
         """Playback rate from the current parameters."""

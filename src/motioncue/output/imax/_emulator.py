@@ -40,7 +40,6 @@ from .._udp_emulator import (
     STATE_HOMING,
     STATE_READY,
     ControllerEmulator,
-    Playback,
     Violation,
     parameter_changes,
     wall_clock,
@@ -107,7 +106,6 @@ class ImaxEmulator(ControllerEmulator[ImaxController]):
         self._last_frame_wall: float | None = None
         self._reported_alarm = 0
         self.port_out_bytes = controller.port_out_bytes
-        self.playback = Playback(self.n_axes, controller.buffer_frames, True)
 
     def set_inputs(self, bits: int, now_s: float | None = None) -> None:
         """Set the X01..X12 inputs (logical values); may trigger or release the e-stop."""

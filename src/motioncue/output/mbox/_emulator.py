@@ -37,7 +37,6 @@ from .._udp_emulator import (
     STATE_HOMING,
     STATE_READY,
     ControllerEmulator,
-    Playback,
     parameter_changes,
 )
 from ._controller import MboxController
@@ -79,7 +78,6 @@ class MboxEmulator(ControllerEmulator[MboxController]):
     LIMIT_PARAMS = frozenset({"Fn0C0", "Fn0C1", "Fn0C2"})
 
     def _init_kind(self) -> None:
-        controller = self.controller
         self.cx = [0x0002, 0, 0, 0, 0, 0, 0, 0]
         self.fault_code = 0
         self.frame_dout = 0
@@ -87,7 +85,9 @@ class MboxEmulator(ControllerEmulator[MboxController]):
         self.frame_ext = 0
         self.inputs = 0
         self._next_duration_s: float | None = None
-        self.playback = Playback(self.n_axes, controller.buffer_frames, bool(self.params["Fn01C"]))
+
+    def _fifo(self) -> bool:
+        return bool(self.params["Fn01C"])  # Fn01C = 0: latest frame only
 
     def inject_fault(self, code: int) -> None:
         """Put the box in the fault state (e.g. 2520 over-speed); RST in CX0 clears it."""
