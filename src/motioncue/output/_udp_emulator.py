@@ -31,7 +31,7 @@ import struct
 import sys
 import threading
 import time
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 from typing import ClassVar, Generic, Protocol, Self, TypeVar
 
@@ -477,6 +477,25 @@ C = TypeVar("C", bound=EmulatedController)
 """The controller description type of a :class:`ControllerEmulator`."""
 
 
+class StampedFrame(Protocol):
+    """What :meth:`ControllerEmulator._stamp_step` reads of a timed frame (both kinds)."""
+
+    @property
+    def absolute(self) -> bool:
+        """``True``: ``time_ms`` is the frame's time stamp; ``False``: its time step."""
+        ...
+
+    @property
+    def time_ms(self) -> int:
+        """Time stamp or step (ms)."""
+        ...
+
+
+Handler = Callable[..., WireMessage | None]
+"""A :attr:`ControllerEmulator.HANDLERS` entry: ``handler(emulator, msg, now_s)`` -> the
+reply (``None``: none)."""
+
+
 class UdpEmulatorBase:
     """The UDP server loop and thread shared by both emulators.
 
@@ -626,8 +645,8 @@ class ControllerEmulator(UdpEmulatorBase, Generic[C]):
 
     The controller description, a mutable copy of its parameters, the homing / ready /
     e-stop state, frame counters, the violations met while decoding, and the
-    :class:`Playback` (built by the subclass in :meth:`_init_kind`, whose buffer rules
-    differ).
+    :class:`Playback` of ``controller.buffer_frames`` frames (FIFO or latest-frame as
+    :meth:`_fifo` says).
 
     Parameters
     ----------
@@ -655,6 +674,14 @@ class ControllerEmulator(UdpEmulatorBase, Generic[C]):
     FRAME_FUNCTIONS: ClassVar[frozenset[int]] = frozenset({F_ABS, F_REL})
     """Header functions of the frames the host sends (0x1301 absolute, 0x1401 relative
     time); a kind with more frame messages (IMAX vibration frames) adds them."""
+    HANDLERS: ClassVar[tuple[tuple[type | tuple[type, ...], Handler], ...]]
+    """What the controller does with each decoded message it receives: ``(message
+    type(s), handler)`` pairs, the first whose type matches is called as ``handler(self,
+    msg, now_s)`` and returns the reply (subclasses first where one message subclasses
+    another); a message that matches none is one the controller sends, not receives."""
+    LIMIT_PARAMS: ClassVar[frozenset[str]]
+    """The parameters ``controller.pulse_limits()`` comes from (a write of one of them
+    changes the limits frames are judged with)."""
 
     def __init__(
         self,
@@ -679,18 +706,19 @@ class ControllerEmulator(UdpEmulatorBase, Generic[C]):
         self._last_time_ms: int | None = None
         self._next_report: float | None = None
         self._violations: list[Violation] = []
+        self.playback = Playback(self.n_axes, controller.buffer_frames, self._fifo())
         self._init_kind()
         self._set_limits()
         self._set_rate()
 
     # -- subclass hooks -----------------------------------------------------------------
     def _init_kind(self) -> None:  # pragma: no cover - abstract
-        """The kind's own state, :attr:`playback` included."""
+        """The kind's own state."""
         raise NotImplementedError
 
-    def _set_limits(self) -> None:  # pragma: no cover - abstract
-        """Judge frames with the limits the current parameters give."""
-        raise NotImplementedError
+    def _fifo(self) -> bool:
+        """Whether the buffer plays every frame in order (``False``: only the latest)."""
+        return True
 
     def _set_rate(self) -> None:  # pragma: no cover - abstract
         """Playback rate from the current parameters."""
@@ -714,8 +742,13 @@ class ControllerEmulator(UdpEmulatorBase, Generic[C]):
         raise NotImplementedError  # pragma: no cover - abstract
 
     def _answer(self, msg: WireMessage, now_s: float) -> WireMessage | None:
-        """Act on a decoded message; the reply to send (if replies are asked for)."""
-        raise NotImplementedError  # pragma: no cover - abstract
+        """Act on a decoded message with its :attr:`HANDLERS` entry; the reply to send (if
+        replies are asked for). A message the controller only sends is recorded malformed."""
+        for types, handler in self.HANDLERS:
+            if isinstance(msg, types):
+                return handler(self, msg, now_s)
+        self._not_to_it(msg)
+        return None
 
     # -- datagrams ----------------------------------------------------------------------
     def handle(self, data: bytes, now_s: float) -> list[bytes]:
@@ -777,11 +810,23 @@ class ControllerEmulator(UdpEmulatorBase, Generic[C]):
                 )
             )
 
-    def _apply_limits(self, changed: dict[str, int]) -> None:
-        """Judge later frames with the limits of the description with ``changed``
-        parameters (as written by the host). Parameters that imply no usable limits (a
-        stroke of less than a pulse) are flagged ``config`` and the limits stay as they were.
-        """
+    def _stamp_step(self, msg: StampedFrame) -> int | None:
+        """The time step (ms) of frame ``msg`` after the previous frame of the run: its
+        relative time, or its stamp minus the previous stamp (``None`` for the first
+        absolute frame of a run); remembers an absolute frame's stamp for the next."""
+        if not msg.absolute:
+            return msg.time_ms
+        step = None if self._last_time_ms is None else msg.time_ms - self._last_time_ms
+        self._last_time_ms = msg.time_ms
+        return step
+
+    def _set_limits(self) -> None:
+        """Judge later frames with the limits of the description with the current values
+        of :attr:`LIMIT_PARAMS` (as written by the host). Parameters that imply no usable
+        limits (a stroke of less than a pulse) are flagged ``config`` and the limits stay
+        as they were."""
+        base = self.controller.parameters
+        changed = {k: self.params[k] for k in self.LIMIT_PARAMS if self.params[k] != base[k]}
         try:
             ctrl = self.controller.with_parameters(**changed) if changed else self.controller
             limits = ctrl.pulse_limits()
@@ -791,6 +836,29 @@ class ControllerEmulator(UdpEmulatorBase, Generic[C]):
             )
             return
         self.playback.set_limits(limits)
+
+    def _refuse_full(self, frame: int, note: str = "") -> None:
+        """Count and record frame ``frame`` refused because the buffer is full (``note``:
+        the controller's error, appended to the detail)."""
+        pb = self.playback
+        self.refused_frames += 1
+        self._violations.append(
+            Violation(
+                pb.t_end,
+                "buffer",
+                None,
+                f"frame {frame} refused: buffer full ({pb.depth} frames{note})",
+            )
+        )
+
+    def _begin_homing(self, now_s: float) -> None:
+        """Start initial positioning at wall time ``now_s``: the platform goes to zero over
+        ``homing_time_s`` (the buffer cleared) and the next frame starts a new run."""
+        self.state = STATE_HOMING
+        self._homing_until = now_s + self.homing_time_s
+        self.playback.jump(self.homing_time_s, [0] * self.n_axes)
+        self.playback.restart()
+        self._last_time_ms = None
 
     def _malformed(self, detail: str) -> list[bytes]:
         """Record a datagram the controller cannot use; no reply."""

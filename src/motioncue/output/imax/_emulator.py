@@ -40,7 +40,6 @@ from .._udp_emulator import (
     STATE_HOMING,
     STATE_READY,
     ControllerEmulator,
-    Playback,
     Violation,
     parameter_changes,
     wall_clock,
@@ -81,6 +80,7 @@ _DP_POS = DP_POS  # low word, high word follows (2.3.3)
 _LIMIT_PARAMS = frozenset(
     ["PA07", "PA40", "PA41", "PA54"] + [f"PA{g}{i:x}" for g in "8ab" for i in range(6)]
 )
+_FRAMES = (F_ABS, F_REL, F_VIB_ABS, F_VIB_REL)
 
 
 class ImaxEmulator(ControllerEmulator[ImaxController]):
@@ -90,7 +90,8 @@ class ImaxEmulator(ControllerEmulator[ImaxController]):
     """
 
     LABEL = "IMAX"
-    FRAME_FUNCTIONS = frozenset({F_ABS, F_REL, F_VIB_ABS, F_VIB_REL})
+    FRAME_FUNCTIONS = frozenset(_FRAMES)
+    LIMIT_PARAMS = _LIMIT_PARAMS
 
     def _init_kind(self) -> None:
         controller = self.controller
@@ -105,7 +106,6 @@ class ImaxEmulator(ControllerEmulator[ImaxController]):
         self._last_frame_wall: float | None = None
         self._reported_alarm = 0
         self.port_out_bytes = controller.port_out_bytes
-        self.playback = Playback(self.n_axes, controller.buffer_frames, True)
 
     def set_inputs(self, bits: int, now_s: float | None = None) -> None:
         """Set the X01..X12 inputs (logical values); may trigger or release the e-stop."""
@@ -154,21 +154,9 @@ class ImaxEmulator(ControllerEmulator[ImaxController]):
             return decode(data, self.port_out_bytes)
         except ProtocolError as exc:
             self._malformed(str(exc))
-            if reply and h.function in (F_ABS, F_REL, F_VIB_ABS, F_VIB_REL):
+            if reply and h.function in self.FRAME_FUNCTIONS:
                 return [self._command_error(h.function)]
             return []
-
-    def _answer(self, msg: WireMessage, now_s: float) -> WireMessage | None:
-        if isinstance(msg, MotionFrame | VibrationFrame):
-            return self._frame(msg)
-        if isinstance(msg, ServoRead | ServoWrite):
-            return self._servo(msg)
-        if isinstance(msg, RegisterRead):
-            return self._read(msg)
-        if isinstance(msg, RegisterWrite):
-            return self._write(msg, now_s)
-        self._not_to_it(msg)
-        return None
 
     def _command_error(self, function: int) -> bytes:
         """x = 5 reply to a frame the controller cannot use (error code 5, zero frame)."""
@@ -214,7 +202,9 @@ class ImaxEmulator(ControllerEmulator[ImaxController]):
             return VibrationFrameReply(*head, msg.vibration, self.port_out_bytes)
         return MotionFrameReply(*head, msg.extend, self.port_out_bytes)
 
-    def _frame(self, msg: MotionFrame | VibrationFrame) -> MotionFrameReply | VibrationFrameReply:
+    def _frame(
+        self, msg: MotionFrame | VibrationFrame, now_s: float
+    ) -> MotionFrameReply | VibrationFrameReply:
         p = self.params
         off = p["PA95"]
         if len(msg.positions) < off + self.n_axes:
@@ -231,22 +221,10 @@ class ImaxEmulator(ControllerEmulator[ImaxController]):
             return self._reply(msg, ReplyStatus.COMMAND_ERROR, 5)
         pb = self.playback
         if pb.full:
-            self.refused_frames += 1
             self._bump_alarm(ERR_BUFFER)
-            self._violations.append(
-                Violation(
-                    pb.t_end,
-                    "buffer",
-                    None,
-                    f"frame {msg.frame} refused: buffer full ({pb.depth} frames, Err21)",
-                )
-            )
+            self._refuse_full(msg.frame, ", Err21")
             return self._reply(msg, ReplyStatus.ERROR, ERR_BUFFER)
-        if msg.absolute:
-            step = None if self._last_time_ms is None else msg.time_ms - self._last_time_ms
-            self._last_time_ms = msg.time_ms
-        else:
-            step = msg.time_ms
+        step = self._stamp_step(msg)
         min_period = max(p["PA59"], 1) / 1000.0
         positions = msg.positions[off : off + self.n_axes]
         stamped = True  # False: the controller times the move itself
@@ -289,7 +267,7 @@ class ImaxEmulator(ControllerEmulator[ImaxController]):
             self.vibration = msg.vibration[off : off + self.n_axes]
         return self._reply(msg, ReplyStatus.OK, 0)
 
-    def _servo(self, msg: ServoRead | ServoWrite) -> ServoReply:
+    def _servo(self, msg: ServoRead | ServoWrite, now_s: float) -> ServoReply:
         func = msg.FUNCTION + 1
         if not 1 <= msg.channel <= self.n_axes:
             n = msg.count if isinstance(msg, ServoRead) else len(msg.values)
@@ -328,7 +306,7 @@ class ImaxEmulator(ControllerEmulator[ImaxController]):
         }
         return table.get(address, 0) if address <= 0xFF else None
 
-    def _read(self, msg: RegisterRead) -> RegisterReply:
+    def _read(self, msg: RegisterRead, now_s: float) -> RegisterReply:
         values = []
         for a in range(msg.start, msg.start + msg.count):
             if msg.channel == CHANNEL_DP:
@@ -378,26 +356,22 @@ class ImaxEmulator(ControllerEmulator[ImaxController]):
             self._set_limits()
         return RegisterReply(0x1202, msg.channel, msg.start, msg.values)
 
+    HANDLERS = (
+        ((MotionFrame, VibrationFrame), _frame),
+        ((ServoRead, ServoWrite), _servo),  # before RegisterRead / RegisterWrite, their bases
+        (RegisterRead, _read),
+        (RegisterWrite, _write),
+    )
+
     # -- state --------------------------------------------------------------------------
     def _set_rate(self) -> None:
         """PA06 = 1: fast-forward while more than 2 frames are buffered (5.2's table), at
         1.5x (the manual gives no rate: decision); every frame is then judged at 1.5x."""
         self.playback.set_catch_up(1.5 if self.params["PA06"] else 1.0, 2)
 
-    def _set_limits(self) -> None:
-        """Stroke, speed and acceleration from the description with the current PA values
-        they come from."""
-        ctrl = self.controller
-        changed = {k: self.params[k] for k in _LIMIT_PARAMS if self.params[k] != ctrl.parameters[k]}
-        self._apply_limits(changed)
-
     def _start_homing(self, now_s: float) -> None:
-        self.state = STATE_HOMING
+        self._begin_homing(now_s)
         self._estop_latched = False
-        self._homing_until = now_s + self.homing_time_s
-        self.playback.jump(self.homing_time_s, [0] * self.n_axes)
-        self.playback.restart()
-        self._last_time_ms = None
         self._resume_pending = False
         self.alarm = 0
 

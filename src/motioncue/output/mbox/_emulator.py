@@ -37,8 +37,6 @@ from .._udp_emulator import (
     STATE_HOMING,
     STATE_READY,
     ControllerEmulator,
-    Playback,
-    Violation,
     parameter_changes,
 )
 from ._controller import MboxController
@@ -77,9 +75,9 @@ class MboxEmulator(ControllerEmulator[MboxController]):
     """
 
     LABEL = "MBOX"
+    LIMIT_PARAMS = frozenset({"Fn0C0", "Fn0C1", "Fn0C2"})
 
     def _init_kind(self) -> None:
-        controller = self.controller
         self.cx = [0x0002, 0, 0, 0, 0, 0, 0, 0]
         self.fault_code = 0
         self.frame_dout = 0
@@ -87,7 +85,9 @@ class MboxEmulator(ControllerEmulator[MboxController]):
         self.frame_ext = 0
         self.inputs = 0
         self._next_duration_s: float | None = None
-        self.playback = Playback(self.n_axes, controller.buffer_frames, bool(self.params["Fn01C"]))
+
+    def _fifo(self) -> bool:
+        return bool(self.params["Fn01C"])  # Fn01C = 0: latest frame only
 
     def inject_fault(self, code: int) -> None:
         """Put the box in the fault state (e.g. 2520 over-speed); RST in CX0 clears it."""
@@ -111,17 +111,7 @@ class MboxEmulator(ControllerEmulator[MboxController]):
         except ProtocolError as exc:
             return self._malformed(str(exc))
 
-    def _answer(self, msg: WireMessage, now_s: float) -> WireMessage | None:
-        if isinstance(msg, MotionFrame):
-            return self._frame(msg)
-        if isinstance(msg, RegisterRead):
-            return self._read(msg)
-        if isinstance(msg, RegisterWrite):
-            return self._write(msg, now_s)
-        self._not_to_it(msg)
-        return None
-
-    def _frame(self, msg: MotionFrame) -> MotionFrameReply:
+    def _frame(self, msg: MotionFrame, now_s: float) -> MotionFrameReply:
         if msg.n_axes != self.n_axes:
             # a frame of the other axis mode: not enough (or not the) data for this box
             self._malformed(
@@ -134,22 +124,10 @@ class MboxEmulator(ControllerEmulator[MboxController]):
             self.ignored_frames += 1
             return MotionFrameReply(FrameStatus.OK, msg)
         if pb.fifo and pb.full:
-            self.refused_frames += 1
-            self._violations.append(
-                Violation(
-                    pb.t_end,
-                    "buffer",
-                    None,
-                    f"frame {msg.line} refused: buffer full ({pb.depth} frames)",
-                )
-            )
+            self._refuse_full(msg.line)
             return MotionFrameReply(FrameStatus.BUFFER_FULL, msg)
         p = self.params
-        if msg.absolute:
-            step = None if self._last_time_ms is None else msg.time_ms - self._last_time_ms
-            self._last_time_ms = msg.time_ms
-        else:
-            step = msg.time_ms
+        step = self._stamp_step(msg)
         stamped = False  # the box times the move itself unless the stamps do
         if self._next_duration_s is not None:
             duration = self._next_duration_s
@@ -172,7 +150,7 @@ class MboxEmulator(ControllerEmulator[MboxController]):
             self.frame_dacs = (msg.dac1, msg.dac2)
         return MotionFrameReply(FrameStatus.OK, msg)
 
-    def _read(self, msg: RegisterRead) -> RegisterReadReply | RegisterError:
+    def _read(self, msg: RegisterRead, now_s: float) -> RegisterReadReply | RegisterError:
         if msg.channel == CHANNEL_DX:
             if msg.start + msg.count > 256:
                 return RegisterError(0x1103, msg.channel, msg.start, msg.count, ERR_ADDRESS)
@@ -223,6 +201,12 @@ class MboxEmulator(ControllerEmulator[MboxController]):
             if not value & 0x2 and self.state != STATE_HOMING:
                 self._start_homing(now_s)
 
+    HANDLERS = (
+        (MotionFrame, _frame),
+        (RegisterRead, _read),
+        (RegisterWrite, _write),
+    )
+
     # -- state --------------------------------------------------------------------------
     def _set_rate(self) -> None:
         """Fn012 >= 1000: every frame is played Fn012/1000 times as fast as stamped (5.3.3).
@@ -237,14 +221,6 @@ class MboxEmulator(ControllerEmulator[MboxController]):
         for planning, see ``MboxController.catch_up_factor``)."""
         fn012 = self.params["Fn012"]
         self.playback.set_catch_up(fn012 / 1000.0 if fn012 >= 1000 else 1.0)
-
-    def _set_limits(self) -> None:
-        """Stroke and speed from the description with the current Fn0C0..Fn0C2."""
-        keys = ("Fn0C0", "Fn0C1", "Fn0C2")
-        changed = {
-            k: self.params[k] for k in keys if self.params[k] != self.controller.parameters[k]
-        }
-        self._apply_limits(changed)
 
     def _set_estop(self, on: bool) -> None:
         pb = self.playback
@@ -270,12 +246,8 @@ class MboxEmulator(ControllerEmulator[MboxController]):
             self._last_time_ms = None
 
     def _start_homing(self, now_s: float) -> None:
-        self.state = STATE_HOMING
-        self._homing_until = now_s + self.homing_time_s
+        self._begin_homing(now_s)
         self.params["Fn090"] = 0
-        self.playback.jump(self.homing_time_s, [0] * self.n_axes)
-        self.playback.restart()
-        self._last_time_ms = None
         self._next_duration_s = None
 
     def _tick(self, now_s: float) -> None:
