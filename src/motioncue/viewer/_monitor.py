@@ -721,6 +721,11 @@ def _server_main(
 ) -> None:
     """The monitor's server process: a :class:`Monitor` on a :class:`_JobSource`, served
     on this process' main thread until the job's process says "end" (or goes away)."""
+    import signal
+
+    # Ctrl-C reaches the whole process group: the job stops (and parks) by its own path,
+    # then says "end" here; this process neither stops early nor prints a traceback
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
     source = _JobSource(requests, config["can_stop"])
     mon = Monitor(
         source, config["platform"], host=config["host"], port=config["port"],
