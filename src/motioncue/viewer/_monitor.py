@@ -25,7 +25,6 @@ from __future__ import annotations
 import asyncio
 import json
 import math
-import multiprocessing
 import threading
 import time
 from collections.abc import Callable, Mapping
@@ -40,9 +39,9 @@ from ._scene import Scene, scene_from_q
 
 if TYPE_CHECKING:
     import socket
+    import subprocess
     from asyncio import Future
     from multiprocessing.connection import Connection
-    from multiprocessing.process import BaseProcess
 
     import tornado.web
 
@@ -367,7 +366,7 @@ class Monitor:
         self._clients: set[_Client] = set()
         self._sockets: list[socket.socket] = []
         # started: the server process, the pipes to it and the job-side reader thread
-        self._proc: BaseProcess | None = None
+        self._proc: subprocess.Popen[bytes] | None = None
         self._requests: Connection | None = None  # the server's snapshot/stop requests
         self._control: Connection | None = None  # "end" to the server
         self._reader: threading.Thread | None = None
@@ -491,9 +490,18 @@ class Monitor:
                 f"monitor: cannot listen on {self.host}:{self.port}: {exc}"
             ) from exc
         self.port = int(self._sockets[0].getsockname()[1])
-        ctx = multiprocessing.get_context("spawn")  # no fork of a process with threads
-        req_server, req_job = ctx.Pipe()
-        ctl_server, ctl_job = ctx.Pipe(duplex=False)
+        import pickle
+        import socket
+        import subprocess
+        import sys
+        from multiprocessing.connection import Connection
+
+        # a fresh interpreter (not a fork of a process with threads, and not multiprocessing's
+        # spawn, which would run the job's own __main__ again), this process' module path
+        # first; the pipes are socket pairs and the listening sockets are passed as fds
+        req_job_s, req_server_s = socket.socketpair()
+        ctl_job_s, ctl_server_s = socket.socketpair()
+        fds = [req_server_s.fileno(), ctl_server_s.fileno()] + [s.fileno() for s in self._sockets]
         config = {
             "platform": self.platform,
             "bars": (self._q_lo, self._q_hi, self._v_max, self._a_max),
@@ -502,22 +510,29 @@ class Monitor:
             "rate_hz": self.rate_hz,
             "title": self.title,
             "can_stop": bool(self.source.can_stop),
+            "families": [s.family for s in self._sockets],
         }
-        proc = ctx.Process(
-            target=_server_main,
-            args=(config, self._sockets, req_server, ctl_server),
-            name="motioncue-monitor",
-            daemon=True,
-        )
+        req_job = Connection(req_job_s.detach())
+        ctl_job = Connection(ctl_job_s.detach())
         try:
-            proc.start()
+            blob = pickle.dumps(config)
+            proc = subprocess.Popen(
+                [sys.executable, "-c", _SERVER_CODE, repr(sys.path), *map(str, fds)],
+                pass_fds=fds,
+                stdin=subprocess.DEVNULL,
+            )
         except Exception as exc:  # e.g. an unpicklable platform: no monitor, one line
+            for c in (req_job, ctl_job):
+                c.close()
+            req_server_s.close()
+            ctl_server_s.close()
             self._close_sockets()
             raise TransportError(f"monitor: cannot start its server: {exc}") from exc
-        req_server.close()
-        ctl_server.close()
+        req_server_s.close()
+        ctl_server_s.close()
         self._proc, self._requests, self._control = proc, req_job, ctl_job
         try:
+            ctl_job.send_bytes(blob)
             ready = req_job.poll(_START_TIMEOUT_S) and req_job.recv() == ("ready",)
         except (EOFError, OSError):
             ready = False
@@ -569,16 +584,19 @@ class Monitor:
         """Stop serving (idempotent), after a last snapshot flagged ``"ended": true`` to each
         page, so that a page shows the job's final state (``parked``) instead of a stale one.
         """
+        import subprocess
+
         proc, control = self._proc, self._control
         if proc is not None and control is not None:
             try:
                 control.send(("end",))
             except (OSError, ValueError):
                 pass
-            proc.join(5.0)
-            if proc.is_alive():
-                proc.terminate()
-                proc.join(2.0)
+            try:
+                proc.wait(5.0)
+            except subprocess.TimeoutExpired:
+                proc.kill()
+                proc.wait(2.0)
             control.close()
             if self._requests is not None:
                 self._requests.close()  # the reader thread ends on it
@@ -713,19 +731,31 @@ class _JobSource:
             raise ConfigError(str(exc)) from None
 
 
-def _server_main(
-    config: dict[str, Any],
-    sockets: list[socket.socket],
-    requests: Connection,
-    control: Connection,
-) -> None:
+# the server process' entry: SIGINT ignored before anything else (Ctrl-C reaches the whole
+# process group: the job stops and parks by its own path, then says "end" here; no
+# traceback), the job's module path, then _server_main on the passed descriptors
+_SERVER_CODE = (
+    "import signal, sys; signal.signal(signal.SIGINT, signal.SIG_IGN); "
+    "import ast; sys.path[:] = ast.literal_eval(sys.argv[1]); "
+    "from motioncue.viewer._monitor import _server_main; "
+    "_server_main(*(int(a) for a in sys.argv[2:]))"
+)
+
+
+def _server_main(req_fd: int, ctl_fd: int, *socket_fds: int) -> None:
     """The monitor's server process: a :class:`Monitor` on a :class:`_JobSource`, served
     on this process' main thread until the job's process says "end" (or goes away)."""
-    import signal
+    import pickle
+    import socket
+    from multiprocessing.connection import Connection
 
-    # Ctrl-C reaches the whole process group: the job stops (and parks) by its own path,
-    # then says "end" here; this process neither stops early nor prints a traceback
-    signal.signal(signal.SIGINT, signal.SIG_IGN)
+    requests = Connection(req_fd)
+    control = Connection(ctl_fd, writable=False)
+    config = pickle.loads(control.recv_bytes())
+    sockets = [
+        socket.socket(family, socket.SOCK_STREAM, fileno=fd)
+        for family, fd in zip(config["families"], socket_fds, strict=True)
+    ]
     source = _JobSource(requests, config["can_stop"])
     mon = Monitor(
         source, config["platform"], host=config["host"], port=config["port"],
