@@ -83,7 +83,8 @@ class _Client(Protocol):
 
 
 class MonitorSource(Protocol):
-    """What a monitor reads from a running job (called in the monitor's thread).
+    """What a monitor reads from a running job (called in the job's process, by the
+    monitor's reader thread when its server asks, or by the caller of :meth:`Monitor.snapshot`).
 
     ``snapshot()`` returns a mapping with, all optional but ``q``:
 
