@@ -635,7 +635,7 @@ class Platform:
             if not math.isfinite(v):
                 raise _bad_input("poses", np.asarray(pose))
         m = self._leg_mask_list
-        x, y, z, roll, pitch, yaw = (v if keep else 0.0 for v, keep in zip(pose, m, strict=True))
+        x, y, z, roll, pitch, yaw = [v if keep else 0.0 for v, keep in zip(pose, m, strict=True)]
         legs = self._legs
         d = legs.vectors_one(rot_one(roll, pitch, yaw), (x, y, z))
         q, reachable = legs.q_one_checked(d)
@@ -748,18 +748,21 @@ class Platform:
         """``(n, 6)`` Jacobian for one pose; ``d`` and ``q`` from :meth:`_eval_one` if known."""
         if d is None or q is None:
             d, q, _ = self._eval_one(pose)
-        x, y, z, roll, pitch, yaw = (
+        x, y, z, roll, pitch, yaw = [
             v if keep else 0.0 for v, keep in zip(pose, self._leg_mask_list, strict=True)
-        )
+        ]
         legs = self._legs
         rows = legs.jacobian_one(d, q[: legs.n], (x, y, z), (roll, pitch, yaw))
+        nl = len(rows)
+        # the yaw axis' row and the spare axes' zero rows go in before the one conversion
+        # (no vstack per row block); the leg mask multiplies the leg rows only, as before
+        if self._yaw_axis:
+            rows.append([0.0, 0.0, 0.0, 0.0, 0.0, self._yaw_dq(pose[5])])
+        if self._n_spare:
+            rows.extend([0.0] * 6 for _ in range(self._n_spare))
         jac: np.ndarray = np.array(rows, dtype=float)
         if not self._all_dof_legs:
-            jac *= self._leg_mask
-        if self._yaw_axis:
-            jac = np.vstack([jac, [0.0, 0.0, 0.0, 0.0, 0.0, self._yaw_dq(pose[5])]])
-        if self._n_spare:
-            jac = np.vstack([jac, np.zeros((self._n_spare, 6))])
+            jac[:nl] *= self._leg_mask
         return jac
 
     # --- forward kinematics -------------------------------------------------------------

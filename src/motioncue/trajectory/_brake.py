@@ -15,11 +15,12 @@ module gives the same yes/no answer with far less work:
   them again.
 * :func:`stops_within` simulates P exactly, but returns as soon as the answer is known:
   *no* the moment a visited position leaves the band (the exact extent can only be
-  wider); *yes* the moment the bound from the current state keeps every later position
-  inside, or once P runs its final braking staircase (``|a|`` falling by ``j dt`` a frame
-  onto rest, monotone positions, last one in closed form) whose end is inside. Its answer
-  is the exact simulation's whenever the bound holds; the tests compare the two on random
-  states near and far from the stroke ends.
+  wider); once P runs its final braking staircase (``|a|`` falling by ``j dt`` a frame
+  onto rest, monotone positions, last one in closed form) *yes* if its end is inside and
+  *no* if it is more than 1e-9 beyond the tolerance (rounding is far smaller); with limits
+  that rule the staircase out, *yes* the moment the bound from the current state keeps
+  every later position inside. Its answer is the exact simulation's whenever the bound
+  holds; the tests compare the two on random states near and far from the stroke ends.
 """
 
 from __future__ import annotations
@@ -167,8 +168,13 @@ def stops_within(
                 end = x - s if v < 0.0 else x + s
                 if lo <= end <= hi:
                     return True
+                if end < lo_e - _EPS or end > hi_e + _EPS:
+                    return False  # the last position leaves the band (rounding << 1e-9)
             stair = 0
-        down, up = brake_bound(v, a, amax, jmax, dt)
-        if lo <= x - down and x + up <= hi:
-            return True
+        elif not stair_ok:
+            # no staircase exit with these limits: the bound is the only early "yes" (with
+            # it, the staircase exit settles most states sooner, so it is not tried there)
+            down, up = brake_bound(v, a, amax, jmax, dt)
+            if lo <= x - down and x + up <= hi:
+                return True
     return False

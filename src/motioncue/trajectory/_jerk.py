@@ -103,6 +103,8 @@ class JerkLimiter:
     limits: ActuatorLimits
     dt_s: float
     _params: tuple[tuple[float, ...], ...] = field(init=False, repr=False)
+    _dt: float = field(init=False, repr=False)
+    _inv_dt: float = field(init=False, repr=False)
 
     def __post_init__(self) -> None:
         if not (isinstance(self.dt_s, int | float) and 0.0 < self.dt_s <= 1.0):
@@ -122,6 +124,8 @@ class JerkLimiter:
             for i in range(lim.n_actuators)
         )
         object.__setattr__(self, "_params", params)
+        object.__setattr__(self, "_dt", dt)
+        object.__setattr__(self, "_inv_dt", 1.0 / dt)
 
     @property
     def n_actuators(self) -> int:
@@ -226,22 +230,29 @@ class JerkLimiter:
         """Next frame (n,) for a target (n,); updates ``state``. Never returns NaN/inf."""
         if isinstance(q_target, np.ndarray):
             q_target = q_target.tolist()
-        if len(q_target) != len(state.q):
-            raise ConfigError(f"target has {len(q_target)} values; expected {len(state.q)}")
-        dt = float(self.dt_s)
-        inv_dt = 1.0 / dt
-        out = [0.0] * len(state.q)
+        qs, vs, accs, lts, lws = state.q, state.v, state.a, state.last_target, state.last_want
+        if len(q_target) != len(qs):
+            raise ConfigError(f"target has {len(q_target)} values; expected {len(qs)}")
+        dt = self._dt
+        inv_dt = self._inv_dt
+        out = [0.0] * len(qs)
         clamped = False
-        for i, (qmin, qmax, vmax, amax, jdt, half_inv_j, abig, _j) in enumerate(self._params):
+        n_sim = 0
+        i = 0
+        # the admissibility test of _admissible, inlined (a call per candidate state costs
+        # more than the test): band with 1e-9 slack, closed-form bound, then simulation
+        for qmin, qmax, vmax, amax, jdt, half_inv_j, abig, jmax in self._params:
             t = float(q_target[i])
             if t - t != 0.0:
-                t = state.last_target[i]
+                t = lts[i]
                 state.n_nonfinite += 1
                 finite = False
             else:
-                state.last_target[i] = t
+                lts[i] = t
                 finite = True
-            q, v, a = state.q[i], state.v[i], state.a[i]
+            q = qs[i]
+            v = vs[i]
+            a = accs[i]
             want = (t - q) * inv_dt
             # beyond 2 v_max every wanted speed acts alike; clamping keeps inf/NaN out
             if want > 2.0 * vmax:
@@ -249,28 +260,41 @@ class JerkLimiter:
             elif want < -2.0 * vmax:
                 want = -2.0 * vmax
             v1, a1, landed = _level_step(
-                v, a, want, state.last_want[i], -vmax, vmax, amax, jdt, half_inv_j, abig, dt, inv_dt
+                v, a, want, lws[i], -vmax, vmax, amax, jdt, half_inv_j, abig, dt, inv_dt
             )
+            lws[i] = want  # the target's own speed as seen from the last frame
             if landed:
                 q1 = t
-            else:
-                q1 = q + v1 * dt
-            v1 = (q1 - q) * inv_dt
-            a1 = (v1 - v) * inv_dt
-            state.last_want[i] = want  # the target's own speed as seen from the last frame
-            if landed and self._admissible(state, i, q1, v1, a1, qmin, qmax):
-                state.q[i], state.v[i], state.a[i] = q1, v1, a1
-                out[i] = q1
-                continue
+                if qmin - 1e-9 <= q1 <= qmax + 1e-9:
+                    v1 = (q1 - q) * inv_dt
+                    a1 = (v1 - v) * inv_dt
+                    down, up = brake_bound(v1, a1, amax, jmax, dt)
+                    if qmin <= q1 - down and q1 + up <= qmax:
+                        ok = True
+                    else:
+                        n_sim += 1
+                        ok = stops_within(
+                            q1, v1, a1, qmin, qmax, vmax, amax, jdt, half_inv_j, abig, jmax, dt
+                        )
+                    if ok:
+                        qs[i] = q1
+                        vs[i] = v1
+                        accs[i] = a1
+                        out[i] = q1
+                        i += 1
+                        continue
             # limiting: the largest wanted speed towards the target (held, no feed-forward
             # of its rate) whose next state is admissible and stops before the target
             # (approach without overshoot); first the full one, then bisection towards 0
             lo_w, hi_w = qmin, qmax
             if t > q:
-                hi_w = min(t, qmax)
+                hi_w = t if t < qmax else qmax
             elif t < q:
-                lo_w = max(t, qmin)
-            best = None
+                lo_w = t if t > qmin else qmin
+            lo_e = lo_w - 1e-9
+            hi_e = hi_w + 1e-9
+            best = False
+            qn = vn = an = 0.0
             w_lo, w_hi = 0.0, want
             # wanted speeds beyond what one frame can reach give the same next state (the
             # step saturates): remember each decided state (q, v fixed: qb decides it)
@@ -283,32 +307,49 @@ class JerkLimiter:
                 qb = q + vb * dt
                 vb = (qb - q) * inv_dt
                 ab_ = (vb - v) * inv_dt
-                ok = seen.get(qb)
-                if ok is None:
-                    ok = seen[qb] = self._admissible(state, i, qb, vb, ab_, lo_w, hi_w)
+                known = seen.get(qb)
+                if known is not None:
+                    ok = known
+                else:
+                    if not lo_e <= qb <= hi_e:
+                        ok = False
+                    else:
+                        down, up = brake_bound(vb, ab_, amax, jmax, dt)
+                        if lo_w <= qb - down and qb + up <= hi_w:
+                            ok = True
+                        else:
+                            n_sim += 1
+                            ok = stops_within(qb, vb, ab_, lo_w, hi_w, vmax, amax, jdt,
+                                              half_inv_j, abig, jmax, dt)  # fmt: skip
+                    seen[qb] = ok
                 if ok:
-                    best = (qb, vb, ab_)
+                    best = True
+                    qn, vn, an = qb, vb, ab_
                     if k == 0:
                         break
                     w_lo = w
                 else:
                     w_hi = w
-            if best is None:  # P's action: admissible by construction
+            if not best:  # P's action: admissible by construction
                 vb, ab_, _l = _level_step(
                     v, a, 0.0, 0.0, -vmax, vmax, amax, jdt, half_inv_j, abig, dt, inv_dt
                 )
-                qb = q + vb * dt
-                vb = (qb - q) * inv_dt
-                ab_ = (vb - v) * inv_dt
-                best = (qb, vb, ab_)
-            qn, vn, an = best
-            state.q[i], state.v[i], state.a[i] = qn, vn, an
+                qn = q + vb * dt
+                vn = (qn - q) * inv_dt
+                an = (vn - v) * inv_dt
+            qs[i] = qn
+            vs[i] = vn
+            accs[i] = an
             out[i] = qn
             if qn != t:
                 clamped = True
                 state.clamped_axes[i] += 1
                 if finite:
-                    state.max_deviation = max(state.max_deviation, abs(qn - t))
+                    dev = abs(qn - t)
+                    if dev > state.max_deviation:
+                        state.max_deviation = dev
+            i += 1
+        state.n_simulated += n_sim
         state.n_frames += 1
         if clamped:
             state.n_clamped += 1

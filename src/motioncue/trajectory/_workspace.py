@@ -189,7 +189,9 @@ def _limit_one_linear(
     platform: Platform, pose: np.ndarray, limits: ActuatorLimits | None
 ) -> PoseLimitResult:
     """Fast single-pose path for all-linear platforms (see module docstring)."""
-    if not np.all(np.isfinite(pose)):
+    vals = pose.tolist()
+    total = sum(vals)  # finite unless NaN or inf is in it (or finite values overflow it)
+    if total - total != 0.0 and not all(map(math.isfinite, vals)):
         zero = np.zeros(6)
         q0 = np.asarray(platform.inverse(zero), dtype=float)
         return PoseLimitResult(zero, "invalid", 0.0, zero.copy(), np.zeros(6, bool), q0)
@@ -205,13 +207,15 @@ def _limit_one_linear(
     # the platform's single-pose and batch inverse kinematics
     tol = 1e-12
     base = req.tolist()
-    inverse = platform.inverse
+    # the platform's single-pose inverse kinematics on plain floats: what platform.inverse
+    # computes for one pose, without its array in and out (q stays a list until returned)
+    inverse_one = platform._inverse_one
     bounds = list(zip(lo_l, hi_l, strict=True))
 
-    def over(sc: float) -> tuple[float, np.ndarray]:
-        q = inverse([sc * b for b in base])
+    def over(sc: float) -> tuple[float, list[float]]:
+        q = inverse_one([sc * b for b in base])
         worst = -math.inf
-        for qi, (a, b) in zip(q.tolist(), bounds, strict=True):
+        for qi, (a, b) in zip(q, bounds, strict=True):
             if qi - b > worst:
                 worst = qi - b
             if a - qi > worst:
@@ -220,7 +224,7 @@ def _limit_one_linear(
 
     g1, q1 = over(1.0)
     if g1 - tol <= 0.0:
-        return PoseLimitResult(req, "ok", 1.0, pose - req, dropped, q1)
+        return PoseLimitResult(req, "ok", 1.0, pose - req, dropped, np.array(q1))
     # neutral: q = q_neutral, no inverse kinematics needed
     g0 = tol + max(
         max(qn - b, a - qn) for qn, (a, b) in zip(platform.q_neutral.tolist(), bounds, strict=True)
@@ -230,7 +234,7 @@ def _limit_one_linear(
         return PoseLimitResult(zero, "unreachable", 0.0, pose.copy(), dropped,
                                np.asarray(platform.q_neutral, dtype=float).copy())  # fmt: skip
     lo, hi, glo, ghi = 0.0, 1.0, g0, g1
-    qlo: np.ndarray | None = None
+    qlo: list[float] | None = None
     side = 0
     for _ in range(60):
         if hi - lo <= _SINGLE_TOL:
@@ -250,6 +254,5 @@ def _limit_one_linear(
                 glo *= 0.5
             side = 1
     out = lo * req
-    if qlo is None:
-        qlo = np.asarray(platform.inverse(out), dtype=float)
-    return PoseLimitResult(out, "clamped", lo, pose - out, dropped, qlo)
+    q_out = np.asarray(platform.inverse(out), dtype=float) if qlo is None else np.array(qlo)
+    return PoseLimitResult(out, "clamped", lo, pose - out, dropped, q_out)

@@ -9,12 +9,15 @@ state. Its stop button asks the job to stop, which parks by the job's own stop p
 The server is tornado (https://www.tornadoweb.org/): HTTP and WebSocket in one small,
 dependency-free, long-maintained library, run on its own asyncio loop in a daemon thread.
 
-The frame loop is never delayed by the monitor: the monitor thread *reads* a
-:class:`MonitorSource` (attribute reads of the running job, no lock the loop waits on), at
-:attr:`Monitor.rate_hz`, and derives everything else (forward kinematics for the pose,
-fractions, acceleration as the change of speed between two snapshots) in its own thread.
-A slow browser only misses snapshots: a snapshot is not sent to a client while its previous
-one is still in flight.
+The frame loop is never delayed by the monitor: a started monitor serves from a process of
+its own (the server, forward kinematics for the pose, fractions, acceleration as the change
+of speed between two snapshots, JSON and WebSocket I/O), so none of that holds the job's
+interpreter lock. In the job's process one small thread only *reads* the
+:class:`MonitorSource` (attribute reads of the running job, no lock the loop waits on) when
+the server asks for a snapshot (at most :attr:`Monitor.rate_hz` times a second while a page
+is open, and for ``/snapshot``) and hands the raw mapping over a pipe. A slow browser only
+misses snapshots: a snapshot is not sent to a client while its previous one is still in
+flight.
 """
 
 from __future__ import annotations
@@ -24,7 +27,7 @@ import json
 import math
 import threading
 import time
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from typing import TYPE_CHECKING, Any, Protocol, SupportsFloat
 
 import numpy as np
@@ -36,7 +39,9 @@ from ._scene import Scene, scene_from_q
 
 if TYPE_CHECKING:
     import socket
+    import subprocess
     from asyncio import Future
+    from multiprocessing.connection import Connection
 
     import tornado.web
 
@@ -58,6 +63,14 @@ __all__ = [
 DEFAULT_MONITOR_PORT = 8765
 """Port of ``--monitor`` without a value (loopback)."""
 
+_START_TIMEOUT_S = 60.0  # the server process imports numpy and motioncue (slow when loaded)
+_REPLY_TIMEOUT_S = 5.0  # the job's process answers a snapshot request within this
+
+
+class _SourceError(Exception):
+    """The job's source failed to give a snapshot; ``str()`` is the one-line error text
+    (``"Type: message"``), already counted in the job's process."""
+
 
 class _Client(Protocol):
     """A page's WebSocket as the monitor uses it."""
@@ -70,7 +83,8 @@ class _Client(Protocol):
 
 
 class MonitorSource(Protocol):
-    """What a monitor reads from a running job (called in the monitor's thread).
+    """What a monitor reads from a running job (called in the job's process, by the
+    monitor's reader thread when its server asks, or by the caller of :meth:`Monitor.snapshot`).
 
     ``snapshot()`` returns a mapping with, all optional but ``q``:
 
@@ -352,6 +366,12 @@ class Monitor:
         self._loop: asyncio.AbstractEventLoop | None = None
         self._clients: set[_Client] = set()
         self._sockets: list[socket.socket] = []
+        # started: the server process, the pipes to it and the job-side reader thread
+        self._proc: subprocess.Popen[bytes] | None = None
+        self._requests: Connection | None = None  # the server's snapshot/stop requests
+        self._control: Connection | None = None  # "end" to the server
+        self._reader: threading.Thread | None = None
+        self._server_errors = 0  # errors counted by the server process (not the source's)
 
     # ------------------------------------------------------------------ snapshots
     def snapshot(self) -> dict[str, Any]:
@@ -454,7 +474,14 @@ class Monitor:
         return f"http://{host}:{self.port}/"
 
     def start(self) -> Monitor:
-        """Listen (errors raised here) and serve from a daemon thread."""
+        """Listen (errors raised here) and serve from a process of its own (module
+        docstring); this process keeps one daemon thread that reads the source on request.
+
+        Raises
+        ------
+        TransportError
+            The address cannot be listened on, or the server process does not start.
+        """
         from tornado.netutil import bind_sockets
 
         try:
@@ -464,18 +491,119 @@ class Monitor:
                 f"monitor: cannot listen on {self.host}:{self.port}: {exc}"
             ) from exc
         self.port = int(self._sockets[0].getsockname()[1])
-        ready = threading.Event()
-        self._thread = threading.Thread(
-            target=self._serve, args=(ready,), name="motioncue-monitor", daemon=True
+        import pickle
+        import socket
+        import subprocess
+        import sys
+        from multiprocessing.connection import Connection
+
+        # a fresh interpreter (not a fork of a process with threads, and not multiprocessing's
+        # spawn, which would run the job's own __main__ again), this process' module path
+        # first; the pipes are socket pairs and the listening sockets are passed as fds
+        req_job_s, req_server_s = socket.socketpair()
+        ctl_job_s, ctl_server_s = socket.socketpair()
+        fds = [req_server_s.fileno(), ctl_server_s.fileno()] + [s.fileno() for s in self._sockets]
+        config = {
+            "platform": self.platform,
+            "bars": (self._q_lo, self._q_hi, self._v_max, self._a_max),
+            "host": self.host,
+            "port": self.port,
+            "rate_hz": self.rate_hz,
+            "title": self.title,
+            "can_stop": bool(self.source.can_stop),
+            "families": [s.family for s in self._sockets],
+        }
+        req_job = Connection(req_job_s.detach())
+        ctl_job = Connection(ctl_job_s.detach())
+        try:
+            blob = pickle.dumps(config)
+            proc = subprocess.Popen(
+                [sys.executable, "-c", _SERVER_CODE, repr(sys.path), *map(str, fds)],
+                pass_fds=fds,
+                stdin=subprocess.DEVNULL,
+            )
+        except Exception as exc:  # e.g. an unpicklable platform: no monitor, one line
+            for c in (req_job, ctl_job):
+                c.close()
+            req_server_s.close()
+            ctl_server_s.close()
+            self._close_sockets()
+            raise TransportError(f"monitor: cannot start its server: {exc}") from exc
+        req_server_s.close()
+        ctl_server_s.close()
+        self._proc, self._requests, self._control = proc, req_job, ctl_job
+        try:
+            ctl_job.send_bytes(blob)
+            ready = req_job.poll(_START_TIMEOUT_S) and req_job.recv() == ("ready",)
+        except (EOFError, OSError):
+            ready = False
+        if not ready:
+            self.stop()
+            raise TransportError("monitor: its server process did not start")
+        self._reader = threading.Thread(
+            target=self._answer, args=(req_job,), name="motioncue-monitor-source", daemon=True
         )
-        self._thread.start()
-        ready.wait(10.0)
+        self._reader.start()
         return self
+
+    def _answer(self, conn: Connection) -> None:
+        """The job-side thread: answer the server process' requests until it ends."""
+        while True:
+            try:
+                msg = conn.recv()
+            except (EOFError, OSError):
+                return
+            try:
+                if msg[0] == "snapshot":
+                    # the server's counters: snapshots made before this one, errors other
+                    # than the source's
+                    self.errors += int(msg[2]) - self._server_errors
+                    self._server_errors = int(msg[2])
+                    try:
+                        reply: tuple[str, Any] = ("ok", dict(self.source.snapshot()))
+                        self.snapshots = int(msg[1]) + 1  # this one is being made
+                    except Exception as exc:  # a torn read: the server shows it, counted
+                        self.errors += 1
+                        reply = ("error", f"{type(exc).__name__}: {exc}")
+                elif msg[0] == "stop":
+                    try:
+                        self.stop_pressed()
+                        reply = ("ok", None)
+                    except Exception as exc:  # e.g. the emulator has nothing to park
+                        reply = ("error", str(exc))
+                else:
+                    continue
+                conn.send(reply)
+            except Exception:  # a raw snapshot that does not pickle: an error shown
+                self.errors += 1
+                try:
+                    conn.send(("error", "the job's snapshot could not be passed on"))
+                except (OSError, ValueError):
+                    return
 
     def stop(self) -> None:
         """Stop serving (idempotent), after a last snapshot flagged ``"ended": true`` to each
         page, so that a page shows the job's final state (``parked``) instead of a stale one.
         """
+        import subprocess
+
+        proc, control = self._proc, self._control
+        if proc is not None and control is not None:
+            try:
+                control.send(("end",))
+            except (OSError, ValueError):
+                pass
+            try:
+                proc.wait(5.0)
+            except subprocess.TimeoutExpired:
+                proc.kill()
+                proc.wait(2.0)
+            control.close()
+            if self._requests is not None:
+                self._requests.close()  # the reader thread ends on it
+            if self._reader is not None:
+                self._reader.join(2.0)
+            self._proc = self._control = self._requests = self._reader = None
         loop = self._loop
         if loop is not None and loop.is_running():
             if self._clients:
@@ -487,6 +615,9 @@ class Monitor:
         if self._thread is not None:
             self._thread.join(5.0)
             self._thread = None
+        self._close_sockets()
+
+    def _close_sockets(self) -> None:
         for s in self._sockets:
             try:
                 s.close()
@@ -504,7 +635,11 @@ class Monitor:
     def local_only(self) -> bool:
         return is_loopback(self.host)
 
-    def _serve(self, ready: threading.Event) -> None:
+    def _serve(
+        self,
+        ready: threading.Event,
+        on_start: Callable[[asyncio.AbstractEventLoop], object] | None = None,
+    ) -> None:
         import tornado.web
         from tornado.httpserver import HTTPServer
         from tornado.ioloop import PeriodicCallback
@@ -517,6 +652,8 @@ class Monitor:
         server.add_sockets(self._sockets)
         tick = PeriodicCallback(self._tick, 1000.0 / self.rate_hz)
         tick.start()
+        if on_start is not None:
+            on_start(loop)
         ready.set()
         try:
             loop.run_forever()
@@ -545,6 +682,8 @@ class Monitor:
             snap = self.snapshot()
             json.dumps(snap, allow_nan=False)  # a NaN is an error too, not a broken page
             return snap
+        except _SourceError as exc:  # counted where the source was read
+            return {"state": "?", "error": str(exc)}
         except Exception as exc:  # a torn read of a running job: skip this snapshot, count it
             self.errors += 1
             return {"state": "?", "error": f"{type(exc).__name__}: {exc}"}
@@ -560,6 +699,104 @@ class Monitor:
         msg = self.snapshot_json()
         for client in list(self._clients):
             client.push(msg)
+
+
+class _JobSource:
+    """The job's source as the server process sees it: each snapshot and stop request is
+    a round trip over the pipe to the job's process (``Monitor._answer``)."""
+
+    def __init__(self, conn: Connection, can_stop: bool) -> None:
+        self.conn = conn
+        self.can_stop = can_stop
+        self.monitor: Monitor | None = None  # its counters go with each request
+
+    def _ask(self, msg: tuple[Any, ...]) -> Any:
+        self.conn.send(msg)
+        if not self.conn.poll(_REPLY_TIMEOUT_S):
+            raise TimeoutError(f"the job did not answer within {_REPLY_TIMEOUT_S:g} s")
+        kind, value = self.conn.recv()
+        if kind == "error":
+            raise _SourceError(value)
+        return value
+
+    def snapshot(self) -> Mapping[str, Any]:
+        mon = self.monitor
+        counts = (0, 0) if mon is None else (mon.snapshots, mon.errors)
+        raw: Mapping[str, Any] = self._ask(("snapshot", *counts))
+        return raw
+
+    def request_stop(self) -> None:
+        try:
+            self._ask(("stop",))
+        except _SourceError as exc:  # the job's refusal, as the page shows it
+            raise ConfigError(str(exc)) from None
+
+
+# the server process' entry: SIGINT ignored before anything else (Ctrl-C reaches the whole
+# process group: the job stops and parks by its own path, then says "end" here; no
+# traceback), the job's module path, then _server_main on the passed descriptors
+_SERVER_CODE = (
+    "import signal, sys; signal.signal(signal.SIGINT, signal.SIG_IGN); "
+    "import ast; sys.path[:] = ast.literal_eval(sys.argv[1]); "
+    "from motioncue.viewer._monitor import _server_main; "
+    "_server_main(*(int(a) for a in sys.argv[2:]))"
+)
+
+
+def _server_main(req_fd: int, ctl_fd: int, *socket_fds: int) -> None:
+    """The monitor's server process: a :class:`Monitor` on a :class:`_JobSource`, served
+    on this process' main thread until the job's process says "end" (or goes away)."""
+    import pickle
+    import socket
+    from multiprocessing.connection import Connection
+
+    requests = Connection(req_fd)
+    control = Connection(ctl_fd, writable=False)
+    config = pickle.loads(control.recv_bytes())
+    sockets = [
+        socket.socket(family, socket.SOCK_STREAM, fileno=fd)
+        for family, fd in zip(config["families"], socket_fds, strict=True)
+    ]
+    source = _JobSource(requests, config["can_stop"])
+    mon = Monitor(
+        source, config["platform"], host=config["host"], port=config["port"],
+        rate_hz=config["rate_hz"], title=config["title"],
+    )  # fmt: skip
+    # the bars are fractions of the job's monitor's limits
+    mon._q_lo, mon._q_hi, mon._v_max, mon._a_max = config["bars"]
+    source.monitor = mon
+    mon._sockets = sockets
+
+    def on_control() -> None:
+        try:
+            msg = control.recv()
+        except (EOFError, OSError):
+            msg = ("end",)
+        if msg[0] == "end":
+            loop = mon._loop
+            assert loop is not None
+            loop.remove_reader(control.fileno())
+            if mon._clients:
+                loop.create_task(_end(mon, loop))
+            else:
+                loop.stop()
+
+    def on_start(loop: asyncio.AbstractEventLoop) -> None:
+        loop.add_reader(control.fileno(), on_control)
+        requests.send(("ready",))
+
+    mon._serve(threading.Event(), on_start)
+    for s in sockets:
+        s.close()
+
+
+async def _end(mon: Monitor, loop: asyncio.AbstractEventLoop) -> None:
+    """The last snapshot (``"ended"``) to each page, then the server's loop stops."""
+    try:
+        await asyncio.wait_for(mon._final_push(), 2.0)
+    except Exception:  # the pages only miss the last word
+        pass
+    loop.stop()
 
 
 def _no_access_log(handler: tornado.web.RequestHandler) -> None:
