@@ -79,3 +79,27 @@ def test_single_pose_fast_path_agrees_with_the_batch_path():
         assert abs(r.scale - s_b) <= 17.0**-3 + 1e-9
         if r.status == "ok":
             assert np.array_equal(r.pose, x)
+
+
+@pytest.mark.parametrize(
+    "pose",
+    [
+        [1e308, 1e308, 0, 0, 0, 0],
+        [1e200, 0, 0, 0, 0, 0],
+        [0, -1e300, 1e300, 0, 0, 0],
+        [0, 0, 0, 1e308, -1e308, 0],
+    ],
+)
+def test_absurd_finite_poses_are_clamped_not_a_crash(pose):
+    """Finite but absurd poses (a float's square overflows) are bad input: clamped towards
+    neutral with finite actuator positions, single pose and batch alike, never an exception
+    (the single-pose path raised OverflowError from ``** 2`` on plain floats)."""
+    p = motioncue.kinematics.load_platform("stewart6-linear")
+    one = limit_pose(p, np.array(pose, dtype=float))
+    with np.errstate(over="ignore", invalid="ignore"):
+        batch = limit_pose(p, np.array([pose, pose], dtype=float))
+    assert one.status == "clamped" and list(batch.status) == ["clamped", "clamped"]
+    for r in (one.pose, *batch.pose):
+        assert np.all(np.isfinite(r)) and np.all(np.abs(r[:3]) < 0.5)
+    assert np.all(np.isfinite(one.q)) and np.all(np.isfinite(batch.q))
+    assert limit_pose(p, one.pose).status == "ok"

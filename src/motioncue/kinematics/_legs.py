@@ -141,15 +141,15 @@ class LinearLegs(LegSet):
         """Positions for one pose from R's entries and the translation (fused, no numpy)."""
         r0, r1, r2, r3, r4, r5, r6, r7, r8 = r
         sqrt = math.sqrt
-        return [
-            sqrt(
-                (x + r0 * px + r1 * py + r2 * pz - bx) ** 2
-                + (y + r3 * px + r4 * py + r5 * pz - by) ** 2
-                + (z + r6 * px + r7 * py + r8 * pz - bz) ** 2
-            )
-            - l0
-            for (px, py, pz, bx, by, bz), l0 in zip(self._one, self._l0, strict=True)
-        ]
+        out = []
+        for (px, py, pz, bx, by, bz), l0 in zip(self._one, self._l0, strict=True):
+            dx = x + r0 * px + r1 * py + r2 * pz - bx
+            dy = y + r3 * px + r4 * py + r5 * pz - by
+            dz = z + r6 * px + r7 * py + r8 * pz - bz
+            # products, not ``** 2``: a float power raises OverflowError where a product
+            # gives inf, as the array path does (an absurd pose is then out of stroke)
+            out.append(sqrt(dx * dx + dy * dy + dz * dz) - l0)
+        return out
 
     def q_from_features_t(self, feat_t: np.ndarray) -> np.ndarray:
         """Positions ``(n, N)`` from transposed features ``(13, N)`` (the fast batch path)."""
