@@ -7,14 +7,17 @@ import functools
 import itertools
 import math
 import os
+import platform
 import random
 import socket
 import struct
+import sys
 import threading
 import time
 from pathlib import Path
 from typing import Any
 
+import numpy as np
 import pytest
 from hypothesis import given
 from hypothesis import strategies as st
@@ -672,3 +675,47 @@ def test_importing_the_readers_does_not_load_numpy() -> None:
     )
     env = dict(os.environ, PYTHONPATH=str(Path(__file__).resolve().parents[1] / "src"))
     subprocess.run([sys.executable, "-c", code], check=True, env=env, timeout=60)
+
+
+@pytest.mark.skipif(
+    sys.platform != "linux" or platform.machine() != "x86_64",
+    reason="kernel arrival stamps are taken on Linux (checked here on x86_64)",
+)
+def test_a_held_up_recorder_keeps_the_arrival_times() -> None:
+    """Datagrams sent 30 ms apart and read only after the last has arrived (a recorder held
+    up by a busy machine) keep their arrival times: the kernel's stamps, not the read times
+    (read back to back, those are microseconds apart)."""
+    from motioncue.telemetry._container import _arrival_receiver
+
+    with (
+        socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as rx,
+        socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as tx,
+    ):
+        rx.bind(("127.0.0.1", 0))
+        receive = _arrival_receiver(rx)
+        # the kernel turns its arrival stamping on asynchronously: a datagram arriving just
+        # after the first socket asks for it may carry the read time instead (harmless for
+        # a recorder: one early record); one round trip first
+        rx.settimeout(1.0)
+        tx.sendto(b"w", rx.getsockname())
+        receive(bytearray(16))
+        time.sleep(0.05)
+        sent = []
+        for i in range(5):
+            tx.sendto(bytes([i]), rx.getsockname())
+            sent.append(time.perf_counter())
+            time.sleep(0.03)
+        time.sleep(0.2)  # held up: everything is queued before the first read
+        rx.settimeout(1.0)
+        read_at, stamps = [], []
+        buf = bytearray(16)
+        for _ in range(5):
+            n, t = receive(buf)
+            assert n == 1
+            read_at.append(time.perf_counter())
+            stamps.append(t)
+    assert read_at[-1] - read_at[0] < 0.02  # read back to back
+    gaps = np.diff(stamps)
+    assert np.all(gaps >= 0.03 * 0.9), gaps  # the sender's sleeps are at least 30 ms
+    # each stamp lies between its send and the first read
+    assert all(s - 1e-3 <= t <= read_at[0] for s, t in zip(sent, stamps, strict=True))

@@ -320,6 +320,7 @@ def record(
                 pass  # the game is not there yet: asked again on the next round
 
     bound_port = sock.getsockname()[1]
+    receive = _arrival_receiver(sock)  # before anyone is told the port: stamps from the first
     summary = RecordSummary(os.fspath(out), game, host, bound_port)
     buf = bytearray(MAX_DATAGRAM + 1)
     try:
@@ -330,6 +331,7 @@ def record(
             if on_ready is not None:
                 on_ready(bound_port)
             t0 = time.perf_counter()
+            t_last = t0
             deadline = math.inf if seconds is None else t0 + seconds
             next_talk = t0
             try:
@@ -343,10 +345,11 @@ def record(
                     wait = min(0.1 if asker is None else TALK_PERIOD_S, deadline - now)
                     sock.settimeout(max(wait, 1e-3))
                     try:
-                        n = sock.recv_into(buf)
+                        n, t = receive(buf)
                     except TimeoutError:
                         continue
-                    t = time.perf_counter()
+                    t = max(t, t_last)  # stamps never go back (a clock step, mixed sources)
+                    t_last = t
                     data = bytes(buf[:n])
                     writer.write(t - t0, data)
                     dec.feed(data, t - t0)
@@ -361,6 +364,57 @@ def record(
         sock.close()
     summary.stats = dict(dec.stats)
     return summary
+
+
+# SO_TIMESTAMPNS / SCM_TIMESTAMPNS (Linux's asm-generic value; Python's socket module does
+# not name it). Only on the machines whose kernels use the generic value.
+_SO_TIMESTAMPNS = 35
+_GENERIC_SOCKET_ABI = {"x86_64", "amd64", "i386", "i686", "aarch64", "arm64", "armv7l", "riscv64"}
+_TIMESPEC = struct.Struct("@qq")
+
+
+def _arrival_receiver(sock: socket.socket) -> Callable[[bytearray], tuple[int, float]]:
+    """A ``receive(buf) -> (nbytes, t)`` for ``sock``: ``t`` is when the datagram arrived, on
+    the :func:`time.perf_counter` clock.
+
+    On Linux the kernel stamps each datagram as it arrives (``SO_TIMESTAMPNS``), so a recorder
+    that a busy machine holds up still records the game's own timing; elsewhere, or if the
+    kernel gives no stamp, the time the datagram was read. A stamp more than 1 s old or from
+    the future (the wall clock stepped) falls back to the read time.
+    """
+    import platform as _platform
+    import sys
+
+    stamped = False
+    if sys.platform == "linux" and _platform.machine().lower() in _GENERIC_SOCKET_ABI:
+        try:
+            sock.setsockopt(socket.SOL_SOCKET, _SO_TIMESTAMPNS, 1)
+            stamped = True
+        except OSError:
+            stamped = False
+    if not stamped:
+
+        def read(buf: bytearray) -> tuple[int, float]:
+            n = sock.recv_into(buf)
+            return n, time.perf_counter()
+
+        return read
+
+    anc = socket.CMSG_SPACE(_TIMESPEC.size)
+
+    def read_stamped(buf: bytearray) -> tuple[int, float]:
+        n, ancdata, _flags, _addr = sock.recvmsg_into([buf], anc)
+        now = time.perf_counter()
+        now_wall_ns = time.time_ns()
+        for level, kind, data in ancdata:
+            if level == socket.SOL_SOCKET and kind == _SO_TIMESTAMPNS and len(data) >= 16:
+                sec, nsec = _TIMESPEC.unpack_from(data)
+                age_s = (now_wall_ns - (sec * 1_000_000_000 + nsec)) / 1e9
+                if 0.0 <= age_s <= 1.0:
+                    return n, now - age_s
+        return n, now
+
+    return read_stamped
 
 
 def _bind_udp(host: str, port: int) -> socket.socket:
