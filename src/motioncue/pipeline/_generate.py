@@ -32,6 +32,8 @@ if TYPE_CHECKING:
     from ._inputs import Keyframes
 
 __all__ = [
+    "JOIN_ACCEL",
+    "JOIN_MAX_S",
     "RAMP_ACCEL",
     "RAMP_SPEED",
     "GenerateReport",
@@ -45,6 +47,16 @@ RAMP_SPEED = 0.3
 RAMP_ACCEL = 0.1
 """... and of the acceleration limits: a rider is lifted from park gently (about 0.1 g on the
 bundled hexapod), not at the machine's full capability."""
+
+JOIN_ACCEL = (0.17, 0.17, 0.28, 0.052, 0.063, 0.045)
+"""Deceleration (m/s^2 for x, y, z; rad/s^2 for roll, pitch, yaw) with which a cue still in
+motion at its first or last sample is brought to rest before the ramp from or to park: the
+otolith perception thresholds (Reid & Nahon 1985, as in
+:data:`motioncue.cueing._vestibular.THRESHOLDS`) for translation, and for rotation the canal
+thresholds (rad/s) shed over a second. Where the workspace or :data:`JOIN_MAX_S` does not allow
+it the segment is shorter and its deceleration higher (still continuous: no velocity step)."""
+JOIN_MAX_S = 2.0
+"""Longest time (s) a join segment between the cue and a ramp may take."""
 
 Progress = Callable[[str, float], None]
 """``progress(stage_description, fraction_done)``."""
@@ -152,6 +164,48 @@ def _ride_limits(
     )
 
 
+def _to_rest(pose: np.ndarray, v: np.ndarray, n: int, dt: float) -> np.ndarray:
+    """Poses ``(n, 6)`` at ``dt, 2 dt, .., n dt`` after ``pose`` of a move that starts with
+    velocity ``v`` (6,) and comes to rest at ``T = n dt``: velocity ``v (1 - 3 tau^2 + 2
+    tau^3)``, ``tau = t / T``, so the acceleration ``-6 v tau (1 - tau) / T`` is zero at both
+    ends and at most ``1.5 |v| / T``; the position is its exact integral."""
+    big_t = n * dt
+    tau = (np.arange(1, n + 1) * dt / big_t)[:, None]
+    out: np.ndarray = pose + big_t * v * (tau - tau**3 + tau**4 / 2.0)
+    return out
+
+
+def _join_to_rest(
+    platform: Platform, poses: np.ndarray, tight: ActuatorLimits, rate_hz: float
+) -> np.ndarray:
+    """The segment ``(n, 6)`` (``n = 0`` when the cue ends at rest) that continues the cue
+    ``poses (M, 6)`` from its last pose and velocity to rest, so that the ramp
+    back to park starts where the cue has stopped instead of at a velocity step.
+
+    Its duration is the shortest that keeps the deceleration of the velocity within
+    :data:`JOIN_ACCEL` (at most :data:`JOIN_MAX_S`), halved while the workspace limiting
+    would move one of its poses (the segment stays what the platform delivers; the
+    deceleration is then higher). The segment goes through the same workspace limiting and
+    actuator-limit planning as the cue.
+    """
+    dt = 1.0 / rate_hz
+    if len(poses) < 3:
+        return np.empty((0, 6))
+    p2, p1, p0 = poses[-3], poses[-2], poses[-1]
+    # the velocity at the last pose of the quadratic through the last three. Its
+    # acceleration is not carried on: a cue that ends (or, reversed, starts) accelerating
+    # hard (a tilt-coordination onset) would swing a long way before coming back to rest
+    vel = (3.0 * p0 - 4.0 * p1 + p2) / (2.0 * dt)
+    need_s = float(np.max(1.5 * np.abs(vel) / np.asarray(JOIN_ACCEL)))
+    n = int(np.ceil(min(need_s, JOIN_MAX_S) * rate_hz))
+    while n >= 2:
+        seg = _to_rest(p0, vel, n, dt)
+        if deliver(platform, seg, tight, rate_hz, actuator_limits=False).clamped == 0:
+            return seg
+        n //= 2
+    return np.empty((0, 6))
+
+
 def generate_ride(
     recording: Recording,
     platform: Platform,
@@ -219,8 +273,16 @@ def generate_ride(
     lap("workspace")
     step("ramps", 0.35)
     gentle = tight.scaled(speed=RAMP_SPEED, accel=RAMP_ACCEL)
-    ramp_in = transition(platform, platform.pose_park, poses_cue_ok[0], gentle, rate_hz)
-    ramp_out = transition(platform, poses_cue_ok[-1], platform.pose_park, gentle, rate_hz)
+    # a cue in motion at either end is joined to its ramp through a short segment that
+    # brings it to rest smoothly (the ramps start and end at rest); at the start, the same
+    # construction in reversed time: the segment leaves rest and reaches the cue's first
+    # pose with its initial velocity and acceleration
+    join_out = _join_to_rest(platform, poses_cue_ok, tight, rate_hz)
+    join_in = _join_to_rest(platform, poses_cue_ok[::-1], tight, rate_hz)[::-1]
+    first = join_in[0] if len(join_in) else poses_cue_ok[0]
+    last = join_out[-1] if len(join_out) else poses_cue_ok[-1]
+    ramp_in = transition(platform, platform.pose_park, first, gentle, rate_hz)
+    ramp_out = transition(platform, last, platform.pose_park, gentle, rate_hz)
     fallbacks = [
         f"ramp {name}: {tr.fallback}"
         for name, tr in (("out of park", ramp_in), ("back to park", ramp_out))
@@ -230,7 +292,14 @@ def generate_ride(
     step("inverse kinematics", 0.45)
     # ... and one more frame at park, so the ride ends at rest there
     poses = np.concatenate(
-        [ramp_in.poses[:-1], poses_cue_ok, ramp_out.poses[1:], ramp_out.poses[-1:]]
+        [
+            ramp_in.poses[:-1],
+            join_in,
+            poses_cue_ok,
+            join_out,
+            ramp_out.poses[1:],
+            ramp_out.poses[-1:],
+        ]
     )
     q_desired = platform.inverse(poses)
     lap("inverse kinematics")
@@ -241,7 +310,7 @@ def generate_ride(
     planned = planning_limits(tight, platform, dt, real=limits)
     opt, q, pulses, t_s, check = _finish(q_desired, platform, planned, table, dt)
     lap("actuator limits, pulses and check")
-    n_in = len(ramp_in.poses) - 1
+    n_in = len(ramp_in.poses) - 1 + len(join_in)
     cue = slice(n_in, n_in + len(poses_cue_ok))
     clamped = delivered.clamped
     loss = float(np.max(1.0 - np.asarray(plim.scale, dtype=float), initial=0.0))
