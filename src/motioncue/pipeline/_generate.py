@@ -32,7 +32,8 @@ if TYPE_CHECKING:
     from ._inputs import Keyframes
 
 __all__ = [
-    "JOIN_ACCEL",
+    "JOIN_ACCEL_M_S2",
+    "JOIN_HEAD_M",
     "JOIN_MAX_S",
     "RAMP_ACCEL",
     "RAMP_SPEED",
@@ -48,15 +49,21 @@ RAMP_ACCEL = 0.1
 """... and of the acceleration limits: a rider is lifted from park gently (about 0.1 g on the
 bundled hexapod), not at the machine's full capability."""
 
-JOIN_ACCEL = (0.17, 0.17, 0.28, 0.052, 0.063, 0.045)
-"""Deceleration (m/s^2 for x, y, z; rad/s^2 for roll, pitch, yaw) with which a cue still in
-motion at its first or last sample is brought to rest before the ramp from or to park: the
-otolith perception thresholds (Reid & Nahon 1985, as in
-:data:`motioncue.cueing._vestibular.THRESHOLDS`) for translation, and for rotation the canal
-thresholds (rad/s) shed over a second. Where the workspace or :data:`JOIN_MAX_S` does not allow
-it the segment is shorter and its deceleration higher (still continuous: no velocity step)."""
+JOIN_ACCEL_M_S2 = (0.17, 0.17, 0.28)
+"""Deceleration (m/s^2, x, y, z) with which a cue still moving at its first or last sample is
+brought to rest before the ramp to park (at the start: brought up from rest after the ramp
+from park): the otolith perception thresholds (Reid & Nahon 1985, as in
+:data:`motioncue.cueing._vestibular.THRESHOLDS`)."""
+JOIN_HEAD_M = 0.5
+"""Distance (m) of a seated rider's head from the platform's rotation centre, for the time
+over which a rotation is brought to rest: over ``T`` the rotation rate ``w`` tilts the rider a
+further ``w T / 2`` (felt as ``g w T / 2``) and swings the head with a peak tangential
+acceleration ``1.5 w h / T``; their sum is least at ``T = sqrt(3 h / g)`` (0.39 s), for any
+``w``."""
 JOIN_MAX_S = 2.0
-"""Longest time (s) a join segment between the cue and a ramp may take."""
+"""Longest time (s) a join segment between the cue and a ramp may take. Where this or the
+workspace does not allow the time above, the segment is shorter and its deceleration higher
+(still continuous: no velocity step)."""
 
 Progress = Callable[[str, float], None]
 """``progress(stage_description, fraction_done)``."""
@@ -164,14 +171,15 @@ def _ride_limits(
     )
 
 
-def _to_rest(pose: np.ndarray, v: np.ndarray, n: int, dt: float) -> np.ndarray:
-    """Poses ``(n, 6)`` at ``dt, 2 dt, .., n dt`` after ``pose`` of a move that starts with
-    velocity ``v`` (6,) and comes to rest at ``T = n dt``: velocity ``v (1 - 3 tau^2 + 2
-    tau^3)``, ``tau = t / T``, so the acceleration ``-6 v tau (1 - tau) / T`` is zero at both
-    ends and at most ``1.5 |v| / T``; the position is its exact integral."""
-    big_t = n * dt
-    tau = (np.arange(1, n + 1) * dt / big_t)[:, None]
-    out: np.ndarray = pose + big_t * v * (tau - tau**3 + tau**4 / 2.0)
+def _to_rest(pose: np.ndarray, v: np.ndarray, dur_s: np.ndarray, n: int, dt: float) -> np.ndarray:
+    """Poses ``(n, 6)`` at ``dt, 2 dt, .., n dt`` after ``pose`` (6,) of a move that starts
+    with velocity ``v`` (6,) and brings each component ``i`` to rest at ``dur_s[i]`` (s, > 0;
+    held from then on): velocity ``v (1 - 3 tau^2 + 2 tau^3)``, ``tau = min(t / dur_s, 1)``,
+    so the acceleration ``-6 v tau (1 - tau) / dur_s`` is zero at both ends and at most
+    ``1.5 |v| / dur_s``; the position is its exact integral."""
+    t = np.arange(1, n + 1)[:, None] * dt
+    tau = np.minimum(t / dur_s, 1.0)
+    out: np.ndarray = pose + dur_s * v * (tau - tau**3 + tau**4 / 2.0)
     return out
 
 
@@ -179,12 +187,13 @@ def _join_to_rest(
     platform: Platform, poses: np.ndarray, tight: ActuatorLimits, rate_hz: float
 ) -> np.ndarray:
     """The segment ``(n, 6)`` (``n = 0`` when the cue ends at rest) that continues the cue
-    ``poses (M, 6)`` from its last pose and velocity to rest, so that the ramp
-    back to park starts where the cue has stopped instead of at a velocity step.
+    ``poses (M, 6)`` from its last pose and velocity to rest, so that the ramp back to park
+    starts where the cue has stopped instead of at a velocity step.
 
-    Its duration is the shortest that keeps the deceleration of the velocity within
-    :data:`JOIN_ACCEL` (at most :data:`JOIN_MAX_S`), halved while the workspace limiting
-    would move one of its poses (the segment stays what the platform delivers; the
+    Each translation is brought to rest in the shortest time that keeps its deceleration
+    within :data:`JOIN_ACCEL_M_S2`, each rotation in ``sqrt(3 h / g)`` (:data:`JOIN_HEAD_M`),
+    all within :data:`JOIN_MAX_S`; the times are halved while the workspace limiting would
+    move one of the segment's poses (the segment stays what the platform delivers; its
     deceleration is then higher). The segment goes through the same workspace limiting and
     actuator-limit planning as the cue.
     """
@@ -196,14 +205,25 @@ def _join_to_rest(
     # acceleration is not carried on: a cue that ends (or, reversed, starts) accelerating
     # hard (a tilt-coordination onset) would swing a long way before coming back to rest
     vel = (3.0 * p0 - 4.0 * p1 + p2) / (2.0 * dt)
-    need_s = float(np.max(1.5 * np.abs(vel) / np.asarray(JOIN_ACCEL)))
-    n = int(np.ceil(min(need_s, JOIN_MAX_S) * rate_hz))
-    while n >= 2:
-        seg = _to_rest(p0, vel, n, dt)
+    from ..cueing import GRAVITY_M_S2
+
+    # a rotation rate whose step in one frame swings the head by less than the threshold
+    # is at rest already
+    swing = np.abs(vel[3:]) * JOIN_HEAD_M / dt > JOIN_ACCEL_M_S2[0]
+    dur_s = np.concatenate([
+        1.5 * np.abs(vel[:3]) / np.asarray(JOIN_ACCEL_M_S2),
+        np.where(swing, np.sqrt(3.0 * JOIN_HEAD_M / GRAVITY_M_S2), dt),
+    ])  # fmt: skip
+    dur_s = np.minimum(dur_s, JOIN_MAX_S)
+    while True:
+        dur_s = np.maximum(dur_s, dt)
+        n = int(np.ceil(np.max(dur_s) * rate_hz - 1e-9))
+        if n < 2:
+            return np.empty((0, 6))
+        seg = _to_rest(p0, vel, dur_s, n, dt)
         if deliver(platform, seg, tight, rate_hz, actuator_limits=False).clamped == 0:
             return seg
-        n //= 2
-    return np.empty((0, 6))
+        dur_s = dur_s / 2.0
 
 
 def generate_ride(
