@@ -3,10 +3,12 @@
 A cue still moving at its first or last sample (an MPC washing back at the end of a
 recording, a recording that begins in motion) used to meet a ramp that starts and ends at
 rest: a velocity step of the cue's whole speed in one frame (8 m/s^2 for 0.08 m/s at 100 Hz,
-felt as a jolt though within the actuator limits). The cue below is synthetic (a constant
-surge velocity of 0.08 m/s from its first sample to its last, put in place of the cueing
-stage's output), and the figures are the ride's own: whole pulses -> forward kinematics ->
-finite differences, sharing nothing with the planner's numbers.
+felt as a jolt though within the actuator limits). The cue below is synthetic (a surge
+velocity of 0.08 m/s and a pitch rate of 0.05 rad/s from its first sample to its last, put in
+place of the cueing stage's output), and the figures are the ride's own: whole pulses ->
+forward kinematics -> finite differences, sharing nothing with the planner's numbers.
+Measured: peak translational acceleration within 0.3 s of the joins 8.16 / 8.20 m/s^2 before,
+0.173 / 0.166 after; pitch 5.10 / 5.12 rad/s^2 before, 0.205 / 0.202 after.
 """
 
 from __future__ import annotations
@@ -25,8 +27,13 @@ from motioncue.trajectory import ActuatorLimits
 RATE_HZ = 100.0
 SPEED_M_S = 0.08
 """The synthetic cue's surge speed at (and between) its first and last sample."""
+PITCH_RATE_RAD_S = 0.05
+"""... and its pitch rate."""
 THRESHOLD_M_S2 = 0.17
 """Surge specific-force perception threshold (Reid & Nahon 1985)."""
+HEAD_M = 0.5
+"""A seated rider's head above the rotation centre: a pitch acceleration ``a`` swings it
+with ``a * HEAD_M`` (m/s^2)."""
 JOIN_WINDOW_S = 0.3
 """Frames this close to the cue's first or last frame are the join."""
 
@@ -38,6 +45,7 @@ def _ride(monkeypatch: pytest.MonkeyPatch) -> tuple[np.ndarray, np.ndarray, int,
     n = int(RATE_HZ)  # 1 s of cue: x from -0.04 to +0.04 m
     poses = np.zeros((n, 6))
     poses[:, 0] = SPEED_M_S * (np.arange(n) / RATE_HZ - 0.5)
+    poses[:, 4] = PITCH_RATE_RAD_S * (np.arange(n) / RATE_HZ - 0.5)
 
     def fake_cueing(design: object, f: np.ndarray, w: np.ndarray) -> Cued:
         assert len(f) == n
@@ -70,9 +78,10 @@ def test_the_cue_meets_its_ramps_without_a_velocity_step(
     poses, _, a, b, _ = _ride(monkeypatch)
     dt = 1.0 / RATE_HZ
     # the cue itself is delivered (its surge speed between the joins)
-    v = np.diff(poses[:, 0]) / dt
-    assert np.allclose(v[a + 5 : b - 5], SPEED_M_S, atol=2e-3)
+    v = np.diff(poses[:, [0, 4]], axis=0) / dt
+    assert np.allclose(v[a + 5 : b - 5], [SPEED_M_S, PITCH_RATE_RAD_S], atol=2e-3)
     acc = np.linalg.norm(np.diff(poses[:, :3], 2, axis=0) / dt**2, axis=1)  # frame k+1
+    ang = np.linalg.norm(np.diff(poses[:, 3:], 2, axis=0) / dt**2, axis=1)  # rad/s^2
     k = np.arange(len(acc)) + 1
     w = int(JOIN_WINDOW_S * RATE_HZ)
     join_in = (k >= a - w) & (k <= a + w)
@@ -82,6 +91,11 @@ def test_the_cue_meets_its_ramps_without_a_velocity_step(
     bound = 1.5 * THRESHOLD_M_S2
     assert np.max(acc[join_in]) < bound, np.max(acc[join_in])
     assert np.max(acc[join_out]) < bound, np.max(acc[join_out])
+    # the pitch rate too (the old joins: 0.05 rad/s in a frame, 5 rad/s^2): within twice
+    # the threshold where the head swings
+    bound_rad_s2 = 2.0 * THRESHOLD_M_S2 / HEAD_M
+    assert np.max(ang[join_in]) < bound_rad_s2, np.max(ang[join_in])
+    assert np.max(ang[join_out]) < bound_rad_s2, np.max(ang[join_out])
 
 
 def test_the_ride_still_starts_and_ends_parked_at_rest_within_the_limits(
