@@ -296,7 +296,7 @@ def generate_ride(
     # a cue in motion at either end is joined to its ramp through a short segment that
     # brings it to rest smoothly (the ramps start and end at rest); at the start, the same
     # construction in reversed time: the segment leaves rest and reaches the cue's first
-    # pose with its initial velocity and acceleration
+    # pose with the cue's initial velocity
     join_out = _join_to_rest(platform, poses_cue_ok, tight, rate_hz)
     join_in = _join_to_rest(platform, poses_cue_ok[::-1], tight, rate_hz)[::-1]
     first = join_in[0] if len(join_in) else poses_cue_ok[0]
