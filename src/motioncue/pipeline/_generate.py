@@ -76,7 +76,9 @@ class GenerateReport:
     Attributes
     ----------
     t_s : ndarray, (N,)
-        Frame times of the whole ride (ramp in, cue, ramp out).
+        Frame times of the whole ride (ramp in, join, cue, join, ramp out; a join brings a
+        cue still moving at its end to rest, see :data:`JOIN_ACCEL_M_S2`; none when it is
+        at rest).
     cue_slice : slice
         Frames of the cued part (between the ramps).
     f_vehicle, w_vehicle : ndarray, (M, 3)
@@ -84,7 +86,7 @@ class GenerateReport:
     poses_cue : ndarray, (M, 6)
         Washout output.
     poses : ndarray, (N, 6)
-        Poses after workspace limiting (ramps included).
+        Poses after workspace limiting (ramps and joins included).
     q_desired, q : ndarray, (N, n)
         Actuator positions before and after the offline limits (SI).
     bad_samples : int
