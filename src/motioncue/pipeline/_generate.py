@@ -35,6 +35,9 @@ if TYPE_CHECKING:
     from ._inputs import Keyframes
 
 __all__ = [
+    "JOIN_ACCEL_M_S2",
+    "JOIN_HEAD_M",
+    "JOIN_MAX_S",
     "RAMP_ACCEL",
     "RAMP_SPEED",
     "GenerateReport",
@@ -49,6 +52,22 @@ RAMP_ACCEL = 0.1
 """... and of the acceleration limits: a rider is lifted from park gently (about 0.1 g on the
 bundled hexapod), not at the machine's full capability."""
 
+JOIN_ACCEL_M_S2 = (0.17, 0.17, 0.28)
+"""Deceleration (m/s^2, x, y, z) with which a cue still moving at its first or last sample is
+brought to rest before the ramp to park (at the start: brought up from rest after the ramp
+from park): the otolith perception thresholds (Reid & Nahon 1985, as in
+:data:`motioncue.cueing._vestibular.THRESHOLDS`)."""
+JOIN_HEAD_M = 0.5
+"""Distance (m) of a seated rider's head from the platform's rotation centre, for the time
+over which a rotation is brought to rest: over ``T`` the rotation rate ``w`` tilts the rider a
+further ``w T / 2`` (felt as ``g w T / 2``) and swings the head with a peak tangential
+acceleration ``1.5 w h / T``; their sum is least at ``T = sqrt(3 h / g)`` (0.39 s), for any
+``w``."""
+JOIN_MAX_S = 2.0
+"""Longest time (s) a join segment between the cue and a ramp may take. Where this or the
+workspace does not allow the time above, the segment is shorter and its deceleration higher
+(still continuous: no velocity step)."""
+
 Progress = Callable[[str, float], None]
 """``progress(stage_description, fraction_done)``."""
 
@@ -60,7 +79,9 @@ class GenerateReport:
     Attributes
     ----------
     t_s : ndarray, (N,)
-        Frame times of the whole ride (ramp in, cue, ramp out).
+        Frame times of the whole ride (ramp in, join, cue, join, ramp out; a join brings a
+        cue still moving at its end to rest, see :data:`JOIN_ACCEL_M_S2`; none when it is
+        at rest).
     cue_slice : slice
         Frames of the cued part (between the ramps).
     f_vehicle, w_vehicle : ndarray, (M, 3)
@@ -68,7 +89,7 @@ class GenerateReport:
     poses_cue : ndarray, (M, 6)
         Washout output.
     poses : ndarray, (N, 6)
-        Poses after workspace limiting (ramps included).
+        Poses after workspace limiting (ramps and joins included).
     q_desired, q : ndarray, (N, n)
         Actuator positions before and after the offline limits (SI).
     bad_samples : int
@@ -190,6 +211,61 @@ def _ride_limits(
     )
 
 
+def _to_rest(pose: np.ndarray, v: np.ndarray, dur_s: np.ndarray, n: int, dt: float) -> np.ndarray:
+    """Poses ``(n, 6)`` at ``dt, 2 dt, .., n dt`` after ``pose`` (6,) of a move that starts
+    with velocity ``v`` (6,) and brings each component ``i`` to rest at ``dur_s[i]`` (s, > 0;
+    held from then on): velocity ``v (1 - 3 tau^2 + 2 tau^3)``, ``tau = min(t / dur_s, 1)``,
+    so the acceleration ``-6 v tau (1 - tau) / dur_s`` is zero at both ends and at most
+    ``1.5 |v| / dur_s``; the position is its exact integral."""
+    t = np.arange(1, n + 1)[:, None] * dt
+    tau = np.minimum(t / dur_s, 1.0)
+    out: np.ndarray = pose + dur_s * v * (tau - tau**3 + tau**4 / 2.0)
+    return out
+
+
+def _join_to_rest(
+    platform: Platform, poses: np.ndarray, tight: ActuatorLimits, rate_hz: float
+) -> np.ndarray:
+    """The segment ``(n, 6)`` (``n = 0`` when the cue ends at rest) that continues the cue
+    ``poses (M, 6)`` from its last pose and velocity to rest, so that the ramp back to park
+    starts where the cue has stopped instead of at a velocity step.
+
+    Each translation is brought to rest in the shortest time that keeps its deceleration
+    within :data:`JOIN_ACCEL_M_S2`, each rotation in ``sqrt(3 h / g)`` (:data:`JOIN_HEAD_M`),
+    all within :data:`JOIN_MAX_S`; the times are halved while the workspace limiting would
+    move one of the segment's poses (the segment stays what the platform delivers; its
+    deceleration is then higher). The segment goes through the same workspace limiting and
+    actuator-limit planning as the cue.
+    """
+    dt = 1.0 / rate_hz
+    if len(poses) < 3:
+        return np.empty((0, 6))
+    p2, p1, p0 = poses[-3], poses[-2], poses[-1]
+    # the velocity at the last pose of the quadratic through the last three. Its
+    # acceleration is not carried on: a cue that ends (or, reversed, starts) accelerating
+    # hard (a tilt-coordination onset) would swing a long way before coming back to rest
+    vel = (3.0 * p0 - 4.0 * p1 + p2) / (2.0 * dt)
+    from ..cueing import GRAVITY_M_S2
+
+    # a rotation rate whose step in one frame swings the head by less than the threshold
+    # is at rest already
+    swing = np.abs(vel[3:]) * JOIN_HEAD_M / dt > JOIN_ACCEL_M_S2[0]
+    dur_s = np.concatenate([
+        1.5 * np.abs(vel[:3]) / np.asarray(JOIN_ACCEL_M_S2),
+        np.where(swing, np.sqrt(3.0 * JOIN_HEAD_M / GRAVITY_M_S2), dt),
+    ])  # fmt: skip
+    dur_s = np.minimum(dur_s, JOIN_MAX_S)
+    while True:
+        dur_s = np.maximum(dur_s, dt)
+        n = int(np.ceil(np.max(dur_s) * rate_hz - 1e-9))
+        if n < 2:
+            return np.empty((0, 6))
+        seg = _to_rest(p0, vel, dur_s, n, dt)
+        if deliver(platform, seg, tight, rate_hz, actuator_limits=False).clamped == 0:
+            return seg
+        dur_s = dur_s / 2.0
+
+
 def generate_ride(
     recording: Recording,
     platform: Platform,
@@ -258,8 +334,16 @@ def generate_ride(
     lap("workspace")
     step("ramps", 0.35)
     gentle = tight.scaled(speed=RAMP_SPEED, accel=RAMP_ACCEL)
-    ramp_in = transition(platform, platform.pose_park, poses_cue_ok[0], gentle, rate_hz)
-    ramp_out = transition(platform, poses_cue_ok[-1], platform.pose_park, gentle, rate_hz)
+    # a cue in motion at either end is joined to its ramp through a short segment that
+    # brings it to rest smoothly (the ramps start and end at rest); at the start, the same
+    # construction in reversed time: the segment leaves rest and reaches the cue's first
+    # pose with the cue's initial velocity
+    join_out = _join_to_rest(platform, poses_cue_ok, tight, rate_hz)
+    join_in = _join_to_rest(platform, poses_cue_ok[::-1], tight, rate_hz)[::-1]
+    first = join_in[0] if len(join_in) else poses_cue_ok[0]
+    last = join_out[-1] if len(join_out) else poses_cue_ok[-1]
+    ramp_in = transition(platform, platform.pose_park, first, gentle, rate_hz)
+    ramp_out = transition(platform, last, platform.pose_park, gentle, rate_hz)
     fallbacks = [
         f"ramp {name}: {tr.fallback}"
         for name, tr in (("out of park", ramp_in), ("back to park", ramp_out))
@@ -269,7 +353,14 @@ def generate_ride(
     step("inverse kinematics", 0.45)
     # ... and one more frame at park, so the ride ends at rest there
     poses = np.concatenate(
-        [ramp_in.poses[:-1], poses_cue_ok, ramp_out.poses[1:], ramp_out.poses[-1:]]
+        [
+            ramp_in.poses[:-1],
+            join_in,
+            poses_cue_ok,
+            join_out,
+            ramp_out.poses[1:],
+            ramp_out.poses[-1:],
+        ]
     )
     q_desired = platform.inverse(poses)
     lap("inverse kinematics")
@@ -280,7 +371,7 @@ def generate_ride(
     planned = planning_limits(tight, platform, dt, real=limits)
     opt, q, pulses, t_s, check = _finish(q_desired, platform, planned, table, dt)
     lap("actuator limits, pulses and check")
-    n_in = len(ramp_in.poses) - 1
+    n_in = len(ramp_in.poses) - 1 + len(join_in)
     cue = slice(n_in, n_in + len(poses_cue_ok))
     clamped = delivered.clamped
     loss = float(np.max(1.0 - np.asarray(plim.scale, dtype=float), initial=0.0))

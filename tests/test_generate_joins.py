@@ -1,0 +1,119 @@
+"""The joins between a generated ride's cue and its ramps from and to park.
+
+A cue still moving at its first or last sample (an MPC washing back at the end of a
+recording, a recording that begins in motion) used to meet a ramp that starts and ends at
+rest: a velocity step of the cue's whole speed in one frame (8 m/s^2 for 0.08 m/s at 100 Hz,
+felt as a jolt though within the actuator limits). The cue below is synthetic (a surge
+velocity of 0.08 m/s and a pitch rate of 0.05 rad/s from its first sample to its last, put in
+place of the cueing stage's output), and the figures are the ride's own: whole pulses ->
+forward kinematics -> finite differences, sharing nothing with the planner's numbers.
+Measured: peak translational acceleration within 0.3 s of the joins 8.16 / 8.20 m/s^2 before,
+0.173 / 0.166 after; pitch 5.10 / 5.12 rad/s^2 before, 0.205 / 0.202 after.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from motioncue.cueing import load_cueing
+from motioncue.kinematics import Platform, load_platform
+from motioncue.output import load_controller
+from motioncue.pipeline import _generate, generate_ride
+from motioncue.pipeline._chain import Cued
+from motioncue.telemetry._recording import Recording
+from motioncue.trajectory import ActuatorLimits
+
+RATE_HZ = 100.0
+SPEED_M_S = 0.08
+"""The synthetic cue's surge speed at (and between) its first and last sample."""
+PITCH_RATE_RAD_S = 0.05
+"""... and its pitch rate."""
+THRESHOLD_M_S2 = 0.17
+"""Surge specific-force perception threshold (Reid & Nahon 1985)."""
+HEAD_M = 0.5
+"""A seated rider's head above the rotation centre: a pitch acceleration ``a`` swings it
+with ``a * HEAD_M`` (m/s^2)."""
+JOIN_WINDOW_S = 0.3
+"""Frames this close to the cue's first or last frame are the join."""
+
+
+def _ride(monkeypatch: pytest.MonkeyPatch) -> tuple[np.ndarray, np.ndarray, int, int, Platform]:
+    """Generate the ride of the synthetic cue; return (poses from FK (N, 6), pulses, first
+    and one-past-last cue frame, platform)."""
+    platform = load_platform("stewart6-linear")
+    n = int(RATE_HZ)  # 1 s of cue: x from -0.04 to +0.04 m
+    poses = np.zeros((n, 6))
+    poses[:, 0] = SPEED_M_S * (np.arange(n) / RATE_HZ - 0.5)
+    poses[:, 4] = PITCH_RATE_RAD_S * (np.arange(n) / RATE_HZ - 0.5)
+
+    def fake_cueing(design: object, f: np.ndarray, w: np.ndarray) -> Cued:
+        assert len(f) == n
+        return Cued(None, poses.copy(), np.asarray(f), np.asarray(w), 0)  # type: ignore[arg-type]
+
+    monkeypatch.setattr(_generate, "run_cueing", fake_cueing)
+    t = np.arange(n) / RATE_HZ
+    f = np.tile([0.0, 0.0, 9.80665], (n, 1))
+    ride, _ = generate_ride(
+        Recording(t, f, np.zeros((n, 3))),
+        platform,
+        load_controller("mbox6"),
+        load_cueing("racing-hexapod"),
+        rate_hz=RATE_HZ,
+    )
+    q = platform.drives.from_pulses(ride.pulses)
+    out = np.empty((len(q), 6))
+    guess = None
+    for i, qi in enumerate(q):
+        res = platform.forward(qi, guess)
+        assert res.ok, i
+        out[i] = guess = res.pose
+    a, b = ride.notes["cue_frames"]
+    return out, np.asarray(ride.pulses), int(a), int(b), platform
+
+
+def test_the_cue_meets_its_ramps_without_a_velocity_step(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    poses, _, a, b, _ = _ride(monkeypatch)
+    dt = 1.0 / RATE_HZ
+    # the cue itself is delivered (its surge speed between the joins)
+    v = np.diff(poses[:, [0, 4]], axis=0) / dt
+    assert np.allclose(v[a + 5 : b - 5], [SPEED_M_S, PITCH_RATE_RAD_S], atol=2e-3)
+    acc = np.linalg.norm(np.diff(poses[:, :3], 2, axis=0) / dt**2, axis=1)  # frame k+1
+    ang = np.linalg.norm(np.diff(poses[:, 3:], 2, axis=0) / dt**2, axis=1)  # rad/s^2
+    k = np.arange(len(acc)) + 1
+    w = int(JOIN_WINDOW_S * RATE_HZ)
+    join_in = (k >= a - w) & (k <= a + w)
+    join_out = (k >= b - 1 - w) & (k <= b - 1 + w)
+    # the old joins: the whole 0.08 m/s in one frame, 8 m/s^2; now the cue is brought to rest
+    # (and out of it) at about the perception threshold, the pulse rounding's noise aside
+    bound = 1.5 * THRESHOLD_M_S2
+    assert np.max(acc[join_in]) < bound, np.max(acc[join_in])
+    assert np.max(acc[join_out]) < bound, np.max(acc[join_out])
+    # the pitch rate too (the old joins: 0.05 rad/s in a frame, 5 rad/s^2): within twice
+    # the threshold where the head swings
+    bound_rad_s2 = 2.0 * THRESHOLD_M_S2 / HEAD_M
+    assert np.max(ang[join_in]) < bound_rad_s2, np.max(ang[join_in])
+    assert np.max(ang[join_out]) < bound_rad_s2, np.max(ang[join_out])
+
+
+def test_the_ride_still_starts_and_ends_parked_at_rest_within_the_limits(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    _, pulses, _, _, platform = _ride(monkeypatch)
+    park = platform.drives.to_pulses(np.asarray(platform.q_park, dtype=float))
+    assert np.array_equal(pulses[0], park)
+    assert np.array_equal(pulses[-1], park) and np.array_equal(pulses[-2], park)
+    # every frame within the platform's limits, by finite differences of the pulses
+    lim = ActuatorLimits.from_platform(platform, load_controller("mbox6"), rate_hz=RATE_HZ)
+    table = lim.to_pulses_table(platform)
+    p = pulses.astype(float)
+    vel = np.diff(np.vstack([p[:1], p]), axis=0) * RATE_HZ  # from rest at park
+    acc = np.diff(np.vstack([np.zeros((1, p.shape[1])), vel]), axis=0) * RATE_HZ
+    for j, row in enumerate(table):
+        lo, hi = row["stroke_pulses"]
+        assert lo <= p[:, j].min() and p[:, j].max() <= hi, row["name"]
+        # one pulse of rounding per frame allowed on top of the limits
+        assert np.max(np.abs(vel[:, j])) <= row["max_speed_pulses_s"] + RATE_HZ, row["name"]
+        assert np.max(np.abs(acc[:, j])) <= row["max_accel_pulses_s2"] + 2 * RATE_HZ**2, row["name"]
