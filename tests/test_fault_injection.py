@@ -638,6 +638,22 @@ SIGNAL_CASES = {
 }
 
 
+def _wait_delivered(pid: int, sig: int, timeout_s: float = 10.0) -> None:
+    """Wait until ``sig`` is no longer pending for process ``pid`` (Linux ``/proc``; elsewhere
+    returns at once)."""
+    status = Path(f"/proc/{pid}/status")
+    end = time.monotonic() + timeout_s
+    while time.monotonic() < end:
+        try:
+            lines = status.read_text().splitlines()
+        except OSError:
+            return  # gone or no /proc
+        masks = [int(ln.split()[1], 16) for ln in lines if ln.startswith(("SigPnd:", "ShdPnd:"))]
+        if not masks or not any(m >> (sig - 1) & 1 for m in masks):
+            return
+        time.sleep(0.001)
+
+
 def _signal_run(args: list[str], signals: list[int], park: np.ndarray) -> tuple[Any, str, Sink]:
     with _cli(args) as (proc, sink):
         # a bound for a process that never moves the platform, not a timing check: the CLI's
@@ -649,7 +665,12 @@ def _signal_run(args: list[str], signals: list[int], park: np.ndarray) -> tuple[
         sent_at = []
         for i, sig in enumerate(signals):
             if i:
-                time.sleep(0.02)  # the later ones arrive during the park
+                # the later ones arrive during the park, after the first was delivered: two
+                # signals pending together are delivered lowest number first (SIGINT before
+                # SIGQUIT), whatever order they were sent in (a quiet fresh clone's run
+                # reported 'stopped by SIGINT' for SIGQUIT then SIGINT 20 ms later)
+                _wait_delivered(proc.pid, signals[i - 1])
+                time.sleep(0.02)
             proc.send_signal(sig)
             sent_at.append(time.monotonic())
         out, err = proc.communicate(timeout=90)
