@@ -31,11 +31,11 @@ from __future__ import annotations
 
 import argparse
 import math
-import time
 from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
+from _local_search import one_plus_two
 
 from motioncue.analysis import run_chain
 from motioncue.cueing import CueingParams, load_cueing
@@ -124,29 +124,23 @@ def main() -> None:
             )
         return (-strength / len(recs) if viol == 0.0 else 1.0 + viol), lines
 
-    rng = np.random.default_rng(args.seed)
-    t0 = time.time()
-    best = x0.copy()
-    fit, lines = evaluate(best)
-    it = 0
-    while time.time() - t0 < args.budget_s:
-        it += 1
-        cands = []
-        for _ in range(2):
-            x = best.copy()
-            k = int(rng.integers(1, 4))
-            idx = rng.choice(len(x), size=k, replace=False)
-            x[idx] += rng.normal(0.0, 0.15, size=k)
-            x = np.clip(x, lo, hi)
-            f, r = evaluate(x)
-            cands.append((f, x, r))
-        f, x, r = min(cands, key=lambda c: c[0])
-        if f <= fit:
-            best, fit, lines = x, f, r
-            Path(args.out).write_text(preset_toml(params(best), [f"search it {it} fit {fit:.5f}"]))
-            vals = ", ".join(f"{n} {v:.4g}" for n, v in zip(NAMES, np.exp(best), strict=True))
-            print(f"it {it} t {time.time() - t0:.0f} s fit {fit:.5f}: {vals}", flush=True)
-            print("\n".join(lines), flush=True)
+    def better(it: int, elapsed_s: float, fit: float, x: np.ndarray, lines: list[str]) -> None:
+        Path(args.out).write_text(preset_toml(params(x), [f"search it {it} fit {fit:.5f}"]))
+        vals = ", ".join(f"{n} {v:.4g}" for n, v in zip(NAMES, np.exp(x), strict=True))
+        print(f"it {it} t {elapsed_s:.0f} s fit {fit:.5f}: {vals}", flush=True)
+        print("\n".join(lines), flush=True)
+
+    one_plus_two(
+        evaluate,
+        x0,
+        lo,
+        hi,
+        seed=args.seed,
+        budget_s=args.budget_s,
+        k_max=4,
+        sigma=0.15,
+        on_better=better,
+    )
 
 
 if __name__ == "__main__":

@@ -45,11 +45,11 @@ from __future__ import annotations
 
 import argparse
 import math
-import time
 from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
+from _local_search import one_plus_two
 
 from motioncue.analysis import run_chain
 from motioncue.cueing import CueingParams, load_cueing
@@ -152,25 +152,21 @@ def main() -> None:
         viol += 10 * max(0.0, float(np.mean(revs)) - 0.015)
         return -strength / len(recs) if viol == 0.0 else 1.0 + viol
 
-    rng = np.random.default_rng(args.seed)
-    t0 = time.time()
-    best, fit = x0.copy(), evaluate(x0)
-    it = 0
-    while time.time() - t0 < args.budget_s:
-        it += 1
-        cands = []
-        for _ in range(2):
-            x = best.copy()
-            k = int(rng.integers(1, 5))
-            idx = rng.choice(len(x), size=k, replace=False)
-            x[idx] += rng.normal(0.0, 0.12, size=k)
-            x = np.clip(x, lo, hi)
-            cands.append((evaluate(x), x))
-        f, x = min(cands, key=lambda c: c[0])
-        if f <= fit:
-            best, fit = x, f
-            Path(args.out).write_text(preset_toml(params(best), [f"search it {it} fit {fit:.5f}"]))
-            print(f"it {it} t {time.time() - t0:.0f} s fit {fit:.5f}", flush=True)
+    def better(it: int, elapsed_s: float, fit: float, x: np.ndarray, _: None) -> None:
+        Path(args.out).write_text(preset_toml(params(x), [f"search it {it} fit {fit:.5f}"]))
+        print(f"it {it} t {elapsed_s:.0f} s fit {fit:.5f}", flush=True)
+
+    one_plus_two(
+        lambda x: (evaluate(x), None),
+        x0,
+        lo,
+        hi,
+        seed=args.seed,
+        budget_s=args.budget_s,
+        k_max=5,
+        sigma=0.12,
+        on_better=better,
+    )
 
 
 if __name__ == "__main__":
