@@ -19,7 +19,8 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from .._errors import LimitError
-from ..cueing import CueingParams, Rig, make_cueing
+from ..cueing import GRAVITY_M_S2, CueingParams, Rig, make_cueing
+from ..cueing._vestibular import THRESHOLDS
 from ..telemetry._recording import resample
 from ..trajectory import ActuatorLimits, limit_ride, transition, transition_through
 from ..trajectory._derive import planning_limits, pulse_rounding_limits
@@ -52,11 +53,11 @@ RAMP_ACCEL = 0.1
 """... and of the acceleration limits: a rider is lifted from park gently (about 0.1 g on the
 bundled hexapod), not at the machine's full capability."""
 
-JOIN_ACCEL_M_S2 = (0.17, 0.17, 0.28)
+JOIN_ACCEL_M_S2 = THRESHOLDS[:3]
 """Deceleration (m/s^2, x, y, z) with which a cue still moving at its first or last sample is
 brought to rest before the ramp to park (at the start: brought up from rest after the ramp
-from park): the otolith perception thresholds (Reid & Nahon 1985, as in
-:data:`motioncue.cueing._vestibular.THRESHOLDS`)."""
+from park): the otolith perception thresholds, the translational part of
+:data:`motioncue.cueing._vestibular.THRESHOLDS` (Reid & Nahon 1985)."""
 JOIN_HEAD_M = 0.5
 """Distance (m) of a seated rider's head from the platform's rotation centre, for the time
 over which a rotation is brought to rest: over ``T`` the rotation rate ``w`` tilts the rider a
@@ -245,8 +246,6 @@ def _join_to_rest(
     # acceleration is not carried on: a cue that ends (or, reversed, starts) accelerating
     # hard (a tilt-coordination onset) would swing a long way before coming back to rest
     vel = (3.0 * p0 - 4.0 * p1 + p2) / (2.0 * dt)
-    from ..cueing import GRAVITY_M_S2
-
     # a rotation rate whose step in one frame swings the head by less than the threshold
     # is at rest already
     swing = np.abs(vel[3:]) * JOIN_HEAD_M / dt > JOIN_ACCEL_M_S2[0]
