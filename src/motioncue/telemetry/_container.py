@@ -27,8 +27,10 @@ import datetime as _dt
 import json
 import math
 import os
+import platform
 import socket
 import struct
+import sys
 import time
 from collections.abc import Callable, Iterator
 from dataclasses import dataclass, field
@@ -382,11 +384,8 @@ def _arrival_receiver(sock: socket.socket) -> Callable[[bytearray], tuple[int, f
     kernel gives no stamp, the time the datagram was read. A stamp more than 1 s old or from
     the future (the wall clock stepped) falls back to the read time.
     """
-    import platform as _platform
-    import sys
-
     stamped = False
-    if sys.platform == "linux" and _platform.machine().lower() in _GENERIC_SOCKET_ABI:
+    if sys.platform == "linux" and platform.machine().lower() in _GENERIC_SOCKET_ABI:
         try:
             sock.setsockopt(socket.SOL_SOCKET, _SO_TIMESTAMPNS, 1)
             stamped = True
