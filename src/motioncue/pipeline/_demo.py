@@ -172,12 +172,11 @@ def run_demo(
     t1 = time.perf_counter()
     emu = kind.open_emulator(emu_ctrl, parse_target("udp://127.0.0.1:0")).start()
     try:
-        with open_transport(emu.where) as link:
-            # the emulator runs in this process: a silence of it is this process held up
-            # (its thread waits for the interpreter and the CPU), not a dead controller; a
-            # real controller keeps the link's own limit (udp://...?silence_ms=, 0.5 s)
-            if link.silence_s is not None:
-                link.silence_s = max(link.silence_s, DEMO_SILENCE_S)
+        # the emulator runs in this process: a silence of it is this process held up (its
+        # thread waits for the interpreter and the CPU), not a dead controller; the link's
+        # own option says so (a real controller keeps its 0.5 s)
+        sep = "&" if "?" in emu.where else "?"
+        with open_transport(f"{emu.where}{sep}silence_ms={round(DEMO_SILENCE_S * 1000)}") as link:
             log(f"playing to the {kind.name} emulator on {emu.where} at {speed:g}x")
 
             played = play_ride(
