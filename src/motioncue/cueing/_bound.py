@@ -31,8 +31,9 @@ The platform's specific force on the channel is modelled, to first order in the 
 
 (the central difference of :func:`simulator_motion`, the pose held before the first sample
 and continued at its last velocity after the last one, so ``s[N-1] = g tau[N-1]``: the end
-of the data charges no stop), with the translation ``p`` and the tilt term ``tau = sin(tilt)`` (pitch for
-``fx``, roll for ``fy``) in boxes from the rig's reach (:func:`motioncue.analysis.rig_reach`)::
+of the data charges no stop), with the translation ``p`` and the tilt term
+``tau = sin(tilt)`` (pitch for ``fx``, roll for ``fy``) in boxes from the rig's reach
+(:func:`motioncue.analysis.rig_reach`)::
 
     |p| <= stroke, |p[k+1] - p[k]| fs <= speed, |second difference| fs^2 <= accel,
     |tau| <= sin(tilt), |tau[k+1] - tau[k]| fs <= tilt rate.
