@@ -55,9 +55,9 @@ RAMP_ACCEL = 0.1
 bundled hexapod), not at the machine's full capability."""
 
 JOIN_ACCEL_M_S2 = THRESHOLDS[:3]
-"""Deceleration (m/s^2, x, y, z) with which a cue still moving at its first or last sample is
-brought to rest before the ramp to park (at the start: brought up from rest after the ramp
-from park): the otolith perception thresholds, the translational part of
+"""Acceleration target (m/s^2, x, y, z) of the move between park and a cue still moving at its
+first or last sample (and the deceleration of the fallback join that brings it to rest before
+a ramp): the otolith perception thresholds, the translational part of
 :data:`motioncue.cueing._vestibular.THRESHOLDS` (Reid & Nahon 1985)."""
 JOIN_HEAD_M = 0.5
 """Distance (m) of a seated rider's head from the platform's rotation centre, for the time
@@ -84,9 +84,9 @@ class GenerateReport:
     Attributes
     ----------
     t_s : ndarray, (N,)
-        Frame times of the whole ride (ramp in, join, cue, join, ramp out; a join brings a
-        cue still moving at its end to rest, see :data:`JOIN_ACCEL_M_S2`; none when it is
-        at rest).
+        Frame times of the whole ride (ramp in, cue, ramp out; a ramp meets a cue still
+        moving at its end with its velocity, see :func:`_ramp`; should that fail, a join
+        segment brings the cue to rest first, see :data:`JOIN_ACCEL_M_S2`).
     cue_slice : slice
         Frames of the cued part (between the ramps).
     f_vehicle, w_vehicle : ndarray, (M, 3)

@@ -28,6 +28,12 @@ says why it was taken (empty when the time-optimal path was used); only end posi
 outside the stroke raise :class:`~motioncue.LimitError`, and no frame that breaks a limit is
 returned.
 
+*From or to motion* (:func:`transition` with ``v_from`` / ``v_to``, e.g. a cue still moving
+at its end on its way to park): no toppra; one quintic per pose component from the given
+position and velocity to the other end's, zero acceleration at both ends, over the shortest
+whole-frame duration that keeps each component within an acceleration target and every frame
+within the limits (see :func:`transition`).
+
 toppra knows no jerk limit. With a jerk limit in ``limits``, the sampled frames are passed
 through the :class:`JerkLimiter` from rest, which then settles on the end position at rest;
 frames it changed leave the geometric path slightly (their poses come from the forward
@@ -565,9 +571,11 @@ def _moving_transition(
                 shortened=note,
             )  # fmt: skip
         if shortened:  # shortened for the workspace, and now too fast for the actuators
+            over = max(("speed", chk.speed), ("acceleration", chk.accel), ("jerk", chk.jerk),
+                       key=lambda kv: kv[1])  # fmt: skip
             why = (
-                f"the move from motion, shortened to {T:.2f} s by the workspace, breaks the "
-                f"actuator limits: {chk}"
+                f"the move from motion, shortened to {T:.2f} s by the workspace, would exceed "
+                f"an actuator {over[0]} limit by {over[1]:.0%}"
             )
             break
         T = math.ceil(T * 1.25 * rate_hz) * dt
