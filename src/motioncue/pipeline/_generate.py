@@ -263,9 +263,10 @@ def _ramp(
     to park (at the start: from park to the cue's first pose and velocity), each pose
     component's acceleration within the perception thresholds (:data:`JOIN_ACCEL_M_S2`,
     :data:`JOIN_ACCEL_RAD_S2`) unless the workspace forces it faster (then ``"shortened"``
-    says so), every frame within ``tight`` and in the workspace (the chain's limiting would
-    move none of its poses). Should no such move exist, the old way: the cue brought to rest
-    by :func:`_join_to_rest`, then the gentle ramp.
+    says so), every frame within ``gentle`` (``"limits": "ramp"``; where the cue's own motion
+    at its end breaks those, within ``tight``: ``"full"``) and in the workspace (the chain's
+    limiting would move none of its poses). Should no such move exist, the old way: the cue
+    brought to rest by :func:`_join_to_rest`, then the gentle ramp.
     """
     dt = 1.0 / rate_hz
     park = np.asarray(platform.pose_park, dtype=float)
@@ -292,17 +293,22 @@ def _ramp(
     def in_workspace(poses: np.ndarray) -> bool:
         return deliver(platform, poses, tight, rate_hz, actuator_limits=False).clamped == 0
 
-    try:
-        if at_end:
-            tr = transition(platform, edge, park, tight, rate_hz, v_from=vel,
-                            accel_max=accel, accept=in_workspace)  # fmt: skip
-        else:
-            tr = transition(platform, park, edge, tight, rate_hz, v_to=vel,
-                            accel_max=accel, accept=in_workspace)  # fmt: skip
-        entry.update(kind="from motion", duration_s=float(tr.t_s[-1]), shortened=tr.shortened)
+    why = ""
+    # within the ramps' gentle limits where the cue's own motion allows, else the full ones
+    for lim, name in ((gentle, "ramp"), (tight, "full")):
+        try:
+            if at_end:
+                tr = transition(platform, edge, park, lim, rate_hz, v_from=vel,
+                                accel_max=accel, accept=in_workspace)  # fmt: skip
+            else:
+                tr = transition(platform, park, edge, lim, rate_hz, v_to=vel,
+                                accel_max=accel, accept=in_workspace)  # fmt: skip
+        except LimitError as exc:
+            why = str(exc)
+            continue
+        entry.update(kind="from motion", duration_s=float(tr.t_s[-1]), shortened=tr.shortened,
+                     limits=name)  # fmt: skip
         return tr, entry, empty
-    except LimitError as exc:
-        why = str(exc)
     seg, halvings = _join_to_rest(platform, seq, tight, rate_hz)
     rest = seg[-1] if len(seg) else edge
     tr = ramp_at_rest(rest)

@@ -77,6 +77,9 @@ __all__ = [
     "unpark_path",
 ]
 
+_MAX_GROWTHS = 12
+"""A move from motion grows its duration by 1.25 at most this many times (15x) to meet the
+limits: beyond that, the motion at its ends is what breaks them, and time does not help."""
 _RETRY_SCALE = 0.97
 _RETRIES = 8
 _MAX_SETTLE_FRAMES = 100_000
@@ -429,8 +432,9 @@ def transition(
     components over one duration ``T``, a whole number of frames: the shortest that keeps
     each component's acceleration within ``accel_max`` (6,) (m/s^2, rad/s^2; e.g. the
     perception thresholds, so the whole move is felt as one gentle motion) and every frame
-    within ``limits`` (``T`` grows by 1.25 until the finite-difference check, with the motion
-    continued at ``v_from`` before the first frame and at ``v_to`` after the last, passes).
+    within ``limits`` (``T`` grows by 1.25, up to 15x, until the finite-difference check, with
+    the motion continued at ``v_from`` before the first frame and at ``v_to`` after the last,
+    passes).
     Where the path leaves the workspace (or ``accept(poses)`` is false), ``T`` shrinks by 0.8
     until it does not (an overshoot along the initial velocity shrinks with ``T``; the acceleration
     grows): ``Transition.shortened`` says so, with the peak acceleration.
@@ -532,6 +536,7 @@ def _moving_transition(
     T = max(math.ceil(target * rate_hz - 1e-9), 2) * dt
     shortened = False
     why = ""
+    growths = 0
     for _ in range(60):
         m = round(T * rate_hz)
         t = np.arange(m + 1) * dt
@@ -576,6 +581,15 @@ def _moving_transition(
             why = (
                 f"the move from motion, shortened to {T:.2f} s by the workspace, would exceed "
                 f"an actuator {over[0]} limit by {over[1]:.0%}"
+            )
+            break
+        growths += 1
+        if growths > _MAX_GROWTHS:
+            over = max(("speed", chk.speed), ("acceleration", chk.accel), ("jerk", chk.jerk),
+                       key=lambda kv: kv[1])  # fmt: skip
+            why = (
+                f"the move from motion exceeds an actuator {over[0]} limit by {over[1]:.0%} "
+                f"even at {T:.2f} s"
             )
             break
         T = math.ceil(T * 1.25 * rate_hz) * dt
