@@ -41,10 +41,12 @@ def _h(n: int, fs: float, model: VestibularModel) -> np.ndarray:
 
 
 def _d2(n: int, fs: float) -> np.ndarray:
+    """As simulator_motion: held before the first sample, the last velocity continued after
+    the last (last row zero)."""
     d = np.zeros((n, n))
-    for k in range(n):
+    for k in range(n - 1):
         d[k, max(k - 1, 0)] += 1.0
-        d[k, min(k + 1, n - 1)] += 1.0
+        d[k, k + 1] += 1.0
         d[k, k] -= 2.0
     return d * fs * fs
 
@@ -240,7 +242,7 @@ def _random_motion(rng: np.random.Generator, d: np.ndarray, fs: float, reach: Ri
         tau[k] = np.clip(prev + np.clip(target[k] - prev, -step, step), -lim, lim)
     p = sum(rng.normal() * np.sin(2 * np.pi * rng.uniform(0.05, 2.0) * t + rng.uniform(0, 6))
             for _ in range(3))  # fmt: skip
-    pad = np.concatenate([p[:1], p, p[-1:]])
+    pad = np.concatenate([p[:1], p, 2 * p[-1:] - p[-2:-1]])  # as simulator_motion
     d2p = (pad[2:] - 2 * pad[1:-1] + pad[:-2]) * fs * fs
     kp = rng.uniform(0.0, 0.05) * min(
         reach.stroke_m[i] / np.abs(p).max(),

@@ -154,3 +154,37 @@ def test_the_riders_force_at_the_end_is_within_its_maximum_over_the_drive(
     # the manoeuvre's own axis is cued at all (else the bound would be empty)
     main = _rider_f(runs[name][0], 0 if name == "brake" else 1)
     assert np.abs(main).max() > 0.2
+
+
+@pytest.mark.parametrize("name", list(DRIVES))
+def test_the_evaluator_charges_no_stop_at_the_end_of_the_data(
+    name: str, runs: dict[str, tuple[np.ndarray, np.ndarray]]
+) -> None:
+    """What ``compare`` judges and draws (session 25): the evaluator continues the pose at its
+    last velocity after the last sample, so the plan still moving there shows no end spike:
+    its perceived specific force (x and y) over the final 0.5 s stays within its maximum over
+    the rest of the drive. The pose held there instead (the old convention: ``-v fs`` more on
+    the last sample) breaks that on the brake drive (measured 0.910 against 0.882 m/s^2), so
+    the check can fail."""
+    from motioncue.cueing import evaluate_cueing, simulator_motion
+    from motioncue.cueing._evaluate import _rot_columns
+
+    cut = runs[name][0]
+    f, w = DRIVES[name](N)
+    ev = evaluate_cueing(f, w, cut, FS, model=MODELS)
+
+    def end_and_rest(ps: np.ndarray) -> tuple[float, float]:
+        return float(np.abs(ps[-END:]).max()), float(np.abs(ps[:-END]).max())
+
+    # the held convention's specific force: the same but for -v fs (rotated) on the last sample
+    f_sim, _ = simulator_motion(cut, FS)
+    held = f_sim.copy()
+    kick = -(cut[-1, :3] - cut[-2, :3]) * FS * FS
+    held[-1] += _rot_columns(cut[-1:, 3], cut[-1:, 4], cut[-1:, 5])[0].T @ kick
+    oto = get_model_set(MODELS).otolith
+    for axis in (0, 1):
+        end, rest = end_and_rest(ev.perceived_sim[:, axis])
+        assert end <= rest * 1.001 + 1e-6, (axis, end, rest)
+        if name == "brake" and axis == 0:
+            end_h, rest_h = end_and_rest(np.asarray(oto[axis].apply(held[:, axis], FS)))
+            assert end_h > rest_h * 1.01, (end_h, rest_h)

@@ -131,8 +131,9 @@ def default_metrics(
 
 
 def _second_difference(p: NDArray[np.float64]) -> NDArray[np.float64]:
-    """The relaxation's ``(p[k+1] - 2 p[k] + p[k-1]) fs^2``, the pose held at both ends."""
-    q = np.concatenate([p[:1], p, p[-1:]])
+    """The relaxation's ``(p[k+1] - 2 p[k] + p[k-1]) fs^2``, the pose held before the first
+    sample and continued at its last velocity after the last (as simulator_motion)."""
+    q = np.concatenate([p[:1], p, 2 * p[-1:] - p[-2:-1]])
     return (q[2:] - 2.0 * q[1:-1] + q[:-2]) * RATE**2
 
 

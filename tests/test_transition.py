@@ -194,3 +194,99 @@ def test_jerk_limited_transitions_and_park(hexapod):
     park = park_path(hexapod, lim, 100.0, q_from=q_from, v_from=v_from, a_from=a_from)
     assert park.check.ok and park.check.jerk <= 1e-9
     np.testing.assert_allclose(park.q[-1], hexapod.q_park, atol=1e-9)
+
+
+# ------------------------------------------------------------- from and to motion (s25)
+_ACC = np.array([0.17, 0.17, 0.28, 0.34, 0.34, 0.34])
+
+
+def test_quintic_meets_its_ends_by_finite_differences():
+    from motioncue.trajectory._transition import quintic_poses
+
+    rng = np.random.default_rng(5)
+    p0, p1, v0, v1 = (rng.normal(size=6) * s for s in (0.05, 0.05, 0.1, 0.1))
+    T, h = 1.3, 1e-4
+    t = np.array([0.0, h, 2 * h, T - 2 * h, T - h, T])
+    p, acc = quintic_poses(p0, v0, p1, v1, T, t)
+    np.testing.assert_allclose(p[0], p0, atol=1e-12)
+    np.testing.assert_allclose(p[-1], p1, atol=1e-12)
+    np.testing.assert_allclose((p[1] - p[0]) / h, v0, atol=1e-3)  # forward differences
+    np.testing.assert_allclose((p[-1] - p[-2]) / h, v1, atol=1e-3)
+    np.testing.assert_allclose(acc[[0, -1]], 0.0, atol=1e-12)
+    np.testing.assert_allclose((p[2] - 2 * p[1] + p[0]) / h**2, 0.0, atol=0.05)
+    # the acceleration returned is the second derivative of the position
+    tt = np.linspace(0.0, T, 2001)
+    pp, aa = quintic_poses(p0, v0, p1, v1, T, tt)
+    d2 = np.diff(pp, 2, axis=0) / (tt[1] - tt[0]) ** 2
+    np.testing.assert_allclose(d2, aa[1:-1], atol=1e-4)
+
+
+@pytest.mark.parametrize("end", ["from", "to"])
+def test_a_move_from_or_to_motion_has_no_velocity_step_and_keeps_its_targets(
+    hexapod: motioncue.kinematics.Platform, hex_limits: ActuatorLimits, end: str
+) -> None:
+    lim = hex_limits
+    cue = np.array([0.03, -0.02, 0.01, 0.02, -0.03, 0.05])
+    v = np.array([0.08, -0.05, 0.02, 0.05, 0.0, -0.04])
+    park = np.asarray(hexapod.pose_park, dtype=float)
+    if end == "from":
+        tr = transition(hexapod, cue, park, lim, 100.0, v_from=v, accel_max=_ACC)
+        start, stop, v0, v1 = cue, park, v, np.zeros(6)
+    else:
+        tr = transition(hexapod, park, cue, lim, 100.0, v_to=v, accel_max=_ACC)
+        start, stop, v0, v1 = park, cue, np.zeros(6), v
+    dt = 0.01
+    p = tr.poses
+    np.testing.assert_allclose(p[0], start, atol=1e-12)
+    np.testing.assert_allclose(p[-1], stop, atol=1e-12)
+    assert tr.check.ok and not tr.shortened and not tr.fallback
+    # no velocity step: the first (last) frame's difference is the motion's, to O(a dt)
+    np.testing.assert_allclose((p[1] - p[0]) / dt, v0, atol=_ACC.max() * dt)
+    np.testing.assert_allclose((p[-1] - p[-2]) / dt, v1, atol=_ACC.max() * dt)
+    # every component's acceleration within its target (finite differences of the frames),
+    # and the time is the shortest that allows it (within a frame and the grid's rounding)
+    a = np.abs(np.diff(p, 2, axis=0)) / dt**2
+    assert np.all(a <= _ACC * 1.001), (a.max(axis=0), _ACC)
+    assert np.max(a / _ACC) > 0.9
+    # the actuators from the motion, through the move, into the motion: within the limits
+    before = hexapod.inverse(start - np.outer([2, 1], v0) * dt)
+    after = hexapod.inverse(stop + np.outer([1, 2], v1) * dt)
+    q = np.concatenate([before, hexapod.inverse(p), after])
+    assert check_trajectory(q[2:], dt, lim.without_jerk(), history=q[:2]).ok
+
+
+def test_a_move_from_motion_the_workspace_cuts_short_says_so(
+    hexapod: motioncue.kinematics.Platform, hex_limits: ActuatorLimits
+) -> None:
+    lim = hex_limits
+    cue = np.array([0.05, 0.0, 0.0, 0.0, 0.0, 0.0])
+    v = np.array([0.1, 0.0, 0.0, 0.0, 0.0, 0.0])  # heading away from park
+    park = np.asarray(hexapod.pose_park, dtype=float)
+    free = transition(hexapod, cue, park, lim, 100.0, v_from=v, accel_max=_ACC)
+    reach = float(free.poses[:, 0].max())
+    assert reach > 0.06 and not free.shortened  # it overshoots the cue by ~v^2 / (2 a)
+
+    edge = 0.05 + 0.6 * (reach - 0.05)  # a workspace that ends before the free overshoot
+
+    def box(poses: np.ndarray) -> bool:
+        return bool(poses[:, 0].max() <= edge)
+
+    tr = transition(hexapod, cue, park, lim, 100.0, v_from=v, accel_max=_ACC, accept=box)
+    assert box(tr.poses) and tr.check.ok
+    assert tr.duration_s < free.duration_s
+    assert "shortened by the workspace" in tr.shortened, tr.shortened
+    peak = np.abs(np.diff(tr.poses[:, 0], 2)).max() * 1e4
+    assert peak > _ACC[0]  # faster than the target: that is what is reported
+    said = float(tr.shortened.split("peak acceleration ")[1].split(" ")[0])
+    assert said == pytest.approx(peak, rel=0.05) and " on x," in tr.shortened
+
+
+def test_a_move_from_motion_needs_its_acceleration_targets(
+    hexapod: motioncue.kinematics.Platform, hex_limits: ActuatorLimits
+) -> None:
+    lim = hex_limits
+    with pytest.raises(motioncue.ConfigError, match="accel_max"):
+        transition(hexapod, np.zeros(6), hexapod.pose_park, lim, 100.0, v_from=np.ones(6) * 0.01)
+    with pytest.raises(motioncue.ConfigError, match="accel_max"):
+        transition(hexapod, np.zeros(6), hexapod.pose_park, lim, 100.0,
+                   v_from=np.ones(6) * 0.01, accel_max=[0.1, 0, 1, 1, 1, 1])  # fmt: skip

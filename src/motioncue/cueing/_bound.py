@@ -29,9 +29,11 @@ The platform's specific force on the channel is modelled, to first order in the 
 
     s[k] = (p[k+1] - 2 p[k] + p[k-1]) fs^2 + g tau[k]
 
-(the central difference of :func:`simulator_motion`, the pose held before the first and after
-the last sample), with the translation ``p`` and the tilt term ``tau = sin(tilt)`` (pitch for
-``fx``, roll for ``fy``) in boxes from the rig's reach (:func:`motioncue.analysis.rig_reach`)::
+(the central difference of :func:`simulator_motion`, the pose held before the first sample
+and continued at its last velocity after the last one, so ``s[N-1] = g tau[N-1]``: the end
+of the data charges no stop), with the translation ``p`` and the tilt term
+``tau = sin(tilt)`` (pitch for ``fx``, roll for ``fy``) in boxes from the rig's reach
+(:func:`motioncue.analysis.rig_reach`)::
 
     |p| <= stroke, |p[k+1] - p[k]| fs <= speed, |second difference| fs^2 <= accel,
     |tau| <= sin(tilt), |tau[k+1] - tau[k]| fs <= tilt rate.
@@ -251,15 +253,24 @@ class CueBound:
 
 
 def _second_difference(n: int, fs: float) -> sparray:
-    """D2 (N, N): the central second difference times fs^2, the pose held at both ends."""
+    """D2 (N, N): the central second difference times fs^2 in the convention of
+    :func:`simulator_motion`: the pose held before the first sample (row 0 is
+    ``p[1] - p[0]``) and continued at its last velocity after the last one (row N-1 is zero)."""
     import scipy.sparse as sp
 
+    if n <= 2:
+        d2 = sp.lil_matrix((n, n))
+        if n == 2:
+            d2[0, 0], d2[0, 1] = -1.0, 1.0
+        return sp.csr_matrix(d2) * (fs * fs)
     main = -2.0 * np.ones(n)
     main[0] += 1.0
-    main[-1] += 1.0
-    d2 = sp.diags([np.ones(n - 1), main, np.ones(n - 1)], [-1, 0, 1], shape=(n, n), format="csr")
-    if n == 1:
-        d2 = sp.csr_matrix((1, 1))
+    main[-1] = 0.0
+    lower = np.ones(n - 1)
+    lower[-1] = 0.0
+    upper = np.ones(n - 1)
+    d2 = sp.diags([lower, main, upper], [-1, 0, 1], shape=(n, n), format="csr")
+    d2.eliminate_zeros()
     return d2 * (fs * fs)
 
 
@@ -708,7 +719,7 @@ def _socp_primal(
     zs = casadi.MX.sym("z", nz)
     y, ybar, a = zs[iy : iy + n], zs[nz - 2], zs[nz - 1]
     c2 = 1.0 / (1.0 + tan_t * tan_t)
-    cons = [casadi.mtimes(_dm(lin), zs)]
+    cons = [casadi.densify(casadi.mtimes(_dm(lin), zs))]  # D2 has an empty row (the end)
     lbg, ubg = [lba], [uba]
     if tan_t > 0.0:
         cons.append(c2 * (casadi.dot(y, y) - n * ybar * ybar) - a * a)
@@ -782,7 +793,7 @@ def _upsample_motion(
     if k > 1:
         pad = np.concatenate([np.full(k, p[0]), p, np.full(k, p[-1])])
         p = np.convolve(pad, np.ones(k) / k, mode="same")[k:-k]
-    d2p = np.concatenate([[p[1] - p[0]], p[2:] - 2 * p[1:-1] + p[:-2], [p[-2] - p[-1]]])
+    d2p = np.concatenate([[p[1] - p[0]], p[2:] - 2 * p[1:-1] + p[:-2], [0.0]])  # as D2
     fs = ch.fs
 
     def fit(x: NDArray[np.float64], *pairs: tuple[float, float]) -> NDArray[np.float64]:

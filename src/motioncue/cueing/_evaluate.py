@@ -120,25 +120,35 @@ def simulator_motion(
     Notes
     -----
     Derivatives are central differences (no delay; second order in the sample period):
-    ``v[n] = (p[n+1] - p[n-1]) fs / 2``, ``a[n] = (p[n+1] - 2 p[n] + p[n-1]) fs^2``, with
-    the pose held constant before the first and after the last sample; ``alpha`` is the
-    central difference of ``w`` with ``w`` held the same way.
+    ``v[n] = (p[n+1] - p[n-1]) fs / 2``, ``a[n] = (p[n+1] - 2 p[n] + p[n-1]) fs^2``, and
+    ``alpha`` the central difference of ``w``, on the poses extended by
+    :func:`extended_poses`: **held before the first sample** (the ride starts from rest, as
+    the vestibular filters do) and **continued at the last velocity after the last one** (the
+    data ends, the platform's motion does not: nothing is assumed about what comes next, so
+    no stop is charged that did not happen). At the last sample this makes the acceleration
+    zero and the velocity the backward difference ``(p[N-1] - p[N-2]) fs``; a platform that
+    stops within the data is still charged its stop where it happens. :mod:`._bound`'s
+    relaxation uses the same convention.
     """
     r_head = _check_offset(head_offset_m)
     p = np.asarray(poses, dtype=float)
     if p.ndim != 2 or p.shape[1] != 6:
         raise ConfigError(f"poses must have shape (N, 6); got {p.shape}")
-    pad = np.concatenate([p[:1], p, p[-1:]], axis=0)
-    acc = (pad[2:, :3] - 2.0 * pad[1:-1, :3] + pad[:-2, :3]) * (fs_hz * fs_hz)
-    rates = (pad[2:, 3:] - pad[:-2, 3:]) * (0.5 * fs_hz)
+    if p.shape[0] == 0:
+        return np.zeros((0, 3)), np.zeros((0, 3))
+    ext = extended_poses(p, 2)  # samples -2 .. N+1
+    acc = (ext[3:-1, :3] - 2.0 * ext[2:-2, :3] + ext[1:-3, :3]) * (fs_hz * fs_hz)
+    # angles and Euler rates at samples -1 .. N (for alpha's central difference)
+    ang = ext[1:-1, 3:]
+    rates = (ext[2:, 3:] - ext[:-2, 3:]) * (0.5 * fs_hz)
     roll, pitch, yaw = p[:, 3], p[:, 4], p[:, 5]
     r = _rot_columns(roll, pitch, yaw)
     acc[:, 2] += GRAVITY_M_S2
     f_sim = np.einsum("nji,nj->ni", r, acc)  # R^T a
     droll, dpitch, dyaw = rates[:, 0], rates[:, 1], rates[:, 2]
-    cr, sr = np.cos(roll), np.sin(roll)
-    cp, sp = np.cos(pitch), np.sin(pitch)
-    w_sim = np.stack(
+    cr, sr = np.cos(ang[:, 0]), np.sin(ang[:, 0])
+    cp, sp = np.cos(ang[:, 1]), np.sin(ang[:, 1])
+    w_ext = np.stack(
         [
             droll - sp * dyaw,
             cr * dpitch + sr * cp * dyaw,
@@ -146,12 +156,37 @@ def simulator_motion(
         ],
         axis=1,
     )
-    if r_head is not None and p.shape[0] > 0:
-        wpad = np.concatenate([w_sim[:1], w_sim, w_sim[-1:]], axis=0)
-        alpha = (wpad[2:] - wpad[:-2]) * (0.5 * fs_hz)
+    w_sim = w_ext[1:-1]
+    if r_head is not None:
+        alpha = (w_ext[2:] - w_ext[:-2]) * (0.5 * fs_hz)
         rr = np.broadcast_to(r_head, w_sim.shape)
         f_sim = f_sim + np.cross(alpha, rr) + np.cross(w_sim, np.cross(w_sim, rr))
     return f_sim, w_sim
+
+
+def extended_poses(poses: ArrayLike, k: int) -> NDArray[np.float64]:
+    """The poses with ``k`` samples added at each end, as :func:`simulator_motion` sees them.
+
+    Parameters
+    ----------
+    poses : (N, D) array_like
+        Poses (or any coordinates) sampled at a constant rate, N >= 1.
+    k : int
+        Samples added at each end (>= 0).
+
+    Returns
+    -------
+    (N + 2 k, D) array
+        ``k`` copies of the first pose (the ride starts from rest), the poses, then ``k``
+        samples continuing the last velocity: ``p[N-1] + j (p[N-1] - p[N-2])``, j = 1..k (held
+        if N = 1).
+    """
+    p = np.asarray(poses, dtype=float)
+    if p.ndim != 2 or p.shape[0] == 0 or k < 0:
+        raise ConfigError(f"extended_poses needs poses (N >= 1, D) and k >= 0; got {p.shape}, {k}")
+    step = p[-1] - p[-2] if p.shape[0] >= 2 else np.zeros(p.shape[1])
+    after = p[-1] + np.arange(1, k + 1)[:, None] * step
+    return np.concatenate([np.repeat(p[:1], k, axis=0), p, after], axis=0)
 
 
 _NOTES = """Notes

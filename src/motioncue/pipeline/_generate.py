@@ -37,6 +37,7 @@ if TYPE_CHECKING:
 
 __all__ = [
     "JOIN_ACCEL_M_S2",
+    "JOIN_ACCEL_RAD_S2",
     "JOIN_HEAD_M",
     "JOIN_MAX_S",
     "RAMP_ACCEL",
@@ -54,9 +55,9 @@ RAMP_ACCEL = 0.1
 bundled hexapod), not at the machine's full capability."""
 
 JOIN_ACCEL_M_S2 = THRESHOLDS[:3]
-"""Deceleration (m/s^2, x, y, z) with which a cue still moving at its first or last sample is
-brought to rest before the ramp to park (at the start: brought up from rest after the ramp
-from park): the otolith perception thresholds, the translational part of
+"""Acceleration target (m/s^2, x, y, z) of the move between park and a cue still moving at its
+first or last sample (and the deceleration of the fallback join that brings it to rest before
+a ramp): the otolith perception thresholds, the translational part of
 :data:`motioncue.cueing._vestibular.THRESHOLDS` (Reid & Nahon 1985)."""
 JOIN_HEAD_M = 0.5
 """Distance (m) of a seated rider's head from the platform's rotation centre, for the time
@@ -65,9 +66,12 @@ further ``w T / 2`` (felt as ``g w T / 2``) and swings the head with a peak tang
 acceleration ``1.5 w h / T``; their sum is least at ``T = sqrt(3 h / g)`` (0.39 s), for any
 ``w``."""
 JOIN_MAX_S = 2.0
-"""Longest time (s) a join segment between the cue and a ramp may take. Where this or the
-workspace does not allow the time above, the segment is shorter and its deceleration higher
-(still continuous: no velocity step)."""
+"""Longest time (s) a join segment between the cue and a ramp may take (the fallback join,
+:func:`_join_to_rest`). Where this or the workspace does not allow the time above, the segment
+is shorter and its deceleration higher (still continuous: no velocity step)."""
+JOIN_ACCEL_RAD_S2 = JOIN_ACCEL_M_S2[0] / JOIN_HEAD_M
+"""Angular acceleration (rad/s^2) of the moves between a moving cue and park: it swings a
+seated rider's head (:data:`JOIN_HEAD_M`) with the surge perception threshold."""
 
 Progress = Callable[[str, float], None]
 """``progress(stage_description, fraction_done)``."""
@@ -80,9 +84,9 @@ class GenerateReport:
     Attributes
     ----------
     t_s : ndarray, (N,)
-        Frame times of the whole ride (ramp in, join, cue, join, ramp out; a join brings a
-        cue still moving at its end to rest, see :data:`JOIN_ACCEL_M_S2`; none when it is
-        at rest).
+        Frame times of the whole ride (ramp in, cue, ramp out; a ramp meets a cue still
+        moving at its end with its velocity, see :func:`_ramp`; should that fail, a join
+        segment brings the cue to rest first, see :data:`JOIN_ACCEL_M_S2`).
     cue_slice : slice
         Frames of the cued part (between the ramps).
     f_vehicle, w_vehicle : ndarray, (M, 3)
@@ -108,6 +112,12 @@ class GenerateReport:
     transition_fallbacks : tuple of str
         One sentence per ramp that could not follow its time-optimal pose path and moved in a
         straight line in actuator space instead.
+    joins : tuple of dict
+        How the cue met each ramp (``"end"``: ``"start"`` or ``"end"``; ``"kind"``: ``"at
+        rest"``, ``"from motion"`` (one move between the moving cue and park, see
+        :func:`_ramp`) or ``"stop then ramp"`` (the fallback: :func:`_join_to_rest`, then
+        the ramp); ``"duration_s"``; ``"shortened"``: why the workspace made it faster
+        than its acceleration target, empty when it did not). Also ``ride.notes["joins"]``.
     """
 
     t_s: np.ndarray
@@ -125,6 +135,7 @@ class GenerateReport:
     frame_check: FrameCheck
     stage_s: dict[str, float] = field(default_factory=dict)
     transition_fallbacks: tuple[str, ...] = ()
+    joins: tuple[dict[str, Any], ...] = ()
 
 
 class _DeferredPyplot(types.ModuleType):
@@ -224,9 +235,99 @@ def _to_rest(pose: np.ndarray, v: np.ndarray, dur_s: np.ndarray, n: int, dt: flo
     return out
 
 
+def _end_velocity(poses: np.ndarray, dt: float) -> np.ndarray:
+    """The pose velocity (6,) at the last of ``poses (M >= 3, 6)``: that of the quadratic
+    through the last three; a rotation rate whose step in one frame swings the head
+    (:data:`JOIN_HEAD_M`) by less than the threshold counts as rest (zero)."""
+    p2, p1, p0 = poses[-3], poses[-2], poses[-1]
+    vel = (3.0 * p0 - 4.0 * p1 + p2) / (2.0 * dt)
+    swing = np.abs(vel[3:]) * JOIN_HEAD_M / dt > JOIN_ACCEL_M_S2[0]
+    vel[3:] = np.where(swing, vel[3:], 0.0)
+    return vel
+
+
+def _ramp(
+    platform: Platform,
+    cue: np.ndarray,
+    end: str,
+    tight: ActuatorLimits,
+    gentle: ActuatorLimits,
+    rate_hz: float,
+) -> tuple[Transition, dict[str, Any], np.ndarray]:
+    """The move between park and the cue's ``end`` (``"start"`` or ``"end"``), its
+    :attr:`GenerateReport.joins` entry, and the fallback join segment (empty unless used;
+    frames between the cue and the ramp, in ride order).
+
+    A cue at rest there: the gentle time-optimal ramp (:data:`RAMP_SPEED`,
+    :data:`RAMP_ACCEL`). A cue still moving: one move from the cue's last pose and velocity
+    to park (at the start: from park to the cue's first pose and velocity), each pose
+    component's acceleration within the perception thresholds (:data:`JOIN_ACCEL_M_S2`,
+    :data:`JOIN_ACCEL_RAD_S2`) unless the workspace forces it faster (then ``"shortened"``
+    says so), every frame within ``gentle`` (``"limits": "ramp"``; where the cue's own motion
+    at its end breaks those, within ``tight``: ``"full"``) and in the workspace (the chain's
+    limiting would move none of its poses). Should no such move exist, the old way: the cue
+    brought to rest by :func:`_join_to_rest`, then the gentle ramp.
+    """
+    dt = 1.0 / rate_hz
+    park = np.asarray(platform.pose_park, dtype=float)
+    at_end = end == "end"
+    seq = cue if at_end else cue[::-1]
+    vel = _end_velocity(seq, dt) if len(seq) >= 3 else np.zeros(6)
+    if not at_end:
+        vel = -vel  # the velocity of the forward-time cue at its first pose
+    edge = seq[-1]
+    entry: dict[str, Any] = {"end": end, "kind": "at rest", "duration_s": 0.0, "shortened": ""}
+    empty = np.empty((0, 6))
+
+    def ramp_at_rest(pose: np.ndarray) -> Transition:
+        if at_end:
+            return transition(platform, pose, park, gentle, rate_hz)
+        return transition(platform, park, pose, gentle, rate_hz)
+
+    if not np.any(vel):
+        tr = ramp_at_rest(edge)
+        entry["duration_s"] = float(tr.t_s[-1])
+        return tr, entry, empty
+    accel = np.concatenate([np.asarray(JOIN_ACCEL_M_S2, dtype=float), [JOIN_ACCEL_RAD_S2] * 3])
+
+    def in_workspace(poses: np.ndarray) -> bool:
+        return deliver(platform, poses, tight, rate_hz, actuator_limits=False).clamped == 0
+
+    why = ""
+    # within the ramps' gentle limits where the cue's own motion allows, else the full ones
+    for lim, name in ((gentle, "ramp"), (tight, "full")):
+        try:
+            if at_end:
+                tr = transition(platform, edge, park, lim, rate_hz, v_from=vel,
+                                accel_max=accel, accept=in_workspace)  # fmt: skip
+            else:
+                tr = transition(platform, park, edge, lim, rate_hz, v_to=vel,
+                                accel_max=accel, accept=in_workspace)  # fmt: skip
+        except LimitError as exc:
+            why = str(exc)
+            continue
+        entry.update(kind="from motion", duration_s=float(tr.t_s[-1]), shortened=tr.shortened,
+                     limits=name)  # fmt: skip
+        return tr, entry, empty
+    seg, halvings = _join_to_rest(platform, seq, tight, rate_hz)
+    rest = seg[-1] if len(seg) else edge
+    tr = ramp_at_rest(rest)
+    entry.update(
+        kind="stop then ramp",
+        duration_s=float(tr.t_s[-1] + len(seg) * dt),
+        shortened=(
+            f"{why}; the cue was brought to rest first, its join halved {halvings} time(s) "
+            "by the workspace"
+            if halvings
+            else f"{why}; the cue was brought to rest first"
+        ),
+    )
+    return tr, entry, seg if at_end else seg[::-1]
+
+
 def _join_to_rest(
     platform: Platform, poses: np.ndarray, tight: ActuatorLimits, rate_hz: float
-) -> np.ndarray:
+) -> tuple[np.ndarray, int]:
     """The segment ``(n, 6)`` (``n = 0`` when the cue ends at rest) that continues the cue
     ``poses (M, 6)`` from its last pose and velocity to rest, so that the ramp back to park
     starts where the cue has stopped instead of at a velocity step.
@@ -236,16 +337,17 @@ def _join_to_rest(
     all within :data:`JOIN_MAX_S`; the times are halved while the workspace limiting would
     move one of the segment's poses (the segment stays what the platform delivers; its
     deceleration is then higher). The segment goes through the same workspace limiting and
-    actuator-limit planning as the cue.
+    actuator-limit planning as the cue. Returns the segment and how many times its times
+    were halved.
     """
     dt = 1.0 / rate_hz
     if len(poses) < 3:
-        return np.empty((0, 6))
-    p2, p1, p0 = poses[-3], poses[-2], poses[-1]
+        return np.empty((0, 6)), 0
+    p0 = poses[-1]
     # the velocity at the last pose of the quadratic through the last three. Its
     # acceleration is not carried on: a cue that ends (or, reversed, starts) accelerating
     # hard (a tilt-coordination onset) would swing a long way before coming back to rest
-    vel = (3.0 * p0 - 4.0 * p1 + p2) / (2.0 * dt)
+    vel = (3.0 * p0 - 4.0 * poses[-2] + poses[-3]) / (2.0 * dt)
     # a rotation rate whose step in one frame swings the head by less than the threshold
     # is at rest already
     swing = np.abs(vel[3:]) * JOIN_HEAD_M / dt > JOIN_ACCEL_M_S2[0]
@@ -254,15 +356,17 @@ def _join_to_rest(
         np.where(swing, np.sqrt(3.0 * JOIN_HEAD_M / GRAVITY_M_S2), dt),
     ])  # fmt: skip
     dur_s = np.minimum(dur_s, JOIN_MAX_S)
+    halvings = 0
     while True:
         dur_s = np.maximum(dur_s, dt)
         n = int(np.ceil(np.max(dur_s) * rate_hz - 1e-9))
         if n < 2:
-            return np.empty((0, 6))
+            return np.empty((0, 6)), halvings
         seg = _to_rest(p0, vel, dur_s, n, dt)
         if deliver(platform, seg, tight, rate_hz, actuator_limits=False).clamped == 0:
-            return seg
+            return seg, halvings
         dur_s = dur_s / 2.0
+        halvings += 1
 
 
 def generate_ride(
@@ -333,16 +437,11 @@ def generate_ride(
     lap("workspace")
     step("ramps", 0.35)
     gentle = tight.scaled(speed=RAMP_SPEED, accel=RAMP_ACCEL)
-    # a cue in motion at either end is joined to its ramp through a short segment that
-    # brings it to rest smoothly (the ramps start and end at rest); at the start, the same
-    # construction in reversed time: the segment leaves rest and reaches the cue's first
-    # pose with the cue's initial velocity
-    join_out = _join_to_rest(platform, poses_cue_ok, tight, rate_hz)
-    join_in = _join_to_rest(platform, poses_cue_ok[::-1], tight, rate_hz)[::-1]
-    first = join_in[0] if len(join_in) else poses_cue_ok[0]
-    last = join_out[-1] if len(join_out) else poses_cue_ok[-1]
-    ramp_in = transition(platform, platform.pose_park, first, gentle, rate_hz)
-    ramp_out = transition(platform, last, platform.pose_park, gentle, rate_hz)
+    # a cue in motion at either end is met by a move that starts (ends) at its velocity
+    # (see _ramp); a cue at rest by the gentle time-optimal ramp
+    ramp_in, join_in_note, join_in = _ramp(platform, poses_cue_ok, "start", tight, gentle, rate_hz)
+    ramp_out, join_out_note, join_out = _ramp(platform, poses_cue_ok, "end", tight, gentle, rate_hz)
+    joins = (join_in_note, join_out_note)
     fallbacks = [
         f"ramp {name}: {tr.fallback}"
         for name, tr in (("out of park", ramp_in), ("back to park", ramp_out))
@@ -394,6 +493,7 @@ def generate_ride(
             "optimisation_status": str(opt.status),
             "frame_check": check.summary(),
             "transition_fallbacks": fallbacks,
+            "joins": [dict(j) for j in joins],
         },
     )
     step("done", 1.0)
@@ -413,6 +513,7 @@ def generate_ride(
         frame_check=check,
         stage_s=stage_s,
         transition_fallbacks=tuple(fallbacks),
+        joins=joins,
     )
     return ride, report
 

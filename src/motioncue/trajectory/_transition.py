@@ -28,6 +28,12 @@ says why it was taken (empty when the time-optimal path was used); only end posi
 outside the stroke raise :class:`~motioncue.LimitError`, and no frame that breaks a limit is
 returned.
 
+*From or to motion* (:func:`transition` with ``v_from`` / ``v_to``, e.g. a cue still moving
+at its end on its way to park): no toppra; one quintic per pose component from the given
+position and velocity to the other end's, zero acceleration at both ends, over the shortest
+whole-frame duration that keeps each component within an acceleration target and every frame
+within the limits (see :func:`transition`).
+
 toppra knows no jerk limit. With a jerk limit in ``limits``, the sampled frames are passed
 through the :class:`JerkLimiter` from rest, which then settles on the end position at rest;
 frames it changed leave the geometric path slightly (their poses come from the forward
@@ -71,6 +77,9 @@ __all__ = [
     "unpark_path",
 ]
 
+_MAX_GROWTHS = 12
+"""A move from motion grows its duration by 1.25 at most this many times (15x) to meet the
+limits: beyond that, the motion at its ends is what breaks them, and time does not help."""
 _RETRY_SCALE = 0.97
 _RETRIES = 8
 _MAX_SETTLE_FRAMES = 100_000
@@ -98,6 +107,10 @@ class Transition:
     fallback : str
         Why the straight line in actuator space was used instead of the time-optimal path
         (one sentence, for reports); empty when it was not.
+    shortened : str
+        For a move from or to motion (:func:`transition` with ``v_from`` / ``v_to``): why it
+        was made shorter than its acceleration target allows, and its peak acceleration then
+        (one sentence, for reports); empty when it was not.
     """
 
     t_s: np.ndarray
@@ -107,6 +120,7 @@ class Transition:
     limit_scale: float
     check: LimitCheck
     fallback: str = ""
+    shortened: str = ""
 
     @property
     def n_frames(self) -> int:
@@ -400,17 +414,186 @@ def transition(
     rate_hz: float,
     *,
     n_grid: int = 100,
+    v_from: ArrayLike | None = None,
+    v_to: ArrayLike | None = None,
+    accel_max: ArrayLike | None = None,
+    accept: Callable[[np.ndarray], bool] | None = None,
 ) -> Transition:
-    """Fastest move at rest from ``pose_from`` to ``pose_to`` (6,) along a straight pose line.
+    """Move from ``pose_from`` to ``pose_to`` (6,).
+
+    At rest at both ends (``v_from`` and ``v_to`` omitted or zero): the fastest move along a
+    straight pose line (toppra, see the module docstring).
+
+    From or to motion: ``v_from`` / ``v_to`` (6,) are the pose velocities (m/s, rad/s) at the
+    first / last frame, so a move can continue a motion (a cue still moving at its end, on
+    its way to park) or end in one (a ramp that hands over to a cue already moving), with no
+    velocity step. Each pose component follows the quintic with the given position and
+    velocity and zero acceleration at both ends (so no acceleration step either), all
+    components over one duration ``T``, a whole number of frames: the shortest that keeps
+    each component's acceleration within ``accel_max`` (6,) (m/s^2, rad/s^2; e.g. the
+    perception thresholds, so the whole move is felt as one gentle motion) and every frame
+    within ``limits`` (``T`` grows by 1.25, up to 15x, until the finite-difference check, with
+    the motion continued at ``v_from`` before the first frame and at ``v_to`` after the last,
+    passes).
+    Where the path leaves the workspace (or ``accept(poses)`` is false), ``T`` shrinks by 0.8
+    until it does not (an overshoot along the initial velocity shrinks with ``T``; the acceleration
+    grows): ``Transition.shortened`` says so, with the peak acceleration.
 
     Raises
     ------
     LimitError
-        When the line leaves the workspace/stroke, or no limit-respecting timing was found.
+        At rest: when the line leaves the workspace/stroke, or no limit-respecting timing
+        was found. From motion: when no duration keeps the frames in the workspace and within
+        the limits.
     """
     a = _pose6("pose_from", pose_from)
     b = _pose6("pose_to", pose_to)
+    va = np.zeros(6) if v_from is None else _pose6("v_from", v_from)
+    vb = np.zeros(6) if v_to is None else _pose6("v_to", v_to)
+    if np.any(va) or np.any(vb):
+        if accel_max is None:
+            raise ConfigError("a transition from or to motion needs accel_max (6,)")
+        acc = _pose6("accel_max", accel_max)
+        if np.any(acc <= 0.0):
+            raise ConfigError(f"accel_max = {acc.tolist()} is invalid; allowed: 6 numbers > 0")
+        return _moving_transition(platform, a, va, b, vb, limits, rate_hz, acc, accept)
     return transition_through(platform, np.stack([a, b]), limits, rate_hz, n_grid=n_grid)
+
+
+def quintic_poses(
+    pose_from: np.ndarray,
+    v_from: np.ndarray,
+    pose_to: np.ndarray,
+    v_to: np.ndarray,
+    duration_s: float,
+    t_s: np.ndarray,
+) -> tuple[np.ndarray, np.ndarray]:
+    """Poses (M, 6) and accelerations (M, 6) at times ``t_s`` (M,) in ``[0, duration_s]`` of
+    the quintic per component with position and velocity ``pose_from, v_from`` at 0 and
+    ``pose_to, v_to`` at ``duration_s``, and zero acceleration at both.
+
+    With ``tau = t / T``, ``D = pose_to - pose_from``, ``a = v_from T``, ``b = v_to T``:
+    ``p = pose_from + a tau + (10 D - 6 a - 4 b) tau^3 + (-15 D + 8 a + 7 b) tau^4
+    + (6 D - 3 a - 3 b) tau^5``.
+    """
+    T = float(duration_s)
+    tau = np.clip(np.asarray(t_s, dtype=float) / T, 0.0, 1.0)[:, None]
+    d = pose_to - pose_from
+    a, b = v_from * T, v_to * T
+    c3, c4, c5 = 10 * d - 6 * a - 4 * b, -15 * d + 8 * a + 7 * b, 6 * d - 3 * a - 3 * b
+    pos = pose_from + a * tau + c3 * tau**3 + c4 * tau**4 + c5 * tau**5
+    acc = (6 * c3 * tau + 12 * c4 * tau**2 + 20 * c5 * tau**3) / (T * T)
+    return pos, acc
+
+
+def _quintic_duration(
+    d: np.ndarray, v_from: np.ndarray, v_to: np.ndarray, accel_max: np.ndarray
+) -> float:
+    """Shortest ``T`` (s) whose :func:`quintic_poses` keeps every component's acceleration
+    within ``accel_max``: the acceleration is ``(A(tau) D + B(tau) v_from T + C(tau) v_to T)
+    / T^2``, decreasing in ``T`` for every ``tau``; bisection on a fine ``tau`` grid."""
+    tau = np.linspace(0.0, 1.0, 401)[:, None]
+    ka = 60 * tau - 180 * tau**2 + 120 * tau**3  # coefficient of D
+    kb = -36 * tau + 96 * tau**2 - 60 * tau**3  # of v_from T
+    kc = -24 * tau + 84 * tau**2 - 60 * tau**3  # of v_to T
+
+    def peak_ratio(T: float) -> float:
+        acc = (ka * d + (kb * v_from + kc * v_to) * T) / (T * T)
+        return float(np.max(np.abs(acc) / accel_max))
+
+    lo, hi = 1e-3, 1.0
+    while peak_ratio(hi) > 1.0 and hi < 1e4:
+        hi *= 2.0
+    for _ in range(60):
+        mid = 0.5 * (lo + hi)
+        lo, hi = (mid, hi) if peak_ratio(mid) > 1.0 else (lo, mid)
+    return hi
+
+
+def _moving_transition(
+    platform: Platform,
+    pose_from: np.ndarray,
+    v_from: np.ndarray,
+    pose_to: np.ndarray,
+    v_to: np.ndarray,
+    limits: ActuatorLimits,
+    rate_hz: float,
+    accel_max: np.ndarray,
+    accept: Callable[[np.ndarray], bool] | None,
+) -> Transition:
+    """:func:`transition` from or to motion (see there)."""
+    if not (isinstance(rate_hz, int | float) and 1.0 <= rate_hz <= 10000.0):
+        raise ConfigError(f"rate_hz = {rate_hz!r} is invalid; allowed: [1, 10000] Hz")
+    if limits.n_actuators != platform.n_actuators:
+        raise ConfigError(
+            f"limits have {limits.n_actuators} actuators; platform has {platform.n_actuators}"
+        )
+    mask = np.asarray(platform.dof_mask, dtype=bool)
+    pose_from, pose_to = np.where(mask, pose_from, 0.0), np.where(mask, pose_to, 0.0)
+    v_from, v_to = np.where(mask, v_from, 0.0), np.where(mask, v_to, 0.0)
+    dt = 1.0 / rate_hz
+    target = _quintic_duration(pose_to - pose_from, v_from, v_to, accel_max)
+    T = max(math.ceil(target * rate_hz - 1e-9), 2) * dt
+    shortened = False
+    why = ""
+    growths = 0
+    for _ in range(60):
+        m = round(T * rate_hz)
+        t = np.arange(m + 1) * dt
+        poses, acc = quintic_poses(pose_from, v_from, pose_to, v_to, T, t)
+        poses[-1] = pose_to
+        q = np.asarray(platform.inverse(poses), dtype=float)
+        inside = bool(
+            np.all(np.isfinite(q))
+            and np.all(q >= limits.q_min - 1e-12)
+            and np.all(q <= limits.q_max + 1e-12)
+            and (accept is None or accept(poses))
+        )
+        if not inside:
+            if m <= 2:
+                why = "no duration keeps the move from motion in the workspace"
+                break
+            T = min(math.floor(m * 0.8), m - 1) * dt  # shorter: less overshoot
+            shortened = True
+            continue
+        before = np.asarray(platform.inverse(pose_from - np.outer([3, 2, 1], v_from) * dt))
+        after = np.asarray(platform.inverse(pose_to + np.outer([1, 2, 3], v_to) * dt))
+        chk = check_trajectory(np.concatenate([q, after]), dt, limits, history=before)
+        if chk.ok:
+            note = ""
+            if shortened:
+                ratio = np.max(np.abs(acc), axis=0) / accel_max
+                i = int(np.argmax(ratio))
+                dof = ("x", "y", "z", "roll", "pitch", "yaw")[i]
+                unit = "m/s^2" if i < 3 else "rad/s^2"
+                note = (
+                    f"shortened by the workspace from {target:.2f} s to {T:.2f} s: peak "
+                    f"acceleration {ratio[i] * accel_max[i]:.3f} {unit} on {dof}, "
+                    f"{ratio[i]:.1f} times its target {accel_max[i]:.3f}"
+                )
+            return Transition(
+                t_s=t, q=q, poses=poses, duration_s=T, limit_scale=1.0, check=chk,
+                shortened=note,
+            )  # fmt: skip
+        if shortened:  # shortened for the workspace, and now too fast for the actuators
+            over = max(("speed", chk.speed), ("acceleration", chk.accel), ("jerk", chk.jerk),
+                       key=lambda kv: kv[1])  # fmt: skip
+            why = (
+                f"the move from motion, shortened to {T:.2f} s by the workspace, would exceed "
+                f"an actuator {over[0]} limit by {over[1]:.0%}"
+            )
+            break
+        growths += 1
+        if growths > _MAX_GROWTHS:
+            over = max(("speed", chk.speed), ("acceleration", chk.accel), ("jerk", chk.jerk),
+                       key=lambda kv: kv[1])  # fmt: skip
+            why = (
+                f"the move from motion exceeds an actuator {over[0]} limit by {over[1]:.0%} "
+                f"even at {T:.2f} s"
+            )
+            break
+        T = math.ceil(T * 1.25 * rate_hz) * dt
+    raise LimitError(why or "no duration keeps the move from motion within the limits")
 
 
 def transition_through(
