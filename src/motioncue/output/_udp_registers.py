@@ -27,6 +27,7 @@ from functools import lru_cache
 from typing import ClassVar, Self
 
 from .._errors import ProtocolError
+from .._frozen import set_fields
 from ._udp_common import CONFIRM_MAIN, PASSCODE, REG_HEAD, WHO_ALL, WHO_NONE, Header, u16_tuple
 
 __all__ = [
@@ -218,7 +219,7 @@ class RegisterValuesShape(_FixedFunction):
 
     def __post_init__(self) -> None:
         _check_address(self)
-        object.__setattr__(self, "values", u16_tuple(self.values, type(self).__name__))
+        set_fields(self, values=u16_tuple(self.values, type(self).__name__))
         if not 1 <= len(self.values) <= self.MAX_COUNT:
             raise ProtocolError(
                 f"{type(self).__name__}: {len(self.values)} values, allowed 1..{self.MAX_COUNT}"

@@ -57,6 +57,7 @@ import numpy as np
 
 from .._atomic import atomic_write_bytes, stop_signals_deferred
 from .._errors import ConfigError, MotioncueError, one_line
+from .._frozen import set_fields
 
 if TYPE_CHECKING:
     from numpy.typing import ArrayLike
@@ -217,13 +218,16 @@ class Ride:
                 raise ConfigError(
                     f"ride {name} outside 0..{top} (found {int(arr.min())}..{int(arr.max())})"
                 )
-        object.__setattr__(self, "rate_hz", float(rate))
-        object.__setattr__(self, "t_s", t)
-        object.__setattr__(self, "pulses", pulses.astype(np.int32))
-        object.__setattr__(self, "dout", dout.astype(np.uint16))
-        object.__setattr__(self, "dacs", dacs.astype(np.uint16))
-        object.__setattr__(self, "actuator_names", tuple(names))
-        object.__setattr__(self, "effects", tuple(effects))
+        set_fields(
+            self,
+            rate_hz=float(rate),
+            t_s=t,
+            pulses=pulses.astype(np.int32),
+            dout=dout.astype(np.uint16),
+            dacs=dacs.astype(np.uint16),
+            actuator_names=tuple(names),
+            effects=tuple(effects),
+        )
 
     @property
     def integrity(self) -> str:
@@ -620,7 +624,7 @@ def load_ride(
         if str(exc).startswith(where):
             raise
         raise ConfigError(f"{where}: {exc}") from exc
-    object.__setattr__(ride, "_integrity", _integrity(arrays, ride))
+    set_fields(ride, _integrity=_integrity(arrays, ride))
     return ride
 
 

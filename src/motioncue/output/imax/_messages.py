@@ -49,6 +49,7 @@ from itertools import chain
 from typing import TYPE_CHECKING, ClassVar, Self, cast
 
 from ..._errors import ProtocolError
+from ..._frozen import set_fields
 from .._udp_common import (
     AXES_OF_CHANNEL,
     CHANNEL_OF_AXES,
@@ -227,7 +228,7 @@ class RegisterReply(RegisterWire):
         values = (self.channel, self.start, self.who_accept, self.who_reply)
         for name, value in zip(fields, values, strict=True):
             check_u16(value, name)
-        object.__setattr__(self, "values", u16_tuple(self.values, type(self).__name__))
+        set_fields(self, values=u16_tuple(self.values, type(self).__name__))
         if len(self.values) > 256:
             raise ProtocolError(f"{type(self).__name__}: {len(self.values)} values")
 

@@ -25,6 +25,7 @@ from functools import cache
 from typing import ClassVar
 
 from ..._errors import ProtocolError
+from ..._frozen import set_fields
 from .._udp_common import (
     AXES_OF_CHANNEL,
     CHANNEL_OF_AXES,
@@ -288,17 +289,19 @@ class MotionFrame:
         f = layout.unpack(data)
         # every field came out of the layout, so it is in range: skip the re-validation
         obj = object.__new__(cls)
-        setattr_ = object.__setattr__
-        setattr_(obj, "absolute", not relative)
-        setattr_(obj, "line", f[6])
-        setattr_(obj, "time_ms", f[7])
-        setattr_(obj, "positions", f[8 : 8 + n])
-        setattr_(obj, "base_dout", f[8 + n])
-        setattr_(obj, "dac1", f[9 + n])
-        setattr_(obj, "dac2", f[10 + n])
-        setattr_(obj, "ext_dout", f[11 + n])
-        setattr_(obj, "who_accept", f[4])
-        setattr_(obj, "who_reply", f[5])
+        set_fields(
+            obj,
+            absolute=not relative,
+            line=f[6],
+            time_ms=f[7],
+            positions=f[8 : 8 + n],
+            base_dout=f[8 + n],
+            dac1=f[9 + n],
+            dac2=f[10 + n],
+            ext_dout=f[11 + n],
+            who_accept=f[4],
+            who_reply=f[5],
+        )
         return obj
 
 
@@ -329,8 +332,7 @@ class MotionFrameReply:
         status = FrameStatus(h.function & 0xF)
         frame = MotionFrame._from_wire(data, (h.function & 0xFFF0) | 1, h.channel)
         # replies address the host (Who = 0); other values are accepted and not kept
-        object.__setattr__(frame, "who_accept", WHO_NONE)
-        object.__setattr__(frame, "who_reply", WHO_NONE)
+        set_fields(frame, who_accept=WHO_NONE, who_reply=WHO_NONE)
         return cls(status, frame)
 
 
