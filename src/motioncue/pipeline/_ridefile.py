@@ -56,6 +56,7 @@ from typing import IO, TYPE_CHECKING, Any, BinaryIO
 import numpy as np
 
 from .._atomic import atomic_write_bytes, stop_signals_deferred
+from .._config import read_capped
 from .._errors import ConfigError, MotioncueError, one_line
 from .._frozen import set_fields
 
@@ -388,22 +389,26 @@ def _read_source(
     else:
         path = Path(source)
         where = name or str(path)
+
+        def check_head(head: bytes) -> None:
+            if head != _ZIP_MAGIC:
+                raise ConfigError(
+                    f"{where}: not a motioncue ride file (not a zip archive: starts with "
+                    f"{_short(head)})"
+                )
+
+        def too_large(size: int | None) -> ConfigError:
+            if size is None:  # a device or a file that grew
+                return ConfigError(
+                    f"{where}: larger than {MAX_RIDE_BYTES} bytes; not a ride file motioncue reads"
+                )
+            return ConfigError(
+                f"{where}: {size} bytes is larger than {MAX_RIDE_BYTES}; not a ride file "
+                "motioncue reads"
+            )
+
         try:
-            with open(path, "rb") as fh:
-                # size and magic before anything is read into memory
-                size = os.fstat(fh.fileno()).st_size
-                if size > MAX_RIDE_BYTES:
-                    raise ConfigError(
-                        f"{where}: {size} bytes is larger than {MAX_RIDE_BYTES}; not a ride "
-                        "file motioncue reads"
-                    )
-                head = fh.read(len(_ZIP_MAGIC))
-                if head != _ZIP_MAGIC:
-                    raise ConfigError(
-                        f"{where}: not a motioncue ride file (not a zip archive: starts with "
-                        f"{_short(head)})"
-                    )
-                data = head + fh.read(MAX_RIDE_BYTES + 1 - len(head))
+            data = read_capped(path, MAX_RIDE_BYTES, too_large, check_head, len(_ZIP_MAGIC))
         except OSError as exc:
             raise ConfigError(f"{where}: cannot read ride file: {exc}") from exc
     if not isinstance(data, bytes):
