@@ -37,6 +37,7 @@ __all__ = [
     "RegisterWire",
     "RegisterWriteShape",
     "check_u16",
+    "check_u16_fields",
     "pack_registers",
     "register_struct",
     "unpack_registers",
@@ -59,6 +60,13 @@ def check_u16(value: int, what: str) -> None:
         raise ProtocolError(f"{what} = {value!r} is not in [0, 0xFFFF]")
 
 
+def check_u16_fields(msg: object, *names: str) -> None:
+    """Raise :class:`ProtocolError` unless each field ``names`` of ``msg`` is a u16 (a
+    message's header and register fields, checked in the order given)."""
+    for name in names:
+        check_u16(getattr(msg, name), name)
+
+
 def _allowed(channels: Sequence[int]) -> str:
     if isinstance(channels, range):
         return f"{channels.start}..{channels.stop - 1}"
@@ -71,9 +79,7 @@ def _check_address(msg: RegisterReadShape | RegisterValuesShape) -> None:
         raise ProtocolError(
             f"{type(msg).__name__}: channel {msg.channel}, allowed {_allowed(msg.CHANNELS)}"
         )
-    check_u16(msg.start, "start")
-    check_u16(msg.who_accept, "who_accept")
-    check_u16(msg.who_reply, "who_reply")
+    check_u16_fields(msg, "start", "who_accept", "who_reply")
 
 
 def pack_registers(

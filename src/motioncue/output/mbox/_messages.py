@@ -46,7 +46,7 @@ from .._udp_registers import (
     RegisterReadShape,
     RegisterValuesShape,
     RegisterWriteShape,
-    check_u16,
+    check_u16_fields,
 )
 
 __all__ = [  # what the package exports from here
@@ -163,12 +163,7 @@ class RegisterError:
     def __post_init__(self) -> None:
         if self.function not in (F_READ_ERR, F_WRITE_ERR):
             raise ProtocolError(f"error reply function 0x{self.function:04X}: 0x1103 or 0x1203")
-        fields = ("channel", "start", "count", "error_code", "who_accept", "who_reply")
-        values = (
-            self.channel, self.start, self.count, self.error_code, self.who_accept, self.who_reply
-        )  # fmt: skip
-        for name, value in zip(fields, values, strict=True):
-            check_u16(value, name)
+        check_u16_fields(self, "channel", "start", "count", "error_code", "who_accept", "who_reply")
 
     size: ClassVar[int] = HEADER.size + 6
 
