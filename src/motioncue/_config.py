@@ -74,7 +74,11 @@ MAX_CONFIG_BYTES = 1 << 20
 def read_capped(
     path: str | os.PathLike[str],
     limit: int,
-    too_large: Callable[[int | None], Exception],
+    what: str,
+    *,
+    error: type[Exception] = ConfigError,
+    where: str | None = None,
+    advice: str = "",
     check_head: Callable[[bytes], None] | None = None,
     head_size: int = 0,
 ) -> bytes:
@@ -82,10 +86,9 @@ def read_capped(
 
     Nothing beyond the first ``head_size`` bytes is read before the size is checked: those
     go to ``check_head`` first (a magic number: the wrong kind of file is named as such),
-    then a file over ``limit`` raises ``too_large(size)``. The read is capped at
-    ``limit + 1`` bytes, so a device or a file that grew meanwhile raises
-    ``too_large(None)``. An ``OSError`` is left to the caller, which names the file its own
-    way.
+    then a file over ``limit`` is refused from its size. The read is capped at
+    ``limit + 1`` bytes, so a device or a file that grew meanwhile is refused as well. An
+    ``OSError`` is left to the caller, which names the file its own way.
 
     Parameters
     ----------
@@ -93,8 +96,15 @@ def read_capped(
         The file.
     limit : int
         Largest size read (bytes).
-    too_large : callable
-        The exception to raise, given the size (bytes; ``None``: more than ``limit`` read).
+    what : str
+        What the file is, for the refusal (``"a ride file"``).
+    error : type
+        The exception raised for a file over ``limit`` (one line: ``where``, the size,
+        ``limit``, ``what``, ``advice``).
+    where : str, optional
+        The file's name in the message (default ``path``).
+    advice : str
+        Appended to the message (``"; split it"``).
     check_head : callable, optional
         Raises for a wrong head (given the bytes read, fewer than ``head_size`` for a short
         file).
@@ -106,6 +116,8 @@ def read_capped(
     bytes
         The file's bytes.
     """
+    name = os.fspath(path) if where is None else where
+    cap = f"the {limit} bytes {what} may have{advice}"
     with open(path, "rb") as fh:
         head = b""
         if check_head is not None:
@@ -113,10 +125,10 @@ def read_capped(
             check_head(head)
         size = os.fstat(fh.fileno()).st_size
         if size > limit:
-            raise too_large(size)
+            raise error(f"{name}: {size} bytes is larger than {cap}")
         blob = head + fh.read(limit + 1 - len(head))
-    if len(blob) > limit:
-        raise too_large(None)
+    if len(blob) > limit:  # a device or a file that grew
+        raise error(f"{name}: more than {cap}")
     return blob
 
 
@@ -127,18 +139,8 @@ def load_toml(path: Path) -> dict[str, Any]:
     not UTF-8 are refused with their line and byte offset; syntax errors name the place.
     """
 
-    def too_large(size: int | None) -> ConfigError:
-        if size is None:  # a device or a file that grew
-            return ConfigError(
-                f"{path}: too large for a configuration file (over {MAX_CONFIG_BYTES} bytes)"
-            )
-        return ConfigError(
-            f"{path}: {size} bytes is too large for a configuration file "
-            f"(at most {MAX_CONFIG_BYTES})"
-        )
-
     try:
-        blob = read_capped(path, MAX_CONFIG_BYTES, too_large)
+        blob = read_capped(path, MAX_CONFIG_BYTES, "a configuration file")
     except OSError as exc:
         raise ConfigError(f"{path}: cannot read: {exc}") from exc
     try:

@@ -397,26 +397,21 @@ def _read_source(
                     f"{_short(head)})"
                 )
 
-        def too_large(size: int | None) -> ConfigError:
-            if size is None:  # a device or a file that grew
-                return ConfigError(
-                    f"{where}: larger than {MAX_RIDE_BYTES} bytes; not a ride file motioncue reads"
-                )
-            return ConfigError(
-                f"{where}: {size} bytes is larger than {MAX_RIDE_BYTES}; not a ride file "
-                "motioncue reads"
-            )
-
         try:
-            data = read_capped(path, MAX_RIDE_BYTES, too_large, check_head, len(_ZIP_MAGIC))
+            data = read_capped(
+                path,
+                MAX_RIDE_BYTES,
+                "a ride file",
+                where=where,
+                check_head=check_head,
+                head_size=len(_ZIP_MAGIC),
+            )
         except OSError as exc:
             raise ConfigError(f"{where}: cannot read ride file: {exc}") from exc
     if not isinstance(data, bytes):
         raise ConfigError(f"{where}: not a motioncue ride file (read {type(data).__name__})")
-    if len(data) > MAX_RIDE_BYTES:
-        raise ConfigError(
-            f"{where}: larger than {MAX_RIDE_BYTES} bytes; not a ride file motioncue reads"
-        )
+    if len(data) > MAX_RIDE_BYTES:  # a stream
+        raise ConfigError(f"{where}: more than the {MAX_RIDE_BYTES} bytes a ride file may have")
     return data, where
 
 

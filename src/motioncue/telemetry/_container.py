@@ -159,16 +159,17 @@ def read_recording_file(path: str | os.PathLike[str]) -> DatagramRecording:
         if head != MAGIC:
             raise ProtocolError(f"{name}: not a motioncue recording (magic {head!r})")
 
-    def too_large(size: int | None) -> ProtocolError:
-        if size is None:  # a device or a file that grew
-            return ProtocolError(f"{name}: larger than {MAX_RECORDING_BYTES} bytes")
-        return ProtocolError(
-            f"{name}: {size} bytes is larger than the {MAX_RECORDING_BYTES} bytes a "
-            "recording may have; split it (motioncue record --duration)"
-        )
-
     try:
-        blob = read_capped(path, MAX_RECORDING_BYTES, too_large, check_head, len(MAGIC))
+        blob = read_capped(
+            path,
+            MAX_RECORDING_BYTES,
+            "a recording",
+            error=ProtocolError,
+            where=name,
+            advice="; split it (motioncue record --duration)",
+            check_head=check_head,
+            head_size=len(MAGIC),
+        )
     except OSError as exc:
         raise TransportError(f"cannot read recording {name!r}: {exc}") from exc
     if len(blob) < FILE_HEADER.size:
