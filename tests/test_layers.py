@@ -6,7 +6,8 @@ first:
 ====  ==========================================  =========================================
 rank  stages                                      why there
 ====  ==========================================  =========================================
-0     ``_errors``                                 the exception tree everyone raises
+0     ``_errors``, ``_frozen``                    the exception tree everyone raises; setting
+                                                  a frozen dataclass's normalised fields
 1     ``_atomic``, ``_config``, ``_registry``     files written whole; bundled configs; what
                                                   the named registries share
 2     ``telemetry``, ``kinematics``, ``output``   independent leaves: game packets; platform
@@ -46,6 +47,7 @@ PACKAGE = "motioncue"
 
 RANKS: dict[str, int] = {
     "_errors": 0,
+    "_frozen": 0,
     "_atomic": 1,
     "_config": 1,
     "_plugins": 1,

@@ -11,14 +11,21 @@ from __future__ import annotations
 import math
 import os
 import tomllib
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from importlib import resources
 from pathlib import Path
 from typing import Any
 
 from ._errors import ConfigError, one_line
 
-__all__ = ["ConfigReader", "bundled_names", "config_dir", "find_config", "load_toml"]
+__all__ = [
+    "ConfigReader",
+    "bundled_names",
+    "config_dir",
+    "find_config",
+    "load_toml",
+    "read_capped",
+]
 
 _MISSING = object()
 
@@ -64,27 +71,78 @@ MAX_CONFIG_BYTES = 1 << 20
 """Largest configuration file read (1 MiB; the bundled ones are a few kB)."""
 
 
+def read_capped(
+    path: str | os.PathLike[str],
+    limit: int,
+    what: str,
+    *,
+    error: type[Exception] = ConfigError,
+    where: str | None = None,
+    advice: str = "",
+    check_head: Callable[[bytes], None] | None = None,
+    head_size: int = 0,
+) -> bytes:
+    """The whole file ``path``, refused unless it has at most ``limit`` bytes.
+
+    Nothing beyond the first ``head_size`` bytes is read before the size is checked: those
+    go to ``check_head`` first (a magic number: the wrong kind of file is named as such),
+    then a file over ``limit`` is refused from its size. The read is capped at
+    ``limit + 1`` bytes, so a device or a file that grew meanwhile is refused as well. An
+    ``OSError`` is left to the caller, which names the file its own way.
+
+    Parameters
+    ----------
+    path : path-like
+        The file.
+    limit : int
+        Largest size read (bytes).
+    what : str
+        What the file is, for the refusal (``"a ride file"``).
+    error : type
+        The exception raised for a file over ``limit`` (one line: ``where``, the size,
+        ``limit``, ``what``, ``advice``).
+    where : str, optional
+        The file's name in the message (default ``path``).
+    advice : str
+        Appended to the message (``"; split it"``).
+    check_head : callable, optional
+        Raises for a wrong head (given the bytes read, fewer than ``head_size`` for a short
+        file).
+    head_size : int
+        Bytes given to ``check_head``.
+
+    Returns
+    -------
+    bytes
+        The file's bytes.
+    """
+    name = os.fspath(path) if where is None else where
+    cap = f"the {limit} bytes {what} may have{advice}"
+    with open(path, "rb") as fh:
+        head = b""
+        if check_head is not None:
+            head = fh.read(head_size)
+            check_head(head)
+        size = os.fstat(fh.fileno()).st_size
+        if size > limit:
+            raise error(f"{name}: {size} bytes is larger than {cap}")
+        blob = head + fh.read(limit + 1 - len(head))
+    if len(blob) > limit:  # a device or a file that grew
+        raise error(f"{name}: more than {cap}")
+    return blob
+
+
 def load_toml(path: Path) -> dict[str, Any]:
     """Parse a TOML file, turning every problem into one :class:`ConfigError` line.
 
     The size is checked before reading (at most :data:`MAX_CONFIG_BYTES`); bytes that are
     not UTF-8 are refused with their line and byte offset; syntax errors name the place.
     """
+
     try:
-        with open(path, "rb") as fh:
-            size = os.fstat(fh.fileno()).st_size
-            if size > MAX_CONFIG_BYTES:
-                raise ConfigError(
-                    f"{path}: {size} bytes is too large for a configuration file "
-                    f"(at most {MAX_CONFIG_BYTES})"
-                )
-            blob = fh.read(MAX_CONFIG_BYTES + 1)
+        blob = read_capped(path, MAX_CONFIG_BYTES, "a configuration file")
     except OSError as exc:
         raise ConfigError(f"{path}: cannot read: {exc}") from exc
-    if len(blob) > MAX_CONFIG_BYTES:  # a device or a file that grew
-        raise ConfigError(
-            f"{path}: too large for a configuration file (over {MAX_CONFIG_BYTES} bytes)"
-        )
     try:
         text = blob.decode("utf-8")
     except UnicodeDecodeError as exc:

@@ -37,9 +37,9 @@ Also here: :func:`at_intensity` (a preset at a point of its tuned range) and
 from __future__ import annotations
 
 import math
-from collections.abc import Iterable, Sequence
+from collections.abc import Callable, Iterable, Sequence
 from dataclasses import dataclass, replace
-from typing import Protocol
+from typing import Any, Protocol
 
 import numpy as np
 from numpy.typing import NDArray
@@ -68,8 +68,6 @@ __all__ = [
 ]
 
 _D2R = math.pi / 180.0
-
-_Vec6 = tuple[float, float, float, float, float, float]
 
 
 @dataclass(frozen=True)
@@ -202,6 +200,130 @@ def _geo(a: float, b: float, floor: float = 0.0) -> float:
     return math.sqrt(max(a, floor) * max(b, floor))
 
 
+_Unset = float | tuple[float, ...] | Callable[["CueingParams"], float | Sequence[float]]
+_Holder = CueingParams | MpcParams
+_Fields = dict[str, Any]  # field values of several types, given to replace() by name
+"""The fields a plan changes in a preset (or its plan), by name, for ``replace``."""
+
+
+@dataclass(frozen=True)
+class _Knob:
+    """Where one tuned parameter lives in a preset: how it is read and how it is written.
+
+    The parameter is the field ``field`` (of :class:`CueingParams`; of :class:`MpcParams` for
+    the ``[mpc]`` plan's). In a vector field, the components ``comps`` share it: read as
+    their geometric mean (each at least ``floor``), one component as it is; a scalar field
+    has no ``comps``. The field holds ``per_unit`` times the parameter (deg -> rad:
+    ``_D2R``). An unset field (None) reads ``unset`` (a value, or a function of the preset;
+    ``None``: the parameter's upper bound) and, written, takes the value in every component.
+    ``read`` and ``write`` (given the preset) replace these rules for a parameter that does
+    not follow them.
+    """
+
+    field: str
+    comps: tuple[int, ...] = ()
+    per_unit: float = 1.0
+    floor: float = 0.0
+    unset: _Unset | None = None
+    read: Callable[[CueingParams], float] | None = None
+    write: Callable[[_Fields, CueingParams, float], None] | None = None
+
+    def value(self, params: CueingParams, holder: _Holder, hi: float) -> float:
+        """The parameter in ``holder`` (``params`` or its plan), in its unit; ``hi``: its
+        upper bound."""
+        if self.read is not None:
+            return self.read(params)
+        raw = getattr(holder, self.field)
+        if raw is None:
+            if self.unset is None:
+                return hi
+            raw = self.unset(params) if callable(self.unset) else self.unset
+        if len(self.comps) == 1:
+            raw = raw[self.comps[0]]
+        elif self.comps:
+            raw = _geo(raw[self.comps[0]], raw[self.comps[1]], self.floor)
+        return float(raw) / self.per_unit if self.per_unit != 1.0 else raw
+
+    def put(self, fields: _Fields, params: CueingParams, holder: _Holder, v: float) -> None:
+        """Write ``v`` (its unit) into ``fields``, the changed fields of ``holder``."""
+        if self.write is not None:
+            self.write(fields, params, v)
+            return
+        value = v * self.per_unit if self.per_unit != 1.0 else v
+        if not self.comps:
+            fields[self.field] = value
+            return
+        vec = fields.get(self.field)
+        if not isinstance(vec, list):
+            old = getattr(holder, self.field)
+            if old is None:
+                unset = self.unset(params) if callable(self.unset) else self.unset
+                old = [value] * (len(unset) if isinstance(unset, Sequence) else 1)
+            vec = list(old)
+        for i in self.comps:
+            vec[i] = value
+        fields[self.field] = vec
+
+
+def _knob_values(
+    knobs: dict[str, _Knob],
+    table: Sequence[TunableParameter],
+    params: CueingParams,
+    holder: _Holder,
+) -> tuple[float, ...]:
+    """The value of each parameter of ``table`` in ``holder`` (the preset or its plan)."""
+    return tuple(knobs[p.name].value(params, holder, p.hi) for p in table)
+
+
+def _knob_fields(
+    knobs: dict[str, _Knob],
+    table: Sequence[TunableParameter],
+    params: CueingParams,
+    holder: _Holder,
+    v: Sequence[float],
+) -> _Fields:
+    """The fields of ``holder`` that ``table`` sets to ``v`` (for ``replace``)."""
+    fields: _Fields = {}
+    for p, value in zip(table, v, strict=True):
+        knobs[p.name].put(fields, params, holder, value)
+    return {k: tuple(x) if isinstance(x, list) else x for k, x in fields.items()}
+
+
+def _tilt_scale_unset(params: CueingParams) -> Sequence[float]:
+    """A preset without ``tilt_scale`` starts with its translational ``f_scale`` (x, y)."""
+    return params.f_scale[:2]
+
+
+_CLASSICAL_KNOBS: dict[str, _Knob] = {
+    "f_scale_x": _Knob("f_scale", (0,)),
+    "f_scale_y": _Knob("f_scale", (1,)),
+    "f_scale_z": _Knob("f_scale", (2,)),
+    "f_limit_xy_m_s2": _Knob("f_limit_m_s2", (0, 1)),
+    "f_shape_xy": _Knob("f_shape", (0, 1), unset=(2.0, 2.0, 2.0)),
+    "trans_wn_xy_rad_s": _Knob("trans_wn_rad_s", (0, 1)),
+    "trans_wb_xy_rad_s": _Knob("trans_wb_rad_s", (0, 1), floor=1e-9),
+    "trans_wn_z_rad_s": _Knob("trans_wn_rad_s", (2,)),
+    "tilt_scale_x": _Knob("tilt_scale", (0,), unset=_tilt_scale_unset),
+    "tilt_scale_y": _Knob("tilt_scale", (1,), unset=_tilt_scale_unset),
+    "tilt_shape": _Knob("tilt_shape"),
+    "tilt_reach_use": _Knob("tilt_reach_use"),
+    "tilt_wn_rad_s": _Knob("tilt_wn_rad_s"),
+    "tilt_rate_limit_deg_s": _Knob("tilt_rate_limit_rad_s", per_unit=_D2R),
+    "tilt_accel_limit_deg_s2": _Knob("tilt_accel_limit_rad_s2", per_unit=_D2R),
+    "tilt_limit_deg": _Knob("tilt_limit_rad", per_unit=_D2R),
+    "w_scale_rp": _Knob("w_scale", (0, 1)),
+    "w_scale_yaw": _Knob("w_scale", (2,)),
+    "rot_wn_rp_rad_s": _Knob("rot_wn_rad_s", (0, 1)),
+    "rot_wn_yaw_rad_s": _Knob("rot_wn_rad_s", (2,)),
+    "lead_x_s": _Knob("lead_s", (0,), unset=(0.02, 0.02)),
+    "lead_y_s": _Knob("lead_s", (1,), unset=(0.02, 0.02)),
+}
+"""Where each parameter of :data:`TUNED_PARAMETERS` and :data:`STRENGTH_TUNED_PARAMETERS`
+lives in a :class:`CueingParams` (x and y share the ``_xy`` ones, roll and pitch the
+``_rp`` ones). A preset without ``tilt_accel_limit_rad_s2`` starts at the upper bound; one
+without ``f_shape`` at 2, and written, the heave curve takes the x/y exponent as well."""
+
+
 class _ClassicalTuning:
     """The classical washout's plan: :data:`TUNED_PARAMETERS`, or
     :data:`STRENGTH_TUNED_PARAMETERS` with the compressive tilt (``tilt_shape``)."""
@@ -210,96 +332,59 @@ class _ClassicalTuning:
         return TUNED_PARAMETERS if params.tilt_shape is None else STRENGTH_TUNED_PARAMETERS
 
     def values(self, params: CueingParams) -> tuple[float, ...]:
-        """A preset without ``tilt_scale`` starts with its translational ``f_scale`` (x, y) as
-        tilt scales; one without ``tilt_accel_limit_rad_s2`` at the upper acceleration
-        bound."""
-        tilt = params.tilt_scale if params.tilt_scale is not None else params.f_scale[:2]
-        accel = params.tilt_accel_limit_rad_s2
-        if params.tilt_shape is not None:
-            fsh = params.f_shape if params.f_shape is not None else (2.0, 2.0, 2.0)
-            return (
-                params.f_scale[0],
-                params.f_scale[1],
-                _geo(params.f_limit_m_s2[0], params.f_limit_m_s2[1]),
-                _geo(fsh[0], fsh[1]),
-                params.f_scale[2],
-                _geo(params.trans_wn_rad_s[0], params.trans_wn_rad_s[1]),
-                _geo(params.trans_wb_rad_s[0], params.trans_wb_rad_s[1], 1e-9),
-                tilt[0],
-                tilt[1],
-                params.tilt_shape,
-                params.tilt_reach_use,
-                params.tilt_wn_rad_s,
-                params.tilt_rate_limit_rad_s / _D2R,
-                STRENGTH_TUNED_PARAMETERS[13].hi if accel is None else accel / _D2R,
-                _geo(params.w_scale[0], params.w_scale[1]),
-                _geo(params.rot_wn_rad_s[0], params.rot_wn_rad_s[1]),
-                params.w_scale[2],
-                params.rot_wn_rad_s[2],
-                params.trans_wn_rad_s[2],
-                0.02 if params.lead_s is None else params.lead_s[0],
-                0.02 if params.lead_s is None else params.lead_s[1],
-            )
-        return (
-            params.f_scale[0],
-            params.f_scale[1],
-            params.f_scale[2],
-            _geo(params.trans_wn_rad_s[0], params.trans_wn_rad_s[1]),
-            _geo(params.trans_wb_rad_s[0], params.trans_wb_rad_s[1], 1e-9),
-            tilt[0],
-            tilt[1],
-            params.tilt_wn_rad_s,
-            params.tilt_rate_limit_rad_s / _D2R,
-            TUNED_PARAMETERS[9].hi if accel is None else accel / _D2R,
-            params.tilt_limit_rad / _D2R,
-            _geo(params.w_scale[0], params.w_scale[1]),
-            _geo(params.rot_wn_rad_s[0], params.rot_wn_rad_s[1]),
-            params.w_scale[2],
-            params.rot_wn_rad_s[2],
-            params.trans_wn_rad_s[2],
-        )
+        return _knob_values(_CLASSICAL_KNOBS, self.parameters(params), params, params)
 
     def apply(self, base: CueingParams, v: Sequence[float], name: str) -> CueingParams:
-        if base.tilt_shape is not None:
-            fz_shape = base.f_shape[2] if base.f_shape is not None else v[3]
-            return replace(
-                base,
-                name=name or base.name,
-                algorithm="classical",
-                f_scale=(v[0], v[1], v[4]),
-                f_limit_m_s2=(v[2], v[2], base.f_limit_m_s2[2]),
-                f_shape=(v[3], v[3], fz_shape),
-                trans_wn_rad_s=(v[5], v[5], v[18]),
-                trans_wb_rad_s=(v[6], v[6], base.trans_wb_rad_s[2]),
-                tilt_scale=(v[7], v[8]),
-                tilt_shape=v[9],
-                tilt_reach_use=v[10],
-                tilt_wn_rad_s=v[11],
-                tilt_rate_limit_rad_s=v[12] * _D2R,
-                tilt_accel_limit_rad_s2=v[13] * _D2R,
-                w_scale=(v[14], v[14], v[16]),
-                rot_wn_rad_s=(v[15], v[15], v[17]),
-                lead_s=(v[19], v[20]),
-            )
-        return replace(
-            base,
-            name=name or base.name,
-            algorithm="classical",
-            f_scale=(v[0], v[1], v[2]),
-            trans_wn_rad_s=(v[3], v[3], v[15]),
-            trans_wb_rad_s=(v[4], v[4], base.trans_wb_rad_s[2]),
-            tilt_scale=(v[5], v[6]),
-            tilt_wn_rad_s=v[7],
-            tilt_rate_limit_rad_s=v[8] * _D2R,
-            tilt_accel_limit_rad_s2=v[9] * _D2R,
-            tilt_limit_rad=v[10] * _D2R,
-            w_scale=(v[11], v[11], v[13]),
-            rot_wn_rad_s=(v[12], v[12], v[14]),
-        )
+        fields = _knob_fields(_CLASSICAL_KNOBS, self.parameters(base), base, base, v)
+        return replace(base, name=name or base.name, algorithm="classical", **fields)
 
 
 def _plan_of(params: CueingParams) -> MpcParams:
     return params.mpc if params.mpc is not None else MpcParams()
+
+
+def _read_sign_guard(params: CueingParams) -> float:
+    """The roll and pitch sign guard: the geometric mean of those the plan sets (> 0)."""
+    guard = [g for g in _plan_of(params).sign_guard[3:5] if g > 0.0]
+    return math.sqrt(guard[0] * guard[-1]) if guard else 0.7
+
+
+def _write_sign_guard(fields: _Fields, params: CueingParams, v: float) -> None:
+    """Only the roll and pitch guards the plan sets (> 0) take the tuned value."""
+    guard = _plan_of(params).sign_guard
+    fields["sign_guard"] = [v if i in (3, 4) and g > 0.0 else g for i, g in enumerate(guard)]
+
+
+def _read_reach_use(params: CueingParams) -> float:
+    """An unset reach share (0) reads 1."""
+    use = _plan_of(params).ref_reach_use
+    return use if use > 0.0 else 1.0
+
+
+def _plan_tilt_rate_unset(params: CueingParams) -> float:
+    """A plan without its own tilt-rate limit starts with the ``[tilt]`` table's."""
+    return params.tilt_rate_limit_rad_s
+
+
+_PLAN_KNOBS: dict[str, _Knob] = {
+    "ref_scale_xy": _Knob("ref_scale", (0, 1), floor=1e-9),
+    "ref_scale_x": _Knob("ref_scale", (0,)),
+    "ref_scale_y": _Knob("ref_scale", (1,)),
+    "ref_limit_xy_m_s2": _Knob("ref_limit", (0, 1)),
+    "ref_reach_use": _Knob("ref_reach_use", read=_read_reach_use),
+    "ref_shape": _Knob("ref_shape"),
+    "plan_tilt_rate_limit_deg_s": _Knob(
+        "tilt_rate_limit_rad_s", per_unit=_D2R, unset=_plan_tilt_rate_unset
+    ),
+    "w_error_rp": _Knob("w_error", (3, 4), floor=1e-9),
+    "w_pose_xy": _Knob("w_pose", (0, 1), floor=1e-9),
+    "w_acc_tilt": _Knob("w_acc", (3, 4), floor=1e-9),
+    "sign_guard_rp": _Knob("sign_guard", read=_read_sign_guard, write=_write_sign_guard),
+}
+"""Where each parameter of :data:`MPC_TUNED_PARAMETERS` and
+:data:`MPC_STRENGTH_TUNED_PARAMETERS` lives in a preset's :class:`MpcParams` (its ``[mpc]``
+table; x and y share the ``_xy`` ones, roll and pitch the ``_rp`` and ``tilt`` ones). An
+unset reach share reads 1."""
 
 
 class _PlanTuning:
@@ -312,72 +397,12 @@ class _PlanTuning:
         return MPC_TUNED_PARAMETERS
 
     def values(self, params: CueingParams) -> tuple[float, ...]:
-        """x and y: their geometric mean; an unset plan tilt-rate limit: the ``[tilt]``
-        table's."""
-        mp = _plan_of(params)
-        tr = mp.tilt_rate_limit_rad_s
-        tilt_rate = (params.tilt_rate_limit_rad_s if tr is None else tr) / _D2R
-        w_error = _geo(mp.w_error[3], mp.w_error[4], 1e-9)
-        w_pose = _geo(mp.w_pose[0], mp.w_pose[1], 1e-9)
-        w_acc = _geo(mp.w_acc[3], mp.w_acc[4], 1e-9)
-        if mp.ref_shape > 0.0:
-            guard = [g for g in mp.sign_guard[3:5] if g > 0.0]
-            return (
-                mp.ref_scale[0],
-                mp.ref_scale[1],
-                mp.ref_reach_use if mp.ref_reach_use > 0.0 else 1.0,
-                mp.ref_shape,
-                tilt_rate,
-                w_error,
-                w_pose,
-                w_acc,
-                math.sqrt(guard[0] * guard[-1]) if guard else 0.7,
-            )
-        return (
-            _geo(mp.ref_scale[0], mp.ref_scale[1], 1e-9),
-            math.sqrt(mp.ref_limit[0] * mp.ref_limit[1]),
-            tilt_rate,
-            w_error,
-            w_pose,
-            w_acc,
-        )
+        return _knob_values(_PLAN_KNOBS, self.parameters(params), params, _plan_of(params))
 
     def apply(self, base: CueingParams, v: Sequence[float], name: str) -> CueingParams:
         mp = _plan_of(base)
-
-        def xy(old: Sequence[float], value: float) -> _Vec6:
-            return (value, value, old[2], old[3], old[4], old[5])
-
-        def rp(old: Sequence[float], value: float) -> _Vec6:
-            return (old[0], old[1], old[2], value, value, old[5])
-
-        if mp.ref_shape > 0.0:
-            sg = list(mp.sign_guard)
-            for i in (3, 4):
-                if sg[i] > 0.0:
-                    sg[i] = v[8]
-            plan = replace(
-                mp,
-                ref_scale=(v[0], v[1], *mp.ref_scale[2:6]),
-                ref_reach_use=v[2],
-                ref_shape=v[3],
-                tilt_rate_limit_rad_s=v[4] * _D2R,
-                w_error=rp(mp.w_error, v[5]),
-                w_pose=xy(mp.w_pose, v[6]),
-                w_acc=rp(mp.w_acc, v[7]),
-                sign_guard=(sg[0], sg[1], sg[2], sg[3], sg[4], sg[5]),
-            )
-        else:
-            plan = replace(
-                mp,
-                ref_scale=xy(mp.ref_scale, v[0]),
-                ref_limit=xy(mp.ref_limit, v[1]),
-                tilt_rate_limit_rad_s=v[2] * _D2R,
-                w_error=rp(mp.w_error, v[3]),
-                w_pose=xy(mp.w_pose, v[4]),
-                w_acc=rp(mp.w_acc, v[5]),
-            )
-        return replace(base, name=name or base.name, mpc=plan)
+        fields = _knob_fields(_PLAN_KNOBS, self.parameters(base), base, mp, v)
+        return replace(base, name=name or base.name, mpc=replace(mp, **fields))
 
 
 CLASSICAL_TUNING: TunePlan = _ClassicalTuning()

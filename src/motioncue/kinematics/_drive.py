@@ -16,6 +16,7 @@ import numpy as np
 import numpy.typing as npt
 
 from .._errors import ConfigError
+from .._frozen import set_fields
 
 __all__ = ["Drive"]
 
@@ -74,13 +75,16 @@ class Drive:
         home = np.asarray(self.q_home, dtype=float)
         if home.shape != (n,) or not np.all(np.isfinite(home)):
             raise ConfigError(f"q_home = {home.tolist()} is invalid; allowed: {n} finite numbers")
-        object.__setattr__(self, "kinds", tuple(self.kinds))
-        object.__setattr__(self, "pulses_per_rev", _readonly(ppr.astype(np.int64)))
-        object.__setattr__(self, "units_per_rev", _readonly(upr.copy()))
-        object.__setattr__(self, "direction", _readonly(dirs.astype(np.int64)))
-        object.__setattr__(self, "q_home", _readonly(home.copy()))
+        set_fields(
+            self,
+            kinds=tuple(self.kinds),
+            pulses_per_rev=_readonly(ppr.astype(np.int64)),
+            units_per_rev=_readonly(upr.copy()),
+            direction=_readonly(dirs.astype(np.int64)),
+            q_home=_readonly(home.copy()),
+        )
         ppu = self.direction * self.pulses_per_rev / self.units_per_rev
-        object.__setattr__(self, "_ppu", _readonly(ppu))
+        set_fields(self, _ppu=_readonly(ppu))
 
     # --- constructors -------------------------------------------------------------------
     @classmethod

@@ -19,6 +19,7 @@ import numpy as np
 import numpy.typing as npt
 
 from .._errors import ConfigError
+from .._frozen import set_fields
 from ._platform import Platform
 from ._rotation import euler_rate_matrix, rotation_matrix
 
@@ -64,9 +65,7 @@ class Payload:
                 f"inertia_kgm2 = {self.inertia_kgm2!r} is invalid; allowed: a symmetric "
                 "positive semi-definite 3x3 matrix (kg m^2)"
             )
-        object.__setattr__(self, "mass_kg", m)
-        object.__setattr__(self, "com_m", com)
-        object.__setattr__(self, "inertia_kgm2", inertia)
+        set_fields(self, mass_kg=m, com_m=com, inertia_kgm2=inertia)
 
 
 @dataclass(frozen=True)

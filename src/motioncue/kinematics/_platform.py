@@ -16,6 +16,7 @@ import numpy as np
 import numpy.typing as npt
 
 from .._errors import ConfigError
+from .._frozen import set_fields
 from ._drive import Drive
 from ._legs import CrankLegs, LegSet, LinearLegs
 from ._rotation import rot9, rot9_derivatives, rot_one
@@ -210,7 +211,7 @@ class Platform:
         import copy
 
         out = copy.copy(self)
-        object.__setattr__(out, "default_preset", preset)
+        set_fields(out, default_preset=preset)
         return out
 
     def with_actuator_limits(
@@ -222,7 +223,7 @@ class Platform:
         """A copy carrying the actuators' own limits (each a number or ``n`` numbers, > 0)."""
         import copy
 
-        out = copy.copy(self)
+        given: dict[str, np.ndarray] = {}
         for key, value in (("v_max", v_max), ("a_max", a_max), ("j_max", j_max)):
             if value is None:
                 continue
@@ -232,7 +233,9 @@ class Platform:
                     f"{key} = {np.asarray(value).tolist()} is invalid; allowed: finite numbers "
                     f"> 0, one or {self.n_actuators}"
                 )
-            object.__setattr__(out, key, _readonly(arr))
+            given[key] = _readonly(arr)
+        out = copy.copy(self)
+        set_fields(out, **given)
         return out
 
     def with_traction_loss(
@@ -427,53 +430,55 @@ class Platform:
                     f"actuator {names[i]!r}: homed position {home[i]:.6g} (from neutral) is "
                     f"outside the usable stroke [{q_lo[i]:.6g}, {q_hi[i]:.6g}]"
                 )
-        a = object.__setattr__
-        a(self, "name", str(name))
-        a(self, "description", str(description))
-        a(self, "actuator_names", names)
-        a(self, "n_actuators", n)
-        a(self, "actuator_kinds", kinds)
-        a(self, "dof_mask", _readonly(dof_mask, bool))
-        a(self, "_legs", legs)
-        a(self, "_leg_mask", np.asarray(leg_pose_mask, dtype=float))
-        a(self, "_leg_mask_list", [bool(v) for v in leg_pose_mask])
-        a(self, "_all_dof_legs", all(bool(v) for v in leg_pose_mask))
+        set_fields(
+            self,
+            name=str(name),
+            description=str(description),
+            actuator_names=names,
+            n_actuators=n,
+            actuator_kinds=kinds,
+            dof_mask=_readonly(dof_mask, bool),
+            _legs=legs,
+            _leg_mask=np.asarray(leg_pose_mask, dtype=float),
+            _leg_mask_list=[bool(v) for v in leg_pose_mask],
+            _all_dof_legs=all(bool(v) for v in leg_pose_mask),
+        )
         fast = (
             self._all_dof_legs and not yaw_axis and not spare_axes and isinstance(legs, LinearLegs)
         )
-        a(self, "_fast_linear", legs if fast else None)
-        a(self, "_yaw_axis", bool(yaw_axis))
-        a(self, "_yaw_arm", None if yaw_arm_m is None else float(yaw_arm_m))
-        a(self, "_n_spare", int(spare_axes))
-        a(self, "_tail", [0.0] * int(spare_axes))
-        a(
+        init_args = {
+            "name": name, "actuator_names": names, "legs": legs,
+            "leg_pose_mask": [bool(v) for v in leg_pose_mask],
+            "dof_mask": [bool(v) for v in dof_mask], "q_min": q_lo, "q_max": q_hi,
+            "drives": drives, "yaw_axis": bool(yaw_axis), "yaw_arm_m": yaw_arm_m,
+            "spare_axes": int(spare_axes), "description": description,
+        }  # fmt: skip
+        dof_idx = np.flatnonzero(np.asarray(dof_mask, dtype=bool))
+        set_fields(
             self,
-            "_init_args",
-            {
-                "name": name, "actuator_names": names, "legs": legs,
-                "leg_pose_mask": [bool(v) for v in leg_pose_mask],
-                "dof_mask": [bool(v) for v in dof_mask], "q_min": q_lo, "q_max": q_hi,
-                "drives": drives, "yaw_axis": bool(yaw_axis), "yaw_arm_m": yaw_arm_m,
-                "spare_axes": int(spare_axes), "description": description,
-            },
-        )  # fmt: skip
-        a(self, "_dof_idx", np.flatnonzero(np.asarray(dof_mask, dtype=bool)))
-        a(self, "_dof_list", [int(k) for k in self._dof_idx])
-        a(self, "q_neutral", _readonly(np.zeros(n)))
-        a(self, "q_min", _readonly(q_lo))
-        a(self, "q_max", _readonly(q_hi))
-        a(self, "q_park", _readonly(home))
-        a(self, "drives", drives)
+            _fast_linear=legs if fast else None,
+            _yaw_axis=bool(yaw_axis),
+            _yaw_arm=None if yaw_arm_m is None else float(yaw_arm_m),
+            _n_spare=int(spare_axes),
+            _tail=[0.0] * int(spare_axes),
+            _init_args=init_args,
+            _dof_idx=dof_idx,
+            _dof_list=[int(k) for k in dof_idx],
+            q_neutral=_readonly(np.zeros(n)),
+            q_min=_readonly(q_lo),
+            q_max=_readonly(q_hi),
+            q_park=_readonly(home),
+            drives=drives,
+        )
         if isinstance(legs, LinearLegs):
             absolute = legs.length0
         elif isinstance(legs, CrankLegs):
             absolute = legs.theta0
         else:
             raise TypeError(f"unknown leg set {type(legs).__name__}")
-        a(
+        set_fields(
             self,
-            "neutral_absolute",
-            _readonly(np.concatenate([absolute, [0.0] * (yaw_axis + spare_axes)])),
+            neutral_absolute=_readonly(np.concatenate([absolute, [0.0] * (yaw_axis + spare_axes)])),
         )
         if len(self._dof_idx) > n_moving:
             raise ConfigError(
@@ -491,15 +496,14 @@ class Platform:
                 "the geometry is singular at the neutral pose (the actuators cannot hold "
                 f"{', '.join(DOF_NAMES[i] for i in self._dof_idx)} there)"
             )
-        a(self, "_square", jac0.shape[0] == jac0.shape[1])
-        a(self, "_jac0_inv", np.linalg.pinv(jac0))
+        set_fields(self, _square=jac0.shape[0] == jac0.shape[1], _jac0_inv=np.linalg.pinv(jac0))
         fk = self.forward(home)
         if not fk.converged:
             raise ConfigError(
                 f"no pose puts the actuators at their homed positions {home.tolist()} "
                 "(from neutral): is the stroke minimum possible for this geometry?"
             )
-        a(self, "pose_park", _readonly(fk.pose))
+        set_fields(self, pose_park=_readonly(fk.pose))
 
     name: str
     description: str
@@ -773,7 +777,7 @@ class Platform:
         cached = self.__dict__.get("_q_rounding")
         if cached is None:
             cached = _readonly(1.0 / np.abs(self.drives.pulses_per_unit))
-            object.__setattr__(self, "_q_rounding", cached)
+            set_fields(self, _q_rounding=cached)
         out: np.ndarray = cached
         return out
 

@@ -24,6 +24,7 @@ from typing import TYPE_CHECKING, Any, Protocol, runtime_checkable
 import numpy as np
 
 from .._errors import ConfigError
+from .._frozen import set_fields
 
 if TYPE_CHECKING:
     import numpy.typing as npt
@@ -91,11 +92,14 @@ class PulseLimits:
         for name, arr in (("max_speed_pulses_s", v), ("max_accel_pulses_s2", a)):
             if np.any(arr <= 0):
                 raise ConfigError(f"{name} = {arr.tolist()} is invalid; allowed: > 0 (inf: none)")
-        object.__setattr__(self, "stroke_lo", lo)
-        object.__setattr__(self, "stroke_hi", hi)
-        object.__setattr__(self, "max_speed_pulses_s", v)
-        object.__setattr__(self, "max_accel_pulses_s2", a)
-        object.__setattr__(self, "sources", dict(self.sources))
+        set_fields(
+            self,
+            stroke_lo=lo,
+            stroke_hi=hi,
+            max_speed_pulses_s=v,
+            max_accel_pulses_s2=a,
+            sources=dict(self.sources),
+        )
 
     @property
     def has_stroke(self) -> bool:

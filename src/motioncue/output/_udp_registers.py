@@ -27,6 +27,7 @@ from functools import lru_cache
 from typing import ClassVar, Self
 
 from .._errors import ProtocolError
+from .._frozen import set_fields
 from ._udp_common import CONFIRM_MAIN, PASSCODE, REG_HEAD, WHO_ALL, WHO_NONE, Header, u16_tuple
 
 __all__ = [
@@ -36,6 +37,7 @@ __all__ = [
     "RegisterWire",
     "RegisterWriteShape",
     "check_u16",
+    "check_u16_fields",
     "pack_registers",
     "register_struct",
     "unpack_registers",
@@ -58,6 +60,13 @@ def check_u16(value: int, what: str) -> None:
         raise ProtocolError(f"{what} = {value!r} is not in [0, 0xFFFF]")
 
 
+def check_u16_fields(msg: object, *names: str) -> None:
+    """Raise :class:`ProtocolError` unless each field ``names`` of ``msg`` is a u16 (a
+    message's header and register fields, checked in the order given)."""
+    for name in names:
+        check_u16(getattr(msg, name), name)
+
+
 def _allowed(channels: Sequence[int]) -> str:
     if isinstance(channels, range):
         return f"{channels.start}..{channels.stop - 1}"
@@ -70,9 +79,7 @@ def _check_address(msg: RegisterReadShape | RegisterValuesShape) -> None:
         raise ProtocolError(
             f"{type(msg).__name__}: channel {msg.channel}, allowed {_allowed(msg.CHANNELS)}"
         )
-    check_u16(msg.start, "start")
-    check_u16(msg.who_accept, "who_accept")
-    check_u16(msg.who_reply, "who_reply")
+    check_u16_fields(msg, "start", "who_accept", "who_reply")
 
 
 def pack_registers(
@@ -218,7 +225,7 @@ class RegisterValuesShape(_FixedFunction):
 
     def __post_init__(self) -> None:
         _check_address(self)
-        object.__setattr__(self, "values", u16_tuple(self.values, type(self).__name__))
+        set_fields(self, values=u16_tuple(self.values, type(self).__name__))
         if not 1 <= len(self.values) <= self.MAX_COUNT:
             raise ProtocolError(
                 f"{type(self).__name__}: {len(self.values)} values, allowed 1..{self.MAX_COUNT}"

@@ -56,7 +56,9 @@ from typing import IO, TYPE_CHECKING, Any, BinaryIO
 import numpy as np
 
 from .._atomic import atomic_write_bytes, stop_signals_deferred
+from .._config import read_capped
 from .._errors import ConfigError, MotioncueError, one_line
+from .._frozen import set_fields
 
 if TYPE_CHECKING:
     from numpy.typing import ArrayLike
@@ -217,13 +219,16 @@ class Ride:
                 raise ConfigError(
                     f"ride {name} outside 0..{top} (found {int(arr.min())}..{int(arr.max())})"
                 )
-        object.__setattr__(self, "rate_hz", float(rate))
-        object.__setattr__(self, "t_s", t)
-        object.__setattr__(self, "pulses", pulses.astype(np.int32))
-        object.__setattr__(self, "dout", dout.astype(np.uint16))
-        object.__setattr__(self, "dacs", dacs.astype(np.uint16))
-        object.__setattr__(self, "actuator_names", tuple(names))
-        object.__setattr__(self, "effects", tuple(effects))
+        set_fields(
+            self,
+            rate_hz=float(rate),
+            t_s=t,
+            pulses=pulses.astype(np.int32),
+            dout=dout.astype(np.uint16),
+            dacs=dacs.astype(np.uint16),
+            actuator_names=tuple(names),
+            effects=tuple(effects),
+        )
 
     @property
     def integrity(self) -> str:
@@ -384,30 +389,29 @@ def _read_source(
     else:
         path = Path(source)
         where = name or str(path)
+
+        def check_head(head: bytes) -> None:
+            if head != _ZIP_MAGIC:
+                raise ConfigError(
+                    f"{where}: not a motioncue ride file (not a zip archive: starts with "
+                    f"{_short(head)})"
+                )
+
         try:
-            with open(path, "rb") as fh:
-                # size and magic before anything is read into memory
-                size = os.fstat(fh.fileno()).st_size
-                if size > MAX_RIDE_BYTES:
-                    raise ConfigError(
-                        f"{where}: {size} bytes is larger than {MAX_RIDE_BYTES}; not a ride "
-                        "file motioncue reads"
-                    )
-                head = fh.read(len(_ZIP_MAGIC))
-                if head != _ZIP_MAGIC:
-                    raise ConfigError(
-                        f"{where}: not a motioncue ride file (not a zip archive: starts with "
-                        f"{_short(head)})"
-                    )
-                data = head + fh.read(MAX_RIDE_BYTES + 1 - len(head))
+            data = read_capped(
+                path,
+                MAX_RIDE_BYTES,
+                "a ride file",
+                where=where,
+                check_head=check_head,
+                head_size=len(_ZIP_MAGIC),
+            )
         except OSError as exc:
             raise ConfigError(f"{where}: cannot read ride file: {exc}") from exc
     if not isinstance(data, bytes):
         raise ConfigError(f"{where}: not a motioncue ride file (read {type(data).__name__})")
-    if len(data) > MAX_RIDE_BYTES:
-        raise ConfigError(
-            f"{where}: larger than {MAX_RIDE_BYTES} bytes; not a ride file motioncue reads"
-        )
+    if len(data) > MAX_RIDE_BYTES:  # a stream
+        raise ConfigError(f"{where}: more than the {MAX_RIDE_BYTES} bytes a ride file may have")
     return data, where
 
 
@@ -620,7 +624,7 @@ def load_ride(
         if str(exc).startswith(where):
             raise
         raise ConfigError(f"{where}: {exc}") from exc
-    object.__setattr__(ride, "_integrity", _integrity(arrays, ride))
+    set_fields(ride, _integrity=_integrity(arrays, ride))
     return ride
 
 

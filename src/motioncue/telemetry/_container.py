@@ -36,6 +36,7 @@ from collections.abc import Callable, Iterator
 from dataclasses import dataclass, field
 
 from .._atomic import AtomicFile, AtomicFileWriter, StopSignalRecorder
+from .._config import read_capped
 from .._errors import ConfigError, ProtocolError, TransportError
 from ._registry import game_info
 from ._sample import TelemetrySample
@@ -151,27 +152,26 @@ def read_recording_file(path: str | os.PathLike[str]) -> DatagramRecording:
         The file cannot be read.
     """
     name = os.fspath(path)
+
+    def check_head(head: bytes) -> None:
+        if len(head) < len(MAGIC):
+            raise ProtocolError(f"{name}: {len(head)} bytes is too short for a recording header")
+        if head != MAGIC:
+            raise ProtocolError(f"{name}: not a motioncue recording (magic {head!r})")
+
     try:
-        with open(path, "rb") as fh:
-            # the magic and the size before the file is read into memory
-            head = fh.read(len(MAGIC))
-            if len(head) < len(MAGIC):
-                raise ProtocolError(
-                    f"{name}: {len(head)} bytes is too short for a recording header"
-                )
-            if head != MAGIC:
-                raise ProtocolError(f"{name}: not a motioncue recording (magic {head!r})")
-            size = os.fstat(fh.fileno()).st_size
-            if size > MAX_RECORDING_BYTES:
-                raise ProtocolError(
-                    f"{name}: {size} bytes is larger than the {MAX_RECORDING_BYTES} bytes a "
-                    "recording may have; split it (motioncue record --duration)"
-                )
-            blob = head + fh.read(MAX_RECORDING_BYTES + 1 - len(head))
+        blob = read_capped(
+            path,
+            MAX_RECORDING_BYTES,
+            "a recording",
+            error=ProtocolError,
+            where=name,
+            advice="; split it (motioncue record --duration)",
+            check_head=check_head,
+            head_size=len(MAGIC),
+        )
     except OSError as exc:
         raise TransportError(f"cannot read recording {name!r}: {exc}") from exc
-    if len(blob) > MAX_RECORDING_BYTES:
-        raise ProtocolError(f"{name}: larger than {MAX_RECORDING_BYTES} bytes")
     if len(blob) < FILE_HEADER.size:
         raise ProtocolError(f"{name}: {len(blob)} bytes is too short for a recording header")
     magic, version, meta_len = FILE_HEADER.unpack_from(blob)

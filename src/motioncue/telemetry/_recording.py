@@ -17,6 +17,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from .._errors import ConfigError
+from .._frozen import set_fields
 
 __all__ = [
     "MAX_RESAMPLED_FRAMES",
@@ -84,9 +85,7 @@ class Recording:
         wa[~np.isfinite(wa)] = np.nan
         for a in (t, fa, wa):
             a.flags.writeable = False
-        object.__setattr__(self, "t_s", t)
-        object.__setattr__(self, "f", fa)
-        object.__setattr__(self, "w", wa)
+        set_fields(self, t_s=t, f=fa, w=wa)
 
     def __len__(self) -> int:
         return int(self.t_s.shape[0])

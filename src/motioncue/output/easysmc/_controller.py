@@ -23,6 +23,7 @@ from typing import TYPE_CHECKING
 
 from ..._config import ConfigReader
 from ..._errors import ConfigError, LimitError, ProtocolError
+from ..._frozen import set_fields
 from .._controller_api import DriveExpectations, PulseLimits
 from .._transport import Transport, parse_target
 from ._profile import feed_for_duration, max_distance, move_duration_s
@@ -219,7 +220,7 @@ class EasySmcController:
             if isinstance(v, bool) or not isinstance(v, int) or not p.lo <= v <= p.hi:
                 raise ConfigError(f"parameter {k} = {v!r}; allowed: an integer in [{p.lo}, {p.hi}]")
             params[k] = v
-        object.__setattr__(self, "parameters", MappingProxyType(params))
+        set_fields(self, parameters=MappingProxyType(params))
         if not 1 <= self.poll_every_frames <= 1000:
             raise ConfigError(f"poll_every_frames {self.poll_every_frames}; allowed 1..1000")
         frame_cmds = 1 + max(len(u.move_codes) for u in self.units)

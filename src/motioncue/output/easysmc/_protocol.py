@@ -30,6 +30,7 @@ from importlib import resources
 from typing import Any
 
 from ..._errors import ProtocolError
+from ..._frozen import set_fields
 
 __all__ = [
     "COMMANDS",
@@ -306,9 +307,9 @@ class Command:
                 f"command {self.code:02X} ({spec.name}) takes {spec.n_words} data words, "
                 f"got {len(self.words)}"
             )
-        object.__setattr__(self, "words", tuple(int(w) for w in self.words))
+        set_fields(self, words=tuple(int(w) for w in self.words))
         try:
-            object.__setattr__(self, "start", Start(self.start))
+            set_fields(self, start=Start(self.start))
         except ValueError as exc:
             raise ProtocolError(f"start condition {self.start!r} not in 0..8") from exc
         for i, w in enumerate(self.words):

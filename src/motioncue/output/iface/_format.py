@@ -28,6 +28,7 @@ from collections.abc import Sequence
 from dataclasses import dataclass, field
 
 from ..._errors import ConfigError, ProtocolError
+from ..._frozen import set_fields
 
 __all__ = ["ENCODINGS", "FrameFormatter", "InterfaceFormat", "literal_bytes", "parse_template"]
 
@@ -137,8 +138,7 @@ class InterfaceFormat:
         missing = [a for a in axes if a not in used]
         if missing:
             raise ConfigError(f"template {self.template!r}: axes {missing} never sent")
-        object.__setattr__(self, "axes", axes)
-        object.__setattr__(self, "_parts", parts)
+        set_fields(self, axes=axes, _parts=parts)
 
     @property
     def full_scale(self) -> int:

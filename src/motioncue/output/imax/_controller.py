@@ -12,6 +12,7 @@ from typing import ClassVar
 
 from ..._config import ConfigReader
 from ..._errors import ConfigError, LimitError, ProtocolError
+from ..._frozen import set_fields
 from .._controller_api import DriveExpectations, PulseLimits
 from .._feedback import PositionQuery, register_position_query
 from .._transport import parse_target
@@ -92,7 +93,7 @@ class ImaxController(UdpController["ImaxFrameEncoder"]):
                 f"IMAX {self.name}: PA02 = {params['PA02']} but axes = "
                 f"{self.n_axes}; they must agree"
             )
-        object.__setattr__(self, "parameters", MappingProxyType(params))
+        set_fields(self, parameters=MappingProxyType(params))
         if not (math.isfinite(self.stroke_mm) and self.stroke_mm >= 0):
             raise ConfigError(f"IMAX {self.name}: stroke_mm = {self.stroke_mm}; allowed >= 0")
         c = self.counts_per_rev

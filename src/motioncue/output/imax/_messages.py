@@ -49,6 +49,7 @@ from itertools import chain
 from typing import TYPE_CHECKING, ClassVar, Self, cast
 
 from ..._errors import ProtocolError
+from ..._frozen import set_fields
 from .._udp_common import (
     AXES_OF_CHANNEL,
     CHANNEL_OF_AXES,
@@ -71,7 +72,7 @@ from .._udp_registers import (
     RegisterReadShape,
     RegisterWire,
     RegisterWriteShape,
-    check_u16,
+    check_u16_fields,
     unpack_values,
 )
 
@@ -223,11 +224,8 @@ class RegisterReply(RegisterWire):
             5,
         ):
             raise ProtocolError(f"{type(self).__name__}: function 0x{self.function:04X}")
-        fields = ("channel", "start", "who_accept", "who_reply")
-        values = (self.channel, self.start, self.who_accept, self.who_reply)
-        for name, value in zip(fields, values, strict=True):
-            check_u16(value, name)
-        object.__setattr__(self, "values", u16_tuple(self.values, type(self).__name__))
+        check_u16_fields(self, "channel", "start", "who_accept", "who_reply")
+        set_fields(self, values=u16_tuple(self.values, type(self).__name__))
         if len(self.values) > 256:
             raise ProtocolError(f"{type(self).__name__}: {len(self.values)} values")
 

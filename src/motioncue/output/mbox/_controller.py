@@ -11,6 +11,7 @@ from typing import ClassVar
 
 from ..._config import ConfigReader
 from ..._errors import ConfigError, LimitError, ProtocolError
+from ..._frozen import set_fields
 from .._controller_api import DriveExpectations, PulseLimits
 from .._feedback import PositionQuery, register_position_query, words_to_positions
 from .._transport import parse_target
@@ -67,11 +68,8 @@ class MboxController(UdpController["MboxFrameEncoder"]):
         if self.n_axes not in (3, 6):
             raise ConfigError(f"MBOX {self.name}: axes = {self.n_axes}; allowed: 3, 6")
         parse_target(self.default_target)
-        object.__setattr__(
-            self,
-            "parameters",
-            _freeze(self.validate_parameters(self.parameters, f"MBOX {self.name}")),
-        )
+        params = self.validate_parameters(self.parameters, f"MBOX {self.name}")
+        set_fields(self, parameters=_freeze(params))
         if not self.max_motor_speed_rpm > 0:
             raise ConfigError(
                 f"MBOX {self.name}: max_motor_speed_rpm = "

@@ -25,6 +25,7 @@ from functools import cache
 from typing import ClassVar
 
 from ..._errors import ProtocolError
+from ..._frozen import set_fields
 from .._udp_common import (
     AXES_OF_CHANNEL,
     CHANNEL_OF_AXES,
@@ -45,7 +46,7 @@ from .._udp_registers import (
     RegisterReadShape,
     RegisterValuesShape,
     RegisterWriteShape,
-    check_u16,
+    check_u16_fields,
 )
 
 __all__ = [  # what the package exports from here
@@ -162,12 +163,7 @@ class RegisterError:
     def __post_init__(self) -> None:
         if self.function not in (F_READ_ERR, F_WRITE_ERR):
             raise ProtocolError(f"error reply function 0x{self.function:04X}: 0x1103 or 0x1203")
-        fields = ("channel", "start", "count", "error_code", "who_accept", "who_reply")
-        values = (
-            self.channel, self.start, self.count, self.error_code, self.who_accept, self.who_reply
-        )  # fmt: skip
-        for name, value in zip(fields, values, strict=True):
-            check_u16(value, name)
+        check_u16_fields(self, "channel", "start", "count", "error_code", "who_accept", "who_reply")
 
     size: ClassVar[int] = HEADER.size + 6
 
@@ -288,6 +284,8 @@ class MotionFrame:
         f = layout.unpack(data)
         # every field came out of the layout, so it is in range: skip the re-validation
         obj = object.__new__(cls)
+        # per-frame decode (emulator, inspect): object.__setattr__ bound once is ~3 us a
+        # frame faster than set_fields' keyword packing
         setattr_ = object.__setattr__
         setattr_(obj, "absolute", not relative)
         setattr_(obj, "line", f[6])
@@ -329,8 +327,7 @@ class MotionFrameReply:
         status = FrameStatus(h.function & 0xF)
         frame = MotionFrame._from_wire(data, (h.function & 0xFFF0) | 1, h.channel)
         # replies address the host (Who = 0); other values are accepted and not kept
-        object.__setattr__(frame, "who_accept", WHO_NONE)
-        object.__setattr__(frame, "who_reply", WHO_NONE)
+        set_fields(frame, who_accept=WHO_NONE, who_reply=WHO_NONE)
         return cls(status, frame)
 
 

@@ -1,0 +1,30 @@
+"""Setting the fields of a frozen dataclass after validation.
+
+A frozen dataclass (``@dataclass(frozen=True)``) that normalises its inputs in
+``__post_init__`` (arrays made read-only, sequences made tuples, values converted to their
+units) must store the normalised values through ``object.__setattr__``, since its own
+``__setattr__`` refuses. :func:`set_fields` does that for any number of fields in one call,
+so a class states its normalised fields once, by name.
+"""
+
+from __future__ import annotations
+
+__all__ = ["set_fields"]
+
+
+def set_fields(obj: object, **fields: object) -> None:
+    """Store ``fields`` (name = value) on ``obj``, bypassing a frozen dataclass's refusal.
+
+    For use in ``__post_init__`` (or a constructor returning a modified copy) only: the
+    instance must not have been handed out yet, since frozen instances are assumed immutable
+    (hashing, caches).
+
+    Parameters
+    ----------
+    obj : object
+        The frozen dataclass instance (slots or not).
+    **fields : object
+        Attribute name and its value, set in the order given.
+    """
+    for name, value in fields.items():
+        object.__setattr__(obj, name, value)
