@@ -173,3 +173,45 @@ def test_a_join_the_workspace_cuts_short_is_reported(monkeypatch: pytest.MonkeyP
     acc = np.abs(np.diff(poses[b - 1 :, 0], 2)) / dt**2
     assert acc.max() > THRESHOLDS_DOF[0] * ROUNDING
     assert poses[b - 1 :, 0].max() < 0.125
+
+
+@pytest.mark.parametrize("x_end_m", [0.04, 0.11])
+def test_generate_prints_its_joins(
+    monkeypatch: pytest.MonkeyPatch,
+    tmp_path: pytest.TempPathFactory,
+    capsys: pytest.CaptureFixture[str],
+    x_end_m: float,
+) -> None:
+    """``motioncue generate --json`` lists how the cue met each ramp, and a join the workspace
+    cut short is said on stderr as a ``note:`` (a rider may feel it); a join within the
+    thresholds is not."""
+    import json
+    from pathlib import Path
+
+    from motioncue.cli import main
+    from motioncue.telemetry._recording import write_recording_csv
+
+    notes: dict = {}
+    _ride(monkeypatch, notes, x_end_m=x_end_m)  # the same synthetic cue, patched in place
+    n = int(RATE_HZ)
+    t = np.arange(n) / RATE_HZ
+    folder = Path(str(tmp_path))
+    write_recording_csv(
+        folder / "in.csv",
+        Recording(t, np.tile([0.0, 0.0, 9.80665], (n, 1)), np.zeros((n, 3))),
+    )
+    code = main([
+        "generate", "--input", str(folder / "in.csv"), "--platform", "stewart6-linear",
+        "--controller", "mbox6", "--preset", "racing-hexapod", "--rate", f"{RATE_HZ:g}",
+        "--out", str(folder / "out.ride"), "--json",
+    ])  # fmt: skip
+    out, err = capsys.readouterr()
+    assert code == 0, err
+    joins = json.loads(out)["joins"]
+    assert joins == notes["joins"]
+    shortened = [j for j in joins if j["shortened"]]
+    assert len(shortened) == (1 if x_end_m > 0.1 else 0), joins
+    said = [line for line in err.splitlines() if line.startswith("note: the cue's")]
+    assert len(said) == len(shortened), err
+    for line in said:
+        assert "end met the ramp" in line and "workspace" in line, line

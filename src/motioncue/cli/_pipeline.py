@@ -117,6 +117,7 @@ def _generate(args: argparse.Namespace) -> int:
             file=sys.stderr,
         )
         fallbacks = list(info["transition_fallbacks"])
+        join_notes: list[str] = []
         if info["late_keyframes"]:
             print(
                 f"warning: {info['late_keyframes']} keyframe(s) could not be reached on time "
@@ -136,6 +137,15 @@ def _generate(args: argparse.Namespace) -> int:
         note = cueing_note(base, args.intensity, args.overrides)
         ride = replace(ride, notes={**ride.notes, "cueing": note})
         fallbacks = list(report.transition_fallbacks)
+        summary["joins"] = [dict(j) for j in report.joins]
+        # a join the workspace made faster than the perception thresholds (or the fallback
+        # stop-then-ramp) is something a rider may feel: say so, as the ramps' fallbacks are
+        join_notes = [
+            f"the cue's {j['end']} met the ramp {j['kind']} in {j['duration_s']:.2f} s: "
+            f"{j['shortened']}"
+            for j in report.joins
+            if j.get("shortened")
+        ]
         warning = held_warning(report.bad_samples, len(report.f_vehicle))
         if warning:
             print(warning, file=sys.stderr)
@@ -154,7 +164,7 @@ def _generate(args: argparse.Namespace) -> int:
                 file=sys.stderr,
             )
     summary["transition_fallbacks"] = len(fallbacks)
-    for line in fallbacks:
+    for line in fallbacks + join_notes:
         print(f"note: {line}", file=sys.stderr)
     # the checks play will make: a ride that would be refused there is not published here
     check_ride_for(ride, platform, controller, limits, **names)
