@@ -21,7 +21,11 @@ Cost over the horizon ``k = 1..N`` (``N = horizon_s fs``), with the weights of
 :class:`~._mpc_params.MpcParams`::
 
     sum_k |W_e e_k / thr|^2 + w_pose |p_k|^2 + w_vel |v_k|^2 + w_acc |u_{k-1}|^2
-        + x_N' T x_N
+        + x_N' T x_N  [+ sum_k w_prior |p_k - p_c|^2]
+
+(the last term only with ``w_prior``: ``p_c`` the classical fallback's pose at this sample,
+held over the horizon; its quadratic part is folded into ``w_pose``, so ``T`` prices
+``w_pose + w_prior`` about neutral, and its linear part is :func:`pose_sum`'s.)
 
 ``T = P - Q`` with ``P`` the solution of the discrete algebraic Riccati equation of the same
 stage cost (``Q`` the state weight), so the finite-horizon cost equals the infinite-horizon one
@@ -100,6 +104,7 @@ __all__ = [
     "build_model",
     "fallback_accel",
     "plan_tilt_reach",
+    "pose_sum",
     "reference",
     "resolve_reach",
     "tilt_fz_bound",
@@ -417,6 +422,31 @@ def terminal_weight(m: LinearModel) -> NDArray[np.float64]:
         ) from None
     t = p - q
     return np.asarray(0.5 * (t + t.T))
+
+
+def pose_sum(m: LinearModel, ends: NDArray[np.int64]) -> NDArray[np.float64]:
+    """``S = sum_k G_k'`` over the horizon's steps ``k = 1..N`` (``N = ends[-1]``), ``G_k``
+    (6, ``nb nu``) the pose at step ``k`` from the blocked inputs (as in :func:`condense`).
+
+    With it the cost ``sum_k |W^(1/2) (p_k - c)|^2`` (``W`` diagonal, ``c`` held) has the
+    linear part ``-2 (S W c)' U`` in the inputs ``U`` (the ``w_prior`` term of
+    :class:`MpcCueing`); its quadratic part is that of ``w_pose``.
+
+    Returns
+    -------
+    (nb nu, 6) array
+    """
+    n = int(ends[-1])
+    nu = m.nu
+    blk = np.searchsorted(ends, np.arange(n), side="right")
+    gam = np.zeros((m.nx, len(ends) * nu))
+    out = np.zeros((len(ends) * nu, 6))
+    for k in range(1, n + 1):
+        j = blk[k - 1]
+        gam = m.a @ gam
+        gam[:, j * nu : (j + 1) * nu] += m.bu
+        out += gam[:6].T
+    return out
 
 
 @dataclass(frozen=True, eq=False)
@@ -972,6 +1002,7 @@ class MpcCueing:
     limits: RigLimits = field(init=False)
     _qp: QpSolver | DaqpQp = field(init=False, repr=False)
     _qp_guard: SoftGuardQp | None = field(init=False, repr=False)
+    _prior_g: NDArray[np.float64] | None = field(init=False, repr=False)
 
     def __post_init__(self) -> None:
         classical = ClassicalWashout(self.params, self.fs_hz)  # validates fs_hz
@@ -982,7 +1013,15 @@ class MpcCueing:
         mp = resolve_reach(mp, limits)
         object.__setattr__(self, "mpc", mp)
         object.__setattr__(self, "classical", classical)
-        model = build_model(self.params.dofs, mp, fs)
+        prior = np.asarray(mp.w_prior)
+        if np.any(prior > 0.0):  # w_pose |p|^2 + wc |p - c|^2: the quadratic part of both
+            from dataclasses import replace
+
+            wp = [float(v) for v in np.asarray(mp.w_pose) + prior]
+            both = replace(mp, w_pose=(wp[0], wp[1], wp[2], wp[3], wp[4], wp[5]))
+            model = build_model(self.params.dofs, both, fs)
+        else:
+            model = build_model(self.params.dofs, mp, fs)
         n = max(1, round(mp.horizon_s * fs))
         ends = block_ends(n, mp.blocks)
         k = np.arange(n + 1)
@@ -992,6 +1031,9 @@ class MpcCueing:
         cond = condense(model, ends, decay, terminal=True)
         object.__setattr__(self, "model", model)
         object.__setattr__(self, "cond", cond)
+        object.__setattr__(
+            self, "_prior_g", -2.0 * pose_sum(model, ends) * prior if np.any(prior > 0.0) else None
+        )
         object.__setattr__(self, "limits", limits)
         object.__setattr__(self, "_qp", qp_solver(mp.solver, cond.hess, self.n_rows))
         guard = self._guard_channels()
@@ -1213,9 +1255,12 @@ class MpcCueing:
         d: NDArray[np.float64],
         deadline_s: float | None,
         d_vehicle: NDArray[np.float64] | None = None,
+        pose_c: Sequence[float] | None = None,
     ) -> NDArray[np.float64] | None:
         t0 = time.perf_counter()
         g, a_mat, lba, uba, lbx, ubx = self.qp_matrices(state.x, d)
+        if self._prior_g is not None and pose_c is not None:
+            g = g + self._prior_g @ np.asarray(pose_c, dtype=float)
         warm = (state.warm_u, state.warm_lam_a, state.warm_lam_x)
         if self._qp_guard is not None and d_vehicle is not None:
             ga, glo, ghi = self.guard_rows(state, d_vehicle)
@@ -1248,7 +1293,7 @@ class MpcCueing:
         h = state.classical.hold
         dv = np.array([h[0], h[1], h[2] - GRAVITY_M_S2, h[3], h[4], h[5]])
         d, state.ref_lp = reference(dv, self.mpc, self.fs_hz, state.ref_lp)
-        u = self._solve(state, d, deadline_s, dv)
+        u = self._solve(state, d, deadline_s, dv, pose_c)
         if u is None:
             u = self._fallback(state, pose_c)
         m = self.model

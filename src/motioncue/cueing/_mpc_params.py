@@ -103,6 +103,15 @@ class MpcParams:
         one per channel): ``we |H (s - r)|^2 + wv |H (s - d)|^2 = (we + wv) |H (s - r')|^2 +
         const`` with ``r' = r + wv / (we + wv) (d - r)``; :func:`~._mpc.reference` returns
         ``r'`` and :func:`~._mpc.build_model` weighs it by ``we + wv``.
+    w_prior : 6 floats
+        ``mpc`` only. 0 (default): none. Otherwise ``wc`` (each in [0, 1e9], per pose
+        component ``x, y, z`` in m, ``roll, pitch, yaw`` in rad) prices the plan's distance to
+        the pose of the preset's classical washout (the fallback, which runs on every sample)
+        at this sample, held over the horizon: ``wc |p_k - p_c|^2`` at every step ``k`` of it
+        (the terminal weight prices ``w_pose + wc`` about neutral). The plan then starts from
+        what the classical washout does (its compressed target, its tilt within the reach
+        in each direction, its rate limit from the leg speeds, its translation filling the
+        tilt's lag) and departs from it where the perceived error pays for it.
     prediction_tau_s : float
         Vehicle motion over the horizon: 0 holds the last sample, ``tau > 0`` lets it decay
         as ``exp(-t / tau)`` (s).
@@ -200,6 +209,7 @@ class MpcParams:
     w_vel: Vec6 = (1.0, 1.0, 1.0, 1.0, 1.0, 1.0)
     w_acc: Vec6 = (0.01, 0.01, 0.01, 0.1, 0.1, 0.1)
     w_vehicle: Vec6 = (0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
+    w_prior: Vec6 = (0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
     prediction_tau_s: float = 0.0
     ref_scale: Vec6 = (1.0, 1.0, 1.0, 1.0, 1.0, 1.0)
     ref_limit: Vec6 = (1e9, 1e9, 1e9, 1e9, 1e9, 1e9)
@@ -223,7 +233,7 @@ class MpcParams:
     block_samples: int = 5
 
     def __post_init__(self) -> None:
-        for name in ("w_error", "w_pose", "w_vel", "w_acc", "w_vehicle"):
+        for name in ("w_error", "w_pose", "w_vel", "w_acc", "w_vehicle", "w_prior"):
             object.__setattr__(self, name, _vec6(name, getattr(self, name), 0.0, 1e9))
         object.__setattr__(self, "ref_scale", _vec6("ref_scale", self.ref_scale, 0.0, 1.0))
         object.__setattr__(self, "ref_limit", _vec6("ref_limit", self.ref_limit, 1e-6, 1e9))
@@ -301,7 +311,7 @@ def read_mpc_table(table: Any) -> MpcParams:
     for name in ("platform", "controller"):
         vals[name] = table.string(name, getattr(d, name))
     vals["solver"] = table.string("solver", d.solver, choices=MPC_SOLVERS)
-    for name in ("w_error", "w_pose", "w_vel", "w_acc", "w_vehicle"):
+    for name in ("w_error", "w_pose", "w_vel", "w_acc", "w_vehicle", "w_prior"):
         vals[name] = table.vector(name, 6, list(getattr(d, name)))
     for name in (
         "horizon_s",
