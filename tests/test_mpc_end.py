@@ -36,8 +36,9 @@ FS = 100.0
 # samples of data per drive, the manoeuvre starting at 1 s and lasting to the end: short
 # enough that the plan is still moving at the end (since session 25's pose prior it settles
 # within about 2.5 s of the onset) and long enough that the cue has peaked before the final
-# END samples (the brake 3 s, the corner 3.5 s; both were 5 s before session 25)
-N = {"brake": 300, "corner": 350}
+# END samples (the brake 2.8 s: still moving at 3.3 mm/s at its end; the corner 3.5 s; both
+# were 5 s before session 25)
+N = {"brake": 280, "corner": 350}
 EXTRA = 100  # the same drive continued for 1 s more
 END = 50  # the final 0.5 s
 MODELS = "telban-cardullo-2005"  # the vestibular models of motioncue compare
@@ -169,13 +170,13 @@ def test_the_evaluator_charges_no_stop_at_the_end_of_the_data(
     last velocity after the last sample, so the plan still moving there shows no end spike:
     its perceived specific force (x and y) over the final 0.5 s stays within its maximum over
     the rest of the drive. The pose held there instead (the old convention: ``-v fs`` more on
-    the last sample) breaks that on the brake drive (measured 0.910 against 0.882 m/s^2), so
-    the check can fail."""
+    the last sample) breaks that on the brake drive (measured 1.097 against 1.003 m/s^2 with
+    session 25's mpc-hexapod), so the check can fail."""
     from motioncue.cueing import evaluate_cueing, simulator_motion
     from motioncue.cueing._evaluate import _rot_columns
 
     cut = runs[name][0]
-    f, w = DRIVES[name](N)
+    f, w = DRIVES[name](N[name])
     ev = evaluate_cueing(f, w, cut, FS, model=MODELS)
 
     def end_and_rest(ps: np.ndarray) -> tuple[float, float]:
