@@ -19,13 +19,15 @@ when ``a`` opposes ``v``; or accepted without simulation when a conservative bou
 excursion already keeps it inside).
 
 *Step.* The candidate is the velocity-level step towards the speed that lands on the
-target this frame; when that lands exactly (the velocity-level step passes it through) and
-the new state is admissible, the target is sent exactly, so a stream P-admissible at every
-frame passes bit for bit. Otherwise the limiter searches (bisection, 10 steps) for the
-largest wanted speed towards the target whose next state is admissible and whose stopping
-point does not pass the target (approach without overshoot); if none does, it sends P's
-action, which is admissible by construction because P is a state feedback (the state it
-leads to continues the same braking). Every emitted frame therefore keeps every limit.
+target this frame; when that lands exactly (the velocity-level step passes it through,
+allowing its rounding slack, :func:`._realtime._land_slack`: the limiter's own frames fed
+back pass again) and the new state is admissible, the target is sent exactly, so a
+stream P-admissible at every frame passes bit for bit. Otherwise the limiter searches
+(bisection, 10 steps) for the largest wanted speed towards the target whose next state
+is admissible and whose stopping point does not pass the target (approach without
+overshoot); if none does, it sends P's action, which is admissible by construction
+because P is a state feedback (the state it leads to continues the same braking).
+Every emitted frame therefore keeps every limit.
 
 Cost: P is simulated only when the closed-form one-sided bounds of
 :mod:`._brake` cannot decide (near a stroke end, or near the target while limiting), and
@@ -46,7 +48,7 @@ import numpy as np
 from .._errors import ConfigError, LimitError
 from ._brake import brake_bound, stops_within
 from ._limits import ActuatorLimits
-from ._realtime import _counters_repr, _level_params, _level_step
+from ._realtime import _counters_repr, _land_slack, _level_params, _level_step
 
 if TYPE_CHECKING:
     from numpy.typing import ArrayLike
@@ -105,6 +107,7 @@ class JerkLimiter:
     _params: tuple[tuple[float, ...], ...] = field(init=False, repr=False)
     _dt: float = field(init=False, repr=False)
     _inv_dt: float = field(init=False, repr=False)
+    _slack: tuple[float, ...] = field(init=False, repr=False)
 
     def __post_init__(self) -> None:
         if not (isinstance(self.dt_s, int | float) and 0.0 < self.dt_s <= 1.0):
@@ -124,6 +127,9 @@ class JerkLimiter:
             for i in range(lim.n_actuators)
         )
         object.__setattr__(self, "_params", params)
+        # the landing test's slack at the velocity level (accelerations: order 2)
+        slacks = tuple(_land_slack(p[4], max(abs(p[0]), abs(p[1])), dt, 2) for p in params)
+        object.__setattr__(self, "_slack", slacks)
         object.__setattr__(self, "_dt", dt)
         object.__setattr__(self, "_inv_dt", 1.0 / dt)
 
@@ -238,6 +244,7 @@ class JerkLimiter:
         out = [0.0] * len(qs)
         clamped = False
         n_sim = 0
+        slacks = self._slack
         i = 0
         # the admissibility test of _admissible, inlined (a call per candidate state costs
         # more than the test): band with 1e-9 slack, closed-form bound, then simulation
@@ -260,8 +267,9 @@ class JerkLimiter:
             elif want < -2.0 * vmax:
                 want = -2.0 * vmax
             v1, a1, landed = _level_step(
-                v, a, want, lws[i], -vmax, vmax, amax, jdt, half_inv_j, abig, dt, inv_dt
-            )
+                v, a, want, lws[i], -vmax, vmax, amax, jdt, half_inv_j, abig, dt, inv_dt,
+                slacks[i],
+            )  # fmt: skip
             lws[i] = want  # the target's own speed as seen from the last frame
             if landed:
                 q1 = t
