@@ -102,7 +102,7 @@ def main() -> int:
             samples.append((time.perf_counter() - t0) / len(stream))
         # the limiter's own output must pass again untouched (0 on the feasible stream)
         print(f"  {label}: limited on {state.n_clamped} of {len(stream)} frames, "
-              f"{state.n_simulated / len(stream):.2f} braking simulations a frame")  # fmt: skip
+              f"{state.n_simulated / len(stream):.2f} exact braking checks a frame")  # fmt: skip
         ok &= report(f"jerk-limited limiter step, 6 actuators, {label}", samples, 20e-6, "us", 1e6)
 
     # 2. workspace limiting per pose (single calls and batches of 1000)

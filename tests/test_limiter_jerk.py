@@ -242,6 +242,56 @@ def test_one_sided_braking_bounds_cover_the_simulated_extent(case):
 
 
 @settings(max_examples=300)
+@given(braking_states())
+def test_closed_form_stopping_distance_is_the_simulated_one(case):
+    """forward_stop (ramp and hold summed, staircase in closed form) against the brute-force
+    frame-by-frame simulation of P (stopping_offset), on limits whose braking never meets
+    the +-v_max caps: where it answers, P moves one way and stops at that distance, to
+    1e-12 m (the two sum the same speeds in a different order: rounding, ~1e-17 m)."""
+    from motioncue.trajectory._brake import forward_stop
+
+    jl, i, v, a, dt = case
+    lim = jl.limits
+    vmax, amax, jmax = float(lim.v_max[i]), float(lim.a_max[i]), float(lim.j_max[i])
+    dist = forward_stop(v, a, amax, jmax * dt, dt)
+    ext = jl.stopping_offset(i, v, a)
+    assert ext is not None
+    if amax * amax / (2.0 * jmax) + amax * dt > vmax:
+        return  # outside its stated domain (the caps may bind): stops_within simulates
+    opposes = (v > 0.0 and a < 0.0) or (v < 0.0 and a > 0.0)
+    if dist is None:
+        assert opposes  # only a state braking harder than P would is left to the simulation
+        return
+    if dist >= 0.0:
+        assert ext[0] >= -1e-12  # never goes back
+        assert dist == pytest.approx(ext[1], rel=0, abs=1e-12)
+    else:
+        assert ext[1] <= 1e-12
+        assert dist == pytest.approx(ext[0], rel=0, abs=1e-12)
+
+
+def test_closed_form_stopping_distance_answers_most_states():
+    """The closed form is not a rarely-taken branch: from a grid of states of a hexapod
+    cylinder it answers all but the strongly opposing ones, and matches the simulation."""
+    from motioncue.trajectory._brake import forward_stop
+
+    lim = ActuatorLimits([-0.1], [0.1], [0.25], [4.0], [80.0])
+    jl = JerkLimiter(lim, 0.01)
+    answered = 0
+    for v in np.linspace(-0.25, 0.25, 11):
+        for a in np.linspace(-4.0, 4.0, 11):
+            if not jl.is_admissible([0.0], [v], [a]):
+                continue
+            dist = forward_stop(float(v), float(a), 4.0, 0.8, 0.01)
+            if dist is None:
+                continue
+            answered += 1
+            lo, hi = jl.stopping_offset(0, float(v), float(a))
+            assert dist == pytest.approx(hi if dist >= 0.0 else lo, rel=0, abs=1e-12)
+    assert answered >= 60
+
+
+@settings(max_examples=300)
 @given(
     braking_states(),
     st.sampled_from(["top", "bottom", "far", "mid"]),

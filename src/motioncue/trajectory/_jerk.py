@@ -29,9 +29,10 @@ overshoot); if none does, it sends P's action, which is admissible by constructi
 because P is a state feedback (the state it leads to continues the same braking).
 Every emitted frame therefore keeps every limit.
 
-Cost: P is simulated only when the closed-form one-sided bounds of
-:mod:`._brake` cannot decide (near a stroke end, or near the target while limiting), and
-then only until the answer is known; a bisection remembers the states it has decided
+Cost: P's stop is looked at only when the closed-form one-sided bounds of
+:mod:`._brake` cannot decide (near a stroke end, or near the target while limiting): its
+exact distance when it moves one way (:func:`._brake.forward_stop`), else a simulation
+until the answer is known; a bisection remembers the states it has decided
 (saturated wanted speeds repeat the same next state). Frames are bit-identical to the
 full simulation's.
 """
