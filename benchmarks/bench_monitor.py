@@ -31,7 +31,7 @@ from typing import Any
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
-from _timing import report
+from _timing import in_reference_units, report
 from bench_bridge import Rig
 
 
@@ -97,6 +97,48 @@ def run_once(mode: str, seconds: float, rt_priority: int | None) -> dict[str, An
     }
 
 
+def stats_cost_s(window: int = 20000) -> float:
+    """Median time (s) of one ``Bridge.stats`` with every timing window full (``window``
+    frames of synthetic send times, latencies and ages), 7 runs of 20 calls: the work the
+    monitor's reader thread does twice a second in the bridge's process."""
+    import numpy as np
+
+    from _timing import median_time_s
+    from motioncue.cueing import load_cueing
+    from motioncue.kinematics import load_platform
+    from motioncue.output import load_controller
+    from motioncue.pipeline._bridge import Bridge, BridgeConfig
+    from motioncue.trajectory import ActuatorLimits
+
+    class _Source:
+        def __init__(self) -> None:
+            self.stats = {"samples": 0, "datagrams": 0}
+
+        def latest(self) -> None:
+            return None
+
+    class _Null:
+        def send(self, data: bytes, *, t_s: float | None = None) -> None:
+            pass
+
+    platform = load_platform("stewart6-linear")
+    ctrl = load_controller("mbox6")
+    lim = ActuatorLimits.from_platform(platform, ctrl, a_max=5.0)
+    cfg = BridgeConfig(rate_hz=100.0, stats_window=window)
+    bridge = Bridge(platform, ctrl, load_cueing("racing"), _Source(), _Null(), lim, cfg)
+    rng = np.random.default_rng(0)
+    t = 0.0
+    jitter = getattr(bridge, "_jitter", None)  # kept by the loop (absent before s25)
+    for _ in range(window):
+        t += bridge.period_s + float(rng.normal(0.0, 1e-4))
+        if jitter is not None and bridge._sent_at.n:
+            jitter.add(abs((t - bridge._sent_at.prev) - bridge.period_s))
+        bridge._sent_at.add(t)
+        for ring in (bridge._latency, bridge._age, bridge._frame_age):
+            ring.add(float(rng.exponential(1e-3)))
+    return median_time_s(lambda: bridge.stats, repeats=7, number=20)
+
+
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--seconds", type=float, default=20.0)
@@ -108,6 +150,12 @@ def main(argv: list[str] | None = None) -> int:
     print(
         f"machine: {os.cpu_count()} CPUs, shared with other sessions; bridge at 100 Hz, "
         f"loop policy {policy}"
+    )
+    cost = stats_cost_s()
+    print(
+        f"Bridge.stats, full 20000-frame windows: {cost * 1e3:.3f} ms a call, median of 7x20 "
+        f"({in_reference_units(cost * 1e3, 'ms').strip()}; s24: about 1.2 ms)",
+        flush=True,
     )
     runs: dict[str, list[dict[str, Any]]] = {m: [] for m in args.modes}
     ok = True

@@ -104,6 +104,40 @@ def test_streams_of_a_tighter_limiter_pass_through_exactly(case, shrink):
     assert st2.n_clamped == 0
 
 
+@settings(max_examples=80)
+@given(scenario())
+def test_its_own_output_passes_through_again(case):
+    """Idempotence: the frames the limiter sent, fed back from the same state, are sent
+    again to 1e-12 m (its frames reach the jerk bound exactly and the recomputed
+    differences miss it by rounding, ~2e-15 m/s^2 a frame: the landing test's slack absorbs
+    it; without it the benchmark's hexapod ride was limited again on 1120 of 2000 frames,
+    by up to 16 mm)."""
+    jl, state, _hist, targets = case
+    out = jl.run(jl.initial_state(state.q, state.v, state.a), targets)
+    again_state = jl.initial_state(state.q, state.v, state.a)
+    again = jl.run(again_state, out)
+    np.testing.assert_allclose(again, out, rtol=0, atol=1e-12)
+    assert again_state.max_deviation <= 1e-12
+
+
+def test_a_hexapod_ride_it_sent_passes_through_untouched():
+    """The benchmark's case: a 6-axis ride at 100 Hz made jerk-feasible by the limiter, fed
+    back, is not limited again on any frame (before the landing slack: most frames)."""
+    lim = ActuatorLimits(
+        np.full(6, -0.1), np.full(6, 0.1), np.full(6, 0.25), np.full(6, 4.0), np.full(6, 80.0)
+    )
+    jl = JerkLimiter(lim, 0.01)
+    rng = np.random.default_rng(3)
+    t = np.arange(600)[:, None] * 0.01
+    raw = sum(0.03 * np.sin(2 * np.pi * rng.uniform(0.1, 1.5, 6) * t + rng.uniform(0, 6, 6))
+              for _ in range(4))  # fmt: skip
+    out = jl.run(jl.initial_state(np.zeros(6)), raw)
+    state = jl.initial_state(np.zeros(6))
+    again = jl.run(state, out)
+    assert state.n_clamped == 0
+    np.testing.assert_allclose(again, out, rtol=0, atol=1e-12)
+
+
 @settings(max_examples=100)
 @given(jerk_limits(), st.floats(-1, 1), st.floats(-1, 1))
 def test_stopping_bound_covers_the_simulated_braking(case, fv, fa):
@@ -208,6 +242,56 @@ def test_one_sided_braking_bounds_cover_the_simulated_extent(case):
 
 
 @settings(max_examples=300)
+@given(braking_states())
+def test_closed_form_stopping_distance_is_the_simulated_one(case):
+    """forward_stop (ramp and hold summed, staircase in closed form) against the brute-force
+    frame-by-frame simulation of P (stopping_offset), on limits whose braking never meets
+    the +-v_max caps: where it answers, P moves one way and stops at that distance, to
+    1e-12 m (the two sum the same speeds in a different order: rounding, ~1e-17 m)."""
+    from motioncue.trajectory._brake import forward_stop
+
+    jl, i, v, a, dt = case
+    lim = jl.limits
+    vmax, amax, jmax = float(lim.v_max[i]), float(lim.a_max[i]), float(lim.j_max[i])
+    dist = forward_stop(v, a, amax, jmax * dt, dt)
+    ext = jl.stopping_offset(i, v, a)
+    assert ext is not None
+    if amax * amax / (2.0 * jmax) + amax * dt > vmax:
+        return  # outside its stated domain (the caps may bind): stops_within simulates
+    opposes = (v > 0.0 and a < 0.0) or (v < 0.0 and a > 0.0)
+    if dist is None:
+        assert opposes  # only a state braking harder than P would is left to the simulation
+        return
+    if dist >= 0.0:
+        assert ext[0] >= -1e-12  # never goes back
+        assert dist == pytest.approx(ext[1], rel=0, abs=1e-12)
+    else:
+        assert ext[1] <= 1e-12
+        assert dist == pytest.approx(ext[0], rel=0, abs=1e-12)
+
+
+def test_closed_form_stopping_distance_answers_most_states():
+    """The closed form is not a rarely-taken branch: from a grid of states of a hexapod
+    cylinder it answers all but the strongly opposing ones, and matches the simulation."""
+    from motioncue.trajectory._brake import forward_stop
+
+    lim = ActuatorLimits([-0.1], [0.1], [0.25], [4.0], [80.0])
+    jl = JerkLimiter(lim, 0.01)
+    answered = 0
+    for v in np.linspace(-0.25, 0.25, 11):
+        for a in np.linspace(-4.0, 4.0, 11):
+            if not jl.is_admissible([0.0], [v], [a]):
+                continue
+            dist = forward_stop(float(v), float(a), 4.0, 0.8, 0.01)
+            if dist is None:
+                continue
+            answered += 1
+            lo, hi = jl.stopping_offset(0, float(v), float(a))
+            assert dist == pytest.approx(hi if dist >= 0.0 else lo, rel=0, abs=1e-12)
+    assert answered >= 60
+
+
+@settings(max_examples=300)
 @given(
     braking_states(),
     st.sampled_from(["top", "bottom", "far", "mid"]),
@@ -259,16 +343,17 @@ def _reference_step(jl, state, target):
                 and (qn + hi_off <= hi + 1e-9)
             )
 
-        def next_state(w, w_prev, q=q, v=v, a=a, vmax=vmax, amax=amax, jdt=jdt,
+        def next_state(w, w_prev, slack=0.0, q=q, v=v, a=a, vmax=vmax, amax=amax, jdt=jdt,
                        half_inv_j=half_inv_j, abig=abig):  # fmt: skip
             vb, _ab, landed = _level_step(
-                v, a, w, w_prev, -vmax, vmax, amax, jdt, half_inv_j, abig, dt, inv_dt
+                v, a, w, w_prev, -vmax, vmax, amax, jdt, half_inv_j, abig, dt, inv_dt, slack
             )
             qb = q + vb * dt
             return qb, landed
 
         want = min(max((t - q) * inv_dt, -2.0 * vmax), 2.0 * vmax)
-        _, landed = next_state(want, state["last_want"][i])
+        # the landing test allows the limiter's stated rounding slack (_realtime._land_slack)
+        _, landed = next_state(want, state["last_want"][i], jl._slack[i])
         state["last_want"][i] = want
         chosen = None
         if landed:

@@ -13,7 +13,11 @@ module gives the same yes/no answer with far less work:
   same from the reverse peak. Over 50,000 random admissible states the simulated
   excursions stayed within the bounds even without the padding frame; the tests compare
   them again.
-* :func:`stops_within` simulates P exactly, but returns as soon as the answer is known:
+* :func:`forward_stop` gives P's exact stopping distance (its discrete S-curve stop: the
+  acceleration ramped down by ``j dt`` a frame, held at ``-a_max``, then the braking
+  staircase in closed form) whenever P keeps moving one way, for limits whose braking
+  never meets the +-v_max caps; :func:`stops_within` then decides with it alone.
+* Otherwise :func:`stops_within` simulates P exactly, returning as soon as the answer is known:
   *no* the moment a visited position leaves the band (the exact extent can only be
   wider); once P runs its final braking staircase (``|a|`` falling by ``j dt`` a frame
   onto rest, monotone positions, last one in closed form) *yes* if its end is inside and
@@ -73,6 +77,73 @@ def brake_bound(v: float, a: float, amax: float, jmax: float, dt: float) -> tupl
     return (fwd, rev) if flip else (rev, fwd)
 
 
+def forward_stop(v: float, a: float, amax: float, jdt: float, dt: float) -> float | None:
+    """Signed distance (m) P travels from speed ``v`` (m/s) and acceleration ``a`` (m/s^2)
+    until rest, when it keeps moving one way; ``None`` when it brakes harder than its
+    jerk allows at some frame (``a`` opposes ``v`` so strongly that the speed may reverse:
+    then only the simulation knows). ``jdt = j_max dt`` (m/s^2 a frame).
+
+    Valid for limits whose braking never meets the +-v_max caps
+    (``amax^2 / (2 j_max) + amax dt <= v_max``, ``stair_ok`` in :func:`stops_within`).
+
+    The discrete S-curve stop of P, in speed-per-frame units ``b = |v| / dt``: with
+    ``S(c) = (m + 1) c - jdt m (m + 1) / 2``, ``m = floor(c / jdt)``, the speed that a braking
+    staircase starting at deceleration ``c`` (then ``c - jdt``, ``c - 2 jdt``...) removes,
+    P lowers ``a`` by ``jdt`` a frame (at most to ``-amax``, then holds it) while
+    ``b > S(-a_next)`` (the staircase from the next deceleration would not stop in time;
+    that is ``vcap(b) > -a_next``), then runs the staircase from ``u = vcap(b)``: speeds
+    ``b - k u + jdt k (k - 1) / 2`` for ``k = 1..n`` and rest, ``n`` the staircase's
+    length (:func:`._realtime._vcap`), a distance ``dt^2 (n b - u n (n + 1) / 2 +
+    jdt (n - 1) n (n + 1) / 6)``. The ramp and hold frames are summed one by one (no
+    square root, a few operations each); the staircase in closed form. Compared with the
+    frame-by-frame simulation in tests/test_limiter_jerk.py (1e-12 m).
+    """
+    flip = v < 0.0 or (v == 0.0 and a < 0.0)
+    if flip:
+        v, a = -v, -a
+    b = v / dt
+    total = 0.0  # sum of b over the frames so far (distance / dt^2)
+    for _ in range(_MAX_BRAKE_FRAMES):
+        dn = a - jdt
+        if dn < -amax:
+            dn = -amax
+        c = -dn  # the deceleration of the next frame if P keeps lowering a
+        if c < 0.0:
+            ramp = True  # a still above jdt: it comes down whatever the speed
+        elif c == 0.0:
+            ramp = b > 0.0
+        else:
+            m = math.floor(c / jdt)
+            ramp = b > (m + 1) * c - jdt * m * (m + 1) * 0.5
+        if ramp:
+            a = dn
+            b += a
+            total += b
+            continue
+        up = a + jdt
+        if up > amax:
+            up = amax
+        if up < 0.0:  # brakes harder than the staircase asks unless vcap(b) >= -up
+            m = math.floor(-up / jdt)
+            if b < (m + 1) * -up - jdt * m * (m + 1) * 0.5:
+                return None
+        if b <= 0.0:
+            break
+        # the braking staircase from u = vcap(b) (as _vcap: b = (n + 1) u - jdt n (n + 1) / 2)
+        n = int((math.sqrt(1.0 + 8.0 * b / jdt) - 1.0) * 0.5)
+        while n > 0 and jdt * n * (n + 1) * 0.5 > b:
+            n -= 1
+        while jdt * (n + 1) * (n + 2) * 0.5 <= b:
+            n += 1
+        u = b / (n + 1) + jdt * n * 0.5
+        total += n * b - u * n * (n + 1) * 0.5 + jdt * (n - 1) * n * (n + 1) / 6.0
+        break
+    else:
+        return None
+    d = total * dt * dt
+    return -d if flip else d
+
+
 def stops_within(
     q: float,
     v: float,
@@ -98,6 +169,11 @@ def stops_within(
     big = abig + abig * abig / (2.0 * jdt) + jdt
     # the -v_max/+v_max cap of a braking step cannot bind (see the staircase below)
     stair_ok = amax * amax * half_inv_j + amax * dt <= vmax
+    if stair_ok and lo_e <= q <= hi_e:
+        # P moving one way: its positions run monotonically from q to q + the distance
+        dist = forward_stop(v, a, amax, jdt, dt)
+        if dist is not None:
+            return lo_e <= q + dist <= hi_e
     stair = 0
     mag = 0.0
     d = 0.0

@@ -19,17 +19,20 @@ when ``a`` opposes ``v``; or accepted without simulation when a conservative bou
 excursion already keeps it inside).
 
 *Step.* The candidate is the velocity-level step towards the speed that lands on the
-target this frame; when that lands exactly (the velocity-level step passes it through) and
-the new state is admissible, the target is sent exactly, so a stream P-admissible at every
-frame passes bit for bit. Otherwise the limiter searches (bisection, 10 steps) for the
-largest wanted speed towards the target whose next state is admissible and whose stopping
-point does not pass the target (approach without overshoot); if none does, it sends P's
-action, which is admissible by construction because P is a state feedback (the state it
-leads to continues the same braking). Every emitted frame therefore keeps every limit.
+target this frame; when that lands exactly (the velocity-level step passes it through,
+allowing its rounding slack, :func:`._realtime._land_slack`: the limiter's own frames fed
+back pass again) and the new state is admissible, the target is sent exactly, so a
+stream P-admissible at every frame passes bit for bit. Otherwise the limiter searches
+(bisection, 10 steps) for the largest wanted speed towards the target whose next state
+is admissible and whose stopping point does not pass the target (approach without
+overshoot); if none does, it sends P's action, which is admissible by construction
+because P is a state feedback (the state it leads to continues the same braking).
+Every emitted frame therefore keeps every limit.
 
-Cost: P is simulated only when the closed-form one-sided bounds of
-:mod:`._brake` cannot decide (near a stroke end, or near the target while limiting), and
-then only until the answer is known; a bisection remembers the states it has decided
+Cost: P's stop is looked at only when the closed-form one-sided bounds of
+:mod:`._brake` cannot decide (near a stroke end, or near the target while limiting): its
+exact distance when it moves one way (:func:`._brake.forward_stop`), else a simulation
+until the answer is known; a bisection remembers the states it has decided
 (saturated wanted speeds repeat the same next state). Frames are bit-identical to the
 full simulation's.
 """
@@ -46,7 +49,7 @@ import numpy as np
 from .._errors import ConfigError, LimitError
 from ._brake import brake_bound, stops_within
 from ._limits import ActuatorLimits
-from ._realtime import _counters_repr, _level_params, _level_step
+from ._realtime import _counters_repr, _land_slack, _level_params, _level_step, _vcap
 
 if TYPE_CHECKING:
     from numpy.typing import ArrayLike
@@ -105,6 +108,8 @@ class JerkLimiter:
     _params: tuple[tuple[float, ...], ...] = field(init=False, repr=False)
     _dt: float = field(init=False, repr=False)
     _inv_dt: float = field(init=False, repr=False)
+    _slack: tuple[float, ...] = field(init=False, repr=False)
+    _big: tuple[float, ...] = field(init=False, repr=False)
 
     def __post_init__(self) -> None:
         if not (isinstance(self.dt_s, int | float) and 0.0 < self.dt_s <= 1.0):
@@ -124,6 +129,12 @@ class JerkLimiter:
             for i in range(lim.n_actuators)
         )
         object.__setattr__(self, "_params", params)
+        # the landing test's slack at the velocity level (accelerations: order 2)
+        slacks = tuple(_land_slack(p[4], max(abs(p[0]), abs(p[1])), dt, 2) for p in params)
+        object.__setattr__(self, "_slack", slacks)
+        # _vcap's saturation threshold per axis (same expression: same decisions)
+        bigs = tuple(p[6] + p[6] * p[6] / (2.0 * p[4]) + p[4] for p in params)
+        object.__setattr__(self, "_big", bigs)
         object.__setattr__(self, "_dt", dt)
         object.__setattr__(self, "_inv_dt", 1.0 / dt)
 
@@ -238,10 +249,15 @@ class JerkLimiter:
         out = [0.0] * len(qs)
         clamped = False
         n_sim = 0
+        slacks = self._slack
+        bigs = self._big
         i = 0
-        # the admissibility test of _admissible, inlined (a call per candidate state costs
-        # more than the test): band with 1e-9 slack, closed-form bound, then simulation
+        # _level_step at the velocity level and the admissibility test of _admissible,
+        # inlined (a call per candidate costs more than the work): the band of next
+        # accelerations depends on (v, a) only, so it is computed once per axis for the
+        # landing test and every candidate; same float operations, so the same frames
         for qmin, qmax, vmax, amax, jdt, half_inv_j, abig, jmax in self._params:
+            big = bigs[i]
             t = float(q_target[i])
             if t - t != 0.0:
                 t = lts[i]
@@ -259,11 +275,26 @@ class JerkLimiter:
                 want = 2.0 * vmax
             elif want < -2.0 * vmax:
                 want = -2.0 * vmax
-            v1, a1, landed = _level_step(
-                v, a, want, lws[i], -vmax, vmax, amax, jdt, half_inv_j, abig, dt, inv_dt
-            )
+            # the band [lo, hi] of next accelerations (_level_step: x = v, d = a)
+            hi = a + jdt
+            if hi > amax:
+                hi = amax
+            lo = a - jdt
+            if lo < -amax:
+                lo = -amax
+            if hi > 0.0 and v + hi * dt + hi * hi * half_inv_j > vmax:
+                cap = _vcap((vmax - v) * inv_dt, jdt, abig)
+                if hi > cap:
+                    hi = cap
+            if lo < 0.0 and v + lo * dt - lo * lo * half_inv_j < -vmax:
+                cap = _vcap((v - -vmax) * inv_dt, jdt, abig)
+                if lo < -cap:
+                    lo = -cap
+            dd = (want - v) * inv_dt
+            dw = (want - lws[i]) * inv_dt
             lws[i] = want  # the target's own speed as seen from the last frame
-            if landed:
+            sl = slacks[i]
+            if lo - sl <= dd <= hi + sl and -jdt - sl <= dd - dw <= jdt + sl:  # lands
                 q1 = t
                 if qmin - 1e-9 <= q1 <= qmax + 1e-9:
                     v1 = (q1 - q) * inv_dt
@@ -301,9 +332,22 @@ class JerkLimiter:
             seen: dict[float, bool] = {}
             for k in range(_BISECT + 1):
                 w = want if k == 0 else 0.5 * (w_lo + w_hi)
-                vb, ab_, _l = _level_step(
-                    v, a, w, w, -vmax, vmax, amax, jdt, half_inv_j, abig, dt, inv_dt
-                )
+                # _level_step(v, a, w, w): lands on w, else the chase clipped to the band
+                ddw = (w - v) * inv_dt
+                if lo <= ddw <= hi and -jdt <= ddw <= jdt:
+                    vb = w
+                else:
+                    e = w - v
+                    # _vcap(|e| / dt, jdt, abig); its first test (a saturated chase) inlined
+                    b = e * inv_dt if e > 0.0 else -e * inv_dt
+                    dn = abig if b >= big else _vcap(b, jdt, abig)
+                    if not e > 0.0:
+                        dn = -dn
+                    if dn > hi:
+                        dn = hi
+                    if dn < lo:
+                        dn = lo
+                    vb = v + dn * dt
                 qb = q + vb * dt
                 vb = (qb - q) * inv_dt
                 ab_ = (vb - v) * inv_dt
@@ -330,10 +374,18 @@ class JerkLimiter:
                     w_lo = w
                 else:
                     w_hi = w
-            if not best:  # P's action: admissible by construction
-                vb, ab_, _l = _level_step(
-                    v, a, 0.0, 0.0, -vmax, vmax, amax, jdt, half_inv_j, abig, dt, inv_dt
-                )
+            if not best:  # P's action (_level_step(v, a, 0, 0)): admissible by construction
+                ddw = (0.0 - v) * inv_dt
+                if lo <= ddw <= hi and -jdt <= ddw <= jdt:
+                    vb = 0.0
+                else:
+                    e = 0.0 - v
+                    dn = _vcap(e * inv_dt, jdt, abig) if e > 0.0 else -_vcap(-e * inv_dt, jdt, abig)
+                    if dn > hi:
+                        dn = hi
+                    if dn < lo:
+                        dn = lo
+                    vb = v + dn * dt
                 qn = q + vb * dt
                 vn = (qn - q) * inv_dt
                 an = (vn - v) * inv_dt

@@ -31,7 +31,14 @@ the target this frame and ``vt = (target - previous target) / dt`` the target's 
 if ``vd`` is in ``[lo, hi]`` and ``|vd - vt| <= a dt`` (the frame lands on the target moving
 about as the target does) the target is sent **exactly**, so a feasible target stream
 passes through bit for bit (there ``q[k-1]`` equals the previous target, hence
-``vd == vt``). Otherwise the limiter chases the target: ``vt + sign(e) V(|e|)`` with
+``vd == vt``). Both tests allow a slack (:func:`_land_slack`): a stream the limiter
+itself sent reaches its bounds exactly, and the finite differences recomputed from its
+frames miss them by rounding (a few 1e-15 m/s at a hexapod's scale); without the slack
+such a frame would be limited again, and the limited frame lands millimetres away (a
+2000-frame hexapod ride fed back: 529 frames limited, up to 7 mm). The slack is one part
+in 1e10 of ``a dt`` (ten times inside the checker's tolerance), or the rounding of
+positions at the stroke's scale where that is larger (``4 ulp(|q|) / dt``).
+Otherwise the limiter chases the target: ``vt + sign(e) V(|e|)`` with
 ``e = target - q[k-1]``, clipped to ``[lo, hi]``; for a held target this is the discrete
 time-optimal approach that stops on it without overshoot. Non-finite targets are replaced
 by the last finite target (counted).
@@ -62,6 +69,8 @@ __all__ = ["LimiterState", "RealtimeLimiter", "braking_distance", "braking_speed
 _FIRST_WINDOW = 64
 _MAX_WINDOW = 4096
 _CALM_FRAMES = 8
+# the landing test's slack, as a fraction of the per-frame change ddt (module docstring)
+_LAND_SLACK = 1e-10
 
 
 def braking_distance(v: float, a_max: float, dt_s: float) -> float:
@@ -108,6 +117,14 @@ def _level_params(d_max: float, dd_max: float, dt: float) -> tuple[float, float,
     return float(d_max), float(dd_max) * dt, 0.5 / float(dd_max), 2.0 * float(d_max)
 
 
+def _land_slack(ddt: float, q_scale: float, dt: float, order: int) -> float:
+    """Slack of :func:`_level_step`'s landing test (module docstring): ``_LAND_SLACK`` of
+    ``ddt``, or the rounding of a difference of order ``order`` (1: speeds, 2: accelerations)
+    recomputed from positions of magnitude ``q_scale`` (m), ``4 order ulp(q_scale) / dt^order``,
+    whichever is larger."""
+    return max(_LAND_SLACK * ddt, 4.0 * order * math.ulp(q_scale) / dt**order)
+
+
 def _level_step(
     x: float,
     d: float,
@@ -121,6 +138,7 @@ def _level_step(
     d_big: float,
     dt: float,
     inv_dt: float,
+    slack: float = 0.0,
 ) -> tuple[float, float, bool]:
     """One step of a causal limiter at one derivative level; ``(x', d', landed exactly)``.
 
@@ -128,7 +146,8 @@ def _level_step(
     ``|d| <= d_max``, and ``d`` changes by at most ``ddt`` a step, so that braking at that
     rate still stops inside the bounds (``half_inv = 1 / (2 ddt / dt)``, ``d_big`` above
     every limit; see :func:`_vcap`). The step lands on ``want`` when allowed, else approaches
-    it as fast as it may (``want_prev``: the previous wanted value). Positions with speeds
+    it as fast as it may (``want_prev``: the previous wanted value); the landing test
+    allows ``slack`` of rounding (:func:`_land_slack`). Positions with speeds
     (:class:`RealtimeLimiter`: ``x = q``, ``d = v``) and speeds with accelerations
     (:class:`~motioncue.trajectory._jerk.JerkLimiter`: ``x = v``, ``x_min = -v_max``).
     """
@@ -148,7 +167,7 @@ def _level_step(
             lo = -cap
     dd = (want - x) * inv_dt
     dw = (want - want_prev) * inv_dt
-    if lo <= dd <= hi and -ddt <= dd - dw <= ddt:
+    if lo - slack <= dd <= hi + slack and -ddt - slack <= dd - dw <= ddt + slack:
         return want, dd, True
     e = want - x
     if e > 0.0:
@@ -248,6 +267,7 @@ class RealtimeLimiter:
     _dt: float = field(init=False, repr=False)
     _inv_dt: float = field(init=False, repr=False)
     _arrays: tuple[np.ndarray, ...] = field(init=False, repr=False)
+    _slack: tuple[float, ...] = field(init=False, repr=False)
 
     def __post_init__(self) -> None:
         if not (isinstance(self.dt_s, int | float) and 0.0 < self.dt_s <= 1.0):
@@ -270,9 +290,11 @@ class RealtimeLimiter:
         object.__setattr__(self, "_params", params)
         object.__setattr__(self, "_dt", dt)
         object.__setattr__(self, "_inv_dt", 1.0 / dt)
-        # the same numbers per axis as arrays (q_min, q_max, d_max, ddt, half_inv): run()
-        columns = np.array([p[:5] for p in params], dtype=np.float64).T
-        object.__setattr__(self, "_arrays", tuple(columns[j].copy() for j in range(5)))
+        slacks = tuple(_land_slack(p[3], max(abs(p[0]), abs(p[1])), dt, 1) for p in params)
+        object.__setattr__(self, "_slack", slacks)
+        # the same numbers per axis as arrays (q_min, q_max, d_max, ddt, half_inv, slack): run()
+        columns = np.array([(*p[:5], s) for p, s in zip(params, slacks, strict=True)]).T
+        object.__setattr__(self, "_arrays", tuple(columns[j].copy() for j in range(6)))
 
     @property
     def n_actuators(self) -> int:
@@ -347,6 +369,7 @@ class RealtimeLimiter:
         out = [0.0] * len(qs)
         clamped = False
         i = 0
+        slacks = self._slack
         for qmin, qmax, vmax, adt, half_inv_a, vbig in self._params:
             t = float(q_target[i])
             tp = lts[i]
@@ -358,8 +381,9 @@ class RealtimeLimiter:
                 lts[i] = t
                 finite = True
             qn, vn, landed = _level_step(
-                qs[i], vs[i], t, tp, qmin, qmax, vmax, adt, half_inv_a, vbig, dt, inv_dt
-            )
+                qs[i], vs[i], t, tp, qmin, qmax, vmax, adt, half_inv_a, vbig, dt, inv_dt,
+                slacks[i],
+            )  # fmt: skip
             if not landed:
                 clamped = True
                 state.clamped_axes[i] += 1
@@ -426,7 +450,7 @@ class RealtimeLimiter:
         """
         if block.shape[0] == 0:
             return 0
-        q_min, q_max, d_max, ddt, half_inv = self._arrays
+        q_min, q_max, d_max, ddt, half_inv, slack = self._arrays
         dt, inv_dt = self._dt, self._inv_dt
         with np.errstate(invalid="ignore", over="ignore"):
             x = np.concatenate([np.asarray([state.q]), block[:-1]])
@@ -441,9 +465,9 @@ class RealtimeLimiter:
             ok = np.isfinite(block)
             ok &= ~((hi > 0.0) & (x + hi * dt + hi * hi * half_inv > q_max))
             ok &= ~((lo < 0.0) & (x + lo * dt - lo * lo * half_inv < q_min))
-            ok &= (lo <= dd) & (dd <= hi)
+            ok &= (lo - slack <= dd) & (dd <= hi + slack)
             e = dd - dw
-            ok &= (-ddt <= e) & (e <= ddt)
+            ok &= (-ddt - slack <= e) & (e <= ddt + slack)
         rows = ok.all(axis=1)
         m = block.shape[0] if rows.all() else int(np.argmin(rows))
         if m:
