@@ -98,8 +98,12 @@ class WorkingSetQp:
     guess only (a relaxation: fewer rows, a slack only for the guard rows kept), every row the
     solution violates is added, and it is solved again until none is: the solution of the
     last relaxation is then feasible for the whole problem, so it is its optimum (a guard row
-    left out is met with a zero slack). Each solve is warm-started from the last one's active
-    set. ``max_rounds`` relaxations at most; then the whole problem is solved.
+    left out is met with a zero slack). A guard row kept is first a hard row (no slack
+    variable); it gets its slack when the rows kept cannot all be met, or when its multiplier
+    exceeds the slack's price (then a zero slack is not optimal); a hard guard row whose
+    multiplier is within the price is the optimum with a zero slack. Each solve is
+    warm-started from the last one's active set. ``max_rounds`` relaxations at most; then the
+    whole problem is solved.
 
     Parameters
     ----------
@@ -114,7 +118,7 @@ class WorkingSetQp:
     """
 
     def __init__(
-        self, hess: NDArray[np.float64], weight: float, tol: float = 1e-7, max_rounds: int = 12
+        self, hess: NDArray[np.float64], weight: float, tol: float = 1e-7, max_rounds: int = 24
     ) -> None:
         self.hess = np.ascontiguousarray(hess, dtype=float)
         self.n = int(hess.shape[0])
@@ -171,12 +175,21 @@ class WorkingSetQp:
         if start is not None and start[0].shape == work.shape:
             work |= start[0] & live
             lam_rows = np.where(work, start[1], 0.0)
+        slack = np.zeros_like(work)  # the guard rows given their slack so far
         for _ in range(self.max_rounds):
             ok, u, lam_rows, lam_u = self._relaxed(
-                g, a_all, lo_all, hi_all, lbx, ubx, soft, work, lam_rows, lam_u
+                g, a_all, lo_all, hi_all, lbx, ubx, soft & slack, work, lam_rows, lam_u
             )
+            hard = work & soft & ~slack
             if not ok:
-                break
+                if not hard.any():
+                    break
+                slack |= hard  # a guard that cannot be met: its rows priced
+                continue
+            over = hard & (np.abs(lam_rows) > self.weight * (1.0 + 1e-9))
+            if over.any():  # worth more than its price: its slack may be used
+                slack |= over
+                continue
             more = violated(u) & ~work
             if not more.any():
                 self.last = (work & (lam_rows != 0.0), lam_rows)
