@@ -89,3 +89,24 @@ def test_a_guard_that_cannot_be_met_is_priced_as_the_closed_form() -> None:
     assert -1.0 < want < lo
     assert ok
     np.testing.assert_allclose(u, [want], rtol=0, atol=1e-9)
+
+
+def test_a_guard_worth_more_than_its_price_takes_its_slack() -> None:
+    # the same problem without the |u| <= 1 row: the guard u >= lo could be met (u = lo), but
+    # its multiplier there, h lo + g = 18, exceeds the price w = 3, so the optimum pays a slack:
+    # u = (w (1 + lo) - g) / (h + w) = 1, s = 3; a cheap guard (w = 100) is met exactly
+    h, g, lo = 2.0, 10.0, 4.0
+    for w, want in ((3.0, (3.0 * (1.0 + lo) - g) / (h + 3.0)), (100.0, lo)):
+        ok, u = WorkingSetQp(np.array([[h]]), w).solve(
+            np.array([g]),
+            np.zeros((0, 1)),
+            np.zeros(0),
+            np.zeros(0),
+            np.array([-np.inf]),
+            np.array([np.inf]),
+            np.array([[1.0]]),
+            np.array([lo]),
+            np.array([np.inf]),
+        )
+        assert ok
+        np.testing.assert_allclose(u, [want], rtol=0, atol=1e-9)
