@@ -714,12 +714,19 @@ class OptimalCueing:
         )
 
     def run(self, f: ArrayLike, w: ArrayLike, state: MpcState | None = None) -> OptimalResult:
-        """The whole recording ``f``, ``w`` (N, 3) at ``fs_hz``, window by window.
+        """The whole recording ``f``, ``w`` (N, 3) at ``fs_hz``, window by window (with one
+        BLAS thread: the window matrices are too small for more to pay).
 
         Returns
         -------
         OptimalResult
         """
+        from threadpoolctl import threadpool_limits
+
+        with threadpool_limits(limits=1, user_api="blas"):
+            return self._run(f, w, state)
+
+    def _run(self, f: ArrayLike, w: ArrayLike, state: MpcState | None) -> OptimalResult:
         import time
 
         fa, wa = recording_arrays(f, w)
