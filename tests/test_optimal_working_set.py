@@ -110,3 +110,27 @@ def test_a_guard_worth_more_than_its_price_takes_its_slack() -> None:
         )
         assert ok
         np.testing.assert_allclose(u, [want], rtol=0, atol=1e-9)
+
+
+def test_the_bundled_plan_on_a_working_set_is_the_whole_qps_plan() -> None:
+    from pathlib import Path
+
+    from motioncue.cueing import load_cueing
+    from motioncue.cueing._optimal import OptimalCueing
+
+    root = Path(__file__).resolve().parents[1]
+    rec = root / "configs" / "recordings" / "street-formula.csv"  # a tuning drive
+    a = np.loadtxt(rec, delimiter=",", skiprows=1, max_rows=3700)[3000:3700]
+    f, w = a[:, 1:4].copy(), a[:, 4:7].copy()
+    params = load_cueing("optimal-hexapod")
+    fast = OptimalCueing(params, 100.0)
+    assert fast._ws is not None
+    whole = OptimalCueing(params, 100.0)
+    object.__setattr__(whole, "_ws", None)  # every row and guard slack in every solve
+    got, want = fast.run(f, w), whole.run(f, w)
+    assert got.fallbacks == want.fallbacks == 0 and got.windows == want.windows >= 3
+    assert np.ptp(want.poses[:, 3]) > np.radians(3.0)  # the excerpt moves the plan (roll)
+    assert fast._ws.solves > 2 * got.windows  # relaxations were grown (not one solve each)
+    # the same optimum, each solve to DAQP's primal tolerance (1e-6 of a row), carried from
+    # window to window by the state: 10 um, 10 urad
+    np.testing.assert_allclose(got.poses, want.poses, rtol=0, atol=1e-5)  # m, rad
