@@ -27,6 +27,9 @@ def test_the_direct_route_gives_the_casadi_plugins_plan() -> None:
     params = load_cueing("optimal-hexapod")
     direct = OptimalCueing(params, FS)
     assert isinstance(direct._qp, DaqpQp)
+    # the whole window QP on this route (its working-set solve is checked against this route
+    # in tests/test_optimal_working_set.py)
+    object.__setattr__(direct, "_ws", None)
     assert direct._qp_guard is not None and direct.mpc.sign_guard[2] > 0.0  # the fz guard too
     oracle = OptimalCueing(params, FS)
     mp = oracle.mpc

@@ -28,7 +28,10 @@ wrong-sign fz cue: a drop felt while the car is pressed down).
 
 The QP of a window has a constant Hessian (built once per design); its gradient comes from
 the vehicle's motion over the window (one simulation of the model from rest); it is solved by
-the same casadi conic plugin as the MPC. A window whose solve fails is driven by the
+the same casadi conic plugin as the MPC, or for ``solver = "daqp"`` by DAQP on a working set
+of its rows (:class:`WorkingSetQp`: the rows the plan violates, grown until none is; the same
+optimum with a fraction of the rows and guard slacks, the set of the window before as the
+start). A window whose solve fails is driven by the
 classical fallback tracker of :mod:`._mpc` (counted in :attr:`OptimalResult.fallbacks`).
 
 :meth:`OptimalCueing.step` raises :class:`~motioncue._errors.ConfigError`: a live ride has no
@@ -85,6 +88,166 @@ def _fz_change(x: NDArray[np.float64], u: NDArray[np.float64], active: tuple[int
     return GRAVITY_M_S2 * (cr * cp - 1.0) - sr * ay + cr * sp * ax
 
 
+class WorkingSetQp:
+    """The window QP of :class:`~._mpc.SoftGuardQp` (hard rows and soft one-sided guard rows,
+    each slack priced ``weight (s + s^2 / 2)``) solved on a growing working set of its rows.
+
+    A window has far more rows (legs' stroke, speed and force at every block end, tilt rates,
+    the guard) than bind; DAQP's set-up costs about ``rows x variables^2`` a solve and a soft
+    row brings a slack variable. So the problem is solved with the rows violated by a first
+    guess only (a relaxation: fewer rows, a slack only for the guard rows kept), every row the
+    solution violates is added, and it is solved again until none is: the solution of the
+    last relaxation is then feasible for the whole problem, so it is its optimum (a guard row
+    left out is met with a zero slack). A guard row kept is first a hard row (no slack
+    variable); it gets its slack when the rows kept cannot all be met, or when its multiplier
+    exceeds the slack's price (then a zero slack is not optimal); a hard guard row whose
+    multiplier is within the price is the optimum with a zero slack. Each solve is
+    warm-started from the last one's active set. ``max_rounds`` relaxations at most; then the
+    whole problem is solved.
+
+    Parameters
+    ----------
+    hess : (n, n) array
+        Hessian of the inputs' cost (constant per design).
+    weight : float
+        Price of a guard row's slack (per threshold, :class:`~._mpc.SoftGuardQp`).
+    tol : float
+        A row counts as violated beyond ``tol (1 + |bound|)`` (its own units).
+    max_rounds : int
+        Relaxations solved before falling back to the whole problem.
+    """
+
+    def __init__(
+        self, hess: NDArray[np.float64], weight: float, tol: float = 1e-7, max_rounds: int = 24
+    ) -> None:
+        self.hess = np.ascontiguousarray(hess, dtype=float)
+        self.n = int(hess.shape[0])
+        self.weight = float(weight)
+        self.tol = float(tol)
+        self.max_rounds = int(max_rounds)
+        self.solves = 0
+        """Relaxations solved so far (for benchmarks)."""
+        self.last: tuple[NDArray[np.bool_], NDArray[np.float64]] | None = None
+        """The last successful solve's active rows (a mask) and its multipliers."""
+
+    def solve(
+        self,
+        g: NDArray[np.float64],
+        a: NDArray[np.float64],
+        lba: NDArray[np.float64],
+        uba: NDArray[np.float64],
+        lbx: NDArray[np.float64],
+        ubx: NDArray[np.float64],
+        a_guard: NDArray[np.float64] | None = None,
+        lo_guard: NDArray[np.float64] | None = None,
+        hi_guard: NDArray[np.float64] | None = None,
+        guess: NDArray[np.float64] | None = None,
+        start: tuple[NDArray[np.bool_], NDArray[np.float64]] | None = None,
+    ) -> tuple[bool, NDArray[np.float64]]:
+        """``(ok, u)``: the optimum of ``0.5 u' H u + g' u + weight sum(s + s^2 / 2)`` over
+        ``lba <= A u <= uba``, ``lbx <= u <= ubx`` and the guard rows (``A_g u + s >= lo_g``
+        where ``lo_g`` is finite, else ``A_g u - s <= hi_g``; none without ``a_guard``);
+        ``guess`` ``(n,)``: a plan whose violated rows start the working set (default zero);
+        ``start``: rows (a mask of ``[A; A_g]``) to start with too and their multipliers (a
+        warm start, e.g. :attr:`last` of a similar problem). The final working set and its
+        multipliers are kept in :attr:`last` (its active rows only)."""
+        n = self.n
+        if a_guard is None or lo_guard is None or hi_guard is None:
+            a_guard = np.zeros((0, n))
+            lo_guard = hi_guard = np.zeros(0)
+        a_all = np.concatenate([a, a_guard], axis=0)
+        lo_all = np.concatenate([lba, lo_guard])
+        hi_all = np.concatenate([uba, hi_guard])
+        soft = np.zeros(a_all.shape[0], dtype=bool)
+        soft[a.shape[0] :] = True
+        live = np.isfinite(lo_all) | np.isfinite(hi_all)
+        tol_lo = self.tol * (1.0 + np.abs(np.where(np.isfinite(lo_all), lo_all, 0.0)))
+        tol_hi = self.tol * (1.0 + np.abs(np.where(np.isfinite(hi_all), hi_all, 0.0)))
+
+        def violated(u: NDArray[np.float64]) -> NDArray[np.bool_]:
+            au = a_all @ u
+            return live & ((au < lo_all - tol_lo) | (au > hi_all + tol_hi))
+
+        u0 = np.zeros(n) if guess is None else np.asarray(guess, dtype=float)
+        work = violated(u0)
+        lam_rows = np.zeros(a_all.shape[0])  # the last solve's multipliers, by row
+        lam_u = np.zeros(n)
+        if start is not None and start[0].shape == work.shape:
+            work |= start[0] & live
+            lam_rows = np.where(work, start[1], 0.0)
+        slack = np.zeros_like(work)  # the guard rows given their slack so far
+        for _ in range(self.max_rounds):
+            ok, u, lam_rows, lam_u = self._relaxed(
+                g, a_all, lo_all, hi_all, lbx, ubx, soft & slack, work, lam_rows, lam_u
+            )
+            hard = work & soft & ~slack
+            if not ok:
+                if not hard.any():
+                    break
+                slack |= hard  # a guard that cannot be met: its rows priced
+                continue
+            over = hard & (np.abs(lam_rows) > self.weight * (1.0 + 1e-9))
+            if over.any():  # worth more than its price: its slack may be used
+                slack |= over
+                continue
+            more = violated(u) & ~work
+            if not more.any():
+                self.last = (work & (lam_rows != 0.0), lam_rows)
+                return True, u
+            work |= more
+        ok, u, lam_rows, _ = self._relaxed(
+            g, a_all, lo_all, hi_all, lbx, ubx, soft, live, np.zeros(a_all.shape[0]), np.zeros(n)
+        )
+        self.last = (live & (lam_rows != 0.0), lam_rows) if ok else None
+        return ok, u
+
+    def _relaxed(
+        self,
+        g: NDArray[np.float64],
+        a_all: NDArray[np.float64],
+        lo_all: NDArray[np.float64],
+        hi_all: NDArray[np.float64],
+        lbx: NDArray[np.float64],
+        ubx: NDArray[np.float64],
+        soft: NDArray[np.bool_],
+        work: NDArray[np.bool_],
+        lam_rows: NDArray[np.float64],
+        lam_u: NDArray[np.float64],
+    ) -> tuple[bool, NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
+        """The problem on the rows ``work``, warm-started from the multipliers ``lam_rows``
+        (by row of the whole problem) and ``lam_u``; returns ``(ok, u, lam_rows, lam_u)``."""
+        n = self.n
+        rows = np.flatnonzero(work)
+        srows = rows[soft[rows]]
+        k = srows.size
+        a_w = np.zeros((rows.size, n + k))
+        a_w[:, :n] = a_all[rows]
+        lo_w, hi_w = lo_all[rows].copy(), hi_all[rows].copy()
+        pos = np.flatnonzero(soft[rows])
+        sigma = np.where(np.isfinite(lo_w[pos]), 1.0, -1.0)
+        a_w[pos, n + np.arange(k)] = sigma
+        h = self.hess
+        if k:
+            h = np.zeros((n + k, n + k))
+            h[:n, :n] = self.hess
+            h[n:, n:] = self.weight * np.eye(k)
+        lam_x = np.concatenate([lam_u, np.zeros(k)])
+        self.solves += 1
+        ok, z, la, lx = DaqpQp(h, rows.size).solve(
+            np.concatenate([g, np.full(k, self.weight)]),
+            a_w,
+            lo_w,
+            hi_w,
+            np.concatenate([lbx, np.zeros(k)]),
+            np.concatenate([ubx, np.full(k, np.inf)]),
+            warm=(None, lam_rows[rows], lam_x),
+        )
+        out = np.zeros(a_all.shape[0])
+        if ok:
+            out[rows] = la
+        return ok, z[:n], out, lx[:n]
+
+
 @dataclass(frozen=True, eq=False)
 class OptimalResult(MpcResult):
     """Outcome of :meth:`OptimalCueing.run`: the fields of :class:`MpcResult` (poses,
@@ -134,6 +297,7 @@ class OptimalCueing:
     _qp: QpSolver | DaqpQp = field(init=False, repr=False)
     _a_guard: NDArray[np.float64] = field(init=False, repr=False)
     _qp_guard: SoftGuardQp | None = field(init=False, repr=False)
+    _ws: WorkingSetQp | None = field(init=False, repr=False)
     _fz_h: NDArray[np.float64] | None = field(init=False, repr=False)
     _fz_free: NDArray[np.float64] | None = field(init=False, repr=False)
 
@@ -222,6 +386,11 @@ class OptimalCueing:
             )
             if guard
             else None,
+        )
+        object.__setattr__(
+            self,
+            "_ws",
+            WorkingSetQp(hess, self.mpc.sign_guard_weight) if self.mpc.solver == "daqp" else None,
         )
         self._condense_fz()
 
@@ -447,11 +616,15 @@ class OptimalCueing:
         sign_ends: NDArray[np.float64],
         use_guard: bool,
         fz: tuple[NDArray[np.float64], ...] | None = None,
+        guess: NDArray[np.float64] | None = None,
+        start: tuple[NDArray[np.bool_], NDArray[np.float64]] | None = None,
     ) -> tuple[bool, NDArray[np.float64]]:
         """Solve one window's QP ``qp`` (from :meth:`_window_qp`), with the sign-guard rows
         when ``use_guard``; ``fz`` (from :meth:`_fz_rows`): the fz guard rows with the tilt's
-        loss of vertical force."""
+        loss of vertical force. On the DAQP route the QP is solved on a working set of its
+        rows (:class:`WorkingSetQp`) started from the rows ``guess`` violates."""
         g, a_mat, lba, uba, lbx, ubx = qp[:6]
+        ws = self._ws
         if use_guard and self._qp_guard is not None:
             glo, ghi = self._guard_bounds(qp[8], xv_ends, sign_ends)
             a_guard = self._a_guard
@@ -464,10 +637,51 @@ class OptimalCueing:
                 gz = self.mpc.sign_guard[2]
                 glo[iz::ng] = np.where(fz[2] > 0.0, -gz - fz[1], -np.inf)
                 ghi[iz::ng] = np.inf
+            if ws is not None and isinstance(self._qp_guard._qp, DaqpQp):
+                return ws.solve(g, a_mat, lba, uba, lbx, ubx, a_guard, glo, ghi, guess, start)
             ok, u, _, _ = self._qp_guard.solve(g, a_mat, lba, uba, lbx, ubx, a_guard, glo, ghi)
+        elif ws is not None and isinstance(self._qp, DaqpQp):
+            return ws.solve(g, a_mat, lba, uba, lbx, ubx, guess=guess, start=start)
         else:
             ok, u, _, _ = self._qp.solve(g, a_mat, lba, uba, lbx, ubx)
         return ok, u
+
+    def _row_groups(self) -> list[int]:
+        """Rows per block end of each group of ``[A; A_g]`` (each group block-major, in the
+        order of :meth:`_condense`)."""
+        nl = int(np.asarray(self.limits.platform.jacobian(np.zeros(6))).shape[0])
+        sizes = [nl, nl, nl]
+        tilt = [i for i in (3, 4) if self.params.dofs[i]]
+        if tilt:
+            sizes.append(len(tilt))
+        if self._combined_tilt_bound() is not None:
+            sizes.append(4)
+        guard = self._guard_channels()
+        if guard:
+            sizes.append(len(guard))
+        return sizes
+
+    def _shifted(
+        self, start: tuple[NDArray[np.bool_], NDArray[np.float64]] | None, shift: int
+    ) -> tuple[NDArray[np.bool_], NDArray[np.float64]] | None:
+        """A working set and its multipliers moved ``shift`` blocks earlier (the next window's
+        rows of the same block ends; the last blocks' rows empty)."""
+        if start is None:
+            return None
+        nb = self.n_window // self.mpc.block_samples
+        work, lam = start
+        w_out, l_out = np.zeros_like(work), np.zeros_like(lam)
+        at = 0
+        for c in self._row_groups():
+            size = nb * c
+            if at + size > work.size:
+                return None
+            wv, lv = work[at : at + size], lam[at : at + size]
+            w_out[at : at + (nb - shift) * c] = wv[shift * c :]
+            l_out[at : at + (nb - shift) * c] = lv[shift * c :]
+            at += size
+        # guard rows absent from a solve without the guard: the sizes disagree
+        return (w_out, l_out) if at == work.size else None
 
     # ------------------------------------------------------------------ interface
     def initial_state(self) -> MpcState:
@@ -500,12 +714,19 @@ class OptimalCueing:
         )
 
     def run(self, f: ArrayLike, w: ArrayLike, state: MpcState | None = None) -> OptimalResult:
-        """The whole recording ``f``, ``w`` (N, 3) at ``fs_hz``, window by window.
+        """The whole recording ``f``, ``w`` (N, 3) at ``fs_hz``, window by window (with one
+        BLAS thread: the window matrices are too small for more to pay).
 
         Returns
         -------
         OptimalResult
         """
+        from threadpoolctl import threadpool_limits
+
+        with threadpool_limits(limits=1, user_api="blas"):
+            return self._run(f, w, state)
+
+    def _run(self, f: ArrayLike, w: ArrayLike, state: MpcState | None) -> OptimalResult:
         import time
 
         fa, wa = recording_arrays(f, w)
@@ -554,6 +775,8 @@ class OptimalCueing:
         nb = nw // bs
         shift = ns // bs
         prev: NDArray[np.float64] | None = None  # the last plan's poses at the block ends
+        u_prev: NDArray[np.float64] | None = None  # the last plan's inputs, shifted
+        w_prev: tuple[NDArray[np.bool_], NDArray[np.float64]] | None = None  # its working set
         fz_on = self._fz_guarded()
         z_fz = np.zeros(m.nx)  # the otolith fz state of the tilt's loss of vertical force
         b_fz = -m.bd[:, 2]
@@ -590,7 +813,9 @@ class OptimalCueing:
             for use_guard, first, use_up in tries:
                 qp = self._window_qp(st.x, d, first, use_up)
                 p_free, g_end = qp[6], qp[7]
-                ok, u = self._solve_window(qp, xv_e, sg, use_guard)
+                ok, u = self._solve_window(
+                    qp, xv_e, sg, use_guard, guess=u_prev, start=self._shifted(w_prev, shift)
+                )
                 if ok:
                     break
             if ok:  # again with the legs (and the tilt's fz) linearised about this plan
@@ -601,14 +826,20 @@ class OptimalCueing:
                     if fz_on and use_guard
                     else None
                 )
-                ok2, u2 = self._solve_window(qp2, xv_e, sg, use_guard, fz)
+                w1 = self._ws.last if self._ws is not None else None
+                ok2, u2 = self._solve_window(qp2, xv_e, sg, use_guard, fz, guess=u, start=w1)
+                w_prev = self._ws.last if self._ws is not None and ok2 else w1
                 if ok2:  # else keep the first plan
                     u = u2
                 plan = p_free + g_end @ u
                 prev = np.zeros_like(plan)  # the next window starts about this plan's rest
                 prev[: nb - shift] = plan[shift:]
+                u_prev = np.zeros_like(u)  # this plan's rest: the next window's first guess
+                u_prev[: (nb - shift) * m.nu] = u[shift * m.nu :]
             else:
                 prev = None
+                u_prev = None
+                w_prev = None
             times.append((time.perf_counter() - t0) * 1e3)
             st.solves += 1
             keep = min(ns, n - start)
