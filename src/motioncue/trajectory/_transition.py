@@ -575,9 +575,10 @@ def _moving_transition(
                 t_s=t, q=q, poses=poses, duration_s=T, limit_scale=1.0, check=chk,
                 shortened=note,
             )  # fmt: skip
+        # the actuator limit this duration breaks most (as a share of it)
+        over = max(("speed", chk.speed), ("acceleration", chk.accel), ("jerk", chk.jerk),
+                   key=lambda kv: kv[1])  # fmt: skip
         if shortened:  # shortened for the workspace, and now too fast for the actuators
-            over = max(("speed", chk.speed), ("acceleration", chk.accel), ("jerk", chk.jerk),
-                       key=lambda kv: kv[1])  # fmt: skip
             why = (
                 f"the move from motion, shortened to {T:.2f} s by the workspace, would exceed "
                 f"an actuator {over[0]} limit by {over[1]:.0%}"
@@ -585,8 +586,6 @@ def _moving_transition(
             break
         growths += 1
         if growths > _MAX_GROWTHS:
-            over = max(("speed", chk.speed), ("acceleration", chk.accel), ("jerk", chk.jerk),
-                       key=lambda kv: kv[1])  # fmt: skip
             why = (
                 f"the move from motion exceeds an actuator {over[0]} limit by {over[1]:.0%} "
                 f"even at {T:.2f} s"
