@@ -135,10 +135,18 @@ def test_view_renders_offline_plays_and_the_slider_moves_the_platform(tmp_path: 
     assert requests == [page.as_uri()], requests
 
 
-def test_view_of_the_demo_ride_is_under_10_mb_and_renders(tmp_path: Path) -> None:
-    from motioncue.pipeline import run_demo
+def test_view_of_the_demo_ride_is_under_10_mb_and_renders(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    from motioncue.pipeline import _report, run_demo
 
-    demo = run_demo(tmp_path / "demo", log=lambda s: None)
+    # the demo's own ride (generated as the demo generates it); its report's plots, which
+    # this test does not read, are not drawn (about 3 s of CPU; tests/test_pipeline.py checks
+    # the report), and it is played at 50x (test_corner4's speed), not 10x
+    drawn: list[Path] = []
+    monkeypatch.setattr(_report, "write_report", lambda d, *_a: drawn.append(Path(d)))
+    demo = run_demo(tmp_path / "demo", speed=50.0, log=lambda s: None)
+    assert drawn == [demo.report_dir]  # the report writer was the one replaced
     out = tmp_path / "demo.html"
     res = subprocess.run(
         [sys.executable, "-m", "motioncue", "view", str(demo.ride_path), "--out", str(out)],

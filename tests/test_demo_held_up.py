@@ -32,6 +32,13 @@ def test_the_demo_rides_through_an_emulator_held_up_for_a_second(
         return handle(self, data, now_s)
 
     monkeypatch.setattr(_udp_emulator.ControllerEmulator, "handle", slow_handle)
+    # the report's plots (about 3 s of CPU; tests/test_pipeline.py checks them) are not what
+    # is held up here: not drawn
+    from motioncue.pipeline import _report
+
+    drawn: list[object] = []
+    monkeypatch.setattr(_report, "write_report", lambda d, *_a: drawn.append(d))
     demo = run_demo(tmp_path / "demo", log=lambda s: None)
+    assert drawn == [demo.report_dir]  # the report writer was the one replaced
     assert held.is_set()  # the hold-up happened during the ride
     assert demo.comparison.ok, demo.comparison  # every frame traced, on time, in the limits

@@ -77,6 +77,7 @@ from ..trajectory import reachable
 
 if TYPE_CHECKING:
     from concurrent.futures import ProcessPoolExecutor
+    from multiprocessing.context import BaseContext
 
     from scipy.optimize import OptimizeResult
 
@@ -488,6 +489,28 @@ def _score_with(objective: TuneObjective, x: NDArray[np.float64]) -> float:
     return objective(x)
 
 
+_POOL_PRELOAD = ("motioncue.analysis._tune", "scipy.signal")
+"""What a pool process needs to evaluate the objective (the chain; the vestibular models and
+the washout filter with :func:`scipy.signal.sosfilt`), imported once in the fork server."""
+
+
+def _pool_context() -> BaseContext:
+    """The start method of the local pool: ``forkserver`` where there is one (POSIX).
+
+    Each ``spawn`` process imports the chain and SciPy's signal package on its own (about
+    1.4 s of CPU each); the fork server imports them once, with :data:`_POOL_PRELOAD`, and
+    forks the pool's processes from itself, single-threaded (a fork of this process could
+    copy a lock another thread holds). Elsewhere (Windows): ``spawn``.
+    """
+    import multiprocessing
+
+    if "forkserver" not in multiprocessing.get_all_start_methods():
+        return multiprocessing.get_context("spawn")
+    ctx = multiprocessing.get_context("forkserver")
+    ctx.set_forkserver_preload(list(_POOL_PRELOAD))  # no effect once the server runs
+    return ctx
+
+
 class _Evaluator:
     """Map-like ``(func, xs) -> list`` for differential_evolution, counting evaluations.
 
@@ -508,12 +531,11 @@ class _Evaluator:
         if scheduler is not None:
             self._start_dask(scheduler)
         elif workers > 1:
-            import multiprocessing
             from concurrent.futures import ProcessPoolExecutor
 
             self._pool = ProcessPoolExecutor(
                 max_workers=workers,
-                mp_context=multiprocessing.get_context("spawn"),
+                mp_context=_pool_context(),
                 initializer=_install,
                 initargs=(objective,),
             )

@@ -139,6 +139,14 @@ def read_recording_csv(path: str | Path) -> Recording:
             need = max(cols) + 1
             rows: list[list[float]] = []
             for row in reader:
+                if len(row) >= need:
+                    try:  # the common row: seven numbers (float() ignores the spaces _parse strips)
+                        values = [float(row[i]) for i in cols]
+                    except ValueError:  # an empty cell (NaN) or a bad number: _parse tells which
+                        values = []
+                    if values and math.isfinite(values[0]):
+                        rows.append(values)
+                        continue
                 line = reader.line_num
                 if not row or all(not c.strip() for c in row):
                     continue
