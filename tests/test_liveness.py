@@ -39,6 +39,12 @@ SRC = Path(__file__).resolve().parents[1] / "src"
 ENV = {**os.environ, "PYTHONPATH": str(SRC)}
 HEAD = struct.Struct(">6H")
 SILENCE_MS = 300
+KILLED_SILENCE_MS = 1000
+"""The silence limit of the tests that kill the emulator process mid-ride. Longer than
+SILENCE_MS: the emulator is a process of its own, which a busy machine (one core kept busy
+beside the suite's workers) held up for over 300 ms while it was alive, so play stopped on a
+false silence before the kill (once in a fresh-clone run, session 25); these tests are about
+what follows a real silence, as test_bridge_stops_when_the_controller_goes_silent's 1000 ms."""
 
 
 def _lap(seconds: float) -> Recording:
@@ -161,7 +167,7 @@ def test_play_stops_when_the_emulator_process_is_killed(rides: Any, controller: 
     emu, port = _emulator(controller)
     try:
         play = _motioncue("play", str(ride_path), "--target",
-                          f"udp://127.0.0.1:{port}?silence_ms={SILENCE_MS}")  # fmt: skip
+                          f"udp://127.0.0.1:{port}?silence_ms={KILLED_SILENCE_MS}")  # fmt: skip
         head = _wait_for_line(play, "play: ")
         time.sleep(1.5)  # the ride is under way (6 s of frames)
         assert play.poll() is None, play.communicate()
@@ -177,7 +183,7 @@ def test_play_stops_when_the_emulator_process_is_killed(rides: Any, controller: 
     assert "Traceback" not in err
     assert "the controller reports motors at" in err  # it was there at the start
     silences = _silences_ms(err)
-    assert silences and min(silences) >= SILENCE_MS, err
+    assert silences and min(silences) >= KILLED_SILENCE_MS, err
     assert "PARK NOT CONFIRMED" in err and "parked at rest" not in out + err
     assert "finished" not in out
     # stopped within the silence limit of the kill, not at the end of the ride
@@ -299,7 +305,7 @@ def test_bridge_replay_stops_when_the_emulator_process_is_killed(
         proc = _motioncue("bridge", "--source", f"replay:{rec}?speed=1", "--platform",
                           "stewart6-linear", "--controller", controller, "--rate", "100",
                           "--fade", "0.3", "--quiet", "--target",
-                          f"udp://127.0.0.1:{port}?silence_ms={SILENCE_MS}")  # fmt: skip
+                          f"udp://127.0.0.1:{port}?silence_ms={KILLED_SILENCE_MS}")  # fmt: skip
         head = _wait_for_line(proc, "bridge: ")  # after the controller's position was read
         time.sleep(1.5)
         assert proc.poll() is None, proc.communicate()
