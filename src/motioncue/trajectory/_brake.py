@@ -31,7 +31,7 @@ from __future__ import annotations
 
 import math
 
-from ._realtime import _vcap
+from ._realtime import _stairs, _vcap
 
 _MAX_BRAKE_FRAMES = 1_000_000
 _PAD_FRAMES = 1.0
@@ -130,11 +130,7 @@ def forward_stop(v: float, a: float, amax: float, jdt: float, dt: float) -> floa
         if b <= 0.0:
             break
         # the braking staircase from u = vcap(b) (as _vcap: b = (n + 1) u - jdt n (n + 1) / 2)
-        n = int((math.sqrt(1.0 + 8.0 * b / jdt) - 1.0) * 0.5)
-        while n > 0 and jdt * n * (n + 1) * 0.5 > b:
-            n -= 1
-        while jdt * (n + 1) * (n + 2) * 0.5 <= b:
-            n += 1
+        n = _stairs(b, jdt)
         u = b / (n + 1) + jdt * n * 0.5
         total += n * b - u * n * (n + 1) * 0.5 + jdt * (n - 1) * n * (n + 1) / 6.0
         break
@@ -208,11 +204,7 @@ def stops_within(
             elif bud >= big:
                 an = abig
             else:
-                n = int((math.sqrt(1.0 + 8.0 * bud / jdt) - 1.0) * 0.5)
-                while n > 0 and jdt * n * (n + 1) * 0.5 > bud:
-                    n -= 1
-                while jdt * (n + 1) * (n + 2) * 0.5 <= bud:
-                    n += 1
+                n = _stairs(bud, jdt)
                 an = bud / (n + 1) + jdt * n * 0.5
             mag = an
             if not e > 0.0:

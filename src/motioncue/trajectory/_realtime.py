@@ -102,12 +102,20 @@ def _vcap(b: float, adt: float, v_big: float = math.inf) -> float:
             return v_big
     elif not b < 1e200:
         return math.inf
+    n = _stairs(b, adt)
+    return b / (n + 1) + adt * n * 0.5
+
+
+def _stairs(b: float, adt: float) -> int:
+    """The number ``n`` of whole steps of ``adt`` in the staircase of budget ``b > 0``: the
+    largest ``n >= 0`` with ``adt n (n + 1) / 2 <= b`` (closed form, then corrected for
+    rounding). :func:`_vcap` is ``b / (n + 1) + adt n / 2``."""
     n = int((math.sqrt(1.0 + 8.0 * b / adt) - 1.0) * 0.5)
     while n > 0 and adt * n * (n + 1) * 0.5 > b:
         n -= 1
     while adt * (n + 1) * (n + 2) * 0.5 <= b:
         n += 1
-    return b / (n + 1) + adt * n * 0.5
+    return n
 
 
 def _level_params(d_max: float, dd_max: float, dt: float) -> tuple[float, float, float, float]:
