@@ -20,6 +20,8 @@ stop-then-ramp; x 0.179, z 0.088, pitch 0.122 with the moves from motion; the ri
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import numpy as np
 import pytest
 
@@ -178,7 +180,7 @@ def test_a_join_the_workspace_cuts_short_is_reported(monkeypatch: pytest.MonkeyP
 @pytest.mark.parametrize("x_end_m", [0.04, 0.11])
 def test_generate_prints_its_joins(
     monkeypatch: pytest.MonkeyPatch,
-    tmp_path: pytest.TempPathFactory,
+    tmp_path: Path,
     capsys: pytest.CaptureFixture[str],
     x_end_m: float,
 ) -> None:
@@ -186,7 +188,6 @@ def test_generate_prints_its_joins(
     cut short is said on stderr as a ``note:`` (a rider may feel it); a join within the
     thresholds is not."""
     import json
-    from pathlib import Path
 
     from motioncue.cli import main
     from motioncue.telemetry._recording import write_recording_csv
@@ -195,7 +196,7 @@ def test_generate_prints_its_joins(
     _ride(monkeypatch, notes, x_end_m=x_end_m)  # the same synthetic cue, patched in place
     n = int(RATE_HZ)
     t = np.arange(n) / RATE_HZ
-    folder = Path(str(tmp_path))
+    folder = tmp_path
     write_recording_csv(
         folder / "in.csv",
         Recording(t, np.tile([0.0, 0.0, 9.80665], (n, 1)), np.zeros((n, 3))),
