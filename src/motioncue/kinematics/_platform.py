@@ -1174,15 +1174,25 @@ def _positive(name: str, value: float) -> float:
     return v
 
 
-def _length_stroke(legs: LinearLegs, stroke: npt.ArrayLike) -> tuple[np.ndarray, np.ndarray]:
-    arr = np.asarray(stroke, dtype=float)
+def _ranges(name: str, value: npt.ArrayLike, n: int, allowed: str) -> np.ndarray:
+    """``(n, 2)`` rows ``(min, max)`` from one pair for all ``n`` actuators or one pair each,
+    finite with ``min < max``; else :class:`ConfigError` naming ``name``, the value and
+    ``allowed``."""
+    arr = np.asarray(value, dtype=float)
     if arr.shape == (2,):
-        arr = np.broadcast_to(arr, (legs.n, 2))
-    if arr.shape != (legs.n, 2) or not np.isfinite(arr).all() or np.any(arr[:, 0] >= arr[:, 1]):
-        raise ConfigError(
-            f"stroke = {stroke!r} is invalid; allowed: (min_length_m, max_length_m) with "
-            "min < max, or one such pair per leg"
-        )
+        arr = np.broadcast_to(arr, (n, 2))
+    if arr.shape != (n, 2) or not np.isfinite(arr).all() or np.any(arr[:, 0] >= arr[:, 1]):
+        raise ConfigError(f"{name} = {value!r} is invalid; allowed: {allowed}")
+    return arr
+
+
+def _length_stroke(legs: LinearLegs, stroke: npt.ArrayLike) -> tuple[np.ndarray, np.ndarray]:
+    arr = _ranges(
+        "stroke",
+        stroke,
+        legs.n,
+        "(min_length_m, max_length_m) with min < max, or one such pair per leg",
+    )
     if np.any(arr[:, 0] <= 0):
         raise ConfigError(f"stroke = {stroke!r} is invalid; allowed: lengths > 0")
     return arr[:, 0] - legs.length0, arr[:, 1] - legs.length0
@@ -1416,13 +1426,7 @@ class Stewart6Rotary(Platform):
             crank,
             rod,
         )
-        cr = np.asarray(crank_range, dtype=float)
-        if cr.shape == (2,):
-            cr = np.broadcast_to(cr, (6, 2))
-        if cr.shape != (6, 2) or not np.isfinite(cr).all() or np.any(cr[:, 0] >= cr[:, 1]):
-            raise ConfigError(
-                f"crank_range = {crank_range!r} is invalid; allowed: (min_rad, max_rad), min < max"
-            )
+        cr = _ranges("crank_range", crank_range, 6, "(min_rad, max_rad), min < max")
         super().__init__(
             name=name,
             actuator_names=_names(actuator_names, 6),
