@@ -118,6 +118,7 @@ from numpy.typing import NDArray
 
 from .._errors import ConfigError
 from ..cueing import ClassicalWashout, CueingParams
+from ..cueing._algorithm import check_rig
 from ..cueing._params import GRAVITY_M_S2
 from ..pipeline._chain import offline_chain
 from ..trajectory import pulse_rounding_limits
@@ -654,11 +655,7 @@ def run_omct(
     sc = amplitude_scale
     if isinstance(sc, bool) or not isinstance(sc, int | float) or not 0.0 < sc <= 100.0:
         raise ConfigError(f"amplitude_scale = {sc!r} is invalid; allowed: (0, 100]")
-    if limits.n_actuators != platform.n_actuators:
-        raise ConfigError(
-            f"limits have {limits.n_actuators} actuators; platform {platform.name!r} has "
-            f"{platform.n_actuators}"
-        )
+    check_rig(platform, limits)
     tight = pulse_rounding_limits(limits, platform, dt)
     settle_s = 12.0 / _slowest_decay_rate(design)
     head = _head_offset(design.params)

@@ -65,6 +65,7 @@ __all__ = [
     "ParameterTable",
     "Rig",
     "check_algorithm_name",
+    "check_rig",
     "cueing_algorithms",
     "cueing_entry",
     "make_cueing",
@@ -178,6 +179,21 @@ Cueing = CueingAlgorithm[CueingState]
 ``bad_samples`` read)."""
 
 
+def check_rig(platform: Platform, limits: ActuatorLimits) -> None:
+    """Refuse actuator limits of another actuator count than the platform's.
+
+    Raises
+    ------
+    ConfigError
+        Naming both counts and the platform.
+    """
+    if limits.n_actuators != platform.n_actuators:
+        raise ConfigError(
+            f"limits have {limits.n_actuators} actuators; platform {platform.name!r} has "
+            f"{platform.n_actuators}"
+        )
+
+
 @dataclass(frozen=True, eq=False)
 class Rig:
     """The machine a cueing algorithm plans for, given by the caller (``--platform``,
@@ -198,11 +214,7 @@ class Rig:
     controller: str = ""
 
     def __post_init__(self) -> None:
-        if self.limits.n_actuators != self.platform.n_actuators:
-            raise ConfigError(
-                f"limits have {self.limits.n_actuators} actuators; platform "
-                f"{self.platform.name!r} has {self.platform.n_actuators}"
-            )
+        check_rig(self.platform, self.limits)
 
 
 @dataclass(frozen=True, eq=False)

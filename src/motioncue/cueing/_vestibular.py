@@ -90,6 +90,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from .._errors import ConfigError
+from .._frozen import readonly
 
 __all__ = [
     "AXIS_NAMES",
@@ -186,9 +187,7 @@ def _tustin_sos(factors: tuple[tuple[Poly, Poly], ...], fs_hz: float) -> NDArray
     poles = np.concatenate([np.roots(a) for _, a in factors])
     k = float(np.prod([b[0] / a[0] for b, a in factors]))
     zd, pd, kd = bilinear_zpk(zeros, poles, k, fs_hz)
-    sos = np.asarray(zpk2sos(zd, pd, kd, pairing="nearest"), dtype=float)
-    sos.setflags(write=False)
-    return sos
+    return readonly(zpk2sos(zd, pd, kd, pairing="nearest"))
 
 
 def _canal_tc(

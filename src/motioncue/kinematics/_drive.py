@@ -16,14 +16,9 @@ import numpy as np
 import numpy.typing as npt
 
 from .._errors import ConfigError
-from .._frozen import set_fields
+from .._frozen import readonly, set_fields
 
 __all__ = ["Drive"]
-
-
-def _readonly(a: np.ndarray) -> np.ndarray:
-    a.setflags(write=False)
-    return a
 
 
 @dataclass(frozen=True, eq=False)
@@ -78,13 +73,13 @@ class Drive:
         set_fields(
             self,
             kinds=tuple(self.kinds),
-            pulses_per_rev=_readonly(ppr.astype(np.int64)),
-            units_per_rev=_readonly(upr.copy()),
-            direction=_readonly(dirs.astype(np.int64)),
-            q_home=_readonly(home.copy()),
+            pulses_per_rev=readonly(ppr, np.int64),
+            units_per_rev=readonly(upr),
+            direction=readonly(dirs, np.int64),
+            q_home=readonly(home),
         )
         ppu = self.direction * self.pulses_per_rev / self.units_per_rev
-        set_fields(self, _ppu=_readonly(ppu))
+        set_fields(self, _ppu=readonly(ppu))
 
     # --- constructors -------------------------------------------------------------------
     @classmethod

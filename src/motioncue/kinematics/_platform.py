@@ -16,7 +16,7 @@ import numpy as np
 import numpy.typing as npt
 
 from .._errors import ConfigError
-from .._frozen import set_fields
+from .._frozen import readonly, set_fields
 from ._drive import Drive
 from ._legs import CrankLegs, LegSet, LinearLegs
 from ._rotation import rot9, rot9_derivatives, rot_one
@@ -39,12 +39,6 @@ _CHUNK = 2048  # poses per block in batch IK: temporaries stay in cache, BLAS st
 _JAC_CHUNK = 8192  # poses per block in batch Jacobians (bounds temporary memory)
 _NO_REACH = np.ones((0, 0), dtype=bool)
 _TL_MAX_RAD = math.radians(89.0)  # a traction-loss slider's pin leaves its slot beyond this
-
-
-def _readonly(a: npt.ArrayLike, dtype: npt.DTypeLike = float) -> np.ndarray:
-    arr = np.array(a, dtype=dtype)
-    arr.setflags(write=False)
-    return arr
 
 
 @dataclass(frozen=True)
@@ -233,7 +227,7 @@ class Platform:
                     f"{key} = {np.asarray(value).tolist()} is invalid; allowed: finite numbers "
                     f"> 0, one or {self.n_actuators}"
                 )
-            given[key] = _readonly(arr)
+            given[key] = readonly(arr)
         out = copy.copy(self)
         set_fields(out, **given)
         return out
@@ -437,7 +431,7 @@ class Platform:
             actuator_names=names,
             n_actuators=n,
             actuator_kinds=kinds,
-            dof_mask=_readonly(dof_mask, bool),
+            dof_mask=readonly(dof_mask, bool),
             _legs=legs,
             _leg_mask=np.asarray(leg_pose_mask, dtype=float),
             _leg_mask_list=[bool(v) for v in leg_pose_mask],
@@ -464,10 +458,10 @@ class Platform:
             _init_args=init_args,
             _dof_idx=dof_idx,
             _dof_list=[int(k) for k in dof_idx],
-            q_neutral=_readonly(np.zeros(n)),
-            q_min=_readonly(q_lo),
-            q_max=_readonly(q_hi),
-            q_park=_readonly(home),
+            q_neutral=readonly(np.zeros(n)),
+            q_min=readonly(q_lo),
+            q_max=readonly(q_hi),
+            q_park=readonly(home),
             drives=drives,
         )
         if isinstance(legs, LinearLegs):
@@ -478,7 +472,7 @@ class Platform:
             raise TypeError(f"unknown leg set {type(legs).__name__}")
         set_fields(
             self,
-            neutral_absolute=_readonly(np.concatenate([absolute, [0.0] * (yaw_axis + spare_axes)])),
+            neutral_absolute=readonly(np.concatenate([absolute, [0.0] * (yaw_axis + spare_axes)])),
         )
         if len(self._dof_idx) > n_moving:
             raise ConfigError(
@@ -503,7 +497,7 @@ class Platform:
                 f"no pose puts the actuators at their homed positions {home.tolist()} "
                 "(from neutral): is the stroke minimum possible for this geometry?"
             )
-        set_fields(self, pose_park=_readonly(fk.pose))
+        set_fields(self, pose_park=readonly(fk.pose))
 
     name: str
     description: str
@@ -776,7 +770,7 @@ class Platform:
         positions a controller is sent, and the default tolerance of :meth:`forward`."""
         cached = self.__dict__.get("_q_rounding")
         if cached is None:
-            cached = _readonly(1.0 / np.abs(self.drives.pulses_per_unit))
+            cached = readonly(1.0 / np.abs(self.drives.pulses_per_unit))
             set_fields(self, _q_rounding=cached)
         out: np.ndarray = cached
         return out
@@ -1180,15 +1174,25 @@ def _positive(name: str, value: float) -> float:
     return v
 
 
-def _length_stroke(legs: LinearLegs, stroke: npt.ArrayLike) -> tuple[np.ndarray, np.ndarray]:
-    arr = np.asarray(stroke, dtype=float)
+def _ranges(name: str, value: npt.ArrayLike, n: int, allowed: str) -> np.ndarray:
+    """``(n, 2)`` rows ``(min, max)`` from one pair for all ``n`` actuators or one pair each,
+    finite with ``min < max``; else :class:`ConfigError` naming ``name``, the value and
+    ``allowed``."""
+    arr = np.asarray(value, dtype=float)
     if arr.shape == (2,):
-        arr = np.broadcast_to(arr, (legs.n, 2))
-    if arr.shape != (legs.n, 2) or not np.isfinite(arr).all() or np.any(arr[:, 0] >= arr[:, 1]):
-        raise ConfigError(
-            f"stroke = {stroke!r} is invalid; allowed: (min_length_m, max_length_m) with "
-            "min < max, or one such pair per leg"
-        )
+        arr = np.broadcast_to(arr, (n, 2))
+    if arr.shape != (n, 2) or not np.isfinite(arr).all() or np.any(arr[:, 0] >= arr[:, 1]):
+        raise ConfigError(f"{name} = {value!r} is invalid; allowed: {allowed}")
+    return arr
+
+
+def _length_stroke(legs: LinearLegs, stroke: npt.ArrayLike) -> tuple[np.ndarray, np.ndarray]:
+    arr = _ranges(
+        "stroke",
+        stroke,
+        legs.n,
+        "(min_length_m, max_length_m) with min < max, or one such pair per leg",
+    )
     if np.any(arr[:, 0] <= 0):
         raise ConfigError(f"stroke = {stroke!r} is invalid; allowed: lengths > 0")
     return arr[:, 0] - legs.length0, arr[:, 1] - legs.length0
@@ -1422,13 +1426,7 @@ class Stewart6Rotary(Platform):
             crank,
             rod,
         )
-        cr = np.asarray(crank_range, dtype=float)
-        if cr.shape == (2,):
-            cr = np.broadcast_to(cr, (6, 2))
-        if cr.shape != (6, 2) or not np.isfinite(cr).all() or np.any(cr[:, 0] >= cr[:, 1]):
-            raise ConfigError(
-                f"crank_range = {crank_range!r} is invalid; allowed: (min_rad, max_rad), min < max"
-            )
+        cr = _ranges("crank_range", crank_range, 6, "(min_rad, max_rad), min < max")
         super().__init__(
             name=name,
             actuator_names=_names(actuator_names, 6),

@@ -24,7 +24,7 @@ from typing import TYPE_CHECKING, Any, Protocol, runtime_checkable
 import numpy as np
 
 from .._errors import ConfigError
-from .._frozen import set_fields
+from .._frozen import readonly, set_fields
 
 if TYPE_CHECKING:
     import numpy.typing as npt
@@ -50,8 +50,7 @@ def _axis_array(name: str, value: npt.ArrayLike | None, n: int, fill: float) -> 
         arr = np.full(n, float(arr[0]))
     if arr.shape != (n,) or np.any(np.isnan(arr)):
         raise ConfigError(f"{name} = {value!r} is invalid; allowed: {n} numbers (inf = none)")
-    arr.setflags(write=False)
-    return arr
+    return readonly(arr)
 
 
 @dataclass(frozen=True, eq=False)

@@ -85,26 +85,25 @@ class UsbDllLink:
         if cmd.addr != 0:
             raise ProtocolError(f"USB address is fixed at 00 (manual 6.2.4.1), got {cmd.addr}")
         buf = (ctypes.c_ubyte * _BUFFER)(*encode_usb_write(cmd))
-        try:
-            ret = self._fn.senddata(buf, 0, USB_WRITE_SIZE)
-        except OSError as exc:
-            raise TransportError(f"EM2300 senddata failed: {exc}") from exc
-        self.calls += 1
-        if ret is not None and int(ret) < 0:
-            raise TransportError(f"EM2300 senddata returned {ret}")
+        self._call("senddata", buf, 0, USB_WRITE_SIZE)
         return decode_usb_write_reply(bytes(buf[:USB_WRITE_REPLY_SIZE]))
 
     def read(self, request: UsbReadRequest) -> UsbReadReply:
         """Run one query; returns the decoded 16-byte reply."""
         buf = (ctypes.c_ubyte * USB_READ_REPLY_SIZE)()
+        self._call("recdata", buf, 0, request.code, request.rdat1, request.rdat2)
+        return decode_usb_read_reply(bytes(buf))
+
+    def _call(self, name: str, *args: Any) -> None:
+        """Call the DLL function ``name``: an OS error or a negative return is a
+        :class:`TransportError` naming it; each call that returns is counted."""
         try:
-            ret = self._fn.recdata(buf, 0, request.code, request.rdat1, request.rdat2)
+            ret = getattr(self._fn, name)(*args)
         except OSError as exc:
-            raise TransportError(f"EM2300 recdata failed: {exc}") from exc
+            raise TransportError(f"EM2300 {name} failed: {exc}") from exc
         self.calls += 1
         if ret is not None and int(ret) < 0:
-            raise TransportError(f"EM2300 recdata returned {ret}")
-        return decode_usb_read_reply(bytes(buf))
+            raise TransportError(f"EM2300 {name} returned {ret}")
 
 
 def usb_read_request(cmd: Command) -> UsbReadRequest:
