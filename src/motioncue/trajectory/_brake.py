@@ -159,10 +159,8 @@ def stops_within(
 
     ``q`` itself is not checked. Parameters as in ``JerkLimiter._params``.
     """
-    inv_dt = 1.0 / dt
     lo_e = lo - _EPS
     hi_e = hi + _EPS
-    big = abig + abig * abig / (2.0 * jdt) + jdt
     # the -v_max/+v_max cap of a braking step cannot bind (see the staircase below)
     stair_ok = amax * amax * half_inv_j + amax * dt <= vmax
     if stair_ok and lo_e <= q <= hi_e:
@@ -170,6 +168,30 @@ def stops_within(
         dist = forward_stop(v, a, amax, jdt, dt)
         if dist is not None:
             return lo_e <= q + dist <= hi_e
+    return simulate_within(q, v, a, lo, hi, vmax, amax, jdt, half_inv_j, abig, jmax, dt, stair_ok)
+
+
+def simulate_within(
+    q: float,
+    v: float,
+    a: float,
+    lo: float,
+    hi: float,
+    vmax: float,
+    amax: float,
+    jdt: float,
+    half_inv_j: float,
+    abig: float,
+    jmax: float,
+    dt: float,
+    stair_ok: bool,
+) -> bool:
+    """:func:`stops_within` by simulation alone (its answer where :func:`forward_stop` has
+    none); ``stair_ok`` as computed there (``amax^2 / (2 j_max) + amax dt <= v_max``)."""
+    inv_dt = 1.0 / dt
+    lo_e = lo - _EPS
+    hi_e = hi + _EPS
+    big = abig + abig * abig / (2.0 * jdt) + jdt
     stair = 0
     mag = 0.0
     d = 0.0

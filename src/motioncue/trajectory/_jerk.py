@@ -47,7 +47,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from .._errors import ConfigError, LimitError
-from ._brake import brake_bound, stops_within
+from ._brake import brake_bound, forward_stop, simulate_within, stops_within
 from ._limits import ActuatorLimits
 from ._realtime import _counters_repr, _land_slack, _level_params, _level_step, _vcap
 
@@ -109,7 +109,7 @@ class JerkLimiter:
     _dt: float = field(init=False, repr=False)
     _inv_dt: float = field(init=False, repr=False)
     _slack: tuple[float, ...] = field(init=False, repr=False)
-    _big: tuple[float, ...] = field(init=False, repr=False)
+    _axes: tuple[tuple[float, ...], ...] = field(init=False, repr=False)
 
     def __post_init__(self) -> None:
         if not (isinstance(self.dt_s, int | float) and 0.0 < self.dt_s <= 1.0):
@@ -132,9 +132,14 @@ class JerkLimiter:
         # the landing test's slack at the velocity level (accelerations: order 2)
         slacks = tuple(_land_slack(p[4], max(abs(p[0]), abs(p[1])), dt, 2) for p in params)
         object.__setattr__(self, "_slack", slacks)
-        # _vcap's saturation threshold per axis (same expression: same decisions)
-        bigs = tuple(p[6] + p[6] * p[6] / (2.0 * p[4]) + p[4] for p in params)
-        object.__setattr__(self, "_big", bigs)
+        # step()'s constants per axis: _params, the landing slack, the budget from which
+        # _vcap is at least a_max (_chase_saturation) and whether P's braking staircase
+        # never meets the +-v_max caps (_brake.stops_within's stair_ok, same expression)
+        axes = tuple(
+            (*p, sl, _chase_saturation(p[3], p[4], p[6]), p[3] * p[3] * p[5] + p[3] * dt <= p[2])
+            for p, sl in zip(params, slacks, strict=True)
+        )
+        object.__setattr__(self, "_axes", axes)
         object.__setattr__(self, "_dt", dt)
         object.__setattr__(self, "_inv_dt", 1.0 / dt)
 
@@ -249,15 +254,12 @@ class JerkLimiter:
         out = [0.0] * len(qs)
         clamped = False
         n_sim = 0
-        slacks = self._slack
-        bigs = self._big
         i = 0
         # _level_step at the velocity level and the admissibility test of _admissible,
         # inlined (a call per candidate costs more than the work): the band of next
         # accelerations depends on (v, a) only, so it is computed once per axis for the
         # landing test and every candidate; same float operations, so the same frames
-        for qmin, qmax, vmax, amax, jdt, half_inv_j, abig, jmax in self._params:
-            big = bigs[i]
+        for qmin, qmax, vmax, amax, jdt, half_inv_j, abig, jmax, sl, sat, stair_ok in self._axes:
             t = float(q_target[i])
             if t - t != 0.0:
                 t = lts[i]
@@ -293,7 +295,6 @@ class JerkLimiter:
             dd = (want - v) * inv_dt
             dw = (want - lws[i]) * inv_dt
             lws[i] = want  # the target's own speed as seen from the last frame
-            sl = slacks[i]
             if lo - sl <= dd <= hi + sl and -jdt - sl <= dd - dw <= jdt + sl:  # lands
                 q1 = t
                 if qmin - 1e-9 <= q1 <= qmax + 1e-9:
@@ -304,9 +305,14 @@ class JerkLimiter:
                         ok = True
                     else:
                         n_sim += 1
-                        ok = stops_within(
-                            q1, v1, a1, qmin, qmax, vmax, amax, jdt, half_inv_j, abig, jmax, dt
-                        )
+                        dist = forward_stop(v1, a1, amax, jdt, dt) if stair_ok else None
+                        if dist is not None:
+                            ok = qmin - 1e-9 <= q1 + dist <= qmax + 1e-9
+                        else:
+                            ok = simulate_within(
+                                q1, v1, a1, qmin, qmax, vmax, amax, jdt, half_inv_j, abig, jmax,
+                                dt, stair_ok,
+                            )  # fmt: skip
                     if ok:
                         qs[i] = q1
                         vs[i] = v1
@@ -326,21 +332,23 @@ class JerkLimiter:
             hi_e = hi_w + 1e-9
             best = False
             qn = vn = an = 0.0
+            seen: dict[float, bool] | None = None
+            w = want
             w_lo, w_hi = 0.0, want
-            # wanted speeds beyond what one frame can reach give the same next state (the
-            # step saturates): remember each decided state (q, v fixed: qb decides it)
-            seen: dict[float, bool] = {}
             for k in range(_BISECT + 1):
-                w = want if k == 0 else 0.5 * (w_lo + w_hi)
+                if k:
+                    w = 0.5 * (w_lo + w_hi)
                 # _level_step(v, a, w, w): lands on w, else the chase clipped to the band
                 ddw = (w - v) * inv_dt
                 if lo <= ddw <= hi and -jdt <= ddw <= jdt:
                     vb = w
                 else:
                     e = w - v
-                    # _vcap(|e| / dt, jdt, abig); its first test (a saturated chase) inlined
+                    # _vcap(|e| / dt, jdt, abig) with its first test (a saturated chase)
+                    # inlined; from `sat` on it is >= amax, so the band's bound is the
+                    # answer whatever its value: abig stands in for it (same clipped dn)
                     b = e * inv_dt if e > 0.0 else -e * inv_dt
-                    dn = abig if b >= big else _vcap(b, jdt, abig)
+                    dn = abig if b >= sat else _vcap(b, jdt, abig)
                     if not e > 0.0:
                         dn = -dn
                     if dn > hi:
@@ -351,7 +359,10 @@ class JerkLimiter:
                 qb = q + vb * dt
                 vb = (qb - q) * inv_dt
                 ab_ = (vb - v) * inv_dt
-                known = seen.get(qb)
+                # wanted speeds beyond what one frame can reach give the same next state
+                # (the step saturates): the bisection remembers each decided state (q, v
+                # fixed: qb decides it); the first candidate needs no memory
+                known = None if seen is None else seen.get(qb)
                 if known is not None:
                     ok = known
                 else:
@@ -363,9 +374,16 @@ class JerkLimiter:
                             ok = True
                         else:
                             n_sim += 1
-                            ok = stops_within(qb, vb, ab_, lo_w, hi_w, vmax, amax, jdt,
-                                              half_inv_j, abig, jmax, dt)  # fmt: skip
-                    seen[qb] = ok
+                            dist = forward_stop(vb, ab_, amax, jdt, dt) if stair_ok else None
+                            if dist is not None:
+                                ok = lo_e <= qb + dist <= hi_e
+                            else:
+                                ok = simulate_within(qb, vb, ab_, lo_w, hi_w, vmax, amax, jdt,
+                                                     half_inv_j, abig, jmax, dt, stair_ok)  # fmt: skip
+                    if seen is None:
+                        seen = {qb: ok}
+                    else:
+                        seen[qb] = ok
                 if ok:
                     best = True
                     qn, vn, an = qb, vb, ab_
@@ -426,3 +444,19 @@ def _second_order_distance(a: float, j: float, dt: float) -> float:
     jdt = j * dt
     n = math.floor(a / jdt)
     return dt * (n * a - jdt * n * (n + 1) / 2.0)
+
+
+def _chase_saturation(amax: float, jdt: float, abig: float) -> float:
+    """A budget ``b`` (speed units, as :func:`._realtime._vcap`'s) from which ``_vcap(b, jdt,
+    abig)`` is at least ``amax`` (so a chase step clipped to the band ``|a| <= amax`` ends on
+    the band's bound, whatever the exact value).
+
+    ``_vcap(b) >= amax`` exactly when ``b >= S = amax + sum_{i=1..m} (amax - i jdt)``,
+    ``m = floor(amax / jdt)`` (the staircase's budget for ``amax``); the threshold is
+    ``S`` plus one part in 1e6, so that ``_vcap``'s rounding (parts in 1e15) cannot bring it
+    under ``amax``: ``_vcap`` rises at least ``1 / (n + 1)`` per unit of budget above ``S``.
+    No more than ``_vcap``'s own saturation test (``abig``): beyond it ``abig`` is returned.
+    """
+    m = math.floor(amax / jdt)
+    s = (m + 1) * amax - jdt * m * (m + 1) / 2.0
+    return min(s * (1.0 + 1e-6), abig + abig * abig / (2.0 * jdt) + jdt)
