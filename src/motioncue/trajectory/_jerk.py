@@ -259,7 +259,8 @@ class JerkLimiter:
         # inlined (a call per candidate costs more than the work): the band of next
         # accelerations depends on (v, a) only, so it is computed once per axis for the
         # landing test and every candidate; same float operations, so the same frames
-        for qmin, qmax, vmax, amax, jdt, half_inv_j, abig, jmax, sl, sat, stair_ok in self._axes:
+        for axis in self._axes:
+            qmin, qmax, vmax, amax, jdt, half_inv_j, abig, jmax, sl, sat, stair_ok = axis
             t = float(q_target[i])
             if t - t != 0.0:
                 t = lts[i]
@@ -305,14 +306,7 @@ class JerkLimiter:
                         ok = True
                     else:
                         n_sim += 1
-                        dist = forward_stop(v1, a1, amax, jdt, dt) if stair_ok else None
-                        if dist is not None:
-                            ok = qmin - 1e-9 <= q1 + dist <= qmax + 1e-9
-                        else:
-                            ok = simulate_within(
-                                q1, v1, a1, qmin, qmax, vmax, amax, jdt, half_inv_j, abig, jmax,
-                                dt, stair_ok,
-                            )  # fmt: skip
+                        ok = _stops(q1, v1, a1, qmin, qmax, axis, dt)
                     if ok:
                         qs[i] = q1
                         vs[i] = v1
@@ -322,91 +316,47 @@ class JerkLimiter:
                         continue
             # limiting: the largest wanted speed towards the target (held, no feed-forward
             # of its rate) whose next state is admissible and stops before the target
-            # (approach without overshoot); first the full one, then bisection towards 0
+            # (approach without overshoot); first the full one (here), then bisection
+            # towards 0 (_bisect)
             lo_w, hi_w = qmin, qmax
             if t > q:
                 hi_w = t if t < qmax else qmax
             elif t < q:
                 lo_w = t if t > qmin else qmin
-            lo_e = lo_w - 1e-9
-            hi_e = hi_w + 1e-9
-            best = False
-            qn = vn = an = 0.0
-            seen: dict[float, bool] | None = None
-            w = want
-            w_lo, w_hi = 0.0, want
-            for k in range(_BISECT + 1):
-                if k:
-                    w = 0.5 * (w_lo + w_hi)
-                # _level_step(v, a, w, w): lands on w, else the chase clipped to the band
-                ddw = (w - v) * inv_dt
-                if lo <= ddw <= hi and -jdt <= ddw <= jdt:
-                    vb = w
+            # _level_step(v, a, want, want): lands on want, else the chase clipped to the band
+            ddw = (want - v) * inv_dt
+            if lo <= ddw <= hi and -jdt <= ddw <= jdt:
+                vb = want
+            else:
+                e = want - v
+                # _vcap(|e| / dt, jdt, abig) with its first test (a saturated chase) inlined;
+                # from `sat` on it is >= amax, so the band's bound is the answer whatever its
+                # value: abig stands in for it (same clipped dn)
+                b = e * inv_dt if e > 0.0 else -e * inv_dt
+                dn = abig if b >= sat else _vcap(b, jdt, abig)
+                if not e > 0.0:
+                    dn = -dn
+                if dn > hi:
+                    dn = hi
+                if dn < lo:
+                    dn = lo
+                vb = v + dn * dt
+            qn = q + vb * dt
+            vn = (qn - q) * inv_dt
+            an = (vn - v) * inv_dt
+            # the next state is admissible (_admissible, inlined)
+            if not lo_w - 1e-9 <= qn <= hi_w + 1e-9:
+                ok = False
+            else:
+                down, up = brake_bound(vn, an, amax, jmax, dt)
+                if lo_w <= qn - down and qn + up <= hi_w:
+                    ok = True
                 else:
-                    e = w - v
-                    # _vcap(|e| / dt, jdt, abig) with its first test (a saturated chase)
-                    # inlined; from `sat` on it is >= amax, so the band's bound is the
-                    # answer whatever its value: abig stands in for it (same clipped dn)
-                    b = e * inv_dt if e > 0.0 else -e * inv_dt
-                    dn = abig if b >= sat else _vcap(b, jdt, abig)
-                    if not e > 0.0:
-                        dn = -dn
-                    if dn > hi:
-                        dn = hi
-                    if dn < lo:
-                        dn = lo
-                    vb = v + dn * dt
-                qb = q + vb * dt
-                vb = (qb - q) * inv_dt
-                ab_ = (vb - v) * inv_dt
-                # wanted speeds beyond what one frame can reach give the same next state
-                # (the step saturates): the bisection remembers each decided state (q, v
-                # fixed: qb decides it); the first candidate needs no memory
-                known = None if seen is None else seen.get(qb)
-                if known is not None:
-                    ok = known
-                else:
-                    if not lo_e <= qb <= hi_e:
-                        ok = False
-                    else:
-                        down, up = brake_bound(vb, ab_, amax, jmax, dt)
-                        if lo_w <= qb - down and qb + up <= hi_w:
-                            ok = True
-                        else:
-                            n_sim += 1
-                            dist = forward_stop(vb, ab_, amax, jdt, dt) if stair_ok else None
-                            if dist is not None:
-                                ok = lo_e <= qb + dist <= hi_e
-                            else:
-                                ok = simulate_within(qb, vb, ab_, lo_w, hi_w, vmax, amax, jdt,
-                                                     half_inv_j, abig, jmax, dt, stair_ok)  # fmt: skip
-                    if seen is None:
-                        seen = {qb: ok}
-                    else:
-                        seen[qb] = ok
-                if ok:
-                    best = True
-                    qn, vn, an = qb, vb, ab_
-                    if k == 0:
-                        break
-                    w_lo = w
-                else:
-                    w_hi = w
-            if not best:  # P's action (_level_step(v, a, 0, 0)): admissible by construction
-                ddw = (0.0 - v) * inv_dt
-                if lo <= ddw <= hi and -jdt <= ddw <= jdt:
-                    vb = 0.0
-                else:
-                    e = 0.0 - v
-                    dn = _vcap(e * inv_dt, jdt, abig) if e > 0.0 else -_vcap(-e * inv_dt, jdt, abig)
-                    if dn > hi:
-                        dn = hi
-                    if dn < lo:
-                        dn = lo
-                    vb = v + dn * dt
-                qn = q + vb * dt
-                vn = (qn - q) * inv_dt
-                an = (vn - v) * inv_dt
+                    n_sim += 1
+                    ok = _stops(qn, vn, an, lo_w, hi_w, axis, dt)
+            if not ok:
+                qn, vn, an, sims = _bisect(q, v, want, lo, hi, lo_w, hi_w, qn, axis, dt, inv_dt)
+                n_sim += sims
             qs[i] = qn
             vs[i] = vn
             accs[i] = an
@@ -436,6 +386,108 @@ class JerkLimiter:
         for k, row in enumerate(targets.tolist()):
             out[k] = self.step(state, row)
         return out
+
+
+def _stops(
+    q: float, v: float, a: float, lo: float, hi: float, axis: tuple[float, ...], dt: float
+) -> bool:
+    """Whether P from ``(q, v, a)`` stops within ``[lo, hi]`` (1e-9 tolerance), ``q`` itself
+    inside it: :func:`._brake.stops_within` with the axis' constants (``JerkLimiter._axes``),
+    its closed-form distance first where the axis allows it."""
+    _, _, vmax, amax, jdt, half_inv_j, abig, jmax, _, _, stair_ok = axis
+    if stair_ok:
+        dist = forward_stop(v, a, amax, jdt, dt)
+        if dist is not None:
+            return lo - 1e-9 <= q + dist <= hi + 1e-9
+    return simulate_within(
+        q, v, a, lo, hi, vmax, amax, jdt, half_inv_j, abig, jmax, dt, bool(stair_ok)
+    )
+
+
+def _bisect(
+    q: float,
+    v: float,
+    want: float,
+    lo: float,
+    hi: float,
+    lo_w: float,
+    hi_w: float,
+    q_want: float,
+    axis: tuple[float, ...],
+    dt: float,
+    inv_dt: float,
+) -> tuple[float, float, float, int]:
+    """The limited next state ``(q, v, a)`` of one axis of :meth:`JerkLimiter.step` when the
+    full wanted speed ``want`` (next position ``q_want``) is not admissible, and the number
+    of exact braking checks made: bisection (``_BISECT`` steps) for the largest wanted speed
+    in ``[0, want]`` whose next state is admissible within ``[lo_w, hi_w]``, else P's
+    action. ``(q, v)``: the last state; ``[lo, hi]``: the band of next accelerations."""
+    _, _, _, amax, jdt, _, abig, jmax, _, sat, _ = axis
+    lo_e = lo_w - 1e-9
+    hi_e = hi_w + 1e-9
+    n_sim = 0
+    best = False
+    qn = vn = an = 0.0
+    w_lo, w_hi = 0.0, want
+    # wanted speeds beyond what one frame can reach give the same next state (the step
+    # saturates): remember each decided state (q, v fixed: qb decides it)
+    seen = {q_want: False}
+    for _ in range(_BISECT):
+        w = 0.5 * (w_lo + w_hi)
+        # _level_step(v, a, w, w): lands on w, else the chase clipped to the band
+        ddw = (w - v) * inv_dt
+        if lo <= ddw <= hi and -jdt <= ddw <= jdt:
+            vb = w
+        else:
+            e = w - v
+            b = e * inv_dt if e > 0.0 else -e * inv_dt
+            dn = abig if b >= sat else _vcap(b, jdt, abig)
+            if not e > 0.0:
+                dn = -dn
+            if dn > hi:
+                dn = hi
+            if dn < lo:
+                dn = lo
+            vb = v + dn * dt
+        qb = q + vb * dt
+        vb = (qb - q) * inv_dt
+        ab_ = (vb - v) * inv_dt
+        known = seen.get(qb)
+        if known is not None:
+            ok = known
+        else:
+            if not lo_e <= qb <= hi_e:
+                ok = False
+            else:
+                down, up = brake_bound(vb, ab_, amax, jmax, dt)
+                if lo_w <= qb - down and qb + up <= hi_w:
+                    ok = True
+                else:
+                    n_sim += 1
+                    ok = _stops(qb, vb, ab_, lo_w, hi_w, axis, dt)
+            seen[qb] = ok
+        if ok:
+            best = True
+            qn, vn, an = qb, vb, ab_
+            w_lo = w
+        else:
+            w_hi = w
+    if not best:  # P's action (_level_step(v, a, 0, 0)): admissible by construction
+        ddw = (0.0 - v) * inv_dt
+        if lo <= ddw <= hi and -jdt <= ddw <= jdt:
+            vb = 0.0
+        else:
+            e = 0.0 - v
+            dn = _vcap(e * inv_dt, jdt, abig) if e > 0.0 else -_vcap(-e * inv_dt, jdt, abig)
+            if dn > hi:
+                dn = hi
+            if dn < lo:
+                dn = lo
+            vb = v + dn * dt
+        qn = q + vb * dt
+        vn = (qn - q) * inv_dt
+        an = (vn - v) * inv_dt
+    return qn, vn, an, n_sim
 
 
 def _second_order_distance(a: float, j: float, dt: float) -> float:
