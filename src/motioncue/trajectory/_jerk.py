@@ -47,7 +47,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from .._errors import ConfigError, LimitError
-from ._brake import brake_bound, forward_stop, simulate_within, stops_within
+from ._brake import bound_max, brake_bound, forward_stop, simulate_within, stops_within
 from ._limits import ActuatorLimits
 from ._realtime import _counters_repr, _land_slack, _level_params, _level_step, _vcap
 
@@ -133,10 +133,17 @@ class JerkLimiter:
         slacks = tuple(_land_slack(p[4], max(abs(p[0]), abs(p[1])), dt, 2) for p in params)
         object.__setattr__(self, "_slack", slacks)
         # step()'s constants per axis: _params, the landing slack, the budget from which
-        # _vcap is at least a_max (_chase_saturation) and whether P's braking staircase
+        # _vcap is at least a_max (_chase_saturation), whether P's braking staircase
         # never meets the +-v_max caps (_brake.stops_within's stair_ok, same expression)
+        # and bound_max's (x, v, a): from |v| <= v and |a| <= a, P moves at most x either way
         axes = tuple(
-            (*p, sl, _chase_saturation(p[3], p[4], p[6]), p[3] * p[3] * p[5] + p[3] * dt <= p[2])
+            (
+                *p,
+                sl,
+                _chase_saturation(p[3], p[4], p[6]),
+                p[3] * p[3] * p[5] + p[3] * dt <= p[2],
+                *bound_max(p[2], p[3], p[7], dt),
+            )
             for p, sl in zip(params, slacks, strict=True)
         )
         object.__setattr__(self, "_axes", axes)
@@ -254,13 +261,16 @@ class JerkLimiter:
         out = [0.0] * len(qs)
         clamped = False
         n_sim = 0
+        n_axes = state.clamped_axes
+        max_dev = state.max_deviation
         i = 0
         # _level_step at the velocity level and the admissibility test of _admissible,
         # inlined (a call per candidate costs more than the work): the band of next
         # accelerations depends on (v, a) only, so it is computed once per axis for the
         # landing test and every candidate; same float operations, so the same frames
         for axis in self._axes:
-            qmin, qmax, vmax, amax, jdt, half_inv_j, abig, jmax, sl, sat, stair_ok = axis
+            (qmin, qmax, vmax, amax, jdt, half_inv_j, abig, jmax, sl, sat, stair_ok,
+             reach, v_in, a_in) = axis  # fmt: skip
             t = float(q_target[i])
             if t - t != 0.0:
                 t = lts[i]
@@ -301,12 +311,19 @@ class JerkLimiter:
                 if qmin - 1e-9 <= q1 <= qmax + 1e-9:
                     v1 = (q1 - q) * inv_dt
                     a1 = (v1 - v) * inv_dt
-                    down, up = brake_bound(v1, a1, amax, jmax, dt)
-                    if qmin <= q1 - down and q1 + up <= qmax:
+                    # P stays inside whatever brake_bound says (reach: bound_max), else
+                    # brake_bound decides, else the exact check
+                    if qmin + reach <= q1 <= qmax - reach and -v_in <= v1 <= v_in and (
+                        -a_in <= a1 <= a_in
+                    ):
                         ok = True
                     else:
-                        n_sim += 1
-                        ok = _stops(q1, v1, a1, qmin, qmax, axis, dt)
+                        down, up = brake_bound(v1, a1, amax, jmax, dt)
+                        if qmin <= q1 - down and q1 + up <= qmax:
+                            ok = True
+                        else:
+                            n_sim += 1
+                            ok = _stops(q1, v1, a1, qmin, qmax, axis, dt)
                     if ok:
                         qs[i] = q1
                         vs[i] = v1
@@ -347,6 +364,10 @@ class JerkLimiter:
             # the next state is admissible (_admissible, inlined)
             if not lo_w - 1e-9 <= qn <= hi_w + 1e-9:
                 ok = False
+            elif lo_w + reach <= qn <= hi_w - reach and -v_in <= vn <= v_in and (
+                -a_in <= an <= a_in
+            ):
+                ok = True  # as brake_bound would say (bound_max)
             else:
                 down, up = brake_bound(vn, an, amax, jmax, dt)
                 if lo_w <= qn - down and qn + up <= hi_w:
@@ -363,12 +384,13 @@ class JerkLimiter:
             out[i] = qn
             if qn != t:
                 clamped = True
-                state.clamped_axes[i] += 1
+                n_axes[i] += 1
                 if finite:
                     dev = abs(qn - t)
-                    if dev > state.max_deviation:
-                        state.max_deviation = dev
+                    if dev > max_dev:
+                        max_dev = dev
             i += 1
+        state.max_deviation = max_dev
         state.n_simulated += n_sim
         state.n_frames += 1
         if clamped:
@@ -394,7 +416,7 @@ def _stops(
     """Whether P from ``(q, v, a)`` stops within ``[lo, hi]`` (1e-9 tolerance), ``q`` itself
     inside it: :func:`._brake.stops_within` with the axis' constants (``JerkLimiter._axes``),
     its closed-form distance first where the axis allows it."""
-    _, _, vmax, amax, jdt, half_inv_j, abig, jmax, _, _, stair_ok = axis
+    _, _, vmax, amax, jdt, half_inv_j, abig, jmax, _, _, stair_ok, _, _, _ = axis
     if stair_ok:
         dist = forward_stop(v, a, amax, jdt, dt)
         if dist is not None:
@@ -422,7 +444,7 @@ def _bisect(
     of exact braking checks made: bisection (``_BISECT`` steps) for the largest wanted speed
     in ``[0, want]`` whose next state is admissible within ``[lo_w, hi_w]``, else P's
     action. ``(q, v)``: the last state; ``[lo, hi]``: the band of next accelerations."""
-    _, _, _, amax, jdt, _, abig, jmax, _, sat, _ = axis
+    _, _, _, amax, jdt, _, abig, jmax, _, sat, _, _, _, _ = axis
     lo_e = lo_w - 1e-9
     hi_e = hi_w + 1e-9
     n_sim = 0
