@@ -340,18 +340,18 @@ class JerkLimiter:
                 hi_w = t if t < qmax else qmax
             elif t < q:
                 lo_w = t if t > qmin else qmin
-            # _level_step(v, a, want, want): lands on want, else the chase clipped to the band
-            ddw = (want - v) * inv_dt
-            if lo <= ddw <= hi and -jdt <= ddw <= jdt:
+            # _level_step(v, a, want, want): lands on want, else the chase clipped to the
+            # band; its (want - v) / dt is dd (same operations)
+            if lo <= dd <= hi and -jdt <= dd <= jdt:
                 vb = want
             else:
-                e = want - v
-                # _vcap(|e| / dt, jdt, abig) with its first test (a saturated chase) inlined;
-                # from `sat` on it is >= amax, so the band's bound is the answer whatever its
-                # value: abig stands in for it (same clipped dn)
-                b = e * inv_dt if e > 0.0 else -e * inv_dt
+                # _vcap(|want - v| / dt, jdt, abig) with its first test (a saturated chase)
+                # inlined; from `sat` on it is >= amax, so the band's bound is the answer
+                # whatever its value: abig stands in for it (same clipped dn). dd has the
+                # sign of want - v (dt <= 1) and (-e) / dt == -(e / dt) (exact negation)
+                b = dd if dd > 0.0 else -dd
                 dn = abig if b >= sat else _vcap(b, jdt, abig)
-                if not e > 0.0:
+                if not dd > 0.0:
                     dn = -dn
                 if dn > hi:
                     dn = hi
@@ -454,7 +454,19 @@ def _bisect(
     # wanted speeds beyond what one frame can reach give the same next state (the step
     # saturates): remember each decided state (q, v fixed: qb decides it)
     seen = {q_want: False}
-    for _ in range(_BISECT):
+    k = 0
+    # while the midpoint's chase is saturated as want's was (same sign, budget past sat),
+    # its next state is q_want's (the same clipped dn): known not admissible
+    d_want = (want - v) * inv_dt
+    if d_want >= sat:
+        while k < _BISECT and (0.5 * (w_lo + w_hi) - v) * inv_dt >= sat:
+            w_hi = 0.5 * (w_lo + w_hi)
+            k += 1
+    elif d_want <= -sat:
+        while k < _BISECT and (0.5 * (w_lo + w_hi) - v) * inv_dt <= -sat:
+            w_hi = 0.5 * (w_lo + w_hi)
+            k += 1
+    for _ in range(k, _BISECT):
         w = 0.5 * (w_lo + w_hi)
         # _level_step(v, a, w, w): lands on w, else the chase clipped to the band
         ddw = (w - v) * inv_dt
