@@ -418,3 +418,47 @@ def test_fast_step_gives_the_reference_steps_frames(stream):
         clamped += any(g != r for g, r in zip(got, row, strict=True))
     assert fast.n_simulated > 0  # the simulation path was exercised, not only the bound
     assert clamped > (n // 2 if stream == "adversarial" else 10)
+
+
+@settings(max_examples=200)
+@given(
+    st.floats(0.02, 1.0), st.floats(0.5, 30.0), st.floats(5.0, 2000.0),
+    st.sampled_from([0.001, 0.004, 0.01, 0.0166667, 0.02, 0.05]),
+)  # fmt: skip
+def test_bound_max_covers_brake_bound_over_its_box(vmax, amax, jmax, dt):
+    """JerkLimiter.step accepts a next state without brake_bound when it lies bound_max's
+    reach inside the band: that is brake_bound's answer only if no state of the box
+    (|v| <= v, |a| <= a) has a larger bound. Checked on a grid including the box's
+    corners (where the largest is), and the reach is not loose (within 1e-6 of it)."""
+    from motioncue.trajectory._brake import bound_max, brake_bound
+
+    reach, v_in, a_in = bound_max(vmax, amax, jmax, dt)
+    assert vmax < v_in <= vmax * (1 + 2e-6) and amax < a_in <= amax * (1 + 2e-6)
+    largest = 0.0
+    for v in np.linspace(-v_in, v_in, 21):
+        for a in np.linspace(-a_in, a_in, 21):
+            down, up = brake_bound(float(v), float(a), amax, jmax, dt)
+            largest = max(largest, down, up)
+    assert largest <= reach
+    assert largest >= reach * (1 - 1e-6)
+
+
+@settings(max_examples=200)
+@given(
+    st.floats(0.5, 30.0), st.floats(5.0, 2000.0),
+    st.sampled_from([0.001, 0.004, 0.01, 0.02, 0.05]), st.floats(0.0, 1.0),
+)  # fmt: skip
+def test_chase_saturation_is_where_vcap_reaches_a_max(amax, jmax, dt, frac):
+    """From _chase_saturation's budget on, _vcap is at least a_max (so JerkLimiter.step may
+    put abig in its place before clipping to the band |a| <= a_max), and the threshold is
+    tight: just below the staircase budget of a_max, _vcap is below a_max."""
+    from motioncue.trajectory._jerk import _chase_saturation
+    from motioncue.trajectory._realtime import _vcap
+
+    jdt = jmax * dt
+    abig = 2.0 * amax
+    sat = _chase_saturation(amax, jdt, abig)
+    big = abig + abig * abig / (2.0 * jdt) + jdt
+    for b in (sat, sat * (1 + 1e-12), sat + frac * (big - sat), big):
+        assert _vcap(b, jdt, abig) >= amax
+    assert _vcap(sat * (1 - 1e-5), jdt, abig) < amax
