@@ -29,12 +29,15 @@ overshoot); if none does, it sends P's action, which is admissible by constructi
 because P is a state feedback (the state it leads to continues the same braking).
 Every emitted frame therefore keeps every limit.
 
-Cost: P's stop is looked at only when the closed-form one-sided bounds of
-:mod:`._brake` cannot decide (near a stroke end, or near the target while limiting): its
-exact distance when it moves one way (:func:`._brake.forward_stop`), else a simulation
-until the answer is known; a bisection remembers the states it has decided
-(saturated wanted speeds repeat the same next state). Frames are bit-identical to the
-full simulation's.
+Cost: a next state farther inside its band than P can move from any admissible
+``(v, a)`` (:func:`._brake.bound_max`) is accepted at once; P's stop is looked at only when
+the closed-form one-sided bounds of :mod:`._brake` cannot decide either (near a stroke end,
+or near the target while limiting): its exact distance when it moves one way
+(:func:`._brake.forward_stop`), else a simulation until the answer is known. A chase
+whose budget is past :func:`_chase_saturation` ends on the band's bound without
+:func:`._realtime._vcap`; the bisection (:func:`_bisect`, only when the full wanted speed
+is refused) remembers the states it has decided (saturated wanted speeds repeat the same
+next state). Frames are bit-identical to the full simulation's.
 """
 
 from __future__ import annotations
@@ -269,7 +272,7 @@ class JerkLimiter:
         # accelerations depends on (v, a) only, so it is computed once per axis for the
         # landing test and every candidate; same float operations, so the same frames
         for axis in self._axes:
-            (qmin, qmax, vmax, amax, jdt, half_inv_j, abig, jmax, sl, sat, stair_ok,
+            (qmin, qmax, vmax, amax, jdt, half_inv_j, abig, jmax, sl, sat, _stair_ok,
              reach, v_in, a_in) = axis  # fmt: skip
             t = float(q_target[i])
             if t - t != 0.0:
@@ -313,8 +316,10 @@ class JerkLimiter:
                     a1 = (v1 - v) * inv_dt
                     # P stays inside whatever brake_bound says (reach: bound_max), else
                     # brake_bound decides, else the exact check
-                    if qmin + reach <= q1 <= qmax - reach and -v_in <= v1 <= v_in and (
-                        -a_in <= a1 <= a_in
+                    if (
+                        qmin + reach <= q1 <= qmax - reach
+                        and -v_in <= v1 <= v_in
+                        and (-a_in <= a1 <= a_in)
                     ):
                         ok = True
                     else:
@@ -364,8 +369,8 @@ class JerkLimiter:
             # the next state is admissible (_admissible, inlined)
             if not lo_w - 1e-9 <= qn <= hi_w + 1e-9:
                 ok = False
-            elif lo_w + reach <= qn <= hi_w - reach and -v_in <= vn <= v_in and (
-                -a_in <= an <= a_in
+            elif (
+                lo_w + reach <= qn <= hi_w - reach and -v_in <= vn <= v_in and (-a_in <= an <= a_in)
             ):
                 ok = True  # as brake_bound would say (bound_max)
             else:
