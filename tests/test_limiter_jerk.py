@@ -462,3 +462,33 @@ def test_chase_saturation_is_where_vcap_reaches_a_max(amax, jmax, dt, frac):
     for b in (sat, sat * (1 + 1e-12), sat + frac * (big - sat), big):
         assert _vcap(b, jdt, abig) >= amax
     assert _vcap(sat * (1 - 1e-5), jdt, abig) < amax
+
+
+@pytest.mark.parametrize(
+    ("v_max", "a_max", "j_max", "dt"),
+    [(0.05, 4.0, 20.0, 0.01), (0.4, 2.0, 30.0, 0.004), (0.25, 8.0, 400.0, 0.02)],
+)
+def test_fast_step_gives_the_reference_steps_frames_on_other_limits(v_max, a_max, j_max, dt):
+    """As above on uniform noise with limits where P's braking meets the +-v_max caps (the
+    first: the exact check simulates, no closed-form distance), where the chase saturates
+    late (small jerk per frame) and where one frame's jerk exceeds a_max (large dt). Same
+    1e-12 m tolerance."""
+    n_ax = 3
+    lim = ActuatorLimits(
+        np.full(n_ax, -0.1), np.full(n_ax, 0.1), np.full(n_ax, v_max), np.full(n_ax, a_max),
+        np.full(n_ax, j_max),
+    )  # fmt: skip
+    jl = JerkLimiter(lim, dt)
+    rng = np.random.default_rng(11)
+    n = 150
+    targets = rng.uniform(-0.2, 0.2, (n, n_ax))
+    q0 = np.clip(targets[0], lim.q_min, lim.q_max)
+    fast = jl.initial_state(q0)
+    ref = {"q": list(q0), "v": [0.0] * n_ax, "a": [0.0] * n_ax, "last_target": list(q0),
+           "last_want": [0.0] * n_ax}  # fmt: skip
+    for k, row in enumerate(targets.tolist()):
+        got = jl.step(fast, row)
+        want = _reference_step(jl, ref, row)
+        np.testing.assert_allclose(got, want, rtol=0, atol=1e-12, err_msg=f"frame {k}")
+    assert fast.n_simulated > 0
+    assert fast.n_clamped > n // 2
