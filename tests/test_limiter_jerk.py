@@ -425,22 +425,25 @@ def test_fast_step_gives_the_reference_steps_frames(stream):
     st.floats(0.02, 1.0), st.floats(0.5, 30.0), st.floats(5.0, 2000.0),
     st.sampled_from([0.001, 0.004, 0.01, 0.0166667, 0.02, 0.05]),
 )  # fmt: skip
-def test_bound_max_covers_brake_bound_over_its_box(vmax, amax, jmax, dt):
-    """JerkLimiter.step accepts a next state without brake_bound when it lies bound_max's
-    reach inside the band: that is brake_bound's answer only if no state of the box
-    (|v| <= v, |a| <= a) has a larger bound. Checked on a grid including the box's
-    corners (where the largest is), and the reach is not loose (within 1e-6 of it)."""
-    from motioncue.trajectory._brake import bound_max, brake_bound
+def test_bound_line_covers_brake_bound_over_its_box(vmax, amax, jmax, dt):
+    """JerkLimiter.step accepts a next state without brake_bound when it lies bound_line's
+    reach (x0 + slope |v|) inside the band: that is brake_bound's answer only if no state
+    of the box (|v| <= v, |a| <= a) has a larger bound than the line at its |v|. Checked on
+    a grid including the box's corners, and the line is not loose at them (the largest
+    bound is there: within 1e-6 of the line)."""
+    from motioncue.trajectory._brake import bound_line, brake_bound
 
-    reach, v_in, a_in = bound_max(vmax, amax, jmax, dt)
+    x0, slope, v_in, a_in = bound_line(vmax, amax, jmax, dt)
     assert vmax < v_in <= vmax * (1 + 2e-6) and amax < a_in <= amax * (1 + 2e-6)
-    largest = 0.0
+    assert x0 > 0.0 and slope > 0.0
+    closest = 0.0
     for v in np.linspace(-v_in, v_in, 21):
+        line = x0 + slope * abs(float(v))
         for a in np.linspace(-a_in, a_in, 21):
             down, up = brake_bound(float(v), float(a), amax, jmax, dt)
-            largest = max(largest, down, up)
-    assert largest <= reach
-    assert largest >= reach * (1 - 1e-6)
+            assert max(down, up) <= line
+            closest = max(closest, max(down, up) / line)
+    assert closest >= 1 - 1e-6
 
 
 @settings(max_examples=200)

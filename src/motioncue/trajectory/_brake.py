@@ -77,29 +77,38 @@ def brake_bound(v: float, a: float, amax: float, jmax: float, dt: float) -> tupl
     return (fwd, rev) if flip else (rev, fwd)
 
 
-def bound_max(vmax: float, amax: float, jmax: float, dt: float) -> tuple[float, float, float]:
-    """``(x, v, a)``: every ``brake_bound(v', a', amax, jmax, dt)`` with ``|v'| <= v`` and
-    ``|a'| <= a`` is at most ``x`` (m), both ways, where ``v`` and ``a`` are ``vmax``
-    (m/s) and ``amax`` (m/s^2) with one part in 1e6 to spare (the rounding of speeds
-    recomputed from positions is far smaller).
+def bound_line(
+    vmax: float, amax: float, jmax: float, dt: float
+) -> tuple[float, float, float, float]:
+    """``(x0, slope, v, a)``: every ``brake_bound(v', a', amax, jmax, dt)`` with ``|v'| <= v``
+    and ``|a'| <= a`` is at most ``x0 + slope |v'|`` (m), both ways, where ``v`` and ``a``
+    are ``vmax`` (m/s) and ``amax`` (m/s^2) with one part in 1e6 to spare (the rounding of
+    speeds recomputed from positions is far smaller).
 
-    From :func:`brake_bound`'s terms: the peak speed is at most ``V = v + a^2 / (2 j) +
-    a dt`` (``a >= 0``; less when braking, and the reverse peak ``a^2 / (2 j) + |a| dt`` is
-    less too), the profile's first part at most ``V (a / j + dt)`` (when braking only the
-    padding frame plus a part that is taken off, or ``v |a| / j``), and the braking distance
-    from ``V`` rises with ``V``. So the bound from ``(v, a)`` itself is the largest; ``x``
-    adds one part in 1e9 and 1e-12 m for the rounding of both computations.
+    From :func:`brake_bound`'s terms, for ``|v'| = s``: the peak speed is at most ``V(s) =
+    s + a^2 / (2 j) + a dt`` (``a' >= 0``; less when braking, and the reverse peak
+    ``a^2 / (2 j) + |a| dt`` is less too), the profile's first part at most
+    ``V (a / j + dt)`` (when braking only the padding frame plus a part that is taken off,
+    or ``s |a'| / j``), and the braking distance from ``V`` rises with ``V``. So
+    ``X(s) = V(s) (a / j + dt) + brake(V(s))`` bounds them all; it is convex in ``s`` (the
+    braking distance is ``V^1.5 / sqrt(j)`` then a parabola, meeting with equal slopes),
+    so below its chord from ``s = 0`` to ``s = v``: the line, with one part in 1e9 and
+    1e-12 m added for the rounding of both computations.
     """
     v = vmax * (1.0 + 1e-6)
     a = amax * (1.0 + 1e-6)
     pad = _PAD_FRAMES * dt
-    peak = v + a * a * 0.5 / jmax + a * dt
-    x = peak * (a / jmax + pad)
-    if peak * jmax >= amax * amax:
-        x += 0.5 * peak * (peak / amax + amax / jmax)
-    else:
-        x += peak * math.sqrt(peak / jmax)
-    return x * (1.0 + 1e-9) + 1e-12, v, a
+
+    def x_of(s: float) -> float:
+        peak = s + a * a * 0.5 / jmax + a * dt
+        x = peak * (a / jmax + pad)
+        if peak * jmax >= amax * amax:
+            return x + 0.5 * peak * (peak / amax + amax / jmax)
+        return x + peak * math.sqrt(peak / jmax)
+
+    x0 = x_of(0.0) * (1.0 + 1e-9) + 1e-12
+    x1 = x_of(v) * (1.0 + 1e-9) + 1e-12
+    return x0, (x1 - x0) / v * (1.0 + 1e-9), v, a
 
 
 def forward_stop(v: float, a: float, amax: float, jdt: float, dt: float) -> float | None:

@@ -30,10 +30,11 @@ because P is a state feedback (the state it leads to continues the same braking)
 Every emitted frame therefore keeps every limit.
 
 Cost: a next state farther inside its band than P can move from any admissible
-``(v, a)`` (:func:`._brake.bound_max`) is accepted at once; P's stop is looked at only when
-the closed-form one-sided bounds of :mod:`._brake` cannot decide either (near a stroke end,
-or near the target while limiting): its exact distance when it moves one way
-(:func:`._brake.forward_stop`), else a simulation until the answer is known. A chase
+``(v, a)`` of its speed (:func:`._brake.bound_line`) is accepted at once; P's stop is
+looked at only when the closed-form one-sided bounds of :mod:`._brake` cannot decide
+either (near a stroke end, or near the target while limiting): its exact distance when
+it moves one way (:func:`._brake.forward_stop`), else a simulation until the answer is
+known. A chase
 whose budget is past :func:`_chase_saturation` ends on the band's bound without
 :func:`._realtime._vcap`; the bisection (:func:`_bisect`, only when the full wanted speed
 is refused) remembers the states it has decided (saturated wanted speeds repeat the same
@@ -50,7 +51,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from .._errors import ConfigError, LimitError
-from ._brake import bound_max, brake_bound, forward_stop, simulate_within, stops_within
+from ._brake import bound_line, brake_bound, forward_stop, simulate_within, stops_within
 from ._limits import ActuatorLimits
 from ._realtime import _counters_repr, _land_slack, _level_params, _level_step, _vcap
 
@@ -138,14 +139,15 @@ class JerkLimiter:
         # step()'s constants per axis: _params, the landing slack, the budget from which
         # _vcap is at least a_max (_chase_saturation), whether P's braking staircase
         # never meets the +-v_max caps (_brake.stops_within's stair_ok, same expression)
-        # and bound_max's (x, v, a): from |v| <= v and |a| <= a, P moves at most x either way
+        # and bound_line's (x0, slope, v, a): from |v'| <= v and |a'| <= a, P moves at most
+        # x0 + slope |v'| either way
         axes = tuple(
             (
                 *p,
                 sl,
                 _chase_saturation(p[3], p[4], p[6]),
                 p[3] * p[3] * p[5] + p[3] * dt <= p[2],
-                *bound_max(p[2], p[3], p[7], dt),
+                *bound_line(p[2], p[3], p[7], dt),
             )
             for p, sl in zip(params, slacks, strict=True)
         )
@@ -273,7 +275,7 @@ class JerkLimiter:
         # landing test and every candidate; same float operations, so the same frames
         for axis in self._axes:
             (qmin, qmax, vmax, amax, jdt, half_inv_j, abig, jmax, sl, sat, _stair_ok,
-             reach, v_in, a_in) = axis  # fmt: skip
+             reach0, slope, v_in, a_in) = axis  # fmt: skip
             t = float(q_target[i])
             if t - t != 0.0:
                 t = lts[i]
@@ -314,8 +316,9 @@ class JerkLimiter:
                 if qmin - 1e-9 <= q1 <= qmax + 1e-9:
                     v1 = (q1 - q) * inv_dt
                     a1 = (v1 - v) * inv_dt
-                    # P stays inside whatever brake_bound says (reach: bound_max), else
+                    # P stays inside whatever brake_bound says (its bound_line reach), else
                     # brake_bound decides, else the exact check
+                    reach = reach0 + slope * (v1 if v1 >= 0.0 else -v1)
                     if (
                         qmin + reach <= q1 <= qmax - reach
                         and -v_in <= v1 <= v_in
@@ -367,12 +370,13 @@ class JerkLimiter:
             vn = (qn - q) * inv_dt
             an = (vn - v) * inv_dt
             # the next state is admissible (_admissible, inlined)
+            reach = reach0 + slope * (vn if vn >= 0.0 else -vn)
             if not lo_w - 1e-9 <= qn <= hi_w + 1e-9:
                 ok = False
             elif (
                 lo_w + reach <= qn <= hi_w - reach and -v_in <= vn <= v_in and (-a_in <= an <= a_in)
             ):
-                ok = True  # as brake_bound would say (bound_max)
+                ok = True  # as brake_bound would say (bound_line)
             else:
                 down, up = brake_bound(vn, an, amax, jmax, dt)
                 if lo_w <= qn - down and qn + up <= hi_w:
@@ -421,7 +425,7 @@ def _stops(
     """Whether P from ``(q, v, a)`` stops within ``[lo, hi]`` (1e-9 tolerance), ``q`` itself
     inside it: :func:`._brake.stops_within` with the axis' constants (``JerkLimiter._axes``),
     its closed-form distance first where the axis allows it."""
-    _, _, vmax, amax, jdt, half_inv_j, abig, jmax, _, _, stair_ok, _, _, _ = axis
+    _, _, vmax, amax, jdt, half_inv_j, abig, jmax, _, _, stair_ok, _, _, _, _ = axis
     if stair_ok:
         dist = forward_stop(v, a, amax, jdt, dt)
         if dist is not None:
@@ -449,7 +453,7 @@ def _bisect(
     of exact braking checks made: bisection (``_BISECT`` steps) for the largest wanted speed
     in ``[0, want]`` whose next state is admissible within ``[lo_w, hi_w]``, else P's
     action. ``(q, v)``: the last state; ``[lo, hi]``: the band of next accelerations."""
-    _, _, _, amax, jdt, _, abig, jmax, _, sat, _, _, _, _ = axis
+    _, _, _, amax, jdt, _, abig, jmax, _, sat, _, _, _, _, _ = axis
     lo_e = lo_w - 1e-9
     hi_e = hi_w + 1e-9
     n_sim = 0
