@@ -34,11 +34,10 @@ Cost: a next state farther inside its band than P can move from any admissible
 looked at only when the closed-form one-sided bounds of :mod:`._brake` cannot decide
 either (near a stroke end, or near the target while limiting): its exact distance when
 it moves one way (:func:`._brake.forward_stop`), else a simulation until the answer is
-known. A chase
-whose budget is past :func:`_chase_saturation` ends on the band's bound without
-:func:`._realtime._vcap`; the bisection (:func:`_bisect`, only when the full wanted speed
-is refused) remembers the states it has decided (saturated wanted speeds repeat the same
-next state). Frames are bit-identical to the full simulation's.
+known. A chase whose budget is past :func:`_chase_saturation` ends on the band's bound
+without :func:`._realtime._vcap`; the bisection (:func:`_bisect`, only when the full
+wanted speed is refused) remembers the states it has decided (saturated wanted speeds
+repeat the same next state). Frames are bit-identical to the full simulation's.
 """
 
 from __future__ import annotations
