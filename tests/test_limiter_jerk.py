@@ -418,3 +418,80 @@ def test_fast_step_gives_the_reference_steps_frames(stream):
         clamped += any(g != r for g, r in zip(got, row, strict=True))
     assert fast.n_simulated > 0  # the simulation path was exercised, not only the bound
     assert clamped > (n // 2 if stream == "adversarial" else 10)
+
+
+@settings(max_examples=200)
+@given(
+    st.floats(0.02, 1.0), st.floats(0.5, 30.0), st.floats(5.0, 2000.0),
+    st.sampled_from([0.001, 0.004, 0.01, 0.0166667, 0.02, 0.05]),
+)  # fmt: skip
+def test_bound_line_covers_brake_bound_over_its_box(vmax, amax, jmax, dt):
+    """JerkLimiter.step accepts a next state without brake_bound when it lies bound_line's
+    reach (x0 + slope |v|) inside the band: that is brake_bound's answer only if no state
+    of the box (|v| <= v, |a| <= a) has a larger bound than the line at its |v|. Checked on
+    a grid including the box's corners, and the line is not loose at them (the largest
+    bound is there: within 1e-6 of the line)."""
+    from motioncue.trajectory._brake import bound_line, brake_bound
+
+    x0, slope, v_in, a_in = bound_line(vmax, amax, jmax, dt)
+    assert vmax < v_in <= vmax * (1 + 2e-6) and amax < a_in <= amax * (1 + 2e-6)
+    assert x0 > 0.0 and slope > 0.0
+    closest = 0.0
+    for v in np.linspace(-v_in, v_in, 21):
+        line = x0 + slope * abs(float(v))
+        for a in np.linspace(-a_in, a_in, 21):
+            down, up = brake_bound(float(v), float(a), amax, jmax, dt)
+            assert max(down, up) <= line
+            closest = max(closest, max(down, up) / line)
+    assert closest >= 1 - 1e-6
+
+
+@settings(max_examples=200)
+@given(
+    st.floats(0.5, 30.0), st.floats(5.0, 2000.0),
+    st.sampled_from([0.001, 0.004, 0.01, 0.02, 0.05]), st.floats(0.0, 1.0),
+)  # fmt: skip
+def test_chase_saturation_is_where_vcap_reaches_a_max(amax, jmax, dt, frac):
+    """From _chase_saturation's budget on, _vcap is at least a_max (so JerkLimiter.step may
+    put abig in its place before clipping to the band |a| <= a_max), and the threshold is
+    tight: just below the staircase budget of a_max, _vcap is below a_max."""
+    from motioncue.trajectory._jerk import _chase_saturation
+    from motioncue.trajectory._realtime import _vcap
+
+    jdt = jmax * dt
+    abig = 2.0 * amax
+    sat = _chase_saturation(amax, jdt, abig)
+    big = abig + abig * abig / (2.0 * jdt) + jdt
+    for b in (sat, sat * (1 + 1e-12), sat + frac * (big - sat), big):
+        assert _vcap(b, jdt, abig) >= amax
+    assert _vcap(sat * (1 - 1e-5), jdt, abig) < amax
+
+
+@pytest.mark.parametrize(
+    ("v_max", "a_max", "j_max", "dt"),
+    [(0.05, 4.0, 20.0, 0.01), (0.4, 2.0, 30.0, 0.004), (0.25, 8.0, 400.0, 0.02)],
+)
+def test_fast_step_gives_the_reference_steps_frames_on_other_limits(v_max, a_max, j_max, dt):
+    """As above on uniform noise with limits where P's braking meets the +-v_max caps (the
+    first: the exact check simulates, no closed-form distance), where the chase saturates
+    late (small jerk per frame) and where one frame's jerk exceeds a_max (large dt). Same
+    1e-12 m tolerance."""
+    n_ax = 3
+    lim = ActuatorLimits(
+        np.full(n_ax, -0.1), np.full(n_ax, 0.1), np.full(n_ax, v_max), np.full(n_ax, a_max),
+        np.full(n_ax, j_max),
+    )  # fmt: skip
+    jl = JerkLimiter(lim, dt)
+    rng = np.random.default_rng(11)
+    n = 150
+    targets = rng.uniform(-0.2, 0.2, (n, n_ax))
+    q0 = np.clip(targets[0], lim.q_min, lim.q_max)
+    fast = jl.initial_state(q0)
+    ref = {"q": list(q0), "v": [0.0] * n_ax, "a": [0.0] * n_ax, "last_target": list(q0),
+           "last_want": [0.0] * n_ax}  # fmt: skip
+    for k, row in enumerate(targets.tolist()):
+        got = jl.step(fast, row)
+        want = _reference_step(jl, ref, row)
+        np.testing.assert_allclose(got, want, rtol=0, atol=1e-12, err_msg=f"frame {k}")
+    assert fast.n_simulated > 0
+    assert fast.n_clamped > n // 2

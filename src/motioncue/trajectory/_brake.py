@@ -77,6 +77,40 @@ def brake_bound(v: float, a: float, amax: float, jmax: float, dt: float) -> tupl
     return (fwd, rev) if flip else (rev, fwd)
 
 
+def bound_line(
+    vmax: float, amax: float, jmax: float, dt: float
+) -> tuple[float, float, float, float]:
+    """``(x0, slope, v, a)``: every ``brake_bound(v', a', amax, jmax, dt)`` with ``|v'| <= v``
+    and ``|a'| <= a`` is at most ``x0 + slope |v'|`` (m), both ways, where ``v`` and ``a``
+    are ``vmax`` (m/s) and ``amax`` (m/s^2) with one part in 1e6 to spare (the rounding of
+    speeds recomputed from positions is far smaller).
+
+    From :func:`brake_bound`'s terms, for ``|v'| = s``: the peak speed is at most ``V(s) =
+    s + a^2 / (2 j) + a dt`` (``a' >= 0``; less when braking, and the reverse peak
+    ``a^2 / (2 j) + |a| dt`` is less too), the profile's first part at most
+    ``V (a / j + dt)`` (when braking only the padding frame plus a part that is taken off,
+    or ``s |a'| / j``), and the braking distance from ``V`` rises with ``V``. So
+    ``X(s) = V(s) (a / j + dt) + brake(V(s))`` bounds them all; it is convex in ``s`` (the
+    braking distance is ``V^1.5 / sqrt(j)`` then a parabola, meeting with equal slopes),
+    so below its chord from ``s = 0`` to ``s = v``: the line, with one part in 1e9 and
+    1e-12 m added for the rounding of both computations.
+    """
+    v = vmax * (1.0 + 1e-6)
+    a = amax * (1.0 + 1e-6)
+    pad = _PAD_FRAMES * dt
+
+    def x_of(s: float) -> float:
+        peak = s + a * a * 0.5 / jmax + a * dt
+        x = peak * (a / jmax + pad)
+        if peak * jmax >= amax * amax:
+            return x + 0.5 * peak * (peak / amax + amax / jmax)
+        return x + peak * math.sqrt(peak / jmax)
+
+    x0 = x_of(0.0) * (1.0 + 1e-9) + 1e-12
+    x1 = x_of(v) * (1.0 + 1e-9) + 1e-12
+    return x0, (x1 - x0) / v * (1.0 + 1e-9), v, a
+
+
 def forward_stop(v: float, a: float, amax: float, jdt: float, dt: float) -> float | None:
     """Signed distance (m) P travels from speed ``v`` (m/s) and acceleration ``a`` (m/s^2)
     until rest, when it keeps moving one way; ``None`` when it brakes harder than its
@@ -159,10 +193,8 @@ def stops_within(
 
     ``q`` itself is not checked. Parameters as in ``JerkLimiter._params``.
     """
-    inv_dt = 1.0 / dt
     lo_e = lo - _EPS
     hi_e = hi + _EPS
-    big = abig + abig * abig / (2.0 * jdt) + jdt
     # the -v_max/+v_max cap of a braking step cannot bind (see the staircase below)
     stair_ok = amax * amax * half_inv_j + amax * dt <= vmax
     if stair_ok and lo_e <= q <= hi_e:
@@ -170,6 +202,30 @@ def stops_within(
         dist = forward_stop(v, a, amax, jdt, dt)
         if dist is not None:
             return lo_e <= q + dist <= hi_e
+    return simulate_within(q, v, a, lo, hi, vmax, amax, jdt, half_inv_j, abig, jmax, dt, stair_ok)
+
+
+def simulate_within(
+    q: float,
+    v: float,
+    a: float,
+    lo: float,
+    hi: float,
+    vmax: float,
+    amax: float,
+    jdt: float,
+    half_inv_j: float,
+    abig: float,
+    jmax: float,
+    dt: float,
+    stair_ok: bool,
+) -> bool:
+    """:func:`stops_within` by simulation alone (its answer where :func:`forward_stop` has
+    none); ``stair_ok`` as computed there (``amax^2 / (2 j_max) + amax dt <= v_max``)."""
+    inv_dt = 1.0 / dt
+    lo_e = lo - _EPS
+    hi_e = hi + _EPS
+    big = abig + abig * abig / (2.0 * jdt) + jdt
     stair = 0
     mag = 0.0
     d = 0.0

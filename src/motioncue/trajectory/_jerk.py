@@ -29,12 +29,15 @@ overshoot); if none does, it sends P's action, which is admissible by constructi
 because P is a state feedback (the state it leads to continues the same braking).
 Every emitted frame therefore keeps every limit.
 
-Cost: P's stop is looked at only when the closed-form one-sided bounds of
-:mod:`._brake` cannot decide (near a stroke end, or near the target while limiting): its
-exact distance when it moves one way (:func:`._brake.forward_stop`), else a simulation
-until the answer is known; a bisection remembers the states it has decided
-(saturated wanted speeds repeat the same next state). Frames are bit-identical to the
-full simulation's.
+Cost: a next state farther inside its band than P can move from any admissible
+``(v, a)`` of its speed (:func:`._brake.bound_line`) is accepted at once; P's stop is
+looked at only when the closed-form one-sided bounds of :mod:`._brake` cannot decide
+either (near a stroke end, or near the target while limiting): its exact distance when
+it moves one way (:func:`._brake.forward_stop`), else a simulation until the answer is
+known. A chase whose budget is past :func:`_chase_saturation` ends on the band's bound
+without :func:`._realtime._vcap`; the bisection (:func:`_bisect`, only when the full
+wanted speed is refused) remembers the states it has decided (saturated wanted speeds
+repeat the same next state). Frames are bit-identical to the full simulation's.
 """
 
 from __future__ import annotations
@@ -47,7 +50,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from .._errors import ConfigError, LimitError
-from ._brake import brake_bound, stops_within
+from ._brake import bound_line, brake_bound, forward_stop, simulate_within, stops_within
 from ._limits import ActuatorLimits
 from ._realtime import _counters_repr, _land_slack, _level_params, _level_step, _vcap
 
@@ -109,7 +112,7 @@ class JerkLimiter:
     _dt: float = field(init=False, repr=False)
     _inv_dt: float = field(init=False, repr=False)
     _slack: tuple[float, ...] = field(init=False, repr=False)
-    _big: tuple[float, ...] = field(init=False, repr=False)
+    _axes: tuple[tuple[float, ...], ...] = field(init=False, repr=False)
 
     def __post_init__(self) -> None:
         if not (isinstance(self.dt_s, int | float) and 0.0 < self.dt_s <= 1.0):
@@ -132,9 +135,22 @@ class JerkLimiter:
         # the landing test's slack at the velocity level (accelerations: order 2)
         slacks = tuple(_land_slack(p[4], max(abs(p[0]), abs(p[1])), dt, 2) for p in params)
         object.__setattr__(self, "_slack", slacks)
-        # _vcap's saturation threshold per axis (same expression: same decisions)
-        bigs = tuple(p[6] + p[6] * p[6] / (2.0 * p[4]) + p[4] for p in params)
-        object.__setattr__(self, "_big", bigs)
+        # step()'s constants per axis: _params, the landing slack, the budget from which
+        # _vcap is at least a_max (_chase_saturation), whether P's braking staircase
+        # never meets the +-v_max caps (_brake.stops_within's stair_ok, same expression)
+        # and bound_line's (x0, slope, v, a): from |v'| <= v and |a'| <= a, P moves at most
+        # x0 + slope |v'| either way
+        axes = tuple(
+            (
+                *p,
+                sl,
+                _chase_saturation(p[3], p[4], p[6]),
+                p[3] * p[3] * p[5] + p[3] * dt <= p[2],
+                *bound_line(p[2], p[3], p[7], dt),
+            )
+            for p, sl in zip(params, slacks, strict=True)
+        )
+        object.__setattr__(self, "_axes", axes)
         object.__setattr__(self, "_dt", dt)
         object.__setattr__(self, "_inv_dt", 1.0 / dt)
 
@@ -249,15 +265,16 @@ class JerkLimiter:
         out = [0.0] * len(qs)
         clamped = False
         n_sim = 0
-        slacks = self._slack
-        bigs = self._big
+        n_axes = state.clamped_axes
+        max_dev = state.max_deviation
         i = 0
         # _level_step at the velocity level and the admissibility test of _admissible,
         # inlined (a call per candidate costs more than the work): the band of next
         # accelerations depends on (v, a) only, so it is computed once per axis for the
         # landing test and every candidate; same float operations, so the same frames
-        for qmin, qmax, vmax, amax, jdt, half_inv_j, abig, jmax in self._params:
-            big = bigs[i]
+        for axis in self._axes:
+            (qmin, qmax, vmax, amax, jdt, half_inv_j, abig, jmax, sl, sat, _stair_ok,
+             reach0, slope, v_in, a_in) = axis  # fmt: skip
             t = float(q_target[i])
             if t - t != 0.0:
                 t = lts[i]
@@ -293,20 +310,27 @@ class JerkLimiter:
             dd = (want - v) * inv_dt
             dw = (want - lws[i]) * inv_dt
             lws[i] = want  # the target's own speed as seen from the last frame
-            sl = slacks[i]
             if lo - sl <= dd <= hi + sl and -jdt - sl <= dd - dw <= jdt + sl:  # lands
                 q1 = t
                 if qmin - 1e-9 <= q1 <= qmax + 1e-9:
                     v1 = (q1 - q) * inv_dt
                     a1 = (v1 - v) * inv_dt
-                    down, up = brake_bound(v1, a1, amax, jmax, dt)
-                    if qmin <= q1 - down and q1 + up <= qmax:
+                    # P stays inside whatever brake_bound says (its bound_line reach), else
+                    # brake_bound decides, else the exact check
+                    reach = reach0 + slope * (v1 if v1 >= 0.0 else -v1)
+                    if (
+                        qmin + reach <= q1 <= qmax - reach
+                        and -v_in <= v1 <= v_in
+                        and (-a_in <= a1 <= a_in)
+                    ):
                         ok = True
                     else:
-                        n_sim += 1
-                        ok = stops_within(
-                            q1, v1, a1, qmin, qmax, vmax, amax, jdt, half_inv_j, abig, jmax, dt
-                        )
+                        down, up = brake_bound(v1, a1, amax, jmax, dt)
+                        if qmin <= q1 - down and q1 + up <= qmax:
+                            ok = True
+                        else:
+                            n_sim += 1
+                            ok = _stops(q1, v1, a1, qmin, qmax, axis, dt)
                     if ok:
                         qs[i] = q1
                         vs[i] = v1
@@ -316,91 +340,65 @@ class JerkLimiter:
                         continue
             # limiting: the largest wanted speed towards the target (held, no feed-forward
             # of its rate) whose next state is admissible and stops before the target
-            # (approach without overshoot); first the full one, then bisection towards 0
+            # (approach without overshoot); first the full one (here), then bisection
+            # towards 0 (_bisect)
             lo_w, hi_w = qmin, qmax
             if t > q:
                 hi_w = t if t < qmax else qmax
             elif t < q:
                 lo_w = t if t > qmin else qmin
-            lo_e = lo_w - 1e-9
-            hi_e = hi_w + 1e-9
-            best = False
-            qn = vn = an = 0.0
-            w_lo, w_hi = 0.0, want
-            # wanted speeds beyond what one frame can reach give the same next state (the
-            # step saturates): remember each decided state (q, v fixed: qb decides it)
-            seen: dict[float, bool] = {}
-            for k in range(_BISECT + 1):
-                w = want if k == 0 else 0.5 * (w_lo + w_hi)
-                # _level_step(v, a, w, w): lands on w, else the chase clipped to the band
-                ddw = (w - v) * inv_dt
-                if lo <= ddw <= hi and -jdt <= ddw <= jdt:
-                    vb = w
+            # _level_step(v, a, want, want): lands on want, else the chase clipped to the
+            # band; its (want - v) / dt is dd (same operations)
+            if lo <= dd <= hi and -jdt <= dd <= jdt:
+                vb = want
+            else:
+                # _vcap(|want - v| / dt, jdt, abig) with its first test (a saturated chase)
+                # inlined; from `sat` on it is >= amax, so the band's bound is the answer
+                # whatever its value: abig stands in for it (same clipped dn). dd has the
+                # sign of want - v (dt <= 1) and (-e) / dt == -(e / dt) (exact negation)
+                b = dd if dd > 0.0 else -dd
+                dn = abig if b >= sat else _vcap(b, jdt, abig)
+                if not dd > 0.0:
+                    dn = -dn
+                if dn > hi:
+                    dn = hi
+                if dn < lo:
+                    dn = lo
+                vb = v + dn * dt
+            qn = q + vb * dt
+            vn = (qn - q) * inv_dt
+            an = (vn - v) * inv_dt
+            # the next state is admissible (_admissible, inlined)
+            reach = reach0 + slope * (vn if vn >= 0.0 else -vn)
+            if not lo_w - 1e-9 <= qn <= hi_w + 1e-9:
+                ok = False
+            elif (
+                lo_w + reach <= qn <= hi_w - reach and -v_in <= vn <= v_in and (-a_in <= an <= a_in)
+            ):
+                ok = True  # as brake_bound would say (bound_line)
+            else:
+                down, up = brake_bound(vn, an, amax, jmax, dt)
+                if lo_w <= qn - down and qn + up <= hi_w:
+                    ok = True
                 else:
-                    e = w - v
-                    # _vcap(|e| / dt, jdt, abig); its first test (a saturated chase) inlined
-                    b = e * inv_dt if e > 0.0 else -e * inv_dt
-                    dn = abig if b >= big else _vcap(b, jdt, abig)
-                    if not e > 0.0:
-                        dn = -dn
-                    if dn > hi:
-                        dn = hi
-                    if dn < lo:
-                        dn = lo
-                    vb = v + dn * dt
-                qb = q + vb * dt
-                vb = (qb - q) * inv_dt
-                ab_ = (vb - v) * inv_dt
-                known = seen.get(qb)
-                if known is not None:
-                    ok = known
-                else:
-                    if not lo_e <= qb <= hi_e:
-                        ok = False
-                    else:
-                        down, up = brake_bound(vb, ab_, amax, jmax, dt)
-                        if lo_w <= qb - down and qb + up <= hi_w:
-                            ok = True
-                        else:
-                            n_sim += 1
-                            ok = stops_within(qb, vb, ab_, lo_w, hi_w, vmax, amax, jdt,
-                                              half_inv_j, abig, jmax, dt)  # fmt: skip
-                    seen[qb] = ok
-                if ok:
-                    best = True
-                    qn, vn, an = qb, vb, ab_
-                    if k == 0:
-                        break
-                    w_lo = w
-                else:
-                    w_hi = w
-            if not best:  # P's action (_level_step(v, a, 0, 0)): admissible by construction
-                ddw = (0.0 - v) * inv_dt
-                if lo <= ddw <= hi and -jdt <= ddw <= jdt:
-                    vb = 0.0
-                else:
-                    e = 0.0 - v
-                    dn = _vcap(e * inv_dt, jdt, abig) if e > 0.0 else -_vcap(-e * inv_dt, jdt, abig)
-                    if dn > hi:
-                        dn = hi
-                    if dn < lo:
-                        dn = lo
-                    vb = v + dn * dt
-                qn = q + vb * dt
-                vn = (qn - q) * inv_dt
-                an = (vn - v) * inv_dt
+                    n_sim += 1
+                    ok = _stops(qn, vn, an, lo_w, hi_w, axis, dt)
+            if not ok:
+                qn, vn, an, sims = _bisect(q, v, want, lo, hi, lo_w, hi_w, qn, axis, dt, inv_dt)
+                n_sim += sims
             qs[i] = qn
             vs[i] = vn
             accs[i] = an
             out[i] = qn
             if qn != t:
                 clamped = True
-                state.clamped_axes[i] += 1
+                n_axes[i] += 1
                 if finite:
                     dev = abs(qn - t)
-                    if dev > state.max_deviation:
-                        state.max_deviation = dev
+                    if dev > max_dev:
+                        max_dev = dev
             i += 1
+        state.max_deviation = max_dev
         state.n_simulated += n_sim
         state.n_frames += 1
         if clamped:
@@ -420,9 +418,139 @@ class JerkLimiter:
         return out
 
 
+def _stops(
+    q: float, v: float, a: float, lo: float, hi: float, axis: tuple[float, ...], dt: float
+) -> bool:
+    """Whether P from ``(q, v, a)`` stops within ``[lo, hi]`` (1e-9 tolerance), ``q`` itself
+    inside it: :func:`._brake.stops_within` with the axis' constants (``JerkLimiter._axes``),
+    its closed-form distance first where the axis allows it."""
+    _, _, vmax, amax, jdt, half_inv_j, abig, jmax, _, _, stair_ok, _, _, _, _ = axis
+    if stair_ok:
+        dist = forward_stop(v, a, amax, jdt, dt)
+        if dist is not None:
+            return lo - 1e-9 <= q + dist <= hi + 1e-9
+    return simulate_within(
+        q, v, a, lo, hi, vmax, amax, jdt, half_inv_j, abig, jmax, dt, bool(stair_ok)
+    )
+
+
+def _bisect(
+    q: float,
+    v: float,
+    want: float,
+    lo: float,
+    hi: float,
+    lo_w: float,
+    hi_w: float,
+    q_want: float,
+    axis: tuple[float, ...],
+    dt: float,
+    inv_dt: float,
+) -> tuple[float, float, float, int]:
+    """The limited next state ``(q, v, a)`` of one axis of :meth:`JerkLimiter.step` when the
+    full wanted speed ``want`` (next position ``q_want``) is not admissible, and the number
+    of exact braking checks made: bisection (``_BISECT`` steps) for the largest wanted speed
+    in ``[0, want]`` whose next state is admissible within ``[lo_w, hi_w]``, else P's
+    action. ``(q, v)``: the last state; ``[lo, hi]``: the band of next accelerations."""
+    _, _, _, amax, jdt, _, abig, jmax, _, sat, _, _, _, _, _ = axis
+    lo_e = lo_w - 1e-9
+    hi_e = hi_w + 1e-9
+    n_sim = 0
+    best = False
+    qn = vn = an = 0.0
+    w_lo, w_hi = 0.0, want
+    # wanted speeds beyond what one frame can reach give the same next state (the step
+    # saturates): remember each decided state (q, v fixed: qb decides it)
+    seen = {q_want: False}
+    k = 0
+    # while the midpoint's chase is saturated as want's was (same sign, budget past sat),
+    # its next state is q_want's (the same clipped dn): known not admissible
+    d_want = (want - v) * inv_dt
+    if d_want >= sat:
+        while k < _BISECT and (0.5 * (w_lo + w_hi) - v) * inv_dt >= sat:
+            w_hi = 0.5 * (w_lo + w_hi)
+            k += 1
+    elif d_want <= -sat:
+        while k < _BISECT and (0.5 * (w_lo + w_hi) - v) * inv_dt <= -sat:
+            w_hi = 0.5 * (w_lo + w_hi)
+            k += 1
+    for _ in range(k, _BISECT):
+        w = 0.5 * (w_lo + w_hi)
+        # _level_step(v, a, w, w): lands on w, else the chase clipped to the band
+        ddw = (w - v) * inv_dt
+        if lo <= ddw <= hi and -jdt <= ddw <= jdt:
+            vb = w
+        else:
+            e = w - v
+            b = e * inv_dt if e > 0.0 else -e * inv_dt
+            dn = abig if b >= sat else _vcap(b, jdt, abig)
+            if not e > 0.0:
+                dn = -dn
+            if dn > hi:
+                dn = hi
+            if dn < lo:
+                dn = lo
+            vb = v + dn * dt
+        qb = q + vb * dt
+        vb = (qb - q) * inv_dt
+        ab_ = (vb - v) * inv_dt
+        known = seen.get(qb)
+        if known is not None:
+            ok = known
+        else:
+            if not lo_e <= qb <= hi_e:
+                ok = False
+            else:
+                down, up = brake_bound(vb, ab_, amax, jmax, dt)
+                if lo_w <= qb - down and qb + up <= hi_w:
+                    ok = True
+                else:
+                    n_sim += 1
+                    ok = _stops(qb, vb, ab_, lo_w, hi_w, axis, dt)
+            seen[qb] = ok
+        if ok:
+            best = True
+            qn, vn, an = qb, vb, ab_
+            w_lo = w
+        else:
+            w_hi = w
+    if not best:  # P's action (_level_step(v, a, 0, 0)): admissible by construction
+        ddw = (0.0 - v) * inv_dt
+        if lo <= ddw <= hi and -jdt <= ddw <= jdt:
+            vb = 0.0
+        else:
+            e = 0.0 - v
+            dn = _vcap(e * inv_dt, jdt, abig) if e > 0.0 else -_vcap(-e * inv_dt, jdt, abig)
+            if dn > hi:
+                dn = hi
+            if dn < lo:
+                dn = lo
+            vb = v + dn * dt
+        qn = q + vb * dt
+        vn = (qn - q) * inv_dt
+        an = (vn - v) * inv_dt
+    return qn, vn, an, n_sim
+
+
 def _second_order_distance(a: float, j: float, dt: float) -> float:
     """Velocity still gained after a frame at acceleration |a| when braking it at jerk j."""
     a = abs(a)
     jdt = j * dt
     n = math.floor(a / jdt)
     return dt * (n * a - jdt * n * (n + 1) / 2.0)
+
+
+def _chase_saturation(amax: float, jdt: float, abig: float) -> float:
+    """A budget ``b`` (speed units, as :func:`._realtime._vcap`'s) from which ``_vcap(b, jdt,
+    abig)`` is at least ``amax`` (so a chase step clipped to the band ``|a| <= amax`` ends on
+    the band's bound, whatever the exact value).
+
+    ``_vcap(b) >= amax`` exactly when ``b >= S = amax + sum_{i=1..m} (amax - i jdt)``,
+    ``m = floor(amax / jdt)`` (the staircase's budget for ``amax``); the threshold is
+    ``S`` plus one part in 1e6, so that ``_vcap``'s rounding (parts in 1e15) cannot bring it
+    under ``amax``: ``_vcap`` rises at least ``1 / (n + 1)`` per unit of budget above ``S``.
+    No more than ``_vcap``'s own saturation test (``abig``): beyond it ``abig`` is returned.
+    """
+    m = math.floor(amax / jdt)
+    s = (m + 1) * amax - jdt * m * (m + 1) / 2.0
+    return min(s * (1.0 + 1e-6), abig + abig * abig / (2.0 * jdt) + jdt)
