@@ -14,8 +14,8 @@ With ``--png`` a plot of the drive's perceived fz (vehicle x ``--scale``, platfo
 platform's roll and pitch, and the reversal times per channel. Diagnosis only (a held-out
 drive may be looked at; no preset is tuned here). Run from the repository root::
 
-    python tools/classical_reversals.py racing-hexapod-firm configs/recordings/flowing-formula.csv \\
-        --episodes 8 --png /tmp/rev.png
+    python tools/classical_reversals.py racing-hexapod-firm \\
+        configs/recordings/flowing-formula.csv --episodes 8 --png /tmp/rev.png
 """
 
 from __future__ import annotations
@@ -65,7 +65,10 @@ def phases(v: np.ndarray, thr: float) -> dict[str, np.ndarray]:
 def runs(mask: np.ndarray) -> list[tuple[int, int]]:
     """(start, length) of each run of True."""
     d = np.diff(np.concatenate([[0], mask.astype(int), [0]]))
-    return [(int(a), int(b - a)) for a, b in zip(np.flatnonzero(d == 1), np.flatnonzero(d == -1), strict=True)]
+    return [
+        (int(a), int(b - a))
+        for a, b in zip(np.flatnonzero(d == 1), np.flatnonzero(d == -1), strict=True)
+    ]
 
 
 def main() -> None:
@@ -126,7 +129,9 @@ def main() -> None:
 
         t = np.arange(n) / RATE
         fig, ax = plt.subplots(4, 1, figsize=(14, 10), sharex=True)
-        ax[0].plot(t, args.scale * pv[:, 2], "k", lw=0.8, label=f"vehicle perceived fz x {args.scale}")
+        ax[0].plot(
+            t, args.scale * pv[:, 2], "k", lw=0.8, label=f"vehicle perceived fz x {args.scale}"
+        )
         ax[0].plot(t, ps[:, 2], "tab:red", lw=0.8, label="platform perceived fz")
         ax[0].axhline(thr[2], color="grey", lw=0.5)
         ax[0].axhline(-thr[2], color="grey", lw=0.5)
@@ -140,14 +145,16 @@ def main() -> None:
         ax[2].plot(t, np.degrees(run.poses[:, 4]), label="pitch")
         ax[2].set_ylabel("deg")
         ax[2].legend(fontsize=8)
-        for c, name in enumerate(CHANNELS):
+        for c in range(len(CHANNELS)):
             ax[3].fill_between(t, c, c + 0.8 * rev[:, c], step="mid", alpha=0.8)
         ax[3].set_yticks(np.arange(6) + 0.4, CHANNELS)
         ax[3].set_ylabel("reversal")
         ax[3].set_xlabel("t (s)")
         for a in ax:
             a.grid(alpha=0.3)
-        fig.suptitle(f"{Path(args.drive).stem} x {args.preset}: reversals {100 * m.reversals_any:.2f} %")
+        fig.suptitle(
+            f"{Path(args.drive).stem} x {args.preset}: reversals {100 * m.reversals_any:.2f} %"
+        )
         fig.tight_layout()
         fig.savefig(args.png, dpi=75)
         print(f"wrote {args.png}")

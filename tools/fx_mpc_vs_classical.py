@@ -22,15 +22,15 @@ from pathlib import Path
 import matplotlib
 
 matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
-import numpy as np  # noqa: E402
+import matplotlib.pyplot as plt
+import numpy as np
 
-from motioncue.analysis import run_chain  # noqa: E402
-from motioncue.cueing import load_cueing  # noqa: E402
-from motioncue.kinematics import load_platform  # noqa: E402
-from motioncue.output import load_controller  # noqa: E402
-from motioncue.telemetry._recording import read_recording_csv, resample  # noqa: E402
-from motioncue.trajectory import ActuatorLimits  # noqa: E402
+from motioncue.analysis import run_chain
+from motioncue.cueing import load_cueing
+from motioncue.kinematics import load_platform
+from motioncue.output import load_controller
+from motioncue.telemetry._recording import read_recording_csv, resample
+from motioncue.trajectory import ActuatorLimits
 
 RATE = 100.0
 G = 9.80665
@@ -88,14 +88,20 @@ def main() -> None:
         m = np.abs(v) > thr
         print(
             f"  {name}: whole excerpt share fx {np.sqrt(np.mean(s**2) / np.mean(v**2)):.3f}, "
-            f"corr {np.corrcoef(s, v)[0, 1]:.3f}, x range {1e3 * x.min():.0f}..{1e3 * x.max():.0f} mm, "
+            f"corr {np.corrcoef(s, v)[0, 1]:.3f}, "
+            f"x range {1e3 * x.min():.0f}..{1e3 * x.max():.0f} mm, "
             f"pitch {np.degrees(pitch.min()):.1f}..{np.degrees(pitch.max()):.1f} deg, "
             f"reversals fx {100 * np.mean(m & (np.abs(s) > thr) & (s * v < 0)):.2f} %"
         )
         for i in idx:
             on = slice(i, i + 50)
-            j = i + int(np.argmax(v[i : i + 300] > -thr)) if np.any(v[i : i + 300] > -thr) else i + 300
+            j = (
+                i + int(np.argmax(v[i : i + 300] > -thr))
+                if np.any(v[i : i + 300] > -thr)
+                else i + 300
+            )
             whole = slice(i, max(j, i + 50))
+            rate_deg_s = np.degrees(np.abs(np.diff(pitch[max(i - 30, 0) : j + 30])).max() * RATE)
             print(
                 f"    stop at {t[i]:6.2f} s ({(j - i) / RATE:.2f} s, vehicle min "
                 f"{v[whole].min():6.2f}): share first 0.5 s "
@@ -103,7 +109,7 @@ def main() -> None:
                 f"{np.sqrt(np.mean(s[whole] ** 2) / np.mean(v[whole] ** 2)):.3f}; "
                 f"tilt/trans mean first 0.5 s {tilt[on].mean():+.2f}/{trans[on].mean():+.2f}, "
                 f"whole {tilt[whole].mean():+.2f}/{trans[whole].mean():+.2f} m/s^2; "
-                f"peak pitch rate {np.degrees(np.abs(np.diff(pitch[i - 30 : j + 30])).max() * RATE):.0f} deg/s, "
+                f"peak pitch rate {rate_deg_s:.0f} deg/s, "
                 f"x {1e3 * x[whole].min():.0f}..{1e3 * x[whole].max():.0f} mm"
             )
     fig, axes = plt.subplots(5, len(idx), figsize=(4.2 * len(idx), 12), squeeze=False, sharey="row")
