@@ -828,6 +828,11 @@ class OptimalCueing:
                 )
                 w1 = self._ws.last if self._ws is not None else None
                 ok2, u2 = self._solve_window(qp2, xv_e, sg, use_guard, fz, guess=u, start=w1)
+                if not ok2 and fz is not None:
+                    # the legs' rows about the first plan can be infeasible (a first plan at
+                    # the stroke's edge); the first plan itself knows nothing of the tilt's
+                    # fz, so the fz rows are kept with the first pass's legs
+                    ok2, u2 = self._solve_window(qp, xv_e, sg, use_guard, fz, guess=u, start=w1)
                 w_prev = self._ws.last if self._ws is not None and ok2 else w1
                 if ok2:  # else keep the first plan
                     u = u2
