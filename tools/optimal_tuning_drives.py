@@ -1,23 +1,22 @@
-"""Cue metrics of ``optimal-hexapod`` candidates on whole tuning drives (the figures of session
+r"""Cue metrics of ``optimal-hexapod`` candidates on whole tuning drives (the figures of session
 26 in the header of configs/cueing/optimal-hexapod.toml).
 
 The drives: the bundled car tuning drives (``sample_drives("tuning", kind="car")``) and formula
 drives made for tuning only with ``tools/make_sample_lap.py`` into ``--made DIR`` (not bundled;
 never the held-out drives or the demo lap):
 
-    python tools/make_sample_lap.py --track chicane --car formula --laps 1 --seed 301 --out DIR/chicane-formula-301.csv
-    python tools/make_sample_lap.py --track street --car formula --laps 2 --seed 401 --out DIR/street-formula-401.csv
-    python tools/make_sample_lap.py --track flowing --car formula --laps 1 --seed 501 --out DIR/flowing-formula-501.csv
-    python tools/make_sample_lap.py --track flowing --car formula --laps 2 --seed 502 --out DIR/flowing-formula-502.csv
-    python tools/make_sample_lap.py --track flowing --car formula --laps 1 --seed 601 --out DIR/flowing-formula-601.csv
+    python tools/make_sample_lap.py --track chicane --car formula --laps 1 --seed 301 \
+        --out DIR/chicane-formula-301.csv
 
-(and 602, 603 the same way). Each candidate (``--mpc KEY=JSON`` overrides of the preset's
+and the same for ``--track street --laps 2 --seed 401`` (street-formula-401.csv), ``--track
+flowing --laps 1 --seed 501``, ``--laps 2 --seed 502``, ``--laps 1 --seed 601``, 602, 603
+(flowing-formula-SEED.csv). Each candidate (``--mpc KEY=JSON`` overrides of the preset's
 ``[mpc]`` table, ``MpcParams`` fields) and ``racing-hexapod-firm`` run through the chain of
 ``motioncue compare`` (:func:`run_chain`) on each whole drive, one process per drive
 (``--jobs``); printed per drive: share fx/fy and its ratio to the firm preset's, corr fx/fy,
 reversals (all, fz), all false cues, clamped %, frames changed by the actuator limiter.
 
-    python tools/optimal_tuning_drives.py --made DIR --mpc 'sign_guard=[0.7, 0.7, 0.5, 0.768, 0.768, 0]'
+    python tools/optimal_tuning_drives.py --made DIR --mpc 'sign_guard_weight=1e5'
 """
 
 from __future__ import annotations
