@@ -10,7 +10,10 @@ platform acceleration) is held over blocks of ``block_samples`` samples; the leg
 linearised about the previous window's plan where it overlaps (about the neutral pose after
 it, and everywhere when that solve fails or there is no previous plan), then the window is
 solved again with them linearised about that first plan at every block end (a second
-sequential-QP pass; the first plan is kept when that solve fails). The usable stroke is
+sequential-QP pass; the first plan is kept when that solve fails, except with the fz guard
+below: the legs' rows about a first plan at the stroke's edge can be infeasible, so the fz
+guard's rows are then solved with the first pass's legs rows, and the first plan, which
+knows nothing of the tilt's fz, is kept only if that fails too). The usable stroke is
 ``stroke_use`` of the real one (the rest absorbs what the linearisation misses); speed,
 acceleration, tilt and combined-tilt (``tilt_fz_use``) limits are those of :mod:`._mpc`.
 Knowing the ride, the plan can also hold the combined tilt tighter exactly where the loss of
@@ -828,6 +831,11 @@ class OptimalCueing:
                 )
                 w1 = self._ws.last if self._ws is not None else None
                 ok2, u2 = self._solve_window(qp2, xv_e, sg, use_guard, fz, guess=u, start=w1)
+                if not ok2 and fz is not None:
+                    # the legs' rows about the first plan can be infeasible (a first plan at
+                    # the stroke's edge); the first plan itself knows nothing of the tilt's
+                    # fz, so the fz rows are kept with the first pass's legs
+                    ok2, u2 = self._solve_window(qp, xv_e, sg, use_guard, fz, guess=u, start=w1)
                 w_prev = self._ws.last if self._ws is not None and ok2 else w1
                 if ok2:  # else keep the first plan
                     u = u2
