@@ -27,7 +27,8 @@ demo: $(BIN)/.installed
 
 # pytest-xdist with two workers per core (-n auto, tests/conftest.py: many tests wait rather
 # than compute), each test module (or class) on one worker, so that a module's fixtures are
-# built once, the longest units handed out first (tests/conftest.py). No wall-clock figure is
+# built once, the longest units handed out first, those that mostly wait (emulators, playback,
+# a browser) beside those that compute (tests/conftest.py). No wall-clock figure is
 # asserted here; those are in make bench.
 # PYTEST_ARGS adds options, e.g. make test PYTEST_ARGS=--cpu-durations=40 (CPU time per test,
 # tests/conftest.py: the figure to compare on a busy machine).

@@ -15,8 +15,10 @@ sleeps, emulators and real-time playback and need no core meanwhile) with ``--di
 loadscope``. Plain loadscope hands out the modules with the most tests first, which leaves
 the few-but-long modules (tuning, MPC acceptance, fuzz) to the end, where one worker runs
 them alone. :class:`_LongestFirst` hands out the units known to take longest first
-(:data:`_LONG_UNITS`, measured) and splits the modules in :data:`_SPLIT` into one unit per
-test (they share no module fixture), so that the run ends with short units on every worker.
+(:data:`_UNITS`, measured), one that mostly waits to a worker whose fellows already keep
+every core busy and one that computes otherwise (:func:`_next_unit`), and splits the modules
+in :data:`_SPLIT` into one unit per test (they share no module fixture), so that the run
+ends with short units on every worker.
 """
 
 from __future__ import annotations
@@ -25,6 +27,7 @@ import os
 import resource
 from collections import defaultdict
 from collections.abc import Generator, Iterator
+from typing import Any
 
 import pytest
 from hypothesis import HealthCheck, settings
@@ -148,75 +151,80 @@ def pytest_terminal_summary(terminalreporter: pytest.TerminalReporter) -> None:
 
 
 # --------------------------------------------------------------------------- work order
-# The units of work that take longest on a quiet machine (setup included), longest first: a
-# module, a class or a single test, by node id prefix. Only the order of hand-out depends on
-# this list; a unit missing from it goes after those listed, in pytest-xdist's own order (file
-# order here). Ranked by wall time less the time spent waiting for a core (runq), per unit
-# summed over its tests, from session 25's `make test PYTEST_ARGS=--cpu-durations=0` on this
-# branch (2058 passed in 248.2 s, load 2.5-4.3: other work on the machine), so with this
-# session's cuts (the browser's and the held-up demo's report not drawn, tune's fork server):
-# the units that mostly wait (liveness, fault injection, tune's processes, the browser) first,
-# since their time does not shrink with the CPU. Units under 3.5 s are left to the end.
-_LONG_UNITS: tuple[str, ...] = (
-    "tests/test_liveness.py",
-    "tests/test_fault_injection.py",
-    "tests/test_tune.py",
-    "tests/test_browser_drawing.py",
-    "tests/test_bridge.py",
-    "tests/test_telemetry.py",
-    "tests/test_pipeline.py",
-    "tests/test_wire_clock.py",
-    "tests/test_easysmc_emulator.py",
-    "tests/test_cue_bound_corr.py",
-    "tests/test_safety_files.py",
-    "tests/test_docs.py::test_docs_build",
-    "tests/test_bridge_new_games.py",
-    "tests/test_browser.py::test_view_renders_offline_plays_and_the_slider_moves_the_platform",
-    "tests/test_cue_bound.py",
-    "tests/test_browser.py::test_view_of_the_demo_ride_is_under_10_mb_and_renders",
-    "tests/test_browser.py::test_play_cli_monitor_stop_parks_on_the_emulator",
-    "tests/test_fk_rides.py",
-    "tests/test_browser.py::test_stop_button_parks_the_bridge",
-    "tests/test_mpc_acceptance.py",
-    "tests/test_browser.py::test_stop_button_parks_a_play",
-    "tests/test_easysmc_pipeline.py",
-    "tests/test_viewer.py",
-    "tests/test_limiter_jerk.py",
-    "tests/test_extend_all.py",
-    "tests/test_profiles.py",
-    "tests/test_latency_acceptance.py",
-    "tests/test_browser.py::test_monitor_renders_and_its_3d_view_follows_the_poses",
-    "tests/test_corner4.py",
-    "tests/test_extend_cueing.py",
-    "tests/test_sample_drives.py",
-    "tests/test_omct.py",
-    "tests/test_bridge_games.py",
-    "tests/test_iface.py",
-    "tests/test_cli_defects.py",
-    "tests/test_arrival.py",
-    "tests/test_strength_bound.py",
-    "tests/test_mpc.py",
-    "tests/test_new_user.py",
-    "tests/test_vestibular_models.py",
-    "tests/test_cli_control.py",
-    "tests/test_cueing_filters.py",
-    "tests/test_easysmc_protocol.py",
-    "tests/test_compare.py",
-    "tests/test_demo_held_up.py",
-    "tests/test_platform_defaults.py",
-    "tests/test_kinematics.py",
-    "tests/test_bridge_cli.py",
-    "tests/test_cue_acceptance.py",
-    "tests/test_extend_platform_game.py",
-    "tests/test_bridge_replay.py",
-    "tests/test_intensity_rides.py",
-    "tests/test_cueing_cli.py",
-    "tests/test_cli_pipeline.py",
-    "tests/test_mpc_reference.py::test_tune_drives_an_optimal_preset_and_never_returns_a_worse_one",
-    "tests/test_shm_source.py",
-    "tests/test_fuzz_inputs.py::test_mutated_config_files_give_only_motioncue_errors",
-    "tests/test_console_exit.py",
-)
+# The units of work that take longest on a quiet machine, by node id prefix (a module, a class
+# or a single test): (CPU seconds, seconds of wall time less the wait for a core), setup
+# included, summed over the unit's tests, longest first. Measured in session 25's `make test
+# PYTEST_ARGS=--cpu-durations=0` (2058 passed in 248.2 s). A unit's CPU share (the first
+# figure over the second) says whether it mostly computes or mostly waits (sleeps, emulators,
+# playback at real time, a browser, other processes starting). The figures decide only the
+# order of hand-out (:class:`_LongestFirst`); a unit missing here (under 3 s) counts as one
+# that computes and goes after those listed, in file order.
+_UNITS: dict[str, tuple[float, float]] = {
+    "tests/test_liveness.py": (14.9, 70.9),
+    "tests/test_fault_injection.py": (8.6, 43.4),
+    "tests/test_tune.py": (12.6, 28.2),
+    "tests/test_browser_drawing.py": (6.1, 23.2),
+    "tests/test_bridge.py": (7.3, 19.3),
+    "tests/test_telemetry.py": (13.3, 16.5),
+    "tests/test_pipeline.py": (6.5, 16.3),
+    "tests/test_wire_clock.py": (14.6, 14.9),
+    "tests/test_easysmc_emulator.py": (0.4, 14.6),
+    "tests/test_cue_bound_corr.py": (14.4, 14.4),
+    "tests/test_safety_files.py": (10.7, 13.6),
+    "tests/test_docs.py::test_docs_build_with_warnings_as_errors": (9.1, 12.7),
+    "tests/test_bridge_new_games.py": (3.7, 12.4),
+    "tests/test_browser.py::test_view_renders_offline_plays_and_the_slider": (2.2, 12.3),
+    "tests/test_cue_bound.py": (12.3, 12.3),
+    "tests/test_browser.py::test_view_of_the_demo_ride_is_under_10_mb_and_renders": (5.2, 11.9),
+    "tests/test_browser.py::test_play_cli_monitor_stop_parks_on_the_emulator": (3.4, 11.1),
+    "tests/test_fk_rides.py": (7.0, 11.1),
+    "tests/test_browser.py::test_stop_button_parks_the_bridge": (3.1, 11.0),
+    "tests/test_mpc_acceptance.py": (10.9, 10.9),
+    "tests/test_browser.py::test_stop_button_parks_a_play": (2.8, 10.7),
+    "tests/test_easysmc_pipeline.py": (7.2, 10.7),
+    "tests/test_limiter_jerk.py": (9.9, 10.0),
+    "tests/test_viewer.py": (8.5, 10.0),
+    "tests/test_extend_all.py": (6.0, 9.4),
+    "tests/test_profiles.py": (2.4, 9.2),
+    "tests/test_latency_acceptance.py": (2.8, 8.6),
+    "tests/test_browser.py::test_monitor_renders_and_its_3d_view_follows_the_poses": (2.3, 8.3),
+    "tests/test_corner4.py": (6.0, 8.1),
+    "tests/test_extend_cueing.py": (5.2, 7.5),
+    "tests/test_sample_drives.py": (7.1, 7.3),
+    "tests/test_omct.py": (7.0, 7.0),
+    "tests/test_iface.py": (3.2, 6.5),
+    "tests/test_bridge_games.py": (1.8, 6.4),
+    "tests/test_cli_defects.py": (3.3, 6.3),
+    "tests/test_strength_bound.py": (6.1, 6.2),
+    "tests/test_arrival.py": (2.2, 6.1),
+    "tests/test_mpc.py": (3.2, 6.0),
+    "tests/test_new_user.py": (3.8, 6.0),
+    "tests/test_vestibular_models.py": (5.7, 5.9),
+    "tests/test_cli_control.py": (1.1, 5.7),
+    "tests/test_easysmc_protocol.py": (5.4, 5.6),
+    "tests/test_cueing_filters.py": (5.5, 5.6),
+    "tests/test_kinematics.py": (4.8, 5.2),
+    "tests/test_compare.py": (5.2, 5.2),
+    "tests/test_demo_held_up.py": (1.2, 5.1),
+    "tests/test_platform_defaults.py": (5.0, 5.0),
+    "tests/test_bridge_cli.py": (1.8, 4.9),
+    "tests/test_cue_acceptance.py": (4.8, 4.9),
+    "tests/test_shm_source.py": (2.6, 4.9),
+    "tests/test_extend_platform_game.py": (2.8, 4.6),
+    "tests/test_bridge_replay.py": (0.8, 4.5),
+    "tests/test_intensity_rides.py": (4.3, 4.3),
+    "tests/test_cueing_cli.py": (3.2, 4.3),
+    "tests/test_cli_pipeline.py": (3.1, 4.0),
+    "tests/test_mpc_reference.py::test_tune_drives_an_optimal_preset": (4.0, 4.0),
+    "tests/test_fuzz_inputs.py::test_mutated_config_files": (3.8, 3.8),  # each of [0] and [1]
+    "tests/test_console_exit.py": (0.2, 3.6),
+    "tests/test_trajectory_ride_qp.py": (3.4, 3.5),
+    "tests/test_limiter.py": (3.4, 3.5),
+    "tests/test_f1_orientation.py": (0.7, 3.4),
+    "tests/test_upsample.py": (3.2, 3.2),
+}
+_WAITING_SHARE = 0.5
+"""A unit whose CPU share is under this mostly waits: it can run beside the computing ones."""
 # Modules handed out one test at a time: long tests that share no module or class fixture.
 _SPLIT: frozenset[str] = frozenset(
     {
@@ -236,17 +244,45 @@ def _unit_of(nodeid: str) -> str:
 
 
 def _rank(nodeid: str) -> int:
-    for k, prefix in enumerate(_LONG_UNITS):
+    """The place of a test's unit in :data:`_UNITS` (their number for an unlisted one)."""
+    for k, prefix in enumerate(_UNITS):
         if nodeid.startswith(prefix):
             return k
-    return len(_LONG_UNITS)
+    return len(_UNITS)
 
 
-def pytest_collection_modifyitems(config: pytest.Config, items: list[pytest.Item]) -> None:
-    """In a pytest-xdist worker, the long units first (every worker sorts alike, as xdist
-    requires; a single-process run keeps the file order)."""
-    if hasattr(config, "workerinput"):
-        items.sort(key=lambda item: _rank(item.nodeid))  # stable: file order within a rank
+def _cpu_share(unit: str) -> float:
+    """The CPU share of a unit of work (:data:`_UNITS`; 1 for an unlisted one)."""
+    k = _rank(unit)
+    if k == len(_UNITS):
+        return 1.0
+    cpu_s, wall_s = list(_UNITS.values())[k]
+    return cpu_s / wall_s
+
+
+def _cores() -> int:
+    try:
+        return len(os.sched_getaffinity(0))
+    except AttributeError:  # not on Linux
+        return os.cpu_count() or 1
+
+
+def _next_unit(waiting: list[str], running: list[str], cores: int) -> str:
+    """The unit to hand to a worker asking for work: the first of ``waiting`` (the queue,
+    longest first) that mostly waits when at least as many of the units ``running`` on the
+    other workers compute as there are cores, else the first that computes; the first of the
+    queue when there is none of the kind wanted.
+
+    Chosen on a simulation of the run from session 25's figures per test (two cores shared
+    fairly, xdist's hand-out): 4 workers in 224.6 s with the longest units first, 211.4 s
+    with this choice (the CPU time alone needs 203 s); with every test's time changed at
+    random by up to 30 % (the table left as it is) 11-17 s less in each of five draws."""
+    computing = sum(_cpu_share(unit) >= _WAITING_SHARE for unit in running)
+    busy = computing >= cores
+    for unit in waiting:
+        if (_cpu_share(unit) < _WAITING_SHARE) == busy:
+            return unit
+    return waiting[0]
 
 
 @pytest.hookimpl(optionalhook=True)
@@ -254,11 +290,7 @@ def pytest_xdist_auto_num_workers(config: pytest.Config) -> int:
     """``-n auto``: two workers per core (at most 16). About a third of the suite's time is
     waiting (sleeps, emulators, playback at real time, other processes starting), which a
     second worker on the core fills with another test."""
-    try:
-        cores = len(os.sched_getaffinity(0))
-    except AttributeError:  # not on Linux
-        cores = os.cpu_count() or 1
-    return min(2 * cores, 16)
+    return min(2 * _cores(), 16)
 
 
 @pytest.hookimpl(optionalhook=True)
@@ -269,7 +301,10 @@ def pytest_xdist_make_scheduler(config: pytest.Config, log: object) -> object:
     from xdist.scheduler import LoadScopeScheduling
 
     class _LongestFirst(LoadScopeScheduling):
-        """Loadscope in the workers' (longest first) order, with :data:`_SPLIT` split."""
+        """Loadscope in the workers' (longest first) order, with :data:`_SPLIT` split, each
+        unit chosen by :func:`_next_unit`: the units that mostly wait run beside those that
+        compute instead of all at once (in session 25 the four that wait longest started
+        together, and the first 30 s of the run left a core idle)."""
 
         def _split_scope(self, nodeid: str) -> str:
             return _unit_of(nodeid)
@@ -277,5 +312,20 @@ def pytest_xdist_make_scheduler(config: pytest.Config, log: object) -> object:
         def schedule(self) -> None:
             self.config.option.loadscopereorder = False  # keep the longest-first order
             super().schedule()
+
+        def _assign_work_unit(self, node: Any) -> None:
+            """xdist's own, but the unit chosen by :func:`_next_unit`, not the first."""
+            assert self.workqueue
+            running = []
+            for other, work in self.assigned_work.items():
+                if other is not node:  # its unit under way: the first with a test to run
+                    running += [s for s, done in work.items() if not all(done.values())][:1]
+            scope = _next_unit(list(self.workqueue), running, _cores())
+            work_unit = self.workqueue.pop(scope)
+            self.assigned_work.setdefault(node, {})[scope] = work_unit
+            collection = self.registered_collections[node]
+            node.send_runtest_some(
+                [collection.index(nodeid) for nodeid, done in work_unit.items() if not done]
+            )
 
     return _LongestFirst(config, log)
