@@ -5,7 +5,6 @@ from __future__ import annotations
 import json
 import os
 import signal
-import socket
 import subprocess
 import sys
 from pathlib import Path
@@ -14,6 +13,7 @@ from typing import Any
 import numpy as np
 import pytest
 
+from _ports import free_port
 from motioncue.cli import main
 from motioncue.kinematics import load_platform
 from motioncue.output import imax, load_controller, mbox
@@ -21,12 +21,6 @@ from motioncue.pipeline._verify import check_frames
 from test_bridge import Sender, _wait_for
 
 SRC = Path(__file__).resolve().parents[1] / "src"
-
-
-def _free_udp_port() -> int:
-    with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as s:
-        s.bind(("127.0.0.1", 0))
-        return int(s.getsockname()[1])
 
 
 def _printed_limits(capsys: pytest.CaptureFixture[str], *args: str) -> Any:
@@ -48,7 +42,7 @@ def _check(emu: Any, platform_name: str, table: Any) -> None:
 
 
 def test_bridge_verb_runs_parks_and_reports(capsys: pytest.CaptureFixture[str]) -> None:
-    port = _free_udp_port()
+    port = free_port()
     emu = imax.ImaxEmulator(load_controller("imax3"))
     with emu, Sender(port, 2023):
         code = main(
@@ -98,7 +92,7 @@ def test_bridge_verb_names_bad_arguments(capsys: pytest.CaptureFixture[str]) -> 
 
 
 def test_sigterm_parks_smoothly_then_exits(capsys: pytest.CaptureFixture[str]) -> None:
-    port = _free_udp_port()
+    port = free_port()
     ctrl = load_controller("mbox6")
     emu = mbox.MboxEmulator(ctrl)
     with emu, Sender(port, 2024):

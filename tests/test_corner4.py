@@ -15,6 +15,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from _ports import free_port
 from motioncue import ConfigError, LimitError
 from motioncue.kinematics import (
     STANDARD_GRAVITY,
@@ -380,16 +381,13 @@ def test_bridge_live_on_corner4_tl_mbox6_parks_and_keeps_limits(
 ) -> None:
     """The live path (F1 telemetry -> bridge -> MBOX emulator) on the corner rig."""
     import json
-    import socket
 
     from _emulator_process import EmulatorProcess
     from motioncue.cli import main
     from motioncue.pipeline._verify import check_frames
     from test_bridge import Sender, _wait_for
 
-    with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as s:
-        s.bind(("127.0.0.1", 0))
-        port = int(s.getsockname()[1])
+    port = free_port()
     # the emulator in a process of its own: a thread of this one, beside the bridge and the
     # sender, was held up 500-620 ms at load 15-25 and the bridge stopped, "controller silent"
     with EmulatorProcess("mbox6") as emu, Sender(port, 2023):

@@ -23,6 +23,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from _ports import free_port
 from motioncue import ConfigError
 from motioncue.cli import main
 from motioncue.cueing import load_cueing
@@ -390,9 +391,7 @@ def test_a_stream_without_motion_ex_moves_the_bridge_and_says_so() -> None:
 def test_record_and_generate_report_the_derived_angular_velocity(
     tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
-    with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as probe:
-        probe.bind(("127.0.0.1", 0))
-        port = int(probe.getsockname()[1])
+    port = free_port()
     rec = tmp_path / "motion-only.mctr"
     with MotionOnlySender(port) as sender:
         assert (

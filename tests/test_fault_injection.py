@@ -38,6 +38,7 @@ import numpy as np
 import pytest
 
 import _loopback as lb
+from _ports import free_port
 from motioncue import LimitError
 from motioncue._config import config_dir
 from motioncue.cli import main
@@ -444,16 +445,10 @@ def test_bridge_within_the_controllers_own_stroke_parks(rig: Any, live_s: float)
     assert int(wire.pulses.max()) > 0.9 * hi  # it did drive toward that stroke end
 
 
-def _free_port() -> int:
-    with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as s:
-        s.bind(("127.0.0.1", 0))
-        return int(s.getsockname()[1])
-
-
 def test_bridge_garbage_telemetry_keeps_the_limits(rig: Any) -> None:
     """Random bytes, NaN and infinite values between real F1 packets, into the real source."""
     platform, ctrl, lim, park = rig
-    port = _free_port()
+    port = free_port()
     rng = np.random.default_rng(11)
 
     def random_bytes(ex: bytes, motion: bytes) -> bytes:
@@ -696,7 +691,7 @@ def test_play_signals_park(case: str, ride_path: Path, rig: Any) -> None:
 @pytest.mark.parametrize("case", list(SIGNAL_CASES))
 def test_bridge_signals_park(case: str, rig: Any) -> None:
     _, _, _, park = rig
-    port = _free_port()
+    port = free_port()
     args = ["bridge", "--source", f"f1:{port}", "--platform", PLATFORM, "--controller",
             CONTROLLER, "--rate", str(int(RATE_HZ)), "--fade", "0.3", "--quiet"]  # fmt: skip
     with Sender(port, 2024):

@@ -25,6 +25,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
+from _ports import free_port
 from motioncue import ConfigError, ProtocolError
 from motioncue._config import ConfigReader, config_dir
 from motioncue.cueing import load_cueing
@@ -377,18 +378,12 @@ def test_play_cli_signal_parks_on_the_emulator(
     assert_moved_then_parked(emu, np.asarray(park) - ctrl.pulses_lo, 50)
 
 
-def _free_port() -> int:
-    with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as s:
-        s.bind(("127.0.0.1", 0))
-        return int(s.getsockname()[1])
-
-
 def test_bridge_sigint_parks_on_the_emulator(rig: Any) -> None:
     """``motioncue bridge`` (live F1 stream) to the SMC3 emulator, stopped by SIGINT."""
     from test_bridge import Sender
 
     _, ctrl, _, park = rig
-    port = _free_port()
+    port = free_port()
     emu = IfaceEmulator(ctrl).start()
     cmd = ["bridge", "--source", f"f1:{port}", "--platform", PLATFORM, "--controller",
            CONTROLLER, "--rate", "100", "--fade", "0.3", "--quiet",

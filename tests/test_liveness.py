@@ -27,6 +27,7 @@ import numpy as np
 import pytest
 
 import _loopback as lb
+from _ports import free_port
 from motioncue._config import config_dir
 from motioncue.cueing import load_cueing
 from motioncue.kinematics import load_platform
@@ -101,12 +102,6 @@ def _wait_for_line(proc: subprocess.Popen[str], start: str, timeout_s: float = 6
         if line.startswith(start):
             return seen
     raise AssertionError(f"no line {start!r} within {timeout_s} s: {seen}")
-
-
-def _free_port() -> int:
-    with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as s:
-        s.bind(("127.0.0.1", 0))
-        return int(s.getsockname()[1])
 
 
 def _ride_frames_sent(out: str) -> int:
@@ -193,7 +188,7 @@ def test_play_stops_when_the_emulator_process_is_killed(rides: Any, controller: 
 def test_play_to_a_port_with_no_listener_stops(rides: Any) -> None:
     ride_path, n_frames = rides["mbox6"]
     play = _motioncue("play", str(ride_path), "--target",
-                      f"udp://127.0.0.1:{_free_port()}?silence_ms={SILENCE_MS}")  # fmt: skip
+                      f"udp://127.0.0.1:{free_port()}?silence_ms={SILENCE_MS}")  # fmt: skip
     out, err = play.communicate(timeout=60)
     assert play.returncode == 2, err
     assert "it never answered" in err and _silences_ms(err), err
@@ -259,7 +254,7 @@ def test_bridge_stops_when_the_controller_goes_silent(then_sigint: bool) -> None
     "parked at rest"."""
     from test_bridge import Sender
 
-    port = _free_port()
+    port = free_port()
     fake = FakeController(silent_after_frames=200)
     # a longer limit than SILENCE_MS: the fake answers from a thread of this test process,
     # which a busy machine held up for over 300 ms before the fake ever went silent (the

@@ -3,11 +3,11 @@
 
 from __future__ import annotations
 
-import socket
 from pathlib import Path
 
 import pytest
 
+from _ports import free_port
 from motioncue import ConfigError
 from motioncue.cli import main
 from motioncue.cueing import load_cueing
@@ -93,16 +93,10 @@ def test_a_relative_preset_path_is_read_next_to_the_profile(tmp_path: Path) -> N
     assert p.preset == str((tmp_path / "sub" / "my-flight.toml").resolve())
 
 
-def _free_udp_port() -> int:
-    with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as s:
-        s.bind(("127.0.0.1", 0))
-        return int(s.getsockname()[1])
-
-
 def test_bridge_profile_runs_dirt_with_effects_inside_the_limits(
     tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
-    port = _free_udp_port()
+    port = free_port()
     prof = _write(tmp_path, f'source = "dirt:{port}"\npreset = "racing"\n'
                   "[cue]\nf_gain = 1.2\n[effects]\nengine = 1.0\nroad = 2.0\nshift = 1.0\n",
                   "rally.toml")  # fmt: skip

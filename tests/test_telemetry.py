@@ -22,6 +22,7 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
+from _ports import free_port
 from motioncue import ConfigError, ProtocolError, TransportError
 from motioncue.cli import main
 from motioncue.telemetry import (
@@ -559,9 +560,7 @@ def test_sample_is_frozen() -> None:
 def test_record_verb_captures_datagrams_sent_to_it(
     tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
-    with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as probe:
-        probe.bind(("127.0.0.1", 0))
-        port = probe.getsockname()[1]
+    port = free_port()
     stop = threading.Event()
 
     def sender() -> None:

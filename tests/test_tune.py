@@ -16,7 +16,6 @@ from __future__ import annotations
 import os
 import shutil
 import signal
-import socket
 import subprocess
 import sys
 import time
@@ -25,6 +24,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from _ports import free_port
 from motioncue.cli import main
 from motioncue.cueing import evaluate_cueing, load_cueing, make_cueing
 from motioncue.kinematics import load_platform
@@ -231,12 +231,6 @@ def test_written_preset_loads_and_meets_the_limits(tuned_local: tuple, drives: d
     assert printed == pytest.approx(float(np.mean(js)), abs=6e-4)
 
 
-def _free_port() -> int:
-    with socket.socket() as s:
-        s.bind(("127.0.0.1", 0))
-        return int(s.getsockname()[1])
-
-
 def _stop(proc: subprocess.Popen) -> None:
     if proc.poll() is None:
         os.killpg(proc.pid, signal.SIGTERM)
@@ -257,7 +251,7 @@ def test_dask_scheduler_gives_the_local_result(
     dask = shutil.which("dask") or str(Path(sys.executable).with_name("dask"))
     assert Path(dask).exists(), "the dask command of the distributed package"
     env = {**os.environ, "PYTHONPATH": str(SRC), "DASK_DISTRIBUTED__WORKER__DAEMON": "False"}
-    port = _free_port()
+    port = free_port()
     address = f"tcp://127.0.0.1:{port}"
     logs = tmp_path / "logs"
     logs.mkdir()
