@@ -15,7 +15,7 @@ import pytest
 
 from motioncue import ConfigError
 from motioncue.kinematics import load_platform
-from motioncue.viewer._monitor import Monitor
+from motioncue.viewer._monitor import SERVER_NICE, Monitor
 
 
 class _Job:
@@ -73,6 +73,9 @@ def test_a_started_monitor_derives_and_serves_in_its_own_process(
     monkeypatch.setattr(Monitor, "_actuators", not_here)
     with Monitor(job, plat, port=0, rate_hz=20.0) as mon:
         assert mon._proc is not None and mon._proc.pid != os.getpid()
+        # below the job's priority, so that it never holds a core the frame loop waits for
+        job_nice = os.getpriority(os.PRIO_PROCESS, 0)
+        assert os.getpriority(os.PRIO_PROCESS, mon._proc.pid) == min(job_nice + SERVER_NICE, 19)
         snaps, reply = asyncio.run(_client(f"ws://127.0.0.1:{mon.port}/ws", 3))
     assert mon._proc is None  # stopped: the server process has ended
     for snap in snaps:  # the forward kinematics of the server process found the pose

@@ -25,6 +25,7 @@ from __future__ import annotations
 import asyncio
 import json
 import math
+import os
 import threading
 import time
 from collections.abc import Callable, Mapping
@@ -735,6 +736,10 @@ class _JobSource:
 # the server process' entry: SIGINT ignored before anything else (Ctrl-C reaches the whole
 # process group: the job stops and parks by its own path, then says "end" here; no
 # traceback), the job's module path, then _server_main on the passed descriptors
+#: how much lower than the job's the server process' scheduling priority is (``os.nice``):
+#: its snapshots, forward kinematics and JSON never hold a core the frame loop waits for
+SERVER_NICE = 10
+
 _SERVER_CODE = (
     "import signal, sys; signal.signal(signal.SIGINT, signal.SIG_IGN); "
     "import ast; sys.path[:] = ast.literal_eval(sys.argv[1]); "
@@ -750,6 +755,10 @@ def _server_main(req_fd: int, ctl_fd: int, *socket_fds: int) -> None:
     import socket
     from multiprocessing.connection import Connection
 
+    try:  # below the job's frame loop: on a busy 2-core machine the loop must win a core
+        os.nice(SERVER_NICE)
+    except (AttributeError, OSError):  # no os.nice (Windows) or not allowed: serve as is
+        pass
     requests = Connection(req_fd)
     control = Connection(ctl_fd, writable=False)
     config = pickle.loads(control.recv_bytes())
