@@ -130,3 +130,32 @@ def test_bad_values_are_rejected(field: str, value: float) -> None:
             MpcParams(fz_guard=value)
         else:
             MpcParams(fz_guard_from=value)
+
+
+def test_pitch_share_scales_the_pitchs_part_of_the_rows() -> None:
+    """``fz_guard_pitch = w`` scales the pitch's part of the rows (the linearisation's pitch
+    slope): rows(w) = rows(0) + w (rows(1) - rows(0)); rows(0) has no pitch slope, so at a pose
+    with no pitch every share gives the same rows."""
+    rows = {}
+    for share in (0.0, 0.5, 1.0):
+        params = _preset(0.7)
+        assert params.mpc is not None
+        mp = dataclasses.replace(params.mpc, fz_guard_pitch=share)
+        mc = MpcCueing(dataclasses.replace(params, mpc=mp), FS)
+        st = mc.initial_state()
+        st.x[3], st.x[4] = math.radians(8.0), math.radians(-6.0)  # rolled and pitched
+        dv = np.array([0.0, 0.0, 3.0, 0.0, 0.0, 0.0])
+        rows[share] = mc.fz_guard_rows(st, dv)[:2]
+        st.x[4] = 0.0
+        flat = mc.fz_guard_rows(st, dv)[:2]
+        if share == 0.0:
+            flat0 = flat
+        for got, ref in zip(flat, flat0, strict=True):
+            assert np.allclose(got, ref, rtol=1e-12, atol=1e-12)
+    for i in range(2):
+        mid = rows[0.0][i] + 0.5 * (rows[1.0][i] - rows[0.0][i])
+        assert np.allclose(rows[0.5][i], mid, rtol=1e-9, atol=1e-12)
+    assert not np.allclose(rows[1.0][0], rows[0.0][0])  # the pitch's slope is there
+    # at rest the plan's free pose is the present one, where the tangent is exact whatever
+    # its slope: the rows' bounds do not depend on the share
+    assert np.allclose(rows[1.0][1], rows[0.0][1], rtol=1e-12, atol=1e-12)

@@ -1189,6 +1189,7 @@ class MpcCueing:
         loss0 = g * (1.0 - math.cos(r0) * math.cos(p0))
         a_r = g * math.sin(r0) * math.cos(p0) * float(self.params.dofs[3])
         a_p = g * math.cos(r0) * math.sin(p0) * float(self.params.dofs[4])
+        a_p *= self.mpc.fz_guard_pitch
         const = loss0 - a_r * r0 - a_p * p0  # s = -(const + a_r roll + a_p pitch)
         zr = state.zr if state.zr is not None else np.zeros(len(fp.sl))
         free_tilt = fp.p_tilt @ x0  # (nb, 2)
