@@ -636,6 +636,11 @@ class MpcState:
         vehicle's motion alone (platform at rest), for the perceived motions it compares.
     ref_lp : (6,) array or None
         Low-pass state of :func:`reference` (with ``ref_split_hz``).
+    zr : array or None
+        With ``fz_guard``: the otolith model's z states driven by the rider's own specific
+        force deviation ``g (cos roll cos pitch - 1)`` at the platform's pose (the loss of
+        vertical force of the tilt, which the linear model does not see), up to the present
+        pose.
     classical : WashoutState
         The fallback washout's state (also holds the last good input sample).
     warm_u, warm_lam_a, warm_lam_x : arrays or None
@@ -661,6 +666,7 @@ class MpcState:
     xv: NDArray[np.float64] | None = None
     xt: NDArray[np.float64] | None = None
     ref_lp: NDArray[np.float64] | None = None
+    zr: NDArray[np.float64] | None = None
 
     @property
     def bad_samples(self) -> int:
@@ -957,6 +963,22 @@ def _lin_at(
 
 
 @dataclass(frozen=True, eq=False)
+class _FzParts:
+    """Constant pieces of :meth:`MpcCueing.fz_guard_rows` (``nb`` block ends, ``nU``
+    inputs, ``nx`` states, ``nz`` otolith z states)."""
+
+    sl: NDArray[np.int64]  # (nz,): the otolith z states in the model's state
+    az: NDArray[np.float64]  # (nz, nz)
+    bz: NDArray[np.float64]  # (nz,): from the rider's specific force deviation s_z
+    cz: NDArray[np.float64]  # (nz,)
+    dz: float
+    zmat: NDArray[np.float64]  # (nb, nz): perceived fz at the block ends from z_1
+    hsum: NDArray[np.float64]  # (nb,): from a constant s_z of 1 over the horizon
+    g_tilt: NDArray[np.float64]  # (nb, 2, nU): from roll, pitch of each step, by the inputs
+    p_tilt: NDArray[np.float64]  # (nb, 2, nx): the same from the free state x0
+
+
+@dataclass(frozen=True, eq=False)
 class _QpParts:
     """Constant pieces of :meth:`MpcCueing.qp_matrices` and :meth:`MpcCueing.guard_rows`
     (``nb`` block ends, ``nU`` inputs, ``nx`` states, ``ng`` guarded channels)."""
@@ -1037,6 +1059,7 @@ class MpcCueing:
         object.__setattr__(self, "limits", limits)
         object.__setattr__(self, "_qp", qp_solver(mp.solver, cond.hess, self.n_rows))
         guard = self._guard_channels()
+        n_soft = len(guard) + int(self._fz_guarded())
         object.__setattr__(
             self,
             "_qp_guard",
@@ -1044,11 +1067,11 @@ class MpcCueing:
                 mp.solver,
                 cond.hess,
                 self.n_rows,
-                len(ends) * len(guard),
+                len(ends) * n_soft,
                 mp.sign_guard_weight,
                 direct=True,
             )
-            if guard
+            if n_soft
             else None,
         )
 
@@ -1071,6 +1094,111 @@ class MpcCueing:
 
     def _guard_channels(self) -> list[int]:
         return [i for i in range(6) if self.mpc.sign_guard[i] > 0.0]
+
+    def _fz_guarded(self) -> bool:
+        """Whether the QP has ``fz_guard``'s rows (roll or pitch moved)."""
+        return self.mpc.fz_guard > 0.0 and bool(self._tilt_axes())
+
+    def _fz_parts(self) -> _FzParts:
+        """Constant pieces of :meth:`fz_guard_rows` (built once, on first use): the
+        otolith z model driven by the rider's specific force deviation, and its response at
+        the block ends to the roll and pitch of every step of the horizon."""
+        fp: _FzParts | None = self.__dict__.get("_fzp")
+        if fp is not None:
+            return fp
+        m = self.model
+        c = self.cond
+        # the otolith z block of the error model (z is not moved by an fz_guard plan's
+        # inputs' coupling: sx has no tilt term in fz), driven by s_z instead of -d_z
+        from scipy.signal import tf2ss
+
+        orders = [
+            tf2ss(*vm.transfer_function())[0].shape[0]
+            for vm in get_model_set(DEFAULT_MODEL_SET).channel_models()
+        ]
+        at = 12 + orders[0] + orders[1]
+        sl = np.arange(at, at + orders[2])
+        az = m.a[np.ix_(sl, sl)]
+        bz = -m.bd[sl, 2]
+        cz = m.ce[2, sl]
+        dz = -float(m.de[2, 2])
+        n = int(c.ends[-1])
+        h = np.zeros(n + 1)  # p_n = cz az^(n-1) z_1 + sum_k h[n - k] s_k
+        h[0] = dz
+        powb = bz.copy()
+        for j in range(1, n + 1):
+            h[j] = float(cz @ powb)
+            powb = az @ powb
+        nb = len(c.ends)
+        hmat = np.zeros((nb, n))  # (nb, steps 1..n)
+        zmat = np.zeros((nb, len(sl)))
+        powc = cz.copy()
+        k_of = {int(e): b for b, e in enumerate(c.ends)}
+        for j in range(1, n + 1):  # cz az^(j-1)
+            if j in k_of:
+                zmat[k_of[j]] = powc
+            powc = powc @ az
+        for b, e in enumerate(c.ends):
+            e = int(e)
+            hmat[b, :e] = h[e - np.arange(1, e + 1)]
+        # roll and pitch of each step from x0 and the blocked inputs (as condense builds them)
+        nu = m.nu
+        blk = np.searchsorted(c.ends, np.arange(n), side="right")
+        gam = np.zeros((m.nx, nb * nu))
+        phi = np.eye(m.nx)
+        g_tilt = np.zeros((n, 2, nb * nu))
+        p_tilt = np.zeros((n, 2, m.nx))
+        for k in range(1, n + 1):
+            j = blk[k - 1]
+            gam = m.a @ gam
+            gam[:, j * nu : (j + 1) * nu] += m.bu
+            phi = m.a @ phi
+            g_tilt[k - 1] = gam[3:5]
+            p_tilt[k - 1] = phi[3:5]
+        fp = _FzParts(
+            sl=sl,
+            az=az,
+            bz=bz,
+            cz=cz,
+            dz=dz,
+            zmat=zmat,
+            hsum=hmat.sum(axis=1),
+            g_tilt=np.einsum("bk,kiu->biu", hmat, g_tilt),
+            p_tilt=np.einsum("bk,kix->bix", hmat, p_tilt),
+        )
+        self.__dict__["_fzp"] = fp
+        return fp
+
+    def fz_guard_rows(
+        self, state: MpcState, d_vehicle: NDArray[np.float64]
+    ) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
+        """``fz_guard``'s rows ``(A, lo, hi)`` of this sample's QP, in thresholds of fz: at
+        each block end where the vehicle's perceived fz (predicted from ``d_vehicle`` as the
+        sign guard predicts it) is above ``fz_guard_from`` thresholds, the rider's perceived
+        fz at least ``-fz_guard`` thresholds. The rider's specific force deviation from the tilt,
+        ``g (cos roll cos pitch - 1)``, is linearised about the present roll and pitch (held
+        over the horizon) and passed through the otolith model from its present state
+        (``state.zr``); ``hi`` is ``inf`` (one-sided rows)."""
+        fp = self._fz_parts()
+        m = self.model
+        c = self.cond
+        g = GRAVITY_M_S2
+        thr = float(m.thresholds[2])
+        x0 = state.x
+        r0, p0 = float(x0[3]), float(x0[4])
+        loss0 = g * (1.0 - math.cos(r0) * math.cos(p0))
+        a_r = g * math.sin(r0) * math.cos(p0) * float(self.params.dofs[3])
+        a_p = g * math.cos(r0) * math.sin(p0) * float(self.params.dofs[4])
+        a_p *= self.mpc.fz_guard_pitch
+        const = loss0 - a_r * r0 - a_p * p0  # s = -(const + a_r roll + a_p pitch)
+        zr = state.zr if state.zr is not None else np.zeros(len(fp.sl))
+        free_tilt = fp.p_tilt @ x0  # (nb, 2)
+        free = fp.zmat @ zr - const * fp.hsum - a_r * free_tilt[:, 0] - a_p * free_tilt[:, 1]
+        a_rows = -(a_r * fp.g_tilt[:, 0, :] + a_p * fp.g_tilt[:, 1, :]) / thr
+        xt = state.xt if state.xt is not None else np.zeros(m.nx)
+        pv = -(c.ce_phi[:, 2, :] @ xt + c.ce_psi[:, 2, :] @ d_vehicle)
+        lo = np.where(pv > self.mpc.fz_guard_from * thr, -self.mpc.fz_guard - free / thr, -np.inf)
+        return a_rows, lo, np.full(lo.shape, np.inf)
 
     def guard_rows(
         self, state: MpcState, d_vehicle: NDArray[np.float64]
@@ -1113,6 +1241,7 @@ class MpcCueing:
         state.xv = np.zeros(self.model.nx)
         state.xt = np.zeros(self.model.nx)
         state.ref_lp = None
+        state.zr = None
         self.classical.reset(state.classical)
         state.warm_u = state.warm_lam_a = state.warm_lam_x = None
 
@@ -1264,6 +1393,11 @@ class MpcCueing:
         warm = (state.warm_u, state.warm_lam_a, state.warm_lam_x)
         if self._qp_guard is not None and d_vehicle is not None:
             ga, glo, ghi = self.guard_rows(state, d_vehicle)
+            if self._fz_guarded():
+                fa, flo, fhi = self.fz_guard_rows(state, d_vehicle)
+                ga = np.concatenate([ga, fa])
+                glo = np.concatenate([glo, flo])
+                ghi = np.concatenate([ghi, fhi])
             ok, u, la, lx = self._qp_guard.solve_full(
                 g, a_mat, lba, uba, lbx, ubx, ga, glo, ghi, warm
             )
@@ -1303,6 +1437,12 @@ class MpcCueing:
                 state.xv, state.xt = np.zeros(m.nx), np.zeros(m.nx)
             state.xv = m.a @ state.xv + m.bd @ d
             state.xt = m.a @ state.xt + m.bd @ dv
+        if self._fz_guarded():
+            fp = self._fz_parts()
+            if state.zr is None:
+                state.zr = np.zeros(len(fp.sl))
+            sz = GRAVITY_M_S2 * (math.cos(state.x[3]) * math.cos(state.x[4]) - 1.0)
+            state.zr = fp.az @ state.zr + fp.bz * sz
         return state.x[:6]
 
     # ------------------------------------------------------------------ streaming / batch

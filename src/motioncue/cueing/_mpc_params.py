@@ -35,6 +35,12 @@ washout is the MPC's fallback) plus one ``[mpc]`` table, read by :func:`read_mpc
                                        #   that costs this many fz thresholds (0: none)
     tilt_fz_use_against = 0.4          # optional, optimal only: the same where the vehicle's
                                        #   perceived fz is above its threshold (0: none)
+    fz_guard = 0.7                     # optional, mpc only: the rider's perceived fz (the
+                                       #   tilt's loss) at most this x threshold against the
+                                       #   vehicle's (0: no such rows)
+    fz_guard_from = 1.0                # optional: where the vehicle's perceived fz is above
+                                       #   this x threshold (-100: everywhere)
+    fz_guard_pitch = 1.0               # optional: share of the pitch's loss the rows see
     trans_limit_m = [0.06, 0.06, 1e9]  # optional, mpc only: |x|, |y|, |z| of the plan at most
                                        #   this (m; 1e9 = none), so that the legs keep stroke
                                        #   for the tilt
@@ -185,6 +191,22 @@ class MpcParams:
         sustained part has no stroke left (the legs at their limit, the linearised stroke
         rows force a jump of the other translation: spikes of fx); a box keeps a share of
         each leg's stroke for the tilt.
+    fz_guard : float
+        ``mpc`` only. 0 (default): none. Otherwise ``g`` in (0, 10]: at each block end where
+        the vehicle's perceived fz (its prediction, as the sign guard's) is above its
+        threshold, the rider's perceived fz may be below ``-g`` thresholds only at the sign
+        guard's price (``sign_guard_weight``; a soft row): an fz reversal. The rider's fz is
+        what the tilt takes away, ``g (cos roll cos pitch - 1)`` (not in the linear model),
+        linearised about the present roll and pitch and passed through the otolith model
+        from its present state, so the overshoot of the model's lead at a quick tilt is seen.
+    fz_guard_from : float
+        The rows of ``fz_guard`` hold at the block ends where the vehicle's predicted
+        perceived fz is above this many thresholds (default 1: where a drop would be a
+        reversal), in [-100, 100]; at -100 everywhere.
+    fz_guard_pitch : float
+        Share in [0, 1] of the pitch's future loss of vertical force the rows of ``fz_guard``
+        see (default 1: all; 0: the roll's alone, so short stops keep their pitch; the
+        rider's present fz state, ``MpcState.zr``, always has both).
     tilt_rate_limit_rad_s : float or None
         Largest roll and pitch rate of the plan (rad/s); ``None``: the preset's
         ``tilt_rate_limit_rad_s`` (the classical fallback always keeps that one).
@@ -226,6 +248,9 @@ class MpcParams:
     tilt_fz_use: float = 0.0
     tilt_fz_use_against: float = 0.0
     trans_limit_m: tuple[float, float, float] = (1e9, 1e9, 1e9)
+    fz_guard: float = 0.0
+    fz_guard_from: float = 1.0
+    fz_guard_pitch: float = 1.0
     solver: str = "daqp"
     deadline_ms: float = 6.0
     window_s: float = 4.0
@@ -270,6 +295,9 @@ class MpcParams:
             ("ref_reach_use", self.ref_reach_use, 0.0, 1.0),
             ("tilt_fz_use", self.tilt_fz_use, 0.0, 5.0),
             ("tilt_fz_use_against", self.tilt_fz_use_against, 0.0, 5.0),
+            ("fz_guard", self.fz_guard, 0.0, 10.0),
+            ("fz_guard_from", self.fz_guard_from, -100.0, 100.0),
+            ("fz_guard_pitch", self.fz_guard_pitch, 0.0, 1.0),
             ("window_s", self.window_s, 0.2, 600.0),
             ("stride_s", self.stride_s, 0.1, 600.0),
         )
@@ -325,6 +353,9 @@ def read_mpc_table(table: Any) -> MpcParams:
         "ref_reach_use",
         "tilt_fz_use",
         "tilt_fz_use_against",
+        "fz_guard",
+        "fz_guard_from",
+        "fz_guard_pitch",
         "window_s",
         "stride_s",
     ):
