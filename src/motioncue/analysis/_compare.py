@@ -42,6 +42,7 @@ from ..pipeline._chain import offline_chain
 from ..telemetry._recording import resample
 from ..trajectory import pulse_rounding_limits
 from ._reach import rig_reach
+from ._reach_coupling import reach_coupling
 
 if TYPE_CHECKING:
     from matplotlib.artist import Artist
@@ -651,7 +652,9 @@ def compare_cueing(
     t0 = time.perf_counter()
     reach = None
     if bound:
-        reach = rig_reach(platform, pulse_rounding_limits(limits, platform, 1.0 / rate_hz))
+        lims = pulse_rounding_limits(limits, platform, 1.0 / rate_hz)
+        # the boxes, then translation and tilt coupled through the legs (docs/cue-metrics.md)
+        reach = reach_coupling(platform, lims, rig_reach(platform, lims))
     for rec_label, rec in recordings:
         uniform = resample(rec, rate_hz)
         t_s[rec_label] = np.asarray(uniform.t_s, dtype=float)
