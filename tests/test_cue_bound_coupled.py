@@ -123,7 +123,7 @@ def test_tiny_problem_coupled_against_brute_force_and_a_dense_lp() -> None:
             np.hstack([d1 / 0.4, d1 / 0.2]),
         ])  # fmt: skip
         hi = np.concatenate([np.full(2 * (n - 1), 0.4), np.full(2 * (n - 1), 0.2),
-                             np.full(2 * n, 1.0), np.full(n, 1.0), np.full(n - 1, 1.2)])  # fmt: skip
+                             np.full(2 * n, 1.0), np.ones(n), np.full(n - 1, 1.2)])  # fmt: skip
         lp = linprog(-(sm.T @ (h.T @ v)), A_ub=a, b_ub=hi,
                      bounds=[(-P, P)] * n + [(-T, T)] * n, method="highs")  # fmt: skip
         assert lp.status == 0

@@ -428,6 +428,12 @@ def _poly_rows(ch: _Channel, n: int) -> tuple[sparray, NDArray[np.float64]] | No
     if ch.poly is None:
         return None
     pp = ch.poly
+    # only the half-planes that cut the boxes (the others are implied by them)
+    keep = np.abs(pp.normals) @ np.array([ch.stroke, ch.tilt]) > pp.offsets
+    rate_box = np.array([ch.speed, ch.tilt_rate])
+    rkeep = np.abs(pp.rate_normals) @ rate_box > pp.rate_offsets
+    pp = ReachPolygon(pp.normals[keep], pp.offsets[keep], pp.rate_normals[rkeep],
+                      pp.rate_offsets[rkeep])  # fmt: skip
     eye = sp.identity(n, format="csr")
     d1 = sp.diags([-np.ones(n - 1), np.ones(n - 1)], [0, 1], shape=(n - 1, n), format="csr")
     d1 = d1 * ch.fs
