@@ -429,9 +429,9 @@ def _poly_rows(ch: _Channel, n: int) -> tuple[sparray, NDArray[np.float64]] | No
         return None
     pp = ch.poly
     # only the half-planes that cut the boxes (the others are implied by them)
-    keep = np.abs(pp.normals) @ np.array([ch.stroke, ch.tilt]) > pp.offsets
+    keep = np.abs(pp.normals) @ np.array([ch.stroke, ch.tilt]) > pp.offsets * (1.0 + 1e-9)
     rate_box = np.array([ch.speed, ch.tilt_rate])
-    rkeep = np.abs(pp.rate_normals) @ rate_box > pp.rate_offsets
+    rkeep = np.abs(pp.rate_normals) @ rate_box > pp.rate_offsets * (1.0 + 1e-9)
     pp = ReachPolygon(pp.normals[keep], pp.offsets[keep], pp.rate_normals[rkeep],
                       pp.rate_offsets[rkeep])  # fmt: skip
     eye = sp.identity(n, format="csr")
@@ -860,18 +860,17 @@ def _socp_primal(
     uba[: (nx + 1) * n + 2] = 0.0
     if tan_t == 0.0:
         uba[-n:] = 0.0
+    poly = _poly_rows(ch, n)
+    if poly is not None:  # first: the multipliers read below are those of the last rows
+        blocks.insert(0, sp.hstack([poly[0], sp.csr_matrix((poly[1].size, n * (1 + nx) + 2))]))
+        lba = np.concatenate([np.full(poly[1].size, -np.inf), lba])
+        uba = np.concatenate([poly[1], uba])
     lin = sp.vstack(blocks, format="csc")
     zs = casadi.MX.sym("z", nz)
     y, ybar, a = zs[iy : iy + n], zs[nz - 2], zs[nz - 1]
     c2 = 1.0 / (1.0 + tan_t * tan_t)
     cons = [casadi.densify(casadi.mtimes(_dm(lin), zs))]  # D2 has an empty row (the end)
     lbg, ubg = [lba], [uba]
-    poly = _poly_rows(ch, n)
-    if poly is not None:  # first: the multipliers read below are those of the last rows
-        pm = sp.hstack([poly[0], sp.csr_matrix((poly[1].size, n * (1 + nx) + 2))], format="csc")
-        cons.insert(0, casadi.densify(casadi.mtimes(_dm(pm), zs)))
-        lbg.insert(0, np.full(poly[1].size, -np.inf))
-        ubg.insert(0, poly[1])
     if tan_t > 0.0:
         cons.append(c2 * (casadi.dot(y, y) - n * ybar * ybar) - a * a)
         lbg.append(np.array([-np.inf]))
