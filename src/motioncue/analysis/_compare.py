@@ -608,6 +608,7 @@ def compare_cueing(
     controller_name: str = "",
     progress: Callable[[str], None] | None = None,
     bound: bool = False,
+    bound_corr_cuts: int = 2,
 ) -> CompareResult:
     """Run every preset on every recording through the platform's chain.
 
@@ -628,8 +629,12 @@ def compare_cueing(
         the last one (with the elapsed time, s).
     bound : bool
         Also compute each recording's physical bound on the platform (:func:`cue_bound`
-        with :func:`rig_reach` of the platform and ``limits``; seconds to a minute per
-        recording), reported in the ``bound_*`` and ``share_of_bound_*`` columns.
+        with :func:`rig_reach` of the platform and ``limits``, translation and tilt coupled
+        by :func:`reach_coupling`; about a minute or two of CPU per recording), reported in
+        the ``bound_*`` and ``share_of_bound_*`` columns.
+    bound_corr_cuts : int
+        ``cue_bound``'s ``corr_cuts``: each cut costs one cone programme per channel and
+        tightens ``share_max_at_corr`` (0: one programme per channel, a looser valid bound).
 
     Returns
     -------
@@ -660,7 +665,13 @@ def compare_cueing(
         t_s[rec_label] = np.asarray(uniform.t_s, dtype=float)
         rec_bound = None
         if reach is not None and len(uniform) >= 4:
-            rec_bound = cue_bound(np.asarray(uniform.f, dtype=float), rate_hz, reach, model=ms)
+            rec_bound = cue_bound(
+                np.asarray(uniform.f, dtype=float),
+                rate_hz,
+                reach,
+                model=ms,
+                corr_cuts=bound_corr_cuts,
+            )
         for preset_label, params in presets:
             if progress is not None:
                 progress(
