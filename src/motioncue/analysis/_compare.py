@@ -502,7 +502,8 @@ class CompareResult:
             f"{rr.accel_m_s2[0]:.1f}/{rr.accel_m_s2[1]:.1f} m/s^2, tilt "
             f"{math.degrees(rr.tilt_rad[0]):.1f}/{math.degrees(rr.tilt_rad[1]):.1f} deg, tilt "
             f"rate {math.degrees(rr.tilt_rate_rad_s[0]):.0f}/"
-            f"{math.degrees(rr.tilt_rate_rad_s[1]):.0f} deg/s",
+            f"{math.degrees(rr.tilt_rate_rad_s[1]):.0f} deg/s"
+            + ("; translation and tilt coupled through the legs" if rr.coupling else ""),
         ]
         wr = max([len("recording"), *(len(k) for k in bounds)])
         lines.append(

@@ -39,9 +39,19 @@ of the data charges no stop), with the translation ``p`` and the tilt term
     |tau| <= sin(tilt), |tau[k+1] - tau[k]| fs <= tilt rate.
 
 Every motion of the rig whose translation and tilt stay within those numbers is in this
-convex set ``S``; the coupling between the degrees of freedom (a hexapod cannot reach its
-largest stroke and its largest tilt at once) is dropped, which only enlarges ``S``, so the
-bounds below hold for the rig (to first order in the angles).
+convex set ``S``. When the reach has a ``coupling`` (:class:`ReachPolygon`, from
+:func:`motioncue.analysis.reach_coupling`, which ``compare --bound`` uses), ``S`` also
+has, at every sample, the half-planes ``normals @ (p[k], tau[k]) <= offsets`` (a hexapod
+cannot reach its largest stroke and its largest tilt at once: the legs couple them) and on
+every step ``rate_normals @ (p[k+1] - p[k], tau[k+1] - tau[k]) fs <= rate_offsets`` (the
+step's mean rate lies in the convex hull of the rates the actuator speeds allow, whatever
+the pose). Both come from the exact kinematics (the projected workspace's support in each
+direction, found from below and multiplied by the reach's margin), with no linearisation of
+the legs; the other degrees of freedom are free, so ``S`` still contains every motion of the
+rig (to first order in the angles in the specific force, as above), only fewer others. Only
+the half-planes that cut the boxes enter the programmes; the LPs of the support function
+then become one joint LP over ``(p, tau)``. Without a coupling the DOFs are bounded apart,
+the looser relaxation.
 
 The perceived motion is the model set's otolith ``H`` (linear, from rest). Then
 
