@@ -19,8 +19,8 @@ rig the tool is given (:class:`motioncue.cueing.Rig`) and never named here: what
 * :func:`run_omct`: the Objective Motion Cueing Test of the whole chain;
 * :func:`tune_cueing` with :class:`TuneObjective`: the strongest cue within cue-quality
   targets and the platform's limits;
-* :func:`rig_reach`, :func:`tilt_reach`: what a rig can reach (for the physical bound and
-  the compressive tilt).
+* :func:`rig_reach`, :func:`reach_coupling`, :func:`tilt_reach`: what a rig can reach (for
+  the physical bound and the compressive tilt).
 """
 
 import importlib
@@ -54,6 +54,7 @@ if TYPE_CHECKING:
         run_omct,
     )
     from ._reach import rig_reach
+    from ._reach_coupling import reach_coupling
     from ._tune import (
         MAX_CLAMPED_FRACTION,
         OBJECTIVES,
@@ -94,6 +95,7 @@ _LAZY: dict[str, str] = {
     "platform_motion": "._omct",
     "plot_file_names": "._compare",
     "plot_omct": "._omct",
+    "reach_coupling": "._reach_coupling",
     "rig_reach": "._reach",
     "run_chain": "._compare",
     "run_omct": "._omct",
@@ -144,6 +146,7 @@ __all__ = [
     "platform_motion",
     "plot_file_names",
     "plot_omct",
+    "reach_coupling",
     "rig_reach",
     "run_chain",
     "run_cueing",

@@ -42,6 +42,7 @@ from ..pipeline._chain import offline_chain
 from ..telemetry._recording import resample
 from ..trajectory import pulse_rounding_limits
 from ._reach import rig_reach
+from ._reach_coupling import reach_coupling
 
 if TYPE_CHECKING:
     from matplotlib.artist import Artist
@@ -501,7 +502,8 @@ class CompareResult:
             f"{rr.accel_m_s2[0]:.1f}/{rr.accel_m_s2[1]:.1f} m/s^2, tilt "
             f"{math.degrees(rr.tilt_rad[0]):.1f}/{math.degrees(rr.tilt_rad[1]):.1f} deg, tilt "
             f"rate {math.degrees(rr.tilt_rate_rad_s[0]):.0f}/"
-            f"{math.degrees(rr.tilt_rate_rad_s[1]):.0f} deg/s",
+            f"{math.degrees(rr.tilt_rate_rad_s[1]):.0f} deg/s"
+            + ("; translation and tilt coupled through the legs" if rr.coupling else ""),
         ]
         wr = max([len("recording"), *(len(k) for k in bounds)])
         lines.append(
@@ -607,6 +609,7 @@ def compare_cueing(
     controller_name: str = "",
     progress: Callable[[str], None] | None = None,
     bound: bool = False,
+    bound_corr_cuts: int = 2,
 ) -> CompareResult:
     """Run every preset on every recording through the platform's chain.
 
@@ -627,8 +630,12 @@ def compare_cueing(
         the last one (with the elapsed time, s).
     bound : bool
         Also compute each recording's physical bound on the platform (:func:`cue_bound`
-        with :func:`rig_reach` of the platform and ``limits``; seconds to a minute per
-        recording), reported in the ``bound_*`` and ``share_of_bound_*`` columns.
+        with :func:`rig_reach` of the platform and ``limits``, translation and tilt coupled
+        by :func:`reach_coupling`; about a minute or two of CPU per recording), reported in
+        the ``bound_*`` and ``share_of_bound_*`` columns.
+    bound_corr_cuts : int
+        ``cue_bound``'s ``corr_cuts``: each cut costs one cone programme per channel and
+        tightens ``share_max_at_corr`` (0: one programme per channel, a looser valid bound).
 
     Returns
     -------
@@ -651,13 +658,21 @@ def compare_cueing(
     t0 = time.perf_counter()
     reach = None
     if bound:
-        reach = rig_reach(platform, pulse_rounding_limits(limits, platform, 1.0 / rate_hz))
+        lims = pulse_rounding_limits(limits, platform, 1.0 / rate_hz)
+        # the boxes, then translation and tilt coupled through the legs (docs/cue-metrics.md)
+        reach = reach_coupling(platform, lims, rig_reach(platform, lims))
     for rec_label, rec in recordings:
         uniform = resample(rec, rate_hz)
         t_s[rec_label] = np.asarray(uniform.t_s, dtype=float)
         rec_bound = None
         if reach is not None and len(uniform) >= 4:
-            rec_bound = cue_bound(np.asarray(uniform.f, dtype=float), rate_hz, reach, model=ms)
+            rec_bound = cue_bound(
+                np.asarray(uniform.f, dtype=float),
+                rate_hz,
+                reach,
+                model=ms,
+                corr_cuts=bound_corr_cuts,
+            )
         for preset_label, params in presets:
             if progress is not None:
                 progress(

@@ -33,7 +33,7 @@ from ._algorithm import (
     register_cueing,
     unregister_cueing,
 )
-from ._bound import BOUND_CHANNELS, CueBound, RigReach, cue_bound
+from ._bound import BOUND_CHANNELS, CueBound, ReachPolygon, RigReach, cue_bound
 from ._classical import ClassicalWashout, WashoutResult, WashoutState
 from ._evaluate import (
     AXIS_NAMES,
@@ -92,6 +92,7 @@ __all__ = [
     "CueingResult",
     "CueingState",
     "ParameterTable",
+    "ReachPolygon",
     "Rig",
     "RigReach",
     "TunableParameter",

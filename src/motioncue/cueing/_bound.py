@@ -39,9 +39,19 @@ of the data charges no stop), with the translation ``p`` and the tilt term
     |tau| <= sin(tilt), |tau[k+1] - tau[k]| fs <= tilt rate.
 
 Every motion of the rig whose translation and tilt stay within those numbers is in this
-convex set ``S``; the coupling between the degrees of freedom (a hexapod cannot reach its
-largest stroke and its largest tilt at once) is dropped, which only enlarges ``S``, so the
-bounds below hold for the rig (to first order in the angles).
+convex set ``S``. When the reach has a ``coupling`` (:class:`ReachPolygon`, from
+:func:`motioncue.analysis.reach_coupling`, which ``compare --bound`` uses), ``S`` also
+has, at every sample, the half-planes ``normals @ (p[k], tau[k]) <= offsets`` (a hexapod
+cannot reach its largest stroke and its largest tilt at once: the legs couple them) and on
+every step ``rate_normals @ (p[k+1] - p[k], tau[k+1] - tau[k]) fs <= rate_offsets`` (the
+step's mean rate lies in the convex hull of the rates the actuator speeds allow, whatever
+the pose). Both come from the exact kinematics (the projected workspace's support in each
+direction, found from below and multiplied by the reach's margin), with no linearisation of
+the legs; the other degrees of freedom are free, so ``S`` still contains every motion of the
+rig (to first order in the angles in the specific force, as above), only fewer others. Only
+the half-planes that cut the boxes enter the programmes; the LPs of the support function
+then become one joint LP over ``(p, tau)``. Without a coupling the DOFs are bounded apart,
+the looser relaxation.
 
 The perceived motion is the model set's otolith ``H`` (linear, from rest). Then
 
@@ -112,7 +122,15 @@ if TYPE_CHECKING:
     from scipy.optimize import OptimizeResult
     from scipy.sparse import sparray
 
-__all__ = ["BOUND_CHANNELS", "CORR_MIN", "REACH_MARGIN", "CueBound", "RigReach", "cue_bound"]
+__all__ = [
+    "BOUND_CHANNELS",
+    "CORR_MIN",
+    "REACH_MARGIN",
+    "CueBound",
+    "ReachPolygon",
+    "RigReach",
+    "cue_bound",
+]
 
 BOUND_CHANNELS: tuple[str, ...] = ("fx", "fy")
 """The channels bounded (longitudinal: surge and pitch; lateral: sway and roll)."""
@@ -124,6 +142,54 @@ of issue 20's acceptance."""
 REACH_MARGIN = 1.05
 """:func:`rig_reach` multiplies what it found by this: the sampled maxima are below the
 true ones by the sampling's resolution, and the bound needs numbers at or above them."""
+
+
+@dataclass(frozen=True, eq=False)
+class ReachPolygon:
+    """The coupled reach of one channel: half-planes containing every pose and every rate.
+
+    ``normals @ (p, tau) <= offsets`` holds for the translation ``p`` (m) and the tilt term
+    ``tau`` (``-sin(pitch)`` for fx, ``cos(pitch) sin(roll)`` for fy: the specific force of
+    the tilt divided by g) of every reachable pose, and ``rate_normals @ (pdot, taudot) <=
+    rate_offsets`` for their rates (m/s, 1/s) within the actuator speed limits at every
+    reachable pose, the other degrees of freedom free (at whatever value or rate helps).
+    A hexapod cannot reach its largest stroke and its largest tilt at once: these half-planes
+    cut the corners of :class:`RigReach`'s boxes.
+
+    Attributes
+    ----------
+    normals : (m, 2) array
+        Pose half-plane normals (dimensionless, applied to ``(p [m], tau [-])``).
+    offsets : (m,) array
+        Their offsets (> 0: the neutral pose is inside).
+    rate_normals : (k, 2) array
+    rate_offsets : (k,) array
+        The same for ``(pdot [m/s], taudot [1/s])``.
+    """
+
+    normals: NDArray[np.float64]
+    offsets: NDArray[np.float64]
+    rate_normals: NDArray[np.float64]
+    rate_offsets: NDArray[np.float64]
+
+    def __post_init__(self) -> None:
+        for nm, off in (("normals", "offsets"), ("rate_normals", "rate_offsets")):
+            a = np.array(getattr(self, nm), dtype=float).reshape(-1, 2)
+            b = np.array(getattr(self, off), dtype=float).reshape(-1)
+            if a.shape[0] != b.shape[0] or not (np.isfinite(a).all() and np.isfinite(b).all()):
+                raise ConfigError(
+                    f"reach polygon {nm}/{off} have shapes {a.shape}/{b.shape} or are not "
+                    "finite; allowed: (m, 2) and (m,) finite numbers"
+                )
+            if np.any(b <= 0.0):
+                raise ConfigError(
+                    f"reach polygon {off} {b.tolist()!r} are invalid; allowed: > 0 (the "
+                    "neutral pose at rest inside)"
+                )
+            a.setflags(write=False)
+            b.setflags(write=False)
+            object.__setattr__(self, nm, a)
+            object.__setattr__(self, off, b)
 
 
 @dataclass(frozen=True)
@@ -142,6 +208,9 @@ class RigReach:
         Largest ``|pitch|`` (for fx) and ``|roll|`` (for fy) of a reachable pose (rad).
     tilt_rate_rad_s : (2,) tuple
         Largest pitch / roll rate within the actuator speed limits (rad/s).
+    coupling : (2,) tuple of ReachPolygon, optional
+        The coupled reach of each channel (translation with tilt); None: the boxes alone
+        (each DOF apart, the looser relaxation).
     """
 
     stroke_m: tuple[float, float]
@@ -149,8 +218,13 @@ class RigReach:
     accel_m_s2: tuple[float, float]
     tilt_rad: tuple[float, float]
     tilt_rate_rad_s: tuple[float, float]
+    coupling: tuple[ReachPolygon, ReachPolygon] | None = None
 
     def __post_init__(self) -> None:
+        if self.coupling is not None and (
+            len(self.coupling) != 2 or not all(isinstance(c, ReachPolygon) for c in self.coupling)
+        ):
+            raise ConfigError("rig reach coupling is invalid; allowed: None or two ReachPolygon")
         for name in ("stroke_m", "speed_m_s", "accel_m_s2", "tilt_rad", "tilt_rate_rad_s"):
             v = tuple(float(x) for x in getattr(self, name))
             if len(v) != 2 or not all(math.isfinite(x) and x >= 0.0 for x in v):
@@ -245,6 +319,7 @@ class CueBound:
                 "accel_m_s2": list(r.accel_m_s2),
                 "tilt_rad": list(r.tilt_rad),
                 "tilt_rate_rad_s": list(r.tilt_rate_rad_s),
+                "coupled": r.coupling is not None,
             },
         }
 
@@ -285,6 +360,7 @@ class _Channel:
     tilt_rate: float
     fs: float
     model: VestibularModel
+    poly: ReachPolygon | None = None
 
     @property
     def sos(self) -> NDArray[np.float64]:
@@ -352,11 +428,76 @@ def _linprog_box_chain(
     return float(-res.fun)
 
 
+def _poly_rows(ch: _Channel, n: int) -> tuple[sparray, NDArray[np.float64]] | None:
+    """The coupled reach's rows over ``[p (n), tau (n)]`` (``A x <= b``): the pose half-planes
+    at every sample, the rate half-planes on every step (the first difference times fs: the
+    mean rate over the step, which lies in the rate polygon when the rate does); None
+    without a polygon."""
+    import scipy.sparse as sp
+
+    if ch.poly is None:
+        return None
+    pp = ch.poly
+    # only the half-planes that cut the boxes (the others are implied by them)
+    keep = np.abs(pp.normals) @ np.array([ch.stroke, ch.tilt]) > pp.offsets * (1.0 + 1e-9)
+    rate_box = np.array([ch.speed, ch.tilt_rate])
+    rkeep = np.abs(pp.rate_normals) @ rate_box > pp.rate_offsets * (1.0 + 1e-9)
+    pp = ReachPolygon(pp.normals[keep], pp.offsets[keep], pp.rate_normals[rkeep],
+                      pp.rate_offsets[rkeep])  # fmt: skip
+    eye = sp.identity(n, format="csr")
+    d1 = sp.diags([-np.ones(n - 1), np.ones(n - 1)], [0, 1], shape=(n - 1, n), format="csr")
+    d1 = d1 * ch.fs
+    rows = [
+        sp.hstack([sp.kron(eye, pp.normals[:, :1]), sp.kron(eye, pp.normals[:, 1:])]),
+        sp.hstack([sp.kron(d1, pp.rate_normals[:, :1]), sp.kron(d1, pp.rate_normals[:, 1:])]),
+    ]
+    rhs = np.concatenate([np.tile(pp.offsets, n), np.tile(pp.rate_offsets, n - 1)])
+    return sp.vstack(rows, format="csr"), rhs
+
+
 def _support(ch: _Channel, c: NDArray[np.float64], d2: sparray) -> float:
-    """sigma_S(c) = max_{s in S} c's (two LPs: translation and tilt)."""
-    trans = _linprog_box_chain(np.asarray(d2.T @ c), ch.stroke, ch.speed / ch.fs, ch.accel, d2)
-    tilt = GRAVITY_M_S2 * _linprog_box_chain(c, ch.tilt, ch.tilt_rate / ch.fs, None, d2)
-    return trans + tilt
+    """sigma_S(c) = max_{s in S} c's (two LPs, translation and tilt; one joint LP when the
+    channel has a coupled reach)."""
+    if ch.poly is None:
+        trans = _linprog_box_chain(np.asarray(d2.T @ c), ch.stroke, ch.speed / ch.fs, ch.accel, d2)
+        tilt = GRAVITY_M_S2 * _linprog_box_chain(c, ch.tilt, ch.tilt_rate / ch.fs, None, d2)
+        return trans + tilt
+    import scipy.sparse as sp
+
+    n = c.shape[0]
+    cost = -np.concatenate([np.asarray(d2.T @ c), GRAVITY_M_S2 * c])
+    if not np.any(cost):
+        return 0.0
+    d1 = sp.diags([-np.ones(n - 1), np.ones(n - 1)], [0, 1], shape=(n - 1, n), format="csr")
+    zn = sp.csr_matrix((n - 1, n))
+    zz = sp.csr_matrix((n, n))
+    poly = _poly_rows(ch, n)
+    assert poly is not None
+    a_ub = sp.vstack(
+        [
+            sp.hstack([d1, zn]),
+            sp.hstack([-d1, zn]),
+            sp.hstack([zn, d1]),
+            sp.hstack([zn, -d1]),
+            sp.hstack([d2, zz]),
+            sp.hstack([-d2, zz]),
+            poly[0],
+        ],
+        format="csr",
+    )
+    b_ub = np.concatenate(
+        [
+            np.full(2 * (n - 1), ch.speed / ch.fs),
+            np.full(2 * (n - 1), ch.tilt_rate / ch.fs),
+            np.full(2 * n, ch.accel),
+            poly[1],
+        ]
+    )
+    bounds = [(-ch.stroke, ch.stroke)] * n + [(-ch.tilt, ch.tilt)] * n
+    res = _linprog(cost, A_ub=a_ub, b_ub=b_ub, bounds=bounds)
+    if res.status != 0:
+        raise ConfigError(f"the bound's support LP failed: {res.message}")
+    return float(-res.fun)
 
 
 def _dm(m: sparray) -> casadi.DM:
@@ -428,10 +569,15 @@ def _qp_best_motion(ch: _Channel, v: NDArray[np.float64], d2: sparray) -> NDArra
         np.full(n - 1, -ch.tilt_rate / ch.fs),
         np.full(n, -ch.accel),
     ]
-    m = sp.vstack(rows, format="csc")
     lba = np.concatenate(lo)
     uba = -lba
     uba[: (nx + 1) * n] = 0.0
+    poly = _poly_rows(ch, n)
+    if poly is not None:
+        rows.append(sp.hstack([poly[0], sp.csr_matrix((poly[1].size, n * (1 + nx)))]))
+        lba = np.concatenate([lba, np.full(poly[1].size, -np.inf)])
+        uba = np.concatenate([uba, poly[1]])
+    m = sp.vstack(rows, format="csc")
     hess = sp.diags(
         np.concatenate([np.zeros(iy), np.full(n, 2.0)]), 0, shape=(n_z, n_z), format="csc"
     )
@@ -515,6 +661,15 @@ def _gain_lp(
             np.full(idx.size, thr),
         ]
     )
+    poly = _poly_rows(ch, n)
+    if poly is not None:  # before the no-reversal rows, whose multipliers are read last
+        a_ub = sp.vstack(
+            [a_ub[: a_ub.shape[0] - idx.size],
+             sp.hstack([poly[0], sp.csr_matrix((poly[1].size, n * (1 + nx)))]),
+             a_ub[a_ub.shape[0] - idx.size :]],
+            format="csr",
+        )  # fmt: skip
+        b_ub = np.concatenate([b_ub[: b_ub.size - idx.size], poly[1], b_ub[b_ub.size - idx.size :]])
     bounds = (
         [(-ch.stroke, ch.stroke)] * n
         + [(-ch.tilt, ch.tilt)] * n
@@ -710,12 +865,17 @@ def _socp_primal(
         blocks.append(sp.hstack([sp.csr_matrix((n, iy)), eye, -sp.csr_matrix(np.ones((n, 1))),
                                  -sp.csr_matrix(u[:, None])]))  # fmt: skip
         lo.append(np.zeros(n))
-    lin = sp.vstack(blocks, format="csc")
     lba = np.concatenate(lo)
     uba = -lba
     uba[: (nx + 1) * n + 2] = 0.0
     if tan_t == 0.0:
         uba[-n:] = 0.0
+    poly = _poly_rows(ch, n)
+    if poly is not None:  # first: the multipliers read below are those of the last rows
+        blocks.insert(0, sp.hstack([poly[0], sp.csr_matrix((poly[1].size, n * (1 + nx) + 2))]))
+        lba = np.concatenate([np.full(poly[1].size, -np.inf), lba])
+        uba = np.concatenate([poly[1], uba])
+    lin = sp.vstack(blocks, format="csc")
     zs = casadi.MX.sym("z", nz)
     y, ybar, a = zs[iy : iy + n], zs[nz - 2], zs[nz - 1]
     c2 = 1.0 / (1.0 + tan_t * tan_t)
@@ -806,7 +966,22 @@ def _upsample_motion(
             (float(np.abs(d2p).max()) * fs * fs, ch.accel))  # fmt: skip
     tau = fit(tau, (float(np.abs(tau).max()), ch.tilt),
               (float(np.abs(np.diff(tau)).max()) * fs, ch.tilt_rate))  # fmt: skip
-    return p, tau
+    return _fit_poly(ch, p, tau)
+
+
+def _fit_poly(
+    ch: _Channel, p: NDArray[np.float64], tau: NDArray[np.float64]
+) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """``(p, tau)`` scaled down together until within the coupled reach's half-planes (the
+    neutral pose is inside, so scaling down keeps the boxes)."""
+    if ch.poly is None:
+        return p, tau
+    n = p.shape[0]
+    poly = _poly_rows(ch, n)
+    assert poly is not None
+    lhs = np.asarray(poly[0] @ np.concatenate([p, tau]))
+    ratio = max(1.0, float(np.max(lhs / poly[1])) if lhs.size else 1.0)
+    return p / ratio, tau / ratio
 
 
 def _polygon_max(cuts: list[tuple[float, float]], c: float) -> tuple[float, float, float]:
@@ -873,7 +1048,7 @@ def _share_at_corr(
         for attempt in range(3):
             if attempt > 0:
                 p_d, tau_d, _, _ = _socp_primal(chd, ud, phi, tan_p, d2d, ss_d)
-            p, tau = _upsample_motion(ch, p_d, tau_d, k, n) if k > 1 else (p_d, tau_d)
+            p, tau = _upsample_motion(ch, p_d, tau_d, k, n) if k > 1 else _fit_poly(ch, p_d, tau_d)
             y = ch.filt(np.asarray(d2 @ p) + GRAVITY_M_S2 * tau)
             a, w, _ = _cone_split(y, u)
             # (at correlation 1: up to the solver's tolerance)
@@ -1009,6 +1184,7 @@ def cue_bound(
             tilt_rate=reach.tilt_rate_rad_s[i],
             fs=float(fs_hz),
             model=ms.otolith[i],
+            poly=None if reach.coupling is None else reach.coupling[i],
         )
         for key, val in zip(
             ("err", "gmax", "gany", "share", "vrms"),
@@ -1039,5 +1215,6 @@ def cue_bound(
             "lp": "highs (scipy)",
             "socp": "ipopt (casadi)",
             "decimation": str(k),
+            "coupling": "none" if reach.coupling is None else "translation-tilt polygons",
         },
     )
