@@ -78,7 +78,7 @@ from __future__ import annotations
 import math
 import time
 from collections import deque
-from collections.abc import MutableSequence, Sequence
+from collections.abc import Iterator, MutableSequence, Sequence
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
 
@@ -103,6 +103,7 @@ __all__ = [
     "block_ends",
     "build_model",
     "fallback_accel",
+    "input_responses",
     "plan_tilt_reach",
     "pose_sum",
     "reference",
@@ -424,6 +425,27 @@ def terminal_weight(m: LinearModel) -> NDArray[np.float64]:
     return np.asarray(0.5 * (t + t.T))
 
 
+def input_responses(m: LinearModel, ends: NDArray[np.int64]) -> Iterator[NDArray[np.float64]]:
+    """``G_k`` for ``k = 1..N`` (``N = ends[-1]``): the state at step ``k`` from the blocked
+    inputs ``U`` (``nb nu``; block ``j`` holds its input over the steps up to ``ends[j]``),
+    ``G_k = A G_(k-1) + B_u E_j`` from ``G_0 = 0``.
+
+    Yields
+    ------
+    (nx, nb nu) array
+        A new array each step (kept by the caller as it likes).
+    """
+    n = int(ends[-1])
+    nu = m.nu
+    blk = np.searchsorted(ends, np.arange(n), side="right")  # block of step k - 1
+    gam = np.zeros((m.nx, len(ends) * nu))
+    for k in range(1, n + 1):
+        j = blk[k - 1]
+        gam = m.a @ gam
+        gam[:, j * nu : (j + 1) * nu] += m.bu
+        yield gam
+
+
 def pose_sum(m: LinearModel, ends: NDArray[np.int64]) -> NDArray[np.float64]:
     """``S = sum_k G_k'`` over the horizon's steps ``k = 1..N`` (``N = ends[-1]``), ``G_k``
     (6, ``nb nu``) the pose at step ``k`` from the blocked inputs (as in :func:`condense`).
@@ -436,15 +458,8 @@ def pose_sum(m: LinearModel, ends: NDArray[np.int64]) -> NDArray[np.float64]:
     -------
     (nb nu, 6) array
     """
-    n = int(ends[-1])
-    nu = m.nu
-    blk = np.searchsorted(ends, np.arange(n), side="right")
-    gam = np.zeros((m.nx, len(ends) * nu))
-    out = np.zeros((len(ends) * nu, 6))
-    for k in range(1, n + 1):
-        j = blk[k - 1]
-        gam = m.a @ gam
-        gam[:, j * nu : (j + 1) * nu] += m.bu
+    out = np.zeros((len(ends) * m.nu, 6))
+    for gam in input_responses(m, ends):
         out += gam[:6].T
     return out
 
@@ -475,11 +490,9 @@ def condense(
 ) -> Condensed:
     """Build :class:`Condensed` for block ``ends`` and the prediction factors ``decay[k]``
     (``d_k = decay[k] d``, ``k = 0..N``)."""
-    n = int(ends[-1])
     nb = len(ends)
     nu, nx = m.nu, m.nx
     n_u = nb * nu
-    blk = np.searchsorted(ends, np.arange(n), side="right")  # block of step j
     q = m.q
     zxd = m.zx.T @ m.zd  # (nx, 6)
     gam = np.zeros((nx, n_u))
@@ -496,10 +509,7 @@ def condense(
     ce_gam = np.zeros((nb, 6, n_u))
     lengths = np.diff(np.concatenate([[0], ends]))
     b_at = 0
-    for k in range(1, n + 1):
-        j = blk[k - 1]
-        gam = m.a @ gam
-        gam[:, j * nu : (j + 1) * nu] += m.bu
+    for k, gam in enumerate(input_responses(m, ends), start=1):
         psi = m.a @ psi + m.bd * decay[k - 1]
         phi = m.a @ phi
         qg = q @ gam
@@ -1142,16 +1152,10 @@ class MpcCueing:
             e = int(e)
             hmat[b, :e] = h[e - np.arange(1, e + 1)]
         # roll and pitch of each step from x0 and the blocked inputs (as condense builds them)
-        nu = m.nu
-        blk = np.searchsorted(c.ends, np.arange(n), side="right")
-        gam = np.zeros((m.nx, nb * nu))
         phi = np.eye(m.nx)
-        g_tilt = np.zeros((n, 2, nb * nu))
+        g_tilt = np.zeros((n, 2, nb * m.nu))
         p_tilt = np.zeros((n, 2, m.nx))
-        for k in range(1, n + 1):
-            j = blk[k - 1]
-            gam = m.a @ gam
-            gam[:, j * nu : (j + 1) * nu] += m.bu
+        for k, gam in enumerate(input_responses(m, c.ends), start=1):
             phi = m.a @ phi
             g_tilt[k - 1] = gam[3:5]
             p_tilt[k - 1] = phi[3:5]

@@ -63,6 +63,7 @@ from ._mpc import (
     SoftGuardQp,
     build_model,
     fallback_accel,
+    input_responses,
     qp_solver,
     recording_arrays,
     reference,
@@ -332,10 +333,9 @@ class OptimalCueing:
         gam = np.zeros((self.n_window + 1, nx, n_u))
         q = m.q
         hess = np.zeros((n_u, n_u))
-        for k in range(1, self.n_window + 1):
-            j = (k - 1) // self.mpc.block_samples
-            gam[k] = m.a @ gam[k - 1]
-            gam[k][:, j * nu : (j + 1) * nu] += m.bu
+        ends = np.arange(1, nb + 1) * self.mpc.block_samples
+        for k, gam_k in enumerate(input_responses(m, ends), start=1):
+            gam[k] = gam_k
             hess += gam[k].T @ q @ gam[k]
         tw = terminal_weight(m)
         hess += gam[-1].T @ tw @ gam[-1]
@@ -346,7 +346,6 @@ class OptimalCueing:
         # constraints at block ends, legs linearised about neutral
         lim = self.limits
         jac = np.asarray(lim.platform.jacobian(np.zeros(6)), dtype=float)
-        ends = np.arange(1, nb + 1) * self.mpc.block_samples
         ge = gam[ends]  # (nb, nx, nU)
         a_pos = np.einsum("lj,bju->blu", jac, ge[:, 0:6])
         a_vel = np.einsum("lj,bju->blu", jac, ge[:, 6:12])
