@@ -95,15 +95,19 @@ if TYPE_CHECKING:
     from ._algorithm import Rig
 
 __all__ = [
+    "TILT_OCTAGON",
     "DaqpQp",
     "MpcCueing",
     "MpcResult",
     "MpcState",
     "SoftGuardQp",
+    "accel_rows",
     "block_ends",
     "build_model",
     "fallback_accel",
+    "input_bounds",
     "input_responses",
+    "octagon_bound",
     "plan_tilt_reach",
     "pose_sum",
     "reference",
@@ -631,6 +635,42 @@ def fallback_cap(m: LinearModel, lim: RigLimits) -> NDArray[np.float64]:
             if i in (3, 4):
                 cap[j] = min(cap[j], lim.tilt_accel)
     return np.asarray(cap)
+
+
+TILT_OCTAGON = np.array([[1.0, 1.0], [1.0, -1.0], [1.0, 0.0], [0.0, 1.0]])
+TILT_OCTAGON.setflags(write=False)
+"""The combined-tilt rows (4, 2) of ``(roll, pitch)``: ``roll + pitch``, ``roll - pitch``,
+``roll``, ``pitch`` (an octagon around the circle ``|tilt| <= bound``)."""
+
+
+def octagon_bound(bound: float) -> NDArray[np.float64]:
+    """Bounds (4,) of :data:`TILT_OCTAGON`'s rows for a combined tilt ``bound`` (rad)."""
+    return np.array([bound, bound, bound / math.sqrt(2.0), bound / math.sqrt(2.0)])
+
+
+def input_bounds(
+    m: LinearModel, lim: RigLimits, n_u: int
+) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """``(lbx, ubx)`` ``(n_u,)`` of blocked inputs (``nu`` per block): the roll and pitch
+    accelerations within ``lim.tilt_accel`` (rad/s^2), the others free."""
+    lbx = np.full(n_u, -np.inf)
+    ubx = np.full(n_u, np.inf)
+    if math.isfinite(lim.tilt_accel):
+        for j, i in enumerate(m.active):
+            if i in (3, 4):
+                lbx[j :: m.nu] = -lim.tilt_accel
+                ubx[j :: m.nu] = lim.tilt_accel
+    return lbx, ubx
+
+
+def accel_rows(ja: NDArray[np.float64], nb: int) -> NDArray[np.float64]:
+    """The legs' acceleration rows ``(nb nl, nb nu)`` of blocked inputs: block-diagonal,
+    ``ja`` ``(nl, nu)`` (the Jacobian's columns of the moved DOFs) in every block."""
+    nl, nu = ja.shape
+    out = np.zeros((nb * nl, nb * nu))
+    for b in range(nb):
+        out[b * nl : (b + 1) * nl, b * nu : (b + 1) * nu] = ja
+    return out
 
 
 @dataclass(eq=False)
@@ -1291,25 +1331,19 @@ class MpcCueing:
         if self._combined_tilt():
             bound = tilt_fz_bound(self.mpc, float(m.thresholds[2]))
             assert bound is not None
-            comb = np.array([[1.0, 1.0], [1.0, -1.0], [1.0, 0.0], [0.0, 1.0]])
-            fixed_rows.append(np.einsum("ck,bku->bcu", comb, gp[:, 3:5, :]).reshape(-1, n_u))
+            fixed_rows.append(
+                np.einsum("ck,bku->bcu", TILT_OCTAGON, gp[:, 3:5, :]).reshape(-1, n_u)
+            )
             sel = np.zeros((4, 12))
-            sel[:, 3:5] = comb
+            sel[:, 3:5] = TILT_OCTAGON
             fixed_sel.append(sel)
-            bv = np.array([bound, bound, bound / math.sqrt(2.0), bound / math.sqrt(2.0)])
-            fixed_bound.append(np.tile(bv, nb))
+            fixed_bound.append(np.tile(octagon_bound(bound), nb))
         boxed = self._trans_boxed()
         if boxed:
             fixed_rows.append(gp[:, boxed, :].reshape(-1, n_u))
             fixed_sel.append(eye12[boxed])
             fixed_bound.append(np.tile(np.asarray(self.mpc.trans_limit_m)[boxed], nb))
-        lbx = np.full(n_u, -np.inf)
-        ubx = np.full(n_u, np.inf)
-        if math.isfinite(lim.tilt_accel):
-            for j, i in enumerate(m.active):
-                if i in (3, 4):
-                    lbx[j::nu] = -lim.tilt_accel
-                    ubx[j::nu] = lim.tilt_accel
+        lbx, ubx = input_bounds(m, lim, n_u)
         nl = lim.q_mid.shape[0]
         guard = self._guard_channels()
         thr = m.thresholds[guard]
@@ -1352,11 +1386,7 @@ class MpcCueing:
         free = pre.free_xd @ xd  # (nb, 12)
         a_pos = np.matmul(jac, pre.gp).reshape(-1, pre.g_xd.shape[0])  # (nb nl, nU)
         a_vel = np.matmul(jac, pre.gv).reshape(-1, pre.g_xd.shape[0])
-        ja = jac[:, list(m.active)]  # (nl, nu): the acceleration rows, block-diagonal
-        nl, nu = ja.shape
-        a_acc = np.zeros((pre.eye_nb.shape[0] * nl, pre.g_xd.shape[0]))
-        for b in range(pre.eye_nb.shape[0]):
-            a_acc[b * nl : (b + 1) * nl, b * nu : (b + 1) * nu] = ja
+        a_acc = accel_rows(jac[:, list(m.active)], pre.eye_nb.shape[0])
         base = q0 - jac @ pose0 - lim.q_mid  # leg offset from centre at p = 0
         pos_free = (free[:, 0:6] @ jac.T + base).reshape(-1)  # (nb nl,)
         vel_free = (free[:, 6:12] @ jac.T).reshape(-1)

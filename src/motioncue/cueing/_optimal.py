@@ -54,6 +54,7 @@ from numpy.typing import ArrayLike, NDArray
 from .._errors import ConfigError
 from ._classical import ClassicalWashout
 from ._mpc import (
+    TILT_OCTAGON,
     DaqpQp,
     LinearModel,
     MpcResult,
@@ -61,9 +62,12 @@ from ._mpc import (
     QpSolver,
     RigLimits,
     SoftGuardQp,
+    accel_rows,
     build_model,
     fallback_accel,
+    input_bounds,
     input_responses,
+    octagon_bound,
     qp_solver,
     recording_arrays,
     reference,
@@ -349,19 +353,12 @@ class OptimalCueing:
         ge = gam[ends]  # (nb, nx, nU)
         a_pos = np.einsum("lj,bju->blu", jac, ge[:, 0:6])
         a_vel = np.einsum("lj,bju->blu", jac, ge[:, 6:12])
-        nl = jac.shape[0]
-        a_acc = np.zeros((nb, nl, n_u))
-        ja = jac[:, list(m.active)]
-        for b in range(nb):
-            a_acc[b, :, b * nu : (b + 1) * nu] = ja
-        rows = [a_pos, a_vel, a_acc]
+        rows = [a_pos, a_vel, accel_rows(jac[:, list(m.active)], nb)]
         tilt = [i for i in (3, 4) if self.params.dofs[i]]
         if tilt:
             rows.append(ge[:, [6 + i for i in tilt]])
         if self._combined_tilt_bound() is not None:
-            rows.append(
-                np.stack([ge[:, 3] + ge[:, 4], ge[:, 3] - ge[:, 4], ge[:, 3], ge[:, 4]], axis=1)
-            )
+            rows.append(np.einsum("ck,bku->bcu", TILT_OCTAGON, ge[:, 3:5]))
         a_mat = np.concatenate([r.reshape(-1, n_u) for r in rows], axis=0)
         object.__setattr__(self, "_gam", gam)
         object.__setattr__(self, "_hess", hess)
@@ -589,26 +586,16 @@ class OptimalCueing:
             hi.append(lim.tilt_rate - tf)
         bound = self._combined_tilt_bound()
         if bound is not None:
-            cf = np.stack([fe[:, 3] + fe[:, 4], fe[:, 3] - fe[:, 4], fe[:, 3], fe[:, 4]], axis=1)
-            bv = np.broadcast_to(
-                np.array([bound, bound, bound / np.sqrt(2.0), bound / np.sqrt(2.0)]), cf.shape
-            )
+            cf = fe[:, 3:5] @ TILT_OCTAGON.T
+            bv = np.broadcast_to(octagon_bound(bound), cf.shape)
             tight = self._against_bound()
             if tight is not None and against is not None and np.any(against):
-                bt = np.array([tight, tight, tight / np.sqrt(2.0), tight / np.sqrt(2.0)])
-                bv = np.where(against[:, None], np.minimum(bv, bt), bv)
+                bv = np.where(against[:, None], np.minimum(bv, octagon_bound(tight)), bv)
             lo.append(-bv - cf)
             hi.append(bv - cf)
         lba = np.concatenate([np.asarray(v).reshape(-1) for v in lo])
         uba = np.concatenate([np.asarray(v).reshape(-1) for v in hi])
-        n_u = nb * m.nu
-        lbx = np.full(n_u, -np.inf)
-        ubx = np.full(n_u, np.inf)
-        if np.isfinite(lim.tilt_accel):
-            for j, i in enumerate(m.active):
-                if i in (3, 4):
-                    lbx[j :: m.nu] = -lim.tilt_accel
-                    ubx[j :: m.nu] = lim.tilt_accel
+        lbx, ubx = input_bounds(m, lim, nb * m.nu)
         return g, a_mat, lba, uba, lbx, ubx, xf[ends, 0:6], self._gam[ends, 0:6], xf[ends], xf
 
     def _solve_window(
