@@ -105,6 +105,7 @@ __all__ = [
     "block_ends",
     "build_model",
     "fallback_accel",
+    "guard_channels",
     "input_bounds",
     "input_responses",
     "octagon_bound",
@@ -112,6 +113,8 @@ __all__ = [
     "pose_sum",
     "reference",
     "resolve_reach",
+    "sign_guard_bounds",
+    "tilt_axes",
     "tilt_fz_bound",
 ]
 
@@ -637,6 +640,31 @@ def fallback_cap(m: LinearModel, lim: RigLimits) -> NDArray[np.float64]:
     return np.asarray(cap)
 
 
+def tilt_axes(dofs: Sequence[bool]) -> list[int]:
+    """The moved tilt DOFs among roll (3) and pitch (4) of ``dofs`` (6 flags)."""
+    return [i for i in (3, 4) if dofs[i]]
+
+
+def guard_channels(mp: MpcParams) -> list[int]:
+    """The channels (0-5: fx, fy, fz, roll, pitch, yaw rate) with a sign guard
+    (``sign_guard > 0``)."""
+    return [i for i in range(6) if mp.sign_guard[i] > 0.0]
+
+
+def sign_guard_bounds(
+    mp: MpcParams, vehicle: NDArray[np.float64], free: NDArray[np.float64]
+) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """Bounds ``(lo, hi)`` (flattened, in thresholds) of the sign-guard rows ``A_g u``: where
+    the vehicle's perceived motion ``vehicle`` ``(nb, ng)`` (or its sign; 0: unguarded) is
+    positive, the plan's perceived motion (``A_g u + free``, ``free`` ``(nb, ng)`` in
+    thresholds) at least ``-sign_guard`` thresholds, where negative at most ``sign_guard``;
+    ``ng`` the channels of :func:`guard_channels`."""
+    g = np.asarray(mp.sign_guard)[guard_channels(mp)]
+    lo = np.where(vehicle > 0, -g - free, -np.inf)
+    hi = np.where(vehicle < 0, g - free, np.inf)
+    return lo.reshape(-1), hi.reshape(-1)
+
+
 TILT_OCTAGON = np.array([[1.0, 1.0], [1.0, -1.0], [1.0, 0.0], [0.0, 1.0]])
 TILT_OCTAGON.setflags(write=False)
 """The combined-tilt rows (4, 2) of ``(roll, pitch)``: ``roll + pitch``, ``roll - pitch``,
@@ -1143,7 +1171,7 @@ class MpcCueing:
         return [i for i in (0, 1, 2) if self.params.dofs[i] and self.mpc.trans_limit_m[i] < 1e9]
 
     def _guard_channels(self) -> list[int]:
-        return [i for i in range(6) if self.mpc.sign_guard[i] > 0.0]
+        return guard_channels(self.mpc)
 
     def _fz_guarded(self) -> bool:
         """Whether the QP has ``fz_guard``'s rows (roll or pitch moved)."""
@@ -1253,20 +1281,16 @@ class MpcCueing:
         by more than ``sign_guard`` thresholds; rows and bounds in thresholds)."""
         pre = self._parts()
         m = self.model
-        guard = self._guard_channels()
         xv = state.xv if state.xv is not None else np.zeros(m.nx)
         xt = state.xt if state.xt is not None else np.zeros(m.nx)
         # perceived simulator motion = ce (x - xv) (the reference's part cancels)
         free = pre.guard_phi @ (state.x - xv)  # (nb, ng)
         pv = -(pre.guard_phi @ xt + pre.guard_psi @ d_vehicle)
-        thr = m.thresholds[guard]
-        g = np.asarray(self.mpc.sign_guard)[guard]
-        lo = np.where(pv > 0, -g - free / thr, -np.inf)
-        hi = np.where(pv < 0, g - free / thr, np.inf)
-        return pre.guard_a, lo.reshape(-1), hi.reshape(-1)
+        lo, hi = sign_guard_bounds(self.mpc, pv, free / m.thresholds[self._guard_channels()])
+        return pre.guard_a, lo, hi
 
     def _tilt_axes(self) -> list[int]:
-        return [i for i in (3, 4) if self.params.dofs[i]]
+        return tilt_axes(self.params.dofs)
 
     # ------------------------------------------------------------------ state
     def initial_state(self) -> MpcState:

@@ -65,6 +65,7 @@ from ._mpc import (
     accel_rows,
     build_model,
     fallback_accel,
+    guard_channels,
     input_bounds,
     input_responses,
     octagon_bound,
@@ -73,7 +74,9 @@ from ._mpc import (
     reference,
     resolve_reach,
     rig_limits,
+    sign_guard_bounds,
     terminal_weight,
+    tilt_axes,
     tilt_fz_bound,
 )
 from ._mpc_params import MpcParams
@@ -354,7 +357,7 @@ class OptimalCueing:
         a_pos = np.einsum("lj,bju->blu", jac, ge[:, 0:6])
         a_vel = np.einsum("lj,bju->blu", jac, ge[:, 6:12])
         rows = [a_pos, a_vel, accel_rows(jac[:, list(m.active)], nb)]
-        tilt = [i for i in (3, 4) if self.params.dofs[i]]
+        tilt = tilt_axes(self.params.dofs)
         if tilt:
             rows.append(ge[:, [6 + i for i in tilt]])
         if self._combined_tilt_bound() is not None:
@@ -486,7 +489,7 @@ class OptimalCueing:
         return (toe @ lin) / thr, (toe @ const + zfree[k_of]) / thr, sign
 
     def _guard_channels(self) -> list[int]:
-        return [i for i in range(6) if self.mpc.sign_guard[i] > 0.0]
+        return guard_channels(self.mpc)
 
     def _combined_tilt_bound(self) -> float | None:
         """Bound of the combined-tilt rows (:func:`~._mpc.tilt_fz_bound`; ``None``: none,
@@ -522,12 +525,8 @@ class OptimalCueing:
         where unconstrained), per guarded channel, in thresholds."""
         m = self.model
         guard = self._guard_channels()
-        g = np.asarray(self.mpc.sign_guard)[guard]
         free = (xf_ends - xv_ends) @ (m.ce[guard] / m.thresholds[guard][:, None]).T
-        sg = sign_ends[:, guard]
-        lo = np.where(sg > 0, -g - free, -np.inf)
-        hi = np.where(sg < 0, g - free, np.inf)
-        return lo.reshape(-1), hi.reshape(-1)
+        return sign_guard_bounds(self.mpc, sign_ends[:, guard], free)
 
     def _window_qp(
         self,
@@ -579,7 +578,7 @@ class OptimalCueing:
             )
         lo = [-lim.q_half - pos_free, -lim.v_max - vel_free, np.broadcast_to(-lim.a_max, (nb, nl))]
         hi = [lim.q_half - pos_free, lim.v_max - vel_free, np.broadcast_to(lim.a_max, (nb, nl))]
-        tilt = [i for i in (3, 4) if self.params.dofs[i]]
+        tilt = tilt_axes(self.params.dofs)
         if tilt:
             tf = fe[:, [6 + i for i in tilt]]
             lo.append(-lim.tilt_rate - tf)
@@ -640,7 +639,7 @@ class OptimalCueing:
         order of :meth:`_condense`)."""
         nl = int(np.asarray(self.limits.platform.jacobian(np.zeros(6))).shape[0])
         sizes = [nl, nl, nl]
-        tilt = [i for i in (3, 4) if self.params.dofs[i]]
+        tilt = tilt_axes(self.params.dofs)
         if tilt:
             sizes.append(len(tilt))
         if self._combined_tilt_bound() is not None:
