@@ -109,6 +109,7 @@ __all__ = [
     "input_bounds",
     "input_responses",
     "octagon_bound",
+    "plan_setup",
     "plan_tilt_reach",
     "pose_sum",
     "reference",
@@ -640,6 +641,19 @@ def fallback_cap(m: LinearModel, lim: RigLimits) -> NDArray[np.float64]:
     return np.asarray(cap)
 
 
+def plan_setup(
+    params: CueingParams, fs_hz: float, rig: Rig | None
+) -> tuple[ClassicalWashout, MpcParams, RigLimits]:
+    """What a plan of ``params`` (an ``[mpc]`` table, default :class:`MpcParams`) reads
+    first: its classical fallback washout at ``fs_hz`` (which validates ``fs_hz``), its MPC
+    parameters with the reference limits of :func:`resolve_reach`, and the limits of
+    :func:`rig_limits` on ``rig``."""
+    classical = ClassicalWashout(params, fs_hz)
+    mp = params.mpc if params.mpc is not None else MpcParams()
+    limits = rig_limits(params, mp, classical.fs_hz, rig)
+    return classical, resolve_reach(mp, limits), limits
+
+
 def tilt_axes(dofs: Sequence[bool]) -> list[int]:
     """The moved tilt DOFs among roll (3) and pitch (4) of ``dofs`` (6 flags)."""
     return [i for i in (3, 4) if dofs[i]]
@@ -1105,12 +1119,9 @@ class MpcCueing:
     _prior_g: NDArray[np.float64] | None = field(init=False, repr=False)
 
     def __post_init__(self) -> None:
-        classical = ClassicalWashout(self.params, self.fs_hz)  # validates fs_hz
+        classical, mp, limits = plan_setup(self.params, self.fs_hz, self.rig)
         fs = classical.fs_hz
         object.__setattr__(self, "fs_hz", fs)
-        mp = self.params.mpc if self.params.mpc is not None else MpcParams()
-        limits = rig_limits(self.params, mp, fs, self.rig)
-        mp = resolve_reach(mp, limits)
         object.__setattr__(self, "mpc", mp)
         object.__setattr__(self, "classical", classical)
         prior = np.asarray(mp.w_prior)

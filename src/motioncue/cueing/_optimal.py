@@ -69,11 +69,10 @@ from ._mpc import (
     input_bounds,
     input_responses,
     octagon_bound,
+    plan_setup,
     qp_solver,
     recording_arrays,
     reference,
-    resolve_reach,
-    rig_limits,
     sign_guard_bounds,
     terminal_weight,
     tilt_axes,
@@ -313,15 +312,12 @@ class OptimalCueing:
     _fz_free: NDArray[np.float64] | None = field(init=False, repr=False)
 
     def __post_init__(self) -> None:
-        classical = ClassicalWashout(self.params, self.fs_hz)
+        classical, mp, limits = plan_setup(self.params, self.fs_hz, self.rig)
         fs = classical.fs_hz
         object.__setattr__(self, "fs_hz", fs)
-        mp = self.params.mpc if self.params.mpc is not None else MpcParams()
         bs = mp.block_samples
         n_stride = max(bs, round(mp.stride_s * fs / bs) * bs)
         n_window = max(n_stride + bs, round(mp.window_s * fs / bs) * bs)
-        limits = rig_limits(self.params, mp, fs, self.rig)
-        mp = resolve_reach(mp, limits)
         model = build_model(self.params.dofs, mp, fs)
         object.__setattr__(self, "mpc", mp)
         object.__setattr__(self, "classical", classical)
