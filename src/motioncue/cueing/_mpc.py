@@ -115,6 +115,8 @@ __all__ = [
     "reference",
     "resolve_reach",
     "sign_guard_bounds",
+    "slack_hessian",
+    "slack_terms",
     "tilt_axes",
     "tilt_fz_bound",
 ]
@@ -958,6 +960,32 @@ def qp_solver(plugin: str, hess: NDArray[np.float64], n_rows: int) -> QpSolver |
     return QpSolver(plugin, hess, n_rows)
 
 
+def slack_hessian(hess: NDArray[np.float64], weight: float, k: int) -> NDArray[np.float64]:
+    """The Hessian ``(n + k, n + k)`` of inputs and ``k`` slacks priced ``weight (s + s^2 /
+    2)``: ``hess`` ``(n, n)``, then ``weight`` on the slacks' diagonal."""
+    n = hess.shape[0]
+    h = np.zeros((n + k, n + k))
+    h[:n, :n] = hess
+    h[n:, n:] = weight * np.eye(k)
+    return h
+
+
+def slack_terms(
+    g: NDArray[np.float64],
+    lbx: NDArray[np.float64],
+    ubx: NDArray[np.float64],
+    weight: float,
+    k: int,
+) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
+    """The gradient and variable bounds of inputs and ``k`` slacks (``s >= 0``, priced
+    ``weight`` each): ``[g, weight]``, ``[lbx, 0]``, ``[ubx, inf]``."""
+    return (
+        np.concatenate([g, np.full(k, weight)]),
+        np.concatenate([lbx, np.zeros(k)]),
+        np.concatenate([ubx, np.full(k, np.inf)]),
+    )
+
+
 class SoftGuardQp:
     """:class:`QpSolver` plus soft one-sided rows (the sign guard), each with a slack
     ``s >= 0`` priced ``weight (s + s^2 / 2)``::
@@ -981,9 +1009,7 @@ class SoftGuardQp:
         direct: bool = False,
     ) -> None:
         n = hess.shape[0]
-        h = np.zeros((n + n_guard, n + n_guard))
-        h[:n, :n] = hess
-        h[n:, n:] = weight * np.eye(n_guard)
+        h = slack_hessian(hess, weight, n_guard)
         self.n = n
         self.n_rows = n_rows
         self.n_guard = n_guard
@@ -1033,15 +1059,9 @@ class SoftGuardQp:
         a_aug[: self.n_rows, : self.n] = a
         a_aug[self.n_rows :, : self.n] = a_guard
         a_aug[self.n_rows :, self.n :] = np.diag(sigma)
-        return self._qp.solve(
-            np.concatenate([g, np.full(ng, self.weight)]),
-            a_aug,
-            np.concatenate([lba, lo_guard]),
-            np.concatenate([uba, hi_guard]),
-            np.concatenate([lbx, np.zeros(ng)]),
-            np.concatenate([ubx, np.full(ng, np.inf)]),
-            warm,
-        )
+        g_s, lbx_s, ubx_s = slack_terms(g, lbx, ubx, self.weight, ng)
+        lba_s, uba_s = np.concatenate([lba, lo_guard]), np.concatenate([uba, hi_guard])
+        return self._qp.solve(g_s, a_aug, lba_s, uba_s, lbx_s, ubx_s, warm)
 
 
 def _lin_at(

@@ -74,6 +74,8 @@ from ._mpc import (
     recording_arrays,
     reference,
     sign_guard_bounds,
+    slack_hessian,
+    slack_terms,
     terminal_weight,
     tilt_axes,
     tilt_fz_bound,
@@ -236,21 +238,12 @@ class WorkingSetQp:
         pos = np.flatnonzero(soft[rows])
         sigma = np.where(np.isfinite(lo_w[pos]), 1.0, -1.0)
         a_w[pos, n + np.arange(k)] = sigma
-        h = self.hess
-        if k:
-            h = np.zeros((n + k, n + k))
-            h[:n, :n] = self.hess
-            h[n:, n:] = self.weight * np.eye(k)
+        h = slack_hessian(self.hess, self.weight, k) if k else self.hess
         lam_x = np.concatenate([lam_u, np.zeros(k)])
         self.solves += 1
+        g_s, lbx_s, ubx_s = slack_terms(g, lbx, ubx, self.weight, k)
         ok, z, la, lx = DaqpQp(h, rows.size).solve(
-            np.concatenate([g, np.full(k, self.weight)]),
-            a_w,
-            lo_w,
-            hi_w,
-            np.concatenate([lbx, np.zeros(k)]),
-            np.concatenate([ubx, np.full(k, np.inf)]),
-            warm=(None, lam_rows[rows], lam_x),
+            g_s, a_w, lo_w, hi_w, lbx_s, ubx_s, warm=(None, lam_rows[rows], lam_x)
         )
         out = np.zeros(a_all.shape[0])
         if ok:
