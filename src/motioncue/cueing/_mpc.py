@@ -684,7 +684,8 @@ def sign_guard_bounds(
 TILT_OCTAGON = np.array([[1.0, 1.0], [1.0, -1.0], [1.0, 0.0], [0.0, 1.0]])
 TILT_OCTAGON.setflags(write=False)
 """The combined-tilt rows (4, 2) of ``(roll, pitch)``: ``roll + pitch``, ``roll - pitch``,
-``roll``, ``pitch`` (an octagon around the circle ``|tilt| <= bound``)."""
+``roll``, ``pitch`` (with :func:`octagon_bound`, a regular octagon about the circle of radius
+``bound / sqrt(2)``; see :func:`tilt_fz_bound`)."""
 
 
 def octagon_bound(bound: float) -> NDArray[np.float64]:
