@@ -78,7 +78,7 @@ from __future__ import annotations
 import math
 import time
 from collections import deque
-from collections.abc import MutableSequence, Sequence
+from collections.abc import Iterator, MutableSequence, Sequence
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
 
@@ -95,18 +95,29 @@ if TYPE_CHECKING:
     from ._algorithm import Rig
 
 __all__ = [
+    "TILT_OCTAGON",
     "DaqpQp",
     "MpcCueing",
     "MpcResult",
     "MpcState",
     "SoftGuardQp",
+    "accel_rows",
     "block_ends",
     "build_model",
     "fallback_accel",
+    "guard_channels",
+    "input_bounds",
+    "input_responses",
+    "octagon_bound",
+    "plan_setup",
     "plan_tilt_reach",
     "pose_sum",
     "reference",
     "resolve_reach",
+    "sign_guard_bounds",
+    "slack_hessian",
+    "slack_terms",
+    "tilt_axes",
     "tilt_fz_bound",
 ]
 
@@ -424,6 +435,27 @@ def terminal_weight(m: LinearModel) -> NDArray[np.float64]:
     return np.asarray(0.5 * (t + t.T))
 
 
+def input_responses(m: LinearModel, ends: NDArray[np.int64]) -> Iterator[NDArray[np.float64]]:
+    """``G_k`` for ``k = 1..N`` (``N = ends[-1]``): the state at step ``k`` from the blocked
+    inputs ``U`` (``nb nu``; block ``j`` holds its input over the steps up to ``ends[j]``),
+    ``G_k = A G_(k-1) + B_u E_j`` from ``G_0 = 0``.
+
+    Yields
+    ------
+    (nx, nb nu) array
+        A new array each step (kept by the caller as it likes).
+    """
+    n = int(ends[-1])
+    nu = m.nu
+    blk = np.searchsorted(ends, np.arange(n), side="right")  # block of step k - 1
+    gam = np.zeros((m.nx, len(ends) * nu))
+    for k in range(1, n + 1):
+        j = blk[k - 1]
+        gam = m.a @ gam
+        gam[:, j * nu : (j + 1) * nu] += m.bu
+        yield gam
+
+
 def pose_sum(m: LinearModel, ends: NDArray[np.int64]) -> NDArray[np.float64]:
     """``S = sum_k G_k'`` over the horizon's steps ``k = 1..N`` (``N = ends[-1]``), ``G_k``
     (6, ``nb nu``) the pose at step ``k`` from the blocked inputs (as in :func:`condense`).
@@ -436,15 +468,8 @@ def pose_sum(m: LinearModel, ends: NDArray[np.int64]) -> NDArray[np.float64]:
     -------
     (nb nu, 6) array
     """
-    n = int(ends[-1])
-    nu = m.nu
-    blk = np.searchsorted(ends, np.arange(n), side="right")
-    gam = np.zeros((m.nx, len(ends) * nu))
-    out = np.zeros((len(ends) * nu, 6))
-    for k in range(1, n + 1):
-        j = blk[k - 1]
-        gam = m.a @ gam
-        gam[:, j * nu : (j + 1) * nu] += m.bu
+    out = np.zeros((len(ends) * m.nu, 6))
+    for gam in input_responses(m, ends):
         out += gam[:6].T
     return out
 
@@ -475,11 +500,9 @@ def condense(
 ) -> Condensed:
     """Build :class:`Condensed` for block ``ends`` and the prediction factors ``decay[k]``
     (``d_k = decay[k] d``, ``k = 0..N``)."""
-    n = int(ends[-1])
     nb = len(ends)
     nu, nx = m.nu, m.nx
     n_u = nb * nu
-    blk = np.searchsorted(ends, np.arange(n), side="right")  # block of step j
     q = m.q
     zxd = m.zx.T @ m.zd  # (nx, 6)
     gam = np.zeros((nx, n_u))
@@ -496,10 +519,7 @@ def condense(
     ce_gam = np.zeros((nb, 6, n_u))
     lengths = np.diff(np.concatenate([[0], ends]))
     b_at = 0
-    for k in range(1, n + 1):
-        j = blk[k - 1]
-        gam = m.a @ gam
-        gam[:, j * nu : (j + 1) * nu] += m.bu
+    for k, gam in enumerate(input_responses(m, ends), start=1):
         psi = m.a @ psi + m.bd * decay[k - 1]
         phi = m.a @ phi
         qg = q @ gam
@@ -621,6 +641,81 @@ def fallback_cap(m: LinearModel, lim: RigLimits) -> NDArray[np.float64]:
             if i in (3, 4):
                 cap[j] = min(cap[j], lim.tilt_accel)
     return np.asarray(cap)
+
+
+def plan_setup(
+    params: CueingParams, fs_hz: float, rig: Rig | None
+) -> tuple[ClassicalWashout, MpcParams, RigLimits]:
+    """What a plan of ``params`` (an ``[mpc]`` table, default :class:`MpcParams`) reads
+    first: its classical fallback washout at ``fs_hz`` (which validates ``fs_hz``), its MPC
+    parameters with the reference limits of :func:`resolve_reach`, and the limits of
+    :func:`rig_limits` on ``rig``."""
+    classical = ClassicalWashout(params, fs_hz)
+    mp = params.mpc if params.mpc is not None else MpcParams()
+    limits = rig_limits(params, mp, classical.fs_hz, rig)
+    return classical, resolve_reach(mp, limits), limits
+
+
+def tilt_axes(dofs: Sequence[bool]) -> list[int]:
+    """The moved tilt DOFs among roll (3) and pitch (4) of ``dofs`` (6 flags)."""
+    return [i for i in (3, 4) if dofs[i]]
+
+
+def guard_channels(mp: MpcParams) -> list[int]:
+    """The channels (0-5: fx, fy, fz, roll, pitch, yaw rate) with a sign guard
+    (``sign_guard > 0``)."""
+    return [i for i in range(6) if mp.sign_guard[i] > 0.0]
+
+
+def sign_guard_bounds(
+    mp: MpcParams, vehicle: NDArray[np.float64], free: NDArray[np.float64]
+) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """Bounds ``(lo, hi)`` (flattened, in thresholds) of the sign-guard rows ``A_g u``: where
+    the vehicle's perceived motion ``vehicle`` ``(nb, ng)`` (or its sign; 0: unguarded) is
+    positive, the plan's perceived motion (``A_g u + free``, ``free`` ``(nb, ng)`` in
+    thresholds) at least ``-sign_guard`` thresholds, where negative at most ``sign_guard``;
+    ``ng`` the channels of :func:`guard_channels`."""
+    g = np.asarray(mp.sign_guard)[guard_channels(mp)]
+    lo = np.where(vehicle > 0, -g - free, -np.inf)
+    hi = np.where(vehicle < 0, g - free, np.inf)
+    return lo.reshape(-1), hi.reshape(-1)
+
+
+TILT_OCTAGON = np.array([[1.0, 1.0], [1.0, -1.0], [1.0, 0.0], [0.0, 1.0]])
+TILT_OCTAGON.setflags(write=False)
+"""The combined-tilt rows (4, 2) of ``(roll, pitch)``: ``roll + pitch``, ``roll - pitch``,
+``roll``, ``pitch`` (with :func:`octagon_bound`, a regular octagon about the circle of radius
+``bound / sqrt(2)``; see :func:`tilt_fz_bound`)."""
+
+
+def octagon_bound(bound: float) -> NDArray[np.float64]:
+    """Bounds (4,) of :data:`TILT_OCTAGON`'s rows for a combined tilt ``bound`` (rad)."""
+    return np.array([bound, bound, bound / math.sqrt(2.0), bound / math.sqrt(2.0)])
+
+
+def input_bounds(
+    m: LinearModel, lim: RigLimits, n_u: int
+) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """``(lbx, ubx)`` ``(n_u,)`` of blocked inputs (``nu`` per block): the roll and pitch
+    accelerations within ``lim.tilt_accel`` (rad/s^2), the others free."""
+    lbx = np.full(n_u, -np.inf)
+    ubx = np.full(n_u, np.inf)
+    if math.isfinite(lim.tilt_accel):
+        for j, i in enumerate(m.active):
+            if i in (3, 4):
+                lbx[j :: m.nu] = -lim.tilt_accel
+                ubx[j :: m.nu] = lim.tilt_accel
+    return lbx, ubx
+
+
+def accel_rows(ja: NDArray[np.float64], nb: int) -> NDArray[np.float64]:
+    """The legs' acceleration rows ``(nb nl, nb nu)`` of blocked inputs: block-diagonal,
+    ``ja`` ``(nl, nu)`` (the Jacobian's columns of the moved DOFs) in every block."""
+    nl, nu = ja.shape
+    out = np.zeros((nb * nl, nb * nu))
+    for b in range(nb):
+        out[b * nl : (b + 1) * nl, b * nu : (b + 1) * nu] = ja
+    return out
 
 
 @dataclass(eq=False)
@@ -866,6 +961,32 @@ def qp_solver(plugin: str, hess: NDArray[np.float64], n_rows: int) -> QpSolver |
     return QpSolver(plugin, hess, n_rows)
 
 
+def slack_hessian(hess: NDArray[np.float64], weight: float, k: int) -> NDArray[np.float64]:
+    """The Hessian ``(n + k, n + k)`` of inputs and ``k`` slacks priced ``weight (s + s^2 /
+    2)``: ``hess`` ``(n, n)``, then ``weight`` on the slacks' diagonal."""
+    n = hess.shape[0]
+    h = np.zeros((n + k, n + k))
+    h[:n, :n] = hess
+    h[n:, n:] = weight * np.eye(k)
+    return h
+
+
+def slack_terms(
+    g: NDArray[np.float64],
+    lbx: NDArray[np.float64],
+    ubx: NDArray[np.float64],
+    weight: float,
+    k: int,
+) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
+    """The gradient and variable bounds of inputs and ``k`` slacks (``s >= 0``, priced
+    ``weight`` each): ``[g, weight]``, ``[lbx, 0]``, ``[ubx, inf]``."""
+    return (
+        np.concatenate([g, np.full(k, weight)]),
+        np.concatenate([lbx, np.zeros(k)]),
+        np.concatenate([ubx, np.full(k, np.inf)]),
+    )
+
+
 class SoftGuardQp:
     """:class:`QpSolver` plus soft one-sided rows (the sign guard), each with a slack
     ``s >= 0`` priced ``weight (s + s^2 / 2)``::
@@ -889,9 +1010,7 @@ class SoftGuardQp:
         direct: bool = False,
     ) -> None:
         n = hess.shape[0]
-        h = np.zeros((n + n_guard, n + n_guard))
-        h[:n, :n] = hess
-        h[n:, n:] = weight * np.eye(n_guard)
+        h = slack_hessian(hess, weight, n_guard)
         self.n = n
         self.n_rows = n_rows
         self.n_guard = n_guard
@@ -941,15 +1060,9 @@ class SoftGuardQp:
         a_aug[: self.n_rows, : self.n] = a
         a_aug[self.n_rows :, : self.n] = a_guard
         a_aug[self.n_rows :, self.n :] = np.diag(sigma)
-        return self._qp.solve(
-            np.concatenate([g, np.full(ng, self.weight)]),
-            a_aug,
-            np.concatenate([lba, lo_guard]),
-            np.concatenate([uba, hi_guard]),
-            np.concatenate([lbx, np.zeros(ng)]),
-            np.concatenate([ubx, np.full(ng, np.inf)]),
-            warm,
-        )
+        g_s, lbx_s, ubx_s = slack_terms(g, lbx, ubx, self.weight, ng)
+        lba_s, uba_s = np.concatenate([lba, lo_guard]), np.concatenate([uba, hi_guard])
+        return self._qp.solve(g_s, a_aug, lba_s, uba_s, lbx_s, ubx_s, warm)
 
 
 def _lin_at(
@@ -1027,12 +1140,9 @@ class MpcCueing:
     _prior_g: NDArray[np.float64] | None = field(init=False, repr=False)
 
     def __post_init__(self) -> None:
-        classical = ClassicalWashout(self.params, self.fs_hz)  # validates fs_hz
+        classical, mp, limits = plan_setup(self.params, self.fs_hz, self.rig)
         fs = classical.fs_hz
         object.__setattr__(self, "fs_hz", fs)
-        mp = self.params.mpc if self.params.mpc is not None else MpcParams()
-        limits = rig_limits(self.params, mp, fs, self.rig)
-        mp = resolve_reach(mp, limits)
         object.__setattr__(self, "mpc", mp)
         object.__setattr__(self, "classical", classical)
         prior = np.asarray(mp.w_prior)
@@ -1093,7 +1203,7 @@ class MpcCueing:
         return [i for i in (0, 1, 2) if self.params.dofs[i] and self.mpc.trans_limit_m[i] < 1e9]
 
     def _guard_channels(self) -> list[int]:
-        return [i for i in range(6) if self.mpc.sign_guard[i] > 0.0]
+        return guard_channels(self.mpc)
 
     def _fz_guarded(self) -> bool:
         """Whether the QP has ``fz_guard``'s rows (roll or pitch moved)."""
@@ -1142,16 +1252,10 @@ class MpcCueing:
             e = int(e)
             hmat[b, :e] = h[e - np.arange(1, e + 1)]
         # roll and pitch of each step from x0 and the blocked inputs (as condense builds them)
-        nu = m.nu
-        blk = np.searchsorted(c.ends, np.arange(n), side="right")
-        gam = np.zeros((m.nx, nb * nu))
         phi = np.eye(m.nx)
-        g_tilt = np.zeros((n, 2, nb * nu))
+        g_tilt = np.zeros((n, 2, nb * m.nu))
         p_tilt = np.zeros((n, 2, m.nx))
-        for k in range(1, n + 1):
-            j = blk[k - 1]
-            gam = m.a @ gam
-            gam[:, j * nu : (j + 1) * nu] += m.bu
+        for k, gam in enumerate(input_responses(m, c.ends), start=1):
             phi = m.a @ phi
             g_tilt[k - 1] = gam[3:5]
             p_tilt[k - 1] = phi[3:5]
@@ -1209,20 +1313,16 @@ class MpcCueing:
         by more than ``sign_guard`` thresholds; rows and bounds in thresholds)."""
         pre = self._parts()
         m = self.model
-        guard = self._guard_channels()
         xv = state.xv if state.xv is not None else np.zeros(m.nx)
         xt = state.xt if state.xt is not None else np.zeros(m.nx)
         # perceived simulator motion = ce (x - xv) (the reference's part cancels)
         free = pre.guard_phi @ (state.x - xv)  # (nb, ng)
         pv = -(pre.guard_phi @ xt + pre.guard_psi @ d_vehicle)
-        thr = m.thresholds[guard]
-        g = np.asarray(self.mpc.sign_guard)[guard]
-        lo = np.where(pv > 0, -g - free / thr, -np.inf)
-        hi = np.where(pv < 0, g - free / thr, np.inf)
-        return pre.guard_a, lo.reshape(-1), hi.reshape(-1)
+        lo, hi = sign_guard_bounds(self.mpc, pv, free / m.thresholds[self._guard_channels()])
+        return pre.guard_a, lo, hi
 
     def _tilt_axes(self) -> list[int]:
-        return [i for i in (3, 4) if self.params.dofs[i]]
+        return tilt_axes(self.params.dofs)
 
     # ------------------------------------------------------------------ state
     def initial_state(self) -> MpcState:
@@ -1287,25 +1387,19 @@ class MpcCueing:
         if self._combined_tilt():
             bound = tilt_fz_bound(self.mpc, float(m.thresholds[2]))
             assert bound is not None
-            comb = np.array([[1.0, 1.0], [1.0, -1.0], [1.0, 0.0], [0.0, 1.0]])
-            fixed_rows.append(np.einsum("ck,bku->bcu", comb, gp[:, 3:5, :]).reshape(-1, n_u))
+            fixed_rows.append(
+                np.einsum("ck,bku->bcu", TILT_OCTAGON, gp[:, 3:5, :]).reshape(-1, n_u)
+            )
             sel = np.zeros((4, 12))
-            sel[:, 3:5] = comb
+            sel[:, 3:5] = TILT_OCTAGON
             fixed_sel.append(sel)
-            bv = np.array([bound, bound, bound / math.sqrt(2.0), bound / math.sqrt(2.0)])
-            fixed_bound.append(np.tile(bv, nb))
+            fixed_bound.append(np.tile(octagon_bound(bound), nb))
         boxed = self._trans_boxed()
         if boxed:
             fixed_rows.append(gp[:, boxed, :].reshape(-1, n_u))
             fixed_sel.append(eye12[boxed])
             fixed_bound.append(np.tile(np.asarray(self.mpc.trans_limit_m)[boxed], nb))
-        lbx = np.full(n_u, -np.inf)
-        ubx = np.full(n_u, np.inf)
-        if math.isfinite(lim.tilt_accel):
-            for j, i in enumerate(m.active):
-                if i in (3, 4):
-                    lbx[j::nu] = -lim.tilt_accel
-                    ubx[j::nu] = lim.tilt_accel
+        lbx, ubx = input_bounds(m, lim, n_u)
         nl = lim.q_mid.shape[0]
         guard = self._guard_channels()
         thr = m.thresholds[guard]
@@ -1348,11 +1442,7 @@ class MpcCueing:
         free = pre.free_xd @ xd  # (nb, 12)
         a_pos = np.matmul(jac, pre.gp).reshape(-1, pre.g_xd.shape[0])  # (nb nl, nU)
         a_vel = np.matmul(jac, pre.gv).reshape(-1, pre.g_xd.shape[0])
-        ja = jac[:, list(m.active)]  # (nl, nu): the acceleration rows, block-diagonal
-        nl, nu = ja.shape
-        a_acc = np.zeros((pre.eye_nb.shape[0] * nl, pre.g_xd.shape[0]))
-        for b in range(pre.eye_nb.shape[0]):
-            a_acc[b * nl : (b + 1) * nl, b * nu : (b + 1) * nu] = ja
+        a_acc = accel_rows(jac[:, list(m.active)], pre.eye_nb.shape[0])
         base = q0 - jac @ pose0 - lim.q_mid  # leg offset from centre at p = 0
         pos_free = (free[:, 0:6] @ jac.T + base).reshape(-1)  # (nb nl,)
         vel_free = (free[:, 6:12] @ jac.T).reshape(-1)

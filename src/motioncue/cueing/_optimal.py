@@ -54,6 +54,7 @@ from numpy.typing import ArrayLike, NDArray
 from .._errors import ConfigError
 from ._classical import ClassicalWashout
 from ._mpc import (
+    TILT_OCTAGON,
     DaqpQp,
     LinearModel,
     MpcResult,
@@ -61,14 +62,22 @@ from ._mpc import (
     QpSolver,
     RigLimits,
     SoftGuardQp,
+    accel_rows,
     build_model,
     fallback_accel,
+    guard_channels,
+    input_bounds,
+    input_responses,
+    octagon_bound,
+    plan_setup,
     qp_solver,
     recording_arrays,
     reference,
-    resolve_reach,
-    rig_limits,
+    sign_guard_bounds,
+    slack_hessian,
+    slack_terms,
     terminal_weight,
+    tilt_axes,
     tilt_fz_bound,
 )
 from ._mpc_params import MpcParams
@@ -229,21 +238,12 @@ class WorkingSetQp:
         pos = np.flatnonzero(soft[rows])
         sigma = np.where(np.isfinite(lo_w[pos]), 1.0, -1.0)
         a_w[pos, n + np.arange(k)] = sigma
-        h = self.hess
-        if k:
-            h = np.zeros((n + k, n + k))
-            h[:n, :n] = self.hess
-            h[n:, n:] = self.weight * np.eye(k)
+        h = slack_hessian(self.hess, self.weight, k) if k else self.hess
         lam_x = np.concatenate([lam_u, np.zeros(k)])
         self.solves += 1
+        g_s, lbx_s, ubx_s = slack_terms(g, lbx, ubx, self.weight, k)
         ok, z, la, lx = DaqpQp(h, rows.size).solve(
-            np.concatenate([g, np.full(k, self.weight)]),
-            a_w,
-            lo_w,
-            hi_w,
-            np.concatenate([lbx, np.zeros(k)]),
-            np.concatenate([ubx, np.full(k, np.inf)]),
-            warm=(None, lam_rows[rows], lam_x),
+            g_s, a_w, lo_w, hi_w, lbx_s, ubx_s, warm=(None, lam_rows[rows], lam_x)
         )
         out = np.zeros(a_all.shape[0])
         if ok:
@@ -305,15 +305,12 @@ class OptimalCueing:
     _fz_free: NDArray[np.float64] | None = field(init=False, repr=False)
 
     def __post_init__(self) -> None:
-        classical = ClassicalWashout(self.params, self.fs_hz)
+        classical, mp, limits = plan_setup(self.params, self.fs_hz, self.rig)
         fs = classical.fs_hz
         object.__setattr__(self, "fs_hz", fs)
-        mp = self.params.mpc if self.params.mpc is not None else MpcParams()
         bs = mp.block_samples
         n_stride = max(bs, round(mp.stride_s * fs / bs) * bs)
         n_window = max(n_stride + bs, round(mp.window_s * fs / bs) * bs)
-        limits = rig_limits(self.params, mp, fs, self.rig)
-        mp = resolve_reach(mp, limits)
         model = build_model(self.params.dofs, mp, fs)
         object.__setattr__(self, "mpc", mp)
         object.__setattr__(self, "classical", classical)
@@ -332,10 +329,9 @@ class OptimalCueing:
         gam = np.zeros((self.n_window + 1, nx, n_u))
         q = m.q
         hess = np.zeros((n_u, n_u))
-        for k in range(1, self.n_window + 1):
-            j = (k - 1) // self.mpc.block_samples
-            gam[k] = m.a @ gam[k - 1]
-            gam[k][:, j * nu : (j + 1) * nu] += m.bu
+        ends = np.arange(1, nb + 1) * self.mpc.block_samples
+        for k, gam_k in enumerate(input_responses(m, ends), start=1):
+            gam[k] = gam_k
             hess += gam[k].T @ q @ gam[k]
         tw = terminal_weight(m)
         hess += gam[-1].T @ tw @ gam[-1]
@@ -346,23 +342,15 @@ class OptimalCueing:
         # constraints at block ends, legs linearised about neutral
         lim = self.limits
         jac = np.asarray(lim.platform.jacobian(np.zeros(6)), dtype=float)
-        ends = np.arange(1, nb + 1) * self.mpc.block_samples
         ge = gam[ends]  # (nb, nx, nU)
         a_pos = np.einsum("lj,bju->blu", jac, ge[:, 0:6])
         a_vel = np.einsum("lj,bju->blu", jac, ge[:, 6:12])
-        nl = jac.shape[0]
-        a_acc = np.zeros((nb, nl, n_u))
-        ja = jac[:, list(m.active)]
-        for b in range(nb):
-            a_acc[b, :, b * nu : (b + 1) * nu] = ja
-        rows = [a_pos, a_vel, a_acc]
-        tilt = [i for i in (3, 4) if self.params.dofs[i]]
+        rows = [a_pos, a_vel, accel_rows(jac[:, list(m.active)], nb)]
+        tilt = tilt_axes(self.params.dofs)
         if tilt:
             rows.append(ge[:, [6 + i for i in tilt]])
         if self._combined_tilt_bound() is not None:
-            rows.append(
-                np.stack([ge[:, 3] + ge[:, 4], ge[:, 3] - ge[:, 4], ge[:, 3], ge[:, 4]], axis=1)
-            )
+            rows.append(np.einsum("ck,bku->bcu", TILT_OCTAGON, ge[:, 3:5]))
         a_mat = np.concatenate([r.reshape(-1, n_u) for r in rows], axis=0)
         object.__setattr__(self, "_gam", gam)
         object.__setattr__(self, "_hess", hess)
@@ -490,7 +478,7 @@ class OptimalCueing:
         return (toe @ lin) / thr, (toe @ const + zfree[k_of]) / thr, sign
 
     def _guard_channels(self) -> list[int]:
-        return [i for i in range(6) if self.mpc.sign_guard[i] > 0.0]
+        return guard_channels(self.mpc)
 
     def _combined_tilt_bound(self) -> float | None:
         """Bound of the combined-tilt rows (:func:`~._mpc.tilt_fz_bound`; ``None``: none,
@@ -526,12 +514,8 @@ class OptimalCueing:
         where unconstrained), per guarded channel, in thresholds."""
         m = self.model
         guard = self._guard_channels()
-        g = np.asarray(self.mpc.sign_guard)[guard]
         free = (xf_ends - xv_ends) @ (m.ce[guard] / m.thresholds[guard][:, None]).T
-        sg = sign_ends[:, guard]
-        lo = np.where(sg > 0, -g - free, -np.inf)
-        hi = np.where(sg < 0, g - free, np.inf)
-        return lo.reshape(-1), hi.reshape(-1)
+        return sign_guard_bounds(self.mpc, sign_ends[:, guard], free)
 
     def _window_qp(
         self,
@@ -583,33 +567,23 @@ class OptimalCueing:
             )
         lo = [-lim.q_half - pos_free, -lim.v_max - vel_free, np.broadcast_to(-lim.a_max, (nb, nl))]
         hi = [lim.q_half - pos_free, lim.v_max - vel_free, np.broadcast_to(lim.a_max, (nb, nl))]
-        tilt = [i for i in (3, 4) if self.params.dofs[i]]
+        tilt = tilt_axes(self.params.dofs)
         if tilt:
             tf = fe[:, [6 + i for i in tilt]]
             lo.append(-lim.tilt_rate - tf)
             hi.append(lim.tilt_rate - tf)
         bound = self._combined_tilt_bound()
         if bound is not None:
-            cf = np.stack([fe[:, 3] + fe[:, 4], fe[:, 3] - fe[:, 4], fe[:, 3], fe[:, 4]], axis=1)
-            bv = np.broadcast_to(
-                np.array([bound, bound, bound / np.sqrt(2.0), bound / np.sqrt(2.0)]), cf.shape
-            )
+            cf = fe[:, 3:5] @ TILT_OCTAGON.T
+            bv = np.broadcast_to(octagon_bound(bound), cf.shape)
             tight = self._against_bound()
             if tight is not None and against is not None and np.any(against):
-                bt = np.array([tight, tight, tight / np.sqrt(2.0), tight / np.sqrt(2.0)])
-                bv = np.where(against[:, None], np.minimum(bv, bt), bv)
+                bv = np.where(against[:, None], np.minimum(bv, octagon_bound(tight)), bv)
             lo.append(-bv - cf)
             hi.append(bv - cf)
         lba = np.concatenate([np.asarray(v).reshape(-1) for v in lo])
         uba = np.concatenate([np.asarray(v).reshape(-1) for v in hi])
-        n_u = nb * m.nu
-        lbx = np.full(n_u, -np.inf)
-        ubx = np.full(n_u, np.inf)
-        if np.isfinite(lim.tilt_accel):
-            for j, i in enumerate(m.active):
-                if i in (3, 4):
-                    lbx[j :: m.nu] = -lim.tilt_accel
-                    ubx[j :: m.nu] = lim.tilt_accel
+        lbx, ubx = input_bounds(m, lim, nb * m.nu)
         return g, a_mat, lba, uba, lbx, ubx, xf[ends, 0:6], self._gam[ends, 0:6], xf[ends], xf
 
     def _solve_window(
@@ -654,7 +628,7 @@ class OptimalCueing:
         order of :meth:`_condense`)."""
         nl = int(np.asarray(self.limits.platform.jacobian(np.zeros(6))).shape[0])
         sizes = [nl, nl, nl]
-        tilt = [i for i in (3, 4) if self.params.dofs[i]]
+        tilt = tilt_axes(self.params.dofs)
         if tilt:
             sizes.append(len(tilt))
         if self._combined_tilt_bound() is not None:
