@@ -7,7 +7,6 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 from hypothesis.extra import numpy as hnp
-from scipy import signal
 
 from motioncue.cueing import ClassicalWashout, load_cueing
 from motioncue.cueing._filters import (
@@ -37,6 +36,8 @@ def rel_rms(a: np.ndarray, b: np.ndarray) -> float:
 
 
 def continuous(num: tuple[float, ...], den: tuple[float, ...], t: np.ndarray, u: np.ndarray):
+    from scipy import signal
+
     _, y, _ = signal.lsim((num, den), u, t)
     return y
 
@@ -44,6 +45,8 @@ def continuous(num: tuple[float, ...], den: tuple[float, ...], t: np.ndarray, u:
 @pytest.mark.parametrize("fs", [100.0, 1000.0])
 @pytest.mark.parametrize("preset", ["racing", "flight"])
 def test_sections_match_continuous_transfer_functions(fs: float, preset: str) -> None:
+    from scipy import signal
+
     design = ClassicalWashout(load_cueing(preset), fs_hz=fs)
     t, u = multisine(fs, 40.0)
     tfs = design.continuous()

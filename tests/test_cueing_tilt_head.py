@@ -14,7 +14,6 @@ import numpy as np
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
-from scipy import signal
 
 from motioncue import ConfigError
 from motioncue.cueing import ClassicalWashout, CueingParams, load_cueing
@@ -185,6 +184,8 @@ def test_step_target_gives_the_hand_computed_trapezoid_or_triangle(theta_deg: fl
 # -- tilt gain --------------------------------------------------------------------------------
 def test_tilt_gain_is_separate_from_the_translational_scale() -> None:
     """Oracle: lsim of the documented tilt low-pass on k_t f_x / g (small angles, no limit)."""
+    from scipy import signal
+
     fs = 500.0
     base = load_cueing("racing")  # hand-written: f_scale 0.4, f_limit 5, no tilt accel limit
     p = dataclasses.replace(
@@ -226,6 +227,8 @@ def test_head_offset_first_order_is_minus_h_times_high_passed_pitch() -> None:
     """Hand derivation (module docstring): head ``h_z`` above the origin, pitch only:
     ``W' x h = [h_z theta'', 0, 0]``, so ``x_h - x_0 = -h_z H_T(s) theta`` to first order,
     with ``H_T = s^2/(s^2 + 2 zeta wn s + wn^2) * s/(s + wb)``. Oracle: lsim of ``H_T``."""
+    from scipy import signal
+
     fs = 1000.0
     hz = 0.9
     base = dataclasses.replace(load_cueing("racing"), f_scale=(0.0, 0.0, 0.0))

@@ -6,7 +6,6 @@ import math
 
 import numpy as np
 import pytest
-from scipy import signal
 
 from motioncue.cueing import (
     DEFAULT_MODEL_SET,
@@ -36,6 +35,8 @@ def otolith_published(w: np.ndarray) -> np.ndarray:
 
 
 def test_models_are_the_published_transfer_functions() -> None:
+    from scipy import signal
+
     np.testing.assert_allclose(SEMICIRCULAR_CANAL.response(W), canal_published(W), rtol=1e-12)
     np.testing.assert_allclose(OTOLITH.response(W), otolith_published(W), rtol=1e-12)
     num, den = SEMICIRCULAR_CANAL.transfer_function()
@@ -69,6 +70,8 @@ def test_otolith_band_shape() -> None:
 
 @pytest.mark.parametrize("fs", [100.0, 1000.0])
 def test_discrete_models_match_continuous(fs: float) -> None:
+    from scipy import signal
+
     w = np.logspace(-2, math.log10(2 * math.pi * fs / 50), 40)  # up to fs/50
     for model, published in ((SEMICIRCULAR_CANAL, canal_published), (OTOLITH, otolith_published)):
         _, h = signal.sosfreqz(model.sos(fs), worN=w / fs)

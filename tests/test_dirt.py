@@ -11,7 +11,6 @@ import numpy as np
 import pytest
 from hypothesis import given
 from hypothesis import strategies as st
-from scipy.spatial.transform import Rotation
 
 from motioncue.telemetry import G0_M_S2, decoder_for
 from motioncue.telemetry._dirt import EXTRADATA3, MAX_GAP_S, DirtDecoder, pack_extradata
@@ -62,6 +61,8 @@ def test_first_datagram_is_partial_then_every_one_is_a_sample() -> None:
 
 def _oracle(v: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Specific force and body rates by scipy rotations and numpy, from the field list."""
+    from scipy.spatial.transform import Rotation
+
     fwd, right = v[:, 14:17], v[:, 11:14]
     up = np.cross(right, fwd)
     frames = np.stack([fwd, -right, up], axis=2)  # columns: body axes in world coordinates

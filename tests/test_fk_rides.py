@@ -14,7 +14,6 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from scipy.spatial.transform import Rotation
 
 from motioncue import ConfigError
 from motioncue._config import bundled_names, config_dir
@@ -32,6 +31,8 @@ CONTROLLERS = {"seat3": "imax3", "seat2-yaw": "imax3", "seat3-pot": "smc3"}  # t
 def _closure_pulses(platform, pose: np.ndarray, q: np.ndarray) -> np.ndarray:  # type: ignore[no-untyped-def]
     """How far ``q`` is from the positions ``pose`` gives, per actuator, in pulses (an upper
     bound for crank legs: distance error over crank length x one pulse's angle)."""
+    from scipy.spatial.transform import Rotation
+
     legs = platform.legs
     x = np.asarray(pose, dtype=float) * platform._leg_mask
     rot = Rotation.from_euler("ZYX", [x[5], x[4], x[3]]).as_matrix()  # Rz Ry Rx

@@ -30,7 +30,6 @@ from collections.abc import Callable
 
 import numpy as np
 import pytest
-from scipy.spatial.transform import Rotation
 
 from motioncue.cueing import load_cueing
 from motioncue.kinematics import load_platform
@@ -72,6 +71,8 @@ def _rate_of(kind: str, t: np.ndarray) -> np.ndarray:
 def _fly(kind: str) -> dict[str, np.ndarray]:
     """A manoeuvre sampled at the datagram rate: time, body rates (p, q, r) and specific
     force in aero body axes (x forward, y right wing, z down; rad/s, m/s^2), attitude."""
+    from scipy.spatial.transform import Rotation
+
     n = int(22.0 * RATE_IN_HZ)
     t = np.arange(n) / RATE_IN_HZ
     pqr = np.zeros((n, 3))

@@ -1,9 +1,9 @@
 """What ``motioncue generate`` imports: toppra without matplotlib.pyplot until pyplot is used.
 
 toppra imports ``matplotlib.pyplot`` when it is imported (plotting helpers generate never
-calls); :func:`motioncue.pipeline._generate._defer_pyplot` puts a placeholder in its place,
-which imports the real module at the first use of one of its attributes. In a fresh process
-(this one may have imported pyplot already).
+calls); :func:`motioncue.trajectory._transition._defer_pyplot`, called where toppra is
+imported, puts a placeholder in its place, which imports the real module at the first use of
+one of its attributes. In a fresh process (this one may have imported pyplot already).
 """
 
 from __future__ import annotations
@@ -17,7 +17,7 @@ SRC = Path(__file__).resolve().parents[1] / "src"
 
 _PROBE = """
 import sys, types
-from motioncue.pipeline._generate import _defer_pyplot
+from motioncue.trajectory._transition import _defer_pyplot
 _defer_pyplot()
 import toppra, toppra.algorithm
 import matplotlib

@@ -11,7 +11,6 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from scipy.optimize import brentq
 
 from motioncue.cli import main
 from motioncue.kinematics import dof_ranges, load_platform
@@ -35,6 +34,8 @@ def test_heave_range_closed_form() -> None:
 def test_seat3_roll_range_by_root_finding() -> None:
     """Roll moves the front anchors (200, +-250, 0) to (200, +-250 cos r, +-250 sin r); the
     limit is whichever front leg first leaves its usable length, found with brentq."""
+    from scipy.optimize import brentq
+
     p = load_platform("seat3")
     h = p.legs.height
     lo_len = p.q_min[0] + p.neutral_absolute[0]

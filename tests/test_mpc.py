@@ -9,7 +9,6 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from scipy.linalg import solve_discrete_are
 
 from motioncue._errors import ConfigError
 from motioncue.cueing import load_cueing, make_cueing
@@ -50,6 +49,8 @@ def unblocked() -> MpcCueing:
 def test_unconstrained_first_move_is_the_lq_feedback_of_scipys_riccati(
     unblocked: MpcCueing,
 ) -> None:
+    from scipy.linalg import solve_discrete_are
+
     m = unblocked.model
     p = solve_discrete_are(m.a, m.bu, m.q + 1e-12 * np.eye(m.nx), m.r)
     k_lq = np.linalg.solve(m.r + m.bu.T @ p @ m.bu, m.bu.T @ p @ m.a)

@@ -8,7 +8,6 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from scipy.optimize import Bounds, LinearConstraint, minimize
 
 from motioncue._errors import ConfigError
 from motioncue.cueing import evaluate_cueing, load_cueing, make_cueing
@@ -135,6 +134,8 @@ def _soft_objective(hess, g, w, a_g, lo_g, hi_g):  # type: ignore[no-untyped-def
 
 @pytest.mark.parametrize("seed", range(6))
 def test_soft_guard_qp_matches_a_general_minimiser_of_the_priced_problem(seed: int) -> None:
+    from scipy.optimize import Bounds, LinearConstraint, minimize
+
     rng = np.random.default_rng(seed)
     n, n_rows, n_guard, w = 4, 3, 5, 7.0
     m = rng.normal(size=(n, n))

@@ -15,7 +15,6 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from scipy.spatial.transform import Rotation
 
 from motioncue.cueing import evaluate_cueing, get_model_set, load_cueing
 from motioncue.cueing._optimal import OptimalCueing, _fz_change
@@ -30,6 +29,8 @@ def _with(params, **kw):  # type: ignore[no-untyped-def]
 
 
 def test_the_change_of_vertical_force_is_that_of_the_rotated_specific_force() -> None:
+    from scipy.spatial.transform import Rotation
+
     rng = np.random.default_rng(4)
     active = (0, 1, 3, 4)
     for _ in range(200):

@@ -11,7 +11,6 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from scipy.signal import savgol_filter
 
 from motioncue.telemetry import G0_M_S2
 from motioncue.telemetry._pcars2 import TELEMETRY_SIZE, PCars2Decoder, PCars2Telemetry
@@ -66,6 +65,8 @@ def capture(request: pytest.FixtureRequest) -> dict[str, np.ndarray]:
 
 
 def _smooth(x: np.ndarray) -> np.ndarray:
+    from scipy.signal import savgol_filter
+
     return np.asarray(savgol_filter(x, 61, 2, axis=0))  # ~1 s at the captures' 60 Hz
 
 

@@ -46,8 +46,6 @@ from pathlib import Path
 import numpy as np
 import pytest
 from numpy.typing import NDArray
-from scipy.ndimage import uniform_filter1d
-from scipy.signal import butter, sosfiltfilt
 
 from motioncue._config import find_config
 from motioncue.analysis import rig_reach, run_chain
@@ -147,6 +145,9 @@ def _witness(d: NDArray[np.float64], i: int, reach: RigReach) -> list[tuple[floa
     enough for the tilt rate (``|diff|`` at most ``2 sin(tilt) / L`` per sample), for a
     grid of ``alpha``.
     """
+    from scipy.ndimage import uniform_filter1d
+    from scipy.signal import butter, sosfiltfilt
+
     ms = get_model_set(MODEL)
     oto = ms.otolith[i]
     v = oto.apply(d, RATE)

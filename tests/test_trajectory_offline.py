@@ -6,7 +6,6 @@ import numpy as np
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
-from scipy.optimize import minimize
 
 from motioncue.trajectory import (
     ActuatorLimits,
@@ -76,6 +75,8 @@ def test_infeasible_ride_is_feasible_and_no_worse_than_the_realtime_limiter(seed
 
 def test_small_problem_matches_an_independent_qp_solver():
     """scipy SLSQP on the same QP (closed form of the constraints) as oracle."""
+    from scipy.optimize import minimize
+
     lim = _lim(n=1)
     N = 40
     t = np.arange(N) * DT

@@ -12,7 +12,6 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from scipy import signal
 
 from motioncue._errors import ConfigError
 from motioncue.cli import main
@@ -118,6 +117,7 @@ def test_continuous_models_are_the_published_ones(name: str) -> None:
 def test_discretisation_is_the_bilinear_transform_exactly(fs: float) -> None:
     """Stated error: H_d(e^{jwT}) = H(j (2/T) tan(wT/2)) to rounding, up to Nyquist."""
     import control
+    from scipy import signal
 
     w = np.linspace(0.01, 0.95 * math.pi * fs, 200)
     warped = 2.0 * fs * np.tan(w / (2.0 * fs))
@@ -140,6 +140,7 @@ def test_time_domain_against_lsim_and_forced_response() -> None:
     """Continuous oracles (scipy lsim and control.forced_response) agree with each other to
     rounding; the discrete filter converges to them at second order in T."""
     import control
+    from scipy import signal
 
     errs: dict[float, float] = {}
     for fs in (100.0, 1000.0):

@@ -8,10 +8,7 @@ is returned: an unsafe ride is never produced (``LimitError``).
 
 from __future__ import annotations
 
-import importlib
-import sys
 import time
-import types
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
@@ -136,41 +133,6 @@ class GenerateReport:
     stage_s: dict[str, float] = field(default_factory=dict)
     transition_fallbacks: tuple[str, ...] = ()
     joins: tuple[dict[str, Any], ...] = ()
-
-
-class _DeferredPyplot(types.ModuleType):
-    """Stands for :mod:`matplotlib.pyplot` in ``sys.modules`` until an attribute of it is
-    used, which imports the real module (once; every later use goes to it).
-
-    toppra, which times the ramps, imports ``matplotlib.pyplot`` when it is imported, for
-    plotting helpers generate never calls: about 0.4 s of CPU per ``motioncue generate``
-    (pyplot's own import, measured with ``python -X importtime``). Dunder lookups (``__file__``,
-    ``__path__``, made by tools that walk ``sys.modules``) do not import it; they see a module
-    without them.
-    """
-
-    def __getattr__(self, attr: str) -> Any:
-        if attr.startswith("__") and attr.endswith("__"):
-            raise AttributeError(attr)
-        if sys.modules.get(self.__name__) is self:
-            del sys.modules[self.__name__]
-        return getattr(importlib.import_module(self.__name__), attr)
-
-
-def _defer_pyplot() -> None:
-    """Put a :class:`_DeferredPyplot` in place of ``matplotlib.pyplot`` before toppra is
-    imported (nothing to do once either is imported). matplotlib itself is imported (toppra's
-    ``import matplotlib.pyplot`` would import it anyway), so that ``matplotlib.pyplot`` is also
-    the placeholder's attribute, as after a real import."""
-    if "toppra" in sys.modules or "matplotlib.pyplot" in sys.modules:
-        return
-    try:
-        import matplotlib
-    except ImportError:  # toppra then goes without pyplot (its own fallback)
-        return
-    placeholder = _DeferredPyplot("matplotlib.pyplot")
-    sys.modules["matplotlib.pyplot"] = placeholder
-    matplotlib.pyplot = placeholder
 
 
 def _finish(
@@ -417,7 +379,6 @@ def generate_ride(
         stage_s[name] = now - clock
         clock = now
 
-    _defer_pyplot()  # toppra's import of pyplot, which the ramps never use
     limits, table, tight = _ride_limits(platform, controller, rate_hz, limits)
     dt = 1.0 / rate_hz
 
@@ -578,7 +539,6 @@ def generate_keyframe_ride(
     LimitError
         A keyframe the platform cannot reach (named with the actuator).
     """
-    _defer_pyplot()  # toppra's import of pyplot, which the moves never use
     limits, table, tight = _ride_limits(platform, controller, rate_hz, limits)
     dt = 1.0 / rate_hz
     poses = np.asarray(keyframes.poses, dtype=float)

@@ -42,12 +42,15 @@ kinematics), ``duration_s`` becomes the time of the last frame, and the check in
 
 from __future__ import annotations
 
+import importlib
 import itertools
 import logging
 import math
+import sys
+import types
 from collections.abc import Callable
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, cast, overload
+from typing import TYPE_CHECKING, Any, cast, overload
 
 import numpy as np
 
@@ -141,10 +144,46 @@ def _pose_path(poses: np.ndarray) -> PathFn:
     return lambda s: spline(np.clip(s, 0.0, 1.0))
 
 
+class _DeferredPyplot(types.ModuleType):
+    """Stands for :mod:`matplotlib.pyplot` in ``sys.modules`` until an attribute of it is
+    used, which imports the real module (once; every later use goes to it).
+
+    toppra imports ``matplotlib.pyplot`` when it is imported, for plotting helpers the moves
+    never call: about 0.4 s of CPU per process that times a move (pyplot's own import,
+    measured with ``python -X importtime``). Dunder lookups (``__file__``, ``__path__``, made
+    by tools that walk ``sys.modules``) do not import it; they see a module without them.
+    """
+
+    def __getattr__(self, attr: str) -> Any:
+        if attr.startswith("__") and attr.endswith("__"):
+            raise AttributeError(attr)
+        if sys.modules.get(self.__name__) is self:
+            del sys.modules[self.__name__]
+        return getattr(importlib.import_module(self.__name__), attr)
+
+
+def _defer_pyplot() -> None:
+    """Put a :class:`_DeferredPyplot` in place of ``matplotlib.pyplot`` before toppra is
+    imported (nothing to do once either is imported). Called where toppra is imported, so that
+    a process that times no move imports neither. matplotlib itself is imported (toppra's
+    ``import matplotlib.pyplot`` would import it anyway), so that ``matplotlib.pyplot`` is also
+    the placeholder's attribute, as after a real import."""
+    if "toppra" in sys.modules or "matplotlib.pyplot" in sys.modules:
+        return
+    try:
+        import matplotlib
+    except ImportError:  # toppra then goes without pyplot (its own fallback)
+        return
+    placeholder = _DeferredPyplot("matplotlib.pyplot")
+    sys.modules["matplotlib.pyplot"] = placeholder
+    matplotlib.pyplot = placeholder
+
+
 def _time_parametrise(
     ss: np.ndarray, qs: np.ndarray, limits: ActuatorLimits, scale: float, n_grid: int
 ) -> tuple[np.ndarray, np.ndarray]:
     """toppra on the spline through (ss, qs): gridpoints and s-dot at them (rest to rest)."""
+    _defer_pyplot()  # toppra's import of pyplot, which the moves never use
     import toppra as ta
     import toppra.algorithm as algo
     import toppra.constraint as constraint
