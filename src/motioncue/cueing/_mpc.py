@@ -1414,6 +1414,7 @@ class MpcCueing:
             fixed_sel.append(eye12[boxed])
             fixed_bound.append(np.tile(np.asarray(self.mpc.trans_limit_m)[boxed], nb))
         lbx, ubx = input_bounds(m, lim, n_u)
+        lbx.flags.writeable = ubx.flags.writeable = False  # every sample's QP holds them
         nl = lim.q_mid.shape[0]
         guard = self._guard_channels()
         thr = m.thresholds[guard]
@@ -1438,18 +1439,26 @@ class MpcCueing:
         self.__dict__["_pre"] = pre
         return pre
 
-    def qp_matrices(self, x0: NDArray[np.float64], d: NDArray[np.float64]) -> QpData:
+    def qp_matrices(
+        self,
+        x0: NDArray[np.float64],
+        d: NDArray[np.float64],
+        pose_c: Sequence[float] | None = None,
+    ) -> QpData:
         """This sample's QP (the Hessian is ``cond.hess``), from state ``x0`` ``(nx,)`` and
-        the vehicle's motion ``d`` ``(6,)``.
+        the vehicle's motion ``d`` ``(6,)``; with ``pose_c`` (the classical fallback's pose,
+        m and rad) and ``w_prior``, the gradient has the prior's linear part too.
 
         Rows, each kind block-major (block end ``b`` outer): leg strokes, leg speeds, leg
         accelerations, the roll/pitch rates, the combined-tilt octagon, the translation box
-        (``trans_limit_m``)."""
+        (``trans_limit_m``). ``lbx``, ``ubx`` are the design's own arrays (read-only)."""
         pre = self._parts()
         lim = self.limits
         m = self.model
         xd = np.concatenate([x0, d])
         g = pre.g_xd @ xd
+        if self._prior_g is not None and pose_c is not None:
+            g = g + self._prior_g @ np.asarray(pose_c, dtype=float)
         pose0 = x0[:6]
         q0, jac = _lin_at(lim, pose0)
         free = pre.free_xd @ xd  # (nb, 12)
@@ -1479,7 +1488,7 @@ class MpcCueing:
                 pre.fixed_bound - np.concatenate([np.zeros(0), *ff]),
             ]
         )
-        return QpData(g, a_mat, lba, uba, pre.lbx.copy(), pre.ubx.copy())
+        return QpData(g, a_mat, lba, uba, pre.lbx, pre.ubx)
 
     def _solve(
         self,
@@ -1490,9 +1499,7 @@ class MpcCueing:
         pose_c: Sequence[float] | None = None,
     ) -> NDArray[np.float64] | None:
         t0 = time.perf_counter()
-        qp = self.qp_matrices(state.x, d)
-        if self._prior_g is not None and pose_c is not None:
-            qp = replace(qp, g=qp.g + self._prior_g @ np.asarray(pose_c, dtype=float))
+        qp = self.qp_matrices(state.x, d, pose_c)
         warm = (state.warm_u, state.warm_lam_a, state.warm_lam_x)
         if self._qp_guard is not None and d_vehicle is not None:
             ga, glo, ghi = self.guard_rows(state, d_vehicle)
