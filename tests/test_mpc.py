@@ -58,8 +58,9 @@ def test_unconstrained_first_move_is_the_lq_feedback_of_scipys_riccati(
     for _ in range(5):
         state = unblocked.initial_state()
         state.x = rng.normal(scale=1e-4, size=m.nx)
-        g, a_mat, lba, uba, lbx, ubx = unblocked.qp_matrices(state.x, np.zeros(6))
-        ok, u, _, _ = unblocked._qp.solve(g, a_mat, lba, uba, lbx, ubx)
+        qp = unblocked.qp_matrices(state.x, np.zeros(6))
+        a_mat, lba, uba = qp.a, qp.lba, qp.uba
+        ok, u, _, _ = unblocked._qp.solve(qp)
         assert ok
         assert np.all(a_mat @ u < uba - 1e-9) and np.all(a_mat @ u > lba + 1e-9)  # inactive
         np.testing.assert_allclose(u[: m.nu], -k_lq @ state.x, rtol=1e-6, atol=1e-9)
@@ -91,8 +92,9 @@ def test_kkt_residuals_and_feasibility_on_random_active_problems(hexapod: MpcCue
         x0[:6] = rng.uniform(-1, 1, 6) * np.array([0.02, 0.02, 0.01, 0.03, 0.03, 0.03])
         x0[6:12] = rng.uniform(-1, 1, 6) * 0.02
         d = rng.normal(scale=[8, 8, 3, 0.5, 0.5, 0.5])
-        g, a_mat, lba, uba, lbx, ubx = hexapod.qp_matrices(x0, d)
-        ok, u, la, lx = hexapod._qp.solve(g, a_mat, lba, uba, lbx, ubx)
+        qp = hexapod.qp_matrices(x0, d)
+        g, a_mat, lba, uba = qp.g, qp.a, qp.lba, qp.uba
+        ok, u, la, lx = hexapod._qp.solve(qp)
         assert ok
         au = a_mat @ u
         tol = 1e-7 * (1 + np.abs(uba))
@@ -128,8 +130,8 @@ def test_daqp_route_matches_casadis_solver_and_any_warm_start_gives_the_optimum(
         x0[6:12] = rng.uniform(-1, 1, 6) * 0.02
         d = rng.normal(scale=[8, 8, 3, 0.5, 0.5, 0.5])
         qp = hexapod.qp_matrices(x0, d)
-        ok_o, u_o, _, _ = oracle.solve(*qp)
-        ok, u, la, lx = direct.solve(*qp)
+        ok_o, u_o, _, _ = oracle.solve(qp)
+        ok, u, la, lx = direct.solve(qp)
         assert ok and ok_o
         scale = 1.0 + np.abs(u_o).max()
         np.testing.assert_allclose(u, u_o, rtol=0, atol=1e-6 * scale)
@@ -137,7 +139,7 @@ def test_daqp_route_matches_casadis_solver_and_any_warm_start_gives_the_optimum(
         flipped = (u, -la, -lx)  # the true active set, each row at its other bound
         every = (u, -np.where(la == 0, 1.0, la), -np.where(lx == 0, 1.0, lx))  # refused: cold
         for warm in ((u, la, lx), prev, flipped, every):
-            ok_w, u_w, _, _ = direct.solve(*qp, warm=warm)
+            ok_w, u_w, _, _ = direct.solve(qp, warm=warm)
             assert ok_w
             np.testing.assert_allclose(u_w, u_o, rtol=0, atol=1e-6 * scale)
         prev = (u, la, lx)
@@ -154,9 +156,9 @@ def test_the_guarded_plan_warm_starts_through_its_sign_guard() -> None:
     real = inner.solve
     seen: list[int] = []
 
-    def spy(g, a, lba, uba, lbx, ubx, warm=None):  # type: ignore[no-untyped-def]
+    def spy(qp, warm=None):  # type: ignore[no-untyped-def]
         seen.append(0 if warm is None or warm[1] is None else len(warm[1]))
-        return real(g, a, lba, uba, lbx, ubx, warm)
+        return real(qp, warm)
 
     inner.solve = spy  # type: ignore[method-assign]
     f, w = _drive(600, 120)
@@ -164,8 +166,8 @@ def test_the_guarded_plan_warm_starts_through_its_sign_guard() -> None:
     n_rows = design.n_rows + design._qp_guard.n_guard
     assert seen[0] == 0 and all(k == n_rows for k in seen[1:])  # guard rows' multipliers too
 
-    def cold(g, a, lba, uba, lbx, ubx, warm=None):  # type: ignore[no-untyped-def]
-        return real(g, a, lba, uba, lbx, ubx)
+    def cold(qp, warm=None):  # type: ignore[no-untyped-def]
+        return real(qp)
 
     inner.solve = cold  # type: ignore[method-assign]
     cold_poses = design.run(f, w).poses

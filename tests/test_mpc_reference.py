@@ -11,7 +11,7 @@ import pytest
 
 from motioncue._errors import ConfigError
 from motioncue.cueing import evaluate_cueing, load_cueing, make_cueing
-from motioncue.cueing._mpc import MpcCueing, SoftGuardQp, reference
+from motioncue.cueing._mpc import MpcCueing, QpData, SoftGuardQp, SoftRows, reference
 from motioncue.cueing._mpc_params import MpcParams
 from motioncue.cueing._optimal import OptimalCueing
 
@@ -150,7 +150,7 @@ def test_soft_guard_qp_matches_a_general_minimiser_of_the_priced_problem(seed: i
     lo_g = np.where(side == 0, val, -np.inf)
     hi_g = np.where(side == 1, val, np.inf)
     qp = SoftGuardQp("daqp", hess, n_rows, n_guard, w)
-    ok, u, _, _ = qp.solve(g, a, lba, uba, lbx, ubx, a_g, lo_g, hi_g)
+    ok, u, _, _ = qp.solve(QpData(g, a, lba, uba, lbx, ubx), SoftRows(a_g, lo_g, hi_g))
     assert ok
     # the same problem with explicit slacks, smooth, by scipy's SLSQP (a second method)
     lower = np.isfinite(lo_g)
@@ -195,9 +195,9 @@ def test_a_feasible_guard_is_met_exactly() -> None:
     qp = SoftGuardQp("daqp", hess, 0, 1, 1e4)
     big = np.full(2, 1e3)
     ok, u, _, _ = qp.solve(
-        g, np.zeros((0, 2)), np.zeros(0), np.zeros(0), -big, big,
-        np.array([[1.0, 0.0]]), np.array([-np.inf]), np.array([1.0]),
-    )  # fmt: skip
+        QpData(g, np.zeros((0, 2)), np.zeros(0), np.zeros(0), -big, big),
+        SoftRows(np.array([[1.0, 0.0]]), np.array([-np.inf]), np.array([1.0])),
+    )
     assert ok
     np.testing.assert_allclose(u, [1.0, -0.5], atol=1e-6)  # u0 <= 1 active, u1 free
 

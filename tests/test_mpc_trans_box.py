@@ -47,7 +47,8 @@ def test_box_rows_predict_the_pose_of_a_plain_double_integrator(boxed: MpcCueing
         x0[6:12] = rng.uniform(-0.1, 0.1, 6)
         d = rng.normal(scale=[5, 5, 1, 0.2, 0.2, 0.2])
         u_blocks = rng.normal(scale=2.0, size=(nb, nu))
-        _, a_mat, lba, uba, _, _ = boxed.qp_matrices(x0, d)
+        qp = boxed.qp_matrices(x0, d)
+        a_mat, lba, uba = qp.a, qp.lba, qp.uba
         rows = a_mat[-nb * 2 :]
         lo, hi = lba[-nb * 2 :], uba[-nb * 2 :]
         # the rows are L - free <= ... : the predicted pose is rows @ U + (hi - L) offset

@@ -152,7 +152,7 @@ def test_the_fz_guard_holds_when_the_second_pass_legs_rows_are_infeasible(
             first_pass.append(qp)
         elif not any(qp is q for q in first_pass):  # a second pass: its legs rows fail
             broken_passes.append(1)
-            return False, np.zeros_like(qp[0])
+            return False, np.zeros_like(qp.qp.g)
         return solve_window(self, qp, xv_ends, sign_ends, use_guard, fz, guess, start)
 
     times = []

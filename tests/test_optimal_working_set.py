@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from motioncue.cueing._mpc import SoftGuardQp
+from motioncue.cueing._mpc import QpData, SoftGuardQp, SoftRows
 from motioncue.cueing._optimal import WorkingSetQp
 
 
@@ -39,11 +39,11 @@ def test_the_working_set_gives_the_whole_problems_optimum() -> None:
     for seed in range(6):
         hess, g, a, lba, uba, lbx, ubx, a_g, lo_g, hi_g = _problem(seed)
         full = SoftGuardQp("daqp", hess, a.shape[0], a_g.shape[0], weight)
-        ok_f, z, _, _ = full.solve_full(g, a, lba, uba, lbx, ubx, a_g, lo_g, hi_g)
+        ok_f, z, _, _ = full.solve_full(QpData(g, a, lba, uba, lbx, ubx), SoftRows(a_g, lo_g, hi_g))
         assert ok_f
         u_full, s_full = z[: hess.shape[0]], z[hess.shape[0] :]
         ws = WorkingSetQp(hess, weight)
-        ok, u = ws.solve(g, a, lba, uba, lbx, ubx, a_g, lo_g, hi_g)
+        ok, u = ws.solve(QpData(g, a, lba, uba, lbx, ubx), SoftRows(a_g, lo_g, hi_g))
         assert ok
         np.testing.assert_allclose(u, u_full, rtol=0, atol=1e-7)
         assert ws.last is not None
@@ -58,11 +58,13 @@ def test_the_working_set_gives_the_whole_problems_optimum() -> None:
 def test_a_warm_start_from_an_earlier_solve_gives_the_same_optimum() -> None:
     hess, g, a, lba, uba, lbx, ubx, a_g, lo_g, hi_g = _problem(11)
     ws = WorkingSetQp(hess, 50.0)
-    ok, u = ws.solve(g, a, lba, uba, lbx, ubx, a_g, lo_g, hi_g)
+    guard = SoftRows(a_g, lo_g, hi_g)
+    ok, u = ws.solve(QpData(g, a, lba, uba, lbx, ubx), guard)
     assert ok and ws.last is not None
     g2 = g + np.random.default_rng(1).normal(scale=3.0, size=g.size)  # a nearby problem
-    ok2, u2 = ws.solve(g2, a, lba, uba, lbx, ubx, a_g, lo_g, hi_g, guess=u, start=ws.last)
-    ok3, u3 = WorkingSetQp(hess, 50.0).solve(g2, a, lba, uba, lbx, ubx, a_g, lo_g, hi_g)
+    qp2 = QpData(g2, a, lba, uba, lbx, ubx)
+    ok2, u2 = ws.solve(qp2, guard, guess=u, start=ws.last)
+    ok3, u3 = WorkingSetQp(hess, 50.0).solve(qp2, guard)
     assert ok2 and ok3
     np.testing.assert_allclose(u2, u3, rtol=0, atol=1e-7)
     assert np.max(np.abs(u2 - u)) > 1e-3  # the problems differ
@@ -75,15 +77,15 @@ def test_a_guard_that_cannot_be_met_is_priced_as_the_closed_form() -> None:
     h, g, w, lo = 2.0, 10.0, 3.0, 4.0
     ws = WorkingSetQp(np.array([[h]]), w)
     ok, u = ws.solve(
-        np.array([g]),
-        np.array([[1.0]]),
-        np.array([-1.0]),
-        np.array([1.0]),
-        np.array([-np.inf]),
-        np.array([np.inf]),
-        np.array([[1.0]]),
-        np.array([lo]),
-        np.array([np.inf]),
+        QpData(
+            np.array([g]),
+            np.array([[1.0]]),
+            np.array([-1.0]),
+            np.array([1.0]),
+            np.array([-np.inf]),
+            np.array([np.inf]),
+        ),
+        SoftRows(np.array([[1.0]]), np.array([lo]), np.array([np.inf])),
     )
     want = (w * (1.0 + lo) - g) / (h + w)
     assert -1.0 < want < lo
@@ -98,15 +100,15 @@ def test_a_guard_worth_more_than_its_price_takes_its_slack() -> None:
     h, g, lo = 2.0, 10.0, 4.0
     for w, want in ((3.0, (3.0 * (1.0 + lo) - g) / (h + 3.0)), (100.0, lo)):
         ok, u = WorkingSetQp(np.array([[h]]), w).solve(
-            np.array([g]),
-            np.zeros((0, 1)),
-            np.zeros(0),
-            np.zeros(0),
-            np.array([-np.inf]),
-            np.array([np.inf]),
-            np.array([[1.0]]),
-            np.array([lo]),
-            np.array([np.inf]),
+            QpData(
+                np.array([g]),
+                np.zeros((0, 1)),
+                np.zeros(0),
+                np.zeros(0),
+                np.array([-np.inf]),
+                np.array([np.inf]),
+            ),
+            SoftRows(np.array([[1.0]]), np.array([lo]), np.array([np.inf])),
         )
         assert ok
         np.testing.assert_allclose(u, [want], rtol=0, atol=1e-9)

@@ -79,7 +79,7 @@ import math
 import time
 from collections import deque
 from collections.abc import Iterator, MutableSequence, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
@@ -100,7 +100,9 @@ __all__ = [
     "MpcCueing",
     "MpcResult",
     "MpcState",
+    "QpData",
     "SoftGuardQp",
+    "SoftRows",
     "accel_rows",
     "block_ends",
     "build_model",
@@ -377,8 +379,6 @@ def resolve_reach(mp: MpcParams, limits: RigLimits) -> MpcParams:
     """
     if mp.ref_reach_use <= 0.0:
         return mp
-    from dataclasses import replace
-
     rn, rp, pn, pp = plan_tilt_reach(limits)
     c = GRAVITY_M_S2 * mp.ref_reach_use
     pos = list(mp.ref_limit)
@@ -819,9 +819,65 @@ def recording_arrays(f: ArrayLike, w: ArrayLike) -> tuple[NDArray[np.float64], N
     return fa, wa
 
 
+@dataclass(frozen=True, eq=False)
+class QpData:
+    """The data of one dense QP ``min 0.5 u' H u + g' u  s.t.  lba <= A u <= uba,  lbx <= u <=
+    ubx`` but its Hessian ``H``: the Hessian is constant per design and belongs to the solver
+    (:class:`QpSolver`, :class:`DaqpQp`, :class:`SoftGuardQp`, ``WorkingSetQp``: built once
+    for it), the rest changes from solve to solve. Shapes: ``n`` unknowns, ``r`` rows (``r``
+    may be 0); the arrays are held, not copied. A bound may be infinite (no bound).
+
+    Attributes
+    ----------
+    g : (n,) array
+        Gradient.
+    a : (r, n) array
+        Row matrix.
+    lba, uba : (r,) arrays
+        Lower and upper bounds of ``A u``.
+    lbx, ubx : (n,) arrays
+        Lower and upper bounds of ``u``.
+    """
+
+    g: NDArray[np.float64]
+    a: NDArray[np.float64]
+    lba: NDArray[np.float64]
+    uba: NDArray[np.float64]
+    lbx: NDArray[np.float64]
+    ubx: NDArray[np.float64]
+
+
+@dataclass(frozen=True, eq=False)
+class SoftRows:
+    """Soft one-sided rows (the sign guard) of a :class:`QpData`'s unknowns ``u``, each with a
+    slack ``s >= 0``: ``A_g u + s >= lo`` where ``lo`` is finite, else ``A_g u - s <= hi``
+    (:class:`SoftGuardQp`); ``k`` rows, in the caller's units (thresholds for the guard).
+
+    Attributes
+    ----------
+    a : (k, n) array
+        Row matrix ``A_g``.
+    lo, hi : (k,) arrays
+        Lower and upper bounds (a row's unused side infinite).
+    """
+
+    a: NDArray[np.float64]
+    lo: NDArray[np.float64]
+    hi: NDArray[np.float64]
+
+
+QpOutcome = tuple[bool, NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]
+"""``(ok, u, lam_a, lam_x)`` of a solve: ``ok`` false when the solver failed or returned
+non-finite numbers; the multipliers of the rows and of the variable bounds (casadi's sign
+convention: positive at an upper bound, negative at a lower one)."""
+
+Warm = tuple[Any, Any, Any]
+"""``(u, lam_a, lam_x)`` of a previous solve of the same sizes (a warm start)."""
+
+
 class QpSolver:
-    """A dense QP ``min 0.5 u' H u + g' u  s.t.  lba <= A u <= uba, lbx <= u <= ubx`` through a
-    casadi conic plugin, built once for fixed sizes."""
+    """A dense QP (:class:`QpData` with the Hessian ``hess``) through a casadi conic plugin,
+    built once for fixed sizes."""
 
     def __init__(self, plugin: str, hess: NDArray[np.float64], n_rows: int) -> None:
         import casadi
@@ -857,26 +913,17 @@ class QpSolver:
             opts,
         )
 
-    def solve(
-        self,
-        g: NDArray[np.float64],
-        a: NDArray[np.float64],
-        lba: NDArray[np.float64],
-        uba: NDArray[np.float64],
-        lbx: NDArray[np.float64],
-        ubx: NDArray[np.float64],
-        warm: tuple[Any, Any, Any] | None = None,
-    ) -> tuple[bool, NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
-        """``(ok, u, lam_a, lam_x)``; ``ok`` false when the solver failed or returned
-        non-finite numbers."""
+    def solve(self, qp: QpData, warm: Warm | None = None) -> QpOutcome:
+        """``(ok, u, lam_a, lam_x)`` (:data:`QpOutcome`) of ``qp``; ``warm``: a previous
+        solve's ``(u, lam_a, lam_x)``."""
         args: dict[str, Any] = {
             "h": self.h,
-            "g": g,
-            "a": self._ca.DM(a),
-            "lba": lba,
-            "uba": uba,
-            "lbx": lbx,
-            "ubx": ubx,
+            "g": qp.g,
+            "a": self._ca.DM(qp.a),
+            "lba": qp.lba,
+            "uba": qp.uba,
+            "lbx": qp.lbx,
+            "ubx": qp.ubx,
         }
         if warm is not None and warm[0] is not None:
             args["x0"], args["lam_a0"], args["lam_x0"] = warm
@@ -913,23 +960,14 @@ class DaqpQp:
         self.n = int(hess.shape[0])
         self.n_rows = n_rows
 
-    def solve(
-        self,
-        g: NDArray[np.float64],
-        a: NDArray[np.float64],
-        lba: NDArray[np.float64],
-        uba: NDArray[np.float64],
-        lbx: NDArray[np.float64],
-        ubx: NDArray[np.float64],
-        warm: tuple[Any, Any, Any] | None = None,
-    ) -> tuple[bool, NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
+    def solve(self, qp: QpData, warm: Warm | None = None) -> QpOutcome:
         """``(ok, u, lam_a, lam_x)`` as :meth:`QpSolver.solve`; ``warm`` is ``(u, lam_a,
         lam_x)`` of a previous solve of the same sizes (only its multipliers are used)."""
         import daqp
 
         n = self.n
-        bu = np.concatenate([ubx, uba])
-        bl = np.concatenate([lbx, lba])
+        bu = np.concatenate([qp.ubx, qp.uba])
+        bl = np.concatenate([qp.lbx, qp.lba])
         sense = np.zeros(n + self.n_rows, dtype=np.int32)
         if warm is not None and warm[1] is not None and warm[2] is not None:
             lam = np.concatenate([warm[2], warm[1]])
@@ -937,8 +975,8 @@ class DaqpQp:
                 sense[lam > 0.0] = 1  # active at its upper bound
                 sense[lam < 0.0] = 3  # active at its lower bound
         fail = (False, np.zeros(n), np.zeros(self.n_rows), np.zeros(n))
-        gv = np.ascontiguousarray(g, dtype=float)
-        am = np.ascontiguousarray(a, dtype=float)
+        gv = np.ascontiguousarray(qp.g, dtype=float)
+        am = np.ascontiguousarray(qp.a, dtype=float)
         for start in (sense, None) if np.any(sense) else (sense,):
             if start is None:  # a warm start that does not fit this problem: once cold
                 start = np.zeros_like(sense)
@@ -988,8 +1026,8 @@ def slack_terms(
 
 
 class SoftGuardQp:
-    """:class:`QpSolver` plus soft one-sided rows (the sign guard), each with a slack
-    ``s >= 0`` priced ``weight (s + s^2 / 2)``::
+    """:class:`QpSolver` plus soft one-sided rows (the sign guard, :class:`SoftRows`), each
+    with a slack ``s >= 0`` priced ``weight (s + s^2 / 2)``::
 
         min 0.5 u' H u + g' u + weight sum(s + s^2 / 2)
         s.t. lba <= A u <= uba,  lbx <= u <= ubx,
@@ -1021,48 +1059,26 @@ class SoftGuardQp:
             else QpSolver(plugin, h, n_rows + n_guard)
         )
 
-    def solve(
-        self,
-        g: NDArray[np.float64],
-        a: NDArray[np.float64],
-        lba: NDArray[np.float64],
-        uba: NDArray[np.float64],
-        lbx: NDArray[np.float64],
-        ubx: NDArray[np.float64],
-        a_guard: NDArray[np.float64],
-        lo_guard: NDArray[np.float64],
-        hi_guard: NDArray[np.float64],
-    ) -> tuple[bool, NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
-        """``(ok, u, lam_a, lam_x)`` of the inputs ``u`` (slacks dropped)."""
-        ok, x, la, lx = self.solve_full(g, a, lba, uba, lbx, ubx, a_guard, lo_guard, hi_guard)
+    def solve(self, qp: QpData, guard: SoftRows) -> QpOutcome:
+        """``(ok, u, lam_a, lam_x)`` of the inputs ``u`` (slacks dropped) of ``qp`` with the
+        soft rows ``guard``."""
+        ok, x, la, lx = self.solve_full(qp, guard)
         return ok, x[: self.n], la[: self.n_rows], lx[: self.n]
 
-    def solve_full(
-        self,
-        g: NDArray[np.float64],
-        a: NDArray[np.float64],
-        lba: NDArray[np.float64],
-        uba: NDArray[np.float64],
-        lbx: NDArray[np.float64],
-        ubx: NDArray[np.float64],
-        a_guard: NDArray[np.float64],
-        lo_guard: NDArray[np.float64],
-        hi_guard: NDArray[np.float64],
-        warm: tuple[Any, Any, Any] | None = None,
-    ) -> tuple[bool, NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
+    def solve_full(self, qp: QpData, guard: SoftRows, warm: Warm | None = None) -> QpOutcome:
         """``(ok, z, lam_a, lam_x)`` of the whole problem: ``z = [u, s]`` (inputs, slacks),
         ``lam_a`` of ``[A; guard rows]``, ``lam_x`` of ``z``'s bounds; ``warm`` is such a
         triple of a previous solve (a warm start through the guard: the slacks' and the guard
         rows' multipliers are part of the active set it passes on)."""
         ng = self.n_guard
-        sigma = np.where(np.isfinite(lo_guard), 1.0, -1.0)
+        sigma = np.where(np.isfinite(guard.lo), 1.0, -1.0)
         a_aug = np.zeros((self.n_rows + ng, self.n + ng))
-        a_aug[: self.n_rows, : self.n] = a
-        a_aug[self.n_rows :, : self.n] = a_guard
+        a_aug[: self.n_rows, : self.n] = qp.a
+        a_aug[self.n_rows :, : self.n] = guard.a
         a_aug[self.n_rows :, self.n :] = np.diag(sigma)
-        g_s, lbx_s, ubx_s = slack_terms(g, lbx, ubx, self.weight, ng)
-        lba_s, uba_s = np.concatenate([lba, lo_guard]), np.concatenate([uba, hi_guard])
-        return self._qp.solve(g_s, a_aug, lba_s, uba_s, lbx_s, ubx_s, warm)
+        g_s, lbx_s, ubx_s = slack_terms(qp.g, qp.lbx, qp.ubx, self.weight, ng)
+        lba_s, uba_s = np.concatenate([qp.lba, guard.lo]), np.concatenate([qp.uba, guard.hi])
+        return self._qp.solve(QpData(g_s, a_aug, lba_s, uba_s, lbx_s, ubx_s), warm)
 
 
 def _lin_at(
@@ -1147,8 +1163,6 @@ class MpcCueing:
         object.__setattr__(self, "classical", classical)
         prior = np.asarray(mp.w_prior)
         if np.any(prior > 0.0):  # w_pose |p|^2 + wc |p - c|^2: the quadratic part of both
-            from dataclasses import replace
-
             wp = [float(v) for v in np.asarray(mp.w_pose) + prior]
             both = replace(mp, w_pose=(wp[0], wp[1], wp[2], wp[3], wp[4], wp[5]))
             model = build_model(self.params.dofs, both, fs)
@@ -1400,6 +1414,7 @@ class MpcCueing:
             fixed_sel.append(eye12[boxed])
             fixed_bound.append(np.tile(np.asarray(self.mpc.trans_limit_m)[boxed], nb))
         lbx, ubx = input_bounds(m, lim, n_u)
+        lbx.flags.writeable = ubx.flags.writeable = False  # every sample's QP holds them
         nl = lim.q_mid.shape[0]
         guard = self._guard_channels()
         thr = m.thresholds[guard]
@@ -1425,18 +1440,25 @@ class MpcCueing:
         return pre
 
     def qp_matrices(
-        self, x0: NDArray[np.float64], d: NDArray[np.float64]
-    ) -> tuple[NDArray[np.float64], ...]:
-        """``(g, A, lba, uba, lbx, ubx)`` of this sample's QP (the Hessian is ``cond.hess``).
+        self,
+        x0: NDArray[np.float64],
+        d: NDArray[np.float64],
+        pose_c: Sequence[float] | None = None,
+    ) -> QpData:
+        """This sample's QP (the Hessian is ``cond.hess``), from state ``x0`` ``(nx,)`` and
+        the vehicle's motion ``d`` ``(6,)``; with ``pose_c`` (the classical fallback's pose,
+        m and rad) and ``w_prior``, the gradient has the prior's linear part too.
 
         Rows, each kind block-major (block end ``b`` outer): leg strokes, leg speeds, leg
         accelerations, the roll/pitch rates, the combined-tilt octagon, the translation box
-        (``trans_limit_m``)."""
+        (``trans_limit_m``). ``lbx``, ``ubx`` are the design's own arrays (read-only)."""
         pre = self._parts()
         lim = self.limits
         m = self.model
         xd = np.concatenate([x0, d])
         g = pre.g_xd @ xd
+        if self._prior_g is not None and pose_c is not None:
+            g = g + self._prior_g @ np.asarray(pose_c, dtype=float)
         pose0 = x0[:6]
         q0, jac = _lin_at(lim, pose0)
         free = pre.free_xd @ xd  # (nb, 12)
@@ -1466,7 +1488,7 @@ class MpcCueing:
                 pre.fixed_bound - np.concatenate([np.zeros(0), *ff]),
             ]
         )
-        return g, a_mat, lba, uba, pre.lbx.copy(), pre.ubx.copy()
+        return QpData(g, a_mat, lba, uba, pre.lbx, pre.ubx)
 
     def _solve(
         self,
@@ -1477,9 +1499,7 @@ class MpcCueing:
         pose_c: Sequence[float] | None = None,
     ) -> NDArray[np.float64] | None:
         t0 = time.perf_counter()
-        g, a_mat, lba, uba, lbx, ubx = self.qp_matrices(state.x, d)
-        if self._prior_g is not None and pose_c is not None:
-            g = g + self._prior_g @ np.asarray(pose_c, dtype=float)
+        qp = self.qp_matrices(state.x, d, pose_c)
         warm = (state.warm_u, state.warm_lam_a, state.warm_lam_x)
         if self._qp_guard is not None and d_vehicle is not None:
             ga, glo, ghi = self.guard_rows(state, d_vehicle)
@@ -1488,11 +1508,9 @@ class MpcCueing:
                 ga = np.concatenate([ga, fa])
                 glo = np.concatenate([glo, flo])
                 ghi = np.concatenate([ghi, fhi])
-            ok, u, la, lx = self._qp_guard.solve_full(
-                g, a_mat, lba, uba, lbx, ubx, ga, glo, ghi, warm
-            )
+            ok, u, la, lx = self._qp_guard.solve_full(qp, SoftRows(ga, glo, ghi), warm)
         else:
-            ok, u, la, lx = self._qp.solve(g, a_mat, lba, uba, lbx, ubx, warm)
+            ok, u, la, lx = self._qp.solve(qp, warm)
         elapsed = time.perf_counter() - t0
         state.solves += 1
         state.last_ms = elapsed * 1e3

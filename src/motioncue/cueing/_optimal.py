@@ -59,9 +59,12 @@ from ._mpc import (
     LinearModel,
     MpcResult,
     MpcState,
+    QpData,
+    QpOutcome,
     QpSolver,
     RigLimits,
     SoftGuardQp,
+    SoftRows,
     accel_rows,
     build_model,
     fallback_accel,
@@ -144,34 +147,27 @@ class WorkingSetQp:
 
     def solve(
         self,
-        g: NDArray[np.float64],
-        a: NDArray[np.float64],
-        lba: NDArray[np.float64],
-        uba: NDArray[np.float64],
-        lbx: NDArray[np.float64],
-        ubx: NDArray[np.float64],
-        a_guard: NDArray[np.float64] | None = None,
-        lo_guard: NDArray[np.float64] | None = None,
-        hi_guard: NDArray[np.float64] | None = None,
+        qp: QpData,
+        guard: SoftRows | None = None,
         guess: NDArray[np.float64] | None = None,
         start: tuple[NDArray[np.bool_], NDArray[np.float64]] | None = None,
     ) -> tuple[bool, NDArray[np.float64]]:
         """``(ok, u)``: the optimum of ``0.5 u' H u + g' u + weight sum(s + s^2 / 2)`` over
-        ``lba <= A u <= uba``, ``lbx <= u <= ubx`` and the guard rows (``A_g u + s >= lo_g``
-        where ``lo_g`` is finite, else ``A_g u - s <= hi_g``; none without ``a_guard``);
+        ``qp``'s rows and bounds and the soft rows ``guard`` (``A_g u + s >= lo_g`` where
+        ``lo_g`` is finite, else ``A_g u - s <= hi_g``; none without ``guard``);
         ``guess`` ``(n,)``: a plan whose violated rows start the working set (default zero);
         ``start``: rows (a mask of ``[A; A_g]``) to start with too and their multipliers (a
         warm start, e.g. :attr:`last` of a similar problem). The final working set and its
         multipliers are kept in :attr:`last` (its active rows only)."""
         n = self.n
-        if a_guard is None or lo_guard is None or hi_guard is None:
-            a_guard = np.zeros((0, n))
-            lo_guard = hi_guard = np.zeros(0)
-        a_all = np.concatenate([a, a_guard], axis=0)
-        lo_all = np.concatenate([lba, lo_guard])
-        hi_all = np.concatenate([uba, hi_guard])
+        if guard is None:
+            guard = SoftRows(np.zeros((0, n)), np.zeros(0), np.zeros(0))
+        a_all = np.concatenate([qp.a, guard.a], axis=0)
+        lo_all = np.concatenate([qp.lba, guard.lo])
+        hi_all = np.concatenate([qp.uba, guard.hi])
+        whole = QpData(qp.g, a_all, lo_all, hi_all, qp.lbx, qp.ubx)  # hard and soft rows
         soft = np.zeros(a_all.shape[0], dtype=bool)
-        soft[a.shape[0] :] = True
+        soft[qp.a.shape[0] :] = True
         live = np.isfinite(lo_all) | np.isfinite(hi_all)
         tol_lo = self.tol * (1.0 + np.abs(np.where(np.isfinite(lo_all), lo_all, 0.0)))
         tol_hi = self.tol * (1.0 + np.abs(np.where(np.isfinite(hi_all), hi_all, 0.0)))
@@ -189,9 +185,7 @@ class WorkingSetQp:
             lam_rows = np.where(work, start[1], 0.0)
         slack = np.zeros_like(work)  # the guard rows given their slack so far
         for _ in range(self.max_rounds):
-            ok, u, lam_rows, lam_u = self._relaxed(
-                g, a_all, lo_all, hi_all, lbx, ubx, soft & slack, work, lam_rows, lam_u
-            )
+            ok, u, lam_rows, lam_u = self._relaxed(whole, soft & slack, work, lam_rows, lam_u)
             hard = work & soft & ~slack
             if not ok:
                 if not hard.any():
@@ -207,48 +201,54 @@ class WorkingSetQp:
                 self.last = (work & (lam_rows != 0.0), lam_rows)
                 return True, u
             work |= more
-        ok, u, lam_rows, _ = self._relaxed(
-            g, a_all, lo_all, hi_all, lbx, ubx, soft, live, np.zeros(a_all.shape[0]), np.zeros(n)
-        )
+        ok, u, lam_rows, _ = self._relaxed(whole, soft, live, np.zeros(a_all.shape[0]), np.zeros(n))
         self.last = (live & (lam_rows != 0.0), lam_rows) if ok else None
         return ok, u
 
     def _relaxed(
         self,
-        g: NDArray[np.float64],
-        a_all: NDArray[np.float64],
-        lo_all: NDArray[np.float64],
-        hi_all: NDArray[np.float64],
-        lbx: NDArray[np.float64],
-        ubx: NDArray[np.float64],
+        whole: QpData,
         soft: NDArray[np.bool_],
         work: NDArray[np.bool_],
         lam_rows: NDArray[np.float64],
         lam_u: NDArray[np.float64],
-    ) -> tuple[bool, NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
-        """The problem on the rows ``work``, warm-started from the multipliers ``lam_rows``
-        (by row of the whole problem) and ``lam_u``; returns ``(ok, u, lam_rows, lam_u)``."""
+    ) -> QpOutcome:
+        """The problem ``whole`` (every row, hard and soft) on the rows ``work``, those in
+        ``soft`` with their slack, warm-started from the multipliers ``lam_rows`` (by row of
+        ``whole``) and ``lam_u``; returns ``(ok, u, lam_rows, lam_u)``."""
         n = self.n
         rows = np.flatnonzero(work)
         srows = rows[soft[rows]]
         k = srows.size
         a_w = np.zeros((rows.size, n + k))
-        a_w[:, :n] = a_all[rows]
-        lo_w, hi_w = lo_all[rows].copy(), hi_all[rows].copy()
+        a_w[:, :n] = whole.a[rows]
+        lo_w, hi_w = whole.lba[rows], whole.uba[rows]
         pos = np.flatnonzero(soft[rows])
         sigma = np.where(np.isfinite(lo_w[pos]), 1.0, -1.0)
         a_w[pos, n + np.arange(k)] = sigma
         h = slack_hessian(self.hess, self.weight, k) if k else self.hess
         lam_x = np.concatenate([lam_u, np.zeros(k)])
         self.solves += 1
-        g_s, lbx_s, ubx_s = slack_terms(g, lbx, ubx, self.weight, k)
+        g_s, lbx_s, ubx_s = slack_terms(whole.g, whole.lbx, whole.ubx, self.weight, k)
         ok, z, la, lx = DaqpQp(h, rows.size).solve(
-            g_s, a_w, lo_w, hi_w, lbx_s, ubx_s, warm=(None, lam_rows[rows], lam_x)
+            QpData(g_s, a_w, lo_w, hi_w, lbx_s, ubx_s), warm=(None, lam_rows[rows], lam_x)
         )
-        out = np.zeros(a_all.shape[0])
+        out = np.zeros(whole.a.shape[0])
         if ok:
             out[rows] = la
         return ok, z[:n], out, lx[:n]
+
+
+@dataclass(frozen=True, eq=False)
+class _WindowQp:
+    """One window's QP (:meth:`OptimalCueing._window_qp`) and the free motion it was built
+    from (``nb`` block ends, ``nU`` inputs, ``nx`` states, ``n`` samples in the window)."""
+
+    qp: QpData  # gradient, rows (legs, tilt rate, octagon), bounds; the Hessian is _hess
+    pose_free: NDArray[np.float64]  # (nb, 6): pose at the block ends without input
+    pose_gain: NDArray[np.float64]  # (nb, 6, nU): pose at the block ends from the inputs
+    x_ends: NDArray[np.float64]  # (nb, nx): free state at the block ends
+    xf: NDArray[np.float64]  # (n + 1, nx): free state over the window
 
 
 @dataclass(frozen=True, eq=False)
@@ -523,9 +523,9 @@ class OptimalCueing:
         d: NDArray[np.float64],
         about: NDArray[np.float64] | None = None,
         against: NDArray[np.bool_] | None = None,
-    ) -> tuple[NDArray[np.float64], ...]:
-        """Gradient, constraint matrix and bounds of one window from state ``x0`` with vehicle
-        motion ``d`` ``(n_window + 1, 6)``; the legs linearised about neutral or, with
+    ) -> _WindowQp:
+        """The QP (gradient, constraint matrix and bounds) of one window from state ``x0``
+        with vehicle motion ``d`` ``(n_window + 1, 6)``; the legs linearised about neutral or, with
         ``about`` ``(blocks, 6)``, about those poses at the block ends; ``against``
         ``(blocks,)``: the block ends whose combined tilt takes the tighter bound of
         ``tilt_fz_use_against``."""
@@ -584,11 +584,13 @@ class OptimalCueing:
         lba = np.concatenate([np.asarray(v).reshape(-1) for v in lo])
         uba = np.concatenate([np.asarray(v).reshape(-1) for v in hi])
         lbx, ubx = input_bounds(m, lim, nb * m.nu)
-        return g, a_mat, lba, uba, lbx, ubx, xf[ends, 0:6], self._gam[ends, 0:6], xf[ends], xf
+        return _WindowQp(
+            QpData(g, a_mat, lba, uba, lbx, ubx), xf[ends, 0:6], self._gam[ends, 0:6], xf[ends], xf
+        )
 
     def _solve_window(
         self,
-        qp: tuple[NDArray[np.float64], ...],
+        win: _WindowQp,
         xv_ends: NDArray[np.float64],
         sign_ends: NDArray[np.float64],
         use_guard: bool,
@@ -596,14 +598,14 @@ class OptimalCueing:
         guess: NDArray[np.float64] | None = None,
         start: tuple[NDArray[np.bool_], NDArray[np.float64]] | None = None,
     ) -> tuple[bool, NDArray[np.float64]]:
-        """Solve one window's QP ``qp`` (from :meth:`_window_qp`), with the sign-guard rows
+        """Solve one window's QP ``win`` (from :meth:`_window_qp`), with the sign-guard rows
         when ``use_guard``; ``fz`` (from :meth:`_fz_rows`): the fz guard rows with the tilt's
         loss of vertical force. On the DAQP route the QP is solved on a working set of its
         rows (:class:`WorkingSetQp`) started from the rows ``guess`` violates."""
-        g, a_mat, lba, uba, lbx, ubx = qp[:6]
+        qp = win.qp
         ws = self._ws
         if use_guard and self._qp_guard is not None:
-            glo, ghi = self._guard_bounds(qp[8], xv_ends, sign_ends)
+            glo, ghi = self._guard_bounds(win.x_ends, xv_ends, sign_ends)
             a_guard = self._a_guard
             if fz is not None:
                 guard = self._guard_channels()
@@ -614,13 +616,14 @@ class OptimalCueing:
                 gz = self.mpc.sign_guard[2]
                 glo[iz::ng] = np.where(fz[2] > 0.0, -gz - fz[1], -np.inf)
                 ghi[iz::ng] = np.inf
+            soft = SoftRows(a_guard, glo, ghi)
             if ws is not None and isinstance(self._qp_guard._qp, DaqpQp):
-                return ws.solve(g, a_mat, lba, uba, lbx, ubx, a_guard, glo, ghi, guess, start)
-            ok, u, _, _ = self._qp_guard.solve(g, a_mat, lba, uba, lbx, ubx, a_guard, glo, ghi)
+                return ws.solve(qp, soft, guess, start)
+            ok, u, _, _ = self._qp_guard.solve(qp, soft)
         elif ws is not None and isinstance(self._qp, DaqpQp):
-            return ws.solve(g, a_mat, lba, uba, lbx, ubx, guess=guess, start=start)
+            return ws.solve(qp, guess=guess, start=start)
         else:
-            ok, u, _, _ = self._qp.solve(g, a_mat, lba, uba, lbx, ubx)
+            ok, u, _, _ = self._qp.solve(qp)
         return ok, u
 
     def _row_groups(self) -> list[int]:
@@ -789,7 +792,7 @@ class OptimalCueing:
             use_up: NDArray[np.bool_] | None = None
             for use_guard, first, use_up in tries:
                 qp = self._window_qp(st.x, d, first, use_up)
-                p_free, g_end = qp[6], qp[7]
+                p_free, g_end = qp.pose_free, qp.pose_gain
                 ok, u = self._solve_window(
                     qp, xv_e, sg, use_guard, guess=u_prev, start=self._shifted(w_prev, shift)
                 )
@@ -799,7 +802,7 @@ class OptimalCueing:
                 about = p_free + g_end @ u
                 qp2 = self._window_qp(st.x, d, about, use_up)
                 fz = (
-                    self._fz_rows(qp2[9], u, z_fz, vz_all[idx] * (idx_raw < n))
+                    self._fz_rows(qp2.xf, u, z_fz, vz_all[idx] * (idx_raw < n))
                     if fz_on and use_guard
                     else None
                 )
