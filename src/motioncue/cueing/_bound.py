@@ -385,9 +385,9 @@ class _Rotation:
         return lo, hi
 
     def perceived(self, tau: NDArray[np.float64], fs: float) -> NDArray[np.float64]:
-        """The platform's perceived rate of the tilt term ``tau`` (the pose held before the
-        first sample: no rate there)."""
-        w = np.concatenate([[0.0], np.diff(tau)]) * (self.sign * fs)
+        """The platform's perceived rate of the tilt term ``tau``, from the neutral pose at
+        rest before the first sample (as the otolith: the first sample's tilt is a step)."""
+        w = np.diff(tau, prepend=0.0) * (self.sign * fs)
         return self.canal.apply(w, fs)
 
 
@@ -517,10 +517,8 @@ def _rot_rows(
         diags = [np.full(n - j, float(c[j])) for j in range(3) if j < n]
         return sp.diags(diags, [-j for j in range(len(diags))], shape=(n, n), format="csr")
 
-    main = np.ones(n)
-    main[0] = 0.0
-    dw = sp.diags([main, -np.ones(n - 1)], [0, -1], shape=(n, n), format="csr")
-    dw = dw * (ch.rot.sign * ch.fs)  # the rate: 0 at the first sample, then fs (tau[k] - tau[k-1])
+    dw = sp.diags([np.ones(n), -np.ones(n - 1)], [0, -1], shape=(n, n), format="csr")
+    dw = dw * (ch.rot.sign * ch.fs)  # the rate fs (tau[k] - tau[k-1]), from tau[-1] = 0
     t_blocks = [-band(sos[0, :3]) @ dw] + [sp.csr_matrix((n, n))] * (m - 1)
     q_rows = []
     for j in range(m):
