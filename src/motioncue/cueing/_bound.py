@@ -93,6 +93,30 @@ The perceived motion is the model set's otolith ``H`` (linear, from rest). Then
   ``z`` interpolated plus the part of ``u`` the decimated problem cannot see, the
   certificates at the full rate.
 
+No false rotation cue
+---------------------
+``cue_bound(..., w_vehicle=w, forbid_false_rotation=True)`` bounds the smaller convex set
+``S'`` of the motions of ``S`` that give no spurious and no reversed rotation cue on the
+channel's tilt axis (pitch for fx, roll for fy). The platform's rate on that axis is, to first
+order in the angles as above, ``sign * (tau[k] - tau[k-1]) fs`` (``tau[-1] = 0``: from the
+neutral pose at rest, as the otolith; ``sign = -1`` for fx, ``tau = -sin(pitch)``, ``+1`` for
+fy), and its perception ``r = C (rate)`` through the model set's canal on that axis (linear,
+from rest); with ``w_v = C w`` the vehicle's perceived rate on the axis and ``thr`` the canal
+threshold::
+
+    -thr <= r[k]         unless w_v[k] < -thr     (no spurious cue, no reversal)
+            r[k] <= thr  unless w_v[k] > thr
+
+(both where the vehicle's perceived rate is below threshold). ``C`` enters every programme
+as its second-order sections: one vector of extra variables per section, tied to ``tau`` and
+to each other by banded equalities (exactly :func:`scipy.signal.sosfilt` from rest), the last
+one ``r`` bounded as above. The QP, the gain LP and the cone programme get these rows, and
+the certificates are the same with ``sigma_S'`` (the support LP with the rows) in place of
+``sigma_S``, so every figure stays a certified bound, now over ``S'``. ``S'`` is not
+symmetric (the rows follow the vehicle's sign), so ``b``'s two cuts are two support LPs.
+``0`` is in ``S'`` and ``S'`` is convex, so a motion is brought into it by scaling down
+(the primals are checked at the full rate).
+
 The moving-average bound of ``tests/test_mpc_acceptance.py`` (``|M s| <= 2 v_max / T +
 g sin(tilt_max)``) is one dual certificate of this family; the QP's is the best.
 
@@ -580,9 +604,9 @@ def _support(ch: _Channel, c: NDArray[np.float64], d2: sparray) -> float:
             *([] if poly is None else [poly[1]]),
         ]
     )
-    bounds: list[tuple[float | None, float | None]] = [(-ch.stroke, ch.stroke)] * n + [
-        (-ch.tilt, ch.tilt)
-    ] * n
+    box_p: tuple[float | None, float | None] = (-ch.stroke, ch.stroke)
+    box_t: tuple[float | None, float | None] = (-ch.tilt, ch.tilt)
+    bounds = [box_p] * n + [box_t] * n
     extra: dict[str, object] = {}
     rot = _rot_rows(ch, n)
     if rot is not None:  # the canal's rows over extra variables
@@ -783,12 +807,10 @@ def _gain_lp(
             format="csr",
         )  # fmt: skip
         b_ub = np.concatenate([b_ub[: b_ub.size - idx.size], poly[1], b_ub[b_ub.size - idx.size :]])
-    bounds = (
-        [(-ch.stroke, ch.stroke)] * n
-        + [(-ch.tilt, ch.tilt)] * n
-        + [(None, None)] * (nx * n)
-        + [(None, None)] * n
-    )
+    box_p: tuple[float | None, float | None] = (-ch.stroke, ch.stroke)
+    box_t: tuple[float | None, float | None] = (-ch.tilt, ch.tilt)
+    free: tuple[float | None, float | None] = (None, None)
+    bounds = [box_p] * n + [box_t] * n + [free] * ((nx + 1) * n)
     cost = np.concatenate([np.zeros((2 + nx) * n), -v])
     rot = _rot_rows(ch, n)
     if rot is not None:  # the canal's rows over extra variables after y
