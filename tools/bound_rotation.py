@@ -1,7 +1,7 @@
 """The physical bound without false rotation cues, per drive, beside the presets' shares.
 
 Usage: PYTHONPATH=src python tools/bound_rotation.py DRIVE [DRIVE ...] [--platform P]
-       [--controller C] [--presets A B ...]
+       [--controller C] [--presets A B ...] [--corr-cuts K]
 
 For each drive (configs/recordings/DRIVE.csv at 100 Hz) prints ``cue_bound(...,
 forbid_false_rotation=True)`` on the platform's coupled reach (as ``compare --bound``): the
@@ -36,6 +36,7 @@ def main() -> None:
     ap.add_argument("--platform", default="stewart6-linear")
     ap.add_argument("--controller", default="mbox6")
     ap.add_argument("--presets", nargs="*", default=list(PRESETS))
+    ap.add_argument("--corr-cuts", type=int, default=2, help="cue_bound's corr_cuts (compare's)")
     args = ap.parse_args()
     fs = 100.0
     pl = load_platform(args.platform)
@@ -49,7 +50,7 @@ def main() -> None:
         t = time.process_time()
         b = cue_bound(np.asarray(uni.f, dtype=float), fs, reach,
                       w_vehicle=np.asarray(uni.w, dtype=float),
-                      forbid_false_rotation=True)  # fmt: skip
+                      forbid_false_rotation=True, corr_cuts=args.corr_cuts)  # fmt: skip
         cpu = time.process_time() - t
         print(f"{drive} no-false-rotation bound: share<= {b.share_max_at_corr.round(3)} "
               f"found {b.share_at_corr_primal.round(3)} zero-mean<= "
