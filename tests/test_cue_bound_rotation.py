@@ -294,3 +294,30 @@ def test_no_preset_without_false_rotation_cues_beats_it() -> None:
             if row[f"reversal_s_{a}"] == 0.0:
                 assert row[f"gain_{a}"] <= b.gain_max[i]
     assert checked >= 3  # no tilt: both channels; slow tilt: fx at least
+
+
+def test_an_lp_failing_with_the_rows_falls_back_to_the_larger_set(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """HiGHS stopped on one support LP with the canal rows (status 4 with every method, the
+    whole lap): the support of the larger set (without the rows) is an upper bound on the
+    smaller set's, so the certificates stay valid; the fallback is counted."""
+    from types import SimpleNamespace
+
+    import motioncue.cueing._bound as bound
+
+    real = bound._linprog
+
+    def failing(c: np.ndarray, **kw: object) -> object:
+        rates = {float(THR[3]), float(THR[4])}  # the canal rows' variables are bounded so
+        if any(isinstance(bd, tuple) and bd[1] in rates for bd in kw.get("bounds", ())):  # type: ignore[attr-defined]
+            return SimpleNamespace(status=4, message="HiGHS Status 4: Solve error")
+        return real(c, **kw)
+
+    f, w = _drive()
+    free = cue_bound(f, FS, REACH, corr_min=None)
+    monkeypatch.setattr(bound, "_linprog", failing)
+    b = cue_bound(f, FS, REACH, corr_min=None, w_vehicle=w, forbid_false_rotation=True)
+    assert int(b.solver["rotation_fallbacks"]) >= 3
+    np.testing.assert_allclose(b.gain_max_any, free.gain_max_any, rtol=1e-9)
+    np.testing.assert_allclose(b.gain_max, free.gain_max, rtol=1e-9)

@@ -53,6 +53,7 @@ def main() -> None:
                       forbid_false_rotation=True, corr_cuts=args.corr_cuts)  # fmt: skip
         cpu = time.process_time() - t
         print(f"{drive} no-false-rotation bound: share<= {b.share_max_at_corr.round(3)} "
+              f"(support LPs replaced by the larger set's: {b.solver['rotation_fallbacks']}) "
               f"found {b.share_at_corr_primal.round(3)} zero-mean<= "
               f"{b.share_max_at_corr_zero_mean.round(3)} gain<= {b.gain_max.round(3)} "
               f"err>= {b.error_rms.round(3)} (fx, fy) cpu {cpu:.1f} s", flush=True)  # fmt: skip

@@ -130,7 +130,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -567,6 +567,11 @@ def _rot_var_bounds(ch: _Channel, n: int) -> list[tuple[float | None, float | No
     return [(None, None)] * ((m - 1) * n) + last
 
 
+_ROT_FALLBACKS = [0]
+"""Support LPs with the no-false-rotation rows that HiGHS could not solve (every method),
+replaced by the support of the larger set without them (``CueBound.solver``)."""
+
+
 def _support(ch: _Channel, c: NDArray[np.float64], d2: sparray) -> float:
     """sigma_S(c) = max_{s in S} c's (two LPs, translation and tilt; one joint LP when the
     channel has a coupled reach)."""
@@ -619,6 +624,10 @@ def _support(ch: _Channel, c: NDArray[np.float64], d2: sparray) -> float:
         cost = np.concatenate([cost, np.zeros(nq)])
         bounds += _rot_var_bounds(ch, n)
     res = _linprog(cost, A_ub=a_ub, b_ub=b_ub, bounds=bounds, **extra)
+    if res.status != 0 and ch.rot is not None:
+        # S' is in S: sigma_S >= sigma_S', so every certificate stays valid (looser)
+        _ROT_FALLBACKS[0] += 1
+        return _support(replace(ch, rot=None), c, d2)
     if res.status != 0:
         raise ConfigError(f"the bound's support LP failed: {res.message}")
     return float(-res.fun)
@@ -826,6 +835,10 @@ def _gain_lp(
         cost = np.concatenate([cost, np.zeros(nq)])
         bounds = bounds + _rot_var_bounds(ch, n)
     res = _linprog(cost, A_ub=a_ub, b_ub=b_ub, A_eq=a_eq, b_eq=b_eq, bounds=bounds)
+    if res.status != 0 and rot is not None:
+        # the larger set's LP: its maximum is above, its multipliers still a certificate
+        _ROT_FALLBACKS[0] += 1
+        return _gain_lp(replace(ch, rot=None), v, thr, d2)
     if res.status != 0:
         raise ConfigError(f"the bound's gain LP failed: {res.message}")
     y = np.asarray(res.x[(2 + nx) * n : (3 + nx) * n], dtype=float)
@@ -861,7 +874,6 @@ def _decimated(
     ch: _Channel, d: NDArray[np.float64], k: int
 ) -> tuple[_Channel, NDArray[np.float64], sparray]:
     """The channel at fs / k with the vehicle's force averaged over blocks of k samples."""
-    from dataclasses import replace
 
     n = d.shape[0]
     m = n // k
@@ -1365,6 +1377,7 @@ def cue_bound(
                 f"w_vehicle must be a finite array shaped like f_vehicle {f.shape}; got {w.shape}"
             )
     d2 = _second_difference(n, fs_hz)
+    _ROT_FALLBACKS[0] = 0
     at_corr: list[tuple[float, float, float, float]] = []
     k = max(1, math.ceil(n / primal_samples))
     res: dict[str, list[float]] = {key: [] for key in ("err", "gmax", "gany", "share", "vrms")}
@@ -1417,6 +1430,7 @@ def cue_bound(
             "socp": "ipopt (casadi)",
             "decimation": str(k),
             "coupling": "none" if reach.coupling is None else "translation-tilt polygons",
+            "rotation_fallbacks": str(_ROT_FALLBACKS[0]),
         },
         rotation_cues="allowed" if w is None else "forbidden",
     )
