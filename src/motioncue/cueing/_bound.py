@@ -93,6 +93,30 @@ The perceived motion is the model set's otolith ``H`` (linear, from rest). Then
   ``z`` interpolated plus the part of ``u`` the decimated problem cannot see, the
   certificates at the full rate.
 
+No false rotation cue
+---------------------
+``cue_bound(..., w_vehicle=w, forbid_false_rotation=True)`` bounds the smaller convex set
+``S'`` of the motions of ``S`` that give no spurious and no reversed rotation cue on the
+channel's tilt axis (pitch for fx, roll for fy). The platform's rate on that axis is, to first
+order in the angles as above, ``sign * (tau[k] - tau[k-1]) fs`` (``tau[-1] = 0``: from the
+neutral pose at rest, as the otolith; ``sign = -1`` for fx, ``tau = -sin(pitch)``, ``+1`` for
+fy), and its perception ``r = C (rate)`` through the model set's canal on that axis (linear,
+from rest); with ``w_v = C w`` the vehicle's perceived rate on the axis and ``thr`` the canal
+threshold::
+
+    -thr <= r[k]         unless w_v[k] < -thr     (no spurious cue, no reversal)
+            r[k] <= thr  unless w_v[k] > thr
+
+(both where the vehicle's perceived rate is below threshold). ``C`` enters every programme
+as its second-order sections: one vector of extra variables per section, tied to ``tau`` and
+to each other by banded equalities (exactly :func:`scipy.signal.sosfilt` from rest), the last
+one ``r`` bounded as above. The QP, the gain LP and the cone programme get these rows, and
+the certificates are the same with ``sigma_S'`` (the support LP with the rows) in place of
+``sigma_S``, so every figure stays a certified bound, now over ``S'``. ``S'`` is not
+symmetric (the rows follow the vehicle's sign), so ``b``'s two cuts are two support LPs.
+``0`` is in ``S'`` and ``S'`` is convex, so a motion is brought into it by scaling down
+(the primals are checked at the full rate).
+
 The moving-average bound of ``tests/test_mpc_acceptance.py`` (``|M s| <= 2 v_max / T +
 g sin(tilt_max)``) is one dual certificate of this family; the QP's is the best.
 
@@ -106,7 +130,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -138,6 +162,14 @@ BOUND_CHANNELS: tuple[str, ...] = ("fx", "fy")
 CORR_MIN: tuple[float, float] = (0.95, 0.90)
 """The correlations (fx, fy) :func:`cue_bound`'s ``share_max_at_corr`` is for by default: those
 of issue 20's acceptance."""
+
+_TILT_AXIS = (1, 0)
+"""The rotation axis (index into roll, pitch, yaw) of each channel's tilt: pitch for fx,
+roll for fy."""
+
+_TILT_SIGN = (-1.0, 1.0)
+"""The tilt axis's rate over ``d tau / dt`` to first order: ``tau = -sin(pitch)`` for fx,
+``cos(pitch) sin(roll)`` for fy (:class:`ReachPolygon`)."""
 
 REACH_MARGIN = 1.05
 """:func:`rig_reach` multiplies what it found by this: the sampled maxima are below the
@@ -273,6 +305,10 @@ class CueBound:
     model_set : str
     solver : dict
         The solvers used and the decimation of the certificate problems (``"1"``: none).
+    rotation_cues : str
+        ``"allowed"``: the bound over every motion of the rig; ``"forbidden"``: over those
+        with no spurious and no reversed rotation cue on the channels' tilt axes
+        (``cue_bound(..., forbid_false_rotation=True)``).
     """
 
     error_rms: NDArray[np.float64]
@@ -291,6 +327,7 @@ class CueBound:
     share_max_at_corr_zero_mean: NDArray[np.float64] = field(
         default_factory=lambda: np.full(2, np.nan)
     )
+    rotation_cues: str = "allowed"
 
     def to_dict(self) -> dict[str, object]:
         """JSON-ready: per channel ``{name: {channel: value}}`` and the reach used."""
@@ -313,6 +350,7 @@ class CueBound:
             "corr_at_primal": ch(self.corr_at_primal),
             "corr_min": ch(self.corr_min),
             "share_max_at_corr_zero_mean": ch(self.share_max_at_corr_zero_mean),
+            "rotation_cues": self.rotation_cues,
             "reach": {
                 "stroke_m": list(r.stroke_m),
                 "speed_m_s": list(r.speed_m_s),
@@ -349,6 +387,34 @@ def _second_difference(n: int, fs: float) -> sparray:
     return d2 * (fs * fs)
 
 
+@dataclass(frozen=True, eq=False)
+class _Rotation:
+    """The no-false-rotation rows of one channel's tilt axis: the platform's rotation rate
+    is ``sign * d tau / dt`` (to first order in the angles; pitch for fx: ``sign = -1``,
+    roll for fy: ``+1``), perceived through ``canal`` from rest; ``omega`` is the vehicle's
+    rate on that axis (rad/s) at the channel's rate, ``thr`` the canal threshold (rad/s)."""
+
+    canal: VestibularModel
+    sign: float
+    omega: NDArray[np.float64]
+    thr: float
+
+    def bounds(self, fs: float) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        """``(lo, hi)`` of the platform's perceived rate per sample: within the threshold
+        where the vehicle's is (no spurious cue), not opposite where it is above (no
+        reversal)."""
+        v = self.canal.apply(self.omega, fs)
+        lo = np.where(v < -self.thr, -np.inf, -self.thr)
+        hi = np.where(v > self.thr, np.inf, self.thr)
+        return lo, hi
+
+    def perceived(self, tau: NDArray[np.float64], fs: float) -> NDArray[np.float64]:
+        """The platform's perceived rate of the tilt term ``tau``, from the neutral pose at
+        rest before the first sample (as the otolith: the first sample's tilt is a step)."""
+        w = np.diff(tau, prepend=0.0) * (self.sign * fs)
+        return self.canal.apply(w, fs)
+
+
 @dataclass(frozen=True)
 class _Channel:
     """One channel's relaxation: boxes and the otolith as a state-space system."""
@@ -361,6 +427,7 @@ class _Channel:
     fs: float
     model: VestibularModel
     poly: ReachPolygon | None = None
+    rot: _Rotation | None = None
 
     @property
     def sos(self) -> NDArray[np.float64]:
@@ -455,10 +522,60 @@ def _poly_rows(ch: _Channel, n: int) -> tuple[sparray, NDArray[np.float64]] | No
     return sp.vstack(rows, format="csr"), rhs
 
 
+def _rot_rows(
+    ch: _Channel, n: int
+) -> tuple[sparray, sparray, NDArray[np.float64], NDArray[np.float64]] | None:
+    """The no-false-rotation rows (None without them): the canal's sections as equalities
+    ``T tau + Q q = 0`` over ``m n`` extra variables ``q`` (each section's output, sample-major
+    per section, from rest: exactly :func:`scipy.signal.sosfilt`), the last section's output
+    ``r`` (the platform's perceived rate) in ``lo <= r <= hi``. Returns ``(T (m n, n),
+    Q (m n, m n), lo (n), hi (n))``."""
+    import scipy.sparse as sp
+
+    if ch.rot is None:
+        return None
+    sos = ch.rot.canal.sos(ch.fs)
+    m = sos.shape[0]
+
+    def band(c: NDArray[np.float64]) -> sparray:
+        diags = [np.full(n - j, float(c[j])) for j in range(3) if j < n]
+        return sp.diags(diags, [-j for j in range(len(diags))], shape=(n, n), format="csr")
+
+    dw = sp.diags([np.ones(n), -np.ones(n - 1)], [0, -1], shape=(n, n), format="csr")
+    dw = dw * (ch.rot.sign * ch.fs)  # the rate fs (tau[k] - tau[k-1]), from tau[-1] = 0
+    t_blocks = [-band(sos[0, :3]) @ dw] + [sp.csr_matrix((n, n))] * (m - 1)
+    q_rows = []
+    for j in range(m):
+        row = [sp.csr_matrix((n, n))] * m
+        row[j] = band(sos[j, 3:] / sos[j, 3])
+        if j > 0:
+            row[j - 1] = -band(sos[j, :3] / sos[j, 3])
+        q_rows.append(sp.hstack(row, format="csr"))
+    t_blocks[0] = t_blocks[0] / sos[0, 3]
+    lo, hi = ch.rot.bounds(ch.fs)
+    return sp.vstack(t_blocks, format="csr"), sp.vstack(q_rows, format="csr"), lo, hi
+
+
+def _rot_var_bounds(ch: _Channel, n: int) -> list[tuple[float | None, float | None]]:
+    """linprog bounds of the rows' extra variables (the sections free, the last bounded)."""
+    rr = _rot_rows(ch, n)
+    if rr is None:
+        return []
+    m = rr[1].shape[1] // n
+    last = [(None if not np.isfinite(a) else float(a), None if not np.isfinite(b) else float(b))
+            for a, b in zip(rr[2], rr[3], strict=True)]  # fmt: skip
+    return [(None, None)] * ((m - 1) * n) + last
+
+
+_ROT_FALLBACKS = [0]
+"""Support LPs with the no-false-rotation rows that HiGHS could not solve (every method),
+replaced by the support of the larger set without them (``CueBound.solver``)."""
+
+
 def _support(ch: _Channel, c: NDArray[np.float64], d2: sparray) -> float:
     """sigma_S(c) = max_{s in S} c's (two LPs, translation and tilt; one joint LP when the
     channel has a coupled reach)."""
-    if ch.poly is None:
+    if ch.poly is None and ch.rot is None:
         trans = _linprog_box_chain(np.asarray(d2.T @ c), ch.stroke, ch.speed / ch.fs, ch.accel, d2)
         tilt = GRAVITY_M_S2 * _linprog_box_chain(c, ch.tilt, ch.tilt_rate / ch.fs, None, d2)
         return trans + tilt
@@ -472,7 +589,6 @@ def _support(ch: _Channel, c: NDArray[np.float64], d2: sparray) -> float:
     zn = sp.csr_matrix((n - 1, n))
     zz = sp.csr_matrix((n, n))
     poly = _poly_rows(ch, n)
-    assert poly is not None
     a_ub = sp.vstack(
         [
             sp.hstack([d1, zn]),
@@ -481,7 +597,7 @@ def _support(ch: _Channel, c: NDArray[np.float64], d2: sparray) -> float:
             sp.hstack([zn, -d1]),
             sp.hstack([d2, zz]),
             sp.hstack([-d2, zz]),
-            poly[0],
+            *([] if poly is None else [poly[0]]),
         ],
         format="csr",
     )
@@ -490,11 +606,28 @@ def _support(ch: _Channel, c: NDArray[np.float64], d2: sparray) -> float:
             np.full(2 * (n - 1), ch.speed / ch.fs),
             np.full(2 * (n - 1), ch.tilt_rate / ch.fs),
             np.full(2 * n, ch.accel),
-            poly[1],
+            *([] if poly is None else [poly[1]]),
         ]
     )
-    bounds = [(-ch.stroke, ch.stroke)] * n + [(-ch.tilt, ch.tilt)] * n
-    res = _linprog(cost, A_ub=a_ub, b_ub=b_ub, bounds=bounds)
+    box_p: tuple[float | None, float | None] = (-ch.stroke, ch.stroke)
+    box_t: tuple[float | None, float | None] = (-ch.tilt, ch.tilt)
+    bounds = [box_p] * n + [box_t] * n
+    extra: dict[str, object] = {}
+    rot = _rot_rows(ch, n)
+    if rot is not None:  # the canal's rows over extra variables
+        nq = rot[1].shape[1]
+        a_ub = sp.hstack([a_ub, sp.csr_matrix((a_ub.shape[0], nq))], format="csr")
+        extra = {
+            "A_eq": sp.hstack([sp.csr_matrix((nq, n)), rot[0], rot[1]], format="csr"),
+            "b_eq": np.zeros(nq),
+        }
+        cost = np.concatenate([cost, np.zeros(nq)])
+        bounds += _rot_var_bounds(ch, n)
+    res = _linprog(cost, A_ub=a_ub, b_ub=b_ub, bounds=bounds, **extra)
+    if res.status != 0 and ch.rot is not None:
+        # S' is in S: sigma_S >= sigma_S', so every certificate stays valid (looser)
+        _ROT_FALLBACKS[0] += 1
+        return _support(replace(ch, rot=None), c, d2)
     if res.status != 0:
         raise ConfigError(f"the bound's support LP failed: {res.message}")
     return float(-res.fun)
@@ -577,12 +710,25 @@ def _qp_best_motion(ch: _Channel, v: NDArray[np.float64], d2: sparray) -> NDArra
         rows.append(sp.hstack([poly[0], sp.csr_matrix((poly[1].size, n * (1 + nx)))]))
         lba = np.concatenate([lba, np.full(poly[1].size, -np.inf)])
         uba = np.concatenate([uba, poly[1]])
+    rot = _rot_rows(ch, n)
+    if rot is not None:  # the canal's rows over extra variables after y, the last bounded
+        nq = rot[1].shape[1]
+        n_z += nq
+        rows = [sp.hstack([r, sp.csr_matrix((r.shape[0], nq))], format="csr") for r in rows]
+        rows.append(sp.hstack([sp.csr_matrix((nq, n)), rot[0], sp.csr_matrix((nq, (1 + nx) * n)),
+                               rot[1]]))  # fmt: skip
+        rows.append(sp.hstack([sp.csr_matrix((n, n_z - n)), sp.identity(n)]))
+        lba = np.concatenate([lba, np.zeros(nq), rot[2]])
+        uba = np.concatenate([uba, np.zeros(nq), rot[3]])
     m = sp.vstack(rows, format="csc")
     hess = sp.diags(
-        np.concatenate([np.zeros(iy), np.full(n, 2.0)]), 0, shape=(n_z, n_z), format="csc"
+        np.concatenate([np.zeros(iy), np.full(n, 2.0), np.zeros(n_z - iy - n)]),
+        0,
+        shape=(n_z, n_z),
+        format="csc",
     )
     q = np.zeros(n_z)
-    q[iy:] = -2.0 * v
+    q[iy : iy + n] = -2.0 * v
     hs = _dm(hess)
     ms = _dm(m)
     solver = casadi.conic(
@@ -670,17 +816,32 @@ def _gain_lp(
             format="csr",
         )  # fmt: skip
         b_ub = np.concatenate([b_ub[: b_ub.size - idx.size], poly[1], b_ub[b_ub.size - idx.size :]])
-    bounds = (
-        [(-ch.stroke, ch.stroke)] * n
-        + [(-ch.tilt, ch.tilt)] * n
-        + [(None, None)] * (nx * n)
-        + [(None, None)] * n
-    )
+    box_p: tuple[float | None, float | None] = (-ch.stroke, ch.stroke)
+    box_t: tuple[float | None, float | None] = (-ch.tilt, ch.tilt)
+    free: tuple[float | None, float | None] = (None, None)
+    bounds = [box_p] * n + [box_t] * n + [free] * ((nx + 1) * n)
     cost = np.concatenate([np.zeros((2 + nx) * n), -v])
+    rot = _rot_rows(ch, n)
+    if rot is not None:  # the canal's rows over extra variables after y
+        nq = rot[1].shape[1]
+        a_ub = sp.hstack([a_ub, sp.csr_matrix((a_ub.shape[0], nq))], format="csr")
+        a_eq = sp.vstack(
+            [sp.hstack([a_eq, sp.csr_matrix((a_eq.shape[0], nq))]),
+             sp.hstack([sp.csr_matrix((nq, n)), rot[0], sp.csr_matrix((nq, (1 + nx) * n)),
+                        rot[1]])],
+            format="csr",
+        )  # fmt: skip
+        b_eq = np.zeros(a_eq.shape[0])
+        cost = np.concatenate([cost, np.zeros(nq)])
+        bounds = bounds + _rot_var_bounds(ch, n)
     res = _linprog(cost, A_ub=a_ub, b_ub=b_ub, A_eq=a_eq, b_eq=b_eq, bounds=bounds)
+    if res.status != 0 and rot is not None:
+        # the larger set's LP: its maximum is above, its multipliers still a certificate
+        _ROT_FALLBACKS[0] += 1
+        return _gain_lp(replace(ch, rot=None), v, thr, d2)
     if res.status != 0:
         raise ConfigError(f"the bound's gain LP failed: {res.message}")
-    y = np.asarray(res.x[(2 + nx) * n :], dtype=float)
+    y = np.asarray(res.x[(2 + nx) * n : (3 + nx) * n], dtype=float)
     lam = np.zeros(n)
     lam[idx] = -np.asarray(res.ineqlin.marginals, dtype=float)[-idx.size :] if idx.size else 0.0
     return float(-res.fun), y, np.maximum(lam, 0.0)
@@ -713,13 +874,15 @@ def _decimated(
     ch: _Channel, d: NDArray[np.float64], k: int
 ) -> tuple[_Channel, NDArray[np.float64], sparray]:
     """The channel at fs / k with the vehicle's force averaged over blocks of k samples."""
-    from dataclasses import replace
 
     n = d.shape[0]
     m = n // k
     dd = d[: m * k].reshape(m, k).mean(axis=1)
     fs_d = ch.fs / k
-    return replace(ch, fs=fs_d), dd, _second_difference(m, fs_d)
+    rot = ch.rot
+    if rot is not None:
+        rot = replace(rot, omega=rot.omega[: m * k].reshape(m, k).mean(axis=1))
+    return replace(ch, fs=fs_d, rot=rot), dd, _second_difference(m, fs_d)
 
 
 def _channel_bound(
@@ -876,8 +1039,20 @@ def _socp_primal(
         lba = np.concatenate([np.full(poly[1].size, -np.inf), lba])
         uba = np.concatenate([poly[1], uba])
     lin = sp.vstack(blocks, format="csc")
+    nzb = nz  # [p, tau, x, y, ybar, a], then the canal's variables
+    rot = _rot_rows(ch, n)
+    if rot is not None:  # first: the multipliers read below are those of the last rows
+        nq = rot[1].shape[1]
+        nz += nq
+        lin = sp.vstack(
+            [sp.hstack([sp.csr_matrix((nq, n)), rot[0], sp.csr_matrix((nq, nzb - 2 * n)), rot[1]]),
+             sp.hstack([lin, sp.csr_matrix((lin.shape[0], nq))])],
+            format="csc",
+        )  # fmt: skip
+        lba = np.concatenate([np.zeros(nq), lba])
+        uba = np.concatenate([np.zeros(nq), uba])
     zs = casadi.MX.sym("z", nz)
-    y, ybar, a = zs[iy : iy + n], zs[nz - 2], zs[nz - 1]
+    y, ybar, a = zs[iy : iy + n], zs[nzb - 2], zs[nzb - 1]
     c2 = 1.0 / (1.0 + tan_t * tan_t)
     cons = [casadi.densify(casadi.mtimes(_dm(lin), zs))]  # D2 has an empty row (the end)
     lbg, ubg = [lba], [uba]
@@ -900,7 +1075,9 @@ def _socp_primal(
     ubx = np.full(nz, np.inf)
     lbx[:n], ubx[:n] = (-ch.stroke, ch.stroke) if moves else (0.0, 0.0)
     lbx[n : 2 * n], ubx[n : 2 * n] = -ch.tilt, ch.tilt
-    lbx[-1] = 0.0
+    lbx[nzb - 1] = 0.0
+    if rot is not None:
+        lbx[nz - n :], ubx[nz - n :] = rot[2], rot[3]
     solver = casadi.nlpsol(
         "corr_bound",
         "ipopt",
@@ -915,7 +1092,7 @@ def _socp_primal(
         },
     )
     x0 = np.zeros(nz)
-    x0[-1] = 1e-3
+    x0[nzb - 1] = 1e-3
     sol = solver(x0=x0, lbx=lbx, ubx=ubx, lbg=np.concatenate(lbg), ubg=np.concatenate(ubg))
     zz = np.asarray(sol["x"], dtype=float).ravel()
     lam = np.asarray(sol["lam_g"], dtype=float).ravel()
@@ -929,7 +1106,7 @@ def _socp_primal(
         yv = zz[iy : iy + n]
         w = yv - yv.mean() - float(np.sum(u * (yv - yv.mean()))) * u
         nw = float(np.sqrt(np.sum(w * w)))
-        mu = 2.0 * float(lam[-1]) * max(float(zz[-1]), 0.0) * c2 * tan_t
+        mu = 2.0 * float(lam[-1]) * max(float(zz[nzb - 1]), 0.0) * c2 * tan_t
         z = w / nw if nw > 0.0 and mu > 0.0 else np.zeros(n)
     else:
         nu = lam[-n:]
@@ -972,15 +1149,19 @@ def _upsample_motion(
 def _fit_poly(
     ch: _Channel, p: NDArray[np.float64], tau: NDArray[np.float64]
 ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
-    """``(p, tau)`` scaled down together until within the coupled reach's half-planes (the
-    neutral pose is inside, so scaling down keeps the boxes)."""
-    if ch.poly is None:
-        return p, tau
-    n = p.shape[0]
-    poly = _poly_rows(ch, n)
-    assert poly is not None
-    lhs = np.asarray(poly[0] @ np.concatenate([p, tau]))
-    ratio = max(1.0, float(np.max(lhs / poly[1])) if lhs.size else 1.0)
+    """``(p, tau)`` scaled down together until within the coupled reach's half-planes and
+    the no-false-rotation rows (the neutral pose is inside both, so scaling down keeps the
+    boxes)."""
+    ratio = 1.0
+    if ch.poly is not None:
+        poly = _poly_rows(ch, p.shape[0])
+        assert poly is not None
+        lhs = np.asarray(poly[0] @ np.concatenate([p, tau]))
+        ratio = max(ratio, float(np.max(lhs / poly[1])) if lhs.size else 1.0)
+    if ch.rot is not None:
+        r = ch.rot.perceived(tau, ch.fs)
+        lo, hi = ch.rot.bounds(ch.fs)
+        ratio = max(ratio, float(np.max(np.maximum(r / hi, r / lo))))  # lo < 0 < hi
     return p / ratio, tau / ratio
 
 
@@ -1035,8 +1216,10 @@ def _share_at_corr(
     def certificate(g: NDArray[np.float64], z: NDArray[np.float64], mu: float) -> float:
         return _support(ch, ch.filt_t(g + mu * tan_t * u - mu * z), d2)
 
-    # b = sqrt(N) mean(y) over all of S (S is symmetric): the cuts phi = +-pi/2
+    # b = sqrt(N) mean(y) over all of S: the cuts phi = +-pi/2 (S is symmetric unless the
+    # no-false-rotation rows, which depend on the vehicle's sign, are in it)
     b_max = _support(ch, ch.filt_t(e1), d2)
+    b_min = b_max if ch.rot is None else _support(ch, -ch.filt_t(e1), d2)
     found: list[tuple[float, float]] = []  # (share, corr) of the full-rate primals
 
     def direction(phi: float) -> float:
@@ -1081,7 +1264,7 @@ def _share_at_corr(
         # ||z|| <= 1 is what makes it a bound (z_hf and z need not be orthogonal)
         return min(certificate(g, z, mu0), certificate(g, z_aug / n_aug, mu0))
 
-    planes = [(0.0, direction(0.0)), (math.pi / 2, b_max), (-math.pi / 2, b_max)]
+    planes = [(0.0, direction(0.0)), (math.pi / 2, b_max), (-math.pi / 2, b_min)]
     for _ in range(max(cuts, 0)):
         # a cut through the polygon's best vertex, normal to the share's level set there
         val, a, b = _polygon_max(planes, corr)
@@ -1108,6 +1291,8 @@ def cue_bound(
     primal_samples: int = 1000,
     corr_min: ArrayLike | None = CORR_MIN,
     corr_cuts: int = 2,
+    w_vehicle: ArrayLike | None = None,
+    forbid_false_rotation: bool = False,
 ) -> CueBound:
     """The physical bound of a drive on a rig (definitions: the module docstring).
 
@@ -1140,6 +1325,15 @@ def cue_bound(
         Cuts added to the first three (module docstring) while the bound is above the best
         motion found: each costs one SOCP at ``fs / k`` and one support function at the full
         rate, and tightens the bound.
+    w_vehicle : (N, 3) array_like, optional
+        The vehicle's angular velocity (rad/s, body frame: roll, pitch, yaw rates) as the
+        cueing algorithm used it (``w_used``); needed by ``forbid_false_rotation``.
+    forbid_false_rotation : bool
+        Bound the smaller set of the motions that give no spurious and no reversed rotation
+        cue on each channel's tilt axis (pitch for fx, roll for fy; module docstring, "No
+        false rotation cue"). Every figure of the result is then over that set
+        (``CueBound.rotation_cues == "forbidden"``); the programmes grow by the canal's
+        sections (about twice the time).
 
     Returns
     -------
@@ -1171,7 +1365,19 @@ def cue_bound(
                 "correlations in (0, 1] (fx, fy)"
             )
     n = f.shape[0]
+    w = None
+    if forbid_false_rotation:
+        if w_vehicle is None:
+            raise ConfigError(
+                "forbid_false_rotation needs w_vehicle (the vehicle's angular velocity)"
+            )
+        w = np.asarray(w_vehicle, dtype=float)
+        if w.shape != f.shape or not np.isfinite(w).all():
+            raise ConfigError(
+                f"w_vehicle must be a finite array shaped like f_vehicle {f.shape}; got {w.shape}"
+            )
     d2 = _second_difference(n, fs_hz)
+    _ROT_FALLBACKS[0] = 0
     at_corr: list[tuple[float, float, float, float]] = []
     k = max(1, math.ceil(n / primal_samples))
     res: dict[str, list[float]] = {key: [] for key in ("err", "gmax", "gany", "share", "vrms")}
@@ -1185,6 +1391,14 @@ def cue_bound(
             fs=float(fs_hz),
             model=ms.otolith[i],
             poly=None if reach.coupling is None else reach.coupling[i],
+            rot=None
+            if w is None
+            else _Rotation(
+                canal=ms.canal[_TILT_AXIS[i]],
+                sign=_TILT_SIGN[i],
+                omega=np.ascontiguousarray(w[:, _TILT_AXIS[i]]),
+                thr=float(thr[3 + _TILT_AXIS[i]]),
+            ),
         )
         for key, val in zip(
             ("err", "gmax", "gany", "share", "vrms"),
@@ -1216,5 +1430,7 @@ def cue_bound(
             "socp": "ipopt (casadi)",
             "decimation": str(k),
             "coupling": "none" if reach.coupling is None else "translation-tilt polygons",
+            "rotation_fallbacks": str(_ROT_FALLBACKS[0]),
         },
+        rotation_cues="allowed" if w is None else "forbidden",
     )
