@@ -18,26 +18,13 @@ import pytest
 from scipy.optimize import linprog
 
 from motioncue import ConfigError
-from motioncue.cueing import RigReach, VestibularModel, cue_bound, get_model_set
+from motioncue.cueing import RigReach, cue_bound, get_model_set
 from motioncue.cueing._bound import _Channel, _Rotation, _second_difference, _support
+from test_cue_bound_corr import _d2, _h
 
 G = 9.80665
 MS = get_model_set("telban-cardullo-2005")
 THR = np.asarray(MS.thresholds)
-
-
-def _mat(model: VestibularModel, n: int, fs: float) -> np.ndarray:
-    """A causal linear model as an (n, n) matrix: column j is its response to a pulse at j."""
-    return np.array([model.apply(e, fs) for e in np.eye(n)]).T
-
-
-def _d2(n: int, fs: float) -> np.ndarray:
-    d = np.zeros((n, n))
-    for k in range(n - 1):
-        d[k, max(k - 1, 0)] += 1.0
-        d[k, k + 1] += 1.0
-        d[k, k] -= 2.0
-    return d * fs * fs
 
 
 def _d1(n: int) -> np.ndarray:
@@ -51,7 +38,7 @@ def _rot_ineq(n: int, fs: float, sign: float, omega: np.ndarray, axis: int) -> t
     canal = MS.canal[axis]
     thr = THR[3 + axis]
     rate = np.vstack([np.eye(n)[:1], _d1(n)]) * fs * sign
-    r = _mat(canal, n, fs) @ rate
+    r = _h(n, fs, canal) @ rate
     v = canal.apply(omega, fs)
     rows, rhs = [], []
     for k in range(n):
@@ -143,7 +130,7 @@ def test_gain_bounds_match_dense_lps_and_never_exceed_the_whole_rig() -> None:
     b = cue_bound(f, FS, REACH, corr_min=None, w_vehicle=w, forbid_false_rotation=True)
     assert b.rotation_cues == "forbidden" and free.rotation_cues == "allowed"
     for i, (axis, sign) in enumerate(((1, -1.0), (0, 1.0))):
-        h = _mat(MS.otolith[i], N, FS)
+        h = _h(N, FS, MS.otolith[i])
         v = h @ f[:, i]
         vv = float(v @ v)
         ineq = _rot_ineq(N, FS, sign, w[:, axis], axis)
@@ -210,7 +197,7 @@ def test_a_motion_without_false_rotation_never_beats_the_bound() -> None:
     free = cue_bound(f, fs, reach, corr_min=(0.5, 0.5), corr_cuts=1)
     assert b.share_max_at_corr[0] <= free.share_max_at_corr[0] * (1.0 + 1e-6)
     assert b.share_at_corr_primal[0] <= b.share_max_at_corr[0] * (1.0 + 1e-6)
-    h = _mat(MS.otolith[0], n, fs)
+    h = _h(n, fs, MS.otolith[0])
     v = h @ f[:, 0]
     canal = MS.canal[1]
     tau = np.convolve(f[:, 0] / G, np.ones(10) / 10, mode="same")
