@@ -11,6 +11,7 @@ from hypothesis import strategies as st
 
 from motioncue import ConfigError, LimitError
 from motioncue.trajectory import ActuatorLimits, JerkLimiter, check_trajectory
+from test_limiter import hexapod_sines
 
 TOL = 1e-9
 
@@ -127,11 +128,7 @@ def test_a_hexapod_ride_it_sent_passes_through_untouched():
         np.full(6, -0.1), np.full(6, 0.1), np.full(6, 0.25), np.full(6, 4.0), np.full(6, 80.0)
     )
     jl = JerkLimiter(lim, 0.01)
-    rng = np.random.default_rng(3)
-    t = np.arange(600)[:, None] * 0.01
-    raw = sum(0.03 * np.sin(2 * np.pi * rng.uniform(0.1, 1.5, 6) * t + rng.uniform(0, 6, 6))
-              for _ in range(4))  # fmt: skip
-    out = jl.run(jl.initial_state(np.zeros(6)), raw)
+    out = jl.run(jl.initial_state(np.zeros(6)), hexapod_sines(600))
     state = jl.initial_state(np.zeros(6))
     again = jl.run(state, out)
     assert state.n_clamped == 0
