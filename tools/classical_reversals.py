@@ -24,6 +24,7 @@ import argparse
 from pathlib import Path
 
 import numpy as np
+from fx_phase_costs import phases
 
 from motioncue.analysis import run_chain
 from motioncue.cueing import load_cueing
@@ -35,31 +36,6 @@ from motioncue.trajectory import ActuatorLimits
 
 RATE = 100.0
 CHANNELS = ("fx", "fy", "fz", "p", "q", "r")
-
-
-def phases(v: np.ndarray, thr: float) -> dict[str, np.ndarray]:
-    """Masks of the fx phases of :mod:`fx_phase_costs` (stop onset, stop, after, throttle, rest)."""
-    n = len(v)
-    brake = v < -thr
-    onset = np.zeros(n, dtype=bool)
-    after = np.zeros(n, dtype=bool)
-    edges = np.diff(brake.astype(int))
-    for i in np.flatnonzero(edges == 1) + 1:
-        onset[i : i + 50] = True
-    for i in np.flatnonzero(edges == -1) + 1:
-        after[i : i + 80] = True
-    onset &= brake
-    after &= ~brake
-    steady = brake & ~onset
-    throttle = (v > thr) & ~after
-    rest = ~(onset | steady | after | throttle)
-    return {
-        "stop 0-0.5 s": onset,
-        "stop rest": steady,
-        "0.8 s after": after,
-        "throttle": throttle,
-        "other": rest,
-    }
 
 
 def runs(mask: np.ndarray) -> list[tuple[int, int]]:

@@ -30,6 +30,33 @@ from motioncue.trajectory import ActuatorLimits
 RATE = 100.0
 
 
+def phases(v: np.ndarray, thr: float) -> dict[str, np.ndarray]:
+    """Masks, (n,) bool, of the phases of the vehicle's perceived fx ``v`` (m/s^2, 100 Hz)
+    against its threshold ``thr``: a stop's first 0.5 s, the rest of it, the 0.8 s after,
+    throttle, other."""
+    n = len(v)
+    brake = v < -thr
+    onset = np.zeros(n, dtype=bool)
+    after = np.zeros(n, dtype=bool)
+    edges = np.diff(brake.astype(int))
+    for i in np.flatnonzero(edges == 1) + 1:
+        onset[i : i + 50] = True
+    for i in np.flatnonzero(edges == -1) + 1:
+        after[i : i + 80] = True
+    onset &= brake
+    after &= ~brake
+    steady = brake & ~onset
+    throttle = (v > thr) & ~after
+    rest = ~(onset | steady | after | throttle)
+    return {
+        "stop 0-0.5 s": onset,
+        "stop rest": steady,
+        "0.8 s after": after,
+        "throttle": throttle,
+        "other": rest,
+    }
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("preset")
@@ -52,31 +79,11 @@ def main() -> None:
         thr = ev.thresholds[0]
         e = s - float(np.dot(s, v) / np.dot(v, v)) * v
         n = len(v)
-        brake = v < -thr
-        onset = np.zeros(n, dtype=bool)
-        after = np.zeros(n, dtype=bool)
-        edges = np.diff(brake.astype(int))
-        for i in np.flatnonzero(edges == 1) + 1:
-            onset[i : i + 50] = True
-        for i in np.flatnonzero(edges == -1) + 1:
-            after[i : i + 80] = True
-        onset &= brake
-        after &= ~brake
-        steady = brake & ~onset
-        throttle = (v > thr) & ~after
-        rest = ~(onset | steady | after | throttle)
         rev = (np.abs(v) > thr) & (np.abs(s) > thr) & (v * s < 0.0)
         total = float(np.sum(e**2))
         corr = float(np.corrcoef(s, v)[0, 1])
         print(f"{Path(d).stem}: corr fx {corr:.3f}, fx reversals {100 * rev.mean():.2f} %")
-        phases = (
-            ("stop, first 0.5 s", onset),
-            ("stop, the rest", steady),
-            ("0.8 s after a stop", after),
-            ("throttle", throttle),
-            ("other", rest),
-        )
-        for name, m in phases:
+        for name, m in phases(v, thr).items():
             print(
                 f"  {name:20s} {100 * m.mean():5.1f} % of the time, "
                 f"{100 * np.sum(e[m] ** 2) / total:5.1f} % of the residual, "
