@@ -17,7 +17,7 @@ import random
 import socket
 
 _LOW_PORT = 20000  # below: ports well-known services commonly use
-_TRIED = set()
+_TRIED: set[int] = set()  # handed out (or found taken) in this process
 
 
 def _ephemeral_range() -> tuple[int, int]:
