@@ -220,3 +220,35 @@ def test_the_plan_uses_the_rig_it_is_given_and_refuses_another_platform() -> Non
         make_cueing(params, RATE, Rig(seat, seat_limits, "mbox3"))
     with pytest.raises(ConfigError, match="actuators"):
         Rig(seat, limits)
+
+
+@pytest.mark.parametrize("on_arrival", [True, False])
+def test_bridge_frames_auto_reads_the_registry_not_the_name(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], on_arrival: bool
+) -> None:
+    """``bridge --frames auto`` sends frames on arrival when the algorithm's registry entry
+    declares ``frames_on_arrival`` (a copy of the classical washout under another name), and
+    fixed frames when it does not: the choice is the declared capability, not the name."""
+    from motioncue.cli import main
+    from motioncue.cueing import register_cueing
+    from motioncue.cueing._classical import ClassicalWashout
+    from test_bridge_replay import write_f1_recording
+
+    name = "classical-copy"
+    register_cueing(name, ClassicalWashout, frames_on_arrival=on_arrival,
+                    table=cueing_entry("classical").table)  # fmt: skip
+    try:
+        text = find_config("cueing", "racing-hexapod-firm").read_text()
+        preset = tmp_path / "copy.toml"
+        preset.write_text(text.replace('algorithm = "classical"', f'algorithm = "{name}"'))
+        assert load_cueing(str(preset)).algorithm == name
+        rec = tmp_path / "short.mctr"
+        write_f1_recording(rec, 0.5)
+        rc = main(["bridge", "--source", f"replay:{rec}", "--platform", PLATFORM,
+                   "--controller", CONTROLLER, "--preset", str(preset), "--target",
+                   f"file:{tmp_path / 'frames.bin'}", "--rt-priority", "0"])  # fmt: skip
+        err = capsys.readouterr().err
+        assert rc == 0, err
+        assert ("frames arrival" if on_arrival else "frames fixed") in err, err
+    finally:
+        unregister_cueing(name)

@@ -149,6 +149,46 @@ def test_adding_a_game_is_one_decoder_and_one_registration() -> None:
         del GAMES["toy"]
 
 
+class _AskedToy(_ToyDecoder):
+    """The toy game, asked for its telemetry (a :class:`Requester`)."""
+
+    default_port = 39992
+    title = "asked toy"
+    PEER_PORT = 39990
+    LISTEN_PORT = 39991
+
+    def requests(self, now_s: float) -> list[bytes]:
+        return [b"HI"]
+
+    def farewell(self) -> list[bytes]:
+        return []
+
+
+def test_a_game_declares_that_it_must_be_asked() -> None:
+    """``GameInfo.asked`` is the declared capability the sources read (no probing of the
+    decoder): '@ADDRESS' is accepted for it and refused for a game that sends on its own,
+    even when its decoder could talk; the default local port is the asked game's own."""
+    from motioncue.telemetry._source import parse_live_spec, split_peer
+
+    with pytest.raises(ConfigError, match="asked = 'yes' must be true or false"):
+        GameInfo("toyasked", 39992, _AskedToy, "t", asked="yes")  # type: ignore[arg-type]
+    assert GameInfo.of(_AskedToy, asked=True).asked and not GameInfo.of(_AskedToy).asked
+    assert [g for g, i in GAMES.items() if i.asked] == ["ac", "gt7"]
+    register_game(GameInfo("toyasked", 39992, _AskedToy, "asked toy", asked=True))
+    register_game(GameInfo("toyquiet", 39993, _AskedToy, "toy that sends on its own"))
+    try:
+        assert split_peer("toyasked@10.0.0.2:0") == ("toyasked:0", "10.0.0.2")
+        assert parse_live_spec("toyasked@10.0.0.2") == ("toyasked", "0.0.0.0", 39991)
+        assert parse_live_spec("toyquiet") == ("toyquiet", "127.0.0.1", 39993)
+        with pytest.raises(ConfigError, match=r"sends on its own.*\(ac, gt7, toyasked\)"):
+            split_peer("toyquiet@10.0.0.2")
+        register_game(GameInfo("toyasked", 39992, _ToyDecoder, "no Requester", asked=True))
+        with pytest.raises(ConfigError, match="registered as asked, but its decoder is no"):
+            parse_live_spec("toyasked")
+    finally:
+        del GAMES["toyasked"], GAMES["toyquiet"]
+
+
 # -- random bytes into every decoder -------------------------------------------------------
 def _check_outcome(dec: Decoder, data: bytes) -> None:
     r = dec.decode(data, 1.0)

@@ -50,6 +50,7 @@ def _source_help() -> str:
 
 
 def run(args: argparse.Namespace) -> int:
+    from ..cueing import cueing_entry
     from ..output import load_controller, open_transport
     from ..output._controller_api import snap_rate_hz
     from ..pipeline._bridge import Bridge, BridgeConfig
@@ -109,12 +110,12 @@ def run(args: argparse.Namespace) -> int:
     frames = args.frames
     if frames == "auto":
         # frames on arrival: whole-ms stamped frames, no jerk limit, and a cueing algorithm
-        # cheap enough to step every millisecond (the classical washout; the MPC runs at the
-        # frame rate)
+        # whose registry entry declares it cheap enough to step every millisecond (the
+        # classical washout; the MPC runs at the frame rate)
         period_ms = 1000.0 / config.rate_hz
         whole = abs(period_ms - round(period_ms)) < 1e-9 and round(period_ms) >= 2
-        stamped = getattr(controller, "time_resolution_s", None) == 1e-3
-        cheap = cueing.algorithm == "classical"
+        stamped = controller.time_resolution_s == 1e-3
+        cheap = cueing_entry(cueing.algorithm).frames_on_arrival
         frames = "arrival" if whole and stamped and limits.j_max is None and cheap else "fixed"
     config = dataclasses.replace(config, frame_clock=frames)
     # over UDP the IMAX and SC-MBOX report where their motors are: start from there

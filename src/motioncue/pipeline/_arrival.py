@@ -62,7 +62,7 @@ class ArrivalOutputStage(OutputStage):
     frame_intervals_ms: list[int] | None = None
 
     def __post_init__(self) -> None:
-        if getattr(self.controller, "time_resolution_s", None) != TICK_S:
+        if self.controller.time_resolution_s != TICK_S:
             raise ConfigError(
                 "frames on arrival need a controller that stamps whole-ms frames (SC-MBOX, IMAX)"
             )

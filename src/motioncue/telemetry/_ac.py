@@ -228,4 +228,4 @@ class ACDecoder(Decoder):
                           {"rpm": rpm, "gear": gear - 1 if gear >= 1 else -1})  # fmt: skip
 
 
-INFO = register_game(GameInfo.of(ACDecoder))
+INFO = register_game(GameInfo.of(ACDecoder, asked=True))

@@ -323,4 +323,4 @@ class GT7Decoder(Decoder):
         return self._make(t_s, (-cz, -cx, cy), (-wz, -wx, wy), paused, extras)
 
 
-INFO = register_game(GameInfo.of(GT7Decoder))
+INFO = register_game(GameInfo.of(GT7Decoder, asked=True))

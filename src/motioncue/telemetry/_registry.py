@@ -53,6 +53,11 @@ class GameInfo:
     encoder : callable or None
         :data:`Encoder` writing the game's datagrams from vehicle motion, which its decoder
         reads back (``send-telemetry``); None when the game cannot be imitated that way.
+    asked : bool
+        The game sends telemetry only when asked: its decoders are
+        :class:`motioncue.telemetry.Requester` (requests, farewell, ``PEER_PORT``,
+        ``LISTEN_PORT``), a live source talks to it and ``GAME@ADDRESS`` names where; the
+        ``auto`` source does not listen for it. False: it sends on its own.
     """
 
     name: str
@@ -60,12 +65,16 @@ class GameInfo:
     decoder: Callable[[], Decoder]
     title: str
     encoder: Encoder | None = None
+    asked: bool = False
 
     @classmethod
-    def of(cls, decoder: type[Decoder], encoder: Encoder | None = None) -> GameInfo:
+    def of(
+        cls, decoder: type[Decoder], encoder: Encoder | None = None, *, asked: bool = False
+    ) -> GameInfo:
         """The game a decoder class declares: its ``game`` (the name), ``default_port`` and
-        ``title`` class attributes, the class as the decoder factory, and ``encoder``."""
-        return cls(decoder.game, decoder.default_port, decoder, decoder.title, encoder)
+        ``title`` class attributes, the class as the decoder factory, ``encoder`` and
+        ``asked``."""
+        return cls(decoder.game, decoder.default_port, decoder, decoder.title, encoder, asked)
 
     def __post_init__(self) -> None:
         if not self.name or not self.name.isidentifier() or self.name != self.name.lower():
@@ -80,6 +89,8 @@ class GameInfo:
             raise ConfigError(f"game {self.name!r}: decoder is not callable")
         if self.encoder is not None and not callable(self.encoder):
             raise ConfigError(f"game {self.name!r}: encoder is not callable")
+        if not isinstance(self.asked, bool):
+            raise ConfigError(f"game {self.name!r}: asked = {self.asked!r} must be true or false")
 
 
 GAMES: dict[str, GameInfo] = {}

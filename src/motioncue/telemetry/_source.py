@@ -89,16 +89,28 @@ def split_peer(spec: str) -> tuple[str, str | None]:
     if not peer:
         raise ConfigError(f"source {spec!r}: '@' needs the game's address, e.g. gt7@192.168.1.20")
     info = GAMES.get(game)
-    if info is not None and not _talks(info.decoder):
+    if info is not None and not info.asked:
         raise ConfigError(
             f"source {spec!r}: {game!r} sends on its own; '@ADDRESS' is for games that must "
-            f"be asked ({', '.join(g for g, i in sorted(GAMES.items()) if _talks(i.decoder))})"
+            f"be asked ({', '.join(g for g, i in sorted(GAMES.items()) if i.asked)})"
         )
     return game + sep + rest, peer
 
 
-def _talks(factory: object) -> bool:
-    return hasattr(factory, "requests") and hasattr(factory, "PEER_PORT")
+def _listen_port(game: str) -> int:
+    """The local port a live source binds by default for ``game``: a game that must be asked
+    declares its own (``LISTEN_PORT``; 0 = any free port), the others send to their
+    ``default_port``."""
+    info = GAMES[game]
+    if not info.asked:
+        return info.default_port
+    dec = info.decoder()
+    if not isinstance(dec, Requester):
+        raise ConfigError(
+            f"game {game!r} is registered as asked, but its decoder is no Requester "
+            "(requests, farewell, PEER_PORT, LISTEN_PORT)"
+        )
+    return int(dec.LISTEN_PORT)
 
 
 def is_loopback(host: str) -> bool:
@@ -141,9 +153,7 @@ def parse_live_spec(spec: str) -> tuple[str, str, int]:
     elif len(parts) > 3:
         raise ConfigError(f"source {spec!r}: expected GAME, GAME:PORT or GAME:HOST:PORT")
     if port_text is None:
-        factory = GAMES[game].decoder
-        listen = getattr(factory, "LISTEN_PORT", None) if _talks(factory) else None
-        return game, host, GAMES[game].default_port if listen is None else int(listen)
+        return game, host, _listen_port(game)
     try:
         port = int(port_text)
     except ValueError:
@@ -540,7 +550,7 @@ class AutoSource(_ThreadedSource):
         if listen is None:
             by_port: dict[int, list[str]] = {}
             for g, info in sorted(GAMES.items()):
-                if not _talks(info.decoder):
+                if not info.asked:
                     by_port.setdefault(info.default_port, []).append(g)
             listen = sorted(by_port.items())
         auto = _AutoDecoder(listen)
