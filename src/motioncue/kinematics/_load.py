@@ -186,7 +186,7 @@ def _pulses_per_rev(r: ConfigReader, n: int, travel_per_rev_mm: np.ndarray | Non
                 r.raw("pulses_per_mm"),
                 "a value giving a whole number of pulses per revolution with lead_mm",
             )
-        return np.round(ppr)
+        return np.asarray(np.round(ppr), dtype=float)
     if not r.has("pulses_per_rev"):
         alt = " or 'pulses_per_mm'" if travel_per_rev_mm is not None else ""
         raise ConfigError(f"{r.where}: missing key 'pulses_per_rev'{alt}")
@@ -251,7 +251,9 @@ def _check_neutral(
         )
 
 
-def platform_from_dict(data: dict, where: str = "<dict>", name: str = "platform") -> Platform:
+def platform_from_dict(
+    data: dict[str, object], where: str = "<dict>", name: str = "platform"
+) -> Platform:
     """Build a platform from a parsed TOML table (see the module docstring for the layout).
 
     The ``kind`` names a registered platform kind (:data:`PLATFORM_KINDS`): this reads the

@@ -12,6 +12,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
+from numpy.typing import NDArray
 
 from ._platform import DOF_NAMES, Platform
 
@@ -91,7 +92,9 @@ def dof_ranges(platform: Platform, *, iterations: int = 40) -> WorkspaceRanges:
     return WorkspaceRanges(lower=lower, upper=upper, supported=mask.copy(), capped=capped)
 
 
-def _slice(platform: Platform, a: int, b: int, ra: float, rb: float, n: int = 121) -> tuple:
+def _slice(
+    platform: Platform, a: int, b: int, ra: float, rb: float, n: int = 121
+) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.bool_]]:
     xs = np.linspace(-ra, ra, n)
     ys = np.linspace(-rb, rb, n)
     grid = np.zeros((n, n, 6))

@@ -48,5 +48,6 @@ def open_transport(url: str | TransportURL, **options: Any) -> Transport:
         raise ConfigError(
             f"target {url!r}: the {parsed.scheme} transport is not installed ({exc.name})"
         ) from exc
-    cls = getattr(module, class_name)
-    return cls.from_url(parsed, **options)
+    cls = getattr(module, class_name)  # the scheme's transport class, imported by name
+    transport: Transport = cls.from_url(parsed, **options)
+    return transport

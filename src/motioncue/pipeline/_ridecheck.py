@@ -73,7 +73,7 @@ def wire_times_s(t_s: np.ndarray, controller: Controller) -> np.ndarray:
     t = np.asarray(t_s, dtype=float)
     res = controller.time_resolution_s
     if res:
-        return np.rint((t - t[0]) / res) * res
+        return np.asarray(np.rint((t - t[0]) / res) * res, dtype=float)
     return t
 
 

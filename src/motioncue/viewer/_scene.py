@@ -88,7 +88,7 @@ def stroke_use(platform: Platform, q: ArrayLike) -> NDArray[np.float64]:
     qa = np.asarray(q, dtype=float)
     lo = np.asarray(platform.q_min, dtype=float)
     hi = np.asarray(platform.q_max, dtype=float)
-    return np.maximum(qa / hi, qa / lo)
+    return np.asarray(np.maximum(qa / hi, qa / lo), dtype=float)
 
 
 def at_rest(platform: Platform, q: ArrayLike) -> NDArray[np.bool_]:
@@ -229,7 +229,7 @@ def _scene(
         turn = _rotation(np.column_stack([np.zeros((len(t), 2)), poses[:, 5]]))
 
         def spin(a: NDArray[np.float64]) -> NDArray[np.float64]:
-            return np.einsum("nij,n...j->n...i", turn, a)
+            return np.asarray(np.einsum("nij,n...j->n...i", turn, a), dtype=float)
 
         top, base, origin, forward = spin(top), spin(base), spin(origin), spin(forward)
         joint = None if joint is None else spin(joint)

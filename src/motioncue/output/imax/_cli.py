@@ -17,15 +17,13 @@ from .._udp_cli import (
     split_datagrams,
 )
 from .._udp_cli import transport_options as _transport_options
-from .._udp_common import CONFIRM_SERVO, HEADER, WireMessage, decode_header
+from .._udp_common import CONFIRM_SERVO, F_ABS, F_REL, HEADER, WireMessage, decode_header
 from ._controller import ImaxController
 from ._messages import (
     CHANNEL_DP,
     CHANNEL_DPF,
     CHANNEL_PA,
-    F_ABS,
     F_READ,
-    F_REL,
     F_STATUS,
     F_VIB_ABS,
     F_VIB_REL,

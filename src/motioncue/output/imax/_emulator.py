@@ -33,7 +33,7 @@ Modelled (IMAX manual section in brackets):
 from __future__ import annotations
 
 from ..._errors import ProtocolError
-from .._udp_common import Header, WireMessage, decode_header
+from .._udp_common import F_ABS, F_REL, Header, WireMessage, decode_header
 from .._udp_emulator import (
     ERR_ADDRESS,
     STATE_ESTOP,
@@ -49,8 +49,6 @@ from ._messages import (
     CHANNEL_DP,
     CHANNEL_DPF,
     CHANNEL_PA,
-    F_ABS,
-    F_REL,
     F_VIB_ABS,
     F_VIB_REL,
     MotionFrame,

@@ -42,7 +42,7 @@ from __future__ import annotations
 
 import enum
 import struct
-from collections.abc import Iterable, Sequence
+from collections.abc import Callable, Iterable, Sequence
 from dataclasses import dataclass
 from functools import cache
 from itertools import chain
@@ -700,7 +700,7 @@ ImaxMessage = (
     | StatusReport
 )
 
-_DECODERS: dict[tuple[int, int], object] = {
+_DECODERS: dict[tuple[int, int], Callable[..., ImaxMessage]] = {
     (CONFIRM_MAIN, F_READ): RegisterRead.decode_parts,
     (CONFIRM_MAIN, F_WRITE): RegisterWrite.decode_parts,
     (CONFIRM_MAIN, F_ABS): MotionFrame.decode_parts,
@@ -752,8 +752,8 @@ def decode(data: bytes, port_out_bytes: int | None = None) -> ImaxMessage:
         )
     try:
         if h.confirm == CONFIRM_MAIN and h.function in _FRAME_FUNCTIONS:
-            return decoder(h, data, port_out_bytes)  # type: ignore[operator]
-        return decoder(h, data)  # type: ignore[operator]
+            return decoder(h, data, port_out_bytes)
+        return decoder(h, data)
     except (struct.error, ValueError) as exc:
         if isinstance(exc, ProtocolError):
             raise
