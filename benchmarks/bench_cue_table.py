@@ -28,7 +28,10 @@ from pathlib import Path
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "src"))
 
 ROOT = Path(__file__).resolve().parents[1]
-DEFAULT_PRESETS = ("racing-hexapod", "optimal-hexapod", "mpc-hexapod", "racing")
+# every preset made for the bundled hexapod, then the generic one; the platform's own
+# default_preset is put first whatever the platform
+HEXAPOD_PRESETS = ("racing-hexapod-firm", "racing-hexapod", "racing-hexapod-strong",
+                   "mpc-hexapod", "optimal-hexapod", "racing")  # fmt: skip
 
 
 def _pct(v: float) -> str:
@@ -48,7 +51,9 @@ def main(argv: list[str]) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--platform", default="stewart6-linear")
     ap.add_argument("--controller", default="mbox6")
-    ap.add_argument("--presets", nargs="+", default=list(DEFAULT_PRESETS))
+    ap.add_argument("--presets", nargs="+", default=None,
+                    help="default: the platform's default preset, then (stewart6-linear) every "
+                    "hexapod preset and racing")  # fmt: skip
     ap.add_argument("--no-bound", action="store_true", help="skip the physical bound")
     ap.add_argument("--kind", default=None, help="only held-out drives of this kind (car, ...)")
     args = ap.parse_args(argv)
@@ -61,6 +66,11 @@ def main(argv: list[str]) -> int:
         kind, data, _ = load_generate_input(str(path))
         assert kind == "recording"
         recs.append((Path(path).stem, data))
+    if args.presets is None:
+        own = [platform.default_preset] if platform.default_preset else []
+        rest = HEXAPOD_PRESETS if args.platform == "stewart6-linear" else ("racing",)
+        args.presets = list(dict.fromkeys([*own, *rest]))
+        print(f"presets: {', '.join(args.presets)} (default of {args.platform}: {own or '-'})")
     presets = [(p, load_cueing(p)) for p in args.presets]
     t0 = time.perf_counter()
     res = compare_cueing(recs, presets, platform, limits, platform_name=args.platform,
