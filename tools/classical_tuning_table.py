@@ -49,8 +49,10 @@ def main() -> None:
     for s in args.set:
         k, v = s.split("=", 1)
         p = replace(p, **{k: ast.literal_eval(v)})
-    print("drive                share fx/fy  corr fx/fy   missed fx/fy  rev % (fx fy fz)"
-          "       false %  clamp %  limited")
+    print(
+        "drive                share fx/fy  corr fx/fy   missed fx/fy  rev % (fx fy fz)"
+        "       false %  clamp %  limited"
+    )
     for d in TUNING + list(args.extra):
         rec = resample(read_recording_csv(Path(d)), RATE)
         run = run_chain(rec.f, rec.w, p, platform, limits, RATE)
