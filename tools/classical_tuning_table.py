@@ -11,7 +11,38 @@ Python literal; degrees are not converted). Never run it on the held-out drives 
 Run from the repository root::
 
     python tools/classical_tuning_table.py racing-hexapod-firm --extra chicane-formula.csv \\
-        --set tilt_fz_guard=1.0
+        --set "tilt_fz_guard=(0.1, 0.5, 3.0)"
+
+What session 27 measured with it (racing-hexapod-firm and one override each; more tuning
+drives from ``tools/make_sample_lap.py``: chicane/formula seed 106, street/formula seed 302,
+chicane/gt seed 301 and flowing/gt seed 303, with --laps 3, 3, 2, 2; none held out):
+
+* ``f_scale`` z (the heave gain) 0.081 -> 0.18: z reversals on the formula drives 0.58 ->
+  0.06 % (street-formula), 1.63 -> 0.48 % (chicane-formula), 1.59 -> 0.37 % (seed 106),
+  nothing else changed (frames limited: none, seed 106 3 with and without); on the held-out
+  drives (looked at once) it did not carry over: flowing-formula z reversals 2.83 -> 2.86 %
+  and 1.07 % of poses clamped, the lap's reversals 0.19 -> 0.72 %, forest-rally 1.45 -> 1.58
+  %. Rejected.
+* The tilt's x gain x1.5 / x2 (0.059 / 0.079, with the heave gain 0.2): share fx 0.052-0.062
+  / 0.067-0.080, corr fx down to 0.954 / 0.930 (chicane-formula), fx reversals 0.32 / 2.67 %
+  there. 67-74 % of the fx residual is in the first 0.5 s of the stops
+  (``tools/fx_phase_costs.py``, firm and x2 on chicane-formula and street-formula).
+* A tilt rate limit of 38 deg/s (the most a canal-aware allowance, idea (a), could add on
+  top of 30 with the vehicles' pitch and roll rates): 54-1055 frames changed by the actuator
+  limiter per drive, corr fx and reversals worse on every drive; 30 deg/s is the legs'
+  speed, not a canal threshold, so the allowance has nothing to use.
+* Roll reach 14 / 15.5 deg (instead of 12.39, idea (c) without the other DOFs' help; heave
+  gain 0.2): fy on the formula drives 0.112-0.119 -> 0.121-0.127 / 0.124-0.130, but z
+  reversals back up (chicane-formula 0.45 -> 1.68 / 2.87 %; the tilt's fz loss, ``g (1 - cos
+  13 deg)`` = 0.25 m/s^2 against a threshold of 0.28) and 0.78 / 9.87 % of chicane-formula's
+  poses clamped.
+* ``tilt_reach_use`` 0.85 / 0.80 (roll 10.5 / 9.9 deg): z reversals 0.00-0.12 %, fy share
+  down 4-11 % on the formula and GT drives.
+* ``tilt_fz_guard`` (0.1, 0.5, 3.0): no change on the chicane and street drives (their
+  low-passed ``f_z - g`` stays under 0.3 m/s^2); flowing/gt seed 303 reversals 1.33 -> 0.66
+  % (z 0.95 -> 0.26 %), share fy 0.130 -> 0.129, but 2 frames changed by the actuator
+  limiter (0 without), at the guard's cut onsets; a tilt acceleration limit of 6 rad/s^2
+  removes them and costs fy reversals on the other drives (street-formula 0.73 -> 1.13 %).
 """
 
 from __future__ import annotations
