@@ -52,11 +52,11 @@ Signal flow (per sample; frames, signs and units of conventions.md)
    |pitch / P|^q <= 1`` instead (``q = 2`` the ellipse; a smaller ``q`` is tighter along the
    diagonals, where a reach extended by the reach offset of step 4 is shortest).
    With ``tilt_fz_guard = (L, A, wz)`` the vehicle's ``f_z - g`` passes the low-pass
-   ``wz^2 / (s^2 + 2 wz s + wz^2)``, ``d``; where ``d > A`` the target is scaled back
-   towards level onto the disc ``sqrt(roll*^2 + pitch*^2) <= acos(1 - l / g)`` (its fz loss
-   ``g (1 - cos(roll) cos(pitch)) <= l``: the tilt no longer lowers the felt ``f_z`` against
-   a vehicle pressed into a dip), ``l = L + (g - L) (1 - min(1, (d - A) / max(A, 0.05)))``,
-   before the rate limits below.
+   ``wz^2 / (s^2 + 2 wz s + wz^2)``, ``d``; where ``d > A`` the force ``(f_t,x, f_t,y)`` fed
+   to ``G_T`` is scaled back towards 0 onto the disc of radius ``g sqrt(1 - c^2)``, ``c = 1 -
+   l / g``, ``l = L + (g - L) (1 - min(1, (d - A) / max(A, 0.05)))``: a settled tilt then has
+   ``sin(roll)^2 + sin(pitch)^2 <= 1 - c^2``, so its fz loss ``g (1 - cos(roll) cos(pitch))
+   <= l`` (the tilt no longer lowers the felt ``f_z`` against a vehicle pressed into a dip).
    With ``tilt_accel_limit_rad_s2 = a`` the tilt is also acceleration limited
    (:func:`rate_accel_limit_step`): with the per-sample step ``u[n] = tilt[n] - tilt[n-1]``,
    ``d = a / fs^2`` and ``e = target - tilt[n-1]``, the wanted step is
@@ -611,9 +611,7 @@ class ClassicalWashout:
         guard = p.tilt_fz_guard is not None
         gz_above = 0.0 if p.tilt_fz_guard is None else p.tilt_fz_guard[1]
         gz_l = 0.0 if p.tilt_fz_guard is None else p.tilt_fz_guard[0]
-        gz_max = math.acos(1.0 - gz_l / g)
         gz_width = max(gz_above, _GUARD_MIN_RAMP_M_S2)
-        acos = math.acos
         fz_lp = self.fz_lp
         comp = compress
         has_lead = p.lead_s is not None
@@ -713,6 +711,16 @@ class ClassicalWashout:
             else:
                 tix = sx
                 tiy = sy
+            if guard:  # the tilt's fz loss bounded while the vehicle's f_z is high
+                dz = bq(fz_lp, z, 30, fz - g)
+                if dz > gz_above:
+                    ramp = (dz - gz_above) / gz_width
+                    c = 1.0 - (gz_l if ramp >= 1.0 else gz_l + (g - gz_l) * (1.0 - ramp)) / g
+                    cap = g * sqrt(1.0 - c * c)
+                    nt = sqrt(tix * tix + tiy * tiy)
+                    if nt > cap:
+                        tix = tix * (cap / nt)
+                        tiy = tiy * (cap / nt)
             ylx = lb0 * tix + z[0]
             z[0] = lb1 * tix - la1 * ylx + z[1]
             z[1] = lb2 * tix - la2 * ylx
@@ -743,17 +751,6 @@ class ClassicalWashout:
                     tp = soft(tp, tl, knee)
                 if tr > atl or tr < -atl:
                     tr = soft(tr, tl, knee)
-            if guard:  # the tilt's fz loss bounded while the vehicle's f_z is high
-                dz = bq(fz_lp, z, 30, fz - g)
-                if dz > gz_above:
-                    ramp = (dz - gz_above) / gz_width
-                    cap = gz_max
-                    if ramp < 1.0:
-                        cap = acos(1.0 - (gz_l + (g - gz_l) * (1.0 - ramp)) / g)
-                    nt = sqrt(tr * tr + tp * tp)
-                    if nt > cap:
-                        tr = tr * (cap / nt)
-                        tp = tp * (cap / nt)
             ttr = tr * mr  # the tilt's target (for the lag the translation fills)
             ttp = tp * mp
             tilt = state.tilt
@@ -1027,6 +1024,17 @@ class ClassicalWashout:
             ktx = p.tilt_scale[0]
             tix = np.where(flx > 0.0, (ktx * fwd) * flx, ktx * flx) if fwd != 1.0 else ktx * flx
             tiy = p.tilt_scale[1] * fly
+        if p.tilt_fz_guard is not None:  # the tilt's fz loss bounded while f_z is high
+            gz_l, gz_above = p.tilt_fz_guard[0], p.tilt_fz_guard[1]
+            width = max(gz_above, _GUARD_MIN_RAMP_M_S2)
+            ramp = (filt([self.fz_lp], fz - g, 15) - gz_above) / width
+            c = 1.0 - (gz_l + (g - gz_l) * (1.0 - np.clip(ramp, 0.0, 1.0))) / g
+            cap = g * np.sqrt(1.0 - c * c)
+            nt = np.sqrt(tix * tix + tiy * tiy)
+            cut = (ramp > 0.0) & (nt > cap)
+            shrink = cap / np.where(cut, nt, 1.0)
+            tix = np.where(cut, tix * shrink, tix)
+            tiy = np.where(cut, tiy * shrink, tiy)
         ylx = filt([self.tilt_lp], tix, 0)
         yly = filt([self.tilt_lp], tiy, 1)
         tp = -np.arcsin(np.clip(ylx / g, -1.0, 1.0))
@@ -1049,16 +1057,6 @@ class ClassicalWashout:
         else:
             tp = soft_limit_array(tp, p.tilt_limit_rad, knee)
             tr = soft_limit_array(tr, p.tilt_limit_rad, knee)
-        if p.tilt_fz_guard is not None:  # the tilt's fz loss bounded while f_z is high
-            gz_l, gz_above = p.tilt_fz_guard[0], p.tilt_fz_guard[1]
-            ramp = (filt([self.fz_lp], fz - g, 15) - gz_above) / max(gz_above, _GUARD_MIN_RAMP_M_S2)
-            loss = gz_l + (g - gz_l) * (1.0 - np.clip(ramp, 0.0, 1.0))
-            cap = np.arccos(1.0 - loss / g)
-            nt = np.sqrt(tr * tr + tp * tp)
-            cut = (ramp > 0.0) & (nt > cap)
-            shrink = cap / np.where(cut, nt, 1.0)
-            tr = np.where(cut, tr * shrink, tr)
-            tp = np.where(cut, tp * shrink, tp)
         fs = self.fs_hz
         st = p.tilt_rate_limit_rad_s / fs
         ttr, ttp = tr, tp  # the tilt's target (for the lag the translation fills)

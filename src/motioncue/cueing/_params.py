@@ -203,18 +203,20 @@ class CueingParams:
     tilt_fz_guard : 3-tuple or None
         ``(loss_m_s2, above_m_s2, wn_rad_s)``: a tilt lowers the specific force the rider
         feels along the platform's z axis by ``g (1 - cos(roll) cos(pitch))`` (0.20 m/s^2 at
-        11.6 deg of roll), the opposite of a vehicle's rising ``f_z`` in a fast downforce
-        corner: a z reversal for as long as the corner is held. Where the vehicle's ``f_z -
-        g``, low-passed by ``wn^2 / (s^2 + 2 wn s + wn^2)`` (so that bumps do not switch it),
-        exceeds ``above_m_s2``, the tilt's target ``(roll*, pitch*)`` is scaled back towards
-        level onto the disc ``sqrt(roll*^2 + pitch*^2) <= acos(1 - l / g)`` (before the rate
-        limit, which smooths the change), on which ``g (1 - cos(roll) cos(pitch)) <= l``
-        (``cos a cos b >= cos(sqrt(a^2 + b^2))`` for such angles; equality in pure roll or
-        pitch). The allowed loss ``l`` falls linearly from ``g`` (no cut) where the low-passed
-        ``f_z - g`` is ``above_m_s2`` to ``loss_m_s2`` where it is ``2 above_m_s2`` (at least
-        0.05 m/s^2 further) and stays there above. ``loss_m_s2`` in (0, 9.8],
-        ``above_m_s2`` in [0, 100], ``wn_rad_s`` in (0, 100] (below Nyquist of the run).
-        ``None`` (the default): no guard.
+        11.6 deg of roll), the opposite of a vehicle's rising ``f_z`` in a dip or compression
+        taken in a corner: a z reversal for as long as the roll is held. Where the vehicle's
+        ``f_z - g``, low-passed by ``wn^2 / (s^2 + 2 wn s + wn^2)`` (so that bumps do not
+        switch it), exceeds ``above_m_s2``, the force the tilt is made from (``(f_t,x,
+        f_t,y)`` of step 2 of :mod:`._classical`, before the tilt's low-pass) is scaled back
+        towards 0 onto the disc of radius ``g sin(acos(1 - l / g))``. Then ``sin(roll)^2 +
+        sin(pitch)^2 <= 1 - c^2`` (``c = 1 - l / g``; the low-pass's step response does not
+        overshoot) and so ``g (1 - cos(roll) cos(pitch)) <= l``, with equality in pure roll
+        or pitch. The allowed loss ``l`` falls linearly from ``g`` (no cut) where the
+        low-passed ``f_z - g`` is ``above_m_s2`` to ``loss_m_s2`` where it is ``2
+        above_m_s2`` (at least 0.05 m/s^2 further) and stays there above; the tilt's low-pass
+        and rate limits smooth the cut. ``loss_m_s2`` in (0, 9.8], ``above_m_s2`` in [0,
+        100], ``wn_rad_s`` in (0, 100] (below Nyquist of the run). ``None`` (the default):
+        no guard.
     head_offset_m : 3-tuple
         The rider's head (the vestibular system) relative to the platform origin, platform
         frame ``[x fwd, y left, z up]`` (m). The translational channel removes the specific
