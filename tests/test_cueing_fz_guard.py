@@ -3,14 +3,14 @@
 A held tilt lowers the felt specific force along the platform's z axis by ``g (1 - cos(roll)
 cos(pitch))``; where the vehicle's own ``f_z`` rises (a dip or compression taken in a corner)
 that is a z reversal for as long as the roll is held. With ``tilt_fz_guard = (L, A, wz)`` the
-force the tilt is made of is scaled back onto the disc of radius ``g sqrt(1 - (1 - L / g)^2)``
-where the vehicle's low-passed ``f_z - g`` is at least ``2 A`` (a linear ramp of the allowed
-loss from ``g`` at ``A`` down to ``L`` at ``2 A``).
+roll gives way where the vehicle's low-passed ``f_z - g`` is at least ``2 A`` (a linear ramp
+of the allowed loss from ``g`` at ``A`` down to ``L`` at ``2 A``): the forces the tilt is made
+of are kept in the disc of radius ``g sqrt(1 - (1 - L / g)^2)`` by the roll's alone.
 Oracles: closed forms of the settled tilt under a constant force (pure roll at ``acos(1 - L /
-g)``, exactly; roll and pitch together with ``sin^2 roll + sin^2 pitch`` on the disc along the
-unguarded direction, and their fz loss at most ``L``; the ramp's cap); below ``A`` nothing
-changes (bit for bit against the run without the guard); batch equals streaming, chunked;
-the TOML round trip; bad values refused with their name and range.
+g)``, exactly; with pitch, the pitch kept and ``sin^2 roll + sin^2 pitch`` on the disc, the fz
+loss at most ``L``; a pitch beyond the disc alone leaves no roll; the ramp's cap); below
+``A`` nothing changes (bit for bit against the run without the guard); batch equals
+streaming, chunked; the TOML round trip; bad values refused with their name and range.
 """
 
 from __future__ import annotations
@@ -54,21 +54,27 @@ def test_held_roll_settles_on_the_disc_edge_where_the_vehicle_is_pressed_down() 
     assert guarded[1] == pytest.approx(0.0, abs=1e-12)
 
 
-def test_roll_and_pitch_together_keep_their_direction_and_lose_at_most_the_bound() -> None:
+def test_with_pitch_the_roll_gives_way_and_the_loss_is_bounded() -> None:
     loss = 0.05
     c = 1.0 - loss / G
     plain = _settled(_firm(), -10.0, -10.0, 0.0)  # a stop in a left corner, inside the reach
     r, p = _settled(_firm(tilt_fz_guard=(loss, 0.5, 2.0)), -10.0, -10.0, 2.0)
     assert plain[0] < 0.0 < plain[1]  # leftward force: roll-; braking: pitch+ (nose down)
     assert math.hypot(math.sin(plain[0]), math.sin(plain[1])) > 1.3 * math.sqrt(1.0 - c * c)
-    # the force the tilt is made of lies on the disc, in the unguarded direction
+    assert p == pytest.approx(plain[1], abs=1e-12)  # the pitch is kept
+    assert r < 0.0  # the roll keeps its sign and ends on the disc
     assert math.sin(r) ** 2 + math.sin(p) ** 2 == pytest.approx(1.0 - c * c, rel=1e-9)
-    assert math.sin(r) / math.sin(p) == pytest.approx(
-        math.sin(plain[0]) / math.sin(plain[1]), rel=1e-9
-    )
     # cos r cos p = sqrt(1 - sin^2 r - sin^2 p + sin^2 r sin^2 p) >= c: the loss is bounded
     assert G * (1.0 - math.cos(r) * math.cos(p)) <= loss + 1e-12
     assert G * (1.0 - math.cos(r) * math.cos(p)) > 0.99 * loss  # and close to it here
+
+
+def test_a_pitch_beyond_the_disc_leaves_no_roll() -> None:
+    plain = _settled(_firm(), -30.0, -10.0, 0.0)  # a hard stop: pitch alone beyond 0.01
+    r, p = _settled(_firm(tilt_fz_guard=(0.01, 0.5, 2.0)), -30.0, -10.0, 2.0)
+    assert G * (1.0 - math.cos(plain[1])) > 0.01
+    assert r == pytest.approx(0.0, abs=1e-12)
+    assert p == pytest.approx(plain[1], abs=1e-12)
 
 
 def test_the_ramp_between_above_and_twice_above() -> None:

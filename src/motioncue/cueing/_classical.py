@@ -52,11 +52,12 @@ Signal flow (per sample; frames, signs and units of conventions.md)
    |pitch / P|^q <= 1`` instead (``q = 2`` the ellipse; a smaller ``q`` is tighter along the
    diagonals, where a reach extended by the reach offset of step 4 is shortest).
    With ``tilt_fz_guard = (L, A, wz)`` the vehicle's ``f_z - g`` passes the low-pass
-   ``wz^2 / (s^2 + 2 wz s + wz^2)``, ``d``; where ``d > A`` the force ``(f_t,x, f_t,y)`` fed
-   to ``G_T`` is scaled back towards 0 onto the disc of radius ``g sqrt(1 - c^2)``, ``c = 1 -
-   l / g``, ``l = L + (g - L) (1 - min(1, (d - A) / max(A, 0.05)))``: a settled tilt then has
-   ``sin(roll)^2 + sin(pitch)^2 <= 1 - c^2``, so its fz loss ``g (1 - cos(roll) cos(pitch))
-   <= l`` (the tilt no longer lowers the felt ``f_z`` against a vehicle pressed into a dip).
+   ``wz^2 / (s^2 + 2 wz s + wz^2)``, ``d``; where ``d > A`` the roll's force ``f_t,y`` fed
+   to ``G_T`` is clipped to ``+-sqrt(max(0, g^2 (1 - c^2) - f_t,x^2))`` (the pitch's kept),
+   ``c = 1 - l / g``, ``l = L + (g - L) (1 - min(1, (d - A) / max(A, 0.05)))``: a settled
+   tilt then has ``sin(roll)^2 + sin(pitch)^2 <= 1 - c^2`` unless the pitch alone exceeds
+   it, so its fz loss ``g (1 - cos(roll) cos(pitch)) <= l`` (the held roll no longer lowers
+   the felt ``f_z`` against a vehicle pressed into a dip).
    With ``tilt_accel_limit_rad_s2 = a`` the tilt is also acceleration limited
    (:func:`rate_accel_limit_step`): with the per-sample step ``u[n] = tilt[n] - tilt[n-1]``,
    ``d = a / fs^2`` and ``e = target - tilt[n-1]``, the wanted step is
@@ -716,11 +717,12 @@ class ClassicalWashout:
                 if dz > gz_above:
                     ramp = (dz - gz_above) / gz_width
                     c = 1.0 - (gz_l if ramp >= 1.0 else gz_l + (g - gz_l) * (1.0 - ramp)) / g
-                    cap = g * sqrt(1.0 - c * c)
-                    nt = sqrt(tix * tix + tiy * tiy)
-                    if nt > cap:
-                        tix = tix * (cap / nt)
-                        tiy = tiy * (cap / nt)
+                    room = g * g * (1.0 - c * c) - tix * tix  # the roll gives way
+                    lim = sqrt(room) if room > 0.0 else 0.0
+                    if tiy > lim:
+                        tiy = lim
+                    elif tiy < -lim:
+                        tiy = -lim
             ylx = lb0 * tix + z[0]
             z[0] = lb1 * tix - la1 * ylx + z[1]
             z[1] = lb2 * tix - la2 * ylx
@@ -1029,12 +1031,9 @@ class ClassicalWashout:
             width = max(gz_above, _GUARD_MIN_RAMP_M_S2)
             ramp = (filt([self.fz_lp], fz - g, 15) - gz_above) / width
             c = 1.0 - (gz_l + (g - gz_l) * (1.0 - np.clip(ramp, 0.0, 1.0))) / g
-            cap = g * np.sqrt(1.0 - c * c)
-            nt = np.sqrt(tix * tix + tiy * tiy)
-            cut = (ramp > 0.0) & (nt > cap)
-            shrink = cap / np.where(cut, nt, 1.0)
-            tix = np.where(cut, tix * shrink, tix)
-            tiy = np.where(cut, tiy * shrink, tiy)
+            room = g * g * (1.0 - c * c) - tix * tix  # the roll gives way
+            lim = np.sqrt(np.maximum(room, 0.0))
+            tiy = np.where(ramp > 0.0, np.clip(tiy, -lim, lim), tiy)
         ylx = filt([self.tilt_lp], tix, 0)
         yly = filt([self.tilt_lp], tiy, 1)
         tp = -np.arcsin(np.clip(ylx / g, -1.0, 1.0))

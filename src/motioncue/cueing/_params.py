@@ -206,17 +206,18 @@ class CueingParams:
         11.6 deg of roll), the opposite of a vehicle's rising ``f_z`` in a dip or compression
         taken in a corner: a z reversal for as long as the roll is held. Where the vehicle's
         ``f_z - g``, low-passed by ``wn^2 / (s^2 + 2 wn s + wn^2)`` (so that bumps do not
-        switch it), exceeds ``above_m_s2``, the force the tilt is made from (``(f_t,x,
-        f_t,y)`` of step 2 of :mod:`._classical`, before the tilt's low-pass) is scaled back
-        towards 0 onto the disc of radius ``g sin(acos(1 - l / g))``. Then ``sin(roll)^2 +
-        sin(pitch)^2 <= 1 - c^2`` (``c = 1 - l / g``; the low-pass's step response does not
-        overshoot) and so ``g (1 - cos(roll) cos(pitch)) <= l``, with equality in pure roll
-        or pitch. The allowed loss ``l`` falls linearly from ``g`` (no cut) where the
-        low-passed ``f_z - g`` is ``above_m_s2`` to ``loss_m_s2`` where it is ``2
-        above_m_s2`` (at least 0.05 m/s^2 further) and stays there above; the tilt's low-pass
-        and rate limits smooth the cut. ``loss_m_s2`` in (0, 9.8], ``above_m_s2`` in [0,
-        100], ``wn_rad_s`` in (0, 100] (below Nyquist of the run). ``None`` (the default):
-        no guard.
+        switch it), exceeds ``above_m_s2``, the roll gives way: the force the roll is made
+        of (``f_t,y`` of step 2 of :mod:`._classical`, before the tilt's low-pass) is clipped
+        to ``+-sqrt(max(0, g^2 (1 - c^2) - f_t,x^2))``, ``c = 1 - l / g``, and the pitch's
+        ``f_t,x`` is kept. A settled tilt then has ``sin(roll)^2 + sin(pitch)^2 <= 1 - c^2``
+        (the low-pass's step response does not overshoot), so ``g (1 - cos(roll)
+        cos(pitch)) <= l``, with equality in pure roll, unless the pitch alone loses more
+        (then the roll is 0). The allowed loss ``l`` falls linearly from ``g`` (no cut) where
+        the low-passed ``f_z - g`` is ``above_m_s2`` to ``loss_m_s2`` where it is ``2
+        above_m_s2`` (at least 0.05 m/s^2 further) and stays there above; the tilt's
+        low-pass and rate limits smooth the cut. ``loss_m_s2`` in (0, 9.8], ``above_m_s2``
+        in [0, 100], ``wn_rad_s`` in (0, 100] (below Nyquist of the run). ``None`` (the
+        default): no guard.
     head_offset_m : 3-tuple
         The rider's head (the vestibular system) relative to the platform origin, platform
         frame ``[x fwd, y left, z up]`` (m). The translational channel removes the specific
