@@ -53,8 +53,12 @@ chicane/gt seed 301 and flowing/gt seed 303, with --laps 3, 3, 2, 2; none held o
   missed fx 29.2 -> 29.4 %. Not adopted.
 * The guard as committed (the roll gives way, the pitch is kept), (0.1, 0.2, 5.0) by the
   same grid and rule: flowing/gt seed 303 reversals 1.33 -> 0.57 % (z 0.95 -> 0.19 %), share
-  fy 0.130 -> 0.128, corr fx 0.989 as before, the other seven drives unchanged. Not looked
-  at on the held-out drives.
+  fy 0.130 -> 0.128, corr fx 0.989 as before, the other seven drives unchanged. Held out (a
+  third look, the one the session's brief asked for at the end): flowing-formula reversals
+  4.00 -> 2.03 % (z 2.83 -> 0.80 %), all false cues 6.44 -> 4.26 %, corr fx 0.951 -> 0.954,
+  but corr fy 0.985 -> 0.971 and share fy 0.102 -> 0.097; forest-rally unchanged; the lap's
+  false cues 2.69 -> 2.72 %, the rest as before. Not adopted: tests/test_default_held_out.py
+  holds the default's corr fy within 0.006 of racing-hexapod's (0.990 there).
 """
 
 from __future__ import annotations
