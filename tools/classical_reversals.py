@@ -21,6 +21,8 @@ drive may be looked at; no preset is tuned here). Run from the repository root::
 from __future__ import annotations
 
 import argparse
+import ast
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -54,11 +56,16 @@ def main() -> None:
     ap.add_argument("--episodes", type=int, default=0)
     ap.add_argument("--png")
     ap.add_argument("--scale", type=float, default=0.1, help="vehicle fz scale in the plot")
+    ap.add_argument("--set", nargs="*", default=[], help="NAME=VALUE parameter overrides")
     args = ap.parse_args()
     platform = load_platform("stewart6-linear")
     limits = ActuatorLimits.from_platform(platform, load_controller("mbox6"), rate_hz=RATE)
     rec = resample(read_recording_csv(Path(args.drive)), RATE)
-    run = run_chain(rec.f, rec.w, load_cueing(args.preset), platform, limits, RATE)
+    params = load_cueing(args.preset)
+    for item in args.set:
+        key, value = item.split("=", 1)
+        params = replace(params, **{key: ast.literal_eval(value)})
+    run = run_chain(rec.f, rec.w, params, platform, limits, RATE)
     ev = run.evaluation
     pv, ps, thr = ev.perceived_vehicle, ev.perceived_sim, ev.thresholds
     m = cue_metrics(pv, ps, thr, clamped_share=run.poses_clamped / len(run.poses))

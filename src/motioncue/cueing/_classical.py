@@ -51,6 +51,13 @@ Signal flow (per sample; frames, signs and units of conventions.md)
    With ``tilt_reach_exponent = q`` the region is the superellipse ``|roll / R|^q +
    |pitch / P|^q <= 1`` instead (``q = 2`` the ellipse; a smaller ``q`` is tighter along the
    diagonals, where a reach extended by the reach offset of step 4 is shortest).
+   With ``tilt_fz_guard = (L, A, wz)`` the vehicle's ``f_z - g`` passes the low-pass
+   ``wz^2 / (s^2 + 2 wz s + wz^2)``, ``d``; where ``d > A`` the roll's force ``f_t,y`` fed
+   to ``G_T`` is clipped to ``+-sqrt(max(0, g^2 (1 - c^2) - f_t,x^2))`` (the pitch's kept),
+   ``c = 1 - l / g``, ``l = L + (g - L) (1 - min(1, (d - A) / max(A, 0.05)))``: a settled
+   tilt then has ``sin(roll)^2 + sin(pitch)^2 <= 1 - c^2`` unless the pitch alone exceeds
+   it, so its fz loss ``g (1 - cos(roll) cos(pitch)) <= l`` (the held roll no longer lowers
+   the felt ``f_z`` against a vehicle pressed into a dip).
    With ``tilt_accel_limit_rad_s2 = a`` the tilt is also acceleration limited
    (:func:`rate_accel_limit_step`): with the per-sample step ``u[n] = tilt[n] - tilt[n-1]``,
    ``d = a / fs^2`` and ``e = target - tilt[n-1]``, the wanted step is
@@ -178,6 +185,7 @@ __all__ = [
 ]
 
 _IDENTITY: Section = (1.0, 0.0, 0.0, 1.0, 0.0, 0.0)
+_GUARD_MIN_RAMP_M_S2 = 0.05  # the fz guard's ramp is at least this wide (tilt_fz_guard)
 _MIN_COS_PITCH = 1e-3
 
 # Section order (each section owns two delay states in WashoutState.z):
@@ -185,7 +193,8 @@ _MIN_COS_PITCH = 1e-3
 # 4-6: rotational high-pass+integrator roll, pitch, yaw; 7-12: translational x1, x2, y1, y2,
 # z1, z2 (the second section of an axis is the identity when its wb is 0).
 # 13, 14: phase lead on fx, fy (the identity without lead_s).
-_N_SECTIONS = 15
+# 15: the low-pass of the vehicle's f_z - g for tilt_fz_guard (the identity without it).
+_N_SECTIONS = 16
 
 
 @dataclass(eq=False)
@@ -194,8 +203,8 @@ class WashoutState:
 
     Attributes
     ----------
-    z : list of 30 floats
-        Delay states of the 15 second-order sections.
+    z : list of 32 floats
+        Delay states of the 16 second-order sections.
     tilt : list of 2 floats
         Rate-limited tilt ``[roll, pitch]`` (rad) of the last sample.
     hold : list of 6 floats
@@ -453,6 +462,7 @@ class ClassicalWashout:
     params: CueingParams
     fs_hz: float
     tilt_lp: Section = field(init=False)
+    fz_lp: Section = field(init=False)
     lead: tuple[Section, Section] = field(init=False)
     rot: tuple[Section, Section, Section] = field(init=False)
     trans: tuple[tuple[Section, Section], ...] = field(init=False)
@@ -488,6 +498,11 @@ class ClassicalWashout:
                 leads[i] = tustin_section([tau, 1.0], [tau / LEAD_GAIN, 1.0], fs, 1.0 / tau)
         object.__setattr__(self, "lead", (leads[0], leads[1]))
         object.__setattr__(self, "tilt_lp", tilt_lp)
+        fz_lp = _IDENTITY
+        if p.tilt_fz_guard is not None:
+            wz = p.tilt_fz_guard[2]
+            fz_lp = tustin_section([wz * wz], [1.0, 2.0 * wz, wz * wz], fs, wz)
+        object.__setattr__(self, "fz_lp", fz_lp)
         object.__setattr__(self, "rot", (rot[0], rot[1], rot[2]))
         object.__setattr__(self, "trans", tuple(trans))
         object.__setattr__(self, "_step_impl", self._make_step())
@@ -500,6 +515,7 @@ class ClassicalWashout:
             sos[7 + 2 * k] = _sos(*secs)
         sos[13] = _sos(leads[0])
         sos[14] = _sos(leads[1])
+        sos[15] = _sos(fz_lp)
         object.__setattr__(self, "_sos", sos)
 
     # ------------------------------------------------------------------ continuous designs
@@ -593,6 +609,11 @@ class ClassicalWashout:
         lxp, lxn, lyp, lyn = p.tilt_force_limits_m_s2
         rmin, rmax, pmin, pmax = p.tilt_limits_rad
         qe = p.tilt_reach_exponent
+        guard = p.tilt_fz_guard is not None
+        gz_above = 0.0 if p.tilt_fz_guard is None else p.tilt_fz_guard[1]
+        gz_l = 0.0 if p.tilt_fz_guard is None else p.tilt_fz_guard[0]
+        gz_width = max(gz_above, _GUARD_MIN_RAMP_M_S2)
+        fz_lp = self.fz_lp
         comp = compress
         has_lead = p.lead_s is not None
         ld0, ld1 = self.lead
@@ -691,6 +712,17 @@ class ClassicalWashout:
             else:
                 tix = sx
                 tiy = sy
+            if guard:  # the tilt's fz loss bounded while the vehicle's f_z is high
+                dz = bq(fz_lp, z, 30, fz - g)
+                if dz > gz_above:
+                    ramp = (dz - gz_above) / gz_width
+                    c = 1.0 - (gz_l if ramp >= 1.0 else gz_l + (g - gz_l) * (1.0 - ramp)) / g
+                    room = g * g * (1.0 - c * c) - tix * tix  # the roll gives way
+                    lim = sqrt(room) if room > 0.0 else 0.0
+                    if tiy > lim:
+                        tiy = lim
+                    elif tiy < -lim:
+                        tiy = -lim
             ylx = lb0 * tix + z[0]
             z[0] = lb1 * tix - la1 * ylx + z[1]
             z[1] = lb2 * tix - la2 * ylx
@@ -994,6 +1026,14 @@ class ClassicalWashout:
             ktx = p.tilt_scale[0]
             tix = np.where(flx > 0.0, (ktx * fwd) * flx, ktx * flx) if fwd != 1.0 else ktx * flx
             tiy = p.tilt_scale[1] * fly
+        if p.tilt_fz_guard is not None:  # the tilt's fz loss bounded while f_z is high
+            gz_l, gz_above = p.tilt_fz_guard[0], p.tilt_fz_guard[1]
+            width = max(gz_above, _GUARD_MIN_RAMP_M_S2)
+            ramp = (filt([self.fz_lp], fz - g, 15) - gz_above) / width
+            c = 1.0 - (gz_l + (g - gz_l) * (1.0 - np.clip(ramp, 0.0, 1.0))) / g
+            room = g * g * (1.0 - c * c) - tix * tix  # the roll gives way
+            lim = np.sqrt(np.maximum(room, 0.0))
+            tiy = np.where(ramp > 0.0, np.clip(tiy, -lim, lim), tiy)
         ylx = filt([self.tilt_lp], tix, 0)
         yly = filt([self.tilt_lp], tiy, 1)
         tp = -np.arcsin(np.clip(ylx / g, -1.0, 1.0))

@@ -200,6 +200,24 @@ class CueingParams:
         Shape of the compressive tilt's region of roll and pitch together: the superellipse
         ``|roll / R|^q + |pitch / P|^q <= 1`` (``R, P`` the limits in that quadrant) with
         ``q`` in [1, 8]; 2 (the default) is the ellipse.
+    tilt_fz_guard : 3-tuple or None
+        ``(loss_m_s2, above_m_s2, wn_rad_s)``: a tilt lowers the specific force the rider
+        feels along the platform's z axis by ``g (1 - cos(roll) cos(pitch))`` (0.20 m/s^2 at
+        11.6 deg of roll), the opposite of a vehicle's rising ``f_z`` in a dip or compression
+        taken in a corner: a z reversal for as long as the roll is held. Where the vehicle's
+        ``f_z - g``, low-passed by ``wn^2 / (s^2 + 2 wn s + wn^2)`` (so that bumps do not
+        switch it), exceeds ``above_m_s2``, the roll gives way: the force the roll is made
+        of (``f_t,y`` of step 2 of :mod:`._classical`, before the tilt's low-pass) is clipped
+        to ``+-sqrt(max(0, g^2 (1 - c^2) - f_t,x^2))``, ``c = 1 - l / g``, and the pitch's
+        ``f_t,x`` is kept. A settled tilt then has ``sin(roll)^2 + sin(pitch)^2 <= 1 - c^2``
+        (the low-pass's step response does not overshoot), so ``g (1 - cos(roll)
+        cos(pitch)) <= l``, with equality in pure roll, unless the pitch alone loses more
+        (then the roll is 0). The allowed loss ``l`` falls linearly from ``g`` (no cut) where
+        the low-passed ``f_z - g`` is ``above_m_s2`` to ``loss_m_s2`` where it is ``2
+        above_m_s2`` (at least 0.05 m/s^2 further) and stays there above; the tilt's
+        low-pass and rate limits smooth the cut. ``loss_m_s2`` in (0, 9.8], ``above_m_s2``
+        in [0, 100], ``wn_rad_s`` in (0, 100] (below Nyquist of the run). ``None`` (the
+        default): no guard.
     head_offset_m : 3-tuple
         The rider's head (the vestibular system) relative to the platform origin, platform
         frame ``[x fwd, y left, z up]`` (m). The translational channel removes the specific
@@ -254,6 +272,7 @@ class CueingParams:
     tilt_forward_ratio: float = 1.0
     tilt_offset_m: tuple[tuple[float, ...], ...] | None = None
     tilt_reach_exponent: float = 2.0
+    tilt_fz_guard: tuple[float, float, float] | None = None
     head_offset_m: Vec3 = (0.0, 0.0, 0.0)
     rot_wn_rad_s: Vec3 = (1.0, 1.0, 0.5)
     rot_zeta: Vec3 = (1.0, 1.0, 1.0)
@@ -354,6 +373,16 @@ class CueingParams:
                 "tilt_scale (the tilt's own gain, of which it is a share)"
             )
         _check("tilt_reach_exponent", (self.tilt_reach_exponent,), 1.0, False, 8.0)
+        if self.tilt_fz_guard is not None:
+            guard = self.tilt_fz_guard
+            if len(guard) != 3:
+                raise ConfigError(
+                    f"CueingParams.tilt_fz_guard = {guard!r} is invalid; allowed: "
+                    "(loss_m_s2, above_m_s2, wn_rad_s)"
+                )
+            _check("tilt_fz_guard loss_m_s2", (guard[0],), 0.0, True, 9.8)
+            _check("tilt_fz_guard above_m_s2", (guard[1],), 0.0, False, 100.0)
+            _check("tilt_fz_guard wn_rad_s", (guard[2],), 0.0, True, 100.0)
         if self.tilt_offset_m is not None:
             off = self.tilt_offset_m
             if len(off) != 3 or any(len(r) != 5 for r in off):
@@ -477,6 +506,9 @@ def load_cueing(name_or_path: str | Path) -> CueingParams:
                                                    #   forward force / on rearward (default 1)
         reach_exponent = 2.0                       # optional: roll and pitch together in
                                                    #   |r/R|^q + |p/P|^q <= 1 (default 2)
+        fz_guard = [0.15, 2.0, 1.0]                # optional: the tilt's fz loss at most
+                                                   #   0.15 m/s^2 while the vehicle's
+                                                   #   low-passed (1 rad/s) f_z - g > 2 m/s^2
         offset_mm = [[0, 0, 0, 0, 0],              # optional: x, y, z of the origin with the
                      [120, 0, 0, 0, 0],            #   tilt (mm per rad of roll, pitch; per
                      [0, -60, -40, -80, 0]]        #   rad^2 of roll^2, pitch^2, roll pitch)
@@ -574,6 +606,10 @@ def load_cueing(name_or_path: str | Path) -> CueingParams:
     if ti.has("forward_ratio"):
         fwd = ti.number("forward_ratio", lo=0.0, hi=4.0, lo_open=True)
     reach_q = ti.number("reach_exponent", lo=1.0, hi=8.0) if ti.has("reach_exponent") else 2.0
+    fz_guard = None
+    if ti.has("fz_guard"):
+        gv = ti.vector("fz_guard", 3)
+        fz_guard = (gv[0], gv[1], gv[2])
     offset = None
     if ti.has("offset_mm"):
         rows = _number_rows(ti, "offset_mm", 3, 5, "3 rows (x, y, z) of 5 numbers")
@@ -641,6 +677,7 @@ def load_cueing(name_or_path: str | Path) -> CueingParams:
             tilt_forward_ratio=fwd,
             tilt_offset_m=offset,
             tilt_reach_exponent=reach_q,
+            tilt_fz_guard=fz_guard,
             head_offset_m=head,
             rot_wn_rad_s=r_wn,
             rot_zeta=r_zeta,

@@ -572,6 +572,8 @@ def preset_toml(params: CueingParams, comments: Sequence[str] = ()) -> str:
         lines.append(f"rate_mix = [{rows}]")
     if params.tilt_reach_exponent != 2.0:
         lines.append(f"reach_exponent = {_fmt(params.tilt_reach_exponent)}")
+    if params.tilt_fz_guard is not None:
+        lines.append(f"fz_guard = {_vec(params.tilt_fz_guard)}")
     if params.tilt_offset_m is not None:
         rows = ", ".join(_vec(r, 1e3) for r in params.tilt_offset_m)
         lines.append(f"offset_mm = [{rows}]")
