@@ -95,3 +95,45 @@ def test_a_ride_whose_source_is_missing_or_unreadable_is_still_viewed(tmp_path: 
         load_view_input(path, recording=tmp_path / "bad.csv")
     with pytest.raises(ConfigError, match="not a recording of vehicle motion"):
         load_view_input(path, recording=tmp_path / "keys.csv")
+
+
+def test_view_reports_every_cue_metric_in_its_notes_and_json(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """Issue 20: the metrics in ``view`` and its JSON. Closed forms on the view's own rider:
+    a vehicle twice the rider's perceived motion is rendered at share and gain 0.5 with
+    correlation 1 and no false cue; its mirror gives reversals wherever both are above
+    threshold. The JSON carries what the notes say."""
+    from motioncue.cueing._vestibular import DEFAULT_MODEL_SET
+    from motioncue.viewer import view_metrics
+    from motioncue.viewer._view import _perceived
+
+    rec = _excerpt(tmp_path / "drive.csv", 1000, 400)
+    ride_path = tmp_path / "drive.ride"
+    assert main(["generate", "--input", str(rec), "--platform", "stewart6-linear",
+                 "--controller", "mbox6", "--out", str(ride_path), "--quiet"]) == 0  # fmt: skip
+    v = load_view_input(ride_path)
+    assert v.metrics is not None and v.vehicle is not None
+    assert any(n.startswith("cues fx / fy: gain") for n in v.notes), v.notes
+    p, _ = _perceived(v.scene, v.rate_hz)
+    lo, hi = v.vehicle_window_s or (0.0, 0.0)
+    inside = (v.scene.t_s >= lo) & (v.scene.t_s <= hi)
+    assert inside.sum() == v.metrics.n_samples > 100
+    twice = view_metrics(dataclasses.replace(v, vehicle=2.0 * p), p)
+    np.testing.assert_allclose(twice.rendered_share, 0.5, rtol=1e-9)
+    np.testing.assert_allclose(twice.gain, 0.5, rtol=1e-9)
+    np.testing.assert_allclose(twice.correlation[:2], 1.0, atol=1e-9)
+    assert twice.false_any == 0.0 and twice.reversals_any == 0.0
+    mirror = view_metrics(dataclasses.replace(v, vehicle=-p), p)
+    thr = np.asarray(get_model_set(DEFAULT_MODEL_SET).thresholds)
+    both = np.abs(p[inside]) > thr
+    np.testing.assert_allclose(mirror.reversals, both.mean(axis=0), atol=1e-12)
+    assert mirror.reversals[0] > 0.0
+    capsys.readouterr()  # generate's summary line
+    assert main(["view", str(ride_path), "--out", str(tmp_path / "v.html"), "--json"]) == 0
+    out = json.loads(capsys.readouterr().out)["metrics"]
+    assert out["n_samples"] == v.metrics.n_samples
+    for key in ("rendered_share", "gain", "correlation", "missed", "reversals", "spurious"):
+        got = [out[key][c] for c in ("fx", "fy")]  # written to three decimals
+        np.testing.assert_allclose(got, getattr(v.metrics, key)[:2], atol=5e-4, err_msg=key)
+    assert out["false_any"] == pytest.approx(v.metrics.false_any, abs=5e-4)

@@ -25,6 +25,7 @@ def _view(args: argparse.Namespace) -> int:
                 "samples": int(view.scene.t_s.size),
                 "duration_s": float(view.scene.t_s[-1]),
                 "notes": list(view.notes),
+                "metrics": None if view.metrics is None else view.metrics.to_dict(),
             }
         )
         return 0

@@ -23,6 +23,7 @@ from ._view import (
     load_view_input,
     rendered_shares,
     view_html,
+    view_metrics,
     write_view,
 )
 
@@ -39,6 +40,7 @@ __all__ = [
     "load_view_input",
     "parse_monitor",
     "rendered_shares",
+    "view_metrics",
     "scene_from_poses",
     "scene_from_q",
     "stroke_use",

@@ -33,6 +33,7 @@ from ._page import html_page, plotly_js, scene_layout
 from ._scene import Scene, scene_from_poses, scene_from_q
 
 if TYPE_CHECKING:
+    from ..cueing import CueMetrics
     from ..kinematics import Platform
     from ..pipeline import Ride
 
@@ -42,6 +43,7 @@ __all__ = [
     "ViewInput",
     "load_view_input",
     "rendered_shares",
+    "view_metrics",
     "view_html",
     "write_view",
 ]
@@ -88,6 +90,9 @@ class ViewInput:
         drawn, why.
     vehicle_window_s : (float, float) or None
         Ride times (s) of the first and last recording sample drawn (the ride's cue).
+    metrics : CueMetrics or None
+        The cue metrics of the rider against the vehicle over that window (the page's
+        samples; definitions in ``docs/cue-metrics.md``), when the vehicle is drawn.
     """
 
     scene: Scene
@@ -97,6 +102,7 @@ class ViewInput:
     vehicle: NDArray[np.float64] | None = None
     notes: tuple[str, ...] = ()
     vehicle_window_s: tuple[float, float] | None = None
+    metrics: CueMetrics | None = None
 
 
 def load_view_input(
@@ -151,11 +157,14 @@ def load_view_input(
         if why:
             notes.append(f"vehicle: not drawn: {why}")
         else:
-            fx, fy = rendered_shares(view)
+            m = view_metrics(view)
+            fx, fy = (float(v) for v in m.rendered_share[:2])
             notes.append(
                 f"strength: the rider perceives {fx:.0%} of the vehicle's fx and {fy:.0%} of "
                 "its fy (rms over the cue; dotted: the vehicle, same scale)"
             )
+            notes.append(_metrics_note(m))
+            view = replace(view, metrics=m)
         return replace(view, notes=tuple(notes))
     if recording is not None:
         raise ConfigError(f"{p}: --recording goes with a ride file, not a poses CSV")
@@ -242,6 +251,43 @@ def _thin(n: int, rate_hz: float) -> tuple[NDArray[np.intp], float]:
 
 def _step(rate_hz: float, cap_hz: float) -> int:
     return max(1, math.ceil(rate_hz / cap_hz - 1e-9))
+
+
+def view_metrics(view: ViewInput, perceived: NDArray[np.float64] | None = None) -> CueMetrics:
+    """The cue metrics (:func:`motioncue.cueing.cue_metrics`) of the rider's perceived motion
+    against the vehicle's over the drawn window, on the page's samples.
+
+    Raises
+    ------
+    ConfigError
+        The view has no vehicle.
+    """
+    from ..cueing import cue_metrics, get_model_set
+    from ..cueing._vestibular import DEFAULT_MODEL_SET
+
+    if view.vehicle is None:
+        raise ConfigError("no vehicle drawn: a ride made from a recording has cue metrics")
+    if perceived is None:
+        perceived, _ = _perceived(view.scene, view.rate_hz)
+    t = view.scene.t_s
+    lo, hi = view.vehicle_window_s or (float(t[0]), float(t[-1]))
+    inside = (t >= lo) & (t <= hi)
+    thr = get_model_set(DEFAULT_MODEL_SET).thresholds
+    return cue_metrics(view.vehicle[inside], perceived[inside], thr)
+
+
+def _metrics_note(m: CueMetrics) -> str:
+    """One line of the metrics per horizontal channel (fx / fy), then the any-channel ones."""
+
+    def pair(a: NDArray[np.float64], pct: bool = True) -> str:
+        return " / ".join(f"{100 * v:.1f} %" if pct else f"{v:.2f}" for v in a[:2])
+
+    return (
+        f"cues fx / fy: gain {pair(m.gain, False)}, correlation {pair(m.correlation, False)}, "
+        f"missed {pair(m.missed)}, reversals {pair(m.reversals)}, spurious "
+        f"{pair(m.spurious)}; any channel: reversals {100 * m.reversals_any:.1f} %, "
+        f"all false cues {100 * m.false_any:.1f} % (docs/cue-metrics.md)"
+    )
 
 
 def rendered_shares(
