@@ -40,10 +40,10 @@ __all__ = [
     "load_view_input",
     "parse_monitor",
     "rendered_shares",
-    "view_metrics",
     "scene_from_poses",
     "scene_from_q",
     "stroke_use",
     "view_html",
+    "view_metrics",
     "write_view",
 ]

@@ -43,8 +43,8 @@ __all__ = [
     "ViewInput",
     "load_view_input",
     "rendered_shares",
-    "view_metrics",
     "view_html",
+    "view_metrics",
     "write_view",
 ]
 
