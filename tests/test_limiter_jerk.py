@@ -433,14 +433,19 @@ def test_bound_line_covers_brake_bound_over_its_box(vmax, amax, jmax, dt):
     x0, slope, v_in, a_in = bound_line(vmax, amax, jmax, dt)
     assert vmax < v_in <= vmax * (1 + 2e-6) and amax < a_in <= amax * (1 + 2e-6)
     assert x0 > 0.0 and slope > 0.0
-    closest = 0.0
-    for v in np.linspace(-v_in, v_in, 21):
+    closest = behind_closest = 0.0
+    for v in [*np.linspace(-v_in, v_in, 21), 0.0, -0.0, 1e-12, -1e-12]:
         line = x0 + slope * abs(float(v))
-        for a in np.linspace(-a_in, a_in, 21):
+        for a in [*np.linspace(-a_in, a_in, 21), 0.0, 1e-12, -1e-12]:
             down, up = brake_bound(float(v), float(a), amax, jmax, dt)
             assert max(down, up) <= line
             closest = max(closest, max(down, up) / line)
+            # behind the motion (both ways at rest) the bound is at most the line's x0
+            behind = down if v > 0.0 else up if v < 0.0 else max(down, up)
+            assert behind <= x0
+            behind_closest = max(behind_closest, behind / x0)
     assert closest >= 1 - 1e-6
+    assert behind_closest >= 1 - 1e-6  # x0 is reached behind (a = -a_in at v -> 0)
 
 
 @settings(max_examples=200)

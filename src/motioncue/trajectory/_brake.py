@@ -94,6 +94,14 @@ def bound_line(
     braking distance is ``V^1.5 / sqrt(j)`` then a parabola, meeting with equal slopes),
     so below its chord from ``s = 0`` to ``s = v``: the line, with one part in 1e9 and
     1e-12 m added for the rounding of both computations.
+
+    Behind the motion (below for ``v' > 0``, above for ``v' < 0``, both ways at
+    ``v' = 0``) the bound is at most ``x0``: for ``v' > 0`` brake_bound's backward term is
+    zero unless ``a' < 0``, and then its reverse peak ``a'^2 / (2 j) - a' dt - v'`` is below
+    ``V(0) = a^2 / (2 j) + a dt``, its first part ``vr (|a'| / j + dt)`` below
+    ``V(0) (a / j + dt)`` and its braking distance below that from ``V(0)``: ``X(0)``
+    (``v' < 0`` mirrors it). At ``v' = 0`` the one nonzero side is the forward bound from
+    speed 0, the line's value there.
     """
     v = vmax * (1.0 + 1e-6)
     a = amax * (1.0 + 1e-6)

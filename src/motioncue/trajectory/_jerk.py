@@ -30,7 +30,8 @@ because P is a state feedback (the state it leads to continues the same braking)
 Every emitted frame therefore keeps every limit.
 
 Cost: a next state farther inside its band than P can move from any admissible
-``(v, a)`` of its speed (:func:`._brake.bound_line`) is accepted at once; P's stop is
+``(v, a)`` of its speed (:func:`._brake.bound_line`: its line ahead of the motion, its
+value at rest behind it) is accepted at once; P's stop is
 looked at only when the closed-form one-sided bounds of :mod:`._brake` cannot decide
 either (near a stroke end, or near the target while limiting): its exact distance when
 it moves one way (:func:`._brake.forward_stop`), else a simulation until the answer is
@@ -315,13 +316,16 @@ class JerkLimiter:
                 if qmin - 1e-9 <= q1 <= qmax + 1e-9:
                     v1 = (q1 - q) * inv_dt
                     a1 = (v1 - v) * inv_dt
-                    # P stays inside whatever brake_bound says (its bound_line reach), else
-                    # brake_bound decides, else the exact check
-                    reach = reach0 + slope * (v1 if v1 >= 0.0 else -v1)
+                    # P stays inside whatever brake_bound says (its bound_line reach ahead,
+                    # x0 behind), else brake_bound decides, else the exact check
                     if (
-                        qmin + reach <= q1 <= qmax - reach
-                        and -v_in <= v1 <= v_in
-                        and (-a_in <= a1 <= a_in)
+                        -v_in <= v1 <= v_in
+                        and -a_in <= a1 <= a_in
+                        and (
+                            qmin + reach0 <= q1 <= qmax - (reach0 + slope * v1)
+                            if v1 >= 0.0
+                            else qmin + (reach0 - slope * v1) <= q1 <= qmax - reach0
+                        )
                     ):
                         ok = True
                     else:
@@ -369,13 +373,18 @@ class JerkLimiter:
             vn = (qn - q) * inv_dt
             an = (vn - v) * inv_dt
             # the next state is admissible (_admissible, inlined)
-            reach = reach0 + slope * (vn if vn >= 0.0 else -vn)
             if not lo_w - 1e-9 <= qn <= hi_w + 1e-9:
                 ok = False
             elif (
-                lo_w + reach <= qn <= hi_w - reach and -v_in <= vn <= v_in and (-a_in <= an <= a_in)
+                -v_in <= vn <= v_in
+                and -a_in <= an <= a_in
+                and (
+                    lo_w + reach0 <= qn <= hi_w - (reach0 + slope * vn)
+                    if vn >= 0.0
+                    else lo_w + (reach0 - slope * vn) <= qn <= hi_w - reach0
+                )
             ):
-                ok = True  # as brake_bound would say (bound_line)
+                ok = True  # as brake_bound would say (bound_line: reach ahead, x0 behind)
             else:
                 down, up = brake_bound(vn, an, amax, jmax, dt)
                 if lo_w <= qn - down and qn + up <= hi_w:
