@@ -267,6 +267,48 @@ def test_closed_form_stopping_distance_is_the_simulated_one(case):
         assert dist == pytest.approx(ext[0], rel=0, abs=1e-12)
 
 
+@settings(max_examples=300)
+@given(
+    braking_states(),
+    st.one_of(st.floats(-1.0, 1.0), st.sampled_from([0.0, 1e-10, -1e-10, 2e-9, -2e-9, 3e-9])),
+)
+def test_early_no_and_forward_side_give_the_closed_forms_answers(case, frac):
+    """JerkLimiter.step decides with forward_within (forward_stop's answer, or an early no
+    once the ramp alone passes the band by 1e-9 more than the tolerance) and brake_ahead
+    (brake_bound's forward side alone). Against forward_stop and brake_bound themselves, on
+    bands that end just before, at and just beyond P's stop (both directions), each early
+    no checked against the simulated extent too (it is the simulation's answer also where
+    forward_stop has none)."""
+    from motioncue.trajectory._brake import (
+        brake_ahead,
+        brake_bound,
+        forward_stop,
+        forward_within,
+    )
+
+    jl, i, v, a, dt = case
+    lim = jl.limits
+    amax, jmax = float(lim.a_max[i]), float(lim.j_max[i])
+    down, up = brake_bound(v, a, amax, jmax, dt)
+    flip = v < 0.0 or (v == 0.0 and a < 0.0)
+    ahead = brake_ahead(-v, -a, amax, jmax, dt) if flip else brake_ahead(v, a, amax, jmax, dt)
+    assert ahead == pytest.approx(down if flip else up, rel=1e-15, abs=0.0)
+    dist = forward_stop(v, a, amax, jmax * dt, dt)
+    ext = jl.stopping_offset(i, v, a)
+    assert ext is not None
+    q = 0.01
+    scale = (abs(v) + abs(a) * dt) * dt * 3.0 if abs(frac) > 1e-8 else 1.0
+    reach = ext[1] if not flip else ext[0]
+    for lo, hi in ((q - 1.0, q + reach + frac * scale), (q + reach + frac * scale, q + 1.0)):
+        got = forward_within(q, v, a, lo, hi, amax, jmax * dt, dt)
+        if dist is not None:
+            assert got == (lo - 1e-9 <= q + dist <= hi + 1e-9)
+        elif got is not None:  # an early no where forward_stop has no distance
+            assert got is False
+        if got is False:
+            assert not (lo - 1e-9 <= q + ext[0] and q + ext[1] <= hi + 1e-9)
+
+
 def test_closed_form_stopping_distance_answers_most_states():
     """The closed form is not a rarely-taken branch: from a grid of states of a hexapod
     cylinder it answers all but the strongly opposing ones, and matches the simulation."""

@@ -77,6 +77,30 @@ def brake_bound(v: float, a: float, amax: float, jmax: float, dt: float) -> tupl
     return (fwd, rev) if flip else (rev, fwd)
 
 
+def brake_ahead(v: float, a: float, amax: float, jmax: float, dt: float) -> float:
+    """:func:`brake_bound`'s bound (m) ahead of the motion for ``v > 0``, or ``v == 0`` and
+    ``a >= 0`` (its ``up``; flipped states: pass ``-v, -a`` for its ``down``), by the same
+    float operations in the same order, without the side behind."""
+    a2 = amax * amax
+    if a >= 0.0:
+        vp = v + a * a * 0.5 / jmax + a * dt
+        fwd = vp * (a / jmax + _PAD_FRAMES * dt)
+    else:
+        vp = v + a * a * 0.5 / jmax
+        fwd = vp * _PAD_FRAMES * dt
+        t1 = -a / jmax
+        if v >= a * a * 0.5 / jmax:
+            fwd -= vp * t1 - jmax * t1 * t1 * t1 / 6.0
+        else:
+            fwd += v * t1
+            vp = 0.0
+    if vp * jmax >= a2:
+        fwd += 0.5 * vp * (vp / amax + amax / jmax)
+    else:
+        fwd += vp * math.sqrt(vp / jmax)
+    return fwd
+
+
 def bound_line(
     vmax: float, amax: float, jmax: float, dt: float
 ) -> tuple[float, float, float, float]:
@@ -180,6 +204,75 @@ def forward_stop(v: float, a: float, amax: float, jdt: float, dt: float) -> floa
         return None
     d = total * dt * dt
     return -d if flip else d
+
+
+def forward_within(
+    q: float, v: float, a: float, lo: float, hi: float, amax: float, jdt: float, dt: float
+) -> bool | None:
+    """:func:`stops_within`'s answer from :func:`forward_stop`'s distance: whether
+    ``q + forward_stop(v, a, amax, jdt, dt)`` lies in ``[lo - 1e-9, hi + 1e-9]``; ``None``
+    where :func:`forward_stop` has no distance (then only the simulation knows).
+
+    The same float operations as :func:`forward_stop` and the same final test, with one
+    early *no*: the ramp and hold frames add positive speeds (``b > S(c) >= c`` before a
+    frame lowers ``b`` by ``c``), so the running sum only grows, and so does the distance
+    the staircase then adds (a sum of positive speeds; its closed form's rounding is parts
+    in 1e16 of it). Once the sum alone puts P more than 1e-9 beyond the tolerance ahead
+    (``room``), the final position is outside too: *no*. Where :func:`forward_stop` would
+    have found no distance after that frame, the simulation :func:`stops_within` falls back
+    to visits the same positions up to rounding (far below 1e-9) and says *no* the moment
+    one leaves the band: the same answer. Valid where :func:`forward_stop` is."""
+    flip = v < 0.0 or (v == 0.0 and a < 0.0)
+    if flip:
+        v, a = -v, -a
+        room = (q - (lo - _EPS - _EPS)) / (dt * dt)
+    else:
+        room = (hi + _EPS + _EPS - q) / (dt * dt)
+    b = v / dt
+    total = 0.0  # sum of b over the frames so far (distance / dt^2)
+    hold = -1.0  # S(amax): the staircase budget of amax (computed once P holds -amax)
+    for _ in range(_MAX_BRAKE_FRAMES):
+        dn = a - jdt
+        if dn < -amax:
+            dn = -amax
+            # P holds -amax: the same test every frame (c = amax), so its S once
+            if hold < 0.0:
+                m = math.floor(amax / jdt)
+                hold = (m + 1) * amax - jdt * m * (m + 1) * 0.5
+            ramp = b > hold
+        else:
+            c = -dn  # the deceleration of the next frame if P keeps lowering a
+            if c < 0.0:
+                ramp = True  # a still above jdt: it comes down whatever the speed
+            elif c == 0.0:
+                ramp = b > 0.0
+            else:
+                m = math.floor(c / jdt)
+                ramp = b > (m + 1) * c - jdt * m * (m + 1) * 0.5
+        if ramp:
+            a = dn
+            b += a
+            total += b
+            if total > room:
+                return False  # already more than 1e-9 beyond the tolerance ahead
+            continue
+        up = a + jdt
+        if up > amax:
+            up = amax
+        if up < 0.0:  # brakes harder than the staircase asks unless vcap(b) >= -up
+            m = math.floor(-up / jdt)
+            if b < (m + 1) * -up - jdt * m * (m + 1) * 0.5:
+                return None
+        if b <= 0.0:
+            break
+        n = _stairs(b, jdt)
+        u = b / (n + 1) + jdt * n * 0.5
+        total += n * b - u * n * (n + 1) * 0.5 + jdt * (n - 1) * n * (n + 1) / 6.0
+        break
+    else:
+        return None
+    d = total * dt * dt
+    return lo - _EPS <= q + (-d if flip else d) <= hi + _EPS
 
 
 def stops_within(

@@ -51,7 +51,14 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from .._errors import ConfigError, LimitError
-from ._brake import bound_line, brake_bound, forward_stop, simulate_within, stops_within
+from ._brake import (
+    bound_line,
+    brake_ahead,
+    brake_bound,
+    forward_within,
+    simulate_within,
+    stops_within,
+)
 from ._limits import ActuatorLimits
 from ._realtime import _counters_repr, _land_slack, _level_params, _level_step, _vcap
 
@@ -372,19 +379,33 @@ class JerkLimiter:
             qn = q + vb * dt
             vn = (qn - q) * inv_dt
             an = (vn - v) * inv_dt
-            # the next state is admissible (_admissible, inlined)
+            # the next state is admissible (_admissible, inlined): brake_bound's answer, or
+            # the exact check where it says no. Where bound_line keeps the side behind the
+            # motion inside (brake_bound's bound there is at most x0), brake_bound's answer
+            # is its forward side's (brake_ahead: the same operations), or the line's where
+            # that keeps the side ahead inside too
             if not lo_w - 1e-9 <= qn <= hi_w + 1e-9:
                 ok = False
-            elif (
-                -v_in <= vn <= v_in
-                and -a_in <= an <= a_in
-                and (
-                    lo_w + reach0 <= qn <= hi_w - (reach0 + slope * vn)
-                    if vn >= 0.0
-                    else lo_w + (reach0 - slope * vn) <= qn <= hi_w - reach0
-                )
-            ):
-                ok = True  # as brake_bound would say (bound_line: reach ahead, x0 behind)
+            elif -v_in <= vn <= v_in and -a_in <= an <= a_in:
+                if vn > 0.0 or (vn == 0.0 and an >= 0.0):  # brake_bound's unflipped side
+                    if lo_w + reach0 <= qn:
+                        ok = (
+                            qn <= hi_w - (reach0 + slope * vn)
+                            or qn + brake_ahead(vn, an, amax, jmax, dt) <= hi_w
+                        )
+                    else:
+                        down, up = brake_bound(vn, an, amax, jmax, dt)
+                        ok = lo_w <= qn - down and qn + up <= hi_w
+                elif qn <= hi_w - reach0:
+                    ok = lo_w + (reach0 - slope * vn) <= qn or lo_w <= qn - brake_ahead(
+                        -vn, -an, amax, jmax, dt
+                    )
+                else:
+                    down, up = brake_bound(vn, an, amax, jmax, dt)
+                    ok = lo_w <= qn - down and qn + up <= hi_w
+                if not ok:
+                    n_sim += 1
+                    ok = _stops(qn, vn, an, lo_w, hi_w, axis, dt)
             else:
                 down, up = brake_bound(vn, an, amax, jmax, dt)
                 if lo_w <= qn - down and qn + up <= hi_w:
@@ -435,9 +456,9 @@ def _stops(
     its closed-form distance first where the axis allows it."""
     _, _, vmax, amax, jdt, half_inv_j, abig, jmax, _, _, stair_ok, _, _, _, _ = axis
     if stair_ok:
-        dist = forward_stop(v, a, amax, jdt, dt)
-        if dist is not None:
-            return lo - 1e-9 <= q + dist <= hi + 1e-9
+        ok = forward_within(q, v, a, lo, hi, amax, jdt, dt)
+        if ok is not None:
+            return ok
     return simulate_within(
         q, v, a, lo, hi, vmax, amax, jdt, half_inv_j, abig, jmax, dt, bool(stair_ok)
     )
