@@ -511,6 +511,25 @@ def test_chase_saturation_is_where_vcap_reaches_a_max(amax, jmax, dt, frac):
     assert _vcap(sat * (1 - 1e-5), jdt, abig) < amax
 
 
+@settings(max_examples=200)
+@given(
+    st.floats(0.5, 30.0), st.floats(5.0, 2000.0),
+    st.sampled_from([0.001, 0.004, 0.01, 0.02, 0.05]), st.floats(-0.1, 1.2),
+)  # fmt: skip
+def test_vcap_with_its_saturation_budget_given_is_vcap(amax, jmax, dt, frac):
+    """JerkLimiter.step's _vcap_big (saturation budget precomputed, _stairs inlined) gives
+    _realtime._vcap's value on budgets below, across and above the saturation budget and
+    at zero."""
+    from motioncue.trajectory._jerk import _vcap_big
+    from motioncue.trajectory._realtime import _vcap
+
+    jdt = jmax * dt
+    abig = 2.0 * amax
+    big = abig + abig * abig / (2.0 * jdt) + jdt
+    for b in (frac * big, big, big * (1 - 1e-15), 0.0, -1.0, frac * jdt, 3.0 * jdt):
+        assert _vcap_big(b, jdt, abig, big) == pytest.approx(_vcap(b, jdt, abig), rel=1e-15)
+
+
 @pytest.mark.parametrize(
     ("v_max", "a_max", "j_max", "dt"),
     [(0.05, 4.0, 20.0, 0.01), (0.4, 2.0, 30.0, 0.004), (0.25, 8.0, 400.0, 0.02)],

@@ -34,11 +34,13 @@ Cost: a next state farther inside its band than P can move from any admissible
 value at rest behind it) is accepted at once; P's stop is
 looked at only when the closed-form one-sided bounds of :mod:`._brake` cannot decide
 either (near a stroke end, or near the target while limiting): its exact distance when
-it moves one way (:func:`._brake.forward_stop`), else a simulation until the answer is
-known. A chase whose budget is past :func:`_chase_saturation` ends on the band's bound
-without :func:`._realtime._vcap`; the bisection (:func:`_bisect`, only when the full
-wanted speed is refused) remembers the states it has decided (saturated wanted speeds
-repeat the same next state). Frames are bit-identical to the full simulation's.
+it moves one way (:func:`._brake.forward_within`: :func:`._brake.forward_stop` with an
+early no), else a simulation until the answer is known. A chase whose budget is past
+:func:`_chase_saturation` ends on the band's bound without :func:`._realtime._vcap`
+(below it, :func:`_vcap_big`: its saturation budget kept per axis, one call); the
+bisection (:func:`_bisect`, only when the full wanted speed is refused) remembers the
+states it has decided (saturated wanted speeds repeat the same next state). Frames are
+bit-identical to the full simulation's.
 """
 
 from __future__ import annotations
@@ -60,7 +62,7 @@ from ._brake import (
     stops_within,
 )
 from ._limits import ActuatorLimits
-from ._realtime import _counters_repr, _land_slack, _level_params, _level_step, _vcap
+from ._realtime import _counters_repr, _land_slack, _level_params, _level_step
 
 if TYPE_CHECKING:
     from numpy.typing import ArrayLike
@@ -147,7 +149,7 @@ class JerkLimiter:
         # _vcap is at least a_max (_chase_saturation), whether P's braking staircase
         # never meets the +-v_max caps (_brake.stops_within's stair_ok, same expression)
         # and bound_line's (x0, slope, v, a): from |v'| <= v and |a'| <= a, P moves at most
-        # x0 + slope |v'| either way
+        # x0 + slope |v'| either way, and _vcap's saturation budget (from which it is abig)
         axes = tuple(
             (
                 *p,
@@ -155,6 +157,7 @@ class JerkLimiter:
                 _chase_saturation(p[3], p[4], p[6]),
                 p[3] * p[3] * p[5] + p[3] * dt <= p[2],
                 *bound_line(p[2], p[3], p[7], dt),
+                p[6] + p[6] * p[6] / (2.0 * p[4]) + p[4],
             )
             for p, sl in zip(params, slacks, strict=True)
         )
@@ -282,7 +285,7 @@ class JerkLimiter:
         # landing test and every candidate; same float operations, so the same frames
         for axis in self._axes:
             (qmin, qmax, vmax, amax, jdt, half_inv_j, abig, jmax, sl, sat, _stair_ok,
-             reach0, slope, v_in, a_in) = axis  # fmt: skip
+             reach0, slope, v_in, a_in, big) = axis  # fmt: skip
             t = float(q_target[i])
             if t - t != 0.0:
                 t = lts[i]
@@ -308,11 +311,11 @@ class JerkLimiter:
             if lo < -amax:
                 lo = -amax
             if hi > 0.0 and v + hi * dt + hi * hi * half_inv_j > vmax:
-                cap = _vcap((vmax - v) * inv_dt, jdt, abig)
+                cap = _vcap_big((vmax - v) * inv_dt, jdt, abig, big)
                 if hi > cap:
                     hi = cap
             if lo < 0.0 and v + lo * dt - lo * lo * half_inv_j < -vmax:
-                cap = _vcap((v - -vmax) * inv_dt, jdt, abig)
+                cap = _vcap_big((v - -vmax) * inv_dt, jdt, abig, big)
                 if lo < -cap:
                     lo = -cap
             dd = (want - v) * inv_dt
@@ -368,7 +371,7 @@ class JerkLimiter:
                 # whatever its value: abig stands in for it (same clipped dn). dd has the
                 # sign of want - v (dt <= 1) and (-e) / dt == -(e / dt) (exact negation)
                 b = dd if dd > 0.0 else -dd
-                dn = abig if b >= sat else _vcap(b, jdt, abig)
+                dn = abig if b >= sat else _vcap_big(b, jdt, abig, big)
                 if not dd > 0.0:
                     dn = -dn
                 if dn > hi:
@@ -454,7 +457,7 @@ def _stops(
     """Whether P from ``(q, v, a)`` stops within ``[lo, hi]`` (1e-9 tolerance), ``q`` itself
     inside it: :func:`._brake.stops_within` with the axis' constants (``JerkLimiter._axes``),
     its closed-form distance first where the axis allows it."""
-    _, _, vmax, amax, jdt, half_inv_j, abig, jmax, _, _, stair_ok, _, _, _, _ = axis
+    _, _, vmax, amax, jdt, half_inv_j, abig, jmax, _, _, stair_ok, _, _, _, _, _ = axis
     if stair_ok:
         ok = forward_within(q, v, a, lo, hi, amax, jdt, dt)
         if ok is not None:
@@ -482,7 +485,7 @@ def _bisect(
     of exact braking checks made: bisection (``_BISECT`` steps) for the largest wanted speed
     in ``[0, want]`` whose next state is admissible within ``[lo_w, hi_w]``, else P's
     action. ``(q, v)``: the last state; ``[lo, hi]``: the band of next accelerations."""
-    _, _, _, amax, jdt, _, abig, jmax, _, sat, _, _, _, _, _ = axis
+    _, _, _, amax, jdt, _, abig, jmax, _, sat, _, _, _, _, _, big = axis
     lo_e = lo_w - 1e-9
     hi_e = hi_w + 1e-9
     n_sim = 0
@@ -513,7 +516,7 @@ def _bisect(
         else:
             e = w - v
             b = e * inv_dt if e > 0.0 else -e * inv_dt
-            dn = abig if b >= sat else _vcap(b, jdt, abig)
+            dn = abig if b >= sat else _vcap_big(b, jdt, abig, big)
             if not e > 0.0:
                 dn = -dn
             if dn > hi:
@@ -550,7 +553,11 @@ def _bisect(
             vb = 0.0
         else:
             e = 0.0 - v
-            dn = _vcap(e * inv_dt, jdt, abig) if e > 0.0 else -_vcap(-e * inv_dt, jdt, abig)
+            dn = (
+                _vcap_big(e * inv_dt, jdt, abig, big)
+                if e > 0.0
+                else -_vcap_big(-e * inv_dt, jdt, abig, big)
+            )
             if dn > hi:
                 dn = hi
             if dn < lo:
@@ -560,6 +567,23 @@ def _bisect(
         vn = (qn - q) * inv_dt
         an = (vn - v) * inv_dt
     return qn, vn, an, n_sim
+
+
+def _vcap_big(b: float, adt: float, v_big: float, b_big: float) -> float:
+    """:func:`._realtime._vcap` ``(b, adt, v_big)`` (speed units) for a finite ``v_big``,
+    its saturation budget ``b_big = v_big + v_big^2 / (2 adt) + adt`` given (precomputed by
+    the same expression, so the same float) and :func:`._realtime._stairs` inlined: the same
+    operations, the same result."""
+    if b <= 0.0:
+        return 0.0
+    if b >= b_big:
+        return v_big
+    n = int((math.sqrt(1.0 + 8.0 * b / adt) - 1.0) * 0.5)
+    while n > 0 and adt * n * (n + 1) * 0.5 > b:
+        n -= 1
+    while adt * (n + 1) * (n + 2) * 0.5 <= b:
+        n += 1
+    return b / (n + 1) + adt * n * 0.5
 
 
 def _second_order_distance(a: float, j: float, dt: float) -> float:
