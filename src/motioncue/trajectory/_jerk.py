@@ -284,7 +284,7 @@ class JerkLimiter:
         # accelerations depends on (v, a) only, so it is computed once per axis for the
         # landing test and every candidate; same float operations, so the same frames
         for axis in self._axes:
-            (qmin, qmax, vmax, amax, jdt, half_inv_j, abig, jmax, sl, sat, _stair_ok,
+            (qmin, qmax, vmax, amax, jdt, half_inv_j, abig, jmax, sl, sat, stair_ok,
              reach0, slope, v_in, a_in, big) = axis  # fmt: skip
             t = float(q_target[i])
             if t - t != 0.0:
@@ -366,14 +366,18 @@ class JerkLimiter:
             if lo <= dd <= hi and -jdt <= dd <= jdt:
                 vb = want
             else:
-                # _vcap(|want - v| / dt, jdt, abig) with its first test (a saturated chase)
-                # inlined; from `sat` on it is >= amax, so the band's bound is the answer
-                # whatever its value: abig stands in for it (same clipped dn). dd has the
-                # sign of want - v (dt <= 1) and (-e) / dt == -(e / dt) (exact negation)
-                b = dd if dd > 0.0 else -dd
-                dn = abig if b >= sat else _vcap_big(b, jdt, abig, big)
-                if not dd > 0.0:
-                    dn = -dn
+                # sign(want - v) _vcap(|want - v| / dt, jdt, abig) with its first test (a
+                # saturated chase) inlined; from `sat` on it is >= amax, so the band's bound
+                # is the answer whatever its value: abig stands in for it (same clipped dn).
+                # dd has the sign of want - v (dt <= 1) and (-e) / dt == -(e / dt) (exact)
+                if dd >= sat:
+                    dn = abig
+                elif dd <= -sat:
+                    dn = -abig
+                elif dd > 0.0:
+                    dn = _vcap_big(dd, jdt, abig, big)
+                else:
+                    dn = -_vcap_big(-dd, jdt, abig, big)
                 if dn > hi:
                     dn = hi
                 if dn < lo:
@@ -406,9 +410,12 @@ class JerkLimiter:
                 else:
                     down, up = brake_bound(vn, an, amax, jmax, dt)
                     ok = lo_w <= qn - down and qn + up <= hi_w
-                if not ok:
+                if not ok:  # the exact check (_stops, inlined)
                     n_sim += 1
-                    ok = _stops(qn, vn, an, lo_w, hi_w, axis, dt)
+                    ok = forward_within(qn, vn, an, lo_w, hi_w, amax, jdt, dt) if stair_ok else None
+                    if ok is None:
+                        ok = simulate_within(qn, vn, an, lo_w, hi_w, vmax, amax, jdt, half_inv_j,
+                                             abig, jmax, dt, stair_ok)  # fmt: skip
             else:
                 down, up = brake_bound(vn, an, amax, jmax, dt)
                 if lo_w <= qn - down and qn + up <= hi_w:
@@ -427,7 +434,7 @@ class JerkLimiter:
                 clamped = True
                 n_axes[i] += 1
                 if finite:
-                    dev = abs(qn - t)
+                    dev = qn - t if qn > t else t - qn  # |qn - t| (t - qn: its exact negation)
                     if dev > max_dev:
                         max_dev = dev
             i += 1
@@ -514,11 +521,15 @@ def _bisect(
         if lo <= ddw <= hi and -jdt <= ddw <= jdt:
             vb = w
         else:
-            e = w - v
-            b = e * inv_dt if e > 0.0 else -e * inv_dt
-            dn = abig if b >= sat else _vcap_big(b, jdt, abig, big)
-            if not e > 0.0:
-                dn = -dn
+            # sign(e) _vcap(|e| / dt), e = w - v: ddw has e's sign and (-e) / dt == -ddw
+            if ddw >= sat:
+                dn = abig
+            elif ddw <= -sat:
+                dn = -abig
+            elif ddw > 0.0:
+                dn = _vcap_big(ddw, jdt, abig, big)
+            else:
+                dn = -_vcap_big(-ddw, jdt, abig, big)
             if dn > hi:
                 dn = hi
             if dn < lo:
