@@ -492,7 +492,8 @@ def _bisect(
     of exact braking checks made: bisection (``_BISECT`` steps) for the largest wanted speed
     in ``[0, want]`` whose next state is admissible within ``[lo_w, hi_w]``, else P's
     action. ``(q, v)``: the last state; ``[lo, hi]``: the band of next accelerations."""
-    _, _, _, amax, jdt, _, abig, jmax, _, sat, _, _, _, _, _, big = axis
+    (_, _, vmax, amax, jdt, half_inv_j, abig, jmax, _, sat, stair_ok, reach0, slope, v_in, a_in,
+     big) = axis  # fmt: skip
     lo_e = lo_w - 1e-9
     hi_e = hi_w + 1e-9
     n_sim = 0
@@ -527,9 +528,10 @@ def _bisect(
             elif ddw <= -sat:
                 dn = -abig
             elif ddw > 0.0:
-                dn = _vcap_big(ddw, jdt, abig, big)
+                # _vcap is >= 0: above a band below 0 it is clipped to hi whatever its value
+                dn = hi if hi < 0.0 else _vcap_big(ddw, jdt, abig, big)
             else:
-                dn = -_vcap_big(-ddw, jdt, abig, big)
+                dn = lo if lo > 0.0 else -_vcap_big(-ddw, jdt, abig, big)  # (mirror)
             if dn > hi:
                 dn = hi
             if dn < lo:
@@ -542,15 +544,39 @@ def _bisect(
         if known is not None:
             ok = known
         else:
+            # as JerkLimiter.step: bound_line (ahead and behind), brake_ahead where the side
+            # behind is inside, else brake_bound; where those say no, the exact check
             if not lo_e <= qb <= hi_e:
                 ok = False
             else:
-                down, up = brake_bound(vb, ab_, amax, jmax, dt)
-                if lo_w <= qb - down and qb + up <= hi_w:
-                    ok = True
+                if -v_in <= vb <= v_in and -a_in <= ab_ <= a_in:
+                    if vb > 0.0 or (vb == 0.0 and ab_ >= 0.0):
+                        if lo_w + reach0 <= qb:
+                            ok = (
+                                qb <= hi_w - (reach0 + slope * vb)
+                                or qb + brake_ahead(vb, ab_, amax, jmax, dt) <= hi_w
+                            )
+                        else:
+                            down, up = brake_bound(vb, ab_, amax, jmax, dt)
+                            ok = lo_w <= qb - down and qb + up <= hi_w
+                    elif qb <= hi_w - reach0:
+                        ok = lo_w + (reach0 - slope * vb) <= qb or lo_w <= qb - brake_ahead(
+                            -vb, -ab_, amax, jmax, dt
+                        )
+                    else:
+                        down, up = brake_bound(vb, ab_, amax, jmax, dt)
+                        ok = lo_w <= qb - down and qb + up <= hi_w
                 else:
+                    down, up = brake_bound(vb, ab_, amax, jmax, dt)
+                    ok = lo_w <= qb - down and qb + up <= hi_w
+                if not ok:
                     n_sim += 1
-                    ok = _stops(qb, vb, ab_, lo_w, hi_w, axis, dt)
+                    ok = (
+                        forward_within(qb, vb, ab_, lo_w, hi_w, amax, jdt, dt) if stair_ok else None
+                    )
+                    if ok is None:
+                        ok = simulate_within(qb, vb, ab_, lo_w, hi_w, vmax, amax, jdt, half_inv_j,
+                                             abig, jmax, dt, stair_ok)  # fmt: skip
             seen[qb] = ok
         if ok:
             best = True
