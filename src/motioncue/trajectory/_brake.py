@@ -230,47 +230,56 @@ def forward_within(
         room = (hi + _EPS + _EPS - q) / (dt * dt)
     b = v / dt
     total = 0.0  # sum of b over the frames so far (distance / dt^2)
-    hold = -1.0  # S(amax): the staircase budget of amax (computed once P holds -amax)
+    floor = math.floor
+    # forward_stop's loop by the phases of P's ramp (same tests, same sums): a coming down
+    # from above jdt (c < 0: whatever the speed), lowered while b > S(c), then held at
+    # -amax while b > S(amax) (one S, a tight loop; its frames, at most b / amax, are not
+    # counted against _MAX_BRAKE_FRAMES); each phase's end leaves for the staircase
     for _ in range(_MAX_BRAKE_FRAMES):
         dn = a - jdt
-        if dn < -amax:
-            dn = -amax
-            # P holds -amax: the same test every frame (c = amax), so its S once
-            if hold < 0.0:
-                m = math.floor(amax / jdt)
-                hold = (m + 1) * amax - jdt * m * (m + 1) * 0.5
-            ramp = b > hold
+        if dn > 0.0:
+            pass  # c = -dn < 0: a still above jdt, it comes down whatever the speed
+        elif dn < -amax:
+            m = floor(amax / jdt)
+            hold = (m + 1) * amax - jdt * m * (m + 1) * 0.5
+            if b > hold:
+                a = -amax
+                b += a
+                total += b
+                if total > room:
+                    return False  # already more than 1e-9 beyond the tolerance ahead
+                while b > hold:
+                    b += a
+                    total += b
+                    if total > room:
+                        return False
+            break
+        elif dn == 0.0:
+            if not b > 0.0:
+                break
         else:
             c = -dn  # the deceleration of the next frame if P keeps lowering a
-            if c < 0.0:
-                ramp = True  # a still above jdt: it comes down whatever the speed
-            elif c == 0.0:
-                ramp = b > 0.0
-            else:
-                m = math.floor(c / jdt)
-                ramp = b > (m + 1) * c - jdt * m * (m + 1) * 0.5
-        if ramp:
-            a = dn
-            b += a
-            total += b
-            if total > room:
-                return False  # already more than 1e-9 beyond the tolerance ahead
-            continue
-        up = a + jdt
-        if up > amax:
-            up = amax
-        if up < 0.0:  # brakes harder than the staircase asks unless vcap(b) >= -up
-            m = math.floor(-up / jdt)
-            if b < (m + 1) * -up - jdt * m * (m + 1) * 0.5:
-                return None
-        if b <= 0.0:
-            break
+            m = floor(c / jdt)
+            if not b > (m + 1) * c - jdt * m * (m + 1) * 0.5:
+                break
+        a = dn
+        b += a
+        total += b
+        if total > room:
+            return False  # already more than 1e-9 beyond the tolerance ahead
+    else:
+        return None
+    up = a + jdt
+    if up > amax:
+        up = amax
+    if up < 0.0:  # brakes harder than the staircase asks unless vcap(b) >= -up
+        m = floor(-up / jdt)
+        if b < (m + 1) * -up - jdt * m * (m + 1) * 0.5:
+            return None
+    if b > 0.0:
         n = _stairs(b, jdt)
         u = b / (n + 1) + jdt * n * 0.5
         total += n * b - u * n * (n + 1) * 0.5 + jdt * (n - 1) * n * (n + 1) / 6.0
-        break
-    else:
-        return None
     d = total * dt * dt
     return lo - _EPS <= q + (-d if flip else d) <= hi + _EPS
 
