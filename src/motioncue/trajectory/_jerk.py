@@ -149,7 +149,8 @@ class JerkLimiter:
         # _vcap is at least a_max (_chase_saturation), whether P's braking staircase
         # never meets the +-v_max caps (_brake.stops_within's stair_ok, same expression)
         # and bound_line's (x0, slope, v, a): from |v'| <= v and |a'| <= a, P moves at most
-        # x0 + slope |v'| either way, and _vcap's saturation budget (from which it is abig)
+        # x0 + slope |v'| either way, _vcap's saturation budget (from which it is abig) and
+        # the largest wanted speed, 2 v_max
         axes = tuple(
             (
                 *p,
@@ -158,6 +159,7 @@ class JerkLimiter:
                 p[3] * p[3] * p[5] + p[3] * dt <= p[2],
                 *bound_line(p[2], p[3], p[7], dt),
                 p[6] + p[6] * p[6] / (2.0 * p[4]) + p[4],
+                2.0 * p[2],
             )
             for p, sl in zip(params, slacks, strict=True)
         )
@@ -273,19 +275,17 @@ class JerkLimiter:
             raise ConfigError(f"target has {len(q_target)} values; expected {len(qs)}")
         dt = self._dt
         inv_dt = self._inv_dt
-        out = [0.0] * len(qs)
         clamped = False
         n_sim = 0
         n_axes = state.clamped_axes
         max_dev = state.max_deviation
-        i = 0
         # _level_step at the velocity level and the admissibility test of _admissible,
         # inlined (a call per candidate costs more than the work): the band of next
         # accelerations depends on (v, a) only, so it is computed once per axis for the
         # landing test and every candidate; same float operations, so the same frames
-        for axis in self._axes:
+        for i, axis in enumerate(self._axes):
             (qmin, qmax, vmax, amax, jdt, half_inv_j, abig, jmax, sl, sat, stair_ok,
-             reach0, slope, v_in, a_in, big) = axis  # fmt: skip
+             reach0, slope, v_in, a_in, big, w_max) = axis  # fmt: skip
             t = float(q_target[i])
             if t - t != 0.0:
                 t = lts[i]
@@ -299,10 +299,10 @@ class JerkLimiter:
             a = accs[i]
             want = (t - q) * inv_dt
             # beyond 2 v_max every wanted speed acts alike; clamping keeps inf/NaN out
-            if want > 2.0 * vmax:
-                want = 2.0 * vmax
-            elif want < -2.0 * vmax:
-                want = -2.0 * vmax
+            if want > w_max:
+                want = w_max
+            elif want < -w_max:
+                want = -w_max
             # the band [lo, hi] of next accelerations (_level_step: x = v, d = a)
             hi = a + jdt
             if hi > amax:
@@ -349,8 +349,6 @@ class JerkLimiter:
                         qs[i] = q1
                         vs[i] = v1
                         accs[i] = a1
-                        out[i] = q1
-                        i += 1
                         continue
             # limiting: the largest wanted speed towards the target (held, no feed-forward
             # of its rate) whose next state is admissible and stops before the target
@@ -429,7 +427,6 @@ class JerkLimiter:
             qs[i] = qn
             vs[i] = vn
             accs[i] = an
-            out[i] = qn
             if qn != t:
                 clamped = True
                 n_axes[i] += 1
@@ -437,13 +434,12 @@ class JerkLimiter:
                     dev = qn - t if qn > t else t - qn  # |qn - t| (t - qn: its exact negation)
                     if dev > max_dev:
                         max_dev = dev
-            i += 1
         state.max_deviation = max_dev
         state.n_simulated += n_sim
         state.n_frames += 1
         if clamped:
             state.n_clamped += 1
-        return out
+        return qs[:]  # the frames: each axis' new q
 
     def run(self, state: JerkLimiterState, q_targets: ArrayLike) -> np.ndarray:
         """Step through targets (N, n); returns the frames (N, n) (same as :meth:`step`)."""
@@ -464,7 +460,7 @@ def _stops(
     """Whether P from ``(q, v, a)`` stops within ``[lo, hi]`` (1e-9 tolerance), ``q`` itself
     inside it: :func:`._brake.stops_within` with the axis' constants (``JerkLimiter._axes``),
     its closed-form distance first where the axis allows it."""
-    _, _, vmax, amax, jdt, half_inv_j, abig, jmax, _, _, stair_ok, _, _, _, _, _ = axis
+    _, _, vmax, amax, jdt, half_inv_j, abig, jmax, _, _, stair_ok, _, _, _, _, _, _ = axis
     if stair_ok:
         ok = forward_within(q, v, a, lo, hi, amax, jdt, dt)
         if ok is not None:
@@ -493,7 +489,7 @@ def _bisect(
     in ``[0, want]`` whose next state is admissible within ``[lo_w, hi_w]``, else P's
     action. ``(q, v)``: the last state; ``[lo, hi]``: the band of next accelerations."""
     (_, _, vmax, amax, jdt, half_inv_j, abig, jmax, _, sat, stair_ok, reach0, slope, v_in, a_in,
-     big) = axis  # fmt: skip
+     big, _) = axis  # fmt: skip
     lo_e = lo_w - 1e-9
     hi_e = hi_w + 1e-9
     n_sim = 0
