@@ -530,6 +530,67 @@ def test_vcap_with_its_saturation_budget_given_is_vcap(amax, jmax, dt, frac):
         assert _vcap_big(b, jdt, abig, big) == pytest.approx(_vcap(b, jdt, abig), rel=1e-15)
 
 
+@settings(max_examples=200)
+@given(
+    st.floats(0.5, 30.0), st.floats(5.0, 2000.0),
+    st.sampled_from([0.001, 0.004, 0.01, 0.02, 0.05]),
+    st.lists(st.floats(-3.0, 3.0), min_size=2, max_size=40),
+)  # fmt: skip
+def test_bisection_chase_value_rises_with_the_wanted_speed(amax, jmax, dt, fracs):
+    """_bisect ends its search at a refused wanted speed whose chase value lies beyond the
+    band the other way, on two facts checked here on random budgets: the chase value (as
+    _bisect computes it: -abig, -_vcap(-x), _vcap(x), abig across -sat, 0, sat, for
+    x = (w - v) / dt) never falls as x rises (beyond rounding, far below its _PAST margin),
+    and _vcap(x) <= x (so a chase value below lo comes from an x below lo: no landing)."""
+    from motioncue.trajectory._jerk import _PAST, _chase_saturation, _vcap_big
+
+    jdt = jmax * dt
+    abig = 2.0 * amax
+    big = abig + abig * abig / (2.0 * jdt) + jdt
+    sat = _chase_saturation(amax, jdt, abig)
+
+    def chase(x):
+        if x >= sat:
+            return abig
+        if x <= -sat:
+            return -abig
+        return _vcap_big(x, jdt, abig, big) if x > 0.0 else -_vcap_big(-x, jdt, abig, big)
+
+    xs = sorted({f * sat for f in fracs} | {sat, -sat, 0.0, jdt, -jdt})
+    values = [chase(x) for x in xs]
+    for x0, x1, c0, c1 in zip(xs, xs[1:], values, values[1:], strict=False):
+        assert c1 >= c0 - 1e-15 * abig, (x0, x1, c0, c1)
+        assert c1 >= c0 - 0.01 * _PAST * abig
+    for x in xs:
+        if 0.0 < x < sat:
+            assert _vcap_big(x, jdt, abig, big) <= x * (1 + 1e-15)
+
+
+@settings(max_examples=80)
+@given(scenario())
+def test_bisection_early_end_changes_no_frame(case):
+    """The same frames, counters included, with _bisect's early end (a refused chase beyond
+    the band) and without it (_PAST so large that no chase value is ever past), on
+    adversarial streams from random admissible states (a wrong direction of the early end
+    fails it)."""
+    from motioncue.trajectory import _jerk
+
+    jl, state, _hist, targets = case
+    q0, v0, a0 = list(state.q), list(state.v), list(state.a)
+    runs = []
+    for past in (_jerk._PAST, 1e300):
+        saved = _jerk._PAST
+        _jerk._PAST = past
+        try:
+            st_ = jl.initial_state(q0, v0, a0)
+            out = jl.run(st_, targets)
+        finally:
+            _jerk._PAST = saved
+        runs.append((out, st_.n_clamped, st_.n_simulated, st_.max_deviation))
+    np.testing.assert_allclose(runs[0][0], runs[1][0], rtol=0, atol=1e-12)
+    assert runs[0][1:] == runs[1][1:]
+
+
 @pytest.mark.parametrize(
     ("v_max", "a_max", "j_max", "dt"),
     [(0.05, 4.0, 20.0, 0.01), (0.4, 2.0, 30.0, 0.004), (0.25, 8.0, 400.0, 0.02)],

@@ -71,6 +71,8 @@ __all__ = ["JerkLimiter", "JerkLimiterState"]
 
 _MAX_BRAKE_FRAMES = 1_000_000
 _BISECT = 10
+# _bisect: a chase value this far (times abig) beyond the band ends the search (see there)
+_PAST = 1e-9
 
 
 class JerkLimiterState:
@@ -511,23 +513,57 @@ def _bisect(
         while k < _BISECT and (0.5 * (w_lo + w_hi) - v) * inv_dt <= -sat:
             w_hi = 0.5 * (w_lo + w_hi)
             k += 1
+    # A refused wanted speed whose chase asks for more than the band allows the other way
+    # ends the search: its chase value (`raw`, before clipping) is a non-decreasing function
+    # of w (of (w - v) / dt: -abig, -_vcap(-x), _vcap(x), abig over the saturation budgets;
+    # _vcap rises with its budget and stays below abig before its own saturation), and every
+    # later midpoint lies between 0 and it (towards 0: below it when want > 0, above it
+    # when want < 0). So for want > 0 and raw below lo by more than _PAST abig (rounding
+    # moves raw by parts in 1e15 of abig), every later chase is below lo too, is clipped to
+    # the same dn = lo (and does not land: (w - v) / dt <= raw < lo), so it is the same
+    # state, refused (seen): the rest of the search only refuses. Mirror for want < 0
+    # (raw above hi). The full want counts as such a speed (its state is refused too).
+    rising = want > 0.0  # (not `up`: brake_bound's name below)
+    lo_past = lo - _PAST * abig
+    hi_past = hi + _PAST * abig
+    if d_want >= sat:
+        raw = abig
+    elif d_want <= -sat:
+        raw = -abig
+    elif d_want > 0.0:
+        raw = _vcap_big(d_want, jdt, abig, big)
+    else:
+        raw = -_vcap_big(-d_want, jdt, abig, big)
+    if (raw < lo_past) if rising else (raw > hi_past):
+        k = _BISECT
     for _ in range(k, _BISECT):
         w = 0.5 * (w_lo + w_hi)
         # _level_step(v, a, w, w): lands on w, else the chase clipped to the band
         ddw = (w - v) * inv_dt
         if lo <= ddw <= hi and -jdt <= ddw <= jdt:
             vb = w
+            past = False
         else:
-            # sign(e) _vcap(|e| / dt), e = w - v: ddw has e's sign and (-e) / dt == -ddw
-            if ddw >= sat:
-                dn = abig
-            elif ddw <= -sat:
-                dn = -abig
-            elif ddw > 0.0:
-                # _vcap is >= 0: above a band below 0 it is clipped to hi whatever its value
-                dn = hi if hi < 0.0 else _vcap_big(ddw, jdt, abig, big)
+            # sign(e) _vcap(|e| / dt), e = w - v: ddw has e's sign and (-e) / dt == -ddw;
+            # past: whether this chase value is beyond the band the other way (above)
+            if ddw > 0.0 and ddw < sat and hi < 0.0:
+                # _vcap is >= 0: above a band below 0 it is clipped to hi whatever its
+                # value; only its bounds [0, abig] are known, so past from them
+                dn = hi
+                past = not rising and 0.0 > hi_past
+            elif ddw <= 0.0 and ddw > -sat and lo > 0.0:
+                dn = lo  # (mirror: in [-abig, 0])
+                past = rising and 0.0 < lo_past
             else:
-                dn = lo if lo > 0.0 else -_vcap_big(-ddw, jdt, abig, big)  # (mirror)
+                if ddw >= sat:
+                    dn = abig
+                elif ddw <= -sat:
+                    dn = -abig
+                elif ddw > 0.0:
+                    dn = _vcap_big(ddw, jdt, abig, big)
+                else:
+                    dn = -_vcap_big(-ddw, jdt, abig, big)
+                past = (dn < lo_past) if rising else (dn > hi_past)
             if dn > hi:
                 dn = hi
             if dn < lo:
@@ -580,6 +616,8 @@ def _bisect(
             w_lo = w
         else:
             w_hi = w
+            if past:  # every later midpoint is this state again: refused (above)
+                break
     if not best:  # P's action (_level_step(v, a, 0, 0)): admissible by construction
         ddw = (0.0 - v) * inv_dt
         if lo <= ddw <= hi and -jdt <= ddw <= jdt:
