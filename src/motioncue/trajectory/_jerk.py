@@ -39,8 +39,9 @@ early no), else a simulation until the answer is known. A chase whose budget is 
 :func:`_chase_saturation` ends on the band's bound without :func:`._realtime._vcap`
 (below it, :func:`_vcap_big`: its saturation budget kept per axis, one call); the
 bisection (:func:`_bisect`, only when the full wanted speed is refused) remembers the
-states it has decided (saturated wanted speeds repeat the same next state). Frames are
-bit-identical to the full simulation's.
+states it has decided (saturated wanted speeds repeat the same next state) and ends at a
+refused wanted speed whose chase lies beyond the band the other way (every later one is
+clipped to the same state). Frames are bit-identical to the full simulation's.
 """
 
 from __future__ import annotations
@@ -412,10 +413,13 @@ class JerkLimiter:
                     ok = lo_w <= qn - down and qn + up <= hi_w
                 if not ok:  # the exact check (_stops, inlined)
                     n_sim += 1
-                    ok = forward_within(qn, vn, an, lo_w, hi_w, amax, jdt, dt) if stair_ok else None
-                    if ok is None:
-                        ok = simulate_within(qn, vn, an, lo_w, hi_w, vmax, amax, jdt, half_inv_j,
-                                             abig, jmax, dt, stair_ok)  # fmt: skip
+                    dec = (
+                        forward_within(qn, vn, an, lo_w, hi_w, amax, jdt, dt) if stair_ok else None
+                    )
+                    if dec is None:
+                        dec = simulate_within(qn, vn, an, lo_w, hi_w, vmax, amax, jdt, half_inv_j,
+                                              abig, jmax, dt, bool(stair_ok))  # fmt: skip
+                    ok = dec
             else:
                 down, up = brake_bound(vn, an, amax, jmax, dt)
                 if lo_w <= qn - down and qn + up <= hi_w:
@@ -603,12 +607,13 @@ def _bisect(
                     ok = lo_w <= qb - down and qb + up <= hi_w
                 if not ok:
                     n_sim += 1
-                    ok = (
+                    dec = (
                         forward_within(qb, vb, ab_, lo_w, hi_w, amax, jdt, dt) if stair_ok else None
                     )
-                    if ok is None:
-                        ok = simulate_within(qb, vb, ab_, lo_w, hi_w, vmax, amax, jdt, half_inv_j,
-                                             abig, jmax, dt, stair_ok)  # fmt: skip
+                    if dec is None:
+                        dec = simulate_within(qb, vb, ab_, lo_w, hi_w, vmax, amax, jdt, half_inv_j,
+                                              abig, jmax, dt, bool(stair_ok))  # fmt: skip
+                    ok = dec
             seen[qb] = ok
         if ok:
             best = True
