@@ -267,7 +267,7 @@ def test_closed_form_stopping_distance_is_the_simulated_one(case):
         assert dist == pytest.approx(ext[0], rel=0, abs=1e-12)
 
 
-@settings(max_examples=300)
+@settings(max_examples=200)
 @given(
     braking_states(),
     st.one_of(st.floats(-1.0, 1.0), st.sampled_from([0.0, 1e-10, -1e-10, 2e-9, -2e-9, 3e-9])),
