@@ -267,6 +267,48 @@ def test_closed_form_stopping_distance_is_the_simulated_one(case):
         assert dist == pytest.approx(ext[0], rel=0, abs=1e-12)
 
 
+@settings(max_examples=200)
+@given(
+    braking_states(),
+    st.one_of(st.floats(-1.0, 1.0), st.sampled_from([0.0, 1e-10, -1e-10, 2e-9, -2e-9, 3e-9])),
+)
+def test_early_no_and_forward_side_give_the_closed_forms_answers(case, frac):
+    """JerkLimiter.step decides with forward_within (forward_stop's answer, or an early no
+    once the ramp alone passes the band by 1e-9 more than the tolerance) and brake_ahead
+    (brake_bound's forward side alone). Against forward_stop and brake_bound themselves, on
+    bands that end just before, at and just beyond P's stop (both directions), each early
+    no checked against the simulated extent too (it is the simulation's answer also where
+    forward_stop has none)."""
+    from motioncue.trajectory._brake import (
+        brake_ahead,
+        brake_bound,
+        forward_stop,
+        forward_within,
+    )
+
+    jl, i, v, a, dt = case
+    lim = jl.limits
+    amax, jmax = float(lim.a_max[i]), float(lim.j_max[i])
+    down, up = brake_bound(v, a, amax, jmax, dt)
+    flip = v < 0.0 or (v == 0.0 and a < 0.0)
+    ahead = brake_ahead(-v, -a, amax, jmax, dt) if flip else brake_ahead(v, a, amax, jmax, dt)
+    assert ahead == pytest.approx(down if flip else up, rel=1e-15, abs=0.0)
+    dist = forward_stop(v, a, amax, jmax * dt, dt)
+    ext = jl.stopping_offset(i, v, a)
+    assert ext is not None
+    q = 0.01
+    scale = (abs(v) + abs(a) * dt) * dt * 3.0 if abs(frac) > 1e-8 else 1.0
+    reach = ext[1] if not flip else ext[0]
+    for lo, hi in ((q - 1.0, q + reach + frac * scale), (q + reach + frac * scale, q + 1.0)):
+        got = forward_within(q, v, a, lo, hi, amax, jmax * dt, dt)
+        if dist is not None:
+            assert got == (lo - 1e-9 <= q + dist <= hi + 1e-9)
+        elif got is not None:  # an early no where forward_stop has no distance
+            assert got is False
+        if got is False:
+            assert not (lo - 1e-9 <= q + ext[0] and q + ext[1] <= hi + 1e-9)
+
+
 def test_closed_form_stopping_distance_answers_most_states():
     """The closed form is not a rarely-taken branch: from a grid of states of a hexapod
     cylinder it answers all but the strongly opposing ones, and matches the simulation."""
@@ -433,14 +475,19 @@ def test_bound_line_covers_brake_bound_over_its_box(vmax, amax, jmax, dt):
     x0, slope, v_in, a_in = bound_line(vmax, amax, jmax, dt)
     assert vmax < v_in <= vmax * (1 + 2e-6) and amax < a_in <= amax * (1 + 2e-6)
     assert x0 > 0.0 and slope > 0.0
-    closest = 0.0
-    for v in np.linspace(-v_in, v_in, 21):
+    closest = behind_closest = 0.0
+    for v in [*np.linspace(-v_in, v_in, 21), 0.0, -0.0, 1e-12, -1e-12]:
         line = x0 + slope * abs(float(v))
-        for a in np.linspace(-a_in, a_in, 21):
+        for a in [*np.linspace(-a_in, a_in, 21), 0.0, 1e-12, -1e-12]:
             down, up = brake_bound(float(v), float(a), amax, jmax, dt)
             assert max(down, up) <= line
             closest = max(closest, max(down, up) / line)
+            # behind the motion (both ways at rest) the bound is at most the line's x0
+            behind = down if v > 0.0 else up if v < 0.0 else max(down, up)
+            assert behind <= x0
+            behind_closest = max(behind_closest, behind / x0)
     assert closest >= 1 - 1e-6
+    assert behind_closest >= 1 - 1e-6  # x0 is reached behind (a = -a_in at v -> 0)
 
 
 @settings(max_examples=200)
@@ -462,6 +509,86 @@ def test_chase_saturation_is_where_vcap_reaches_a_max(amax, jmax, dt, frac):
     for b in (sat, sat * (1 + 1e-12), sat + frac * (big - sat), big):
         assert _vcap(b, jdt, abig) >= amax
     assert _vcap(sat * (1 - 1e-5), jdt, abig) < amax
+
+
+@settings(max_examples=200)
+@given(
+    st.floats(0.5, 30.0), st.floats(5.0, 2000.0),
+    st.sampled_from([0.001, 0.004, 0.01, 0.02, 0.05]), st.floats(-0.1, 1.2),
+)  # fmt: skip
+def test_vcap_with_its_saturation_budget_given_is_vcap(amax, jmax, dt, frac):
+    """JerkLimiter.step's _vcap_big (saturation budget precomputed, _stairs inlined) gives
+    _realtime._vcap's value on budgets below, across and above the saturation budget and
+    at zero."""
+    from motioncue.trajectory._jerk import _vcap_big
+    from motioncue.trajectory._realtime import _vcap
+
+    jdt = jmax * dt
+    abig = 2.0 * amax
+    big = abig + abig * abig / (2.0 * jdt) + jdt
+    for b in (frac * big, big, big * (1 - 1e-15), 0.0, -1.0, frac * jdt, 3.0 * jdt):
+        assert _vcap_big(b, jdt, abig, big) == pytest.approx(_vcap(b, jdt, abig), rel=1e-15)
+
+
+@settings(max_examples=200)
+@given(
+    st.floats(0.5, 30.0), st.floats(5.0, 2000.0),
+    st.sampled_from([0.001, 0.004, 0.01, 0.02, 0.05]),
+    st.lists(st.floats(-3.0, 3.0), min_size=2, max_size=40),
+)  # fmt: skip
+def test_bisection_chase_value_rises_with_the_wanted_speed(amax, jmax, dt, fracs):
+    """_bisect ends its search at a refused wanted speed whose chase value lies beyond the
+    band the other way, on two facts checked here on random budgets: the chase value (as
+    _bisect computes it: -abig, -_vcap(-x), _vcap(x), abig across -sat, 0, sat, for
+    x = (w - v) / dt) never falls as x rises (beyond rounding, far below its _PAST margin),
+    and _vcap(x) <= x (so a chase value below lo comes from an x below lo: no landing)."""
+    from motioncue.trajectory._jerk import _PAST, _chase_saturation, _vcap_big
+
+    jdt = jmax * dt
+    abig = 2.0 * amax
+    big = abig + abig * abig / (2.0 * jdt) + jdt
+    sat = _chase_saturation(amax, jdt, abig)
+
+    def chase(x):
+        if x >= sat:
+            return abig
+        if x <= -sat:
+            return -abig
+        return _vcap_big(x, jdt, abig, big) if x > 0.0 else -_vcap_big(-x, jdt, abig, big)
+
+    xs = sorted({f * sat for f in fracs} | {sat, -sat, 0.0, jdt, -jdt})
+    values = [chase(x) for x in xs]
+    for x0, x1, c0, c1 in zip(xs, xs[1:], values, values[1:], strict=False):
+        assert c1 >= c0 - 1e-15 * abig, (x0, x1, c0, c1)
+        assert c1 >= c0 - 0.01 * _PAST * abig
+    for x in xs:
+        if 0.0 < x < sat:
+            assert _vcap_big(x, jdt, abig, big) <= x * (1 + 1e-15)
+
+
+@settings(max_examples=80)
+@given(scenario())
+def test_bisection_early_end_changes_no_frame(case):
+    """The same frames, counters included, with _bisect's early end (a refused chase beyond
+    the band) and without it (_PAST so large that no chase value is ever past), on
+    adversarial streams from random admissible states (a wrong direction of the early end
+    fails it)."""
+    from motioncue.trajectory import _jerk
+
+    jl, state, _hist, targets = case
+    q0, v0, a0 = list(state.q), list(state.v), list(state.a)
+    runs = []
+    for past in (_jerk._PAST, 1e300):
+        saved = _jerk._PAST
+        _jerk._PAST = past
+        try:
+            st_ = jl.initial_state(q0, v0, a0)
+            out = jl.run(st_, targets)
+        finally:
+            _jerk._PAST = saved
+        runs.append((out, st_.n_clamped, st_.n_simulated, st_.max_deviation))
+    np.testing.assert_allclose(runs[0][0], runs[1][0], rtol=0, atol=1e-12)
+    assert runs[0][1:] == runs[1][1:]
 
 
 @pytest.mark.parametrize(

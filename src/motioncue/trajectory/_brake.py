@@ -77,6 +77,30 @@ def brake_bound(v: float, a: float, amax: float, jmax: float, dt: float) -> tupl
     return (fwd, rev) if flip else (rev, fwd)
 
 
+def brake_ahead(v: float, a: float, amax: float, jmax: float, dt: float) -> float:
+    """:func:`brake_bound`'s bound (m) ahead of the motion for ``v > 0``, or ``v == 0`` and
+    ``a >= 0`` (its ``up``; flipped states: pass ``-v, -a`` for its ``down``), by the same
+    float operations in the same order, without the side behind."""
+    a2 = amax * amax
+    if a >= 0.0:
+        vp = v + a * a * 0.5 / jmax + a * dt
+        fwd = vp * (a / jmax + _PAD_FRAMES * dt)
+    else:
+        vp = v + a * a * 0.5 / jmax
+        fwd = vp * _PAD_FRAMES * dt
+        t1 = -a / jmax
+        if v >= a * a * 0.5 / jmax:
+            fwd -= vp * t1 - jmax * t1 * t1 * t1 / 6.0
+        else:
+            fwd += v * t1
+            vp = 0.0
+    if vp * jmax >= a2:
+        fwd += 0.5 * vp * (vp / amax + amax / jmax)
+    else:
+        fwd += vp * math.sqrt(vp / jmax)
+    return fwd
+
+
 def bound_line(
     vmax: float, amax: float, jmax: float, dt: float
 ) -> tuple[float, float, float, float]:
@@ -94,6 +118,14 @@ def bound_line(
     braking distance is ``V^1.5 / sqrt(j)`` then a parabola, meeting with equal slopes),
     so below its chord from ``s = 0`` to ``s = v``: the line, with one part in 1e9 and
     1e-12 m added for the rounding of both computations.
+
+    Behind the motion (below for ``v' > 0``, above for ``v' < 0``, both ways at
+    ``v' = 0``) the bound is at most ``x0``: for ``v' > 0`` brake_bound's backward term is
+    zero unless ``a' < 0``, and then its reverse peak ``a'^2 / (2 j) - a' dt - v'`` is below
+    ``V(0) = a^2 / (2 j) + a dt``, its first part ``vr (|a'| / j + dt)`` below
+    ``V(0) (a / j + dt)`` and its braking distance below that from ``V(0)``: ``X(0)``
+    (``v' < 0`` mirrors it). At ``v' = 0`` the one nonzero side is the forward bound from
+    speed 0, the line's value there.
     """
     v = vmax * (1.0 + 1e-6)
     a = amax * (1.0 + 1e-6)
@@ -172,6 +204,84 @@ def forward_stop(v: float, a: float, amax: float, jdt: float, dt: float) -> floa
         return None
     d = total * dt * dt
     return -d if flip else d
+
+
+def forward_within(
+    q: float, v: float, a: float, lo: float, hi: float, amax: float, jdt: float, dt: float
+) -> bool | None:
+    """:func:`stops_within`'s answer from :func:`forward_stop`'s distance: whether
+    ``q + forward_stop(v, a, amax, jdt, dt)`` lies in ``[lo - 1e-9, hi + 1e-9]``; ``None``
+    where :func:`forward_stop` has no distance (then only the simulation knows).
+
+    The same float operations as :func:`forward_stop` and the same final test, with one
+    early *no*: the ramp and hold frames add positive speeds (``b > S(c) >= c`` before a
+    frame lowers ``b`` by ``c``), so the running sum only grows, and so does the distance
+    the staircase then adds (a sum of positive speeds; its closed form's rounding is parts
+    in 1e16 of it). Once the sum alone puts P more than 1e-9 beyond the tolerance ahead
+    (``room``), the final position is outside too: *no*. Where :func:`forward_stop` would
+    have found no distance after that frame, the simulation :func:`stops_within` falls back
+    to visits the same positions up to rounding (far below 1e-9) and says *no* the moment
+    one leaves the band: the same answer. Valid where :func:`forward_stop` is."""
+    flip = v < 0.0 or (v == 0.0 and a < 0.0)
+    if flip:
+        v, a = -v, -a
+        room = (q - (lo - _EPS - _EPS)) / (dt * dt)
+    else:
+        room = (hi + _EPS + _EPS - q) / (dt * dt)
+    b = v / dt
+    total = 0.0  # sum of b over the frames so far (distance / dt^2)
+    floor = math.floor
+    # forward_stop's loop by the phases of P's ramp (same tests, same sums): a coming down
+    # from above jdt (c < 0: whatever the speed), lowered while b > S(c), then held at
+    # -amax while b > S(amax) (one S, a tight loop; its frames, at most b / amax, are not
+    # counted against _MAX_BRAKE_FRAMES); each phase's end leaves for the staircase
+    for _ in range(_MAX_BRAKE_FRAMES):
+        dn = a - jdt
+        if dn > 0.0:
+            pass  # c = -dn < 0: a still above jdt, it comes down whatever the speed
+        elif dn < -amax:
+            m = floor(amax / jdt)
+            hold = (m + 1) * amax - jdt * m * (m + 1) * 0.5
+            if b > hold:
+                a = -amax
+                b += a
+                total += b
+                if total > room:
+                    return False  # already more than 1e-9 beyond the tolerance ahead
+                while b > hold:
+                    b += a
+                    total += b
+                    if total > room:
+                        return False
+            break
+        elif dn == 0.0:
+            if not b > 0.0:
+                break
+        else:
+            c = -dn  # the deceleration of the next frame if P keeps lowering a
+            m = floor(c / jdt)
+            if not b > (m + 1) * c - jdt * m * (m + 1) * 0.5:
+                break
+        a = dn
+        b += a
+        total += b
+        if total > room:
+            return False  # already more than 1e-9 beyond the tolerance ahead
+    else:
+        return None
+    up = a + jdt
+    if up > amax:
+        up = amax
+    if up < 0.0:  # brakes harder than the staircase asks unless vcap(b) >= -up
+        m = floor(-up / jdt)
+        if b < (m + 1) * -up - jdt * m * (m + 1) * 0.5:
+            return None
+    if b > 0.0:
+        n = _stairs(b, jdt)
+        u = b / (n + 1) + jdt * n * 0.5
+        total += n * b - u * n * (n + 1) * 0.5 + jdt * (n - 1) * n * (n + 1) / 6.0
+    d = total * dt * dt
+    return lo - _EPS <= q + (-d if flip else d) <= hi + _EPS
 
 
 def stops_within(

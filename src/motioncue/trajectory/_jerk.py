@@ -30,14 +30,18 @@ because P is a state feedback (the state it leads to continues the same braking)
 Every emitted frame therefore keeps every limit.
 
 Cost: a next state farther inside its band than P can move from any admissible
-``(v, a)`` of its speed (:func:`._brake.bound_line`) is accepted at once; P's stop is
+``(v, a)`` of its speed (:func:`._brake.bound_line`: its line ahead of the motion, its
+value at rest behind it) is accepted at once; P's stop is
 looked at only when the closed-form one-sided bounds of :mod:`._brake` cannot decide
 either (near a stroke end, or near the target while limiting): its exact distance when
-it moves one way (:func:`._brake.forward_stop`), else a simulation until the answer is
-known. A chase whose budget is past :func:`_chase_saturation` ends on the band's bound
-without :func:`._realtime._vcap`; the bisection (:func:`_bisect`, only when the full
-wanted speed is refused) remembers the states it has decided (saturated wanted speeds
-repeat the same next state). Frames are bit-identical to the full simulation's.
+it moves one way (:func:`._brake.forward_within`: :func:`._brake.forward_stop` with an
+early no), else a simulation until the answer is known. A chase whose budget is past
+:func:`_chase_saturation` ends on the band's bound without :func:`._realtime._vcap`
+(below it, :func:`_vcap_big`: its saturation budget kept per axis, one call); the
+bisection (:func:`_bisect`, only when the full wanted speed is refused) remembers the
+states it has decided (saturated wanted speeds repeat the same next state) and ends at a
+refused wanted speed whose chase lies beyond the band the other way (every later one is
+clipped to the same state). Frames are bit-identical to the full simulation's.
 """
 
 from __future__ import annotations
@@ -50,9 +54,16 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from .._errors import ConfigError, LimitError
-from ._brake import bound_line, brake_bound, forward_stop, simulate_within, stops_within
+from ._brake import (
+    bound_line,
+    brake_ahead,
+    brake_bound,
+    forward_within,
+    simulate_within,
+    stops_within,
+)
 from ._limits import ActuatorLimits
-from ._realtime import _counters_repr, _land_slack, _level_params, _level_step, _vcap
+from ._realtime import _counters_repr, _land_slack, _level_params, _level_step
 
 if TYPE_CHECKING:
     from numpy.typing import ArrayLike
@@ -61,6 +72,8 @@ __all__ = ["JerkLimiter", "JerkLimiterState"]
 
 _MAX_BRAKE_FRAMES = 1_000_000
 _BISECT = 10
+# _bisect: a chase value this far (times abig) beyond the band ends the search (see there)
+_PAST = 1e-9
 
 
 class JerkLimiterState:
@@ -139,7 +152,8 @@ class JerkLimiter:
         # _vcap is at least a_max (_chase_saturation), whether P's braking staircase
         # never meets the +-v_max caps (_brake.stops_within's stair_ok, same expression)
         # and bound_line's (x0, slope, v, a): from |v'| <= v and |a'| <= a, P moves at most
-        # x0 + slope |v'| either way
+        # x0 + slope |v'| either way, _vcap's saturation budget (from which it is abig) and
+        # the largest wanted speed, 2 v_max
         axes = tuple(
             (
                 *p,
@@ -147,6 +161,8 @@ class JerkLimiter:
                 _chase_saturation(p[3], p[4], p[6]),
                 p[3] * p[3] * p[5] + p[3] * dt <= p[2],
                 *bound_line(p[2], p[3], p[7], dt),
+                p[6] + p[6] * p[6] / (2.0 * p[4]) + p[4],
+                2.0 * p[2],
             )
             for p, sl in zip(params, slacks, strict=True)
         )
@@ -262,19 +278,17 @@ class JerkLimiter:
             raise ConfigError(f"target has {len(q_target)} values; expected {len(qs)}")
         dt = self._dt
         inv_dt = self._inv_dt
-        out = [0.0] * len(qs)
         clamped = False
         n_sim = 0
         n_axes = state.clamped_axes
         max_dev = state.max_deviation
-        i = 0
         # _level_step at the velocity level and the admissibility test of _admissible,
         # inlined (a call per candidate costs more than the work): the band of next
         # accelerations depends on (v, a) only, so it is computed once per axis for the
         # landing test and every candidate; same float operations, so the same frames
-        for axis in self._axes:
-            (qmin, qmax, vmax, amax, jdt, half_inv_j, abig, jmax, sl, sat, _stair_ok,
-             reach0, slope, v_in, a_in) = axis  # fmt: skip
+        for i, axis in enumerate(self._axes):
+            (qmin, qmax, vmax, amax, jdt, half_inv_j, abig, jmax, sl, sat, stair_ok,
+             reach0, slope, v_in, a_in, big, w_max) = axis  # fmt: skip
             t = float(q_target[i])
             if t - t != 0.0:
                 t = lts[i]
@@ -288,10 +302,10 @@ class JerkLimiter:
             a = accs[i]
             want = (t - q) * inv_dt
             # beyond 2 v_max every wanted speed acts alike; clamping keeps inf/NaN out
-            if want > 2.0 * vmax:
-                want = 2.0 * vmax
-            elif want < -2.0 * vmax:
-                want = -2.0 * vmax
+            if want > w_max:
+                want = w_max
+            elif want < -w_max:
+                want = -w_max
             # the band [lo, hi] of next accelerations (_level_step: x = v, d = a)
             hi = a + jdt
             if hi > amax:
@@ -300,11 +314,11 @@ class JerkLimiter:
             if lo < -amax:
                 lo = -amax
             if hi > 0.0 and v + hi * dt + hi * hi * half_inv_j > vmax:
-                cap = _vcap((vmax - v) * inv_dt, jdt, abig)
+                cap = _vcap_big((vmax - v) * inv_dt, jdt, abig, big)
                 if hi > cap:
                     hi = cap
             if lo < 0.0 and v + lo * dt - lo * lo * half_inv_j < -vmax:
-                cap = _vcap((v - -vmax) * inv_dt, jdt, abig)
+                cap = _vcap_big((v - -vmax) * inv_dt, jdt, abig, big)
                 if lo < -cap:
                     lo = -cap
             dd = (want - v) * inv_dt
@@ -315,13 +329,16 @@ class JerkLimiter:
                 if qmin - 1e-9 <= q1 <= qmax + 1e-9:
                     v1 = (q1 - q) * inv_dt
                     a1 = (v1 - v) * inv_dt
-                    # P stays inside whatever brake_bound says (its bound_line reach), else
-                    # brake_bound decides, else the exact check
-                    reach = reach0 + slope * (v1 if v1 >= 0.0 else -v1)
+                    # P stays inside whatever brake_bound says (its bound_line reach ahead,
+                    # x0 behind), else brake_bound decides, else the exact check
                     if (
-                        qmin + reach <= q1 <= qmax - reach
-                        and -v_in <= v1 <= v_in
-                        and (-a_in <= a1 <= a_in)
+                        -v_in <= v1 <= v_in
+                        and -a_in <= a1 <= a_in
+                        and (
+                            qmin + reach0 <= q1 <= qmax - (reach0 + slope * v1)
+                            if v1 >= 0.0
+                            else qmin + (reach0 - slope * v1) <= q1 <= qmax - reach0
+                        )
                     ):
                         ok = True
                     else:
@@ -335,8 +352,6 @@ class JerkLimiter:
                         qs[i] = q1
                         vs[i] = v1
                         accs[i] = a1
-                        out[i] = q1
-                        i += 1
                         continue
             # limiting: the largest wanted speed towards the target (held, no feed-forward
             # of its rate) whose next state is admissible and stops before the target
@@ -352,14 +367,18 @@ class JerkLimiter:
             if lo <= dd <= hi and -jdt <= dd <= jdt:
                 vb = want
             else:
-                # _vcap(|want - v| / dt, jdt, abig) with its first test (a saturated chase)
-                # inlined; from `sat` on it is >= amax, so the band's bound is the answer
-                # whatever its value: abig stands in for it (same clipped dn). dd has the
-                # sign of want - v (dt <= 1) and (-e) / dt == -(e / dt) (exact negation)
-                b = dd if dd > 0.0 else -dd
-                dn = abig if b >= sat else _vcap(b, jdt, abig)
-                if not dd > 0.0:
-                    dn = -dn
+                # sign(want - v) _vcap(|want - v| / dt, jdt, abig) with its first test (a
+                # saturated chase) inlined; from `sat` on it is >= amax, so the band's bound
+                # is the answer whatever its value: abig stands in for it (same clipped dn).
+                # dd has the sign of want - v (dt <= 1) and (-e) / dt == -(e / dt) (exact)
+                if dd >= sat:
+                    dn = abig
+                elif dd <= -sat:
+                    dn = -abig
+                elif dd > 0.0:
+                    dn = _vcap_big(dd, jdt, abig, big)
+                else:
+                    dn = -_vcap_big(-dd, jdt, abig, big)
                 if dn > hi:
                     dn = hi
                 if dn < lo:
@@ -368,14 +387,39 @@ class JerkLimiter:
             qn = q + vb * dt
             vn = (qn - q) * inv_dt
             an = (vn - v) * inv_dt
-            # the next state is admissible (_admissible, inlined)
-            reach = reach0 + slope * (vn if vn >= 0.0 else -vn)
+            # the next state is admissible (_admissible, inlined): brake_bound's answer, or
+            # the exact check where it says no. Where bound_line keeps the side behind the
+            # motion inside (brake_bound's bound there is at most x0), brake_bound's answer
+            # is its forward side's (brake_ahead: the same operations), or the line's where
+            # that keeps the side ahead inside too
             if not lo_w - 1e-9 <= qn <= hi_w + 1e-9:
                 ok = False
-            elif (
-                lo_w + reach <= qn <= hi_w - reach and -v_in <= vn <= v_in and (-a_in <= an <= a_in)
-            ):
-                ok = True  # as brake_bound would say (bound_line)
+            elif -v_in <= vn <= v_in and -a_in <= an <= a_in:
+                if vn > 0.0 or (vn == 0.0 and an >= 0.0):  # brake_bound's unflipped side
+                    if lo_w + reach0 <= qn:
+                        ok = (
+                            qn <= hi_w - (reach0 + slope * vn)
+                            or qn + brake_ahead(vn, an, amax, jmax, dt) <= hi_w
+                        )
+                    else:
+                        down, up = brake_bound(vn, an, amax, jmax, dt)
+                        ok = lo_w <= qn - down and qn + up <= hi_w
+                elif qn <= hi_w - reach0:
+                    ok = lo_w + (reach0 - slope * vn) <= qn or lo_w <= qn - brake_ahead(
+                        -vn, -an, amax, jmax, dt
+                    )
+                else:
+                    down, up = brake_bound(vn, an, amax, jmax, dt)
+                    ok = lo_w <= qn - down and qn + up <= hi_w
+                if not ok:  # the exact check (_stops, inlined)
+                    n_sim += 1
+                    dec = (
+                        forward_within(qn, vn, an, lo_w, hi_w, amax, jdt, dt) if stair_ok else None
+                    )
+                    if dec is None:
+                        dec = simulate_within(qn, vn, an, lo_w, hi_w, vmax, amax, jdt, half_inv_j,
+                                              abig, jmax, dt, bool(stair_ok))  # fmt: skip
+                    ok = dec
             else:
                 down, up = brake_bound(vn, an, amax, jmax, dt)
                 if lo_w <= qn - down and qn + up <= hi_w:
@@ -389,21 +433,19 @@ class JerkLimiter:
             qs[i] = qn
             vs[i] = vn
             accs[i] = an
-            out[i] = qn
             if qn != t:
                 clamped = True
                 n_axes[i] += 1
                 if finite:
-                    dev = abs(qn - t)
+                    dev = qn - t if qn > t else t - qn  # |qn - t| (t - qn: its exact negation)
                     if dev > max_dev:
                         max_dev = dev
-            i += 1
         state.max_deviation = max_dev
         state.n_simulated += n_sim
         state.n_frames += 1
         if clamped:
             state.n_clamped += 1
-        return out
+        return qs[:]  # the frames: each axis' new q
 
     def run(self, state: JerkLimiterState, q_targets: ArrayLike) -> np.ndarray:
         """Step through targets (N, n); returns the frames (N, n) (same as :meth:`step`)."""
@@ -424,11 +466,11 @@ def _stops(
     """Whether P from ``(q, v, a)`` stops within ``[lo, hi]`` (1e-9 tolerance), ``q`` itself
     inside it: :func:`._brake.stops_within` with the axis' constants (``JerkLimiter._axes``),
     its closed-form distance first where the axis allows it."""
-    _, _, vmax, amax, jdt, half_inv_j, abig, jmax, _, _, stair_ok, _, _, _, _ = axis
+    _, _, vmax, amax, jdt, half_inv_j, abig, jmax, _, _, stair_ok, _, _, _, _, _, _ = axis
     if stair_ok:
-        dist = forward_stop(v, a, amax, jdt, dt)
-        if dist is not None:
-            return lo - 1e-9 <= q + dist <= hi + 1e-9
+        ok = forward_within(q, v, a, lo, hi, amax, jdt, dt)
+        if ok is not None:
+            return ok
     return simulate_within(
         q, v, a, lo, hi, vmax, amax, jdt, half_inv_j, abig, jmax, dt, bool(stair_ok)
     )
@@ -452,7 +494,8 @@ def _bisect(
     of exact braking checks made: bisection (``_BISECT`` steps) for the largest wanted speed
     in ``[0, want]`` whose next state is admissible within ``[lo_w, hi_w]``, else P's
     action. ``(q, v)``: the last state; ``[lo, hi]``: the band of next accelerations."""
-    _, _, _, amax, jdt, _, abig, jmax, _, sat, _, _, _, _, _ = axis
+    (_, _, vmax, amax, jdt, half_inv_j, abig, jmax, _, sat, stair_ok, reach0, slope, v_in, a_in,
+     big, _) = axis  # fmt: skip
     lo_e = lo_w - 1e-9
     hi_e = hi_w + 1e-9
     n_sim = 0
@@ -474,18 +517,57 @@ def _bisect(
         while k < _BISECT and (0.5 * (w_lo + w_hi) - v) * inv_dt <= -sat:
             w_hi = 0.5 * (w_lo + w_hi)
             k += 1
+    # A refused wanted speed whose chase asks for more than the band allows the other way
+    # ends the search: its chase value (`raw`, before clipping) is a non-decreasing function
+    # of w (of (w - v) / dt: -abig, -_vcap(-x), _vcap(x), abig over the saturation budgets;
+    # _vcap rises with its budget and stays below abig before its own saturation), and every
+    # later midpoint lies between 0 and it (towards 0: below it when want > 0, above it
+    # when want < 0). So for want > 0 and raw below lo by more than _PAST abig (rounding
+    # moves raw by parts in 1e15 of abig), every later chase is below lo too, is clipped to
+    # the same dn = lo (and does not land: (w - v) / dt <= raw < lo), so it is the same
+    # state, refused (seen): the rest of the search only refuses. Mirror for want < 0
+    # (raw above hi). The full want counts as such a speed (its state is refused too).
+    rising = want > 0.0  # (not `up`: brake_bound's name below)
+    lo_past = lo - _PAST * abig
+    hi_past = hi + _PAST * abig
+    if d_want >= sat:
+        raw = abig
+    elif d_want <= -sat:
+        raw = -abig
+    elif d_want > 0.0:
+        raw = _vcap_big(d_want, jdt, abig, big)
+    else:
+        raw = -_vcap_big(-d_want, jdt, abig, big)
+    if (raw < lo_past) if rising else (raw > hi_past):
+        k = _BISECT
     for _ in range(k, _BISECT):
         w = 0.5 * (w_lo + w_hi)
         # _level_step(v, a, w, w): lands on w, else the chase clipped to the band
         ddw = (w - v) * inv_dt
         if lo <= ddw <= hi and -jdt <= ddw <= jdt:
             vb = w
+            past = False
         else:
-            e = w - v
-            b = e * inv_dt if e > 0.0 else -e * inv_dt
-            dn = abig if b >= sat else _vcap(b, jdt, abig)
-            if not e > 0.0:
-                dn = -dn
+            # sign(e) _vcap(|e| / dt), e = w - v: ddw has e's sign and (-e) / dt == -ddw;
+            # past: whether this chase value is beyond the band the other way (above)
+            if ddw > 0.0 and ddw < sat and hi < 0.0:
+                # _vcap is >= 0: above a band below 0 it is clipped to hi whatever its
+                # value; only its bounds [0, abig] are known, so past from them
+                dn = hi
+                past = not rising and 0.0 > hi_past
+            elif ddw <= 0.0 and ddw > -sat and lo > 0.0:
+                dn = lo  # (mirror: in [-abig, 0])
+                past = rising and 0.0 < lo_past
+            else:
+                if ddw >= sat:
+                    dn = abig
+                elif ddw <= -sat:
+                    dn = -abig
+                elif ddw > 0.0:
+                    dn = _vcap_big(ddw, jdt, abig, big)
+                else:
+                    dn = -_vcap_big(-ddw, jdt, abig, big)
+                past = (dn < lo_past) if rising else (dn > hi_past)
             if dn > hi:
                 dn = hi
             if dn < lo:
@@ -498,15 +580,40 @@ def _bisect(
         if known is not None:
             ok = known
         else:
+            # as JerkLimiter.step: bound_line (ahead and behind), brake_ahead where the side
+            # behind is inside, else brake_bound; where those say no, the exact check
             if not lo_e <= qb <= hi_e:
                 ok = False
             else:
-                down, up = brake_bound(vb, ab_, amax, jmax, dt)
-                if lo_w <= qb - down and qb + up <= hi_w:
-                    ok = True
+                if -v_in <= vb <= v_in and -a_in <= ab_ <= a_in:
+                    if vb > 0.0 or (vb == 0.0 and ab_ >= 0.0):
+                        if lo_w + reach0 <= qb:
+                            ok = (
+                                qb <= hi_w - (reach0 + slope * vb)
+                                or qb + brake_ahead(vb, ab_, amax, jmax, dt) <= hi_w
+                            )
+                        else:
+                            down, up = brake_bound(vb, ab_, amax, jmax, dt)
+                            ok = lo_w <= qb - down and qb + up <= hi_w
+                    elif qb <= hi_w - reach0:
+                        ok = lo_w + (reach0 - slope * vb) <= qb or lo_w <= qb - brake_ahead(
+                            -vb, -ab_, amax, jmax, dt
+                        )
+                    else:
+                        down, up = brake_bound(vb, ab_, amax, jmax, dt)
+                        ok = lo_w <= qb - down and qb + up <= hi_w
                 else:
+                    down, up = brake_bound(vb, ab_, amax, jmax, dt)
+                    ok = lo_w <= qb - down and qb + up <= hi_w
+                if not ok:
                     n_sim += 1
-                    ok = _stops(qb, vb, ab_, lo_w, hi_w, axis, dt)
+                    dec = (
+                        forward_within(qb, vb, ab_, lo_w, hi_w, amax, jdt, dt) if stair_ok else None
+                    )
+                    if dec is None:
+                        dec = simulate_within(qb, vb, ab_, lo_w, hi_w, vmax, amax, jdt, half_inv_j,
+                                              abig, jmax, dt, bool(stair_ok))  # fmt: skip
+                    ok = dec
             seen[qb] = ok
         if ok:
             best = True
@@ -514,13 +621,19 @@ def _bisect(
             w_lo = w
         else:
             w_hi = w
+            if past:  # every later midpoint is this state again: refused (above)
+                break
     if not best:  # P's action (_level_step(v, a, 0, 0)): admissible by construction
         ddw = (0.0 - v) * inv_dt
         if lo <= ddw <= hi and -jdt <= ddw <= jdt:
             vb = 0.0
         else:
             e = 0.0 - v
-            dn = _vcap(e * inv_dt, jdt, abig) if e > 0.0 else -_vcap(-e * inv_dt, jdt, abig)
+            dn = (
+                _vcap_big(e * inv_dt, jdt, abig, big)
+                if e > 0.0
+                else -_vcap_big(-e * inv_dt, jdt, abig, big)
+            )
             if dn > hi:
                 dn = hi
             if dn < lo:
@@ -530,6 +643,23 @@ def _bisect(
         vn = (qn - q) * inv_dt
         an = (vn - v) * inv_dt
     return qn, vn, an, n_sim
+
+
+def _vcap_big(b: float, adt: float, v_big: float, b_big: float) -> float:
+    """:func:`._realtime._vcap` ``(b, adt, v_big)`` (speed units) for a finite ``v_big``,
+    its saturation budget ``b_big = v_big + v_big^2 / (2 adt) + adt`` given (precomputed by
+    the same expression, so the same float) and :func:`._realtime._stairs` inlined: the same
+    operations, the same result."""
+    if b <= 0.0:
+        return 0.0
+    if b >= b_big:
+        return v_big
+    n = int((math.sqrt(1.0 + 8.0 * b / adt) - 1.0) * 0.5)
+    while n > 0 and adt * n * (n + 1) * 0.5 > b:
+        n -= 1
+    while adt * (n + 1) * (n + 2) * 0.5 <= b:
+        n += 1
+    return b / (n + 1) + adt * n * 0.5
 
 
 def _second_order_distance(a: float, j: float, dt: float) -> float:
