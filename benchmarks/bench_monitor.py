@@ -5,9 +5,12 @@ The bridge of ``bench_bridge.py`` (real F1 packets from a sender process -> brid
 run so that the shared machine's load falls on all alike:
 
 * ``off``: no monitor;
-* ``ws``: a :class:`~motioncue.viewer._monitor.Monitor` serving the bridge, with a WebSocket
-  client in another process taking every snapshot (the monitor's whole in-process work:
-  snapshots, forward kinematics, JSON, sends);
+* ``ws``: a :class:`~motioncue.viewer._monitor.Monitor` serving the bridge from its own
+  process, with a WebSocket client in another process taking every snapshot (10 a second);
+  in the bridge's process the loop itself reads each snapshot after a frame and writes it to
+  shared memory (``viewer/_monitor_slot.py``; until s27 a reader thread woke on each
+  request, and a frame whose deadline came within about 1.5 ms after such a wake-up went
+  out 0.3-1.1 ms late);
 * ``browser``: the same with the page open in headless Chromium (which also takes CPU
   from the two cores).
 
@@ -100,7 +103,8 @@ def run_once(mode: str, seconds: float, rt_priority: int | None) -> dict[str, An
 def stats_cost_s(window: int = 20000) -> float:
     """Median time (s) of one ``Bridge.stats`` with every timing window full (``window``
     frames of synthetic send times, latencies and ages), 7 runs of 20 calls: the work the
-    monitor's reader thread does twice a second in the bridge's process."""
+    monitor's snapshots add twice a second in the bridge's process (in the loop's thread,
+    after a frame's send)."""
     import numpy as np
 
     from _timing import median_time_s
