@@ -38,6 +38,7 @@ import asyncio
 import json
 import math
 import os
+import pickle
 import threading
 import time
 from collections.abc import Callable, Mapping
@@ -520,7 +521,6 @@ class Monitor:
                 f"monitor: cannot listen on {self.host}:{self.port}: {exc}"
             ) from exc
         self.port = int(self._sockets[0].getsockname()[1])
-        import pickle
         import socket
         import subprocess
         import sys
@@ -600,8 +600,6 @@ class Monitor:
     def _publish(self, running: bool) -> None:
         """The job's loop, after a frame (``running``) or once when it stops: answer the
         server's newest request in the slot. Never blocks and never raises."""
-        import pickle
-
         slot = self._slot
         if slot is None:
             return
@@ -810,8 +808,6 @@ class _JobSource:
         counts = (0, 0) if mon is None else (mon.snapshots, mon.errors)
         slot = self.slot
         if slot is not None and slot.live:
-            import pickle
-
             req = slot.request(*counts)
             end = time.monotonic() + _SLOT_WAIT_S
             while True:
@@ -853,7 +849,6 @@ _SERVER_CODE = (
 def _server_main(req_fd: int, ctl_fd: int, slot_fd: int, *socket_fds: int) -> None:
     """The monitor's server process: a :class:`Monitor` on a :class:`_JobSource`, served
     on this process' main thread until the job's process says "end" (or goes away)."""
-    import pickle
     import socket
     from multiprocessing.connection import Connection
 
