@@ -129,8 +129,11 @@ def _get_snapshot(mon: Monitor) -> dict[str, Any]:
     return snap
 
 
-def test_a_running_bridge_answers_from_its_loop_and_its_final_state_comes_after_it() -> None:
-    bridge, _ = _bridge(rate_hz=100.0)
+@pytest.mark.parametrize("frame_clock", ["fixed", "arrival"])
+def test_a_running_bridge_answers_from_its_loop_and_its_final_state_comes_after_it(
+    frame_clock: str,
+) -> None:
+    bridge, _ = _bridge(rate_hz=100.0, frame_clock=frame_clock)
     src = _Recording(bridge)
     with Monitor(src, bridge.platform, bridge.limits, port=0) as mon:
         assert bridge.after_frame is not None  # attached before the loop starts
