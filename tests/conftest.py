@@ -164,7 +164,8 @@ def pytest_terminal_summary(terminalreporter: pytest.TerminalReporter) -> None:
 # of waiting units does not, so those keep session 25's figures), which lists
 # test_cue_bound_rotation (8 s), test_optimal_solver_route (6 s), test_cue_bound_coupled and
 # three more units that had come after every listed unit, and moves test_limiter_jerk from
-# 10 s to 15 s; test_cue_bound and test_platform_defaults with session 27's cuts subtracted.
+# 10 s to 15 s; test_cue_bound, test_cue_bound_corr, test_cue_bound_rotation and
+# test_platform_defaults with session 27's cuts subtracted.
 _UNITS: dict[str, tuple[float, float]] = {
     "tests/test_liveness.py": (14.9, 70.9),
     "tests/test_fault_injection.py": (8.6, 43.4),
@@ -176,8 +177,8 @@ _UNITS: dict[str, tuple[float, float]] = {
     "tests/test_wire_clock.py": (15.0, 15.8),
     "tests/test_limiter_jerk.py": (14.8, 15.0),
     "tests/test_easysmc_emulator.py": (0.4, 14.6),
-    "tests/test_cue_bound_corr.py": (14.1, 14.4),
     "tests/test_safety_files.py": (10.7, 13.6),
+    "tests/test_cue_bound_corr.py": (13.0, 13.3),
     "tests/test_docs.py::test_docs_build_with_warnings_as_errors": (9.1, 12.7),
     "tests/test_bridge_new_games.py": (3.7, 12.4),
     "tests/test_cue_bound.py": (12.1, 12.3),
@@ -194,12 +195,12 @@ _UNITS: dict[str, tuple[float, float]] = {
     "tests/test_profiles.py": (2.4, 9.2),
     "tests/test_latency_acceptance.py": (2.8, 8.6),
     "tests/test_browser.py::test_monitor_renders_and_its_3d_view_follows_the_poses": (2.3, 8.3),
-    "tests/test_cue_bound_rotation.py": (8.0, 8.1),
     "tests/test_corner4.py": (6.0, 8.1),
     "tests/test_omct.py": (7.2, 7.6),
     "tests/test_extend_cueing.py": (5.2, 7.5),
     "tests/test_sample_drives.py": (7.2, 7.5),
     "tests/test_strength_bound.py": (7.2, 7.3),
+    "tests/test_cue_bound_rotation.py": (7.1, 7.2),
     "tests/test_vestibular_models.py": (6.6, 7.0),
     "tests/test_iface.py": (3.2, 6.5),
     "tests/test_compare.py": (6.0, 6.4),
