@@ -307,7 +307,7 @@ def test_drive_excerpt_presets_and_random_motions_never_beat_the_bound() -> None
 
 
 def test_decimated_certificates_stay_above_a_full_rate_motion() -> None:
-    """Three seconds of the bundled lap: the bound whose dual directions come from fs / 4 is
+    """Two seconds of the bundled lap: the bound whose dual directions come from fs / 4 is
     still above the share of the motion the full-rate problem finds (a motion of S with the
     correlation, so any valid bound is above it), and not far above."""
     from pathlib import Path
@@ -315,12 +315,16 @@ def test_decimated_certificates_stay_above_a_full_rate_motion() -> None:
     from motioncue.telemetry._recording import read_recording_csv, resample
 
     path = Path(__file__).resolve().parents[1] / "configs" / "recordings" / "lap.csv"
-    f = np.asarray(resample(read_recording_csv(path), 100.0).f, dtype=float)[2000:2300]
+    # 2 s (3 s took 1.4 times the CPU: 4.6-5.4 against 3.4 s for the two bounds, measured
+    # alone), the same margins: the decimated bound 2.6 % above the full-rate motion on fy on
+    # both, 5.8 % on fx (3 s: 5.2 %)
+    f = np.asarray(resample(read_recording_csv(path), 100.0).f, dtype=float)[2000:2200]
     hex_reach = RigReach((0.13, 0.115), (0.54, 0.55), (21.4, 22.0), (0.24, 0.23), (0.99, 0.90))
     # the default cuts (two after the first three; four took twice the CPU): the full-rate
-    # bound is then 1.4 % above its motion on fx, 1.3 % on fy (measured), within the 10 % below
+    # bound is then 1.4 % above its motion on fx, 1.1 % on fy (measured; on 3 s 1.6 % and
+    # 1.4 %), within the 10 % below
     full = cue_bound(f, 100.0, hex_reach)
-    dec = cue_bound(f, 100.0, hex_reach, primal_samples=75)
+    dec = cue_bound(f, 100.0, hex_reach, primal_samples=50)
     assert full.solver["decimation"] == "1" and dec.solver["decimation"] == "4"
     assert np.all(full.corr_at_primal >= full.corr_min)
     assert np.all(full.share_at_corr_primal <= full.share_max_at_corr)
