@@ -29,6 +29,12 @@ exact, carried from window to window), and the rider's perceived fz so found may
 vehicle's by at most ``sign_guard[2]`` thresholds at every block end (an fz reversal or a
 wrong-sign fz cue: a drop felt while the car is pressed down).
 
+The sign guard's rows are set at the block ends; with ``sign_guard_every = k`` those of every
+guarded channel but fz also every ``k``-th sample within each block: the rider's motion is
+judged sample by sample, and a car's perceived rate (a formula car's roll rate: road
+texture) can change sign every few samples, so a tilt felt with the car's own rotation is
+left free and one felt against it is held within the guard at each sample.
+
 The QP of a window has a constant Hessian (built once per design); its gradient comes from
 the vehicle's motion over the window (one simulation of the model from rest); it is solved by
 the same casadi conic plugin as the MPC, or for ``solver = "daqp"`` by DAQP on a working set
