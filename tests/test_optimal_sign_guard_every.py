@@ -35,6 +35,22 @@ def test_sign_guard_every_is_validated(bad: object) -> None:
         MpcParams(sign_guard_every=bad)  # type: ignore[arg-type]
 
 
+def test_the_preset_reads_it_and_a_bad_one_is_refused(tmp_path: Path) -> None:
+    mp = load_cueing("optimal-hexapod").mpc
+    assert mp is not None and mp.sign_guard_every == 1
+    src = (ROOT / "configs" / "cueing" / "optimal-hexapod.toml").read_text()
+    assert "\nsign_guard_every = 1\n" in src
+    for text, want in (("0", 0), ("3", 3)):
+        good = tmp_path / f"every{want}.toml"
+        good.write_text(src.replace("\nsign_guard_every = 1\n", f"\nsign_guard_every = {text}\n"))
+        got = load_cueing(good).mpc
+        assert got is not None and got.sign_guard_every == want
+    bad = tmp_path / "bad.toml"
+    bad.write_text(src.replace("\nsign_guard_every = 1\n", "\nsign_guard_every = -2\n"))
+    with pytest.raises(ConfigError, match="sign_guard_every"):
+        load_cueing(bad)
+
+
 @pytest.mark.parametrize("every", [1, 2])
 def test_the_inner_rows_are_the_perceived_motion_of_a_forward_simulation(every: int) -> None:
     params = _with(
@@ -98,6 +114,8 @@ def test_the_inner_guard_cuts_false_roll_cues_on_a_formula_drive() -> None:
         false_s.append(float(ev.false_cue_time_s[3] + ev.false_cue_time_s[4]))
         pv, ps = np.asarray(ev.perceived_vehicle), np.asarray(ev.perceived_sim)
         share.append(float(np.sqrt(np.mean(ps[:, 1] ** 2) / np.mean(pv[:, 1] ** 2))))
+    # measured (15 s): 2.28 s of false roll and pitch cues at the block ends only, 0.78 s at
+    # every sample; fy share 0.160 and 0.156
     assert false_s[0] > 1.0  # block ends only: the tilt's rate felt against the car's
     assert false_s[1] <= 0.5 * false_s[0]
     assert share[1] >= 0.9 * share[0]  # at (nearly) the same lateral strength
