@@ -18,9 +18,9 @@ figures are in the constants' comments), each channel apart and the geometric me
 fy (the tuner's strength). Both plans pursue strength (issue 20 item 7: ``[mpc] w_vehicle``
 prices the error to the vehicle's whole motion). Not met, on the flowing-formula excerpt only
 (the exceptions ``CORR_FLOOR``, ``REVERSAL_CEIL``, ``FALSE_CEIL`` with their figures):
-``optimal``'s fy correlation 0.898 (the whole drive 0.921; its reversals there 1.27 %, the
-whole drive's 0.97 % since session 26, 2.20 % before: fz reversals of its roll in fast
-downforce corners where a window's second pass failed); ``mpc``'s fx
+``optimal``'s fy correlation 0.898 (the whole drive 0.922; its reversals there 0.60 %, the
+whole drive's 0.73 % since session 27, 0.97 % in session 26, 2.20 % before: fz reversals of
+its roll in fast downforce corners where a window's second pass failed); ``mpc``'s fx
 correlation 0.927. Against ``racing-hexapod-firm`` (``CLASSICAL``, stewart6-linear's default
 since issue 20) ``mpc``'s fy share is 0.97 / 1.49 / 1.09x on the excerpts (fx 1.50 / 2.03 /
 1.99x; session 25's plan with the pose prior, ``[mpc] w_prior``): below the issue's 1.15x in fy
@@ -73,9 +73,12 @@ DRIVES = ("flowing-formula", "forest-rally", "lap")
 # Floors of the rendered-share ratio to the classical default, (fx, fy, geometric mean), per
 # excerpt in DRIVES order and pooled; measured (excerpts): optimal, against
 # racing-hexapod-firm (the default once CLASSICAL names it; against racing-hexapod the ratios
-# are larger), fx 1.749 / 2.156 / 2.156, fy 1.321 / 1.939 / 1.579, geometric mean 1.520 /
-# 2.045 / 1.845, pooled 2.048 / 1.519 / 1.763 (session 25's preset, see its header; session
-# 23's gave fx 1.38 / 1.69 / 1.70, fy 1.24 / 1.73 / 1.39, pooled 1.61 / 1.38 / 1.49);
+# are larger), fx 1.822 / 2.245 / 2.256, fy 1.307 / 1.927 / 1.571, geometric mean 1.543 /
+# 2.080 / 1.882, pooled 2.137 / 1.507 / 1.795 (session 27's preset, see its header; with its
+# sign guard alone fx 1.740 / 2.155 / 2.154, fy 1.311 / 1.932 / 1.578; session 25's
+# 1.749 / 2.156 / 2.156, 1.321 / 1.939 / 1.579, 1.520 / 2.045 / 1.845, pooled 2.048 /
+# 1.519 / 1.763; session 23's fx 1.38 / 1.69 / 1.70, fy 1.24 / 1.73 / 1.39, pooled 1.61 /
+# 1.38 / 1.49);
 # mpc (the w_vehicle/sign-guard plan, taken in session 22 once its solves were fast: DAQP's own
 # interface, warm-started through the guard), against racing-hexapod-firm (session 23):
 # fx 1.34 / 1.89 / 1.77, fy 0.88 / 1.20 / 0.90, geometric mean 1.09 / 1.51 / 1.26, pooled
@@ -84,10 +87,10 @@ DRIVES = ("flowing-formula", "forest-rally", "lap")
 # 1.88 / 1.11 / 1.44 (fy below the issue's 1.15x on flowing-formula and the lap: module
 # docstring).
 RATIO_OPTIMAL = {
-    "flowing-formula": (1.7, 1.3, 1.5),
-    "forest-rally": (2.1, 1.9, 2.0),
-    "lap": (2.1, 1.55, 1.8),
-    "pooled": (2.0, 1.5, 1.75),
+    "flowing-formula": (1.8, 1.3, 1.5),
+    "forest-rally": (2.2, 1.9, 2.05),
+    "lap": (2.2, 1.55, 1.85),
+    "pooled": (2.1, 1.5, 1.78),
 }
 RATIO_MPC = {
     "flowing-formula": (1.45, 0.95, 1.18),
@@ -96,18 +99,22 @@ RATIO_MPC = {
     "pooled": (1.8, 1.08, 1.4),
 }
 # correlation floors (fx, fy) where the issue's 0.95 / 0.90 is not met: optimal on the
-# flowing-formula excerpt gives 0.972 / 0.898 (the whole drive 0.969 / 0.921);
+# flowing-formula excerpt gives 0.975 / 0.898 (the whole drive 0.973 / 0.922);
 # mpc there 0.927 / 0.970 (the whole drive 0.908 / 0.965)
 CORR_FLOOR = {
     ("optimal-hexapod", "flowing-formula"): (0.95, 0.89),
     ("mpc-hexapod", "flowing-formula"): (0.92, 0.90),
 }
 # reversal ceilings where the issue's 2 % is not met on an excerpt (none: optimal on the
-# flowing-formula excerpt 1.27 %, racing-hexapod-firm 3.40 %; the whole drive 0.97 %)
+# flowing-formula excerpt 0.60 %, 1.27 % before session 27, racing-hexapod-firm 3.40 %; the
+# whole drive 0.73 %)
 REVERSAL_CEIL: dict[tuple[str, str], float] = {}
 # false-cue ceilings where the issue's 15 % is not met on an excerpt: none (mpc on the
 # flowing-formula excerpt was 15.93 % before session 25's plan, now 11.8 %)
 FALSE_CEIL: dict[tuple[str, str], float] = {}
+OPTIMAL_FALSE_MAX = 0.05
+"""All false cues of ``optimal-hexapod`` on every excerpt at most this (measured 3.47 / 2.33 /
+2.37 % in DRIVES order since session 27's sign guard at every sample; the issue asks 15 %)."""
 
 
 BOUND_FLOOR_FY = 13.5
@@ -192,6 +199,8 @@ def test_within_the_cue_targets_on_every_excerpt(
     for drive, m in zip(DRIVES, each, strict=True):
         assert m.reversals_any <= REVERSAL_CEIL.get((preset, drive), 0.02), drive
         assert m.false_any <= FALSE_CEIL.get((preset, drive), 0.15), drive
+        if preset == "optimal-hexapod":
+            assert m.false_any <= OPTIMAL_FALSE_MAX, drive
         assert m.clamped <= 0.01, drive
         fx, fy = CORR_FLOOR.get((preset, drive), (0.95, 0.90))
         assert m.correlation[0] >= fx and m.correlation[1] >= fy, drive
@@ -214,7 +223,7 @@ def test_renders_more_than_the_classical_default(
         ):
             assert got >= floor * base, (preset, drive, got, base, floor)
     # the issue's figures on the geometric mean, pooled: optimal >= 1.3x (aim 1.5x; against
-    # racing-hexapod-firm it gives 1.76x), mpc >= 1.15x
+    # racing-hexapod-firm it gives 1.80x), mpc >= 1.15x
     need = 1.5 if preset == "optimal-hexapod" else 1.15
     assert _strength(m)[2] >= need * _strength(c)[2]
 

@@ -8,6 +8,7 @@ QpSolver`, a separate argument path), swapped into a second design.
 
 from __future__ import annotations
 
+import dataclasses
 from pathlib import Path
 
 import numpy as np
@@ -25,7 +26,14 @@ def test_the_direct_route_gives_the_casadi_plugins_plan() -> None:
     # 5 s: three windows of the 2 s stride, the fewest the test accepts (each costs the same)
     a = np.loadtxt(rec, delimiter=",", skiprows=1, max_rows=3500)[3000:3500]
     f, w = a[:, 1:4].copy(), a[:, 4:7].copy()
-    params = load_cueing("optimal-hexapod")
+    # the guard at the block ends only (sign_guard_every = 0): with the preset's guard at every
+    # sample (session 27) casadi's daqp plugin fails the first window's QP that DAQP's own
+    # interface and the working set solve to the same optimum (cost -144496.34, measured), so
+    # the oracle would compare a different fallback; the working set is checked against the
+    # direct route with the preset's own guard in tests/test_optimal_working_set.py
+    base = load_cueing("optimal-hexapod")
+    assert base.mpc is not None
+    params = dataclasses.replace(base, mpc=dataclasses.replace(base.mpc, sign_guard_every=0))
     direct = OptimalCueing(params, FS)
     assert isinstance(direct._qp, DaqpQp)
     # the whole window QP on this route (its working-set solve is checked against this route

@@ -52,6 +52,9 @@ washout is the MPC's fallback) plus one ``[mpc]`` table, read by :func:`read_mpc
     window_s = 4.0                     # optimal only: window length
     stride_s = 2.0                     # optimal only: kept part of each window
     block_samples = 5                  # optimal only: input held for this many samples
+    sign_guard_every = 1               # optional, optimal only: the sign guard (fz excepted)
+                                       #   also every this many samples within a block
+                                       #   (0: at the block ends only)
 
 All weights are dimensionless multipliers of the units given; the perceived error is
 measured in perception thresholds, like :func:`~._vestibular.perceived_motion_error`.
@@ -220,6 +223,11 @@ class MpcParams:
         ``stride_s < window_s``.
     block_samples : int
         ``optimal``: samples per move block.
+    sign_guard_every : int
+        ``optimal``: the sign guard's rows (every guarded channel but fz) also at every
+        ``sign_guard_every``-th sample within each block, not only at the block ends (0: at
+        the block ends only; a perceived motion judged sample by sample, against a vehicle
+        whose sign can change within a block).
     """
 
     platform: str = "stewart6-linear"
@@ -256,6 +264,7 @@ class MpcParams:
     window_s: float = 4.0
     stride_s: float = 2.0
     block_samples: int = 5
+    sign_guard_every: int = 0
 
     def __post_init__(self) -> None:
         for name in ("w_error", "w_pose", "w_vel", "w_acc", "w_vehicle", "w_prior"):
@@ -319,6 +328,7 @@ class MpcParams:
         for name, iv, ilo, ihi in (
             ("blocks", self.blocks, 1, 200),
             ("block_samples", self.block_samples, 1, 100),
+            ("sign_guard_every", self.sign_guard_every, 0, 100),
         ):
             if isinstance(iv, bool) or not isinstance(iv, int) or not ilo <= iv <= ihi:
                 raise ConfigError(f"MpcParams.{name} = {iv!r} is invalid; allowed: [{ilo}, {ihi}]")
@@ -360,7 +370,7 @@ def read_mpc_table(table: Any) -> MpcParams:
         "stride_s",
     ):
         vals[name] = table.number(name, getattr(d, name))
-    for name in ("blocks", "block_samples"):
+    for name in ("blocks", "block_samples", "sign_guard_every"):
         vals[name] = table.integer(name, getattr(d, name))
     lim = list(d.ref_limit)
     if table.has("ref_limit_m_s2"):

@@ -29,6 +29,12 @@ exact, carried from window to window), and the rider's perceived fz so found may
 vehicle's by at most ``sign_guard[2]`` thresholds at every block end (an fz reversal or a
 wrong-sign fz cue: a drop felt while the car is pressed down).
 
+The sign guard's rows are set at the block ends; with ``sign_guard_every = k`` those of every
+guarded channel but fz also every ``k``-th sample within each block: the rider's motion is
+judged sample by sample, and a car's perceived rate (a formula car's roll rate: road
+texture) can change sign every few samples, so a tilt felt with the car's own rotation is
+left free and one felt against it is held within the guard at each sample.
+
 The QP of a window has a constant Hessian (built once per design); its gradient comes from
 the vehicle's motion over the window (one simulation of the model from rest); it is solved by
 the same casadi conic plugin as the MPC, or for ``solver = "daqp"`` by DAQP on a working set
@@ -363,6 +369,12 @@ class OptimalCueing:
         guard = self._guard_channels()
         ce_thr = m.ce[guard] / m.thresholds[guard][:, None]  # rows in thresholds
         a_guard = np.einsum("gx,bxu->bgu", ce_thr, ge).reshape(-1, n_u)
+        inner = self._inner_samples()
+        if inner.size:  # and within the blocks (sign_guard_every), fz excepted, block-major
+            gi = self._inner_channels()
+            ce_in = m.ce[gi] / m.thresholds[gi][:, None]
+            a_in = np.einsum("gx,kxu->kgu", ce_in, gam[inner]).reshape(-1, n_u)
+            a_guard = np.concatenate([a_guard, a_in], axis=0)
         object.__setattr__(self, "_a_guard", a_guard)
         object.__setattr__(
             self,
@@ -503,19 +515,48 @@ class OptimalCueing:
             float(self.model.thresholds[2]),
         )
 
+    def _inner_samples(self) -> NDArray[np.int64]:
+        """Window samples (state indices, block-major) within the blocks whose perceived
+        motion the sign guard also bounds (``sign_guard_every``; empty: block ends only)."""
+        every = self.mpc.sign_guard_every
+        if every <= 0 or not self._inner_channels():
+            return np.zeros(0, dtype=np.int64)
+        bs = self.mpc.block_samples
+        nb = self.n_window // bs
+        offs = np.arange(every, bs, every)
+        return (np.arange(nb)[:, None] * bs + offs[None, :]).reshape(-1).astype(np.int64)
+
+    def _inner_channels(self) -> list[int]:
+        """The guarded channels bounded within the blocks too: all but fz (whose guard needs
+        the tilt's loss of vertical force, at the block ends only)."""
+        return [i for i in self._guard_channels() if i != 2]
+
     def _guard_bounds(
         self,
-        xf_ends: NDArray[np.float64],
-        xv_ends: NDArray[np.float64],
-        sign_ends: NDArray[np.float64],
+        xf_win: NDArray[np.float64],
+        xv_win: NDArray[np.float64],
+        sign_win: NDArray[np.float64],
     ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
-        """Bounds of the sign-guard rows: at block ends (``xf_ends`` free state, ``xv_ends``
-        the vehicle-only state, ``sign_ends`` the sign of the vehicle's perceived motion, 0
-        where unconstrained), per guarded channel, in thresholds."""
+        """Bounds of the sign-guard rows, in thresholds: at the block ends per guarded
+        channel, then at :meth:`_inner_samples` per :meth:`_inner_channels`. ``xf_win``
+        ``(n_window + 1, nx)``: the window's free state, ``xv_win``: the vehicle-only state,
+        ``sign_win`` ``(n_window + 1, 6)``: the sign of the vehicle's perceived motion (0
+        where unconstrained), each by state index."""
         m = self.model
         guard = self._guard_channels()
-        free = (xf_ends - xv_ends) @ (m.ce[guard] / m.thresholds[guard][:, None]).T
-        return sign_guard_bounds(self.mpc, sign_ends[:, guard], free)
+        ends = np.arange(1, self.n_window // self.mpc.block_samples + 1) * self.mpc.block_samples
+        free = (xf_win[ends] - xv_win[ends]) @ (m.ce[guard] / m.thresholds[guard][:, None]).T
+        lo, hi = sign_guard_bounds(self.mpc, sign_win[ends][:, guard], free)
+        inner = self._inner_samples()
+        if not inner.size:
+            return lo, hi
+        gi = self._inner_channels()
+        free_in = (xf_win[inner] - xv_win[inner]) @ (m.ce[gi] / m.thresholds[gi][:, None]).T
+        g = np.asarray(self.mpc.sign_guard)[gi]
+        v = sign_win[inner][:, gi]
+        lo_in = np.where(v > 0, -g - free_in, -np.inf).reshape(-1)
+        hi_in = np.where(v < 0, g - free_in, np.inf).reshape(-1)
+        return np.concatenate([lo, lo_in]), np.concatenate([hi, hi_in])
 
     def _window_qp(
         self,
@@ -591,8 +632,8 @@ class OptimalCueing:
     def _solve_window(
         self,
         win: _WindowQp,
-        xv_ends: NDArray[np.float64],
-        sign_ends: NDArray[np.float64],
+        xv_win: NDArray[np.float64],
+        sign_win: NDArray[np.float64],
         use_guard: bool,
         fz: tuple[NDArray[np.float64], ...] | None = None,
         guess: NDArray[np.float64] | None = None,
@@ -605,17 +646,18 @@ class OptimalCueing:
         qp = win.qp
         ws = self._ws
         if use_guard and self._qp_guard is not None:
-            glo, ghi = self._guard_bounds(win.x_ends, xv_ends, sign_ends)
+            glo, ghi = self._guard_bounds(win.xf, xv_win, sign_win)
             a_guard = self._a_guard
             if fz is not None:
                 guard = self._guard_channels()
                 ng = len(guard)
                 iz = guard.index(2)
+                n_end = ng * (self.n_window // self.mpc.block_samples)  # the block ends' rows
                 a_guard = a_guard.copy()
-                a_guard[iz::ng] = fz[0]
+                a_guard[iz:n_end:ng] = fz[0]
                 gz = self.mpc.sign_guard[2]
-                glo[iz::ng] = np.where(fz[2] > 0.0, -gz - fz[1], -np.inf)
-                ghi[iz::ng] = np.inf
+                glo[iz:n_end:ng] = np.where(fz[2] > 0.0, -gz - fz[1], -np.inf)
+                ghi[iz:n_end:ng] = np.inf
             soft = SoftRows(a_guard, glo, ghi)
             if ws is not None and isinstance(self._qp_guard._qp, DaqpQp):
                 return ws.solve(qp, soft, guess, start)
@@ -639,6 +681,13 @@ class OptimalCueing:
         guard = self._guard_channels()
         if guard:
             sizes.append(len(guard))
+        inner = self._inner_samples()
+        if inner.size:
+            sizes.append(
+                inner.size
+                // (self.n_window // self.mpc.block_samples)
+                * len(self._inner_channels())
+            )
         return sizes
 
     def _shifted(
@@ -773,11 +822,11 @@ class OptimalCueing:
             sg = xv_e = np.zeros(0)
             ab = start + np.arange(1, nb + 1) * bs - 1  # samples at the block ends
             up = up_all[np.minimum(ab, n - 1)] & (ab < n)
-            if guard:
-                ab = start + np.arange(1, nb + 1) * bs - 1  # samples at the block ends
-                abc = np.minimum(ab, n - 1)
-                sg = sign_all[abc] * (ab < n)[:, None]
-                xv_e = xv_all[abc]
+            if guard:  # by state index k of the window: sample start + k - 1
+                kw = start + np.arange(nw + 1) - 1
+                kwc = np.clip(kw, 0, n - 1)
+                sg = sign_all[kwc] * ((kw >= 0) & (kw < n))[:, None]
+                xv_e = xv_all[kwc]
             firsts = (prev, None) if prev is not None else (None,)
             ups = (up, None) if up.any() else (None,)
             tries = [

@@ -648,6 +648,8 @@ def mpc_table_lines(mp: MpcParams) -> list[str]:
     ):
         lines.append(f"{key} = {_fmt(getattr(mp, key))}")
     lines.append(f"block_samples = {mp.block_samples}")
+    if mp.sign_guard_every:
+        lines.append(f"sign_guard_every = {mp.sign_guard_every}")
     if mp.tilt_rate_limit_rad_s is not None:
         lines.append(f"tilt_rate_limit_deg_s = {_fmt(mp.tilt_rate_limit_rad_s * r2d)}")
     lines += [f"solver = {_quote(mp.solver)}", ""]
