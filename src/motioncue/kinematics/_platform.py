@@ -14,6 +14,7 @@ from typing import TypedDict
 
 import numpy as np
 import numpy.typing as npt
+from numpy.typing import NDArray
 
 from .._errors import ConfigError
 from .._frozen import readonly, set_fields
@@ -510,7 +511,7 @@ class Platform:
     q_max: np.ndarray
     q_park: np.ndarray
     pose_park: np.ndarray
-    neutral_absolute: np.ndarray
+    neutral_absolute: NDArray[np.float64]
     drives: Drive
     _legs: LegSet
     _leg_mask: np.ndarray
@@ -627,7 +628,9 @@ class Platform:
         _, q, reachable = self._eval_one(pose)
         return q, reachable
 
-    def _eval_one(self, pose: list[float]) -> tuple[list, list[float], bool]:
+    def _eval_one(
+        self, pose: list[float]
+    ) -> tuple[list[tuple[float, float, float]], list[float], bool]:
         """Leg vectors, actuator positions and reachability for one pose (plain floats)."""
         for v in pose:
             if not math.isfinite(v):
@@ -741,8 +744,11 @@ class Platform:
         return jac
 
     def _jacobian_one(
-        self, pose: list[float], d: list | None = None, q: list[float] | None = None
-    ) -> np.ndarray:
+        self,
+        pose: list[float],
+        d: list[tuple[float, float, float]] | None = None,
+        q: list[float] | None = None,
+    ) -> NDArray[np.float64]:
         """``(n, 6)`` Jacobian for one pose; ``d`` and ``q`` from :meth:`_eval_one` if known."""
         if d is None or q is None:
             d, q, _ = self._eval_one(pose)
@@ -758,7 +764,7 @@ class Platform:
             rows.append([0.0, 0.0, 0.0, 0.0, 0.0, self._yaw_dq(pose[5])])
         if self._n_spare:
             rows.extend([0.0] * 6 for _ in range(self._n_spare))
-        jac: np.ndarray = np.array(rows, dtype=float)
+        jac: NDArray[np.float64] = np.array(rows, dtype=float)
         if not self._all_dof_legs:
             jac[:nl] *= self._leg_mask
         return jac
@@ -886,15 +892,15 @@ class Platform:
         )
 
     @staticmethod
-    def _within(fk: FKResult, tol_q: np.ndarray) -> bool:
+    def _within(fk: FKResult, tol_q: NDArray[np.float64]) -> bool:
         r = fk.residuals
         return r is not None and bool(np.all(np.abs(r) <= tol_q))
 
-    def _residuals(self, pose: np.ndarray, q: np.ndarray) -> np.ndarray:
+    def _residuals(self, pose: NDArray[np.float64], q: NDArray[np.float64]) -> NDArray[np.float64]:
         """``q - q(pose)`` ``(n,)``; a crank leg compared with the nearer assembly branch."""
         pl = [float(v) for v in pose]
         d, cur, reachable = self._eval_one(pl)
-        r = q - np.asarray(cur, dtype=float)
+        r: NDArray[np.float64] = q - np.asarray(cur, dtype=float)
         legs = self._legs
         if isinstance(legs, CrankLegs):
             nl = legs.n
@@ -913,7 +919,7 @@ class Platform:
             r[:] = np.inf
         return r
 
-    def _closure(self, q: np.ndarray) -> Callable[[list[float]], np.ndarray]:
+    def _closure(self, q: NDArray[np.float64]) -> Callable[[list[float]], NDArray[np.float64]]:
         """The leg closure residuals ``f(pose)`` for positions ``q``: zero exactly where a
         pose gives ``q``, smooth everywhere, whatever the crank's assembly branch: leg length
         minus the actuator's length (m) for linear legs, distance from crank tip to anchor
@@ -931,10 +937,10 @@ class Platform:
             want = legs.rod
         q_yaw = float(q[nl]) if self._yaw_axis else 0.0
 
-        def f(pose: list[float]) -> np.ndarray:
+        def f(pose: list[float]) -> NDArray[np.float64]:
             x, y, z, roll, pitch, yaw = (v if m else 0.0 for v, m in zip(pose, mask, strict=True))
             d = np.asarray(legs.vectors_one(rot_one(roll, pitch, yaw), (x, y, z)), dtype=float)
-            out = np.linalg.norm(d - tips, axis=1) - want
+            out = np.asarray(np.linalg.norm(d - tips, axis=1) - want, dtype=float)
             if self._yaw_axis:
                 out = np.append(out, self._yaw_q_one(pose[5])[0] - q_yaw)
             return out
@@ -1120,7 +1126,7 @@ class Platform:
             ok=ok,
         )
 
-    def absolute(self, q: npt.ArrayLike) -> np.ndarray:
+    def absolute(self, q: npt.ArrayLike) -> NDArray[np.float64]:
         """Pin-to-pin length (m) or crank angle from its zero direction (rad), ``(..., n)``."""
         return np.asarray(q, dtype=float) + self.neutral_absolute
 
