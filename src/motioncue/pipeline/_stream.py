@@ -341,7 +341,7 @@ class OutputStage:
         self._supervise()
         state = self._state
         saved = self._saver.save(state)
-        clock = getattr(self._encoder, "clock", None)
+        clock = self._encoder.clock  # declared: None for an encoder without one
         saved_clock = None if clock is None else clock.snapshot()
         try:
             q_out = np.asarray(self._step(q_target), dtype=float)
