@@ -98,10 +98,12 @@ TRANSIENT_ERRNOS = frozenset(
 )
 
 
-def _errno_of(exc: BaseException) -> int | None:
-    code = getattr(exc, "errno", None)
-    if code is None and exc.__cause__ is not None:
-        code = getattr(exc.__cause__, "errno", None)
+def _errno_of(exc: OSError) -> int | None:
+    """The errno of a failed send, or of the OSError it was raised from (a TransportError
+    wrapping the socket's); None when neither carries a whole number."""
+    code: object = exc.errno
+    if code is None and isinstance(exc.__cause__, OSError):
+        code = exc.__cause__.errno
     return code if isinstance(code, int) else None
 
 
