@@ -301,6 +301,8 @@ class FaultyController:
         owner = self
 
         class Enc:
+            clock = inner.clock  # the FrameEncoder protocol declares it (None for iface)
+
             def encode(self, *a: Any, **k: Any) -> list[bytes]:
                 owner.calls += 1
                 if owner.calls == owner.fail_at:

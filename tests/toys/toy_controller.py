@@ -73,7 +73,12 @@ class ToyFrame:
 
 
 class ToyEncoder:
-    """Frames of one run: numbers from 0, times in whole ms from the first frame."""
+    """Frames of one run: numbers from 0, times in whole ms from the first frame.
+
+    Its ``clock`` is None (a ``FrameEncoder`` declares one): the toy numbers its frames
+    itself and is not rolled back by the output stage."""
+
+    clock: None = None
 
     def __init__(self, n_axes: int) -> None:
         self.n_axes = n_axes

@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 import sys
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from .._errors import ConfigError
 from ._common import (
@@ -22,6 +23,9 @@ from ._common import (
 )
 from ._preset import add_vestibular_option
 from ._verb import Allowed, Verb, registrar
+
+if TYPE_CHECKING:
+    from ..cueing import CueingEvaluation
 
 __all__ = ["register"]
 
@@ -71,7 +75,7 @@ def run(args: argparse.Namespace) -> int:
         rate_hz,
         workspace=params.workspace,
         model=args.vestibular,
-        head_offset_m=getattr(params, "head_offset_m", None),
+        head_offset_m=params.head_offset_m,
     )
     if args.json:
         print_json(
@@ -122,21 +126,16 @@ def run(args: argparse.Namespace) -> int:
     return 0
 
 
-def _metrics(ev: object) -> dict[str, object]:
+def _metrics(ev: CueingEvaluation) -> dict[str, object]:
     """The evaluation's scalar metrics, for ``--json`` (numbers as floats, NaN as None)."""
     import numpy as np
 
-    to_dict = getattr(ev, "to_dict", None)
-    if callable(to_dict):
-        return dict(to_dict())
     out: dict[str, object] = {}
     for name, value in vars(ev).items():
         arr = np.asarray(value)
         if arr.dtype.kind in "fiub" and arr.size <= 6:
             out[name] = [None if not np.isfinite(v) else float(v) for v in arr.ravel().tolist()]
-    cue = getattr(ev, "metrics", None)
-    if cue is not None:
-        out["metrics"] = cue.to_dict()  # definitions: motioncue.cueing.cue_metrics
+    out["metrics"] = ev.metrics.to_dict()  # definitions: motioncue.cueing.cue_metrics
     return out
 
 

@@ -152,10 +152,15 @@ def compress(x: float, k: float, limit_pos: float, limit_neg: float, shape: floa
     float
     """
     y = k * x
+    # ``float ** float`` is untyped (a negative base gives a complex); every base here is
+    # > 1, so the power is a float
+    soft: float
     if y > 0.0:
-        return y / (1.0 + (y / limit_pos) ** shape) ** (1.0 / shape)
+        soft = (1.0 + (y / limit_pos) ** shape) ** (1.0 / shape)
+        return y / soft
     if y < 0.0:
-        return y / (1.0 + (-y / limit_neg) ** shape) ** (1.0 / shape)
+        soft = (1.0 + (-y / limit_neg) ** shape) ** (1.0 / shape)
+        return y / soft
     return y
 
 
@@ -177,7 +182,8 @@ def compress_inverse(y: float, k: float, limit_pos: float, limit_neg: float, sha
     r = abs(y) / lim
     if r >= 1.0:
         raise ValueError(f"|y| = {abs(y)!r} is not below the limit {lim!r}")
-    return y / (k * (1.0 - r**shape) ** (1.0 / shape))
+    soft: float = (1.0 - r**shape) ** (1.0 / shape)  # base in (0, 1]: a float power
+    return y / (k * soft)
 
 
 _SHORT = 24  # a segment shorter than this switches to the scalar loop

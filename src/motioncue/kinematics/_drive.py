@@ -14,6 +14,7 @@ from dataclasses import dataclass
 
 import numpy as np
 import numpy.typing as npt
+from numpy.typing import NDArray
 
 from .._errors import ConfigError
 from .._frozen import readonly, set_fields
@@ -41,10 +42,10 @@ class Drive:
     """
 
     kinds: tuple[str, ...]
-    pulses_per_rev: np.ndarray
-    units_per_rev: np.ndarray
-    direction: np.ndarray
-    q_home: np.ndarray
+    pulses_per_rev: NDArray[np.float64]
+    units_per_rev: NDArray[np.float64]
+    direction: NDArray[np.float64]
+    q_home: NDArray[np.float64]
 
     def __post_init__(self) -> None:
         n = len(self.kinds)
@@ -145,18 +146,18 @@ class Drive:
         return len(self.kinds)
 
     @property
-    def pulses_per_unit(self) -> np.ndarray:
+    def pulses_per_unit(self) -> NDArray[np.float64]:
         """``(n,)`` signed pulses per metre (linear) or per radian (rotary)."""
-        ppu: np.ndarray = self._ppu  # type: ignore[attr-defined]
+        ppu: NDArray[np.float64] = self._ppu  # type: ignore[attr-defined]
         return ppu
 
     @property
-    def gear_ratio(self) -> np.ndarray:
+    def gear_ratio(self) -> NDArray[np.float64]:
         """``(n,)`` motor revolutions per output revolution (rotary; NaN for linear)."""
         kinds = np.array([k == "rotary" for k in self.kinds])
         return np.where(kinds, 2.0 * math.pi / self.units_per_rev, np.nan)
 
-    def _check(self, name: str, x: np.ndarray) -> np.ndarray:
+    def _check(self, name: str, x: npt.ArrayLike) -> NDArray[np.float64]:
         x = np.asarray(x, dtype=float)
         if x.ndim == 0 or x.shape[-1] != self.n:
             raise ConfigError(f"{name} has shape {x.shape}; expected (..., {self.n})")
@@ -167,17 +168,17 @@ class Drive:
             )
         return x
 
-    def to_revolutions(self, q: np.ndarray) -> np.ndarray:
+    def to_revolutions(self, q: npt.ArrayLike) -> NDArray[np.float64]:
         """Motor revolutions from the homed position, ``(..., n)``, signed by direction."""
         q = self._check("q", q)
         return (q - self.q_home) * self.direction / self.units_per_rev
 
-    def from_revolutions(self, revs: np.ndarray) -> np.ndarray:
+    def from_revolutions(self, revs: npt.ArrayLike) -> NDArray[np.float64]:
         """Actuator positions ``(..., n)`` from motor revolutions."""
         revs = self._check("revolutions", revs)
         return self.q_home + revs * self.units_per_rev * self.direction
 
-    def to_pulses(self, q: np.ndarray) -> np.ndarray:
+    def to_pulses(self, q: npt.ArrayLike) -> NDArray[np.int64]:
         """Pulses ``(..., n)`` int64 for actuator positions ``q``; rounds to the nearest pulse."""
         q = self._check("q", q)
         pulses = np.rint((q - self.q_home) * self.pulses_per_unit)
@@ -185,7 +186,7 @@ class Drive:
             raise ConfigError(f"q = {q!r} is beyond any pulse count (|pulses| >= 2**62)")
         return pulses.astype(np.int64)
 
-    def from_pulses(self, pulses: np.ndarray) -> np.ndarray:
+    def from_pulses(self, pulses: npt.ArrayLike) -> NDArray[np.float64]:
         """Actuator positions ``(..., n)`` for pulses (exact inverse of :meth:`to_pulses`)."""
         p = np.asarray(pulses)
         if p.ndim == 0 or p.shape[-1] != self.n:

@@ -17,6 +17,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 import numpy.typing as npt
+from numpy.typing import NDArray
 
 from .._errors import ConfigError
 from .._frozen import set_fields
@@ -98,34 +99,36 @@ class ForceResult:
         ``(N, n)`` motor speed (rev/min), signed like ``speed``.
     """
 
-    t_s: np.ndarray
-    forces: np.ndarray
-    peak: np.ndarray
-    peak_index: np.ndarray
-    wrench: np.ndarray
-    condition: np.ndarray
-    speed: np.ndarray
-    motor_torque_nm: np.ndarray
-    motor_rpm: np.ndarray
+    t_s: NDArray[np.float64]
+    forces: NDArray[np.float64]
+    peak: NDArray[np.float64]
+    peak_index: NDArray[np.intp]
+    wrench: NDArray[np.float64]
+    condition: NDArray[np.float64]
+    speed: NDArray[np.float64]
+    motor_torque_nm: NDArray[np.float64]
+    motor_rpm: NDArray[np.float64]
 
     @property
-    def peak_motor_torque_nm(self) -> np.ndarray:
+    def peak_motor_torque_nm(self) -> NDArray[np.float64]:
         """``(n,)`` largest motor torque magnitude per actuator (ideal transmission)."""
-        return np.max(np.abs(self.motor_torque_nm), axis=0)
+        return np.asarray(np.max(np.abs(self.motor_torque_nm), axis=0), dtype=float)
 
     @property
-    def peak_motor_rpm(self) -> np.ndarray:
+    def peak_motor_rpm(self) -> NDArray[np.float64]:
         """``(n,)`` largest motor speed magnitude per actuator (rev/min)."""
-        return np.max(np.abs(self.motor_rpm), axis=0)
+        return np.asarray(np.max(np.abs(self.motor_rpm), axis=0), dtype=float)
 
 
-def _derivative(t: np.ndarray, y: np.ndarray) -> np.ndarray:
+def _derivative(t: NDArray[np.float64], y: NDArray[np.float64]) -> NDArray[np.float64]:
     if len(t) < 3:
         return np.zeros_like(y)
     return np.gradient(y, t, axis=0, edge_order=2)
 
 
-def _euler_rate_derivative(angles: np.ndarray, rates: np.ndarray) -> np.ndarray:
+def _euler_rate_derivative(
+    angles: NDArray[np.float64], rates: NDArray[np.float64]
+) -> NDArray[np.float64]:
     """Time derivative of :func:`euler_rate_matrix`, ``(N, 3, 3)``."""
     cp, sp = np.cos(angles[:, 1]), np.sin(angles[:, 1])
     cy, sy = np.cos(angles[:, 2]), np.sin(angles[:, 2])
@@ -140,12 +143,12 @@ def _euler_rate_derivative(angles: np.ndarray, rates: np.ndarray) -> np.ndarray:
 
 
 def pose_wrench(
-    poses: np.ndarray,
-    velocities: np.ndarray,
-    accelerations: np.ndarray,
+    poses: NDArray[np.float64],
+    velocities: NDArray[np.float64],
+    accelerations: NDArray[np.float64],
     payload: Payload,
     gravity_mps2: float = STANDARD_GRAVITY,
-) -> np.ndarray:
+) -> NDArray[np.float64]:
     """Wrench ``(N, 6)`` the platform applies to the payload (base axes, moment about the
     platform origin), from Pinocchio's RNEA, given pose-vector rates and accelerations."""
     import pinocchio as pin

@@ -17,11 +17,14 @@ from __future__ import annotations
 import math
 
 import numpy as np
+from numpy.typing import NDArray
 
 __all__ = ["CrankLegs", "LegSet", "LinearLegs"]
 
 
-def _anchor_matrix(base: np.ndarray, plat: np.ndarray, height: float) -> np.ndarray:
+def _anchor_matrix(
+    base: NDArray[np.float64], plat: NDArray[np.float64], height: float
+) -> NDArray[np.float64]:
     n = base.shape[0]
     m = np.zeros((13, 3 * n))
     for i in range(n):
@@ -33,7 +36,7 @@ def _anchor_matrix(base: np.ndarray, plat: np.ndarray, height: float) -> np.ndar
     return m
 
 
-def _wrap(angle: np.ndarray) -> np.ndarray:
+def _wrap(angle: NDArray[np.float64]) -> NDArray[np.float64]:
     """Angles wrapped to [-pi, pi)."""
     return np.remainder(angle + math.pi, 2.0 * math.pi) - math.pi
 
@@ -43,7 +46,7 @@ class LegSet:
 
     kind = ""
 
-    def __init__(self, base: np.ndarray, plat: np.ndarray, height: float) -> None:
+    def __init__(self, base: NDArray[np.float64], plat: NDArray[np.float64], height: float) -> None:
         self.base = np.array(base, dtype=float)
         self.plat = np.array(plat, dtype=float)
         self.height = float(height)
@@ -54,11 +57,13 @@ class LegSet:
         shifted = self.base - np.array([0.0, 0.0, self.height])
         self._one = [(*self.plat[i].tolist(), *shifted[i].tolist()) for i in range(self.n)]
 
-    def vectors(self, features: np.ndarray) -> np.ndarray:
+    def vectors(self, features: NDArray[np.float64]) -> NDArray[np.float64]:
         """``D = P - b`` for features ``(N, 13)``; returns ``(N, n, 3)``."""
         return (features @ self.matrix).reshape(-1, self.n, 3)
 
-    def vectors_one(self, r: tuple[float, ...], t: tuple[float, float, float]) -> list:
+    def vectors_one(
+        self, r: tuple[float, ...], t: tuple[float, float, float]
+    ) -> list[tuple[float, float, float]]:
         x, y, z = t
         out = []
         for px, py, pz, bx, by, bz in self._one:
@@ -71,12 +76,16 @@ class LegSet:
             )
         return out
 
-    def anchor_derivatives(self, drot: np.ndarray) -> np.ndarray:
+    def anchor_derivatives(self, drot: NDArray[np.float64]) -> NDArray[np.float64]:
         """``dP_i/dangle_k = dR_k p_i`` for ``drot (N, 3, 9)``; returns ``(N, 3, n, 3)``."""
         return (drot @ self.rot_part).reshape(drot.shape[0], 3, self.n, 3)
 
     def jacobian_one(
-        self, d: list, q: list[float], t: tuple[float, float, float], angles: tuple
+        self,
+        d: list[tuple[float, float, float]],
+        q: list[float],
+        t: tuple[float, float, float],
+        angles: tuple[float, float, float],
     ) -> list[list[float]]:
         """Rows ``dq_i/dpose`` (6 floats each) for one pose, without numpy.
 
@@ -100,27 +109,29 @@ class LegSet:
             rows.append([gx, gy, gz, mx * e0x + my * e0y + mz * e0z, -mx * sy + my * cy, mz])
         return rows
 
-    def joints(self, q: np.ndarray) -> np.ndarray | None:
+    def joints(self, q: NDArray[np.float64]) -> NDArray[np.float64] | None:
         """How a drawing shows the legs: the joint between each leg's ends, as an offset
         ``(N, n, 3)`` from its base end (m), for leg positions ``q (N, n)``; None for a
         straight leg drawn from base end to platform anchor (the default)."""
         return None
 
     # Implemented by the subclasses.
-    def gradient_one(self, d: list, q: list[float]) -> list[tuple[float, float, float]]:
+    def gradient_one(
+        self, d: list[tuple[float, float, float]], q: list[float]
+    ) -> list[tuple[float, float, float]]:
         raise NotImplementedError
 
-    def q(self, d: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    def q(self, d: NDArray[np.float64]) -> tuple[NDArray[np.float64], NDArray[np.bool_]]:
         raise NotImplementedError
 
-    def q_one(self, d: list) -> list[float]:
+    def q_one(self, d: list[tuple[float, float, float]]) -> list[float]:
         raise NotImplementedError
 
-    def q_one_checked(self, d: list) -> tuple[list[float], bool]:
+    def q_one_checked(self, d: list[tuple[float, float, float]]) -> tuple[list[float], bool]:
         """Positions and whether every leg is reachable, for one pose."""
         return self.q_one(d), True
 
-    def gradient(self, d: np.ndarray, q: np.ndarray) -> np.ndarray:
+    def gradient(self, d: NDArray[np.float64], q: NDArray[np.float64]) -> NDArray[np.float64]:
         """``dq_i / dP_i``, ``(N, n, 3)``."""
         raise NotImplementedError
 
@@ -130,7 +141,7 @@ class LinearLegs(LegSet):
 
     kind = "linear"
 
-    def __init__(self, base: np.ndarray, plat: np.ndarray, height: float) -> None:
+    def __init__(self, base: NDArray[np.float64], plat: NDArray[np.float64], height: float) -> None:
         super().__init__(base, plat, height)
         d0 = self.plat + np.array([0.0, 0.0, self.height]) - self.base
         self.length0 = np.sqrt(np.einsum("ij,ij->i", d0, d0))
@@ -151,7 +162,7 @@ class LinearLegs(LegSet):
             out.append(sqrt(dx * dx + dy * dy + dz * dz) - l0)
         return out
 
-    def q_from_features_t(self, feat_t: np.ndarray) -> np.ndarray:
+    def q_from_features_t(self, feat_t: NDArray[np.float64]) -> NDArray[np.float64]:
         """Positions ``(n, N)`` from transposed features ``(13, N)`` (the fast batch path)."""
         d = self._matrix_t @ feat_t
         d *= d
@@ -162,24 +173,26 @@ class LinearLegs(LegSet):
         out -= self.length0[:, None]
         return out
 
-    def lengths(self, d: np.ndarray) -> np.ndarray:
-        return np.sqrt(np.einsum("...ij,...ij->...i", d, d))
+    def lengths(self, d: NDArray[np.float64]) -> NDArray[np.float64]:
+        return np.asarray(np.sqrt(np.einsum("...ij,...ij->...i", d, d)), dtype=float)
 
-    def q(self, d: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    def q(self, d: NDArray[np.float64]) -> tuple[NDArray[np.float64], NDArray[np.bool_]]:
         q = self.lengths(d)
         q -= self.length0
         return q, np.ones(q.shape, dtype=bool)
 
-    def q_one(self, d: list) -> list[float]:
+    def q_one(self, d: list[tuple[float, float, float]]) -> list[float]:
         return [
             math.sqrt(dx * dx + dy * dy + dz * dz) - l0
             for (dx, dy, dz), l0 in zip(d, self._l0, strict=True)
         ]
 
-    def gradient(self, d: np.ndarray, q: np.ndarray) -> np.ndarray:
-        return d / (q + self.length0)[..., None]
+    def gradient(self, d: NDArray[np.float64], q: NDArray[np.float64]) -> NDArray[np.float64]:
+        return np.asarray(d / (q + self.length0)[..., None], dtype=float)
 
-    def gradient_one(self, d: list, q: list[float]) -> list[tuple[float, float, float]]:
+    def gradient_one(
+        self, d: list[tuple[float, float, float]], q: list[float]
+    ) -> list[tuple[float, float, float]]:
         out = []
         for (dx, dy, dz), qi, l0 in zip(d, q, self._l0, strict=True):
             inv = 1.0 / (qi + l0)
@@ -199,13 +212,13 @@ class CrankLegs(LegSet):
 
     def __init__(
         self,
-        base: np.ndarray,
-        plat: np.ndarray,
+        base: NDArray[np.float64],
+        plat: NDArray[np.float64],
         height: float,
-        axes: np.ndarray,
-        zero_dirs: np.ndarray,
-        crank: np.ndarray,
-        rod: np.ndarray,
+        axes: NDArray[np.float64],
+        zero_dirs: NDArray[np.float64],
+        crank: NDArray[np.float64],
+        rod: NDArray[np.float64],
     ) -> None:
         super().__init__(base, plat, height)
         self.axes = np.array(axes, dtype=float)
@@ -235,7 +248,9 @@ class CrankLegs(LegSet):
             )
         )
 
-    def _abc(self, d: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    def _abc(
+        self, d: NDArray[np.float64]
+    ) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
         a = np.einsum("...ij,ij->...i", d, self.e1)
         b = np.einsum("...ij,ij->...i", d, self.e2)
         c = (np.einsum("...ij,...ij->...i", d, d) + self.crank**2 - self.rod**2) / (
@@ -243,13 +258,13 @@ class CrankLegs(LegSet):
         )
         return a, b, c
 
-    def _theta_branch(self, d: np.ndarray, sign: float) -> np.ndarray:
+    def _theta_branch(self, d: NDArray[np.float64], sign: float) -> NDArray[np.float64]:
         a, b, c = self._abc(d)
         rho = np.hypot(a, b)
         ratio = np.clip(np.divide(c, rho, out=np.full_like(c, 2.0), where=rho > 0), -1.0, 1.0)
-        return np.arctan2(b, a) + sign * np.arccos(ratio)
+        return np.asarray(np.arctan2(b, a) + sign * np.arccos(ratio), dtype=float)
 
-    def _theta(self, d: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    def _theta(self, d: NDArray[np.float64]) -> tuple[NDArray[np.float64], NDArray[np.bool_]]:
         a, b, c = self._abc(d)
         rho = np.hypot(a, b)
         ratio = np.divide(c, rho, out=np.full_like(c, 2.0), where=rho > 0)
@@ -257,14 +272,14 @@ class CrankLegs(LegSet):
         theta = np.arctan2(b, a) + self.branch * np.arccos(np.clip(ratio, -1.0, 1.0))
         return theta, reachable
 
-    def q(self, d: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    def q(self, d: NDArray[np.float64]) -> tuple[NDArray[np.float64], NDArray[np.bool_]]:
         theta, reachable = self._theta(d)
         return _wrap(theta - self.theta0), reachable
 
-    def q_one(self, d: list) -> list[float]:
+    def q_one(self, d: list[tuple[float, float, float]]) -> list[float]:
         return self.q_one_checked(d)[0]
 
-    def q_one_checked(self, d: list) -> tuple[list[float], bool]:
+    def q_one_checked(self, d: list[tuple[float, float, float]]) -> tuple[list[float], bool]:
         out = []
         reachable = True
         for (dx, dy, dz), (e1, e2, r, rod, s, t0) in zip(d, self._one_c, strict=True):
@@ -280,11 +295,15 @@ class CrankLegs(LegSet):
             out.append((theta - t0 + math.pi) % (2.0 * math.pi) - math.pi)
         return out, reachable
 
-    def gradient_one(self, d: list, q: list[float]) -> list[tuple[float, float, float]]:
+    def gradient_one(
+        self, d: list[tuple[float, float, float]], q: list[float]
+    ) -> list[tuple[float, float, float]]:
         g = self.gradient(np.asarray(d, dtype=float)[None], np.asarray(q)[None])[0]
         return [tuple(row) for row in g.tolist()]
 
-    def crank_vectors(self, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    def crank_vectors(
+        self, q: NDArray[np.float64]
+    ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
         """Crank tip offset ``c`` and its angle derivative ``dc/dtheta``, ``(N, n, 3)`` each."""
         theta = (q + self.theta0)[..., None]
         cos, sin = np.cos(theta), np.sin(theta)
@@ -293,15 +312,15 @@ class CrankLegs(LegSet):
         dc = r * (-sin * self.e1 + cos * self.e2)
         return c, dc
 
-    def joints(self, q: np.ndarray) -> np.ndarray:
+    def joints(self, q: NDArray[np.float64]) -> NDArray[np.float64]:
         """The crank tips, ``(N, n, 3)`` offsets from the crank pivots (m): a crank leg is
         drawn pivot -> crank tip -> platform anchor."""
         return self.crank_vectors(q)[0]
 
-    def gradient(self, d: np.ndarray, q: np.ndarray) -> np.ndarray:
+    def gradient(self, d: NDArray[np.float64], q: NDArray[np.float64]) -> NDArray[np.float64]:
         c, dc = self.crank_vectors(q)
         w = d - c
         denom = np.einsum("...ij,...ij->...i", w, dc)
         tiny = 1e-12 * self.crank * self.rod
         denom = np.where(np.abs(denom) < tiny, np.copysign(tiny, denom), denom)
-        return w / denom[..., None]
+        return np.asarray(w / denom[..., None], dtype=float)

@@ -14,6 +14,7 @@ from typing import TypedDict
 
 import numpy as np
 import numpy.typing as npt
+from numpy.typing import NDArray
 
 from .._errors import ConfigError
 from .._frozen import readonly, set_fields
@@ -69,13 +70,13 @@ class FKResult:
         ``(n,)`` rounding tolerance the status was judged with (m or rad).
     """
 
-    pose: np.ndarray
+    pose: NDArray[np.float64]
     converged: bool
     iterations: int
     residual: float
     status: str = "exact"
-    residuals: np.ndarray | None = None
-    tolerance: np.ndarray | None = None
+    residuals: NDArray[np.float64] | None = None
+    tolerance: NDArray[np.float64] | None = None
 
     @property
     def ok(self) -> bool:
@@ -112,22 +113,22 @@ class CheckResult:
         ``(...)`` bool: every actuator in stroke and reachable.
     """
 
-    q: np.ndarray
-    in_stroke: np.ndarray
-    overshoot: np.ndarray
-    reachable: np.ndarray
-    unsupported: np.ndarray
-    ok: np.ndarray
+    q: NDArray[np.float64]
+    in_stroke: NDArray[np.bool_]
+    overshoot: NDArray[np.float64]
+    reachable: NDArray[np.bool_]
+    unsupported: NDArray[np.bool_]
+    ok: NDArray[np.bool_]
 
 
-def _bad_input(name: str, arr: np.ndarray) -> ConfigError:
+def _bad_input(name: str, arr: NDArray[np.float64]) -> ConfigError:
     bad = np.argwhere(~np.isfinite(arr))[0]
     return ConfigError(
         f"{name}{list(bad.tolist())} = {arr[tuple(bad)]!r} is invalid; allowed: finite numbers"
     )
 
 
-def _as_poses(poses: npt.ArrayLike) -> np.ndarray:
+def _as_poses(poses: npt.ArrayLike) -> NDArray[np.float64]:
     arr = np.asarray(poses, dtype=float)
     if arr.ndim == 0 or arr.shape[-1] != 6:
         raise ConfigError(f"poses has shape {arr.shape}; expected (..., 6) [x,y,z,roll,pitch,yaw]")
@@ -195,9 +196,9 @@ class Platform:
         ``bridge`` and ``cue`` when no ``--preset`` is given (the file's ``default_preset``).
     """
 
-    v_max: np.ndarray | None = None
-    a_max: np.ndarray | None = None
-    j_max: np.ndarray | None = None
+    v_max: NDArray[np.float64] | None = None
+    a_max: NDArray[np.float64] | None = None
+    j_max: NDArray[np.float64] | None = None
     default_preset: str | None = None
 
     def with_default_preset(self, preset: str | None) -> Platform:
@@ -217,7 +218,7 @@ class Platform:
         """A copy carrying the actuators' own limits (each a number or ``n`` numbers, > 0)."""
         import copy
 
-        given: dict[str, np.ndarray] = {}
+        given: dict[str, NDArray[np.float64]] = {}
         for key, value in (("v_max", v_max), ("a_max", a_max), ("j_max", j_max)):
             if value is None:
                 continue
@@ -504,27 +505,27 @@ class Platform:
     actuator_names: tuple[str, ...]
     n_actuators: int
     actuator_kinds: tuple[str, ...]
-    dof_mask: np.ndarray
-    q_neutral: np.ndarray
-    q_min: np.ndarray
-    q_max: np.ndarray
-    q_park: np.ndarray
-    pose_park: np.ndarray
-    neutral_absolute: np.ndarray
+    dof_mask: NDArray[np.bool_]
+    q_neutral: NDArray[np.float64]
+    q_min: NDArray[np.float64]
+    q_max: NDArray[np.float64]
+    q_park: NDArray[np.float64]
+    pose_park: NDArray[np.float64]
+    neutral_absolute: NDArray[np.float64]
     drives: Drive
     _legs: LegSet
-    _leg_mask: np.ndarray
+    _leg_mask: NDArray[np.float64]  # 1.0 or 0.0 per pose component, a multiplier
     _leg_mask_list: list[bool]
     _all_dof_legs: bool
     _fast_linear: LinearLegs | None
-    _jac0_inv: np.ndarray
+    _jac0_inv: NDArray[np.float64]
     _yaw_axis: bool
     _yaw_arm: float | None
     _n_spare: int
     _tail: list[float]
     _init_args: _PlatformArgs
     _square: bool
-    _dof_idx: np.ndarray
+    _dof_idx: NDArray[np.intp]
     _dof_list: list[int]
 
     def __setattr__(self, key: str, value: object) -> None:
@@ -537,7 +538,7 @@ class Platform:
         )
 
     # --- inverse kinematics -------------------------------------------------------------
-    def _features_t(self, poses: np.ndarray) -> np.ndarray:
+    def _features_t(self, poses: NDArray[np.float64]) -> NDArray[np.float64]:
         """Transposed features ``(13, N)``: R entries, translation, 1 (masked pose)."""
         a = poses.T
         if not self._all_dof_legs:
@@ -561,7 +562,9 @@ class Platform:
         f[12] = 1.0
         return f
 
-    def _ik_block(self, poses: np.ndarray, want_reach: bool) -> tuple[np.ndarray, np.ndarray]:
+    def _ik_block(
+        self, poses: NDArray[np.float64], want_reach: bool
+    ) -> tuple[NDArray[np.float64], NDArray[np.bool_]]:
         """q and reachable for a block ``(N, 6)`` of validated poses."""
         legs = self._legs
         n_pose = poses.shape[0]
@@ -586,7 +589,7 @@ class Platform:
             return q, reach
         return q_legs, reach
 
-    def _yaw_q(self, yaw: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    def _yaw_q(self, yaw: NDArray[np.float64]) -> tuple[NDArray[np.float64], NDArray[np.bool_]]:
         """Yaw-axis position ``(N,)`` and reachable ``(N,)`` for yaw angles ``(N,)`` (rad).
 
         A turntable (no arm): ``q = yaw`` (rad). A traction-loss slider with arm ``L``: a pin
@@ -627,7 +630,9 @@ class Platform:
         _, q, reachable = self._eval_one(pose)
         return q, reachable
 
-    def _eval_one(self, pose: list[float]) -> tuple[list, list[float], bool]:
+    def _eval_one(
+        self, pose: list[float]
+    ) -> tuple[list[tuple[float, float, float]], list[float], bool]:
         """Leg vectors, actuator positions and reachability for one pose (plain floats)."""
         for v in pose:
             if not math.isfinite(v):
@@ -645,7 +650,7 @@ class Platform:
             q.extend(self._tail)
         return d, q, reachable
 
-    def inverse(self, poses: npt.ArrayLike) -> np.ndarray:
+    def inverse(self, poses: npt.ArrayLike) -> NDArray[np.float64]:
         """Actuator positions for poses, in closed form.
 
         Parameters
@@ -677,8 +682,8 @@ class Platform:
         return self._inverse_batch(_as_poses(poses))[0]
 
     def _inverse_batch(
-        self, arr: np.ndarray, want_reach: bool = False
-    ) -> tuple[np.ndarray, np.ndarray]:
+        self, arr: NDArray[np.float64], want_reach: bool = False
+    ) -> tuple[NDArray[np.float64], NDArray[np.bool_]]:
         """q ``(..., n)`` and, when ``want_reach``, reachable ``(..., n)`` (else empty)."""
         lead = arr.shape[:-1]
         flat = arr.reshape(-1, 6)
@@ -699,7 +704,7 @@ class Platform:
         return q.reshape(*lead, n), reach.reshape(*lead, n)
 
     # --- Jacobian -----------------------------------------------------------------------
-    def jacobian(self, poses: npt.ArrayLike) -> np.ndarray:
+    def jacobian(self, poses: npt.ArrayLike) -> NDArray[np.float64]:
         """``d q / d pose`` for poses ``(..., 6)``; returns ``(..., n, 6)``.
 
         Columns of pose components the machine does not produce are zero (``inverse`` holds
@@ -716,7 +721,7 @@ class Platform:
             out[start : start + _JAC_CHUNK] = self._jacobian_block(flat[start : start + _JAC_CHUNK])
         return out.reshape(*lead, n, 6)
 
-    def _jacobian_block(self, flat: np.ndarray) -> np.ndarray:
+    def _jacobian_block(self, flat: NDArray[np.float64]) -> NDArray[np.float64]:
         legs = self._legs
         m = self._leg_mask
         ang = flat[:, 3:6] * m[3:6]
@@ -741,8 +746,11 @@ class Platform:
         return jac
 
     def _jacobian_one(
-        self, pose: list[float], d: list | None = None, q: list[float] | None = None
-    ) -> np.ndarray:
+        self,
+        pose: list[float],
+        d: list[tuple[float, float, float]] | None = None,
+        q: list[float] | None = None,
+    ) -> NDArray[np.float64]:
         """``(n, 6)`` Jacobian for one pose; ``d`` and ``q`` from :meth:`_eval_one` if known."""
         if d is None or q is None:
             d, q, _ = self._eval_one(pose)
@@ -758,21 +766,21 @@ class Platform:
             rows.append([0.0, 0.0, 0.0, 0.0, 0.0, self._yaw_dq(pose[5])])
         if self._n_spare:
             rows.extend([0.0] * 6 for _ in range(self._n_spare))
-        jac: np.ndarray = np.array(rows, dtype=float)
+        jac: NDArray[np.float64] = np.array(rows, dtype=float)
         if not self._all_dof_legs:
             jac[:nl] *= self._leg_mask
         return jac
 
     # --- forward kinematics -------------------------------------------------------------
     @property
-    def q_rounding(self) -> np.ndarray:
+    def q_rounding(self) -> NDArray[np.float64]:
         """``(n,)`` one pulse of each actuator's drive (m or rad): the resolution of the
         positions a controller is sent, and the default tolerance of :meth:`forward`."""
         cached = self.__dict__.get("_q_rounding")
         if cached is None:
             cached = readonly(1.0 / np.abs(self.drives.pulses_per_unit))
             set_fields(self, _q_rounding=cached)
-        out: np.ndarray = cached
+        out: NDArray[np.float64] = cached
         return out
 
     def forward(
@@ -886,15 +894,15 @@ class Platform:
         )
 
     @staticmethod
-    def _within(fk: FKResult, tol_q: np.ndarray) -> bool:
+    def _within(fk: FKResult, tol_q: NDArray[np.float64]) -> bool:
         r = fk.residuals
         return r is not None and bool(np.all(np.abs(r) <= tol_q))
 
-    def _residuals(self, pose: np.ndarray, q: np.ndarray) -> np.ndarray:
+    def _residuals(self, pose: NDArray[np.float64], q: NDArray[np.float64]) -> NDArray[np.float64]:
         """``q - q(pose)`` ``(n,)``; a crank leg compared with the nearer assembly branch."""
         pl = [float(v) for v in pose]
         d, cur, reachable = self._eval_one(pl)
-        r = q - np.asarray(cur, dtype=float)
+        r: NDArray[np.float64] = q - np.asarray(cur, dtype=float)
         legs = self._legs
         if isinstance(legs, CrankLegs):
             nl = legs.n
@@ -913,7 +921,7 @@ class Platform:
             r[:] = np.inf
         return r
 
-    def _closure(self, q: np.ndarray) -> Callable[[list[float]], np.ndarray]:
+    def _closure(self, q: NDArray[np.float64]) -> Callable[[list[float]], NDArray[np.float64]]:
         """The leg closure residuals ``f(pose)`` for positions ``q``: zero exactly where a
         pose gives ``q``, smooth everywhere, whatever the crank's assembly branch: leg length
         minus the actuator's length (m) for linear legs, distance from crank tip to anchor
@@ -931,10 +939,10 @@ class Platform:
             want = legs.rod
         q_yaw = float(q[nl]) if self._yaw_axis else 0.0
 
-        def f(pose: list[float]) -> np.ndarray:
+        def f(pose: list[float]) -> NDArray[np.float64]:
             x, y, z, roll, pitch, yaw = (v if m else 0.0 for v, m in zip(pose, mask, strict=True))
             d = np.asarray(legs.vectors_one(rot_one(roll, pitch, yaw), (x, y, z)), dtype=float)
-            out = np.linalg.norm(d - tips, axis=1) - want
+            out = np.asarray(np.linalg.norm(d - tips, axis=1) - want, dtype=float)
             if self._yaw_axis:
                 out = np.append(out, self._yaw_q_one(pose[5])[0] - q_yaw)
             return out
@@ -942,17 +950,21 @@ class Platform:
         return f
 
     def _least_squares(
-        self, q: np.ndarray, idx: list[int], starts: list[list[float]], tol_q: np.ndarray
-    ) -> np.ndarray:
+        self,
+        q: NDArray[np.float64],
+        idx: list[int],
+        starts: list[list[float]],
+        tol_q: NDArray[np.float64],
+    ) -> NDArray[np.float64]:
         """The best pose of damped least-squares solves of the closure equations from each
         start, then along a continuation from neutral (``t q`` for t = 1/4 .. 1)."""
         from scipy.optimize import least_squares
 
-        def solve(target: np.ndarray, start: list[float]) -> np.ndarray:
+        def solve(target: NDArray[np.float64], start: list[float]) -> NDArray[np.float64]:
             f = self._closure(target)
             x0 = np.array([start[k] for k in idx])
 
-            def g(x: np.ndarray) -> np.ndarray:
+            def g(x: NDArray[np.float64]) -> NDArray[np.float64]:
                 pose = [0.0] * 6
                 for j, k in enumerate(idx):
                     pose[k] = float(x[j])
@@ -1049,7 +1061,9 @@ class Platform:
             residuals=-np.array(r) if reachable else np.full(len(r), np.inf),
         )
 
-    def project(self, q: npt.ArrayLike, *, tol: float = 1e-9) -> tuple[np.ndarray, str | None]:
+    def project(
+        self, q: npt.ArrayLike, *, tol: float = 1e-9
+    ) -> tuple[NDArray[np.float64], str | None]:
         """The actuator positions of the rigid pose nearest to ``q`` (least squares).
 
         On a platform with as many moving actuators as degrees of freedom every reachable
@@ -1120,7 +1134,7 @@ class Platform:
             ok=ok,
         )
 
-    def absolute(self, q: npt.ArrayLike) -> np.ndarray:
+    def absolute(self, q: npt.ArrayLike) -> NDArray[np.float64]:
         """Pin-to-pin length (m) or crank angle from its zero direction (rad), ``(..., n)``."""
         return np.asarray(q, dtype=float) + self.neutral_absolute
 
@@ -1142,7 +1156,7 @@ def _rebuilt(old: Platform, args: _PlatformArgs) -> Platform:
     return out
 
 
-def _default_drives(kinds: tuple[str, ...], q_min: np.ndarray) -> Drive:
+def _default_drives(kinds: tuple[str, ...], q_min: NDArray[np.float64]) -> Drive:
     """Drives for user geometries that name none: 5 mm lead, 10000 pulses/rev (linear) or
     gear 50, 10000 pulses/rev (rotary), homed at the bottom of the usable stroke."""
     parts = []
@@ -1154,7 +1168,7 @@ def _default_drives(kinds: tuple[str, ...], q_min: np.ndarray) -> Drive:
     return Drive.concat(*parts)
 
 
-def _anchors(name: str, value: npt.ArrayLike, n: int) -> np.ndarray:
+def _anchors(name: str, value: npt.ArrayLike, n: int) -> NDArray[np.float64]:
     arr = np.asarray(value, dtype=float)
     if arr.shape != (n, 3) or not np.isfinite(arr).all():
         raise ConfigError(f"{name} = {value!r} is invalid; allowed: ({n}, 3) finite numbers (m)")
@@ -1174,7 +1188,7 @@ def _positive(name: str, value: float) -> float:
     return v
 
 
-def _ranges(name: str, value: npt.ArrayLike, n: int, allowed: str) -> np.ndarray:
+def _ranges(name: str, value: npt.ArrayLike, n: int, allowed: str) -> NDArray[np.float64]:
     """``(n, 2)`` rows ``(min, max)`` from one pair for all ``n`` actuators or one pair each,
     finite with ``min < max``; else :class:`ConfigError` naming ``name``, the value and
     ``allowed``."""
@@ -1186,7 +1200,9 @@ def _ranges(name: str, value: npt.ArrayLike, n: int, allowed: str) -> np.ndarray
     return arr
 
 
-def _length_stroke(legs: LinearLegs, stroke: npt.ArrayLike) -> tuple[np.ndarray, np.ndarray]:
+def _length_stroke(
+    legs: LinearLegs, stroke: npt.ArrayLike
+) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
     arr = _ranges(
         "stroke",
         stroke,
@@ -1255,7 +1271,7 @@ def _linear_legs(
     neutral_height: float,
     stroke: npt.ArrayLike,
     n: int,
-) -> tuple[LinearLegs, np.ndarray, np.ndarray]:
+) -> tuple[LinearLegs, NDArray[np.float64], NDArray[np.float64]]:
     """``n`` linear legs from validated anchors (m), and their stroke from neutral (m)."""
     legs = LinearLegs(
         _anchors("base_anchors", base_anchors, n),

@@ -31,6 +31,7 @@ if TYPE_CHECKING:
 
     from ._feedback import PositionQuery
     from ._transport import Transport
+    from ._udp_common import FrameClock
 
 __all__ = [
     "CommandStreamer",
@@ -140,7 +141,19 @@ class DriveExpectations:
 @runtime_checkable
 class FrameEncoder(Protocol):
     """Turns timed motor positions into the bytes of one controller's frames (explicit state:
-    frame numbers, time origin). One encoder per run."""
+    frame numbers, time origin). One encoder per run.
+
+    Attributes
+    ----------
+    clock : FrameClock or None
+        The frame numbering and time stamps the encoder steps with each frame (MBOX, IMAX),
+        which the output stage saves before a frame and restores when that frame is never
+        sent, so a refused or failed frame leaves no gap in the numbers; None for an encoder
+        without one (its state is left unchanged when it refuses a frame).
+    """
+
+    @property
+    def clock(self) -> FrameClock | None: ...
 
     def encode(
         self, t_s: float, pulses: Sequence[int], dout: int = 0, dacs: tuple[int, int] = (0, 0)

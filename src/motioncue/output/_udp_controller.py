@@ -251,7 +251,10 @@ class UdpFrameEncoder:
     The header carries 0x1301 / 0x1401 by the clock's time mode and the channel of the
     controller's axis count (0 = 3 axes, 1 = 6 axes, else n); the kind gives its frame
     layout (:meth:`_layout`) and any state of its own (:meth:`_init_kind`).
-    ``STROKE_SOURCE`` names the settings a stroke violation comes from.
+    ``STROKE_SOURCE`` names the settings a stroke violation comes from. ``clock`` is the
+    run's :class:`~._udp_common.FrameClock` (the ``clock`` a
+    :class:`~motioncue.output.FrameEncoder` declares), saved and restored by the output stage
+    around a frame that is never sent.
     """
 
     __slots__ = (

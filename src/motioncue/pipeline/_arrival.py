@@ -118,7 +118,7 @@ class ArrivalOutputStage(OutputStage):
             )
         state = self._state
         saved = self._saver.save(state)
-        clock = getattr(self._encoder, "clock", None)
+        clock = self._encoder.clock  # declared: None for an encoder without one
         saved_clock = None if clock is None else clock.snapshot()
         saved_frames, saved_t, saved_stamp = self.frames, self.t_s, self.last_stamp_ms
         target = [float(v) for v in np.asarray(q_target, dtype=float).reshape(-1)]

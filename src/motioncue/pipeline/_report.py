@@ -155,8 +155,8 @@ def write_report(
         report.w_vehicle,
         poses,
         ride.rate_hz,
-        workspace=getattr(cueing, "workspace", None),
-        head_offset_m=getattr(cueing, "head_offset_m", None),
+        workspace=cueing.workspace,
+        head_offset_m=cueing.head_offset_m,
         clamped_share=min(1.0, report.poses_clamped / max(len(poses), 1)),
     )
     plot_cueing(
@@ -164,11 +164,11 @@ def write_report(
         poses,
         out / "cueing.png",
         title=f"{ride.source} on {ride.platform}",
-        preset=getattr(cueing, "name", None),
+        preset=cueing.name,
         platform=f"{ride.platform}, controller {ride.controller}",
     )
     desired = platform.drives.to_pulses(report.q_desired)
-    plot_actuators(ride, out / "actuators.png", desired, preset=getattr(cueing, "name", None))
+    plot_actuators(ride, out / "actuators.png", desired, preset=cueing.name)
     opt = report.optimisation
     check = report.frame_check
 

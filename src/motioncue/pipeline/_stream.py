@@ -98,10 +98,12 @@ TRANSIENT_ERRNOS = frozenset(
 )
 
 
-def _errno_of(exc: BaseException) -> int | None:
-    code = getattr(exc, "errno", None)
-    if code is None and exc.__cause__ is not None:
-        code = getattr(exc.__cause__, "errno", None)
+def _errno_of(exc: OSError) -> int | None:
+    """The errno of a failed send, or of the OSError it was raised from (a TransportError
+    wrapping the socket's); None when neither carries a whole number."""
+    code: object = exc.errno
+    if code is None and isinstance(exc.__cause__, OSError):
+        code = exc.__cause__.errno
     return code if isinstance(code, int) else None
 
 
@@ -341,7 +343,7 @@ class OutputStage:
         self._supervise()
         state = self._state
         saved = self._saver.save(state)
-        clock = getattr(self._encoder, "clock", None)
+        clock = self._encoder.clock  # declared: None for an encoder without one
         saved_clock = None if clock is None else clock.snapshot()
         try:
             q_out = np.asarray(self._step(q_target), dtype=float)

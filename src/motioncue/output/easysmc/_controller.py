@@ -529,7 +529,12 @@ class EasySmcFrameEncoder:
     differences of rounded absolute targets, they sum exactly to the commanded pulses, and
     because each move's duration is aimed at the frame's absolute time (not at one period),
     rounding of the feed to whole hertz does not accumulate either.
+
+    Its ``clock`` is None (see :class:`~motioncue.output.FrameEncoder`): EasySmc commands
+    carry no frame numbers, and a refused frame leaves its state unchanged.
     """
+
+    clock: None = None
 
     def __init__(
         self,

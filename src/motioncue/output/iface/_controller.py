@@ -194,7 +194,12 @@ class IfaceEncoder:
 
     A position outside ``pulses_range`` raises :class:`~motioncue.ProtocolError` (nothing
     sent for that frame): positions are never clipped on the way out.
+
+    Its ``clock`` is None (see :class:`~motioncue.output.FrameEncoder`): the strings carry no
+    frame numbers or times.
     """
+
+    clock: None = None
 
     def __init__(self, controller: IfaceController) -> None:
         self.controller = controller
