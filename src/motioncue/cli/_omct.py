@@ -31,7 +31,7 @@ def run(args: argparse.Namespace) -> int:
     rate = args.rate
     scale = args.amplitude_scale
     params = load_preset_arg(args.preset, args.overrides)
-    algorithm = getattr(params, "algorithm", "classical")
+    algorithm = params.algorithm
     if algorithm != "classical":
         raise ConfigError(
             f"preset {params.name!r} uses the cueing algorithm {algorithm!r}; the OMCT's "

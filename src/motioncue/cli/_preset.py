@@ -74,7 +74,7 @@ def choose_preset(
             "no cueing preset: give --preset NAME, or --platform P to use its default"
         )
     label = platform_label or platform.name
-    default = getattr(platform, "default_preset", None)
+    default = platform.default_preset
     if default:
         params = load_cueing(default)
         return params, f"{params.name} (default of platform {label})"

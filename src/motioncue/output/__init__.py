@@ -25,6 +25,7 @@ from ._transport import Transport, TransportURL, parse_target
 from ._transports_file import FileTransport, PcapPacket, PcapTransport, read_pcap
 from ._transports_open import open_transport
 from ._transports_udp import UdpTransport
+from ._udp_common import FrameClock
 from ._udp_emulator import Trace, UdpEmulatorBase, Violation
 
 __all__ = [
@@ -34,6 +35,7 @@ __all__ = [
     "Emulator",
     "EmulatorReadout",
     "FileTransport",
+    "FrameClock",
     "FrameEncoder",
     "Inspection",
     "PcapPacket",
