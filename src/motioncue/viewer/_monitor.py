@@ -583,14 +583,14 @@ class Monitor:
             attach(self._publish)
         return self
 
-    def _source_reply(self, server_snapshots: int, server_errors: int) -> tuple[str, object]:
+    def _source_reply(self, server_snapshots: int, server_errors: int) -> tuple[str, Any]:
         """Read the source once for the server: ``("ok", raw mapping)`` or ``("error",
         text)`` (counted); the server's counters (snapshots made before this one, errors
         other than the source's) are taken over."""
         self.errors += server_errors - self._server_errors
         self._server_errors = server_errors
         try:
-            reply: tuple[str, object] = ("ok", dict(self.source.snapshot()))
+            reply: tuple[str, Any] = ("ok", dict(self.source.snapshot()))
             self.snapshots = server_snapshots + 1  # this one is being made
         except Exception as exc:  # a torn read: the server shows it, counted
             self.errors += 1
@@ -635,7 +635,7 @@ class Monitor:
             except (EOFError, OSError):
                 return
             try:
-                reply: tuple[str, object]
+                reply: tuple[str, Any]
                 if msg[0] == "snapshot":
                     reply = self._source_reply(int(msg[1]), int(msg[2]))
                 elif msg[0] == "stop":
