@@ -5,12 +5,9 @@ The bridge of ``bench_bridge.py`` (real F1 packets from a sender process -> brid
 run so that the shared machine's load falls on all alike:
 
 * ``off``: no monitor;
-* ``ws``: a :class:`~motioncue.viewer._monitor.Monitor` serving the bridge from its own
-  process, with a WebSocket client in another process taking every snapshot (10 a second);
-  in the bridge's process the loop itself reads each snapshot after a frame and writes it to
-  shared memory (``viewer/_monitor_slot.py``; until s27 a reader thread woke on each
-  request, and a frame whose deadline came within about 1.5 ms after such a wake-up went
-  out 0.3-1.1 ms late);
+* ``ws``: a :class:`~motioncue.viewer._monitor.Monitor` serving the bridge, with a WebSocket
+  client in another process taking every snapshot (the monitor's whole in-process work:
+  snapshots, forward kinematics, JSON, sends);
 * ``browser``: the same with the page open in headless Chromium (which also takes CPU
   from the two cores).
 
@@ -54,42 +51,7 @@ def _ws_client(url: str, stop: Any, count: Any) -> None:
     asyncio.run(run())
 
 
-def _renice_descendants(nice: int, name: str = "chrom") -> int:
-    """Set every thread of this process' descendant processes whose name starts with
-    ``name`` to ``nice`` (Linux ``/proc``); returns how many threads were set.
-
-    Chromium run as root raises its display threads (browser main, GPU, compositors, IO) to
-    nice -8, above the bridge's loop at 0; a desktop user's browser cannot."""
-    parent: dict[int, int] = {}
-    for d in Path("/proc").iterdir():
-        if d.name.isdigit():
-            try:
-                stat = (d / "stat").read_text()
-            except OSError:
-                continue
-            parent[int(d.name)] = int(stat.rsplit(")", 1)[1].split()[1])
-    mine = {os.getpid()}
-    grew = True
-    while grew:
-        new = {p for p, pp in parent.items() if pp in mine and p not in mine}
-        mine |= new
-        grew = bool(new)
-    count = 0
-    for pid in mine - {os.getpid()}:
-        try:
-            if not Path(f"/proc/{pid}/comm").read_text().startswith(name):
-                continue
-            for task in Path(f"/proc/{pid}/task").iterdir():
-                os.setpriority(os.PRIO_PROCESS, int(task.name), nice)
-                count += 1
-        except OSError:  # ended meanwhile
-            continue
-    return count
-
-
-def run_once(
-    mode: str, seconds: float, rt_priority: int | None, browser_nice: int | None = None
-) -> dict[str, Any]:
+def run_once(mode: str, seconds: float, rt_priority: int | None) -> dict[str, Any]:
     from motioncue.viewer._monitor import BridgeSource, Monitor
 
     with Rig(100.0, rt_priority) as rig:
@@ -113,9 +75,6 @@ def run_once(
             tab = page_ctx.new_page()
             assert mon is not None
             tab.goto(mon.url)
-            if browser_nice is not None:
-                n = _renice_descendants(browser_nice)
-                print(f"  Chromium: {n} threads set to nice {browser_nice}", flush=True)
         time.sleep(seconds)
         live = rig.bridge.stats
         snapshots = 0 if mon is None else mon.snapshots
@@ -141,8 +100,7 @@ def run_once(
 def stats_cost_s(window: int = 20000) -> float:
     """Median time (s) of one ``Bridge.stats`` with every timing window full (``window``
     frames of synthetic send times, latencies and ages), 7 runs of 20 calls: the work the
-    monitor's snapshots add twice a second in the bridge's process (in the loop's thread,
-    after a frame's send)."""
+    monitor's reader thread does twice a second in the bridge's process."""
     import numpy as np
 
     from _timing import median_time_s
@@ -187,11 +145,6 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--repeats", type=int, default=3)
     ap.add_argument("--modes", nargs="+", default=["off", "ws", "browser"])
     ap.add_argument("--rt-priority", type=int, default=None, help="SCHED_FIFO of the loop")
-    ap.add_argument(
-        "--browser-nice", type=int, default=None,
-        help="renice every Chromium thread to this after the page loaded (run as root, "
-        "Chromium raises its display threads to nice -8, above the loop)",
-    )  # fmt: skip
     args = ap.parse_args(argv)
     policy = "normal" if args.rt_priority is None else f"SCHED_FIFO {args.rt_priority}"
     print(
@@ -208,7 +161,7 @@ def main(argv: list[str] | None = None) -> int:
     ok = True
     for r in range(args.repeats):
         for mode in args.modes:
-            res = run_once(mode, args.seconds, args.rt_priority, args.browser_nice)
+            res = run_once(mode, args.seconds, args.rt_priority)
             runs[mode].append(res)
             ok &= res["ok"]
             print(

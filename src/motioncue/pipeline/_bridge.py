@@ -75,7 +75,7 @@ import os
 import sys
 import threading
 import time
-from collections.abc import Callable, Mapping
+from collections.abc import Mapping
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Literal, Protocol
 
@@ -618,13 +618,6 @@ class Bridge:
         self._held: TelemetrySample | None = None
         self._clean = True  # washout state fresh (reset while parked)
         self._last_sample_t = math.nan
-        self.after_frame: Callable[[bool], None] | None = None
-        """Called by the loop thread after each frame, in the loop's own time before the next
-        deadline, with True, and once with False when the loop stops sending regular frames
-        (its stop park done, or a failure): a live monitor publishes its snapshots here
-        (:class:`~motioncue.viewer.BridgeSource`), so that no other thread of this process
-        wakes, and takes the interpreter lock, when a page asks for one. It must not block;
-        if it raises it is dropped (a note says why) and the loop goes on."""
 
     # ------------------------------------------------------------------ control
     def start(self) -> Bridge:
@@ -725,9 +718,7 @@ class Bridge:
                 self._loop_arrival()
             else:
                 self._loop()
-            self._after_frame(False)
         except BaseException as exc:  # recorded, reported by stats/stop; then park
-            self._after_frame(False)
             self._error = f"{type(exc).__name__}: {exc}"
             self._state = "failed, parking"
             self._park_after_failure()
@@ -744,21 +735,9 @@ class Bridge:
                 self._error = str(exc)
                 self._state = "failed"
         finally:
-            self._after_frame(False)
             gc.unfreeze()
             if self._stop.is_set():  # stop() may have stopped waiting for the park
                 self._restore_switch()
-
-    def _after_frame(self, running: bool) -> None:
-        """Call :attr:`after_frame`; one that raises is dropped with a note, never the loop."""
-        hook = self.after_frame
-        if hook is None:
-            return
-        try:
-            hook(running)
-        except Exception as exc:
-            self.after_frame = None
-            self._notes.append(f"after_frame dropped ({type(exc).__name__}: {exc})")
 
     def _park_after_failure(self) -> None:
         """Park from wherever the last frame the link took left the platform, on time."""
@@ -811,8 +790,6 @@ class Bridge:
             stopping = stop.is_set() or self.source_finished
             step(deadline, stopping)
             self._missed = ticker.missed
-            if self.after_frame is not None:
-                self._after_frame(True)
             if stopping:
                 stop_ticks += 1
                 if self._parked_after_stop(stop_ticks):
@@ -873,8 +850,6 @@ class Bridge:
                 self._jitter.add(abs(interval - (due * tick - self._stamps.prev)))
             self._stamps.add(due * tick)
             last = due
-            if self.after_frame is not None:
-                self._after_frame(True)
             if stopping:
                 stop_ticks += 1
                 if self._parked_after_stop(stop_ticks):

@@ -12,24 +12,12 @@ dependency-free, long-maintained library, run on its own asyncio loop in a daemo
 The frame loop is never delayed by the monitor: a started monitor serves from a process of
 its own (the server, forward kinematics for the pose, fractions, acceleration as the change
 of speed between two snapshots, JSON and WebSocket I/O), so none of that holds the job's
-interpreter lock. The server asks for a raw snapshot (at most :attr:`Monitor.rate_hz` times a
-second while a page is open, and for ``/snapshot``):
-
-* from a job with a frame loop of its own (:class:`BridgeSource`: ``attach_publisher``)
-  through a slot in shared memory (:mod:`._monitor_slot`): the server writes a request
-  number there, and the loop, after its next frame, in its own time before the next
-  deadline, reads the :class:`MonitorSource` and writes the snapshot; the server polls the
-  slot. Nothing in the job's process wakes when a page asks. (A thread woken by each request
-  takes the interpreter lock at its own moment, also just before a frame's deadline or
-  during the frame: measured on the bridge at 100 Hz, such a frame went out about 0.3-1.1 ms
-  late, and with 10 requests a second that set the jitter p99; ``benchmarks/bench_monitor.py``);
-* otherwise (a play, an emulator, a bridge not running yet or any more) over a pipe, which
-  one small thread of the job's process answers by *reading* the source (attribute reads
-  of the running job, no lock the loop waits on).
-
-A dead or stopped server never holds up the loop (it never waits for the server). A slow
-browser only misses snapshots: a snapshot is not sent to a client while its previous one is
-still in flight.
+interpreter lock. In the job's process one small thread only *reads* the
+:class:`MonitorSource` (attribute reads of the running job, no lock the loop waits on) when
+the server asks for a snapshot (at most :attr:`Monitor.rate_hz` times a second while a page
+is open, and for ``/snapshot``) and hands the raw mapping over a pipe. A slow browser only
+misses snapshots: a snapshot is not sent to a client while its previous one is still in
+flight.
 """
 
 from __future__ import annotations
@@ -38,7 +26,6 @@ import asyncio
 import json
 import math
 import os
-import pickle
 import threading
 import time
 from collections.abc import Callable, Mapping
@@ -48,7 +35,6 @@ import numpy as np
 
 from .._errors import ConfigError, TransportError
 from ..telemetry._source import is_loopback
-from ._monitor_slot import SnapshotSlot
 from ._page import frame_json, html_page, scene_layout
 from ._scene import Scene, scene_from_q
 
@@ -80,8 +66,6 @@ DEFAULT_MONITOR_PORT = 8765
 
 _START_TIMEOUT_S = 60.0  # the server process imports numpy and motioncue (slow when loaded)
 _REPLY_TIMEOUT_S = 5.0  # the job's process answers a snapshot request within this
-_SLOT_WAIT_S = 1.0  # a loop that has not answered in the slot by then: ask over the pipe
-_SLOT_POLL_S = 0.001  # how often the server looks at the slot while it waits
 
 
 class _SourceError(Exception):
@@ -114,12 +98,6 @@ class MonitorSource(Protocol):
     - ``info``: ``{label: text}`` shown as is (frames sent, ride time...).
 
     ``request_stop()`` asks the job to stop and park; ``can_stop`` says if it can.
-
-    Optional: ``attach_publisher(publish)`` for a job with a frame loop of its own: the loop
-    is to call ``publish(True)`` after each frame (in its own time) and ``publish(False)`` once
-    when it stops; ``attach_publisher(None)`` detaches. A started monitor then takes its
-    snapshots through shared memory from the loop's thread instead of waking a thread of the
-    job's process (module docstring).
     """
 
     can_stop: bool
@@ -189,10 +167,6 @@ class BridgeSource:
         # Bridge.stop() sets the loop's stop flag, then waits for the park: run it in a
         # thread of its own so the monitor's loop goes on serving while the platform parks.
         threading.Thread(target=self.bridge.stop, name="monitor-stop", daemon=True).start()
-
-    def attach_publisher(self, publish: Callable[[bool], None] | None) -> None:
-        """The bridge's loop calls ``publish`` after each frame (``Bridge.after_frame``)."""
-        self.bridge.after_frame = publish
 
 
 class PlaySource:
@@ -399,9 +373,6 @@ class Monitor:
         self._control: Connection | None = None  # "end" to the server
         self._reader: threading.Thread | None = None
         self._server_errors = 0  # errors counted by the server process (not the source's)
-        self._slot: SnapshotSlot | None = None  # shared with the server (a loop publishes)
-        self._answered = 0  # the last request number the loop answered in the slot
-        self._live = False  # the slot says a loop publishes
 
     # ------------------------------------------------------------------ snapshots
     def snapshot(self) -> dict[str, Any]:
@@ -521,6 +492,7 @@ class Monitor:
                 f"monitor: cannot listen on {self.host}:{self.port}: {exc}"
             ) from exc
         self.port = int(self._sockets[0].getsockname()[1])
+        import pickle
         import socket
         import subprocess
         import sys
@@ -531,9 +503,7 @@ class Monitor:
         # first; the pipes are socket pairs and the listening sockets are passed as fds
         req_job_s, req_server_s = socket.socketpair()
         ctl_job_s, ctl_server_s = socket.socketpair()
-        slot = SnapshotSlot.create()
-        fds = [req_server_s.fileno(), ctl_server_s.fileno(), slot.fileno()]
-        fds += [s.fileno() for s in self._sockets]
+        fds = [req_server_s.fileno(), ctl_server_s.fileno()] + [s.fileno() for s in self._sockets]
         config = {
             "platform": self.platform,
             "bars": (self._q_lo, self._q_hi, self._v_max, self._a_max),
@@ -543,7 +513,6 @@ class Monitor:
             "title": self.title,
             "can_stop": bool(self.source.can_stop),
             "families": [s.family for s in self._sockets],
-            "slot_capacity_b": slot.capacity_b,
         }
         req_job = Connection(req_job_s.detach())
         ctl_job = Connection(ctl_job_s.detach())
@@ -559,13 +528,11 @@ class Monitor:
                 c.close()
             req_server_s.close()
             ctl_server_s.close()
-            slot.close()
             self._close_sockets()
             raise TransportError(f"monitor: cannot start its server: {exc}") from exc
         req_server_s.close()
         ctl_server_s.close()
         self._proc, self._requests, self._control = proc, req_job, ctl_job
-        self._slot = slot
         try:
             ctl_job.send_bytes(blob)
             ready = req_job.poll(_START_TIMEOUT_S) and req_job.recv() == ("ready",)
@@ -578,54 +545,7 @@ class Monitor:
             target=self._answer, args=(req_job,), name="motioncue-monitor-source", daemon=True
         )
         self._reader.start()
-        attach = getattr(self.source, "attach_publisher", None)
-        if callable(attach):
-            attach(self._publish)
         return self
-
-    def _source_reply(self, server_snapshots: int, server_errors: int) -> tuple[str, Any]:
-        """Read the source once for the server: ``("ok", raw mapping)`` or ``("error",
-        text)`` (counted); the server's counters (snapshots made before this one, errors
-        other than the source's) are taken over."""
-        self.errors += server_errors - self._server_errors
-        self._server_errors = server_errors
-        try:
-            reply: tuple[str, Any] = ("ok", dict(self.source.snapshot()))
-            self.snapshots = server_snapshots + 1  # this one is being made
-        except Exception as exc:  # a torn read: the server shows it, counted
-            self.errors += 1
-            reply = ("error", f"{type(exc).__name__}: {exc}")
-        return reply
-
-    def _publish(self, running: bool) -> None:
-        """The job's loop, after a frame (``running``) or once when it stops: answer the
-        server's newest request in the slot. Never blocks and never raises."""
-        slot = self._slot
-        if slot is None:
-            return
-        try:
-            if not running:
-                slot.set_live(False)
-                self._live = False
-                return
-            if not self._live:
-                slot.set_live(True)
-                self._live = True
-            req = slot.requested()
-            if req == self._answered:
-                return
-            self._answered = req
-            reply = self._source_reply(*slot.server_counts())
-            try:
-                data = pickle.dumps(reply, protocol=pickle.HIGHEST_PROTOCOL)
-                if len(data) > slot.capacity_b:
-                    raise ValueError(f"{len(data)} bytes")
-            except Exception:  # a raw snapshot that does not pickle or fit: an error shown
-                self.errors += 1
-                data = pickle.dumps(("error", "the job's snapshot could not be passed on"))
-            slot.publish(req, data)
-        except Exception:  # the slot closed under us (the monitor stopping): nothing to do
-            pass
 
     def _answer(self, conn: Connection) -> None:
         """The job-side thread: answer the server process' requests until it ends."""
@@ -635,9 +555,17 @@ class Monitor:
             except (EOFError, OSError):
                 return
             try:
-                reply: tuple[str, Any]
                 if msg[0] == "snapshot":
-                    reply = self._source_reply(int(msg[1]), int(msg[2]))
+                    # the server's counters: snapshots made before this one, errors other
+                    # than the source's
+                    self.errors += int(msg[2]) - self._server_errors
+                    self._server_errors = int(msg[2])
+                    try:
+                        reply: tuple[str, Any] = ("ok", dict(self.source.snapshot()))
+                        self.snapshots = int(msg[1]) + 1  # this one is being made
+                    except Exception as exc:  # a torn read: the server shows it, counted
+                        self.errors += 1
+                        reply = ("error", f"{type(exc).__name__}: {exc}")
                 elif msg[0] == "stop":
                     try:
                         self.stop_pressed()
@@ -660,13 +588,6 @@ class Monitor:
         """
         import subprocess
 
-        slot = self._slot
-        if slot is not None:  # the loop stops publishing; the last snapshots come by the pipe
-            detach = getattr(self.source, "attach_publisher", None)
-            if callable(detach):
-                detach(None)
-            self._slot = None
-            slot.set_live(False)
         proc, control = self._proc, self._control
         if proc is not None and control is not None:
             try:
@@ -684,8 +605,6 @@ class Monitor:
             if self._reader is not None:
                 self._reader.join(2.0)
             self._proc = self._control = self._requests = self._reader = None
-        if slot is not None:
-            slot.close()
         loop = self._loop
         if loop is not None and loop.is_running():
             if self._clients:
@@ -784,14 +703,12 @@ class Monitor:
 
 
 class _JobSource:
-    """The job's source as the server process sees it: a snapshot comes through the slot
-    while the job's loop publishes there (``Monitor._publish``), else, like a stop request,
-    in a round trip over the pipe to the job's process (``Monitor._answer``)."""
+    """The job's source as the server process sees it: each snapshot and stop request is
+    a round trip over the pipe to the job's process (``Monitor._answer``)."""
 
-    def __init__(self, conn: Connection, can_stop: bool, slot: SnapshotSlot | None = None) -> None:
+    def __init__(self, conn: Connection, can_stop: bool) -> None:
         self.conn = conn
         self.can_stop = can_stop
-        self.slot = slot
         self.monitor: Monitor | None = None  # its counters go with each request
 
     def _ask(self, msg: tuple[Any, ...]) -> Any:
@@ -806,21 +723,6 @@ class _JobSource:
     def snapshot(self) -> Mapping[str, Any]:
         mon = self.monitor
         counts = (0, 0) if mon is None else (mon.snapshots, mon.errors)
-        slot = self.slot
-        if slot is not None and slot.live:
-            req = slot.request(*counts)
-            end = time.monotonic() + _SLOT_WAIT_S
-            while True:
-                answers, data = slot.read()
-                if answers >= req:
-                    kind, value = pickle.loads(data)
-                    if kind == "error":
-                        raise _SourceError(value)
-                    out: Mapping[str, Any] = value
-                    return out
-                if not slot.live or time.monotonic() > end:
-                    break  # the loop has stopped, or is too slow to wait for: ask the job
-                time.sleep(_SLOT_POLL_S)
         raw: Mapping[str, Any] = self._ask(("snapshot", *counts))
         return raw
 
@@ -846,9 +748,10 @@ _SERVER_CODE = (
 )
 
 
-def _server_main(req_fd: int, ctl_fd: int, slot_fd: int, *socket_fds: int) -> None:
+def _server_main(req_fd: int, ctl_fd: int, *socket_fds: int) -> None:
     """The monitor's server process: a :class:`Monitor` on a :class:`_JobSource`, served
     on this process' main thread until the job's process says "end" (or goes away)."""
+    import pickle
     import socket
     from multiprocessing.connection import Connection
 
@@ -863,8 +766,7 @@ def _server_main(req_fd: int, ctl_fd: int, slot_fd: int, *socket_fds: int) -> No
         socket.socket(family, socket.SOCK_STREAM, fileno=fd)
         for family, fd in zip(config["families"], socket_fds, strict=True)
     ]
-    slot = SnapshotSlot(slot_fd, config["slot_capacity_b"])
-    source = _JobSource(requests, config["can_stop"], slot)
+    source = _JobSource(requests, config["can_stop"])
     mon = Monitor(
         source, config["platform"], host=config["host"], port=config["port"],
         rate_hz=config["rate_hz"], title=config["title"],
@@ -895,7 +797,6 @@ def _server_main(req_fd: int, ctl_fd: int, slot_fd: int, *socket_fds: int) -> No
     mon._serve(threading.Event(), on_start)
     for s in sockets:
         s.close()
-    slot.close()
 
 
 async def _end(mon: Monitor, loop: asyncio.AbstractEventLoop) -> None:
