@@ -46,6 +46,7 @@ PLATFORMS = {
     "corner4": "mbox6",
     "corner4-tl": "mbox6",
     "stewart6-rotary": "imax6",
+    "seat3-pot": "smc3",  # the seat3 geometry on pot-feedback actuators (SMC3)
 }
 HELD_OUT = sample_drives("held-out")
 CAR_HELD_OUT = {p.name for p in sample_drives("held-out", kind="car")}
@@ -109,3 +110,10 @@ def test_default_preset_reports_cues_and_clamps_at_most_1pct(
         assert r["clamped_pct"] <= 1.0, (platform, r["recording"], r["clamped_pct"])
         if r["recording"] in CAR_HELD_OUT:
             assert r["gain_fy"] > 0.05, (platform, r["recording"], r["gain_fy"])
+
+
+def test_every_bundled_platform_has_its_default_checked() -> None:
+    """A new platform file cannot be left out unnoticed: every bundled platform is
+    stewart6-linear (its own acceptance: test_cue_acceptance and others) or in PLATFORMS."""
+    bundled = {p.stem for p in find_config("platforms", "seat3").parent.glob("*.toml")}
+    assert bundled <= {"stewart6-linear"} | set(PLATFORMS), sorted(bundled - set(PLATFORMS))
