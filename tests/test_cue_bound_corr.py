@@ -126,8 +126,11 @@ def test_tiny_problem_nothing_beats_the_bound(tiny, i: int) -> None:
         {"type": "ineq", "fun": lambda x: _admissible(x, i), "jac": lambda x: jac_box},
         {"type": "ineq", "fun": lambda x: _share_corr(y_of(x), v)[1] - c, "jac": corr_jac},
     ]
-    for _ in range(12):
-        # starts near a tilt following the vehicle, at random scales, plus noise
+    for _ in range(40):
+        # starts near a tilt following the vehicle, at random scales, plus noise; SLSQP ends
+        # infeasible or in a local optimum from many of them, and which ones depends on the
+        # last bits of the arithmetic (another CPU's kernels gave 1.605 for 1.842 from the
+        # same 12 starts), so enough starts that the tightness check below does not hang on one
         tau0 = np.clip(f[:, i] / G * rng.uniform(0.2, 2.0), -0.1, 0.1)
         x0 = np.r_[rng.uniform(-0.02, 0.02, N), tau0 + rng.normal(0, 0.01, N)]
         res = minimize(lambda x: -float(y_of(x) @ y_of(x)), x0, method="SLSQP",
