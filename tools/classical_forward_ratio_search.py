@@ -25,6 +25,13 @@ speeds, whatever the other channels add)::
 
     nice -n 10 python tools/classical_forward_ratio_search.py --budget-s 1200 --seed 2 \
         --formula chicane-formula-106.csv --base fwd.toml --rate-max 40 --out fwd2.toml
+
+``--adapt`` adds the tilt gain that adapts to the drive (``[tilt] adapt_peak_m_s2``,
+``adapt_tau_s``: 4 more parameters, the level and the envelope's time constant per axis
+share one tau) and lets the tilt's fixed gains go up to 0.5 (they become the gains' upper
+bounds); ``--min-corr-x`` and ``--max-reversals`` tighten those two constraints on the
+tuning drives (a margin for the drives held out). How ``racing-hexapod-adaptive`` was made
+is in its header.
 """
 
 from __future__ import annotations
@@ -67,6 +74,9 @@ def main() -> None:
     ap.add_argument("--base", help="start from this preset (default: the firm default with "
                     "the tilt's x gain 0.08 and forward_ratio 0.5)")  # fmt: skip
     ap.add_argument("--rate-max", type=float, default=30.0, help="tilt rate limit bound (deg/s)")
+    ap.add_argument("--adapt", action="store_true", help="search the adaptive tilt gain too")
+    ap.add_argument("--min-corr-x", type=float, default=0.95, help="corr fx on every drive")
+    ap.add_argument("--max-reversals", type=float, default=0.02, help="reversals on every drive")
     args = ap.parse_args()
     platform = load_platform("stewart6-linear")
     limits = ActuatorLimits.from_platform(platform, load_controller("mbox6"), rate_hz=RATE)
@@ -81,6 +91,12 @@ def main() -> None:
                  p0.trans_wb_rad_s[0], p0.tilt_wn_rad_s, rate0])  # fmt: skip
     lo = np.log([0.03, 0.08, 0.1, 1.5, 0.5, 0.01, 0.05, 0.005, 0.1, 2.0, 0.3, 5.0, 15.0])
     hi = np.log([0.3, 0.3, 1.5, 20, 1.0, 0.4, 1.0, 0.3, 3.0, 10.0, 3.0, 40.0, args.rate_max])
+    if args.adapt:  # c_x, c_y, tau; the fixed gains become upper bounds
+        peak0 = p0.tilt_adapt_peak_m_s2 or (1.0, 1.0)
+        x0 = np.r_[x0, np.log([max(peak0[0], 0.2), max(peak0[1], 0.2), p0.tilt_adapt_tau_s])]
+        lo = np.r_[lo, np.log([0.2, 0.2, 3.0])]
+        hi = np.r_[hi, np.log([5.0, 5.0, 300.0])]
+        hi[0] = hi[1] = np.log(0.5)
     x0 = np.minimum(x0, hi)
 
     def params(x: np.ndarray) -> CueingParams:
@@ -100,6 +116,8 @@ def main() -> None:
             tilt_wn_rad_s=v[11],
             tilt_rate_limit_rad_s=v[12] * D2R,
             intensity_gentle=None,
+            tilt_adapt_peak_m_s2=(v[13], v[14]) if args.adapt else p0.tilt_adapt_peak_m_s2,
+            tilt_adapt_tau_s=v[15] if args.adapt else p0.tilt_adapt_tau_s,
         )
 
     def evaluate(x: np.ndarray) -> tuple[float, list[str]]:
@@ -112,8 +130,9 @@ def main() -> None:
                             clamped_share=run.poses_clamped / len(run.poses))  # fmt: skip
             sx, sy = m.rendered_share[0], m.rendered_share[1]
             cx, cy = m.correlation[0], m.correlation[1]
-            viol += 10 * max(0.0, 0.95 - cx) + 10 * max(0.0, 0.90 - cy)
-            viol += 10 * max(0.0, m.reversals_any - 0.02) + max(0.0, m.false_any - 0.15)
+            viol += 10 * max(0.0, args.min_corr_x - cx) + 10 * max(0.0, 0.90 - cy)
+            viol += 10 * max(0.0, m.reversals_any - args.max_reversals)
+            viol += max(0.0, m.false_any - 0.15)
             viol += 10 * max(0.0, m.clamped - 0.01) + run.actuator_limited / 100
             viol += 10 * max(0.0, fy - 0.005 - sy)
             strength += sx
@@ -126,7 +145,8 @@ def main() -> None:
 
     def better(it: int, elapsed_s: float, fit: float, x: np.ndarray, lines: list[str]) -> None:
         Path(args.out).write_text(preset_toml(params(x), [f"search it {it} fit {fit:.5f}"]))
-        vals = ", ".join(f"{n} {v:.4g}" for n, v in zip(NAMES, np.exp(x), strict=True))
+        names = (*NAMES, "c_x", "c_y", "tau") if args.adapt else NAMES
+        vals = ", ".join(f"{n} {v:.4g}" for n, v in zip(names, np.exp(x), strict=True))
         print(f"it {it} t {elapsed_s:.0f} s fit {fit:.5f}: {vals}", flush=True)
         print("\n".join(lines), flush=True)
 

@@ -58,6 +58,13 @@ Signal flow (per sample; frames, signs and units of conventions.md)
    tilt then has ``sin(roll)^2 + sin(pitch)^2 <= 1 - c^2`` unless the pitch alone exceeds
    it, so its fz loss ``g (1 - cos(roll) cos(pitch)) <= l`` (the held roll no longer lowers
    the felt ``f_z`` against a vehicle pressed into a dip).
+   With ``tilt_adapt_peak_m_s2 = (c_x, c_y)`` the tilt's gain adapts to the drive: on each
+   axis with ``c > 0`` the envelope ``e[n] = max(|f[n]|, d e[n-1])`` (``d = exp(-1 / (fs
+   tau))``, ``tau = tilt_adapt_tau_s``, the held vehicle force, ``e = 0`` before the first
+   sample) scales the force fed to the tilt by ``c / (kt e)`` where ``kt e > c`` (``kt`` that
+   axis's ``tilt_scale``), before the lead's output meets the compression: the tilt's gain
+   is ``min(kt, c / e)``, so the largest force of the last few ``tau`` reaches the
+   compression at ``c``.
    With ``tilt_accel_limit_rad_s2 = a`` the tilt is also acceleration limited
    (:func:`rate_accel_limit_step`): with the per-sample step ``u[n] = tilt[n] - tilt[n-1]``,
    ``d = a / fs^2`` and ``e = target - tilt[n-1]``, the wanted step is
@@ -216,6 +223,9 @@ class WashoutState:
         Output ``[roll, pitch, yaw]`` (rad) of the last sample (kept with a head offset).
     omega : list of 3 floats
         Platform body angular velocity (rad/s) of the last sample (kept with a head offset).
+    tilt_env : list of 2 floats
+        Envelope ``[x, y]`` (m/s^2) of the vehicle's force peaks (kept with
+        ``tilt_adapt_peak_m_s2``).
     bad_samples : int
         Samples replaced by the last good one since the last reset.
     samples : int
@@ -228,6 +238,7 @@ class WashoutState:
     attitude: list[float] = field(default_factory=lambda: [0.0, 0.0, 0.0])
     omega: list[float] = field(default_factory=lambda: [0.0, 0.0, 0.0])
     hold: list[float] = field(default_factory=lambda: [0.0, 0.0, GRAVITY_M_S2, 0.0, 0.0, 0.0])
+    tilt_env: list[float] = field(default_factory=lambda: [0.0, 0.0])
     bad_samples: int = 0
     samples: int = 0
 
@@ -284,6 +295,30 @@ def _rate_accel_limit_array(
         append(prev)
     tilt_rate[k] = rate
     return np.array(out, dtype=np.float64)
+
+
+def _adapt_gain(
+    f: NDArray[np.float64], c: float, kt: float, tau_s: float, fs: float, env: list[float], k: int
+) -> NDArray[np.float64]:
+    """The factor ``tilt_adapt_peak_m_s2`` puts on one axis's force fed to the tilt (step 2
+    above): ``c / (kt e)`` where ``kt e > c``, else 1, with the envelope ``e`` of ``|f|``
+    (the loop on floats, so that it gives exactly the streaming numbers), continuing from and
+    updating ``env[k]`` (m/s^2). ``c = 0``: ones (the envelope still advances)."""
+    decay = math.exp(-1.0 / (fs * tau_s))
+    cur = env[k]
+    e: list[float] = []
+    append = e.append
+    for v in np.abs(f).tolist():
+        cur = cur * decay
+        cur = v if v > cur else cur
+        append(cur)
+    env[k] = cur
+    out = np.ones(len(e))
+    if c > 0.0:
+        ke = kt * np.array(e)
+        over = ke > c
+        out[over] = c / ke[over]
+    return out
 
 
 _StepFn = Callable[
@@ -561,6 +596,7 @@ class ClassicalWashout:
         state.attitude[:] = [0.0, 0.0, 0.0]
         state.omega[:] = [0.0, 0.0, 0.0]
         state.hold[:] = [0.0, 0.0, GRAVITY_M_S2, 0.0, 0.0, 0.0]
+        state.tilt_env[:] = [0.0, 0.0]
         state.bad_samples = 0
         state.samples = 0
 
@@ -615,6 +651,9 @@ class ClassicalWashout:
         gz_width = max(gz_above, _GUARD_MIN_RAMP_M_S2)
         fz_lp = self.fz_lp
         comp = compress
+        adapt = p.tilt_adapt_peak_m_s2 is not None
+        cax, cay = (0.0, 0.0) if p.tilt_adapt_peak_m_s2 is None else p.tilt_adapt_peak_m_s2
+        adapt_decay = math.exp(-1.0 / (fs * p.tilt_adapt_tau_s))
         has_lead = p.lead_s is not None
         ld0, ld1 = self.lead
         hx, hy, hz = p.head_offset_m
@@ -703,6 +742,20 @@ class ClassicalWashout:
                     qz = soft(qz, lwz, knee)
             z = state.z
             # 2. tilt coordination
+            if adapt:  # the tilt's gain follows the drive's force peaks
+                env = state.tilt_env
+                ex = env[0] * adapt_decay
+                ey = env[1] * adapt_decay
+                ax_ = abs(fx)
+                ay_ = abs(fy)
+                ex = ax_ if ax_ > ex else ex
+                ey = ay_ if ay_ > ey else ey
+                env[0] = ex
+                env[1] = ey
+                if cax > 0.0 and ktx * ex > cax:
+                    flx = flx * (cax / (ktx * ex))
+                if cay > 0.0 and kty * ey > cay:
+                    fly = fly * (cay / (kty * ey))
             if cshape:
                 tix = comp(flx, ktxf if flx > 0.0 else ktx, lxp, lxn, pt)
                 tiy = comp(fly, kty, lyp, lyn, pt)
@@ -1011,6 +1064,11 @@ class ClassicalWashout:
             qz = compress_array(wz, k[2], lw[2], lw[2], pw[2])
 
         # 2. tilt coordination
+        if p.tilt_adapt_peak_m_s2 is not None and p.tilt_scale is not None and n:
+            flx = flx * _adapt_gain(fx, p.tilt_adapt_peak_m_s2[0], p.tilt_scale[0],
+                                    p.tilt_adapt_tau_s, self.fs_hz, state.tilt_env, 0)  # fmt: skip
+            fly = fly * _adapt_gain(fy, p.tilt_adapt_peak_m_s2[1], p.tilt_scale[1],
+                                    p.tilt_adapt_tau_s, self.fs_hz, state.tilt_env, 1)  # fmt: skip
         fwd = p.tilt_forward_ratio
         if p.tilt_shape is not None and p.tilt_scale is not None:
             lxp, lxn, lyp, lyn = p.tilt_force_limits_m_s2

@@ -218,6 +218,19 @@ class CueingParams:
         low-pass and rate limits smooth the cut. ``loss_m_s2`` in (0, 9.8], ``above_m_s2``
         in [0, 100], ``wn_rad_s`` in (0, 100] (below Nyquist of the run). ``None`` (the
         default): no guard.
+    tilt_adapt_peak_m_s2 : 2-tuple or None
+        ``(c_x, c_y)``: the tilt's gain adapts to the drive. On each axis an envelope follows
+        the peaks of the vehicle's specific force (held input, before any lead),
+        ``e[n] = max(|f[n]|, e[n-1] exp(-1 / (fs tau)))`` (``tau = tilt_adapt_tau_s``; 0
+        before the first sample), and the tilt's gain ``tilt_scale`` on that axis becomes
+        ``min(kt, c / e)``: the largest force of the last few ``tau`` is brought to at most
+        ``c`` before the tilt's compression. A car whose stops are 1 g gets a larger tilt gain
+        than one whose stops are 3 g, so each uses the tilt the rig has (the fixed gain of a
+        preset is set by its hardest drive); within a drive the gain changes as slowly as the
+        envelope decays. ``c`` in [0, 50] (0: that axis keeps its fixed gain). Needs
+        ``tilt_scale``. ``None`` (the default): fixed gains.
+    tilt_adapt_tau_s : float
+        Decay time constant of that envelope (s), in [0.1, 3600]; 30 (the default).
     head_offset_m : 3-tuple
         The rider's head (the vestibular system) relative to the platform origin, platform
         frame ``[x fwd, y left, z up]`` (m). The translational channel removes the specific
@@ -273,6 +286,8 @@ class CueingParams:
     tilt_offset_m: tuple[tuple[float, ...], ...] | None = None
     tilt_reach_exponent: float = 2.0
     tilt_fz_guard: tuple[float, float, float] | None = None
+    tilt_adapt_peak_m_s2: tuple[float, float] | None = None
+    tilt_adapt_tau_s: float = 30.0
     head_offset_m: Vec3 = (0.0, 0.0, 0.0)
     rot_wn_rad_s: Vec3 = (1.0, 1.0, 0.5)
     rot_zeta: Vec3 = (1.0, 1.0, 1.0)
@@ -383,6 +398,20 @@ class CueingParams:
             _check("tilt_fz_guard loss_m_s2", (guard[0],), 0.0, True, 9.8)
             _check("tilt_fz_guard above_m_s2", (guard[1],), 0.0, False, 100.0)
             _check("tilt_fz_guard wn_rad_s", (guard[2],), 0.0, True, 100.0)
+        if self.tilt_adapt_peak_m_s2 is not None:
+            peak = self.tilt_adapt_peak_m_s2
+            if len(peak) != 2:
+                raise ConfigError(
+                    f"CueingParams.tilt_adapt_peak_m_s2 = {peak!r} is invalid; allowed: two "
+                    "numbers (x, y)"
+                )
+            _check("tilt_adapt_peak_m_s2", peak, 0.0, False, 50.0)
+            if self.tilt_scale is None:
+                raise ConfigError(
+                    f"CueingParams.tilt_adapt_peak_m_s2 = {peak!r} needs tilt_scale (the "
+                    "tilt's own gain, which it lowers)"
+                )
+        _check("tilt_adapt_tau_s", (self.tilt_adapt_tau_s,), 0.1, False, 3600.0)
         if self.tilt_offset_m is not None:
             off = self.tilt_offset_m
             if len(off) != 3 or any(len(r) != 5 for r in off):
@@ -610,6 +639,11 @@ def load_cueing(name_or_path: str | Path) -> CueingParams:
     if ti.has("fz_guard"):
         gv = ti.vector("fz_guard", 3)
         fz_guard = (gv[0], gv[1], gv[2])
+    adapt_peak = None
+    if ti.has("adapt_peak_m_s2"):
+        av = ti.vector("adapt_peak_m_s2", 2)
+        adapt_peak = (av[0], av[1])
+    adapt_tau = ti.number("adapt_tau_s", lo=0.1, hi=3600.0) if ti.has("adapt_tau_s") else 30.0
     offset = None
     if ti.has("offset_mm"):
         rows = _number_rows(ti, "offset_mm", 3, 5, "3 rows (x, y, z) of 5 numbers")
@@ -678,6 +712,8 @@ def load_cueing(name_or_path: str | Path) -> CueingParams:
             tilt_offset_m=offset,
             tilt_reach_exponent=reach_q,
             tilt_fz_guard=fz_guard,
+            tilt_adapt_peak_m_s2=adapt_peak,
+            tilt_adapt_tau_s=adapt_tau,
             head_offset_m=head,
             rot_wn_rad_s=r_wn,
             rot_zeta=r_zeta,

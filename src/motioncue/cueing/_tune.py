@@ -574,6 +574,9 @@ def preset_toml(params: CueingParams, comments: Sequence[str] = ()) -> str:
         lines.append(f"reach_exponent = {_fmt(params.tilt_reach_exponent)}")
     if params.tilt_fz_guard is not None:
         lines.append(f"fz_guard = {_vec(params.tilt_fz_guard)}")
+    if params.tilt_adapt_peak_m_s2 is not None:
+        lines.append(f"adapt_peak_m_s2 = {_vec(params.tilt_adapt_peak_m_s2)}")
+        lines.append(f"adapt_tau_s = {_fmt(params.tilt_adapt_tau_s)}")
     if params.tilt_offset_m is not None:
         rows = ", ".join(_vec(r, 1e3) for r in params.tilt_offset_m)
         lines.append(f"offset_mm = [{rows}]")
