@@ -202,7 +202,7 @@ def _end_velocity(poses: np.ndarray, dt: float) -> np.ndarray:
     through the last three; a rotation rate whose step in one frame swings the head
     (:data:`JOIN_HEAD_M`) by less than the threshold counts as rest (zero)."""
     p2, p1, p0 = poses[-3], poses[-2], poses[-1]
-    vel = (3.0 * p0 - 4.0 * p1 + p2) / (2.0 * dt)
+    vel: np.ndarray = (3.0 * p0 - 4.0 * p1 + p2) / (2.0 * dt)
     swing = np.abs(vel[3:]) * JOIN_HEAD_M / dt > JOIN_ACCEL_M_S2[0]
     vel[3:] = np.where(swing, vel[3:], 0.0)
     return vel

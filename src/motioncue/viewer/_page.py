@@ -35,7 +35,9 @@ def plotly_js() -> str:
 
 
 def _r(a: ArrayLike, digits: int) -> list[Any]:
-    return np.round(np.asarray(a, dtype=float), digits).tolist()
+    # ``tolist`` nests as deep as the array (a point or a list of points): typed as a list.
+    out: list[Any] = np.round(np.asarray(a, dtype=float), digits).tolist()
+    return out
 
 
 def frame_json(scene: Scene, k: int) -> dict[str, Any]:
