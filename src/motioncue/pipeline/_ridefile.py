@@ -380,13 +380,7 @@ def _read_source(
 ) -> tuple[bytes, str]:
     if isinstance(source, bytes | bytearray | memoryview):
         return bytes(source), name or "<ride bytes>"
-    if hasattr(source, "read"):
-        where = name or str(getattr(source, "name", "<ride stream>"))
-        try:
-            data = source.read(MAX_RIDE_BYTES + 1)
-        except OSError as exc:
-            raise ConfigError(f"{where}: cannot read: {exc}") from exc
-    else:
+    if isinstance(source, str | os.PathLike):
         path = Path(source)
         where = name or str(path)
 
@@ -408,6 +402,12 @@ def _read_source(
             )
         except OSError as exc:
             raise ConfigError(f"{where}: cannot read ride file: {exc}") from exc
+    else:  # a binary stream (BytesIO has no name)
+        where = name or str(getattr(source, "name", "<ride stream>"))
+        try:
+            data = source.read(MAX_RIDE_BYTES + 1)
+        except OSError as exc:
+            raise ConfigError(f"{where}: cannot read: {exc}") from exc
     if not isinstance(data, bytes):
         raise ConfigError(f"{where}: not a motioncue ride file (read {type(data).__name__})")
     if len(data) > MAX_RIDE_BYTES:  # a stream
