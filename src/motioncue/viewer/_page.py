@@ -34,9 +34,9 @@ def plotly_js() -> str:
     return str(get_plotlyjs())
 
 
-def _r(a: ArrayLike, digits: int) -> list[Any]:
-    # ``tolist`` nests as deep as the array (a point or a list of points): typed as a list.
-    out: list[Any] = np.round(np.asarray(a, dtype=float), digits).tolist()
+def _r(a: ArrayLike, digits: int) -> list[float] | list[list[float]]:
+    """A vector (n,) or points (n, 3), rounded, as (nested) JSON lists."""
+    out: list[float] | list[list[float]] = np.round(np.asarray(a, dtype=float), digits).tolist()
     return out
 
 
