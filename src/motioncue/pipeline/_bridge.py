@@ -96,6 +96,7 @@ if TYPE_CHECKING:
     from ..output import Controller, Transport
     from ..telemetry import TelemetrySample
     from ..trajectory import ActuatorLimits
+    from ._arrival import ArrivalOutputStage
 
 __all__ = [
     "CLAMP_WARN_FRACTION",
@@ -585,13 +586,16 @@ class Bridge:
         self.effects_state = EffectsState()
         self.gate = CueGate(cfg.gate)
         # built here so that configuration errors surface before start()
+        # (the arrival stage also kept as its own type: its emit takes the ticks)
+        self._arrival_stage: ArrivalOutputStage | None = None
         if self._arrival:
             from ._arrival import ArrivalOutputStage
 
-            self.stage: OutputStage = ArrivalOutputStage(
+            self._arrival_stage = ArrivalOutputStage(
                 platform, controller, limits, cfg.rate_hz, transport, q_start=q_start,
                 min_interval_ms=cfg.min_interval_ms,
             )  # fmt: skip
+            self.stage: OutputStage = self._arrival_stage
         else:
             self.stage = OutputStage(
                 platform, controller, limits, cfg.rate_hz, transport, q_start=q_start
@@ -912,6 +916,7 @@ class Bridge:
         else:
             gain = gate.update(now, held.t_s, held.paused or stopping)
         stage = self.stage
+        arrival = self._arrival_stage
         if gate.parked:
             if not self._clean:
                 wstate = self.cueing_state
@@ -920,8 +925,8 @@ class Bridge:
                 if self.effects is not None:
                     self.effects.reset(self.effects_state)
                 self._clean = True
-            if self._arrival:
-                stage.emit(self.platform.q_park, ticks=ticks)  # type: ignore[call-arg]
+            if arrival is not None:
+                arrival.emit(self.platform.q_park, ticks=ticks)
             else:
                 stage.park_step()
         else:
@@ -980,8 +985,8 @@ class Bridge:
                     self._pose_invalid += 1
                 else:
                     self._pose_clamped += 1
-            if self._arrival:
-                stage.emit(res.q, ticks=ticks)  # type: ignore[call-arg]
+            if arrival is not None:
+                arrival.emit(res.q, ticks=ticks)
             else:
                 stage.emit(res.q)
         done = time.perf_counter()
