@@ -180,7 +180,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         parser.print_help()
         return 2
     verb = args._verb_name
-    from .._atomic import interrupt_on_stop_signals
+    from .._atomic import Interrupted, interrupt_on_stop_signals
 
     try:
         # before any output is opened: SIGTERM, SIGHUP and SIGQUIT interrupt like Ctrl-C, so
@@ -192,7 +192,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         print(one_line(f"motioncue {verb}: error: {exc}"), file=sys.stderr)
         return 2
     except KeyboardInterrupt as exc:
-        by = getattr(exc, "signal_name", None)
+        by = exc.signal_name if isinstance(exc, Interrupted) else None
         try:
             print(f"motioncue {verb}: interrupted{f' by {by}' if by else ''}", file=sys.stderr)
         except OSError:  # the terminal is gone (SIGHUP)
