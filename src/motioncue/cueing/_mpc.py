@@ -92,6 +92,7 @@ from ._params import GRAVITY_M_S2, CueingParams
 from ._vestibular import DEFAULT_MODEL_SET, get_model_set
 
 if TYPE_CHECKING:
+    from ..kinematics import Platform
     from ._algorithm import Rig
 
 __all__ = [
@@ -574,7 +575,7 @@ class RigLimits:
         Largest roll/pitch rate (rad/s) and acceleration (rad/s^2; inf = none).
     """
 
-    platform: Any
+    platform: Platform
     q_mid: NDArray[np.float64]
     q_half: NDArray[np.float64]
     v_max: NDArray[np.float64]
@@ -905,7 +906,7 @@ QpOutcome = tuple[bool, NDArray[np.float64], NDArray[np.float64], NDArray[np.flo
 non-finite numbers; the multipliers of the rows and of the variable bounds (casadi's sign
 convention: positive at an upper bound, negative at a lower one)."""
 
-Warm = tuple[Any, Any, Any]
+Warm = tuple[NDArray[np.float64] | None, NDArray[np.float64] | None, NDArray[np.float64] | None]
 """``(u, lam_a, lam_x)`` of a previous solve of the same sizes (a warm start)."""
 
 
@@ -1228,7 +1229,7 @@ class MpcCueing(PlanCueing):
     def n_rows(self) -> int:
         """Constraint rows of the QP (stroke, speed, acceleration of each leg per block, the
         tilt rate, and the combined tilt with ``tilt_fz_use``)."""
-        nl = self.limits.q_mid.shape[0]
+        nl = len(self.limits.q_mid)
         per_block = 3 * nl + len(self._tilt_axes()) + 4 * self._combined_tilt()
         return len(self.cond.ends) * (per_block + len(self._trans_boxed()))
 

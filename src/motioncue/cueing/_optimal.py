@@ -167,7 +167,7 @@ class WorkingSetQp:
         whole = QpData(qp.g, a_all, lo_all, hi_all, qp.lbx, qp.ubx)  # hard and soft rows
         soft = np.zeros(a_all.shape[0], dtype=bool)
         soft[qp.a.shape[0] :] = True
-        live = np.isfinite(lo_all) | np.isfinite(hi_all)
+        live: NDArray[np.bool_] = np.isfinite(lo_all) | np.isfinite(hi_all)
         tol_lo = self.tol * (1.0 + np.abs(np.where(np.isfinite(lo_all), lo_all, 0.0)))
         tol_hi = self.tol * (1.0 + np.abs(np.where(np.isfinite(hi_all), hi_all, 0.0)))
 
