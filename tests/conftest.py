@@ -10,6 +10,12 @@ also lists, per test, how long the test's thread was ready to run but waited for
 (``runq``, from ``/proc/thread-self/schedstat``): wall minus that is what the test would
 take on a quiet machine (roughly: the wait of child processes for a core is not seen).
 
+``--timeline=PATH`` writes, per test, the worker that ran it, when it started and ended
+(seconds from the first test's start, setup to teardown), its CPU and wall seconds, as CSV,
+and prints the span of each worker and an estimate of the cores left idle (at each moment
+the running tests' CPU shares, CPU over wall, summed and capped at the cores): the figures to
+find what limits a run's wall time (the last unit to end, a gap before it, idle cores).
+
 Work order: ``make test`` runs more pytest-xdist workers than cores (many tests wait on
 sleeps, emulators and real-time playback and need no core meanwhile) with ``--dist
 loadscope``. Plain loadscope hands out the modules with the most tests first, which leaves
@@ -53,6 +59,12 @@ def pytest_addoption(parser: pytest.Parser) -> None:
         default=None,
         metavar="N",
         help="list the N tests that used the most CPU time (0: all) and the total",
+    )
+    parser.addoption(
+        "--timeline",
+        default=None,
+        metavar="PATH",
+        help="write each test's worker, start, end, CPU and wall seconds to PATH (CSV)",
     )
 
 
@@ -117,6 +129,8 @@ def pytest_runtest_makereport(
 _CPU_BY_TEST: dict[str, float] = defaultdict(float)
 _WALL_BY_TEST: dict[str, float] = defaultdict(float)
 _RUNQ_BY_TEST: dict[str, float] = defaultdict(float)
+_SPAN_BY_TEST: dict[str, tuple[str, float, float]] = {}
+"""Per test: the worker that ran it (``-`` without xdist), its first start and last stop."""
 
 
 def pytest_runtest_logreport(report: pytest.TestReport) -> None:
@@ -126,9 +140,65 @@ def pytest_runtest_logreport(report: pytest.TestReport) -> None:
         elif name == "runq_s" and isinstance(value, float):
             _RUNQ_BY_TEST[report.nodeid] += value
     _WALL_BY_TEST[report.nodeid] += report.duration
+    node = getattr(report, "node", None)  # pytest-xdist's controller sets it
+    worker = str(getattr(report, "worker_id", None) or (node and node.gateway.id) or "-")
+    start, stop = float(getattr(report, "start", 0.0)), float(getattr(report, "stop", 0.0))
+    if report.nodeid in _SPAN_BY_TEST:
+        _, t0, t1 = _SPAN_BY_TEST[report.nodeid]
+        start, stop = min(start, t0), max(stop, t1)
+    _SPAN_BY_TEST[report.nodeid] = (worker, start, stop)
+
+
+def _write_timeline(terminalreporter: pytest.TerminalReporter, path: str) -> None:
+    """The ``--timeline`` file and its summary (module docstring)."""
+    import csv
+
+    if not _SPAN_BY_TEST:
+        return
+    t_first = min(t0 for _, t0, _ in _SPAN_BY_TEST.values())
+    rows = sorted(
+        (t0 - t_first, t1 - t_first, worker, nodeid)
+        for nodeid, (worker, t0, t1) in _SPAN_BY_TEST.items()
+    )
+    with open(path, "w", newline="") as fh:
+        out = csv.writer(fh)
+        out.writerow(["worker", "start_s", "end_s", "cpu_s", "wall_s", "nodeid"])
+        for t0, t1, worker, nodeid in rows:
+            cpu = _CPU_BY_TEST.get(nodeid, 0.0)
+            out.writerow([worker, f"{t0:.3f}", f"{t1:.3f}", f"{cpu:.3f}", f"{t1 - t0:.3f}",
+                          nodeid])  # fmt: skip
+    terminalreporter.write_sep("=", f"timeline ({len(rows)} tests): {path}")
+    spans: dict[str, list[float]] = {}
+    for t0, t1, worker, _ in rows:
+        w = spans.setdefault(worker, [t0, t1])
+        w[0], w[1] = min(w[0], t0), max(w[1], t1)
+    for worker, (t0, t1) in sorted(spans.items()):
+        last = max((r for r in rows if r[2] == worker), key=lambda r: r[1])
+        terminalreporter.write_line(f"{worker}: {t0:7.1f} - {t1:7.1f} s, last {last[3]}")
+    # the cores the running tests kept busy (a step function: each test's CPU share from its
+    # start to its end), swept over the starts and ends
+    cores = _cores()
+    steps: list[tuple[float, float]] = []
+    for t0, t1, _, nodeid in rows:
+        share = min(1.0, _CPU_BY_TEST.get(nodeid, 0.0) / max(t1 - t0, 1e-9))
+        steps += [(t0, share), (t1, -share)]
+    steps.sort()
+    idle = demand = 0.0
+    before = steps[0][0]
+    for t, change in steps:
+        idle += (t - before) * max(0.0, cores - demand)
+        demand, before = demand + change, t
+    end = steps[-1][0]
+    terminalreporter.write_line(
+        f"estimated idle: {idle:.1f} core-seconds of {cores} x {end:.1f} s"
+        " (cores not kept busy by the running tests' CPU shares)"
+    )
 
 
 def pytest_terminal_summary(terminalreporter: pytest.TerminalReporter) -> None:
+    timeline = terminalreporter.config.getoption("--timeline")
+    if timeline:
+        _write_timeline(terminalreporter, timeline)
     n = terminalreporter.config.getoption("--cpu-durations")
     if n is None or not _CPU_BY_TEST:
         return
