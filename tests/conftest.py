@@ -10,6 +10,12 @@ also lists, per test, how long the test's thread was ready to run but waited for
 (``runq``, from ``/proc/thread-self/schedstat``): wall minus that is what the test would
 take on a quiet machine (roughly: the wait of child processes for a core is not seen).
 
+``--timeline=PATH`` writes, per test, the worker that ran it, when it started and ended
+(seconds from the first test's start, setup to teardown), its CPU and wall seconds, as CSV,
+and prints the span of each worker and an estimate of the cores left idle (at each moment
+the running tests' CPU shares, CPU over wall, summed and capped at the cores): the figures to
+find what limits a run's wall time (the last unit to end, a gap before it, idle cores).
+
 Work order: ``make test`` runs more pytest-xdist workers than cores (many tests wait on
 sleeps, emulators and real-time playback and need no core meanwhile) with ``--dist
 loadscope``. Plain loadscope hands out the modules with the most tests first, which leaves
@@ -53,6 +59,12 @@ def pytest_addoption(parser: pytest.Parser) -> None:
         default=None,
         metavar="N",
         help="list the N tests that used the most CPU time (0: all) and the total",
+    )
+    parser.addoption(
+        "--timeline",
+        default=None,
+        metavar="PATH",
+        help="write each test's worker, start, end, CPU and wall seconds to PATH (CSV)",
     )
 
 
@@ -117,6 +129,8 @@ def pytest_runtest_makereport(
 _CPU_BY_TEST: dict[str, float] = defaultdict(float)
 _WALL_BY_TEST: dict[str, float] = defaultdict(float)
 _RUNQ_BY_TEST: dict[str, float] = defaultdict(float)
+_SPAN_BY_TEST: dict[str, tuple[str, float, float]] = {}
+"""Per test: the worker that ran it (``-`` without xdist), its first start and last stop."""
 
 
 def pytest_runtest_logreport(report: pytest.TestReport) -> None:
@@ -126,9 +140,65 @@ def pytest_runtest_logreport(report: pytest.TestReport) -> None:
         elif name == "runq_s" and isinstance(value, float):
             _RUNQ_BY_TEST[report.nodeid] += value
     _WALL_BY_TEST[report.nodeid] += report.duration
+    node = getattr(report, "node", None)  # pytest-xdist's controller sets it
+    worker = str(getattr(report, "worker_id", None) or (node and node.gateway.id) or "-")
+    start, stop = float(getattr(report, "start", 0.0)), float(getattr(report, "stop", 0.0))
+    if report.nodeid in _SPAN_BY_TEST:
+        _, t0, t1 = _SPAN_BY_TEST[report.nodeid]
+        start, stop = min(start, t0), max(stop, t1)
+    _SPAN_BY_TEST[report.nodeid] = (worker, start, stop)
+
+
+def _write_timeline(terminalreporter: pytest.TerminalReporter, path: str) -> None:
+    """The ``--timeline`` file and its summary (module docstring)."""
+    import csv
+
+    if not _SPAN_BY_TEST:
+        return
+    t_first = min(t0 for _, t0, _ in _SPAN_BY_TEST.values())
+    rows = sorted(
+        (t0 - t_first, t1 - t_first, worker, nodeid)
+        for nodeid, (worker, t0, t1) in _SPAN_BY_TEST.items()
+    )
+    with open(path, "w", newline="") as fh:
+        out = csv.writer(fh)
+        out.writerow(["worker", "start_s", "end_s", "cpu_s", "wall_s", "nodeid"])
+        for t0, t1, worker, nodeid in rows:
+            cpu = _CPU_BY_TEST.get(nodeid, 0.0)
+            out.writerow([worker, f"{t0:.3f}", f"{t1:.3f}", f"{cpu:.3f}", f"{t1 - t0:.3f}",
+                          nodeid])  # fmt: skip
+    terminalreporter.write_sep("=", f"timeline ({len(rows)} tests): {path}")
+    spans: dict[str, list[float]] = {}
+    for t0, t1, worker, _ in rows:
+        w = spans.setdefault(worker, [t0, t1])
+        w[0], w[1] = min(w[0], t0), max(w[1], t1)
+    for worker, (t0, t1) in sorted(spans.items()):
+        last = max((r for r in rows if r[2] == worker), key=lambda r: r[1])
+        terminalreporter.write_line(f"{worker}: {t0:7.1f} - {t1:7.1f} s, last {last[3]}")
+    # the cores the running tests kept busy (a step function: each test's CPU share from its
+    # start to its end), swept over the starts and ends
+    cores = _cores()
+    steps: list[tuple[float, float]] = []
+    for t0, t1, _, nodeid in rows:
+        share = min(1.0, _CPU_BY_TEST.get(nodeid, 0.0) / max(t1 - t0, 1e-9))
+        steps += [(t0, share), (t1, -share)]
+    steps.sort()
+    idle = demand = 0.0
+    before = steps[0][0]
+    for t, change in steps:
+        idle += (t - before) * max(0.0, cores - demand)
+        demand, before = demand + change, t
+    end = steps[-1][0]
+    terminalreporter.write_line(
+        f"estimated idle: {idle:.1f} core-seconds of {cores} x {end:.1f} s"
+        " (cores not kept busy by the running tests' CPU shares)"
+    )
 
 
 def pytest_terminal_summary(terminalreporter: pytest.TerminalReporter) -> None:
+    timeline = terminalreporter.config.getoption("--timeline")
+    if timeline:
+        _write_timeline(terminalreporter, timeline)
     n = terminalreporter.config.getoption("--cpu-durations")
     if n is None or not _CPU_BY_TEST:
         return
@@ -165,19 +235,21 @@ def pytest_terminal_summary(terminalreporter: pytest.TerminalReporter) -> None:
 # test_cue_bound_rotation (8 s), test_optimal_solver_route (6 s), test_cue_bound_coupled and
 # three more units that had come after every listed unit, and moves test_limiter_jerk from
 # 10 s to 15 s; test_cue_bound, test_cue_bound_corr, test_cue_bound_rotation and
-# test_platform_defaults with session 27's cuts subtracted.
+# test_platform_defaults with session 27's cuts subtracted; test_telemetry, test_wire_clock,
+# test_limiter_jerk, test_easysmc_protocol and test_limiter with session 28's (CPU measured
+# before and after on a busy machine) subtracted from both figures.
 _UNITS: dict[str, tuple[float, float]] = {
     "tests/test_liveness.py": (14.9, 70.9),
     "tests/test_fault_injection.py": (8.6, 43.4),
     "tests/test_tune.py": (12.6, 28.2),
     "tests/test_browser_drawing.py": (6.1, 23.2),
     "tests/test_bridge.py": (7.3, 19.3),
-    "tests/test_telemetry.py": (13.3, 16.5),
     "tests/test_pipeline.py": (6.5, 16.3),
-    "tests/test_wire_clock.py": (15.0, 15.8),
-    "tests/test_limiter_jerk.py": (14.8, 15.0),
     "tests/test_easysmc_emulator.py": (0.4, 14.6),
+    "tests/test_telemetry.py": (10.7, 13.9),
     "tests/test_safety_files.py": (10.7, 13.6),
+    "tests/test_wire_clock.py": (12.7, 13.5),
+    "tests/test_limiter_jerk.py": (13.3, 13.5),
     "tests/test_cue_bound_corr.py": (13.0, 13.3),
     "tests/test_docs.py::test_docs_build_with_warnings_as_errors": (9.1, 12.7),
     "tests/test_bridge_new_games.py": (3.7, 12.4),
@@ -213,9 +285,7 @@ _UNITS: dict[str, tuple[float, float]] = {
     "tests/test_mpc.py": (3.2, 6.0),
     "tests/test_kinematics.py": (5.2, 5.9),
     "tests/test_cli_control.py": (1.1, 5.7),
-    "tests/test_easysmc_protocol.py": (5.4, 5.6),
     "tests/test_cue_acceptance.py": (5.3, 5.4),
-    "tests/test_limiter.py": (4.9, 5.1),
     "tests/test_demo_held_up.py": (1.2, 5.1),
     "tests/test_cue_bound_coupled.py": (4.9, 5.0),
     "tests/test_intensity_rides.py": (4.9, 5.0),
@@ -225,8 +295,10 @@ _UNITS: dict[str, tuple[float, float]] = {
     "tests/test_platform_defaults.py": (4.6, 4.6),
     "tests/test_mpc_reference.py::test_tune_drives_an_optimal_preset": (4.6, 4.6),
     "tests/test_extend_platform_game.py": (2.8, 4.6),
+    "tests/test_limiter.py": (4.3, 4.5),
     "tests/test_bridge_replay.py": (0.8, 4.5),
     "tests/test_trajectory_ride_qp.py": (4.2, 4.4),
+    "tests/test_easysmc_protocol.py": (4.1, 4.3),
     "tests/test_cueing_cli.py": (3.2, 4.3),
     "tests/test_cli_pipeline.py": (3.1, 4.0),
     "tests/test_upsample.py": (3.5, 3.7),

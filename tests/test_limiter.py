@@ -22,15 +22,33 @@ TOL = 1e-9
 
 
 # ----------------------------------------------------------------------------- strategies
+# The strategies the composites below draw from, built once: a composite that builds its
+# strategies at each draw spends a good part of its time on that (st.floats looks its
+# arguments up in Hypothesis' cache each time), and the same strategies draw the same values.
+_N_AXES, _Q_MIN, _SPAN = st.integers(1, 6), st.floats(-0.5, 0.5), st.floats(0.01, 1.0)
+_V_MAX, _A_MAX = st.floats(0.01, 2.0), st.floats(0.1, 60.0)
+_DT = st.sampled_from([0.001, 0.002, 0.004, 0.01, 0.0166667, 0.02, 0.05])
+_AT_END = st.sampled_from([0.0, 1.0, None])
+_KIND = st.sampled_from(["step", "spike", "impulse", "chatter", "nan", "inf", "far", "noise"])
+_LEVEL, _SPIKE = st.floats(-0.5, 1.5), st.sampled_from([1e3, -1e3, 1e300, -1e300, 1.7e308])
+_IMPULSE, _CHATTER = st.floats(-3, 3), st.floats(0.0, 2.0)
+_INF = st.sampled_from([np.inf, -np.inf])
+_FAR = st.sampled_from([-1e6, 1e6, 1e12, -1e12, 1.7e308, -1.7e308])
+_SEED, _PART, _PARTS = st.integers(0, 2**32 - 1), st.integers(1, 60), st.integers(1, 5)
+
+
 @st.composite
 def limits_and_dt(draw, n=None):
-    n = n or draw(st.integers(1, 6))
-    q_min = np.array([draw(st.floats(-0.5, 0.5)) for _ in range(n)])
-    span = np.array([draw(st.floats(0.01, 1.0)) for _ in range(n)])
-    v_max = np.array([draw(st.floats(0.01, 2.0)) for _ in range(n)])
-    a_max = np.array([draw(st.floats(0.1, 60.0)) for _ in range(n)])
-    dt = draw(st.sampled_from([0.001, 0.002, 0.004, 0.01, 0.0166667, 0.02, 0.05]))
+    n = n or draw(_N_AXES)
+    q_min = np.array([draw(_Q_MIN) for _ in range(n)])
+    span = np.array([draw(_SPAN) for _ in range(n)])
+    v_max = np.array([draw(_V_MAX) for _ in range(n)])
+    a_max = np.array([draw(_A_MAX) for _ in range(n)])
+    dt = draw(_DT)
     return ActuatorLimits(q_min, q_min + span, v_max, a_max), dt
+
+
+_LIMITS_AND_DT = limits_and_dt()
 
 
 @st.composite
@@ -47,7 +65,7 @@ def admissible_state(draw, lim, dt):
         qlo = lo + (d if vi < 0 else 0.0)
         qhi = hi - (d if vi > 0 else 0.0)
         assume(qlo <= qhi)
-        frac = draw(st.sampled_from([0.0, 1.0, None]))
+        frac = draw(_AT_END)
         qi = (qlo if frac == 0.0 else qhi) if frac is not None else draw(st.floats(qlo, qhi))
         q.append(qi)
         v.append(vi)
@@ -56,41 +74,36 @@ def admissible_state(draw, lim, dt):
 
 def _segment(draw, n, lim, length):
     """One adversarial piece of target stream (length, n)."""
-    kind = draw(
-        st.sampled_from(["step", "spike", "impulse", "chatter", "nan", "inf", "far", "noise"])
-    )
+    kind = draw(_KIND)
     lo, hi = lim.q_min, lim.q_max
     span = hi - lo
-    level = lo + span * draw(st.floats(-0.5, 1.5))
+    level = lo + span * draw(_LEVEL)
     seg = np.repeat(level[None, :], length, axis=0)
     if kind == "spike":
         k = draw(st.integers(0, length - 1))
-        seg[k] = draw(st.sampled_from([1e3, -1e3, 1e300, -1e300, 1.7e308])) * np.ones(n)
+        seg[k] = draw(_SPIKE) * np.ones(n)
     elif kind == "impulse":
-        seg[::3] += span * draw(st.floats(-3, 3))
+        seg[::3] += span * draw(_IMPULSE)
     elif kind == "chatter":
-        amp = draw(st.floats(0.0, 2.0)) * span
+        amp = draw(_CHATTER) * span
         seg += amp * (2 * (np.arange(length) % 2) - 1)[:, None]
     elif kind == "nan":
         seg[draw(st.integers(0, length - 1)) :] = np.nan
     elif kind == "inf":
-        seg[:: max(1, length // 3)] = draw(st.sampled_from([np.inf, -np.inf]))
+        seg[:: max(1, length // 3)] = draw(_INF)
     elif kind == "far":
-        seg[:] = draw(st.sampled_from([-1e6, 1e6, 1e12, -1e12, 1.7e308, -1.7e308]))
+        seg[:] = draw(_FAR)
     elif kind == "noise":
-        seed = draw(st.integers(0, 2**32 - 1))
+        seed = draw(_SEED)
         seg = lo + span * np.random.default_rng(seed).uniform(-1, 2, (length, n))
     return seg
 
 
 @st.composite
 def scenario(draw):
-    lim, dt = draw(limits_and_dt())
+    lim, dt = draw(_LIMITS_AND_DT)
     q0, v0 = draw(admissible_state(lim, dt))
-    parts = [
-        _segment(draw, lim.n_actuators, lim, draw(st.integers(1, 60)))
-        for _ in range(draw(st.integers(1, 5)))
-    ]
+    parts = [_segment(draw, lim.n_actuators, lim, draw(_PART)) for _ in range(draw(_PARTS))]
     return lim, dt, q0, v0, np.concatenate(parts)
 
 

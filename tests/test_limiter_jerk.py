@@ -16,56 +16,73 @@ from test_limiter import hexapod_sines
 TOL = 1e-9
 
 
+# The strategies the composites below draw from, built once: a composite that builds its
+# strategies at each draw spends about a third of its time on that (st.floats looks its
+# arguments up in Hypothesis' cache each time), and the same strategies draw the same values.
+_N_AXES = st.integers(1, 4)
+_Q_MIN, _SPAN, _V = st.floats(-0.3, 0.3), st.floats(0.02, 0.6), st.floats(0.05, 1.0)
+_A, _J = st.floats(1.0, 30.0), st.floats(20.0, 1000.0)
+_DT = st.sampled_from([0.004, 0.01, 0.0166667, 0.02])
+_KIND = st.sampled_from(["step", "spike", "chatter", "nan", "inf", "far", "noise"])
+_LEVEL, _SPIKE = st.floats(-0.5, 1.5), st.sampled_from([1e3, -1e300, 1.7e308, -1.7e308])
+_CHATTER, _FAR = st.floats(0, 2), st.sampled_from([-1e9, 1e9, 1.7e308, -1.7e308])
+_SEED, _UNIT = st.integers(0, 2**32 - 1), st.floats(0, 1)
+_WARM, _PART, _PARTS = st.integers(1, 40), st.integers(1, 50), st.integers(1, 4)
+_SOFT_A, _SOFT_J = st.floats(0.5, 8.0), st.floats(40.0, 1000.0)
+_REVERSAL = st.floats(-1.0, 1.0)
+
+
 @st.composite
 def jerk_limits(draw):
-    n = draw(st.integers(1, 4))
-    q_min = np.array([draw(st.floats(-0.3, 0.3)) for _ in range(n)])
-    span = np.array([draw(st.floats(0.02, 0.6)) for _ in range(n)])
-    v = np.array([draw(st.floats(0.05, 1.0)) for _ in range(n)])
-    a = np.array([draw(st.floats(1.0, 30.0)) for _ in range(n)])
-    j = np.array([draw(st.floats(20.0, 1000.0)) for _ in range(n)])
-    dt = draw(st.sampled_from([0.004, 0.01, 0.0166667, 0.02]))
+    n = draw(_N_AXES)
+    q_min = np.array([draw(_Q_MIN) for _ in range(n)])
+    span = np.array([draw(_SPAN) for _ in range(n)])
+    v = np.array([draw(_V) for _ in range(n)])
+    a = np.array([draw(_A) for _ in range(n)])
+    j = np.array([draw(_J) for _ in range(n)])
+    dt = draw(_DT)
     return ActuatorLimits(q_min, q_min + span, v, a, j), dt
 
 
+_JERK_LIMITS = jerk_limits()
+
+
 def _targets(draw, lim, length):
-    kind = draw(st.sampled_from(["step", "spike", "chatter", "nan", "inf", "far", "noise"]))
+    kind = draw(_KIND)
     lo, hi = lim.q_min, lim.q_max
     span = hi - lo
-    seg = np.repeat((lo + span * draw(st.floats(-0.5, 1.5)))[None, :], length, axis=0)
+    seg = np.repeat((lo + span * draw(_LEVEL))[None, :], length, axis=0)
     if kind == "spike":
-        seg[draw(st.integers(0, length - 1))] = draw(
-            st.sampled_from([1e3, -1e300, 1.7e308, -1.7e308])
-        )
+        seg[draw(st.integers(0, length - 1))] = draw(_SPIKE)
     elif kind == "chatter":
-        seg += draw(st.floats(0, 2)) * span * (2 * (np.arange(length) % 2) - 1)[:, None]
+        seg += draw(_CHATTER) * span * (2 * (np.arange(length) % 2) - 1)[:, None]
     elif kind == "nan":
         seg[draw(st.integers(0, length - 1)) :] = np.nan
     elif kind == "inf":
         seg[::3] = np.inf
     elif kind == "far":
-        seg[:] = draw(st.sampled_from([-1e9, 1e9, 1.7e308, -1.7e308]))
+        seg[:] = draw(_FAR)
     elif kind == "noise":
-        rng = np.random.default_rng(draw(st.integers(0, 2**32 - 1)))
+        rng = np.random.default_rng(draw(_SEED))
         seg = lo + span * rng.uniform(-1, 2, (length, lim.n_actuators))
     return seg
 
 
 @st.composite
 def scenario(draw):
-    lim, dt = draw(jerk_limits())
+    lim, dt = draw(_JERK_LIMITS)
     jl = JerkLimiter(lim, dt)
     # an admissible start: either at rest anywhere in stroke, or a state the limiter itself
     # reached (reachable states are admissible by induction) after a random warm-up
-    frac = np.array([draw(st.floats(0, 1)) for _ in range(lim.n_actuators)])
+    frac = np.array([draw(_UNIT) for _ in range(lim.n_actuators)])
     q0 = lim.q_min + frac * (lim.q_max - lim.q_min)
     state = jl.initial_state(q0)
     hist = [q0, q0, q0]
     if draw(st.booleans()):
-        warm = _targets(draw, lim, draw(st.integers(1, 40)))
+        warm = _targets(draw, lim, draw(_WARM))
         out = jl.run(state, warm)
         hist = [*list(np.concatenate([np.stack(hist), out])[-3:])]
-    parts = [_targets(draw, lim, draw(st.integers(1, 50))) for _ in range(draw(st.integers(1, 4)))]
+    parts = [_targets(draw, lim, draw(_PART)) for _ in range(draw(_PARTS))]
     return jl, state, np.stack(hist), np.concatenate(parts)
 
 
@@ -190,17 +207,20 @@ def test_validation():
 def soft_jerk_limits(draw):
     """Limits whose braking never meets the +-v_max caps (a^2/(2j) + a dt <= v_max), as
     real cylinders: the braking simulation then also takes its closed-form staircase exit."""
-    lim, dt = draw(jerk_limits())
-    amax = np.array([draw(st.floats(0.5, 8.0)) for _ in range(lim.n_actuators)])
-    jmax = np.array([draw(st.floats(40.0, 1000.0)) for _ in range(lim.n_actuators)])
+    lim, dt = draw(_JERK_LIMITS)
+    amax = np.array([draw(_SOFT_A) for _ in range(lim.n_actuators)])
+    jmax = np.array([draw(_SOFT_J) for _ in range(lim.n_actuators)])
     vmax = np.maximum(lim.v_max, amax * amax / (2.0 * jmax) + amax * dt)
     return ActuatorLimits(lim.q_min, lim.q_max, vmax, amax, jmax), dt
+
+
+_ANY_LIMITS = st.one_of(jerk_limits(), soft_jerk_limits())
 
 
 @st.composite
 def braking_states(draw):
     """Limits, an axis and a velocity-level-admissible (v, a), with the simulated extent."""
-    lim, dt = draw(st.one_of(jerk_limits(), soft_jerk_limits()))
+    lim, dt = draw(_ANY_LIMITS)
     jl = JerkLimiter(lim, dt)
     i = draw(st.integers(0, lim.n_actuators - 1))
     vmax, amax, jmax = float(lim.v_max[i]), float(lim.a_max[i]), float(lim.j_max[i])
@@ -208,7 +228,7 @@ def braking_states(draw):
     v = draw(
         st.one_of(
             st.floats(-vmax, vmax),
-            st.floats(-1.0, 1.0).map(lambda f: f * a * a / (2.0 * jmax)),  # reversal zone
+            _REVERSAL.map(lambda f: f * a * a / (2.0 * jmax)),  # reversal zone
         )
     )
     vs, acc = [0.0] * lim.n_actuators, [0.0] * lim.n_actuators

@@ -40,7 +40,7 @@ def hexapod():
 def _bare(p):
     """The platform without its own [limits] (to test the controller rules alone)."""
     keys = ("n_actuators", "actuator_kinds", "actuator_names", "q_min", "q_max", "drives", "name")
-    return SimpleNamespace(**{k: getattr(p, k) for k in keys})
+    return SimpleNamespace(**{k: getattr(p, k) for k in keys}, v_max=None, a_max=None, j_max=None)
 
 
 def test_imax_speed_is_the_smallest_rpm_limit_times_the_lead(hexapod):
@@ -184,7 +184,8 @@ def test_missing_sources_and_axis_count_are_named(hexapod):
     with pytest.raises(ConfigError, match="max-accel"):
         ActuatorLimits.from_platform(_bare(hexapod), v_max=0.2)
     with pytest.raises(ConfigError, match="3 axes"):
-        ActuatorLimits.from_platform(hexapod, SimpleNamespace(kind="mbox", n_axes=3, parameters={}))
+        three = SimpleNamespace(kind="mbox", name="three", n_axes=3, parameters={})
+        ActuatorLimits.from_platform(hexapod, three)
 
 
 @pytest.mark.parametrize("name", ["stewart6-linear", "stewart6-rotary", "seat3", "seat2-yaw"])
@@ -289,7 +290,7 @@ def test_platform_carried_limits_take_part():
     fake = SimpleNamespace(
         **{k: getattr(p, k) for k in ("n_actuators", "actuator_kinds", "actuator_names",
                                        "q_min", "q_max", "drives", "name")},
-        v_max=np.array([0.1, 0.2, 0.3]), a_max=2.0,
+        v_max=np.array([0.1, 0.2, 0.3]), a_max=2.0, j_max=None,
     )  # fmt: skip
     lim = ActuatorLimits.from_platform(fake, v_max=0.15)
     np.testing.assert_allclose(lim.v_max, [0.1, 0.15, 0.15])

@@ -56,10 +56,10 @@ from __future__ import annotations
 
 import math
 import time
-from collections.abc import Callable, Iterable, Sequence
+from collections.abc import Callable, Iterable, Mapping, Sequence, Sized
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Protocol
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -511,6 +511,44 @@ def _pool_context() -> BaseContext:
     return ctx
 
 
+class _DaskFuture(Protocol):
+    """A value or a result held on the Dask cluster (``distributed.Future``)."""
+
+    def result(self) -> object: ...
+
+
+class _DaskClient(Protocol):
+    """What :class:`_Evaluator` uses of a ``distributed.Client`` (an optional package whose
+    methods are untyped): the workers, the objective scattered once, scores mapped and
+    gathered in order."""
+
+    def scheduler_info(self) -> Mapping[str, object]: ...
+
+    def wait_for_workers(self, n_workers: int, timeout: float | None = None) -> None: ...
+
+    def scatter(self, data: TuneObjective, *, broadcast: bool, hash: bool) -> _DaskFuture: ...
+
+    def map(
+        self,
+        func: Callable[[TuneObjective, NDArray[np.float64]], float],
+        objectives: Sequence[_DaskFuture],
+        points: Sequence[NDArray[np.float64]],
+        /,
+        *,
+        pure: bool,
+    ) -> Sequence[_DaskFuture]: ...
+
+    def gather(self, futures: Sequence[_DaskFuture]) -> list[float]: ...
+
+    def close(self) -> None: ...
+
+
+def _n_workers(client: _DaskClient) -> int:
+    """Workers the Dask scheduler knows of (its ``scheduler_info()["workers"]``)."""
+    workers = client.scheduler_info().get("workers", {})
+    return len(workers) if isinstance(workers, Sized) else 0
+
+
 class _Evaluator:
     """Map-like ``(func, xs) -> list`` for differential_evolution, counting evaluations.
 
@@ -525,8 +563,8 @@ class _Evaluator:
         self.where = "in-process"
         self._workers = workers
         self._pool: ProcessPoolExecutor | None = None
-        self._client: Any = None  # a dask.distributed Client (optional, untyped package)
-        self._future: Any = None  # its scattered copy of the objective
+        self._client: _DaskClient | None = None
+        self._future: _DaskFuture | None = None  # the scattered copy of the objective
         self._address = ""
         if scheduler is not None:
             self._start_dask(scheduler)
@@ -548,21 +586,22 @@ class _Evaluator:
             raise ConfigError(
                 "--scheduler needs the Dask distributed package: pip install 'motioncue[dask]'"
             ) from exc
+        connect: Callable[..., _DaskClient] = Client  # its methods are untyped: see _DaskClient
         try:
-            client = Client(scheduler, timeout=20, set_as_default=False)
+            client = connect(scheduler, timeout=20, set_as_default=False)
         except (OSError, TimeoutError, ValueError) as exc:
             msg = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
             raise ConfigError(f"cannot reach the Dask scheduler {scheduler}: {msg}") from exc
         self._client = client
         self._address = scheduler
-        n = len(client.scheduler_info().get("workers", {}))
+        n = _n_workers(client)
         if n == 0:
             try:
                 client.wait_for_workers(1, timeout=20)
             except (OSError, TimeoutError) as exc:
                 client.close()
                 raise ConfigError(f"the Dask scheduler {scheduler} has no workers") from exc
-            n = len(client.scheduler_info().get("workers", {}))
+            n = _n_workers(client)
         self._future = client.scatter(self.objective, broadcast=True, hash=False)
         self.where = f"Dask scheduler {scheduler} ({n} workers)"
 
@@ -571,7 +610,7 @@ class _Evaluator:
     ) -> list[float]:
         points = [np.asarray(x, dtype=float) for x in xs]
         self.evaluations += len(points)
-        if self._client is not None:
+        if self._client is not None and self._future is not None:  # both, or neither
             from distributed import KilledWorker
 
             futures = self._client.map(

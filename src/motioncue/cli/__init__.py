@@ -149,6 +149,7 @@ def build_parser(verb: str | None = None) -> _Parser:
     parser.add_argument("--version", action="version", version=f"motioncue {__version__}")
     # the verb's name under its own key: a verb's positional arguments cannot overwrite it
     sub = parser.add_subparsers(dest="_verb_name", metavar="VERB")
+    parser.set_defaults(run=None)  # no verb given: each verb's parser sets its own run
     only = _VERB_MODULE.get(verb or "")
     for name in _VERB_MODULES if only is None else (only,):
         module = importlib.import_module(f"{__name__}.{name}")
@@ -171,16 +172,16 @@ def main(argv: Sequence[str] | None = None) -> int:
     args, extras = parser.parse_known_args(words)
     if extras:
         # words no parser took: refused by the verb's parser, in the verb's error form
-        verb_parser = _verb_parsers(parser).get(getattr(args, "_verb_name", None) or "")
+        verb_parser = _verb_parsers(parser).get(args._verb_name or "")
         if isinstance(verb_parser, _Parser):
             verb_parser.unknown_options(extras)
         parser.unknown_options(extras)
-    run = getattr(args, "run", None)
+    run = args.run
     if run is None:
         parser.print_help()
         return 2
     verb = args._verb_name
-    from .._atomic import interrupt_on_stop_signals
+    from .._atomic import Interrupted, interrupt_on_stop_signals
 
     try:
         # before any output is opened: SIGTERM, SIGHUP and SIGQUIT interrupt like Ctrl-C, so
@@ -192,7 +193,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         print(one_line(f"motioncue {verb}: error: {exc}"), file=sys.stderr)
         return 2
     except KeyboardInterrupt as exc:
-        by = getattr(exc, "signal_name", None)
+        by = exc.signal_name if isinstance(exc, Interrupted) else None
         try:
             print(f"motioncue {verb}: interrupted{f' by {by}' if by else ''}", file=sys.stderr)
         except OSError:  # the terminal is gone (SIGHUP)

@@ -249,12 +249,12 @@ SPEED = Option.of("--speed", type=float, help="pacing factor")
 
 def limit_overrides(args: argparse.Namespace) -> dict[str, float | None]:
     """The keyword arguments of ``ActuatorLimits.from_platform`` set by
-    :data:`LIMITS`."""
+    :data:`LIMITS` (which every verb that calls it declares: each is None when not given)."""
     return {
-        "stroke_margin": getattr(args, "stroke_margin", None),
-        "v_max": getattr(args, "max_speed", None),
-        "a_max": getattr(args, "max_accel", None),
-        "j_max": getattr(args, "max_jerk", None),
+        "stroke_margin": args.stroke_margin,
+        "v_max": args.max_speed,
+        "a_max": args.max_accel,
+        "j_max": args.max_jerk,
     }
 
 

@@ -17,7 +17,7 @@ import time
 from collections.abc import Sequence
 from pathlib import Path
 from types import FrameType
-from typing import TYPE_CHECKING, Any, TextIO
+from typing import TYPE_CHECKING, TextIO
 
 from .._atomic import StopSignalRecorder
 from .._errors import ConfigError, ProtocolError
@@ -35,6 +35,7 @@ from ._verb import Option, Verb, registrar
 
 if TYPE_CHECKING:
     from ..output import Controller, ControllerKind, Emulator, Trace, Violation
+    from ..viewer import Monitor
 
 __all__ = ["register"]
 
@@ -180,7 +181,7 @@ def _write_trace(
         )
 
 
-def _emulator_monitor(args: argparse.Namespace, ctrl: Controller, emu: Emulator) -> Any:
+def _emulator_monitor(args: argparse.Namespace, ctrl: Controller, emu: Emulator) -> Monitor | None:
     """The live page of ``emulate --monitor``: what the emulated controller plays."""
     from ..kinematics import load_platform
     from ..trajectory import ActuatorLimits

@@ -34,6 +34,7 @@ def run(args: argparse.Namespace) -> int:
     import numpy as np
 
     from ..cueing import evaluate_cueing, get_model_set, make_cueing
+    from ..pipeline._chain import run_cueing
     from ..pipeline._inputs import load_generate_input
     from ..telemetry._motion import is_datagram_recording
     from ..telemetry._recording import read_recording_csv, resample
@@ -55,7 +56,8 @@ def run(args: argparse.Namespace) -> int:
         raise ConfigError(f"{args.input}: no samples")
     uniform = resample(rec, rate_hz)
     design = make_cueing(params, rate_hz)
-    res = design.run(uniform.f, uniform.w)
+    cued = run_cueing(design, uniform.f, uniform.w)  # with the input as the algorithm used it
+    res = cued.result
     out = Path(args.out)
     table = np.column_stack([uniform.t_s, res.poses])
     try:
@@ -65,12 +67,9 @@ def run(args: argparse.Namespace) -> int:
                 fh.write(",".join(repr(v) for v in row) + "\n")
     except OSError as exc:
         raise ConfigError(f"{out}: cannot write: {exc}") from exc
-    # the input as the algorithm used it (bad samples held) when it reports it
-    f_used = getattr(res, "f_used", uniform.f)
-    w_used = getattr(res, "w_used", uniform.w)
     ev = evaluate_cueing(
-        f_used,
-        w_used,
+        cued.f_used,
+        cued.w_used,
         res.poses,
         rate_hz,
         workspace=params.workspace,

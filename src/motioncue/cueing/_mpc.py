@@ -92,6 +92,7 @@ from ._params import GRAVITY_M_S2, CueingParams
 from ._vestibular import DEFAULT_MODEL_SET, get_model_set
 
 if TYPE_CHECKING:
+    from ..kinematics import Platform
     from ._algorithm import Rig
 
 __all__ = [
@@ -100,6 +101,7 @@ __all__ = [
     "MpcCueing",
     "MpcResult",
     "MpcState",
+    "PlanCueing",
     "QpData",
     "SoftGuardQp",
     "SoftRows",
@@ -111,7 +113,6 @@ __all__ = [
     "input_bounds",
     "input_responses",
     "octagon_bound",
-    "plan_setup",
     "plan_tilt_reach",
     "pose_sum",
     "reference",
@@ -574,7 +575,7 @@ class RigLimits:
         Largest roll/pitch rate (rad/s) and acceleration (rad/s^2; inf = none).
     """
 
-    platform: Any
+    platform: Platform
     q_mid: NDArray[np.float64]
     q_half: NDArray[np.float64]
     v_max: NDArray[np.float64]
@@ -643,17 +644,51 @@ def fallback_cap(m: LinearModel, lim: RigLimits) -> NDArray[np.float64]:
     return np.asarray(cap)
 
 
-def plan_setup(
-    params: CueingParams, fs_hz: float, rig: Rig | None
-) -> tuple[ClassicalWashout, MpcParams, RigLimits]:
-    """What a plan of ``params`` (an ``[mpc]`` table, default :class:`MpcParams`) reads
-    first: its classical fallback washout at ``fs_hz`` (which validates ``fs_hz``), its MPC
-    parameters with the reference limits of :func:`resolve_reach`, and the limits of
-    :func:`rig_limits` on ``rig``."""
-    classical = ClassicalWashout(params, fs_hz)
-    mp = params.mpc if params.mpc is not None else MpcParams()
-    limits = rig_limits(params, mp, classical.fs_hz, rig)
-    return classical, resolve_reach(mp, limits), limits
+@dataclass(frozen=True, eq=False)
+class PlanCueing:
+    """What the two plans of a preset's ``[mpc]`` table (:class:`MpcCueing`, live, and
+    ``OptimalCueing``, ride files) are made of and read first.
+
+    Parameters
+    ----------
+    params : CueingParams
+        The preset; ``params.mpc`` (default :class:`MpcParams` when absent) is the plan's
+        table, its classical tables the fallback washout.
+    fs_hz : float
+        Sample rate (Hz); validated (and stored as) the fallback washout's.
+    rig : Rig, optional
+        The rig whose limits the plan keeps (:func:`rig_limits`).
+
+    Attributes
+    ----------
+    mpc : MpcParams
+        The ``[mpc]`` table with the reference limits of :func:`resolve_reach`.
+    classical : ClassicalWashout
+        The fallback washout at ``fs_hz``.
+    model : LinearModel
+        The plan's error model (each plan builds its own).
+    limits : RigLimits
+        The limits of :func:`rig_limits` on ``rig``.
+    """
+
+    params: CueingParams
+    fs_hz: float
+    rig: Rig | None = None
+    mpc: MpcParams = field(init=False)
+    classical: ClassicalWashout = field(init=False)
+    model: LinearModel = field(init=False)
+    limits: RigLimits = field(init=False)
+
+    def _set_up_plan(self) -> None:
+        """Set ``fs_hz``, ``classical``, ``mpc`` and ``limits`` (see the class docstring);
+        the first thing a plan's ``__post_init__`` does (``model`` is the plan's own)."""
+        classical = ClassicalWashout(self.params, self.fs_hz)
+        mp = self.params.mpc if self.params.mpc is not None else MpcParams()
+        limits = rig_limits(self.params, mp, classical.fs_hz, self.rig)
+        object.__setattr__(self, "fs_hz", classical.fs_hz)
+        object.__setattr__(self, "classical", classical)
+        object.__setattr__(self, "mpc", resolve_reach(mp, limits))
+        object.__setattr__(self, "limits", limits)
 
 
 def tilt_axes(dofs: Sequence[bool]) -> list[int]:
@@ -871,7 +906,7 @@ QpOutcome = tuple[bool, NDArray[np.float64], NDArray[np.float64], NDArray[np.flo
 non-finite numbers; the multipliers of the rows and of the variable bounds (casadi's sign
 convention: positive at an upper bound, negative at a lower one)."""
 
-Warm = tuple[Any, Any, Any]
+Warm = tuple[NDArray[np.float64] | None, NDArray[np.float64] | None, NDArray[np.float64] | None]
 """``(u, lam_a, lam_x)`` of a previous solve of the same sizes (a warm start)."""
 
 
@@ -1131,7 +1166,7 @@ class _QpParts:
 
 
 @dataclass(frozen=True, eq=False)
-class MpcCueing:
+class MpcCueing(PlanCueing):
     """Model-predictive cueing of a preset with an ``[mpc]`` table, at ``fs_hz``.
 
     Parameters
@@ -1143,24 +1178,15 @@ class MpcCueing:
         Sample rate (Hz).
     """
 
-    params: CueingParams
-    fs_hz: float
-    rig: Rig | None = None
-    mpc: MpcParams = field(init=False)
-    classical: ClassicalWashout = field(init=False)
-    model: LinearModel = field(init=False)
     cond: Condensed = field(init=False)
-    limits: RigLimits = field(init=False)
     _qp: QpSolver | DaqpQp = field(init=False, repr=False)
     _qp_guard: SoftGuardQp | None = field(init=False, repr=False)
     _prior_g: NDArray[np.float64] | None = field(init=False, repr=False)
 
     def __post_init__(self) -> None:
-        classical, mp, limits = plan_setup(self.params, self.fs_hz, self.rig)
-        fs = classical.fs_hz
-        object.__setattr__(self, "fs_hz", fs)
-        object.__setattr__(self, "mpc", mp)
-        object.__setattr__(self, "classical", classical)
+        self._set_up_plan()
+        fs = self.fs_hz
+        mp = self.mpc
         prior = np.asarray(mp.w_prior)
         if np.any(prior > 0.0):  # w_pose |p|^2 + wc |p - c|^2: the quadratic part of both
             wp = [float(v) for v in np.asarray(mp.w_pose) + prior]
@@ -1180,7 +1206,6 @@ class MpcCueing:
         object.__setattr__(
             self, "_prior_g", -2.0 * pose_sum(model, ends) * prior if np.any(prior > 0.0) else None
         )
-        object.__setattr__(self, "limits", limits)
         object.__setattr__(self, "_qp", qp_solver(mp.solver, cond.hess, self.n_rows))
         guard = self._guard_channels()
         n_soft = len(guard) + int(self._fz_guarded())
@@ -1204,7 +1229,7 @@ class MpcCueing:
     def n_rows(self) -> int:
         """Constraint rows of the QP (stroke, speed, acceleration of each leg per block, the
         tilt rate, and the combined tilt with ``tilt_fz_use``)."""
-        nl = self.limits.q_mid.shape[0]
+        nl = len(self.limits.q_mid)
         per_block = 3 * nl + len(self._tilt_axes()) + 4 * self._combined_tilt()
         return len(self.cond.ends) * (per_block + len(self._trans_boxed()))
 

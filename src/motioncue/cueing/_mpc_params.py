@@ -63,10 +63,14 @@ measured in perception thresholds, like :func:`~._vestibular.perceived_motion_er
 from __future__ import annotations
 
 import math
+from collections.abc import Iterable
 from dataclasses import dataclass
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from .._errors import ConfigError
+
+if TYPE_CHECKING:
+    from .._config import ConfigReader
 
 __all__ = ["MPC_SOLVERS", "MpcParams", "read_mpc_table"]
 
@@ -76,7 +80,7 @@ MPC_SOLVERS: tuple[str, ...] = ("daqp", "qpoases", "osqp", "proxqp")
 """QP solvers (casadi conic plugins) the MPC accepts; ``daqp`` is the measured default."""
 
 
-def _vec6(name: str, v: Any, lo: float, hi: float) -> Vec6:
+def _vec6(name: str, v: Iterable[float], lo: float, hi: float) -> Vec6:
     t = tuple(float(x) for x in v)
     if len(t) != 6 or not all(math.isfinite(x) and lo <= x <= hi for x in t):
         raise ConfigError(
@@ -341,11 +345,11 @@ class MpcParams:
                 raise ConfigError(f"MpcParams.{name} = {getattr(self, name)!r}; a name or path")
 
 
-def read_mpc_table(table: Any) -> MpcParams:
+def read_mpc_table(table: ConfigReader) -> MpcParams:
     """:class:`MpcParams` from the preset's ``[mpc]`` table (a ``ConfigReader``); unknown keys
     are rejected, missing ones take the defaults of :class:`MpcParams`."""
     d = MpcParams()
-    vals: dict[str, Any] = {}
+    vals: dict[str, Any] = {}  # MpcParams' keyword arguments by name, of several types
     for name in ("platform", "controller"):
         vals[name] = table.string(name, getattr(d, name))
     vals["solver"] = table.string("solver", d.solver, choices=MPC_SOLVERS)

@@ -52,23 +52,21 @@ from __future__ import annotations
 import math
 from collections.abc import MutableSequence, Sequence
 from dataclasses import dataclass, field, replace
-from typing import TYPE_CHECKING, ClassVar
+from typing import ClassVar
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from .._errors import ConfigError
-from ._classical import ClassicalWashout
 from ._mpc import (
     TILT_OCTAGON,
     DaqpQp,
-    LinearModel,
     MpcResult,
     MpcState,
+    PlanCueing,
     QpData,
     QpOutcome,
     QpSolver,
-    RigLimits,
     SoftGuardQp,
     SoftRows,
     accel_rows,
@@ -78,7 +76,6 @@ from ._mpc import (
     input_bounds,
     input_responses,
     octagon_bound,
-    plan_setup,
     qp_solver,
     recording_arrays,
     reference,
@@ -89,11 +86,7 @@ from ._mpc import (
     tilt_axes,
     tilt_fz_bound,
 )
-from ._mpc_params import MpcParams
-from ._params import GRAVITY_M_S2, CueingParams
-
-if TYPE_CHECKING:
-    from ._algorithm import Rig
+from ._params import GRAVITY_M_S2
 
 __all__ = ["OptimalCueing", "OptimalResult"]
 
@@ -174,7 +167,7 @@ class WorkingSetQp:
         whole = QpData(qp.g, a_all, lo_all, hi_all, qp.lbx, qp.ubx)  # hard and soft rows
         soft = np.zeros(a_all.shape[0], dtype=bool)
         soft[qp.a.shape[0] :] = True
-        live = np.isfinite(lo_all) | np.isfinite(hi_all)
+        live: NDArray[np.bool_] = np.isfinite(lo_all) | np.isfinite(hi_all)
         tol_lo = self.tol * (1.0 + np.abs(np.where(np.isfinite(lo_all), lo_all, 0.0)))
         tol_hi = self.tol * (1.0 + np.abs(np.where(np.isfinite(hi_all), hi_all, 0.0)))
 
@@ -276,7 +269,7 @@ class OptimalResult(MpcResult):
 
 
 @dataclass(frozen=True, eq=False)
-class OptimalCueing:
+class OptimalCueing(PlanCueing):
     """Whole-ride optimal cueing of a preset with an ``[mpc]`` table at ``fs_hz`` (offline).
 
     Parameters
@@ -290,13 +283,6 @@ class OptimalCueing:
     offline: ClassVar[bool] = True
     """Needs the whole recording: the live bridge refuses it."""
 
-    params: CueingParams
-    fs_hz: float
-    rig: Rig | None = None
-    mpc: MpcParams = field(init=False)
-    classical: ClassicalWashout = field(init=False)
-    model: LinearModel = field(init=False)
-    limits: RigLimits = field(init=False)
     n_window: int = field(init=False)
     n_stride: int = field(init=False)
     _gam: NDArray[np.float64] = field(init=False, repr=False)
@@ -311,17 +297,13 @@ class OptimalCueing:
     _fz_free: NDArray[np.float64] | None = field(init=False, repr=False)
 
     def __post_init__(self) -> None:
-        classical, mp, limits = plan_setup(self.params, self.fs_hz, self.rig)
-        fs = classical.fs_hz
-        object.__setattr__(self, "fs_hz", fs)
+        self._set_up_plan()
+        fs = self.fs_hz
+        mp = self.mpc
         bs = mp.block_samples
         n_stride = max(bs, round(mp.stride_s * fs / bs) * bs)
         n_window = max(n_stride + bs, round(mp.window_s * fs / bs) * bs)
-        model = build_model(self.params.dofs, mp, fs)
-        object.__setattr__(self, "mpc", mp)
-        object.__setattr__(self, "classical", classical)
-        object.__setattr__(self, "model", model)
-        object.__setattr__(self, "limits", limits)
+        object.__setattr__(self, "model", build_model(self.params.dofs, mp, fs))
         object.__setattr__(self, "n_window", n_window)
         object.__setattr__(self, "n_stride", n_stride)
         self._condense()

@@ -18,7 +18,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any, Protocol, runtime_checkable
 
 import numpy as np
@@ -54,7 +54,7 @@ def _axis_array(name: str, value: npt.ArrayLike | None, n: int, fill: float) -> 
     return readonly(arr)
 
 
-@dataclass(frozen=True, eq=False)
+@dataclass(frozen=True, eq=False, init=False)  # its own __init__: array-likes in, arrays kept
 class PulseLimits:
     """Per-axis limits implied by a controller's parameters, on the controller's own clock.
 
@@ -75,18 +75,27 @@ class PulseLimits:
     """
 
     n_axes: int
-    stroke_lo: Any = None
-    stroke_hi: Any = None
-    max_speed_pulses_s: Any = None
-    max_accel_pulses_s2: Any = None
-    sources: Mapping[str, str] = field(default_factory=dict)
+    stroke_lo: npt.NDArray[np.float64]
+    stroke_hi: npt.NDArray[np.float64]
+    max_speed_pulses_s: npt.NDArray[np.float64]
+    max_accel_pulses_s2: npt.NDArray[np.float64]
+    sources: Mapping[str, str]
 
-    def __post_init__(self) -> None:
-        n = int(self.n_axes)
-        lo = _axis_array("stroke_lo", self.stroke_lo, n, -math.inf)
-        hi = _axis_array("stroke_hi", self.stroke_hi, n, math.inf)
-        v = _axis_array("max_speed_pulses_s", self.max_speed_pulses_s, n, math.inf)
-        a = _axis_array("max_accel_pulses_s2", self.max_accel_pulses_s2, n, math.inf)
+    def __init__(
+        self,
+        n_axes: int,
+        stroke_lo: npt.ArrayLike | None = None,
+        stroke_hi: npt.ArrayLike | None = None,
+        max_speed_pulses_s: npt.ArrayLike | None = None,
+        max_accel_pulses_s2: npt.ArrayLike | None = None,
+        sources: Mapping[str, str] | None = None,
+    ) -> None:
+        """Each limit: one number or ``n_axes`` (None: none); stored as read-only arrays."""
+        n = int(n_axes)
+        lo = _axis_array("stroke_lo", stroke_lo, n, -math.inf)
+        hi = _axis_array("stroke_hi", stroke_hi, n, math.inf)
+        v = _axis_array("max_speed_pulses_s", max_speed_pulses_s, n, math.inf)
+        a = _axis_array("max_accel_pulses_s2", max_accel_pulses_s2, n, math.inf)
         if np.any(lo >= hi):
             raise ConfigError(f"stroke [{lo.tolist()}, {hi.tolist()}] pulses: need lo < hi")
         for name, arr in (("max_speed_pulses_s", v), ("max_accel_pulses_s2", a)):
@@ -94,11 +103,12 @@ class PulseLimits:
                 raise ConfigError(f"{name} = {arr.tolist()} is invalid; allowed: > 0 (inf: none)")
         set_fields(
             self,
+            n_axes=n_axes,
             stroke_lo=lo,
             stroke_hi=hi,
             max_speed_pulses_s=v,
             max_accel_pulses_s2=a,
-            sources=dict(self.sources),
+            sources={} if sources is None else dict(sources),
         )
 
     @property

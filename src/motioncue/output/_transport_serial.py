@@ -8,7 +8,7 @@ raised ``from`` the cause.
 
 from __future__ import annotations
 
-from typing import Any
+from typing import Any, Protocol
 
 from .._errors import ConfigError, TransportError
 from ._transport import Transport, TransportURL, parse_target
@@ -16,6 +16,23 @@ from ._transport import Transport, TransportURL, parse_target
 __all__ = ["SerialTransport", "open_serial"]
 
 _PARITY = {"N": "N", "E": "E", "O": "O"}
+
+
+class _SerialPort(Protocol):
+    """What :class:`SerialTransport` uses of a ``serial.Serial`` (pyserial has no types)."""
+
+    timeout: float | None
+
+    @property
+    def in_waiting(self) -> int: ...
+
+    def write(self, data: bytes, /) -> int | None: ...
+
+    def flush(self) -> None: ...
+
+    def read(self, size: int = 1, /) -> bytes: ...
+
+    def close(self) -> None: ...
 
 
 class SerialTransport(Transport):
@@ -43,7 +60,7 @@ class SerialTransport(Transport):
         self.bytes_sent = 0
         self.bytes_received = 0
         try:
-            self._port: Any = serial.Serial(
+            self._port: _SerialPort = serial.Serial(
                 port=path,
                 baudrate=baud,
                 bytesize=bytesize,

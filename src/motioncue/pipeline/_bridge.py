@@ -77,7 +77,7 @@ import threading
 import time
 from collections.abc import Mapping
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING, Literal, Protocol
+from typing import TYPE_CHECKING, Literal, Protocol, runtime_checkable
 
 import numpy as np
 
@@ -91,11 +91,12 @@ from ._stream import OutputStage
 if TYPE_CHECKING:
     from numpy.typing import ArrayLike
 
-    from ..cueing import CueingParams
+    from ..cueing import CueingParams, CueingState
     from ..kinematics import Platform
     from ..output import Controller, Transport
     from ..telemetry import TelemetrySample
     from ..trajectory import ActuatorLimits
+    from ._arrival import ArrivalOutputStage
 
 __all__ = [
     "CLAMP_WARN_FRACTION",
@@ -103,6 +104,8 @@ __all__ = [
     "Bridge",
     "BridgeConfig",
     "BridgeStats",
+    "FinishingInput",
+    "ReportsCueingStats",
     "TelemetryInput",
 ]
 
@@ -118,16 +121,37 @@ class TelemetryInput(Protocol):
 
     ``latest()`` returns the newest :class:`~motioncue.telemetry.TelemetrySample` (or None)
     without blocking; ``stats`` maps outcome reasons (``"skipped: truncated"``...) and the
-    counters ``datagrams``, ``samples``, ``receive errors`` to counts. An optional boolean
-    property ``finished`` (the telemetry sources have it: False for live receivers, True at
-    the end of a replayed file) tells the bridge that nothing more will come: it then fades
-    out, parks and ends as on :meth:`Bridge.stop`. A source without it never finishes.
+    counters ``datagrams``, ``samples``, ``receive errors`` to counts. A source that can end
+    also has :class:`FinishingInput`'s ``finished``; one without it never finishes.
     """
 
     def latest(self) -> TelemetrySample | None: ...
 
     @property
     def stats(self) -> Mapping[str, int]: ...
+
+
+@runtime_checkable
+class FinishingInput(Protocol):
+    """The optional capability of a :class:`TelemetryInput` that can end.
+
+    ``finished`` (the telemetry sources have it: False for live receivers, True at the end
+    of a replayed file) tells the bridge that nothing more will come: it then fades out,
+    parks and ends as on :meth:`Bridge.stop`. The bridge looks for it once, when it is
+    made.
+    """
+
+    @property
+    def finished(self) -> bool: ...
+
+
+@runtime_checkable
+class ReportsCueingStats(Protocol):
+    """The optional capability of a cueing design that reports on its run (MPC: solve times,
+    fallbacks): ``stats(state)``, names to numbers, copied into :attr:`BridgeStats.cueing`.
+    """
+
+    def stats(self, state: CueingState) -> Mapping[str, float]: ...
 
 
 @dataclass(frozen=True)
@@ -527,6 +551,7 @@ class Bridge:
         self.platform = platform
         self.controller = controller
         self.source = source
+        self._finishing = source if isinstance(source, FinishingInput) else None
         self.transport = transport
         self.limits = limits
         self.config = BridgeConfig() if config is None else config
@@ -561,13 +586,16 @@ class Bridge:
         self.effects_state = EffectsState()
         self.gate = CueGate(cfg.gate)
         # built here so that configuration errors surface before start()
+        # (the arrival stage also kept as its own type: its emit takes the ticks)
+        self._arrival_stage: ArrivalOutputStage | None = None
         if self._arrival:
             from ._arrival import ArrivalOutputStage
 
-            self.stage: OutputStage = ArrivalOutputStage(
+            self._arrival_stage = ArrivalOutputStage(
                 platform, controller, limits, cfg.rate_hz, transport, q_start=q_start,
                 min_interval_ms=cfg.min_interval_ms,
             )  # fmt: skip
+            self.stage: OutputStage = self._arrival_stage
         else:
             self.stage = OutputStage(
                 platform, controller, limits, cfg.rate_hz, transport, q_start=q_start
@@ -678,11 +706,12 @@ class Bridge:
 
     @property
     def source_finished(self) -> bool:
-        """True once the telemetry source reports ``finished`` (end of a replay).
+        """True once the telemetry source reports ``finished`` (end of a replay; a source
+        without :class:`FinishingInput`'s ``finished`` never finishes).
 
         The loop then fades out, parks and ends by itself, as after :meth:`stop`.
         """
-        return getattr(self.source, "finished", False) is True
+        return self._finishing is not None and self._finishing.finished is True
 
     def __enter__(self) -> Bridge:
         return self.start()
@@ -887,6 +916,7 @@ class Bridge:
         else:
             gain = gate.update(now, held.t_s, held.paused or stopping)
         stage = self.stage
+        arrival = self._arrival_stage
         if gate.parked:
             if not self._clean:
                 wstate = self.cueing_state
@@ -895,8 +925,8 @@ class Bridge:
                 if self.effects is not None:
                     self.effects.reset(self.effects_state)
                 self._clean = True
-            if self._arrival:
-                stage.emit(self.platform.q_park, ticks=ticks)  # type: ignore[call-arg]
+            if arrival is not None:
+                arrival.emit(self.platform.q_park, ticks=ticks)
             else:
                 stage.park_step()
         else:
@@ -955,8 +985,8 @@ class Bridge:
                     self._pose_invalid += 1
                 else:
                     self._pose_clamped += 1
-            if self._arrival:
-                stage.emit(res.q, ticks=ticks)  # type: ignore[call-arg]
+            if arrival is not None:
+                arrival.emit(res.q, ticks=ticks)
             else:
                 stage.emit(res.q)
         done = time.perf_counter()
@@ -1057,11 +1087,12 @@ class Bridge:
         )
 
     def _cueing_stats(self) -> dict[str, float]:
-        """The cueing algorithm's ``stats(state)`` (MPC solve times, fallbacks), if it has it."""
-        fn = getattr(self.cueing, "stats", None)
-        if not callable(fn):
+        """The cueing algorithm's ``stats(state)`` (MPC solve times, fallbacks), if it has it
+        (:class:`ReportsCueingStats`)."""
+        design = self.cueing
+        if not isinstance(design, ReportsCueingStats):
             return {}
         try:
-            return {str(k): float(v) for k, v in dict(fn(self.cueing_state)).items()}
+            return {str(k): float(v) for k, v in dict(design.stats(self.cueing_state)).items()}
         except Exception as exc:  # a plug-in's report must not stop the bridge
             return {f"stats unavailable: {type(exc).__name__}": 1.0}

@@ -21,7 +21,7 @@ casadi optimisation replaces the real-time limiter), ``compare`` and ``omct`` (b
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Protocol
+from typing import TYPE_CHECKING, Protocol, runtime_checkable
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -37,6 +37,7 @@ __all__ = [
     "ChainRun",
     "Cued",
     "Delivered",
+    "ReportsUsedInput",
     "RunsRecordings",
     "deliver",
     "offline_chain",
@@ -49,6 +50,26 @@ class RunsRecordings(Protocol):
 
     def run(self, f: ArrayLike, w: ArrayLike) -> CueingResult:
         """Poses (N, 6) for ``f``, ``w`` (N, 3) at the design's rate."""
+        ...
+
+
+@runtime_checkable
+class ReportsUsedInput(Protocol):
+    """A run's result that also gives the input as the algorithm used it (bad samples held).
+
+    An optional capability of a :class:`~motioncue.cueing.CueingResult` (the bundled
+    algorithms have it; a plug-in's result need not): :func:`run_cueing` takes the given
+    input for a result without it.
+    """
+
+    @property
+    def f_used(self) -> NDArray[np.float64]:
+        """(N, 3) specific force as used (m/s^2)."""
+        ...
+
+    @property
+    def w_used(self) -> NDArray[np.float64]:
+        """(N, 3) angular velocity as used (rad/s)."""
         ...
 
 
@@ -116,8 +137,12 @@ def run_cueing(design: RunsRecordings, f: ArrayLike, w: ArrayLike) -> Cued:
     """The cueing stage: ``design.run(f, w)`` and the input it used."""
     res = design.run(f, w)
     # an algorithm may hold bad input samples; the evaluation compares against what it used
-    f_used = np.asarray(getattr(res, "f_used", f), dtype=float)
-    w_used = np.asarray(getattr(res, "w_used", w), dtype=float)
+    if isinstance(res, ReportsUsedInput):
+        f_used = np.asarray(res.f_used, dtype=float)
+        w_used = np.asarray(res.w_used, dtype=float)
+    else:
+        f_used = np.asarray(f, dtype=float)
+        w_used = np.asarray(w, dtype=float)
     return Cued(res, np.asarray(res.poses, dtype=float), f_used, w_used, int(res.bad_samples))
 
 

@@ -80,7 +80,11 @@ SHIFT_PULSE_S = 0.08
 
 
 class EffectSample(Protocol):
-    """What the layer reads from a :class:`~motioncue.telemetry.TelemetrySample`."""
+    """What the layer reads from a :class:`~motioncue.telemetry.TelemetrySample`.
+
+    Every member is required: a sample has them all, NaN or None where the game does not
+    send the channel (the sample's defaults), which the layer reads as "no such channel".
+    """
 
     @property
     def rpm(self) -> float: ...
@@ -164,9 +168,9 @@ class Effects:
         g = self.gains
         z = roll = pitch = 0.0
         # engine
-        rpm = getattr(sample, "rpm", math.nan)
+        rpm = sample.rpm
         if g.engine > 0.0 and math.isfinite(rpm) and rpm > 0.0:
-            rpm_max = getattr(sample, "rpm_max", math.nan)
+            rpm_max = sample.rpm_max
             top = rpm_max if math.isfinite(rpm_max) and rpm_max > 0.0 else ENGINE_RPM_DEFAULT_MAX
             load = min(rpm / top, 1.0)
             hz = min(max(rpm / 30.0, ENGINE_MIN_HZ), 0.4 * self.rate_hz)
@@ -177,7 +181,7 @@ class Effects:
         elif g.engine > 0.0 and not math.isnan(rpm):
             state.bad_channels += 1
         # road texture and kerbs
-        sv = getattr(sample, "suspension_velocity_m_s", None)
+        sv = sample.suspension_velocity_m_s
         road = state.road
         if g.road > 0.0:
             target = (0.0, 0.0, 0.0)
@@ -201,7 +205,7 @@ class Effects:
             roll += road[1]
             pitch += road[2]
         # gear change
-        gear = getattr(sample, "gear", None)
+        gear = sample.gear
         if g.shift > 0.0:
             last = state.last_gear
             if isinstance(gear, int) and isinstance(last, int) and gear != last:

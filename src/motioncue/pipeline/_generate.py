@@ -11,7 +11,7 @@ from __future__ import annotations
 import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, NotRequired, TypedDict
 
 import numpy as np
 
@@ -40,6 +40,7 @@ __all__ = [
     "RAMP_ACCEL",
     "RAMP_SPEED",
     "GenerateReport",
+    "JoinEntry",
     "Progress",
     "generate_ride",
     "pulse_rounding_limits",
@@ -72,6 +73,30 @@ seated rider's head (:data:`JOIN_HEAD_M`) with the surge perception threshold.""
 
 Progress = Callable[[str, float], None]
 """``progress(stage_description, fraction_done)``."""
+
+
+class JoinEntry(TypedDict):
+    """How the cue met one ramp (:attr:`GenerateReport.joins`, ``ride.notes["joins"]``).
+
+    Attributes
+    ----------
+    end : str
+        ``"start"`` or ``"end"`` of the cue.
+    kind : str
+        ``"at rest"``, ``"from motion"`` or ``"stop then ramp"``.
+    duration_s : float
+        The join's length (s).
+    shortened : str
+        Why the workspace made it faster than its acceleration target; empty when it did not.
+    limits : str, optional
+        ``"ramp"`` or ``"full"``: the limits a join from motion kept (that kind only).
+    """
+
+    end: str
+    kind: str
+    duration_s: float
+    shortened: str
+    limits: NotRequired[str]
 
 
 @dataclass(frozen=True, eq=False)
@@ -109,7 +134,7 @@ class GenerateReport:
     transition_fallbacks : tuple of str
         One sentence per ramp that could not follow its time-optimal pose path and moved in a
         straight line in actuator space instead.
-    joins : tuple of dict
+    joins : tuple of JoinEntry
         How the cue met each ramp (``"end"``: ``"start"`` or ``"end"``; ``"kind"``: ``"at
         rest"``, ``"from motion"`` (one move between the moving cue and park, see
         :func:`_ramp`) or ``"stop then ramp"`` (the fallback: :func:`_join_to_rest`, then
@@ -132,7 +157,7 @@ class GenerateReport:
     frame_check: FrameCheck
     stage_s: dict[str, float] = field(default_factory=dict)
     transition_fallbacks: tuple[str, ...] = ()
-    joins: tuple[dict[str, Any], ...] = ()
+    joins: tuple[JoinEntry, ...] = ()
 
 
 def _finish(
@@ -202,7 +227,7 @@ def _end_velocity(poses: np.ndarray, dt: float) -> np.ndarray:
     through the last three; a rotation rate whose step in one frame swings the head
     (:data:`JOIN_HEAD_M`) by less than the threshold counts as rest (zero)."""
     p2, p1, p0 = poses[-3], poses[-2], poses[-1]
-    vel = (3.0 * p0 - 4.0 * p1 + p2) / (2.0 * dt)
+    vel: np.ndarray = (3.0 * p0 - 4.0 * p1 + p2) / (2.0 * dt)
     swing = np.abs(vel[3:]) * JOIN_HEAD_M / dt > JOIN_ACCEL_M_S2[0]
     vel[3:] = np.where(swing, vel[3:], 0.0)
     return vel
@@ -215,7 +240,7 @@ def _ramp(
     tight: ActuatorLimits,
     gentle: ActuatorLimits,
     rate_hz: float,
-) -> tuple[Transition, dict[str, Any], np.ndarray]:
+) -> tuple[Transition, JoinEntry, np.ndarray]:
     """The move between park and the cue's ``end`` (``"start"`` or ``"end"``), its
     :attr:`GenerateReport.joins` entry, and the fallback join segment (empty unless used;
     frames between the cue and the ramp, in ride order).
@@ -238,7 +263,7 @@ def _ramp(
     if not at_end:
         vel = -vel  # the velocity of the forward-time cue at its first pose
     edge = seq[-1]
-    entry: dict[str, Any] = {"end": end, "kind": "at rest", "duration_s": 0.0, "shortened": ""}
+    entry: JoinEntry = {"end": end, "kind": "at rest", "duration_s": 0.0, "shortened": ""}
     empty = np.empty((0, 6))
 
     def ramp_at_rest(pose: np.ndarray) -> Transition:
@@ -268,21 +293,21 @@ def _ramp(
         except LimitError as exc:
             why = str(exc)
             continue
-        entry.update(kind="from motion", duration_s=float(tr.t_s[-1]), shortened=tr.shortened,
-                     limits=name)  # fmt: skip
+        entry["kind"] = "from motion"
+        entry["duration_s"] = float(tr.t_s[-1])
+        entry["shortened"] = tr.shortened
+        entry["limits"] = name
         return tr, entry, empty
     seg, halvings = _join_to_rest(platform, seq, tight, rate_hz)
     rest = seg[-1] if len(seg) else edge
     tr = ramp_at_rest(rest)
-    entry.update(
-        kind="stop then ramp",
-        duration_s=float(tr.t_s[-1] + len(seg) * dt),
-        shortened=(
-            f"{why}; the cue was brought to rest first, its join halved {halvings} time(s) "
-            "by the workspace"
-            if halvings
-            else f"{why}; the cue was brought to rest first"
-        ),
+    entry["kind"] = "stop then ramp"
+    entry["duration_s"] = float(tr.t_s[-1] + len(seg) * dt)
+    entry["shortened"] = (
+        f"{why}; the cue was brought to rest first, its join halved {halvings} time(s) "
+        "by the workspace"
+        if halvings
+        else f"{why}; the cue was brought to rest first"
     )
     return tr, entry, seg if at_end else seg[::-1]
 

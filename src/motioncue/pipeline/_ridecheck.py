@@ -115,12 +115,12 @@ def check_ride_for(
             f"ride actuators {list(ride.actuator_names)} are not the actuators "
             f"{list(names)} of platform {platform_name!r}"
         )
-    n_axes = int(getattr(controller, "n_axes", len(names)))
+    n_axes = int(controller.n_axes)
     if n_axes != len(names):
         raise ConfigError(
             f"controller {controller_name!r} drives {n_axes} axes; the ride and platform "
             f"{platform_name!r} have "
-            + str(getattr(platform, "axes_text", f"{len(names)} actuators"))
+            + platform.axes_text
         )
     table = limits.to_pulses_table(platform)
     _check_identity(ride, table, platform_name, controller_name)
@@ -319,7 +319,7 @@ def check_ride_integrity(
         distance = "no pose reaches them" if not math.isfinite(far) else f"{far:.1f} pulses"
         raise LimitError(
             f"{name} (edited) is no rigid platform's: at frame {k} (t = {ride.t_s[k]:.3f} s) "
-            f"no pose of {getattr(platform, 'name', 'the platform')} gives its actuator "
+            f"no pose of {platform.name} gives its actuator "
             f"positions (actuator {names[axis]!r}: {distance} from the nearest rigid pose; "
             f"pulse rounding allows {allowed:.2f}); nothing was sent"
         )

@@ -48,10 +48,10 @@ import re
 import struct
 import warnings
 import zipfile
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import IO, TYPE_CHECKING, Any, BinaryIO
+from typing import IO, TYPE_CHECKING, Any, BinaryIO, TypeVar
 
 import numpy as np
 
@@ -380,13 +380,7 @@ def _read_source(
 ) -> tuple[bytes, str]:
     if isinstance(source, bytes | bytearray | memoryview):
         return bytes(source), name or "<ride bytes>"
-    if hasattr(source, "read"):
-        where = name or str(getattr(source, "name", "<ride stream>"))
-        try:
-            data = source.read(MAX_RIDE_BYTES + 1)
-        except OSError as exc:
-            raise ConfigError(f"{where}: cannot read: {exc}") from exc
-    else:
+    if isinstance(source, str | os.PathLike):
         path = Path(source)
         where = name or str(path)
 
@@ -408,6 +402,12 @@ def _read_source(
             )
         except OSError as exc:
             raise ConfigError(f"{where}: cannot read ride file: {exc}") from exc
+    else:  # a binary stream (BytesIO has no name)
+        where = name or str(getattr(source, "name", "<ride stream>"))
+        try:
+            data = source.read(MAX_RIDE_BYTES + 1)
+        except OSError as exc:
+            raise ConfigError(f"{where}: cannot read: {exc}") from exc
     if not isinstance(data, bytes):
         raise ConfigError(f"{where}: not a motioncue ride file (read {type(data).__name__})")
     if len(data) > MAX_RIDE_BYTES:  # a stream
@@ -534,7 +534,18 @@ def _read_arrays(data: bytes, where: str) -> dict[str, np.ndarray]:
     return arrays
 
 
-def _header_value(header: dict[str, Any], key: str, where: str, kind: Any, default: Any) -> Any:
+_T = TypeVar("_T")
+
+
+def _header_value(
+    header: Mapping[str, object],
+    key: str,
+    where: str,
+    kind: type[_T] | tuple[type[_T], ...],
+    default: object,
+) -> _T:
+    """``header[key]`` checked to be a ``kind`` (never a bool for another kind); ``default``
+    when absent, :data:`_REQUIRED` to refuse its absence."""
     value = header.get(key, default)
     if value is _REQUIRED:
         raise ConfigError(f"{where}: ride header lacks {key!r}")
@@ -609,7 +620,7 @@ def load_ride(
         ride = Ride(
             platform=_header_value(header, "platform", where, str, _REQUIRED),
             controller=_header_value(header, "controller", where, str, _REQUIRED),
-            rate_hz=_header_value(header, "rate_hz", where, int | float, _REQUIRED),
+            rate_hz=_header_value(header, "rate_hz", where, (int, float), _REQUIRED),
             actuator_names=tuple(_header_value(header, "actuator_names", where, list, _REQUIRED)),
             t_s=arrays["t_s"],
             pulses=arrays["pulses"],

@@ -141,7 +141,7 @@ def _child(
         except ImportError as exc:
             port_conn.send(("error", ("ConfigError", f"cannot import a game's module: {exc}")))
             return
-        port_conn.send(("port", getattr(src, "port", 0)))
+        port_conn.send(("port", src.port))  # 0 for a replay or a source on several ports
         seq = [0]
         view = [buf]  # emptied before the block is closed
 

@@ -409,6 +409,9 @@ class ReplaySource(_ThreadedSource):
         Samples kept for :meth:`drain`.
     """
 
+    port: int = 0
+    """The UDP port it listens on: none (0, as for a source on several ports)."""
+
     def __init__(
         self, path: str | os.PathLike[str], speed: float = 1.0, *, history: int = 1024
     ) -> None:

@@ -18,13 +18,17 @@ from .._errors import ConfigError, LimitError
 from ._limits import ActuatorLimits
 
 if TYPE_CHECKING:
+    from numpy.typing import NDArray
+
     from ..kinematics import Drive, Platform
     from ..output import Controller, DriveExpectations, PulseLimits
 
 __all__ = ["planning_limits", "pulse_rounding_limits", "within_controller_stroke"]
 
 
-def _per_axis(name: str, value: float | Sequence[float] | None, n: int) -> np.ndarray | None:
+def _per_axis(
+    name: str, value: float | Sequence[float] | NDArray[np.float64] | None, n: int
+) -> np.ndarray | None:
     if value is None:
         return None
     arr = np.array(value, dtype=float).reshape(-1)
@@ -41,7 +45,7 @@ def _check_drives(platform: Platform, expect: DriveExpectations, who: str) -> No
     kinds = tuple(platform.actuator_kinds)
     ppr = np.asarray(drives.pulses_per_rev, dtype=float).reshape(-1)
     lead = np.abs(np.asarray(drives.units_per_rev, dtype=float).reshape(-1))
-    pname = getattr(platform, "name", "?")
+    pname = platform.name
     if expect.pulses_per_rev is not None:
         for i, value in enumerate(ppr):
             if abs(value - expect.pulses_per_rev) > 1e-9 * max(value, 1.0):
@@ -105,17 +109,13 @@ def within_controller_stroke(
         The two strokes do not overlap on some axis, or the park position is outside the
         controller's stroke (nothing could be driven and parked there).
     """
-    pulse_limits = getattr(controller, "pulse_limits", None)
-    if pulse_limits is None:
-        return limits, None
-    pl = pulse_limits(rate_hz)
+    pl = controller.pulse_limits(rate_hz)
     if not pl.has_stroke:
         return limits, None
     q_min, q_max = _within_stroke(platform.drives, pl, limits.q_min, limits.q_max)
     if np.array_equal(q_min, limits.q_min) and np.array_equal(q_max, limits.q_max):
         return limits, None
-    name = getattr(controller, "name", "?")
-    where = pl.sources.get("stroke", f"controller {name} stroke")
+    where = pl.sources.get("stroke", f"controller {controller.name} stroke")
     park = np.asarray(platform.q_park, dtype=float)
     if np.any(q_min >= q_max) or np.any(park < q_min) or np.any(park > q_max):
         raise LimitError(

@@ -250,7 +250,7 @@ class ActuatorLimits:
         kinds = tuple(platform.actuator_kinds)
         q_min = np.array(platform.q_min, dtype=float)
         q_max = np.array(platform.q_max, dtype=float)
-        pname = getattr(platform, "name", "?")
+        pname = platform.name
         sources: dict[str, str] = {"stroke": f"platform {pname} usable stroke"}
         margin = _per_axis("stroke_margin", stroke_margin, n)
         if margin is not None:
@@ -266,7 +266,7 @@ class ActuatorLimits:
         catch_up = 1.0
 
         if controller is not None:
-            who = f"controller {getattr(controller, 'name', '?')!r}"
+            who = f"controller {controller.name!r}"
             n_axes = int(controller.n_axes)
             if n_axes != n:
                 raise ConfigError(
@@ -287,8 +287,10 @@ class ActuatorLimits:
 
         # a platform description may carry its own actuator limits (SI arrays v_max / a_max /
         # j_max), e.g. the servo's rated speed; they take part like any other source
-        for attr, cands in (("v_max", v_cands), ("a_max", a_cands)):
-            own = getattr(platform, attr, None)
+        for attr, own, cands in (
+            ("v_max", platform.v_max, v_cands),
+            ("a_max", platform.a_max, a_cands),
+        ):
             if own is not None:
                 arr = _per_axis(f"platform {attr}", own, n)
                 if arr is not None:
@@ -313,7 +315,7 @@ class ActuatorLimits:
         sources["v_max"] = "min of: " + "; ".join(s for _, s in v_cands)
         sources["a_max"] = "min of: " + "; ".join(s for _, s in a_cands)
         j_cands: list[tuple[np.ndarray, str]] = []
-        own_j = getattr(platform, "j_max", None)
+        own_j = platform.j_max
         if own_j is not None:
             arr = _per_axis("platform j_max", own_j, n)
             if arr is not None:

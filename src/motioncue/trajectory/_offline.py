@@ -342,10 +342,11 @@ def limit_ride(
         return result(qd.copy(), "unchanged", 0, 0)
 
     # ------------------------------------------------------------ windows per actuator
-    jerk = limits.j_max is not None
+    j_max = limits.j_max
+    jerk = j_max is not None
     n_stop = limits.braking_steps(dt_s)
-    if jerk:
-        n_stop += int(np.max(np.ceil(limits.a_max / (limits.j_max * dt_s)))) + 1  # type: ignore[operator]
+    if j_max is not None:
+        n_stop += int(np.max(np.ceil(limits.a_max / (j_max * dt_s)))) + 1
     pad = max(round(pad_s / dt_s), 2 * n_stop)
     overlap = max(2 * n_stop, _BLOCK)
     chunk = max(int(chunk), overlap + _BLOCK)
@@ -387,7 +388,7 @@ def limit_ride(
         hi_x = (float(limits.q_max[i]) - off) / s_i - _TIGHTEN * float(span[i]) / s_i
         vb = float(limits.v_max[i]) * dt_s / s_i * tight
         ab = tight
-        jb = (float(limits.j_max[i]) * dt_s**3 / s_i * tight) if jerk else 0.0  # type: ignore[index]
+        jb = (float(j_max[i]) * dt_s**3 / s_i * tight) if j_max is not None else 0.0
         bounds = (lo_x, hi_x, vb, ab, jb)
         col_t = (target[:, i] - off) / s_i
         col_rt = (q_rt[:, i] - off) / s_i

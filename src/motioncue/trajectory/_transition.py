@@ -318,7 +318,8 @@ def _s_profile(limits_1d: ActuatorLimits, dt: float) -> np.ndarray:
     out = [0.0]
     for _ in range(_MAX_SETTLE_FRAMES):
         out.append(step()[0])
-        at_rest = not any(state.v) and not any(getattr(state, "a", [0.0]))
+        accelerating = isinstance(state, JerkLimiterState) and any(state.a)
+        at_rest = not any(state.v) and not accelerating
         if state.q[0] == 1.0 and at_rest:
             return np.asarray(out)
     raise LimitError("the straight-line fallback did not settle at its end position")

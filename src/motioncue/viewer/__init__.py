@@ -13,6 +13,7 @@ from ._monitor import (
     Monitor,
     MonitorSource,
     PlaySource,
+    SourceSnapshot,
     parse_monitor,
 )
 from ._scene import Scene, scene_from_poses, scene_from_q, stroke_use
@@ -36,6 +37,7 @@ __all__ = [
     "MonitorSource",
     "PlaySource",
     "Scene",
+    "SourceSnapshot",
     "ViewInput",
     "load_view_input",
     "parse_monitor",

@@ -28,8 +28,8 @@ import math
 import os
 import threading
 import time
-from collections.abc import Callable, Mapping
-from typing import TYPE_CHECKING, Any, Protocol, SupportsFloat
+from collections.abc import Callable, Mapping, Sequence
+from typing import TYPE_CHECKING, Any, Protocol, SupportsFloat, TypedDict
 
 import numpy as np
 
@@ -58,6 +58,7 @@ __all__ = [
     "Monitor",
     "MonitorSource",
     "PlaySource",
+    "SourceSnapshot",
     "parse_monitor",
 ]
 
@@ -83,26 +84,49 @@ class _Client(Protocol):
     def write_message(self, message: str) -> Future[None]: ...
 
 
+class SourceSnapshot(TypedDict, total=False):
+    """What a :class:`MonitorSource` reports, every key optional (without ``q`` the page
+    shows no actuators); the monitor checks each value it reads (the snapshot may come over
+    a pipe from another process).
+
+    Attributes
+    ----------
+    q : sequence of float
+        Actuator positions from neutral (SI, ``n`` numbers) of the last frame.
+    v : sequence of float
+        Their speeds (SI).
+    t_s : float
+        The frame clock of ``q`` (s), for the acceleration.
+    state : str
+        ``"parked"``, ``"running"``, ``"fading in"``... (the job's words).
+    cue : sequence of float or None
+        The cue pose ``[x, y, z, roll, pitch, yaw]`` (m, rad).
+    telemetry : mapping of str to float or None
+        ``{"rate_hz", "delay_ms", "jitter_ms"}``.
+    info : mapping of str to str
+        ``{label: text}`` shown as is (frames sent, ride time...).
+    """
+
+    q: Sequence[float]
+    v: Sequence[float]
+    t_s: float
+    state: str
+    cue: Sequence[float | None]
+    telemetry: Mapping[str, float | None]
+    info: Mapping[str, str]
+
+
 class MonitorSource(Protocol):
     """What a monitor reads from a running job (called in the job's process, by the
     monitor's reader thread when its server asks, or by the caller of :meth:`Monitor.snapshot`).
 
-    ``snapshot()`` returns a mapping with, all optional but ``q``:
-
-    - ``q``: actuator positions from neutral (SI, ``n`` numbers) of the last frame;
-    - ``v``: their speeds (SI);
-    - ``t_s``: the frame clock of ``q`` (s), for the acceleration;
-    - ``state``: ``"parked"``, ``"running"``, ``"fading in"``... (the job's words);
-    - ``cue``: the cue pose ``[x, y, z, roll, pitch, yaw]`` (m, rad);
-    - ``telemetry``: ``{"rate_hz", "delay_ms", "jitter_ms"}``;
-    - ``info``: ``{label: text}`` shown as is (frames sent, ride time...).
-
+    ``snapshot()`` returns a :class:`SourceSnapshot` (a plain dict of those keys).
     ``request_stop()`` asks the job to stop and park; ``can_stop`` says if it can.
     """
 
     can_stop: bool
 
-    def snapshot(self) -> Mapping[str, Any]: ...
+    def snapshot(self) -> SourceSnapshot: ...
 
     def request_stop(self) -> None: ...
 
@@ -131,7 +155,7 @@ class BridgeSource:
         self._stats: BridgeStats | None = None
         self._stats_at = -math.inf
 
-    def snapshot(self) -> Mapping[str, Any]:
+    def snapshot(self) -> SourceSnapshot:
         b = self.bridge
         now = time.monotonic()
         st = self._stats
@@ -195,7 +219,7 @@ class PlaySource:
     def request_stop(self) -> None:
         self._stop.set()
 
-    def snapshot(self) -> Mapping[str, Any]:
+    def snapshot(self) -> SourceSnapshot:
         stage = self.stage
         if stage is None:
             return {"state": "starting", "info": dict(self.info)}
@@ -238,7 +262,7 @@ class EmulatorSource:
     def request_stop(self) -> None:
         raise ConfigError("the emulator cannot park: stop the program that sends it frames")
 
-    def snapshot(self) -> Mapping[str, Any]:
+    def snapshot(self) -> SourceSnapshot:
         emu = self.emulator
         trace = emu.trace
         n = self.platform.n_actuators
@@ -404,7 +428,7 @@ class Monitor:
         self._last = out
         return out
 
-    def _actuators(self, q: np.ndarray, raw: Mapping[str, Any]) -> dict[str, Any]:
+    def _actuators(self, q: np.ndarray, raw: SourceSnapshot) -> dict[str, Any]:
         from ._scene import _scene, at_rest, fk_miss, stroke_use
 
         plat = self.platform
@@ -720,10 +744,10 @@ class _JobSource:
             raise _SourceError(value)
         return value
 
-    def snapshot(self) -> Mapping[str, Any]:
+    def snapshot(self) -> SourceSnapshot:
         mon = self.monitor
         counts = (0, 0) if mon is None else (mon.snapshots, mon.errors)
-        raw: Mapping[str, Any] = self._ask(("snapshot", *counts))
+        raw: SourceSnapshot = self._ask(("snapshot", *counts))  # checked where it is read
         return raw
 
     def request_stop(self) -> None:

@@ -34,8 +34,10 @@ def plotly_js() -> str:
     return str(get_plotlyjs())
 
 
-def _r(a: ArrayLike, digits: int) -> list[Any]:
-    return np.round(np.asarray(a, dtype=float), digits).tolist()
+def _r(a: ArrayLike, digits: int) -> list[float] | list[list[float]]:
+    """A vector (n,) or points (n, 3), rounded, as (nested) JSON lists."""
+    out: list[float] | list[list[float]] = np.round(np.asarray(a, dtype=float), digits).tolist()
+    return out
 
 
 def frame_json(scene: Scene, k: int) -> dict[str, Any]:

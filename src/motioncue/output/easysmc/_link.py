@@ -30,7 +30,7 @@ from ._protocol import (
 )
 
 if TYPE_CHECKING:
-    from ._controller import EasySmcController
+    from ._controller import EasySmcController, EasySmcFrameEncoder
     from ._usb import UsbCommandLink
 
 __all__ = ["ByteLink", "EasySmcLink", "EasySmcStreamer", "StreamStats"]
@@ -261,7 +261,7 @@ class EasySmcStreamer:
 
     def stream(
         self,
-        encoder: object,
+        encoder: EasySmcFrameEncoder,
         frames: Iterable[tuple[float, Sequence[float]]],
         clock: Callable[[], float] = time.monotonic,
     ) -> int:
@@ -275,7 +275,7 @@ class EasySmcStreamer:
         n = 0
         wall0 = t_first = None
         for t_s, pulses in frames:
-            cmds = encoder.encode_commands(t_s, pulses)  # type: ignore[attr-defined]
+            cmds = encoder.encode_commands(t_s, pulses)
             if wall0 is None or t_first is None:
                 wall0, t_first = clock(), t_s
             due = wall0 + (t_s - t_first) - self.lead_s

@@ -428,8 +428,8 @@ class ExecStatus:
         if reply.code != 0x38 or len(reply.words) != 3:
             raise ProtocolError(f"not a query-38 status reply: {reply}")
         w1, w2, w3 = reply.words
-        faults = tuple((w3 >> (4 * (5 - i))) & 0xF for i in range(4))
-        return cls(w1 >> 24, w1 & MAX_MAGNITUDE, w2, faults)  # type: ignore[arg-type]
+        f = [(w3 >> (4 * (5 - i))) & 0xF for i in range(4)]
+        return cls(w1 >> 24, w1 & MAX_MAGNITUDE, w2, (f[0], f[1], f[2], f[3]))
 
     def words(self) -> tuple[int, int, int]:
         w3 = sum((f & 0xF) << (4 * (5 - i)) for i, f in enumerate(self.axis_faults))

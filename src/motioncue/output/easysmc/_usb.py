@@ -16,7 +16,8 @@ from __future__ import annotations
 
 import ctypes
 import sys
-from typing import Any
+from collections.abc import Callable
+from typing import Protocol
 
 from ..._errors import ProtocolError, TransportError
 from ._link import StreamStats
@@ -39,13 +40,31 @@ from ._protocol import (
     encode_usb_write,
 )
 
-__all__ = ["DLL_NAME", "UsbCommandLink", "UsbDllLink", "load_dll_functions", "usb_read_request"]
+__all__ = [
+    "DLL_NAME",
+    "Em2300Functions",
+    "UsbCommandLink",
+    "UsbDllLink",
+    "load_dll_functions",
+    "usb_read_request",
+]
 
 DLL_NAME = "EM2300_DLL.dll"
 _BUFFER = 64  # the manual's examples allocate 64 bytes for psend
 
 
-def load_dll_functions(path: str = DLL_NAME) -> Any:
+class Em2300Functions(Protocol):
+    """The two functions of the vendor DLL :class:`UsbDllLink` calls (manual 6.2.4): each
+    returns a negative number on failure."""
+
+    def senddata(self, buf: ctypes.Array[ctypes.c_ubyte], addr: int, length: int, /) -> int: ...
+
+    def recdata(
+        self, buf: ctypes.Array[ctypes.c_ubyte], addr: int, cmd: int, rdat1: int, rdat2: int, /
+    ) -> int: ...
+
+
+def load_dll_functions(path: str = DLL_NAME) -> Em2300Functions:
     """Load the vendor DLL and declare its two functions (Windows only)."""
     if sys.platform != "win32":
         raise TransportError(
@@ -74,7 +93,7 @@ class UsbDllLink:
         rdat2)``; the loaded DLL by default.
     """
 
-    def __init__(self, functions: Any = None, path: str = DLL_NAME) -> None:
+    def __init__(self, functions: Em2300Functions | None = None, path: str = DLL_NAME) -> None:
         self._fn = load_dll_functions(path) if functions is None else functions
         self.calls = 0
 
@@ -85,20 +104,20 @@ class UsbDllLink:
         if cmd.addr != 0:
             raise ProtocolError(f"USB address is fixed at 00 (manual 6.2.4.1), got {cmd.addr}")
         buf = (ctypes.c_ubyte * _BUFFER)(*encode_usb_write(cmd))
-        self._call("senddata", buf, 0, USB_WRITE_SIZE)
+        self._call("senddata", self._fn.senddata, buf, 0, USB_WRITE_SIZE)
         return decode_usb_write_reply(bytes(buf[:USB_WRITE_REPLY_SIZE]))
 
     def read(self, request: UsbReadRequest) -> UsbReadReply:
         """Run one query; returns the decoded 16-byte reply."""
         buf = (ctypes.c_ubyte * USB_READ_REPLY_SIZE)()
-        self._call("recdata", buf, 0, request.code, request.rdat1, request.rdat2)
+        self._call("recdata", self._fn.recdata, buf, 0, request.code, request.rdat1, request.rdat2)
         return decode_usb_read_reply(bytes(buf))
 
-    def _call(self, name: str, *args: Any) -> None:
-        """Call the DLL function ``name``: an OS error or a negative return is a
+    def _call(self, name: str, fn: Callable[..., int | None], *args: object) -> None:
+        """Call the DLL function ``fn`` (named ``name``): an OS error or a negative return is a
         :class:`TransportError` naming it; each call that returns is counted."""
         try:
-            ret = getattr(self._fn, name)(*args)
+            ret = fn(*args)
         except OSError as exc:
             raise TransportError(f"EM2300 {name} failed: {exc}") from exc
         self.calls += 1

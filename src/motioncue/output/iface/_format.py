@@ -24,7 +24,7 @@ from __future__ import annotations
 import math
 import re
 import struct
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 
 from ..._errors import ConfigError, ProtocolError
@@ -187,14 +187,14 @@ class FrameFormatter:
         if f.encoding == "binary":
             code = "B" if f.bits <= 8 else "H"
             fmt = ">" + "".join(f"{len(p)}s" if isinstance(p, bytes) else code for p in f._parts)
-            self._struct_pack = struct.Struct(fmt).pack
+            self._struct_pack: Callable[..., bytes] | None = struct.Struct(fmt).pack
             self._text = b""
         else:
             spec = f"%0{math.ceil(f.bits / 4)}X" if f.encoding == "hex" else "%d"
             self._text = b"".join(
                 p.replace(b"%", b"%%") if isinstance(p, bytes) else spec.encode() for p in f._parts
             )
-            self._struct_pack = None  # type: ignore[assignment]
+            self._struct_pack = None
 
     def format(self, values: Sequence[int]) -> bytes:
         """The bytes of one frame carrying ``values`` (one per motor axis, ints in range).

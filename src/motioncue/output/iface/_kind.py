@@ -6,7 +6,7 @@ datagrams as one byte stream, through the board's firmware parser.
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Protocol, runtime_checkable
 
 from ..._errors import ConfigError
 from .._registry import ControllerKind
@@ -26,9 +26,18 @@ def _emulator(controller: Controller, url: TransportURL, homing_time_s: float) -
     return IfaceEmulator(controller, url.host, url.port)
 
 
+@runtime_checkable
+class _SendsStop(Protocol):
+    """A controller with a stop string (:class:`IfaceController`, or a wrapper that passes
+    its attributes through)."""
+
+    @property
+    def stop_bytes(self) -> bytes: ...
+
+
 def _end_of_run(controller: Controller) -> list[bytes]:
     """The stop string (``stop`` in the TOML), sent after the park; none when empty."""
-    stop = getattr(controller, "stop_bytes", b"")
+    stop = controller.stop_bytes if isinstance(controller, _SendsStop) else b""
     return [stop] if stop else []
 
 

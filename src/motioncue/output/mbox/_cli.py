@@ -17,17 +17,15 @@ from .._udp_cli import (
     split_datagrams,
 )
 from .._udp_cli import transport_options as _transport_options
-from .._udp_common import HEADER, WireMessage, decode_header
+from .._udp_common import F_ABS, F_REL, HEADER, WireMessage, decode_header
 from ._controller import MboxController
 from ._messages import (
     CHANNEL_CX,
     CHANNEL_DX,
     CHANNEL_FX,
     CHANNEL_FXM,
-    F_ABS,
     F_READ,
     F_READ_ERR,
-    F_REL,
     F_STATUS,
     F_WRITE,
     F_WRITE_ERR,

@@ -30,7 +30,7 @@ reads 0 homing, 1 ready, 2 e-stop, 3 fault.
 from __future__ import annotations
 
 from ..._errors import ProtocolError
-from .._udp_common import WHO_NONE, Header, WireMessage
+from .._udp_common import F_ABS, F_REL, WHO_NONE, Header, WireMessage
 from .._udp_emulator import (
     ERR_ADDRESS,
     STATE_ESTOP,
@@ -43,8 +43,6 @@ from ._controller import MboxController
 from ._messages import (
     CHANNEL_CX,
     CHANNEL_DX,
-    F_ABS,
-    F_REL,
     FrameStatus,
     MotionFrame,
     MotionFrameReply,
