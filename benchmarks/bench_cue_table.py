@@ -31,7 +31,8 @@ ROOT = Path(__file__).resolve().parents[1]
 # every preset made for the bundled hexapod, then the generic one; the platform's own
 # default_preset is put first whatever the platform
 HEXAPOD_PRESETS = ("racing-hexapod-firm", "racing-hexapod", "racing-hexapod-strong",
-                   "mpc-hexapod", "optimal-hexapod", "racing")  # fmt: skip
+                   "racing-hexapod-adaptive", "mpc-hexapod", "optimal-hexapod",
+                   "racing")  # fmt: skip
 
 
 def _pct(v: float) -> str:

@@ -76,8 +76,9 @@ def test_a_level_no_force_reaches_changes_nothing() -> None:
 
 @pytest.mark.parametrize("force", [-8.0, 5.0, 12.0])
 def test_a_sustained_force_gets_the_gain_c_over_f(force: float) -> None:
-    """From its first sample a constant force is its own envelope, so the gain is c / |F|:
-    the run equals the fixed-gain washout with that gain (forward ratio included)."""
+    """From its first sample a constant force is its own envelope (started at 0), so the gain
+    is c / |F|: the run equals the fixed-gain washout with that gain (forward ratio
+    included)."""
     c = 1.2
     n = 600
     f = np.zeros((n, 3))
@@ -85,7 +86,7 @@ def test_a_sustained_force_gets_the_gain_c_over_f(force: float) -> None:
     f[:, 1] = -0.6 * force
     f[:, 2] = G
     w = np.zeros((n, 3))
-    adaptive = _firm(tilt_adapt_peak_m_s2=(c, c), tilt_forward_ratio=0.6)
+    adaptive = _firm(tilt_adapt_peak_m_s2=(c, c), tilt_forward_ratio=0.6, tilt_adapt_start_m_s2=0)
     fixed = _firm(tilt_scale=(c / abs(force), c / abs(0.6 * force)), tilt_forward_ratio=0.6)
     got = ClassicalWashout(adaptive, fs_hz=FS).run(f, w)
     want = ClassicalWashout(fixed, fs_hz=FS).run(f, w)
@@ -113,13 +114,32 @@ def test_after_a_peak_the_gain_recovers_as_the_closed_form() -> None:
     assert env[0] == pytest.approx(max(0.5, peak * d ** (n - 101)), rel=1e-12)
 
 
+@pytest.mark.parametrize("start", [0.0, 9.80665, 25.0])
+def test_the_envelope_starts_at_its_prior_and_decays(start: float) -> None:
+    p = _firm(tilt_adapt_peak_m_s2=(1.0, 1.0), tilt_adapt_tau_s=4.0, tilt_adapt_start_m_s2=start)
+    design = ClassicalWashout(p, fs_hz=FS)
+    state = design.initial_state()
+    assert state.tilt_env == [start, start]
+    n = 250
+    f = np.zeros((n, 3))
+    f[:, 2] = G
+    design.run(f, np.zeros((n, 3)), state)
+    want = start * math.exp(-1.0 / (FS * 4.0)) ** n
+    np.testing.assert_allclose(state.tilt_env, [want, want], rtol=1e-12, atol=0.0)
+    design.reset(state)
+    assert state.tilt_env == [start, start]
+    # without the adaptive gain the envelope is not used and stays 0
+    assert ClassicalWashout(_firm(), fs_hz=FS).initial_state().tilt_env == [0.0, 0.0]
+
+
 def test_preset_file_round_trip(tmp_path) -> None:
-    p = _firm(tilt_adapt_peak_m_s2=(1.05, 0.0), tilt_adapt_tau_s=13.7)
+    p = _firm(tilt_adapt_peak_m_s2=(1.05, 0.0), tilt_adapt_tau_s=13.7, tilt_adapt_start_m_s2=21.5)
     path = tmp_path / "adaptive.toml"
     path.write_text(preset_toml(p))
     back = load_cueing(path)
     assert back.tilt_adapt_peak_m_s2 == pytest.approx(p.tilt_adapt_peak_m_s2, rel=1e-12)
     assert back.tilt_adapt_tau_s == pytest.approx(13.7, rel=1e-12)
+    assert back.tilt_adapt_start_m_s2 == pytest.approx(21.5, rel=1e-12)
 
 
 @pytest.mark.parametrize(
@@ -129,9 +149,15 @@ def test_preset_file_round_trip(tmp_path) -> None:
         (dict(tilt_adapt_peak_m_s2=(1.0, math.nan)), "tilt_adapt_peak_m_s2"),
         (dict(tilt_adapt_peak_m_s2=(1.0,)), "two numbers"),
         (dict(tilt_adapt_tau_s=0.0), "tilt_adapt_tau_s"),
+        (dict(tilt_adapt_start_m_s2=-1.0), "tilt_adapt_start_m_s2"),
         (
-            dict(tilt_adapt_peak_m_s2=(1.0, 1.0), tilt_scale=None, tilt_shape=None,
-                 tilt_additive=False, tilt_lag_fill=0.0),
+            dict(
+                tilt_adapt_peak_m_s2=(1.0, 1.0),
+                tilt_scale=None,
+                tilt_shape=None,
+                tilt_additive=False,
+                tilt_lag_fill=0.0,
+            ),
             "adapt_peak.*needs tilt_scale",
         ),
     ],

@@ -27,11 +27,12 @@ speeds, whatever the other channels add)::
         --formula chicane-formula-106.csv --base fwd.toml --rate-max 40 --out fwd2.toml
 
 ``--adapt`` adds the tilt gain that adapts to the drive (``[tilt] adapt_peak_m_s2``,
-``adapt_tau_s``: 4 more parameters, the level and the envelope's time constant per axis
-share one tau) and lets the tilt's fixed gains go up to 0.5 (they become the gains' upper
-bounds); ``--min-corr-x`` and ``--max-reversals`` tighten those two constraints on the
-tuning drives (a margin for the drives held out). How ``racing-hexapod-adaptive`` was made
-is in its header.
+``adapt_tau_s``, ``adapt_start_m_s2``: 4 more parameters, the level per axis, the envelope's
+time constant and its start; y starts at 5 m/s^2, where it does not act) and lets the
+tilt's fixed gains go up to 0.5 (they become the gains' upper bounds); ``--min-corr-x``
+and ``--max-reversals`` tighten those two constraints on the tuning drives (a margin for
+the drives held out); ``--extra`` adds generated tuning drives (the firm default's fy on
+each is measured at the start).
 """
 
 from __future__ import annotations
@@ -60,7 +61,6 @@ BUNDLED = [
     "configs/recordings/street-formula.csv",
     "configs/recordings/flowing-road.csv",
 ]
-FIRM_FY = (0.132, 0.119, 0.137, 0.113)  # racing-hexapod-firm's share fy on the four drives
 NAMES = ("ktx", "kty", "fwd", "tshape", "reach_use", "lead_x", "lag", "kfx", "lfx", "twn",
          "twb", "tiltwn", "rate")  # fmt: skip
 
@@ -75,13 +75,20 @@ def main() -> None:
                     "the tilt's x gain 0.08 and forward_ratio 0.5)")  # fmt: skip
     ap.add_argument("--rate-max", type=float, default=30.0, help="tilt rate limit bound (deg/s)")
     ap.add_argument("--adapt", action="store_true", help="search the adaptive tilt gain too")
+    ap.add_argument("--extra", nargs="*", default=[], help="more generated tuning drives (CSV)")
     ap.add_argument("--min-corr-x", type=float, default=0.95, help="corr fx on every drive")
     ap.add_argument("--max-reversals", type=float, default=0.02, help="reversals on every drive")
     args = ap.parse_args()
     platform = load_platform("stewart6-linear")
     limits = ActuatorLimits.from_platform(platform, load_controller("mbox6"), rate_hz=RATE)
-    drives = [*BUNDLED, args.formula]
+    drives = [*BUNDLED, args.formula, *args.extra]
     recs = [resample(read_recording_csv(Path(d)), RATE) for d in drives]
+    firm = load_cueing("racing-hexapod-firm")
+    firm_fy = []  # racing-hexapod-firm's share fy on each drive (0.132, 0.119, 0.137, 0.113)
+    for rec in recs:
+        ev = run_chain(rec.f, rec.w, firm, platform, limits, RATE).evaluation
+        firm_fy.append(cue_metrics(ev.perceived_vehicle, ev.perceived_sim, ev.thresholds)
+                       .rendered_share[1])  # fmt: skip
     p0 = load_cueing(args.base or "racing-hexapod-firm")
     assert p0.tilt_scale is not None and p0.lead_s is not None and p0.tilt_shape is not None
     kx, fwd = (0.08, 0.5) if args.base is None else (p0.tilt_scale[0], p0.tilt_forward_ratio)
@@ -92,10 +99,12 @@ def main() -> None:
     lo = np.log([0.03, 0.08, 0.1, 1.5, 0.5, 0.01, 0.05, 0.005, 0.1, 2.0, 0.3, 5.0, 15.0])
     hi = np.log([0.3, 0.3, 1.5, 20, 1.0, 0.4, 1.0, 0.3, 3.0, 10.0, 3.0, 40.0, args.rate_max])
     if args.adapt:  # c_x, c_y, tau; the fixed gains become upper bounds
-        peak0 = p0.tilt_adapt_peak_m_s2 or (1.0, 1.0)
-        x0 = np.r_[x0, np.log([max(peak0[0], 0.2), max(peak0[1], 0.2), p0.tilt_adapt_tau_s])]
-        lo = np.r_[lo, np.log([0.2, 0.2, 3.0])]
-        hi = np.r_[hi, np.log([5.0, 5.0, 300.0])]
+        peak0 = p0.tilt_adapt_peak_m_s2 or (1.0, 5.0)
+        start0 = max(p0.tilt_adapt_start_m_s2, 2.0)
+        x0 = np.r_[x0, np.log([max(peak0[0], 0.2), max(peak0[1], 0.2), p0.tilt_adapt_tau_s,
+                               start0])]  # fmt: skip
+        lo = np.r_[lo, np.log([0.2, 0.2, 3.0, 2.0])]
+        hi = np.r_[hi, np.log([5.0, 5.0, 300.0, 40.0])]
         hi[0] = hi[1] = np.log(0.5)
     x0 = np.minimum(x0, hi)
 
@@ -118,12 +127,13 @@ def main() -> None:
             intensity_gentle=None,
             tilt_adapt_peak_m_s2=(v[13], v[14]) if args.adapt else p0.tilt_adapt_peak_m_s2,
             tilt_adapt_tau_s=v[15] if args.adapt else p0.tilt_adapt_tau_s,
+            tilt_adapt_start_m_s2=v[16] if args.adapt else p0.tilt_adapt_start_m_s2,
         )
 
     def evaluate(x: np.ndarray) -> tuple[float, list[str]]:
         p = params(x)
         viol, strength, lines = 0.0, 0.0, []
-        for rec, name, fy in zip(recs, drives, FIRM_FY, strict=True):
+        for rec, name, fy in zip(recs, drives, firm_fy, strict=True):
             run = run_chain(rec.f, rec.w, p, platform, limits, RATE)
             ev = run.evaluation
             m = cue_metrics(ev.perceived_vehicle, ev.perceived_sim, ev.thresholds,
@@ -145,7 +155,7 @@ def main() -> None:
 
     def better(it: int, elapsed_s: float, fit: float, x: np.ndarray, lines: list[str]) -> None:
         Path(args.out).write_text(preset_toml(params(x), [f"search it {it} fit {fit:.5f}"]))
-        names = (*NAMES, "c_x", "c_y", "tau") if args.adapt else NAMES
+        names = (*NAMES, "c_x", "c_y", "tau", "start") if args.adapt else NAMES
         vals = ", ".join(f"{n} {v:.4g}" for n, v in zip(names, np.exp(x), strict=True))
         print(f"it {it} t {elapsed_s:.0f} s fit {fit:.5f}: {vals}", flush=True)
         print("\n".join(lines), flush=True)

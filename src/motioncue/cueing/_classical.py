@@ -60,9 +60,10 @@ Signal flow (per sample; frames, signs and units of conventions.md)
    the felt ``f_z`` against a vehicle pressed into a dip).
    With ``tilt_adapt_peak_m_s2 = (c_x, c_y)`` the tilt's gain adapts to the drive: on each
    axis with ``c > 0`` the envelope ``e[n] = max(|f[n]|, d e[n-1])`` (``d = exp(-1 / (fs
-   tau))``, ``tau = tilt_adapt_tau_s``, the held vehicle force, ``e = 0`` before the first
-   sample) scales the force fed to the tilt by ``c / (kt e)`` where ``kt e > c`` (``kt`` that
-   axis's ``tilt_scale``), before the lead's output meets the compression: the tilt's gain
+   tau))``, ``tau = tilt_adapt_tau_s``, the held vehicle force, ``e =
+   tilt_adapt_start_m_s2`` before the first sample) scales the force fed to the tilt by ``c
+   / (kt e)`` where ``kt e > c`` (``kt`` that axis's ``tilt_scale``), before the lead's
+   output meets the compression: the tilt's gain
    is ``min(kt, c / e)``, so the largest force of the last few ``tau`` reaches the
    compression at ``c``.
    With ``tilt_accel_limit_rad_s2 = a`` the tilt is also acceleration limited
@@ -225,7 +226,8 @@ class WashoutState:
         Platform body angular velocity (rad/s) of the last sample (kept with a head offset).
     tilt_env : list of 2 floats
         Envelope ``[x, y]`` (m/s^2) of the vehicle's force peaks (kept with
-        ``tilt_adapt_peak_m_s2``).
+        ``tilt_adapt_peak_m_s2``; :meth:`ClassicalWashout.initial_state` starts it at
+        ``tilt_adapt_start_m_s2``).
     bad_samples : int
         Samples replaced by the last good one since the last reset.
     samples : int
@@ -584,7 +586,14 @@ class ClassicalWashout:
     # ------------------------------------------------------------------ state
     def initial_state(self) -> WashoutState:
         """A fresh state: platform at neutral, vehicle at rest, no samples seen."""
-        return WashoutState()
+        state = WashoutState()
+        state.tilt_env[:] = self._env_start()
+        return state
+
+    def _env_start(self) -> list[float]:
+        """The force envelope before the first sample (``tilt_adapt_start_m_s2``)."""
+        e = self.params.tilt_adapt_start_m_s2 if self.params.tilt_adapt_peak_m_s2 else 0.0
+        return [e, e]
 
     def reset(self, state: WashoutState) -> None:
         """Put ``state`` back to :meth:`initial_state` (in place, keeping its lists)."""
@@ -596,7 +605,7 @@ class ClassicalWashout:
         state.attitude[:] = [0.0, 0.0, 0.0]
         state.omega[:] = [0.0, 0.0, 0.0]
         state.hold[:] = [0.0, 0.0, GRAVITY_M_S2, 0.0, 0.0, 0.0]
-        state.tilt_env[:] = [0.0, 0.0]
+        state.tilt_env[:] = self._env_start()
         state.bad_samples = 0
         state.samples = 0
 

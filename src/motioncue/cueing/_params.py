@@ -231,6 +231,11 @@ class CueingParams:
         ``tilt_scale``. ``None`` (the default): fixed gains.
     tilt_adapt_tau_s : float
         Decay time constant of that envelope (s), in [0.1, 3600]; 30 (the default).
+    tilt_adapt_start_m_s2 : float
+        The envelope before the first sample (m/s^2, both axes), in [0, 100]: the drive's
+        peaks the gain assumes until it has seen them (0 starts at the fixed gain, so a
+        drive's first hard stop would be rendered at the gain of a gentle one); 9.81 (1 g,
+        the default).
     head_offset_m : 3-tuple
         The rider's head (the vestibular system) relative to the platform origin, platform
         frame ``[x fwd, y left, z up]`` (m). The translational channel removes the specific
@@ -288,6 +293,7 @@ class CueingParams:
     tilt_fz_guard: tuple[float, float, float] | None = None
     tilt_adapt_peak_m_s2: tuple[float, float] | None = None
     tilt_adapt_tau_s: float = 30.0
+    tilt_adapt_start_m_s2: float = 9.80665
     head_offset_m: Vec3 = (0.0, 0.0, 0.0)
     rot_wn_rad_s: Vec3 = (1.0, 1.0, 0.5)
     rot_zeta: Vec3 = (1.0, 1.0, 1.0)
@@ -412,6 +418,7 @@ class CueingParams:
                     "tilt's own gain, which it lowers)"
                 )
         _check("tilt_adapt_tau_s", (self.tilt_adapt_tau_s,), 0.1, False, 3600.0)
+        _check("tilt_adapt_start_m_s2", (self.tilt_adapt_start_m_s2,), 0.0, False, 100.0)
         if self.tilt_offset_m is not None:
             off = self.tilt_offset_m
             if len(off) != 3 or any(len(r) != 5 for r in off):
@@ -644,6 +651,9 @@ def load_cueing(name_or_path: str | Path) -> CueingParams:
         av = ti.vector("adapt_peak_m_s2", 2)
         adapt_peak = (av[0], av[1])
     adapt_tau = ti.number("adapt_tau_s", lo=0.1, hi=3600.0) if ti.has("adapt_tau_s") else 30.0
+    adapt_start = GRAVITY_M_S2
+    if ti.has("adapt_start_m_s2"):
+        adapt_start = ti.number("adapt_start_m_s2", lo=0.0, hi=100.0)
     offset = None
     if ti.has("offset_mm"):
         rows = _number_rows(ti, "offset_mm", 3, 5, "3 rows (x, y, z) of 5 numbers")
@@ -714,6 +724,7 @@ def load_cueing(name_or_path: str | Path) -> CueingParams:
             tilt_fz_guard=fz_guard,
             tilt_adapt_peak_m_s2=adapt_peak,
             tilt_adapt_tau_s=adapt_tau,
+            tilt_adapt_start_m_s2=adapt_start,
             head_offset_m=head,
             rot_wn_rad_s=r_wn,
             rot_zeta=r_zeta,

@@ -577,6 +577,7 @@ def preset_toml(params: CueingParams, comments: Sequence[str] = ()) -> str:
     if params.tilt_adapt_peak_m_s2 is not None:
         lines.append(f"adapt_peak_m_s2 = {_vec(params.tilt_adapt_peak_m_s2)}")
         lines.append(f"adapt_tau_s = {_fmt(params.tilt_adapt_tau_s)}")
+        lines.append(f"adapt_start_m_s2 = {_fmt(params.tilt_adapt_start_m_s2)}")
     if params.tilt_offset_m is not None:
         rows = ", ".join(_vec(r, 1e3) for r in params.tilt_offset_m)
         lines.append(f"offset_mm = [{rows}]")
