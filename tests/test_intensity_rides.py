@@ -3,8 +3,9 @@ each within the limits, judged on the rides themselves.
 
 On a 30 s excerpt of the bundled lap (10 s to 40 s: braking, corners, a crest; never tuned
 on), ``generate --preset PRESET --intensity 0|50|100`` on ``stewart6-linear`` with ``mbox6``,
-for racing-hexapod-strong and for the platform's default, racing-hexapod-firm (its gentle end
-tuned with a per-channel cap, ``tune --gentle-share``):
+for racing-hexapod-strong, for the platform's default, racing-hexapod-firm (its gentle end
+tuned with a per-channel cap, ``tune --gentle-share``), and for racing-hexapod-adaptive (its
+tilt gain adapts to the drive; the gentle end tuned the same way as firm's):
 
 - strength as the rider gets it: the rendered share of fx and fy (rms of the perceived
   platform motion over rms of the perceived vehicle motion) measured on the ride's frames
@@ -13,7 +14,8 @@ tuned with a per-channel cap, ``tune --gentle-share``):
   no pulses, no forward kinematics) within 2 %. Measured (view / chain), strong: fx 0.0276 /
   0.0276, 0.0377 / 0.0377, 0.0464 / 0.0464; fy 0.0884 / 0.0884, 0.1226 / 0.1226, 0.1348 /
   0.1348; firm: fx 0.0227 / 0.0228, 0.0295 / 0.0296, 0.0387 / 0.0387; fy 0.0629 / 0.0630,
-  0.0920 / 0.0921, 0.1302 / 0.1302;
+  0.0920 / 0.0921, 0.1302 / 0.1302; adaptive: fx 0.0308 / 0.0306, 0.0569 / 0.0567, 0.0667 /
+  0.0660; fy 0.0732 / 0.0732, 0.1018 / 0.1018, 0.1311 / 0.1312;
 - every frame within the limits as the controller reads them: the frames ``play`` sends
   (ramp from park, the ride, the park) decoded and fed to the MBOX emulator on its own
   clock (Fn012 pacing, whole-ms stamps; it judges with the manual's numbers), and the
@@ -47,7 +49,7 @@ from motioncue.trajectory import ActuatorLimits
 from motioncue.viewer import load_view_input, rendered_shares, view_html
 
 PLATFORM, CONTROLLER, PRESET, RATE = "stewart6-linear", "mbox6", "racing-hexapod-strong", 100.0
-PRESETS = (PRESET, "racing-hexapod-firm")
+PRESETS = (PRESET, "racing-hexapod-firm", "racing-hexapod-adaptive")
 LEVELS = (0.0, 50.0, 100.0)
 Rides = tuple[Path, dict[float, Path], str]
 
