@@ -76,6 +76,10 @@ def main() -> None:
     ap.add_argument("--rate-max", type=float, default=30.0, help="tilt rate limit bound (deg/s)")
     ap.add_argument("--adapt", action="store_true", help="search the adaptive tilt gain too")
     ap.add_argument("--extra", nargs="*", default=[], help="more generated tuning drives (CSV)")
+    ap.add_argument("--start-min", type=float, default=2.0,
+                    help="--adapt: least envelope start (m/s^2)")
+    ap.add_argument("--tau-min", type=float, default=3.0,
+                    help="--adapt: least envelope time constant (s)")
     ap.add_argument("--min-corr-x", type=float, default=0.95, help="corr fx on every drive")
     ap.add_argument("--max-reversals", type=float, default=0.02, help="reversals on every drive")
     args = ap.parse_args()
@@ -100,10 +104,10 @@ def main() -> None:
     hi = np.log([0.3, 0.3, 1.5, 20, 1.0, 0.4, 1.0, 0.3, 3.0, 10.0, 3.0, 40.0, args.rate_max])
     if args.adapt:  # c_x, c_y, tau; the fixed gains become upper bounds
         peak0 = p0.tilt_adapt_peak_m_s2 or (1.0, 5.0)
-        start0 = max(p0.tilt_adapt_start_m_s2, 2.0)
-        x0 = np.r_[x0, np.log([max(peak0[0], 0.2), max(peak0[1], 0.2), p0.tilt_adapt_tau_s,
-                               start0])]  # fmt: skip
-        lo = np.r_[lo, np.log([0.2, 0.2, 3.0, 2.0])]
+        start0 = max(p0.tilt_adapt_start_m_s2, args.start_min)
+        tau0 = max(p0.tilt_adapt_tau_s, args.tau_min)
+        x0 = np.r_[x0, np.log([max(peak0[0], 0.2), max(peak0[1], 0.2), tau0, start0])]
+        lo = np.r_[lo, np.log([0.2, 0.2, args.tau_min, args.start_min])]
         hi = np.r_[hi, np.log([5.0, 5.0, 300.0, 40.0])]
         hi[0] = hi[1] = np.log(0.5)
     x0 = np.minimum(x0, hi)
