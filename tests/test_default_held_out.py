@@ -24,26 +24,14 @@ on flowing-formula (0.102), reversals <= 2 % and missed fx <= 35 % there (4.0 %,
 
 from __future__ import annotations
 
-import tomllib
-from pathlib import Path
-
 import numpy as np
 import pytest
 
-from motioncue._config import find_config
-from motioncue.analysis import run_chain
-from motioncue.cueing import load_cueing
-from motioncue.cueing._metrics import CueMetrics, cue_metrics
-from motioncue.kinematics import load_platform
-from motioncue.output import load_controller
+from _held_out import DRIVES, default_preset, held_out_metrics
+from motioncue.cueing._metrics import CueMetrics
 from motioncue.telemetry import sample_drives
-from motioncue.telemetry._recording import read_recording_csv, resample
-from motioncue.trajectory import ActuatorLimits
 
-PLATFORM, CONTROLLER, RATE = "stewart6-linear", "mbox6", 100.0
 OLD = "racing-hexapod"
-PATHS = [*sample_drives("held-out", kind="car"), *sample_drives("demo")]
-DRIVES = [p.name for p in PATHS]
 RATIO = 1.25  # measured 1.31-1.77 (fx 1.31-1.40, fy 1.40-1.77)
 # measured with racing-hexapod-firm: share fx, fy; corr fx, fy; missed fx, fy; reversals; false
 MEASURED = {
@@ -57,38 +45,18 @@ TOL = (0.002, 0.002, 0.002, 0.002, 0.01, 0.01, 0.002, 0.005)
 MARGIN = {"reversals": 0.007, "false": 0.045, "corr_fy": 0.006}
 
 
-def _default_preset() -> str:
-    text = find_config("platforms", PLATFORM).read_text()
-    return str(tomllib.loads(text)["default_preset"])
-
-
-def _run(preset: str) -> dict[str, tuple[CueMetrics, int]]:
-    platform = load_platform(PLATFORM)
-    limits = ActuatorLimits.from_platform(platform, load_controller(CONTROLLER), rate_hz=RATE)
-    params = load_cueing(preset)
-    out: dict[str, tuple[CueMetrics, int]] = {}
-    for path in PATHS:
-        rec = resample(read_recording_csv(Path(path)), RATE)
-        run = run_chain(rec.f, rec.w, params, platform, limits, RATE)
-        ev = run.evaluation
-        m = cue_metrics(ev.perceived_vehicle, ev.perceived_sim, ev.thresholds,
-                        clamped_share=run.poses_clamped / len(run.poses))  # fmt: skip
-        out[path.name] = (m, run.actuator_limited)
-    return out
-
-
 @pytest.fixture(scope="module")
 def new() -> dict[str, tuple[CueMetrics, int]]:
-    return _run(_default_preset())
+    return held_out_metrics(default_preset())
 
 
 @pytest.fixture(scope="module")
 def old() -> dict[str, tuple[CueMetrics, int]]:
-    return _run(OLD)
+    return held_out_metrics(OLD)
 
 
 def test_the_default_is_the_new_preset_and_the_drives_are_unseen() -> None:
-    assert _default_preset() != OLD
+    assert default_preset() != OLD
     assert set(DRIVES) == set(MEASURED)
     assert not {p.name for p in sample_drives("tuning")} & set(DRIVES)
 

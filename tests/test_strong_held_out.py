@@ -29,23 +29,13 @@ Not reached (reported in the issue's note; the floors below are raised when they
 
 from __future__ import annotations
 
-from pathlib import Path
-
 import pytest
 
-from motioncue.analysis import run_chain
-from motioncue.cueing import load_cueing
-from motioncue.cueing._metrics import CueMetrics, cue_metrics
-from motioncue.kinematics import load_platform
-from motioncue.output import load_controller
+from _held_out import DRIVES, HARD, check_issue_figures, held_out_metrics
+from motioncue.cueing._metrics import CueMetrics
 from motioncue.telemetry import sample_drives
-from motioncue.telemetry._recording import read_recording_csv, resample
-from motioncue.trajectory import ActuatorLimits
 
-PLATFORM, CONTROLLER, PRESET, RATE = "stewart6-linear", "mbox6", "racing-hexapod-strong", 100.0
-PATHS = [*sample_drives("held-out", kind="car"), *sample_drives("demo")]
-DRIVES = [p.name for p in PATHS]
-HARD = "flowing-formula.csv"
+PRESET = "racing-hexapod-strong"
 # floors (ceilings for reversals and missed cues) of what is not reached; measured in comments
 FLOORS = {
     "share_fx": 0.04,  # 0.041-0.049
@@ -58,17 +48,7 @@ FLOORS = {
 
 @pytest.fixture(scope="module")
 def metrics() -> dict[str, CueMetrics]:
-    platform = load_platform(PLATFORM)
-    limits = ActuatorLimits.from_platform(platform, load_controller(CONTROLLER), rate_hz=RATE)
-    preset = load_cueing(PRESET)
-    out: dict[str, CueMetrics] = {}
-    for path in PATHS:
-        rec = resample(read_recording_csv(Path(path)), RATE)
-        run = run_chain(rec.f, rec.w, preset, platform, limits, RATE)
-        ev = run.evaluation
-        out[path.name] = cue_metrics(ev.perceived_vehicle, ev.perceived_sim, ev.thresholds,
-                                     clamped_share=run.poses_clamped / len(run.poses))  # fmt: skip
-    return out
+    return {name: m for name, (m, _) in held_out_metrics(PRESET).items()}
 
 
 def test_the_drives_are_the_held_out_cars_and_the_lap() -> None:
@@ -78,19 +58,7 @@ def test_the_drives_are_the_held_out_cars_and_the_lap() -> None:
 
 @pytest.mark.parametrize("name", DRIVES)
 def test_error_targets(metrics: dict[str, CueMetrics], name: str) -> None:
-    m = metrics[name]
-    assert m.false_any <= 0.15, m.false_any
-    assert m.clamped <= 0.01, m.clamped
-    assert m.correlation[1] >= 0.90, m.correlation
-    assert m.missed[1] <= 0.35, m.missed
-    if name != HARD:
-        assert m.reversals_any <= 0.02, m.reversals_any
-        assert m.correlation[0] >= 0.95, m.correlation
-        assert m.missed[0] <= 0.35, m.missed
-    else:
-        assert m.reversals_any <= FLOORS["reversals_hard"], m.reversals_any
-        assert m.correlation[0] >= FLOORS["corr_fx_hard"], m.correlation
-        assert m.missed[0] <= FLOORS["missed_fx_hard"], m.missed
+    check_issue_figures(metrics[name], name, FLOORS)
 
 
 @pytest.mark.parametrize("name", DRIVES)
