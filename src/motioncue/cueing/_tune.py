@@ -323,6 +323,12 @@ lives in a :class:`CueingParams` (x and y share the ``_xy`` ones, roll and pitch
 ``_rp`` ones). A preset without ``tilt_accel_limit_rad_s2`` starts at the upper bound; one
 without ``f_shape`` at 2, and written, the heave curve takes the x/y exponent as well."""
 
+_INTENSITY_FIELDS: tuple[str, ...] = tuple(
+    dict.fromkeys(_CLASSICAL_KNOBS[p.name].field for p in STRENGTH_TUNED_PARAMETERS)
+)
+"""The :class:`CueingParams` fields an intensity range moves (:func:`at_intensity`): those
+the knobs of :data:`STRENGTH_TUNED_PARAMETERS` write, in table order."""
+
 
 class _ClassicalTuning:
     """The classical washout's plan: :data:`TUNED_PARAMETERS`, or
@@ -452,22 +458,59 @@ def params_from_vector(base: CueingParams, x: Sequence[float], name: str = "") -
     return plan.apply(base, v, name)
 
 
+def _between(a: float, b: float, t: float) -> float:
+    """``a`` at ``t = 0``, ``b`` at ``t = 1``: geometric in between where both have the same
+    sign (the tuner's log space), linear where one is zero or they differ in sign (no log);
+    monotonic in ``t`` either way, and exact at the ends and where ``a == b``."""
+    if t == 0.0 or a == b:
+        return a
+    if t == 1.0:
+        return b
+    if a * b > 0.0:
+        la, lb = math.log(abs(a)), math.log(abs(b))
+        return math.copysign(math.exp(la + t * (lb - la)), a)
+    return a + t * (b - a)
+
+
+def _between_fields(gentle: CueingParams, strong: CueingParams, t: float) -> _Fields:
+    """Each of :data:`_INTENSITY_FIELDS` between the two ends, element by element
+    (:func:`_between`); for ``replace`` on ``strong``."""
+    fields: _Fields = {}
+    for name in _INTENSITY_FIELDS:
+        a, b = getattr(gentle, name), getattr(strong, name)
+        if isinstance(a, tuple) and isinstance(b, tuple) and len(a) == len(b):
+            fields[name] = tuple(_between(float(u), float(v), t) for u, v in zip(a, b, strict=True))
+        elif isinstance(a, (int, float)) and isinstance(b, (int, float)):
+            fields[name] = _between(float(a), float(b), t)
+        else:  # the knobs write what they read: both ends have the same shape
+            raise AssertionError(f"intensity field {name}: {a!r} and {b!r} differ in shape")
+    return fields
+
+
 def at_intensity(params: CueingParams, percent: float) -> CueingParams:
     """The preset at an intensity: a point of its tuned range, not a plain gain.
 
     ``100`` is the preset itself (its tables: the strongest tuned point within its cue
-    budget), ``0`` its ``[intensity] gentle`` end (tuned for a tighter false-cue budget);
-    between, every tuned parameter (:data:`STRENGTH_TUNED_PARAMETERS`: gains, limits,
-    exponents, filter frequencies, tilt rate and reach share) is interpolated geometrically,
-    ``v = v0^(1 - t) v100^t`` with ``t = percent / 100`` (the tuner's log space), so that every
-    point is a complete washout design between two tuned ones. Whatever the intensity, the
-    chain after the washout (workspace limiting, the actuator limiter) keeps every frame
-    within the limits.
+    budget), ``0`` its ``[intensity] gentle`` end (tuned for a tighter false-cue budget): the
+    preset with the tuned parameters (:data:`STRENGTH_TUNED_PARAMETERS`) set to that table,
+    ``params_from_vector(params, log(gentle))``. In between, every field those parameters
+    write (:data:`_INTENSITY_FIELDS`: gains, limits, exponents, filter frequencies, tilt rate
+    and acceleration limits, reach share, leads) is interpolated element by element between
+    the gentle end's value ``v0`` and the preset's own ``v100``, geometrically (the tuner's
+    log space), ``v = v0^(1 - t) v100^t`` with ``t = percent / 100`` (linearly for an element
+    that is zero at one end), so that every point is a complete washout design between two
+    tuned ones and the range is continuous up to 100 %: the preset's own values, not their
+    image in the tuner's space (which holds one f_limit for x and y, their geometric mean,
+    ``tilt_shape`` at most 8, and every value clipped to its bounds), are the strong end. A
+    field the preset leaves unset (``None``, e.g. no lead) is read there as the tuner reads
+    it (:func:`vector_from_params`). Everything else, the ``adapt_*`` keys among them, is the
+    preset's at every intensity. Whatever the intensity, the chain after the washout
+    (workspace limiting, the actuator limiter) keeps every frame within the limits.
 
     Parameters
     ----------
     params : CueingParams
-        A preset with an intensity range (``intensity_gentle``).
+        A classical preset with an intensity range (``intensity_gentle``).
     percent : float
         0 to 100.
 
@@ -479,7 +522,8 @@ def at_intensity(params: CueingParams, percent: float) -> CueingParams:
     Raises
     ------
     ConfigError
-        ``percent`` outside 0..100, or a preset without an intensity range.
+        ``percent`` outside 0..100, a preset without an intensity range, or one whose
+        algorithm is not tuned on :data:`STRENGTH_TUNED_PARAMETERS` (the classical washout's).
     """
     if isinstance(percent, bool) or not (math.isfinite(percent) and 0.0 <= percent <= 100.0):
         raise ConfigError(f"intensity {percent!r} % is invalid; allowed: 0 to 100")
@@ -488,13 +532,28 @@ def at_intensity(params: CueingParams, percent: float) -> CueingParams:
             f"preset {params.name!r} has no tuned intensity range (no [intensity] table); "
             "give a preset that has one (e.g. racing-hexapod-strong) or leave out the intensity"
         )
+    if _tuning(params) is not CLASSICAL_TUNING:
+        raise ConfigError(
+            f"preset {params.name!r}: its [intensity.gentle] table sets the classical "
+            f"washout's tuned parameters, which its algorithm {params.algorithm!r} does not "
+            "tune; leave out the intensity or the table"
+        )
     if percent == 100.0:
         return params
-    t = percent / 100.0
-    strong = vector_from_params(params)
-    gentle = _clip_log(STRENGTH_TUNED_PARAMETERS, params.intensity_gentle)
-    x = gentle + t * (strong - gentle)
-    return params_from_vector(params, x.tolist(), name=f"{params.name}@{percent:g}%")
+    name = f"{params.name}@{percent:g}%"
+    gentle_end = params_from_vector(
+        params, _clip_log(STRENGTH_TUNED_PARAMETERS, params.intensity_gentle).tolist(), name
+    )
+    if percent == 0.0:
+        return gentle_end
+    # the strong end: the preset's own fields; one it leaves unset, as the tuner reads it
+    unset = [f for f in _INTENSITY_FIELDS if getattr(params, f) is None]
+    strong_end = params
+    if unset:
+        read = params_from_vector(params, vector_from_params(params).tolist())
+        strong_end = replace(params, **{f: getattr(read, f) for f in unset})
+    fields = _between_fields(gentle_end, strong_end, percent / 100.0)
+    return replace(params, name=name, **fields)
 
 
 def _fmt(v: float) -> str:
