@@ -76,12 +76,18 @@ def main() -> None:
     ap.add_argument("--rate-max", type=float, default=30.0, help="tilt rate limit bound (deg/s)")
     ap.add_argument("--adapt", action="store_true", help="search the adaptive tilt gain too")
     ap.add_argument("--extra", nargs="*", default=[], help="more generated tuning drives (CSV)")
-    ap.add_argument("--start-min", type=float, default=2.0,
-                    help="--adapt: least envelope start (m/s^2)")
-    ap.add_argument("--tau-min", type=float, default=3.0,
-                    help="--adapt: least envelope time constant (s)")
+    ap.add_argument(
+        "--start-min", type=float, default=2.0, help="--adapt: least envelope start (m/s^2)"
+    )
+    ap.add_argument(
+        "--tau-min", type=float, default=3.0, help="--adapt: least envelope time constant (s)"
+    )
     ap.add_argument("--min-corr-x", type=float, default=0.95, help="corr fx on every drive")
     ap.add_argument("--max-reversals", type=float, default=0.02, help="reversals on every drive")
+    ap.add_argument("--vs-firm", action="store_true",
+                    help="also: share fx at least the firm default's less 0.002 on every drive, "
+                    "corr fx at least min(--min-corr-x, the firm default's), reversals at most "
+                    "max(--max-reversals, the firm default's)")  # fmt: skip
     args = ap.parse_args()
     platform = load_platform("stewart6-linear")
     limits = ActuatorLimits.from_platform(platform, load_controller("mbox6"), rate_hz=RATE)
@@ -89,10 +95,14 @@ def main() -> None:
     recs = [resample(read_recording_csv(Path(d)), RATE) for d in drives]
     firm = load_cueing("racing-hexapod-firm")
     firm_fy = []  # racing-hexapod-firm's share fy on each drive (0.132, 0.119, 0.137, 0.113)
+    firm_fx, firm_cx, firm_rev = [], [], []  # its share fx, corr fx, reversals (--vs-firm)
     for rec in recs:
         ev = run_chain(rec.f, rec.w, firm, platform, limits, RATE).evaluation
-        firm_fy.append(cue_metrics(ev.perceived_vehicle, ev.perceived_sim, ev.thresholds)
-                       .rendered_share[1])  # fmt: skip
+        fm = cue_metrics(ev.perceived_vehicle, ev.perceived_sim, ev.thresholds)
+        firm_fy.append(fm.rendered_share[1])
+        firm_fx.append(fm.rendered_share[0])
+        firm_cx.append(fm.correlation[0])
+        firm_rev.append(fm.reversals_any)
     p0 = load_cueing(args.base or "racing-hexapod-firm")
     assert p0.tilt_scale is not None and p0.lead_s is not None and p0.tilt_shape is not None
     kx, fwd = (0.08, 0.5) if args.base is None else (p0.tilt_scale[0], p0.tilt_forward_ratio)
@@ -137,15 +147,21 @@ def main() -> None:
     def evaluate(x: np.ndarray) -> tuple[float, list[str]]:
         p = params(x)
         viol, strength, lines = 0.0, 0.0, []
-        for rec, name, fy in zip(recs, drives, firm_fy, strict=True):
+        for rec, name, fy, fx0, cx0, rev0 in zip(
+            recs, drives, firm_fy, firm_fx, firm_cx, firm_rev, strict=True
+        ):
             run = run_chain(rec.f, rec.w, p, platform, limits, RATE)
             ev = run.evaluation
             m = cue_metrics(ev.perceived_vehicle, ev.perceived_sim, ev.thresholds,
                             clamped_share=run.poses_clamped / len(run.poses))  # fmt: skip
             sx, sy = m.rendered_share[0], m.rendered_share[1]
             cx, cy = m.correlation[0], m.correlation[1]
-            viol += 10 * max(0.0, args.min_corr_x - cx) + 10 * max(0.0, 0.90 - cy)
-            viol += 10 * max(0.0, m.reversals_any - args.max_reversals)
+            min_cx = min(args.min_corr_x, cx0) if args.vs_firm else args.min_corr_x
+            viol += 10 * max(0.0, min_cx - cx) + 10 * max(0.0, 0.90 - cy)
+            if args.vs_firm:
+                viol += 10 * max(0.0, fx0 - 0.002 - sx)
+            max_rev = max(args.max_reversals, rev0) if args.vs_firm else args.max_reversals
+            viol += 10 * max(0.0, m.reversals_any - max_rev)
             viol += max(0.0, m.false_any - 0.15)
             viol += 10 * max(0.0, m.clamped - 0.01) + run.actuator_limited / 100
             viol += 10 * max(0.0, fy - 0.005 - sy)
