@@ -84,6 +84,7 @@ def main() -> None:
     )
     ap.add_argument("--min-corr-x", type=float, default=0.95, help="corr fx on every drive")
     ap.add_argument("--max-reversals", type=float, default=0.02, help="reversals on every drive")
+    ap.add_argument("--max-false", type=float, default=0.15, help="all false cues on every drive")
     ap.add_argument("--vs-firm", action="store_true",
                     help="also: share fx at least the firm default's less 0.002 on every drive, "
                     "corr fx at least min(--min-corr-x, the firm default's), reversals at most "
@@ -162,7 +163,7 @@ def main() -> None:
                 viol += 10 * max(0.0, fx0 - 0.002 - sx)
             max_rev = max(args.max_reversals, rev0) if args.vs_firm else args.max_reversals
             viol += 10 * max(0.0, m.reversals_any - max_rev)
-            viol += max(0.0, m.false_any - 0.15)
+            viol += max(0.0, m.false_any - args.max_false)
             viol += 10 * max(0.0, m.clamped - 0.01) + run.actuator_limited / 100
             viol += 10 * max(0.0, fy - 0.005 - sy)
             strength += sx
