@@ -230,7 +230,7 @@ def test_a_registered_algorithm_runs_in_cue_generate_and_bridge_by_name(
 # -- the platforms' default presets -------------------------------------------------------------
 def test_every_bundled_platform_names_a_loadable_default_preset() -> None:
     expected = {
-        "stewart6-linear": "racing-hexapod-firm",
+        "stewart6-linear": "racing-hexapod-auto",
         "stewart6-rotary": "racing-rotary",
         "seat3": "cinema-seat-3dof",
         "seat3-pot": "cinema-seat-3dof",  # seat3 on pot-feedback actuators (SMC3, iface)
@@ -274,7 +274,7 @@ def test_generate_and_cue_use_the_platform_default_and_say_so(
     cue = ["cue", "--input", str(rec), "--rate", "50", "--out", str(out)]
     assert main([*cue, "--platform", "stewart6-linear"]) == 0
     said = capsys.readouterr().out
-    assert "preset racing-hexapod-firm (default of platform stewart6-linear)" in said
+    assert "preset racing-hexapod-auto (default of platform stewart6-linear)" in said
     assert main([*cue]) == 2
     err = capsys.readouterr().err
     assert "motioncue cue: error: no cueing preset: give --preset NAME, or --platform P" in err
@@ -282,7 +282,7 @@ def test_generate_and_cue_use_the_platform_default_and_say_so(
     # a platform file without default_preset: the fallback is used and named
     plain = tmp_path / "plain.toml"
     text = find_config("platforms", "stewart6-linear").read_text()
-    plain.write_text(text.replace('default_preset = "racing-hexapod-firm"', "", 1))
+    plain.write_text(text.replace('default_preset = "racing-hexapod-auto"', "", 1))
     assert main([*cue, "--platform", str(plain)]) == 0
     assert "preset racing (fallback: platform" in capsys.readouterr().out
 

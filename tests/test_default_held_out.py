@@ -1,25 +1,31 @@
 """Issue 20's figures for the ``stewart6-linear`` default on the drives never tuned on.
 
-Every held-out car drive (``sample_drives("held-out", kind="car")``) and the bundled lap,
-``stewart6-linear`` with ``mbox6``, through the chain of ``motioncue compare`` (cueing,
-workspace limiting, the actuator limiter, forward kinematics of the changed frames, vestibular
-models; definitions of :mod:`motioncue.cueing._metrics`, ``docs/cue-metrics.md``), with the
-platform's ``default_preset`` (read from its file; ``racing-hexapod-firm`` since issue 20).
-``tests/test_cue_acceptance.py`` holds the default to issue 11's figures and checks every frame
-of its rides on the controller's clock; this module pins what the switch from
-``racing-hexapod`` promised:
+The default (the platform's ``default_preset``, read from its file) is ``racing-hexapod-auto``
+since session 29: the compressive washout with a tilt gain that adapts to the car's force
+peaks (``[tilt] adapt_peak_m_s2``), searched so that it is at least as good as the default
+before it, ``racing-hexapod-firm`` (:data:`REFERENCE`), on every tuning drive. Every held-out car
+drive (``sample_drives("held-out", kind="car")``) and the bundled lap, ``stewart6-linear`` with
+``mbox6``, through the chain of ``motioncue compare`` (:func:`motioncue.analysis.run_chain`,
+metrics of :mod:`motioncue.cueing._metrics`, ``docs/cue-metrics.md``).
+``tests/test_cue_acceptance.py`` holds the default to issue 11's figures and checks every
+frame of its rides on the controller's clock; ``tests/test_firm_held_out.py`` keeps what the
+reference promised against ``racing-hexapod``. This module pins what the switch promised:
 
-* on every drive: the issue's thresholds the default meets (all false cues <= 15 %, clamped
-  <= 1 %, correlation fx >= 0.95 and fy >= 0.90, missed fy <= 35 %), and no pose changed by the
-  actuator limiter;
-* stronger than the old default: rendered share fx and fy at least RATIO x ``racing-hexapod``'s
-  on every drive, and fewer missed cues on both channels;
-* no worse than the old default on any acceptance column but by the stated margins
-  (:data:`MARGIN`: false cues and reversals on forest-rally and the lap, corr fy);
-* pinned at the measured figures (:data:`MEASURED`) within :data:`TOL`.
+* on every drive: issue 20's error figures (``check_issue_figures``: all false cues <= 15 %,
+  clamped <= 1 %, corr fy >= 0.90, missed fy <= 35 %; reversals <= 2 %, corr fx >= 0.95 and
+  missed fx <= 35 % but on flowing-formula, where :data:`FLOORS` hold what is reached), corr
+  fx >= 0.95 on flowing-formula too, and no frame changed by the actuator limiter;
+* stronger than the reference where the tilt had room: share fx at least :data:`RATIO` times
+  the reference's on every drive but flowing-formula, where it is at least
+  ``FLOORS["share_fx_hard"]`` times (a formula car's 3-4 g stops take the gain the reference
+  had; the search held it to the reference's less 0.002 on its formula drives);
+* no worse than the reference on the other columns but by :data:`MARGIN`;
+* pinned at the measured figures (:data:`MEASURED`) within :data:`TOL`;
+* its intensity range: at 0, 50 and 100 % the shares of fx and fy each grow on every drive,
+  clamped <= 1 % and no frame changed by the actuator limiter at each level.
 
-Not reached (the preset's header says why): share fx >= 0.12 (0.034-0.042), share fy >= 0.12
-on flowing-formula (0.102), reversals <= 2 % and missed fx <= 35 % there (4.0 %, 67 %).
+Not reached (the preset's header says why): share fx >= 0.12 but on forest-rally, share fy >=
+0.12 on flowing-formula, reversals <= 2 % and missed fx <= 35 % on flowing-formula.
 """
 
 from __future__ import annotations
@@ -27,52 +33,74 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from _held_out import DRIVES, default_preset, held_out_metrics
+from _held_out import DRIVES, HARD, check_issue_figures, default_preset, held_out_metrics
+from motioncue.cueing import at_intensity, load_cueing
 from motioncue.cueing._metrics import CueMetrics
 from motioncue.telemetry import sample_drives
 
-OLD = "racing-hexapod"
-RATIO = 1.25  # measured 1.31-1.77 (fx 1.31-1.40, fy 1.40-1.77)
-# measured with racing-hexapod-firm: share fx, fy; corr fx, fy; missed fx, fy; reversals; false
+PRESET = "racing-hexapod-auto"
+REFERENCE = "racing-hexapod-firm"
+LEVELS = (0.0, 50.0, 100.0)  # --intensity
+RATIO = 1.5  # share fx against the reference's but on HARD; measured 2.37 and 1.72
+# floors (ceilings for reversals and missed cues) on HARD; measured in comments
+FLOORS = {
+    "corr_fx_hard": 0.95,  # 0.952 (the issue's figure; the reference's 0.951)
+    "reversals_hard": 0.035,  # 0.031 (the reference's 0.040)
+    "missed_fx_hard": 0.70,  # 0.667 (the reference's 0.667)
+    "share_fx_hard": 0.9,  # x the reference's: 0.944
+}
+# measured: share fx, fy; corr fx, fy; missed fx, fy; reversals; all false cues
 MEASURED = {
-    "forest-rally.csv": (0.042, 0.138, 0.987, 0.995, 0.293, 0.104, 0.0145, 0.0561),
-    "flowing-formula.csv": (0.034, 0.102, 0.951, 0.985, 0.667, 0.042, 0.0400, 0.0644),
-    "lap.csv": (0.039, 0.131, 0.987, 0.998, 0.292, 0.019, 0.0019, 0.0269),
+    "forest-rally.csv": (0.100, 0.134, 0.978, 0.995, 0.086, 0.114, 0.0092, 0.0778),
+    "flowing-formula.csv": (0.032, 0.098, 0.952, 0.989, 0.667, 0.071, 0.0315, 0.0600),
+    "lap.csv": (0.067, 0.130, 0.975, 0.999, 0.210, 0.020, 0.0023, 0.0255),
 }
 # absolute tolerances of those: shares, correlations, missed, reversals, false cues
 TOL = (0.002, 0.002, 0.002, 0.002, 0.01, 0.01, 0.002, 0.005)
-# how much worse than the old default a column may be (absolute), where the old one was better
-MARGIN = {"reversals": 0.007, "false": 0.045, "corr_fy": 0.006}
+# how much worse than the reference a column may be (absolute), where the reference is better
+# (measured, worst drive: share fy -0.0047 forest-rally; missed fx +0.0000 flowing-formula;
+# missed fy +0.029 flowing-formula; corr fx -0.013 lap; corr fy -0.0004 forest-rally;
+# reversals +0.0004 lap; all false cues +0.022 forest-rally)
+MARGIN = {"share_fy": 0.006, "missed_fx": 0.001, "missed_fy": 0.035, "corr_fx": 0.015,
+          "corr_fy": 0.002, "reversals": 0.001, "false": 0.025}  # fmt: skip
 
 
 @pytest.fixture(scope="module")
-def new() -> dict[str, tuple[CueMetrics, int]]:
-    return held_out_metrics(default_preset())
+def metrics() -> dict[str, dict[str, tuple[CueMetrics, int]]]:
+    return {name: held_out_metrics(name) for name in (PRESET, REFERENCE)}
 
 
 @pytest.fixture(scope="module")
-def old() -> dict[str, tuple[CueMetrics, int]]:
-    return held_out_metrics(OLD)
+def levels(
+    metrics: dict[str, dict[str, tuple[CueMetrics, int]]],
+) -> dict[float, dict[str, tuple[CueMetrics, int]]]:
+    """The default at each of :data:`LEVELS` (100 %: the preset itself, measured above)."""
+    strong = load_cueing(PRESET)
+    return {
+        pct: metrics[PRESET] if pct == 100.0 else held_out_metrics(at_intensity(strong, pct))
+        for pct in LEVELS
+    }
 
 
-def test_the_default_is_the_new_preset_and_the_drives_are_unseen() -> None:
-    assert default_preset() != OLD
-    assert set(DRIVES) == set(MEASURED)
+def test_the_default_is_this_preset_and_the_drives_are_unseen() -> None:
+    assert default_preset() == PRESET
+    assert set(DRIVES) == set(MEASURED) and HARD in DRIVES
     assert not {p.name for p in sample_drives("tuning")} & set(DRIVES)
+    p = load_cueing(PRESET)
+    assert p.tilt_adapt_peak_m_s2 is not None and p.intensity_gentle is not None
 
 
 @pytest.mark.parametrize("name", DRIVES)
-def test_thresholds_met(new: dict[str, tuple[CueMetrics, int]], name: str) -> None:
-    m, limited = new[name]
+def test_error_targets(metrics: dict[str, dict[str, tuple[CueMetrics, int]]], name: str) -> None:
+    m, limited = metrics[PRESET][name]
     assert limited == 0, limited
-    assert m.false_any <= 0.15 and m.clamped <= 0.01, (m.false_any, m.clamped)
-    assert m.correlation[0] >= 0.95 and m.correlation[1] >= 0.90, m.correlation
-    assert m.missed[1] <= 0.35, m.missed
+    check_issue_figures(m, name, FLOORS)
+    assert m.correlation[0] >= 0.95, m.correlation  # the issue's, on HARD as well
 
 
 @pytest.mark.parametrize("name", DRIVES)
-def test_pinned_figures(new: dict[str, tuple[CueMetrics, int]], name: str) -> None:
-    m, _ = new[name]
+def test_pinned_figures(metrics: dict[str, dict[str, tuple[CueMetrics, int]]], name: str) -> None:
+    m, _ = metrics[PRESET][name]
     got = (*m.rendered_share[:2], *m.correlation[:2], *m.missed[:2], m.reversals_any,
            m.false_any)  # fmt: skip
     err = np.abs(np.asarray(got) - np.asarray(MEASURED[name]))
@@ -80,16 +108,34 @@ def test_pinned_figures(new: dict[str, tuple[CueMetrics, int]], name: str) -> No
 
 
 @pytest.mark.parametrize("name", DRIVES)
-def test_stronger_than_the_old_default_and_no_worse_but_by_the_margins(
-    new: dict[str, tuple[CueMetrics, int]], old: dict[str, tuple[CueMetrics, int]], name: str
+def test_stronger_than_the_reference_and_no_worse_but_by_the_margins(
+    metrics: dict[str, dict[str, tuple[CueMetrics, int]]], name: str
 ) -> None:
-    m, o = new[name][0], old[name][0]
-    assert np.all(m.rendered_share[:2] >= RATIO * o.rendered_share[:2]), (
-        m.rendered_share[:2], o.rendered_share[:2])  # fmt: skip
-    assert np.all(m.missed[:2] < o.missed[:2]), (m.missed[:2], o.missed[:2])
-    assert m.correlation[0] >= o.correlation[0] - 1e-9, (m.correlation, o.correlation)
-    assert m.correlation[1] >= o.correlation[1] - MARGIN["corr_fy"], (m.correlation, o.correlation)
-    assert m.reversals_any <= o.reversals_any + MARGIN["reversals"], (
-        m.reversals_any, o.reversals_any)  # fmt: skip
-    assert m.false_any <= o.false_any + MARGIN["false"], (m.false_any, o.false_any)
-    assert m.clamped <= max(o.clamped, 0.0), (m.clamped, o.clamped)
+    m, r = metrics[PRESET][name][0], metrics[REFERENCE][name][0]
+    ratio = RATIO if name != HARD else FLOORS["share_fx_hard"]
+    assert m.rendered_share[0] >= ratio * r.rendered_share[0], (
+        m.rendered_share, r.rendered_share)  # fmt: skip
+    assert m.rendered_share[1] >= r.rendered_share[1] - MARGIN["share_fy"], (
+        m.rendered_share, r.rendered_share)  # fmt: skip
+    assert m.missed[0] <= r.missed[0] + MARGIN["missed_fx"], (m.missed, r.missed)
+    assert m.missed[1] <= r.missed[1] + MARGIN["missed_fy"], (m.missed, r.missed)
+    assert m.correlation[0] >= r.correlation[0] - MARGIN["corr_fx"], (
+        m.correlation, r.correlation)  # fmt: skip
+    assert m.correlation[1] >= r.correlation[1] - MARGIN["corr_fy"], (
+        m.correlation, r.correlation)  # fmt: skip
+    assert m.reversals_any <= r.reversals_any + MARGIN["reversals"], (
+        m.reversals_any, r.reversals_any)  # fmt: skip
+    assert m.false_any <= r.false_any + MARGIN["false"], (m.false_any, r.false_any)
+    assert m.clamped <= r.clamped, (m.clamped, r.clamped)
+
+
+@pytest.mark.parametrize("name", DRIVES)
+def test_intensity_grows_within_the_limits(
+    levels: dict[float, dict[str, tuple[CueMetrics, int]]], name: str
+) -> None:
+    rows = [levels[pct][name] for pct in LEVELS]
+    s = np.array([m.rendered_share[:2] for m, _ in rows])
+    assert np.all(np.diff(s, axis=0) > 0.0), s  # fx and fy each grow 0 -> 50 -> 100 %
+    for pct, (m, limited) in zip(LEVELS, rows, strict=True):
+        assert m.clamped <= 0.01, (pct, m.clamped)
+        assert limited == 0, (pct, limited)

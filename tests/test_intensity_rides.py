@@ -3,9 +3,11 @@ each within the limits, judged on the rides themselves.
 
 On a 30 s excerpt of the bundled lap (10 s to 40 s: braking, corners, a crest; never tuned
 on), ``generate --preset PRESET --intensity 0|50|100`` on ``stewart6-linear`` with ``mbox6``,
-for racing-hexapod-strong, for the platform's default, racing-hexapod-firm (its gentle end
-tuned with a per-channel cap, ``tune --gentle-share``), and for racing-hexapod-adaptive (its
-tilt gain adapts to the drive; the gentle end tuned the same way as firm's):
+for racing-hexapod-strong, for racing-hexapod-firm (the platform's default until session 29;
+its gentle end tuned with a per-channel cap, ``tune --gentle-share``), for
+racing-hexapod-adaptive (its tilt gain adapts to the drive; the gentle end tuned the same way
+as firm's) and for the default since session 29, racing-hexapod-auto (the same, tuned the
+same way):
 
 - strength as the rider gets it: the rendered share of fx and fy (rms of the perceived
   platform motion over rms of the perceived vehicle motion) measured on the ride's frames
@@ -16,7 +18,8 @@ tilt gain adapts to the drive; the gentle end tuned the same way as firm's):
   0.1226, 0.1348 / 0.1348; firm: fx 0.0232 / 0.0228, 0.0299 / 0.0296, 0.0392 / 0.0387; fy
   0.0629 / 0.0629, 0.0920 / 0.0920, 0.1301 / 0.1302; adaptive: fx 0.0308 / 0.0306, 0.0579 /
   0.0577, 0.0667 / 0.0660; fy 0.0732 / 0.0732, 0.1078 / 0.1078, 0.1311 / 0.1312 (50 % since
-  at_intensity ends at the preset's own values);
+  at_intensity ends at the preset's own values); auto: fx 0.0331 / 0.0330, 0.0553 / 0.0551,
+  0.0630 / 0.0629; fy 0.0768 / 0.0768, 0.1086 / 0.1087, 0.1271 / 0.1273;
 - every frame within the limits as the controller reads them: the frames ``play`` sends
   (ramp from park, the ride, the park) decoded and fed to the MBOX emulator on its own
   clock (Fn012 pacing, whole-ms stamps; it judges with the manual's numbers), and the
@@ -50,7 +53,7 @@ from motioncue.trajectory import ActuatorLimits
 from motioncue.viewer import load_view_input, rendered_shares, view_html
 
 PLATFORM, CONTROLLER, PRESET, RATE = "stewart6-linear", "mbox6", "racing-hexapod-strong", 100.0
-PRESETS = (PRESET, "racing-hexapod-firm", "racing-hexapod-adaptive")
+PRESETS = (PRESET, "racing-hexapod-firm", "racing-hexapod-adaptive", "racing-hexapod-auto")
 LEVELS = (0.0, 50.0, 100.0)
 Rides = tuple[Path, dict[float, Path], str]
 

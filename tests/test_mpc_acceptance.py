@@ -22,9 +22,11 @@ prices the error to the vehicle's whole motion). Not met, on the flowing-formula
 whole drive's 0.73 % since session 27, 0.97 % in session 26, 2.20 % before: fz reversals of
 its roll in fast downforce corners where a window's second pass failed); ``mpc``'s fx
 correlation 0.927. Against ``racing-hexapod-firm`` (``CLASSICAL``, stewart6-linear's default
-since issue 20) ``mpc``'s fy share is 0.97 / 1.49 / 1.09x on the excerpts (fx 1.50 / 2.03 /
-1.99x; session 25's plan with the pose prior, ``[mpc] w_prior``): below the issue's 1.15x in fy
-on flowing-formula and the lap, so ``RATIO_MPC`` holds the measured floors there: see the
+from issue 20 to session 29, which the plans were searched against; the default is now
+``racing-hexapod-auto``, README "Classical, model-predictive and optimal cueing") ``mpc``'s
+fy share is 0.97 / 1.49 / 1.09x on the excerpts (fx 1.50 / 2.03 / 1.99x; session 25's plan
+with the pose prior, ``[mpc] w_prior``): below the issue's 1.15x in fy on flowing-formula and
+the lap, so ``RATIO_MPC`` holds the measured floors there: see the
 presets' headers.
 
 The physical bound of issue 12's note is kept: for any motion of this hexapod (tilt at most
@@ -66,7 +68,7 @@ EXCERPT_S = (30.0, 60.0)
 """The window of each drive (s from its start)."""
 
 CLASSICAL = "racing-hexapod-firm"
-"""The classical default of stewart6-linear (issue 20 compares with it)."""
+"""The classical default of stewart6-linear until session 29 (issue 20 compares with it)."""
 
 DRIVES = ("flowing-formula", "forest-rally", "lap")
 

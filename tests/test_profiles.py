@@ -241,11 +241,11 @@ def test_bridge_warns_when_a_profile_preset_clamps_and_not_with_the_platforms_ow
     assert main([*base, "--profile", str(old)]) == 0
     err = capsys.readouterr().err
     assert ("warning: profile old-f1 replaces platform stewart6-linear's tuned preset "
-            "racing-hexapod-firm by racing") in err  # fmt: skip
+            "racing-hexapod-auto by racing") in err  # fmt: skip
     warnings = [ln for ln in err.splitlines() if "warning: the workspace limit clamped" in ln]
     assert len(warnings) == 2, err  # once live (at the first status poll past 1 %), once at the end
     assert "| WARNING" in err  # and on the status line
     assert main([*base, "--profile", "f1-24"]) == 0
     err = capsys.readouterr().err
-    assert "preset racing-hexapod-firm (default of platform stewart6-linear), profile f1-24" in err
+    assert "preset racing-hexapod-auto (default of platform stewart6-linear), profile f1-24" in err
     assert "workspace clamped 0 poses" in err and "warning" not in err, err

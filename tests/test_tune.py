@@ -94,6 +94,10 @@ def _tune_args(
         "--input", str(drives["a"]), str(drives["b"]),
         "--platform", PLATFORM,
         "--controller", CONTROLLER,
+        # the base these checks were measured from: stewart6-linear's default until session 29
+        # (its default now, racing-hexapod-auto, adapts its tilt gain, which the cue score's
+        # tuning space leaves out)
+        "--preset", "racing-hexapod-firm",
         "--out", str(out),
         "--seed", str(SEED),
         "--generations", str(generations),
