@@ -15,7 +15,7 @@ from pathlib import Path
 
 from motioncue._config import find_config
 from motioncue.analysis import run_chain
-from motioncue.cueing import CueingParams, load_cueing
+from motioncue.cueing import CueingParams, at_intensity, load_cueing
 from motioncue.cueing._metrics import CueMetrics, cue_metrics
 from motioncue.kinematics import load_platform
 from motioncue.output import load_controller
@@ -49,6 +49,18 @@ def held_out_metrics(preset: str | CueingParams) -> dict[str, tuple[CueMetrics, 
                         clamped_share=run.poses_clamped / len(run.poses))  # fmt: skip
         out[path.name] = (m, run.actuator_limited)
     return out
+
+
+def held_out_levels(
+    preset: str, full: dict[str, tuple[CueMetrics, int]], levels: tuple[float, ...]
+) -> dict[float, dict[str, tuple[CueMetrics, int]]]:
+    """:func:`held_out_metrics` of ``preset`` at each intensity of ``levels`` (``--intensity``,
+    :func:`motioncue.cueing.at_intensity`); at 100 % the preset itself, whose metrics
+    (``full``) the caller has measured already."""
+    strong = load_cueing(preset)
+    return {
+        pct: full if pct == 100.0 else held_out_metrics(at_intensity(strong, pct)) for pct in levels
+    }
 
 
 def check_issue_figures(m: CueMetrics, name: str, floors: dict[str, float]) -> None:

@@ -33,8 +33,15 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from _held_out import DRIVES, HARD, check_issue_figures, default_preset, held_out_metrics
-from motioncue.cueing import at_intensity, load_cueing
+from _held_out import (
+    DRIVES,
+    HARD,
+    check_issue_figures,
+    default_preset,
+    held_out_levels,
+    held_out_metrics,
+)
+from motioncue.cueing import load_cueing
 from motioncue.cueing._metrics import CueMetrics
 from motioncue.telemetry import sample_drives
 
@@ -75,11 +82,7 @@ def levels(
     metrics: dict[str, dict[str, tuple[CueMetrics, int]]],
 ) -> dict[float, dict[str, tuple[CueMetrics, int]]]:
     """The default at each of :data:`LEVELS` (100 %: the preset itself, measured above)."""
-    strong = load_cueing(PRESET)
-    return {
-        pct: metrics[PRESET] if pct == 100.0 else held_out_metrics(at_intensity(strong, pct))
-        for pct in LEVELS
-    }
+    return held_out_levels(PRESET, metrics[PRESET], LEVELS)
 
 
 def test_the_default_is_this_preset_and_the_drives_are_unseen() -> None:
