@@ -12,9 +12,10 @@ frame of its rides on the controller's clock; ``tests/test_firm_held_out.py`` ke
 reference promised against ``racing-hexapod``. This module pins what the switch promised:
 
 * on every drive: issue 20's error figures (``check_issue_figures``: all false cues <= 15 %,
-  clamped <= 1 %, corr fy >= 0.90, missed fy <= 35 %; reversals <= 2 %, corr fx >= 0.95 and
-  missed fx <= 35 % but on flowing-formula, where :data:`FLOORS` hold what is reached), corr
-  fx >= 0.95 on flowing-formula too, and no frame changed by the actuator limiter;
+  clamped <= 1 %, corr fy >= 0.90, missed fy <= 35 %, reversals <= 2 %, corr fx >= 0.95;
+  missed fx <= 35 % but on flowing-formula, where ``FLOORS["missed_fx_hard"]`` holds what is
+  reached; there the other two floors are the issue's figures), and no frame changed by the
+  actuator limiter;
 * stronger than the reference where the tilt had room: share fx at least :data:`RATIO` times
   the reference's on every drive but flowing-formula, where it is at least
   ``FLOORS["share_fx_hard"]`` times (a formula car's 3-4 g stops take the gain the reference
@@ -24,8 +25,9 @@ reference promised against ``racing-hexapod``. This module pins what the switch 
 * its intensity range: at 0, 50 and 100 % the shares of fx and fy each grow on every drive,
   clamped <= 1 % and no frame changed by the actuator limiter at each level.
 
-Not reached (the preset's header says why): share fx >= 0.12 but on forest-rally, share fy >=
-0.12 on flowing-formula, reversals <= 2 % and missed fx <= 35 % on flowing-formula.
+Not reached (the preset's header says why): share fx >= 0.12 (0.100 on forest-rally, 0.067 on
+the lap, 0.032 on flowing-formula), share fy >= 0.12 on flowing-formula (0.096), missed fx <= 35 %
+on flowing-formula (67 %).
 """
 
 from __future__ import annotations
@@ -51,22 +53,23 @@ LEVELS = (0.0, 50.0, 100.0)  # --intensity
 RATIO = 1.5  # share fx against the reference's but on HARD; measured 2.37 and 1.72
 # floors (ceilings for reversals and missed cues) on HARD; measured in comments
 FLOORS = {
-    "corr_fx_hard": 0.95,  # 0.952 (the issue's figure; the reference's 0.951)
-    "reversals_hard": 0.035,  # 0.031 (the reference's 0.040)
+    "corr_fx_hard": 0.95,  # 0.954 (the issue's figure; the reference's 0.951)
+    "reversals_hard": 0.02,  # 0.018 (the issue's figure; the reference's 0.040)
     "missed_fx_hard": 0.70,  # 0.667 (the reference's 0.667)
-    "share_fx_hard": 0.9,  # x the reference's: 0.944
+    "share_fx_hard": 0.9,  # x the reference's: 0.949
 }
 # measured: share fx, fy; corr fx, fy; missed fx, fy; reversals; all false cues
 MEASURED = {
     "forest-rally.csv": (0.100, 0.134, 0.978, 0.995, 0.086, 0.114, 0.0092, 0.0778),
-    "flowing-formula.csv": (0.032, 0.098, 0.952, 0.989, 0.667, 0.071, 0.0315, 0.0600),
+    "flowing-formula.csv": (0.032, 0.096, 0.954, 0.987, 0.666, 0.074, 0.0180, 0.0429),
     "lap.csv": (0.067, 0.130, 0.975, 0.999, 0.210, 0.020, 0.0023, 0.0255),
 }
 # absolute tolerances of those: shares, correlations, missed, reversals, false cues
 TOL = (0.002, 0.002, 0.002, 0.002, 0.01, 0.01, 0.002, 0.005)
 # how much worse than the reference a column may be (absolute), where the reference is better
-# (measured, worst drive: share fy -0.0047 forest-rally; missed fx +0.0000 flowing-formula;
-# missed fy +0.029 flowing-formula; corr fx -0.013 lap; corr fy -0.0004 forest-rally;
+# (measured, worst drive: share fy -0.0057 flowing-formula (the fz guard's price); missed fx
+# -0.0003 flowing-formula; missed fy +0.032 flowing-formula; corr fx -0.013 lap; corr fy
+# -0.0004 forest-rally;
 # reversals +0.0004 lap; all false cues +0.022 forest-rally)
 MARGIN = {"share_fy": 0.006, "missed_fx": 0.001, "missed_fy": 0.035, "corr_fx": 0.015,
           "corr_fy": 0.002, "reversals": 0.001, "false": 0.025}  # fmt: skip
