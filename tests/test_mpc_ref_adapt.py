@@ -196,6 +196,46 @@ def test_the_mpc_plan_keeps_the_envelope_in_its_state_and_resets_it() -> None:
     assert not np.array_equal(fixed.run(f, w).poses, stream)
 
 
+def test_the_optimal_plan_tracks_the_reference_the_streaming_plan_would(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    from motioncue.cueing import _optimal
+    from motioncue.cueing._optimal import OptimalCueing
+
+    base = load_cueing("optimal-hexapod")
+    assert base.mpc is not None
+    params = dataclasses.replace(
+        base,
+        mpc=dataclasses.replace(
+            base.mpc,
+            ref_scale=(0.2, 0.6, 0.0, 0.0, 0.0, 0.0),
+            ref_adapt_peak_m_s2=(2.4, 3.0),
+            ref_adapt_tau_s=2.0,
+            ref_adapt_start_m_s2=20.0,
+        ),
+    )
+    seen: list[np.ndarray] = []
+
+    def spy(d, mp, fs_hz, lp=None, env=None):  # type: ignore[no-untyped-def]
+        out = reference(d, mp, fs_hz, lp, env)
+        seen.append(out[0])
+        return out
+
+    monkeypatch.setattr(_optimal, "reference", spy)
+    design = OptimalCueing(params, FS)
+    f, w = _drive(900, 300)
+    res = design.run(f, w)
+    assert seen and res.fallbacks == 0
+    dv = np.hstack([res.f_used, res.w_used])
+    dv[:, 2] -= 9.80665
+    env = initial_ref_env(design.mpc)  # the streaming plan's reference, sample by sample
+    stream = np.array([reference(dv[k], design.mpc, FS, None, env)[0] for k in range(len(dv))])
+    for r in seen:  # round-off as in the streaming test above
+        np.testing.assert_allclose(r, stream, rtol=4e-16, atol=4.5e-16)
+    fixed, _ = reference(dv, dataclasses.replace(design.mpc, ref_adapt_peak_m_s2=None), FS)
+    assert not np.allclose(stream[:, 0], fixed[:, 0])
+
+
 # ---------------------------------------------------------------------- settings
 @pytest.mark.parametrize(
     ("kw", "msg"),
