@@ -86,7 +86,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from .._errors import ConfigError
-from ._classical import ClassicalWashout, WashoutState
+from ._classical import ClassicalWashout, WashoutState, _adapt_gain
 from ._mpc_params import MpcParams
 from ._params import GRAVITY_M_S2, CueingParams
 from ._vestibular import DEFAULT_MODEL_SET, get_model_set
@@ -269,8 +269,20 @@ def build_model(
     )
 
 
+def initial_ref_env(mp: MpcParams) -> list[float] | None:
+    """The envelope of ``[mpc] ref_adapt_peak_m_s2`` before the first sample: ``[e_x, e_y]``
+    at ``ref_adapt_start_m_s2`` (m/s^2), ``None`` when the gain is fixed."""
+    if mp.ref_adapt_peak_m_s2 is None:
+        return None
+    return [mp.ref_adapt_start_m_s2, mp.ref_adapt_start_m_s2]
+
+
 def reference(
-    d: ArrayLike, mp: MpcParams, fs_hz: float, lp: NDArray[np.float64] | None = None
+    d: ArrayLike,
+    mp: MpcParams,
+    fs_hz: float,
+    lp: NDArray[np.float64] | None = None,
+    env: list[float] | None = None,
 ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
     """The motion the plan tracks, sample by sample, and the low-pass state after it.
 
@@ -286,6 +298,12 @@ def reference(
     mp.ref_scale_hf``): the slow part as a limited copy (tilt), the fast part as it comes
     (translation).
 
+    With ``mp.ref_adapt_peak_m_s2 = (c_x, c_y)`` the gain ``k`` of fx and fy (of their
+    slow part with a split) is ``min(k, c / e)`` sample by sample, ``e`` the causal envelope
+    of the vehicle's ``|f|`` that the classical washout's adaptive tilt gain uses (the same
+    code: ``_classical._adapt_gain``), continued from and written back to ``env``; the
+    curve is the same, its input scaled (``compress(a d, k) = compress(d, a k)``).
+
     With ``mp.w_vehicle`` (``wv``; ``we = mp.w_error``) the result is the blend
     ``r' = r + wv / (we + wv) (d - r)`` per channel: the one target whose error, weighed by
     ``we + wv``, is the cost of both terms (:class:`~._mpc_params.MpcParams`).
@@ -299,6 +317,10 @@ def reference(
         Sample rate (Hz).
     lp : (6,) array, optional
         Low-pass state before ``d`` (default zeros: the vehicle at rest).
+    env : list of 2 floats, optional
+        With ``mp.ref_adapt_peak_m_s2``: the fx, fy envelope before ``d`` (m/s^2), updated in
+        place to the envelope after it (default :func:`initial_ref_env`, not kept: a
+        recording from its start). Ignored when the gain is fixed.
 
     Returns
     -------
@@ -324,6 +346,14 @@ def reference(
     else:
         fast = np.zeros_like(da)
         slow = da
+    peak = mp.ref_adapt_peak_m_s2
+    if peak is not None:  # the gain adapts: the slow part scaled by min(1, c / (k e))
+        ev = [mp.ref_adapt_start_m_s2] * 2 if env is None else env
+        slow = np.array(slow, dtype=float)
+        rows = da.reshape(-1, 6)
+        for j in (0, 1):
+            fac = _adapt_gain(rows[:, j], peak[j], float(k[j]), mp.ref_adapt_tau_s, fs_hz, ev, j)
+            slow[..., j] = slow[..., j] * fac.reshape(slow.shape[:-1])
     r = slow * k
     if mp.ref_shape > 0.0:
         from ._filters import compress_array
@@ -766,6 +796,9 @@ class MpcState:
         vehicle's motion alone (platform at rest), for the perceived motions it compares.
     ref_lp : (6,) array or None
         Low-pass state of :func:`reference` (with ``ref_split_hz``).
+    ref_env : list of 2 floats or None
+        With ``ref_adapt_peak_m_s2``: the fx, fy force envelope of :func:`reference` after
+        the last sample (:func:`initial_ref_env` in a fresh or reset state).
     zr : array or None
         With ``fz_guard``: the otolith model's z states driven by the rider's own specific
         force deviation ``g (cos roll cos pitch - 1)`` at the platform's pose (the loss of
@@ -797,6 +830,7 @@ class MpcState:
     xt: NDArray[np.float64] | None = None
     ref_lp: NDArray[np.float64] | None = None
     zr: NDArray[np.float64] | None = None
+    ref_env: list[float] | None = None
 
     @property
     def bad_samples(self) -> int:
@@ -1371,6 +1405,7 @@ class MpcCueing(PlanCueing):
             classical=self.classical.initial_state(),
             xv=np.zeros(self.model.nx),
             xt=np.zeros(self.model.nx),
+            ref_env=initial_ref_env(self.mpc),
         )
 
     def reset(self, state: MpcState) -> None:
@@ -1380,6 +1415,7 @@ class MpcCueing(PlanCueing):
         state.xv = np.zeros(self.model.nx)
         state.xt = np.zeros(self.model.nx)
         state.ref_lp = None
+        state.ref_env = initial_ref_env(self.mpc)
         state.zr = None
         self.classical.reset(state.classical)
         state.warm_u = state.warm_lam_a = state.warm_lam_x = None
@@ -1559,7 +1595,9 @@ class MpcCueing(PlanCueing):
         pose_c = self.classical.step(state.classical, f, w)
         h = state.classical.hold
         dv = np.array([h[0], h[1], h[2] - GRAVITY_M_S2, h[3], h[4], h[5]])
-        d, state.ref_lp = reference(dv, self.mpc, self.fs_hz, state.ref_lp)
+        if state.ref_env is None:
+            state.ref_env = initial_ref_env(self.mpc)
+        d, state.ref_lp = reference(dv, self.mpc, self.fs_hz, state.ref_lp, state.ref_env)
         u = self._solve(state, d, deadline_s, dv, pose_c)
         if u is None:
             u = self._fallback(state, pose_c)

@@ -24,6 +24,11 @@ washout is the MPC's fallback) plus one ``[mpc]`` table, read by :func:`read_mpc
                                        #   washout instead of tanh (exponent p >= 1)
     ref_reach_use = 0.8                # optional: fx, fy limits from this share of the
                                        #   plan's own tilt reach, per direction
+    ref_adapt_peak_m_s2 = [22.0, 0.0]  # optional: the fx, fy gain adapts to the drive,
+                                       #   min(ref_scale, c / e), e the envelope of the
+                                       #   vehicle's force peaks (0: that axis fixed)
+    ref_adapt_tau_s = 18.0             # optional: the envelope's decay time (s)
+    ref_adapt_start_m_s2 = 22.0        # optional: the envelope before the first sample
     ref_split_hz = 0.5                 # optional: only the part below this is scaled and
     ref_scale_hf = [1.0, 1.0, 0.0, 0.0, 0.0, 0.0]  # limited; the part above times this
     sign_guard = [0.7, 0.7, 0.0, 0.0, 0.0, 0.0]  # wrong-sign perceived motion at most this
@@ -158,6 +163,24 @@ class MpcParams:
         the slow part only and ``ref_scale_hf`` (6 floats in [0, 1]) to the fast part (see
         :func:`~._mpc.reference`).
     ref_scale_hf : 6 floats
+    ref_adapt_peak_m_s2 : 2 floats or None
+        ``None`` (default): the gain of the tracked fx and fy is ``ref_scale``, fixed.
+        ``(c_x, c_y)``, each in [0, 50] m/s^2: the gain adapts to the drive as the classical
+        washout's tilt gain does (``tilt_adapt_peak_m_s2``, the same envelope and code): on
+        each axis with ``c > 0`` the envelope ``e[n] = max(|f[n]|, e[n-1] exp(-1 / (fs
+        tau)))`` of the vehicle's force (``tau = ref_adapt_tau_s``, ``e =
+        ref_adapt_start_m_s2`` before the first sample) sets the gain of that channel's
+        copy (of its slow part with ``ref_split_hz``) to ``min(k, c / e)`` (``k`` its
+        ``ref_scale``): the largest force of the last few ``tau`` is tracked as ``c``, so a
+        car whose stops are 1 g gets about three times the gain of one whose stops are
+        3 g. Causal for both plans (the envelope sees the past only; ``mpc`` keeps it in its
+        state, ``MpcState.ref_env``, and a reset starts it again), so ``optimal`` tracks
+        the reference the streaming plan would.
+    ref_adapt_tau_s : float
+        The envelope's decay time (s), in [0.1, 3600]; default 30.
+    ref_adapt_start_m_s2 : float
+        The envelope before the first sample (m/s^2), in [0, 100]; default g. Starting high
+        keeps a hard car's first stop from being tracked at a gentle car's gain.
     sign_guard : 6 floats
         Where ``g_i > 0``, the plan's
         perceived motion on channel ``i`` may oppose the vehicle's perceived motion by at most
@@ -252,6 +275,9 @@ class MpcParams:
     ref_shape: float = 0.0
     ref_reach_use: float = 0.0
     ref_limit_neg: Vec6 | None = None
+    ref_adapt_peak_m_s2: tuple[float, float] | None = None
+    ref_adapt_tau_s: float = 30.0
+    ref_adapt_start_m_s2: float = 9.80665
     sign_guard: Vec6 = (0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
     sign_guard_weight: float = 1e4
     stroke_use: float = 0.9
@@ -280,6 +306,18 @@ class MpcParams:
             object.__setattr__(
                 self, "ref_limit_neg", _vec6("ref_limit_neg", self.ref_limit_neg, 1e-6, 1e9)
             )
+        peak = self.ref_adapt_peak_m_s2
+        if peak is not None:
+            pk = tuple(peak)
+            if len(pk) != 2 or not all(
+                not isinstance(v, bool) and isinstance(v, int | float) and 0.0 <= v <= 50.0
+                for v in pk
+            ):
+                raise ConfigError(
+                    f"MpcParams.ref_adapt_peak_m_s2 = {peak!r} is invalid; allowed: two numbers "
+                    "(x, y) in [0, 50]"
+                )
+            object.__setattr__(self, "ref_adapt_peak_m_s2", (float(pk[0]), float(pk[1])))
         rs = self.ref_shape
         if (
             isinstance(rs, bool)
@@ -306,6 +344,8 @@ class MpcParams:
             ("sign_guard_weight", self.sign_guard_weight, 1e-9, 1e9),
             ("ref_split_hz", self.ref_split_hz, 0.0, 50.0),
             ("ref_reach_use", self.ref_reach_use, 0.0, 1.0),
+            ("ref_adapt_tau_s", self.ref_adapt_tau_s, 0.1, 3600.0),
+            ("ref_adapt_start_m_s2", self.ref_adapt_start_m_s2, 0.0, 100.0),
             ("tilt_fz_use", self.tilt_fz_use, 0.0, 5.0),
             ("tilt_fz_use_against", self.tilt_fz_use_against, 0.0, 5.0),
             ("fz_guard", self.fz_guard, 0.0, 10.0),
@@ -365,6 +405,8 @@ def read_mpc_table(table: ConfigReader) -> MpcParams:
         "ref_split_hz",
         "ref_shape",
         "ref_reach_use",
+        "ref_adapt_tau_s",
+        "ref_adapt_start_m_s2",
         "tilt_fz_use",
         "tilt_fz_use_against",
         "fz_guard",
@@ -387,6 +429,8 @@ def read_mpc_table(table: ConfigReader) -> MpcParams:
     vals["ref_scale"] = table.vector("ref_scale", 6, list(d.ref_scale))
     vals["ref_scale_hf"] = table.vector("ref_scale_hf", 6, list(d.ref_scale_hf))
     vals["sign_guard"] = table.vector("sign_guard", 6, list(d.sign_guard))
+    if table.has("ref_adapt_peak_m_s2"):
+        vals["ref_adapt_peak_m_s2"] = tuple(table.vector("ref_adapt_peak_m_s2", 2))
     vals["trans_limit_m"] = tuple(table.vector("trans_limit_m", 3, list(d.trans_limit_m)))
     if table.has("tilt_rate_limit_deg_s"):
         deg = table.number("tilt_rate_limit_deg_s", lo=0.0, hi=5000.0, lo_open=True)

@@ -777,6 +777,8 @@ class OptimalCueing(PlanCueing):
                 e_k = m.ce @ xt + m.de @ d_all[k]
                 sign_all[k] = -np.sign(e_k)
                 vz_all[k] = -e_k[2]
+        # the tracked copy; with ref_adapt_peak_m_s2 its gain follows the causal envelope from
+        # the recording's start (MpcCueing's, sample by sample), foresight left to the plan
         d_all, _ = reference(d_all, self.mpc, self.fs_hz)
         nw, ns, bs = self.n_window, self.n_stride, self.mpc.block_samples
         poses = np.zeros((n, 6))

@@ -713,6 +713,10 @@ def mpc_table_lines(mp: MpcParams) -> list[str]:
     lines.append(f"block_samples = {mp.block_samples}")
     if mp.sign_guard_every:
         lines.append(f"sign_guard_every = {mp.sign_guard_every}")
+    if mp.ref_adapt_peak_m_s2 is not None:  # the adaptive gain (written only where set)
+        lines.append(f"ref_adapt_peak_m_s2 = {_vec(mp.ref_adapt_peak_m_s2)}")
+        lines.append(f"ref_adapt_tau_s = {_fmt(mp.ref_adapt_tau_s)}")
+        lines.append(f"ref_adapt_start_m_s2 = {_fmt(mp.ref_adapt_start_m_s2)}")
     if mp.tilt_rate_limit_rad_s is not None:
         lines.append(f"tilt_rate_limit_deg_s = {_fmt(mp.tilt_rate_limit_rad_s * r2d)}")
     lines += [f"solver = {_quote(mp.solver)}", ""]
