@@ -32,6 +32,7 @@ ROOT = Path(__file__).resolve().parents[1]
 # default_preset is put first whatever the platform
 HEXAPOD_PRESETS = ("racing-hexapod-firm", "racing-hexapod", "racing-hexapod-strong",
                    "racing-hexapod-adaptive", "mpc-hexapod", "optimal-hexapod",
+                   "optimal-hexapod-auto",
                    "racing")  # fmt: skip
 
 

@@ -56,9 +56,11 @@ def test_unset_is_the_fixed_reference_bit_for_bit() -> None:
     r1, _ = reference(d, mp, FS, None, env)
     np.testing.assert_array_equal(r1, r0)
     assert env == [5.0, 5.0]
-    for name in ("mpc-hexapod", "optimal-hexapod"):  # the shipped plans have no such keys
+    for name in ("mpc-hexapod", "optimal-hexapod"):  # these shipped plans have no such keys
         p = load_cueing(name).mpc
         assert p is not None and p.ref_adapt_peak_m_s2 is None
+    q = load_cueing("optimal-hexapod-auto").mpc  # the one that adapts
+    assert q is not None and q.ref_adapt_peak_m_s2 == (2.0, 0.0)
 
 
 def test_a_level_no_force_reaches_changes_nothing() -> None:
@@ -258,7 +260,8 @@ def test_bad_values_are_refused_with_the_key_named(kw: dict[str, object], msg: s
 def test_the_keys_load_from_toml_and_the_preset_writer_round_trips(tmp_path: Path) -> None:
     from motioncue.cueing._tune import preset_toml
 
-    src = (ROOT / "configs" / "cueing" / "optimal-hexapod.toml").read_text()
+    text = (ROOT / "configs" / "cueing" / "optimal-hexapod.toml").read_text()
+    src = "\n".join(ln for ln in text.splitlines() if not ln.startswith("ref_adapt_")) + "\n"
     keys = "ref_adapt_peak_m_s2 = [2.0, 0.5]\nref_adapt_tau_s = 18.0\nref_adapt_start_m_s2 = 22.0"
     path = tmp_path / "adapt.toml"
     path.write_text(src.replace("[mpc]\n", "[mpc]\n" + keys + "\n"))
@@ -272,7 +275,7 @@ def test_the_keys_load_from_toml_and_the_preset_writer_round_trips(tmp_path: Pat
     back = load_cueing(out)
     assert back.mpc == p.mpc
     # unset: the writer adds no such key
-    plain = load_cueing("optimal-hexapod")
+    plain = load_cueing("mpc-hexapod")
     assert "ref_adapt" not in preset_toml(plain, ["x"])
     bad = tmp_path / "bad.toml"
     bad.write_text(src.replace("[mpc]\n", "[mpc]\nref_adapt_tau_s = 0.01\n"))

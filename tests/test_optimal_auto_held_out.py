@@ -1,0 +1,53 @@
+"""Issue 20 item 7 for ``optimal-hexapod-auto`` on the drives never tuned on.
+
+``optimal-hexapod`` with its tracked fx gain adapting to the drive (``[mpc]
+ref_adapt_peak_m_s2``; its header says how it was chosen). Issue 20 asks ``optimal`` for a
+rendered share at least 1.3 times the classical default's (aim 1.5), with reversals <= 2 %, all
+false cues <= 15 %, corr fx >= 0.95 and fy >= 0.90, clamped <= 1 %. Since session 29 the
+classical default is ``racing-hexapod-auto``, whose fx ``optimal-hexapod`` no longer reaches
+1.3 times of on forest-rally (0.92x; README). Every held-out car drive and the bundled lap,
+``stewart6-linear`` with ``mbox6``, through the chain of ``motioncue compare``
+(``tests/_held_out.py``), whole drives:
+
+* the issue's figures on every drive, and no frame changed by the actuator limiter;
+* share fx and fy each at least :data:`RATIO` times the default's on every drive;
+* pinned at the measured shares (:data:`MEASURED`) within 0.002.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from _held_out import DRIVES, default_preset, held_out_metrics
+from motioncue.cueing._metrics import CueMetrics
+
+PRESET = "optimal-hexapod-auto"
+RATIO = 1.3  # the issue's; measured fx 1.69 / 2.32 / 1.76, fy 1.99 / 1.47 / 1.41
+MEASURED = {  # share fx, fy
+    "forest-rally.csv": (0.169, 0.266),
+    "flowing-formula.csv": (0.074, 0.141),
+    "lap.csv": (0.118, 0.182),
+}
+
+
+@pytest.fixture(scope="module")
+def metrics() -> dict[str, dict[str, tuple[CueMetrics, int]]]:
+    return {name: held_out_metrics(name) for name in (PRESET, default_preset())}
+
+
+@pytest.mark.parametrize("name", DRIVES)
+def test_the_issue_figures_and_the_ratio_to_the_default(
+    metrics: dict[str, dict[str, tuple[CueMetrics, int]]], name: str
+) -> None:
+    m, limited = metrics[PRESET][name]
+    d, _ = metrics[default_preset()][name]
+    assert default_preset() == "racing-hexapod-auto"
+    assert limited == 0, limited
+    assert m.reversals_any <= 0.02 and m.false_any <= 0.15, (m.reversals_any, m.false_any)
+    assert m.correlation[0] >= 0.95 and m.correlation[1] >= 0.90, m.correlation
+    assert m.clamped <= 0.01, m.clamped
+    assert np.all(m.rendered_share[:2] >= RATIO * d.rendered_share[:2]), (
+        m.rendered_share, d.rendered_share)  # fmt: skip
+    assert set(MEASURED) == set(DRIVES)
+    np.testing.assert_allclose(m.rendered_share[:2], MEASURED[name], atol=0.002)
