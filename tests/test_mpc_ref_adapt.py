@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 
 from motioncue._errors import ConfigError
-from motioncue.cueing import load_cueing
+from motioncue.cueing import CueingParams, load_cueing
 from motioncue.cueing._mpc import MpcCueing, initial_ref_env, reference
 from motioncue.cueing._mpc_params import MpcParams
 
@@ -160,20 +160,18 @@ def test_the_reference_streams_like_the_batch() -> None:
         assert not np.array_equal(batch[:, :2], fixed[:, :2])  # it did adapt
 
 
-def test_the_mpc_plan_keeps_the_envelope_in_its_state_and_resets_it() -> None:
-    base = load_cueing("mpc-hexapod")
+def _adapting(preset: str, **mp: object) -> CueingParams:
+    """A bundled plan with its ``[mpc]`` table changed by ``mp``."""
+    base = load_cueing(preset)
     assert base.mpc is not None
-    params = dataclasses.replace(
-        base,
-        mpc=dataclasses.replace(
-            base.mpc,
-            ref_scale=(0.2, 0.3, 1.0, 1.0, 1.0, 1.0),
-            ref_adapt_peak_m_s2=(2.0, 2.5),
-            ref_adapt_tau_s=2.0,
-            ref_adapt_start_m_s2=20.0,
-            deadline_ms=1e6,
-        ),
-    )
+    return dataclasses.replace(base, mpc=dataclasses.replace(base.mpc, **mp))  # type: ignore[arg-type]
+
+
+def test_the_mpc_plan_keeps_the_envelope_in_its_state_and_resets_it() -> None:
+    params = _adapting(
+        "mpc-hexapod", ref_scale=(0.2, 0.3, 1.0, 1.0, 1.0, 1.0), ref_adapt_peak_m_s2=(2.0, 2.5),
+        ref_adapt_tau_s=2.0, ref_adapt_start_m_s2=20.0, deadline_ms=1e6,
+    )  # fmt: skip
     design = MpcCueing(params, FS)
     f, w = _drive(900, 150)
     state = design.initial_state()
@@ -204,18 +202,10 @@ def test_the_optimal_plan_tracks_the_reference_the_streaming_plan_would(
     from motioncue.cueing import _optimal
     from motioncue.cueing._optimal import OptimalCueing
 
-    base = load_cueing("optimal-hexapod")
-    assert base.mpc is not None
-    params = dataclasses.replace(
-        base,
-        mpc=dataclasses.replace(
-            base.mpc,
-            ref_scale=(0.2, 0.6, 0.0, 0.0, 0.0, 0.0),
-            ref_adapt_peak_m_s2=(2.4, 3.0),
-            ref_adapt_tau_s=2.0,
-            ref_adapt_start_m_s2=20.0,
-        ),
-    )
+    params = _adapting(
+        "optimal-hexapod", ref_scale=(0.2, 0.6, 0.0, 0.0, 0.0, 0.0), ref_adapt_peak_m_s2=(2.4, 3.0),
+        ref_adapt_tau_s=2.0, ref_adapt_start_m_s2=20.0,
+    )  # fmt: skip
     seen: list[np.ndarray] = []
 
     def spy(d, mp, fs_hz, lp=None, env=None):  # type: ignore[no-untyped-def]
