@@ -348,7 +348,8 @@ def reference(
         slow = da
     peak = mp.ref_adapt_peak_m_s2
     if peak is not None:  # the gain adapts: the slow part scaled by min(1, c / (k e))
-        ev = [mp.ref_adapt_start_m_s2] * 2 if env is None else env
+        ev = initial_ref_env(mp) if env is None else env
+        assert ev is not None  # the gain adapts, so initial_ref_env gives an envelope
         slow = np.array(slow, dtype=float)
         rows = da.reshape(-1, 6)
         for j in (0, 1):
@@ -1595,8 +1596,6 @@ class MpcCueing(PlanCueing):
         pose_c = self.classical.step(state.classical, f, w)
         h = state.classical.hold
         dv = np.array([h[0], h[1], h[2] - GRAVITY_M_S2, h[3], h[4], h[5]])
-        if state.ref_env is None:
-            state.ref_env = initial_ref_env(self.mpc)
         d, state.ref_lp = reference(dv, self.mpc, self.fs_hz, state.ref_lp, state.ref_env)
         u = self._solve(state, d, deadline_s, dv, pose_c)
         if u is None:

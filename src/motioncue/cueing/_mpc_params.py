@@ -24,7 +24,7 @@ washout is the MPC's fallback) plus one ``[mpc]`` table, read by :func:`read_mpc
                                        #   washout instead of tanh (exponent p >= 1)
     ref_reach_use = 0.8                # optional: fx, fy limits from this share of the
                                        #   plan's own tilt reach, per direction
-    ref_adapt_peak_m_s2 = [22.0, 0.0]  # optional: the fx, fy gain adapts to the drive,
+    ref_adapt_peak_m_s2 = [2.0, 0.0]   # optional: the fx, fy gain adapts to the drive,
                                        #   min(ref_scale, c / e), e the envelope of the
                                        #   vehicle's force peaks (0: that axis fixed)
     ref_adapt_tau_s = 18.0             # optional: the envelope's decay time (s)
