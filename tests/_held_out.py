@@ -13,6 +13,9 @@ from __future__ import annotations
 import tomllib
 from pathlib import Path
 
+import numpy as np
+from numpy.typing import NDArray
+
 from motioncue._config import find_config
 from motioncue.analysis import run_chain
 from motioncue.cueing import CueingParams, at_intensity, load_cueing
@@ -61,6 +64,21 @@ def held_out_levels(
     return {
         pct: full if pct == 100.0 else held_out_metrics(at_intensity(strong, pct)) for pct in levels
     }
+
+
+def check_intensity_growth(
+    levels: dict[float, dict[str, tuple[CueMetrics, int]]], name: str
+) -> NDArray[np.float64]:
+    """On drive ``name``, ``levels`` (:func:`held_out_levels`, in rising order) give shares of
+    fx and fy that each grow from level to level, with at most 1 % of the poses clamped and
+    no frame changed by the actuator limiter at each level. Returns the shares, (levels, 2)."""
+    rows = [levels[pct][name] for pct in sorted(levels)]
+    s = np.array([m.rendered_share[:2] for m, _ in rows], dtype=float)
+    assert np.all(np.diff(s, axis=0) > 0.0), s  # fx and fy each grow level to level
+    for pct, (m, limited) in zip(sorted(levels), rows, strict=True):
+        assert m.clamped <= 0.01, (pct, m.clamped)
+        assert limited == 0, (pct, limited)
+    return s
 
 
 def check_issue_figures(m: CueMetrics, name: str, floors: dict[str, float]) -> None:

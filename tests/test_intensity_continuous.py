@@ -37,7 +37,8 @@ TOUCHED = (
     "tilt_accel_limit_rad_s2", "w_scale", "rot_wn_rad_s", "lead_s",
 )  # fmt: skip
 """The :class:`CueingParams` fields :data:`STRENGTH_TUNED_PARAMETERS` write."""
-BUNDLED = ("racing-hexapod-adaptive", "racing-hexapod-firm", "racing-hexapod-strong")
+BUNDLED = ("racing-hexapod-adaptive", "racing-hexapod-auto", "racing-hexapod-firm",
+           "racing-hexapod-strong")  # fmt: skip
 PRESETS = presets_with_intensity()
 REL_99_99 = 1e-3  # |ln(v0 / v100)| <= 2.5 here (tilt shape 1.67 -> 20), so 1e-4 of it: 2.5e-4
 SHARE_STEP = 0.002  # measured: at most 0.0010 (firm, forest-rally fy); the old step 0.0061
