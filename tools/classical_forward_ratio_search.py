@@ -32,7 +32,10 @@ time constant and its start; y starts at 5 m/s^2, where it does not act) and let
 tilt's fixed gains go up to 0.5 (they become the gains' upper bounds); ``--min-corr-x``
 and ``--max-reversals`` tighten those two constraints on the tuning drives (a margin for
 the drives held out); ``--extra`` adds generated tuning drives (the firm default's fy on
-each is measured at the start).
+each is measured at the start). ``--vs-firm`` holds every candidate to
+``racing-hexapod-firm`` on every drive (fx within 0.002, corr fx and reversals no worse but
+within ``--min-corr-x`` and ``--max-reversals``) and ``--max-false`` bounds all false cues;
+how ``racing-hexapod-adaptive`` and ``racing-hexapod-auto`` were made is in their headers.
 """
 
 from __future__ import annotations
