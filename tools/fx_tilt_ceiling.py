@@ -52,8 +52,12 @@ def main() -> None:
     ap.add_argument("--shape", type=float, default=8.0, help="compression exponent p")
     ap.add_argument("--forward-ratio", type=float, default=0.6, help="k_f / k")
     ap.add_argument("--min-corr", type=float, default=0.95)
-    ap.add_argument("--rate-dps", type=float, default=None,
-                    help="the tilt's largest rate (deg/s); default: no limit (lag-free)")
+    ap.add_argument(
+        "--rate-dps",
+        type=float,
+        default=None,
+        help="the tilt's largest rate (deg/s); default: no limit (lag-free)",
+    )
     args = ap.parse_args()
     step = None if args.rate_dps is None else G * math.radians(args.rate_dps) / RATE
     lim = G * math.sin(math.radians(args.reach_deg))

@@ -424,28 +424,73 @@ TRACKS: dict[str, Track] = {
 
 CARS: dict[str, Car] = {
     "gt": Car(
-        "gt", mu=1.35, downforce_1_m=0.0002, mass_kg=1300.0, power_w=370e3,
-        drag_1_m=0.45 / 1300.0, v_max_m_s=75.0, traction=0.8, roll_deg_g=1.0,
-        pitch_deg_g=0.6, roll_hz=1.6, roll_zeta=0.5, pitch_hz=2.0, pitch_zeta=0.6,
+        "gt",
+        mu=1.35,
+        downforce_1_m=0.0002,
+        mass_kg=1300.0,
+        power_w=370e3,
+        drag_1_m=0.45 / 1300.0,
+        v_max_m_s=75.0,
+        traction=0.8,
+        roll_deg_g=1.0,
+        pitch_deg_g=0.6,
+        roll_hz=1.6,
+        roll_zeta=0.5,
+        pitch_hz=2.0,
+        pitch_zeta=0.6,
         texture_m_s2=0.7,
     ),
     "formula": Car(  # light, stiff, downforce: about 2.5-3 g in fast corners
-        "formula", mu=1.6, downforce_1_m=0.0016, mass_kg=600.0, power_w=200e3,
-        drag_1_m=0.55 / 600.0, v_max_m_s=78.0, traction=0.75, roll_deg_g=0.3,
-        pitch_deg_g=0.25, roll_hz=3.0, roll_zeta=0.6, pitch_hz=3.5, pitch_zeta=0.6,
+        "formula",
+        mu=1.6,
+        downforce_1_m=0.0016,
+        mass_kg=600.0,
+        power_w=200e3,
+        drag_1_m=0.55 / 600.0,
+        v_max_m_s=78.0,
+        traction=0.75,
+        roll_deg_g=0.3,
+        pitch_deg_g=0.25,
+        roll_hz=3.0,
+        roll_zeta=0.6,
+        pitch_hz=3.5,
+        pitch_zeta=0.6,
         texture_m_s2=1.0,
     ),
     "road": Car(  # a soft road car on road tyres: body roll, less grip, less power
-        "road", mu=0.9, downforce_1_m=0.0, mass_kg=1500.0, power_w=140e3,
-        drag_1_m=0.4 / 1500.0, v_max_m_s=58.0, traction=0.6, roll_deg_g=5.0,
-        pitch_deg_g=2.5, roll_hz=1.1, roll_zeta=0.35, pitch_hz=1.3, pitch_zeta=0.4,
+        "road",
+        mu=0.9,
+        downforce_1_m=0.0,
+        mass_kg=1500.0,
+        power_w=140e3,
+        drag_1_m=0.4 / 1500.0,
+        v_max_m_s=58.0,
+        traction=0.6,
+        roll_deg_g=5.0,
+        pitch_deg_g=2.5,
+        roll_hz=1.1,
+        roll_zeta=0.35,
+        pitch_hz=1.3,
+        pitch_zeta=0.4,
         texture_m_s2=0.5,
     ),
     "rally": Car(  # on gravel: low grip, sliding, a rough road
-        "rally", mu=0.8, downforce_1_m=0.0, mass_kg=1250.0, power_w=220e3,
-        drag_1_m=0.45 / 1250.0, v_max_m_s=50.0, traction=0.85, roll_deg_g=3.0,
-        pitch_deg_g=1.5, roll_hz=1.4, roll_zeta=0.4, pitch_hz=1.6, pitch_zeta=0.45,
-        texture_m_s2=2.5, slide_deg=14.0,
+        "rally",
+        mu=0.8,
+        downforce_1_m=0.0,
+        mass_kg=1250.0,
+        power_w=220e3,
+        drag_1_m=0.45 / 1250.0,
+        v_max_m_s=50.0,
+        traction=0.85,
+        roll_deg_g=3.0,
+        pitch_deg_g=1.5,
+        roll_hz=1.4,
+        roll_zeta=0.4,
+        pitch_hz=1.6,
+        pitch_zeta=0.45,
+        texture_m_s2=2.5,
+        slide_deg=14.0,
     ),
 }
 REST_S = 2.0  # at rest before the start (and after a stage's finish)
@@ -467,9 +512,7 @@ def _speed_profile_car(
     # cornering limit v^2 |k| = mu push (g cos + v^2 (df + kv))  ->  v^2 = ... when positive
     mu = car.mu * push
     denom = np.abs(kappa) - mu * (car.downforce_1_m + curv_v)
-    v_lim = np.where(
-        denom > 1e-9, np.sqrt(mu * G * cos_g / np.maximum(denom, 1e-9)), car.v_max_m_s
-    )
+    v_lim = np.where(denom > 1e-9, np.sqrt(mu * G * cos_g / np.maximum(denom, 1e-9)), car.v_max_m_s)
     v_lim = np.minimum(v_lim, car.v_max_m_s)
     v = v_lim.tolist()
     kap, mul, cg, sg, kv = (x.tolist() for x in (kappa, mu, cos_g, sin_g, curv_v))
@@ -554,8 +597,14 @@ def body_motion(
     """
     acc = np.gradient(vel, t, axis=0)
     acc[:, 2] += G
-    cr, sr, cp, sp, cy, sy = (np.cos(roll), np.sin(roll), np.cos(pitch), np.sin(pitch),
-                              np.cos(yaw), np.sin(yaw))
+    cr, sr, cp, sp, cy, sy = (
+        np.cos(roll),
+        np.sin(roll),
+        np.cos(pitch),
+        np.sin(pitch),
+        np.cos(yaw),
+        np.sin(yaw),
+    )
     # Rz^T: into the heading frame
     h0 = cy * acc[:, 0] + sy * acc[:, 1]
     h1 = -sy * acc[:, 0] + cy * acc[:, 1]
@@ -618,9 +667,7 @@ def make_drive(track: Track, car: Car, seed: int, laps: int = 1) -> dict[str, np
             win = np.clip(1.0 - (d / 6.0) ** 2, 0.0, 1.0) ** 2
             kerb += win * 6.0 / w_kerb**2 * np.sin(w_kerb * t)
     z_body = z_tex + kerb
-    vel = np.stack(
-        [v * np.cos(chi), v * np.sin(chi), v * slope_t + np.gradient(z_body, t)], axis=1
-    )
+    vel = np.stack([v * np.cos(chi), v * np.sin(chi), v * slope_t + np.gradient(z_body, t)], axis=1)
     a_long = np.gradient(v, t)
     a_lat = v * v * k_t
     # Body slip (yaw relative to the velocity): grows with the grip used, plus the driver's

@@ -119,8 +119,7 @@ def check_ride_for(
     if n_axes != len(names):
         raise ConfigError(
             f"controller {controller_name!r} drives {n_axes} axes; the ride and platform "
-            f"{platform_name!r} have "
-            + platform.axes_text
+            f"{platform_name!r} have " + platform.axes_text
         )
     table = limits.to_pulses_table(platform)
     _check_identity(ride, table, platform_name, controller_name)
