@@ -10,6 +10,7 @@ forward kinematics of the changed frames, vestibular models) and the metrics of
 
 from __future__ import annotations
 
+import importlib.util
 import tomllib
 from pathlib import Path
 
@@ -38,13 +39,16 @@ def default_preset() -> str:
     return str(tomllib.loads(text)["default_preset"])
 
 
-def held_out_metrics(preset: str | CueingParams) -> dict[str, tuple[CueMetrics, int]]:
-    """``{drive file name: (cue metrics, frames changed by the actuator limiter)}``."""
+def held_out_metrics(
+    preset: str | CueingParams, paths: list[Path] | None = None
+) -> dict[str, tuple[CueMetrics, int]]:
+    """``{drive file name: (cue metrics, frames changed by the actuator limiter)}`` on
+    ``paths`` (default :data:`PATHS`)."""
     params = load_cueing(preset) if isinstance(preset, str) else preset
     platform = load_platform(PLATFORM)
     limits = ActuatorLimits.from_platform(platform, load_controller(CONTROLLER), rate_hz=RATE)
     out: dict[str, tuple[CueMetrics, int]] = {}
-    for path in PATHS:
+    for path in PATHS if paths is None else paths:
         rec = resample(read_recording_csv(Path(path)), RATE)
         run = run_chain(rec.f, rec.w, params, platform, limits, RATE)
         ev = run.evaluation
@@ -52,6 +56,19 @@ def held_out_metrics(preset: str | CueingParams) -> dict[str, tuple[CueMetrics, 
                         clamped_share=run.poses_clamped / len(run.poses))  # fmt: skip
         out[path.name] = (m, run.actuator_limited)
     return out
+
+
+def fresh_held_out_paths(folder: Path) -> list[Path]:
+    """The generated held-out car drives (``configs/recordings/generated.toml``, written into
+    ``folder`` by ``tools/make_generated_drives.py``), in manifest order."""
+    spec = importlib.util.spec_from_file_location(
+        "make_generated_drives",
+        Path(__file__).resolve().parents[1] / "tools/make_generated_drives.py",
+    )
+    assert spec and spec.loader
+    tool = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(tool)
+    return list(tool.generated_drives(folder, set="held-out", kind="car"))
 
 
 def held_out_levels(

@@ -109,6 +109,79 @@ def test_unknown_sets_and_bad_manifests_are_config_errors(tmp_path: Path) -> Non
         sample_drives(folder=tmp_path / "missing")
 
 
+# -- the generated drives (configs/recordings/generated.toml, not bundled) ---------------------
+
+GENERATED_MANIFEST = RECORDINGS / "generated.toml"
+
+
+@functools.cache
+def _generated_tool() -> ModuleType:
+    spec = importlib.util.spec_from_file_location(
+        "make_generated_drives_t", ROOT / "tools/make_generated_drives.py"
+    )
+    assert spec and spec.loader
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+def _seed(command: str) -> int:
+    argv = shlex.split(command)
+    return int(argv[argv.index("--seed") + 1])
+
+
+def test_generated_drives_are_apart_from_the_bundled_ones(tmp_path: Path) -> None:
+    generated = sample_drive_manifest(tmp_path, manifest=GENERATED_MANIFEST)
+    assert {d.set for d in generated} == {"tuning", "held-out"}
+    names = [d.path.name for d in generated]
+    assert not set(names) & {d.path.name for d in MANIFEST}  # no name of a bundled drive
+    seeds = [_seed(d.command) for d in (*generated, *NEW)]
+    assert len(seeds) == len(set(seeds))  # no drive shares another's seed, set or not
+    assert all(d.path.parent == tmp_path for d in generated)
+    # never among the bundled drives, whatever the set
+    assert not {p.name for p in sample_drives()} & set(names)
+    for d in generated:
+        assert "--out" in _generated_tool().generator_argv(d)
+
+
+def test_the_tool_writes_what_the_command_writes_and_only_when_needed(tmp_path: Path) -> None:
+    tool = _generated_tool()
+    drive = next(d for d in sample_drive_manifest(tmp_path, manifest=GENERATED_MANIFEST)
+                 if d.name == "street-gt-401")  # fmt: skip
+    argv = shlex.split(drive.command)[2:]
+    argv[argv.index("--out") + 1] = str(tmp_path / "by-command.csv")
+    assert _tool().main(argv) == 0
+    paths = tool.generated_drives(tmp_path / "out", set="held-out", kind="car")
+    written = tmp_path / "out" / "street-gt-401.csv"
+    assert written in paths and len(paths) == 6
+    assert written.read_bytes() == (tmp_path / "by-command.csv").read_bytes()
+    # a file with the command's text is left alone; a changed one is written again, whole
+    stamp = written.stat().st_mtime_ns
+    tool.generated_drives(tmp_path / "out", set="held-out")
+    assert written.stat().st_mtime_ns == stamp
+    written.write_text("t,fx\n0,1\n")
+    tool.generated_drives(tmp_path / "out", set="held-out")
+    assert written.read_bytes() == (tmp_path / "by-command.csv").read_bytes()
+    assert not list((tmp_path / "out").glob("*.part"))
+
+
+def test_a_generated_entry_must_be_the_generator_writing_into_build_drives(
+    tmp_path: Path,
+) -> None:
+    tool = _generated_tool()
+    good = sample_drive_manifest(tmp_path, manifest=GENERATED_MANIFEST)[0]
+    for command, match in [
+        ("python tools/other.py --seed 1 --out build/drives/x.csv", "not make_sample_lap"),
+        (good.command.replace("--out build/drives/", "--out configs/recordings/"), "--out must"),
+        (good.command.rsplit(" --out", 1)[0], "not make_sample_lap --out"),
+    ]:
+        bad = type(good)(good.path, good.set, good.kind, good.description, command)
+        with pytest.raises(ConfigError, match=match):
+            tool.generator_argv(bad)
+    with pytest.raises(ConfigError, match="'tune' is unknown"):
+        tool.generated_drives(tmp_path, set="tune")
+
+
 # -- reproducible -----------------------------------------------------------------------------
 
 

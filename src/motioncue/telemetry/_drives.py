@@ -49,14 +49,21 @@ class SampleDrive:
         return self.path.stem
 
 
-def sample_drive_manifest(folder: str | Path | None = None) -> list[SampleDrive]:
+def sample_drive_manifest(
+    folder: str | Path | None = None, manifest: str | Path | None = None
+) -> list[SampleDrive]:
     """Every drive of the manifest, in its order.
 
     Parameters
     ----------
     folder : path, optional
-        Folder holding ``drives.toml`` and the CSVs; default the bundled
+        Folder holding the CSVs (and ``drives.toml``); default the bundled
         ``configs/recordings``.
+    manifest : path, optional
+        The manifest to read; default ``drives.toml`` in ``folder``. The bundled
+        ``configs/recordings/generated.toml`` lists drives that are not bundled (each
+        written by its command, ``tools/make_generated_drives.py``): read it with the folder
+        they were written to.
 
     Raises
     ------
@@ -66,7 +73,7 @@ def sample_drive_manifest(folder: str | Path | None = None) -> list[SampleDrive]
     from .._config import config_dir, load_toml
 
     base = Path(folder) if folder is not None else config_dir("recordings")
-    manifest = base / _MANIFEST
+    manifest = Path(manifest) if manifest is not None else base / _MANIFEST
     doc = load_toml(manifest)  # size, UTF-8 and syntax checked, one ConfigError line
     entries = doc.get("drive")
     if not isinstance(entries, list) or not entries:
