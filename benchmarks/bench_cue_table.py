@@ -1,7 +1,8 @@
 """Issue 20's table: cue strength and cue errors of every preset on the held-out drives.
 
 Run: ``python benchmarks/bench_cue_table.py [--platform P] [--controller C] [--presets ...]
-[--kind car] [--no-bound]`` (with ``src`` on the path). For each held-out drive
+[--kind car] [--no-bound] [--fresh]`` (with ``src`` on the path; ``--fresh`` adds the
+generated held-out drives of ``configs/recordings/generated.toml``). For each held-out drive
 (``sample_drives("held-out")``, or only those of ``--kind``) and the bundled lap, every
 preset runs through the chain of ``motioncue compare`` (cueing, workspace limiting, actuator
 limits, delivered poses through the vestibular models) on the bundled ``stewart6-linear``
@@ -58,11 +59,23 @@ def main(argv: list[str]) -> int:
                     "hexapod preset and racing")  # fmt: skip
     ap.add_argument("--no-bound", action="store_true", help="skip the physical bound")
     ap.add_argument("--kind", default=None, help="only held-out drives of this kind (car, ...)")
+    ap.add_argument("--fresh", action="store_true", help="also the generated held-out drives "
+                    "(configs/recordings/generated.toml, written into build/drives)")  # fmt: skip
     args = ap.parse_args(argv)
     platform = load_platform(args.platform)
     limits = ActuatorLimits.from_platform(platform, load_controller(args.controller), rate_hz=100.0)
     held_out = sample_drives("held-out", kind=args.kind) if args.kind else sample_drives("held-out")
     drives = [*held_out, ROOT / "configs" / "recordings" / "lap.csv"]
+    if args.fresh:
+        import importlib.util
+
+        spec = importlib.util.spec_from_file_location(
+            "make_generated_drives", ROOT / "tools" / "make_generated_drives.py"
+        )
+        assert spec is not None and spec.loader is not None
+        tool = importlib.util.module_from_spec(spec)
+        spec.loader.exec_module(tool)
+        drives += tool.generated_drives(ROOT / "build" / "drives", set="held-out", kind=args.kind)
     recs = []
     for path in drives:
         kind, data, _ = load_generate_input(str(path))
@@ -79,7 +92,8 @@ def main(argv: list[str]) -> int:
                          controller_name=args.controller, bound=not args.no_bound)  # fmt: skip
     wall = time.perf_counter() - t0
     print(f"platform {args.platform}, controller {args.controller}, 100 Hz, vestibular models "
-          f"{res.model_set}; drives: held-out + the bundled lap")  # fmt: skip
+          f"{res.model_set}; drives: held-out + the bundled lap"
+          + (" + the generated held-out drives" if args.fresh else ""))  # fmt: skip
     wr = max(len(k) for k, _ in recs)
     wp = max(len(p) for p in args.presets)
     print(
