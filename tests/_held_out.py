@@ -10,13 +10,13 @@ forward kinematics of the changed frames, vestibular models) and the metrics of
 
 from __future__ import annotations
 
-import importlib.util
 import tomllib
 from pathlib import Path
 
 import numpy as np
 from numpy.typing import NDArray
 
+from _tools import load_tool
 from motioncue._config import find_config
 from motioncue.analysis import run_chain
 from motioncue.cueing import CueingParams, at_intensity, load_cueing
@@ -61,13 +61,7 @@ def held_out_metrics(
 def fresh_held_out_paths(folder: Path) -> list[Path]:
     """The generated held-out car drives (``configs/recordings/generated.toml``, written into
     ``folder`` by ``tools/make_generated_drives.py``), in manifest order."""
-    spec = importlib.util.spec_from_file_location(
-        "make_generated_drives",
-        Path(__file__).resolve().parents[1] / "tools/make_generated_drives.py",
-    )
-    assert spec and spec.loader
-    tool = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(tool)
+    tool = load_tool("make_generated_drives")
     return list(tool.generated_drives(folder, set="held-out", kind="car"))
 
 

@@ -11,7 +11,6 @@ gravity), must give back the recorded speed; an inconsistent pair drifts off at 
 from __future__ import annotations
 
 import functools
-import importlib.util
 import shlex
 import sys
 from pathlib import Path
@@ -25,6 +24,7 @@ from motioncue.telemetry import read_recording_csv, sample_drive_manifest, sampl
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from _csvtext import csv_text_mismatch
+from _tools import load_tool
 
 ROOT = Path(__file__).resolve().parents[1]
 RECORDINGS = ROOT / "configs" / "recordings"
@@ -33,15 +33,8 @@ MANIFEST = sample_drive_manifest(RECORDINGS)
 NEW = [d for d in MANIFEST if d.set != "demo"]
 
 
-@functools.cache
 def _tool() -> ModuleType:
-    spec = importlib.util.spec_from_file_location(
-        "make_sample_lap_drives", ROOT / "tools/make_sample_lap.py"
-    )
-    assert spec and spec.loader
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
+    return load_tool("make_sample_lap")
 
 
 @functools.cache
@@ -114,15 +107,8 @@ def test_unknown_sets_and_bad_manifests_are_config_errors(tmp_path: Path) -> Non
 GENERATED_MANIFEST = RECORDINGS / "generated.toml"
 
 
-@functools.cache
 def _generated_tool() -> ModuleType:
-    spec = importlib.util.spec_from_file_location(
-        "make_generated_drives_t", ROOT / "tools/make_generated_drives.py"
-    )
-    assert spec and spec.loader
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
+    return load_tool("make_generated_drives")
 
 
 def _seed(command: str) -> int:

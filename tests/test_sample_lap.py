@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import importlib.util
 import sys
 from pathlib import Path
 
@@ -10,19 +9,14 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from _csvtext import csv_text_mismatch
+from _tools import load_tool
 
 ROOT = Path(__file__).resolve().parents[1]
 G = 9.80665
 
 
 def _generator():  # type: ignore[no-untyped-def]
-    spec = importlib.util.spec_from_file_location(
-        "make_sample_lap", ROOT / "tools/make_sample_lap.py"
-    )
-    assert spec and spec.loader
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
+    return load_tool("make_sample_lap")
 
 
 def _bundled() -> np.ndarray:
