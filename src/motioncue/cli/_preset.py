@@ -93,7 +93,8 @@ def add_intensity_option(parser: argparse.ArgumentParser) -> None:
         help="0-100: a point of the preset's tuned range from gentle (0) to the strongest "
         "within its false-cue budget (100, the preset as it is); not a plain gain, every "
         "frame still within the limits. Needs a preset with an [intensity] table "
-        "(racing-hexapod-strong among the bundled ones; the error lists them)",
+        "(the bundled hexapod's default racing-hexapod-auto among the bundled ones; the error "
+        "lists them)",
     )
 
 
