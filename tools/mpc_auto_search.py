@@ -117,26 +117,27 @@ COORDS: tuple[Coord, ...] = (
     ("wvy", "mpc", "w_vehicle", 1, 0.005, 0.5),
     ("wacc_rp", "mpc", "w_acc", 3, 0.02, 20.0),
     ("werr_rp", "mpc", "w_error", 3, 0.1, 10.0),
-    ("wprior_rp", "mpc", "w_prior", 3, 10.0, 1e4),
+    ("wprior_roll", "mpc", "w_prior", 3, 100.0, 3e5),
+    ("wprior_pitch", "mpc", "w_prior", 4, 100.0, 3e5),
     ("guard_x", "mpc", "sign_guard", 0, 0.2, 3.0),
     ("guard_y", "mpc", "sign_guard", 1, 0.2, 3.0),
     ("shape", "mpc", "ref_shape", None, 1.0, 20.0),
     ("reach", "mpc", "ref_reach_use", None, 0.5, 1.0),
-    ("fz_use", "mpc", "tilt_fz_use", None, 0.3, 1.0),
+    ("fz_use", "mpc", "tilt_fz_use", None, 0.4, 1.0),
     ("rate", "mpc", "tilt_rate_limit_deg_s", None, 15.0, 40.0),
     ("tcx", "tilt", "adapt_peak_m_s2", 0, 0.3, 5.0),
     ("tcy", "tilt", "adapt_peak_m_s2", 1, 0.3, 5.0),
 )
-# Coordinates tied to another: the roll entries of the [mpc] vectors follow pitch's (index 3
+# Coordinates tied to another: the pitch entries of these [mpc] vectors follow roll's (index 3
 # is roll, 4 pitch; the searched value is written to both).
-TIED = {("mpc", "w_acc", 3): 4, ("mpc", "w_error", 3): 4, ("mpc", "w_prior", 3): 4}
+TIED = {("mpc", "w_acc", 3): 4, ("mpc", "w_error", 3): 4}
 
 
 def _fmt(v: object) -> str:
     if isinstance(v, list):
         return "[" + ", ".join(_fmt(x) for x in v) + "]"
     if isinstance(v, float):
-        return repr(float(f"{v:.6g}"))
+        return repr(v)
     return repr(v) if not isinstance(v, str) else f'"{v}"'
 
 
@@ -163,11 +164,12 @@ def edit_toml(text: str, values: dict[tuple[str, str], object]) -> str:
 
 
 def point_values(
-    base: dict[str, dict[str, object]], x: np.ndarray
+    base: dict[str, dict[str, object]], coords: Sequence[Coord], x: np.ndarray
 ) -> dict[tuple[str, str], object]:
-    """The TOML values of the searched point ``x`` (log space) over the ``base`` tables."""
+    """The TOML values of the point ``x`` (log space) of ``coords`` over the ``base`` tables
+    (the other entries of a vector stay the base's)."""
     out: dict[tuple[str, str], object] = {}
-    for (_, section, key, idx, _, _), xv in zip(COORDS, x, strict=True):
+    for (_, section, key, idx, _, _), xv in zip(coords, x, strict=True):
         v = float(math.exp(xv))
         if idx is None:
             out[(section, key)] = v
@@ -264,6 +266,9 @@ def main() -> None:
     ap.add_argument("--min-ratio", type=float, default=1.0, help="least strength ratio")
     ap.add_argument("--workers", type=int, default=2)
     ap.add_argument("--sigma", type=float, default=0.15, help="step in log space")
+    ap.add_argument(
+        "--coords", nargs="*", help="search only these coordinates (labels; default: all)"
+    )
     ap.add_argument("--eval", nargs="*", help="only measure these presets (TOML or names)")
     args = ap.parse_args()
     for d in args.drives:
@@ -294,35 +299,48 @@ def main() -> None:
         ap.error("a search needs --base, --out and --budget-s")
     base_text = Path(args.base).read_text()
     base = tomllib.loads(base_text)
-    lo = np.log([c[4] for c in COORDS])
-    hi = np.log([c[5] for c in COORDS])
+    labels = [c[0] for c in COORDS]
+    for lab in args.coords or []:
+        if lab not in labels:
+            ap.error(f"unknown coordinate {lab!r}; known: {' '.join(labels)}")
+    free = np.array([not args.coords or c[0] in args.coords for c in COORDS])
+    x0 = start_point(base)
+    searched = [c for c, on in zip(COORDS, free, strict=True) if on]
+    lo = np.log([c[4] for c in COORDS])[free]
+    hi = np.log([c[5] for c in COORDS])[free]
     tmp = Path(args.out).with_suffix(".candidate.toml")
 
-    def text_of(x: np.ndarray) -> str:
-        return edit_toml(base_text, point_values(base, x))
+    def full(xf: np.ndarray) -> np.ndarray:
+        """The whole point: the searched coordinates ``xf``, the others the base's."""
+        x = x0.copy()
+        x[free] = xf
+        return x
 
-    def evaluate(x: np.ndarray) -> tuple[float, list[Figures]]:
-        tmp.write_text(text_of(x))
+    def text_of(xf: np.ndarray) -> str:
+        return edit_toml(base_text, point_values(base, searched, xf))
+
+    def evaluate(xf: np.ndarray) -> tuple[float, list[Figures]]:
+        tmp.write_text(text_of(xf))
         figs = run(str(tmp))
         viol, ratio = score(figs, ref, args.min_ratio)
         return (-ratio if viol == 0.0 else 1.0 + viol), figs
 
-    def better(it: int, elapsed_s: float, fit: float, x: np.ndarray, figs: list[Figures]) -> None:
+    def better(it: int, elapsed_s: float, fit: float, xf: np.ndarray, figs: list[Figures]) -> None:
         lines = [f.line(r) for f, r in zip(figs, ref, strict=True)]
         head = f"# search it {it} t {elapsed_s:.0f} s fit {fit:.5f}\n"
-        Path(args.out).write_text(head + "".join(f"#   {ln}\n" for ln in lines) + text_of(x))
-        vals = ", ".join(f"{c[0]} {math.exp(v):.4g}" for c, v in zip(COORDS, x, strict=True))
+        Path(args.out).write_text(head + "".join(f"#   {ln}\n" for ln in lines) + text_of(xf))
+        vals = ", ".join(f"{c[0]} {math.exp(v):.4g}" for c, v in zip(COORDS, full(xf), strict=True))
         print(f"it {it} t {elapsed_s:.0f} s fit {fit:.5f}: {vals}", flush=True)
         print("\n".join("  " + ln for ln in lines), flush=True)
 
     one_plus_two(
         evaluate,
-        start_point(base),
+        x0[free],
         lo,
         hi,
         seed=args.seed,
         budget_s=args.budget_s,
-        k_max=4,
+        k_max=min(4, int(free.sum()) + 1),
         sigma=args.sigma,
         on_better=better,
     )
