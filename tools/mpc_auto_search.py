@@ -33,8 +33,18 @@ The preset: ``--base`` (an ``mpc`` preset TOML) with the searched keys replaced;
 ``--out`` at every improvement, with the drives' figures as a comment. ``--eval`` measures
 the given presets (the reference first) and stops, for exploring by hand. Each candidate is
 7 whole drives (about 50 s of CPU, 25-30 s on 2 processes, ``--workers``). The wall-clock
-budget decides where the search stops; the seed gives the sequence of candidates. The
-commands that made ``configs/cueing/mpc-hexapod-auto.toml`` are in its header.
+budget decides where the search stops; the seed gives the sequence of candidates.
+``configs/cueing/mpc-hexapod-auto.toml`` was made (session 30, after about 30 candidates by
+hand with ``--eval`` and a first search whose result is in :data:`BASE_KEYS`) by::
+
+    python tools/mpc_auto_search.py --write-base start.toml
+    python tools/mpc_auto_search.py --base start.toml --out mpc-hexapod-auto.toml \
+        --budget-s 1800 --seed 2 --sigma 0.15 \
+        --coords fz_use wvy tcy wprior_roll wprior_pitch cx reach ky
+
+(about 35 rounds; its header, written by hand, holds the figures). No candidate met every
+constraint: fy stays at 0.97-0.98x the default's on chicane-formula-106 and street-formula
+(the roll the plan may hold without fz reversals binds; see the preset's header).
 """
 
 from __future__ import annotations
