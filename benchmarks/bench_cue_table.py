@@ -32,7 +32,8 @@ ROOT = Path(__file__).resolve().parents[1]
 # every preset made for the bundled hexapod, then the generic one; the platform's own
 # default_preset is put first whatever the platform
 HEXAPOD_PRESETS = ("racing-hexapod-firm", "racing-hexapod", "racing-hexapod-strong",
-                   "racing-hexapod-adaptive", "mpc-hexapod", "optimal-hexapod",
+                   "racing-hexapod-adaptive", "mpc-hexapod", "mpc-hexapod-auto",
+                   "optimal-hexapod",
                    "optimal-hexapod-auto",
                    "racing")  # fmt: skip
 

@@ -6,16 +6,10 @@ A (1+2) random local search (:func:`_local_search.one_plus_two`, as
 ``w_prior`` starts from), each candidate through the chain of ``motioncue compare``
 (:func:`motioncue.analysis.run_chain`, then :func:`motioncue.cueing._metrics.cue_metrics`)
 on whole tuning drives at 100 Hz, ``stewart6-linear`` with ``mbox6``: the bundled
-chicane-gt, street-formula and flowing-road and four generated ones (not bundled)::
+chicane-gt, street-formula and flowing-road and the four generated tuning drives of
+``configs/recordings/generated.toml`` (not bundled; written into ``build/drives/`` first)::
 
-    python tools/make_sample_lap.py --track chicane --car formula --laps 3 --seed 106 \\
-        --out /tmp/chicane-formula-106.csv
-    python tools/make_sample_lap.py --track flowing --car formula --laps 2 --seed 107 \\
-        --out /tmp/flowing-formula-107.csv
-    python tools/make_sample_lap.py --track flowing --car gt --laps 2 --seed 303 \\
-        --out /tmp/flowing-gt-303.csv
-    python tools/make_sample_lap.py --track forest --car rally --laps 1 --seed 108 \\
-        --out /tmp/forest-rally-108.csv
+    python tools/make_generated_drives.py --set tuning
 
 Never the held-out drives (configs/recordings/flowing-formula.csv, forest-rally.csv, lap.csv).
 
@@ -77,10 +71,10 @@ DRIVES = (
     "configs/recordings/chicane-gt.csv",
     "configs/recordings/street-formula.csv",
     "configs/recordings/flowing-road.csv",
-    "/tmp/chicane-formula-106.csv",
-    "/tmp/flowing-formula-107.csv",
-    "/tmp/flowing-gt-303.csv",
-    "/tmp/forest-rally-108.csv",
+    "build/drives/chicane-formula-106.csv",
+    "build/drives/flowing-formula-107.csv",
+    "build/drives/flowing-gt-303.csv",
+    "build/drives/forest-rally-108.csv",
 )
 HELD_OUT = ("flowing-formula.csv", "forest-rally.csv", "lap.csv")
 MIN_CORR = (0.955, 0.91)
