@@ -2,7 +2,8 @@
 
 Run: ``python benchmarks/bench_mpc.py`` (with ``src`` on the path). Prints
 
-* ``mpc-hexapod`` streaming at 100 Hz on the tuning drives (chicane-gt, street-formula;
+* ``mpc-hexapod`` (then ``mpc-hexapod-auto``, its CPU p50 as a ratio to it) streaming at
+  100 Hz on the tuning drives (chicane-gt, street-formula;
   60 s each, through :meth:`MpcCueing.step` with the preset's deadline): the QP solve time
   p50/p99 per step, as wall time and as the solving thread's CPU time (on a shared machine
   the wall-time tail is mostly the time the thread was not running), the whole step's p99
@@ -52,9 +53,9 @@ def _load(path: Path) -> tuple[np.ndarray, np.ndarray]:
     return a[:, 1:4], a[:, 4:7]
 
 
-def bench_mpc(seconds: float = 60.0) -> dict[str, float]:
-    """Streaming step and QP solve times of ``mpc-hexapod`` (ms), over two tuning drives."""
-    design = make_cueing(load_cueing("mpc-hexapod"), FS)
+def bench_mpc(seconds: float = 60.0, preset: str = "mpc-hexapod") -> dict[str, float]:
+    """Streaming step and QP solve times of ``preset`` (ms), over two tuning drives."""
+    design = make_cueing(load_cueing(preset), FS)
     assert isinstance(design, MpcCueing)
     # the solver the plan calls (with a sign guard, the one inside the soft-guard QP)
     qp = design._qp if design._qp_guard is None else design._qp_guard._qp
@@ -205,6 +206,14 @@ def main() -> int:
     ok = report("mpc QP solve p99, wall (100 Hz, horizon 1.2 s)", m["solve_p99"], "ms", 5.0, False)
     ok &= report("mpc QP solve p99, CPU time on one core", m["cpu_p99"], "ms", 5.0, False)
     ok &= report("mpc whole step p99 (100 Hz)", m["step_p99"], "ms", 10.0, False)
+    a = bench_mpc(20.0 if quick else 60.0, "mpc-hexapod-auto")
+    print(
+        f"mpc-hexapod-auto, the same seconds after it: QP solve CPU p50 {a['cpu_p50']:.2f} ms "
+        f"({a['cpu_p50'] / m['cpu_p50']:.2f}x mpc-hexapod's), p99 {a['cpu_p99']:.2f} ms; step "
+        f"p99 {a['step_p99']:.2f} ms; late {int(a['late'])}, failed {int(a['failed'])}",
+        flush=True,
+    )
+    ok &= report("mpc-hexapod-auto QP solve p99, CPU time", a["cpu_p99"], "ms", 5.0, False)
     lt = bench_lateness(4.0 if quick else 8.0, 3 if quick else 5)
     print(
         f"mpc lateness with a core kept busy, paced at 100 Hz, medians of {int(lt['rounds'])} "
