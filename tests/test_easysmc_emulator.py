@@ -592,3 +592,44 @@ def test_a_slower_line_than_budgeted_starves_the_controller() -> None:
     finally:
         emu.stop()
     assert emu.models[0].stats["underflows"] > 5
+
+
+class StalledHost:
+    """A link whose reader is held up: its first read finds nothing, then the host stops for
+    ``stall_s`` (a busy machine, a stopped process) while the controller's reply arrives in
+    the port's buffer, so the link next looks after its reply deadline (the clock is the link
+    module's, moved here)."""
+
+    def __init__(self, emu: EasySmcEmulator | None, clock: list[float], stall_s: float) -> None:
+        self.emu, self.clock, self.stall_s = emu, clock, stall_s
+        self.later = self.pending = b""
+
+    def send(self, data: bytes) -> None:
+        if self.emu is not None:
+            self.later += self.emu.feed(data)  # on its way, not there yet
+
+    def recv(self, timeout_s: float) -> bytes | None:
+        if self.later or (self.emu is None and self.clock[0] < self.stall_s):
+            self.clock[0] += self.stall_s  # nothing yet; the host is held up after the read
+            self.pending, self.later = self.pending + self.later, b""
+            return None
+        self.clock[0] += timeout_s
+        data, self.pending = self.pending, b""
+        return data or None
+
+
+def test_a_held_up_host_is_not_a_silent_controller(monkeypatch: pytest.MonkeyPatch) -> None:
+    """The reply that came while the host was held up is read before the link gives up;
+    a controller that sent nothing is still reported silent (ControllerSilent)."""
+    from motioncue._errors import ControllerSilent
+    from motioncue.output.easysmc import _link
+
+    clock = [0.0]
+    monkeypatch.setattr(_link.time, "monotonic", lambda: clock[0])
+    emu = EasySmcEmulator((0,), clock=lambda: 0.0)
+    link = EasySmcLink(StalledHost(emu, clock, stall_s=2.0), timeout_s=0.5)
+    reply = link.request(Command(0x19, (0x1000000,), SEQ))  # answered, read 1.5 s late
+    assert reply.addr == 0 and link.stats.commands == 1
+    dead = EasySmcLink(StalledHost(None, clock, stall_s=2.0), timeout_s=0.5)
+    with pytest.raises(ControllerSilent, match="controller silent for 500 ms"):
+        dead.request(Command(0x19, (0x1000000,), SEQ))

@@ -92,6 +92,14 @@ class EasySmcLink:
                 return frames[0]
             left = deadline - time.monotonic()
             if left <= 0:
+                # a host held up past the deadline (a busy machine, a stopped process) is not
+                # the controller's silence: what came meanwhile is read before giving up
+                late = self.transport.recv(0.0)
+                while late:
+                    self._rx += late
+                    late = self.transport.recv(0.0)
+                if split_serial_frames(self._rx)[0]:
+                    continue
                 # a subclass of TransportError: a cut cable, power loss or reset
                 raise ControllerSilent(
                     f"controller silent for {1000 * self.timeout_s:.0f} ms: no reply from the "
