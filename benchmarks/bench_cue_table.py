@@ -68,15 +68,10 @@ def main(argv: list[str]) -> int:
     held_out = sample_drives("held-out", kind=args.kind) if args.kind else sample_drives("held-out")
     drives = [*held_out, ROOT / "configs" / "recordings" / "lap.csv"]
     if args.fresh:
-        import importlib.util
+        sys.path.insert(0, str(ROOT / "tools"))
+        from make_generated_drives import generated_drives
 
-        spec = importlib.util.spec_from_file_location(
-            "make_generated_drives", ROOT / "tools" / "make_generated_drives.py"
-        )
-        assert spec is not None and spec.loader is not None
-        tool = importlib.util.module_from_spec(spec)
-        spec.loader.exec_module(tool)
-        drives += tool.generated_drives(ROOT / "build" / "drives", set="held-out", kind=args.kind)
+        drives += generated_drives(ROOT / "build" / "drives", set="held-out", kind=args.kind)
     recs = []
     for path in drives:
         kind, data, _ = load_generate_input(str(path))

@@ -26,6 +26,7 @@ from types import ModuleType
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT / "src"))
 
+from motioncue._atomic import atomic_write_bytes  # noqa: E402
 from motioncue._errors import ConfigError  # noqa: E402
 from motioncue.telemetry import sample_drive_manifest  # noqa: E402
 from motioncue.telemetry._drives import DRIVE_SETS, SampleDrive  # noqa: E402
@@ -79,9 +80,7 @@ def generated_drives(
         tool = tool or _generator()
         text = tool.drive_csv_text(generator_argv(drive))
         if not (drive.path.exists() and drive.path.read_text() == text):
-            tmp = drive.path.with_suffix(".csv.part")
-            tmp.write_text(text)
-            tmp.replace(drive.path)  # never a half-written drive under its name
+            atomic_write_bytes(drive.path, text.encode(), "generated drive")  # never half-written
         paths.append(drive.path)
     return paths
 
