@@ -20,7 +20,7 @@ from _tools import load_tool
 from motioncue._config import find_config
 from motioncue.analysis import run_chain
 from motioncue.cueing import CueingParams, at_intensity, load_cueing
-from motioncue.cueing._metrics import CueMetrics, cue_metrics
+from motioncue.cueing._metrics import CueMetrics
 from motioncue.kinematics import load_platform
 from motioncue.output import load_controller
 from motioncue.telemetry import sample_drives
@@ -51,9 +51,7 @@ def held_out_metrics(
     for path in PATHS if paths is None else paths:
         rec = resample(read_recording_csv(Path(path)), RATE)
         run = run_chain(rec.f, rec.w, params, platform, limits, RATE)
-        ev = run.evaluation
-        m = cue_metrics(ev.perceived_vehicle, ev.perceived_sim, ev.thresholds,
-                        clamped_share=run.poses_clamped / len(run.poses))  # fmt: skip
+        m = run.evaluation.metrics  # cue_metrics with the clamped share run_chain passes
         out[path.name] = (m, run.actuator_limited)
     return out
 
@@ -90,6 +88,16 @@ def check_intensity_growth(
         assert m.clamped <= 0.01, (pct, m.clamped)
         assert limited == 0, (pct, limited)
     return s
+
+
+def check_plan_figures(m: CueMetrics, limited: int) -> None:
+    """The figures issue 20 holds ``mpc`` and ``optimal`` to ("the same false-cue, correlation
+    and clamping figures"): reversals <= 2 %, all false cues <= 15 %, corr fx >= 0.95 and fy
+    >= 0.90, clamped <= 1 %, and no frame changed by the actuator limiter."""
+    assert limited == 0, limited
+    assert m.reversals_any <= 0.02 and m.false_any <= 0.15, (m.reversals_any, m.false_any)
+    assert m.correlation[0] >= 0.95 and m.correlation[1] >= 0.90, m.correlation
+    assert m.clamped <= 0.01, m.clamped
 
 
 def check_issue_figures(m: CueMetrics, name: str, floors: dict[str, float]) -> None:

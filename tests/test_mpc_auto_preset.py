@@ -17,12 +17,12 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from _held_out import held_out_metrics
 from motioncue.analysis import run_chain
-from motioncue.cueing import CueingParams, load_cueing
-from motioncue.cueing._metrics import CueMetrics, cue_metrics
+from motioncue.cueing import load_cueing
+from motioncue.cueing._metrics import CueMetrics
 from motioncue.kinematics import load_platform
 from motioncue.output import load_controller
-from motioncue.telemetry._recording import read_recording_csv, resample
 from motioncue.trajectory import ActuatorLimits
 
 PRESET = "mpc-hexapod-auto"
@@ -36,24 +36,9 @@ RATIO = (1.06, 1.07)  # share ratio to the default's the search reached on this 
 MEASURED = (0.073, 0.140)  # share fx, fy measured on this drive (session 30)
 
 
-def _metrics(params: CueingParams) -> tuple[CueMetrics, int]:
-    platform = load_platform("stewart6-linear")
-    limits = ActuatorLimits.from_platform(platform, load_controller("mbox6"), rate_hz=RATE)
-    rec = resample(read_recording_csv(DRIVE), RATE)
-    run = run_chain(rec.f, rec.w, params, platform, limits, RATE)
-    ev = run.evaluation
-    m = cue_metrics(
-        ev.perceived_vehicle,
-        ev.perceived_sim,
-        ev.thresholds,
-        clamped_share=run.poses_clamped / len(run.poses),
-    )
-    return m, run.actuator_limited
-
-
 @pytest.fixture(scope="module")
 def figures() -> dict[str, tuple[CueMetrics, int]]:
-    return {name: _metrics(load_cueing(name)) for name in (PRESET, DEFAULT)}
+    return {name: held_out_metrics(name, [DRIVE])[DRIVE.name] for name in (PRESET, DEFAULT)}
 
 
 def test_an_adaptive_mpc_plan_whose_prior_is_the_default() -> None:

@@ -59,7 +59,6 @@ from _local_search import one_plus_two
 
 from motioncue.analysis import run_chain
 from motioncue.cueing import load_cueing
-from motioncue.cueing._metrics import cue_metrics
 from motioncue.kinematics import load_platform
 from motioncue.output import load_controller
 from motioncue.telemetry._recording import read_recording_csv, resample
@@ -260,13 +259,7 @@ def measure(job: tuple[str, str]) -> Figures:
         _CHAIN["limits"],
         RATE,
     )
-    ev = run.evaluation
-    m = cue_metrics(
-        ev.perceived_vehicle,
-        ev.perceived_sim,
-        ev.thresholds,
-        clamped_share=run.poses_clamped / len(run.poses),
-    )
+    m = run.evaluation.metrics  # cue_metrics with the clamped share run_chain passes
     return Figures(
         drive=drive,
         share=(float(m.rendered_share[0]), float(m.rendered_share[1])),
