@@ -115,6 +115,31 @@ def test_the_plugin_registers_with_its_declarations_and_its_table(
         load_cueing(bad)
 
 
+def test_the_plugin_declares_an_intensity_range_over_its_own_keys(
+    toy: ModuleType, files: dict[str, Path]
+) -> None:
+    from motioncue.cueing import at_intensity
+
+    gentle = files["tmp"] / "gentle.toml"
+    gentle.write_text(
+        files["preset"].read_text() + "\n[intensity.gentle]\ngain_x = 0.001\ngain_y = 0.002\n"
+    )
+    params = load_cueing(gentle)
+    assert params.intensity_gentle == (0.001, 0.002)
+    mid = at_intensity(params, 25.0)  # the toy's own rule: linear from the gentle table
+    assert mid.tables["toy"].gain_x == pytest.approx(0.001 + 0.25 * (GAIN[0] - 0.001), rel=1e-12)
+    assert mid.tables["toy"].gain_y == pytest.approx(0.002 + 0.25 * (GAIN[1] - 0.002), rel=1e-12)
+    assert at_intensity(params, 100.0) is params
+    # the writer writes the toy's keys, and a key of another algorithm is refused, named
+    again = files["tmp"] / "gentle-again.toml"
+    again.write_text(preset_toml(params))
+    assert load_cueing(again).intensity_gentle == params.intensity_gentle
+    bad = files["tmp"] / "gentle-bad.toml"
+    bad.write_text(gentle.read_text().replace("gain_y = 0.002", "gain_y = 0.002\nf_scale_x = 0.1"))
+    with pytest.raises(ConfigError, match="f_scale_x"):
+        load_cueing(bad)
+
+
 def test_generate_through_the_plugin_gives_the_closed_form(
     toy: ModuleType, files: dict[str, Path]
 ) -> None:
@@ -235,8 +260,9 @@ def test_bridge_frames_auto_reads_the_registry_not_the_name(
     from test_bridge_replay import write_f1_recording
 
     name = "classical-copy"
+    classical = cueing_entry("classical")  # the copy declares what the classical one does
     register_cueing(name, ClassicalWashout, frames_on_arrival=on_arrival,
-                    table=cueing_entry("classical").table)  # fmt: skip
+                    table=classical.table, tune=classical.tune)  # fmt: skip
     try:
         text = find_config("cueing", "racing-hexapod-firm").read_text()
         preset = tmp_path / "copy.toml"

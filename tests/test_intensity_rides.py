@@ -6,8 +6,9 @@ on), ``generate --preset PRESET --intensity 0|50|100`` on ``stewart6-linear`` wi
 for racing-hexapod-strong, for racing-hexapod-firm (the platform's default until session 29;
 its gentle end tuned with a per-channel cap, ``tune --gentle-share``), for
 racing-hexapod-adaptive (its tilt gain adapts to the drive; the gentle end tuned the same way
-as firm's) and for the default since session 29, racing-hexapod-auto (the same, tuned the
-same way):
+as firm's), for the default since session 29, racing-hexapod-auto (the same, tuned the
+same way) and for the whole-ride plan optimal-hexapod-auto (its range moves the plan's
+strength terms, tests/test_plan_intensity.py):
 
 - strength as the rider gets it: the rendered share of fx and fy (rms of the perceived
   platform motion over rms of the perceived vehicle motion) measured on the ride's frames
@@ -19,7 +20,9 @@ same way):
   0.0629 / 0.0629, 0.0920 / 0.0920, 0.1301 / 0.1302; adaptive: fx 0.0308 / 0.0306, 0.0579 /
   0.0577, 0.0667 / 0.0660; fy 0.0732 / 0.0732, 0.1078 / 0.1078, 0.1311 / 0.1312 (50 % since
   at_intensity ends at the preset's own values); auto: fx 0.0331 / 0.0330, 0.0553 / 0.0551,
-  0.0630 / 0.0629; fy 0.0768 / 0.0768, 0.1086 / 0.1087, 0.1271 / 0.1273;
+  0.0630 / 0.0629; fy 0.0768 / 0.0768, 0.1086 / 0.1087, 0.1271 / 0.1273; optimal-hexapod-auto:
+  fx 0.0643 / 0.0644, 0.0885 / 0.0885, 0.1147 / 0.1146; fy 0.1152 / 0.1152, 0.1439 / 0.1444,
+  0.1685 / 0.1709 (its frames and poses differ most: the plan uses more of the stroke);
 - every frame within the limits as the controller reads them: the frames ``play`` sends
   (ramp from park, the ride, the park) decoded and fed to the MBOX emulator on its own
   clock (Fn012 pacing, whole-ms stamps; it judges with the manual's numbers), and the
@@ -53,7 +56,10 @@ from motioncue.trajectory import ActuatorLimits
 from motioncue.viewer import load_view_input, rendered_shares, view_html
 
 PLATFORM, CONTROLLER, PRESET, RATE = "stewart6-linear", "mbox6", "racing-hexapod-strong", 100.0
-PRESETS = (PRESET, "racing-hexapod-firm", "racing-hexapod-adaptive", "racing-hexapod-auto")
+PRESETS = (
+    PRESET, "racing-hexapod-firm", "racing-hexapod-adaptive", "racing-hexapod-auto",
+    "optimal-hexapod-auto",
+)  # fmt: skip
 LEVELS = (0.0, 50.0, 100.0)
 Rides = tuple[Path, dict[float, Path], str]
 

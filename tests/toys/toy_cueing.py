@@ -8,8 +8,8 @@ bad sample and gives 0.
 
 Importing this module registers it as ``"toy-copy"`` (``MOTIONCUE_PLUGINS=toys.toy_cueing``)
 with every declaration an algorithm can make: streaming, not for frames on arrival, the rig
-wanted by its factory (recorded in :data:`RIGS_SEEN`), its table (reader and writer) and
-two tunable parameters.
+wanted by its factory (recorded in :data:`RIGS_SEEN`), its table (reader and writer),
+two tunable parameters and an intensity range over them.
 """
 
 from __future__ import annotations
@@ -153,6 +153,19 @@ class ToyTuning:
     def apply(self, base: CueingParams, v: Sequence[float], name: str) -> CueingParams:
         t = replace(table_of(base), gain_x=float(v[0]), gain_y=float(v[1]))
         return replace(base, name=name or base.name, tables={**base.tables, "toy": t})
+
+    @property
+    def intensity_keys(self) -> tuple[str, ...]:
+        """An ``[intensity.gentle]`` table of the two gains."""
+        return ("gain_x", "gain_y")
+
+    def intensity(self, params: CueingParams, t: float, name: str) -> CueingParams:
+        """Each gain linear from the gentle table's to the preset's."""
+        gentle = params.intensity_gentle
+        assert gentle is not None
+        own = self.values(params)
+        v = [g + t * (o - g) for g, o in zip(gentle, own, strict=True)]
+        return self.apply(params, v, name)
 
 
 if NAME not in cueing_algorithms():  # imported once per process; a re-import is a no-op

@@ -46,7 +46,7 @@ from numpy.typing import NDArray
 
 from .._errors import ConfigError
 from ._mpc_params import MpcParams
-from ._params import INTENSITY_KEYS, CueingParams
+from ._params import INTENSITY_KEYS, PLAN_INTENSITY_KEYS, CueingParams, intensity_keys
 
 __all__ = [
     "CLASSICAL_TUNING",
@@ -102,6 +102,16 @@ class TunePlan(Protocol):
     def apply(self, base: CueingParams, v: Sequence[float], name: str) -> CueingParams:
         """``base`` with the parameters set to ``v`` (their units, within the bounds),
         named ``name`` (``""``: the base's name)."""
+        ...
+
+    @property
+    def intensity_keys(self) -> tuple[str, ...]:
+        """The keys of this algorithm's ``[intensity] gentle`` table (empty: no range)."""
+        ...
+
+    def intensity(self, params: CueingParams, t: float, name: str) -> CueingParams:
+        """``params`` (with ``intensity_gentle``) at the fraction ``t`` of its range, strictly
+        between 0 (the gentle end) and 1 (the preset), named ``name``."""
         ...
 
 
@@ -344,6 +354,28 @@ class _ClassicalTuning:
         fields = _knob_fields(_CLASSICAL_KNOBS, self.parameters(base), base, base, v)
         return replace(base, name=name or base.name, algorithm="classical", **fields)
 
+    @property
+    def intensity_keys(self) -> tuple[str, ...]:
+        return INTENSITY_KEYS
+
+    def intensity(self, params: CueingParams, t: float, name: str) -> CueingParams:
+        gentle = params.intensity_gentle
+        if gentle is None:  # at_intensity checks first
+            raise ConfigError(f"preset {params.name!r} has no tuned intensity range")
+        gentle_end = params_from_vector(
+            params, _clip_log(STRENGTH_TUNED_PARAMETERS, gentle).tolist(), name
+        )
+        if t == 0.0:
+            return gentle_end
+        # the strong end: the preset's own fields; one it leaves unset, as the tuner reads it
+        unset = [f for f in _INTENSITY_FIELDS if getattr(params, f) is None]
+        strong_end = params
+        if unset:
+            read = params_from_vector(params, vector_from_params(params).tolist())
+            strong_end = replace(params, **{f: getattr(read, f) for f in unset})
+        fields = _between_fields(gentle_end, strong_end, t)
+        return replace(params, name=name, **fields)
+
 
 def _plan_of(params: CueingParams) -> MpcParams:
     return params.mpc if params.mpc is not None else MpcParams()
@@ -409,6 +441,55 @@ class _PlanTuning:
         mp = _plan_of(base)
         fields = _knob_fields(_PLAN_KNOBS, self.parameters(base), base, mp, v)
         return replace(base, name=name or base.name, mpc=replace(mp, **fields))
+
+    @property
+    def intensity_keys(self) -> tuple[str, ...]:
+        return PLAN_INTENSITY_KEYS
+
+    def intensity(self, params: CueingParams, t: float, name: str) -> CueingParams:
+        gentle = params.intensity_gentle
+        if gentle is None:  # at_intensity checks first
+            raise ConfigError(f"preset {params.name!r} has no tuned intensity range")
+        mp = _plan_of(params)
+        own = _plan_intensity_values(mp)
+        v = {k: _between(g, own[k], t) for k, g in zip(PLAN_INTENSITY_KEYS, gentle, strict=True)}
+        ref_scale = list(mp.ref_scale)
+        ref_scale[0], ref_scale[1] = v["ref_scale_x"], v["ref_scale_y"]
+        w_vehicle = list(mp.w_vehicle)
+        w_vehicle[0], w_vehicle[1] = v["w_vehicle_x"], v["w_vehicle_y"]
+        adapt = mp.ref_adapt_peak_m_s2
+        if adapt is not None:
+            adapt = (v["ref_adapt_peak_x_m_s2"], adapt[1])
+        plan = replace(
+            mp,
+            ref_scale=_vec6(ref_scale),
+            w_vehicle=_vec6(w_vehicle),
+            ref_adapt_peak_m_s2=adapt,
+        )
+        return replace(params, name=name, mpc=plan)
+
+
+def _vec6(v: Sequence[float]) -> tuple[float, float, float, float, float, float]:
+    return (v[0], v[1], v[2], v[3], v[4], v[5])
+
+
+def _plan_intensity_values(mp: MpcParams) -> dict[str, float]:
+    """The plan's own value of each of :data:`PLAN_INTENSITY_KEYS` (its 100 % end)."""
+    adapt = mp.ref_adapt_peak_m_s2
+    return {
+        "ref_scale_x": float(mp.ref_scale[0]),
+        "ref_scale_y": float(mp.ref_scale[1]),
+        "ref_adapt_peak_x_m_s2": 0.0 if adapt is None else float(adapt[0]),
+        "w_vehicle_x": float(mp.w_vehicle[0]),
+        "w_vehicle_y": float(mp.w_vehicle[1]),
+    }
+
+
+def plan_intensity_values(params: CueingParams) -> tuple[float, ...]:
+    """An ``mpc`` or ``optimal`` preset's own values of :data:`PLAN_INTENSITY_KEYS` (in
+    that order): its strong (100 %) end, the values a gentle table is chosen below."""
+    own = _plan_intensity_values(_plan_of(params))
+    return tuple(own[k] for k in PLAN_INTENSITY_KEYS)
 
 
 CLASSICAL_TUNING: TunePlan = _ClassicalTuning()
@@ -504,13 +585,24 @@ def at_intensity(params: CueingParams, percent: float) -> CueingParams:
     ``tilt_shape`` at most 8, and every value clipped to its bounds), are the strong end. A
     field the preset leaves unset (``None``, e.g. no lead) is read there as the tuner reads
     it (:func:`vector_from_params`). Everything else, the ``adapt_*`` keys among them, is the
-    preset's at every intensity. Whatever the intensity, the chain after the washout
-    (workspace limiting, the actuator limiter) keeps every frame within the limits.
+    preset's at every intensity.
+
+    An ``mpc`` or ``optimal`` preset's range moves the terms of its plan's cost that ask for
+    strength (the keys of its ``[intensity.gentle]`` table: the tracked copy's fx and
+    fy gains, the adaptive cap of the fx gain, the price of the error to the vehicle's whole
+    fx and fy), each between its gentle value and the preset's own in the same way (linearly
+    where one end is 0). Every point is then the plan's optimum for its own cost: a point of
+    that cost's front between strength and the error terms (false cues, guards, limits), not a
+    gain on a ride.
+
+    Whatever the intensity, the chain after the cueing (workspace limiting, the actuator
+    limiter) keeps every frame within the limits.
 
     Parameters
     ----------
     params : CueingParams
-        A classical preset with an intensity range (``intensity_gentle``).
+        A preset with an intensity range (``intensity_gentle``) whose algorithm declares one
+        (its :class:`TunePlan`'s ``intensity_keys``: classical, mpc, optimal).
     percent : float
         0 to 100.
 
@@ -523,7 +615,7 @@ def at_intensity(params: CueingParams, percent: float) -> CueingParams:
     ------
     ConfigError
         ``percent`` outside 0..100, a preset without an intensity range, or one whose
-        algorithm is not tuned on :data:`STRENGTH_TUNED_PARAMETERS` (the classical washout's).
+        algorithm declares no tunable parameters.
     """
     if isinstance(percent, bool) or not (math.isfinite(percent) and 0.0 <= percent <= 100.0):
         raise ConfigError(f"intensity {percent!r} % is invalid; allowed: 0 to 100")
@@ -532,28 +624,10 @@ def at_intensity(params: CueingParams, percent: float) -> CueingParams:
             f"preset {params.name!r} has no tuned intensity range (no [intensity] table); "
             "give a preset that has one (e.g. racing-hexapod-strong) or leave out the intensity"
         )
-    if _tuning(params) is not CLASSICAL_TUNING:
-        raise ConfigError(
-            f"preset {params.name!r}: its [intensity.gentle] table sets the classical "
-            f"washout's tuned parameters, which its algorithm {params.algorithm!r} does not "
-            "tune; leave out the intensity or the table"
-        )
+    plan = _tuning(params)
     if percent == 100.0:
         return params
-    name = f"{params.name}@{percent:g}%"
-    gentle_end = params_from_vector(
-        params, _clip_log(STRENGTH_TUNED_PARAMETERS, params.intensity_gentle).tolist(), name
-    )
-    if percent == 0.0:
-        return gentle_end
-    # the strong end: the preset's own fields; one it leaves unset, as the tuner reads it
-    unset = [f for f in _INTENSITY_FIELDS if getattr(params, f) is None]
-    strong_end = params
-    if unset:
-        read = params_from_vector(params, vector_from_params(params).tolist())
-        strong_end = replace(params, **{f: getattr(read, f) for f in unset})
-    fields = _between_fields(gentle_end, strong_end, percent / 100.0)
-    return replace(params, name=name, **fields)
+    return plan.intensity(params, percent / 100.0, f"{params.name}@{percent:g}%")
 
 
 def _fmt(v: float) -> str:
@@ -662,7 +736,8 @@ def preset_toml(params: CueingParams, comments: Sequence[str] = ()) -> str:
     if params.intensity_gentle is not None:
         lines += ["[intensity.gentle]"]
         lines += [
-            f"{k} = {_fmt(v)}" for k, v in zip(INTENSITY_KEYS, params.intensity_gentle, strict=True)
+            f"{k} = {_fmt(v)}"
+            for k, v in zip(intensity_keys(params.algorithm), params.intensity_gentle, strict=True)
         ]
         lines.append("")
     return "\n".join(lines)
