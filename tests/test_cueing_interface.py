@@ -272,30 +272,52 @@ def test_generate_and_cue_use_the_platform_default_and_say_so(
 
     out = tmp_path / "p.csv"
     cue = ["cue", "--input", str(rec), "--rate", "50", "--out", str(out)]
+    # the whole recording is known: the platform's ride-file preset (a plan) before its default
     assert main([*cue, "--platform", "stewart6-linear"]) == 0
     said = capsys.readouterr().out
-    assert "preset racing-hexapod-auto (default of platform stewart6-linear)" in said
+    assert "preset optimal-hexapod-auto (ride-file default of platform stewart6-linear)" in said
     assert main([*cue]) == 2
     err = capsys.readouterr().err
     assert "motioncue cue: error: no cueing preset: give --preset NAME, or --platform P" in err
 
-    # a platform file without default_preset: the fallback is used and named
-    plain = tmp_path / "plain.toml"
+    # a platform file without ride_preset: its default_preset; without either: the fallback
     text = find_config("platforms", "stewart6-linear").read_text()
-    plain.write_text(text.replace('default_preset = "racing-hexapod-auto"', "", 1))
+    ride_line = next(ln for ln in text.splitlines() if ln.startswith("ride_preset ="))
+    no_ride = tmp_path / "no-ride.toml"
+    no_ride.write_text(text.replace(ride_line, "", 1))
+    assert main([*cue, "--platform", str(no_ride)]) == 0
+    assert "preset racing-hexapod-auto (default of platform" in capsys.readouterr().out
+    plain = tmp_path / "plain.toml"
+    plain.write_text(
+        text.replace(ride_line, "", 1).replace('default_preset = "racing-hexapod-auto"', "", 1)
+    )
     assert main([*cue, "--platform", str(plain)]) == 0
     assert "preset racing (fallback: platform" in capsys.readouterr().out
+    # a ride_preset that is no preset is refused where the platform is read, named
+    bad = tmp_path / "bad.toml"
+    bad.write_text(text.replace(ride_line, 'ride_preset = "no-such-preset"', 1))
+    assert main([*cue, "--platform", str(bad)]) == 2
+    assert "ride_preset" in capsys.readouterr().err
 
 
+@pytest.mark.parametrize(
+    ("platform", "controller", "preset"),
+    [
+        ("seat3", "imax3", "cinema-seat-3dof"),
+        # live: the causal default, never the ride-file plan (which needs the whole ride)
+        ("stewart6-linear", "mbox6", "racing-hexapod-auto"),
+    ],
+)
 def test_bridge_verb_names_the_platform_default_preset(
-    tmp_path: Path, capsys: pytest.CaptureFixture[str]
-) -> None:
-    rc = main(["bridge", "--source", "f1:127.0.0.1:0", "--platform", "seat3", "--controller",
-               "imax3", "--target", f"file:{tmp_path / 'out.bin'}", "--duration", "0.2",
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], platform: str, controller: str,
+    preset: str,
+) -> None:  # fmt: skip
+    rc = main(["bridge", "--source", "f1:127.0.0.1:0", "--platform", platform, "--controller",
+               controller, "--target", f"file:{tmp_path / 'out.bin'}", "--duration", "0.2",
                "--rt-priority", "0", "--quiet"])  # fmt: skip
     err = capsys.readouterr().err
     assert rc == 0, err
-    assert "preset cinema-seat-3dof (default of platform seat3)" in err
+    assert f"preset {preset} (default of platform {platform})" in err
 
 
 def test_old_washout_name_still_imports_with_a_deprecation_warning() -> None:

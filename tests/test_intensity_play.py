@@ -123,9 +123,10 @@ def _platform_with_default(tmp_path: Path, preset: str) -> Path:
     src = Path(__file__).resolve().parents[1] / "configs" / "platforms" / f"{PLATFORM}.toml"
     text = src.read_text()
     assert 'default_preset = "' in text
-    lines = [
+    lines = [  # the platform's only default: no ride-file preset before it
         f'default_preset = "{preset}"' if ln.startswith("default_preset") else ln
         for ln in text.splitlines()
+        if not ln.startswith("ride_preset")
     ]
     out = tmp_path / f"{PLATFORM}.toml"  # same stem: the ride names the same rig
     out.write_text("\n".join(lines) + "\n")
@@ -156,7 +157,8 @@ def test_the_bundled_default_with_intensity_works_or_says_why(
     """Whichever the default is (another helper may give it an [intensity] table): a ride
     recording the intensity, or the one-line refusal naming the presets that have one."""
     rec, _ = made
-    default = load_platform(PLATFORM).default_preset
+    platform = load_platform(PLATFORM)
+    default = platform.ride_preset or platform.default_preset  # generate's, from a recording
     assert default
     out = tmp_path / "d.ride"
     rc = main(["generate", "--input", str(rec), "--platform", PLATFORM, "--controller",
@@ -165,6 +167,7 @@ def test_the_bundled_default_with_intensity_works_or_says_why(
     if load_cueing(default).intensity_gentle is not None:
         assert rc == 0, err
         assert load_ride(out).notes["cueing"]["intensity_percent"] == 0.0
+        assert load_ride(out).notes["cueing"]["preset"] == default
     else:
         assert rc == 2 and "no tuned intensity range" in err and PRESET in err
         assert not out.exists()

@@ -21,8 +21,8 @@ strength terms, tests/test_plan_intensity.py):
   0.0577, 0.0667 / 0.0660; fy 0.0732 / 0.0732, 0.1078 / 0.1078, 0.1311 / 0.1312 (50 % since
   at_intensity ends at the preset's own values); auto: fx 0.0331 / 0.0330, 0.0553 / 0.0551,
   0.0630 / 0.0629; fy 0.0768 / 0.0768, 0.1086 / 0.1087, 0.1271 / 0.1273; optimal-hexapod-auto:
-  fx 0.0643 / 0.0644, 0.0885 / 0.0885, 0.1147 / 0.1146; fy 0.1152 / 0.1152, 0.1439 / 0.1444,
-  0.1685 / 0.1709 (its frames and poses differ most: the plan uses more of the stroke);
+  fx 0.0637 / 0.0637, 0.0875 / 0.0874, 0.1142 / 0.1141; fy 0.1126 / 0.1126, 0.1257 / 0.1257,
+  0.1361 / 0.1362;
 - every frame within the limits as the controller reads them: the frames ``play`` sends
   (ramp from park, the ride, the park) decoded and fed to the MBOX emulator on its own
   clock (Fn012 pacing, whole-ms stamps; it judges with the manual's numbers), and the

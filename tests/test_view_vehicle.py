@@ -46,7 +46,7 @@ def test_view_draws_the_vehicle_beside_the_rider(tmp_path: Path) -> None:
     names = [tr.get("name", "") for tr in json.loads(blob.group(1))["curves"]["data"]]
     veh = [n for n in names if n.startswith("vehicle f")]
     assert len(veh) == 2 and all("rider gets" in n for n in veh)
-    assert v.notes[0].startswith("cueing: racing-hexapod")  # the platform's default
+    assert v.notes[0].startswith("cueing: optimal-hexapod-auto")  # the ride-file default
     assert any(n.startswith("strength: the rider perceives") for n in v.notes)
     # the same page without the recording has no vehicle traces, and says why
     (tmp_path / "drive.csv").rename(tmp_path / "moved.csv")

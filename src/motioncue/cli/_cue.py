@@ -45,7 +45,9 @@ def run(args: argparse.Namespace) -> int:
     platform = None
     if args.platform is not None:
         platform = load_platform_arg(args.platform, args.overrides)
-    params, preset_source = choose_preset(args.preset, platform, args.platform, args.overrides)
+    params, preset_source = choose_preset(
+        args.preset, platform, args.platform, args.overrides, ride=True
+    )
     counters: dict[str, int] = {}
     if is_datagram_recording(Path(args.input)):
         # a 'motioncue record' file: decoded as generate and compare decode it

@@ -125,13 +125,21 @@ def _generate(args: argparse.Namespace) -> int:
                 file=sys.stderr,
             )
     else:
-        base, base_source = choose_preset(args.preset, platform, args.platform, args.overrides)
+        base, base_source = choose_preset(
+            args.preset, platform, args.platform, args.overrides, ride=True
+        )
         cueing, preset_source = apply_intensity(base, args.intensity, base_source)
         print(f"cueing: preset {preset_source}", file=sys.stderr)
         ride, report = generate_ride(
             data, platform, controller, cueing, rate_hz=args.rate, limits=limits,
             source=Path(args.input).name, progress=bar, **names,
         )  # fmt: skip
+        if report.cue_rate_hz != args.rate:
+            print(
+                f"cueing: {cueing.algorithm} plans at {report.cue_rate_hz:g} Hz (its highest "
+                f"rate); the {args.rate:g} Hz frames follow a cubic spline through its poses",
+                file=sys.stderr,
+            )
         # the ride says which preset and intensity made it (view, the monitor and play
         # --intensity read it; in the header, so the digest covers it)
         note = cueing_note(base, args.intensity, args.overrides)

@@ -35,6 +35,8 @@ def choose_preset(
     platform: Platform | None,
     platform_label: str | None,
     overrides: Sequence[str] | None = None,
+    *,
+    ride: bool = False,
 ) -> tuple[CueingParams, str]:
     """Load the cueing preset a command runs with, and say where it came from.
 
@@ -48,13 +50,17 @@ def choose_preset(
         How the user named the platform (for the message).
     overrides : sequence of str, optional
         ``--set`` items; the ``preset.SECTION.KEY=VALUE`` ones are applied to the preset.
+    ride : bool
+        The command knows the whole recording before its first frame (``generate``,
+        ``cue``): the platform's ``ride_preset`` is used before its ``default_preset``.
 
     Returns
     -------
     params : motioncue.cueing.CueingParams
     source : str
-        ``"NAME (--preset)"``, ``"NAME (default of platform P)"`` or
-        ``"NAME (fallback: platform P names no default_preset)"``.
+        ``"NAME (--preset)"``, ``"NAME (ride-file default of platform P)"``, ``"NAME
+        (default of platform P)"`` or ``"NAME (fallback: platform P names no
+        default_preset)"``.
 
     Raises
     ------
@@ -74,6 +80,9 @@ def choose_preset(
             "no cueing preset: give --preset NAME, or --platform P to use its default"
         )
     label = platform_label or platform.name
+    if ride and platform.ride_preset:
+        params = load_cueing(platform.ride_preset)
+        return params, f"{params.name} (ride-file default of platform {label})"
     default = platform.default_preset
     if default:
         params = load_cueing(default)

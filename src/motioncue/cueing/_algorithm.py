@@ -35,6 +35,7 @@ and its tunable parameters (:class:`TunePlan`, what ``motioncue tune`` searches)
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable, MutableSequence, Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -263,6 +264,12 @@ class CueingEntry:
         Its own preset table.
     tune : TunePlan or None
         Its tunable parameters (None: ``motioncue tune`` refuses it).
+    max_rate_hz : float or None
+        The highest rate a ride file is cued at (Hz): ``generate`` at a higher frame rate
+        cues at the frame rate over the smallest whole divisor that brings it to this rate
+        or below, and takes the frames' poses from a cubic spline through the cue's (a plan
+        whose cost grows faster than its samples; its presets are tuned at this rate).
+        None: cued at the frame rate.
     """
 
     name: str
@@ -272,6 +279,17 @@ class CueingEntry:
     needs_rig: bool = False
     table: ParameterTable | None = None
     tune: TunePlan | None = None
+    max_rate_hz: float | None = None
+
+    def cue_rate_hz(self, frame_rate_hz: float) -> float:
+        """The rate a ride at ``frame_rate_hz`` is cued at (see ``max_rate_hz``)."""
+        cap = self.max_rate_hz
+        if cap is None or frame_rate_hz <= cap:
+            return frame_rate_hz
+        k = max(1, math.ceil(frame_rate_hz / cap - 1e-9))  # 300 / 100: 3, not 4
+        while frame_rate_hz / k > cap:
+            k += 1
+        return frame_rate_hz / k
 
 
 _REGISTRY: dict[str, CueingEntry] = {}
@@ -286,6 +304,7 @@ def register_cueing(
     needs_rig: bool = False,
     table: ParameterTable | None = None,
     tune: TunePlan | None = None,
+    max_rate_hz: float | None = None,
 ) -> CueingEntry:
     """Make ``algorithm = "NAME"`` in a preset select ``factory`` (see :class:`CueingEntry`
     for the declarations).
@@ -321,8 +340,20 @@ def register_cueing(
                         f"cueing algorithm {name!r}: table [{table.name}] is already read by "
                         f"{other.name!r} with another reader"
                     )
+    if max_rate_hz is not None and not (math.isfinite(max_rate_hz) and max_rate_hz > 0.0):
+        raise ConfigError(
+            f"cueing algorithm {name!r}: max_rate_hz {max_rate_hz!r} is invalid; allowed: a "
+            "finite rate > 0 Hz or None"
+        )
     entry = CueingEntry(
-        name, factory, bool(streaming), bool(frames_on_arrival), bool(needs_rig), table, tune
+        name,
+        factory,
+        bool(streaming),
+        bool(frames_on_arrival),
+        bool(needs_rig),
+        table,
+        tune,
+        None if max_rate_hz is None else float(max_rate_hz),
     )
     _REGISTRY[name] = entry
     return entry
@@ -425,6 +456,11 @@ def named_rig(platform: str, controller: str, fs_hz: float) -> Rig:
 def _mpc(params: CueingParams, fs_hz: float, rig: Rig | None = None) -> MpcCueing:
     from ._mpc import MpcCueing  # numpy/scipy/casadi only when an MPC preset is used
 
+    if params.mpc is not None and any(params.mpc.w_jerk):
+        raise ConfigError(
+            f'preset {params.name!r}: [mpc] w_jerk is for algorithm = "optimal" (its '
+            "windows' input steps); the live mpc re-plans every sample: leave it out"
+        )
     return MpcCueing(params, fs_hz, _plan_rig(params, fs_hz, rig))
 
 
@@ -440,5 +476,11 @@ _MPC_TABLE = ParameterTable("mpc", read_mpc_table, mpc_table_lines)
 register_cueing("classical", ClassicalWashout, frames_on_arrival=True, tune=CLASSICAL_TUNING)
 register_cueing("mpc", _mpc, needs_rig=True, table=_MPC_TABLE, tune=PLAN_TUNING)
 register_cueing(
-    "optimal", _optimal, streaming=False, needs_rig=True, table=_MPC_TABLE, tune=PLAN_TUNING
+    "optimal",
+    _optimal,
+    streaming=False,
+    needs_rig=True,
+    table=_MPC_TABLE,
+    tune=PLAN_TUNING,
+    max_rate_hz=100.0,  # its windows' QPs grow with their samples; tuned at 100 Hz
 )

@@ -121,6 +121,13 @@ class MpcParams:
         one per channel): ``we |H (s - r)|^2 + wv |H (s - d)|^2 = (we + wv) |H (s - r')|^2 +
         const`` with ``r' = r + wv / (we + wv) (d - r)``; :func:`~._mpc.reference` returns
         ``r'`` and :func:`~._mpc.build_model` weighs it by ``we + wv``.
+    w_jerk : 6 floats
+        ``optimal`` only. 0 (default): none. Otherwise the price of each change of the input
+        (the acceleration, m/s^2 or rad/s^2, held within a block) from one block to the next
+        and from the last block applied before a window to its first: ``w_jerk |u_b -
+        u_{b-1}|^2`` per degree of freedom (per (m/s^2)^2, (rad/s^2)^2). The otoliths'
+        lead turns each step of a translation's acceleration into a brief felt pulse of its
+        own; without this price a plan may use them (a jolt the vehicle did not have).
     w_prior : 6 floats
         ``mpc`` only. 0 (default): none. Otherwise ``wc`` (each in [0, 1e9], per pose
         component ``x, y, z`` in m, ``roll, pitch, yaw`` in rad) prices the plan's distance to
@@ -267,6 +274,7 @@ class MpcParams:
     w_acc: Vec6 = (0.01, 0.01, 0.01, 0.1, 0.1, 0.1)
     w_vehicle: Vec6 = (0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
     w_prior: Vec6 = (0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
+    w_jerk: Vec6 = (0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
     prediction_tau_s: float = 0.0
     ref_scale: Vec6 = (1.0, 1.0, 1.0, 1.0, 1.0, 1.0)
     ref_limit: Vec6 = (1e9, 1e9, 1e9, 1e9, 1e9, 1e9)
@@ -297,7 +305,7 @@ class MpcParams:
     sign_guard_every: int = 0
 
     def __post_init__(self) -> None:
-        for name in ("w_error", "w_pose", "w_vel", "w_acc", "w_vehicle", "w_prior"):
+        for name in ("w_error", "w_pose", "w_vel", "w_acc", "w_vehicle", "w_prior", "w_jerk"):
             object.__setattr__(self, name, _vec6(name, getattr(self, name), 0.0, 1e9))
         object.__setattr__(self, "ref_scale", _vec6("ref_scale", self.ref_scale, 0.0, 1.0))
         object.__setattr__(self, "ref_limit", _vec6("ref_limit", self.ref_limit, 1e-6, 1e9))
@@ -393,7 +401,7 @@ def read_mpc_table(table: ConfigReader) -> MpcParams:
     for name in ("platform", "controller"):
         vals[name] = table.string(name, getattr(d, name))
     vals["solver"] = table.string("solver", d.solver, choices=MPC_SOLVERS)
-    for name in ("w_error", "w_pose", "w_vel", "w_acc", "w_vehicle", "w_prior"):
+    for name in ("w_error", "w_pose", "w_vel", "w_acc", "w_vehicle", "w_prior", "w_jerk"):
         vals[name] = table.vector(name, 6, list(getattr(d, name)))
     for name in (
         "horizon_s",

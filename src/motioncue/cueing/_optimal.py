@@ -326,6 +326,16 @@ class OptimalCueing(PlanCueing):
         for j in range(nb):
             sl = slice(j * nu, (j + 1) * nu)
             hess[sl, sl] += self.mpc.block_samples * m.r
+        wj = self._w_jerk()
+        if wj is not None:  # w_jerk |u_b - u_{b-1}|^2, the first block's u_{-1} in the gradient
+            for j in range(nb):
+                sl = slice(j * nu, (j + 1) * nu)
+                hess[sl, sl] += np.diag(wj)
+                if j > 0:
+                    prev = slice((j - 1) * nu, j * nu)
+                    hess[prev, prev] += np.diag(wj)
+                    hess[prev, sl] -= np.diag(wj)
+                    hess[sl, prev] -= np.diag(wj)
         hess = 2.0 * 0.5 * (hess + hess.T)
         # constraints at block ends, legs linearised about neutral
         lim = self.limits
@@ -378,6 +388,11 @@ class OptimalCueing(PlanCueing):
             WorkingSetQp(hess, self.mpc.sign_guard_weight) if self.mpc.solver == "daqp" else None,
         )
         self._condense_fz()
+
+    def _w_jerk(self) -> NDArray[np.float64] | None:
+        """``w_jerk`` of the moved degrees of freedom (the inputs' order); None: all 0."""
+        wj = np.asarray(self.mpc.w_jerk, dtype=float)[list(self.model.active)]
+        return wj if np.any(wj > 0.0) else None
 
     def _fz_guarded(self) -> bool:
         """Whether the plan's perceived fz includes the tilt's loss of vertical force (a
@@ -546,12 +561,14 @@ class OptimalCueing(PlanCueing):
         d: NDArray[np.float64],
         about: NDArray[np.float64] | None = None,
         against: NDArray[np.bool_] | None = None,
+        u_before: NDArray[np.float64] | None = None,
     ) -> _WindowQp:
         """The QP (gradient, constraint matrix and bounds) of one window from state ``x0``
         with vehicle motion ``d`` ``(n_window + 1, 6)``; the legs linearised about neutral or, with
         ``about`` ``(blocks, 6)``, about those poses at the block ends; ``against``
         ``(blocks,)``: the block ends whose combined tilt takes the tighter bound of
-        ``tilt_fz_use_against``."""
+        ``tilt_fz_use_against``; ``u_before`` ``(nu,)``: the input applied just before the
+        window (the first block's step from it is priced by ``w_jerk``; None: from 0)."""
         m = self.model
         n = self.n_window
         bs = self.mpc.block_samples
@@ -566,6 +583,9 @@ class OptimalCueing(PlanCueing):
         lin = xf[1:] @ m.q + d[1:] @ zxd.T  # (n, nx): Q x_k + Zx'Zd d_k
         g = 2.0 * np.einsum("knu,kn->u", self._gam[1:], lin)
         g += 2.0 * self._gam[-1].T @ (self._tw @ xf[-1])
+        wj = self._w_jerk()
+        if wj is not None and u_before is not None:
+            g[: m.nu] -= 2.0 * wj * u_before
         lim = self.limits
         ends = np.arange(1, nb + 1) * bs
         fe = xf[ends]
@@ -791,6 +811,7 @@ class OptimalCueing(PlanCueing):
         u_prev: NDArray[np.float64] | None = None  # the last plan's inputs, shifted
         w_prev: tuple[NDArray[np.bool_], NDArray[np.float64]] | None = None  # its working set
         fz_on = self._fz_guarded()
+        u_before = np.zeros(m.nu)  # the input applied last (w_jerk prices the step from it)
         z_fz = np.zeros(m.nx)  # the otolith fz state of the tilt's loss of vertical force
         b_fz = -m.bd[:, 2]
         while start < n:
@@ -824,7 +845,7 @@ class OptimalCueing(PlanCueing):
             use_guard = False
             use_up: NDArray[np.bool_] | None = None
             for use_guard, first, use_up in tries:
-                qp = self._window_qp(st.x, d, first, use_up)
+                qp = self._window_qp(st.x, d, first, use_up, u_before)
                 p_free, g_end = qp.pose_free, qp.pose_gain
                 ok, u = self._solve_window(
                     qp, xv_e, sg, use_guard, guess=u_prev, start=self._shifted(w_prev, shift)
@@ -833,7 +854,7 @@ class OptimalCueing(PlanCueing):
                     break
             if ok:  # again with the legs (and the tilt's fz) linearised about this plan
                 about = p_free + g_end @ u
-                qp2 = self._window_qp(st.x, d, about, use_up)
+                qp2 = self._window_qp(st.x, d, about, use_up, u_before)
                 fz = (
                     self._fz_rows(qp2.xf, u, z_fz, vz_all[idx] * (idx_raw < n))
                     if fz_on and use_guard
@@ -874,6 +895,7 @@ class OptimalCueing(PlanCueing):
                     z_fz = m.a @ z_fz + b_fz * _fz_change(st.x, uk, m.active)
                 st.x = m.a @ st.x + m.bu @ uk + m.bd @ d_all[start + k]
                 poses[start + k] = st.x[:6]
+                u_before = np.asarray(uk, dtype=float)
             start += keep
         st.solve_ms.extend(times)
         return OptimalResult(

@@ -766,6 +766,8 @@ def mpc_table_lines(mp: MpcParams) -> list[str]:
         lines.append(f"{key} = {_vec(getattr(mp, key))}")
     if any(mp.w_prior):  # mpc's pose prior (written only where set)
         lines.append(f"w_prior = {_vec(mp.w_prior)}")
+    if any(mp.w_jerk):  # optimal's price of the input's steps (written only where set)
+        lines.append(f"w_jerk = {_vec(mp.w_jerk)}")
     lines += [
         f"ref_limit_m_s2 = {_vec(mp.ref_limit[:3])}",
         f"ref_limit_deg_s = {_vec([min(1e9, v * r2d) for v in mp.ref_limit[3:]])}",

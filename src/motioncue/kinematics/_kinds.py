@@ -19,7 +19,8 @@ package (a plugin module named in ``MOTIONCUE_PLUGINS`` for the command line)::
     )
 
 What the loader does for every kind (:func:`~motioncue.kinematics.platform_from_dict`):
-the common keys (``description``, ``actuators``, ``spare_axes``, ``default_preset``), the
+the common keys (``description``, ``actuators``, ``spare_axes``, ``default_preset``,
+``ride_preset``), the
 ``[geometry]`` anchors and neutral height, then the kind's reader, then the optional
 ``[traction_loss]`` slider, spare axes and ``[limits]``. Drawing needs no registration: the
 viewer draws every platform from its leg set (:attr:`Platform.legs`, whose

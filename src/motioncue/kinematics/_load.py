@@ -12,6 +12,8 @@ Layout of a platform file::
                                       # under a 4- or 5-actuator rig)
     default_preset = "racing-hexapod" # optional: the cueing preset used when a command is
                                       # given no --preset (a bundled name or a path)
+    ride_preset = "optimal-hexapod"   # optional: the one generate and cue use instead (the
+                                      # whole recording known: a plan that sees the ride)
 
     [geometry]                        # anchors: a symmetric ring layout (hexapods) or the
                                       # measured joint centres, one [x, y, z] per leg, in mm
@@ -270,12 +272,15 @@ def platform_from_dict(
         )
     kind = PLATFORM_KINDS[kind_name]
     description = cfg.string("description", "")
-    default_preset = cfg.string("default_preset", "") or None
-    if default_preset is not None:
-        try:
-            find_config("cueing", default_preset)
-        except ConfigError as exc:
-            raise cfg.error("default_preset", default_preset, f"a cueing preset ({exc})") from exc
+    presets: dict[str, str | None] = {}
+    for key in ("default_preset", "ride_preset"):
+        presets[key] = cfg.string(key, "") or None
+        if presets[key] is not None:
+            try:
+                find_config("cueing", str(presets[key]))
+            except ConfigError as exc:
+                raise cfg.error(key, presets[key], f"a cueing preset ({exc})") from exc
+    default_preset, ride_preset = presets["default_preset"], presets["ride_preset"]
     n_legs = kind.n_legs
     has_tl = cfg.has("traction_loss")
     if has_tl and kind.yaw_axis:
@@ -309,6 +314,8 @@ def platform_from_dict(
     platform = _actuator_limits(cfg, platform, tl_limits)
     if default_preset is not None:
         platform = platform.with_default_preset(default_preset)
+    if ride_preset is not None:
+        platform = platform.with_ride_preset(ride_preset)
     cfg.finish()
     _check_pulse_range(platform, where)
     return platform

@@ -194,12 +194,18 @@ class Platform:
     default_preset : str or None
         The cueing preset (name or path) made for this machine, used by ``generate``,
         ``bridge`` and ``cue`` when no ``--preset`` is given (the file's ``default_preset``).
+    ride_preset : str or None
+        The cueing preset used instead of ``default_preset`` where the whole recording is
+        known before the first frame (``generate`` and ``cue``, and so ride files): a plan
+        that sees the whole ride (the file's ``ride_preset``); ``None``: ``default_preset``
+        there too. ``bridge`` always uses ``default_preset``.
     """
 
     v_max: NDArray[np.float64] | None = None
     a_max: NDArray[np.float64] | None = None
     j_max: NDArray[np.float64] | None = None
     default_preset: str | None = None
+    ride_preset: str | None = None
 
     def with_default_preset(self, preset: str | None) -> Platform:
         """A copy naming ``preset`` (a cueing preset name or path) as its default."""
@@ -207,6 +213,14 @@ class Platform:
 
         out = copy.copy(self)
         set_fields(out, default_preset=preset)
+        return out
+
+    def with_ride_preset(self, preset: str | None) -> Platform:
+        """A copy naming ``preset`` (a cueing preset name or path) as its ride-file default."""
+        import copy
+
+        out = copy.copy(self)
+        set_fields(out, ride_preset=preset)
         return out
 
     def with_actuator_limits(
@@ -1153,6 +1167,8 @@ def _rebuilt(old: Platform, args: _PlatformArgs) -> Platform:
     out = Platform(**args)
     if old.default_preset is not None:
         out = out.with_default_preset(old.default_preset)
+    if old.ride_preset is not None:
+        out = out.with_ride_preset(old.ride_preset)
     return out
 
 

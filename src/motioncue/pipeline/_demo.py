@@ -2,8 +2,8 @@
 
 Another bundled platform and any controller whose kind has an emulator on UDP can be named
 (``corner4-tl`` on ``mbox6``, ``imax6``; ``smc3`` alone picks ``seat3-pot``, the first bundled
-platform it can drive); the cueing preset is the platform's
-``default_preset``.
+platform it can drive); the cueing preset is the platform's ride-file preset
+(``ride_preset``, the plan that sees the whole lap), else its ``default_preset``.
 
 No hardware and no network: the emulator listens on loopback in this process.
 """
@@ -115,7 +115,7 @@ def run_demo(
     actuators as the controller has axes, and a drive its values agree with);
     ``controller_name``: a controller (name or path) whose kind declares an emulator on
     ``udp://``, played to that emulator. The
-    cueing preset is the platform's ``default_preset``.
+    cueing preset is the platform's ``ride_preset``, else its ``default_preset``.
     """
     from motioncue.cueing import load_cueing
     from motioncue.kinematics import load_platform
@@ -140,7 +140,7 @@ def run_demo(
             f"controller {controller_name!r} is of kind {kind.name}, which has no emulator on "
             "udp://; the demo plays to a controller emulator on loopback"
         )
-    preset = platform.default_preset or "racing"
+    preset = platform.ride_preset or platform.default_preset or "racing"
     cueing = load_cueing(preset)
     limits = ActuatorLimits.from_platform(platform, controller, rate_hz=rate_hz)
     log(

@@ -16,7 +16,7 @@ from typing import TYPE_CHECKING, Any, NotRequired, TypedDict
 import numpy as np
 
 from .._errors import LimitError
-from ..cueing import GRAVITY_M_S2, CueingParams, Rig, make_cueing
+from ..cueing import GRAVITY_M_S2, CueingParams, Rig, cueing_entry, make_cueing
 from ..cueing._vestibular import THRESHOLDS
 from ..telemetry._recording import resample
 from ..trajectory import ActuatorLimits, limit_ride, transition, transition_through
@@ -140,6 +140,10 @@ class GenerateReport:
         :func:`_ramp`) or ``"stop then ramp"`` (the fallback: :func:`_join_to_rest`, then
         the ramp); ``"duration_s"``; ``"shortened"``: why the workspace made it faster
         than its acceleration target, empty when it did not). Also ``ride.notes["joins"]``.
+    cue_rate_hz : float
+        The rate the cueing ran at: the frame rate, or below it for an algorithm that
+        declares a ``max_rate_hz`` (:class:`motioncue.cueing.CueingEntry`), whose poses were
+        then splined to the frames.
     """
 
     t_s: np.ndarray
@@ -158,6 +162,20 @@ class GenerateReport:
     stage_s: dict[str, float] = field(default_factory=dict)
     transition_fallbacks: tuple[str, ...] = ()
     joins: tuple[JoinEntry, ...] = ()
+    cue_rate_hz: float = 0.0
+
+
+def _splined_to_frames(
+    poses: np.ndarray, t_cue_s: np.ndarray, t_frames_s: np.ndarray
+) -> np.ndarray:
+    """Poses ``(M, 6)`` at the times ``t_cue_s`` at the frame times (a C2 cubic spline, so
+    the frames' accelerations are continuous; past the last cue sample its pose is held)."""
+    from scipy.interpolate import CubicSpline
+
+    if len(t_cue_s) < 2:
+        return np.repeat(poses[:1], len(t_frames_s), axis=0)
+    spline = CubicSpline(t_cue_s, poses, axis=0)
+    return np.asarray(spline(np.clip(t_frames_s, t_cue_s[0], t_cue_s[-1])), dtype=float)
 
 
 def _finish(
@@ -413,11 +431,18 @@ def generate_ride(
     step("cueing", 0.1)
     # the offline chain's cueing and workspace stages (motioncue.pipeline._chain); the
     # casadi ride optimisation below stands for the live actuator limiter
-    design = make_cueing(cueing, rate_hz, Rig(platform, limits, controller.name))
-    wres = run_cueing(design, rec.f, rec.w)
+    # an algorithm that declares a highest rate (a plan) cues below a faster frame rate, and
+    # the frames take their poses from a spline through its poses
+    cue_hz = cueing_entry(cueing.algorithm).cue_rate_hz(rate_hz)
+    rec_cue = rec if cue_hz == rate_hz else resample(recording, cue_hz)
+    design = make_cueing(cueing, cue_hz, Rig(platform, limits, controller.name))
+    wres = run_cueing(design, rec_cue.f, rec_cue.w)
+    poses_cued = wres.poses
+    if cue_hz != rate_hz:
+        poses_cued = _splined_to_frames(wres.poses, rec_cue.t_s, rec.t_s)
     lap("cueing")
     step("workspace", 0.2)
-    delivered = deliver(platform, wres.poses, tight, rate_hz, actuator_limits=False)
+    delivered = deliver(platform, poses_cued, tight, rate_hz, actuator_limits=False)
     plim = delivered.workspace
     poses_cue_ok = delivered.poses
     lap("workspace")
@@ -488,7 +513,7 @@ def generate_ride(
         cue_slice=cue,
         f_vehicle=rec.f,
         w_vehicle=rec.w,
-        poses_cue=np.asarray(wres.poses),
+        poses_cue=np.asarray(poses_cued),
         poses=poses,
         q_desired=q_desired,
         q=q,
@@ -500,6 +525,7 @@ def generate_ride(
         stage_s=stage_s,
         transition_fallbacks=tuple(fallbacks),
         joins=joins,
+        cue_rate_hz=cue_hz,
     )
     return ride, report
 
