@@ -11,7 +11,9 @@ hexapod driven by an ``mbox6`` unless told otherwise. None of these drives is a 
 Printed per drive and preset (definitions: ``docs/cue-metrics.md``,
 :func:`motioncue.cueing.cue_metrics`): correlation fx / fy, rendered share fx / fy, gain
 fx / fy, missed cues fx / fy (% of the time), reversals fx / fy / any channel and all
-false cues (any channel; % of the time), clamped poses (%), and with the bound
+false cues (any channel; % of the time), clamped poses (%), the jolt fx / fy (the rider's
+perceived motion above 2 Hz in thresholds, :func:`motioncue.cueing.jolt`; in brackets the
+vehicle's own: pulses far above it are knocks the vehicle did not have), and with the bound
 (:func:`motioncue.cueing.cue_bound`, default on) each preset's share as % of the largest
 gain the rig could give without a reversal and of the largest share it could give at the
 acceptance's correlation (0.95 fx, 0.90 fy); then per drive the bound itself. Ends with the
@@ -95,7 +97,7 @@ def main(argv: list[str]) -> int:
     print(
         f"{'drive':<{wr}} {'preset':<{wp}} {'corr fx/fy':>11} {'share fx/fy':>11} "
         f"{'gain fx/fy':>11} {'missed% fx/fy':>13} {'rev% fx/fy/any':>16} {'false%':>6} "
-        f"{'clamp%':>6} "
+        f"{'clamp%':>6} {'jolt fx/fy (veh)':>22} "
         f"{'%bound fx/fy':>12} {'%@corr fx/fy':>12}"
     )
     for r in res.rows():
@@ -108,6 +110,8 @@ def main(argv: list[str]) -> int:
             f"{r['gain_fx']:5.3f}/{r['gain_fy']:5.3f} {mx:6.1f}/{my:6.1f} "
             f"{rx:4.2f}/{ry:4.2f}/{r['reversal_pct_any']:5.2f} {r['false_cue_pct_any']:6.2f} "
             f"{r['clamped_pct']:6.2f} "
+            f"{r['jolt_fx']:4.2f}/{r['jolt_fy']:4.2f} "
+            f"({r['jolt_vehicle_fx']:5.2f}/{r['jolt_vehicle_fy']:5.2f}) "
             f"{_pct(r['share_of_bound_pct_fx'])}/{_pct(r['share_of_bound_pct_fy'])} "
             f"{_pct(r['share_of_corr_bound_pct_fx'])}/{_pct(r['share_of_corr_bound_pct_fy'])}"
         )

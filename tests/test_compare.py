@@ -108,9 +108,15 @@ def _alone(rec_path: Path, preset: str) -> dict:
     sim, veh, thr = ev.perceived_sim, ev.perceived_vehicle, ev.thresholds
     any_false = np.any((np.abs(sim) > thr) & (np.sign(sim) == -np.sign(veh)) & (veh != 0), axis=1)
     any_missed = np.any((np.abs(veh) > thr) & (np.abs(sim) <= thr), axis=1)
+    from scipy.signal import butter, sosfiltfilt
+
     from test_tune import _score  # the score written out from its definition
 
+    hp = butter(4, 2.0, "highpass", fs=fs, output="sos")  # the jolt's band, written out
+
     return {
+        "jolt": np.sqrt(np.mean(sosfiltfilt(hp, sim, axis=0) ** 2, axis=0)) / thr,
+        "jolt_vehicle": np.sqrt(np.mean(sosfiltfilt(hp, veh, axis=0) ** 2, axis=0)) / thr,
         "objective_J": ev.perceived_error,
         "cue_score": _score(veh, sim, thr),
         "corr": ev.correlation,
@@ -162,6 +168,10 @@ def test_rows_equal_each_preset_evaluated_alone(report: dict) -> None:
             assert row[f"gain_{a}"] == pytest.approx(ref["gain"][i], rel=1e-6, abs=1e-12)
             assert row[f"reversal_s_{a}"] == pytest.approx(ref["reversal"][i])
             assert row[f"spurious_s_{a}"] == pytest.approx(ref["spurious"][i])
+            assert row[f"jolt_{a}"] == pytest.approx(ref["jolt"][i], rel=1e-9, abs=1e-12)
+            assert row[f"jolt_vehicle_{a}"] == pytest.approx(
+                ref["jolt_vehicle"][i], rel=1e-9, abs=1e-12
+            )
     # the presets really differ (the comparison is not one run copied)
     js = {r["preset"]: r["objective_J"] for r in rows if r["recording"] == "lap-a.csv"}
     assert len({round(v, 9) for v in js.values()}) == len(presets)

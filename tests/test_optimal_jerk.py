@@ -19,7 +19,7 @@ import numpy as np
 import pytest
 
 from motioncue._errors import ConfigError
-from motioncue.cueing import CueingParams, load_cueing, make_cueing
+from motioncue.cueing import CueingParams, evaluate_cueing, jolt, load_cueing, make_cueing
 from motioncue.cueing._optimal import OptimalCueing
 from motioncue.cueing._tune import preset_toml
 from motioncue.telemetry import sample_drives
@@ -86,6 +86,13 @@ def test_a_ride_with_the_price_has_smaller_steps() -> None:
     # 0.305 -> 0.0135 (0.04x)
     assert s1[0] < 0.8 * s0[0] and s1[1] < 0.2 * s0[1], (s0, s1)
     assert np.all(np.isfinite(smooth))
+    # as the rider feels it: the perceived fy above 2 Hz (motioncue.cueing.jolt), against
+    # the vehicle's own
+    ev0, ev1 = (evaluate_cueing(f, w, np.asarray(p), FS) for p in (plain, smooth))
+    j0, j1 = (jolt(e.perceived_sim, FS, e.thresholds)[1] for e in (ev0, ev1))
+    jv = jolt(ev0.perceived_vehicle, FS, ev0.thresholds)[1]
+    print(f"jolt fy (thresholds): vehicle {jv:.3f}, without {j0:.3f}, with {j1:.3f}")
+    assert j1 < 0.4 * j0, (j0, j1)
 
 
 def test_the_key_is_read_written_and_refused_where_unused(tmp_path: Path) -> None:

@@ -32,7 +32,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from .._errors import ConfigError
-from ..cueing import CueingParams, Rig, make_cueing
+from ..cueing import JOLT_CUTOFF_HZ, CueingParams, Rig, jolt, make_cueing
 from ..cueing._bound import CORR_MIN, CueBound, RigReach, cue_bound
 from ..cueing._evaluate import CueingEvaluation, evaluate_cueing
 from ..cueing._plot import rider_axis
@@ -159,6 +159,16 @@ COLUMN_NOTES: dict[str, str] = {
         "time (s) with |perceived simulator {a}| above the threshold "
         "and |perceived vehicle| at or below it (a cue the vehicle does not give, either sign)",
     ),
+    **{
+        f"jolt_{a}": f"brief pulses of the perceived simulator {a}: its rms above "
+        f"{JOLT_CUTOFF_HZ:g} Hz, in thresholds (motioncue.cueing.jolt; compare jolt_vehicle_{a})"
+        for a in COMPARE_AXES
+    },
+    **{
+        f"jolt_vehicle_{a}": f"the same of the perceived vehicle {a} (its own road texture and "
+        "kerbs): a simulator far above it gives pulses the vehicle did not have"
+        for a in COMPARE_AXES
+    },
     "clamped_pct": "% of the cue poses outside the platform's workspace (incl. the "
     "controller's stroke and pulse rounding), scaled back towards neutral",
     "actuator_limited_pct": "% of frames changed by the actuator speed/acceleration/jerk "
@@ -276,6 +286,11 @@ class CompareRun:
             row[f"spurious_s_{a}"] = float(m.spurious[i]) * dur
         row["spurious_s_any"] = m.spurious_any * dur
         row["spurious_pct_any"] = 100.0 * m.spurious_any
+        j_sim, j_veh = jolt(sim, fs, thr), jolt(veh, fs, thr)
+        for i, a in enumerate(COMPARE_AXES):
+            row[f"jolt_{a}"] = float(j_sim[i])
+        for i, a in enumerate(COMPARE_AXES):
+            row[f"jolt_vehicle_{a}"] = float(j_veh[i])
         b = self.bound
         for i, a in enumerate(COMPARE_AXES[:2]):
             row[f"bound_error_{a}_m_s2"] = math.nan if b is None else float(b.error_rms[i])

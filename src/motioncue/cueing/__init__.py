@@ -44,7 +44,7 @@ from ._evaluate import (
     evaluate_cueing,
     simulator_motion,
 )
-from ._metrics import CueMasks, CueMetrics, cue_masks, cue_metrics
+from ._metrics import JOLT_CUTOFF_HZ, CueMasks, CueMetrics, cue_masks, cue_metrics, jolt
 from ._params import DOF_NAMES, GRAVITY_M_S2, CueingParams, load_cueing
 from ._plot import plot_cueing
 from ._score import (
@@ -75,6 +75,7 @@ __all__ = [
     "DOF_NAMES",
     "FALSE_CUE_WEIGHT",
     "GRAVITY_M_S2",
+    "JOLT_CUTOFF_HZ",
     "MISSED_CUE_WEIGHT",
     "MODEL_SETS",
     "OTOLITH",
@@ -110,6 +111,7 @@ __all__ = [
     "cueing_entry",
     "evaluate_cueing",
     "get_model_set",
+    "jolt",
     "load_cueing",
     "make_cueing",
     "perceived_motion_error",

@@ -74,7 +74,7 @@ from numpy.typing import ArrayLike, NDArray
 from .._errors import ConfigError
 from ._vestibular import AXIS_NAMES
 
-__all__ = ["CueMasks", "CueMetrics", "cue_masks", "cue_metrics"]
+__all__ = ["JOLT_CUTOFF_HZ", "CueMasks", "CueMetrics", "cue_masks", "cue_metrics", "jolt"]
 
 
 class CueMasks(NamedTuple):
@@ -324,3 +324,56 @@ def cue_metrics(
         thresholds=thr,
         n_samples=int(n),
     )
+
+
+JOLT_CUTOFF_HZ = 2.0
+"""Lower edge (Hz) of the band :func:`jolt` measures."""
+
+
+def jolt(
+    perceived: ArrayLike, fs_hz: float, thresholds: ArrayLike, cutoff_hz: float = JOLT_CUTOFF_HZ
+) -> NDArray[np.float64]:
+    """The brief pulses in a perceived motion: its rms above ``cutoff_hz``, in thresholds.
+
+    Parameters
+    ----------
+    perceived : (N, k) array_like
+        Perceived motion (the vestibular models' output, e.g.
+        :attr:`CueingEvaluation.perceived_sim`), uniform at ``fs_hz``.
+    fs_hz : float
+        Sample rate (Hz), above ``2 cutoff_hz``.
+    thresholds : (k,) array_like
+        Perception thresholds of the channels (> 0, the units of ``perceived``).
+    cutoff_hz : float
+        The band's lower edge (Hz; default 2 Hz, above the sustained and onset cues of a
+        vehicle's manoeuvres and below road texture's 6-20 Hz).
+
+    Returns
+    -------
+    (k,) ndarray
+        Per channel the rms of ``perceived`` through a 4th-order Butterworth high-pass at
+        ``cutoff_hz`` run forwards and backwards (zero phase, so a pulse is not moved),
+        divided by the threshold. A steady or slowly varying motion gives about 0, a
+        sinusoid well above the cutoff of amplitude ``a`` about ``a / sqrt(2) / thr``. The
+        vehicle's own (road texture, kerbs) is the reference for a simulator's: a simulator
+        far above it gives pulses the vehicle did not have (a plan's steps of acceleration
+        through the otoliths' lead felt as knocks). Shorter than 30 samples: NaN.
+    """
+    from scipy.signal import butter, sosfiltfilt
+
+    p = np.asarray(perceived, dtype=float)
+    thr = np.asarray(thresholds, dtype=float)
+    if p.ndim != 2 or thr.shape != (p.shape[1],) or np.any(~(thr > 0.0)):
+        raise ConfigError(
+            f"jolt needs perceived (N, k) and k thresholds > 0; got {p.shape} and {thr.shape}"
+        )
+    if not (math.isfinite(fs_hz) and math.isfinite(cutoff_hz) and 0.0 < 2.0 * cutoff_hz < fs_hz):
+        raise ConfigError(
+            f"jolt: cutoff {cutoff_hz!r} Hz at {fs_hz!r} Hz is invalid; allowed: 0 < cutoff "
+            "< fs / 2"
+        )
+    if p.shape[0] < 30:
+        return np.full(p.shape[1], np.nan)
+    sos = butter(4, cutoff_hz, "highpass", fs=fs_hz, output="sos")
+    hp = sosfiltfilt(sos, np.nan_to_num(p), axis=0)
+    return np.asarray(np.sqrt(np.mean(hp**2, axis=0)) / thr, dtype=float)
