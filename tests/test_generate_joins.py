@@ -28,7 +28,7 @@ import pytest
 from motioncue.cueing import load_cueing
 from motioncue.kinematics import Platform, load_platform
 from motioncue.output import load_controller
-from motioncue.pipeline import _generate, generate_ride
+from motioncue.pipeline import _chain, generate_ride
 from motioncue.pipeline._chain import Cued
 from motioncue.telemetry._recording import Recording
 from motioncue.trajectory import ActuatorLimits
@@ -69,7 +69,7 @@ def _ride(
         assert len(f) == n
         return Cued(None, poses.copy(), np.asarray(f), np.asarray(w), 0)  # type: ignore[arg-type]
 
-    monkeypatch.setattr(_generate, "run_cueing", fake_cueing)
+    monkeypatch.setattr(_chain, "run_cueing", fake_cueing)  # generate's cueing stage
     t = np.arange(n) / RATE_HZ
     f = np.tile([0.0, 0.0, 9.80665], (n, 1))
     ride, _ = generate_ride(

@@ -119,3 +119,24 @@ def test_the_rider_gets_the_same_ride_at_100_and_500_hz(excerpt: Path, tmp_path:
     assert np.all(np.isfinite(s)) and np.all(s > 0.05), s
     print("rendered share fx, fy at 100 / 500 Hz:", s.round(4).tolist())
     np.testing.assert_allclose(s[1], s[0], rtol=0.02)
+
+
+def test_cue_at_a_fast_rate_runs_the_plan_at_its_own(
+    excerpt: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    tables = {}
+    for rate in (100.0, 500.0):
+        out = tmp_path / f"p{rate:g}.csv"
+        rc = main(["cue", "--input", str(excerpt), "--platform", PLATFORM, "--rate",
+                   f"{rate:g}", "--out", str(out)])  # fmt: skip
+        said = capsys.readouterr()
+        assert rc == 0, said.err
+        assert f"preset {PRESET} (ride-file default of platform {PLATFORM})" in said.out
+        assert ("optimal plans at 100 Hz" in said.err) == (rate == 500.0), said.err
+        tables[rate] = np.loadtxt(out, delimiter=",", skiprows=1)
+    slow, fast = tables[100.0], tables[500.0]
+    np.testing.assert_allclose(np.diff(fast[:, 0]), 0.002, atol=1e-9)
+    # every fifth 500 Hz row is a 100 Hz sample: the same pose (the spline's knots)
+    n = min(len(slow), len(fast[::5]))
+    np.testing.assert_allclose(fast[::5][:n, 0], slow[:n, 0], atol=1e-9)
+    np.testing.assert_allclose(fast[::5][:n, 1:], slow[:n, 1:], rtol=0.0, atol=1e-12)

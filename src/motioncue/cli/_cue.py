@@ -33,11 +33,11 @@ __all__ = ["register"]
 def run(args: argparse.Namespace) -> int:
     import numpy as np
 
-    from ..cueing import evaluate_cueing, get_model_set, make_cueing
-    from ..pipeline._chain import run_cueing
+    from ..cueing import evaluate_cueing, get_model_set
+    from ..pipeline._chain import cue_recording
     from ..pipeline._inputs import load_generate_input
     from ..telemetry._motion import is_datagram_recording
-    from ..telemetry._recording import read_recording_csv, resample
+    from ..telemetry._recording import read_recording_csv
     from ._preset import choose_preset
 
     rate_hz = args.rate
@@ -56,12 +56,20 @@ def run(args: argparse.Namespace) -> int:
         rec = read_recording_csv(args.input)  # rows in any order, bad samples held below
     if len(rec) == 0:
         raise ConfigError(f"{args.input}: no samples")
-    uniform = resample(rec, rate_hz)
-    design = make_cueing(params, rate_hz)
-    cued = run_cueing(design, uniform.f, uniform.w)  # with the input as the algorithm used it
+    # at the algorithm's rate (a plan's highest, its poses splined to --rate), with the input
+    # as the algorithm used it
+    cued, poses, uniform, cue_hz = cue_recording(params, rec, rate_hz)
     res = cued.result
+    f_used, w_used = cued.f_used, cued.w_used
+    if cue_hz != rate_hz:  # judged against the input at --rate, as the poses are
+        f_used, w_used = uniform.f, uniform.w
+        print(
+            f"motioncue cue: {params.algorithm} plans at {cue_hz:g} Hz (its highest rate); "
+            f"the {rate_hz:g} Hz poses follow a cubic spline through its poses",
+            file=sys.stderr,
+        )
     out = Path(args.out)
-    table = np.column_stack([uniform.t_s, res.poses])
+    table = np.column_stack([uniform.t_s, poses])
     try:
         with open(out, "w", encoding="utf-8") as fh:
             fh.write("t,x,y,z,roll,pitch,yaw\n")
@@ -70,9 +78,9 @@ def run(args: argparse.Namespace) -> int:
     except OSError as exc:
         raise ConfigError(f"{out}: cannot write: {exc}") from exc
     ev = evaluate_cueing(
-        cued.f_used,
-        cued.w_used,
-        res.poses,
+        f_used,
+        w_used,
+        poses,
         rate_hz,
         workspace=params.workspace,
         model=args.vestibular,
@@ -110,7 +118,7 @@ def run(args: argparse.Namespace) -> int:
 
         path = plot_cueing(
             ev,
-            res.poses,
+            poses,
             args.plot,
             t_s=uniform.t_s,
             title=f"{Path(args.input).name} at {rate_hz:g} Hz",
@@ -161,7 +169,8 @@ _CUE = Verb(
             help="platform whose default_preset is used when --preset is not given",
         ),
         RATE.but(
-            help="rate the recording is resampled to and the cueing runs at (default 100)",
+            help="rate the recording is resampled to and the cueing runs at (default 100; a plan "
+            "above its highest rate runs there and its poses are splined to this rate)",
             allowed=Allowed(0.0, 2000.0, unit="Hz"),
         ),
         OUT.but(metavar="POSES.csv", help="poses CSV to write"),

@@ -4,7 +4,8 @@ Every offline user of a cueing algorithm runs the same stages a ride goes throug
 arrays at the frame rate:
 
 1. :func:`run_cueing`: the algorithm's whole-recording run, with the input it actually used
-   (bad samples held);
+   (bad samples held); :func:`cue_recording` runs it on a recording at the algorithm's own
+   rate (a plan's highest, its poses splined to the frames: ``generate``, ``cue``);
 2. :func:`deliver`: workspace limiting (:func:`motioncue.trajectory.limit_pose`) with the
    actuator limits already tightened for the controller's pulse rounding (by the caller:
    :func:`motioncue.trajectory.pulse_rounding_limits`, or ``planning_limits`` where a ride
@@ -26,7 +27,8 @@ from typing import TYPE_CHECKING, Protocol, runtime_checkable
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from ..cueing import CueingResult
+from ..cueing import CueingParams, CueingResult, Rig, cueing_entry, make_cueing
+from ..telemetry._recording import Recording, resample
 from ..trajectory import JerkLimiter, RealtimeLimiter, limit_pose
 
 if TYPE_CHECKING:
@@ -39,6 +41,7 @@ __all__ = [
     "Delivered",
     "ReportsUsedInput",
     "RunsRecordings",
+    "cue_recording",
     "deliver",
     "offline_chain",
     "run_cueing",
@@ -144,6 +147,49 @@ def run_cueing(design: RunsRecordings, f: ArrayLike, w: ArrayLike) -> Cued:
         f_used = np.asarray(f, dtype=float)
         w_used = np.asarray(w, dtype=float)
     return Cued(res, np.asarray(res.poses, dtype=float), f_used, w_used, int(res.bad_samples))
+
+
+def cue_recording(
+    params: CueingParams, recording: Recording, rate_hz: float, rig: Rig | None = None
+) -> tuple[Cued, NDArray[np.float64], Recording, float]:
+    """The cueing stage on a recording for frames at ``rate_hz``, at the algorithm's rate.
+
+    An algorithm that declares a highest rate (``max_rate_hz`` of its registry entry, a plan)
+    runs on the recording resampled to :meth:`~motioncue.cueing.CueingEntry.cue_rate_hz`,
+    and the frames' poses come from a C2 cubic spline through its poses (past its last
+    sample, the last pose held); any other runs at ``rate_hz``.
+
+    Returns
+    -------
+    cued : Cued
+        The stage's output at the cue rate.
+    poses : (N, 6) array
+        The poses at the frames (``recording`` resampled to ``rate_hz``; m, rad).
+    at_rate : Recording
+        ``recording`` resampled to ``rate_hz``.
+    cue_rate_hz : float
+    """
+    at_rate = resample(recording, rate_hz)
+    cue_hz = cueing_entry(params.algorithm).cue_rate_hz(rate_hz)
+    at_cue = at_rate if cue_hz == rate_hz else resample(recording, cue_hz)
+    cued = run_cueing(make_cueing(params, cue_hz, rig), at_cue.f, at_cue.w)
+    poses = cued.poses
+    if cue_hz != rate_hz:
+        poses = _splined(cued.poses, np.asarray(at_cue.t_s), np.asarray(at_rate.t_s))
+    return cued, poses, at_rate, cue_hz
+
+
+def _splined(
+    poses: NDArray[np.float64], t_cue_s: NDArray[np.float64], t_frames_s: NDArray[np.float64]
+) -> NDArray[np.float64]:
+    """Poses ``(M, 6)`` at the times ``t_cue_s`` at the frame times (a C2 cubic spline, so
+    the frames' accelerations are continuous; past the last cue sample its pose is held)."""
+    from scipy.interpolate import CubicSpline
+
+    if len(t_cue_s) < 2:
+        return np.repeat(poses[:1], len(t_frames_s), axis=0)
+    spline = CubicSpline(t_cue_s, poses, axis=0)
+    return np.asarray(spline(np.clip(t_frames_s, t_cue_s[0], t_cue_s[-1])), dtype=float)
 
 
 def deliver(

@@ -16,12 +16,11 @@ from typing import TYPE_CHECKING, Any, NotRequired, TypedDict
 import numpy as np
 
 from .._errors import LimitError
-from ..cueing import GRAVITY_M_S2, CueingParams, Rig, cueing_entry, make_cueing
+from ..cueing import GRAVITY_M_S2, CueingParams, Rig
 from ..cueing._vestibular import THRESHOLDS
-from ..telemetry._recording import resample
 from ..trajectory import ActuatorLimits, limit_ride, transition, transition_through
 from ..trajectory._derive import planning_limits, pulse_rounding_limits
-from ._chain import deliver, run_cueing
+from ._chain import cue_recording, deliver
 from ._ridefile import Ride
 from ._verify import FrameCheck, check_frames
 
@@ -163,19 +162,6 @@ class GenerateReport:
     transition_fallbacks: tuple[str, ...] = ()
     joins: tuple[JoinEntry, ...] = ()
     cue_rate_hz: float = 0.0
-
-
-def _splined_to_frames(
-    poses: np.ndarray, t_cue_s: np.ndarray, t_frames_s: np.ndarray
-) -> np.ndarray:
-    """Poses ``(M, 6)`` at the times ``t_cue_s`` at the frame times (a C2 cubic spline, so
-    the frames' accelerations are continuous; past the last cue sample its pose is held)."""
-    from scipy.interpolate import CubicSpline
-
-    if len(t_cue_s) < 2:
-        return np.repeat(poses[:1], len(t_frames_s), axis=0)
-    spline = CubicSpline(t_cue_s, poses, axis=0)
-    return np.asarray(spline(np.clip(t_frames_s, t_cue_s[0], t_cue_s[-1])), dtype=float)
 
 
 def _finish(
@@ -425,21 +411,13 @@ def generate_ride(
     limits, table, tight = _ride_limits(platform, controller, rate_hz, limits)
     dt = 1.0 / rate_hz
 
-    step("resample", 0.0)
-    rec = resample(recording, rate_hz)
-    lap("resample")
     step("cueing", 0.1)
     # the offline chain's cueing and workspace stages (motioncue.pipeline._chain); the
-    # casadi ride optimisation below stands for the live actuator limiter
-    # an algorithm that declares a highest rate (a plan) cues below a faster frame rate, and
-    # the frames take their poses from a spline through its poses
-    cue_hz = cueing_entry(cueing.algorithm).cue_rate_hz(rate_hz)
-    rec_cue = rec if cue_hz == rate_hz else resample(recording, cue_hz)
-    design = make_cueing(cueing, cue_hz, Rig(platform, limits, controller.name))
-    wres = run_cueing(design, rec_cue.f, rec_cue.w)
-    poses_cued = wres.poses
-    if cue_hz != rate_hz:
-        poses_cued = _splined_to_frames(wres.poses, rec_cue.t_s, rec.t_s)
+    # casadi ride optimisation below stands for the live actuator limiter. An algorithm that
+    # declares a highest rate (a plan) cues below a faster frame rate, and the frames take
+    # their poses from a spline through its poses
+    rig = Rig(platform, limits, controller.name)
+    wres, poses_cued, rec, cue_hz = cue_recording(cueing, recording, rate_hz, rig)
     lap("cueing")
     step("workspace", 0.2)
     delivered = deliver(platform, poses_cued, tight, rate_hz, actuator_limits=False)
