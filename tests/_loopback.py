@@ -163,7 +163,7 @@ def step_delays_ms(
     steps_ns: list[int],
     threshold: float = 1.5e6,
     window_ms: float = 50.0,
-) -> tuple[np.ndarray, int]:
+) -> tuple[np.ndarray, int, int]:
     """Delay from each step's send to the first frame that moves with it (ms).
 
     A frame moves with the step when its acceleration on the controller's clock
@@ -171,26 +171,28 @@ def step_delays_ms(
     ``threshold`` pulses/s^2: once the washout has settled on a constant input the frames
     keep their speed, and the pulse rounding changes an acceleration by at most
     ``4 / h^2`` pulses/s^2 (1e6 at h = 2 ms); a step of 1 g in the specific force changes
-    the actuators' acceleration at once. Steps whose 10 frames before were not quiet, or
-    with no such frame within ``window_ms``, are not counted (their number is returned).
+    the actuators' acceleration at once. Returns the delays, the number of steps that could
+    not be judged (their 10 frames before were not quiet: another step's transient, or
+    frames stamped unevenly by a stopped process) and the number judged that no frame moved
+    with within ``window_ms`` (a step that did not reach the frames).
     """
     t = np.asarray(t_ns, dtype=np.int64)
     a = accelerations(stamp_ms, positions)
     da = np.zeros(len(a))
     if len(a) > 3:
         da[3:] = np.max(np.abs(np.diff(a[2:], axis=0)), axis=1)
-    out, skipped = [], 0
+    out, unjudged, missed = [], 0, 0
     for s in steps_ns:
         k = int(np.searchsorted(t, s, side="right"))
         if k < 13 or np.any(da[k - 10 : k] > threshold):
-            skipped += 1
+            unjudged += 1
             continue
         moving = np.nonzero(da[k:] > threshold)[0]
         if moving.size == 0 or t[k + moving[0]] - s > window_ms * 1e6:
-            skipped += 1
+            missed += 1
             continue
         out.append((t[k + moving[0]] - s) * 1e-6)
-    return np.array(out, dtype=float), skipped
+    return np.array(out, dtype=float), unjudged, missed
 
 
 def percentile(v: np.ndarray, q: float) -> float:
@@ -282,7 +284,9 @@ def run_loopback(
     keep = (t > t_live) & (t < end_ns - int(0.1e9))
     jit = lb.jitter_ms(t[keep], rows[keep, 1])
     steps_live = [s for s in steps if s > t_live]
-    delays, skipped = lb.step_delays_ms(t, rows[:, 1], rows[:, 2:], steps_live, window_ms=window_ms)
+    delays, unjudged, missed = lb.step_delays_ms(
+        t, rows[:, 1], rows[:, 2:], steps_live, window_ms=window_ms
+    )
     # in order: consecutive line numbers, time stamps that never go back, kernel stamps too
     in_order = bool(
         len(rows) > 1
@@ -296,7 +300,9 @@ def run_loopback(
         "delay_p50_ms": lb.percentile(delays, 50),
         "delay_max_ms": float(delays.max()) if delays.size else float("nan"),
         "steps": len(delays),
-        "steps_skipped": skipped,
+        "steps_skipped": unjudged + missed,
+        "steps_unjudged": unjudged,
+        "steps_missed": missed,
         "steps_live": len(steps_live),
         "frames": len(rows),
         "in_order": in_order,

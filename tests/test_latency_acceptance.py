@@ -22,7 +22,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 import _loopback as lb
 
 RATE_HZ = 250.0
-SECONDS = 6.0  # from the bridge going live: 1.5 s warm-up, then about 4 steps
+SECONDS = 8.0  # from the bridge going live: 1.5 s warm-up, then about 6 steps
 # A step counts when a frame moves with it within this time. Not a timing promise (that is
 # 1.5 ms p50 / 3 ms max, in the bench): 100x the promise, so that only a step that never
 # reaches the frames (dropped, or waiting for something that does not come) goes uncounted,
@@ -38,7 +38,10 @@ def test_a_lateral_g_step_reaches_the_frames_in_order_and_within_the_limits() ->
     assert res["error"] is None and res["state"] == "stopped", res
     assert res["in_order"], res
     assert res["frames"] > 0.1 * RATE_HZ * SECONDS, res  # the loop ran (not a rate check)
-    # every step sent after the warm-up moved the frames: a step is left uncounted only when
-    # the 10 frames before it were not quiet (a step right after another one's transient)
-    assert res["steps_live"] >= 3, res
-    assert res["steps"] >= res["steps_live"] - 1, res
+    # every step sent after the warm-up that can be judged moved the frames within the
+    # window. A step cannot be judged when the 10 frames before it were not quiet: another
+    # step's transient, or frames stamped unevenly while a busy machine stopped this process
+    # (CI, session 31: 2 of 5 steps on a machine running the whole suite); at least 3 are
+    assert res["steps_live"] >= 4, res
+    assert res["steps_missed"] == 0, res
+    assert res["steps"] >= 3 and res["steps"] + res["steps_unjudged"] == res["steps_live"], res

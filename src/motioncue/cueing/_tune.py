@@ -340,6 +340,13 @@ _INTENSITY_FIELDS: tuple[str, ...] = tuple(
 the knobs of :data:`STRENGTH_TUNED_PARAMETERS` write, in table order."""
 
 
+def _gentle_table(params: CueingParams) -> tuple[float, ...]:
+    """The preset's ``[intensity.gentle]`` values (:func:`at_intensity` checks first)."""
+    if params.intensity_gentle is None:
+        raise ConfigError(f"preset {params.name!r} has no tuned intensity range")
+    return params.intensity_gentle
+
+
 class _ClassicalTuning:
     """The classical washout's plan: :data:`TUNED_PARAMETERS`, or
     :data:`STRENGTH_TUNED_PARAMETERS` with the compressive tilt (``tilt_shape``)."""
@@ -359,9 +366,7 @@ class _ClassicalTuning:
         return INTENSITY_KEYS
 
     def intensity(self, params: CueingParams, t: float, name: str) -> CueingParams:
-        gentle = params.intensity_gentle
-        if gentle is None:  # at_intensity checks first
-            raise ConfigError(f"preset {params.name!r} has no tuned intensity range")
+        gentle = _gentle_table(params)
         gentle_end = params_from_vector(
             params, _clip_log(STRENGTH_TUNED_PARAMETERS, gentle).tolist(), name
         )
@@ -447,9 +452,7 @@ class _PlanTuning:
         return PLAN_INTENSITY_KEYS
 
     def intensity(self, params: CueingParams, t: float, name: str) -> CueingParams:
-        gentle = params.intensity_gentle
-        if gentle is None:  # at_intensity checks first
-            raise ConfigError(f"preset {params.name!r} has no tuned intensity range")
+        gentle = _gentle_table(params)
         mp = _plan_of(params)
         own = _plan_intensity_values(mp)
         v = {k: _between(g, own[k], t) for k, g in zip(PLAN_INTENSITY_KEYS, gentle, strict=True)}
