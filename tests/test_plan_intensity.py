@@ -25,8 +25,7 @@ from motioncue._config import find_config
 from motioncue._errors import ConfigError
 from motioncue.cli._preset import presets_with_intensity
 from motioncue.cueing import CueingParams, at_intensity, load_cueing
-from motioncue.cueing._params import PLAN_INTENSITY_KEYS
-from motioncue.cueing._tune import plan_intensity_values, preset_toml
+from motioncue.cueing._tune import PLAN_INTENSITY_KEYS, plan_intensity_values, preset_toml
 
 PRESET = "optimal-hexapod-auto"
 MOVED = {"ref_scale": (0, 1), "w_vehicle": (0, 1), "ref_adapt_peak_m_s2": (0,)}

@@ -21,6 +21,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from motioncue._config import ConfigReader
+from motioncue._errors import ConfigError
 from motioncue.cueing import (
     CueingParams,
     ParameterTable,
@@ -158,6 +159,12 @@ class ToyTuning:
     def intensity_keys(self) -> tuple[str, ...]:
         """An ``[intensity.gentle]`` table of the two gains."""
         return ("gain_x", "gain_y")
+
+    def check_intensity(self, params: CueingParams, gentle: Sequence[float]) -> None:
+        """Each gentle gain within the tuned bounds."""
+        for p, g in zip(self.PARAMETERS, gentle, strict=True):
+            if not p.lo <= g <= p.hi:
+                raise ConfigError(f"intensity gentle {p.name} = {g!r}; allowed {p.lo}-{p.hi}")
 
     def intensity(self, params: CueingParams, t: float, name: str) -> CueingParams:
         """Each gain linear from the gentle table's to the preset's."""

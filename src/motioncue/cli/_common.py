@@ -61,6 +61,7 @@ __all__ = [
     "Subparsers",
     "add_deprecated_alias",
     "apply_overrides",
+    "cue_rate_line",
     "json_option",
     "limits_for",
     "load_platform_arg",
@@ -155,6 +156,15 @@ def say(line: str, stream: TextIO | None = None) -> None:
         print(line, file=sys.stderr if stream is None else stream, flush=True)
     except (OSError, ValueError):
         pass
+
+
+def cue_rate_line(algorithm: str, cue_hz: float, rate_hz: float, what: str) -> str:
+    """What ``generate`` and ``cue`` say when a plan ran below their rate (``what``: the
+    frames or the poses at ``rate_hz``)."""
+    return (
+        f"{algorithm} plans at {cue_hz:g} Hz (its highest rate); the {rate_hz:g} Hz {what} "
+        "follow a cubic spline through its poses"
+    )
 
 
 def status_line(line: str, tty: bool) -> None:

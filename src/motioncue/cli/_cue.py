@@ -16,6 +16,7 @@ from ._common import (
     RATE,
     RECORDING,
     add_deprecated_alias,
+    cue_rate_line,
     json_option,
     load_platform_arg,
     print_json,
@@ -63,11 +64,8 @@ def run(args: argparse.Namespace) -> int:
     f_used, w_used = cued.f_used, cued.w_used
     if cue_hz != rate_hz:  # judged against the input at --rate, as the poses are
         f_used, w_used = uniform.f, uniform.w
-        print(
-            f"motioncue cue: {params.algorithm} plans at {cue_hz:g} Hz (its highest rate); "
-            f"the {rate_hz:g} Hz poses follow a cubic spline through its poses",
-            file=sys.stderr,
-        )
+        line = cue_rate_line(params.algorithm, cue_hz, rate_hz, "poses")
+        print(f"motioncue cue: {line}", file=sys.stderr)
     out = Path(args.out)
     table = np.column_stack([uniform.t_s, poses])
     try:

@@ -24,6 +24,7 @@ from ._common import (
     SPEED,
     TARGET,
     check_set_targets,
+    cue_rate_line,
     json_option,
     limits_for,
     load_platform_arg,
@@ -135,11 +136,8 @@ def _generate(args: argparse.Namespace) -> int:
             source=Path(args.input).name, progress=bar, **names,
         )  # fmt: skip
         if report.cue_rate_hz != args.rate:
-            print(
-                f"cueing: {cueing.algorithm} plans at {report.cue_rate_hz:g} Hz (its highest "
-                f"rate); the {args.rate:g} Hz frames follow a cubic spline through its poses",
-                file=sys.stderr,
-            )
+            line = cue_rate_line(cueing.algorithm, report.cue_rate_hz, args.rate, "frames")
+            print(f"cueing: {line}", file=sys.stderr)
         # the ride says which preset and intensity made it (view, the monitor and play
         # --intensity read it; in the header, so the digest covers it)
         note = cueing_note(base, args.intensity, args.overrides)

@@ -62,26 +62,6 @@ INTENSITY_KEYS: tuple[str, ...] = (
 on a preset with the compressive tilt (:data:`motioncue.cueing._tune.STRENGTH_TUNED_PARAMETERS`),
 in their units, at the gentle (0 %) end of the preset's intensity range."""
 
-PLAN_INTENSITY_KEYS: tuple[str, ...] = (
-    "ref_scale_x",
-    "ref_scale_y",
-    "ref_adapt_peak_x_m_s2",
-    "w_vehicle_x",
-    "w_vehicle_y",
-)
-"""Keys of an ``mpc`` or ``optimal`` preset's ``[intensity] gentle`` table: the terms of the
-plan's cost that ask for strength, at the gentle (0 %) end. ``ref_scale_x``, ``ref_scale_y``:
-the gain of the tracked copy of the vehicle's fx, fy (``[mpc] ref_scale``, > 0);
-``ref_adapt_peak_x_m_s2``: the adaptive cap of the fx gain (``[mpc] ref_adapt_peak_m_s2``'s
-fx, m/s^2; > 0 exactly where the preset sets one, 0 where it has none); ``w_vehicle_x``,
-``w_vehicle_y``: the price of the rider's error to the vehicle's whole fx, fy (``[mpc]
-w_vehicle``, >= 0). Every point of the range is the plan's optimum for its own cost, so a
-point of the front of that cost between strength and the error terms, not a gain on a
-ride."""
-
-_ZERO_ALLOWED_INTENSITY_KEYS = frozenset({"ref_adapt_peak_x_m_s2", "w_vehicle_x", "w_vehicle_y"})
-"""Keys of an intensity table that may be 0 (a term the preset does not use)."""
-
 
 def intensity_keys(algorithm: str) -> tuple[str, ...]:
     """The keys of an ``[intensity] gentle`` table for a preset of ``algorithm``: those its
@@ -299,7 +279,8 @@ class CueingParams:
     intensity_gentle : tuple of floats or None
         The gentle (0 %) end of the preset's tuned intensity range: one value per key of
         its algorithm (:func:`intensity_keys`: :data:`INTENSITY_KEYS` for the classical
-        washout, :data:`PLAN_INTENSITY_KEYS` for ``mpc`` and ``optimal``; their units), from
+        washout, the terms of the plan's cost that ask for strength for ``mpc`` and
+        ``optimal``; their units), from
         the optional ``[intensity]`` table; the
         preset's own tables are the strong (100 %) end. ``None``: the preset has no range
         (see :func:`motioncue.cueing.at_intensity`).
@@ -507,32 +488,20 @@ class CueingParams:
         _check("workspace", self.workspace, 0.0, False, 1e6)
 
     def _check_intensity(self, gentle: tuple[float, ...]) -> None:
-        """The gentle end fits the algorithm's intensity keys and the preset's own terms."""
+        """The gentle end has one value per key of the algorithm's range, and its tuning plan
+        accepts them for this preset (:class:`motioncue.cueing.TunePlan`
+        ``check_intensity``)."""
+        from ._algorithm import cueing_entry
+
         keys = intensity_keys(self.algorithm)
         if len(gentle) != len(keys):
             raise ConfigError(
                 f"CueingParams.intensity_gentle has {len(gentle)} values; allowed for "
                 f"algorithm {self.algorithm!r}: {len(keys)} ({', '.join(keys)})"
             )
-        for key, v in zip(keys, gentle, strict=True):
-            zero_ok = key in _ZERO_ALLOWED_INTENSITY_KEYS
-            _check(f"intensity_gentle {key}", (v,), 0.0, not zero_ok, 1e6)
-        if keys == INTENSITY_KEYS:
-            if self.tilt_shape is None:
-                raise ConfigError(
-                    "CueingParams.intensity_gentle needs the compressive tilt (tilt_shape)"
-                )
-            return
-        mp = self.mpc if self.mpc is not None else MpcParams()
-        if "ref_adapt_peak_x_m_s2" in keys:
-            own = 0.0 if mp.ref_adapt_peak_m_s2 is None else mp.ref_adapt_peak_m_s2[0]
-            g = gentle[keys.index("ref_adapt_peak_x_m_s2")]
-            if (own > 0.0) != (g > 0.0):
-                raise ConfigError(
-                    f"intensity gentle ref_adapt_peak_x_m_s2 = {g!r} is invalid; allowed: > 0 "
-                    "where the preset's [mpc] ref_adapt_peak_m_s2 sets an fx cap, 0 where it "
-                    f"sets none (it sets {own!r})"
-                )
+        plan = cueing_entry(self.algorithm).tune
+        assert plan is not None  # intensity_keys refuses an algorithm without one
+        plan.check_intensity(self, gentle)
 
 
 def _number_rows(
@@ -750,10 +719,8 @@ def load_cueing(name_or_path: str | Path) -> CueingParams:
     if top.has("intensity"):
         it = top.table("intensity")
         gt = it.table("gentle")
-        gentle = tuple(
-            gt.number(k, lo=0.0, lo_open=k not in _ZERO_ALLOWED_INTENSITY_KEYS)
-            for k in intensity_keys(algorithm)
-        )
+        # finite numbers >= 0 here; the algorithm's plan checks the rest (CueingParams)
+        gentle = tuple(gt.number(k, lo=0.0) for k in intensity_keys(algorithm))
         gt.finish()
         it.finish()
     top.finish()

@@ -46,7 +46,7 @@ from numpy.typing import NDArray
 
 from .._errors import ConfigError
 from ._mpc_params import MpcParams
-from ._params import INTENSITY_KEYS, PLAN_INTENSITY_KEYS, CueingParams, intensity_keys
+from ._params import INTENSITY_KEYS, CueingParams, intensity_keys
 
 __all__ = [
     "CLASSICAL_TUNING",
@@ -107,6 +107,12 @@ class TunePlan(Protocol):
     @property
     def intensity_keys(self) -> tuple[str, ...]:
         """The keys of this algorithm's ``[intensity] gentle`` table (empty: no range)."""
+        ...
+
+    def check_intensity(self, params: CueingParams, gentle: Sequence[float]) -> None:
+        """Raise :class:`ConfigError` (naming the key and the allowed range) unless
+        ``gentle``, one value per ``intensity_keys`` (each a finite number >= 0), is a gentle
+        end this preset can have."""
         ...
 
     def intensity(self, params: CueingParams, t: float, name: str) -> CueingParams:
@@ -287,16 +293,21 @@ def _knob_values(
 
 def _knob_fields(
     knobs: dict[str, _Knob],
-    table: Sequence[TunableParameter],
+    names: Sequence[str],
     params: CueingParams,
     holder: _Holder,
     v: Sequence[float],
 ) -> _Fields:
-    """The fields of ``holder`` that ``table`` sets to ``v`` (for ``replace``)."""
+    """The fields of ``holder`` that the parameters ``names`` set to ``v`` (for
+    ``replace``)."""
     fields: _Fields = {}
-    for p, value in zip(table, v, strict=True):
-        knobs[p.name].put(fields, params, holder, value)
+    for name, value in zip(names, v, strict=True):
+        knobs[name].put(fields, params, holder, value)
     return {k: tuple(x) if isinstance(x, list) else x for k, x in fields.items()}
+
+
+def _names(table: Sequence[TunableParameter]) -> list[str]:
+    return [p.name for p in table]
 
 
 def _tilt_scale_unset(params: CueingParams) -> Sequence[float]:
@@ -358,12 +369,20 @@ class _ClassicalTuning:
         return _knob_values(_CLASSICAL_KNOBS, self.parameters(params), params, params)
 
     def apply(self, base: CueingParams, v: Sequence[float], name: str) -> CueingParams:
-        fields = _knob_fields(_CLASSICAL_KNOBS, self.parameters(base), base, base, v)
+        fields = _knob_fields(_CLASSICAL_KNOBS, _names(self.parameters(base)), base, base, v)
         return replace(base, name=name or base.name, algorithm="classical", **fields)
 
     @property
     def intensity_keys(self) -> tuple[str, ...]:
         return INTENSITY_KEYS
+
+    def check_intensity(self, params: CueingParams, gentle: Sequence[float]) -> None:
+        for key, v in zip(INTENSITY_KEYS, gentle, strict=True):
+            _check_gentle(key, v, zero_ok=False)
+        if params.tilt_shape is None:
+            raise ConfigError(
+                "CueingParams.intensity_gentle needs the compressive tilt (tilt_shape)"
+            )
 
     def intensity(self, params: CueingParams, t: float, name: str) -> CueingParams:
         gentle = _gentle_table(params)
@@ -409,6 +428,19 @@ def _plan_tilt_rate_unset(params: CueingParams) -> float:
     return params.tilt_rate_limit_rad_s
 
 
+def _read_adapt_x(params: CueingParams) -> float:
+    """The plan's adaptive fx cap; 0 where it sets none."""
+    peak = _plan_of(params).ref_adapt_peak_m_s2
+    return 0.0 if peak is None else float(peak[0])
+
+
+def _write_adapt_x(fields: _Fields, params: CueingParams, v: float) -> None:
+    """Only a cap the plan sets takes the value (0 stays none)."""
+    peak = _plan_of(params).ref_adapt_peak_m_s2
+    if peak is not None:
+        fields["ref_adapt_peak_m_s2"] = (v, peak[1])
+
+
 _PLAN_KNOBS: dict[str, _Knob] = {
     "ref_scale_xy": _Knob("ref_scale", (0, 1), floor=1e-9),
     "ref_scale_x": _Knob("ref_scale", (0,)),
@@ -423,11 +455,35 @@ _PLAN_KNOBS: dict[str, _Knob] = {
     "w_pose_xy": _Knob("w_pose", (0, 1), floor=1e-9),
     "w_acc_tilt": _Knob("w_acc", (3, 4), floor=1e-9),
     "sign_guard_rp": _Knob("sign_guard", read=_read_sign_guard, write=_write_sign_guard),
+    "w_vehicle_x": _Knob("w_vehicle", (0,)),
+    "w_vehicle_y": _Knob("w_vehicle", (1,)),
+    "ref_adapt_peak_x_m_s2": _Knob("ref_adapt_peak_m_s2", read=_read_adapt_x, write=_write_adapt_x),
 }
-"""Where each parameter of :data:`MPC_TUNED_PARAMETERS` and
-:data:`MPC_STRENGTH_TUNED_PARAMETERS` lives in a preset's :class:`MpcParams` (its ``[mpc]``
+"""Where each parameter of :data:`MPC_TUNED_PARAMETERS`, :data:`MPC_STRENGTH_TUNED_PARAMETERS`
+and :data:`PLAN_INTENSITY_KEYS` lives in a preset's :class:`MpcParams` (its ``[mpc]``
 table; x and y share the ``_xy`` ones, roll and pitch the ``_rp`` and ``tilt`` ones). An
 unset reach share reads 1."""
+
+
+PLAN_INTENSITY_KEYS: tuple[str, ...] = (
+    "ref_scale_x",
+    "ref_scale_y",
+    "ref_adapt_peak_x_m_s2",
+    "w_vehicle_x",
+    "w_vehicle_y",
+)
+"""Keys of an ``mpc`` or ``optimal`` preset's ``[intensity] gentle`` table (knobs of
+:data:`_PLAN_KNOBS`): the terms of the plan's cost that ask for strength, at the gentle
+(0 %) end. ``ref_scale_x``, ``ref_scale_y``: the gain of the tracked copy of the vehicle's fx,
+fy (``[mpc] ref_scale``, > 0); ``ref_adapt_peak_x_m_s2``: the adaptive cap of the fx gain
+(``[mpc] ref_adapt_peak_m_s2``'s fx, m/s^2; > 0 exactly where the preset sets one, 0 where it
+has none); ``w_vehicle_x``, ``w_vehicle_y``: the price of the rider's error to the vehicle's
+whole fx, fy (``[mpc] w_vehicle``, >= 0). Every point of the range is the plan's optimum for
+its own cost, so a point of the front of that cost between strength and the error terms, not
+a gain on a ride."""
+
+_PLAN_INTENSITY_ZERO_OK = frozenset({"ref_adapt_peak_x_m_s2", "w_vehicle_x", "w_vehicle_y"})
+"""Keys of a plan's gentle table that may be 0 (a term the preset does not use)."""
 
 
 class _PlanTuning:
@@ -444,55 +500,46 @@ class _PlanTuning:
 
     def apply(self, base: CueingParams, v: Sequence[float], name: str) -> CueingParams:
         mp = _plan_of(base)
-        fields = _knob_fields(_PLAN_KNOBS, self.parameters(base), base, mp, v)
+        fields = _knob_fields(_PLAN_KNOBS, _names(self.parameters(base)), base, mp, v)
         return replace(base, name=name or base.name, mpc=replace(mp, **fields))
 
     @property
     def intensity_keys(self) -> tuple[str, ...]:
         return PLAN_INTENSITY_KEYS
 
+    def check_intensity(self, params: CueingParams, gentle: Sequence[float]) -> None:
+        for key, v in zip(PLAN_INTENSITY_KEYS, gentle, strict=True):
+            _check_gentle(key, v, zero_ok=key in _PLAN_INTENSITY_ZERO_OK)
+        own = plan_intensity_values(params)[PLAN_INTENSITY_KEYS.index("ref_adapt_peak_x_m_s2")]
+        g = gentle[PLAN_INTENSITY_KEYS.index("ref_adapt_peak_x_m_s2")]
+        if (own > 0.0) != (g > 0.0):
+            raise ConfigError(
+                f"intensity gentle ref_adapt_peak_x_m_s2 = {g!r} is invalid; allowed: > 0 "
+                "where the preset's [mpc] ref_adapt_peak_m_s2 sets an fx cap, 0 where it "
+                f"sets none (it sets {own!r})"
+            )
+
     def intensity(self, params: CueingParams, t: float, name: str) -> CueingParams:
-        gentle = _gentle_table(params)
+        own = plan_intensity_values(params)
+        v = [_between(g, o, t) for g, o in zip(_gentle_table(params), own, strict=True)]
         mp = _plan_of(params)
-        own = _plan_intensity_values(mp)
-        v = {k: _between(g, own[k], t) for k, g in zip(PLAN_INTENSITY_KEYS, gentle, strict=True)}
-        ref_scale = list(mp.ref_scale)
-        ref_scale[0], ref_scale[1] = v["ref_scale_x"], v["ref_scale_y"]
-        w_vehicle = list(mp.w_vehicle)
-        w_vehicle[0], w_vehicle[1] = v["w_vehicle_x"], v["w_vehicle_y"]
-        adapt = mp.ref_adapt_peak_m_s2
-        if adapt is not None:
-            adapt = (v["ref_adapt_peak_x_m_s2"], adapt[1])
-        plan = replace(
-            mp,
-            ref_scale=_vec6(ref_scale),
-            w_vehicle=_vec6(w_vehicle),
-            ref_adapt_peak_m_s2=adapt,
-        )
-        return replace(params, name=name, mpc=plan)
-
-
-def _vec6(v: Sequence[float]) -> tuple[float, float, float, float, float, float]:
-    return (v[0], v[1], v[2], v[3], v[4], v[5])
-
-
-def _plan_intensity_values(mp: MpcParams) -> dict[str, float]:
-    """The plan's own value of each of :data:`PLAN_INTENSITY_KEYS` (its 100 % end)."""
-    adapt = mp.ref_adapt_peak_m_s2
-    return {
-        "ref_scale_x": float(mp.ref_scale[0]),
-        "ref_scale_y": float(mp.ref_scale[1]),
-        "ref_adapt_peak_x_m_s2": 0.0 if adapt is None else float(adapt[0]),
-        "w_vehicle_x": float(mp.w_vehicle[0]),
-        "w_vehicle_y": float(mp.w_vehicle[1]),
-    }
+        fields = _knob_fields(_PLAN_KNOBS, PLAN_INTENSITY_KEYS, params, mp, v)
+        return replace(params, name=name, mpc=replace(mp, **fields))
 
 
 def plan_intensity_values(params: CueingParams) -> tuple[float, ...]:
     """An ``mpc`` or ``optimal`` preset's own values of :data:`PLAN_INTENSITY_KEYS` (in
     that order): its strong (100 %) end, the values a gentle table is chosen below."""
-    own = _plan_intensity_values(_plan_of(params))
-    return tuple(own[k] for k in PLAN_INTENSITY_KEYS)
+    mp = _plan_of(params)
+    return tuple(_PLAN_KNOBS[k].value(params, mp, math.inf) for k in PLAN_INTENSITY_KEYS)
+
+
+def _check_gentle(key: str, v: float, zero_ok: bool) -> None:
+    if not (math.isfinite(v) and (v >= 0.0 if zero_ok else v > 0.0) and v <= 1e6):
+        raise ConfigError(
+            f"intensity gentle {key} = {v!r} is invalid; allowed: "
+            f"{'0' if zero_ok else 'above 0'} to 1e6"
+        )
 
 
 CLASSICAL_TUNING: TunePlan = _ClassicalTuning()

@@ -128,6 +128,10 @@ class GenerateReport:
         The :class:`motioncue.trajectory.OptimisedRide` of the limits stage.
     frame_check : FrameCheck
         Independent finite-difference check of the frames against the limits table.
+    cue_rate_hz : float
+        The rate the cueing ran at: the frame rate, or below it for an algorithm that
+        declares a ``max_rate_hz`` (:class:`motioncue.cueing.CueingEntry`), whose poses were
+        then splined to the frames.
     stage_s : dict[str, float]
         Wall time per stage.
     transition_fallbacks : tuple of str
@@ -139,10 +143,6 @@ class GenerateReport:
         :func:`_ramp`) or ``"stop then ramp"`` (the fallback: :func:`_join_to_rest`, then
         the ramp); ``"duration_s"``; ``"shortened"``: why the workspace made it faster
         than its acceleration target, empty when it did not). Also ``ride.notes["joins"]``.
-    cue_rate_hz : float
-        The rate the cueing ran at: the frame rate, or below it for an algorithm that
-        declares a ``max_rate_hz`` (:class:`motioncue.cueing.CueingEntry`), whose poses were
-        then splined to the frames.
     """
 
     t_s: np.ndarray
@@ -158,10 +158,10 @@ class GenerateReport:
     max_pose_scale_loss: float
     optimisation: OptimisedRide
     frame_check: FrameCheck
+    cue_rate_hz: float
     stage_s: dict[str, float] = field(default_factory=dict)
     transition_fallbacks: tuple[str, ...] = ()
     joins: tuple[JoinEntry, ...] = ()
-    cue_rate_hz: float = 0.0
 
 
 def _finish(
