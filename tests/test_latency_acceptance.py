@@ -36,12 +36,13 @@ def test_a_lateral_g_step_reaches_the_frames_in_order_and_within_the_limits() ->
     )
     assert res["limits_ok"], res["limits"]
     assert res["error"] is None and res["state"] == "stopped", res
-    assert res["in_order"], res
+    assert res["in_order"], res["order"]
     assert res["frames"] > 0.1 * RATE_HZ * SECONDS, res  # the loop ran (not a rate check)
     # every step sent after the warm-up that can be judged moved the frames within the
-    # window. A step cannot be judged when the 10 frames before it were not quiet: another
-    # step's transient, or frames stamped unevenly while a busy machine stopped this process
-    # (CI, session 31: 2 of 5 steps on a machine running the whole suite); at least 3 are
+    # window. A step cannot be judged when the 10 frames before it were not quiet (another
+    # step's transient, or frames stamped unevenly while a busy machine stopped this
+    # process: CI, session 31, 2 of 5 steps), or when no frame moved in its window while the
+    # frames stopped (this process stopped 3 s by SIGSTOP: 2 steps); at least 3 are
     assert res["steps_live"] >= 4, res
     assert res["steps_missed"] == 0, res
     assert res["steps"] >= 3 and res["steps"] + res["steps_unjudged"] == res["steps_live"], res
