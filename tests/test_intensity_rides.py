@@ -20,9 +20,9 @@ strength terms, tests/test_plan_intensity.py):
   0.0629 / 0.0629, 0.0920 / 0.0920, 0.1301 / 0.1302; adaptive: fx 0.0308 / 0.0306, 0.0579 /
   0.0577, 0.0667 / 0.0660; fy 0.0732 / 0.0732, 0.1078 / 0.1078, 0.1311 / 0.1312 (50 % since
   at_intensity ends at the preset's own values); auto: fx 0.0331 / 0.0330, 0.0553 / 0.0551,
-  0.0630 / 0.0629; fy 0.0768 / 0.0768, 0.1086 / 0.1087, 0.1271 / 0.1273; optimal-hexapod-auto:
-  fx 0.0637 / 0.0637, 0.0875 / 0.0874, 0.1142 / 0.1141; fy 0.1126 / 0.1126, 0.1257 / 0.1257,
-  0.1361 / 0.1362;
+  0.0630 / 0.0629; fy 0.0768 / 0.0768, 0.1086 / 0.1087, 0.1271 / 0.1273; optimal-hexapod-auto
+  (session 32): fx 0.0637 / 0.0637, 0.0939 / 0.0938, 0.1312 / 0.1310; fy 0.1126 / 0.1126,
+  0.1256 / 0.1257, 0.1360 / 0.1360;
 - every frame within the limits as the controller reads them: the frames ``play`` sends
   (ramp from park, the ride, the park) decoded and fed to the MBOX emulator on its own
   clock (Fn012 pacing, whole-ms stamps; it judges with the manual's numbers), and the
