@@ -26,6 +26,7 @@ from motioncue.cueing import (
     CueingParams,
     CueingResult,
     cueing_algorithms,
+    cueing_entry,
     load_cueing,
     make_cueing,
     register_cueing,
@@ -245,6 +246,21 @@ def test_every_bundled_platform_names_a_loadable_default_preset() -> None:
         assert load_cueing(preset).name == preset
 
 
+def test_the_bundled_ride_presets_are_plans_for_their_platform() -> None:
+    """``generate`` and ``cue`` use a platform's ``ride_preset`` (the whole ride is known): a
+    plan written for that platform, never one the live bridge could run."""
+    expected = {"stewart6-linear": "optimal-hexapod-auto", "seat3": "optimal-seat3-auto"}
+    for name in bundled_names("platforms"):
+        platform = load_platform(name)
+        assert platform.ride_preset == expected.get(name), name
+        if platform.ride_preset is None:
+            continue
+        params = load_cueing(platform.ride_preset)
+        assert params.name == platform.ride_preset
+        assert not cueing_entry(params.algorithm).streaming, name
+        assert params.mpc is not None and params.mpc.platform == name
+
+
 def test_platform_default_preset_is_checked_and_optional(tmp_path: Path) -> None:
     text = find_config("platforms", "seat3").read_text()
     assert 'default_preset = "cinema-seat-3dof"' in text
@@ -264,11 +280,25 @@ def test_generate_and_cue_use_the_platform_default_and_say_so(
     common = ["generate", "--input", str(rec), "--platform", "seat3", "--controller", "mbox3",
               "--quiet"]  # fmt: skip
     a, b = tmp_path / "a.ride", tmp_path / "b.ride"
+    # seat3's ride-file default (session 32): the plan that sees the ride, not default_preset
     assert main([*common, "--out", str(a)]) == 0
-    assert "cueing: preset cinema-seat-3dof (default of platform seat3)" in capsys.readouterr().err
-    assert main([*common, "--preset", "cinema-seat-3dof", "--out", str(b)]) == 0
-    assert "cinema-seat-3dof (--preset)" in capsys.readouterr().err
+    said = capsys.readouterr().err
+    assert "cueing: preset optimal-seat3-auto (ride-file default of platform seat3)" in said
+    assert main([*common, "--preset", "optimal-seat3-auto", "--out", str(b)]) == 0
+    assert "optimal-seat3-auto (--preset)" in capsys.readouterr().err
     assert a.read_bytes() == b.read_bytes()  # the same ride as naming the preset
+    # a seat3 file without ride_preset: its default_preset, the same ride as naming it
+    seat = find_config("platforms", "seat3").read_text()
+    seat_ride = next(ln for ln in seat.splitlines() if ln.startswith("ride_preset ="))
+    no_ride_seat = tmp_path / "seat3-no-ride.toml"
+    no_ride_seat.write_text(seat.replace(seat_ride, "", 1))
+    c, d = tmp_path / "c.ride", tmp_path / "d.ride"
+    seat_args = [*common[:4], str(no_ride_seat), *common[5:]]
+    assert main([*seat_args, "--out", str(c)]) == 0
+    assert "cueing: preset cinema-seat-3dof (default of platform" in capsys.readouterr().err
+    assert main([*seat_args, "--preset", "cinema-seat-3dof", "--out", str(d)]) == 0
+    assert "cinema-seat-3dof (--preset)" in capsys.readouterr().err
+    assert c.read_bytes() == d.read_bytes()
 
     out = tmp_path / "p.csv"
     cue = ["cue", "--input", str(rec), "--rate", "50", "--out", str(out)]
