@@ -26,7 +26,7 @@ reference promised against ``racing-hexapod``. This module pins what the switch 
   clamped <= 1 % and no frame changed by the actuator limiter at each level.
 
 Not reached (the preset's header says why): share fx >= 0.12 (0.100 on forest-rally, 0.067 on
-the lap, 0.032 on flowing-formula), share fy >= 0.12 on flowing-formula (0.096), missed fx <= 35 %
+the lap, 0.032 on flowing-formula), share fy >= 0.12 on flowing-formula (0.095), missed fx <= 35 %
 on flowing-formula (67 %).
 """
 
@@ -55,23 +55,25 @@ RATIO = 1.5  # share fx against the reference's but on HARD; measured 2.37 and 1
 # floors (ceilings for reversals and missed cues) on HARD; measured in comments
 FLOORS = {
     "corr_fx_hard": 0.95,  # 0.954 (the issue's figure; the reference's 0.951)
-    "reversals_hard": 0.02,  # 0.018 (the issue's figure; the reference's 0.040)
+    "reversals_hard": 0.02,  # 0.0165 (the issue's figure; the reference's 0.040; 0.018 before session 32)
     "missed_fx_hard": 0.70,  # 0.667 (the reference's 0.667)
     "share_fx_hard": 0.9,  # x the reference's: 0.949
 }
 # measured: share fx, fy; corr fx, fy; missed fx, fy; reversals; all false cues
 MEASURED = {
     "forest-rally.csv": (0.100, 0.134, 0.978, 0.995, 0.086, 0.114, 0.0092, 0.0778),
-    "flowing-formula.csv": (0.032, 0.096, 0.954, 0.987, 0.666, 0.074, 0.0180, 0.0429),
+    "flowing-formula.csv": (0.032, 0.095, 0.954, 0.985, 0.666, 0.074, 0.0165, 0.0417),
     "lap.csv": (0.067, 0.130, 0.975, 0.999, 0.210, 0.020, 0.0023, 0.0255),
 }
 # absolute tolerances of those: shares, correlations, missed, reversals, false cues
 TOL = (0.002, 0.002, 0.002, 0.002, 0.01, 0.01, 0.002, 0.005)
 # how much worse than the reference a column may be (absolute), where the reference is better
-# (measured, worst drive: share fy -0.0057 flowing-formula (the fz guard's price); missed fx
+# (measured, worst drive: share fy -0.0066 flowing-formula (the fz guard's price: -0.0057
+# until session 32 made the guard wake at 0.03 m/s^2 instead of 0.2, which took this drive's
+# reversals from 1.80 to 1.65 % and chicane-formula-402's from 2.09 to 1.54 %); missed fx
 # -0.0003 flowing-formula; missed fy +0.032 flowing-formula; corr fx -0.013 lap; corr fy
 # -0.0004 forest-rally; reversals +0.0004 lap; all false cues +0.022 forest-rally)
-MARGIN = {"share_fy": 0.006, "missed_fx": 0.001, "missed_fy": 0.035, "corr_fx": 0.015,
+MARGIN = {"share_fy": 0.007, "missed_fx": 0.001, "missed_fy": 0.035, "corr_fx": 0.015,
           "corr_fy": 0.002, "reversals": 0.001, "false": 0.025}  # fmt: skip
 
 
