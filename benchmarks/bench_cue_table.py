@@ -32,7 +32,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "src"))
 
 ROOT = Path(__file__).resolve().parents[1]
 # every preset made for the bundled hexapod, then the generic one; the platform's own
-# default_preset is put first whatever the platform
+# default_preset and ride_preset are put first whatever the platform
 HEXAPOD_PRESETS = ("racing-hexapod-firm", "racing-hexapod", "racing-hexapod-strong",
                    "racing-hexapod-adaptive", "mpc-hexapod", "mpc-hexapod-auto",
                    "optimal-hexapod",
@@ -80,10 +80,11 @@ def main(argv: list[str]) -> int:
         assert kind == "recording"
         recs.append((Path(path).stem, data))
     if args.presets is None:
-        own = [platform.default_preset] if platform.default_preset else []
+        # the platform's live default and its ride-file default (generate, cue) first
+        own = [p for p in (platform.default_preset, platform.ride_preset) if p]
         rest = HEXAPOD_PRESETS if args.platform == "stewart6-linear" else ("racing",)
         args.presets = list(dict.fromkeys([*own, *rest]))
-        print(f"presets: {', '.join(args.presets)} (default of {args.platform}: {own or '-'})")
+        print(f"presets: {', '.join(args.presets)} (defaults of {args.platform}: {own or '-'})")
     presets = [(p, load_cueing(p)) for p in args.presets]
     t0 = time.perf_counter()
     res = compare_cueing(recs, presets, platform, limits, platform_name=args.platform,
