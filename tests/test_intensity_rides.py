@@ -21,8 +21,8 @@ strength terms, tests/test_plan_intensity.py):
   0.0577, 0.0667 / 0.0660; fy 0.0732 / 0.0732, 0.1078 / 0.1078, 0.1311 / 0.1312 (50 % since
   at_intensity ends at the preset's own values); auto: fx 0.0331 / 0.0330, 0.0553 / 0.0551,
   0.0630 / 0.0629; fy 0.0768 / 0.0768, 0.1086 / 0.1087, 0.1271 / 0.1273; optimal-hexapod-auto
-  (session 32): fx 0.0637 / 0.0637, 0.0939 / 0.0938, 0.1312 / 0.1310; fy 0.1126 / 0.1126,
-  0.1256 / 0.1257, 0.1360 / 0.1360;
+  (session 32): fx 0.0637 / 0.0637, 0.0974 / 0.0973, 0.1423 / 0.1420; fy 0.1127 / 0.1126,
+  0.1252 / 0.1253, 0.1346 / 0.1346;
 - every frame within the limits as the controller reads them: the frames ``play`` sends
   (ramp from park, the ride, the park) decoded and fed to the MBOX emulator on its own
   clock (Fn012 pacing, whole-ms stamps; it judges with the manual's numbers), and the

@@ -22,10 +22,11 @@ tests/test_optimal_jerk.py). Before, part of its fy was felt pulses the vehicle 
 1.17x, with corr fy 0.980 / 0.939 / 0.953 (was 0.966 / 0.922 / 0.941).
 
 Since session 32 the price of the error to the vehicle's whole fx, fy is higher (``[mpc]
-w_vehicle`` 0.3 / 0.45 -> 0.6 / 0.52; the preset's header): share fx 0.169 / 0.073 / 0.118 ->
-0.192 / 0.086 / 0.133, fy 0.238 / 0.123 / 0.152 -> 0.240 / 0.127 / 0.154, so fy's 1.3x is
-now met on flowing-formula too (1.28 -> 1.32x); corr fx 0.993 / 0.962 / 0.988 -> 0.993 /
-0.956 / 0.982.
+w_vehicle`` 0.3 / 0.45 -> 0.8 / 0.52) and the guard on the rider's pitch rate is one
+threshold instead of 0.77 (the preset's header): share fx 0.169 / 0.073 / 0.118 -> 0.208 /
+0.096 / 0.144, fy 0.238 / 0.123 / 0.152 -> 0.241 / 0.127 / 0.153, so fy's 1.3x is now met
+on flowing-formula too (1.28 -> 1.34x); corr fx 0.993 / 0.962 / 0.988 -> 0.993 / 0.958 /
+0.983; all false cues 2.1 / 2.3 / 1.2 -> 3.0 / 3.9 / 2.9 %.
 """
 
 from __future__ import annotations
@@ -37,13 +38,13 @@ from _held_out import DRIVES, check_plan_figures, default_preset, held_out_metri
 from motioncue.cueing._metrics import CueMetrics
 
 PRESET = "optimal-hexapod-auto"
-RATIO = 1.3  # the issue's; measured fx 1.92 / 2.69 / 1.99, fy 1.79 / 1.32 / 1.18
+RATIO = 1.3  # the issue's; measured fx 2.08 / 3.00 / 2.15, fy 1.80 / 1.34 / 1.19
 FY_RATIO_MET = ("forest-rally.csv", "flowing-formula.csv")
-FY_RATIO_SHORT = {"lap.csv": 1.15}  # measured 1.18
+FY_RATIO_SHORT = {"lap.csv": 1.15}  # measured 1.19
 MEASURED = {  # share fx, fy
-    "forest-rally.csv": (0.192, 0.240),
-    "flowing-formula.csv": (0.086, 0.127),
-    "lap.csv": (0.133, 0.154),
+    "forest-rally.csv": (0.208, 0.241),
+    "flowing-formula.csv": (0.096, 0.127),
+    "lap.csv": (0.144, 0.153),
 }
 
 
