@@ -142,3 +142,33 @@ def test_the_bundled_plan_on_a_working_set_is_the_whole_qps_plan() -> None:
     # the same optimum, each solve to DAQP's primal tolerance (1e-6 of a row), carried from
     # window to window by the state: 10 um, 10 urad
     np.testing.assert_allclose(got.poses, want.poses, rtol=0, atol=1e-5)  # m, rad
+
+
+def test_a_relaxation_proved_infeasible_ends_the_solve_without_the_whole_problem() -> None:
+    # u0 >= 1 and u0 <= 0 (two hard rows) cannot both hold. The first relaxation keeps the
+    # row the zero guess violates (u0 >= 1) and is met at u0 = 1, which violates the other;
+    # the second keeps both and DAQP proves it infeasible. The whole problem has both rows
+    # too, so it is not solved (it cost seconds a window on the bundled plan's large working
+    # sets): two relaxations, not three. The oracle: the whole problem through casadi's daqp
+    # plugin is infeasible as well.
+    hess = np.eye(2)
+    qp = QpData(
+        np.zeros(2),
+        np.array([[1.0, 0.0], [1.0, 0.0]]),
+        np.array([1.0, -np.inf]),
+        np.array([np.inf, 0.0]),
+        np.full(2, -5.0),
+        np.full(2, 5.0),
+    )
+    ws = WorkingSetQp(hess, 10.0)
+    ok, _ = ws.solve(qp)
+    assert not ok and ws.infeasible and ws.last is None
+    assert ws.solves == 2, ws.solves
+    full = SoftGuardQp("daqp", hess, 2, 0, 10.0)
+    ok_f, _, _, _ = full.solve_full(qp, SoftRows(np.zeros((0, 2)), np.zeros(0), np.zeros(0)))
+    assert not ok_f
+    # a feasible problem after it: solved, and not marked infeasible
+    qp_ok = QpData(qp.g, qp.a, np.array([1.0, -np.inf]), np.array([np.inf, 2.0]), qp.lbx, qp.ubx)
+    ok2, u2 = ws.solve(qp_ok)
+    assert ok2 and not ws.infeasible
+    np.testing.assert_allclose(u2, [1.0, 0.0], rtol=0, atol=1e-9)

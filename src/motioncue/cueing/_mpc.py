@@ -1009,6 +1009,10 @@ class QpSolver:
         return ok, u, la, lx
 
 
+DAQP_INFEASIBLE = -1
+"""DAQP's exit flag for a problem whose constraints it proved infeasible (EXIT_INFEASIBLE)."""
+
+
 class DaqpQp:
     """The problem of :class:`QpSolver` through DAQP's own interface (:func:`daqp.solve`),
     the ``mpc`` route for ``solver = "daqp"``.
@@ -1023,12 +1027,20 @@ class DaqpQp:
     solve has a fresh workspace (a reused :class:`daqp.Model` carries rounding from one solve
     to the next), so the result depends only on the arguments and streaming, batch and reset
     runs give the same numbers.
+
+    Attributes
+    ----------
+    infeasible : bool
+        The last :meth:`solve` failed because DAQP proved its rows infeasible (exit flag
+        :data:`DAQP_INFEASIBLE` on every start tried), not for another reason (cycling, an
+        iteration limit, a refused start).
     """
 
     def __init__(self, hess: NDArray[np.float64], n_rows: int) -> None:
         self.h = np.ascontiguousarray(hess, dtype=float)
         self.n = int(hess.shape[0])
         self.n_rows = n_rows
+        self.infeasible = False
 
     def solve(self, qp: QpData, warm: Warm | None = None) -> QpOutcome:
         """``(ok, u, lam_a, lam_x)`` as :meth:`QpSolver.solve`; ``warm`` is ``(u, lam_a,
@@ -1045,6 +1057,7 @@ class DaqpQp:
                 sense[lam > 0.0] = 1  # active at its upper bound
                 sense[lam < 0.0] = 3  # active at its lower bound
         fail = (False, np.zeros(n), np.zeros(self.n_rows), np.zeros(n))
+        flags: list[int] = []
         gv = np.ascontiguousarray(qp.g, dtype=float)
         am = np.ascontiguousarray(qp.a, dtype=float)
         for start in (sense, None) if np.any(sense) else (sense,):
@@ -1053,11 +1066,15 @@ class DaqpQp:
             try:
                 x, _, flag, info = daqp.solve(self.h, gv, am, bu, bl, start)
             except (RuntimeError, ValueError):
+                flags.append(0)
                 continue
+            flags.append(int(flag))
             z = np.array(x, dtype=float).reshape(-1)
             if int(flag) == 1 and z.shape == (n,) and np.all(np.isfinite(z)):
                 lam_all = np.array(info["lam"], dtype=float).reshape(-1)
+                self.infeasible = False
                 return True, z, lam_all[n:], lam_all[:n]
+        self.infeasible = bool(flags) and all(f == DAQP_INFEASIBLE for f in flags)
         return fail
 
 

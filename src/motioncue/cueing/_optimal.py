@@ -117,7 +117,9 @@ class WorkingSetQp:
     exceeds the slack's price (then a zero slack is not optimal); a hard guard row whose
     multiplier is within the price is the optimum with a zero slack. Each solve is
     warm-started from the last one's active set. ``max_rounds`` relaxations at most; then the
-    whole problem is solved.
+    whole problem is solved. A relaxation that DAQP proves infeasible, with no guard row left
+    to price, ends the solve as failed: the whole problem has all its rows and more, so it is
+    infeasible too (solving it anyway took seconds per window on a large working set).
 
     Parameters
     ----------
@@ -141,6 +143,8 @@ class WorkingSetQp:
         self.max_rounds = int(max_rounds)
         self.solves = 0
         """Relaxations solved so far (for benchmarks)."""
+        self.infeasible = False
+        """The last relaxation was proved infeasible (:attr:`DaqpQp.infeasible`)."""
         self.last: tuple[NDArray[np.bool_], NDArray[np.float64]] | None = None
         """The last successful solve's active rows (a mask) and its multipliers."""
 
@@ -188,6 +192,9 @@ class WorkingSetQp:
             hard = work & soft & ~slack
             if not ok:
                 if not hard.any():
+                    if self.infeasible:  # fewer rows than the whole problem, and infeasible
+                        self.last = None
+                        return False, u
                     break
                 slack |= hard  # a guard that cannot be met: its rows priced
                 continue
@@ -229,9 +236,11 @@ class WorkingSetQp:
         lam_x = np.concatenate([lam_u, np.zeros(k)])
         self.solves += 1
         g_s, lbx_s, ubx_s = slack_terms(whole.g, whole.lbx, whole.ubx, self.weight, k)
-        ok, z, la, lx = DaqpQp(h, rows.size).solve(
+        solver = DaqpQp(h, rows.size)
+        ok, z, la, lx = solver.solve(
             QpData(g_s, a_w, lo_w, hi_w, lbx_s, ubx_s), warm=(None, lam_rows[rows], lam_x)
         )
+        self.infeasible = solver.infeasible
         out = np.zeros(whole.a.shape[0])
         if ok:
             out[rows] = la
