@@ -49,7 +49,7 @@ def main(argv: list[str]) -> int:
         runs.append((name, role, ev))
     t = np.arange(runs[0][2].perceived_vehicle.shape[0]) / 100.0
     fig, axes = plt.subplots(2, 1, figsize=(12, 6.5), sharex=True)
-    for i, (ax, ch) in enumerate(zip(axes, ("fx", "fy"))):
+    for i, (ax, ch) in enumerate(zip(axes, ("fx", "fy"), strict=True)):
         pv = runs[0][2].perceived_vehicle[:, i]
         ax.plot(t, args.scale * pv, color="0.55", lw=0.9, label=f"driver x {args.scale:g}")
         for name, role, ev in runs:
