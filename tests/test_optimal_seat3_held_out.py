@@ -15,14 +15,12 @@ the platform's classical default ``cinema-seat-3dof``:
 
 from __future__ import annotations
 
-import tomllib
 from pathlib import Path
 
 import numpy as np
 import pytest
 
 from _held_out import check_plan_figures
-from motioncue._config import find_config
 from motioncue.analysis import run_chain
 from motioncue.cueing import CueingParams, at_intensity, load_cueing
 from motioncue.cueing._metrics import CueMetrics
@@ -55,15 +53,14 @@ def _metrics(params: CueingParams, paths: list[Path]) -> dict[str, tuple[CueMetr
     return out
 
 
-def _platform_presets() -> tuple[str, str]:
-    data = tomllib.loads(find_config("platforms", PLATFORM).read_text())
-    return str(data["default_preset"]), str(data["ride_preset"])
+def _platform_presets() -> tuple[str | None, str | None]:
+    platform = load_platform(PLATFORM)
+    return platform.default_preset, platform.ride_preset
 
 
 @pytest.fixture(scope="module")
 def metrics() -> dict[str, dict[str, tuple[CueMetrics, int]]]:
-    default, _ = _platform_presets()
-    return {name: _metrics(load_cueing(name), PATHS) for name in (PRESET, default)}
+    return {name: _metrics(load_cueing(name), PATHS) for name in (PRESET, "cinema-seat-3dof")}
 
 
 def test_it_is_the_ride_file_default_of_seat3() -> None:

@@ -80,13 +80,11 @@ def choose_preset(
             "no cueing preset: give --preset NAME, or --platform P to use its default"
         )
     label = platform_label or platform.name
-    if ride and platform.ride_preset:
-        params = load_cueing(platform.ride_preset)
-        return params, f"{params.name} (ride-file default of platform {label})"
-    default = platform.default_preset
-    if default:
-        params = load_cueing(default)
-        return params, f"{params.name} (default of platform {label})"
+    chosen = platform.cueing_preset(ride)
+    if chosen:
+        params = load_cueing(chosen)
+        which = "ride-file default" if chosen != platform.default_preset else "default"
+        return params, f"{params.name} ({which} of platform {label})"
     params = load_cueing(FALLBACK_PRESET)
     return params, f"{params.name} (fallback: platform {label} names no default_preset)"
 

@@ -1057,7 +1057,7 @@ class DaqpQp:
                 sense[lam > 0.0] = 1  # active at its upper bound
                 sense[lam < 0.0] = 3  # active at its lower bound
         fail = (False, np.zeros(n), np.zeros(self.n_rows), np.zeros(n))
-        flags: list[int] = []
+        self.infeasible = True  # until a start ends otherwise
         gv = np.ascontiguousarray(qp.g, dtype=float)
         am = np.ascontiguousarray(qp.a, dtype=float)
         for start in (sense, None) if np.any(sense) else (sense,):
@@ -1066,15 +1066,13 @@ class DaqpQp:
             try:
                 x, _, flag, info = daqp.solve(self.h, gv, am, bu, bl, start)
             except (RuntimeError, ValueError):
-                flags.append(0)
+                self.infeasible = False
                 continue
-            flags.append(int(flag))
+            self.infeasible &= int(flag) == DAQP_INFEASIBLE
             z = np.array(x, dtype=float).reshape(-1)
             if int(flag) == 1 and z.shape == (n,) and np.all(np.isfinite(z)):
                 lam_all = np.array(info["lam"], dtype=float).reshape(-1)
-                self.infeasible = False
                 return True, z, lam_all[n:], lam_all[:n]
-        self.infeasible = bool(flags) and all(f == DAQP_INFEASIBLE for f in flags)
         return fail
 
 

@@ -209,19 +209,24 @@ class Platform:
 
     def with_default_preset(self, preset: str | None) -> Platform:
         """A copy naming ``preset`` (a cueing preset name or path) as its default."""
-        import copy
-
-        out = copy.copy(self)
-        set_fields(out, default_preset=preset)
-        return out
+        return self._with_preset(default_preset=preset)
 
     def with_ride_preset(self, preset: str | None) -> Platform:
         """A copy naming ``preset`` (a cueing preset name or path) as its ride-file default."""
+        return self._with_preset(ride_preset=preset)
+
+    def _with_preset(self, **preset: str | None) -> Platform:
         import copy
 
         out = copy.copy(self)
-        set_fields(out, ride_preset=preset)
+        set_fields(out, **preset)
         return out
+
+    def cueing_preset(self, ride: bool = False) -> str | None:
+        """The preset a command runs unasked: ``ride_preset`` where the whole recording is
+        known (``ride``: ``generate``, ``cue``, the demo) and the platform names one, else
+        ``default_preset`` (None: the platform names neither)."""
+        return (self.ride_preset if ride else None) or self.default_preset
 
     def with_actuator_limits(
         self,

@@ -140,7 +140,7 @@ def run_demo(
             f"controller {controller_name!r} is of kind {kind.name}, which has no emulator on "
             "udp://; the demo plays to a controller emulator on loopback"
         )
-    preset = platform.ride_preset or platform.default_preset or "racing"
+    preset = platform.cueing_preset(ride=True) or "racing"
     cueing = load_cueing(preset)
     limits = ActuatorLimits.from_platform(platform, controller, rate_hz=rate_hz)
     log(
