@@ -30,19 +30,34 @@ SECONDS = 8.0  # from the bridge going live: 1.5 s warm-up, then about 6 steps
 FUNCTIONAL_WINDOW_MS = 300.0
 
 
+# A machine that stalls this process for seconds can leave fewer than 3 of one run's steps
+# judgeable (below); the test then runs again, up to this many runs in all, and judges the
+# steps of every run. Each run must pass every check on its own.
+MAX_RUNS = 3
+MIN_JUDGED = 3
+
+
 def test_a_lateral_g_step_reaches_the_frames_in_order_and_within_the_limits() -> None:
-    res = lb.run_loopback(
-        RATE_HZ, SECONDS, False, True, "extrapolate", "arrival", window_ms=FUNCTIONAL_WINDOW_MS
-    )
-    assert res["limits_ok"], res["limits"]
-    assert res["error"] is None and res["state"] == "stopped", res
-    assert res["in_order"], res["order"]
-    assert res["frames"] > 0.1 * RATE_HZ * SECONDS, res  # the loop ran (not a rate check)
-    # every step sent after the warm-up that can be judged moved the frames within the
-    # window. A step cannot be judged when the 10 frames before it were not quiet (another
-    # step's transient, or frames stamped unevenly while a busy machine stopped this
-    # process: CI, session 31, 2 of 5 steps), or when no frame moved in its window while the
-    # frames stopped (this process stopped 3 s by SIGSTOP: 2 steps); at least 3 are
-    assert res["steps_live"] >= 4, res
-    assert res["steps_missed"] == 0, res
-    assert res["steps"] >= 3 and res["steps"] + res["steps_unjudged"] == res["steps_live"], res
+    judged = live = 0
+    runs = []
+    while judged < MIN_JUDGED and len(runs) < MAX_RUNS:
+        res = lb.run_loopback(
+            RATE_HZ, SECONDS, False, True, "extrapolate", "arrival", window_ms=FUNCTIONAL_WINDOW_MS
+        )
+        runs.append(res)
+        assert res["limits_ok"], res["limits"]
+        assert res["error"] is None and res["state"] == "stopped", res
+        assert res["in_order"], res["order"]
+        assert res["frames"] > 0.1 * RATE_HZ * SECONDS, res  # the loop ran (not a rate check)
+        # every step sent after the warm-up that can be judged moved the frames within the
+        # window. A step cannot be judged when the 10 frames before it were not quiet (another
+        # step's transient, or frames stamped unevenly while a busy machine stopped this
+        # process: CI, session 31, 2 of 5 steps), or when no frame moved in its window while
+        # the frames stopped (this process stopped 3 s by SIGSTOP: 2 steps)
+        assert res["steps_missed"] == 0, res
+        assert res["steps"] + res["steps_unjudged"] == res["steps_live"], res
+        judged += res["steps"]
+        live += res["steps_live"]
+    # about 6 steps are sent per run; at least 3 judged over the runs
+    assert live >= 4 * len(runs), runs
+    assert judged >= MIN_JUDGED, runs
