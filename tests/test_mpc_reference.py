@@ -68,6 +68,36 @@ def test_compressive_reference_is_the_classical_curve_with_a_limit_per_sign() ->
     np.testing.assert_array_equal(r[:, 2], 0.0)
 
 
+def test_small_cue_gain_adds_its_closed_form_before_the_vehicle_blend() -> None:
+    d = np.random.default_rng(5).normal(scale=2.0, size=(600, 6))
+    base = MpcParams(
+        ref_scale=(0.1, 0.2, 0.0, 0.0, 0.0, 0.0),
+        ref_limit=(1.5, 2.0, 1e9, 1e9, 1e9, 1e9),
+        ref_shape=3.0,
+        w_error=(8.0, 1.0, 0.3, 1.0, 1.0, 0.3),
+    )
+    mp = dataclasses.replace(base, ref_small_gain=(0.3, 0.5), ref_small_knee_m_s2=0.4)
+    r0, _ = reference(d, base, FS)
+    r1, _ = reference(d, mp, FS)
+    for j, b in ((0, 0.3), (1, 0.5)):  # b K tanh(d / K), written out
+        np.testing.assert_allclose(
+            r1[:, j] - r0[:, j], b * 0.4 * np.tanh(d[:, j] / 0.4), rtol=1e-12, atol=1e-14
+        )
+    np.testing.assert_array_equal(r1[:, 2:], r0[:, 2:])
+    # at most b K more on any cue; near zero the slope is the copy's plus b (finite difference)
+    assert np.all(np.abs(r1[:, 0] - r0[:, 0]) <= 0.3 * 0.4 + 1e-15)
+    h = 1e-6
+    tiny = np.zeros((2, 6))
+    tiny[1, 0] = h
+    slope = (reference(tiny, mp, FS)[0][1, 0] - reference(tiny, mp, FS)[0][0, 0]) / h
+    assert slope == pytest.approx(0.1 + 0.3, rel=1e-6)
+    # with w_vehicle the boosted copy is blended with the whole vehicle: r' = r + beta (d - r)
+    wv = (0.7, 0.0, 0.0, 0.0, 0.0, 0.0)
+    rb, _ = reference(d, dataclasses.replace(mp, w_vehicle=wv), FS)
+    beta = 0.7 / (8.0 + 0.7)
+    np.testing.assert_allclose(rb[:, 0], r1[:, 0] + beta * (d[:, 0] - r1[:, 0]), rtol=1e-12)
+
+
 def test_reach_limits_are_the_tilt_the_plan_can_hold_in_each_direction() -> None:
     from motioncue.cueing._mpc import plan_tilt_reach, resolve_reach, rig_limits
 
@@ -270,6 +300,11 @@ def test_new_mpc_settings_are_validated_and_read_in_their_units(tmp_path: Path) 
         MpcParams(ref_shape=0.5)
     with pytest.raises(ConfigError, match=r"ref_reach_use = 1.5 is invalid; allowed: \[0.0, 1.0\]"):
         MpcParams(ref_reach_use=1.5)
+    for bad_gain in ((1.5, 0.0), (0.1,), (-0.1, 0.0), (math.nan, 0.0)):
+        with pytest.raises(ConfigError, match=r"ref_small_gain = .* allowed: two numbers"):
+            MpcParams(ref_small_gain=bad_gain)  # type: ignore[arg-type]
+    with pytest.raises(ConfigError, match=r"ref_small_knee_m_s2 = 0.0 is invalid; allowed"):
+        MpcParams(ref_small_knee_m_s2=0.0)
     src = (ROOT / "configs" / "cueing" / "optimal-hexapod.toml").read_text()
     import tomllib
 
@@ -292,7 +327,9 @@ def test_new_mpc_settings_are_validated_and_read_in_their_units(tmp_path: Path) 
 
 
 # ---------------------------------------------------------------------- tune and write
-@pytest.mark.parametrize("preset", ["mpc-hexapod", "optimal-hexapod", "optimal-seat3"])
+@pytest.mark.parametrize(
+    "preset", ["mpc-hexapod", "optimal-hexapod", "optimal-seat3", "optimal-hexapod-auto"]
+)
 def test_a_plan_preset_written_by_tune_reads_back_the_same(preset: str, tmp_path: Path) -> None:
     from motioncue.cueing._tune import params_from_vector, preset_toml, vector_from_params
 

@@ -27,6 +27,12 @@ threshold instead of 0.77 (the preset's header): share fx 0.169 / 0.073 / 0.118 
 0.096 / 0.144, fy 0.238 / 0.123 / 0.152 -> 0.241 / 0.127 / 0.153, so fy's 1.3x is now met
 on flowing-formula too (1.28 -> 1.34x); corr fx 0.993 / 0.962 / 0.988 -> 0.993 / 0.958 /
 0.983; all false cues 2.1 / 2.3 / 1.2 -> 3.0 / 3.9 / 2.9 %.
+
+Since session 33 small fx cues are tracked with more gain (``[mpc] ref_small_gain`` fx 0.3,
+knee 0.3 m/s^2) and the price on the whole fx is 0.7: missed fx on flowing-formula 37 -> 28 %,
+so the issue's missed cues <= 35 % is now checked on every drive; share fx 0.208 / 0.096 /
+0.144 -> 0.211 / 0.097 / 0.145, fy 0.241 / 0.127 / 0.153 -> 0.239 / 0.127 / 0.152, corr fx
+0.993 / 0.958 / 0.983 -> 0.992 / 0.953 / 0.982.
 """
 
 from __future__ import annotations
@@ -38,13 +44,13 @@ from _held_out import DRIVES, check_plan_figures, default_preset, held_out_metri
 from motioncue.cueing._metrics import CueMetrics
 
 PRESET = "optimal-hexapod-auto"
-RATIO = 1.3  # the issue's; measured fx 2.08 / 3.00 / 2.15, fy 1.80 / 1.34 / 1.19
+RATIO = 1.3  # the issue's; measured fx 2.12 / 3.01 / 2.16, fy 1.79 / 1.34 / 1.18
 FY_RATIO_MET = ("forest-rally.csv", "flowing-formula.csv")
-FY_RATIO_SHORT = {"lap.csv": 1.15}  # measured 1.19
+FY_RATIO_SHORT = {"lap.csv": 1.15}  # measured 1.18
 MEASURED = {  # share fx, fy
-    "forest-rally.csv": (0.208, 0.241),
-    "flowing-formula.csv": (0.096, 0.127),
-    "lap.csv": (0.144, 0.153),
+    "forest-rally.csv": (0.211, 0.239),
+    "flowing-formula.csv": (0.097, 0.127),
+    "lap.csv": (0.145, 0.152),
 }
 
 
@@ -61,6 +67,7 @@ def test_the_issue_figures_and_the_ratio_to_the_default(
     d, _ = metrics[default_preset()][name]
     assert default_preset() == "racing-hexapod-auto"
     check_plan_figures(m, limited)
+    assert m.missed[0] <= 0.35 and m.missed[1] <= 0.35, m.missed  # the issue's missed cues
     ratio = np.asarray(m.rendered_share[:2]) / np.asarray(d.rendered_share[:2])
     assert ratio[0] >= RATIO, ratio
     assert set(FY_RATIO_MET) | set(FY_RATIO_SHORT) == set(DRIVES)

@@ -28,7 +28,12 @@ from motioncue.cueing import CueingParams, at_intensity, load_cueing
 from motioncue.cueing._tune import PLAN_INTENSITY_KEYS, plan_intensity_values, preset_toml
 
 PRESET = "optimal-hexapod-auto"
-MOVED = {"ref_scale": (0, 1), "w_vehicle": (0, 1), "ref_adapt_peak_m_s2": (0,)}
+MOVED = {
+    "ref_scale": (0, 1),
+    "w_vehicle": (0, 1),
+    "ref_adapt_peak_m_s2": (0,),
+    "ref_small_gain": (0,),
+}
 """The plan's fields (and their elements) an intensity moves, written out here."""
 
 
@@ -41,6 +46,7 @@ def _own(p: CueingParams) -> dict[str, float]:
         "ref_adapt_peak_x_m_s2": mp.ref_adapt_peak_m_s2[0],
         "w_vehicle_x": mp.w_vehicle[0],
         "w_vehicle_y": mp.w_vehicle[1],
+        "ref_small_gain_x": mp.ref_small_gain[0],
     }
 
 

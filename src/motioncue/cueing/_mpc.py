@@ -304,6 +304,9 @@ def reference(
     code: ``_classical._adapt_gain``), continued from and written back to ``env``; the
     curve is the same, its input scaled (``compress(a d, k) = compress(d, a k)``).
 
+    With ``mp.ref_small_gain = (b_x, b_y)`` the fx and fy copies get ``b K tanh(d / K)``
+    more (``K = mp.ref_small_knee_m_s2``): small cues tracked with more gain.
+
     With ``mp.w_vehicle`` (``wv``; ``we = mp.w_error``) the result is the blend
     ``r' = r + wv / (we + wv) (d - r)`` per channel: the one target whose error, weighed by
     ``we + wv``, is the cost of both terms (:class:`~._mpc_params.MpcParams`).
@@ -365,6 +368,11 @@ def reference(
     elif np.any(soft):
         r[..., soft] = lim[soft] * np.tanh(r[..., soft] / lim[soft])
     r = r + fast
+    if any(mp.ref_small_gain):  # small cues tracked with more gain, up to the knee
+        knee = mp.ref_small_knee_m_s2
+        for j in (0, 1):
+            if mp.ref_small_gain[j] > 0.0:
+                r[..., j] += mp.ref_small_gain[j] * knee * np.tanh(da[..., j] / knee)
     wv = np.asarray(mp.w_vehicle)
     if np.any(wv > 0.0):
         beta = wv / np.maximum(np.asarray(mp.w_error) + wv, 1e-300)

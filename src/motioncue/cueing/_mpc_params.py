@@ -29,6 +29,8 @@ washout is the MPC's fallback) plus one ``[mpc]`` table, read by :func:`read_mpc
                                        #   vehicle's force peaks (0: that axis fixed)
     ref_adapt_tau_s = 18.0             # optional: the envelope's decay time (s)
     ref_adapt_start_m_s2 = 22.0        # optional: the envelope before the first sample
+    ref_small_gain = [0.5, 0.0]        # optional: small fx, fy cues tracked with this much
+    ref_small_knee_m_s2 = 0.5          #   more gain, up to about this size (see below)
     ref_split_hz = 0.5                 # optional: only the part below this is scaled and
     ref_scale_hf = [1.0, 1.0, 0.0, 0.0, 0.0, 0.0]  # limited; the part above times this
     sign_guard = [0.7, 0.7, 0.0, 0.0, 0.0, 0.0]  # wrong-sign perceived motion at most this
@@ -188,6 +190,16 @@ class MpcParams:
     ref_adapt_start_m_s2 : float
         The envelope before the first sample (m/s^2), in [0, 100]; default g. Starting high
         keeps a hard car's first stop from being tracked at a gentle car's gain.
+    ref_small_gain : 2 floats
+        ``(b_x, b_y)``, each in [0, 1] (default 0: none): the tracked fx and fy get
+        ``b K tanh(d / K)`` more (``K = ref_small_knee_m_s2``, ``d`` the vehicle's force on
+        the channel), added to the copy above before the blend with ``w_vehicle``. A cue
+        well below ``K`` is tracked with the gain ``b`` more (a car's light braking and
+        coasting, which an adaptive gain set by 4 g stops leaves below the rider's
+        threshold); a large one gets at most ``b K`` more, so the stops, which carry the
+        variance, keep their proportion.
+    ref_small_knee_m_s2 : float
+        ``K`` (m/s^2), in (0, 20]; default 0.5.
     sign_guard : 6 floats
         Where ``g_i > 0``, the plan's
         perceived motion on channel ``i`` may oppose the vehicle's perceived motion by at most
@@ -286,6 +298,8 @@ class MpcParams:
     ref_adapt_peak_m_s2: tuple[float, float] | None = None
     ref_adapt_tau_s: float = 30.0
     ref_adapt_start_m_s2: float = 9.80665
+    ref_small_gain: tuple[float, float] = (0.0, 0.0)
+    ref_small_knee_m_s2: float = 0.5
     sign_guard: Vec6 = (0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
     sign_guard_weight: float = 1e4
     stroke_use: float = 0.9
@@ -326,6 +340,15 @@ class MpcParams:
                     "(x, y) in [0, 50]"
                 )
             object.__setattr__(self, "ref_adapt_peak_m_s2", (float(pk[0]), float(pk[1])))
+        sg = tuple(self.ref_small_gain)
+        if len(sg) != 2 or not all(
+            not isinstance(v, bool) and isinstance(v, int | float) and 0.0 <= v <= 1.0 for v in sg
+        ):
+            raise ConfigError(
+                f"MpcParams.ref_small_gain = {self.ref_small_gain!r} is invalid; allowed: two "
+                "numbers (x, y) in [0, 1]"
+            )
+        object.__setattr__(self, "ref_small_gain", (float(sg[0]), float(sg[1])))
         rs = self.ref_shape
         if (
             isinstance(rs, bool)
@@ -354,6 +377,7 @@ class MpcParams:
             ("ref_reach_use", self.ref_reach_use, 0.0, 1.0),
             ("ref_adapt_tau_s", self.ref_adapt_tau_s, 0.1, 3600.0),
             ("ref_adapt_start_m_s2", self.ref_adapt_start_m_s2, 0.0, 100.0),
+            ("ref_small_knee_m_s2", self.ref_small_knee_m_s2, 1e-3, 20.0),
             ("tilt_fz_use", self.tilt_fz_use, 0.0, 5.0),
             ("tilt_fz_use_against", self.tilt_fz_use_against, 0.0, 5.0),
             ("fz_guard", self.fz_guard, 0.0, 10.0),
@@ -415,6 +439,7 @@ def read_mpc_table(table: ConfigReader) -> MpcParams:
         "ref_reach_use",
         "ref_adapt_tau_s",
         "ref_adapt_start_m_s2",
+        "ref_small_knee_m_s2",
         "tilt_fz_use",
         "tilt_fz_use_against",
         "fz_guard",
@@ -439,6 +464,7 @@ def read_mpc_table(table: ConfigReader) -> MpcParams:
     vals["sign_guard"] = table.vector("sign_guard", 6, list(d.sign_guard))
     if table.has("ref_adapt_peak_m_s2"):
         vals["ref_adapt_peak_m_s2"] = tuple(table.vector("ref_adapt_peak_m_s2", 2))
+    vals["ref_small_gain"] = tuple(table.vector("ref_small_gain", 2, list(d.ref_small_gain)))
     vals["trans_limit_m"] = tuple(table.vector("trans_limit_m", 3, list(d.trans_limit_m)))
     if table.has("tilt_rate_limit_deg_s"):
         deg = table.number("tilt_rate_limit_deg_s", lo=0.0, hi=5000.0, lo_open=True)

@@ -458,6 +458,7 @@ _PLAN_KNOBS: dict[str, _Knob] = {
     "w_vehicle_x": _Knob("w_vehicle", (0,)),
     "w_vehicle_y": _Knob("w_vehicle", (1,)),
     "ref_adapt_peak_x_m_s2": _Knob("ref_adapt_peak_m_s2", read=_read_adapt_x, write=_write_adapt_x),
+    "ref_small_gain_x": _Knob("ref_small_gain", (0,)),
 }
 """Where each parameter of :data:`MPC_TUNED_PARAMETERS`, :data:`MPC_STRENGTH_TUNED_PARAMETERS`
 and :data:`PLAN_INTENSITY_KEYS` lives in a preset's :class:`MpcParams` (its ``[mpc]``
@@ -471,6 +472,7 @@ PLAN_INTENSITY_KEYS: tuple[str, ...] = (
     "ref_adapt_peak_x_m_s2",
     "w_vehicle_x",
     "w_vehicle_y",
+    "ref_small_gain_x",
 )
 """Keys of an ``mpc`` or ``optimal`` preset's ``[intensity] gentle`` table (knobs of
 :data:`_PLAN_KNOBS`): the terms of the plan's cost that ask for strength, at the gentle
@@ -478,11 +480,14 @@ PLAN_INTENSITY_KEYS: tuple[str, ...] = (
 fy (``[mpc] ref_scale``, > 0); ``ref_adapt_peak_x_m_s2``: the adaptive cap of the fx gain
 (``[mpc] ref_adapt_peak_m_s2``'s fx, m/s^2; > 0 exactly where the preset sets one, 0 where it
 has none); ``w_vehicle_x``, ``w_vehicle_y``: the price of the rider's error to the vehicle's
-whole fx, fy (``[mpc] w_vehicle``, >= 0). Every point of the range is the plan's optimum for
+whole fx, fy (``[mpc] w_vehicle``, >= 0); ``ref_small_gain_x``: the extra gain of small
+fx cues (``[mpc] ref_small_gain``'s fx, >= 0). Every point of the range is the plan's optimum for
 its own cost, so a point of the front of that cost between strength and the error terms, not
 a gain on a ride."""
 
-_PLAN_INTENSITY_ZERO_OK = frozenset({"ref_adapt_peak_x_m_s2", "w_vehicle_x", "w_vehicle_y"})
+_PLAN_INTENSITY_ZERO_OK = frozenset(
+    {"ref_adapt_peak_x_m_s2", "w_vehicle_x", "w_vehicle_y", "ref_small_gain_x"}
+)
 """Keys of a plan's gentle table that may be 0 (a term the preset does not use)."""
 
 
@@ -844,6 +849,9 @@ def mpc_table_lines(mp: MpcParams) -> list[str]:
         lines.append(f"ref_adapt_peak_m_s2 = {_vec(mp.ref_adapt_peak_m_s2)}")
         lines.append(f"ref_adapt_tau_s = {_fmt(mp.ref_adapt_tau_s)}")
         lines.append(f"ref_adapt_start_m_s2 = {_fmt(mp.ref_adapt_start_m_s2)}")
+    if any(mp.ref_small_gain):  # small cues' extra gain (written only where set)
+        lines.append(f"ref_small_gain = {_vec(mp.ref_small_gain)}")
+        lines.append(f"ref_small_knee_m_s2 = {_fmt(mp.ref_small_knee_m_s2)}")
     if mp.tilt_rate_limit_rad_s is not None:
         lines.append(f"tilt_rate_limit_deg_s = {_fmt(mp.tilt_rate_limit_rad_s * r2d)}")
     lines += [f"solver = {_quote(mp.solver)}", ""]
