@@ -147,5 +147,5 @@ def test_a_plan_algorithm_with_a_classical_gentle_table_is_refused() -> None:
     base = load_cueing("mpc-hexapod")
     gentle = load_cueing("racing-hexapod-firm").intensity_gentle
     assert base.tilt_shape is not None and gentle is not None
-    with pytest.raises(ConfigError, match="allowed for algorithm 'mpc': 5"):
+    with pytest.raises(ConfigError, match="allowed for algorithm 'mpc': 6"):
         replace(base, intensity_gentle=gentle)

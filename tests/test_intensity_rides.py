@@ -19,10 +19,10 @@ strength terms, tests/test_plan_intensity.py):
   0.1226, 0.1348 / 0.1348; firm: fx 0.0232 / 0.0228, 0.0299 / 0.0296, 0.0392 / 0.0387; fy
   0.0629 / 0.0629, 0.0920 / 0.0920, 0.1301 / 0.1302; adaptive: fx 0.0308 / 0.0306, 0.0579 /
   0.0577, 0.0667 / 0.0660; fy 0.0732 / 0.0732, 0.1078 / 0.1078, 0.1311 / 0.1312 (50 % since
-  at_intensity ends at the preset's own values); auto: fx 0.0331 / 0.0330, 0.0553 / 0.0551,
-  0.0630 / 0.0629; fy 0.0768 / 0.0768, 0.1086 / 0.1087, 0.1271 / 0.1273; optimal-hexapod-auto
-  (session 32): fx 0.0637 / 0.0637, 0.0974 / 0.0973, 0.1423 / 0.1420; fy 0.1127 / 0.1126,
-  0.1252 / 0.1253, 0.1346 / 0.1346;
+  at_intensity ends at the preset's own values); auto (session 33): fx 0.0324 / 0.0323,
+  0.0551 / 0.0549, 0.0630 / 0.0629; fy 0.0764 / 0.0765, 0.1084 / 0.1086, 0.1270 / 0.1271;
+  optimal-hexapod-auto (session 33): fx 0.0668 / 0.0668, 0.1009 / 0.1008, 0.1428 / 0.1426; fy
+  0.1126 / 0.1126, 0.1249 / 0.1250, 0.1346 / 0.1346;
 - every frame within the limits as the controller reads them: the frames ``play`` sends
   (ramp from park, the ride, the park) decoded and fed to the MBOX emulator on its own
   clock (Fn012 pacing, whole-ms stamps; it judges with the manual's numbers), and the
