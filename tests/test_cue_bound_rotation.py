@@ -31,10 +31,13 @@ def _d1(n: int) -> np.ndarray:
     return np.eye(n)[1:] - np.eye(n)[:-1]
 
 
-def _rot_ineq(n: int, fs: float, sign: float, omega: np.ndarray, axis: int) -> tuple:
+def _rot_ineq(
+    n: int, fs: float, sign: float, omega: np.ndarray, axis: int, rule: str = "spurious"
+) -> tuple:
     """The test's own no-false-rotation rows on tau: ``R tau <= hi`` and ``-R tau <= -lo``
     where finite (R: the canal matrix times the rate, from the neutral pose before the first
-    sample)."""
+    sample). ``rule="false"``: only the rows against a cue beyond the threshold with the sign
+    opposite to the vehicle's (whatever the vehicle's size)."""
     canal = MS.canal[axis]
     thr = THR[3 + axis]
     rate = np.vstack([np.eye(n)[:1], _d1(n)]) * fs * sign
@@ -42,6 +45,14 @@ def _rot_ineq(n: int, fs: float, sign: float, omega: np.ndarray, axis: int) -> t
     v = canal.apply(omega, fs)
     rows, rhs = [], []
     for k in range(n):
+        if rule == "false":
+            if v[k] > 0.0:  # the vehicle's rate positive: the platform's not below -thr
+                rows.append(-r[k])
+                rhs.append(thr)
+            elif v[k] < 0.0:
+                rows.append(r[k])
+                rhs.append(thr)
+            continue
         if v[k] >= -thr:  # not below -thr: the platform's perceived rate >= -thr
             rows.append(-r[k])
             rhs.append(thr)
@@ -112,6 +123,29 @@ def test_support_matches_a_dense_lp() -> None:
         assert tighter >= 1  # the rows bind somewhere
 
 
+def test_the_false_rule_matches_a_dense_lp_between_the_smaller_set_and_the_rig() -> None:
+    # rotation_rule="false": only the rows against a false cue (the sign opposite to the
+    # vehicle's beyond the threshold, whatever the vehicle's size), so S' within S'' within S
+    rng = np.random.default_rng(7)
+    d2 = _second_difference(N, FS)
+    omega = _omega()
+    for i, (axis, sign) in enumerate(((1, -1.0), (0, 1.0))):
+        canal, thr = MS.canal[axis], float(THR[3 + axis])
+        base = _Channel(*BOX, FS, MS.otolith[i])
+        strict = _Channel(*BOX, FS, MS.otolith[i], rot=_Rotation(canal, sign, omega, thr))
+        loose = _Channel(*BOX, FS, MS.otolith[i], rot=_Rotation(canal, sign, omega, thr, "false"))
+        ineq = _rot_ineq(N, FS, sign, omega, axis, rule="false")
+        looser = 0
+        for _ in range(6):
+            c = rng.normal(size=N)
+            got = _support(loose, c, d2)
+            assert got == pytest.approx(_dense_support(c, FS, BOX, ineq), rel=1e-6, abs=1e-9)
+            small, whole = _support(strict, c, d2), _support(base, c, d2)
+            assert small <= got * (1.0 + 1e-9) + 1e-12 <= whole * (1.0 + 2e-9) + 2e-12
+            looser += got > small * (1.0 + 1e-3)
+        assert looser >= 1  # the spurious cues with the vehicle's sign are allowed somewhere
+
+
 def _drive() -> tuple[np.ndarray, np.ndarray]:
     t = np.arange(N) / FS
     f = np.zeros((N, 3))
@@ -144,6 +178,28 @@ def test_gain_bounds_match_dense_lps_and_never_exceed_the_whole_rig() -> None:
             _dense_support(h.T @ v, FS, BOX, ineq, no_rev) / vv, rel=1e-5
         )
         assert b.gain_max[i] <= free.gain_max[i] * (1.0 + 1e-7)
+
+
+def test_the_false_rule_gain_bounds_match_dense_lps_and_are_refused_when_unknown() -> None:
+    f, w = _drive()
+    strict = cue_bound(f, FS, REACH, corr_min=None, w_vehicle=w, forbid_false_rotation=True)
+    b = cue_bound(
+        f, FS, REACH, corr_min=None, w_vehicle=w, forbid_false_rotation=True, rotation_rule="false"
+    )
+    free = cue_bound(f, FS, REACH, corr_min=None)
+    assert b.rotation_cues == "no-false" and b.to_dict()["rotation_cues"] == "no-false"
+    for i, (axis, sign) in enumerate(((1, -1.0), (0, 1.0))):
+        h = _h(N, FS, MS.otolith[i])
+        v = h @ f[:, i]
+        ineq = _rot_ineq(N, FS, sign, w[:, axis], axis, rule="false")
+        assert b.gain_max_any[i] == pytest.approx(
+            _dense_support(h.T @ v, FS, BOX, ineq) / float(v @ v), rel=1e-6
+        )
+        assert strict.gain_max[i] <= b.gain_max[i] * (1.0 + 1e-7)
+        assert b.gain_max[i] <= free.gain_max[i] * (1.0 + 1e-7)
+        assert b.error_rms[i] <= strict.error_rms[i] * (1.0 + 1e-7) + 1e-12
+    with pytest.raises(ConfigError, match="rotation_rule 'reversed' is invalid; allowed"):
+        cue_bound(f, FS, REACH, w_vehicle=w, forbid_false_rotation=True, rotation_rule="reversed")
 
 
 def test_canal_limited_tilt_closed_form() -> None:

@@ -107,7 +107,14 @@ threshold::
     -thr <= r[k]         unless w_v[k] < -thr     (no spurious cue, no reversal)
             r[k] <= thr  unless w_v[k] > thr
 
-(both where the vehicle's perceived rate is below threshold). ``C`` enters every programme
+(both where the vehicle's perceived rate is below threshold). With ``rotation_rule="false"``
+the rows are only those against a *false* cue (``cue_metrics``' ``false``: beyond the
+threshold with the sign opposite to the vehicle's, whatever the vehicle's size)::
+
+    -thr <= r[k]   where w_v[k] > 0,        r[k] <= thr   where w_v[k] < 0
+
+a larger set ``S''`` (``S'`` within ``S''`` within ``S``): a spurious cue with the vehicle's
+own sign is allowed, as issue 20's "all false cues" allows it. ``C`` enters every programme
 as its second-order sections: one vector of extra variables per section, tied to ``tau`` and
 to each other by banded equalities (exactly :func:`scipy.signal.sosfilt` from rest), the last
 one ``r`` bounded as above. The QP, the gain LP and the cone programme get these rows, and
@@ -308,7 +315,8 @@ class CueBound:
     rotation_cues : str
         ``"allowed"``: the bound over every motion of the rig; ``"forbidden"``: over those
         with no spurious and no reversed rotation cue on the channels' tilt axes
-        (``cue_bound(..., forbid_false_rotation=True)``).
+        (``cue_bound(..., forbid_false_rotation=True)``); ``"no-false"``: over those with no
+        false rotation cue there (``rotation_rule="false"``).
     """
 
     error_rms: NDArray[np.float64]
@@ -398,12 +406,19 @@ class _Rotation:
     sign: float
     omega: NDArray[np.float64]
     thr: float
+    rule: str = "spurious"
 
     def bounds(self, fs: float) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
-        """``(lo, hi)`` of the platform's perceived rate per sample: within the threshold
-        where the vehicle's is (no spurious cue), not opposite where it is above (no
-        reversal)."""
+        """``(lo, hi)`` of the platform's perceived rate per sample. ``rule`` ``"spurious"``:
+        within the threshold where the vehicle's is (no spurious cue), not opposite where it
+        is above (no reversal). ``"false"``: not beyond the threshold with the sign opposite
+        to the vehicle's, whatever the vehicle's size (no false cue, ``cue_metrics``'
+        definition; free where the vehicle's is exactly 0)."""
         v = self.canal.apply(self.omega, fs)
+        if self.rule == "false":
+            lo = np.where(v > 0.0, -self.thr, -np.inf)
+            hi = np.where(v < 0.0, self.thr, np.inf)
+            return lo, hi
         lo = np.where(v < -self.thr, -np.inf, -self.thr)
         hi = np.where(v > self.thr, np.inf, self.thr)
         return lo, hi
@@ -1293,6 +1308,7 @@ def cue_bound(
     corr_cuts: int = 2,
     w_vehicle: ArrayLike | None = None,
     forbid_false_rotation: bool = False,
+    rotation_rule: str = "spurious",
 ) -> CueBound:
     """The physical bound of a drive on a rig (definitions: the module docstring).
 
@@ -1334,6 +1350,14 @@ def cue_bound(
         false rotation cue"). Every figure of the result is then over that set
         (``CueBound.rotation_cues == "forbidden"``); the programmes grow by the canal's
         sections (about twice the time).
+    rotation_rule : {"spurious", "false"}
+        With ``forbid_false_rotation``: ``"spurious"`` (default) forbids spurious and
+        reversed rotation cues, as above; ``"false"`` forbids only *false* ones, the platform
+        beyond the threshold with the sign opposite to the vehicle's whatever the vehicle's
+        size (the ``false`` of :func:`motioncue.cueing.cue_metrics`, issue 20's "all false
+        cues"): a larger set, so a looser bound, over the motions that are within that
+        figure's budget with no false rotation cue at all
+        (``CueBound.rotation_cues == "no-false"``).
 
     Returns
     -------
@@ -1364,6 +1388,10 @@ def cue_bound(
                 f"corr_min {np.asarray(corr_min).tolist()!r} is invalid; allowed: two "
                 "correlations in (0, 1] (fx, fy)"
             )
+    if rotation_rule not in ("spurious", "false"):
+        raise ConfigError(
+            f"rotation_rule {rotation_rule!r} is invalid; allowed: 'spurious', 'false'"
+        )
     n = f.shape[0]
     w = None
     if forbid_false_rotation:
@@ -1398,6 +1426,7 @@ def cue_bound(
                 sign=_TILT_SIGN[i],
                 omega=np.ascontiguousarray(w[:, _TILT_AXIS[i]]),
                 thr=float(thr[3 + _TILT_AXIS[i]]),
+                rule=rotation_rule,
             ),
         )
         for key, val in zip(
@@ -1432,5 +1461,7 @@ def cue_bound(
             "coupling": "none" if reach.coupling is None else "translation-tilt polygons",
             "rotation_fallbacks": str(_ROT_FALLBACKS[0]),
         },
-        rotation_cues="allowed" if w is None else "forbidden",
+        rotation_cues="allowed"
+        if w is None
+        else ("forbidden" if rotation_rule == "spurious" else "no-false"),
     )
