@@ -300,7 +300,7 @@ def test_new_mpc_settings_are_validated_and_read_in_their_units(tmp_path: Path) 
         MpcParams(ref_shape=0.5)
     with pytest.raises(ConfigError, match=r"ref_reach_use = 1.5 is invalid; allowed: \[0.0, 1.0\]"):
         MpcParams(ref_reach_use=1.5)
-    for bad_gain in ((1.5, 0.0), (0.1,), (-0.1, 0.0), (math.nan, 0.0)):
+    for bad_gain in ((1.5, 0.0), (0.1,), (-0.1, 0.0), (math.nan, 0.0), 0.3, "ab"):
         with pytest.raises(ConfigError, match=r"ref_small_gain = .* allowed: two numbers"):
             MpcParams(ref_small_gain=bad_gain)  # type: ignore[arg-type]
     with pytest.raises(ConfigError, match=r"ref_small_knee_m_s2 = 0.0 is invalid; allowed"):

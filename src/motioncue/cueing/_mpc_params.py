@@ -199,7 +199,7 @@ class MpcParams:
         threshold); a large one gets at most ``b K`` more, so the stops, which carry the
         variance, keep their proportion.
     ref_small_knee_m_s2 : float
-        ``K`` (m/s^2), in (0, 20]; default 0.5.
+        ``K`` (m/s^2), in [0.001, 20]; default 0.5.
     sign_guard : 6 floats
         Where ``g_i > 0``, the plan's
         perceived motion on channel ``i`` may oppose the vehicle's perceived motion by at most
@@ -340,7 +340,7 @@ class MpcParams:
                     "(x, y) in [0, 50]"
                 )
             object.__setattr__(self, "ref_adapt_peak_m_s2", (float(pk[0]), float(pk[1])))
-        sg = tuple(self.ref_small_gain)
+        sg = tuple(self.ref_small_gain) if isinstance(self.ref_small_gain, Iterable) else ()
         if len(sg) != 2 or not all(
             not isinstance(v, bool) and isinstance(v, int | float) and 0.0 <= v <= 1.0 for v in sg
         ):
