@@ -3,7 +3,9 @@
 toppra imports ``matplotlib.pyplot`` when it is imported (plotting helpers generate never
 calls); :func:`motioncue.trajectory._transition._defer_pyplot`, called where toppra is
 imported, puts a placeholder in its place, which imports the real module at the first use of
-one of its attributes. In a fresh process (this one may have imported pyplot already).
+one of its attributes; setting or deleting an attribute through it reaches the real module
+(tests/test_cli_defects.py monkeypatches ``plt.close`` in a worker that may hold the
+placeholder). In a fresh process (this one may have imported pyplot already).
 """
 
 from __future__ import annotations
@@ -32,6 +34,14 @@ import matplotlib.pyplot as real
 assert real is not held and type(real) is types.ModuleType
 assert real.figure is held.figure and fig.number in real.get_fignums()
 assert sys.modules["matplotlib.pyplot"] is real and matplotlib.pyplot is real
+# a monkeypatch through the placeholder (code that imported it earlier) reaches the real module
+orig, marker = real.close, object()
+held.close = marker
+assert real.close is marker and held.close is marker
+held.close = orig
+held.extra_attr = 1
+del held.extra_attr
+assert real.close is orig and not hasattr(real, "extra_attr")
 print("ok")
 """
 

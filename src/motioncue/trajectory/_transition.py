@@ -152,14 +152,31 @@ class _DeferredPyplot(types.ModuleType):
     never call: about 0.4 s of CPU per process that times a move (pyplot's own import,
     measured with ``python -X importtime``). Dunder lookups (``__file__``, ``__path__``, made
     by tools that walk ``sys.modules``) do not import it; they see a module without them.
+    Setting or deleting an attribute (``monkeypatch.setattr(plt, "close", ...)`` in code that
+    imported the placeholder) goes to the real module too, where later imports will look.
     """
+
+    def _real(self) -> types.ModuleType:
+        if sys.modules.get(self.__name__) is self:
+            del sys.modules[self.__name__]
+        return importlib.import_module(self.__name__)
 
     def __getattr__(self, attr: str) -> Any:
         if attr.startswith("__") and attr.endswith("__"):
             raise AttributeError(attr)
-        if sys.modules.get(self.__name__) is self:
-            del sys.modules[self.__name__]
-        return getattr(importlib.import_module(self.__name__), attr)
+        return getattr(self._real(), attr)
+
+    def __setattr__(self, attr: str, value: Any) -> None:
+        if attr.startswith("__") and attr.endswith("__"):
+            super().__setattr__(attr, value)
+        else:
+            setattr(self._real(), attr, value)
+
+    def __delattr__(self, attr: str) -> None:
+        if attr.startswith("__") and attr.endswith("__"):
+            super().__delattr__(attr)
+        else:
+            delattr(self._real(), attr)
 
 
 def _defer_pyplot() -> None:
