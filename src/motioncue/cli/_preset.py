@@ -16,7 +16,6 @@ if TYPE_CHECKING:
     from ..pipeline import Ride
 
 __all__ = [
-    "FALLBACK_PRESET",
     "add_intensity_option",
     "add_vestibular_option",
     "apply_intensity",
@@ -25,9 +24,6 @@ __all__ = [
     "cueing_note",
     "presets_with_intensity",
 ]
-
-FALLBACK_PRESET = "racing"
-"""Used when neither ``--preset`` nor the platform file names a preset."""
 
 
 def choose_preset(
@@ -67,6 +63,7 @@ def choose_preset(
     ConfigError
         No preset and no platform, or the preset cannot be loaded.
     """
+    from ..cueing import FALLBACK_PRESET
     from ._common import load_preset_arg
 
     def load_cueing(name: str) -> CueingParams:

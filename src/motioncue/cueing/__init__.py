@@ -45,7 +45,7 @@ from ._evaluate import (
     simulator_motion,
 )
 from ._metrics import JOLT_CUTOFF_HZ, CueMasks, CueMetrics, cue_masks, cue_metrics, jolt
-from ._params import DOF_NAMES, GRAVITY_M_S2, CueingParams, load_cueing
+from ._params import DOF_NAMES, FALLBACK_PRESET, GRAVITY_M_S2, CueingParams, load_cueing
 from ._plot import plot_cueing
 from ._score import (
     ACTIVE_FRACTION,
@@ -73,6 +73,7 @@ __all__ = [
     "DEFAULT_MODEL_SET",
     "DEFAULT_WEIGHTS",
     "DOF_NAMES",
+    "FALLBACK_PRESET",
     "FALSE_CUE_WEIGHT",
     "GRAVITY_M_S2",
     "JOLT_CUTOFF_HZ",

@@ -368,11 +368,9 @@ def reference(
     elif np.any(soft):
         r[..., soft] = lim[soft] * np.tanh(r[..., soft] / lim[soft])
     r = r + fast
-    if any(mp.ref_small_gain):  # small cues tracked with more gain, up to the knee
+    if any(mp.ref_small_gain):  # small fx, fy cues tracked with more gain, up to the knee
         knee = mp.ref_small_knee_m_s2
-        for j in (0, 1):
-            if mp.ref_small_gain[j] > 0.0:
-                r[..., j] += mp.ref_small_gain[j] * knee * np.tanh(da[..., j] / knee)
+        r[..., :2] += np.asarray(mp.ref_small_gain) * knee * np.tanh(da[..., :2] / knee)
     wv = np.asarray(mp.w_vehicle)
     if np.any(wv > 0.0):
         beta = wv / np.maximum(np.asarray(mp.w_error) + wv, 1e-300)

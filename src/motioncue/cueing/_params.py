@@ -530,6 +530,11 @@ def _number_rows(
     return [[float(v) for v in r] for r in raw]
 
 
+FALLBACK_PRESET = "racing"
+"""The preset used when neither the command nor the platform file names one (``choose_preset``
+of the CLI, the demo)."""
+
+
 def load_cueing(name_or_path: str | Path) -> CueingParams:
     """Load a cueing preset by bundled name (``racing``) or from a TOML path.
 

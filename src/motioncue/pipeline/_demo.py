@@ -117,7 +117,7 @@ def run_demo(
     ``udp://``, played to that emulator. The
     cueing preset is the platform's ``ride_preset``, else its ``default_preset``.
     """
-    from motioncue.cueing import load_cueing
+    from motioncue.cueing import FALLBACK_PRESET, load_cueing
     from motioncue.kinematics import load_platform
     from motioncue.output import controller_kind, load_controller, open_transport, parse_target
     from motioncue.telemetry._recording import read_recording_csv
@@ -140,7 +140,7 @@ def run_demo(
             f"controller {controller_name!r} is of kind {kind.name}, which has no emulator on "
             "udp://; the demo plays to a controller emulator on loopback"
         )
-    preset = platform.cueing_preset(ride=True) or "racing"
+    preset = platform.cueing_preset(ride=True) or FALLBACK_PRESET
     cueing = load_cueing(preset)
     limits = ActuatorLimits.from_platform(platform, controller, rate_hz=rate_hz)
     log(
