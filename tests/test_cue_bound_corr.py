@@ -243,8 +243,9 @@ def _random_motion(rng: np.random.Generator, d: np.ndarray, fs: float, reach: Ri
     for k in range(n):
         prev = tau[k - 1] if k else 0.0
         tau[k] = np.clip(prev + np.clip(target[k] - prev, -step, step), -lim, lim)
-    p = sum(rng.normal() * np.sin(2 * np.pi * rng.uniform(0.05, 2.0) * t + rng.uniform(0, 6))
-            for _ in range(3))  # fmt: skip
+    p = np.zeros(n)
+    for _ in range(3):
+        p += rng.normal() * np.sin(2 * np.pi * rng.uniform(0.05, 2.0) * t + rng.uniform(0, 6))
     pad = np.concatenate([p[:1], p, 2 * p[-1:] - p[-2:-1]])  # as simulator_motion
     d2p = (pad[2:] - 2 * pad[1:-1] + pad[:-2]) * fs * fs
     kp = rng.uniform(0.0, 0.05) * min(
