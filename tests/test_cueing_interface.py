@@ -249,7 +249,11 @@ def test_every_bundled_platform_names_a_loadable_default_preset() -> None:
 def test_the_bundled_ride_presets_are_plans_for_their_platform() -> None:
     """``generate`` and ``cue`` use a platform's ``ride_preset`` (the whole ride is known): a
     plan written for that platform, never one the live bridge could run."""
-    expected = {"stewart6-linear": "optimal-hexapod-auto", "seat3": "optimal-seat3-auto"}
+    expected = {
+        "stewart6-linear": "optimal-hexapod-auto",
+        "seat3": "optimal-seat3-auto",
+        "seat3-pot": "optimal-seat3-pot-auto",
+    }
     for name in bundled_names("platforms"):
         platform = load_platform(name)
         assert platform.ride_preset == expected.get(name), name

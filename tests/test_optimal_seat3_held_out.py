@@ -11,10 +11,16 @@ the platform's classical default ``cinema-seat-3dof``:
 * pinned at the measured shares (:data:`MEASURED`) within 0.002;
 * ``--intensity`` 0 / 50 / 100 % gives a stronger ride at each step on the lap, within the
   same figures.
+
+Its twin ``optimal-seat3-pot-auto`` (session 34), ``seat3-pot``'s ride-file default, is this
+plan sized for the SMC3 (``[mpc]`` platform ``seat3-pot``, controller ``smc3``): every other
+field equal, and on ``seat3-pot`` with ``smc3`` the same figures, ratios and shares on the lap
+and flowing-formula.
 """
 
 from __future__ import annotations
 
+import dataclasses
 from pathlib import Path
 
 import numpy as np
@@ -42,9 +48,17 @@ MEASURED = {  # share fx, fy
 }
 
 
-def _metrics(params: CueingParams, paths: list[Path]) -> dict[str, tuple[CueMetrics, int]]:
-    platform = load_platform(PLATFORM)
-    limits = ActuatorLimits.from_platform(platform, load_controller(CONTROLLER), rate_hz=RATE)
+POT_PLATFORM, POT_CONTROLLER, POT_PRESET = "seat3-pot", "smc3", "optimal-seat3-pot-auto"
+
+
+def _metrics(
+    params: CueingParams,
+    paths: list[Path],
+    platform_name: str = PLATFORM,
+    controller_name: str = CONTROLLER,
+) -> dict[str, tuple[CueMetrics, int]]:
+    platform = load_platform(platform_name)
+    limits = ActuatorLimits.from_platform(platform, load_controller(controller_name), rate_hz=RATE)
     out: dict[str, tuple[CueMetrics, int]] = {}
     for path in paths:
         rec = resample(read_recording_csv(Path(path)), RATE)
@@ -53,8 +67,8 @@ def _metrics(params: CueingParams, paths: list[Path]) -> dict[str, tuple[CueMetr
     return out
 
 
-def _platform_presets() -> tuple[str | None, str | None]:
-    platform = load_platform(PLATFORM)
+def _platform_presets(name: str = PLATFORM) -> tuple[str | None, str | None]:
+    platform = load_platform(name)
     return platform.default_preset, platform.ride_preset
 
 
@@ -92,3 +106,34 @@ def test_intensity_0_50_100_is_stronger_at_each_step_on_the_lap(
     assert np.all(np.diff(shares, axis=0) > 0.0), shares
     for m, limited in levels:
         check_plan_figures(m, limited)
+
+
+def test_the_pot_twin_is_this_plan_sized_for_the_smc3() -> None:
+    assert _platform_presets(POT_PLATFORM) == ("cinema-seat-3dof", POT_PRESET)
+    twin, plan = load_cueing(POT_PRESET), load_cueing(PRESET)
+    assert twin.mpc is not None and plan.mpc is not None
+    assert twin.mpc == dataclasses.replace(
+        plan.mpc, platform=POT_PLATFORM, controller=POT_CONTROLLER
+    )
+    for f in dataclasses.fields(twin):
+        if f.name not in ("name", "mpc"):
+            assert getattr(twin, f.name) == getattr(plan, f.name), f.name
+
+
+def test_the_pot_twin_on_seat3_pot_gives_the_same_ride(
+    metrics: dict[str, dict[str, tuple[CueMetrics, int]]],
+) -> None:
+    paths = [q for q in PATHS if q.name in ("lap.csv", "flowing-formula.csv")]
+    assert len(paths) == 2
+    twin = _metrics(load_cueing(POT_PRESET), paths, POT_PLATFORM, POT_CONTROLLER)
+    default = _metrics(load_cueing("cinema-seat-3dof"), paths, POT_PLATFORM, POT_CONTROLLER)
+    for q in paths:
+        m, limited = twin[q.name]
+        check_plan_figures(m, limited)
+        ratio = np.asarray(m.rendered_share[:2]) / np.asarray(default[q.name][0].rendered_share[:2])
+        assert np.all(ratio >= RATIO), ratio
+        np.testing.assert_allclose(m.rendered_share[:2], MEASURED[q.name], atol=0.002)
+        # the same plan on the same geometry: the seat3 ride's figures
+        np.testing.assert_allclose(
+            m.rendered_share[:2], metrics[PRESET][q.name][0].rendered_share[:2], atol=0.001
+        )
