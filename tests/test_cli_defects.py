@@ -436,3 +436,43 @@ def test_generate_reports_the_samples_of_an_mctr_recording(tmp_path: Path, capsy
     assert code == 0, err
     assert f"telemetry: {len(samples)} samples used; packets skipped: none" in err
     assert len(samples) == stats["sample"] == 120
+
+
+def test_the_rest_at_home_is_not_time_at_a_stroke_end() -> None:
+    """seat3-pot is homed at its stroke's lower end (pulse 0 is the pot's value 31): every ride
+    starts and ends there, and generate used to say "an actuator at a stroke end" for it. The
+    rest before the motion and after it (back where it started) does not count; the motion at
+    an end does, and so does an end the ride stays at when it does not come back."""
+    from types import SimpleNamespace
+
+    from motioncue.cli._pipeline import _time_at_stroke_end_s
+
+    rows = [{"stroke_pulses": [0, 1000]}, {"stroke_pulses": [0, 1000]}]
+    rest = np.zeros((30, 2))
+    motion = np.column_stack([np.linspace(1, 900, 50), np.full(50, 500.0)])
+    at_end = np.tile([1000.0, 500.0], (20, 1))  # actuator 0 held at its upper end, 0.2 s
+
+    def secs(*parts: np.ndarray) -> float:
+        ride = SimpleNamespace(limits={"actuators": rows}, pulses=np.vstack(parts), rate_hz=100.0)
+        return _time_at_stroke_end_s(ride)  # type: ignore[arg-type]
+
+    assert secs(rest, motion, rest) == 0.0
+    assert secs(rest, motion, at_end, motion, rest) == pytest.approx(0.2)
+    assert secs(rest, motion, at_end) == pytest.approx(0.2)  # it stays there: counted
+    assert secs(rest) == 0.0
+    # a rig homed mid-stroke: its rest was never counted, and still is not
+    mid = np.full((30, 2), 500.0)
+    assert secs(mid, motion, at_end, motion, mid) == pytest.approx(0.2)
+
+
+def test_generate_on_seat3_pot_does_not_call_home_a_stroke_end(tmp_path: Path, capsys) -> None:
+    ride = tmp_path / "p.ride"
+    code = main(
+        ["generate", "--input", str(RECORDINGS / "lap.csv"), "--platform", "seat3-pot",
+         "--controller", "smc3", "--preset", "cinema-seat-3dof", "--out", str(ride), "--json"]
+    )  # fmt: skip
+    data = json.loads(capsys.readouterr().out)
+    assert code == 0
+    pulses = np.asarray(load_ride(ride).pulses)
+    assert (pulses[0] == 0).all() and (pulses[-1] == 0).all()  # home, the stroke's lower end
+    assert data["stroke_end_s"] == 0.0

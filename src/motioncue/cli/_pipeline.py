@@ -227,18 +227,34 @@ CLAMP_WARN_PERCENT = 1.0
 
 def _time_at_stroke_end_s(ride: Ride) -> float:
     """Longest total time (s) one actuator spends within 0.1 % of the half stroke from an end
-    of its pulse range (the limits table saved in the ride)."""
+    of its pulse range (the limits table saved in the ride) while it moves.
+
+    Each actuator's frames before its first change, and after its last one when it ends where
+    it started, are the rig at rest (home, and the first or last frames of a slow ramp that
+    round to the home pulse); they do not count. A rig homed at its stroke end (seat3-pot:
+    pulse 0 is the pot's value 31, the usable stroke's lower end) was said to sit "at a stroke
+    end" in every ride before.
+    """
     import numpy as np
 
     rows = ride.limits.get("actuators", []) if isinstance(ride.limits, dict) else []
-    if not rows:
+    pulses = np.asarray(ride.pulses, dtype=float)
+    if not rows or pulses.ndim != 2 or pulses.shape[0] < 2:
         return 0.0
     lo = np.array([r["stroke_pulses"][0] for r in rows], dtype=float)
     hi = np.array([r["stroke_pulses"][1] for r in rows], dtype=float)
     half = np.maximum((hi - lo) / 2.0, 1e-9)
-    use = np.abs(np.asarray(ride.pulses, dtype=float) - (hi + lo) / 2.0) / half
-    frames = np.count_nonzero(use >= 0.999, axis=0)
-    return float(frames.max(initial=0)) / float(ride.rate_hz)
+    at_end = np.abs(pulses - (hi + lo) / 2.0) / half >= 0.999
+    longest = 0
+    for j in range(pulses.shape[1]):
+        q = pulses[:, j]
+        changed = np.flatnonzero(q[1:] != q[:-1])
+        if changed.size == 0:
+            continue
+        # its last run is the rest it started from only when it is that same pulse
+        stop = changed[-1] + 1 if q[-1] == q[0] else q.size
+        longest = max(longest, int(np.count_nonzero(at_end[changed[0] + 1 : stop, j])))
+    return float(longest) / float(ride.rate_hz)
 
 
 def _play(args: argparse.Namespace) -> int:
