@@ -12,21 +12,22 @@ the platform's classical default ``cinema-seat-3dof``:
 * ``--intensity`` 0 / 50 / 100 % gives a stronger ride at each step on the lap, within the
   same figures.
 
-Its twin ``optimal-seat3-pot-auto`` (session 34), ``seat3-pot``'s ride-file default, is this
-plan sized for the SMC3 (``[mpc]`` platform ``seat3-pot``, controller ``smc3``): every other
-field equal, and on ``seat3-pot`` with ``smc3`` the same figures, ratios and shares on the lap
-and flowing-formula.
+It is ``seat3-pot``'s ride-file default too (session 34): seat3's seat on pot-feedback
+actuators driven by an SMC3 moves as seat3 (``Platform.same_kinematics``), so the plan, made
+for the rig the ride is for, takes it. On ``seat3-pot`` with ``smc3`` it gives the same
+figures, ratios and shares on the lap and flowing-formula; a platform that moves otherwise
+is still refused.
 """
 
 from __future__ import annotations
 
-import dataclasses
 from pathlib import Path
 
 import numpy as np
 import pytest
 
 from _held_out import check_plan_figures
+from motioncue import ConfigError
 from motioncue.analysis import run_chain
 from motioncue.cueing import CueingParams, at_intensity, load_cueing
 from motioncue.cueing._metrics import CueMetrics
@@ -48,7 +49,7 @@ MEASURED = {  # share fx, fy
 }
 
 
-POT_PLATFORM, POT_CONTROLLER, POT_PRESET = "seat3-pot", "smc3", "optimal-seat3-pot-auto"
+POT_PLATFORM, POT_CONTROLLER = "seat3-pot", "smc3"
 
 
 def _metrics(
@@ -108,27 +109,36 @@ def test_intensity_0_50_100_is_stronger_at_each_step_on_the_lap(
         check_plan_figures(m, limited)
 
 
-def test_the_pot_twin_is_this_plan_sized_for_the_smc3() -> None:
-    assert _platform_presets(POT_PLATFORM) == ("cinema-seat-3dof", POT_PRESET)
-    twin, plan = load_cueing(POT_PRESET), load_cueing(PRESET)
-    assert twin.mpc is not None and plan.mpc is not None
-    assert twin.mpc == dataclasses.replace(
-        plan.mpc, platform=POT_PLATFORM, controller=POT_CONTROLLER
-    )
-    for f in dataclasses.fields(twin):
-        if f.name not in ("name", "mpc"):
-            assert getattr(twin, f.name) == getattr(plan, f.name), f.name
+def test_seat3_pot_takes_seat3s_plan_and_another_geometry_is_refused(tmp_path: Path) -> None:
+    from motioncue.cueing import Rig, make_cueing
+    from motioncue.kinematics import load_platform
+
+    assert _platform_presets(POT_PLATFORM) == ("cinema-seat-3dof", PRESET)
+    pot = load_platform(POT_PLATFORM)
+    assert pot.same_kinematics(load_platform(PLATFORM)) and pot.name != PLATFORM
+    limits = ActuatorLimits.from_platform(pot, load_controller(POT_CONTROLLER), rate_hz=RATE)
+    make_cueing(load_cueing(PRESET), RATE, rig=Rig(pot, limits, POT_CONTROLLER))  # accepted
+    # the same seat with its rear cylinder 20 mm further back moves otherwise: refused
+    src = (Path(__file__).resolve().parents[1] / "configs" / "platforms" / "seat3.toml").read_text()
+    assert src.count("[-300.0, 0.0, 0.0]") == 2  # the rear joint, base and seat
+    moved = tmp_path / "seat3-moved.toml"
+    moved.write_text(src.replace("[-300.0, 0.0, 0.0]", "[-320.0, 0.0, 0.0]"))
+    other = load_platform(moved)
+    assert not other.same_kinematics(load_platform(PLATFORM))
+    limits = ActuatorLimits.from_platform(other, load_controller("mbox3"), rate_hz=RATE)
+    with pytest.raises(ConfigError, match=r"plans for platform 'seat3'.*'seat3-moved'"):
+        make_cueing(load_cueing(PRESET), RATE, rig=Rig(other, limits, "mbox3"))
 
 
-def test_the_pot_twin_on_seat3_pot_gives_the_same_ride(
+def test_seat3s_plan_on_seat3_pot_gives_the_same_ride(
     metrics: dict[str, dict[str, tuple[CueMetrics, int]]],
 ) -> None:
     paths = [q for q in PATHS if q.name in ("lap.csv", "flowing-formula.csv")]
     assert len(paths) == 2
-    twin = _metrics(load_cueing(POT_PRESET), paths, POT_PLATFORM, POT_CONTROLLER)
+    pot = _metrics(load_cueing(PRESET), paths, POT_PLATFORM, POT_CONTROLLER)
     default = _metrics(load_cueing("cinema-seat-3dof"), paths, POT_PLATFORM, POT_CONTROLLER)
     for q in paths:
-        m, limited = twin[q.name]
+        m, limited = pot[q.name]
         check_plan_figures(m, limited)
         ratio = np.asarray(m.rendered_share[:2]) / np.asarray(default[q.name][0].rendered_share[:2])
         assert np.all(ratio >= RATIO), ratio

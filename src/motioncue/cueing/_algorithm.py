@@ -429,17 +429,25 @@ def make_cueing(params: CueingParams, fs_hz: float, rig: Rig | None = None) -> C
 # ------------------------------------------------------------------------- the bundled ones
 def _plan_rig(params: CueingParams, fs_hz: float, rig: Rig | None) -> Rig:
     """The rig an ``[mpc]`` plan is made for: the caller's, which must be the platform the
-    preset was written for; without one, the platform and controller the preset names."""
+    preset was written for or one that moves as it does (``Platform.same_kinematics``: the
+    seat3 plan on seat3-pot); without one, the platform and controller the preset names."""
     mp = params.mpc if params.mpc is not None else MpcParams()
     if rig is None:
         return named_rig(mp.platform, mp.controller, fs_hz)
     named = Path(mp.platform).stem if mp.platform.endswith(".toml") else mp.platform
-    if rig.platform.name != named:
+    if rig.platform.name != named and not _moves_as(rig.platform, mp.platform):
         raise ConfigError(
             f"preset {params.name!r} plans for platform {mp.platform!r} ([mpc] platform); "
             f"the ride is for {rig.platform.name!r}: give a preset written for it"
         )
     return rig
+
+
+def _moves_as(platform: Platform, named: str) -> bool:
+    """Whether ``platform`` moves as the platform ``named`` (a bundled name or TOML path)."""
+    from ..kinematics import load_platform
+
+    return platform.same_kinematics(load_platform(named))
 
 
 def named_rig(platform: str, controller: str, fs_hz: float) -> Rig:

@@ -722,6 +722,25 @@ class Platform:
             return q.reshape(*lead, n), _NO_REACH
         return q.reshape(*lead, n), reach.reshape(*lead, n)
 
+    def same_kinematics(self, other: Platform, atol: float = 1e-9) -> bool:
+        """Whether ``other`` moves as this machine does: the same actuator kinds in the same
+        order, degrees of freedom, usable stroke and neutral positions, and the same
+        :meth:`inverse` (within ``atol``, m or rad) at neutral and at small steps of each
+        degree of freedom it produces. Drives, homing, limits and names may differ (seat3 and
+        seat3-pot: one seat on two kinds of actuator). A plan tuned for one fits the other.
+        """
+        if (
+            self.actuator_kinds != other.actuator_kinds
+            or not np.array_equal(self.dof_mask, other.dof_mask)
+            or not np.allclose(self.q_min, other.q_min, rtol=0.0, atol=atol)
+            or not np.allclose(self.q_max, other.q_max, rtol=0.0, atol=atol)
+            or not np.allclose(self.neutral_absolute, other.neutral_absolute, rtol=0.0, atol=atol)
+        ):
+            return False
+        step = np.array([0.01, 0.01, 0.01, 0.03, 0.03, 0.03])  # m, rad: inside any stroke
+        poses = np.vstack([np.zeros(6), np.diag(step), -np.diag(step), step / 2.0])
+        return bool(np.allclose(self.inverse(poses), other.inverse(poses), rtol=0.0, atol=atol))
+
     # --- Jacobian -----------------------------------------------------------------------
     def jacobian(self, poses: npt.ArrayLike) -> NDArray[np.float64]:
         """``d q / d pose`` for poses ``(..., 6)``; returns ``(..., n, 6)``.
